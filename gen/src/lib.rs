@@ -1,0 +1,1 @@
+//! Verilog emitter and one generator per Neo unit (filled in by the RTL issues).

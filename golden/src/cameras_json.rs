@@ -1,0 +1,1 @@
+//! Reading and writing INRIA `cameras.json` files, and `FILE#i` camera selection.

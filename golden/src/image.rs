@@ -1,0 +1,1 @@
+//! Float RGB images, 8-bit quantisation and PNG input/output.

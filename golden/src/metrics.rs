@@ -1,0 +1,1 @@
+//! Image quality metrics: PSNR and SSIM (11x11 Gaussian window).

@@ -1,0 +1,1 @@
+//! Standard 3DGS `.ply` and PlayCanvas/SuperSplat `compressed.ply` reading and writing.

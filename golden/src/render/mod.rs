@@ -1,0 +1,1 @@
+//! The float reference renderer, following the published 3DGS rasterizer forward pass.

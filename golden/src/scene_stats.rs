@@ -1,0 +1,1 @@
+//! Scene statistics for `neo scene info`.

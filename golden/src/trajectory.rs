@@ -1,0 +1,1 @@
+//! Camera trajectories at 30 fps: orbit, walk/fly-through and hand-held shake.

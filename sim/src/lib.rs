@@ -1,0 +1,1 @@
+//! Cycle model, DRAM model, baselines and reports (filled in by the cycle-model issue).

@@ -1,0 +1,5 @@
+//! The `neo` command line.
+
+fn main() {
+    println!("neo");
+}

@@ -1,0 +1,1 @@
+//! Verilator builds and cosimulation test benches (filled in by the RTL issues).
