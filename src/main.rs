@@ -1,5 +1,51 @@
-//! The `neo` command line.
+//! The `neo` command line: scene tools, the float reference renderer, image metrics and benchmarks.
 
-fn main() {
-    println!("neo");
+mod commands;
+mod progress;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// RTL generator, cosimulation harness and cycle model for the Neo 3DGS accelerator.
+#[derive(Parser)]
+#[command(name = "neo", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Inspect or convert a scene (standard or compressed .ply, or a synthetic spec).
+    #[command(subcommand)]
+    Scene(commands::scene::SceneCommand),
+    /// Render one view with the float reference renderer and write an 8-bit PNG.
+    Render(commands::render::RenderArgs),
+    /// Print PSNR and SSIM between two PNG images.
+    Compare(commands::compare::CompareArgs),
+    /// Generate a camera trajectory and write it as a cameras.json.
+    Trajectory(commands::trajectory::TrajectoryArgs),
+    /// Measure throughput figures (scene loading, rendering) in one run and print them.
+    Bench(commands::bench::BenchArgs),
+    /// The main job: statistics and a render of the default scene (later: the full report).
+    Report(commands::report::ReportArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Scene(c) => commands::scene::run(c),
+        Command::Render(a) => commands::render::run(a),
+        Command::Compare(a) => commands::compare::run(a),
+        Command::Trajectory(a) => commands::trajectory::run(a),
+        Command::Bench(a) => commands::bench::run(a),
+        Command::Report(a) => commands::report::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
 }

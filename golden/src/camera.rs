@@ -26,30 +26,22 @@ pub struct Camera {
     pub cam_to_world: DMat3,
 }
 
-impl Camera {
-    /// A camera at `position` looking at `target`, with world "up" `up` (for the INRIA
-    /// convention with y down, pass the world direction that should appear at the top).
-    pub fn look_at(name: &str, width: u32, height: u32, fx: f64, fy: f64, position: DVec3, target: DVec3, up: DVec3) -> Self {
-        let z = (target - position).normalize();
-        // Camera y points down in the image, i.e. opposite to `up`.
-        let mut x = z.cross(-up);
-        if x.length_squared() < 1e-18 {
-            // Looking straight along `up`: pick any perpendicular axis.
-            x = z.any_orthonormal_vector();
-        }
-        let x = x.normalize();
-        let y = z.cross(x);
-        Camera {
-            name: name.to_string(),
-            width,
-            height,
-            fx,
-            fy,
-            position,
-            cam_to_world: DMat3::from_cols(x, y, z),
-        }
+/// The camera-to-world rotation of a camera looking from `position` at `target`, with the world
+/// direction `up` appearing at the top of the image (camera y points down, so it is `-up`).
+/// When the view is along `up`, any perpendicular right axis is chosen.
+pub fn look_at_rotation(position: DVec3, target: DVec3, up: DVec3) -> DMat3 {
+    let z = (target - position).normalize();
+    // Right-handed camera frame with x right, y down, z forward: x = y cross z = z cross up.
+    let mut x = z.cross(up);
+    if x.length_squared() < 1e-18 {
+        x = z.any_orthonormal_vector();
     }
+    let x = x.normalize();
+    let y = z.cross(x);
+    DMat3::from_cols(x, y, z)
+}
 
+impl Camera {
     /// World-to-view rotation (single precision), the transpose of `cam_to_world`.
     pub fn world_to_view_rotation(&self) -> Mat3 {
         self.cam_to_world.transpose().as_mat3()
@@ -85,5 +77,31 @@ impl Camera {
         let sx = width as f64 / self.width as f64;
         let sy = height as f64 / self.height as f64;
         Camera { width, height, fx: self.fx * sx, fy: self.fy * sy, ..self.clone() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn look_at_puts_up_at_the_top_of_the_image() {
+        // World y is down (INRIA convention), so "up" is -y.
+        let r = look_at_rotation(DVec3::new(0.0, 0.0, -5.0), DVec3::ZERO, DVec3::NEG_Y);
+        let cam = Camera {
+            name: String::new(),
+            width: 100,
+            height: 100,
+            fx: 100.0,
+            fy: 100.0,
+            position: DVec3::new(0.0, 0.0, -5.0),
+            cam_to_world: r,
+        };
+        assert!((r.determinant() - 1.0).abs() < 1e-12, "proper rotation");
+        // A point above the target (smaller world y) lands above the centre (smaller image y).
+        assert!(cam.to_view(Vec3::new(0.0, -1.0, 0.0)).y < 0.0);
+        // A point to the right (+x, seen from -z looking at +z) lands right of the centre.
+        assert!(cam.to_view(Vec3::new(1.0, 0.0, 0.0)).x > 0.0);
+        assert!(cam.to_view(Vec3::ZERO).z > 4.99);
     }
 }

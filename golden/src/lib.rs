@@ -14,6 +14,7 @@ pub mod render;
 pub mod scene;
 pub mod scene_stats;
 pub mod shared;
+pub mod sort;
 pub mod source;
 pub mod synthetic;
 pub mod trajectory;
