@@ -175,7 +175,10 @@ impl Scene {
             let q = raw.rotation[i];
             let norm2: f32 = q.iter().map(|v| v * v).sum();
             if norm2 == 0.0 {
-                return Err(InputError::new(path, format!("Gaussian {i} has a zero quaternion (rot_0..3 all 0)")));
+                return Err(InputError::new(
+                    path,
+                    format!("Gaussian {i} has a zero quaternion (rot_0..3 all 0)"),
+                ));
             }
             let inv = 1.0 / norm2.sqrt();
             if raw.opacity[i].is_infinite() {
@@ -253,10 +256,12 @@ mod tests {
 
     #[test]
     fn infinite_logits_are_legal_and_nan_is_dropped() {
-        let (s, rep) = Scene::from_raw(&one(f32::INFINITY, [1.0, 0.0, 0.0, 0.0]), Path::new("t"), false).unwrap();
+        let (s, rep) =
+            Scene::from_raw(&one(f32::INFINITY, [1.0, 0.0, 0.0, 0.0]), Path::new("t"), false).unwrap();
         assert_eq!(s.opacities, vec![1.0]);
         assert_eq!(rep.infinite_opacity, 1);
-        let (s, _) = Scene::from_raw(&one(f32::NEG_INFINITY, [1.0, 0.0, 0.0, 0.0]), Path::new("t"), false).unwrap();
+        let (s, _) =
+            Scene::from_raw(&one(f32::NEG_INFINITY, [1.0, 0.0, 0.0, 0.0]), Path::new("t"), false).unwrap();
         assert_eq!(s.opacities, vec![0.0]);
         let mut raw = one(0.0, [1.0, 0.0, 0.0, 0.0]);
         raw.position[0][1] = f32::NAN;

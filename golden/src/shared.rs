@@ -8,10 +8,7 @@ use std::path::PathBuf;
 /// The workspace root (the directory holding the top-level `Cargo.toml`).
 pub fn workspace_root() -> PathBuf {
     // golden/ sits directly below the workspace root.
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("golden/ has a parent directory")
-        .to_path_buf()
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).parent().expect("golden/ has a parent directory").to_path_buf()
 }
 
 /// The `shared/` directory beside the project (`NEO_SHARED` overrides it).
@@ -34,6 +31,9 @@ pub fn shared_file_for_test(test: &str, rel: &str) -> Option<PathBuf> {
     if std::env::var_os("CI").is_some() {
         panic!("{test}: required shared file {} is missing (CI is set, so this is an error)", path.display());
     }
-    eprintln!("SKIP {test}: {} not found (set NEO_SHARED or place shared/ beside the project)", path.display());
+    eprintln!(
+        "SKIP {test}: {} not found (set NEO_SHARED or place shared/ beside the project)",
+        path.display()
+    );
     None
 }

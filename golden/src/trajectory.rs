@@ -21,10 +21,10 @@ pub use shake::{shake, ShakeParams};
 pub use spec::parse_trajectory;
 pub use walk::{walk, WalkParams};
 
-use crate::camera::Camera;
+use crate::camera::{look_at_rotation, Camera};
 use crate::cameras_json;
 use crate::error::{InputError, InputResult};
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use std::path::Path;
 
 /// Frame rate of generated trajectories and of files without an `"fps"` field.
@@ -128,14 +128,6 @@ impl Intrinsics {
     /// [`WORLD_UP`] appears at the top of the image (camera x right, y down, z forward).
     pub fn look_at(&self, name: &str, position: DVec3, target: DVec3) -> Camera {
         let f = self.focal();
-        let z = (target - position).normalize_or(DVec3::Z);
-        // Right-handed camera frame: x = y x z with y (image down) as close to -up as possible.
-        let mut x = (-WORLD_UP).cross(z);
-        if x.length_squared() < 1e-18 {
-            x = z.any_orthonormal_vector();
-        }
-        let x = x.normalize();
-        let y = z.cross(x);
         Camera {
             name: name.to_string(),
             width: self.width,
@@ -143,7 +135,7 @@ impl Intrinsics {
             fx: f,
             fy: f,
             position,
-            cam_to_world: DMat3::from_cols(x, y, z),
+            cam_to_world: look_at_rotation(position, target, WORLD_UP),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! cameras.json reading, writing, camera selection, and the reader's robustness.
 
 use glam::{DMat3, DVec3};
-use neo_golden::camera::Camera;
+use neo_golden::camera::{look_at_rotation, Camera};
 use neo_golden::cameras_json::{parse_camera_spec, parse_cameras, read_cameras, write_cameras};
 use neo_golden::shared::shared_file_for_test;
 use proptest::prelude::*;
@@ -50,10 +50,15 @@ fn some_cameras() -> Vec<Camera> {
         .map(|i| {
             let a = i as f64 * 0.7 + 0.123_456_789;
             let pos = DVec3::new(3.0 * a.sin(), -1.0 - 0.1 * i as f64, -3.0 * a.cos());
-            let mut c =
-                Camera::look_at(&format!("cam {i}"), 640, 360, 555.5, 555.25, pos, DVec3::ZERO, DVec3::NEG_Y);
-            c.position += DVec3::splat(1e-13 * i as f64);
-            c
+            Camera {
+                name: format!("cam {i}"),
+                width: 640,
+                height: 360,
+                fx: 555.5,
+                fy: 555.25,
+                position: pos + DVec3::splat(1e-13 * i as f64),
+                cam_to_world: look_at_rotation(pos, DVec3::ZERO, DVec3::NEG_Y),
+            }
         })
         .collect()
 }
@@ -77,7 +82,10 @@ fn round_trip_preserves_cameras_cuts_and_fps() {
 
 #[test]
 fn written_rotation_rows_follow_the_inria_convention() {
-    let c = Camera::look_at("x", 8, 8, 4.0, 4.0, DVec3::new(-5.0, 0.0, 0.0), DVec3::ZERO, DVec3::NEG_Y);
+    let pos = DVec3::new(-5.0, 0.0, 0.0);
+    let rot = look_at_rotation(pos, DVec3::ZERO, DVec3::NEG_Y);
+    let c =
+        Camera { name: "x".into(), width: 8, height: 8, fx: 4.0, fy: 4.0, position: pos, cam_to_world: rot };
     let path = temp("convention.json");
     write_cameras(&path, std::slice::from_ref(&c), &[], None).unwrap();
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();

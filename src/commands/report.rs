@@ -33,7 +33,8 @@ pub fn run(mut a: ReportArgs) -> Result<()> {
         a.view.height = Some(720);
     }
     let cam = a.view.camera(&scene)?;
-    let (out, t_render) = spin("rendering", || render::render(&scene, &cam, &render::RenderOptions::default()));
+    let (out, t_render) =
+        spin("rendering", || render::render(&scene, &cam, &render::RenderOptions::default()));
     let png = a.out.join("render.png");
     out.image.to_rgb8().write_png(&png)?;
     println!(

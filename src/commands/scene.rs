@@ -44,7 +44,8 @@ pub struct ConvertArgs {
 pub fn run(cmd: SceneCommand) -> Result<()> {
     match cmd {
         SceneCommand::Info(a) => {
-            let (loaded, _) = spin(&format!("loading {}", a.scene), || source::load_scene(&a.scene, a.strict));
+            let (loaded, _) =
+                spin(&format!("loading {}", a.scene), || source::load_scene(&a.scene, a.strict));
             let (scene, report) = loaded?;
             let stats = SceneStats::of(&scene, &report);
             if a.json {
@@ -56,14 +57,20 @@ pub fn run(cmd: SceneCommand) -> Result<()> {
             Ok(())
         }
         SceneCommand::Convert(a) => {
-            let (loaded, _) = spin(&format!("loading {}", a.input), || source::load_scene(&a.input, a.strict));
+            let (loaded, _) =
+                spin(&format!("loading {}", a.input), || source::load_scene(&a.input, a.strict));
             let (scene, report) = loaded?;
             if report.dropped_non_finite > 0 {
                 eprintln!("warning: dropped {} Gaussians with NaN values", report.dropped_non_finite);
             }
             ply::write_standard(&a.output, &scene.to_raw())
                 .with_context(|| format!("converting {}", a.input))?;
-            println!("wrote {} Gaussians (SH degree {}) to {}", scene.len(), scene.sh_degree, a.output.display());
+            println!(
+                "wrote {} Gaussians (SH degree {}) to {}",
+                scene.len(),
+                scene.sh_degree,
+                a.output.display()
+            );
             Ok(())
         }
     }

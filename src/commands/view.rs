@@ -35,7 +35,11 @@ impl ViewArgs {
                 let traj = trajectory::parse_trajectory(spec, source::robust_bounds(scene), self.frame + 1)?;
                 match traj.frames.get(self.frame) {
                     Some(c) => c.clone(),
-                    None => bail!("trajectory '{spec}' has {} frames; frame {} requested", traj.frames.len(), self.frame),
+                    None => bail!(
+                        "trajectory '{spec}' has {} frames; frame {} requested",
+                        traj.frames.len(),
+                        self.frame
+                    ),
                 }
             }
         };

@@ -246,9 +246,22 @@ mod tests {
         assert!(c[1].abs() < 1e-5 && c[2].abs() < 1e-5 && c[4].abs() < 1e-5);
     }
 
+    /// A camera at the origin looking along +z with f = 50 px.
+    fn forward_camera(width: u32, height: u32) -> Camera {
+        Camera {
+            name: "c".into(),
+            width,
+            height,
+            fx: 50.0,
+            fy: 50.0,
+            position: DVec3::ZERO,
+            cam_to_world: crate::camera::look_at_rotation(DVec3::ZERO, DVec3::Z, DVec3::NEG_Y),
+        }
+    }
+
     #[test]
     fn cov2d_of_a_centred_isotropic_gaussian() {
-        let cam = Camera::look_at("c", 64, 48, 50.0, 50.0, DVec3::ZERO, DVec3::Z, -DVec3::Y);
+        let cam = forward_camera(64, 48);
         let view = ViewParams::new(&cam, 16);
         let s = 0.1f32;
         let c = view.cov2d([0.0, 0.0, 2.0], &cov3d([s; 3], [1.0, 0.0, 0.0, 0.0]));
@@ -258,7 +271,7 @@ mod tests {
 
     #[test]
     fn tile_rect_follows_get_rect() {
-        let cam = Camera::look_at("c", 100, 50, 50.0, 50.0, DVec3::ZERO, DVec3::Z, -DVec3::Y);
+        let cam = forward_camera(100, 50);
         let view = ViewParams::new(&cam, 16);
         assert_eq!(view.grid, [7, 4]);
         // (20 - 3) / 16 -> 1, (20 + 3 + 15) / 16 -> 2.

@@ -26,14 +26,16 @@ pub struct Splat {
 }
 
 /// Standard deviation of the log of the in-plane size around its nominal value.
-const LOG_SIZE_SIGMA: f64 = 0.55;
+pub const LOG_SIZE_SIGMA: f64 = 0.55;
 /// In-plane geometric-mean standard deviation as a fraction of the local spacing.
-const SIZE_PER_SPACING: f64 = 0.7;
-/// `ln(max / min)` is normal with this mean and standard deviation (fitted to biker.ply:
-/// median ratio 18.7, 10th/90th percentiles 5.1 and 75), clamped to `[0, MAX_LOG_ANISOTROPY]`.
-const LOG_ANISOTROPY_MEAN: f64 = 2.93;
-const LOG_ANISOTROPY_SIGMA: f64 = 1.02;
-const MAX_LOG_ANISOTROPY: f64 = 7.0;
+pub const SIZE_PER_SPACING: f64 = 0.7;
+/// Mean of the normally distributed `ln(max / min)` (fitted to biker.ply: median ratio 18.7,
+/// 10th/90th percentiles 5.1 and 75).
+pub const LOG_ANISOTROPY_MEAN: f64 = 2.93;
+/// Standard deviation of `ln(max / min)`.
+pub const LOG_ANISOTROPY_SIGMA: f64 = 1.02;
+/// Largest `ln(max / min)` (a ratio of about 1100).
+pub const MAX_LOG_ANISOTROPY: f64 = 7.0;
 
 /// Log-scales `[long, mid, short]` for a Gaussian whose in-plane size (geometric mean of the
 /// long and mid axes) is about `SIZE_PER_SPACING * spacing`, log-normally distributed. The

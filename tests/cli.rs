@@ -1,0 +1,168 @@
+//! End-to-end tests of the `neo` binary: the commands a user types, their output and exit codes.
+
+use neo_golden::shared::shared_file_for_test;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn neo(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_neo")).args(args).output().expect("run neo")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = neo(args);
+    assert!(o.status.success(), "neo {args:?} failed:\n{}", stderr(&o));
+    stdout(&o)
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    serde_json::from_str(&ok(args)).expect("valid JSON")
+}
+
+/// The failure must be a clean error (exit 1, `error: FILE: ...`), never a panic.
+fn fails_cleanly(args: &[&str], file: &Path, phrase: &str) {
+    let o = neo(args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "neo {args:?} should fail with exit 1, stderr:\n{err}");
+    assert!(!err.contains("panicked"), "panic instead of an error:\n{err}");
+    assert!(err.contains(&file.display().to_string()), "error does not name {}:\n{err}", file.display());
+    assert!(err.contains(phrase), "error lacks '{phrase}':\n{err}");
+}
+
+#[test]
+fn synthetic_scene_survives_convert_and_reload() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = "synthetic:outdoor?gaussians=5k&seed=7&sh=1";
+    let info = json(&["scene", "info", spec, "--json"]);
+    assert_eq!(info["count"], 5000);
+    assert_eq!(info["sh_degree"], 1);
+    let out = dir.path().join("s.ply");
+    ok(&["scene", "convert", spec, out.to_str().unwrap()]);
+    let back = json(&["scene", "info", out.to_str().unwrap(), "--json"]);
+    assert_eq!(back["count"], 5000);
+    assert_eq!(back["sh_degree"], 1);
+    assert_eq!(back["bounds"], info["bounds"], "positions are written bit-exactly");
+}
+
+#[test]
+fn bad_scene_files_give_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = "synthetic:blobs?gaussians=100&seed=1";
+    let good = dir.path().join("good.ply");
+    ok(&["scene", "convert", spec, good.to_str().unwrap()]);
+    let bytes = std::fs::read(&good).unwrap();
+
+    let truncated = dir.path().join("truncated.ply");
+    std::fs::write(&truncated, &bytes[..bytes.len() - 7]).unwrap();
+    fails_cleanly(&["scene", "info", truncated.to_str().unwrap()], &truncated, "missing");
+
+    let ascii = dir.path().join("ascii.ply");
+    std::fs::write(&ascii, b"ply\nformat ascii 1.0\nelement vertex 0\nend_header\n").unwrap();
+    fails_cleanly(&["scene", "info", ascii.to_str().unwrap()], &ascii, "ascii");
+
+    let missing = dir.path().join("nope.ply");
+    fails_cleanly(&["render", "--scene", missing.to_str().unwrap(), "--out", "x.png"], &missing, "");
+}
+
+#[test]
+fn bad_camera_selection_names_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let traj = dir.path().join("cams.json");
+    let spec = "synthetic:blobs?gaussians=200&seed=2";
+    ok(&[
+        "trajectory",
+        "--scene",
+        spec,
+        "--trajectory",
+        "orbit",
+        "--frames",
+        "4",
+        "--out",
+        traj.to_str().unwrap(),
+    ]);
+    let sel = format!("{}#9", traj.display());
+    fails_cleanly(&["render", "--scene", spec, "--camera", &sel, "--out", "x.png"], &traj, "9");
+}
+
+#[test]
+fn trajectory_file_renders_and_compares() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = "synthetic:outdoor?gaussians=20k&seed=3";
+    let traj = dir.path().join("t.json");
+    let msg = ok(&[
+        "trajectory",
+        "--scene",
+        spec,
+        "--trajectory",
+        "orbit:speed=4,cut=3",
+        "--frames",
+        "5",
+        "--width",
+        "160",
+        "--height",
+        "90",
+        "--out",
+        traj.to_str().unwrap(),
+    ]);
+    assert!(msg.contains("5 frames") && msg.contains("1 scene cuts"), "{msg}");
+    let a = dir.path().join("a.png");
+    let b = dir.path().join("b.png");
+    let t = traj.to_str().unwrap();
+    ok(&["render", "--scene", spec, "--trajectory", t, "--frame", "1", "--out", a.to_str().unwrap()]);
+    ok(&["render", "--scene", spec, "--camera", &format!("{t}#1"), "--out", b.to_str().unwrap()]);
+    // The same camera through two routes renders the same image.
+    let same = json(&["compare", a.to_str().unwrap(), b.to_str().unwrap(), "--json"]);
+    assert!(same["psnr"].is_null(), "identical images have infinite PSNR: {same}");
+    assert_eq!(same["ssim"], 1.0);
+    // A different frame differs.
+    let c = dir.path().join("c.png");
+    ok(&["render", "--scene", spec, "--trajectory", t, "--frame", "4", "--out", c.to_str().unwrap()]);
+    let diff = json(&["compare", a.to_str().unwrap(), c.to_str().unwrap(), "--json"]);
+    assert!(diff["psnr"].as_f64().unwrap() < 40.0, "{diff}");
+    // Size mismatch is an error, not a panic.
+    let small = dir.path().join("small.png");
+    ok(&[
+        "render",
+        "--scene",
+        spec,
+        "--camera",
+        &format!("{t}#1"),
+        "--width",
+        "80",
+        "--height",
+        "45",
+        "--out",
+        small.to_str().unwrap(),
+    ]);
+    let o = neo(&["compare", a.to_str().unwrap(), small.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!stderr(&o).contains("panicked"));
+}
+
+#[test]
+fn biker_render_matches_the_reference_through_the_cli() {
+    let Some(scene) = shared_file_for_test("biker_render_cli", "scenes/biker.compressed.ply") else { return };
+    let cams = scene.with_file_name("biker_cameras.json");
+    let reference = scene.with_file_name("biker_ref_three_quarter.png");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("tq.png");
+    ok(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--camera",
+        &format!("{}#three_quarter", cams.display()),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let m = json(&["compare", out.to_str().unwrap(), reference.to_str().unwrap(), "--json"]);
+    let psnr = m["psnr"].as_f64().unwrap_or(f64::INFINITY);
+    assert!(psnr >= 40.0, "PSNR {psnr} dB against the reference render");
+}
