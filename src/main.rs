@@ -27,8 +27,12 @@ enum Command {
     Trajectory(commands::trajectory::TrajectoryArgs),
     /// Measure throughput figures (scene loading, rendering) in one run and print them.
     Bench(commands::bench::BenchArgs),
+    /// Run the bit-exact golden pipeline along a trajectory with a sorting strategy; write stats.json.
+    Frames(commands::frames::FramesArgs),
     /// The main job: statistics and a render of the default scene (later: the full report).
     Report(commands::report::ReportArgs),
+    /// Generate the Verilog of the Sorting Core (BSU, MSU+, core), check it, report synthesis.
+    Gen(commands::gen::GenArgs),
 }
 
 fn main() -> ExitCode {
@@ -39,7 +43,9 @@ fn main() -> ExitCode {
         Command::Compare(a) => commands::compare::run(a),
         Command::Trajectory(a) => commands::trajectory::run(a),
         Command::Bench(a) => commands::bench::run(a),
+        Command::Frames(a) => commands::frames::run(a),
         Command::Report(a) => commands::report::run(a),
+        Command::Gen(a) => commands::gen::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,1 +1,21 @@
-//! Verilog emitter and one generator per Neo unit (filled in by the RTL issues).
+//! The Verilog emitter and one generator per Neo unit.
+//!
+//! Every generator describes its module with the typed builder in [`emit`], which prints
+//! readable Verilog in the lowRISC style and also exports the module's port list
+//! ([`interface::ModuleInterface`]), so the Verilator C++ shim and the Rust bindings in `tb/` are
+//! generated from the same description rather than written twice.
+//!
+//! Entry points: [`GenConfig`] (the parameters, [`GenConfig::default`] = the paper's Sorting
+//! Core), [`generate`] (every module as a [`VerilogFile`]), [`tops`] (the units with their own
+//! cosimulation model) and [`files_for`] (the files one top needs).
+
+pub mod config;
+pub mod emit;
+pub mod interface;
+pub mod output;
+pub mod report;
+pub mod tools;
+pub mod units;
+
+pub use config::{ConfigError, GenConfig, Topology};
+pub use units::{files_for, generate, top_modules, tops, try_generate, VerilogFile};

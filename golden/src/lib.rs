@@ -7,9 +7,12 @@
 pub mod camera;
 pub mod cameras_json;
 pub mod error;
+pub mod formats;
 pub mod image;
 pub mod metrics;
+pub mod pipeline;
 pub mod ply;
+pub mod raster;
 pub mod render;
 pub mod scene;
 pub mod scene_stats;

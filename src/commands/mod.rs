@@ -2,6 +2,8 @@
 
 pub mod bench;
 pub mod compare;
+pub mod frames;
+pub mod gen;
 pub mod render;
 pub mod report;
 pub mod scene;

@@ -1,0 +1,242 @@
+//! [`GenConfig`]: the parameters of the generated Sorting Core, read from JSON by
+//! `neo gen --config FILE`.
+//!
+//! Widths, networks and padding are not re-derived here: they come from the golden model
+//! ([`neo_golden::sort`]), which is the single source of truth.
+
+use neo_golden::error::InputError;
+use neo_golden::sort::{Network, SortConfig, SortFormat};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Which golden comparator network the BSU instantiates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Topology {
+    /// [`Network::bitonic`] (the paper's BSU; any power-of-two width).
+    Bitonic,
+    /// [`Network::odd_even_merge`] (Batcher's odd-even merge sort).
+    OddEvenMerge,
+    /// [`Network::best_16`] (60 comparators; width 16 only).
+    #[serde(rename = "best_16")]
+    Best16,
+}
+
+impl Topology {
+    /// Every topology, in report order.
+    pub const ALL: [Topology; 3] = [Topology::Bitonic, Topology::OddEvenMerge, Topology::Best16];
+
+    /// The name used in JSON and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Topology::Bitonic => "bitonic",
+            Topology::OddEvenMerge => "odd_even_merge",
+            Topology::Best16 => "best_16",
+        }
+    }
+}
+
+/// Parameters of the generated RTL. [`GenConfig::default`] is the paper's configuration.
+///
+/// JSON: an object with any subset of these fields (missing ones take the default), e.g.
+/// `{"topology": "best_16", "register_every": 3}`. Unknown fields are rejected.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GenConfig {
+    /// BSU comparator network.
+    pub topology: Topology,
+    /// BSU width `n` (entries per vector): a power of two >= 2; 16 for `best_16`.
+    pub bsu_width: usize,
+    /// `k`: a register stage after every `k` comparator layers (and after the last layer), so
+    /// the BSU latency is `ceil(depth / k)` cycles. Must be >= 1 (`k >= depth`: one stage).
+    pub register_every: usize,
+    /// Key field width (golden [`SortFormat`]).
+    pub key_bits: u8,
+    /// Id field width (golden [`SortFormat`]).
+    pub id_bits: u8,
+    /// Chunk size `C` of the Sorting Core's buffers (entries): `n` times a power of two.
+    pub chunk: usize,
+    /// Width of memory entry addresses and command addresses.
+    pub addr_bits: u32,
+    /// Width of command lengths and `done_len_o`.
+    pub len_bits: u32,
+    /// Longest memory read burst (entries), a power of two <= `chunk`.
+    pub burst: usize,
+    /// Read bursts in flight at most (depth of the response-routing queue), a power of two.
+    pub max_outstanding: usize,
+}
+
+impl Default for GenConfig {
+    fn default() -> Self {
+        let f = SortFormat::ARTIFACT;
+        GenConfig {
+            topology: Topology::Bitonic,
+            bsu_width: 16,
+            register_every: 2,
+            key_bits: f.key_bits(),
+            id_bits: f.id_bits(),
+            chunk: SortConfig::DEFAULT_CHUNK,
+            addr_bits: 32,
+            len_bits: 32,
+            burst: 16,
+            max_outstanding: 4,
+        }
+    }
+}
+
+/// A configuration the generator cannot honour.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("invalid generator configuration: {0}")]
+pub struct ConfigError(pub String);
+
+impl GenConfig {
+    /// Reads a JSON configuration file; errors name the file and the problem.
+    pub fn from_json_file(path: &Path) -> Result<GenConfig, InputError> {
+        let text =
+            std::fs::read_to_string(path).map_err(|e| InputError::new(path, format!("cannot read: {e}")))?;
+        let cfg: GenConfig = serde_json::from_str(&text)
+            .map_err(|e| InputError::new(path, format!("not a valid generator config: {e}")))?;
+        cfg.validate().map_err(|e| InputError::new(path, e.0))?;
+        Ok(cfg)
+    }
+
+    /// The entry format (golden).
+    ///
+    /// # Panics
+    /// When the widths are invalid (call [`GenConfig::validate`] first).
+    pub fn format(&self) -> SortFormat {
+        SortFormat::new(self.key_bits, self.id_bits).expect("validated key/id widths")
+    }
+
+    /// The BSU network (golden), for this topology and width.
+    ///
+    /// # Panics
+    /// When the topology/width pair is invalid (call [`GenConfig::validate`] first).
+    pub fn network(&self) -> Network {
+        match self.topology {
+            Topology::Bitonic => Network::bitonic(self.bsu_width),
+            Topology::OddEvenMerge => Network::odd_even_merge(self.bsu_width),
+            Topology::Best16 => {
+                assert_eq!(self.bsu_width, 16, "best_16 is a 16-input network");
+                Network::best_16()
+            }
+        }
+    }
+
+    /// The golden Sorting Core configuration this RTL implements (format, chunk, network).
+    ///
+    /// # Panics
+    /// When the configuration is invalid (call [`GenConfig::validate`] first).
+    pub fn sort_config(&self) -> SortConfig {
+        SortConfig::new(self.format(), self.chunk, self.network()).expect("validated sort configuration")
+    }
+
+    /// Checks every constraint, naming the first one violated.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let err = |s: String| Err(ConfigError(s));
+        SortFormat::new(self.key_bits, self.id_bits).map_err(|e| ConfigError(e.to_string()))?;
+        let n = self.bsu_width;
+        if n < 2 || !n.is_power_of_two() || n > 64 {
+            return err(format!("bsu_width {n} is not a power of two in 2..=64"));
+        }
+        if self.topology == Topology::Best16 && n != 16 {
+            return err(format!("topology best_16 needs bsu_width 16, got {n}"));
+        }
+        if self.register_every == 0 {
+            return err("register_every must be >= 1 (use a value >= the network depth for one stage)".into());
+        }
+        if self.chunk > 1 << 16 {
+            return err(format!("chunk {} exceeds 65536 entries", self.chunk));
+        }
+        SortConfig::new(self.format(), self.chunk, self.network()).map_err(|e| ConfigError(e.to_string()))?;
+        if !(8..=48).contains(&self.addr_bits) {
+            return err(format!("addr_bits {} is outside 8..=48", self.addr_bits));
+        }
+        if !(12..=48).contains(&self.len_bits) {
+            return err(format!("len_bits {} is outside 12..=48", self.len_bits));
+        }
+        if (self.chunk as u64) >= 1u64 << self.len_bits {
+            return err(format!("chunk {} does not fit len_bits {}", self.chunk, self.len_bits));
+        }
+        if !self.burst.is_power_of_two() || self.burst > self.chunk {
+            return err(format!("burst {} is not a power of two <= chunk {}", self.burst, self.chunk));
+        }
+        if !self.max_outstanding.is_power_of_two() || !(2..=64).contains(&self.max_outstanding) {
+            return err(format!("max_outstanding {} is not a power of two in 2..=64", self.max_outstanding));
+        }
+        Ok(())
+    }
+
+    /// Width of a packed `{valid, key, id}` entry.
+    pub fn entry_bits(&self) -> u32 {
+        self.format().entry_bits()
+    }
+
+    /// Width of the comparison value (the low `key_bits + id_bits` bits).
+    pub fn cmp_bits(&self) -> u32 {
+        self.key_bits as u32 + self.id_bits as u32
+    }
+
+    /// BSU latency in cycles: the number of register stages, `ceil(depth / k)`.
+    pub fn bsu_latency(&self) -> usize {
+        self.network().depth().div_ceil(self.register_every)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_is_the_paper_configuration() {
+        let c = GenConfig::default();
+        c.validate().unwrap();
+        assert_eq!(c.entry_bits(), SortFormat::ARTIFACT.entry_bits());
+        assert_eq!(c.sort_config(), SortConfig::artifact());
+        assert_eq!(c.network().comparator_count(), 80);
+        assert_eq!(c.bsu_latency(), 5);
+    }
+
+    #[test]
+    fn json_subset_overrides_defaults() {
+        let c: GenConfig = serde_json::from_str(r#"{"topology": "best_16", "register_every": 3}"#).unwrap();
+        assert_eq!(c.topology, Topology::Best16);
+        assert_eq!(c.register_every, 3);
+        assert_eq!(c.chunk, 256);
+        assert_eq!(c.bsu_latency(), 4);
+        assert!(serde_json::from_str::<GenConfig>(r#"{"topolgy": "bitonic"}"#).is_err());
+        assert!(serde_json::from_str::<GenConfig>(r#"{"topology": "odd_even_merge"}"#).is_ok());
+    }
+
+    #[test]
+    fn invalid_configs_are_rejected() {
+        let bad = [
+            GenConfig { register_every: 0, ..GenConfig::default() },
+            GenConfig { bsu_width: 12, ..GenConfig::default() },
+            GenConfig { topology: Topology::Best16, bsu_width: 8, chunk: 64, ..GenConfig::default() },
+            GenConfig { chunk: 200, ..GenConfig::default() },
+            GenConfig { key_bits: 0, ..GenConfig::default() },
+            GenConfig { burst: 3, ..GenConfig::default() },
+            GenConfig { max_outstanding: 1, ..GenConfig::default() },
+        ];
+        for c in bad {
+            assert!(c.validate().is_err(), "{c:?}");
+        }
+    }
+
+    #[test]
+    fn bad_file_errors_name_the_file() {
+        let dir = std::env::temp_dir().join(format!("neo-gen-cfg-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("bad.json");
+        std::fs::write(&p, "{\"bsu_width\": 12}").unwrap();
+        let e = GenConfig::from_json_file(&p).unwrap_err().to_string();
+        assert!(e.starts_with(&p.display().to_string()) && e.contains("bsu_width 12"), "{e}");
+        std::fs::write(&p, "not json").unwrap();
+        let e = GenConfig::from_json_file(&p).unwrap_err().to_string();
+        assert!(e.contains("bad.json") && e.contains("not a valid generator config"), "{e}");
+        let e = GenConfig::from_json_file(&dir.join("missing.json")).unwrap_err().to_string();
+        assert!(e.contains("missing.json") && e.contains("cannot read"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,195 @@
+//! Printing a [`Module`] as Verilog-2005 text.
+
+use super::{Instance, Item, Module, Stmt, HEADER};
+use crate::interface::Dir;
+use std::fmt::Write;
+
+const IND: &str = "  ";
+
+fn range(width: u32) -> String {
+    if width == 1 {
+        String::new()
+    } else {
+        format!("[{}:0]", width - 1)
+    }
+}
+
+fn indent(level: usize) -> String {
+    IND.repeat(level)
+}
+
+/// The whole file text of `m`.
+pub(super) fn module(m: &Module) -> String {
+    let mut s = String::new();
+    s.push_str(HEADER);
+    s.push('\n');
+    for line in &m.doc {
+        push_comment(&mut s, 0, line);
+    }
+    write!(s, "module {}", m.name).unwrap();
+    if !m.params.is_empty() {
+        s.push_str(" #(\n");
+        for (k, p) in m.params.iter().enumerate() {
+            let sep = if k + 1 < m.params.len() { "," } else { "" };
+            writeln!(s, "{IND}parameter integer {} = {}{sep}", p.name, p.value).unwrap();
+        }
+        s.push(')');
+    }
+    s.push_str(" (\n");
+    let rw = m.ports.iter().map(|p| range(p.width).len()).max().unwrap_or(0);
+    let decls: Vec<String> = m
+        .ports
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let dir = match p.dir {
+                Dir::In => "input ",
+                Dir::Out => "output",
+            };
+            let sep = if k + 1 < m.ports.len() { "," } else { "" };
+            format!("{IND}{dir} wire {:<rw$} {}{sep}", range(p.width), p.name)
+        })
+        .collect();
+    // Trailing comments line up one column after the longest commented declaration.
+    let cw = m.ports.iter().zip(&decls).filter(|(p, _)| p.comment.is_some()).map(|(_, d)| d.len()).max();
+    for (p, d) in m.ports.iter().zip(&decls) {
+        match (&p.comment, cw) {
+            (Some(c), Some(cw)) => writeln!(s, "{d:<cw$}  // {c}").unwrap(),
+            _ => writeln!(s, "{d}").unwrap(),
+        }
+    }
+    s.push_str(");\n\n");
+    items(&mut s, 1, &m.items);
+    s.push_str("\nendmodule\n");
+    s
+}
+
+fn push_comment(s: &mut String, level: usize, text: &str) {
+    for line in text.lines() {
+        if line.is_empty() {
+            writeln!(s, "{}//", indent(level)).unwrap();
+        } else {
+            writeln!(s, "{}// {line}", indent(level)).unwrap();
+        }
+    }
+    if text.is_empty() {
+        writeln!(s, "{}//", indent(level)).unwrap();
+    }
+}
+
+fn decl(kind: &str, width: u32, name: &str) -> String {
+    if width == 1 {
+        format!("{kind:<4} {name}")
+    } else {
+        format!("{kind:<4} {} {name}", range(width))
+    }
+}
+
+fn items(s: &mut String, level: usize, list: &[Item]) {
+    let ind = indent(level);
+    for it in list {
+        match it {
+            Item::Comment(t) => push_comment(s, level, t),
+            Item::Blank => s.push('\n'),
+            Item::LocalParam { name, width, value } => {
+                let r = range(*width);
+                let r = if r.is_empty() { String::new() } else { format!("{r} ") };
+                writeln!(s, "{ind}localparam {r}{name} = {value};").unwrap();
+            }
+            Item::Wire { name, width } => writeln!(s, "{ind}{};", decl("wire", *width, name)).unwrap(),
+            Item::Reg { name, width } => writeln!(s, "{ind}{};", decl("reg", *width, name)).unwrap(),
+            Item::Mem { name, width, depth } => {
+                writeln!(s, "{ind}{} [0:{}];", decl("reg", *width, name), depth - 1).unwrap()
+            }
+            Item::Assign { lhs, rhs } => writeln!(s, "{ind}assign {lhs} = {rhs};").unwrap(),
+            Item::Seq { reset: Some(reset), body } => {
+                writeln!(s, "{ind}always @(posedge clk_i or negedge rst_ni) begin").unwrap();
+                writeln!(s, "{ind}{IND}if (!rst_ni) begin").unwrap();
+                stmts(s, level + 2, reset, "<=");
+                writeln!(s, "{ind}{IND}end else begin").unwrap();
+                stmts(s, level + 2, body, "<=");
+                writeln!(s, "{ind}{IND}end").unwrap();
+                writeln!(s, "{ind}end").unwrap();
+            }
+            Item::Seq { reset: None, body } => {
+                writeln!(s, "{ind}always @(posedge clk_i) begin").unwrap();
+                stmts(s, level + 1, body, "<=");
+                writeln!(s, "{ind}end").unwrap();
+            }
+            Item::Comb(body) => {
+                writeln!(s, "{ind}always @* begin").unwrap();
+                stmts(s, level + 1, body, "=");
+                writeln!(s, "{ind}end").unwrap();
+            }
+            Item::Instance(i) => instance(s, level, i),
+            Item::GenFor { var, count, label, items: body } => {
+                writeln!(s, "{ind}genvar {var};").unwrap();
+                writeln!(s, "{ind}generate").unwrap();
+                writeln!(s, "{ind}{IND}for ({var} = 0; {var} < {count}; {var} = {var} + 1) begin : {label}")
+                    .unwrap();
+                items(s, level + 2, body);
+                writeln!(s, "{ind}{IND}end").unwrap();
+                writeln!(s, "{ind}endgenerate").unwrap();
+            }
+        }
+    }
+}
+
+fn instance(s: &mut String, level: usize, i: &Instance) {
+    let ind = indent(level);
+    write!(s, "{ind}{}", i.module).unwrap();
+    if !i.params.is_empty() {
+        s.push_str(" #(\n");
+        for (k, (p, v)) in i.params.iter().enumerate() {
+            let sep = if k + 1 < i.params.len() { "," } else { "" };
+            writeln!(s, "{ind}{IND}.{p}({v}){sep}").unwrap();
+        }
+        write!(s, "{ind})").unwrap();
+    }
+    writeln!(s, " {} (", i.name).unwrap();
+    for (k, (p, e)) in i.conns.iter().enumerate() {
+        let sep = if k + 1 < i.conns.len() { "," } else { "" };
+        writeln!(s, "{ind}{IND}.{p}({e}){sep}").unwrap();
+    }
+    writeln!(s, "{ind});").unwrap();
+}
+
+fn stmts(s: &mut String, level: usize, list: &[Stmt], op: &str) {
+    let ind = indent(level);
+    for st in list {
+        match st {
+            Stmt::Set(l, r) => writeln!(s, "{ind}{l} {op} {r};").unwrap(),
+            Stmt::Comment(t) => push_comment(s, level, t),
+            Stmt::If(c, then, els) => {
+                writeln!(s, "{ind}if ({c}) begin").unwrap();
+                stmts(s, level + 1, then, op);
+                if els.is_empty() {
+                    writeln!(s, "{ind}end").unwrap();
+                } else if let [Stmt::If(..)] = els.as_slice() {
+                    // `else if` chains print flat.
+                    s.push_str(&ind);
+                    s.push_str("end else ");
+                    let mut inner = String::new();
+                    stmts(&mut inner, level, els, op);
+                    s.push_str(inner.trim_start());
+                } else {
+                    writeln!(s, "{ind}end else begin").unwrap();
+                    stmts(s, level + 1, els, op);
+                    writeln!(s, "{ind}end").unwrap();
+                }
+            }
+            Stmt::Case(sel, arms, default) => {
+                writeln!(s, "{ind}case ({sel})").unwrap();
+                for (label, body) in arms {
+                    writeln!(s, "{ind}{IND}{label}: begin").unwrap();
+                    stmts(s, level + 2, body, op);
+                    writeln!(s, "{ind}{IND}end").unwrap();
+                }
+                writeln!(s, "{ind}{IND}default: begin").unwrap();
+                stmts(s, level + 2, default, op);
+                writeln!(s, "{ind}{IND}end").unwrap();
+                writeln!(s, "{ind}endcase").unwrap();
+            }
+        }
+    }
+}

@@ -1,0 +1,156 @@
+//! Synthesis reports: Yosys cells and flip-flops per unit and per BSU topology
+//! (`neo gen --stats`, written to `reports/synth.json`).
+
+use crate::config::{GenConfig, Topology};
+use crate::tools::{synth_stats, SynthStats, ToolError};
+use crate::units::{files_for, top_modules};
+use serde::Serialize;
+
+/// One synthesized unit of a configuration.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnitReport {
+    /// Module name.
+    pub unit: String,
+    /// BSU comparator count (BSU only).
+    pub comparators: Option<usize>,
+    /// BSU network depth in comparator layers (BSU only).
+    pub depth: Option<usize>,
+    /// BSU latency in cycles (BSU only).
+    pub latency: Option<usize>,
+    /// Yosys statistics.
+    pub synth: SynthStats,
+}
+
+/// The BSU of one topology (other parameters from the base configuration).
+#[derive(Clone, Debug, Serialize)]
+pub struct TopologyReport {
+    /// Topology name.
+    pub topology: String,
+    /// Network width.
+    pub bsu_width: usize,
+    /// Register stage every `k` layers.
+    pub register_every: usize,
+    /// Comparators (golden network).
+    pub comparators: usize,
+    /// Layers (golden network).
+    pub depth: usize,
+    /// Latency in cycles.
+    pub latency: usize,
+    /// Yosys cells (flattened, generic gates).
+    pub cells: u64,
+    /// Yosys flip-flops.
+    pub flip_flops: u64,
+    /// Yosys latches (0).
+    pub latches: u64,
+}
+
+/// Everything `neo gen --stats` measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct SynthReport {
+    /// The configuration synthesized.
+    pub config: GenConfig,
+    /// The Yosys script per top (`TOP` replaced by the module name).
+    pub command: String,
+    /// Per-unit results, in [`top_modules`] order.
+    pub units: Vec<UnitReport>,
+    /// Per-topology BSU results (empty unless requested).
+    pub bsu_topologies: Vec<TopologyReport>,
+}
+
+/// The Yosys flow used for every figure.
+pub const YOSYS_COMMAND: &str = "yosys -q -p \"read_verilog FILES; synth -flatten -top TOP; stat -json\"";
+
+/// Runs `jobs` on up to two threads (the build machine has two cores), keeping their order.
+fn parallel<T: Send, R: Send>(jobs: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R> {
+    let mut jobs: Vec<(usize, T)> = jobs.into_iter().enumerate().collect();
+    let half = jobs.len().div_ceil(2);
+    let second = jobs.split_off(half);
+    let mut out: Vec<(usize, R)> = std::thread::scope(|s| {
+        let f = &f;
+        let h = s.spawn(move || second.into_iter().map(|(i, j)| (i, f(j))).collect::<Vec<_>>());
+        let mut a: Vec<(usize, R)> = jobs.into_iter().map(|(i, j)| (i, f(j))).collect();
+        a.extend(h.join().expect("synthesis thread"));
+        a
+    });
+    out.sort_by_key(|(i, _)| *i);
+    out.into_iter().map(|(_, r)| r).collect()
+}
+
+/// Synthesizes every top of `cfg`.
+pub fn unit_reports(cfg: &GenConfig) -> Result<Vec<UnitReport>, ToolError> {
+    let net = cfg.network();
+    parallel(top_modules().to_vec(), |top| {
+        let synth = synth_stats(&files_for(cfg, top), top)?;
+        let bsu = top == crate::units::bsu::NAME;
+        Ok(UnitReport {
+            unit: top.to_string(),
+            comparators: bsu.then(|| net.comparator_count()),
+            depth: bsu.then(|| net.depth()),
+            latency: bsu.then(|| cfg.bsu_latency()),
+            synth,
+        })
+    })
+    .into_iter()
+    .collect()
+}
+
+/// Synthesizes the BSU of every topology valid at `cfg.bsu_width`.
+pub fn topology_reports(cfg: &GenConfig) -> Result<Vec<TopologyReport>, ToolError> {
+    let cfgs: Vec<GenConfig> = Topology::ALL
+        .iter()
+        .map(|&topology| GenConfig { topology, ..cfg.clone() })
+        .filter(|c| c.validate().is_ok())
+        .collect();
+    parallel(cfgs, |c| {
+        let top = crate::units::bsu::NAME;
+        let s = synth_stats(&files_for(&c, top), top)?;
+        let net = c.network();
+        Ok(TopologyReport {
+            topology: c.topology.name().to_string(),
+            bsu_width: c.bsu_width,
+            register_every: c.register_every,
+            comparators: net.comparator_count(),
+            depth: net.depth(),
+            latency: c.bsu_latency(),
+            cells: s.cells,
+            flip_flops: s.flip_flops,
+            latches: s.latches,
+        })
+    })
+    .into_iter()
+    .collect()
+}
+
+/// A plain-text table of a report.
+pub fn table(r: &SynthReport) -> String {
+    let dash = |o: Option<usize>| o.map_or("-".to_string(), |v| v.to_string());
+    let mut s = format!(
+        "{:<14} {:>9} {:>10} {:>7} {:>11} {:>6} {:>8}\n",
+        "unit", "cells", "flip-flops", "latches", "comparators", "depth", "latency"
+    );
+    for u in &r.units {
+        s += &format!(
+            "{:<14} {:>9} {:>10} {:>7} {:>11} {:>6} {:>8}\n",
+            u.unit,
+            u.synth.cells,
+            u.synth.flip_flops,
+            u.synth.latches,
+            dash(u.comparators),
+            dash(u.depth),
+            dash(u.latency)
+        );
+    }
+    if !r.bsu_topologies.is_empty() {
+        s += &format!(
+            "\n{:<16} {:>11} {:>6} {:>2} {:>8} {:>9} {:>10}\n",
+            "bsu topology", "comparators", "depth", "k", "latency", "cells", "flip-flops"
+        );
+        for t in &r.bsu_topologies {
+            s += &format!(
+                "{:<16} {:>11} {:>6} {:>2} {:>8} {:>9} {:>10}\n",
+                t.topology, t.comparators, t.depth, t.register_every, t.latency, t.cells, t.flip_flops
+            );
+        }
+    }
+    s
+}

@@ -1,0 +1,233 @@
+//! Running the EDA tools on generated files: Yosys synthesis statistics, Verilator lint and an
+//! Icarus compile. Each writes the files to a fresh temporary directory first, so it works on
+//! in-memory output as well as on a checked-in directory.
+
+use crate::units::VerilogFile;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A tool that failed to run or reported a problem.
+#[derive(Debug, thiserror::Error)]
+pub enum ToolError {
+    /// The tool is not on `PATH` (or could not be started).
+    #[error("{tool} could not be run: {problem}")]
+    Missing {
+        /// Program name.
+        tool: String,
+        /// Why.
+        problem: String,
+    },
+    /// The tool ran and failed; `output` is its stdout and stderr.
+    #[error("{tool} failed on {top}:\n{output}")]
+    Failed {
+        /// Program name.
+        tool: String,
+        /// The top module it was run on.
+        top: String,
+        /// Its output.
+        output: String,
+    },
+}
+
+/// True when `tool --version` (`-V` for Yosys and Icarus) runs.
+pub fn available(tool: &str) -> bool {
+    let flag = if tool == "verilator" { "--version" } else { "-V" };
+    Command::new(tool).arg(flag).output().map(|o| o.status.success()).unwrap_or(false)
+}
+
+/// For tests: true when `tool` can be run; otherwise panics when the `CI` environment variable
+/// is set, and prints a SKIP message naming `test` and returns false when it is not.
+pub fn require_for_test(tool: &str, test: &str) -> bool {
+    if available(tool) {
+        return true;
+    }
+    if std::env::var_os("CI").is_some() {
+        panic!("{test}: {tool} is not on PATH (CI is set, so this is an error; run scripts/setup)");
+    }
+    eprintln!("SKIP {test}: {tool} is not on PATH (run scripts/setup to install it)");
+    false
+}
+
+/// A temporary directory holding some generated files; removed on drop.
+pub struct TempFiles {
+    dir: PathBuf,
+    paths: Vec<PathBuf>,
+}
+
+static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+impl TempFiles {
+    /// Writes `files` (as `NAME.v`) into a new directory under the system temp dir.
+    pub fn write(files: &[VerilogFile]) -> std::io::Result<TempFiles> {
+        let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("neo-gen-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir)?;
+        let mut paths = Vec::new();
+        for f in files {
+            let p = dir.join(f.file_name());
+            std::fs::write(&p, &f.text)?;
+            paths.push(p);
+        }
+        Ok(TempFiles { dir, paths })
+    }
+
+    /// The directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The file paths, in the order given.
+    pub fn paths(&self) -> &[PathBuf] {
+        &self.paths
+    }
+}
+
+impl Drop for TempFiles {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn run(tool: &str, top: &str, cmd: &mut Command) -> Result<String, ToolError> {
+    let out = cmd.output().map_err(|e| ToolError::Missing { tool: tool.into(), problem: e.to_string() })?;
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    if out.status.success() {
+        Ok(text)
+    } else {
+        Err(ToolError::Failed { tool: tool.into(), top: top.into(), output: text })
+    }
+}
+
+fn io_err(tool: &str, e: std::io::Error) -> ToolError {
+    ToolError::Missing { tool: tool.into(), problem: format!("temporary files: {e}") }
+}
+
+/// Yosys statistics of one synthesized top (generic gates, flattened).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct SynthStats {
+    /// The top module.
+    pub top: String,
+    /// Total cells after `synth -flatten`.
+    pub cells: u64,
+    /// Flip-flop cells (every `$_*DFF*` type).
+    pub flip_flops: u64,
+    /// Latch cells (every `*DLATCH*`/`$dlatch*`/`$_SR_*` type); must be 0.
+    pub latches: u64,
+    /// Cell counts by type.
+    pub cells_by_type: BTreeMap<String, u64>,
+}
+
+/// True for a Yosys flip-flop cell type.
+pub fn is_flip_flop(cell_type: &str) -> bool {
+    let t = cell_type.to_ascii_uppercase();
+    t.contains("DFF")
+}
+
+/// True for a Yosys latch cell type.
+pub fn is_latch(cell_type: &str) -> bool {
+    let t = cell_type.to_ascii_uppercase();
+    t.contains("DLATCH") || t.starts_with("$_SR_") || t == "$SR"
+}
+
+/// Synthesizes `top` from `files` with `yosys synth -flatten` (generic gates) and returns its
+/// statistics.
+pub fn synth_stats(files: &[VerilogFile], top: &str) -> Result<SynthStats, ToolError> {
+    yosys_stat(files, top, "")
+}
+
+/// The coarse part of `synth -flatten` (`-run :fine`: hierarchy, `proc` (where a latch would be
+/// inferred as `$dlatch`), `opt`, `memory -nomap`, ...) and its statistics: a fast latch check
+/// (seconds where the full flow takes a minute on the Sorting Core).
+pub fn coarse_synth_stats(files: &[VerilogFile], top: &str) -> Result<SynthStats, ToolError> {
+    yosys_stat(files, top, " -run :fine")
+}
+
+fn yosys_stat(files: &[VerilogFile], top: &str, synth_args: &str) -> Result<SynthStats, ToolError> {
+    let tmp = TempFiles::write(files).map_err(|e| io_err("yosys", e))?;
+    let json = tmp.dir().join("stat.json");
+    let reads: Vec<String> = tmp.paths().iter().map(|p| format!("read_verilog {};", p.display())).collect();
+    let script = format!(
+        "{} synth -flatten -top {top}{synth_args}; tee -q -o {} stat -json",
+        reads.join(" "),
+        json.display()
+    );
+    run("yosys", top, Command::new("yosys").args(["-q", "-p", &script]))?;
+    let text = std::fs::read_to_string(&json).map_err(|e| io_err("yosys", e))?;
+    parse_stat_json(top, &text)
+}
+
+/// Parses the output of Yosys `stat -json` (the `design` totals).
+pub fn parse_stat_json(top: &str, text: &str) -> Result<SynthStats, ToolError> {
+    let bad = |why: &str| ToolError::Failed { tool: "yosys".into(), top: top.into(), output: why.into() };
+    let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(&format!("stat JSON: {e}")))?;
+    let design = v.get("design").ok_or_else(|| bad("stat JSON has no design"))?;
+    let cells = design.get("num_cells").and_then(|c| c.as_u64()).ok_or_else(|| bad("no num_cells"))?;
+    let mut by_type = BTreeMap::new();
+    if let Some(map) = design.get("num_cells_by_type").and_then(|m| m.as_object()) {
+        for (k, n) in map {
+            by_type.insert(k.clone(), n.as_u64().unwrap_or(0));
+        }
+    }
+    let flip_flops = by_type.iter().filter(|(k, _)| is_flip_flop(k)).map(|(_, n)| n).sum();
+    let latches = by_type.iter().filter(|(k, _)| is_latch(k)).map(|(_, n)| n).sum();
+    Ok(SynthStats { top: top.into(), cells, flip_flops, latches, cells_by_type: by_type })
+}
+
+/// `verilator --lint-only -Wall [vlt] FILES --top-module TOP`; `Ok` when it prints nothing and
+/// succeeds, else the output.
+pub fn verilator_lint(files: &[VerilogFile], top: &str, vlt: Option<&Path>) -> Result<(), ToolError> {
+    let tmp = TempFiles::write(files).map_err(|e| io_err("verilator", e))?;
+    let mut cmd = Command::new("verilator");
+    cmd.args(["--lint-only", "-Wall"]);
+    if let Some(v) = vlt {
+        cmd.arg(v);
+    }
+    cmd.args(tmp.paths()).args(["--top-module", top]);
+    let out = run("verilator", top, &mut cmd)?;
+    if out.trim().is_empty() {
+        Ok(())
+    } else {
+        Err(ToolError::Failed { tool: "verilator".into(), top: top.into(), output: out })
+    }
+}
+
+/// `iverilog -g2005 -s TOP FILES` (compile only); `Ok` when it succeeds silently.
+pub fn icarus_compile(files: &[VerilogFile], top: &str) -> Result<(), ToolError> {
+    let tmp = TempFiles::write(files).map_err(|e| io_err("iverilog", e))?;
+    let out_file = tmp.dir().join("a.out");
+    let mut cmd = Command::new("iverilog");
+    cmd.args(["-g2005", "-Wall", "-s", top, "-o"]).arg(&out_file).args(tmp.paths());
+    let out = run("iverilog", top, &mut cmd)?;
+    if out.trim().is_empty() {
+        Ok(())
+    } else {
+        Err(ToolError::Failed { tool: "iverilog".into(), top: top.into(), output: out })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cell_classes() {
+        for ff in ["$_DFF_P_", "$_DFFE_PN0P_", "$_SDFFCE_PN0P_", "$dff", "$adff"] {
+            assert!(is_flip_flop(ff) && !is_latch(ff), "{ff}");
+        }
+        for l in ["$_DLATCH_P_", "$dlatch", "$adlatch", "$_SR_PP_", "$_DLATCHSR_PPP_"] {
+            assert!(is_latch(l) && !is_flip_flop(l), "{l}");
+        }
+        assert!(!is_flip_flop("$_MUX_") && !is_latch("$_MUX_"));
+    }
+
+    #[test]
+    fn stat_json_is_parsed() {
+        let text = r#"{"design": {"num_cells": 10, "num_cells_by_type": {"$_DFFE_PP_": 4, "$_DLATCH_P_": 1, "$_AND_": 5}}}"#;
+        let s = parse_stat_json("t", text).unwrap();
+        assert_eq!((s.cells, s.flip_flops, s.latches), (10, 4, 1));
+        assert!(parse_stat_json("t", "{}").is_err());
+        assert!(parse_stat_json("t", "garbage").is_err());
+    }
+}

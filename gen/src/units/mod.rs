@@ -1,0 +1,149 @@
+//! One generator per Neo unit, and the file sets of the cosimulated tops.
+//!
+//! | module          | what                                                    | cosim top |
+//! |-----------------|---------------------------------------------------------|-----------|
+//! | `neo_cmp_swap`  | compare-exchange on packed entries                      | no        |
+//! | `neo_bsu`       | Bitonic Sorting Unit: pipelined comparator network      | yes       |
+//! | `neo_msu`       | Merge Sort Unit+: streaming two-way merge with delete   | yes       |
+//! | `neo_chunk_ram` | one chunk buffer: 1 write port, 2 asynchronous reads    | no        |
+//! | `neo_sort_core` | Sorting Core: BSU + MSU+ + buffers + memory/command ports | yes     |
+
+pub mod bsu;
+pub mod chunk_ram;
+pub mod cmp_swap;
+pub mod msu;
+pub mod sort_core;
+
+use crate::config::{ConfigError, GenConfig};
+use crate::emit::Module;
+use crate::interface::ModuleInterface;
+
+/// One generated file: module `name` in `name.v`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct VerilogFile {
+    /// The module name (the file is `NAME.v`).
+    pub name: String,
+    /// The file text.
+    pub text: String,
+}
+
+impl VerilogFile {
+    /// The file name, `NAME.v`.
+    pub fn file_name(&self) -> String {
+        format!("{}.v", self.name)
+    }
+}
+
+/// Names of the tops that get their own cosimulation model, in order.
+pub fn top_modules() -> [&'static str; 3] {
+    ["neo_bsu", "neo_msu", "neo_sort_core"]
+}
+
+/// Every module of the configuration, leaves first.
+pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
+    cfg.validate()?;
+    Ok(vec![
+        cmp_swap::module(cfg),
+        bsu::module(cfg),
+        msu::module(cfg),
+        chunk_ram::module(cfg),
+        sort_core::module(cfg),
+    ])
+}
+
+/// Every module as a file, or the configuration error.
+pub fn try_generate(cfg: &GenConfig) -> Result<Vec<VerilogFile>, ConfigError> {
+    Ok(modules(cfg)?.iter().map(|m| VerilogFile { name: m.name.clone(), text: m.to_verilog() }).collect())
+}
+
+/// Every module as a file (one module per file `NAME.v`), in a fixed order.
+///
+/// # Panics
+/// When `cfg` is invalid ([`GenConfig::validate`]); use [`try_generate`] to get the error.
+pub fn generate(cfg: &GenConfig) -> Vec<VerilogFile> {
+    try_generate(cfg).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The interfaces of the cosimulated tops ([`top_modules`]).
+///
+/// # Panics
+/// When `cfg` is invalid.
+pub fn tops(cfg: &GenConfig) -> Vec<ModuleInterface> {
+    let all = modules(cfg).unwrap_or_else(|e| panic!("{e}"));
+    top_modules()
+        .iter()
+        .map(|t| all.iter().find(|m| m.name == *t).expect("every top is generated").interface())
+        .collect()
+}
+
+/// The files module `top` needs: itself and every module it instantiates, transitively
+/// (dependencies first, `top` last). Empty when `top` is not a generated module.
+///
+/// # Panics
+/// When `cfg` is invalid.
+pub fn files_for(cfg: &GenConfig, top: &str) -> Vec<VerilogFile> {
+    let all = modules(cfg).unwrap_or_else(|e| panic!("{e}"));
+    let mut order: Vec<String> = Vec::new();
+    fn visit(all: &[Module], name: &str, order: &mut Vec<String>) {
+        if order.iter().any(|n| n == name) {
+            return;
+        }
+        if let Some(m) = all.iter().find(|m| m.name == name) {
+            for dep in m.instantiated() {
+                visit(all, &dep, order);
+            }
+            order.push(name.to_string());
+        }
+    }
+    visit(&all, top, &mut order);
+    order
+        .iter()
+        .map(|n| {
+            let m = all.iter().find(|m| &m.name == n).expect("visited modules exist");
+            VerilogFile { name: m.name.clone(), text: m.to_verilog() }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_file_per_module_named_after_it() {
+        let files = generate(&GenConfig::default());
+        for f in &files {
+            assert!(f.text.contains(&format!("\nmodule {} ", f.name)), "{}", f.name);
+            assert_eq!(f.text.matches("\nmodule ").count(), 1, "{}", f.name);
+            assert!(f.text.starts_with(crate::emit::HEADER));
+        }
+        let mut names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), files.len());
+    }
+
+    #[test]
+    fn files_for_is_the_transitive_closure() {
+        let cfg = GenConfig::default();
+        let names = |t: &str| files_for(&cfg, t).into_iter().map(|f| f.name).collect::<Vec<_>>();
+        assert_eq!(names("neo_bsu"), ["neo_cmp_swap", "neo_bsu"]);
+        assert_eq!(names("neo_msu"), ["neo_msu"]);
+        let core = names("neo_sort_core");
+        assert_eq!(core.last().map(String::as_str), Some("neo_sort_core"));
+        for dep in ["neo_cmp_swap", "neo_bsu", "neo_msu", "neo_chunk_ram"] {
+            assert!(core.iter().any(|n| n == dep), "{dep} missing from {core:?}");
+        }
+        assert!(names("no_such_module").is_empty());
+    }
+
+    #[test]
+    fn tops_have_clock_and_reset() {
+        let t = tops(&GenConfig::default());
+        assert_eq!(t.iter().map(|i| i.name.as_str()).collect::<Vec<_>>(), top_modules());
+        for i in &t {
+            assert_eq!(i.ports[0].name, "clk_i");
+            assert_eq!(i.ports[1].name, "rst_ni");
+        }
+    }
+}

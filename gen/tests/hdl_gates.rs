@@ -1,0 +1,147 @@
+//! Quality gates on the generated RTL: the checked-in `hdl/` is the generator's output, every
+//! top is Verilator-lint clean (`-Wall`, waivers only in `hdl/lint.vlt`) and latch-free in
+//! Yosys, for the default configuration and for the other topologies and register spacings.
+//! Verilator / Yosys / Icarus missing: these tests fail when `CI` is set and skip otherwise.
+
+use neo_gen::output::check_dir;
+use neo_gen::tools::{coarse_synth_stats, icarus_compile, require_for_test, verilator_lint};
+use neo_gen::units::VerilogFile;
+use neo_gen::{files_for, generate, top_modules, GenConfig, Topology};
+use std::path::PathBuf;
+
+fn hdl_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("hdl")
+}
+
+/// Non-default configurations every gate also covers.
+fn other_configs() -> Vec<(String, GenConfig)> {
+    let base = GenConfig::default();
+    vec![
+        ("odd_even_merge".into(), GenConfig { topology: Topology::OddEvenMerge, ..base.clone() }),
+        ("best_16".into(), GenConfig { topology: Topology::Best16, ..base.clone() }),
+        ("bitonic k=3".into(), GenConfig { register_every: 3, ..base.clone() }),
+        ("best_16 k=1".into(), GenConfig { topology: Topology::Best16, register_every: 1, ..base.clone() }),
+        (
+            "bitonic n=8 k=10 chunk=64 narrow".into(),
+            GenConfig {
+                bsu_width: 8,
+                register_every: 10,
+                chunk: 64,
+                key_bits: 8,
+                id_bits: 10,
+                addr_bits: 20,
+                len_bits: 16,
+                burst: 8,
+                max_outstanding: 2,
+                ..base
+            },
+        ),
+    ]
+}
+
+fn for_every_top(cfg: &GenConfig, what: &str, check: impl Fn(&[VerilogFile], &str) -> Result<(), String>) {
+    let mut failures = Vec::new();
+    for top in top_modules() {
+        if let Err(e) = check(&files_for(cfg, top), top) {
+            failures.push(format!("{what}: {top}: {e}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn checked_in_hdl_is_the_generators_output() {
+    let files = generate(&GenConfig::default());
+    let diffs = check_dir(&hdl_dir(), &files).expect("read hdl/");
+    let list: Vec<String> = diffs.iter().map(|d| format!("  hdl/{d}")).collect();
+    assert!(
+        diffs.is_empty(),
+        "hdl/ is out of date; run `neo gen` (cargo run -- gen) and commit:\n{}",
+        list.join("\n")
+    );
+    assert!(hdl_dir().join("lint.vlt").exists(), "hdl/lint.vlt is missing");
+}
+
+fn lint(cfg: &GenConfig, what: &str) {
+    let vlt = hdl_dir().join("lint.vlt");
+    for_every_top(cfg, what, |files, top| verilator_lint(files, top, Some(&vlt)).map_err(|e| e.to_string()));
+}
+
+fn no_latches(cfg: &GenConfig, what: &str) {
+    for_every_top(cfg, what, |files, top| {
+        let s = coarse_synth_stats(files, top).map_err(|e| e.to_string())?;
+        if s.latches != 0 {
+            return Err(format!("{} latch cells: {:?}", s.latches, s.cells_by_type));
+        }
+        if s.flip_flops == 0 && top != "neo_cmp_swap" {
+            return Err(format!("no flip-flops at all? {:?}", s.cells_by_type));
+        }
+        Ok(())
+    });
+}
+
+#[test]
+fn every_top_is_lint_clean() {
+    if !require_for_test("verilator", "every_top_is_lint_clean") {
+        return;
+    }
+    lint(&GenConfig::default(), "default");
+}
+
+#[test]
+fn other_configurations_are_lint_clean() {
+    if !require_for_test("verilator", "other_configurations_are_lint_clean") {
+        return;
+    }
+    for (what, cfg) in other_configs() {
+        lint(&cfg, &what);
+    }
+}
+
+#[test]
+fn every_top_is_latch_free() {
+    if !require_for_test("yosys", "every_top_is_latch_free") {
+        return;
+    }
+    no_latches(&GenConfig::default(), "default");
+}
+
+#[test]
+fn other_configurations_are_latch_free() {
+    if !require_for_test("yosys", "other_configurations_are_latch_free") {
+        return;
+    }
+    for (what, cfg) in other_configs() {
+        no_latches(&cfg, &what);
+    }
+}
+
+#[test]
+fn latch_check_catches_a_latch() {
+    if !require_for_test("yosys", "latch_check_catches_a_latch") {
+        return;
+    }
+    let text = "module l (input wire en_i, input wire d_i, output reg q_o);\n\
+                always @* begin if (en_i) q_o = d_i; end\nendmodule\n";
+    let s = coarse_synth_stats(&[VerilogFile { name: "l".into(), text: text.into() }], "l").unwrap();
+    assert!(s.latches >= 1, "{:?}", s.cells_by_type);
+}
+
+#[test]
+fn lint_catches_a_problem() {
+    if !require_for_test("verilator", "lint_catches_a_problem") {
+        return;
+    }
+    let text = "module u (input wire [3:0] a_i, output wire [1:0] y_o);\nassign y_o = a_i;\nendmodule\n";
+    assert!(verilator_lint(&[VerilogFile { name: "u".into(), text: text.into() }], "u", None).is_err());
+}
+
+#[test]
+fn icarus_compiles_every_top() {
+    if !require_for_test("iverilog", "icarus_compiles_every_top") {
+        return;
+    }
+    for_every_top(&GenConfig::default(), "default", |files, top| {
+        icarus_compile(files, top).map_err(|e| e.to_string())
+    });
+}

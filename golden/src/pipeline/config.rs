@@ -1,0 +1,247 @@
+//! Pipeline parameters and the number formats a run uses.
+
+use serde::Serialize;
+
+use super::strategy::Strategy;
+use crate::camera::Camera;
+use crate::formats::{FeatureFormat, FeatureStats, FormatError};
+use crate::raster::RasterConfig;
+use crate::render::preprocess;
+use crate::scene::Scene;
+use crate::sort::{DepthKeyCodec, Network, SortConfig, SortFormat, SortParamError};
+
+/// Pipeline parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PipelineConfig {
+    /// Sorting strategy.
+    pub strategy: Strategy,
+    /// Tile and subtile geometry and SCU widths (64 / 8 by default).
+    pub raster: RasterConfig,
+    /// DPS and conventional-sort chunk size `C` (256).
+    pub chunk: usize,
+    /// DPS passes per frame (1).
+    pub dps_passes: usize,
+    /// Largest table per tile; `None` is unbounded.
+    pub capacity: Option<usize>,
+    /// Render the exact-order frame and compare against it (PSNR/SSIM vs exact).
+    pub compare_exact: bool,
+    /// Render the float reference and compare against it.
+    pub compare_float: bool,
+    /// Compute SSIM as well as PSNR.
+    pub ssim: bool,
+    /// Skip the exact-order raster of a tile whose table, restricted to the Gaussians touching
+    /// it, is already in the exact order (its pixels are then the same: entries that do not
+    /// touch a tile have empty subtile bitmaps and are never blended). Only saves time.
+    pub exact_shortcut: bool,
+}
+
+impl Default for PipelineConfig {
+    fn default() -> Self {
+        PipelineConfig {
+            strategy: Strategy::Neo,
+            raster: RasterConfig::default(),
+            chunk: SortConfig::DEFAULT_CHUNK,
+            dps_passes: 1,
+            capacity: None,
+            compare_exact: true,
+            compare_float: true,
+            ssim: true,
+            exact_shortcut: true,
+        }
+    }
+}
+
+impl PipelineConfig {
+    /// The table capacity as a number (`usize::MAX` when unbounded).
+    pub fn capacity_or_max(&self) -> usize {
+        self.capacity.unwrap_or(usize::MAX)
+    }
+}
+
+/// Why a configuration cannot run.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    /// A sorting parameter (chunk size, key or id width).
+    #[error("sorting parameters: {0}")]
+    Sort(#[from] SortParamError),
+    /// A feature-table or raster parameter.
+    #[error("feature/raster format: {0}")]
+    Format(#[from] FormatError),
+    /// Anything else.
+    #[error("{0}")]
+    Other(String),
+}
+
+/// The number formats of a run: feature table, depth key, sort entry.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Formats {
+    /// Feature-table widths.
+    pub feature: FeatureFormat,
+    /// Depth-key codec (its width equals `feature.depth_key_bits`).
+    pub key: DepthKeyCodec,
+    /// Sorting Core parameters (entry format, chunk size, 16-input bitonic BSU).
+    pub sort: SortConfig,
+}
+
+impl Formats {
+    /// The artifact's formats: default feature widths, FP16 depth key, 6-byte sort entries.
+    pub fn artifact(chunk: usize) -> Result<Self, PipelineError> {
+        let feature = FeatureFormat::default();
+        let key = DepthKeyCodec::Fp16;
+        let sort = SortConfig::new(
+            SortFormat::new(key.key_bits(), SortFormat::ARTIFACT.id_bits())?,
+            chunk,
+            Network::bitonic(16),
+        )?;
+        Ok(Formats { feature, key, sort })
+    }
+
+    /// Formats fitted to a run: feature ranges ([`FeatureFormat::fitted`]) and a log depth key
+    /// of the default width ([`DepthKeyCodec::fit`]) over every frame's preprocessed Gaussians,
+    /// and an id field as narrow as the Gaussian count allows ([`SortFormat::fitted`]).
+    /// Preprocesses every camera once (in parallel per frame).
+    pub fn fitted(scene: &Scene, cams: &[Camera], tile: u32, chunk: usize) -> Result<Self, PipelineError> {
+        let base = FeatureFormat::default();
+        let mut stats = FeatureStats::default();
+        let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
+        for cam in cams {
+            let p = preprocess(scene, cam, tile);
+            stats = stats.merge(&FeatureStats::from_projected(&p));
+            for q in &p {
+                if q.depth.is_finite() && q.depth > 0.0 {
+                    lo = lo.min(q.depth);
+                    hi = hi.max(q.depth);
+                }
+            }
+        }
+        let feature = FeatureFormat::fitted(&stats, &base);
+        let key = DepthKeyCodec::fit(
+            [lo, hi].into_iter().filter(|z| z.is_finite() && *z > 0.0),
+            base.depth_key_bits,
+        )?;
+        let format = SortFormat::fitted(scene.len() as u64, key.key_bits())?;
+        let sort = SortConfig::new(format, chunk, Network::bitonic(16))?;
+        Ok(Formats { feature, key, sort })
+    }
+
+    /// Checks the formats against each other, the raster configuration and the scene size.
+    pub fn check(&self, raster: &RasterConfig, gaussians: usize) -> Result<(), PipelineError> {
+        raster.check(&self.feature)?;
+        if self.key.key_bits() != self.feature.depth_key_bits
+            || self.key.key_bits() != self.sort.format().key_bits()
+        {
+            return Err(PipelineError::Other(format!(
+                "depth key widths differ: codec {}, feature table {}, sort entry {}",
+                self.key.key_bits(),
+                self.feature.depth_key_bits,
+                self.sort.format().key_bits()
+            )));
+        }
+        if gaussians as u64 > self.sort.format().id_capacity() {
+            return Err(SortParamError::TooManyGaussians(gaussians as u64).into());
+        }
+        Ok(())
+    }
+}
+
+/// The configuration block of `stats.json`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConfigRecord {
+    /// Scene spec or path.
+    pub scene: String,
+    /// Trajectory spec.
+    pub trajectory: String,
+    /// Gaussians in the scene.
+    pub gaussians: usize,
+    /// Strategy, as parsed (`neo`, `periodic:4`, ...).
+    pub strategy: String,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Frames rendered.
+    pub frames: usize,
+    /// Scene cuts of the trajectory.
+    pub cuts: Vec<usize>,
+    /// Tile side.
+    pub tile: u32,
+    /// Subtile side.
+    pub subtile: u32,
+    /// Chunk size.
+    pub chunk: usize,
+    /// DPS passes per frame.
+    pub dps_passes: usize,
+    /// Table capacity (`null`: unbounded).
+    pub capacity: Option<usize>,
+    /// Whether the formats were fitted to the run.
+    pub fitted: bool,
+    /// Depth-key codec, e.g. `Fp16` or `Log(KeyRange { .. })`.
+    pub key_codec: String,
+    /// Sort entry `[key_bits, id_bits]`.
+    pub sort_entry_bits: [u8; 2],
+    /// Bytes per sort entry in DRAM.
+    pub sort_entry_bytes: usize,
+    /// Feature-table widths.
+    pub feature_format: FeatureFormat,
+    /// Bytes per feature entry in DRAM.
+    pub feature_entry_bytes: u32,
+    /// Comparisons enabled.
+    pub compare_exact: bool,
+    /// Comparisons enabled.
+    pub compare_float: bool,
+    /// SSIM enabled.
+    pub ssim: bool,
+    /// Rayon threads.
+    pub threads: usize,
+}
+
+/// What a run is besides its configuration and formats (for [`ConfigRecord::new`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunInfo<'a> {
+    /// Scene spec or path.
+    pub scene: &'a str,
+    /// Trajectory spec.
+    pub trajectory: &'a str,
+    /// Gaussians in the scene.
+    pub gaussians: usize,
+    /// Frames rendered.
+    pub frames: usize,
+    /// Scene cuts.
+    pub cuts: &'a [usize],
+    /// Image size.
+    pub size: (u32, u32),
+    /// Whether the formats were fitted to the run.
+    pub fitted: bool,
+}
+
+impl ConfigRecord {
+    /// The record of a run.
+    pub fn new(run: &RunInfo, cfg: &PipelineConfig, f: &Formats) -> Self {
+        let RunInfo { scene, trajectory, gaussians, frames, cuts, size, fitted } = *run;
+        ConfigRecord {
+            scene: scene.to_string(),
+            trajectory: trajectory.to_string(),
+            gaussians,
+            strategy: cfg.strategy.to_string(),
+            width: size.0,
+            height: size.1,
+            frames,
+            cuts: cuts.to_vec(),
+            tile: cfg.raster.tile,
+            subtile: cfg.raster.subtile,
+            chunk: cfg.chunk,
+            dps_passes: cfg.dps_passes,
+            capacity: cfg.capacity,
+            fitted,
+            key_codec: format!("{:?}", f.key),
+            sort_entry_bits: [f.sort.format().key_bits(), f.sort.format().id_bits()],
+            sort_entry_bytes: f.sort.format().bytes_per_entry(),
+            feature_format: f.feature,
+            feature_entry_bytes: f.feature.bytes_per_entry(),
+            compare_exact: cfg.compare_exact,
+            compare_float: cfg.compare_float,
+            ssim: cfg.ssim,
+            threads: rayon::current_num_threads(),
+        }
+    }
+}

@@ -1,0 +1,554 @@
+//! The per-frame driver: float preprocess, quantisation into the feature table, binning with
+//! the ITU, per-tile sorting (the strategy's), fixed-point raster with the write-back of depth
+//! keys and valid bits, and the references and statistics.
+//!
+//! Tiles are independent and processed in parallel (rayon), each phase over all tiles in turn
+//! so that the timing of every stage is a wall-clock figure. Per-tile buffers live in the
+//! pipeline and are reused from frame to frame; per-thread buffers come from a pool.
+
+use std::io::{self, Write};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::binning::Binning;
+use super::config::{Formats, PipelineConfig, PipelineError};
+use super::order::{compare_orders, TileOrder};
+use super::stats::{
+    finite, FrameStats, GaussianCounts, OrderStats, RasterWork, Retention, TileAggregates, TileColumns,
+    Timing,
+};
+use super::tile::{exact_table, sort_tile, FramePos, TileCtx, TileSortOutput, TileState};
+use super::trace::write_trace;
+use crate::camera::Camera;
+use crate::formats::{quantize, FeatureEntry};
+use crate::image::Rgb8Image;
+use crate::metrics::{psnr, ssim};
+use crate::raster::{raster_tile_into, TileRaster};
+use crate::render::{self, preprocess};
+use crate::scene::Scene;
+use crate::sort::SortEntry;
+
+/// Marks a Gaussian without a feature entry this frame.
+const CULLED: u32 = u32::MAX;
+
+/// Per-tile buffers of one frame.
+#[derive(Clone, Debug, Default)]
+struct TileSlot {
+    sort: TileSortOutput,
+    /// Subtile bitmap of every entry of the rastered table (0 for culled Gaussians).
+    bitmaps: Vec<u64>,
+    /// Ids of the tile's incoming list (every current id when sorted from scratch).
+    incoming: Vec<u32>,
+    /// Exact table.
+    exact: Vec<SortEntry>,
+    /// The strategy's pixels (`tile * tile`).
+    pixels: Vec<[u8; 3]>,
+    /// The exact order's pixels, when they differ.
+    exact_pixels: Vec<[u8; 3]>,
+    /// The exact pixels equal `pixels`.
+    exact_same: bool,
+    raster: TileRaster,
+    feats: Vec<FeatureEntry>,
+    raster_work: RasterWork,
+    order: TileOrder,
+    displacements: Vec<u32>,
+}
+
+/// A pool of per-thread buffers.
+struct CtxPool {
+    free: Mutex<Vec<TileCtx>>,
+    proto: TileCtx,
+}
+
+/// A buffer taken from the pool, returned on drop.
+struct PooledCtx<'p> {
+    ctx: Option<TileCtx>,
+    pool: &'p CtxPool,
+}
+
+impl CtxPool {
+    fn take(&self) -> PooledCtx<'_> {
+        let ctx = self.free.lock().expect("pool lock").pop().unwrap_or_else(|| self.proto.clone());
+        PooledCtx { ctx: Some(ctx), pool: self }
+    }
+}
+
+impl Drop for PooledCtx<'_> {
+    fn drop(&mut self) {
+        if let Some(c) = self.ctx.take() {
+            if let Ok(mut v) = self.pool.free.lock() {
+                v.push(c);
+            }
+        }
+    }
+}
+
+impl std::ops::Deref for PooledCtx<'_> {
+    type Target = TileCtx;
+    fn deref(&self) -> &TileCtx {
+        self.ctx.as_ref().expect("present until drop")
+    }
+}
+
+impl std::ops::DerefMut for PooledCtx<'_> {
+    fn deref_mut(&mut self) -> &mut TileCtx {
+        self.ctx.as_mut().expect("present until drop")
+    }
+}
+
+/// The images and statistics of one frame.
+#[derive(Clone, Debug)]
+pub struct FrameOutput {
+    /// The strategy's 8-bit frame.
+    pub image: Rgb8Image,
+    /// The exact-order frame (when compared).
+    pub exact_image: Option<Rgb8Image>,
+    /// The float reference (when compared).
+    pub float_image: Option<Rgb8Image>,
+    /// Statistics.
+    pub stats: FrameStats,
+    /// Per-tile columns.
+    pub tiles: TileColumns,
+}
+
+/// The golden pipeline over a sequence of frames of one scene at one resolution.
+pub struct Pipeline<'s> {
+    scene: &'s Scene,
+    cfg: PipelineConfig,
+    formats: Formats,
+    width: u32,
+    height: u32,
+    grid: [u32; 2],
+    states: Vec<TileState>,
+    slots: Vec<TileSlot>,
+    pool: CtxPool,
+    features: Vec<FeatureEntry>,
+    feature_ids: Vec<u32>,
+    feature_of: Vec<u32>,
+    binning: Binning,
+    shot_start: usize,
+    last_frame: Option<usize>,
+}
+
+impl<'s> Pipeline<'s> {
+    /// A pipeline for `scene` rendered at `width x height`.
+    pub fn new(
+        scene: &'s Scene,
+        cfg: PipelineConfig,
+        formats: Formats,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, PipelineError> {
+        formats.check(&cfg.raster, scene.len())?;
+        if width == 0 || height == 0 {
+            return Err(PipelineError::Other(format!("image size {width}x{height} is empty")));
+        }
+        if formats.sort.chunk() != cfg.chunk {
+            return Err(PipelineError::Other(format!(
+                "chunk {} differs from the sort configuration's {}",
+                cfg.chunk,
+                formats.sort.chunk()
+            )));
+        }
+        let grid = [width.div_ceil(cfg.raster.tile), height.div_ceil(cfg.raster.tile)];
+        let tiles = grid[0] as usize * grid[1] as usize;
+        let proto = TileCtx::new(cfg.strategy, &formats.sort, cfg.dps_passes, cfg.capacity_or_max());
+        Ok(Pipeline {
+            scene,
+            formats,
+            width,
+            height,
+            grid,
+            states: vec![TileState::default(); tiles],
+            slots: vec![TileSlot::default(); tiles],
+            pool: CtxPool { free: Mutex::new(Vec::new()), proto },
+            features: Vec::new(),
+            feature_ids: Vec::new(),
+            feature_of: vec![CULLED; scene.len()],
+            binning: Binning::default(),
+            shot_start: 0,
+            last_frame: None,
+            cfg,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &PipelineConfig {
+        &self.cfg
+    }
+
+    /// The number formats.
+    pub fn formats(&self) -> &Formats {
+        &self.formats
+    }
+
+    /// Tile grid `[x, y]`.
+    pub fn grid(&self) -> [u32; 2] {
+        self.grid
+    }
+
+    /// The tables after the last frame's write-back (row-major tiles): the next frame's reused
+    /// tables.
+    pub fn tables(&self) -> impl Iterator<Item = &[SortEntry]> {
+        self.states.iter().map(|s| s.table.as_slice())
+    }
+
+    /// The current list of every tile in the last frame (ascending ids, current keys).
+    pub fn current_lists(&self) -> impl Iterator<Item = &[SortEntry]> {
+        (0..self.binning.tiles()).map(|t| self.binning.tile(t))
+    }
+
+    /// The exact tables of the last frame (when the exact order was computed).
+    pub fn exact_tables(&self) -> impl Iterator<Item = &[SortEntry]> {
+        self.slots.iter().map(|s| s.exact.as_slice())
+    }
+
+    /// The subtile bitmaps of the last frame's rastered tables, per tile, per entry.
+    pub fn bitmaps(&self) -> impl Iterator<Item = &[u64]> {
+        self.slots.iter().map(|s| s.bitmaps.as_slice())
+    }
+
+    /// Renders frame `frame` from `cam` (of the pipeline's size). `cut` marks a scene cut; the
+    /// first frame rendered is always a shot start.
+    ///
+    /// # Panics
+    /// When the camera's size differs from the pipeline's.
+    pub fn render_frame(&mut self, cam: &Camera, frame: usize, cut: bool) -> FrameOutput {
+        assert_eq!(
+            (cam.width, cam.height),
+            (self.width, self.height),
+            "camera size differs from the pipeline's"
+        );
+        let t_start = Instant::now();
+        if cut || self.last_frame.is_none() {
+            self.shot_start = frame;
+        }
+        self.last_frame = Some(frame);
+        let pos = FramePos { frame, shot_start: self.shot_start };
+        let mut timing = Timing::default();
+
+        // Preprocess and quantise.
+        let t = Instant::now();
+        let projected = preprocess(self.scene, cam, self.cfg.raster.tile);
+        timing.preprocess_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let (fmt, key) = (&self.formats.feature, &self.formats.key);
+        projected.par_iter().map(|p| quantize(p, fmt, key)).collect_into_vec(&mut self.features);
+        self.feature_ids.clear();
+        self.feature_ids.extend(projected.iter().map(|p| p.index));
+        self.feature_of.par_iter_mut().for_each(|v| *v = CULLED);
+        for (i, &id) in self.feature_ids.iter().enumerate() {
+            self.feature_of[id as usize] = i as u32;
+        }
+        drop(projected);
+        timing.quantize_s = t.elapsed().as_secs_f64();
+
+        // Binning.
+        let t = Instant::now();
+        self.binning.run(&self.features, &self.feature_ids, fmt, &self.cfg.raster, self.width, self.height);
+        timing.binning_s = t.elapsed().as_secs_f64();
+
+        // Sorting.
+        let t = Instant::now();
+        let strategy = self.cfg.strategy;
+        let binning = &self.binning;
+        let pool = &self.pool;
+        self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each_init(
+            || pool.take(),
+            |ctx, (ti, (state, slot))| {
+                let current = binning.tile(ti);
+                slot.sort = sort_tile(strategy, pos, state, current, ctx);
+                slot.incoming.clear();
+                if slot.sort.from_scratch {
+                    slot.incoming.extend(current.iter().map(|e| e.id));
+                } else {
+                    slot.incoming.extend(ctx.incoming.iter().map(|e| e.id));
+                }
+            },
+        );
+        timing.sort_s = t.elapsed().as_secs_f64();
+
+        // Raster and write-back.
+        let t = Instant::now();
+        self.raster_phase(strategy.writes_back_keys());
+        let image = self.assemble(false);
+        timing.raster_s = t.elapsed().as_secs_f64();
+        timing.pipeline_s =
+            timing.preprocess_s + timing.quantize_s + timing.binning_s + timing.sort_s + timing.raster_s;
+
+        // Exact reference.
+        let t = Instant::now();
+        self.reference_phase();
+        let exact_image = if self.cfg.compare_exact { Some(self.assemble(true)) } else { None };
+        timing.reference_s = t.elapsed().as_secs_f64();
+
+        // Float reference.
+        let t = Instant::now();
+        let float_image = self
+            .cfg
+            .compare_float
+            .then(|| render::render(self.scene, cam, &render::RenderOptions::default()).image.to_rgb8());
+        timing.float_s = t.elapsed().as_secs_f64();
+
+        // Metrics.
+        let t = Instant::now();
+        let mut stats = self.frame_stats(pos, cut, &image, exact_image.as_ref(), float_image.as_ref());
+        timing.metrics_s = t.elapsed().as_secs_f64();
+        timing.total_s = t_start.elapsed().as_secs_f64();
+        stats.timing = timing;
+        let inversions: Vec<u64> = self.slots.iter().map(|s| s.order.inversions).collect();
+        let counts: Vec<_> = self.slots.iter().map(|s| s.sort.counts).collect();
+        let tiles = TileColumns::new(frame, self.grid, &counts, &inversions);
+        FrameOutput { image, exact_image, float_image, stats, tiles }
+    }
+
+    /// Rasterises every tile's table, fills the slots' bitmaps and pixels, and writes keys (when
+    /// `write_keys`) and valid bits back into the tables.
+    fn raster_phase(&mut self, write_keys: bool) {
+        let (features, feature_of, binning) = (&self.features, &self.feature_of, &self.binning);
+        let (fmt, cfg, w, h, gx) =
+            (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
+        let subtiles = cfg.subtiles_per_tile() as u64;
+        self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each(
+            |(ti, (state, slot))| {
+                let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
+                slot.feats.clear();
+                for e in &state.table {
+                    let f = feature_of[e.id as usize];
+                    if f != CULLED {
+                        slot.feats.push(features[f as usize]);
+                    }
+                }
+                raster_tile_into(&slot.feats, fmt, tx, ty, w, h, cfg, &mut slot.raster);
+                std::mem::swap(&mut slot.pixels, &mut slot.raster.pixels);
+                let current = binning.tile(ti);
+                let mut rw = RasterWork { entries: slot.feats.len() as u64, ..RasterWork::default() };
+                rw.subtile_tests = rw.entries * subtiles;
+                slot.bitmaps.clear();
+                let mut j = 0;
+                let mut popcount = 0u64;
+                for e in state.table.iter_mut() {
+                    let f = feature_of[e.id as usize];
+                    let in_current = current.binary_search_by_key(&e.id, |c| c.id).is_ok();
+                    if f == CULLED {
+                        slot.bitmaps.push(0);
+                        e.valid = false;
+                        rw.itu_mismatch += in_current as u64;
+                        continue;
+                    }
+                    let b = slot.raster.bitmaps[j];
+                    let valid = slot.raster.valid[j];
+                    slot.bitmaps.push(b);
+                    popcount += b.count_ones() as u64;
+                    rw.itu_mismatch += (valid != in_current) as u64;
+                    e.valid = valid;
+                    if write_keys {
+                        e.key = features[f as usize].depth_key;
+                    }
+                    j += 1;
+                }
+                rw.subtile_blends = popcount;
+                for sw in &slot.raster.work {
+                    rw.subtile_processed += sw.processed as u64;
+                    rw.pixel_evals += sw.pixel_evals as u64;
+                    rw.finished_pixels += sw.finished_pixels as u64;
+                    rw.terminated_subtiles += sw.terminated as u64;
+                }
+                slot.sort.counts.bitmap_popcount = popcount as u32;
+                slot.raster_work = rw;
+            },
+        );
+    }
+
+    /// Exact tables of every tile and, when compared, their raster.
+    fn reference_phase(&mut self) {
+        let (features, feature_of, binning) = (&self.features, &self.feature_of, &self.binning);
+        let (fmt, cfg, w, h, gx) =
+            (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
+        let capacity = self.cfg.capacity_or_max();
+        let exact_strategy = self.cfg.strategy.is_exact();
+        let (compare, shortcut) = (self.cfg.compare_exact, self.cfg.exact_shortcut);
+        let pool = &self.pool;
+        self.states.par_iter().zip(self.slots.par_iter_mut()).enumerate().for_each_init(
+            || pool.take(),
+            |ctx, (ti, (state, slot))| {
+                let current = binning.tile(ti);
+                exact_table(current, capacity, &mut slot.exact);
+                if exact_strategy {
+                    debug_assert!(state.table.iter().map(|e| e.id).eq(slot.exact.iter().map(|e| e.id)));
+                    slot.exact_same = true;
+                    return;
+                }
+                if !compare {
+                    slot.exact_same = false;
+                    return;
+                }
+                if shortcut {
+                    ctx.marks.clear();
+                    for e in current {
+                        ctx.marks.insert(e.id);
+                    }
+                    let touching = state.table.iter().filter(|e| ctx.marks.contains(e.id)).map(|e| e.id);
+                    if touching.eq(slot.exact.iter().map(|e| e.id)) {
+                        slot.exact_same = true;
+                        return;
+                    }
+                }
+                slot.exact_same = false;
+                slot.feats.clear();
+                slot.feats.extend(slot.exact.iter().map(|e| features[feature_of[e.id as usize] as usize]));
+                let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
+                raster_tile_into(&slot.feats, fmt, tx, ty, w, h, cfg, &mut slot.raster);
+                std::mem::swap(&mut slot.exact_pixels, &mut slot.raster.pixels);
+            },
+        );
+    }
+
+    /// The 8-bit frame from the slots' pixels (`exact`: the exact-order pixels).
+    fn assemble(&self, exact: bool) -> Rgb8Image {
+        let mut img = Rgb8Image::new(self.width, self.height);
+        let t = self.cfg.raster.tile as usize;
+        let (w, h, gx) = (self.width as usize, self.height as usize, self.grid[0] as usize);
+        let row_bytes = 3 * w;
+        img.data.par_chunks_mut(row_bytes * t).enumerate().for_each(|(ty, band)| {
+            for tx in 0..gx {
+                let slot = &self.slots[ty * gx + tx];
+                let px = if exact && !slot.exact_same { &slot.exact_pixels } else { &slot.pixels };
+                let x0 = tx * t;
+                let cols = t.min(w - x0);
+                let rows = t.min(h - ty * t);
+                for ly in 0..rows {
+                    let dst = &mut band[ly * row_bytes + 3 * x0..ly * row_bytes + 3 * (x0 + cols)];
+                    for (d, s) in dst.chunks_exact_mut(3).zip(&px[ly * t..ly * t + cols]) {
+                        d.copy_from_slice(s);
+                    }
+                }
+            }
+        });
+        img
+    }
+
+    /// Statistics of the frame just rendered.
+    fn frame_stats(
+        &mut self,
+        pos: FramePos,
+        cut: bool,
+        image: &Rgb8Image,
+        exact: Option<&Rgb8Image>,
+        float: Option<&Rgb8Image>,
+    ) -> FrameStats {
+        let exact_strategy = self.cfg.strategy.is_exact();
+        let pool = &self.pool;
+        if exact_strategy {
+            for (state, slot) in self.states.iter().zip(self.slots.iter_mut()) {
+                let n = state.table.len();
+                slot.order = TileOrder { compared: n, ..TileOrder::default() };
+                slot.displacements.clear();
+                slot.displacements.resize(n, 0);
+            }
+        } else {
+            self.states.par_iter().zip(self.slots.par_iter_mut()).for_each_init(
+                || pool.take(),
+                |ctx, (state, slot)| {
+                    slot.displacements.clear();
+                    slot.order =
+                        compare_orders(&state.table, &slot.exact, &mut ctx.order, &mut slot.displacements);
+                },
+            );
+        }
+        let mut disp: Vec<u32> = self.slots.iter().flat_map(|s| s.displacements.iter().copied()).collect();
+        let inversions = self.slots.iter().map(|s| s.order.inversions).sum();
+        let with_inv = self.slots.iter().filter(|s| s.order.inversions > 0).count() as u64;
+        let order = OrderStats::from_displacements(&mut disp, inversions, with_inv);
+
+        let counts: Vec<_> = self.slots.iter().map(|s| s.sort.counts).collect();
+        let from_scratch = self.slots.iter().filter(|s| s.sort.from_scratch).count() as u64;
+        let mut work = super::work::StageWork::default();
+        let mut raster = RasterWork::default();
+        for s in &self.slots {
+            work.add(&s.sort.work);
+            raster.add(&s.raster_work);
+        }
+        let writes_back = self.cfg.strategy.reuses_tables();
+        work.raster_read = raster.entries;
+        if writes_back {
+            work.writeback = counts.iter().map(|c| c.table_len as u64).sum();
+        }
+        let ssim_on = self.cfg.ssim;
+        let metric = |a: &Rgb8Image, b: &Rgb8Image| -> (Option<f64>, Option<f64>) {
+            let p = psnr(a, b).ok().and_then(finite);
+            let s = if ssim_on { ssim(a, b).ok() } else { None };
+            (p, s)
+        };
+        let ((pe, se), (pf, sf), (epf, esf)) = rayon::join(
+            || exact.map(|e| metric(image, e)).unwrap_or_default(),
+            || {
+                rayon::join(
+                    || float.map(|f| metric(image, f)).unwrap_or_default(),
+                    || match (exact, float) {
+                        (Some(e), Some(f)) => metric(e, f),
+                        _ => (None, None),
+                    },
+                )
+            },
+        )
+        .map_tuple();
+        let visible = self.features.len() as u64;
+        FrameStats {
+            frame: pos.frame,
+            cut: cut && pos.frame == pos.shot_start,
+            shot_start: pos.shot_start,
+            from_scratch: from_scratch as usize == self.slots.len(),
+            psnr_vs_exact: pe,
+            psnr_vs_float: pf,
+            ssim_vs_exact: se,
+            ssim_vs_float: sf,
+            exact_psnr_vs_float: epf,
+            exact_ssim_vs_float: esf,
+            identical_to_exact: exact.map(|e| e.data == image.data),
+            gaussians: GaussianCounts {
+                total: self.scene.len() as u64,
+                visible,
+                culled: self.scene.len() as u64 - visible,
+            },
+            tiles: TileAggregates::from_counts(&counts, from_scratch, self.binning.tiles_tested),
+            order,
+            retention: Retention::from_counts(&counts),
+            dropped_capacity: work.dropped_capacity,
+            dropped_invalid: work.dropped_invalid,
+            work,
+            raster,
+            timing: Timing::default(),
+        }
+    }
+
+    /// Writes the last frame as a `poc.trace` (see [`super::trace`]).
+    pub fn write_trace(&self, out: &mut dyn Write) -> io::Result<()> {
+        let tables: Vec<&[SortEntry]> = self.states.iter().map(|s| s.table.as_slice()).collect();
+        let bitmaps: Vec<&[u64]> = self.slots.iter().map(|s| s.bitmaps.as_slice()).collect();
+        let incoming: Vec<&[u32]> = self.slots.iter().map(|s| s.incoming.as_slice()).collect();
+        let reused: Vec<u32> = self.slots.iter().map(|s| s.sort.counts.reused).collect();
+        let culled: Vec<bool> = self.feature_of.iter().map(|&f| f == CULLED).collect();
+        let header = super::trace::TraceHeader {
+            width: self.width,
+            height: self.height,
+            tile: self.cfg.raster.tile,
+            subtile: self.cfg.raster.subtile,
+            chunk: self.cfg.chunk,
+        };
+        write_trace(out, &header, &culled, &tables, &bitmaps, &incoming, &reused)
+    }
+}
+
+/// `((a, b), ((c, d), (e, f)))` to `((a, b), (c, d), (e, f))`.
+trait MapTuple<A, B, C> {
+    fn map_tuple(self) -> (A, B, C);
+}
+
+impl<A, B, C> MapTuple<A, B, C> for (A, (B, C)) {
+    fn map_tuple(self) -> (A, B, C) {
+        (self.0, self.1 .0, self.1 .1)
+    }
+}

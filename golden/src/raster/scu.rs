@@ -1,0 +1,485 @@
+//! The Subtile Compute Unit: front-to-back blending of one tile's Gaussian table in fixed point.
+//!
+//! # Per tile
+//! The ITU computes each entry's subtile bitmap ([`super::itu::subtile_bitmap`]); the valid bit
+//! of entry `i` is `bitmap != 0`. Each subtile then blends, in table order, only the entries
+//! whose bit is set. The order matters per pixel only, so pixel lanes are free.
+//!
+//! # Per pixel `(px, py)` and entry (names as in [`crate::formats`]; `Fm = mean.frac`,
+//! `s = M - top + exp` the conic scale, `P = power_frac`, `A = alpha_frac`, `Tf =
+//! transmittance_frac`, `Fc = color.frac`, `Fo = opacity.frac`, `Fe = exp.out_frac`)
+//! 1. `dx = mean_x - (px << Fm)`, `dy = mean_y - (py << Fm)` (exact).
+//! 2. `q = a dx² + 2 b dx dy + c dy²` with the conic mantissas, **exact** (any exact evaluation
+//!    order, e.g. incremental over the subtile, gives the same bits). Width: `2 W_d + M + 2` bits
+//!    with `W_d = mean.bits + 1`.
+//! 3. `np = shr_round(q, s + 2 Fm + 1 - P)`: `-power = q / 2` with `P` fraction bits, rounded
+//!    half up (a shift of 127 or more gives 0). If `np < 0` (`power > 0`, only possible when the
+//!    quantised conic is not positive definite) the entry is skipped. Else
+//!    `np = min(np, 2^(power_int + P) - 1)` (saturation).
+//! 4. `e = exp(np)` by [`super::exp::ExpTable::eval`] (`Fe` fraction bits).
+//! 5. `alpha = min(shr_round(opacity * e, Fo + Fe - A), max_alpha_raw)` (a left shift when
+//!    `Fo + Fe < A`). Skipped iff `alpha < min_alpha_raw = ceil(2^A / 255)`, i.e. exactly when
+//!    the fixed-point alpha is below 1/255.
+//! 6. `w = shr_round(alpha * T, A)` (`Tf` fraction bits), `test_T = T - w`. If
+//!    `test_T < min_transmittance_raw = ceil(1e-4 2^Tf)` the pixel is done and this entry is
+//!    not added (the reference's rule). Else `C += rgb * w` (exact, `Fc + Tf` fraction bits,
+//!    `color.bits + Tf + 1` bits) and `T = test_T`. `T` starts at `2^Tf`.
+//! 7. Output: `min(255, (C * 255 + 2^(K-1)) >> K)`, `K = Fc + Tf`: the 8-bit rule of
+//!    [`crate::image::quantize_channel`] (round half up of `255 C`, clamp) applied exactly to
+//!    the fixed-point `C`, over black.
+//!
+//! A subtile terminates when all its pixels inside the image are done. Pixels outside the image
+//! are never blended: they start done and come out black.
+
+use super::exp::ExpTable;
+use super::itu::{bitmap_of, ItuGeom};
+use super::RasterConfig;
+use crate::formats::blend::BlendFormat;
+use crate::formats::feature::{FeatureEntry, FeatureFormat};
+use crate::formats::fixed::{shr_round, shr_round64};
+
+/// Work of one subtile (what the cycle model needs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SubtileWork {
+    /// Entries routed to the subtile (set bits in its column of the bitmaps).
+    pub routed: u32,
+    /// Entries the SCU processed before the subtile terminated (`routed` unless every pixel
+    /// finished earlier; 0 when no pixel of the subtile is inside the image).
+    pub processed: u32,
+    /// Pixel-entry evaluations: for each processed entry, the pixels still active.
+    pub pixel_evals: u32,
+    /// Pixels (inside the image) whose transmittance reached the floor.
+    pub finished_pixels: u32,
+    /// The subtile stopped before its last routed entry (`processed < routed`).
+    pub terminated: bool,
+}
+
+/// The output of [`raster_tile`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TileRaster {
+    /// `tile * tile` pixels, row-major; pixels outside the image are black.
+    pub pixels: Vec<[u8; 3]>,
+    /// Per table entry: the cumulative OR of its subtile bits (false = outgoing).
+    pub valid: Vec<bool>,
+    /// Per table entry: its subtile bitmap (bit `sy * n + sx`).
+    pub bitmaps: Vec<u64>,
+    /// Per subtile (row-major, `n * n`): work counters.
+    pub work: Vec<SubtileWork>,
+}
+
+/// The conic-to-power shift at exponent field 0 (the smallest), `M - top + 2 mean.frac + 1 -
+/// power_frac`; [`RasterConfig::check`] requires it to be at least 1.
+pub fn min_power_shift(fmt: &FeatureFormat, blend: &BlendFormat) -> i32 {
+    fmt.conic.scale(0) + 2 * fmt.mean.frac as i32 + 1 - blend.power_frac as i32
+}
+
+/// Integer constants of the datapath.
+#[derive(Clone, Copy, Debug)]
+struct Consts {
+    fm: u32,
+    power_frac: u32,
+    max_np: i64,
+    alpha_shift: i32,
+    max_alpha: i64,
+    min_alpha: i64,
+    alpha_frac: u32,
+    one_t: i64,
+    min_t: i64,
+    out_shift: u32,
+}
+
+impl Consts {
+    fn new(fmt: &FeatureFormat, b: &BlendFormat) -> Self {
+        Consts {
+            fm: fmt.mean.frac as u32,
+            power_frac: b.power_frac as u32,
+            max_np: b.max_neg_power(),
+            alpha_shift: fmt.opacity.frac as i32 + b.exp.out_frac as i32 - b.alpha_frac as i32,
+            max_alpha: b.max_alpha_raw(),
+            min_alpha: b.min_alpha_raw(),
+            alpha_frac: b.alpha_frac as u32,
+            one_t: b.one_transmittance(),
+            min_t: b.min_transmittance_raw(),
+            out_shift: fmt.color.frac as u32 + b.transmittance_frac as u32,
+        }
+    }
+}
+
+/// One entry's SCU operands.
+#[derive(Clone, Copy, Debug)]
+struct Prep {
+    m: [i64; 2],
+    a: i64,
+    b2: i64,
+    c: i64,
+    /// Conic-to-power shift `s + 2 Fm + 1 - P`.
+    sh: u32,
+    /// The quadratic form may not fit `i64` over this tile: use `i128`.
+    wide: bool,
+    o: i64,
+    /// Largest `np` at which `alpha >= min_alpha` (-1: never). Only a shortcut: alpha is
+    /// non-increasing in `np`, so `np > np_cut` is exactly `alpha < min_alpha`.
+    np_cut: i64,
+    rgb: [i64; 3],
+}
+
+impl Prep {
+    /// Operands of `f` for pixels in `[x0, x1] x [y0, y1]` (decides `wide`).
+    fn new(f: &FeatureEntry, fmt: &FeatureFormat, b: &BlendFormat, np_cut: i64, rect: [i64; 4]) -> Self {
+        let fm = fmt.mean.frac as u32;
+        let m = f.mean.map(|v| v as i64);
+        let (a, b2, c) = (f.conic.a as i64, 2 * f.conic.b as i64, f.conic.c as i64);
+        let sh = fmt.conic.scale(f.conic.exp) + 2 * fm as i32 + 1 - b.power_frac as i32;
+        let [x0, y0, x1, y1] = rect;
+        let dmax = |m: i64, lo: i64, hi: i64| {
+            (m - (lo << fm)).unsigned_abs().max((m - (hi << fm)).unsigned_abs()) as u128
+        };
+        let (dx, dy) = (dmax(m[0], x0, x1), dmax(m[1], y0, y1));
+        let bound = a as u128 * dx * dx + b2.unsigned_abs() as u128 * dx * dy + c as u128 * dy * dy;
+        Prep {
+            m,
+            a,
+            b2,
+            c,
+            sh: sh.max(0) as u32,
+            wide: bound >= 1 << 62,
+            o: f.opacity as i64,
+            np_cut,
+            rgb: f.rgb.map(|v| v as i64),
+        }
+    }
+
+    /// Steps 1-3: `np` at pixel `(px, py)`, saturated, or -1 when `power > 0`.
+    #[inline(always)]
+    fn neg_power(&self, k: &Consts, px: i64, py: i64) -> i64 {
+        let dx = self.m[0] - (px << k.fm);
+        let dy = self.m[1] - (py << k.fm);
+        if self.wide {
+            if self.sh >= 127 {
+                return 0;
+            }
+            let (dx, dy) = (dx as i128, dy as i128);
+            let q = self.a as i128 * dx * dx + self.b2 as i128 * dx * dy + self.c as i128 * dy * dy;
+            shr_round(q, self.sh).clamp(-1, k.max_np as i128) as i64
+        } else {
+            // |q| < 2^62 here, so a shift of 63 or more rounds to 0.
+            if self.sh >= 63 {
+                return 0;
+            }
+            let q = self.a * dx * dx + self.b2 * dx * dy + self.c * dy * dy;
+            shr_round64(q, self.sh).clamp(-1, k.max_np)
+        }
+    }
+
+    /// Steps 1-5: the capped alpha at pixel `(px, py)`, or `None` when `power > 0`.
+    #[inline(always)]
+    fn alpha(&self, k: &Consts, exp: &ExpTable, px: i64, py: i64) -> Option<i64> {
+        let np = self.neg_power(k, px, py);
+        if np < 0 {
+            return None;
+        }
+        Some(alpha_of(self.o, np, k, exp))
+    }
+}
+
+/// Steps 4-5: the capped alpha of opacity `o` at `-power = np`.
+#[inline(always)]
+fn alpha_of(o: i64, np: i64, k: &Consts, exp: &ExpTable) -> i64 {
+    let prod = o * exp.eval(np);
+    let alpha =
+        if k.alpha_shift >= 0 { shr_round64(prod, k.alpha_shift as u32) } else { prod << -k.alpha_shift };
+    alpha.min(k.max_alpha)
+}
+
+/// The largest `np` in `[0, max_np]` with `alpha_of(o, np) >= min_alpha`, or -1. Exact: an f64
+/// estimate is corrected by stepping with the integer function, which is non-increasing in `np`.
+fn np_cut(o: i64, fmt: &FeatureFormat, k: &Consts, exp: &ExpTable) -> i64 {
+    let ok = |np: i64| alpha_of(o, np, k, exp) >= k.min_alpha;
+    if !ok(0) {
+        return -1;
+    }
+    let ov = fmt.opacity.dequantize(o);
+    let min = k.min_alpha as f64 / (k.alpha_frac as f64).exp2();
+    let scale = (k.power_frac as f64).exp2();
+    let est = ((ov / min).ln() * scale).floor();
+    let mut np = if est.is_finite() { (est as i64).clamp(0, k.max_np) } else { 0 };
+    while np < k.max_np && ok(np + 1) {
+        np += 1;
+    }
+    while np > 0 && !ok(np) {
+        np -= 1;
+    }
+    np
+}
+
+/// A direct-mapped cache of [`np_cut`] by opacity (only saves time).
+struct NpCutCache {
+    slots: [(i64, i64); 256],
+}
+
+impl NpCutCache {
+    fn new() -> Self {
+        NpCutCache { slots: [(-1, 0); 256] }
+    }
+
+    fn get(&mut self, o: i64, fmt: &FeatureFormat, k: &Consts, exp: &ExpTable) -> i64 {
+        let slot = &mut self.slots[(o & 255) as usize];
+        if slot.0 != o {
+            *slot = (o, np_cut(o, fmt, k, exp));
+        }
+        slot.1
+    }
+}
+
+/// The state of one pixel.
+#[derive(Clone, Copy, Debug)]
+struct PixelState {
+    t: i64,
+    c: [i64; 3],
+}
+
+/// Blends `list` (the routed entries' operands, in table order) at `(px, py)`. Returns the
+/// colour accumulator, the final transmittance and the list position where the pixel finished.
+#[inline]
+fn blend(list: &[Prep], k: &Consts, exp: &ExpTable, px: i64, py: i64) -> (PixelState, Option<usize>) {
+    let mut st = PixelState { t: k.one_t, c: [0; 3] };
+    for (pos, p) in list.iter().enumerate() {
+        let np = p.neg_power(k, px, py);
+        // np > np_cut is exactly alpha < min_alpha (see `np_cut`).
+        if np < 0 || np > p.np_cut {
+            continue;
+        }
+        let alpha = alpha_of(p.o, np, k, exp);
+        let w = shr_round64(alpha * st.t, k.alpha_frac);
+        let test_t = st.t - w;
+        if test_t < k.min_t {
+            return (st, Some(pos));
+        }
+        for (c, rgb) in st.c.iter_mut().zip(p.rgb) {
+            *c += rgb * w;
+        }
+        st.t = test_t;
+    }
+    (st, None)
+}
+
+/// Step 7: one 8-bit channel from the accumulator.
+#[inline]
+fn to_u8(c: i64, out_shift: u32) -> u8 {
+    (((c * 255) + (1i64 << (out_shift - 1))) >> out_shift).clamp(0, 255) as u8
+}
+
+/// Result of [`shade_pixel`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelShade {
+    /// The 8-bit colour.
+    pub color: [u8; 3],
+    /// Colour accumulators (`color.frac + transmittance_frac` fraction bits).
+    pub accum: [i64; 3],
+    /// Final transmittance, raw.
+    pub transmittance: i64,
+    /// Index of the entry at which the pixel finished (that entry was not added).
+    pub finished_at: Option<usize>,
+}
+
+/// Blends every entry of `entries` (no ITU filtering) at pixel `(px, py)` with the SCU
+/// arithmetic. Inside a tile, [`raster_tile`] gives the same pixel whenever the ITU routes
+/// every entry that can reach `alpha >= 1/255` at the pixel.
+pub fn shade_pixel(
+    entries: &[FeatureEntry],
+    fmt: &FeatureFormat,
+    cfg: &RasterConfig,
+    px: i64,
+    py: i64,
+) -> PixelShade {
+    let k = Consts::new(fmt, &cfg.blend);
+    let exp = ExpTable::new(&cfg.blend.exp, cfg.blend.power_frac);
+    let preps: Vec<Prep> = entries
+        .iter()
+        .map(|f| Prep::new(f, fmt, &cfg.blend, np_cut(f.opacity as i64, fmt, &k, &exp), [px, py, px, py]))
+        .collect();
+    let (st, fin) = blend(&preps, &k, &exp, px, py);
+    PixelShade {
+        color: st.c.map(|c| to_u8(c, k.out_shift)),
+        accum: st.c,
+        transmittance: st.t,
+        finished_at: fin,
+    }
+}
+
+/// Steps 1-5 for one entry at pixel `(px, py)`: the capped alpha (raw, `alpha_frac` bits), or
+/// `None` when `power > 0`. The entry is blended iff the result is at least
+/// [`BlendFormat::min_alpha_raw`].
+pub fn pixel_alpha(
+    f: &FeatureEntry,
+    fmt: &FeatureFormat,
+    cfg: &RasterConfig,
+    exp: &ExpTable,
+    px: i64,
+    py: i64,
+) -> Option<i64> {
+    let k = Consts::new(fmt, &cfg.blend);
+    Prep::new(f, fmt, &cfg.blend, 0, [px, py, px, py]).alpha(&k, exp, px, py)
+}
+
+/// Rasterises tile `(tile_x, tile_y)` of a `width x height` image from the tile's table
+/// (`entries`, in table order). `cfg` must pass [`RasterConfig::check`] for `fmt`.
+pub fn raster_tile(
+    entries: &[FeatureEntry],
+    fmt: &FeatureFormat,
+    tile_x: u32,
+    tile_y: u32,
+    width: u32,
+    height: u32,
+    cfg: &RasterConfig,
+) -> TileRaster {
+    let mut out = TileRaster::default();
+    raster_tile_into(entries, fmt, tile_x, tile_y, width, height, cfg, &mut out);
+    out
+}
+
+/// [`raster_tile`] into `out`, reusing its buffers.
+#[allow(clippy::too_many_arguments)]
+pub fn raster_tile_into(
+    entries: &[FeatureEntry],
+    fmt: &FeatureFormat,
+    tile_x: u32,
+    tile_y: u32,
+    width: u32,
+    height: u32,
+    cfg: &RasterConfig,
+    out: &mut TileRaster,
+) {
+    let t = cfg.tile as i64;
+    let s = cfg.subtile as i64;
+    let n = cfg.subtiles_per_side() as i64;
+    let (x0, y0) = (tile_x as i64 * t, tile_y as i64 * t);
+    let k = Consts::new(fmt, &cfg.blend);
+    let exp = ExpTable::new(&cfg.blend.exp, cfg.blend.power_frac);
+
+    out.bitmaps.clear();
+    out.bitmaps.extend(entries.iter().map(|f| bitmap_of(&ItuGeom::new(f, fmt), tile_x, tile_y, cfg)));
+    out.valid.clear();
+    out.valid.extend(out.bitmaps.iter().map(|&b| b != 0));
+    out.pixels.clear();
+    out.pixels.resize((t * t) as usize, [0; 3]);
+    out.work.clear();
+    out.work.resize((n * n) as usize, SubtileWork::default());
+
+    // Route entries to subtiles (a counting sort by subtile that keeps table order), and
+    // prepare the operands of every routed entry once per tile.
+    let nsub = (n * n) as usize;
+    let mut offsets = [0u32; 65];
+    for &b in &out.bitmaps {
+        let mut m = b;
+        while m != 0 {
+            offsets[m.trailing_zeros() as usize + 1] += 1;
+            m &= m - 1;
+        }
+    }
+    for j in 0..nsub {
+        offsets[j + 1] += offsets[j];
+    }
+    let mut cursor = offsets;
+    let mut routed = vec![0u32; offsets[nsub] as usize];
+    let rect = [x0, y0, x0 + t - 1, y0 + t - 1];
+    let mut cuts = NpCutCache::new();
+    let mut preps: Vec<Prep> = Vec::with_capacity(entries.len());
+    for (f, &b) in entries.iter().zip(&out.bitmaps) {
+        let i = preps.len() as u32;
+        if b == 0 {
+            continue;
+        }
+        preps.push(Prep::new(f, fmt, &cfg.blend, cuts.get(f.opacity as i64, fmt, &k, &exp), rect));
+        let mut m = b;
+        while m != 0 {
+            let j = m.trailing_zeros() as usize;
+            routed[cursor[j] as usize] = i;
+            cursor[j] += 1;
+            m &= m - 1;
+        }
+    }
+    let mut list: Vec<Prep> = Vec::with_capacity(preps.len());
+    for sy in 0..n {
+        for sx in 0..n {
+            let j = (sy * n + sx) as usize;
+            list.clear();
+            list.extend(
+                routed[offsets[j] as usize..offsets[j + 1] as usize].iter().map(|&i| preps[i as usize]),
+            );
+            let mut work = SubtileWork { routed: list.len() as u32, ..SubtileWork::default() };
+            let (mut inside, mut last_finish) = (0u32, 0usize);
+            for ly in sy * s..(sy + 1) * s {
+                let py = y0 + ly;
+                for lx in sx * s..(sx + 1) * s {
+                    let px = x0 + lx;
+                    if px >= width as i64 || py >= height as i64 {
+                        continue;
+                    }
+                    inside += 1;
+                    let (st, fin) = blend(&list, &k, &exp, px, py);
+                    out.pixels[(ly * t + lx) as usize] = st.c.map(|c| to_u8(c, k.out_shift));
+                    match fin {
+                        Some(pos) => {
+                            work.finished_pixels += 1;
+                            work.pixel_evals += pos as u32 + 1;
+                            last_finish = last_finish.max(pos + 1);
+                        }
+                        None => work.pixel_evals += list.len() as u32,
+                    }
+                }
+            }
+            work.processed = if inside == 0 {
+                0
+            } else if work.finished_pixels == inside {
+                last_finish as u32
+            } else {
+                work.routed
+            };
+            work.terminated = work.processed < work.routed;
+            out.work[j] = work;
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::formats::feature::quantize;
+    use crate::raster::synth::projected_from_cov;
+    use crate::render::Projected;
+    use crate::sort::DepthKeyCodec;
+
+    /// A Gaussian with covariance `cov` at `mean`.
+    pub(crate) fn projected(mean: [f32; 2], cov: [f32; 3], opacity: f32, rgb: [f32; 3]) -> Projected {
+        projected_from_cov(0, mean, cov, opacity, rgb, 1.0)
+    }
+
+    fn entry(mean: [f32; 2], cov: [f32; 3], opacity: f32, rgb: [f32; 3]) -> FeatureEntry {
+        quantize(&projected(mean, cov, opacity, rgb), &FeatureFormat::default(), &DepthKeyCodec::Fp16)
+    }
+
+    #[test]
+    fn single_gaussian_matches_float_at_its_centre() {
+        let fmt = FeatureFormat::default();
+        let cfg = RasterConfig::default();
+        cfg.check(&fmt).unwrap();
+        let e = entry([10.0, 20.0], [4.0, 1.0, 3.0], 0.6, [1.0, 0.5, 0.25]);
+        let r = raster_tile(&[e], &fmt, 0, 0, 64, 64, &cfg);
+        // At the centre alpha = 0.6 (quantised to 154/256 = 0.6016); colours are exact.
+        let expect = [1.0, 0.5, 0.25].map(|c: f64| (c * (154.0 / 256.0) * 255.0 + 0.5).floor() as u8);
+        assert_eq!(r.pixels[20 * 64 + 10], expect);
+        assert_eq!(r.valid, vec![true]);
+        assert_eq!(shade_pixel(&[e], &fmt, &cfg, 10, 20).color, expect);
+        // The subtile of the centre saw one entry.
+        assert_eq!(r.work[2 * 8 + 1].routed, 1);
+        assert_eq!(r.work[2 * 8 + 1].processed, 1);
+        assert_eq!(r.work[0].routed, 0);
+    }
+
+    #[test]
+    fn min_power_shift_of_the_default_is_positive() {
+        let s = min_power_shift(&FeatureFormat::default(), &BlendFormat::default());
+        assert_eq!(s, 18 - 2 + 16 + 1 - 10);
+    }
+}

@@ -1,0 +1,73 @@
+//! `neo gen`: writes the generated Verilog (one file per module), checks a directory against
+//! fresh output, and reports Yosys synthesis statistics.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use neo_gen::output::{check_dir, write_dir};
+use neo_gen::report::{table, topology_reports, unit_reports, SynthReport, YOSYS_COMMAND};
+use neo_gen::GenConfig;
+use std::path::PathBuf;
+
+/// Arguments of `neo gen`.
+#[derive(Args)]
+pub struct GenArgs {
+    /// JSON generator configuration (any subset of the fields; default: the paper's core).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "hdl")]
+    pub out: PathBuf,
+    /// Compare OUT against fresh output instead of writing; fails listing differing files.
+    #[arg(long)]
+    pub check: bool,
+    /// Synthesize every top with Yosys, print cells / flip-flops / depth, write the JSON report.
+    #[arg(long)]
+    pub stats: bool,
+    /// With --stats: also synthesize the BSU of every topology.
+    #[arg(long)]
+    pub all_topologies: bool,
+    /// With --stats: where to write the JSON report.
+    #[arg(long, default_value = "reports/synth.json")]
+    pub report: PathBuf,
+}
+
+/// Runs `neo gen`.
+pub fn run(a: GenArgs) -> Result<()> {
+    let cfg = match &a.config {
+        Some(p) => GenConfig::from_json_file(p)?,
+        None => GenConfig::default(),
+    };
+    let files = neo_gen::try_generate(&cfg)?;
+    if a.check {
+        let diffs = check_dir(&a.out, &files).with_context(|| format!("reading {}", a.out.display()))?;
+        if !diffs.is_empty() {
+            let list: Vec<String> =
+                diffs.iter().map(|d| format!("  {}", a.out.join(d.to_string()).display())).collect();
+            let config = a.config.as_ref().map(|p| format!(" --config {}", p.display())).unwrap_or_default();
+            bail!(
+                "{} is out of date ({} file(s)); run `neo gen{config} --out {}`:\n{}",
+                a.out.display(),
+                diffs.len(),
+                a.out.display(),
+                list.join("\n")
+            );
+        }
+        println!("{}: {} files up to date", a.out.display(), files.len());
+    } else {
+        let written = write_dir(&a.out, &files).with_context(|| format!("writing {}", a.out.display()))?;
+        println!("wrote {} files to {}: {}", written.len(), a.out.display(), written.join(" "));
+    }
+    if a.stats {
+        let units = unit_reports(&cfg)?;
+        let bsu_topologies = if a.all_topologies { topology_reports(&cfg)? } else { Vec::new() };
+        let report = SynthReport { config: cfg, command: YOSYS_COMMAND.to_string(), units, bsu_topologies };
+        print!("{}", table(&report));
+        if let Some(dir) = a.report.parent() {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        let json = serde_json::to_string_pretty(&report)?;
+        std::fs::write(&a.report, json + "\n").with_context(|| format!("writing {}", a.report.display()))?;
+        println!("report: {}", a.report.display());
+    }
+    Ok(())
+}

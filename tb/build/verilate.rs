@@ -1,0 +1,195 @@
+//! Running Verilator and compiling its C++ output (plus the shim) into static libraries.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// Verilator flags used for every top (part of the cache key). Lint warnings stay fatal.
+pub const VERILATOR_FLAGS: &[&str] = &["--cc", "--trace", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+
+/// C++ optimisation of the per-cycle code (the `Slow` files, run once at construction, use -O1).
+pub const OPT_FAST: u32 = 3;
+/// C++ optimisation of the construction-time (`Slow`) code.
+pub const OPT_SLOW: u32 = 1;
+/// Version of the way the runtime library is built (part of its cache key).
+pub const RUNTIME_VERSION: u32 = 1;
+
+/// The Verilator installation.
+pub struct Verilator {
+    /// The executable.
+    pub exe: PathBuf,
+    /// `verilator --version`.
+    pub version: String,
+    /// `VERILATOR_ROOT` (holds `include/`).
+    pub root: PathBuf,
+}
+
+impl Verilator {
+    /// Finds `verilator` on `PATH` (or `$VERILATOR`), or `None` when it does not run.
+    pub fn find() -> Option<Verilator> {
+        let exe = std::env::var_os("VERILATOR").map(PathBuf::from).unwrap_or_else(|| "verilator".into());
+        let out = Command::new(&exe).arg("--version").output().ok().filter(|o| o.status.success())?;
+        let version = String::from_utf8_lossy(&out.stdout).trim().to_string();
+        let root = Command::new(&exe).args(["--getenv", "VERILATOR_ROOT"]).output().ok()?;
+        let root = PathBuf::from(String::from_utf8_lossy(&root.stdout).trim());
+        root.join("include/verilated.cpp").is_file().then_some(Verilator { exe, version, root })
+    }
+
+    /// `<root>/include`.
+    pub fn include(&self) -> PathBuf {
+        self.root.join("include")
+    }
+}
+
+/// A C++ build with the flags Verilator's own makefile uses.
+fn cpp_build(v: &Verilator, opt: u32, out_dir: &Path) -> cc::Build {
+    let mut b = cc::Build::new();
+    b.cpp(true)
+        .opt_level(opt)
+        .debug(false)
+        .warnings(false)
+        .cargo_metadata(false)
+        .out_dir(out_dir)
+        .std("gnu++17")
+        .include(v.include())
+        .include(v.include().join("vltstd"))
+        .flag_if_supported("-faligned-new")
+        .flag_if_supported("-fcf-protection=none")
+        .define("VM_COVERAGE", "0")
+        .define("VM_SC", "0")
+        .define("VM_TRACE", "1")
+        .define("VM_TRACE_VCD", "1")
+        .define("VM_TRACE_FST", "0");
+    b
+}
+
+/// A description of the C++ compiler (path and `--version`) for cache keys.
+pub fn compiler_id() -> String {
+    let tool = cc::Build::new().cpp(true).cargo_metadata(false).get_compiler();
+    let version = Command::new(tool.path())
+        .arg("--version")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).lines().next().unwrap_or("").to_string())
+        .unwrap_or_default();
+    // Path and version only: cc's default flags depend on the cargo profile, and the flags that
+    // matter are fixed in `cpp_build` (and part of the key through the opt levels).
+    format!("{} {}", tool.path().display(), version)
+}
+
+/// Compiles the Verilator runtime (`verilated.cpp`, `verilated_vcd_c.cpp`,
+/// `verilated_threads.cpp`) into `<dir>/libneo_verilated.a`.
+pub fn build_runtime(v: &Verilator, dir: &Path) -> Result<(), String> {
+    let mut b = cpp_build(v, OPT_FAST, dir);
+    for f in ["verilated.cpp", "verilated_vcd_c.cpp", "verilated_threads.cpp"] {
+        b.file(v.include().join(f));
+    }
+    b.try_compile("neo_verilated").map_err(|e| format!("compiling the Verilator runtime: {e}"))?;
+    remove_objects(dir);
+    Ok(())
+}
+
+/// Verilates `top` from the files in `hdl_dir` into `<dir>/obj`, then compiles the model and the
+/// shim (`shim_cpp`) into `<dir>/libneo_<top>_fast.a` and `<dir>/libneo_<top>_slow.a`.
+pub fn build_model(
+    v: &Verilator,
+    top: &str,
+    verilog_files: &[PathBuf],
+    shim_cpp: &str,
+    dir: &Path,
+) -> Result<String, String> {
+    let obj = dir.join("obj");
+    let t0 = Instant::now();
+    let mut cmd = Command::new(&v.exe);
+    cmd.args(VERILATOR_FLAGS)
+        .arg("--top-module")
+        .arg(top)
+        .arg("--prefix")
+        .arg(format!("V{top}"))
+        .arg("--Mdir")
+        .arg(&obj)
+        .args(verilog_files);
+    let out = cmd.output().map_err(|e| format!("cannot run {}: {e}", v.exe.display()))?;
+    if !out.status.success() {
+        return Err(format!(
+            "verilator failed on {top} ({:?}):\n{}{}",
+            cmd,
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    let verilate_s = t0.elapsed().as_secs_f64();
+
+    let classes = fs::read_to_string(obj.join(format!("V{top}_classes.mk")))
+        .map_err(|e| format!("verilator wrote no V{top}_classes.mk: {e}"))?;
+    let fast = mk_list(&classes, &["VM_CLASSES_FAST", "VM_SUPPORT_FAST"]);
+    let slow = mk_list(&classes, &["VM_CLASSES_SLOW", "VM_SUPPORT_SLOW"]);
+    if fast.is_empty() {
+        return Err(format!("V{top}_classes.mk lists no classes"));
+    }
+    fs::write(dir.join("shim.cpp"), shim_cpp).map_err(|e| e.to_string())?;
+
+    let t1 = Instant::now();
+    let mut b = cpp_build(v, OPT_FAST, dir);
+    b.include(&obj);
+    for c in &fast {
+        b.file(obj.join(format!("{c}.cpp")));
+    }
+    b.file(dir.join("shim.cpp"));
+    b.try_compile(&format!("neo_{top}_fast")).map_err(|e| format!("compiling {top}: {e}"))?;
+    let mut b = cpp_build(v, OPT_SLOW, dir);
+    b.include(&obj);
+    for c in &slow {
+        b.file(obj.join(format!("{c}.cpp")));
+    }
+    if slow.is_empty() {
+        // Keep the library set uniform: an empty translation unit.
+        fs::write(dir.join("empty.cpp"), "// no slow classes\n").map_err(|e| e.to_string())?;
+        b.file(dir.join("empty.cpp"));
+    }
+    b.try_compile(&format!("neo_{top}_slow")).map_err(|e| format!("compiling {top} (slow): {e}"))?;
+    remove_objects(dir);
+    Ok(format!(
+        "verilate {verilate_s:.1} s, compile {:.1} s ({} fast + {} slow files)",
+        t1.elapsed().as_secs_f64(),
+        fast.len() + 1,
+        slow.len()
+    ))
+}
+
+/// The names listed under the `+=` variables `vars` of a Verilator `_classes.mk`.
+fn mk_list(mk: &str, vars: &[&str]) -> Vec<String> {
+    let mut names = Vec::new();
+    let mut active = false;
+    for line in mk.lines() {
+        let trimmed = line.trim();
+        if let Some(var) = trimmed.strip_suffix("+= \\").or_else(|| trimmed.strip_suffix("+=")) {
+            active = vars.contains(&var.trim());
+            continue;
+        }
+        if !active {
+            continue;
+        }
+        let name = trimmed.trim_end_matches('\\').trim();
+        if !name.is_empty() {
+            names.push(name.to_string());
+        }
+        if !trimmed.ends_with('\\') {
+            active = false;
+        }
+    }
+    names
+}
+
+/// Deletes the object files (`*.o`) cc left under `dir`; only the archives are kept.
+fn remove_objects(dir: &Path) {
+    let Ok(entries) = fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() && p.file_name().is_some_and(|n| n != "obj") {
+            remove_objects(&p);
+        } else if p.extension().is_some_and(|x| x == "o") {
+            let _ = fs::remove_file(&p);
+        }
+    }
+}

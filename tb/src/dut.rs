@@ -1,0 +1,75 @@
+//! The generic view of a Verilated model: ports by index, words in and out, clock and reset.
+//!
+//! Every generated wrapper in [`crate::models`] implements [`Dut`], so drivers, monitors and wave
+//! tooling can be written once and bound to port names at run time.
+
+use std::path::Path;
+
+/// One port of a Verilated top.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PortSpec {
+    /// Verilog name, e.g. `in_valid_i`.
+    pub name: &'static str,
+    /// True for inputs.
+    pub input: bool,
+    /// Width in bits.
+    pub width: u32,
+}
+
+impl PortSpec {
+    /// Number of little-endian 32-bit words holding the port.
+    pub const fn words(&self) -> usize {
+        self.width.div_ceil(32) as usize
+    }
+}
+
+/// A Verilated model driven through port indices (positions in [`Dut::PORTS`]).
+pub trait Dut {
+    /// Module name.
+    const NAME: &'static str;
+    /// Ports in declaration order.
+    const PORTS: &'static [PortSpec];
+
+    /// Drives input `port` with little-endian words (missing words are zero, extra bits ignored).
+    ///
+    /// # Panics
+    /// When `port` is not an input.
+    fn set_words(&mut self, port: usize, words: &[u32]);
+    /// Reads `port` into `out` (words beyond the port are zeroed).
+    fn get_words(&self, port: usize, out: &mut [u32]);
+    /// Settles combinational logic.
+    fn eval(&mut self);
+    /// One clock cycle (see the wrappers' `tick`).
+    fn tick(&mut self);
+    /// Reset sequence; restarts [`Dut::cycle`] at zero.
+    fn reset(&mut self);
+    /// Rising edges since the last reset.
+    fn cycle(&self) -> u64;
+    /// Starts a VCD trace.
+    fn trace_open(&mut self, path: &Path) -> std::io::Result<()>;
+    /// Closes the trace.
+    fn trace_close(&mut self);
+
+    /// Index of the port called `name`.
+    ///
+    /// # Panics
+    /// When there is none (a test bench bound to the wrong interface).
+    fn port(name: &str) -> usize {
+        Self::PORTS
+            .iter()
+            .position(|p| p.name == name)
+            .unwrap_or_else(|| panic!("{} has no port {name}", Self::NAME))
+    }
+
+    /// Drives a port of at most 64 bits.
+    fn set_u64(&mut self, port: usize, v: u64) {
+        self.set_words(port, &[v as u32, (v >> 32) as u32]);
+    }
+
+    /// Reads a port of at most 64 bits.
+    fn get_u64(&self, port: usize) -> u64 {
+        let mut w = [0u32; 2];
+        self.get_words(port, &mut w);
+        w[0] as u64 | ((w[1] as u64) << 32)
+    }
+}

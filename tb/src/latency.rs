@@ -1,0 +1,257 @@
+//! Latency and throughput measured by cosimulation, written to `reports/latency.json` for the
+//! cycle model.
+//!
+//! # Schema (`"schema": "neo-latency/1"`; keys are sorted)
+//! ```text
+//! {
+//!   "schema": "neo-latency/1",
+//!   "doc": { field: explanation, ... },
+//!   "config": { the neo_gen::GenConfig the RTL was generated from },
+//!   "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
+//!   "units": {
+//!     "neo_bsu": { "latency": L, "ii": 1, "vectors": N, "cycles": C },
+//!     "neo_msu": { "latency": L, "ii": 1, "end_of_merge": E, "entries": N, "cycles": C },
+//!     "neo_sort_core": { "command_overhead": O }
+//!   },
+//!   "sort_core": {
+//!     "conventional": [ { "entries": n, "cycles": c, "artifact_cycles": a }, ... ],
+//!     "dps":          [ { "entries": n, "cycles": c, "artifact_cycles": a }, ... ],
+//!     "merge":        [ { "entries": n, "len_a": .., "len_b": .., "cycles": c }, ... ],
+//!     "merge_delete": [ { "entries": n, "len_a": .., "len_b": .., "invalid": k, "out": m, "cycles": c }, ... ]
+//!   }
+//! }
+//! ```
+//! All numbers are measured on the Verilated RTL with fixed stimulus (seeded), full-rate inputs,
+//! an always-ready output and the ideal memory, so the file is reproducible bit for bit.
+
+use crate::core::{layout, Command, Core, MemTiming, Mode};
+use crate::models::{NeoBsu, NeoMsu};
+use crate::rng::Rng;
+use crate::stimulus::{sorted_stream, tile_entries};
+use neo_gen::GenConfig;
+use neo_golden::sort::SortEntry;
+use serde_json::{json, Value};
+
+/// Schema identifier written in the report.
+pub const SCHEMA: &str = "neo-latency/1";
+
+/// Seed of the report's stimulus (fixed: the report must be reproducible).
+const SEED: u64 = 0x4E45_4F5F_4C41_5431;
+
+/// BSU: (latency, initiation interval, vectors, cycles). Latency is the number of rising edges
+/// from the edge that accepts a vector to the first cycle its result is on `out_data_o` with
+/// `out_valid_o` high; II is measured over `vectors` back-to-back vectors.
+pub fn bsu_latency(cfg: &GenConfig) -> (u64, u64, u64, u64) {
+    let fmt = cfg.format();
+    let mut dut = NeoBsu::new();
+    dut.set_in_valid_i(false);
+    dut.set_out_ready_i(true);
+    dut.reset();
+    let mut rng = Rng::new(SEED);
+    let vectors = 64u64;
+    let (mut accepted, mut outputs) = (Vec::new(), Vec::new());
+    let mut words = [0u32; 24];
+    while (outputs.len() as u64) < vectors {
+        let sending = (accepted.len() as u64) < vectors;
+        if sending {
+            let v: Vec<SortEntry> = tile_entries(&fmt, &mut rng, cfg.bsu_width, false, 100);
+            crate::lanes::pack_lanes(&fmt, &v, &mut words);
+            dut.set_in_data_i(&words);
+        }
+        dut.set_in_valid_i(sending);
+        dut.eval();
+        if sending && dut.in_ready_o() {
+            accepted.push(dut.cycle());
+        }
+        if dut.out_valid_o() {
+            outputs.push(dut.cycle());
+        }
+        dut.tick();
+        assert!(dut.cycle() < 10_000, "BSU produced {} of {vectors} outputs", outputs.len());
+    }
+    let latency = outputs[0] - accepted[0];
+    let ii = (accepted[accepted.len() - 1] - accepted[0]) / (vectors - 1);
+    let out_ii = (outputs[outputs.len() - 1] - outputs[0]) / (vectors - 1);
+    assert_eq!(ii, out_ii, "input and output rates differ");
+    (latency, ii, vectors, outputs[outputs.len() - 1] + 1)
+}
+
+/// MSU+: (latency, initiation interval, end-of-merge overhead, entries, cycles) for one merge of
+/// two all-valid streams of `len` entries each, both offered every cycle, output always ready.
+/// Latency: edges from the first pop to the first output beat. II: cycles per output entry over
+/// the merge. End of merge: extra cycles of the last beat beyond the steady-state schedule
+/// (`last output cycle - first output cycle + 1 - entries`).
+pub fn msu_latency(cfg: &GenConfig, len: usize) -> (u64, u64, u64, u64, u64) {
+    let fmt = cfg.format();
+    let mut rng = Rng::new(SEED ^ 1);
+    let a = sorted_stream(&fmt, &mut rng, len, 100, false);
+    let b = sorted_stream(&fmt, &mut rng, len, 100, false);
+    let mut dut = NeoMsu::new();
+    dut.set_a_valid_i(false);
+    dut.set_b_valid_i(false);
+    dut.set_out_ready_i(true);
+    dut.set_drop_invalid_i(false);
+    dut.reset();
+    let (mut ia, mut ib) = (0usize, 0usize);
+    let (mut first_pop, mut outs) = (None, Vec::new());
+    while outs.len() < 2 * len {
+        dut.set_a_valid_i(ia < len);
+        dut.set_b_valid_i(ib < len);
+        if ia < len {
+            dut.set_a_data_i(fmt.pack(&a[ia]));
+            dut.set_a_last_i(ia + 1 == len);
+            dut.set_a_empty_i(false);
+        }
+        if ib < len {
+            dut.set_b_data_i(fmt.pack(&b[ib]));
+            dut.set_b_last_i(ib + 1 == len);
+            dut.set_b_empty_i(false);
+        }
+        dut.eval();
+        let pop_a = ia < len && dut.a_ready_o();
+        let pop_b = ib < len && dut.b_ready_o();
+        if (pop_a || pop_b) && first_pop.is_none() {
+            first_pop = Some(dut.cycle());
+        }
+        ia += pop_a as usize;
+        ib += pop_b as usize;
+        if dut.out_valid_o() {
+            outs.push(dut.cycle());
+        }
+        dut.tick();
+        assert!(dut.cycle() < 100 * len as u64 + 100, "MSU+ produced {} of {} outputs", outs.len(), 2 * len);
+    }
+    let first = first_pop.expect("an entry was popped");
+    let entries = 2 * len as u64;
+    let span = outs[outs.len() - 1] - outs[0] + 1;
+    let ii = ((outs[outs.len() - 2] - outs[0]) as f64 / (entries - 2) as f64).round() as u64;
+    (outs[0] - first, ii, span - entries, entries, outs[outs.len() - 1] + 1)
+}
+
+/// The artifact's cycle model for the in-chunk merge passes of an `n`-entry chunk with a
+/// 16-input BSU: `ceil(log2(n / 16)) * n` (0 for `n <= 16`).
+pub fn artifact_chunk_cycles(n: u64, bsu: u64) -> u64 {
+    if n <= bsu {
+        return 0;
+    }
+    let vectors = n.div_ceil(bsu);
+    (64 - (vectors - 1).leading_zeros()) as u64 * n
+}
+
+/// Cycles of one core command with the ideal memory, checked against golden on the way.
+fn core_cycles(core: &mut Core, cfg: &GenConfig, mode: Mode, a: &[SortEntry], b: &[SortEntry]) -> (u64, u64) {
+    let r = match mode {
+        Mode::Sort | Mode::Dps => crate::core::sort_chunk_checked(core, cfg, a, mode),
+        Mode::Merge => crate::core::merge_checked(core, a, b, false),
+        Mode::MergeDelete => crate::core::merge_checked(core, a, b, true),
+    };
+    (r.cycles, r.done_len)
+}
+
+/// The whole report as JSON (see the module docs for the schema).
+pub fn report(cfg: &GenConfig) -> Value {
+    let fmt = cfg.format();
+    let bsu_w = cfg.bsu_width as u64;
+    let (bl, bii, bv, bc) = bsu_latency(cfg);
+    let (ml, mii, mend, me, mc) = msu_latency(cfg, 128);
+
+    let mut core = Core::new(cfg, SEED, MemTiming::IDEAL);
+    let mut rng = Rng::new(SEED ^ 2);
+    // A zero-length command: the fixed cost of accepting and finishing.
+    let overhead = core
+        .run(Command { mode: Mode::Sort, src_a: layout::SRC, len_a: 0, src_b: 0, len_b: 0, dst: layout::DST })
+        .cycles;
+    let sizes: Vec<u64> = [1, 16, 32, 64, 128, 256].into_iter().filter(|&n| n <= cfg.chunk as u64).collect();
+    let mut chunk_rows = |mode: Mode, rng: &mut Rng| -> Vec<Value> {
+        sizes
+            .iter()
+            .map(|&n| {
+                let v = tile_entries(&fmt, rng, n as usize, false, 100);
+                let (cycles, _) = core_cycles(&mut core, cfg, mode, &v, &[]);
+                json!({ "entries": n, "cycles": cycles, "artifact_cycles": artifact_chunk_cycles(n, bsu_w) })
+            })
+            .collect()
+    };
+    let conventional = chunk_rows(Mode::Sort, &mut rng);
+    let dps = chunk_rows(Mode::Dps, &mut rng);
+    let merge_sizes = [(0u64, 0u64), (8, 8), (32, 32), (128, 128), (256, 256), (512, 512), (300, 0)];
+    let mut merge = Vec::new();
+    let mut merge_delete = Vec::new();
+    for &(la, lb) in &merge_sizes {
+        let a = sorted_stream(&fmt, &mut rng, la as usize, 100, false);
+        let b = sorted_stream(&fmt, &mut rng, lb as usize, 100, false);
+        let fix = |v: Vec<SortEntry>| -> Vec<SortEntry> {
+            v.into_iter()
+                .map(|mut e| {
+                    e.id = e.id.min(fmt.id_max() - 1);
+                    e
+                })
+                .collect()
+        };
+        let (a, b) = (fix(a), fix(b));
+        let (cycles, _) = core_cycles(&mut core, cfg, Mode::Merge, &a, &b);
+        merge.push(json!({ "entries": la + lb, "len_a": la, "len_b": lb, "cycles": cycles }));
+        // A quarter of the entries invalid (every fourth of each stream).
+        let kill = |v: &[SortEntry]| -> Vec<SortEntry> {
+            v.iter().enumerate().map(|(i, e)| e.with_valid(i % 4 != 3)).collect()
+        };
+        let (ka, kb) = (kill(&a), kill(&b));
+        let invalid = ka.iter().chain(&kb).filter(|e| !e.valid).count();
+        let (cycles, out) = core_cycles(&mut core, cfg, Mode::MergeDelete, &ka, &kb);
+        merge_delete.push(json!({
+            "entries": la + lb, "len_a": la, "len_b": lb, "invalid": invalid, "out": out, "cycles": cycles
+        }));
+    }
+
+    json!({
+        "schema": SCHEMA,
+        "doc": {
+            "config": "the neo_gen::GenConfig the measured RTL was generated from",
+            "memory": "the memory model used for sort_core: request always accepted, first read beat the cycle after the request, one beat per cycle",
+            "units.*.latency": "rising edges from the edge that accepts an input to the first cycle its result is offered (out_valid_o high)",
+            "units.*.ii": "initiation interval: cycles between accepted inputs (BSU: vectors; MSU+: output entries) at full rate",
+            "units.neo_msu.end_of_merge": "extra cycles of a merge's final beat beyond one output per cycle (the registered end-of-stream flush)",
+            "units.neo_sort_core.command_overhead": "cycles from accepting a zero-length SORT to its done_o pulse",
+            "sort_core.*.cycles": "cycles from the edge that accepts the command (cmd_valid_i & cmd_ready_o) to the done_o pulse, ideal memory, output verified against golden",
+            "sort_core.conventional": "SORT of one chunk of `entries` entries: load, BSU vectors, in-chunk merge passes, write-back (golden full_sort of one chunk)",
+            "sort_core.dps": "DPS command on one chunk (same datapath as SORT; golden dps_pass)",
+            "sort_core.merge": "MERGE of sorted streams A and B (golden merge2(a, b, false))",
+            "sort_core.merge_delete": "MERGE_DELETE with every fourth entry of each stream invalid (golden merge2(a, b, true)); `out` entries written",
+            "sort_core.*.artifact_cycles": "the Neo artifact's cycle model for the in-chunk merge passes of an n-entry chunk, ceil(log2(n/16)) * n: it counts only the merge passes at one entry per cycle, while `cycles` is the whole command (load, BSU, passes, write-back) measured on the RTL"
+        },
+        "config": serde_json::to_value(cfg).expect("GenConfig serializes"),
+        "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
+        "units": {
+            "neo_bsu": { "latency": bl, "ii": bii, "vectors": bv, "cycles": bc },
+            "neo_msu": { "latency": ml, "ii": mii, "end_of_merge": mend, "entries": me, "cycles": mc },
+            "neo_sort_core": { "command_overhead": overhead }
+        },
+        "sort_core": {
+            "conventional": conventional,
+            "dps": dps,
+            "merge": merge,
+            "merge_delete": merge_delete
+        }
+    })
+}
+
+/// The report as the text written to `reports/latency.json` (pretty JSON and a final newline).
+pub fn report_text(cfg: &GenConfig) -> String {
+    let mut s = serde_json::to_string_pretty(&report(cfg)).expect("JSON");
+    s.push('\n');
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn artifact_model_matches_its_formula() {
+        assert_eq!(artifact_chunk_cycles(16, 16), 0);
+        assert_eq!(artifact_chunk_cycles(32, 16), 32);
+        assert_eq!(artifact_chunk_cycles(256, 16), 4 * 256);
+        assert_eq!(artifact_chunk_cycles(100, 16), 3 * 100);
+        assert_eq!(artifact_chunk_cycles(1, 16), 0);
+    }
+}

@@ -1,0 +1,172 @@
+//! Stimulus generators: random and directed entry vectors and sorted streams.
+
+use crate::rng::Rng;
+use neo_golden::sort::{SortEntry, SortFormat};
+
+/// How keys (and ids) are drawn, to cover both the full range and many ties.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KeyDist {
+    /// Uniform over the whole key field; ids uniform over the whole id field (reserved one
+    /// included: the units must not treat it specially).
+    Full,
+    /// Keys in `0..8` (many equal keys) with distinct-ish ids in `0..64`.
+    Ties,
+    /// Keys and ids from `{0, 1, max-1, max}` (extremes).
+    Extremes,
+}
+
+/// A random entry; `valid_pct` is the probability of the valid bit.
+pub fn random_entry(fmt: &SortFormat, rng: &mut Rng, dist: KeyDist, valid_pct: u32) -> SortEntry {
+    let (kmax, imax) = (fmt.key_max() as u64, fmt.id_max() as u64);
+    let (key, id) = match dist {
+        KeyDist::Full => (rng.below(kmax + 1), rng.below(imax + 1)),
+        KeyDist::Ties => (rng.below(8.min(kmax + 1)), rng.below(64.min(imax + 1))),
+        KeyDist::Extremes => {
+            let pick = |rng: &mut Rng, max: u64| *rng.pick(&[0, 1.min(max), max.saturating_sub(1), max]);
+            (pick(rng, kmax), pick(rng, imax))
+        }
+    };
+    SortEntry { key: key as u32, id: id as u32, valid: rng.percent(valid_pct) }
+}
+
+/// A random vector of `n` entries with a randomly chosen distribution and valid density.
+pub fn random_vector(fmt: &SortFormat, rng: &mut Rng, n: usize) -> Vec<SortEntry> {
+    let dist = *rng.pick(&[KeyDist::Full, KeyDist::Full, KeyDist::Ties, KeyDist::Extremes]);
+    let valid_pct = *rng.pick(&[100, 90, 50, 10, 0]);
+    (0..n).map(|_| random_entry(fmt, rng, dist, valid_pct)).collect()
+}
+
+/// The directed BSU cases on `n` lanes, by name: all keys equal with different ids, reversed,
+/// already sorted, min/max keys, all invalid, one valid, equal (key, id) with different valid
+/// bits.
+pub fn directed_vectors(fmt: &SortFormat, n: usize) -> Vec<(&'static str, Vec<SortEntry>)> {
+    let n32 = n as u32;
+    let kmax = fmt.key_max();
+    let imax = fmt.id_max();
+    let mut cases = vec![
+        (
+            "equal keys, ids descending",
+            (0..n32).map(|i| SortEntry::new(7.min(kmax), (n32 - 1 - i) % imax)).collect(),
+        ),
+        ("equal keys, ids ascending", (0..n32).map(|i| SortEntry::new(kmax, i % imax)).collect()),
+        ("reversed", (0..n32).map(|i| SortEntry::new((n32 - 1 - i) % (kmax + 1), i % imax)).collect()),
+        ("already sorted", (0..n32).map(|i| SortEntry::new(i % (kmax + 1), (3 * i) % imax)).collect()),
+        (
+            "min and max keys",
+            (0..n32).map(|i| SortEntry::new(if i % 2 == 0 { kmax } else { 0 }, (i * 7) % imax)).collect(),
+        ),
+        (
+            "max key and reserved id",
+            (0..n32).map(|i| SortEntry { key: kmax, id: imax - (i % 2), valid: i % 2 == 1 }).collect(),
+        ),
+        (
+            "all invalid",
+            (0..n32).map(|i| SortEntry { key: (n32 - i) % (kmax + 1), id: i, valid: false }).collect(),
+        ),
+        (
+            "one valid",
+            (0..n32)
+                .map(|i| SortEntry { key: (i * 5) % (kmax + 1), id: i % imax, valid: i == n32 / 2 })
+                .collect(),
+        ),
+        (
+            "equal (key, id), valid bits differ",
+            (0..n32).map(|i| SortEntry { key: 3.min(kmax), id: 9 % imax, valid: i % 3 == 0 }).collect(),
+        ),
+        ("all zero", vec![SortEntry { key: 0, id: 0, valid: false }; n]),
+    ];
+    for (_, v) in &mut cases {
+        for e in v.iter_mut() {
+            e.key &= kmax;
+            e.id &= imax;
+        }
+    }
+    cases
+}
+
+/// A sorted stream of `len` entries (THE ORDER), with valid bits at density `valid_pct`.
+/// With `ties`, keys repeat a lot (ids distinguish them, and may collide with the other stream).
+pub fn sorted_stream(
+    fmt: &SortFormat,
+    rng: &mut Rng,
+    len: usize,
+    valid_pct: u32,
+    ties: bool,
+) -> Vec<SortEntry> {
+    let dist = if ties { KeyDist::Ties } else { KeyDist::Full };
+    let mut v: Vec<SortEntry> = (0..len).map(|_| random_entry(fmt, rng, dist, valid_pct)).collect();
+    v.sort_by_key(|e| e.order_key());
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generated_entries_fit_the_format() {
+        let fmt = SortFormat::ARTIFACT;
+        let mut rng = Rng::new(5);
+        for _ in 0..200 {
+            for e in random_vector(&fmt, &mut rng, 16) {
+                assert!(fmt.try_pack(&e).is_some());
+            }
+        }
+        for (name, v) in directed_vectors(&fmt, 16) {
+            assert_eq!(v.len(), 16, "{name}");
+            assert!(v.iter().all(|e| fmt.try_pack(e).is_some()), "{name}");
+        }
+        let s = sorted_stream(&fmt, &mut rng, 100, 50, true);
+        let t = nearly_sorted(tile_entries(&fmt, &mut rng, 300, false, 100), &mut rng, 10, 100);
+        let mut sorted = t.clone();
+        sorted.sort_by_key(|e| e.order_key());
+        for (i, e) in t.iter().enumerate() {
+            let home = sorted.iter().position(|x| x == e).unwrap();
+            assert!(home.abs_diff(i) <= 10, "entry moved {} places", home.abs_diff(i));
+        }
+        let ids: std::collections::HashSet<u32> = t.iter().map(|e| e.id).collect();
+        assert_eq!(ids.len(), 300, "tile ids are distinct");
+        assert!(s.windows(2).all(|w| w[0].order_key() <= w[1].order_key()));
+    }
+}
+
+/// `n` entries of one tile: distinct real ids (never the reserved one), keys uniform or (with
+/// `ties`) in `0..8`, valid bits at density `valid_pct`, in random order.
+pub fn tile_entries(fmt: &SortFormat, rng: &mut Rng, n: usize, ties: bool, valid_pct: u32) -> Vec<SortEntry> {
+    let cap = fmt.id_capacity();
+    assert!(n as u64 <= cap, "{n} distinct ids do not fit the format");
+    let base = rng.below(cap);
+    let mut v: Vec<SortEntry> = (0..n as u64)
+        .map(|i| {
+            let key = if ties {
+                rng.below(8.min(fmt.key_max() as u64 + 1))
+            } else {
+                rng.below(fmt.key_max() as u64 + 1)
+            };
+            SortEntry { key: key as u32, id: ((base + i) % cap) as u32, valid: rng.percent(valid_pct) }
+        })
+        .collect();
+    rng.shuffle(&mut v);
+    v
+}
+
+/// `v` sorted in THE ORDER, then disturbed by up to `swaps` random swaps of entries at most
+/// `max_dist` positions apart, each entry moved at most once (so no entry ends up more than
+/// `max_dist` from its place: a reused table whose depths changed a little).
+pub fn nearly_sorted(mut v: Vec<SortEntry>, rng: &mut Rng, max_dist: usize, swaps: usize) -> Vec<SortEntry> {
+    v.sort_by_key(|e| e.order_key());
+    if v.len() < 2 || max_dist == 0 {
+        return v;
+    }
+    let mut moved = vec![false; v.len()];
+    for _ in 0..swaps {
+        let i = rng.below(v.len() as u64) as usize;
+        let j = (i + 1 + rng.below(max_dist as u64) as usize).min(v.len() - 1);
+        if i != j && !moved[i] && !moved[j] {
+            v.swap(i, j);
+            moved[i] = true;
+            moved[j] = true;
+        }
+    }
+    v
+}

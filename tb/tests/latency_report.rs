@@ -1,0 +1,55 @@
+//! `reports/latency.json` is regenerated from cosimulation and must match the checked-in file
+//! (the cycle model reads it). `NEO_UPDATE_REPORTS=1` rewrites it instead.
+
+#[cfg(not(neo_has_verilator))]
+#[test]
+fn latency_report_skipped_without_verilator() {
+    println!("SKIP: neo-tb was built without Verilator; reports/latency.json was not checked");
+}
+
+#[cfg(neo_has_verilator)]
+mod cosim {
+    use std::path::PathBuf;
+
+    fn report_path() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../reports/latency.json")
+    }
+
+    #[test]
+    fn measured_unit_latencies_match_the_generator() {
+        let cfg = neo_tb::config();
+        let (latency, ii, _, _) = neo_tb::latency::bsu_latency(&cfg);
+        assert_eq!(latency, cfg.bsu_latency() as u64, "BSU latency is ceil(depth / register_every)");
+        assert_eq!(ii, 1, "the BSU takes a vector every cycle");
+        let (_, msu_ii, _, entries, _) = neo_tb::latency::msu_latency(&cfg, 64);
+        assert_eq!(entries, 128);
+        assert_eq!(msu_ii, 1, "the MSU+ emits an entry every cycle at full rate");
+    }
+
+    #[test]
+    fn latency_report_is_current() {
+        if std::env::var_os("NEO_HDL_DIR").is_some() {
+            println!("SKIP: NEO_HDL_DIR is set; the report describes the generated RTL only");
+            return;
+        }
+        let text = neo_tb::latency::report_text(&neo_tb::config());
+        let path = report_path();
+        let tmp = tempfile::NamedTempFile::new().unwrap();
+        std::fs::write(tmp.path(), &text).unwrap();
+        let update = std::env::var("NEO_UPDATE_REPORTS").is_ok_and(|v| !v.is_empty() && v != "0");
+        if update {
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(&path, &text).unwrap();
+            println!("wrote {}", path.display());
+            return;
+        }
+        let current = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            current == text,
+            "{} is out of date with the RTL (fresh measurement in {}); regenerate it with\n  \
+             NEO_UPDATE_REPORTS=1 cargo test -p neo-tb --release --test latency_report",
+            path.display(),
+            tmp.into_temp_path().keep().unwrap().display()
+        );
+    }
+}

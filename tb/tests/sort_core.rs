@@ -1,0 +1,192 @@
+//! `neo_sort_core` against golden `full_sort`, `dps_pass`, `merge2` and `update_tile`, with the
+//! memory served by the test bench's model (random request stalls, random response latency).
+//!
+//! Chunks of 1, 255, 256 entries are one `SORT` each; 257 entries is two chunks (256 + 1) plus
+//! a `MERGE` of the two runs, exactly golden `full_sort`'s schedule.
+
+#[cfg(not(neo_has_verilator))]
+#[test]
+fn sort_core_skipped_without_verilator() {
+    println!("SKIP: neo-tb was built without Verilator; Sorting Core cosimulation did not run");
+}
+
+#[cfg(neo_has_verilator)]
+mod cosim {
+    use neo_golden::sort::{Parity, SortEntry};
+    use neo_tb::core::{
+        dps_pass_checked, full_sort_checked, layout, merge_checked, sort_chunk_checked, update_checked,
+        Command, Core, MemTiming, Mode,
+    };
+    use neo_tb::rng::{test_seed, Rng};
+    use neo_tb::stimulus::{nearly_sorted, sorted_stream, tile_entries};
+    use neo_tb::waves::maybe_trace;
+
+    fn core(name: &str, seed: u64, timing: MemTiming) -> Core {
+        let mut c = Core::new(&neo_tb::config(), seed, timing);
+        maybe_trace(&mut c.dut, name);
+        c
+    }
+
+    #[test]
+    fn core_sorts_chunks_of_1_255_256() {
+        let name = "core_sorts_chunks_of_1_255_256";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let mut rng = Rng::new(seed);
+        let mut c = core(name, seed, MemTiming::RANDOM);
+        for n in [1, 2, 15, 16, 17, 100, 255, 256] {
+            for (ties, valid) in [(false, 100), (true, 70)] {
+                let v = tile_entries(&cfg.format(), &mut rng, n, ties, valid);
+                sort_chunk_checked(&mut c, &cfg, &v, Mode::Sort);
+            }
+        }
+        c.set_timing(MemTiming::IDEAL);
+        for n in [1, 255, 256] {
+            let v = tile_entries(&cfg.format(), &mut rng, n, false, 90);
+            sort_chunk_checked(&mut c, &cfg, &v, Mode::Sort);
+        }
+    }
+
+    #[test]
+    fn core_sorts_257_as_two_chunks_plus_a_merge_and_longer_inputs_in_passes() {
+        let name = "core_sorts_257_as_two_chunks_plus_a_merge_and_longer_inputs_in_passes";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let mut rng = Rng::new(seed);
+        let mut c = core(name, seed, MemTiming::RANDOM);
+        // 257: SORT 256 + SORT 1 + MERGE; 600: 3 chunks, a pass with a copied lone run, then a merge.
+        for n in [257, 600] {
+            let v = tile_entries(&cfg.format(), &mut rng, n, n == 600, 80);
+            full_sort_checked(&mut c, &cfg, &v);
+        }
+    }
+
+    #[test]
+    fn core_sort_takes_at_most_one_chunk() {
+        let name = "core_sort_takes_at_most_one_chunk";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let mut rng = Rng::new(seed);
+        let mut c = core(name, seed, MemTiming::IDEAL);
+        // A SORT of 257 entries sorts src[0..256) only (documented clamp) and reports 256.
+        let v = tile_entries(&cfg.format(), &mut rng, 257, false, 100);
+        c.write_entries(layout::SRC, &v);
+        let r = c.run(Command {
+            mode: Mode::Sort,
+            src_a: layout::SRC,
+            len_a: 257,
+            src_b: 0,
+            len_b: 0,
+            dst: layout::DST,
+        });
+        assert_eq!(r.done_len, 256);
+        let (want, _) = neo_golden::sort::full_sort(&v[..256], &cfg.sort_config());
+        c.expect("clamped chunk", layout::DST, &want);
+    }
+
+    #[test]
+    fn core_directed_chunks() {
+        let name = "core_directed_chunks";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let fmt = cfg.format();
+        let mut c = core(name, seed, MemTiming::RANDOM);
+        let n = cfg.chunk as u32;
+        let cases: Vec<(&str, Vec<SortEntry>)> = vec![
+            ("equal keys, ids descending", (0..n).map(|i| SortEntry::new(9, n - i)).collect()),
+            ("reversed", (0..n).map(|i| SortEntry::new(n - i, i)).collect()),
+            ("already sorted", (0..n).map(|i| SortEntry::new(i, 1000 + i)).collect()),
+            (
+                "min and max keys",
+                (0..n).map(|i| SortEntry::new(if i % 2 == 0 { fmt.key_max() } else { 0 }, i)).collect(),
+            ),
+            ("all invalid", (0..n).map(|i| SortEntry { key: i % 7, id: i, valid: false }).collect()),
+            ("one valid", (0..37).map(|i| SortEntry { key: 40 - i, id: i, valid: i == 20 }).collect()),
+            ("largest real id", vec![SortEntry::new(fmt.key_max(), fmt.id_max() - 1), SortEntry::new(0, 0)]),
+        ];
+        for (case, v) in &cases {
+            println!("case: {case}");
+            sort_chunk_checked(&mut c, &cfg, v, Mode::Sort);
+            sort_chunk_checked(&mut c, &cfg, v, Mode::Dps);
+        }
+    }
+
+    #[test]
+    fn core_dps_passes_match_golden() {
+        let name = "core_dps_passes_match_golden";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let mut rng = Rng::new(seed);
+        let mut c = core(name, seed, MemTiming::RANDOM);
+        // A reused table slightly out of order (displacements <= C/2): two passes of opposite
+        // parity restore the order, pass by pass as golden.
+        let v = tile_entries(&cfg.format(), &mut rng, 700, false, 85);
+        let table = nearly_sorted(v, &mut rng, cfg.chunk / 2, 120);
+        let (t1, _) = dps_pass_checked(&mut c, &cfg, &table, Parity::Even);
+        let (t2, _) = dps_pass_checked(&mut c, &cfg, &t1, Parity::Odd);
+        assert!(t2.windows(2).all(|w| w[0].order_key() <= w[1].order_key()), "two passes sort it");
+        // An unsorted table, odd parity first (chunks of C/2, C, ..., and a short last one).
+        let v = tile_entries(&cfg.format(), &mut rng, 300, true, 60);
+        dps_pass_checked(&mut c, &cfg, &v, Parity::Odd);
+    }
+
+    #[test]
+    fn core_merges_match_golden() {
+        let name = "core_merges_match_golden";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let fmt = cfg.format();
+        let mut rng = Rng::new(seed);
+        let mut c = core(name, seed, MemTiming::RANDOM);
+        let mut entries = 0;
+        for k in 0..16 {
+            let la = if k == 0 { 0 } else { rng.below(301) as usize };
+            let lb = if k == 1 { 0 } else { rng.below(301) as usize };
+            let ties = k % 3 == 0;
+            let va = *rng.pick(&[100, 80, 30]);
+            let a = sorted_stream(&fmt, &mut rng, la, va, ties);
+            let mut b = sorted_stream(&fmt, &mut rng, lb, 70, ties);
+            if k % 5 == 4 {
+                b = a.iter().map(|e| e.with_valid(!e.valid)).collect();
+            }
+            // Stream entries must be real (not the reserved padding id).
+            let fix = |v: &mut Vec<SortEntry>| v.iter_mut().for_each(|e| e.id = e.id.min(fmt.id_max() - 1));
+            let (mut a, mut b) = (a, b);
+            fix(&mut a);
+            fix(&mut b);
+            merge_checked(&mut c, &a, &b, k % 2 == 0);
+            entries += a.len() + b.len();
+        }
+        // Empty both, and everything dropped.
+        merge_checked(&mut c, &[], &[], true);
+        merge_checked(&mut c, &[], &[], false);
+        let dead = vec![SortEntry { key: 1, id: 1, valid: false }, SortEntry { key: 2, id: 2, valid: false }];
+        let r = merge_checked(&mut c, &dead, &dead[1..], true);
+        assert_eq!(r.done_len, 0);
+        println!("{name}: {entries} entries merged");
+    }
+
+    #[test]
+    fn core_update_flow_matches_golden_update_tile() {
+        let name = "core_update_flow_matches_golden_update_tile";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let mut rng = Rng::new(seed);
+        let mut c = core(name, seed, MemTiming::RANDOM);
+        let fmt = cfg.format();
+        let all = tile_entries(&fmt, &mut rng, 900, false, 100);
+        let (mut table, _) = neo_golden::sort::full_sort(&all[..400], &cfg.sort_config());
+        let mut next = 400;
+        for frame in 1..4u64 {
+            // Depth keys drift, some Gaussians leave (valid = 0), new ones arrive.
+            for e in table.iter_mut() {
+                e.key = (e.key as i64 + rng.range(0, 200) as i64 - 100).clamp(0, fmt.key_max() as i64) as u32;
+                e.valid = !rng.percent(10);
+            }
+            let n_in = rng.range(0, 150) as usize;
+            let incoming = all[next..next + n_in].to_vec();
+            next += n_in;
+            table = update_checked(&mut c, &cfg, &table, &incoming, frame);
+        }
+    }
+}
