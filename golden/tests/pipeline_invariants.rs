@@ -45,7 +45,7 @@ proptest! {
     ) {
         let (scene, _) = source::load_scene(&format!("synthetic:blobs?gaussians={n}&seed={seed}"), false).unwrap();
         let traj = trajectory::parse_trajectory(&traj_spec(kind, speed), source::robust_bounds(&scene), 5).unwrap();
-        let mut cfg = PipelineConfig { chunk: 32 << chunk_log, ..config(strategy_of(strat)) };
+        let mut cfg = PipelineConfig { chunk: 32 << chunk_log, compare_float: false, ..config(strategy_of(strat)) };
         (cfg.raster.tile, cfg.raster.subtile) = [(64, 8), (32, 8), (16, 4)][geometry as usize];
         let stats = run_frames(&scene, &traj.frames, &[], cfg, check_tables);
         for f in &stats {
@@ -61,7 +61,7 @@ proptest! {
         let (scene, _) = source::load_scene(&format!("synthetic:blobs?gaussians={n}&seed={seed}"), false).unwrap();
         let traj = trajectory::parse_trajectory("orbit:res=160x96", source::robust_bounds(&scene), frame + 1).unwrap();
         let cams = vec![traj.frames[frame].clone(); 4];
-        let cfg = PipelineConfig { chunk: 32 << chunk_log, ..config(Strategy::Neo) };
+        let cfg = PipelineConfig { chunk: 32 << chunk_log, compare_float: false, ..config(Strategy::Neo) };
         let stats = run_frames(&scene, &cams, &[], cfg, check_tables);
         for f in &stats {
             prop_assert_eq!(f.order.inversions, 0, "frame {}", f.frame);
@@ -70,12 +70,17 @@ proptest! {
         }
     }
 
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 6, ..ProptestConfig::default() })]
+
     /// After the camera stops, Neo's order is exact within `ceil(L / (C/2)) + 2` frames (`L`
     /// the longest table): one frame for the written-back keys to be current, then DPS's
     /// alternating passes (a block odd-even transposition sort).
     #[test]
     fn order_converges_after_the_camera_stops(
-        n in 300usize..1500,
+        n in 300usize..800,
         seed in 1u64..1000,
         speed in 1.0f64..16.0,
         moving in 2usize..6,
@@ -85,7 +90,7 @@ proptest! {
         let traj = trajectory::parse_trajectory(&format!("orbit:res=160x96,speed={speed}"), source::robust_bounds(&scene), moving).unwrap();
         let chunk = 32usize << chunk_log;
         let mut cams = traj.frames.clone();
-        let longest = 1500usize;
+        let longest = n;
         let bound = longest.div_ceil(chunk / 2) + 2;
         cams.extend(std::iter::repeat_n(traj.frames[moving - 1].clone(), bound + 1));
         let cfg = PipelineConfig { chunk, compare_float: false, ..config(Strategy::Neo) };

@@ -22,7 +22,15 @@ fn float_pixel(ps: &[Projected], x: u32, y: u32) -> [u8; 3] {
 
 /// Largest per-channel difference between a tile and the float reference over the pixels of
 /// tile `(tx, ty)` inside a `w x h` image.
-fn max_diff_to_float(r: &TileRaster, ps: &[Projected], tx: u32, ty: u32, cfg: &RasterConfig, w: u32, h: u32) -> u8 {
+fn max_diff_to_float(
+    r: &TileRaster,
+    ps: &[Projected],
+    tx: u32,
+    ty: u32,
+    cfg: &RasterConfig,
+    w: u32,
+    h: u32,
+) -> u8 {
     let t = cfg.tile;
     let mut worst = 0u8;
     for ly in 0..t {
@@ -50,7 +58,7 @@ fn alpha_threshold_is_exact_at_its_boundary() {
     let min = cfg.blend.min_alpha_raw();
     assert_eq!(min, 17);
     // 17/4096 >= 1/255 > 16/4096: the fixed-point threshold is exactly "alpha < 1/255".
-    assert!(17 * 255 >= 4096 && 16 * 255 < 4096);
+    assert!(min as f64 / 4096.0 >= 1.0 / 255.0 && ((min - 1) as f64 / 4096.0) < 1.0 / 255.0);
     let at = |raw: i64| {
         let p = projected_from_cov(0, [20.0, 20.0], [4.0, 0.0, 4.0], raw as f32 / 4096.0, [1.0; 3], 1.0);
         let e = q(&p, &fmt);
@@ -174,7 +182,14 @@ fn arb_table() -> impl Strategy<Value = Vec<Projected>> {
             .enumerate()
             .map(|(i, ((x, y), (lu, ratio, th), o, (r, g, b)))| {
                 let su = 10f64.powf(lu).max(0.55);
-                projected_from_cov(i as u32, [x, y], cov_from_axes(su, (su * ratio).max(0.55), th), o, [r, g, b], 1.0)
+                projected_from_cov(
+                    i as u32,
+                    [x, y],
+                    cov_from_axes(su, (su * ratio).max(0.55), th),
+                    o,
+                    [r, g, b],
+                    1.0,
+                )
             })
             .collect()
     })

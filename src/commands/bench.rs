@@ -5,7 +5,7 @@
 use crate::progress::spin;
 use anyhow::Result;
 use clap::Args;
-use neo_golden::{camera::Camera, ply, render, source, trajectory};
+use neo_golden::{camera::Camera, pipeline, ply, render, source, trajectory};
 use std::time::Duration;
 
 /// Arguments of `neo bench`.
@@ -70,5 +70,37 @@ pub fn run(a: BenchArgs) -> Result<()> {
         verdict(t_render.as_secs_f64() < 10.0)
     );
     println!("  split: {}", out.stats.timing_summary());
+
+    // The whole golden pipeline (preprocess, quantise, ITU binning, reuse-and-update sort,
+    // fixed-point raster) at QHD: frame 0 sorts from scratch, frame 1 reuses.
+    let qhd = traj.frames[0].with_resolution(2560, 1440);
+    let cams = [qhd.clone(), qhd];
+    let cfg = pipeline::PipelineConfig::default();
+    let (timings, _) = spin("golden pipeline, 2 QHD frames", || pipeline::bench_frames(&scene, &cams, &cfg));
+    let timings = timings?;
+    for (i, t) in timings.iter().enumerate() {
+        println!(
+            "golden frame {i}  {:>9.3} s     (2560x1440; preprocess {:.3}, quantise {:.3}, binning {:.3}, sort {:.3}, raster {:.3}; target < 2 s: {})",
+            t.pipeline_s,
+            t.preprocess_s,
+            t.quantize_s,
+            t.binning_s,
+            t.sort_s,
+            t.raster_s,
+            verdict(t.pipeline_s < 2.0)
+        );
+    }
+
+    let vectors = 2_000_000;
+    match neo_tb::bench::bsu_throughput(vectors, 0x5eed, threads) {
+        Some(t) => println!(
+            "BSU cosim       {:>9.2} M vectors/s ({} random 16-entry vectors on {threads} verilated models, golden-checked, {:.1} Mcycles/s; target >= 1 M/s: {})",
+            t.vectors_per_s() / 1e6,
+            t.vectors,
+            t.mcycles_per_s(),
+            verdict(t.vectors_per_s() >= 1e6)
+        ),
+        None => println!("BSU cosim       skipped: neo was built without Verilator (run scripts/setup)"),
+    }
     Ok(())
 }

@@ -146,7 +146,7 @@ fn prune(root: &Path, name: &str, keep: &Path) {
             (t, p)
         })
         .collect();
-    found.sort_by(|a, b| b.0.cmp(&a.0));
+    found.sort_by_key(|e| std::cmp::Reverse(e.0));
     for (_, p) in found.into_iter().skip(KEEP_PER_NAME) {
         if p != keep {
             let _ = fs::remove_dir_all(&p);

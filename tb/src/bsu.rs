@@ -12,6 +12,8 @@ use neo_golden::sort::SortEntry;
 use std::collections::VecDeque;
 use std::time::Instant;
 
+pub use crate::bench::Throughput;
+
 /// What a BSU run did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BsuRun {
@@ -80,29 +82,6 @@ pub fn run_checked(
         dut.tick();
     }
     BsuRun { vectors: vectors.len(), cycles: dut.cycle() }
-}
-
-/// Result of [`throughput`].
-#[derive(Clone, Copy, Debug)]
-pub struct Throughput {
-    /// Random vectors checked against the golden network.
-    pub vectors: u64,
-    /// Clock cycles simulated.
-    pub cycles: u64,
-    /// Wall-clock seconds.
-    pub seconds: f64,
-}
-
-impl Throughput {
-    /// Vectors checked per second.
-    pub fn vectors_per_s(&self) -> f64 {
-        self.vectors as f64 / self.seconds
-    }
-
-    /// Millions of cycles per second.
-    pub fn mcycles_per_s(&self) -> f64 {
-        self.cycles as f64 / self.seconds / 1e6
-    }
 }
 
 /// The BSU at full rate (one random vector per cycle, output always ready), every output

@@ -76,7 +76,8 @@ impl MemTiming {
 /// What a command did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CmdResult {
-    /// Cycles from the command's acceptance to the `done_o` pulse.
+    /// Rising edges from the one that accepts the command (`cmd_valid_i & cmd_ready_o`) to the
+    /// cycle with the `done_o` pulse (at least 1).
     pub cycles: u64,
     /// `done_len_o`.
     pub done_len: u64,
@@ -260,10 +261,12 @@ impl Core {
         self.dut.set_cmd_dst_i(cmd.dst);
         self.dut.set_cmd_valid_i(true);
         let limit = self.dut.cycle() + 2000 + 400 * (cmd.len_a + cmd.len_b);
+        let mut start;
         loop {
             self.dut.eval();
             let accepted = self.dut.cmd_ready_o();
             let c = self.dut.cycle();
+            start = c;
             self.checker.protocol(c, !self.dut.done_o(), "done_o while no command is running");
             self.step();
             if accepted {
@@ -273,7 +276,6 @@ impl Core {
                 self.checker.fail(c, "cmd_ready_o", "1", "0 (timeout)");
             }
         }
-        let start = self.dut.cycle();
         self.dut.set_cmd_valid_i(false);
         // Random garbage on the idle command fields.
         self.dut.set_cmd_src_a_i(self.rng.next_u64());

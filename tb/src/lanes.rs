@@ -77,7 +77,7 @@ mod tests {
     fn lanes_round_trip() {
         let fmt = SortFormat::ARTIFACT;
         let v: Vec<SortEntry> = (0..16u32)
-            .map(|i| SortEntry { key: i * 4000, id: i * 0x0777_7777 & fmt.id_max(), valid: i % 3 != 0 })
+            .map(|i| SortEntry { key: i * 4000, id: (i * 0x0777_7777) & fmt.id_max(), valid: i % 3 != 0 })
             .collect();
         let words = packed(&fmt, &v);
         assert_eq!(words.len(), 24);

@@ -10,7 +10,7 @@
 //!   "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
 //!   "units": {
 //!     "neo_bsu": { "latency": L, "ii": 1, "vectors": N, "cycles": C },
-//!     "neo_msu": { "latency": L, "ii": 1, "end_of_merge": E, "entries": N, "cycles": C },
+//!     "neo_msu": { "latency": L, "ii": 1, "merge_gap": G, "entries": N, "cycles": C },
 //!     "neo_sort_core": { "command_overhead": O }
 //!   },
 //!   "sort_core": {
@@ -76,16 +76,25 @@ pub fn bsu_latency(cfg: &GenConfig) -> (u64, u64, u64, u64) {
     (latency, ii, vectors, outputs[outputs.len() - 1] + 1)
 }
 
-/// MSU+: (latency, initiation interval, end-of-merge overhead, entries, cycles) for one merge of
-/// two all-valid streams of `len` entries each, both offered every cycle, output always ready.
-/// Latency: edges from the first pop to the first output beat. II: cycles per output entry over
-/// the merge. End of merge: extra cycles of the last beat beyond the steady-state schedule
-/// (`last output cycle - first output cycle + 1 - entries`).
+/// MSU+: (latency, initiation interval, merge gap, entries, cycles) for two back-to-back merges of
+/// all-valid streams of `len` entries each, every input beat offered as soon as possible and the
+/// output always ready. Latency: edges from the first pop to the first output beat. II: cycles
+/// per output entry within a merge. Merge gap: idle output cycles between the last beat of the
+/// first merge and the first beat of the second (the end-of-merge flush). Entries and cycles
+/// are the totals over both merges.
 pub fn msu_latency(cfg: &GenConfig, len: usize) -> (u64, u64, u64, u64, u64) {
     let fmt = cfg.format();
     let mut rng = Rng::new(SEED ^ 1);
-    let a = sorted_stream(&fmt, &mut rng, len, 100, false);
-    let b = sorted_stream(&fmt, &mut rng, len, 100, false);
+    // Per stream: the beats (entry, last) of merge 1 then merge 2.
+    let beats = |rng: &mut Rng| -> Vec<(SortEntry, bool)> {
+        (0..2)
+            .flat_map(|_| {
+                let s = sorted_stream(&fmt, rng, len, 100, false);
+                s.into_iter().enumerate().map(|(i, e)| (e, i + 1 == len)).collect::<Vec<_>>()
+            })
+            .collect()
+    };
+    let (a, b) = (beats(&mut rng), beats(&mut rng));
     let mut dut = NeoMsu::new();
     dut.set_a_valid_i(false);
     dut.set_b_valid_i(false);
@@ -94,38 +103,41 @@ pub fn msu_latency(cfg: &GenConfig, len: usize) -> (u64, u64, u64, u64, u64) {
     dut.reset();
     let (mut ia, mut ib) = (0usize, 0usize);
     let (mut first_pop, mut outs) = (None, Vec::new());
-    while outs.len() < 2 * len {
-        dut.set_a_valid_i(ia < len);
-        dut.set_b_valid_i(ib < len);
-        if ia < len {
-            dut.set_a_data_i(fmt.pack(&a[ia]));
-            dut.set_a_last_i(ia + 1 == len);
+    let total = a.len() + b.len();
+    while outs.len() < total {
+        dut.set_a_valid_i(ia < a.len());
+        dut.set_b_valid_i(ib < b.len());
+        if let Some(&(e, last)) = a.get(ia) {
+            dut.set_a_data_i(fmt.pack(&e));
+            dut.set_a_last_i(last);
             dut.set_a_empty_i(false);
         }
-        if ib < len {
-            dut.set_b_data_i(fmt.pack(&b[ib]));
-            dut.set_b_last_i(ib + 1 == len);
+        if let Some(&(e, last)) = b.get(ib) {
+            dut.set_b_data_i(fmt.pack(&e));
+            dut.set_b_last_i(last);
             dut.set_b_empty_i(false);
         }
         dut.eval();
-        let pop_a = ia < len && dut.a_ready_o();
-        let pop_b = ib < len && dut.b_ready_o();
+        let pop_a = ia < a.len() && dut.a_ready_o();
+        let pop_b = ib < b.len() && dut.b_ready_o();
         if (pop_a || pop_b) && first_pop.is_none() {
             first_pop = Some(dut.cycle());
         }
         ia += pop_a as usize;
         ib += pop_b as usize;
         if dut.out_valid_o() {
-            outs.push(dut.cycle());
+            outs.push((dut.cycle(), dut.out_last_o()));
         }
         dut.tick();
-        assert!(dut.cycle() < 100 * len as u64 + 100, "MSU+ produced {} of {} outputs", outs.len(), 2 * len);
+        assert!(dut.cycle() < 100 * total as u64 + 100, "MSU+ produced {} of {total} outputs", outs.len());
     }
     let first = first_pop.expect("an entry was popped");
-    let entries = 2 * len as u64;
-    let span = outs[outs.len() - 1] - outs[0] + 1;
-    let ii = ((outs[outs.len() - 2] - outs[0]) as f64 / (entries - 2) as f64).round() as u64;
-    (outs[0] - first, ii, span - entries, entries, outs[outs.len() - 1] + 1)
+    let per = 2 * len;
+    let end1 = outs[per - 1];
+    assert!(end1.1, "the merge's last beat carries out_last_o");
+    let ii = ((end1.0 - outs[0].0) as f64 / (per - 1) as f64).round() as u64;
+    let gap = outs[per].0 - end1.0 - 1;
+    (outs[0].0 - first, ii, gap, total as u64, outs[total - 1].0 + 1)
 }
 
 /// The artifact's cycle model for the in-chunk merge passes of an `n`-entry chunk with a
@@ -153,7 +165,7 @@ pub fn report(cfg: &GenConfig) -> Value {
     let fmt = cfg.format();
     let bsu_w = cfg.bsu_width as u64;
     let (bl, bii, bv, bc) = bsu_latency(cfg);
-    let (ml, mii, mend, me, mc) = msu_latency(cfg, 128);
+    let (ml, mii, mgap, me, mc) = msu_latency(cfg, 64);
 
     let mut core = Core::new(cfg, SEED, MemTiming::IDEAL);
     let mut rng = Rng::new(SEED ^ 2);
@@ -210,7 +222,8 @@ pub fn report(cfg: &GenConfig) -> Value {
             "memory": "the memory model used for sort_core: request always accepted, first read beat the cycle after the request, one beat per cycle",
             "units.*.latency": "rising edges from the edge that accepts an input to the first cycle its result is offered (out_valid_o high)",
             "units.*.ii": "initiation interval: cycles between accepted inputs (BSU: vectors; MSU+: output entries) at full rate",
-            "units.neo_msu.end_of_merge": "extra cycles of a merge's final beat beyond one output per cycle (the registered end-of-stream flush)",
+            "units.neo_msu.merge_gap": "idle output cycles between the last beat of a merge and the first beat of the next one fed back to back (the end-of-merge flush)",
+            "units.neo_msu.entries": "output entries of the measurement: two back-to-back merges of two 64-entry streams",
             "units.neo_sort_core.command_overhead": "cycles from accepting a zero-length SORT to its done_o pulse",
             "sort_core.*.cycles": "cycles from the edge that accepts the command (cmd_valid_i & cmd_ready_o) to the done_o pulse, ideal memory, output verified against golden",
             "sort_core.conventional": "SORT of one chunk of `entries` entries: load, BSU vectors, in-chunk merge passes, write-back (golden full_sort of one chunk)",
@@ -223,7 +236,7 @@ pub fn report(cfg: &GenConfig) -> Value {
         "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
         "units": {
             "neo_bsu": { "latency": bl, "ii": bii, "vectors": bv, "cycles": bc },
-            "neo_msu": { "latency": ml, "ii": mii, "end_of_merge": mend, "entries": me, "cycles": mc },
+            "neo_msu": { "latency": ml, "ii": mii, "merge_gap": mgap, "entries": me, "cycles": mc },
             "neo_sort_core": { "command_overhead": overhead }
         },
         "sort_core": {

@@ -99,37 +99,6 @@ pub fn sorted_stream(
     v
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn generated_entries_fit_the_format() {
-        let fmt = SortFormat::ARTIFACT;
-        let mut rng = Rng::new(5);
-        for _ in 0..200 {
-            for e in random_vector(&fmt, &mut rng, 16) {
-                assert!(fmt.try_pack(&e).is_some());
-            }
-        }
-        for (name, v) in directed_vectors(&fmt, 16) {
-            assert_eq!(v.len(), 16, "{name}");
-            assert!(v.iter().all(|e| fmt.try_pack(e).is_some()), "{name}");
-        }
-        let s = sorted_stream(&fmt, &mut rng, 100, 50, true);
-        let t = nearly_sorted(tile_entries(&fmt, &mut rng, 300, false, 100), &mut rng, 10, 100);
-        let mut sorted = t.clone();
-        sorted.sort_by_key(|e| e.order_key());
-        for (i, e) in t.iter().enumerate() {
-            let home = sorted.iter().position(|x| x == e).unwrap();
-            assert!(home.abs_diff(i) <= 10, "entry moved {} places", home.abs_diff(i));
-        }
-        let ids: std::collections::HashSet<u32> = t.iter().map(|e| e.id).collect();
-        assert_eq!(ids.len(), 300, "tile ids are distinct");
-        assert!(s.windows(2).all(|w| w[0].order_key() <= w[1].order_key()));
-    }
-}
-
 /// `n` entries of one tile: distinct real ids (never the reserved one), keys uniform or (with
 /// `ties`) in `0..8`, valid bits at density `valid_pct`, in random order.
 pub fn tile_entries(fmt: &SortFormat, rng: &mut Rng, n: usize, ties: bool, valid_pct: u32) -> Vec<SortEntry> {
@@ -169,4 +138,35 @@ pub fn nearly_sorted(mut v: Vec<SortEntry>, rng: &mut Rng, max_dist: usize, swap
         }
     }
     v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generated_entries_fit_the_format() {
+        let fmt = SortFormat::ARTIFACT;
+        let mut rng = Rng::new(5);
+        for _ in 0..200 {
+            for e in random_vector(&fmt, &mut rng, 16) {
+                assert!(fmt.try_pack(&e).is_some());
+            }
+        }
+        for (name, v) in directed_vectors(&fmt, 16) {
+            assert_eq!(v.len(), 16, "{name}");
+            assert!(v.iter().all(|e| fmt.try_pack(e).is_some()), "{name}");
+        }
+        let s = sorted_stream(&fmt, &mut rng, 100, 50, true);
+        let t = nearly_sorted(tile_entries(&fmt, &mut rng, 300, false, 100), &mut rng, 10, 100);
+        let mut sorted = t.clone();
+        sorted.sort_by_key(|e| e.order_key());
+        for (i, e) in t.iter().enumerate() {
+            let home = sorted.iter().position(|x| x == e).unwrap();
+            assert!(home.abs_diff(i) <= 10, "entry moved {} places", home.abs_diff(i));
+        }
+        let ids: std::collections::HashSet<u32> = t.iter().map(|e| e.id).collect();
+        assert_eq!(ids.len(), 300, "tile ids are distinct");
+        assert!(s.windows(2).all(|w| w[0].order_key() <= w[1].order_key()));
+    }
 }

@@ -1,5 +1,6 @@
 //! `reports/latency.json` is regenerated from cosimulation and must match the checked-in file
-//! (the cycle model reads it). `NEO_UPDATE_REPORTS=1` rewrites it instead.
+//! (the cycle model reads it). `NEO_UPDATE_REPORTS=1` rewrites it instead. With `NEO_HDL_DIR`
+//! the comparison still runs, so `scripts/mutate-check` sees timing-only bugs.
 
 #[cfg(not(neo_has_verilator))]
 #[test]
@@ -22,16 +23,12 @@ mod cosim {
         assert_eq!(latency, cfg.bsu_latency() as u64, "BSU latency is ceil(depth / register_every)");
         assert_eq!(ii, 1, "the BSU takes a vector every cycle");
         let (_, msu_ii, _, entries, _) = neo_tb::latency::msu_latency(&cfg, 64);
-        assert_eq!(entries, 128);
+        assert_eq!(entries, 256, "two merges of 2 x 64 entries");
         assert_eq!(msu_ii, 1, "the MSU+ emits an entry every cycle at full rate");
     }
 
     #[test]
     fn latency_report_is_current() {
-        if std::env::var_os("NEO_HDL_DIR").is_some() {
-            println!("SKIP: NEO_HDL_DIR is set; the report describes the generated RTL only");
-            return;
-        }
         let text = neo_tb::latency::report_text(&neo_tb::config());
         let path = report_path();
         let tmp = tempfile::NamedTempFile::new().unwrap();

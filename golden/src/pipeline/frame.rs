@@ -24,7 +24,7 @@ use super::trace::write_trace;
 use crate::camera::Camera;
 use crate::formats::{quantize, FeatureEntry};
 use crate::image::Rgb8Image;
-use crate::metrics::{psnr, ssim};
+use crate::metrics::{psnr, ssim, SSIM_WINDOW};
 use crate::raster::{raster_tile_into, TileRaster};
 use crate::render::{self, preprocess};
 use crate::scene::Scene;
@@ -482,19 +482,26 @@ impl<'s> Pipeline<'s> {
             let s = if ssim_on { ssim(a, b).ok() } else { None };
             (p, s)
         };
-        let ((pe, se), (pf, sf), (epf, esf)) = rayon::join(
-            || exact.map(|e| metric(image, e)).unwrap_or_default(),
-            || {
-                rayon::join(
-                    || float.map(|f| metric(image, f)).unwrap_or_default(),
-                    || match (exact, float) {
-                        (Some(e), Some(f)) => metric(e, f),
-                        _ => (None, None),
-                    },
-                )
-            },
-        )
-        .map_tuple();
+        let identical = exact.map(|e| e.data == image.data);
+        let ((pe, se), ((pf, sf), (epf, esf))) = if identical == Some(true) {
+            // Same image: PSNR null, SSIM 1, and one comparison against the float reference.
+            let vs_float = float.map(|f| metric(image, f)).unwrap_or_default();
+            let big = image.width as usize >= SSIM_WINDOW && image.height as usize >= SSIM_WINDOW;
+            ((None, (ssim_on && big).then_some(1.0)), (vs_float, vs_float))
+        } else {
+            rayon::join(
+                || exact.map(|e| metric(image, e)).unwrap_or_default(),
+                || {
+                    rayon::join(
+                        || float.map(|f| metric(image, f)).unwrap_or_default(),
+                        || match (exact, float) {
+                            (Some(e), Some(f)) => metric(e, f),
+                            _ => (None, None),
+                        },
+                    )
+                },
+            )
+        };
         let visible = self.features.len() as u64;
         FrameStats {
             frame: pos.frame,
@@ -507,7 +514,7 @@ impl<'s> Pipeline<'s> {
             ssim_vs_float: sf,
             exact_psnr_vs_float: epf,
             exact_ssim_vs_float: esf,
-            identical_to_exact: exact.map(|e| e.data == image.data),
+            identical_to_exact: identical,
             gaussians: GaussianCounts {
                 total: self.scene.len() as u64,
                 visible,
@@ -539,16 +546,5 @@ impl<'s> Pipeline<'s> {
             chunk: self.cfg.chunk,
         };
         write_trace(out, &header, &culled, &tables, &bitmaps, &incoming, &reused)
-    }
-}
-
-/// `((a, b), ((c, d), (e, f)))` to `((a, b), (c, d), (e, f))`.
-trait MapTuple<A, B, C> {
-    fn map_tuple(self) -> (A, B, C);
-}
-
-impl<A, B, C> MapTuple<A, B, C> for (A, (B, C)) {
-    fn map_tuple(self) -> (A, B, C) {
-        (self.0, self.1 .0, self.1 .1)
     }
 }

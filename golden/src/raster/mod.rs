@@ -61,7 +61,7 @@ impl RasterConfig {
     pub fn check(&self, fmt: &FeatureFormat) -> Result<(), FormatError> {
         fmt.check()?;
         self.blend.check()?;
-        if self.subtile == 0 || self.tile == 0 || self.tile % self.subtile != 0 {
+        if self.subtile == 0 || self.tile == 0 || self.tile / self.subtile * self.subtile != self.tile {
             return Err(FormatError::new(
                 "tile",
                 format!("tile {} is not a positive multiple of subtile {}", self.tile, self.subtile),

@@ -34,7 +34,7 @@
 use super::exp::ExpTable;
 use super::itu::{bitmap_of, ItuGeom};
 use super::RasterConfig;
-use crate::formats::blend::BlendFormat;
+use crate::formats::blend::{BlendFormat, ExpFormat};
 use crate::formats::feature::{FeatureEntry, FeatureFormat};
 use crate::formats::fixed::{shr_round, shr_round64};
 
@@ -120,6 +120,20 @@ struct Prep {
     /// Largest `np` at which `alpha >= min_alpha` (-1: never). Only a shortcut: alpha is
     /// non-increasing in `np`, so `np > np_cut` is exactly `alpha < min_alpha`.
     np_cut: i64,
+    /// `q < q_cut` is exactly `np <= np_cut` (for `np >= 0`): `(2 np_cut + 1) 2^(sh - 1)`, or
+    /// `None` when that does not hold through saturation or huge shifts (no span culling).
+    q_cut: Option<i128>,
+    /// The quantised conic is positive definite: `q` is convex along every row.
+    pd: bool,
+    /// Span culling (only with `q_cut` and `pd`): rows with `|dy| >= row_reach` (raw mean
+    /// units) have no pixel with `q < q_cut`; the real minimum of a row is at pixel column
+    /// `x_at0 - x_slope * py`.
+    row_reach: f64,
+    x_at0: f64,
+    x_slope: f64,
+    /// Increments of `q` between neighbouring pixels of a row: `a h^2` and `2 a h`, `h = 2^Fm`.
+    a_h2: i128,
+    two_a_h: i128,
     rgb: [i64; 3],
 }
 
@@ -136,17 +150,70 @@ impl Prep {
         };
         let (dx, dy) = (dmax(m[0], x0, x1), dmax(m[1], y0, y1));
         let bound = a as u128 * dx * dx + b2.unsigned_abs() as u128 * dx * dy + c as u128 * dy * dy;
+        let sh = sh.max(0) as u32;
+        let max_np = b.max_neg_power();
+        let q_cut = (sh >= 1 && sh < 100 && np_cut < max_np).then(|| (2 * np_cut as i128 + 1) << (sh - 1));
+        let pd = a > 0 && c > 0 && (a as i128) * (c as i128) * 4 > (b2 as i128) * (b2 as i128);
+        let h = (fm as f64).exp2();
+        // Row minimum dy^2 (4ac - b2^2) / 4a >= q_cut iff |dy| >= sqrt(4a q_cut / (4ac - b2^2));
+        // widened by 1e-9 relative (f64 is accurate to ~1e-15 here) and one raw unit.
+        let row_reach = match q_cut {
+            Some(qc) if pd && qc <= 0 => -1.0,
+            Some(qc) if pd => {
+                let det4 = 4.0 * a as f64 * c as f64 - (b2 as f64) * (b2 as f64);
+                (4.0 * a as f64 * qc as f64 / det4).sqrt() * (1.0 + 1e-9) + 1.0
+            }
+            _ => f64::INFINITY,
+        };
         Prep {
             m,
             a,
             b2,
             c,
-            sh: sh.max(0) as u32,
+            sh,
             wide: bound >= 1 << 62,
             o: f.opacity as i64,
             np_cut,
+            q_cut,
+            pd,
+            row_reach,
+            x_at0: (m[0] as f64 + b2 as f64 * m[1] as f64 / (2.0 * a as f64)) / h,
+            x_slope: b2 as f64 / (2.0 * a as f64),
+            a_h2: (a as i128) << (2 * fm),
+            two_a_h: (2 * a as i128) << fm,
             rgb: f.rgb.map(|v| v as i64),
         }
+    }
+
+    /// `L = 2 a dx + b2 dy` at pixel `(px, py)`: `q` changes by `+-h L + a h^2` one pixel to
+    /// the left / right.
+    #[inline(always)]
+    fn slope(&self, fm: u32, px: i64, py: i64) -> i128 {
+        let dx = (self.m[0] - (px << fm)) as i128;
+        let dy = (self.m[1] - (py << fm)) as i128;
+        2 * self.a as i128 * dx + self.b2 as i128 * dy
+    }
+
+    /// Steps 1-2: the exact quadratic form `q` at pixel `(px, py)`.
+    #[inline(always)]
+    fn q(&self, fm: u32, px: i64, py: i64) -> i128 {
+        let dx = self.m[0] - (px << fm);
+        let dy = self.m[1] - (py << fm);
+        if self.wide {
+            let (dx, dy) = (dx as i128, dy as i128);
+            self.a as i128 * dx * dx + self.b2 as i128 * dx * dy + self.c as i128 * dy * dy
+        } else {
+            (self.a * dx * dx + self.b2 * dx * dy + self.c * dy * dy) as i128
+        }
+    }
+
+    /// Step 3 from `q`: `np`, saturated, or -1 when `power > 0`.
+    #[inline(always)]
+    fn np_of(&self, k: &Consts, q: i128) -> i64 {
+        if self.sh >= 127 {
+            return 0;
+        }
+        shr_round(q, self.sh).clamp(-1, k.max_np as i128) as i64
     }
 
     /// Steps 1-3: `np` at pixel `(px, py)`, saturated, or -1 when `power > 0`.
@@ -178,14 +245,14 @@ impl Prep {
         if np < 0 {
             return None;
         }
-        Some(alpha_of(self.o, np, k, exp))
+        Some(alpha_of(self.o, exp.eval(np), k))
     }
 }
 
-/// Steps 4-5: the capped alpha of opacity `o` at `-power = np`.
+/// Step 5: the capped alpha of opacity `o` where the exp unit gives `e`.
 #[inline(always)]
-fn alpha_of(o: i64, np: i64, k: &Consts, exp: &ExpTable) -> i64 {
-    let prod = o * exp.eval(np);
+fn alpha_of(o: i64, e: i64, k: &Consts) -> i64 {
+    let prod = o * e;
     let alpha =
         if k.alpha_shift >= 0 { shr_round64(prod, k.alpha_shift as u32) } else { prod << -k.alpha_shift };
     alpha.min(k.max_alpha)
@@ -194,7 +261,7 @@ fn alpha_of(o: i64, np: i64, k: &Consts, exp: &ExpTable) -> i64 {
 /// The largest `np` in `[0, max_np]` with `alpha_of(o, np) >= min_alpha`, or -1. Exact: an f64
 /// estimate is corrected by stepping with the integer function, which is non-increasing in `np`.
 fn np_cut(o: i64, fmt: &FeatureFormat, k: &Consts, exp: &ExpTable) -> i64 {
-    let ok = |np: i64| alpha_of(o, np, k, exp) >= k.min_alpha;
+    let ok = |np: i64| alpha_of(o, exp.eval(np), k) >= k.min_alpha;
     if !ok(0) {
         return -1;
     }
@@ -249,7 +316,7 @@ fn blend(list: &[Prep], k: &Consts, exp: &ExpTable, px: i64, py: i64) -> (PixelS
         if np < 0 || np > p.np_cut {
             continue;
         }
-        let alpha = alpha_of(p.o, np, k, exp);
+        let alpha = alpha_of(p.o, exp.eval(np), k);
         let w = shr_round64(alpha * st.t, k.alpha_frac);
         let test_t = st.t - w;
         if test_t < k.min_t {
@@ -399,7 +466,9 @@ pub fn raster_tile_into(
             m &= m - 1;
         }
     }
+    let lut = exp_lut(&exp, k.max_np);
     let mut list: Vec<Prep> = Vec::with_capacity(preps.len());
+    let mut st = SubtileState::default();
     for sy in 0..n {
         for sx in 0..n {
             let j = (sy * n + sx) as usize;
@@ -407,38 +476,206 @@ pub fn raster_tile_into(
             list.extend(
                 routed[offsets[j] as usize..offsets[j + 1] as usize].iter().map(|&i| preps[i as usize]),
             );
-            let mut work = SubtileWork { routed: list.len() as u32, ..SubtileWork::default() };
-            let (mut inside, mut last_finish) = (0u32, 0usize);
-            for ly in sy * s..(sy + 1) * s {
-                let py = y0 + ly;
-                for lx in sx * s..(sx + 1) * s {
-                    let px = x0 + lx;
-                    if px >= width as i64 || py >= height as i64 {
-                        continue;
-                    }
-                    inside += 1;
-                    let (st, fin) = blend(&list, &k, &exp, px, py);
-                    out.pixels[(ly * t + lx) as usize] = st.c.map(|c| to_u8(c, k.out_shift));
-                    match fin {
-                        Some(pos) => {
-                            work.finished_pixels += 1;
-                            work.pixel_evals += pos as u32 + 1;
-                            last_finish = last_finish.max(pos + 1);
-                        }
-                        None => work.pixel_evals += list.len() as u32,
-                    }
+            let origin = [x0 + sx * s, y0 + sy * s];
+            out.work[j] = st.run(&list, &k, &lut, origin, s, [width as i64, height as i64]);
+            for ly in 0..s {
+                for lx in 0..s {
+                    let c = st.c[(ly * s + lx) as usize];
+                    out.pixels[((sy * s + ly) * t + sx * s + lx) as usize] = c.map(|c| to_u8(c, k.out_shift));
                 }
             }
-            work.processed = if inside == 0 {
-                0
-            } else if work.finished_pixels == inside {
-                last_finish as u32
-            } else {
-                work.routed
-            };
-            work.terminated = work.processed < work.routed;
-            out.work[j] = work;
         }
+    }
+}
+
+thread_local! {
+    /// The last exp lookup table built on this thread (only saves time).
+    static EXP_LUT: std::cell::RefCell<Option<(ExpFormat, u32, std::rc::Rc<Vec<i64>>)>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// `exp.eval(np)` for every `np` in `[0, max_np]`, as a table (the same function, evaluated
+/// ahead; only saves time). Cached per thread.
+fn exp_lut(exp: &ExpTable, max_np: i64) -> std::rc::Rc<Vec<i64>> {
+    let key = (*exp.format(), exp.input_shift());
+    EXP_LUT.with(|cell| {
+        let mut cell = cell.borrow_mut();
+        if let Some((f, sh, lut)) = cell.as_ref() {
+            if (*f, *sh) == key && lut.len() == max_np as usize + 1 {
+                return lut.clone();
+            }
+        }
+        let lut = std::rc::Rc::new((0..=max_np).map(|np| exp.eval(np)).collect::<Vec<i64>>());
+        *cell = Some((key.0, key.1, lut.clone()));
+        lut
+    })
+}
+
+/// The pixels of one subtile while the SCU blends it (row-major, `side * side`).
+#[derive(Debug, Default)]
+struct SubtileState {
+    /// Transmittance per pixel.
+    t: Vec<i64>,
+    /// Colour accumulators per pixel.
+    c: Vec<[i64; 3]>,
+    /// Pixel still blending (inside the image and not finished).
+    active: Vec<bool>,
+    /// Active pixels per row.
+    row_active: Vec<u32>,
+}
+
+impl SubtileState {
+    /// Blends `list` (the routed entries in table order) into the subtile whose top-left pixel
+    /// is `origin`, entry by entry over the subtile's pixels (the hardware's order; per pixel it
+    /// is the same sequence as [`blend`]). Only the pixels of a row where `q < q_cut` can blend:
+    /// for a positive definite conic they form one run around the row's minimum, found with
+    /// exact evaluations, so the others are skipped without changing any result.
+    fn run(
+        &mut self,
+        list: &[Prep],
+        k: &Consts,
+        lut: &[i64],
+        origin: [i64; 2],
+        side: i64,
+        size: [i64; 2],
+    ) -> SubtileWork {
+        let n = (side * side) as usize;
+        self.t.clear();
+        self.t.resize(n, k.one_t);
+        self.c.clear();
+        self.c.resize(n, [0; 3]);
+        self.active.clear();
+        self.row_active.clear();
+        let mut remaining = 0u32;
+        for ly in 0..side {
+            let mut count = 0;
+            for lx in 0..side {
+                let inside = origin[0] + lx < size[0] && origin[1] + ly < size[1];
+                self.active.push(inside);
+                count += inside as u32;
+            }
+            self.row_active.push(count);
+            remaining += count;
+        }
+        let mut work = SubtileWork { routed: list.len() as u32, ..SubtileWork::default() };
+        if remaining == 0 {
+            work.terminated = work.routed > 0;
+            return work;
+        }
+        let (xs, xe) = (origin[0], origin[0] + side - 1);
+        let h = (k.fm as f64).exp2();
+        for (pos, g) in list.iter().enumerate() {
+            work.pixel_evals += remaining;
+            let span = g.pd && g.q_cut.is_some();
+            // Rows that can hold a blending pixel (all rows without span culling).
+            let (ly0, ly1) = if span {
+                let lo = ((g.m[1] as f64 - g.row_reach) / h).ceil();
+                let hi = ((g.m[1] as f64 + g.row_reach) / h).floor();
+                let lo = if lo.is_nan() { 0 } else { (lo.max(-1e15) as i64 - origin[1]).max(0) };
+                let hi = if hi.is_nan() { side - 1 } else { (hi.min(1e15) as i64 - origin[1]).min(side - 1) };
+                (lo, hi)
+            } else {
+                (0, side - 1)
+            };
+            for ly in ly0..=ly1 {
+                if self.row_active[ly as usize] == 0 {
+                    continue;
+                }
+                let py = origin[1] + ly;
+                if !span {
+                    for x in xs..=xe {
+                        let q = g.q(k.fm, x, py);
+                        self.blend_at(g, k, lut, x - xs, ly, side, q, &mut remaining, &mut work);
+                    }
+                    continue;
+                }
+                let q_cut = g.q_cut.unwrap_or(0);
+                // Seed: the row's integer minimum is within one pixel of the truncated real
+                // minimum (clamped to the subtile); the pixels with q < q_cut are one run.
+                let xm = g.x_at0 - g.x_slope * py as f64;
+                let c0 = if xm.is_finite() { (xm.clamp(-1e15, 1e15) as i64).clamp(xs, xe) } else { xs };
+                let q0 = g.q(k.fm, c0, py);
+                let l0 = g.slope(k.fm, c0, py);
+                let shift = k.fm;
+                let mut seed = None;
+                if q0 < q_cut {
+                    seed = Some((c0, q0, l0));
+                } else if c0 > xs && q0 + (l0 << shift) + g.a_h2 < q_cut {
+                    seed = Some((c0 - 1, q0 + (l0 << shift) + g.a_h2, l0 + g.two_a_h));
+                } else if c0 < xe && q0 - (l0 << shift) + g.a_h2 < q_cut {
+                    seed = Some((c0 + 1, q0 - (l0 << shift) + g.a_h2, l0 - g.two_a_h));
+                }
+                let Some((x, q, l)) = seed else { continue };
+                self.blend_at(g, k, lut, x - xs, ly, side, q, &mut remaining, &mut work);
+                let (mut xl, mut ql, mut ll) = (x, q, l);
+                while xl > xs {
+                    ql += (ll << shift) + g.a_h2;
+                    ll += g.two_a_h;
+                    xl -= 1;
+                    if ql >= q_cut {
+                        break;
+                    }
+                    self.blend_at(g, k, lut, xl - xs, ly, side, ql, &mut remaining, &mut work);
+                }
+                let (mut xr, mut qr, mut lr) = (x, q, l);
+                while xr < xe {
+                    qr += g.a_h2 - (lr << shift);
+                    lr -= g.two_a_h;
+                    xr += 1;
+                    if qr >= q_cut {
+                        break;
+                    }
+                    self.blend_at(g, k, lut, xr - xs, ly, side, qr, &mut remaining, &mut work);
+                }
+            }
+            if remaining == 0 {
+                work.processed = pos as u32 + 1;
+                work.terminated = work.processed < work.routed;
+                return work;
+            }
+        }
+        work.processed = work.routed;
+        work
+    }
+
+    /// Steps 3-6 for entry `g` at pixel `(lx, ly)` of the subtile, given its `q`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn blend_at(
+        &mut self,
+        g: &Prep,
+        k: &Consts,
+        lut: &[i64],
+        lx: i64,
+        ly: i64,
+        side: i64,
+        q: i128,
+        remaining: &mut u32,
+        work: &mut SubtileWork,
+    ) {
+        let i = (ly * side + lx) as usize;
+        if !self.active[i] {
+            return;
+        }
+        let np = g.np_of(k, q);
+        if np < 0 || np > g.np_cut {
+            return;
+        }
+        let alpha = alpha_of(g.o, lut[np as usize], k);
+        let t = self.t[i];
+        let w = shr_round64(alpha * t, k.alpha_frac);
+        let test_t = t - w;
+        if test_t < k.min_t {
+            self.active[i] = false;
+            self.row_active[ly as usize] -= 1;
+            *remaining -= 1;
+            work.finished_pixels += 1;
+            return;
+        }
+        for (c, rgb) in self.c[i].iter_mut().zip(g.rgb) {
+            *c += rgb * w;
+        }
+        self.t[i] = test_t;
     }
 }
 
