@@ -64,6 +64,14 @@ pub struct GenConfig {
     pub burst: usize,
     /// Read bursts in flight at most (depth of the response-routing queue), a power of two.
     pub max_outstanding: usize,
+    /// ITU: width of the tile indices `tile_x_i` / `tile_y_i` (unsigned; the tile origin is
+    /// `tile_x * tile` pixels). 10 bits cover +-32768 px of the default mean format.
+    pub tile_bits: u32,
+    /// ITU: width of the sideband tag carried from `tag_i` to `tag_o` unchanged.
+    pub itu_tag_bits: u32,
+    /// SCU: pixel lanes (a power of two dividing the subtile's pixel count; each Gaussian
+    /// takes `pixels / scu_lanes` cycles). 16 by default (see docs/rtl.md "SCU").
+    pub scu_lanes: usize,
 }
 
 impl Default for GenConfig {
@@ -80,6 +88,9 @@ impl Default for GenConfig {
             len_bits: 32,
             burst: 16,
             max_outstanding: 4,
+            tile_bits: 10,
+            itu_tag_bits: 16,
+            scu_lanes: 16,
         }
     }
 }
@@ -164,7 +175,28 @@ impl GenConfig {
         if !self.max_outstanding.is_power_of_two() || !(2..=64).contains(&self.max_outstanding) {
             return err(format!("max_outstanding {} is not a power of two in 2..=64", self.max_outstanding));
         }
+        if !(1..=16).contains(&self.tile_bits) {
+            return err(format!("tile_bits {} is outside 1..=16", self.tile_bits));
+        }
+        if !(1..=64).contains(&self.itu_tag_bits) {
+            return err(format!("itu_tag_bits {} is outside 1..=64", self.itu_tag_bits));
+        }
+        let pixels = (self.raster_config().subtile * self.raster_config().subtile) as usize;
+        if !self.scu_lanes.is_power_of_two() || self.scu_lanes < 2 || self.scu_lanes > pixels {
+            return err(format!("scu_lanes {} is not a power of two in 2..={pixels}", self.scu_lanes));
+        }
         Ok(())
+    }
+
+    /// The feature-entry format of the Rasterization Engine (golden default).
+    pub fn feature_format(&self) -> neo_golden::formats::feature::FeatureFormat {
+        neo_golden::formats::feature::FeatureFormat::default()
+    }
+
+    /// The tile geometry of the Rasterization Engine (golden default: 64x64 tiles of 8x8
+    /// subtiles).
+    pub fn raster_config(&self) -> neo_golden::raster::RasterConfig {
+        neo_golden::raster::RasterConfig::default()
     }
 
     /// Width of a packed `{valid, key, id}` entry.

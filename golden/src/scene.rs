@@ -4,6 +4,9 @@
 use crate::error::{InputError, InputResult};
 use std::path::Path;
 
+/// The degree-0 real SH basis constant `1 / (2 sqrt(pi))`: colour = `SH_C0 * f_dc + 0.5`.
+pub const SH_C0: f64 = 0.282_094_791_773_878_14;
+
 /// Number of SH coefficients per colour channel for a degree (1, 4, 9 or 16).
 pub const fn sh_coeffs(degree: u8) -> usize {
     (degree as usize + 1) * (degree as usize + 1)

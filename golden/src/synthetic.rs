@@ -29,8 +29,7 @@ use splat::Splat;
 /// The default scene: the outdoor scene with 1M Gaussians, seed 1, SH degree 3.
 pub const DEFAULT_SCENE: &str = "synthetic:outdoor?gaussians=1M&seed=1";
 
-/// The degree-0 SH basis constant: colour = `C0 * f_dc + 0.5`.
-pub const SH_C0: f64 = 0.282_094_791_773_878_14;
+pub use crate::scene::SH_C0;
 /// Standard deviation of the random SH coefficients of degree 1, 2, 3.
 const SH_SIGMA: [f64; 3] = [0.05, 0.03, 0.02];
 /// Gaussians per parallel work item.

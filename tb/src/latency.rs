@@ -18,9 +18,18 @@
 //!     "dps":          [ { "entries": n, "cycles": c, "artifact_cycles": a }, ... ],
 //!     "merge":        [ { "entries": n, "len_a": .., "len_b": .., "cycles": c }, ... ],
 //!     "merge_delete": [ { "entries": n, "len_a": .., "len_b": .., "invalid": k, "out": m, "cycles": c }, ... ]
+//!   },
+//!   "raster": {
+//!     "itu": { "latency": L, "ii": 1, "jobs": N, "subtiles_per_job": 64 }
 //!   }
 //! }
 //! ```
+//! `raster` is the section the cycle model (`neo_sim::latency`) reads for the Rasterization
+//! Engine: `raster.itu.latency` (edges from accepting a (Gaussian, tile) job to its bitmap on the
+//! output) and `raster.itu.ii` (cycles per job at full rate; one job tests all
+//! `subtiles_per_job` subtiles of the tile). The raster core (`raster.core.*`) is not measured
+//! yet (no `neo_raster_core` RTL), so those fields are absent and the cycle model assumes them.
+//!
 //! All numbers are measured on the Verilated RTL with fixed stimulus (seeded), full-rate inputs,
 //! an always-ready output and the ideal memory, so the file is reproducible bit for bit.
 
@@ -225,6 +234,9 @@ pub fn report(cfg: &GenConfig) -> Value {
             "units.neo_msu.merge_gap": "idle output cycles between the last beat of a merge and the first beat of the next one fed back to back (the end-of-merge flush)",
             "units.neo_msu.entries": "output entries of the measurement: two back-to-back merges of two 64-entry streams",
             "units.neo_sort_core.command_overhead": "cycles from accepting a zero-length SORT to its done_o pulse",
+            "raster.itu.latency": "neo_itu: rising edges from the edge that accepts a (Gaussian, tile) job to the first cycle its subtile bitmap is offered",
+            "raster.itu.ii": "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once",
+            "raster.itu.jobs": "random jobs of the II measurement (every bitmap checked against golden subtile_bitmap)",
             "sort_core.*.cycles": "cycles from the edge that accepts the command (cmd_valid_i & cmd_ready_o) to the done_o pulse, ideal memory, output verified against golden",
             "sort_core.conventional": "SORT of one chunk of `entries` entries: load, BSU vectors, in-chunk merge passes, write-back (golden full_sort of one chunk)",
             "sort_core.dps": "DPS command on one chunk (same datapath as SORT; golden dps_pass)",
@@ -239,11 +251,28 @@ pub fn report(cfg: &GenConfig) -> Value {
             "neo_msu": { "latency": ml, "ii": mii, "merge_gap": mgap, "entries": me, "cycles": mc },
             "neo_sort_core": { "command_overhead": overhead }
         },
+        "raster": raster_section(cfg),
         "sort_core": {
             "conventional": conventional,
             "dps": dps,
             "merge": merge,
             "merge_delete": merge_delete
+        }
+    })
+}
+
+/// The `raster` section: the ITU's latency and II, measured on random jobs (checked against
+/// golden on the way).
+pub fn raster_section(cfg: &GenConfig) -> Value {
+    let jobs = 256;
+    let mut dut = crate::models::NeoItu::new();
+    let t = crate::itu::measure_timing(&mut dut, cfg, SEED ^ 3, jobs);
+    json!({
+        "itu": {
+            "latency": t.latency,
+            "ii": t.ii,
+            "jobs": jobs,
+            "subtiles_per_job": cfg.raster_config().subtiles_per_tile()
         }
     })
 }

@@ -14,12 +14,16 @@ pub mod check;
 #[cfg(neo_has_verilator)]
 pub mod core;
 pub mod dut;
+#[cfg(neo_has_verilator)]
+pub mod itu;
 pub mod lanes;
 #[cfg(neo_has_verilator)]
 pub mod latency;
 #[cfg(neo_has_verilator)]
 pub mod msu;
 pub mod rng;
+#[cfg(neo_has_verilator)]
+pub mod scu;
 pub mod stimulus;
 pub mod stream;
 pub mod waves;

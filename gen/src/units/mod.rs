@@ -7,11 +7,16 @@
 //! | `neo_msu`       | Merge Sort Unit+: streaming two-way merge with delete   | yes       |
 //! | `neo_chunk_ram` | one chunk buffer: 1 write port, 2 asynchronous reads    | no        |
 //! | `neo_sort_core` | Sorting Core: BSU + MSU+ + buffers + memory/command ports | yes     |
+//! | `neo_itu`       | Intersection Test Unit: subtile bitmap of one Gaussian  | yes       |
+//! | `neo_scu_exp`   | SCU exp unit: ROM over one octave + interpolation       | no        |
+//! | `neo_scu`       | Subtile Compute Unit: alpha blending of one subtile     | yes       |
 
 pub mod bsu;
 pub mod chunk_ram;
 pub mod cmp_swap;
+pub mod itu;
 pub mod msu;
+pub mod scu;
 pub mod sort_core;
 
 use crate::config::{ConfigError, GenConfig};
@@ -35,8 +40,8 @@ impl VerilogFile {
 }
 
 /// Names of the tops that get their own cosimulation model, in order.
-pub fn top_modules() -> [&'static str; 3] {
-    ["neo_bsu", "neo_msu", "neo_sort_core"]
+pub fn top_modules() -> &'static [&'static str] {
+    &["neo_bsu", "neo_msu", "neo_sort_core", "neo_itu", "neo_scu"]
 }
 
 /// Every module of the configuration, leaves first.
@@ -48,6 +53,9 @@ pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
         msu::module(cfg),
         chunk_ram::module(cfg),
         sort_core::module(cfg),
+        itu::module(cfg),
+        scu::exp_module(cfg),
+        scu::module(cfg),
     ])
 }
 

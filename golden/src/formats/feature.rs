@@ -91,7 +91,7 @@ pub struct FeatureFormat {
 }
 
 impl Default for FeatureFormat {
-    /// The defaults justified in docs/formats.md: mean Q16.8 signed (24 bits, +-32768 px), conic
+    /// The defaults justified in docs/formats.md: mean signed Q15.8 (24 bits, +-32768 px), conic
     /// 18-bit mantissas with a 6-bit exponent, opacity 0.8, colour 1.10, FP16 depth key, axis
     /// with 8 fraction bits, extents 13.2 (15 bits), `Cutoff::Alpha { margin: 0.05 }`.
     fn default() -> Self {

@@ -15,8 +15,7 @@ use std::path::Path;
 /// Gaussians per chunk.
 pub const CHUNK_SIZE: usize = 256;
 
-/// The degree-0 SH basis constant used to convert colours to `f_dc`.
-pub const SH_C0: f64 = 0.282_094_791_773_878_14;
+pub use crate::scene::SH_C0;
 
 const CHUNK_REQUIRED: [&str; 12] = [
     "min_x",

@@ -30,6 +30,16 @@
 //!
 //! A subtile terminates when all its pixels inside the image are done. Pixels outside the image
 //! are never blended: they start done and come out black.
+//!
+//! # How this model evaluates it (speed only; the bits are those of the steps above)
+//! [`raster_tile`] walks entry by entry over a subtile's pixels (the hardware's order). Since
+//! `alpha` is non-increasing in `np`, `alpha >= min_alpha` is exactly `q < q_cut` for a
+//! per-entry integer `q_cut`; for a positive definite conic `q` is convex along a row, so those
+//! pixels form one run around the row's minimum, which is found and walked with exact integer
+//! increments (rows and pixels outside it are skipped; float is used only to *guess* where to
+//! start, every decision is an exact integer comparison). `exp` comes from a table of
+//! [`super::exp::ExpTable::eval`] over every `np`. [`shade_pixel`] is the plain per-pixel
+//! evaluation of the steps; the tests check that both give the same pixels.
 
 use super::exp::ExpTable;
 use super::itu::{bitmap_of, ItuGeom};
@@ -114,7 +124,8 @@ struct Prep {
     c: i64,
     /// Conic-to-power shift `s + 2 Fm + 1 - P`.
     sh: u32,
-    /// The quadratic form may not fit `i64` over this tile: use `i128`.
+    /// `|q|` may reach `2^60` over this tile: use `i128` (below, `q`, its row increments and
+    /// the rounding shift all fit `i64`).
     wide: bool,
     o: i64,
     /// Largest `np` at which `alpha >= min_alpha` (-1: never). Only a shortcut: alpha is
@@ -152,7 +163,7 @@ impl Prep {
         let bound = a as u128 * dx * dx + b2.unsigned_abs() as u128 * dx * dy + c as u128 * dy * dy;
         let sh = sh.max(0) as u32;
         let max_np = b.max_neg_power();
-        let q_cut = (sh >= 1 && sh < 100 && np_cut < max_np).then(|| (2 * np_cut as i128 + 1) << (sh - 1));
+        let q_cut = ((1..100).contains(&sh) && np_cut < max_np).then(|| (2 * np_cut as i128 + 1) << (sh - 1));
         let pd = a > 0 && c > 0 && (a as i128) * (c as i128) * 4 > (b2 as i128) * (b2 as i128);
         let h = (fm as f64).exp2();
         // Row minimum dy^2 (4ac - b2^2) / 4a >= q_cut iff |dy| >= sqrt(4a q_cut / (4ac - b2^2));
@@ -171,7 +182,7 @@ impl Prep {
             b2,
             c,
             sh,
-            wide: bound >= 1 << 62,
+            wide: bound >= 1 << 60,
             o: f.opacity as i64,
             np_cut,
             q_cut,
@@ -185,15 +196,6 @@ impl Prep {
         }
     }
 
-    /// `L = 2 a dx + b2 dy` at pixel `(px, py)`: `q` changes by `+-h L + a h^2` one pixel to
-    /// the left / right.
-    #[inline(always)]
-    fn slope(&self, fm: u32, px: i64, py: i64) -> i128 {
-        let dx = (self.m[0] - (px << fm)) as i128;
-        let dy = (self.m[1] - (py << fm)) as i128;
-        2 * self.a as i128 * dx + self.b2 as i128 * dy
-    }
-
     /// Steps 1-2: the exact quadratic form `q` at pixel `(px, py)`.
     #[inline(always)]
     fn q(&self, fm: u32, px: i64, py: i64) -> i128 {
@@ -205,6 +207,16 @@ impl Prep {
         } else {
             (self.a * dx * dx + self.b2 * dx * dy + self.c * dy * dy) as i128
         }
+    }
+
+    /// [`Prep::np_of`] for a non-wide entry (`|q| < 2^60`).
+    #[inline(always)]
+    fn np_of64(&self, k: &Consts, q: i64) -> i64 {
+        if self.sh >= 63 {
+            return 0;
+        }
+        // sh >= 1 (RasterConfig::check), so this is shr_round64 without its s == 0 case.
+        ((q + (1i64 << (self.sh - 1))) >> self.sh).clamp(-1, k.max_np)
     }
 
     /// Step 3 from `q`: `np`, saturated, or -1 when `power > 0`.
@@ -229,7 +241,7 @@ impl Prep {
             let q = self.a as i128 * dx * dx + self.b2 as i128 * dx * dy + self.c as i128 * dy * dy;
             shr_round(q, self.sh).clamp(-1, k.max_np as i128) as i64
         } else {
-            // |q| < 2^62 here, so a shift of 63 or more rounds to 0.
+            // |q| < 2^60 here, so a shift of 63 or more rounds to 0.
             if self.sh >= 63 {
                 return 0;
             }
@@ -480,7 +492,8 @@ pub fn raster_tile_into(
             out.work[j] = st.run(&list, &k, &lut, origin, s, [width as i64, height as i64]);
             for ly in 0..s {
                 for lx in 0..s {
-                    let c = st.c[(ly * s + lx) as usize];
+                    let p = st.px[(ly * s + lx) as usize];
+                    let c = [p[1], p[2], p[3]];
                     out.pixels[((sy * s + ly) * t + sx * s + lx) as usize] = c.map(|c| to_u8(c, k.out_shift));
                 }
             }
@@ -488,15 +501,18 @@ pub fn raster_tile_into(
     }
 }
 
+/// A cached exp table: the unit's format, its input shift, and `exp(np)` for every `np`.
+type CachedLut = (ExpFormat, u32, std::rc::Rc<Vec<i32>>);
+
 thread_local! {
     /// The last exp lookup table built on this thread (only saves time).
-    static EXP_LUT: std::cell::RefCell<Option<(ExpFormat, u32, std::rc::Rc<Vec<i64>>)>> =
+    static EXP_LUT: std::cell::RefCell<Option<CachedLut>> =
         const { std::cell::RefCell::new(None) };
 }
 
 /// `exp.eval(np)` for every `np` in `[0, max_np]`, as a table (the same function, evaluated
 /// ahead; only saves time). Cached per thread.
-fn exp_lut(exp: &ExpTable, max_np: i64) -> std::rc::Rc<Vec<i64>> {
+fn exp_lut(exp: &ExpTable, max_np: i64) -> std::rc::Rc<Vec<i32>> {
     let key = (*exp.format(), exp.input_shift());
     EXP_LUT.with(|cell| {
         let mut cell = cell.borrow_mut();
@@ -505,21 +521,38 @@ fn exp_lut(exp: &ExpTable, max_np: i64) -> std::rc::Rc<Vec<i64>> {
                 return lut.clone();
             }
         }
-        let lut = std::rc::Rc::new((0..=max_np).map(|np| exp.eval(np)).collect::<Vec<i64>>());
+        // Values are at most 2^out_frac <= 2^24.
+        let lut = std::rc::Rc::new((0..=max_np).map(|np| exp.eval(np) as i32).collect::<Vec<i32>>());
         *cell = Some((key.0, key.1, lut.clone()));
         lut
     })
 }
 
+/// `ceil(v)` as an integer without libm (NaN gives `i64::MIN / 2`, beyond +-1e15 clamps).
+fn ceil_i64(v: f64) -> i64 {
+    if v.is_nan() {
+        return i64::MIN / 2;
+    }
+    let v = v.clamp(-1e15, 1e15);
+    let t = v as i64;
+    t + ((t as f64) < v) as i64
+}
+
+/// `floor(v)` as an integer without libm (NaN gives `i64::MAX / 2`, beyond +-1e15 clamps).
+fn floor_i64(v: f64) -> i64 {
+    if v.is_nan() {
+        return i64::MAX / 2;
+    }
+    let v = v.clamp(-1e15, 1e15);
+    let t = v as i64;
+    t - ((t as f64) > v) as i64
+}
+
 /// The pixels of one subtile while the SCU blends it (row-major, `side * side`).
 #[derive(Debug, Default)]
 struct SubtileState {
-    /// Transmittance per pixel.
-    t: Vec<i64>,
-    /// Colour accumulators per pixel.
-    c: Vec<[i64; 3]>,
-    /// Pixel still blending (inside the image and not finished).
-    active: Vec<bool>,
+    /// Per pixel: `[T, C_r, C_g, C_b, active]` (active: inside the image and not finished).
+    px: Vec<[i64; 5]>,
     /// Active pixels per row.
     row_active: Vec<u32>,
 }
@@ -534,24 +567,19 @@ impl SubtileState {
         &mut self,
         list: &[Prep],
         k: &Consts,
-        lut: &[i64],
+        lut: &[i32],
         origin: [i64; 2],
         side: i64,
         size: [i64; 2],
     ) -> SubtileWork {
-        let n = (side * side) as usize;
-        self.t.clear();
-        self.t.resize(n, k.one_t);
-        self.c.clear();
-        self.c.resize(n, [0; 3]);
-        self.active.clear();
+        self.px.clear();
         self.row_active.clear();
         let mut remaining = 0u32;
         for ly in 0..side {
             let mut count = 0;
             for lx in 0..side {
                 let inside = origin[0] + lx < size[0] && origin[1] + ly < size[1];
-                self.active.push(inside);
+                self.px.push([k.one_t, 0, 0, 0, inside as i64]);
                 count += inside as u32;
             }
             self.row_active.push(count);
@@ -569,14 +597,13 @@ impl SubtileState {
             let span = g.pd && g.q_cut.is_some();
             // Rows that can hold a blending pixel (all rows without span culling).
             let (ly0, ly1) = if span {
-                let lo = ((g.m[1] as f64 - g.row_reach) / h).ceil();
-                let hi = ((g.m[1] as f64 + g.row_reach) / h).floor();
-                let lo = if lo.is_nan() { 0 } else { (lo.max(-1e15) as i64 - origin[1]).max(0) };
-                let hi = if hi.is_nan() { side - 1 } else { (hi.min(1e15) as i64 - origin[1]).min(side - 1) };
-                (lo, hi)
+                let lo = ceil_i64((g.m[1] as f64 - g.row_reach) / h);
+                let hi = floor_i64((g.m[1] as f64 + g.row_reach) / h);
+                ((lo - origin[1]).max(0), (hi - origin[1]).min(side - 1))
             } else {
                 (0, side - 1)
             };
+            let shift = k.fm;
             for ly in ly0..=ly1 {
                 if self.row_active[ly as usize] == 0 {
                     continue;
@@ -584,48 +611,78 @@ impl SubtileState {
                 let py = origin[1] + ly;
                 if !span {
                     for x in xs..=xe {
-                        let q = g.q(k.fm, x, py);
-                        self.blend_at(g, k, lut, x - xs, ly, side, q, &mut remaining, &mut work);
+                        let np = g.np_of(k, g.q(k.fm, x, py));
+                        self.blend_at(g, k, lut, x - xs, ly, side, np, &mut remaining, &mut work);
                     }
                     continue;
                 }
-                let q_cut = g.q_cut.unwrap_or(0);
                 // Seed: the row's integer minimum is within one pixel of the truncated real
-                // minimum (clamped to the subtile); the pixels with q < q_cut are one run.
+                // minimum (clamped to the subtile); the pixels with q < q_cut are one run
+                // around it, walked with exact increments (in i64 unless the entry is wide).
                 let xm = g.x_at0 - g.x_slope * py as f64;
                 let c0 = if xm.is_finite() { (xm.clamp(-1e15, 1e15) as i64).clamp(xs, xe) } else { xs };
-                let q0 = g.q(k.fm, c0, py);
-                let l0 = g.slope(k.fm, c0, py);
-                let shift = k.fm;
-                let mut seed = None;
-                if q0 < q_cut {
-                    seed = Some((c0, q0, l0));
-                } else if c0 > xs && q0 + (l0 << shift) + g.a_h2 < q_cut {
-                    seed = Some((c0 - 1, q0 + (l0 << shift) + g.a_h2, l0 + g.two_a_h));
-                } else if c0 < xe && q0 - (l0 << shift) + g.a_h2 < q_cut {
-                    seed = Some((c0 + 1, q0 - (l0 << shift) + g.a_h2, l0 - g.two_a_h));
+                macro_rules! run {
+                    ($t:ty, $np:ident) => {{
+                        let (q_cut, a_h2, two_a_h) = (
+                            g.q_cut.unwrap_or(0).clamp(<$t>::MIN as i128, <$t>::MAX as i128) as $t,
+                            g.a_h2 as $t,
+                            g.two_a_h as $t,
+                        );
+                        let dx = (g.m[0] - (c0 << shift)) as $t;
+                        let dy = (g.m[1] - (py << shift)) as $t;
+                        let (a, b2, c) = (g.a as $t, g.b2 as $t, g.c as $t);
+                        let q0 = a * dx * dx + b2 * dx * dy + c * dy * dy;
+                        let l0 = 2 * a * dx + b2 * dy;
+                        let seed = if q0 < q_cut {
+                            Some((c0, q0, l0))
+                        } else if c0 > xs && q0 + (l0 << shift) + a_h2 < q_cut {
+                            Some((c0 - 1, q0 + (l0 << shift) + a_h2, l0 + two_a_h))
+                        } else if c0 < xe && q0 - (l0 << shift) + a_h2 < q_cut {
+                            Some((c0 + 1, q0 - (l0 << shift) + a_h2, l0 - two_a_h))
+                        } else {
+                            None
+                        };
+                        if let Some((x, q, l)) = seed {
+                            self.blend_at(
+                                g,
+                                k,
+                                lut,
+                                x - xs,
+                                ly,
+                                side,
+                                g.$np(k, q),
+                                &mut remaining,
+                                &mut work,
+                            );
+                            let (mut xl, mut ql, mut ll) = (x, q, l);
+                            while xl > xs {
+                                ql += (ll << shift) + a_h2;
+                                ll += two_a_h;
+                                xl -= 1;
+                                if ql >= q_cut {
+                                    break;
+                                }
+                                let np = g.$np(k, ql);
+                                self.blend_at(g, k, lut, xl - xs, ly, side, np, &mut remaining, &mut work);
+                            }
+                            let (mut xr, mut qr, mut lr) = (x, q, l);
+                            while xr < xe {
+                                qr += a_h2 - (lr << shift);
+                                lr -= two_a_h;
+                                xr += 1;
+                                if qr >= q_cut {
+                                    break;
+                                }
+                                let np = g.$np(k, qr);
+                                self.blend_at(g, k, lut, xr - xs, ly, side, np, &mut remaining, &mut work);
+                            }
+                        }
+                    }};
                 }
-                let Some((x, q, l)) = seed else { continue };
-                self.blend_at(g, k, lut, x - xs, ly, side, q, &mut remaining, &mut work);
-                let (mut xl, mut ql, mut ll) = (x, q, l);
-                while xl > xs {
-                    ql += (ll << shift) + g.a_h2;
-                    ll += g.two_a_h;
-                    xl -= 1;
-                    if ql >= q_cut {
-                        break;
-                    }
-                    self.blend_at(g, k, lut, xl - xs, ly, side, ql, &mut remaining, &mut work);
-                }
-                let (mut xr, mut qr, mut lr) = (x, q, l);
-                while xr < xe {
-                    qr += g.a_h2 - (lr << shift);
-                    lr -= g.two_a_h;
-                    xr += 1;
-                    if qr >= q_cut {
-                        break;
-                    }
-                    self.blend_at(g, k, lut, xr - xs, ly, side, qr, &mut remaining, &mut work);
+                if g.wide {
+                    run!(i128, np_of);
+                } else {
+                    run!(i64, np_of64);
                 }
             }
             if remaining == 0 {
@@ -638,44 +695,40 @@ impl SubtileState {
         work
     }
 
-    /// Steps 3-6 for entry `g` at pixel `(lx, ly)` of the subtile, given its `q`.
+    /// Steps 4-6 for entry `g` at pixel `(lx, ly)` of the subtile, given its `np`.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn blend_at(
         &mut self,
         g: &Prep,
         k: &Consts,
-        lut: &[i64],
+        lut: &[i32],
         lx: i64,
         ly: i64,
         side: i64,
-        q: i128,
+        np: i64,
         remaining: &mut u32,
         work: &mut SubtileWork,
     ) {
-        let i = (ly * side + lx) as usize;
-        if !self.active[i] {
+        let p = &mut self.px[(ly * side + lx) as usize];
+        if p[4] == 0 || np < 0 || np > g.np_cut {
             return;
         }
-        let np = g.np_of(k, q);
-        if np < 0 || np > g.np_cut {
-            return;
-        }
-        let alpha = alpha_of(g.o, lut[np as usize], k);
-        let t = self.t[i];
-        let w = shr_round64(alpha * t, k.alpha_frac);
-        let test_t = t - w;
+        let alpha = alpha_of(g.o, lut[np as usize] as i64, k);
+        // alpha_frac >= 8: shr_round64 without its s == 0 case.
+        let w = (alpha * p[0] + (1i64 << (k.alpha_frac - 1))) >> k.alpha_frac;
+        let test_t = p[0] - w;
         if test_t < k.min_t {
-            self.active[i] = false;
+            p[4] = 0;
             self.row_active[ly as usize] -= 1;
             *remaining -= 1;
             work.finished_pixels += 1;
             return;
         }
-        for (c, rgb) in self.c[i].iter_mut().zip(g.rgb) {
-            *c += rgb * w;
-        }
-        self.t[i] = test_t;
+        p[0] = test_t;
+        p[1] += g.rgb[0] * w;
+        p[2] += g.rgb[1] * w;
+        p[3] += g.rgb[2] * w;
     }
 }
 

@@ -3,7 +3,7 @@
 // The reference's constants, written with their full decimal expansion and rounded to f32 as
 // the CUDA compiler does for its `float` literals.
 /// Degree-0 SH basis constant.
-pub const SH_C0: f32 = 0.282_094_791_773_878_14_f64 as f32;
+pub const SH_C0: f32 = crate::scene::SH_C0 as f32;
 /// Degree-1 SH basis constant.
 pub const SH_C1: f32 = 0.488_602_511_902_919_9_f64 as f32;
 /// Degree-2 SH basis constants.

@@ -1,0 +1,350 @@
+//! `neo_itu`: the Intersection Test Unit (paper Section 5.4), bit-exact with golden
+//! [`neo_golden::raster::subtile_bitmap`]: the separating-axis test of one Gaussian's cutoff
+//! octagon against every subtile of one tile, one Gaussian per cycle.
+//!
+//! # Ports
+//! - `in_valid_i` / `in_ready_o`: one Gaussian and one tile per transfer;
+//!   - `mean_i` = bits `[2 mean.bits - 1 : 0]` of the packed feature entry (`{mean_y, mean_x}`),
+//!   - `geom_i` = the contiguous ITU block of the entry, from `extent_x` to `extent_v`
+//!     (`{extent_v, extent_u, axis_s, axis_c, extent_y, extent_x}`, LSB first as in
+//!     [`neo_golden::formats::feature`]),
+//!   - `tile_x_i`, `tile_y_i`: tile indices (unsigned, [`GenConfig::tile_bits`]); the tile's
+//!     first pixel is `(tile_x * tile, tile_y * tile)`,
+//!   - `tag_i`: a sideband tag returned unchanged with the result;
+//! - `out_valid_o` / `out_ready_i`: the result, in input order:
+//!   - `bitmap_o`: bit `sy * n + sx` set iff subtile `(sx, sy)` may be touched (golden order),
+//!   - `hit_o`: the cumulative OR of the bitmap (the table entry's valid bit),
+//!   - `tag_o`.
+//!
+//! # Pipeline
+//! Three register stages, all advancing together when `~out_valid_o | out_ready_i`
+//! (`in_ready_o` is that signal, so it depends combinationally on `out_ready_i`). Latency: a
+//! Gaussian accepted at edge `t` is on the output from edge `t + 3`; II = 1 while `out_ready_i`
+//! is high. Bubbles are not squeezed out.
+//! 1. offsets `d0 = mean - centre(subtile (0, 0))`, the per-Gaussian thresholds
+//!    (`x`/`y`: `R + w`, `U`/`V`: `H 2^axis.frac + w (|C| + |S|)`, `w` the subtile half-size
+//!    term) and the unbounded flags;
+//! 2. the `x` test per column and the `y` test per row, and the projections of `d0` on `U`
+//!    and `V` (4 multipliers);
+//! 3. per subtile, the projections are stepped by constant multiples of `C` and `S` (the
+//!    centre moves by `2 S 2^mean.frac` units per subtile): `|pu0 - kc[sx] - ks[sy]| > Tu` is
+//!    tested as `kc[sx]` outside the window `[ru - Tu, ru + Tu]`, `ru = pu0 - ks[sy]`, one
+//!    window per row (likewise for V), so each subtile costs four signed comparisons.
+//!
+//! All arithmetic is in `W`-bit two's complement (see [`datapath_bits`]), wide enough for every
+//! input bit pattern, so the unit matches golden on arbitrary field values, not just on
+//! quantised Gaussians.
+
+use crate::config::GenConfig;
+use crate::emit::expr::{bits_for, lit, slice};
+use crate::emit::{if_, set, Item, Module};
+
+/// Module name.
+pub const NAME: &str = "neo_itu";
+
+/// Pipeline latency in cycles (input transfer edge to output valid).
+pub const LATENCY: u32 = 3;
+
+/// Width of `mean_i` for `cfg`.
+pub fn mean_bits(cfg: &GenConfig) -> u32 {
+    2 * cfg.feature_format().mean.bits as u32
+}
+
+/// Width of `geom_i` for `cfg`, and its first bit in the packed entry.
+pub fn geom_bits_lsb(cfg: &GenConfig) -> (u32, u32) {
+    let layout = cfg.feature_format().layout();
+    let first = layout.iter().find(|f| f.name == "extent_x").expect("extent_x field");
+    let last = layout.iter().find(|f| f.name == "extent_v").expect("extent_v field");
+    (last.lsb + last.width - first.lsb, first.lsb)
+}
+
+/// Width `W` of the signed datapath: bounds every offset, projection and threshold for any
+/// input bits and any tile index below `2^tile_bits`, plus a sign bit and two bits of margin (stage 3 adds a
+/// projection, a threshold and a subtile step).
+pub fn datapath_bits(cfg: &GenConfig) -> u32 {
+    let fmt = cfg.feature_format();
+    let r = cfg.raster_config();
+    let fm = fmt.mean.frac as u32;
+    let g = fm + 1;
+    let mean_max: u128 = 1u128 << fmt.mean.bits; // |mean << 1|
+    let centre_max: u128 = ((2u128 << cfg.tile_bits) * r.tile as u128 + 2 * r.tile as u128) << fm;
+    let d_max = mean_max + centre_max;
+    let axis_max: u128 = 1u128 << (fmt.axis.bits - 1);
+    let p_max = 2 * d_max * axis_max;
+    let w = ((r.subtile as u128) - 1) << fm;
+    let ext_max: u128 = (1u128 << fmt.extent.bits) - 1;
+    let t_max = (ext_max << (g - fmt.extent.frac as u32 + fmt.axis.frac as u32)) + 2 * w * axis_max;
+    bits_for(p_max.max(t_max) as u64) + 3
+}
+
+/// `{{(to-from){x[from-1]}}, x}` (sign extension; `x` when the widths match).
+fn sext(x: &str, from: u32, to: u32) -> String {
+    if to == from {
+        x.to_string()
+    } else {
+        format!("{{{{{}{{{}}}}}, {x}}}", to - from, slice(x, from - 1, from - 1))
+    }
+}
+
+/// `{{(to-from){1'b0}}, x}` (zero extension).
+fn zext(x: &str, from: u32, to: u32) -> String {
+    if to == from {
+        x.to_string()
+    } else {
+        format!("{{{}, {x}}}", lit(to - from, 0))
+    }
+}
+
+/// `|x|` of a `w`-bit two's complement expression (a net name).
+fn abs(x: &str, w: u32) -> String {
+    format!("({x}[{}] ? ({} - {x}) : {x})", w - 1, lit(w, 0))
+}
+
+/// The ITU for `cfg` (see the module doc).
+pub fn module(cfg: &GenConfig) -> Module {
+    let fmt = cfg.feature_format();
+    let r = cfg.raster_config();
+    let n = r.subtiles_per_side();
+    let nb = r.subtiles_per_tile();
+    let s = r.subtile as u64;
+    let fm = fmt.mean.frac as u32;
+    let g = fm + 1;
+    let mb = fmt.mean.bits as u32;
+    let eb = fmt.extent.bits as u32;
+    let ab = fmt.axis.bits as u32;
+    let w = datapath_bits(cfg);
+    let tb = cfg.tile_bits;
+    let tg = cfg.itu_tag_bits;
+    let (gb, _) = geom_bits_lsb(cfg);
+    let half = (s - 1) << fm; // subtile size term w = h in 2^-G px
+    let step = (2 * s) << fm; // centre step per subtile in 2^-G px
+    let l = |v: u64| lit(w, v);
+
+    let mut m = Module::new(NAME);
+    m.doc(
+        "Intersection Test Unit: subtile bitmap of one Gaussian's cutoff octagon in one tile, bit-exact with",
+    );
+    m.doc("golden raster::subtile_bitmap (bit sy*N+sx), and its OR (the table entry's valid bit).");
+    m.doc(format!(
+        "{LATENCY}-stage pipeline, II = 1, all stages advance on ~out_valid_o | out_ready_i. {w}-bit signed datapath."
+    ));
+    m.doc("See docs/rtl.md (ITU).");
+    m.clock_reset();
+    m.input("in_valid_i", 1);
+    m.output("in_ready_o", 1);
+    m.input_c("mean_i", 2 * mb, "{mean_y, mean_x}: entry bits of mean_x and mean_y");
+    m.input_c("geom_i", gb, "{extent_v, extent_u, axis_s, axis_c, extent_y, extent_x}");
+    m.input_c("tile_x_i", tb, "tile column index");
+    m.input_c("tile_y_i", tb, "tile row index");
+    m.input_c("tag_i", tg, "sideband, returned on tag_o");
+    m.output("out_valid_o", 1);
+    m.input("out_ready_i", 1);
+    m.output_c("bitmap_o", nb, "bit sy*N+sx: subtile (sx, sy) may be touched");
+    m.output_c("hit_o", 1, "OR of bitmap_o");
+    m.output("tag_o", tg);
+
+    // Field slices of geom_i.
+    let mut off = 0;
+    let mut field = |name: &str, width: u32, m: &mut Module| {
+        m.wire_assign(name, width, slice("geom_i", off + width - 1, off));
+        off += width;
+    };
+    m.blank();
+    m.comment("Fields.");
+    field("ext_x", eb, &mut m);
+    field("ext_y", eb, &mut m);
+    field("axis_c", ab, &mut m);
+    field("axis_s", ab, &mut m);
+    field("ext_u", eb, &mut m);
+    field("ext_v", eb, &mut m);
+    m.wire_assign("mean_x", mb, slice("mean_i", mb - 1, 0));
+    m.wire_assign("mean_y", mb, slice("mean_i", 2 * mb - 1, mb));
+
+    m.blank();
+    m.comment("Handshake: one global stage enable.");
+    m.reg("v1_q", 1).reg("v2_q", 1).reg("v3_q", 1);
+    m.wire_assign("adv", 1, "~v3_q | out_ready_i");
+    m.assign("in_ready_o", "adv");
+    m.seq(
+        vec![set("v1_q", lit(1, 0)), set("v2_q", lit(1, 0)), set("v3_q", lit(1, 0))],
+        vec![if_("adv", vec![set("v1_q", "in_valid_i"), set("v2_q", "v1_q"), set("v3_q", "v2_q")])],
+    );
+
+    // Stage 1.
+    m.blank();
+    m.comment(format!(
+        "Stage 1: offsets from the centre of subtile (0, 0), in 2^-{g} px: mean << 1 minus ((2 T + {}) << {fm}).",
+        s - 1
+    ));
+    for (a, t, mean) in [("x", "tile_x_i", "mean_x"), ("y", "tile_y_i", "mean_y")] {
+        m.wire_assign(format!("m{a}"), w, format!("{{{}, 1'b0}}", sext(mean, mb, w - 1)));
+        m.wire_assign(
+            format!("c{a}"),
+            w,
+            format!("({} * {} + {}) << {fm}", zext(t, tb, w), l(2 * r.tile as u64), l(s - 1)),
+        );
+        m.wire_assign(format!("d{a}0"), w, format!("m{a} - c{a}"));
+    }
+    m.comment(format!(
+        "Thresholds: R << {} + {half} (x, y); H << {} + {half} (|C| + |S|) (U, V).",
+        g - fmt.extent.frac as u32,
+        g - fmt.extent.frac as u32 + fmt.axis.frac as u32
+    ));
+    m.wire_assign("cw", w, sext("axis_c", ab, w));
+    m.wire_assign("sw", w, sext("axis_s", ab, w));
+    m.wire_assign("abs_cs", w, format!("{} + {}", abs("cw", w), abs("sw", w)));
+    let sh_xy = g - fmt.extent.frac as u32;
+    let sh_uv = sh_xy + fmt.axis.frac as u32;
+    for (a, e, sh) in
+        [("x", "ext_x", sh_xy), ("y", "ext_y", sh_xy), ("u", "ext_u", sh_uv), ("v", "ext_v", sh_uv)]
+    {
+        let term = if sh_xy == sh { l(half) } else { format!("{} * abs_cs", l(half)) };
+        m.wire_assign(format!("t{a}"), w, format!("({} << {sh}) + {term}", zext(e, eb, w)));
+        m.wire_assign(format!("unb_{a}"), 1, format!("&{e}"));
+    }
+    let s1 = [
+        ("dx0_q", w, "dx0"),
+        ("dy0_q", w, "dy0"),
+        ("c1_q", w, "cw"),
+        ("s1_q", w, "sw"),
+        ("tx1_q", w, "tx"),
+        ("ty1_q", w, "ty"),
+        ("tu1_q", w, "tu"),
+        ("tv1_q", w, "tv"),
+        ("ux1_q", 1, "unb_x"),
+        ("uy1_q", 1, "unb_y"),
+        ("uu1_q", 1, "unb_u"),
+        ("uv1_q", 1, "unb_v"),
+        ("tag1_q", tg, "tag_i"),
+    ];
+    for (q, width, _) in s1 {
+        m.reg(q, width);
+    }
+    m.seq_noreset(vec![if_("adv", s1.iter().map(|(q, _, d)| set(*q, *d)).collect())]);
+
+    // Stage 2.
+    m.blank();
+    m.comment(format!(
+        "Stage 2: x test per column, y test per row (centre steps of {step}); projections on U = (C, S), V = (-S, C)."
+    ));
+    m.wire("col_ok", n).wire("row_ok", n);
+    for k in 0..n as u64 {
+        for (a, ok, u) in [("x", "col_ok", "ux1_q"), ("y", "row_ok", "uy1_q")] {
+            let d = format!("d{a}_{k}");
+            m.wire_assign(&d, w, format!("d{a}0_q - {}", l(k * step)));
+            m.assign(format!("{ok}[{k}]"), format!("{u} | ~({} > t{a}1_q)", abs(&d, w)));
+        }
+    }
+    m.wire_assign("pu0", w, "dx0_q * c1_q + dy0_q * s1_q");
+    m.wire_assign("pv0", w, "dy0_q * c1_q - dx0_q * s1_q");
+    let s2 = [
+        ("col2_q", n, "col_ok"),
+        ("row2_q", n, "row_ok"),
+        ("pu2_q", w, "pu0"),
+        ("pv2_q", w, "pv0"),
+        ("c2_q", w, "c1_q"),
+        ("s2_q", w, "s1_q"),
+        ("tu2_q", w, "tu1_q"),
+        ("tv2_q", w, "tv1_q"),
+        ("uu2_q", 1, "uu1_q"),
+        ("uv2_q", 1, "uv1_q"),
+        ("tag2_q", tg, "tag1_q"),
+    ];
+    for (q, width, _) in s2 {
+        m.reg(q, width);
+    }
+    m.seq_noreset(vec![if_("adv", s2.iter().map(|(q, _, d)| set(*q, *d)).collect())]);
+
+    // Stage 3.
+    m.blank();
+    m.comment(format!(
+        "Stage 3: pu = pu0 - kc[sx] - ks[sy], pv = pv0 - kc[sy] + ks[sx] (kc[k] = {step} k C, ks[k] = {step} k S):"
+    ));
+    m.comment("|pu| > Tu iff kc[sx] lies outside [ru - Tu, ru + Tu], ru = pu0 - ks[sy] (one window per row), likewise V.");
+    m.wire("kc", n * w).wire("ks", n * w);
+    for k in 0..n as u64 {
+        m.assign(slice("kc", (k as u32 + 1) * w - 1, k as u32 * w), format!("c2_q * {}", l(k * step)));
+        m.assign(slice("ks", (k as u32 + 1) * w - 1, k as u32 * w), format!("s2_q * {}", l(k * step)));
+    }
+    m.wire("lu", n * w).wire("hu", n * w).wire("lv", n * w).wire("hv", n * w);
+    for k in 0..n {
+        let ln = |v: &str| slice(v, (k + 1) * w - 1, k * w);
+        m.wire_assign(format!("ru_{k}"), w, format!("pu2_q - {}", ln("ks")));
+        m.wire_assign(format!("rv_{k}"), w, format!("pv2_q - {}", ln("kc")));
+        m.assign(ln("lu"), format!("ru_{k} - tu2_q"));
+        m.assign(ln("hu"), format!("ru_{k} + tu2_q"));
+        m.assign(ln("lv"), format!("{} - tv2_q - rv_{k}", l(0)));
+        m.assign(ln("hv"), format!("tv2_q - rv_{k}"));
+    }
+    m.wire("bitmap_d", nb);
+    let lane = |v: &str, idx: &str| format!("$signed({v}[({idx})*{w} +: {w}])");
+    let (col, row) = (format!("gi % {n}"), format!("gi / {n}"));
+    m.gen_for(
+        "gi",
+        nb,
+        "g_subtile",
+        vec![
+            Item::Wire { name: "sep_u".into(), width: 1 },
+            Item::Wire { name: "sep_v".into(), width: 1 },
+            Item::Assign {
+                lhs: "sep_u".into(),
+                rhs: format!(
+                    "~uu2_q & (({kc} < {lu}) | ({kc} > {hu}))",
+                    kc = lane("kc", &col),
+                    lu = lane("lu", &row),
+                    hu = lane("hu", &row)
+                ),
+            },
+            Item::Assign {
+                lhs: "sep_v".into(),
+                rhs: format!(
+                    "~uv2_q & (({ks} < {lv}) | ({ks} > {hv}))",
+                    ks = lane("ks", &col),
+                    lv = lane("lv", &row),
+                    hv = lane("hv", &row)
+                ),
+            },
+            Item::Assign {
+                lhs: "bitmap_d[gi]".into(),
+                rhs: format!("col2_q[{col}] & row2_q[{row}] & ~sep_u & ~sep_v"),
+            },
+        ],
+    );
+    m.reg("bitmap3_q", nb).reg("tag3_q", tg);
+    m.seq_noreset(vec![if_("adv", vec![set("bitmap3_q", "bitmap_d"), set("tag3_q", "tag2_q")])]);
+    m.blank();
+    m.assign("out_valid_o", "v3_q");
+    m.assign("bitmap_o", "bitmap3_q");
+    m.assign("hit_o", "|bitmap3_q");
+    m.assign("tag_o", "tag3_q");
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn widths_follow_the_formats() {
+        let cfg = GenConfig::default();
+        assert_eq!(mean_bits(&cfg), 48);
+        let (gb, lsb) = geom_bits_lsb(&cfg);
+        assert_eq!(gb, 4 * 15 + 2 * 10);
+        let fmt = cfg.feature_format();
+        let dk = fmt.layout().into_iter().find(|f| f.name == "depth_key").unwrap();
+        assert_eq!(lsb + gb, dk.lsb, "the ITU block ends where the depth key starts");
+        assert_eq!(lsb, 150, "after mean (48), conic (61), opacity (8) and colour (33)");
+        let w = datapath_bits(&cfg);
+        assert!((36..=44).contains(&w), "{w}");
+        let narrow = GenConfig { tile_bits: 4, ..cfg };
+        assert!(datapath_bits(&narrow) <= w);
+    }
+
+    #[test]
+    fn ports_and_subtile_generate_block() {
+        let v = module(&GenConfig::default()).to_verilog();
+        assert!(v.contains("output wire [63:0] bitmap_o"), "{v}");
+        assert!(v.contains("for (gi = 0; gi < 64; gi = gi + 1) begin : g_subtile"), "{v}");
+        assert!(v.contains("assign hit_o = |bitmap3_q;"), "{v}");
+    }
+}

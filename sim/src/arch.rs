@@ -1,0 +1,834 @@
+//! Neo and the GSCore-style baseline on the engine: the address map, the jobs each engine runs
+//! per frame and tile, and the scheduler with the real dependencies between them.
+//!
+//! # Engines and jobs
+//! - **Preprocessing** (one agent): per frame, reads every Gaussian's geometry and the SH of the
+//!   visible ones, writes the feature table and the per-tile lists (Neo: incoming lists; GSCore:
+//!   every pair, with its subtile bitmap). Compute: the slowest of projection, colour and
+//!   duplication units (assumed timing).
+//! - **Sorting** (`sort_cores` agents): per tile, the sorting-core commands of the strategy
+//!   ([`crate::sortcmd`]), each a segment timed by `latency.json`: Neo's DPS (the last pass
+//!   fused with the MSU+ insert/delete merge when `fused_dps_merge`), conventional sorts of the
+//!   incoming lists, or, from scratch, of the whole list; GSCore's hierarchical sort (an
+//!   approximate binning pass, then one on-chip sort per bin).
+//! - **Raster** (`raster_cores` agents): per tile, reads the sorted table and gathers the
+//!   features, runs the ITU/SCU pipeline over subtile groups, writes the depth keys and valid
+//!   bits back (Neo) and the tile's pixels.
+//!
+//! # Dependencies
+//! - preprocessing of frame `f` after that of `f - 1` and after every raster of frame
+//!   `f - frame_buffers` (its feature table and lists are double-buffered);
+//! - sorting of tile `(f, t)` after preprocessing of `f`, after the raster of `(f - 2, t)` (tables
+//!   are double-buffered) and, when the strategy reuses tables (Neo hardware), after the raster
+//!   of `(f - 1, t)`, whose write-back it reads; `background:K` also after the background sort of
+//!   the frame whose order it uses;
+//! - the raster of `(f, t)` after its sort.
+//!
+//! Ready jobs run in (frame, tile) order on the first idle agent of their engine; background
+//! sorts run on idle sorting cores after every ready foreground sort.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use neo_golden::pipeline::Strategy;
+use neo_golden::sort::Parity;
+
+use crate::config::{RasterTiming, SimConfig};
+use crate::dram::Ps;
+use crate::engine::{Access, AccessKind, AgentSpec, Job, JobTag, Scheduler, Segment};
+use crate::latency::Latency;
+use crate::sortcmd::{conventional_sort, dps_pass, Cmd, Mode};
+use crate::traffic::Stage;
+use crate::workload::{TileWork, Workload};
+
+/// Agent classes.
+pub const CLASS_PRE: u8 = 0;
+/// Sorting cores.
+pub const CLASS_SORT: u8 = 1;
+/// Raster cores.
+pub const CLASS_RASTER: u8 = 2;
+
+const K_PRE: u8 = 0;
+const K_SORT: u8 = 1;
+const K_RASTER: u8 = 2;
+const K_BG: u8 = 3;
+
+/// Which accelerator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Accel {
+    /// Neo (the workload's strategy on Neo's hardware).
+    Neo,
+    /// GSCore-style with `cores` sorting cores and `cores` subtile units.
+    Gscore {
+        /// Core count.
+        cores: u32,
+    },
+}
+
+/// The raster core's cycles for one tile: subtile groups of `scus` subtiles; per group the ITUs
+/// test every entry (`ceil(entries / itus) * itu_ii`, skipped when bitmaps come from memory) and
+/// each SCU blends its subtile's processed pairs (`ceil(routed * ratio) * scu_cycles_per_pair`);
+/// the ITU of group `g + 1` overlaps the SCUs of group `g`. Returns (total, tail after the
+/// last input).
+pub fn raster_tile_cycles(
+    routed: &[u32],
+    ratio: f64,
+    entries: u32,
+    rt: &RasterTiming,
+    itus: u32,
+    scus: u32,
+    itu: bool,
+) -> (f64, f64) {
+    if routed.is_empty() {
+        return (rt.tile_overhead as f64, rt.tile_overhead as f64);
+    }
+    let itu_g = if itu { (entries as f64 / itus as f64).ceil() * rt.itu_ii } else { 0.0 };
+    let groups: Vec<f64> = routed
+        .chunks(scus.max(1) as usize)
+        .map(|g| g.iter().map(|&r| (r as f64 * ratio).ceil() * rt.scu_cycles_per_pair).fold(0.0, f64::max))
+        .collect();
+    let n = groups.len();
+    let mut total = itu_g;
+    for (i, &s) in groups.iter().enumerate() {
+        let next_itu = if i + 1 < n { itu_g } else { 0.0 };
+        total += s.max(next_itu);
+    }
+    let lat = if itu { rt.itu_latency as f64 } else { 0.0 } + rt.scu_latency as f64 + rt.tile_overhead as f64;
+    let tail = groups[n - 1] + rt.scu_latency as f64;
+    (total + lat, tail.min(total + lat))
+}
+
+const MB: u64 = 1 << 20;
+
+fn region(next: &mut u64, bytes: u64) -> u64 {
+    let base = *next;
+    *next += bytes.div_ceil(MB).max(1) * MB;
+    base
+}
+
+/// Where everything lives in DRAM.
+#[derive(Clone, Debug)]
+struct Layout {
+    geometry: u64,
+    sh: u64,
+    features: [u64; 2],
+    lists: [u64; 2],
+    bg_lists: [u64; 2],
+    tables: [u64; 2],
+    bg_tables: [u64; 2],
+    slot: u64,
+    scratch: u64,
+    scratch_part: u64,
+    framebuffer: u64,
+}
+
+/// The model of one accelerator on one workload.
+pub struct Model<'a> {
+    accel: Accel,
+    cfg: &'a SimConfig,
+    lat: &'a Latency,
+    wl: &'a Workload,
+    raster: RasterTiming,
+    strategy: Strategy,
+    /// Sort entry bytes as stored (GSCore: with the bitmap).
+    eb: u64,
+    fb: u64,
+    line: u64,
+    cyc: f64,
+    layout: Layout,
+    sort_cores: u32,
+    raster_cores: u32,
+    scus_per_core: u32,
+    itus_per_core: u32,
+    hier: bool,
+    shot_start: Vec<usize>,
+}
+
+fn round_ps(cycles: f64, cyc: f64) -> Ps {
+    (cycles * cyc).round().max(0.0) as Ps
+}
+
+impl<'a> Model<'a> {
+    /// The model of `accel` running `wl`.
+    pub fn new(accel: Accel, cfg: &'a SimConfig, lat: &'a Latency, wl: &'a Workload) -> Result<Self, String> {
+        let strategy: Strategy = wl.info.strategy.parse().map_err(|e: String| e)?;
+        let (eb, sort_cores, raster_cores, scus_per_core, itus_per_core, hier) = match accel {
+            Accel::Neo => (
+                wl.info.sort_entry_bytes as u64,
+                cfg.neo.sort_cores,
+                cfg.neo.raster_cores,
+                cfg.neo.scus_per_core,
+                cfg.neo.itus_per_core,
+                strategy == Strategy::Hierarchical,
+            ),
+            Accel::Gscore { cores } => (
+                (wl.info.sort_entry_bytes + cfg.gscore.bitmap_bytes) as u64,
+                cores,
+                cores.div_ceil(4).max(1),
+                cores.min(4),
+                0,
+                true,
+            ),
+        };
+        if hier && wl.frames.iter().any(|f| f.tiles.iter().any(|t| t.hier.entries != t.current)) {
+            return Err("the workload has no hierarchical-sort record (generate it with hierarchical on)".into());
+        }
+        cfg.check_buffers(eb as u32)?;
+        if wl.info.chunk != cfg.pipeline.chunk {
+            return Err(format!(
+                "workload chunk {} differs from the configuration's pipeline.chunk {}",
+                wl.info.chunk, cfg.pipeline.chunk
+            ));
+        }
+        let line = cfg.dram.line_bytes as u64;
+        let fb = wl.info.feature_entry_bytes as u64;
+        let max_table = wl.max_table_len().max(wl.max_sort_len()) as u64;
+        let max_sort = wl.max_sort_len() as u64;
+        let tiles = wl.info.grid[0] as u64 * wl.info.grid[1] as u64;
+        let max_visible = wl.frames.iter().map(|f| f.visible).max().unwrap_or(0);
+        let max_lists = wl
+            .frames
+            .iter()
+            .map(|f| f.tiles.iter().map(|t| t.current.max(t.sort_n) as u64).sum::<u64>())
+            .max()
+            .unwrap_or(0);
+        let slot = (max_table * eb).div_ceil(4096).max(1) * 4096;
+        let scratch_part = (max_sort.max(max_table) * eb).div_ceil(4096).max(1) * 4096;
+        let g = wl.info.gaussians;
+        let mut next = 0;
+        let layout = Layout {
+            geometry: region(&mut next, g * cfg.sizes.gaussian_geometry_bytes as u64),
+            sh: region(&mut next, g * cfg.sizes.gaussian_sh_bytes as u64),
+            features: [region(&mut next, max_visible * fb), region(&mut next, max_visible * fb)],
+            lists: [region(&mut next, max_lists * eb), region(&mut next, max_lists * eb)],
+            bg_lists: [region(&mut next, max_lists * eb), region(&mut next, max_lists * eb)],
+            tables: [region(&mut next, tiles * slot), region(&mut next, tiles * slot)],
+            bg_tables: [region(&mut next, tiles * slot), region(&mut next, tiles * slot)],
+            slot,
+            scratch: region(&mut next, sort_cores as u64 * 3 * scratch_part),
+            scratch_part,
+            framebuffer: region(&mut next, wl.info.width as u64 * wl.info.height as u64 * cfg.sizes.pixel_bytes as u64),
+        };
+        let mut shot_start = Vec::with_capacity(wl.frames.len());
+        let mut s = 0;
+        for (i, f) in wl.frames.iter().enumerate() {
+            if i == 0 || f.cut {
+                s = i;
+            }
+            shot_start.push(s);
+        }
+        Ok(Model {
+            accel,
+            cfg,
+            lat,
+            wl,
+            raster: lat.raster.clone(),
+            strategy,
+            eb,
+            fb,
+            line,
+            cyc: cfg.cycle_ps(),
+            layout,
+            sort_cores,
+            raster_cores,
+            scus_per_core,
+            itus_per_core,
+            hier,
+            shot_start,
+        })
+    }
+
+    /// The agents: preprocessing, sorting cores, raster cores.
+    pub fn agents(&self) -> Vec<AgentSpec> {
+        let n = &self.cfg.neo;
+        let mut v = vec![AgentSpec { class: CLASS_PRE, window: n.preprocess_read_window, overlap: false }];
+        for _ in 0..self.sort_cores {
+            v.push(AgentSpec { class: CLASS_SORT, window: n.sort_read_window, overlap: n.double_buffered_io });
+        }
+        let rwin = ((n.raster_buffer_bytes / 2 / self.line).max(1) as u32).min(n.raster_read_window);
+        for _ in 0..self.raster_cores {
+            v.push(AgentSpec { class: CLASS_RASTER, window: rwin, overlap: false });
+        }
+        v
+    }
+
+    /// The scheduler for this model.
+    pub fn scheduler(&self) -> Sched<'_, 'a> {
+        Sched::new(self)
+    }
+
+    fn ps(&self, cycles: f64) -> Ps {
+        round_ps(cycles, self.cyc)
+    }
+
+    fn sort_port(&self) -> Ps {
+        // One entry per cycle (latency.json: one beat per cycle).
+        self.ps(self.line as f64 / self.eb as f64 * self.lat.msu_ii)
+    }
+
+    fn list_len(&self, t: &TileWork) -> u64 {
+        if self.hier {
+            t.current as u64
+        } else {
+            t.sort_n as u64
+        }
+    }
+
+    fn preprocess_job(&self, f: usize) -> Job {
+        let fw = &self.wl.frames[f];
+        let p = &self.cfg.preprocess;
+        let n = &self.cfg.neo;
+        let cyc = (fw.gaussians as f64 / n.projection_units as f64).ceil() * p.projection_ii;
+        let cyc = cyc.max((fw.visible as f64 / n.color_units as f64).ceil() * p.color_ii);
+        let cyc = cyc.max((fw.binning_tests as f64 / n.duplication_units as f64).ceil() * p.duplication_ii);
+        let compute = self.ps(cyc + p.latency as f64);
+        let s = &self.cfg.sizes;
+        let l = &self.layout;
+        let reads = vec![
+            Access::seq(Stage::Preprocess, l.geometry, fw.gaussians * s.gaussian_geometry_bytes as u64),
+            Access::seq(Stage::Preprocess, l.sh, fw.visible * s.gaussian_sh_bytes as u64),
+        ];
+        let lists: u64 = fw.tiles.iter().map(|t| self.list_len(t)).sum();
+        let mut writes = vec![
+            Access::seq(Stage::FeatureTable, l.features[f % 2], fw.visible * self.fb),
+            Access::seq(Stage::IncomingList, l.lists[f % 2], lists * self.eb),
+        ];
+        if self.accel == Accel::Neo && matches!(self.strategy, Strategy::Background(_)) {
+            let all: u64 = fw.tiles.iter().map(|t| t.background_n as u64).sum();
+            writes.push(Access::seq(Stage::BackgroundSort, l.bg_lists[f % 2], all * self.eb));
+        }
+        Job {
+            tag: JobTag { frame: f as u32, tile: 0, kind: K_PRE },
+            segments: vec![Segment {
+                compute,
+                load: compute,
+                serial: false,
+                reads,
+                writes,
+                writes_at_end: false,
+                min_interval: self.ps(1.0),
+                spread_reads: true,
+            }],
+        }
+    }
+
+    fn cmd_segment(&self, cmd: Cmd, reads: Vec<Access>, writes: Vec<Access>, extra_cycles: f64) -> Segment {
+        let t = cmd.cycles(self.lat) as f64 + extra_cycles;
+        let load = cmd.entries_in() as f64 * self.lat.msu_ii;
+        let serial = matches!(cmd.mode, Mode::Sort | Mode::Dps);
+        Segment {
+            compute: self.ps(t.max(1.0)),
+            load: self.ps(load.min(t)),
+            serial,
+            reads,
+            writes,
+            writes_at_end: serial,
+            min_interval: self.sort_port(),
+            spread_reads: false,
+        }
+    }
+
+    /// Conventional sort of `n` entries from `src` (charged to `src_stage`) into `dst`, with
+    /// temporaries in `scratch` (two run buffers); `stage` for everything after the first read.
+    #[allow(clippy::too_many_arguments)]
+    fn conv_sort(
+        &self,
+        segs: &mut Vec<Segment>,
+        n: u64,
+        src: u64,
+        src_stage: Stage,
+        dst: u64,
+        scratch: [u64; 2],
+        stage: Stage,
+    ) {
+        let c = self.cfg.pipeline.chunk as u64;
+        let eb = self.eb;
+        let cmds = conventional_sort(n, c);
+        let chunks = n.div_ceil(c);
+        let mut off = 0;
+        let mut it = cmds.into_iter().peekable();
+        for _ in 0..chunks {
+            let cmd = it.next().expect("a chunk command");
+            let out = if chunks == 1 { dst } else { scratch[0] };
+            segs.push(self.cmd_segment(
+                cmd,
+                vec![Access::seq(src_stage, src + off * eb, cmd.len_a * eb)],
+                vec![Access::seq(stage, out + off * eb, cmd.len_a * eb)],
+                0.0,
+            ));
+            off += cmd.len_a;
+        }
+        // Merge passes: runs of C, 2C, ... alternate between the scratch buffers; the last pass
+        // writes `dst`.
+        let passes = if chunks > 1 { 64 - (chunks - 1).leading_zeros() } else { 0 };
+        let mut from = 0usize;
+        for p in 0..passes {
+            let to_last = p + 1 == passes;
+            let mut start = 0;
+            while start < n {
+                let cmd = it.next().expect("a merge command");
+                let len = cmd.entries_in();
+                let out = if to_last { dst } else { scratch[1 - from] };
+                segs.push(self.cmd_segment(
+                    cmd,
+                    vec![Access::seq(stage, scratch[from] + start * eb, len * eb)],
+                    vec![Access::seq(stage, out + start * eb, len * eb)],
+                    0.0,
+                ));
+                start += len;
+            }
+            from = 1 - from;
+        }
+        debug_assert!(it.next().is_none());
+    }
+
+    fn scratch(&self, agent: usize) -> [u64; 3] {
+        let core = agent.saturating_sub(1) as u64;
+        let base = self.layout.scratch + core * 3 * self.layout.scratch_part;
+        [base, base + self.layout.scratch_part, base + 2 * self.layout.scratch_part]
+    }
+
+    fn table(&self, f: usize, t: usize) -> u64 {
+        self.layout.tables[f % 2] + t as u64 * self.layout.slot
+    }
+
+    fn empty_segment(&self) -> Segment {
+        Segment {
+            compute: self.ps(self.lat.command_overhead.max(1) as f64),
+            load: 0,
+            serial: true,
+            reads: Vec::new(),
+            writes: Vec::new(),
+            writes_at_end: true,
+            min_interval: self.sort_port(),
+            spread_reads: false,
+        }
+    }
+
+    fn sort_job(&self, f: usize, t: usize, agent: usize, list_off: u64) -> Job {
+        let tw = &self.wl.frames[f].tiles[t];
+        let eb = self.eb;
+        let sc = self.scratch(agent);
+        let list = self.layout.lists[f % 2] + list_off * eb;
+        let cur = self.table(f, t);
+        let mut segs = Vec::new();
+        if self.hier {
+            self.hier_sort(&mut segs, tw, list, cur, sc);
+        } else if tw.from_scratch {
+            self.conv_sort(&mut segs, tw.sort_n as u64, list, Stage::IncomingList, cur, [sc[0], sc[1]], Stage::SortTable);
+        } else {
+            let (prev, prev_stage) = match self.strategy {
+                Strategy::Background(k) => {
+                    let src = f.saturating_sub(k).max(self.shot_start[f]);
+                    (self.layout.bg_tables[src % 2] + t as u64 * self.layout.slot, Stage::SortTable)
+                }
+                _ => (self.table(f + 1, t), Stage::SortTable),
+            };
+            let c = self.cfg.pipeline.chunk as u64;
+            let (a, b) = (tw.merge_a as u64, tw.merge_b as u64);
+            let out = (tw.merge_out - tw.merge_out.min(tw.dropped_capacity)) as u64;
+            let passes = tw.dps_passes as usize;
+            let fused = self.cfg.neo.fused_dps_merge && passes > 0 && tw.dps_len > 0;
+            if fused {
+                // Sorted incoming list first; DPS passes; the last pass feeds the MSU+.
+                self.conv_sort(&mut segs, b, list, Stage::IncomingList, sc[2], [sc[0], sc[1]], Stage::SortTable);
+                let len = tw.dps_len as u64;
+                for p in 0..passes - 1 {
+                    let mut off = 0;
+                    for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
+                        let acc = Access::seq(Stage::SortTable, prev + off * eb, cmd.len_a * eb);
+                        segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
+                        off += cmd.len_a;
+                    }
+                }
+                let extra = (self.lat.merge_cycles(a, b, true) as f64 - a as f64).max(b as f64);
+                let (mut off, mut b_done, mut o_done) = (0u64, 0u64, 0u64);
+                for cmd in dps_pass(len, c, Parity::of(f as u64, passes - 1)) {
+                    let end = off + cmd.len_a;
+                    let b_to = b * end / len;
+                    let o_to = out * end / len;
+                    let (bi, oi) = (b_to - b_done, o_to - o_done);
+                    let mut reads = vec![Access::seq(prev_stage, prev + off * eb, cmd.len_a * eb)];
+                    if bi > 0 {
+                        reads.push(Access::seq(Stage::SortTable, sc[2] + b_done * eb, bi * eb));
+                    }
+                    let writes = vec![Access::seq(Stage::SortTable, cur + o_done * eb, oi * eb)];
+                    let share = extra * cmd.len_a as f64 / len as f64;
+                    let mut s = self.cmd_segment(cmd, reads, writes, share);
+                    s.load = self.ps(((cmd.len_a + bi) as f64 * self.lat.msu_ii).min(cmd.cycles(self.lat) as f64 + share));
+                    segs.push(s);
+                    (off, b_done, o_done) = (end, b_to, o_to);
+                }
+            } else {
+                let len = tw.dps_len as u64;
+                for p in 0..passes {
+                    let mut off = 0;
+                    for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
+                        let acc = Access::seq(Stage::SortTable, prev + off * eb, cmd.len_a * eb);
+                        segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
+                        off += cmd.len_a;
+                    }
+                }
+                self.conv_sort(&mut segs, b, list, Stage::IncomingList, sc[2], [sc[0], sc[1]], Stage::SortTable);
+                if a + b > 0 {
+                    let cmd = Cmd { mode: Mode::MergeDelete, len_a: a, len_b: b };
+                    segs.push(self.cmd_segment(
+                        cmd,
+                        vec![Access::seq(prev_stage, prev, a * eb), Access::seq(Stage::SortTable, sc[2], b * eb)],
+                        vec![Access::seq(Stage::SortTable, cur, out * eb)],
+                        0.0,
+                    ));
+                }
+            }
+        }
+        if segs.is_empty() {
+            segs.push(self.empty_segment());
+        }
+        Job { tag: JobTag { frame: f as u32, tile: t as u32, kind: K_SORT }, segments: segs }
+    }
+
+    fn hier_sort(&self, segs: &mut Vec<Segment>, tw: &TileWork, list: u64, cur: u64, sc: [u64; 3]) {
+        let h = &tw.hier;
+        let eb = self.eb;
+        let c = self.cfg.pipeline.chunk as u64;
+        if h.entries == 0 {
+            return;
+        }
+        let g = &self.cfg.gscore;
+        let binned = h.approx_passes > 0;
+        if binned {
+            let n = h.entries as u64;
+            let deeper = h.approx_entries as u64 - n.min(h.approx_entries as u64);
+            let stream = h.approx_entries as f64 / g.approx_entries_per_cycle;
+            let lat = (g.approx_latency * h.approx_passes as u64) as f64;
+            let mut reads = vec![Access::seq(Stage::IncomingList, list, n * eb)];
+            if deeper > 0 {
+                reads.push(Access::seq(Stage::SortTable, sc[1], deeper * eb));
+            }
+            segs.push(Segment {
+                compute: self.ps(stream + lat),
+                load: self.ps(stream),
+                serial: false,
+                reads,
+                writes: vec![Access::seq(Stage::SortTable, sc[0], h.approx_entries as u64 * eb)],
+                writes_at_end: false,
+                min_interval: self.sort_port(),
+                spread_reads: false,
+            });
+        }
+        let k = h.bin_sorts.max(1) as u64;
+        let total = h.bin_entries as u64;
+        let (q, rem) = (total / k, total % k);
+        let mut off = 0;
+        for i in 0..k {
+            let len = (q + (i < rem) as u64).min(c);
+            if len == 0 {
+                continue;
+            }
+            let (src, stage) = if binned { (sc[0], Stage::SortTable) } else { (list, Stage::IncomingList) };
+            let cmd = Cmd { mode: Mode::Sort, len_a: len, len_b: 0 };
+            segs.push(self.cmd_segment(
+                cmd,
+                vec![Access::seq(stage, src + off * eb, len * eb)],
+                vec![Access::seq(Stage::SortTable, cur + off * eb, len * eb)],
+                0.0,
+            ));
+            off += len;
+        }
+        if h.fallback_global > 0 {
+            let n = h.fallback_global as u64;
+            let cmd = Cmd { mode: Mode::Merge, len_a: n / 2, len_b: n - n / 2 };
+            segs.push(self.cmd_segment(
+                cmd,
+                vec![Access::seq(Stage::SortTable, sc[1], n * eb)],
+                vec![Access::seq(Stage::SortTable, cur, n * eb)],
+                0.0,
+            ));
+        }
+    }
+
+    fn background_job(&self, f: usize, t: usize, agent: usize, off: u64) -> Job {
+        let tw = &self.wl.frames[f].tiles[t];
+        let sc = self.scratch(agent);
+        let mut segs = Vec::new();
+        let src = self.layout.bg_lists[f % 2] + off * self.eb;
+        let dst = self.layout.bg_tables[f % 2] + t as u64 * self.layout.slot;
+        self.conv_sort(&mut segs, tw.background_n as u64, src, Stage::BackgroundSort, dst, [sc[0], sc[1]], Stage::BackgroundSort);
+        if segs.is_empty() {
+            segs.push(self.empty_segment());
+        }
+        Job { tag: JobTag { frame: f as u32, tile: t as u32, kind: K_BG }, segments: segs }
+    }
+
+    fn raster_job(&self, f: usize, t: usize) -> Job {
+        let fw = &self.wl.frames[f];
+        let tw = &fw.tiles[t];
+        let info = &self.wl.info;
+        let neo = self.accel == Accel::Neo;
+        let (entries, table_entries) =
+            if neo { (tw.raster_entries, tw.table_len as u64) } else { (tw.current, tw.current as u64) };
+        let (cyc, tail) = raster_tile_cycles(
+            &tw.routed,
+            fw.processed_ratio,
+            entries,
+            &self.raster,
+            self.itus_per_core.max(1),
+            self.scus_per_core,
+            neo,
+        );
+        let cur = self.table(f, t);
+        let mut reads = vec![Access::seq(Stage::RasterTable, cur, table_entries * self.eb)];
+        if entries > 0 {
+            reads.push(Access {
+                stage: Stage::FeatureTable,
+                base: self.layout.features[f % 2],
+                kind: AccessKind::Gather {
+                    count: entries as u64,
+                    record_bytes: self.fb as u32,
+                    records_in_region: fw.visible.max(1),
+                    seed: crate::engine::mix(((f as u64) << 32) ^ t as u64),
+                },
+            });
+        }
+        let mut writes = Vec::new();
+        if neo && tw.writeback > 0 {
+            writes.push(Access::seq(Stage::DepthWriteback, cur, tw.writeback as u64 * self.eb));
+        }
+        let (gx, ts) = (info.grid[0] as u64, info.tile as u64);
+        let (tx, ty) = (t as u64 % gx, t as u64 / gx);
+        let (w, h) = (info.width as u64, info.height as u64);
+        let pb = self.cfg.sizes.pixel_bytes as u64;
+        let x0 = tx * ts;
+        let cols = ts.min(w.saturating_sub(x0));
+        for y in ty * ts..(ty * ts + ts).min(h) {
+            writes.push(Access::seq(Stage::FrameBuffer, self.layout.framebuffer + (y * w + x0) * pb, cols * pb));
+        }
+        let compute = self.ps(cyc);
+        Job {
+            tag: JobTag { frame: f as u32, tile: t as u32, kind: K_RASTER },
+            segments: vec![Segment {
+                compute,
+                load: compute - self.ps(tail).min(compute),
+                serial: false,
+                reads,
+                writes,
+                writes_at_end: true,
+                min_interval: self.ps(1.0),
+                spread_reads: true,
+            }],
+        }
+    }
+}
+
+/// Per-frame event times.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameTimes {
+    /// Preprocessing started.
+    pub pre_start: Ps,
+    /// Preprocessing ended.
+    pub pre_done: Ps,
+    /// Last sort of the frame ended.
+    pub sort_done: Ps,
+    /// Last raster of the frame ended: the frame is complete.
+    pub done: Ps,
+}
+
+/// The scheduler of a [`Model`] (see the module docs for the rules).
+pub struct Sched<'m, 'a> {
+    m: &'m Model<'a>,
+    frames: usize,
+    tiles: usize,
+    pre_next: usize,
+    pre_running: bool,
+    pre_done: Vec<bool>,
+    times: Vec<FrameTimes>,
+    sort_queued: Vec<bool>,
+    raster_done: Vec<bool>,
+    bg_done: Vec<bool>,
+    raster_left: Vec<usize>,
+    sort_left: Vec<usize>,
+    frame_done: Vec<bool>,
+    bg_left: usize,
+    sort_ready: BinaryHeap<Reverse<(u32, u32)>>,
+    bg_ready: BinaryHeap<Reverse<(u32, u32)>>,
+    raster_ready: BinaryHeap<Reverse<(u32, u32)>>,
+    offsets: Vec<Option<Vec<u64>>>,
+    bg_offsets: Vec<Option<Vec<u64>>>,
+    background: Option<usize>,
+}
+
+impl<'m, 'a> Sched<'m, 'a> {
+    fn new(m: &'m Model<'a>) -> Self {
+        let frames = m.wl.frames.len();
+        let tiles = m.wl.info.grid[0] as usize * m.wl.info.grid[1] as usize;
+        let background = match (m.accel, m.strategy) {
+            (Accel::Neo, Strategy::Background(k)) => Some(k),
+            _ => None,
+        };
+        Sched {
+            m,
+            frames,
+            tiles,
+            pre_next: 0,
+            pre_running: false,
+            pre_done: vec![false; frames],
+            times: vec![FrameTimes::default(); frames],
+            sort_queued: vec![false; frames * tiles],
+            raster_done: vec![false; frames * tiles],
+            bg_done: vec![false; frames * tiles],
+            raster_left: vec![tiles; frames],
+            sort_left: vec![tiles; frames],
+            frame_done: vec![false; frames],
+            bg_left: if background.is_some() { frames * tiles } else { 0 },
+            sort_ready: BinaryHeap::new(),
+            bg_ready: BinaryHeap::new(),
+            raster_ready: BinaryHeap::new(),
+            offsets: vec![None; frames],
+            bg_offsets: vec![None; frames],
+            background,
+        }
+    }
+
+    /// Per-frame times (valid after the run).
+    pub fn times(&self) -> &[FrameTimes] {
+        &self.times
+    }
+
+    fn reuses(&self) -> bool {
+        self.m.accel == Accel::Neo && !self.m.hier && self.m.strategy != Strategy::Full
+    }
+
+    fn sort_deps_met(&self, f: usize, t: usize) -> bool {
+        if !self.pre_done[f] {
+            return false;
+        }
+        let i = f * self.tiles + t;
+        if f >= 2 && !self.raster_done[i - 2 * self.tiles] {
+            return false;
+        }
+        if f >= 1 && self.reuses() && !self.raster_done[i - self.tiles] {
+            return false;
+        }
+        if let Some(k) = self.background {
+            let s = self.m.shot_start[f];
+            if f > s {
+                let src = f.saturating_sub(k).max(s);
+                if !self.bg_done[src * self.tiles + t] {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    fn try_queue_sort(&mut self, f: usize, t: usize) {
+        if f >= self.frames {
+            return;
+        }
+        let i = f * self.tiles + t;
+        if !self.sort_queued[i] && self.sort_deps_met(f, t) {
+            self.sort_queued[i] = true;
+            self.sort_ready.push(Reverse((f as u32, t as u32)));
+        }
+    }
+
+    fn offsets_of(&mut self, f: usize, bg: bool) -> &[u64] {
+        let m = self.m;
+        let slot = if bg { &mut self.bg_offsets[f] } else { &mut self.offsets[f] };
+        slot.get_or_insert_with(|| {
+            let mut acc = 0;
+            m.wl.frames[f]
+                .tiles
+                .iter()
+                .map(|t| {
+                    let o = acc;
+                    acc += if bg { t.background_n as u64 } else { m.list_len(t) };
+                    o
+                })
+                .collect()
+        })
+    }
+}
+
+impl Scheduler for Sched<'_, '_> {
+    fn next_job(&mut self, agent: usize, class: u8, t: Ps) -> Option<Job> {
+        match class {
+            CLASS_PRE => {
+                let f = self.pre_next;
+                if self.pre_running || f >= self.frames {
+                    return None;
+                }
+                let fb = self.m.cfg.neo.frame_buffers as usize;
+                if f >= fb && !self.frame_done[f - fb] {
+                    return None;
+                }
+                self.pre_running = true;
+                self.times[f].pre_start = t;
+                Some(self.m.preprocess_job(f))
+            }
+            CLASS_SORT => {
+                if let Some(Reverse((f, tile))) = self.sort_ready.pop() {
+                    let off = self.offsets_of(f as usize, false)[tile as usize];
+                    return Some(self.m.sort_job(f as usize, tile as usize, agent, off));
+                }
+                if let Some(Reverse((f, tile))) = self.bg_ready.pop() {
+                    let off = self.offsets_of(f as usize, true)[tile as usize];
+                    return Some(self.m.background_job(f as usize, tile as usize, agent, off));
+                }
+                None
+            }
+            _ => {
+                let Reverse((f, tile)) = self.raster_ready.pop()?;
+                Some(self.m.raster_job(f as usize, tile as usize))
+            }
+        }
+    }
+
+    fn job_done(&mut self, tag: JobTag, t: Ps) {
+        let (f, tile) = (tag.frame as usize, tag.tile as usize);
+        match tag.kind {
+            K_PRE => {
+                self.pre_running = false;
+                self.pre_done[f] = true;
+                self.times[f].pre_done = t;
+                self.pre_next += 1;
+                for tt in 0..self.tiles {
+                    self.try_queue_sort(f, tt);
+                    if self.background.is_some() {
+                        self.bg_ready.push(Reverse((f as u32, tt as u32)));
+                    }
+                }
+            }
+            K_SORT => {
+                self.raster_ready.push(Reverse((tag.frame, tag.tile)));
+                self.sort_left[f] -= 1;
+                if self.sort_left[f] == 0 {
+                    self.times[f].sort_done = t;
+                }
+            }
+            K_RASTER => {
+                self.raster_done[f * self.tiles + tile] = true;
+                self.raster_left[f] -= 1;
+                if self.raster_left[f] == 0 {
+                    self.frame_done[f] = true;
+                    self.times[f].done = t;
+                }
+                self.try_queue_sort(f + 1, tile);
+                self.try_queue_sort(f + 2, tile);
+            }
+            _ => {
+                self.bg_done[f * self.tiles + tile] = true;
+                self.bg_left -= 1;
+                if let Some(k) = self.background {
+                    for g in f..(f + k + 1).min(self.frames) {
+                        self.try_queue_sort(g, tile);
+                    }
+                }
+            }
+        }
+    }
+
+    fn finished(&self) -> bool {
+        self.frame_done.iter().all(|&d| d) && self.bg_left == 0
+    }
+}

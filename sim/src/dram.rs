@@ -1,0 +1,497 @@
+//! A transaction-level LPDDR4 model: channels, banks with an open row each, a shared data bus per
+//! channel, the activation limits and refresh, and posted writes drained in batches.
+//!
+//! Requests arrive in non-decreasing issue time (the engine serves them in time order). Each
+//! 64-byte request is mapped to (channel, bank, row) by [`crate::config::DramConfig::mapping`]
+//! and timed at once:
+//! - **row hit** (the bank has the row open): column command as soon as the bank allows;
+//! - **row miss** (bank closed) or **conflict** (another row open): precharge when allowed
+//!   (`tRAS` after the activate, `tRTP` after a read, `tWR` after write data), `tRP`, then
+//!   activate, subject to `tRC` (same bank), `tRRD` and the four-activate window `tFAW` (same
+//!   channel), then `tRCD` to the column command;
+//! - data follows the column command after `CL` (reads) or `CWL` (writes) and occupies the
+//!   channel's data bus for `BL` clocks (so column commands are at least `tCCD = BL` apart); a
+//!   read takes the earliest free bus slot at or after its data is ready, so a row hit issued
+//!   after a slow miss to another bank may return first (the bank-level parallelism and the
+//!   hit-first data return of an FR-FCFS controller; the order of activations stays the issue
+//!   order);
+//! - **writes** are posted: they return at once and wait in a per-channel queue; when it holds
+//!   `write_queue` requests they are drained together (grouped by bank and row) after the reads
+//!   already scheduled, paying the read-to-write turnaround once, and reads after the drain wait
+//!   for the write-to-read turnaround (`tWTR`), as a write-draining controller does;
+//! - **refresh**: every `tREFI` each channel is blocked for `tRFCab` (after the data already
+//!   scheduled, as a controller may postpone refreshes) and all its rows close.
+//!
+//! Not modelled: command-bus conflicts between banks, FR-FCFS reordering of reads, per-bank
+//! refresh, power-down, on-die ECC, data bus inversion, rank switching (one rank).
+
+use serde::Serialize;
+
+use crate::config::DramConfig;
+
+/// Time in picoseconds.
+pub type Ps = u64;
+
+const CLOSED: u32 = u32::MAX;
+
+#[derive(Clone, Copy, Debug)]
+struct Bank {
+    open: u32,
+    act: Ps,
+    rd_col: Ps,
+    wr_end: Ps,
+    activated: bool,
+}
+
+impl Default for Bank {
+    fn default() -> Self {
+        Bank { open: CLOSED, act: 0, rd_col: 0, wr_end: 0, activated: false }
+    }
+}
+
+#[derive(Clone, Debug)]
+struct Channel {
+    banks: Vec<Bank>,
+    /// Reserved data-bus bursts `(start, end)`, sorted, non-overlapping; bursts ending before
+    /// the latest issue time are pruned.
+    busy: std::collections::VecDeque<(Ps, Ps)>,
+    /// Latest end of any burst.
+    bus_free: Ps,
+    /// No read data before this (write-to-read turnaround after a drain, refresh).
+    floor: Ps,
+    /// Activate times that can still constrain new ones (`tRRD`, `tFAW`), sorted.
+    acts: std::collections::VecDeque<Ps>,
+    next_ref: Ps,
+    blocked_until: Ps,
+    wq: Vec<(u32, u32)>,
+}
+
+/// Counters of the DRAM model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct DramStats {
+    /// Read requests served.
+    pub reads: u64,
+    /// Write requests accepted.
+    pub writes: u64,
+    /// Requests that found their row open.
+    pub row_hits: u64,
+    /// Requests that found their bank closed.
+    pub row_misses: u64,
+    /// Requests that found another row open.
+    pub row_conflicts: u64,
+    /// Refreshes performed.
+    pub refreshes: u64,
+    /// Write drains.
+    pub drains: u64,
+    /// Sum over reads of (data end - issue), picoseconds.
+    pub read_latency_ps: u64,
+    /// Latest data-bus activity.
+    pub last_data_ps: Ps,
+}
+
+impl DramStats {
+    /// Mean read latency in nanoseconds.
+    pub fn mean_read_latency_ns(&self) -> f64 {
+        if self.reads == 0 {
+            0.0
+        } else {
+            self.read_latency_ps as f64 / self.reads as f64 / 1000.0
+        }
+    }
+
+    /// Fraction of requests that hit an open row.
+    pub fn row_hit_rate(&self) -> f64 {
+        let n = self.row_hits + self.row_misses + self.row_conflicts;
+        if n == 0 {
+            0.0
+        } else {
+            self.row_hits as f64 / n as f64
+        }
+    }
+}
+
+/// The earliest activate time at or after `x` that keeps `rrd` to every other activate of the
+/// channel and at most four activates in any `faw` window; records it. Activates may be placed
+/// between earlier-scheduled ones (banks activate out of issue order). `t` is the issue time
+/// (activates ending their influence before it are pruned).
+fn act_slot(acts: &mut std::collections::VecDeque<Ps>, mut x: Ps, t: Ps, rrd: Ps, faw: Ps) -> Ps {
+    while acts.front().is_some_and(|&a| a + faw.max(rrd) <= t) {
+        acts.pop_front();
+    }
+    'search: loop {
+        let pos = acts.partition_point(|&a| a <= x);
+        // tRRD to the neighbours.
+        if pos > 0 && acts[pos - 1] + rrd > x {
+            x = acts[pos - 1] + rrd;
+            continue;
+        }
+        if pos < acts.len() && x + rrd > acts[pos] {
+            x = acts[pos] + rrd;
+            continue;
+        }
+        // Every five consecutive activates (x among them) must span at least faw.
+        for k in 0..5usize {
+            // The window holds acts[pos - 4 + k .. pos], x, acts[pos .. pos + k].
+            if pos + k < 4 || pos + k > acts.len() {
+                continue;
+            }
+            let first = if k < 4 { acts[pos + k - 4] } else { x };
+            let last = if k > 0 { acts[pos + k - 1] } else { x };
+            if last - first < faw {
+                x = if k == 0 { first + faw } else { acts[pos] + rrd };
+                continue 'search;
+            }
+        }
+        acts.insert(pos, x);
+        return x;
+    }
+}
+
+/// Timing in picoseconds, from the configuration's clock counts.
+#[derive(Clone, Copy, Debug)]
+struct T {
+    cl: Ps,
+    cwl: Ps,
+    rcd: Ps,
+    rp: Ps,
+    ras: Ps,
+    rc: Ps,
+    rtp: Ps,
+    wtr: Ps,
+    wr: Ps,
+    rrd: Ps,
+    faw: Ps,
+    bl: Ps,
+    rtrs: Ps,
+    refi: Ps,
+    rfc: Ps,
+}
+
+/// The DRAM: either the LPDDR4 model or an ideal memory (validation against the cosimulation,
+/// whose memory answers the cycle after the request and has no bandwidth limit).
+#[derive(Clone, Debug)]
+pub struct Dram {
+    line_shift: u32,
+    ch_bits: u32,
+    bank_bits: u32,
+    col_bits: u32,
+    bank_first: bool,
+    t: T,
+    channels: Vec<Channel>,
+    write_queue: usize,
+    ideal: Option<Ps>,
+    stats: DramStats,
+}
+
+impl Dram {
+    /// The model of `cfg` (which must pass [`DramConfig::check`]).
+    pub fn new(cfg: &DramConfig) -> Self {
+        let ck = cfg.t_ck_ps;
+        let t = T {
+            cl: cfg.n_cl * ck,
+            cwl: cfg.n_cwl * ck,
+            rcd: cfg.n_rcd * ck,
+            rp: cfg.n_rp * ck,
+            ras: cfg.n_ras * ck,
+            rc: cfg.n_rc * ck,
+            rtp: cfg.n_rtp * ck,
+            wtr: cfg.n_wtr * ck,
+            wr: cfg.n_wr * ck,
+            rrd: cfg.n_rrd * ck,
+            faw: cfg.n_faw * ck,
+            bl: cfg.n_bl * ck,
+            rtrs: cfg.n_rtrs * ck,
+            refi: cfg.n_refi * ck,
+            rfc: cfg.n_rfc * ck,
+        };
+        let channels = (0..cfg.channels)
+            .map(|_| Channel {
+                banks: vec![Bank::default(); cfg.banks as usize],
+                busy: std::collections::VecDeque::new(),
+                bus_free: 0,
+                floor: 0,
+                acts: std::collections::VecDeque::new(),
+                // All channels refresh together (staggering would let one refreshing channel
+                // stall in-order requesters that stream over all of them).
+                next_ref: if t.refi == 0 { Ps::MAX } else { t.refi },
+                blocked_until: 0,
+                wq: Vec::with_capacity(cfg.write_queue as usize),
+            })
+            .collect();
+        Dram {
+            line_shift: cfg.line_bytes.trailing_zeros(),
+            ch_bits: cfg.channels.trailing_zeros(),
+            bank_bits: cfg.banks.trailing_zeros(),
+            col_bits: (cfg.row_bytes / cfg.line_bytes).trailing_zeros(),
+            bank_first: cfg.mapping == "RoCoBaCh",
+            t,
+            channels,
+            write_queue: cfg.write_queue as usize,
+            ideal: None,
+            stats: DramStats::default(),
+        }
+    }
+
+    /// An ideal memory: every read completes `latency_ps` after its issue, writes are free,
+    /// nothing else limits.
+    pub fn ideal(line_bytes: u32, latency_ps: Ps) -> Self {
+        let mut d = Dram::new(&DramConfig { line_bytes, ..DramConfig::default() });
+        d.ideal = Some(latency_ps);
+        d
+    }
+
+    /// True for the ideal memory.
+    pub fn is_ideal(&self) -> bool {
+        self.ideal.is_some()
+    }
+
+    /// Counters so far.
+    pub fn stats(&self) -> DramStats {
+        self.stats
+    }
+
+    /// `(channel, bank, row)` of the line holding byte `addr`. The bank index is XORed with the
+    /// low row bits (permutation-based interleaving, as memory controllers do), so streams whose
+    /// bases are aligned alike do not all fall into the same bank.
+    pub fn map(&self, addr: u64) -> (usize, usize, u32) {
+        let line = addr >> self.line_shift;
+        let ch = (line & ((1 << self.ch_bits) - 1)) as usize;
+        let rest = line >> self.ch_bits;
+        let mask = (1u64 << self.bank_bits) - 1;
+        let (bank, row) = if self.bank_first {
+            let bank = rest & mask;
+            (bank, rest >> (self.bank_bits + self.col_bits))
+        } else {
+            let r = rest >> self.col_bits;
+            (r & mask, r >> self.bank_bits)
+        };
+        (ch, (bank ^ (row & mask)) as usize, row as u32)
+    }
+
+    /// Reads the line holding `addr`, issued at `t`; returns when its data has arrived.
+    pub fn read(&mut self, t: Ps, addr: u64) -> Ps {
+        self.stats.reads += 1;
+        if let Some(l) = self.ideal {
+            self.stats.read_latency_ps += l;
+            return t + l;
+        }
+        let (c, b, r) = self.map(addr);
+        let done = self.access(t, c, b, r, false);
+        self.stats.read_latency_ps += done - t;
+        done
+    }
+
+    /// Posts a write of the line holding `addr` at `t` (returns at once; drained later).
+    pub fn write(&mut self, t: Ps, addr: u64) {
+        self.stats.writes += 1;
+        if self.ideal.is_some() {
+            return;
+        }
+        let (c, b, r) = self.map(addr);
+        self.channels[c].wq.push((b as u32, r));
+        if self.channels[c].wq.len() >= self.write_queue {
+            self.drain(t, c);
+        }
+    }
+
+    /// Drains every write queue at `t`; returns when the last data has left (at least `t`).
+    pub fn flush(&mut self, t: Ps) -> Ps {
+        for c in 0..self.channels.len() {
+            self.drain(t, c);
+        }
+        self.channels.iter().map(|c| c.bus_free).max().unwrap_or(0).max(t)
+    }
+
+    fn drain(&mut self, t: Ps, c: usize) {
+        let mut q = std::mem::take(&mut self.channels[c].wq);
+        if q.is_empty() {
+            self.channels[c].wq = q;
+            return;
+        }
+        self.stats.drains += 1;
+        q.sort_by_key(|&(b, r)| (b, r));
+        // Writes go after the reads already scheduled, with one read-to-write turnaround.
+        let tm = self.t;
+        {
+            let ch = &mut self.channels[c];
+            let start = t.max(ch.bus_free) + (tm.cl + tm.bl + tm.rtrs).saturating_sub(tm.cwl);
+            ch.floor = ch.floor.max(start);
+        }
+        let mut end = 0;
+        for &(b, r) in &q {
+            end = self.access(t, c, b as usize, r, true);
+            self.channels[c].floor = end;
+        }
+        // Reads wait for the write-to-read turnaround.
+        self.channels[c].floor = end + tm.wtr + tm.cl;
+        q.clear();
+        self.channels[c].wq = q;
+    }
+
+    /// Performs the refreshes due by the channel's frontier (the later of `t` and its data
+    /// bus): a refresh waits for the data already scheduled (LPDDR4 lets a controller postpone
+    /// refreshes), then blocks the channel for `tRFCab` and closes every row.
+    fn refresh_until(&mut self, c: usize, t: Ps) {
+        let tm = self.t;
+        let ch = &mut self.channels[c];
+        while ch.next_ref <= t.max(ch.bus_free) {
+            let start = ch.next_ref.max(ch.bus_free).max(ch.blocked_until);
+            ch.blocked_until = start + tm.rfc;
+            ch.floor = ch.floor.max(ch.blocked_until);
+            for b in ch.banks.iter_mut() {
+                b.open = CLOSED;
+            }
+            ch.next_ref += tm.refi;
+            self.stats.refreshes += 1;
+        }
+    }
+
+    /// One request on channel `c`; returns the end of its data on the bus.
+    fn access(&mut self, t: Ps, c: usize, b: usize, row: u32, write: bool) -> Ps {
+        self.refresh_until(c, t);
+        let tm = self.t;
+        let ch = &mut self.channels[c];
+        let t = t.max(ch.blocked_until);
+        let bank = &mut ch.banks[b];
+        let col_ready = if bank.open == row {
+            self.stats.row_hits += 1;
+            t.max(bank.act + tm.rcd)
+        } else {
+            let mut act = t;
+            if bank.open != CLOSED {
+                self.stats.row_conflicts += 1;
+                let pre = t.max(bank.act + tm.ras).max(bank.rd_col + tm.rtp).max(bank.wr_end + tm.wr);
+                act = act.max(pre + tm.rp);
+            } else {
+                self.stats.row_misses += 1;
+            }
+            if bank.activated {
+                act = act.max(bank.act + tm.rc);
+            }
+            act = act_slot(&mut ch.acts, act, t, tm.rrd, tm.faw);
+            bank.activated = true;
+            bank.open = row;
+            bank.act = act;
+            act + tm.rcd
+        };
+        let lat = if write { tm.cwl } else { tm.cl };
+        let ready = (col_ready + lat).max(ch.floor);
+        // Earliest free burst slot at or after `ready`.
+        while ch.busy.front().is_some_and(|&(_, e)| e <= t) {
+            ch.busy.pop_front();
+        }
+        let mut start = ready;
+        let mut pos = ch.busy.len();
+        for (i, &(s, e)) in ch.busy.iter().enumerate() {
+            if e <= start {
+                continue;
+            }
+            if s >= start + tm.bl {
+                pos = i;
+                break;
+            }
+            start = e;
+        }
+        let end = start + tm.bl;
+        ch.busy.insert(pos, (start, end));
+        ch.bus_free = ch.bus_free.max(end);
+        let col = start - lat;
+        if write {
+            bank.wr_end = bank.wr_end.max(end);
+        } else {
+            bank.rd_col = bank.rd_col.max(col);
+        }
+        self.stats.last_data_ps = self.stats.last_data_ps.max(end);
+        end
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn gbs(bytes: u64, ps: Ps) -> f64 {
+        bytes as f64 / (ps as f64 * 1e-12) / 1e9
+    }
+
+    /// Streams `n` reads with at most `window` outstanding; returns the achieved GB/s.
+    fn run(d: &mut Dram, addrs: impl Iterator<Item = u64>, window: usize) -> f64 {
+        let mut inflight = std::collections::VecDeque::new();
+        let mut t = 0;
+        let mut n = 0u64;
+        let mut last = 0;
+        for a in addrs {
+            if inflight.len() == window {
+                t = t.max(inflight.pop_front().unwrap());
+            }
+            let done = d.read(t, a);
+            last = last.max(done);
+            inflight.push_back(done);
+            n += 1;
+        }
+        gbs(n * 64, last)
+    }
+
+    #[test]
+    fn mapping_interleaves_channels_then_columns() {
+        let d = Dram::new(&DramConfig::default());
+        assert_eq!(d.map(0), (0, 0, 0));
+        assert_eq!(d.map(64), (1, 0, 0));
+        assert_eq!(d.map(4 * 64), (0, 0, 0));
+        // 4 channels x 4 KB rows: the next bank after 16 KB, the next row after 128 KB.
+        assert_eq!(d.map(16 * 1024), (0, 1, 0));
+        // Row 1 of bank 0 is XORed onto bank 1.
+        assert_eq!(d.map(128 * 1024), (0, 1, 1));
+        assert_eq!(d.map(128 * 1024 + 16 * 1024), (0, 0, 1));
+    }
+
+    #[test]
+    fn streaming_reaches_most_of_peak_and_random_about_half() {
+        let cfg = DramConfig::default();
+        let mut d = Dram::new(&cfg);
+        let stream = run(&mut d, (0..200_000u64).map(|i| i * 64), 64);
+        assert!(d.stats().row_hit_rate() > 0.95);
+        let mut d = Dram::new(&cfg);
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let random = run(
+            &mut d,
+            (0..200_000).map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                (x % (1 << 30)) & !63
+            }),
+            64,
+        );
+        assert!(d.stats().row_hit_rate() < 0.05);
+        // Peak 51.2; refresh costs 288/6247 = 4.6%.
+        assert!(stream > 0.88 * 51.2 && stream < 51.2, "stream {stream}");
+        // tFAW: 4 activates per 40 ns per channel = 25.6 GB/s at most.
+        eprintln!("stream {stream:.2} GB/s, random {random:.2} GB/s");
+        assert!(random > 0.3 * 51.2 && random < 0.5 * 51.2, "random {random}");
+    }
+
+    #[test]
+    fn ideal_memory_answers_after_a_fixed_latency() {
+        let mut d = Dram::ideal(64, 1000);
+        assert_eq!(d.read(5, 0), 1005);
+        d.write(7, 64);
+        assert_eq!(d.stats().reads + d.stats().writes, 2);
+    }
+
+    #[test]
+    fn writes_are_posted_and_drained() {
+        let mut d = Dram::new(&DramConfig::default());
+        for i in 0..400u64 {
+            d.write(i, i * 64);
+        }
+        // 100 writes per channel, drained every 32.
+        assert_eq!(d.stats().drains, 12);
+        let end = d.flush(1000);
+        assert!(end > 100 * 5000, "100 bursts of 5 ns per channel: {end}");
+        assert_eq!(d.stats().writes, 400);
+        // A read after the drain waits for the write-to-read turnaround.
+        let r = d.read(1000, 0);
+        assert!(r >= end, "read {r} before the drain ended {end}");
+    }
+}

@@ -1,0 +1,453 @@
+//! Unit timing measured on the RTL, read from `reports/latency.json` (schema `neo-latency/1`,
+//! written by the test bench from cosimulation; see `tb/src/latency.rs`).
+//!
+//! Nothing here is typed in: every sorting-core cycle count the model uses is a measured point
+//! of the file or an interpolation between measured points, as follows.
+//!
+//! - **SORT / DPS of one chunk of `n` entries**: the measured `cycles` when `n` is listed.
+//!   Otherwise `T(n) = ii * n * (1 + p(n)) + c(n)`, where `p(n) = ceil(log2(ceil(n / w)))` is
+//!   the number of in-chunk merge passes (`w` = `config.bsu_width`, `ii` = `units.neo_msu.ii`):
+//!   the load streams `n` entries and every pass streams `n` entries through the MSU+, one per
+//!   `ii` cycles. The remainder `c(n) = cycles - ii n (1 + p(n))` (BSU fill, merge gaps, command
+//!   overhead) is interpolated linearly in `n` between the two nearest measured points
+//!   (extrapolated from the last two beyond the largest one).
+//! - **MERGE / MERGE_DELETE of streams `a` and `b`**: `T = in + c`, `in = a + b`, where the
+//!   overhead `c` is interpolated linearly in `in` over the measured points of the same mode with
+//!   both streams non-empty, and, when one stream is empty (a copy), over the points with an
+//!   empty stream (falling back to the two-stream points when there are none); `c` per entry
+//!   is kept from the nearest point beyond the measured range.
+//! - **Raster units**: the optional `raster` section (written when the raster core is measured):
+//!   `raster.itu.{ii, latency}`, `raster.scu.{cycles_per_pair, latency}`,
+//!   `raster.core.tile_overhead`. Fields present replace the assumed values of
+//!   [`crate::config::RasterTiming`]; [`RasterSource`] records which.
+
+use serde::Serialize;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+use crate::config::RasterTiming;
+use neo_golden::error::{InputError, InputResult};
+
+/// The schema this reader understands.
+pub const SCHEMA: &str = "neo-latency/1";
+
+/// The default location, relative to the project root.
+pub const DEFAULT_PATH: &str = "reports/latency.json";
+
+/// One measured chunk command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct ChunkPoint {
+    /// Entries in the chunk.
+    pub entries: u64,
+    /// Measured cycles.
+    pub cycles: u64,
+}
+
+/// One measured merge command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct MergePoint {
+    /// Entries of stream A.
+    pub len_a: u64,
+    /// Entries of stream B.
+    pub len_b: u64,
+    /// Measured cycles.
+    pub cycles: u64,
+}
+
+/// Where the raster-core timing came from.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub enum RasterSource {
+    /// No `raster` section: every raster number is assumed, not measured.
+    Assumed,
+    /// From `latency.json`; the listed fields were measured, the others assumed.
+    Measured {
+        /// Fields read from the file (e.g. `scu.cycles_per_pair`).
+        fields: Vec<String>,
+    },
+}
+
+impl RasterSource {
+    /// A one-line label for reports.
+    pub fn label(&self) -> String {
+        match self {
+            RasterSource::Assumed => "raster-core timing ASSUMED, not measured (no `raster` section in latency.json)".into(),
+            RasterSource::Measured { fields } if fields.len() == 5 => {
+                "raster-core timing measured (latency.json `raster`)".into()
+            }
+            RasterSource::Measured { fields } => format!(
+                "raster-core timing partly measured ({} from latency.json `raster`), the rest ASSUMED",
+                fields.join(", ")
+            ),
+        }
+    }
+}
+
+/// Chunk command kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChunkMode {
+    /// Conventional SORT of one chunk.
+    Sort,
+    /// DPS of one chunk.
+    Dps,
+}
+
+/// The measured timing the model uses.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Latency {
+    /// The file read.
+    pub source: PathBuf,
+    /// BSU width (entries per vector) of the measured RTL.
+    pub bsu_width: u64,
+    /// Chunk size of the measured RTL.
+    pub chunk: u64,
+    /// Read burst in entries.
+    pub burst: u64,
+    /// Outstanding read bursts of the sorting core.
+    pub max_outstanding: u64,
+    /// MSU+ initiation interval (cycles per output entry).
+    pub msu_ii: f64,
+    /// BSU latency.
+    pub bsu_latency: u64,
+    /// Cycles from accepting a zero-length command to `done_o`.
+    pub command_overhead: u64,
+    /// SORT points, ascending entries.
+    pub conventional: Vec<ChunkPoint>,
+    /// DPS points, ascending entries.
+    pub dps: Vec<ChunkPoint>,
+    /// MERGE points.
+    pub merge: Vec<MergePoint>,
+    /// MERGE_DELETE points (every fourth entry invalid).
+    pub merge_delete: Vec<MergePoint>,
+    /// Raster timing: measured fields over the assumed defaults.
+    pub raster: RasterTiming,
+    /// Where the raster timing came from.
+    pub raster_source: RasterSource,
+}
+
+fn num(v: &Value, path: &str) -> Result<f64, String> {
+    let mut cur = v;
+    for k in path.split('.') {
+        cur = cur.get(k).ok_or_else(|| format!("missing `{path}`"))?;
+    }
+    cur.as_f64().ok_or_else(|| format!("`{path}` is not a number"))
+}
+
+fn int(v: &Value, path: &str) -> Result<u64, String> {
+    let x = num(v, path)?;
+    if x < 0.0 || x.fract() != 0.0 || x > 1e15 {
+        return Err(format!("`{path}` = {x}: expected a non-negative integer"));
+    }
+    Ok(x as u64)
+}
+
+fn chunk_points(v: &Value, key: &str) -> Result<Vec<ChunkPoint>, String> {
+    let arr = v
+        .get("sort_core")
+        .and_then(|s| s.get(key))
+        .and_then(Value::as_array)
+        .ok_or_else(|| format!("missing array `sort_core.{key}`"))?;
+    let mut out = Vec::with_capacity(arr.len());
+    for (i, p) in arr.iter().enumerate() {
+        let e = |f: &str| int(p, f).map_err(|m| format!("sort_core.{key}[{i}]: {m}"));
+        out.push(ChunkPoint { entries: e("entries")?, cycles: e("cycles")? });
+    }
+    out.sort_by_key(|p| p.entries);
+    out.dedup_by_key(|p| p.entries);
+    if out.iter().filter(|p| p.entries > 0).count() < 2 {
+        return Err(format!("`sort_core.{key}` needs at least two measured chunk sizes"));
+    }
+    Ok(out)
+}
+
+fn merge_points(v: &Value, key: &str) -> Result<Vec<MergePoint>, String> {
+    let arr = v
+        .get("sort_core")
+        .and_then(|s| s.get(key))
+        .and_then(Value::as_array)
+        .ok_or_else(|| format!("missing array `sort_core.{key}`"))?;
+    let mut out = Vec::with_capacity(arr.len());
+    for (i, p) in arr.iter().enumerate() {
+        let e = |f: &str| int(p, f).map_err(|m| format!("sort_core.{key}[{i}]: {m}"));
+        out.push(MergePoint { len_a: e("len_a")?, len_b: e("len_b")?, cycles: e("cycles")? });
+    }
+    if out.iter().filter(|p| p.len_a > 0 && p.len_b > 0).count() < 2 {
+        return Err(format!("`sort_core.{key}` needs at least two measured merges of two non-empty streams"));
+    }
+    Ok(out)
+}
+
+/// Linear interpolation of `y` at `x` over points sorted by `x` (extrapolating from the two
+/// nearest at either end).
+fn interp(points: &[(f64, f64)], x: f64) -> f64 {
+    debug_assert!(points.len() >= 2);
+    let i = points.partition_point(|p| p.0 <= x).clamp(1, points.len() - 1);
+    let (x0, y0) = points[i - 1];
+    let (x1, y1) = points[i];
+    if x1 == x0 {
+        return y0;
+    }
+    y0 + (y1 - y0) * (x - x0) / (x1 - x0)
+}
+
+impl Latency {
+    /// Reads and checks `path`.
+    pub fn from_file(path: &Path) -> InputResult<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::new(path, e.to_string()))?;
+        Self::from_json_str(&text, path)
+    }
+
+    /// Parses the document `text` (named `path` in errors).
+    pub fn from_json_str(text: &str, path: &Path) -> InputResult<Self> {
+        let v: Value = serde_json::from_str(text).map_err(|e| InputError::new(path, format!("not JSON: {e}")))?;
+        Self::from_value(&v, path).map_err(|e| InputError::new(path, e))
+    }
+
+    fn from_value(v: &Value, path: &Path) -> Result<Self, String> {
+        match v.get("schema").and_then(Value::as_str) {
+            Some(SCHEMA) => {}
+            Some(s) => return Err(format!("schema '{s}', expected '{SCHEMA}'")),
+            None => return Err(format!("missing `schema` (expected '{SCHEMA}')")),
+        }
+        let bsu_width = int(v, "config.bsu_width")?;
+        if bsu_width == 0 {
+            return Err("`config.bsu_width` must be positive".into());
+        }
+        let msu_ii = num(v, "units.neo_msu.ii")?;
+        if !(msu_ii > 0.0) {
+            return Err("`units.neo_msu.ii` must be positive".into());
+        }
+        let (raster, raster_source) = raster_timing(v)?;
+        Ok(Latency {
+            source: path.to_path_buf(),
+            bsu_width,
+            chunk: int(v, "config.chunk")?,
+            burst: int(v, "config.burst")?,
+            max_outstanding: int(v, "config.max_outstanding")?,
+            msu_ii,
+            bsu_latency: int(v, "units.neo_bsu.latency")?,
+            command_overhead: int(v, "units.neo_sort_core.command_overhead")?,
+            conventional: chunk_points(v, "conventional")?,
+            dps: chunk_points(v, "dps")?,
+            merge: merge_points(v, "merge")?,
+            merge_delete: merge_points(v, "merge_delete")?,
+            raster,
+            raster_source,
+        })
+    }
+
+    /// In-chunk merge passes of an `n`-entry chunk.
+    pub fn passes(&self, n: u64) -> u64 {
+        let vectors = n.div_ceil(self.bsu_width);
+        if vectors <= 1 {
+            0
+        } else {
+            64 - (vectors - 1).leading_zeros() as u64
+        }
+    }
+
+    fn structural(&self, n: u64) -> f64 {
+        self.msu_ii * n as f64 * (1 + self.passes(n)) as f64
+    }
+
+    /// Cycles of one SORT or DPS command on an `n`-entry chunk (0 for an empty chunk: no
+    /// command is issued). See the module docs for the interpolation.
+    pub fn chunk_cycles(&self, mode: ChunkMode, n: u64) -> u64 {
+        if n == 0 {
+            return 0;
+        }
+        let pts = match mode {
+            ChunkMode::Sort => &self.conventional,
+            ChunkMode::Dps => &self.dps,
+        };
+        if let Some(p) = pts.iter().find(|p| p.entries == n) {
+            return p.cycles;
+        }
+        let rem: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|p| p.entries > 0)
+            .map(|p| (p.entries as f64, p.cycles as f64 - self.structural(p.entries)))
+            .collect();
+        let c = interp(&rem, n as f64);
+        (self.structural(n) + c).round().max(1.0) as u64
+    }
+
+    /// Cycles of a MERGE (`drop_invalid = false`) or MERGE_DELETE command of streams of `a` and
+    /// `b` entries. See the module docs for the interpolation.
+    pub fn merge_cycles(&self, a: u64, b: u64, drop_invalid: bool) -> u64 {
+        let pts = if drop_invalid { &self.merge_delete } else { &self.merge };
+        if let Some(p) = pts.iter().find(|p| p.len_a == a && p.len_b == b) {
+            return p.cycles;
+        }
+        let n = a + b;
+        let copy = a == 0 || b == 0;
+        let select = |want_copy: bool| -> Vec<(f64, f64)> {
+            let mut v: Vec<(f64, f64)> = pts
+                .iter()
+                .filter(|p| p.len_a + p.len_b > 0 && ((p.len_a == 0 || p.len_b == 0) == want_copy))
+                .map(|p| ((p.len_a + p.len_b) as f64, p.cycles as f64 - (p.len_a + p.len_b) as f64))
+                .collect();
+            v.sort_by(|x, y| x.0.total_cmp(&y.0));
+            v.dedup_by(|x, y| x.0 == y.0);
+            v
+        };
+        let mut pts2 = if copy { select(true) } else { Vec::new() };
+        if pts2.is_empty() {
+            pts2 = select(false);
+        }
+        let zero = pts.iter().find(|p| p.len_a + p.len_b == 0).map(|p| p.cycles);
+        if n == 0 {
+            return zero.unwrap_or(self.command_overhead.max(1));
+        }
+        let x = n as f64;
+        let c = if pts2.len() == 1 {
+            pts2[0].1 / pts2[0].0 * x
+        } else if x > pts2.last().map_or(0.0, |p| p.0) {
+            let last = pts2[pts2.len() - 1];
+            last.1 / last.0 * x
+        } else if x < pts2[0].0 {
+            // Between the empty merge (if measured) and the smallest point.
+            let (x1, c1) = pts2[0];
+            let c0 = zero.map_or(0.0, |z| z as f64);
+            c0 + (c1 - c0) * x / x1
+        } else {
+            interp(&pts2, x)
+        };
+        (x + c).round().max(1.0) as u64
+    }
+}
+
+/// The raster section, when present: measured fields over the assumed defaults.
+fn raster_timing(v: &Value) -> Result<(RasterTiming, RasterSource), String> {
+    let mut t = RasterTiming::default();
+    let Some(r) = v.get("raster") else {
+        return Ok((t, RasterSource::Assumed));
+    };
+    if !r.is_object() {
+        return Err("`raster` must be an object".into());
+    }
+    let mut fields = Vec::new();
+    let mut get = |path: &str| -> Result<Option<f64>, String> {
+        let mut cur = r;
+        for k in path.split('.') {
+            match cur.get(k) {
+                Some(x) => cur = x,
+                None => return Ok(None),
+            }
+        }
+        let x = cur.as_f64().ok_or_else(|| format!("`raster.{path}` is not a number"))?;
+        if !(x >= 0.0 && x.is_finite()) {
+            return Err(format!("`raster.{path}` = {x}: must be non-negative"));
+        }
+        fields.push(path.to_string());
+        Ok(Some(x))
+    };
+    if let Some(x) = get("itu.ii")? {
+        t.itu_ii = x;
+    }
+    if let Some(x) = get("itu.latency")? {
+        t.itu_latency = x as u64;
+    }
+    if let Some(x) = get("scu.cycles_per_pair")? {
+        t.scu_cycles_per_pair = x;
+    }
+    if let Some(x) = get("scu.latency")? {
+        t.scu_latency = x as u64;
+    }
+    if let Some(x) = get("core.tile_overhead")? {
+        t.tile_overhead = x as u64;
+    }
+    if fields.is_empty() {
+        return Err(
+            "`raster` has none of itu.ii, itu.latency, scu.cycles_per_pair, scu.latency, core.tile_overhead \
+             (see docs/cycle-model.md)"
+                .into(),
+        );
+    }
+    if t.itu_ii <= 0.0 || t.scu_cycles_per_pair <= 0.0 {
+        return Err("`raster.itu.ii` and `raster.scu.cycles_per_pair` must be positive".into());
+    }
+    Ok((t, RasterSource::Measured { fields }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn project_file() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(DEFAULT_PATH)
+    }
+
+    #[test]
+    fn measured_points_are_returned_exactly() {
+        let l = Latency::from_file(&project_file()).unwrap();
+        for p in &l.conventional {
+            assert_eq!(l.chunk_cycles(ChunkMode::Sort, p.entries), if p.entries == 0 { 0 } else { p.cycles });
+        }
+        for p in &l.dps {
+            assert_eq!(l.chunk_cycles(ChunkMode::Dps, p.entries), if p.entries == 0 { 0 } else { p.cycles });
+        }
+        for p in &l.merge {
+            assert_eq!(l.merge_cycles(p.len_a, p.len_b, false), p.cycles);
+        }
+        for p in &l.merge_delete {
+            assert_eq!(l.merge_cycles(p.len_a, p.len_b, true), p.cycles);
+        }
+    }
+
+    #[test]
+    fn interpolation_is_monotone_and_between_neighbours() {
+        let l = Latency::from_file(&project_file()).unwrap();
+        let mut last = 0;
+        for n in 1..=l.chunk {
+            let c = l.chunk_cycles(ChunkMode::Sort, n);
+            assert!(c >= last, "SORT cycles not monotone at {n}: {c} < {last}");
+            assert!(c as f64 >= l.msu_ii * n as f64, "a chunk cannot beat one entry per cycle");
+            last = c;
+        }
+        let mut last = 0;
+        for n in (0..3000).step_by(7) {
+            let c = l.merge_cycles(n / 2, n - n / 2, false);
+            assert!(c >= last && c >= n, "MERGE cycles at {n}: {c}");
+            last = c;
+        }
+        assert!(l.merge_cycles(1000, 0, true) >= 1000);
+    }
+
+    #[test]
+    fn errors_name_the_file_and_field() {
+        let p = Path::new("lat.json");
+        let bad = |s: &str| Latency::from_json_str(s, p).unwrap_err().to_string();
+        assert!(bad("{").contains("lat.json: not JSON"));
+        assert!(bad(r#"{"schema": "x"}"#).contains("schema 'x'"));
+        let text = std::fs::read_to_string(project_file()).unwrap();
+        let mut v: Value = serde_json::from_str(&text).unwrap();
+        v["units"]["neo_msu"].as_object_mut().unwrap().remove("ii");
+        assert!(bad(&v.to_string()).contains("units.neo_msu.ii"));
+        let mut v: Value = serde_json::from_str(&text).unwrap();
+        v["raster"] = serde_json::json!({"scu": {"cycles_per_pair": 2.5}});
+        let l = Latency::from_json_str(&v.to_string(), p).unwrap();
+        assert_eq!(l.raster.scu_cycles_per_pair, 2.5);
+        assert_eq!(l.raster_source, RasterSource::Measured { fields: vec!["scu.cycles_per_pair".into()] });
+        v["raster"] = serde_json::json!({"other": 1});
+        assert!(bad(&v.to_string()).contains("raster"));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn never_panics_on_mutated_documents(cut in 0usize..6000, byte in 0u8..128) {
+            let text = std::fs::read_to_string(project_file()).unwrap();
+            let mut b = text.into_bytes();
+            if cut < b.len() {
+                b[cut] = byte;
+            }
+            let s = String::from_utf8_lossy(&b);
+            if let Ok(l) = Latency::from_json_str(&s, Path::new("x.json")) {
+                for n in [0u64, 1, 17, 200, 256, 300] {
+                    let _ = l.chunk_cycles(ChunkMode::Sort, n);
+                    let _ = l.merge_cycles(n, n / 3, true);
+                    let _ = l.merge_cycles(n, 0, false);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,303 @@
+//! Running an architecture on a workload and summarising the result.
+
+use serde::Serialize;
+use std::time::Instant;
+
+use crate::arch::{Accel, Model, CLASS_PRE, CLASS_RASTER, CLASS_SORT};
+use crate::config::SimConfig;
+use crate::dram::{Dram, DramStats};
+use crate::engine::Engine;
+use crate::gpu;
+use crate::latency::Latency;
+use crate::traffic::{Stage, Traffic};
+use crate::workload::Workload;
+
+/// An architecture to evaluate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+pub enum Arch {
+    /// Neo running the workload's strategy.
+    Neo,
+    /// GSCore-style with this many cores.
+    Gscore(u32),
+    /// GPU-style (Orin-AGX-like).
+    Gpu,
+}
+
+impl Arch {
+    /// Name in tables and JSON: `neo`, `gscore4`, `gscore16`, `gpu`.
+    pub fn name(&self) -> String {
+        match self {
+            Arch::Neo => "neo".into(),
+            Arch::Gscore(c) => format!("gscore{c}"),
+            Arch::Gpu => "gpu".into(),
+        }
+    }
+
+    /// Parses `neo`, `gscore` (every configured core count), `gscoreN`, `gpu` or `all`,
+    /// comma-separated.
+    pub fn parse_list(s: &str, cfg: &SimConfig) -> Result<Vec<Arch>, String> {
+        let mut v = Vec::new();
+        for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            match part {
+                "neo" => v.push(Arch::Neo),
+                "gpu" => v.push(Arch::Gpu),
+                "gscore" => v.extend(cfg.gscore.core_counts.iter().map(|&c| Arch::Gscore(c))),
+                "all" => {
+                    v.push(Arch::Neo);
+                    v.extend(cfg.gscore.core_counts.iter().map(|&c| Arch::Gscore(c)));
+                    v.push(Arch::Gpu);
+                }
+                other => match other.strip_prefix("gscore").map(str::parse::<u32>) {
+                    Some(Ok(c)) if c > 0 => v.push(Arch::Gscore(c)),
+                    _ => return Err(format!("unknown architecture '{other}' (expected neo, gscore, gscoreN, gpu or all)")),
+                },
+            }
+        }
+        if v.is_empty() {
+            return Err("no architecture given".into());
+        }
+        let mut seen = std::collections::HashSet::new();
+        v.retain(|a| seen.insert(*a));
+        Ok(v)
+    }
+}
+
+/// One frame's result.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct FrameResult {
+    /// Frame index.
+    pub frame: usize,
+    /// Preprocessing start (ms from the start of the run).
+    pub pre_start_ms: f64,
+    /// Preprocessing end.
+    pub pre_done_ms: f64,
+    /// Last sort end.
+    pub sort_done_ms: f64,
+    /// Frame complete.
+    pub done_ms: f64,
+    /// `done - pre_start`.
+    pub latency_ms: f64,
+    /// Time since the previous frame completed (frame 0: its latency).
+    pub interval_ms: f64,
+    /// DRAM bytes caused by this frame's jobs.
+    pub dram_bytes: u64,
+    /// Of which sorting stages.
+    pub sort_bytes: u64,
+    /// Every tile sorted from scratch.
+    pub from_scratch: bool,
+}
+
+/// Utilisation of each engine over the run (busy time / (agents x run time)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Utilisation {
+    /// Preprocessing engine.
+    pub preprocess: f64,
+    /// Sorting cores.
+    pub sort: f64,
+    /// Raster cores.
+    pub raster: f64,
+    /// DRAM data bus: bytes moved / (peak x run time).
+    pub dram: f64,
+}
+
+/// One architecture on one workload.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ArchResult {
+    /// Architecture name.
+    pub arch: String,
+    /// Strategy the workload ran (the sort GSCore and the GPU use is their own).
+    pub strategy: String,
+    /// Frames.
+    pub frames: Vec<FrameResult>,
+    /// Throughput: 1000 / mean frame interval (frames after the first).
+    pub fps: f64,
+    /// Mean frame interval (ms).
+    pub frame_ms_mean: f64,
+    /// 99th percentile frame interval (ms, nearest rank).
+    pub frame_ms_p99: f64,
+    /// Largest frame interval (ms).
+    pub frame_ms_max: f64,
+    /// Mean latency (ms).
+    pub latency_ms_mean: f64,
+    /// End of the run (ms).
+    pub total_ms: f64,
+    /// Traffic of the whole run.
+    pub traffic: Traffic,
+    /// DRAM counters (accelerators).
+    pub dram: Option<DramStats>,
+    /// Engine utilisation (accelerators).
+    pub utilisation: Option<Utilisation>,
+    /// Where the raster timing came from.
+    pub raster_timing: String,
+    /// Wall-clock seconds of the model.
+    pub model_s: f64,
+}
+
+impl ArchResult {
+    /// DRAM bytes per 60 frames of `stage` (the paper's Fig. 16 unit), in GB.
+    pub fn gb_per_60(&self, stage: Option<Stage>) -> f64 {
+        let n = self.frames.len().max(1) as f64;
+        let b = match stage {
+            Some(s) => self.traffic.stage_bytes(s),
+            None => self.traffic.total_bytes(),
+        };
+        b as f64 * 60.0 / n / 1e9
+    }
+}
+
+/// How to run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RunOptions {
+    /// An ideal memory (one cycle, no bandwidth limit) instead of the DRAM model.
+    pub ideal_memory: bool,
+}
+
+fn percentile(v: &[f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let k = ((q * s.len() as f64).ceil() as usize).clamp(1, s.len());
+    s[k - 1]
+}
+
+fn summarise(arch: String, strategy: String, mut frames: Vec<FrameResult>) -> (Vec<FrameResult>, f64, f64, f64, f64, f64) {
+    let mut last = 0.0;
+    for (i, f) in frames.iter_mut().enumerate() {
+        f.latency_ms = f.done_ms - f.pre_start_ms;
+        f.interval_ms = if i == 0 { f.latency_ms } else { f.done_ms - last };
+        last = f.done_ms;
+    }
+    let _ = (arch, strategy);
+    let steady: Vec<f64> =
+        if frames.len() > 1 { frames[1..].iter().map(|f| f.interval_ms).collect() } else { vec![frames[0].interval_ms] };
+    let mean = steady.iter().sum::<f64>() / steady.len() as f64;
+    let p99 = percentile(&steady, 0.99);
+    let max = steady.iter().copied().fold(0.0, f64::max);
+    let lat = frames.iter().map(|f| f.latency_ms).sum::<f64>() / frames.len() as f64;
+    (frames, mean, p99, max, lat, if mean > 0.0 { 1000.0 / mean } else { 0.0 })
+}
+
+/// Runs `arch` on `wl`.
+pub fn simulate(arch: Arch, cfg: &SimConfig, lat: &Latency, wl: &Workload, opt: RunOptions) -> Result<ArchResult, String> {
+    if wl.frames.is_empty() {
+        return Err("the workload has no frames".into());
+    }
+    let t0 = Instant::now();
+    let (w, h) = (wl.info.width, wl.info.height);
+    match arch {
+        Arch::Gpu => {
+            let mut traffic = Traffic::new(cfg.dram.line_bytes as u64);
+            let mut frames = Vec::with_capacity(wl.frames.len());
+            let mut t = 0.0;
+            for fw in &wl.frames {
+                let g = gpu::frame(cfg, fw, w, h);
+                let ms = g.total_s() * 1e3;
+                frames.push(FrameResult {
+                    frame: fw.frame,
+                    pre_start_ms: t,
+                    pre_done_ms: t + g.kernel_s[0] * 1e3,
+                    sort_done_ms: t + (g.kernel_s[0] + g.kernel_s[1] + g.kernel_s[2] + g.kernel_s[3]) * 1e3,
+                    done_ms: t + ms,
+                    dram_bytes: g.traffic.total_bytes(),
+                    sort_bytes: g.traffic.sorting_bytes(),
+                    from_scratch: true,
+                    ..FrameResult::default()
+                });
+                t += ms;
+                traffic.merge(&g.traffic);
+            }
+            let (frames, mean, p99, max, latm, fps) = summarise(arch.name(), wl.info.strategy.clone(), frames);
+            Ok(ArchResult {
+                arch: arch.name(),
+                strategy: "radix (from scratch)".into(),
+                frames,
+                fps,
+                frame_ms_mean: mean,
+                frame_ms_p99: p99,
+                frame_ms_max: max,
+                latency_ms_mean: latm,
+                total_ms: t,
+                traffic,
+                dram: None,
+                utilisation: None,
+                raster_timing: "GPU rates ASSUMED (config gpu.*)".into(),
+                model_s: t0.elapsed().as_secs_f64(),
+            })
+        }
+        Arch::Neo | Arch::Gscore(_) => {
+            let accel = match arch {
+                Arch::Gscore(c) => Accel::Gscore { cores: c },
+                _ => Accel::Neo,
+            };
+            let model = Model::new(accel, cfg, lat, wl)?;
+            let line = cfg.dram.line_bytes as u64;
+            let dram = if opt.ideal_memory { Dram::ideal(cfg.dram.line_bytes, cfg.cycle_ps().round() as u64) } else { Dram::new(&cfg.dram) };
+            let agents = model.agents();
+            let mut engine = Engine::new(dram, line, agents, wl.frames.len());
+            let mut sched = model.scheduler();
+            let end = engine.run(&mut sched);
+            let ms = |p: u64| p as f64 / 1e9;
+            let frames: Vec<FrameResult> = sched
+                .times()
+                .iter()
+                .enumerate()
+                .map(|(i, t)| FrameResult {
+                    frame: wl.frames[i].frame,
+                    pre_start_ms: ms(t.pre_start),
+                    pre_done_ms: ms(t.pre_done),
+                    sort_done_ms: ms(t.sort_done),
+                    done_ms: ms(t.done),
+                    dram_bytes: engine.frame_traffic[i].total_bytes(),
+                    sort_bytes: engine.frame_traffic[i].sorting_bytes(),
+                    from_scratch: wl.frames[i].from_scratch,
+                    ..FrameResult::default()
+                })
+                .collect();
+            let (frames, mean, p99, max, latm, fps) = summarise(arch.name(), wl.info.strategy.clone(), frames);
+            let stats = engine.agent_stats();
+            let util = |class: u8| {
+                let (busy, n) = stats
+                    .iter()
+                    .filter(|s| s.class == class)
+                    .fold((0u64, 0u64), |(b, n), s| (b + s.busy_ps, n + 1));
+                if n == 0 || end == 0 {
+                    0.0
+                } else {
+                    busy as f64 / (n as f64 * end as f64)
+                }
+            };
+            let dstats = engine.dram().stats();
+            let dram_util = if end == 0 {
+                0.0
+            } else {
+                engine.traffic.total_bytes() as f64 / (cfg.dram.peak_bytes_per_s() * end as f64 * 1e-12)
+            };
+            Ok(ArchResult {
+                arch: arch.name(),
+                strategy: match accel {
+                    Accel::Neo => wl.info.strategy.clone(),
+                    Accel::Gscore { .. } => "hierarchical (from scratch)".into(),
+                },
+                frames,
+                fps,
+                frame_ms_mean: mean,
+                frame_ms_p99: p99,
+                frame_ms_max: max,
+                latency_ms_mean: latm,
+                total_ms: ms(end),
+                traffic: engine.traffic.clone(),
+                dram: (!opt.ideal_memory).then_some(dstats),
+                utilisation: Some(Utilisation {
+                    preprocess: util(CLASS_PRE),
+                    sort: util(CLASS_SORT),
+                    raster: util(CLASS_RASTER),
+                    dram: dram_util,
+                }),
+                raster_timing: lat.raster_source.label(),
+                model_s: t0.elapsed().as_secs_f64(),
+            })
+        }
+    }
+}

@@ -1,0 +1,375 @@
+//! The SCU test bench: subtile lists through `neo_scu` under random input stalls and output
+//! backpressure, every pixel of every list checked against golden
+//! [`neo_golden::raster::shade_pixel`] (the per-pixel definition of the SCU arithmetic), plus the
+//! latency / II measurement for `reports/latency.json`.
+//!
+//! Driver ([`Source`] on the Gaussian beat ports), golden ([`golden_pixels`]) and checker
+//! ([`Checker`], per pixel and channel) are separate. A list of `n >= 1` Gaussians is `n` beats
+//! with `last` on the final one; an empty list is one `empty`, `last` beat; the origin and the
+//! inside columns / rows ride on every beat but only the first beat's count.
+
+use crate::bits::get_bits;
+use crate::check::Checker;
+use crate::dut::Dut;
+use crate::models::NeoScu;
+use crate::rng::Rng;
+use crate::stream::{Beat, Sink, Source};
+use neo_gen::GenConfig;
+use neo_golden::formats::feature::{quantize, FeatureEntry, FeatureFormat};
+use neo_golden::raster::synth::{cov_from_axes, projected_from_cov};
+use neo_golden::raster::{shade_pixel, RasterConfig};
+use neo_golden::sort::DepthKeyCodec;
+use std::collections::VecDeque;
+
+/// One subtile's work: its top-left pixel, the columns / rows inside the image, and the routed
+/// Gaussians in table order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScuList {
+    /// Top-left pixel `[x, y]`.
+    pub origin: [u32; 2],
+    /// Columns inside the image (0..=side).
+    pub cols: u32,
+    /// Rows inside the image (0..=side).
+    pub rows: u32,
+    /// The Gaussians.
+    pub entries: Vec<FeatureEntry>,
+}
+
+/// What a run did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScuRun {
+    /// Lists checked.
+    pub lists: usize,
+    /// Gaussians sent.
+    pub gaussians: usize,
+    /// Cycles from the end of reset to the last output.
+    pub cycles: u64,
+    /// Cycles in which `term_o` was high.
+    pub term_cycles: u64,
+}
+
+/// The input data ports, in beat order.
+const IN_PORTS: [&str; 16] = [
+    "in_mean_x_i",
+    "in_mean_y_i",
+    "in_conic_a_i",
+    "in_conic_b_i",
+    "in_conic_c_i",
+    "in_conic_exp_i",
+    "in_opacity_i",
+    "in_red_i",
+    "in_green_i",
+    "in_blue_i",
+    "in_empty_i",
+    "in_last_i",
+    "in_origin_x_i",
+    "in_origin_y_i",
+    "in_cols_i",
+    "in_rows_i",
+];
+
+/// The beat of Gaussian `e` (None: an empty beat) of a list.
+fn beat(e: Option<&FeatureEntry>, list: &ScuList, last: bool) -> Beat {
+    let f = e.copied().unwrap_or_default();
+    let vals: [u64; 16] = [
+        f.mean[0] as u32 as u64,
+        f.mean[1] as u32 as u64,
+        f.conic.a as u32 as u64,
+        f.conic.b as u32 as u64,
+        f.conic.c as u32 as u64,
+        f.conic.exp as u64,
+        f.opacity as u32 as u64,
+        f.rgb[0] as u32 as u64,
+        f.rgb[1] as u32 as u64,
+        f.rgb[2] as u32 as u64,
+        e.is_none() as u64,
+        last as u64,
+        list.origin[0] as u64,
+        list.origin[1] as u64,
+        list.cols as u64,
+        list.rows as u64,
+    ];
+    vals.iter()
+        .enumerate()
+        .map(|(k, &v)| {
+            let w = NeoScu::PORTS[NeoScu::port(IN_PORTS[k])].width;
+            vec![(v & ((1u64 << w) - 1)) as u32]
+        })
+        .collect()
+}
+
+/// The beats of `list`.
+pub fn beats(list: &ScuList) -> Vec<Beat> {
+    if list.entries.is_empty() {
+        return vec![beat(None, list, true)];
+    }
+    let n = list.entries.len();
+    list.entries.iter().enumerate().map(|(i, e)| beat(Some(e), list, i + 1 == n)).collect()
+}
+
+/// Golden: the subtile's pixels (row-major), `shade_pixel` over the whole list for pixels
+/// inside the image, black outside.
+pub fn golden_pixels(list: &ScuList, fmt: &FeatureFormat, rc: &RasterConfig) -> Vec<[u8; 3]> {
+    let s = rc.subtile;
+    let mut out = Vec::with_capacity((s * s) as usize);
+    for ly in 0..s {
+        for lx in 0..s {
+            if lx < list.cols && ly < list.rows {
+                let (px, py) = ((list.origin[0] + lx) as i64, (list.origin[1] + ly) as i64);
+                out.push(shade_pixel(&list.entries, fmt, rc, px, py).color);
+            } else {
+                out.push([0; 3]);
+            }
+        }
+    }
+    out
+}
+
+/// Sends `lists` through a fresh SCU (input stalls with probability `stall_pct`, output ready
+/// with probability `ready_pct`), checking every pixel against [`golden_pixels`] and the
+/// valid/ready rules; panics at the first mismatch.
+pub fn run_checked(
+    dut: &mut NeoScu,
+    cfg: &GenConfig,
+    seed: u64,
+    lists: &[ScuList],
+    stall_pct: u32,
+    ready_pct: u32,
+) -> ScuRun {
+    let fmt = cfg.feature_format();
+    let rc = cfg.raster_config();
+    let mut rng = Rng::new(seed);
+    let checker = Checker::new(NeoScu::NAME, seed);
+    let mut src = Source::new::<NeoScu>("in_valid_i", "in_ready_o", &IN_PORTS, rng.fork(1), stall_pct);
+    let mut sink = Sink::new::<NeoScu>("out_valid_o", "out_ready_i", &["out_rgb_o"], rng.fork(2), ready_pct);
+    let mut expected: VecDeque<Vec<[u8; 3]>> = VecDeque::with_capacity(lists.len());
+    let mut gaussians = 0;
+    for l in lists {
+        for b in beats(l) {
+            src.push(b);
+        }
+        gaussians += l.entries.len();
+        expected.push_back(golden_pixels(l, &fmt, &rc));
+    }
+    dut.set_in_valid_i(false);
+    dut.set_out_ready_i(false);
+    dut.reset();
+    let passes = (rc.subtile * rc.subtile) as u64 / cfg.scu_lanes as u64;
+    let limit = 1000 + (gaussians as u64 + lists.len() as u64) * (passes + 2) * 8 + 40 * lists.len() as u64;
+    let mut index = 0usize;
+    let mut term_cycles = 0;
+    while let Some(want) = expected.front() {
+        if dut.cycle() > limit {
+            checker.fail(dut.cycle(), "out_valid_o", "a subtile", &format!("none for {limit} cycles"));
+        }
+        src.drive(dut);
+        sink.drive(dut);
+        dut.eval();
+        term_cycles += dut.term_o() as u64;
+        src.sample(dut);
+        if let Some(b) = sink.sample(dut, &checker) {
+            for (k, px) in want.iter().enumerate() {
+                for (c, name) in ["red", "green", "blue"].iter().enumerate() {
+                    let got = get_bits(&b[0], 24 * k + 8 * c, 8);
+                    if got != px[c] as u64 {
+                        let s = rc.subtile as usize;
+                        checker.value(
+                            dut.cycle(),
+                            &format!("list {index} pixel {k} (lx {}, ly {}).{name}", k % s, k / s),
+                            px[c] as u64,
+                            got,
+                        );
+                    }
+                }
+            }
+            expected.pop_front();
+            index += 1;
+        }
+        dut.tick();
+    }
+    checker.protocol(dut.cycle(), src.is_idle(), "an output for every list but input beats left over");
+    for _ in 0..passes + 12 {
+        dut.set_in_valid_i(false);
+        dut.set_out_ready_i(true);
+        dut.eval();
+        checker.protocol(dut.cycle(), !dut.out_valid_o(), "an output subtile with no list left");
+        dut.tick();
+    }
+    ScuRun { lists: lists.len(), gaussians, cycles: dut.cycle(), term_cycles }
+}
+
+/// A log-uniform draw in `[lo, hi]`.
+fn log_uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    let u = rng.below(1 << 30) as f64 / (1u64 << 30) as f64;
+    (lo.ln() + u * (hi.ln() - lo.ln())).exp()
+}
+
+/// A uniform draw in `[lo, hi)`.
+fn uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * (rng.below(1 << 30) as f64 / (1u64 << 30) as f64)
+}
+
+/// A quantised Gaussian with centre `mean` (pixels), axes `su, sv`, angle `th`.
+pub fn gaussian(mean: [f64; 2], su: f64, sv: f64, th: f64, opacity: f64, rgb: [f64; 3]) -> FeatureEntry {
+    let cov = cov_from_axes(su, sv, th);
+    let p = projected_from_cov(
+        0,
+        [mean[0] as f32, mean[1] as f32],
+        cov,
+        opacity as f32,
+        rgb.map(|c| c as f32),
+        1.0,
+    );
+    quantize(&p, &FeatureFormat::default(), &DepthKeyCodec::Fp16)
+}
+
+/// A random Gaussian for a subtile at `origin`: mostly real (quantised) Gaussians near the
+/// subtile of every size and anisotropy, some with raw random fields (any conic, including
+/// non positive definite ones), some far away or huge.
+pub fn random_gaussian(rng: &mut Rng, fmt: &FeatureFormat, origin: [u32; 2]) -> FeatureEntry {
+    let o = [origin[0] as f64, origin[1] as f64];
+    match rng.below(100) {
+        0..=69 => {
+            let mean = [o[0] + uniform(rng, -10.0, 18.0), o[1] + uniform(rng, -10.0, 18.0)];
+            let su = log_uniform(rng, 0.2, 20.0);
+            let sv = log_uniform(rng, 0.2, 20.0);
+            let th = uniform(rng, 0.0, std::f64::consts::PI);
+            let op = if rng.percent(20) { uniform(rng, 0.9, 1.0) } else { uniform(rng, 0.0, 1.0) };
+            let rgb = [uniform(rng, 0.0, 1.6), uniform(rng, 0.0, 1.6), uniform(rng, 0.0, 1.6)];
+            gaussian(mean, su, sv, th, op, rgb)
+        }
+        70..=84 => {
+            let m = fmt.conic.max_mantissa() as u64;
+            let mut e = gaussian([o[0] + 4.0, o[1] + 4.0], 2.0, 2.0, 0.0, 0.5, [0.5; 3]);
+            let (lo, hi) = (-(1i64 << (fmt.mean.bits - 1)), (1i64 << (fmt.mean.bits - 1)) - 1);
+            for m in e.mean.iter_mut() {
+                *m = (*m as i64 + rng.range(0, 8 << 8) as i64 - (4 << 8)).clamp(lo, hi) as i32;
+            }
+            e.conic.a = rng.below(m + 1) as i32;
+            e.conic.c = rng.below(m + 1) as i32;
+            e.conic.b = rng.below(2 * m + 1) as i32 - m as i32;
+            e.conic.exp = rng.below(fmt.conic.max_exp() as u64 + 1) as u32;
+            e.opacity = rng.below(1 << fmt.opacity.bits) as i32;
+            for c in e.rgb.iter_mut() {
+                *c = rng.below(1 << fmt.color.bits) as i32;
+            }
+            e
+        }
+        85..=92 => {
+            // Far away (outside the subtile, up to a few hundred pixels).
+            let mean = [o[0] + uniform(rng, -300.0, 300.0), o[1] + uniform(rng, -300.0, 300.0)];
+            gaussian(mean, log_uniform(rng, 0.5, 80.0), log_uniform(rng, 0.5, 80.0), 1.0, 0.8, [0.7, 0.2, 0.9])
+        }
+        _ => {
+            // Screen-filling.
+            let mean = [o[0] + uniform(rng, -500.0, 500.0), o[1] + uniform(rng, -500.0, 500.0)];
+            gaussian(mean, log_uniform(rng, 300.0, 3000.0), log_uniform(rng, 300.0, 3000.0), 0.4, 0.3, [1.0, 0.9, 0.1])
+        }
+    }
+}
+
+/// A random list: origin, inside counts (mostly the whole subtile) and up to `max_len`
+/// Gaussians.
+pub fn random_list(rng: &mut Rng, fmt: &FeatureFormat, side: u32, max_len: usize) -> ScuList {
+    let far = rng.percent(5);
+    let span = if far { 8000 } else { 512 };
+    let origin = [rng.below(span) as u32 * side, rng.below(span) as u32 * side];
+    let (cols, rows) =
+        if rng.percent(15) { (rng.below(side as u64 + 1) as u32, rng.below(side as u64 + 1) as u32) } else { (side, side) };
+    let n = rng.below(max_len as u64 + 1) as usize;
+    let entries = (0..n).map(|_| random_gaussian(rng, fmt, origin)).collect();
+    ScuList { origin, cols, rows, entries }
+}
+
+/// Latency and II of `neo_scu`, measured at full rate with the output always ready.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScuTiming {
+    /// Rising edges from the edge that accepts a list's last beat to the first cycle its
+    /// subtile is offered (`out_valid_o`), pipeline otherwise empty.
+    pub latency: u64,
+    /// Cycles per Gaussian in a long list that does not terminate.
+    pub ii: u64,
+    /// Gaussians of the II measurement.
+    pub gaussians: u64,
+    /// Cycles per Gaussian drained after the subtile terminated (second half of an opaque
+    /// stack of `gaussians`).
+    pub drain_ii: u64,
+}
+
+/// Runs one list at full rate; returns the cycle out_valid_o first rises and the cycle of every
+/// input transfer. Checks the pixels against golden.
+fn timed(dut: &mut NeoScu, cfg: &GenConfig, seed: u64, list: &ScuList) -> (u64, Vec<u64>) {
+    let fmt = cfg.feature_format();
+    let rc = cfg.raster_config();
+    let checker = Checker::new(NeoScu::NAME, seed);
+    let mut rng = Rng::new(seed);
+    let mut src = Source::new::<NeoScu>("in_valid_i", "in_ready_o", &IN_PORTS, rng.fork(1), 0);
+    for b in beats(list) {
+        src.push(b);
+    }
+    let want = golden_pixels(list, &fmt, &rc);
+    dut.set_out_ready_i(true);
+    dut.set_in_valid_i(false);
+    dut.reset();
+    let mut sent = Vec::new();
+    loop {
+        if dut.cycle() > 100_000 {
+            checker.fail(dut.cycle(), "out_valid_o", "a subtile", "none");
+        }
+        src.drive(dut);
+        dut.eval();
+        if src.sample(dut) {
+            sent.push(dut.cycle());
+        }
+        if dut.out_valid_o() {
+            let got = dut.out_rgb_o();
+            for (k, px) in want.iter().enumerate() {
+                for c in 0..3 {
+                    checker.value(dut.cycle(), &format!("pixel {k}.{c}"), px[c] as u64, get_bits(&got, 24 * k + 8 * c, 8));
+                }
+            }
+            let out = dut.cycle();
+            dut.tick();
+            return (out, sent);
+        }
+        dut.tick();
+    }
+}
+
+/// Measures [`ScuTiming`] (every output checked against golden).
+pub fn measure_timing(dut: &mut NeoScu, cfg: &GenConfig, seed: u64) -> ScuTiming {
+    let fmt = cfg.feature_format();
+    let side = cfg.raster_config().subtile;
+    let origin = [64, 128];
+    let one = ScuList { origin, cols: side, rows: side, entries: vec![gaussian([67.0, 131.0], 2.0, 2.0, 0.0, 0.5, [0.5; 3])] };
+    let (out, sent) = timed(dut, cfg, seed, &one);
+    let last = sent[sent.len() - 1];
+    // A long list of faint Gaussians: never terminates.
+    let mut rng = Rng::new(seed ^ 1);
+    let n = 256u64;
+    let faint: Vec<FeatureEntry> = (0..n)
+        .map(|_| {
+            let mut e = random_gaussian(&mut rng, &fmt, origin);
+            e.opacity = e.opacity.min(8);
+            e
+        })
+        .collect();
+    let list = ScuList { origin, cols: side, rows: side, entries: faint };
+    let (_, sent) = timed(dut, cfg, seed, &list);
+    let ii = (sent[n as usize - 1] - sent[0]) / (n - 1);
+    // An opaque stack: terminates after a few Gaussians, the rest drain.
+    let mut opaque = vec![gaussian([68.0, 132.0], 400.0, 400.0, 0.0, 0.999, [0.2, 0.4, 0.6]); n as usize];
+    opaque[0].rgb = [100, 200, 300];
+    let list = ScuList { origin, cols: side, rows: side, entries: opaque };
+    let (_, sent) = timed(dut, cfg, seed, &list);
+    let h = n as usize / 2;
+    let drain_ii = (sent[n as usize - 1] - sent[h]) / (n - 1 - h as u64);
+    ScuTiming { latency: out - last, ii, gaussians: n, drain_ii }
+}
+
+/// Runs `cfg`'s lists and returns them with the run (for tests that build lists themselves).
+pub fn lists_of(rng: &mut Rng, cfg: &GenConfig, count: usize, max_len: usize) -> Vec<ScuList> {
+    let fmt = cfg.feature_format();
+    let side = cfg.raster_config().subtile;
+    (0..count).map(|_| random_list(rng, &fmt, side, max_len)).collect()
+}
