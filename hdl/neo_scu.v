@@ -51,8 +51,6 @@ module neo_scu (
   reg  [198:0] d4_q;
   reg  v5_q;
   reg  [198:0] d5_q;
-  reg  v6_q;
-  reg  [198:0] d6_q;
   reg  out_valid_q;
   reg  [1535:0] out_rgb_q;
   wire in_fire;
@@ -65,11 +63,11 @@ module neo_scu (
   assign issue0 = v0_q & ~(skip0 & ~b0_q[191]);
   wire end0;
   assign end0 = skip0 | (p0_q == 2'd3);
-  wire fin6;
-  assign fin6 = v6_q & d6_q[191] & (d6_q[198] | (d6_q[197:196] == 2'd3));
+  wire fin_b;
+  assign fin_b = v5_q & d5_q[191] & (d5_q[198] | (d5_q[197:196] == 2'd3));
   wire en;
-  assign en = ~(fin6 & out_valid_q & ~out_ready_i);
-  assign in_ready_o = ~v0_q | (en & end0);
+  assign en = ~(fin_b & out_valid_q & ~out_ready_i);
+  assign in_ready_o = en & (~v0_q | end0);
   assign term_o = term_q & (term_lid_q == lid_in_q) & ~first_in_q;
   wire [198:0] beat_in;
   assign beat_in = {(1'b0), (2'd0), (lid_in_q), (first_in_q), (in_last_i), (in_empty_i), (in_rows_i), (in_cols_i), (first_in_q ? in_origin_y_i : oy_in_q), (first_in_q ? in_origin_x_i : ox_in_q), (in_blue_i), (in_green_i), (in_red_i), (in_opacity_i), (in_conic_exp_i), (in_conic_c_i), (in_conic_b_i), (in_conic_a_i), (in_mean_y_i), (in_mean_x_i)};
@@ -114,7 +112,6 @@ module neo_scu (
       v3_q <= 1'b0;
       v4_q <= 1'b0;
       v5_q <= 1'b0;
-      v6_q <= 1'b0;
     end else begin
       if (en) begin
         v1_q <= issue0;
@@ -122,7 +119,6 @@ module neo_scu (
         v3_q <= v2_q;
         v4_q <= v3_q;
         v5_q <= v4_q;
-        v6_q <= v5_q;
       end
     end
   end
@@ -133,2066 +129,2065 @@ module neo_scu (
       d3_q <= d2_q;
       d4_q <= d3_q;
       d5_q <= d4_q;
-      d6_q <= d5_q;
     end
   end
 
   // lane 0
-  wire [5:0] ix0;
-  assign ix0 = {issue_bundle[197:196], 4'd0};
-  wire [16:0] pxx0;
-  assign pxx0 = {1'b0, issue_bundle[165:150]} + {14'd0, ix0[2:0]};
-  wire [26:0] dx0;
-  assign dx0 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx0, 8'd0};
-  wire [25:0] ax0;
-  assign ax0 = dx0[26] ? (~dx0[25:0] + 26'd1) : dx0[25:0];
-  wire [16:0] pxy0;
-  assign pxy0 = {1'b0, issue_bundle[181:166]} + {14'd0, ix0[5:3]};
-  wire [26:0] dy0;
-  assign dy0 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy0, 8'd0};
-  wire [25:0] ay0;
-  assign ay0 = dy0[26] ? (~dy0[25:0] + 26'd1) : dy0[25:0];
-  reg  [51:0] sxx0;
-  reg  [51:0] syy0;
-  reg  [51:0] sxy0;
-  reg  sneg0;
+  wire [5:0] l0_ix;
+  assign l0_ix = {issue_bundle[197:196], 4'd0};
+  wire [16:0] l0_pxx;
+  assign l0_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l0_ix[2:0]};
+  wire [26:0] l0_dx;
+  assign l0_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l0_pxx, 8'd0};
+  wire [25:0] l0_ax;
+  assign l0_ax = l0_dx[26] ? (~l0_dx[25:0] + 26'd1) : l0_dx[25:0];
+  wire [16:0] l0_pxy;
+  assign l0_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l0_ix[5:3]};
+  wire [26:0] l0_dy;
+  assign l0_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l0_pxy, 8'd0};
+  wire [25:0] l0_ay;
+  assign l0_ay = l0_dy[26] ? (~l0_dy[25:0] + 26'd1) : l0_dy[25:0];
+  reg  [51:0] l0_sxx;
+  reg  [51:0] l0_syy;
+  reg  [51:0] l0_sxy;
+  reg  l0_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx0 <= {26'd0, ax0} * {26'd0, ax0};
-      syy0 <= {26'd0, ay0} * {26'd0, ay0};
-      sxy0 <= {26'd0, ax0} * {26'd0, ay0};
-      sneg0 <= dx0[26] ^ dy0[26];
+      l0_sxx <= {26'd0, l0_ax} * {26'd0, l0_ax};
+      l0_syy <= {26'd0, l0_ay} * {26'd0, l0_ay};
+      l0_sxy <= {26'd0, l0_ax} * {26'd0, l0_ay};
+      l0_sneg <= l0_dx[26] ^ l0_dy[26];
     end
   end
-  wire cbs0;
-  assign cbs0 = d1_q[84];
-  wire [18:0] babs0;
-  assign babs0 = cbs0 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta0;
-  assign ta0 = {53'd0, d1_q[65:48]} * {19'd0, sxx0};
-  wire [70:0] tc0;
-  assign tc0 = {53'd0, d1_q[102:85]} * {19'd0, syy0};
-  wire [71:0] tb0;
-  assign tb0 = {53'd0, babs0} * {20'd0, sxy0};
-  wire [72:0] tbx0;
-  assign tbx0 = {tb0, 1'b0};
-  reg  [72:0] q0;
+  wire l0_cbs;
+  assign l0_cbs = d1_q[84];
+  wire [18:0] l0_babs;
+  assign l0_babs = l0_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l0_ta;
+  assign l0_ta = {53'd0, d1_q[65:48]} * {19'd0, l0_sxx};
+  wire [70:0] l0_tc;
+  assign l0_tc = {53'd0, d1_q[102:85]} * {19'd0, l0_syy};
+  wire [71:0] l0_tb;
+  assign l0_tb = {53'd0, l0_babs} * {20'd0, l0_sxy};
+  wire [72:0] l0_tbx;
+  assign l0_tbx = {l0_tb, 1'b0};
+  reg  [72:0] l0_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q0 <= {2'd0, ta0} + {2'd0, tc0} + ((sneg0 ^ cbs0) ? (~tbx0 + 73'd1) : tbx0);
+      l0_q <= {2'd0, l0_ta} + {2'd0, l0_tc} + ((l0_sneg ^ l0_cbs) ? (~l0_tbx + 73'd1) : l0_tbx);
     end
   end
-  wire [6:0] shm10;
-  assign shm10 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt0;
-  assign qt0 = $signed(q0) >>> shm10;
-  wire [72:0] qt10;
-  assign qt10 = qt0 + 73'd1;
-  wire [72:0] npf0;
-  assign npf0 = $signed(qt10) >>> 1;
-  reg  [12:0] np0;
-  reg  pos0;
+  wire [6:0] l0_shm1;
+  assign l0_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l0_qt;
+  assign l0_qt = $signed(l0_q) >>> l0_shm1;
+  wire [72:0] l0_qt1;
+  assign l0_qt1 = l0_qt + 73'd1;
+  wire [72:0] l0_npf;
+  assign l0_npf = $signed(l0_qt1) >>> 1;
+  reg  [12:0] l0_np;
+  reg  l0_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np0 <= (|npf0[71:13]) ? 13'd8191 : npf0[12:0];
-      pos0 <= ~npf0[72] & ~d2_q[190];
+      l0_np <= (|l0_npf[71:13]) ? 13'd8191 : l0_npf[12:0];
+      l0_pos <= ~l0_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex0;
+  wire [16:0] l0_ex;
   neo_scu_exp u_exp0 (
-    .np_i(np0),
-    .e_o(ex0)
+    .np_i(l0_np),
+    .e_o(l0_ex)
   );
-  reg  [16:0] e0;
-  reg  ok4_0;
+  reg  [16:0] l0_e;
+  reg  l0_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e0 <= ex0;
-      ok4_0 <= pos0;
+      l0_e <= l0_ex;
+      l0_ok4_ <= l0_pos;
     end
   end
-  wire [25:0] oe0;
-  assign oe0 = {18'd0, d4_q[116:109]} * {9'd0, e0};
-  wire [25:0] oer0;
-  assign oer0 = oe0 + 26'd2048;
-  wire [13:0] ar0;
-  assign ar0 = oer0[25:12];
-  wire [13:0] arx0;
-  assign arx0 = ar0;
-  wire [11:0] acap0;
-  assign acap0 = (arx0 > 14'd4055) ? 12'd4055 : arx0[11:0];
-  reg  [11:0] alpha0;
-  reg  ok5_0;
+  wire [25:0] l0_oe;
+  assign l0_oe = {18'd0, d4_q[116:109]} * {9'd0, l0_e};
+  wire [25:0] l0_oer;
+  assign l0_oer = l0_oe + 26'd2048;
+  wire [13:0] l0_ar;
+  assign l0_ar = l0_oer[25:12];
+  wire [13:0] l0_arx;
+  assign l0_arx = l0_ar;
+  wire [11:0] l0_acap;
+  assign l0_acap = (l0_arx > 14'd4055) ? 12'd4055 : l0_arx[11:0];
+  reg  [11:0] l0_alpha;
+  reg  l0_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha0 <= acap0;
-      ok5_0 <= ok4_0 & (acap0 >= 12'd17);
+      l0_alpha <= l0_acap;
+      l0_ok5_ <= l0_ok4_ & (l0_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_0;
-  assign ix6_0 = {d6_q[197:196], 4'd0};
-  wire inside0;
-  assign inside0 = ({1'b0, ix6_0[2:0]} < d6_q[185:182]) & ({1'b0, ix6_0[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old0;
-  assign t_old0 = d6_q[192] ? 17'd65536 : rd_t0;
-  wire [83:0] c_old0;
-  assign c_old0 = d6_q[192] ? 84'd0 : rd_c0;
-  wire dn_old0;
-  assign dn_old0 = d6_q[192] ? ~inside0 : rd_dn0;
-  wire bl0;
-  assign bl0 = ok5_0 & ~dn_old0;
-  wire [29:0] wp0;
-  assign wp0 = {18'd0, alpha0} * {13'd0, t_old0} + 30'd2048;
-  wire [16:0] wt0;
-  assign wt0 = wp0[28:12];
-  wire [16:0] tt0;
-  assign tt0 = t_old0 - wt0;
-  wire fin0;
-  assign fin0 = tt0 < 17'd7;
-  wire add0;
-  assign add0 = bl0 & ~fin0;
-  wire [16:0] t_new0;
-  assign t_new0 = add0 ? tt0 : t_old0;
-  wire dn_new0;
-  assign dn_new0 = dn_old0 | (bl0 & fin0);
-  wire [27:0] csr0;
-  assign csr0 = c_old0[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt0};
-  wire [27:0] csg0;
-  assign csg0 = c_old0[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt0};
-  wire [27:0] csb0;
-  assign csb0 = c_old0[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt0};
-  wire [83:0] c_new0;
-  assign c_new0 = add0 ? {csb0, csg0, csr0} : c_old0;
+  wire [5:0] l0_ix6_;
+  assign l0_ix6_ = {d5_q[197:196], 4'd0};
+  wire l0_inside;
+  assign l0_inside = ({1'b0, l0_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l0_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l0_t_old;
+  assign l0_t_old = d5_q[192] ? 17'd65536 : rd_t0;
+  wire [83:0] l0_c_old;
+  assign l0_c_old = d5_q[192] ? 84'd0 : rd_c0;
+  wire l0_dn_old;
+  assign l0_dn_old = d5_q[192] ? ~l0_inside : rd_dn0;
+  wire l0_bl;
+  assign l0_bl = l0_ok5_ & ~l0_dn_old;
+  wire [29:0] l0_wp;
+  assign l0_wp = {18'd0, l0_alpha} * {13'd0, l0_t_old} + 30'd2048;
+  wire [16:0] l0_wt;
+  assign l0_wt = l0_wp[28:12];
+  wire [16:0] l0_tt;
+  assign l0_tt = l0_t_old - l0_wt;
+  wire l0_fin;
+  assign l0_fin = l0_tt < 17'd7;
+  wire l0_add;
+  assign l0_add = l0_bl & ~l0_fin;
+  wire [16:0] l0_t_new;
+  assign l0_t_new = l0_add ? l0_tt : l0_t_old;
+  wire l0_dn_new;
+  assign l0_dn_new = l0_dn_old | (l0_bl & l0_fin);
+  wire [27:0] l0_csr;
+  assign l0_csr = l0_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l0_wt};
+  wire [27:0] l0_csg;
+  assign l0_csg = l0_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l0_wt};
+  wire [27:0] l0_csb;
+  assign l0_csb = l0_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l0_wt};
+  wire [83:0] l0_c_new;
+  assign l0_c_new = l0_add ? {l0_csb, l0_csg, l0_csr} : l0_c_old;
 
   // lane 1
-  wire [5:0] ix1;
-  assign ix1 = {issue_bundle[197:196], 4'd1};
-  wire [16:0] pxx1;
-  assign pxx1 = {1'b0, issue_bundle[165:150]} + {14'd0, ix1[2:0]};
-  wire [26:0] dx1;
-  assign dx1 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx1, 8'd0};
-  wire [25:0] ax1;
-  assign ax1 = dx1[26] ? (~dx1[25:0] + 26'd1) : dx1[25:0];
-  wire [16:0] pxy1;
-  assign pxy1 = {1'b0, issue_bundle[181:166]} + {14'd0, ix1[5:3]};
-  wire [26:0] dy1;
-  assign dy1 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy1, 8'd0};
-  wire [25:0] ay1;
-  assign ay1 = dy1[26] ? (~dy1[25:0] + 26'd1) : dy1[25:0];
-  reg  [51:0] sxx1;
-  reg  [51:0] syy1;
-  reg  [51:0] sxy1;
-  reg  sneg1;
+  wire [5:0] l1_ix;
+  assign l1_ix = {issue_bundle[197:196], 4'd1};
+  wire [16:0] l1_pxx;
+  assign l1_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l1_ix[2:0]};
+  wire [26:0] l1_dx;
+  assign l1_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l1_pxx, 8'd0};
+  wire [25:0] l1_ax;
+  assign l1_ax = l1_dx[26] ? (~l1_dx[25:0] + 26'd1) : l1_dx[25:0];
+  wire [16:0] l1_pxy;
+  assign l1_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l1_ix[5:3]};
+  wire [26:0] l1_dy;
+  assign l1_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l1_pxy, 8'd0};
+  wire [25:0] l1_ay;
+  assign l1_ay = l1_dy[26] ? (~l1_dy[25:0] + 26'd1) : l1_dy[25:0];
+  reg  [51:0] l1_sxx;
+  reg  [51:0] l1_syy;
+  reg  [51:0] l1_sxy;
+  reg  l1_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx1 <= {26'd0, ax1} * {26'd0, ax1};
-      syy1 <= {26'd0, ay1} * {26'd0, ay1};
-      sxy1 <= {26'd0, ax1} * {26'd0, ay1};
-      sneg1 <= dx1[26] ^ dy1[26];
+      l1_sxx <= {26'd0, l1_ax} * {26'd0, l1_ax};
+      l1_syy <= {26'd0, l1_ay} * {26'd0, l1_ay};
+      l1_sxy <= {26'd0, l1_ax} * {26'd0, l1_ay};
+      l1_sneg <= l1_dx[26] ^ l1_dy[26];
     end
   end
-  wire cbs1;
-  assign cbs1 = d1_q[84];
-  wire [18:0] babs1;
-  assign babs1 = cbs1 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta1;
-  assign ta1 = {53'd0, d1_q[65:48]} * {19'd0, sxx1};
-  wire [70:0] tc1;
-  assign tc1 = {53'd0, d1_q[102:85]} * {19'd0, syy1};
-  wire [71:0] tb1;
-  assign tb1 = {53'd0, babs1} * {20'd0, sxy1};
-  wire [72:0] tbx1;
-  assign tbx1 = {tb1, 1'b0};
-  reg  [72:0] q1;
+  wire l1_cbs;
+  assign l1_cbs = d1_q[84];
+  wire [18:0] l1_babs;
+  assign l1_babs = l1_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l1_ta;
+  assign l1_ta = {53'd0, d1_q[65:48]} * {19'd0, l1_sxx};
+  wire [70:0] l1_tc;
+  assign l1_tc = {53'd0, d1_q[102:85]} * {19'd0, l1_syy};
+  wire [71:0] l1_tb;
+  assign l1_tb = {53'd0, l1_babs} * {20'd0, l1_sxy};
+  wire [72:0] l1_tbx;
+  assign l1_tbx = {l1_tb, 1'b0};
+  reg  [72:0] l1_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q1 <= {2'd0, ta1} + {2'd0, tc1} + ((sneg1 ^ cbs1) ? (~tbx1 + 73'd1) : tbx1);
+      l1_q <= {2'd0, l1_ta} + {2'd0, l1_tc} + ((l1_sneg ^ l1_cbs) ? (~l1_tbx + 73'd1) : l1_tbx);
     end
   end
-  wire [6:0] shm11;
-  assign shm11 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt1;
-  assign qt1 = $signed(q1) >>> shm11;
-  wire [72:0] qt11;
-  assign qt11 = qt1 + 73'd1;
-  wire [72:0] npf1;
-  assign npf1 = $signed(qt11) >>> 1;
-  reg  [12:0] np1;
-  reg  pos1;
+  wire [6:0] l1_shm1;
+  assign l1_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l1_qt;
+  assign l1_qt = $signed(l1_q) >>> l1_shm1;
+  wire [72:0] l1_qt1;
+  assign l1_qt1 = l1_qt + 73'd1;
+  wire [72:0] l1_npf;
+  assign l1_npf = $signed(l1_qt1) >>> 1;
+  reg  [12:0] l1_np;
+  reg  l1_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np1 <= (|npf1[71:13]) ? 13'd8191 : npf1[12:0];
-      pos1 <= ~npf1[72] & ~d2_q[190];
+      l1_np <= (|l1_npf[71:13]) ? 13'd8191 : l1_npf[12:0];
+      l1_pos <= ~l1_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex1;
+  wire [16:0] l1_ex;
   neo_scu_exp u_exp1 (
-    .np_i(np1),
-    .e_o(ex1)
+    .np_i(l1_np),
+    .e_o(l1_ex)
   );
-  reg  [16:0] e1;
-  reg  ok4_1;
+  reg  [16:0] l1_e;
+  reg  l1_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e1 <= ex1;
-      ok4_1 <= pos1;
+      l1_e <= l1_ex;
+      l1_ok4_ <= l1_pos;
     end
   end
-  wire [25:0] oe1;
-  assign oe1 = {18'd0, d4_q[116:109]} * {9'd0, e1};
-  wire [25:0] oer1;
-  assign oer1 = oe1 + 26'd2048;
-  wire [13:0] ar1;
-  assign ar1 = oer1[25:12];
-  wire [13:0] arx1;
-  assign arx1 = ar1;
-  wire [11:0] acap1;
-  assign acap1 = (arx1 > 14'd4055) ? 12'd4055 : arx1[11:0];
-  reg  [11:0] alpha1;
-  reg  ok5_1;
+  wire [25:0] l1_oe;
+  assign l1_oe = {18'd0, d4_q[116:109]} * {9'd0, l1_e};
+  wire [25:0] l1_oer;
+  assign l1_oer = l1_oe + 26'd2048;
+  wire [13:0] l1_ar;
+  assign l1_ar = l1_oer[25:12];
+  wire [13:0] l1_arx;
+  assign l1_arx = l1_ar;
+  wire [11:0] l1_acap;
+  assign l1_acap = (l1_arx > 14'd4055) ? 12'd4055 : l1_arx[11:0];
+  reg  [11:0] l1_alpha;
+  reg  l1_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha1 <= acap1;
-      ok5_1 <= ok4_1 & (acap1 >= 12'd17);
+      l1_alpha <= l1_acap;
+      l1_ok5_ <= l1_ok4_ & (l1_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_1;
-  assign ix6_1 = {d6_q[197:196], 4'd1};
-  wire inside1;
-  assign inside1 = ({1'b0, ix6_1[2:0]} < d6_q[185:182]) & ({1'b0, ix6_1[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old1;
-  assign t_old1 = d6_q[192] ? 17'd65536 : rd_t1;
-  wire [83:0] c_old1;
-  assign c_old1 = d6_q[192] ? 84'd0 : rd_c1;
-  wire dn_old1;
-  assign dn_old1 = d6_q[192] ? ~inside1 : rd_dn1;
-  wire bl1;
-  assign bl1 = ok5_1 & ~dn_old1;
-  wire [29:0] wp1;
-  assign wp1 = {18'd0, alpha1} * {13'd0, t_old1} + 30'd2048;
-  wire [16:0] wt1;
-  assign wt1 = wp1[28:12];
-  wire [16:0] tt1;
-  assign tt1 = t_old1 - wt1;
-  wire fin1;
-  assign fin1 = tt1 < 17'd7;
-  wire add1;
-  assign add1 = bl1 & ~fin1;
-  wire [16:0] t_new1;
-  assign t_new1 = add1 ? tt1 : t_old1;
-  wire dn_new1;
-  assign dn_new1 = dn_old1 | (bl1 & fin1);
-  wire [27:0] csr1;
-  assign csr1 = c_old1[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt1};
-  wire [27:0] csg1;
-  assign csg1 = c_old1[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt1};
-  wire [27:0] csb1;
-  assign csb1 = c_old1[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt1};
-  wire [83:0] c_new1;
-  assign c_new1 = add1 ? {csb1, csg1, csr1} : c_old1;
+  wire [5:0] l1_ix6_;
+  assign l1_ix6_ = {d5_q[197:196], 4'd1};
+  wire l1_inside;
+  assign l1_inside = ({1'b0, l1_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l1_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l1_t_old;
+  assign l1_t_old = d5_q[192] ? 17'd65536 : rd_t1;
+  wire [83:0] l1_c_old;
+  assign l1_c_old = d5_q[192] ? 84'd0 : rd_c1;
+  wire l1_dn_old;
+  assign l1_dn_old = d5_q[192] ? ~l1_inside : rd_dn1;
+  wire l1_bl;
+  assign l1_bl = l1_ok5_ & ~l1_dn_old;
+  wire [29:0] l1_wp;
+  assign l1_wp = {18'd0, l1_alpha} * {13'd0, l1_t_old} + 30'd2048;
+  wire [16:0] l1_wt;
+  assign l1_wt = l1_wp[28:12];
+  wire [16:0] l1_tt;
+  assign l1_tt = l1_t_old - l1_wt;
+  wire l1_fin;
+  assign l1_fin = l1_tt < 17'd7;
+  wire l1_add;
+  assign l1_add = l1_bl & ~l1_fin;
+  wire [16:0] l1_t_new;
+  assign l1_t_new = l1_add ? l1_tt : l1_t_old;
+  wire l1_dn_new;
+  assign l1_dn_new = l1_dn_old | (l1_bl & l1_fin);
+  wire [27:0] l1_csr;
+  assign l1_csr = l1_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l1_wt};
+  wire [27:0] l1_csg;
+  assign l1_csg = l1_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l1_wt};
+  wire [27:0] l1_csb;
+  assign l1_csb = l1_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l1_wt};
+  wire [83:0] l1_c_new;
+  assign l1_c_new = l1_add ? {l1_csb, l1_csg, l1_csr} : l1_c_old;
 
   // lane 2
-  wire [5:0] ix2;
-  assign ix2 = {issue_bundle[197:196], 4'd2};
-  wire [16:0] pxx2;
-  assign pxx2 = {1'b0, issue_bundle[165:150]} + {14'd0, ix2[2:0]};
-  wire [26:0] dx2;
-  assign dx2 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx2, 8'd0};
-  wire [25:0] ax2;
-  assign ax2 = dx2[26] ? (~dx2[25:0] + 26'd1) : dx2[25:0];
-  wire [16:0] pxy2;
-  assign pxy2 = {1'b0, issue_bundle[181:166]} + {14'd0, ix2[5:3]};
-  wire [26:0] dy2;
-  assign dy2 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy2, 8'd0};
-  wire [25:0] ay2;
-  assign ay2 = dy2[26] ? (~dy2[25:0] + 26'd1) : dy2[25:0];
-  reg  [51:0] sxx2;
-  reg  [51:0] syy2;
-  reg  [51:0] sxy2;
-  reg  sneg2;
+  wire [5:0] l2_ix;
+  assign l2_ix = {issue_bundle[197:196], 4'd2};
+  wire [16:0] l2_pxx;
+  assign l2_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l2_ix[2:0]};
+  wire [26:0] l2_dx;
+  assign l2_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l2_pxx, 8'd0};
+  wire [25:0] l2_ax;
+  assign l2_ax = l2_dx[26] ? (~l2_dx[25:0] + 26'd1) : l2_dx[25:0];
+  wire [16:0] l2_pxy;
+  assign l2_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l2_ix[5:3]};
+  wire [26:0] l2_dy;
+  assign l2_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l2_pxy, 8'd0};
+  wire [25:0] l2_ay;
+  assign l2_ay = l2_dy[26] ? (~l2_dy[25:0] + 26'd1) : l2_dy[25:0];
+  reg  [51:0] l2_sxx;
+  reg  [51:0] l2_syy;
+  reg  [51:0] l2_sxy;
+  reg  l2_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx2 <= {26'd0, ax2} * {26'd0, ax2};
-      syy2 <= {26'd0, ay2} * {26'd0, ay2};
-      sxy2 <= {26'd0, ax2} * {26'd0, ay2};
-      sneg2 <= dx2[26] ^ dy2[26];
+      l2_sxx <= {26'd0, l2_ax} * {26'd0, l2_ax};
+      l2_syy <= {26'd0, l2_ay} * {26'd0, l2_ay};
+      l2_sxy <= {26'd0, l2_ax} * {26'd0, l2_ay};
+      l2_sneg <= l2_dx[26] ^ l2_dy[26];
     end
   end
-  wire cbs2;
-  assign cbs2 = d1_q[84];
-  wire [18:0] babs2;
-  assign babs2 = cbs2 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta2;
-  assign ta2 = {53'd0, d1_q[65:48]} * {19'd0, sxx2};
-  wire [70:0] tc2;
-  assign tc2 = {53'd0, d1_q[102:85]} * {19'd0, syy2};
-  wire [71:0] tb2;
-  assign tb2 = {53'd0, babs2} * {20'd0, sxy2};
-  wire [72:0] tbx2;
-  assign tbx2 = {tb2, 1'b0};
-  reg  [72:0] q2;
+  wire l2_cbs;
+  assign l2_cbs = d1_q[84];
+  wire [18:0] l2_babs;
+  assign l2_babs = l2_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l2_ta;
+  assign l2_ta = {53'd0, d1_q[65:48]} * {19'd0, l2_sxx};
+  wire [70:0] l2_tc;
+  assign l2_tc = {53'd0, d1_q[102:85]} * {19'd0, l2_syy};
+  wire [71:0] l2_tb;
+  assign l2_tb = {53'd0, l2_babs} * {20'd0, l2_sxy};
+  wire [72:0] l2_tbx;
+  assign l2_tbx = {l2_tb, 1'b0};
+  reg  [72:0] l2_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q2 <= {2'd0, ta2} + {2'd0, tc2} + ((sneg2 ^ cbs2) ? (~tbx2 + 73'd1) : tbx2);
+      l2_q <= {2'd0, l2_ta} + {2'd0, l2_tc} + ((l2_sneg ^ l2_cbs) ? (~l2_tbx + 73'd1) : l2_tbx);
     end
   end
-  wire [6:0] shm12;
-  assign shm12 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt2;
-  assign qt2 = $signed(q2) >>> shm12;
-  wire [72:0] qt12;
-  assign qt12 = qt2 + 73'd1;
-  wire [72:0] npf2;
-  assign npf2 = $signed(qt12) >>> 1;
-  reg  [12:0] np2;
-  reg  pos2;
+  wire [6:0] l2_shm1;
+  assign l2_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l2_qt;
+  assign l2_qt = $signed(l2_q) >>> l2_shm1;
+  wire [72:0] l2_qt1;
+  assign l2_qt1 = l2_qt + 73'd1;
+  wire [72:0] l2_npf;
+  assign l2_npf = $signed(l2_qt1) >>> 1;
+  reg  [12:0] l2_np;
+  reg  l2_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np2 <= (|npf2[71:13]) ? 13'd8191 : npf2[12:0];
-      pos2 <= ~npf2[72] & ~d2_q[190];
+      l2_np <= (|l2_npf[71:13]) ? 13'd8191 : l2_npf[12:0];
+      l2_pos <= ~l2_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex2;
+  wire [16:0] l2_ex;
   neo_scu_exp u_exp2 (
-    .np_i(np2),
-    .e_o(ex2)
+    .np_i(l2_np),
+    .e_o(l2_ex)
   );
-  reg  [16:0] e2;
-  reg  ok4_2;
+  reg  [16:0] l2_e;
+  reg  l2_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e2 <= ex2;
-      ok4_2 <= pos2;
+      l2_e <= l2_ex;
+      l2_ok4_ <= l2_pos;
     end
   end
-  wire [25:0] oe2;
-  assign oe2 = {18'd0, d4_q[116:109]} * {9'd0, e2};
-  wire [25:0] oer2;
-  assign oer2 = oe2 + 26'd2048;
-  wire [13:0] ar2;
-  assign ar2 = oer2[25:12];
-  wire [13:0] arx2;
-  assign arx2 = ar2;
-  wire [11:0] acap2;
-  assign acap2 = (arx2 > 14'd4055) ? 12'd4055 : arx2[11:0];
-  reg  [11:0] alpha2;
-  reg  ok5_2;
+  wire [25:0] l2_oe;
+  assign l2_oe = {18'd0, d4_q[116:109]} * {9'd0, l2_e};
+  wire [25:0] l2_oer;
+  assign l2_oer = l2_oe + 26'd2048;
+  wire [13:0] l2_ar;
+  assign l2_ar = l2_oer[25:12];
+  wire [13:0] l2_arx;
+  assign l2_arx = l2_ar;
+  wire [11:0] l2_acap;
+  assign l2_acap = (l2_arx > 14'd4055) ? 12'd4055 : l2_arx[11:0];
+  reg  [11:0] l2_alpha;
+  reg  l2_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha2 <= acap2;
-      ok5_2 <= ok4_2 & (acap2 >= 12'd17);
+      l2_alpha <= l2_acap;
+      l2_ok5_ <= l2_ok4_ & (l2_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_2;
-  assign ix6_2 = {d6_q[197:196], 4'd2};
-  wire inside2;
-  assign inside2 = ({1'b0, ix6_2[2:0]} < d6_q[185:182]) & ({1'b0, ix6_2[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old2;
-  assign t_old2 = d6_q[192] ? 17'd65536 : rd_t2;
-  wire [83:0] c_old2;
-  assign c_old2 = d6_q[192] ? 84'd0 : rd_c2;
-  wire dn_old2;
-  assign dn_old2 = d6_q[192] ? ~inside2 : rd_dn2;
-  wire bl2;
-  assign bl2 = ok5_2 & ~dn_old2;
-  wire [29:0] wp2;
-  assign wp2 = {18'd0, alpha2} * {13'd0, t_old2} + 30'd2048;
-  wire [16:0] wt2;
-  assign wt2 = wp2[28:12];
-  wire [16:0] tt2;
-  assign tt2 = t_old2 - wt2;
-  wire fin2;
-  assign fin2 = tt2 < 17'd7;
-  wire add2;
-  assign add2 = bl2 & ~fin2;
-  wire [16:0] t_new2;
-  assign t_new2 = add2 ? tt2 : t_old2;
-  wire dn_new2;
-  assign dn_new2 = dn_old2 | (bl2 & fin2);
-  wire [27:0] csr2;
-  assign csr2 = c_old2[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt2};
-  wire [27:0] csg2;
-  assign csg2 = c_old2[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt2};
-  wire [27:0] csb2;
-  assign csb2 = c_old2[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt2};
-  wire [83:0] c_new2;
-  assign c_new2 = add2 ? {csb2, csg2, csr2} : c_old2;
+  wire [5:0] l2_ix6_;
+  assign l2_ix6_ = {d5_q[197:196], 4'd2};
+  wire l2_inside;
+  assign l2_inside = ({1'b0, l2_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l2_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l2_t_old;
+  assign l2_t_old = d5_q[192] ? 17'd65536 : rd_t2;
+  wire [83:0] l2_c_old;
+  assign l2_c_old = d5_q[192] ? 84'd0 : rd_c2;
+  wire l2_dn_old;
+  assign l2_dn_old = d5_q[192] ? ~l2_inside : rd_dn2;
+  wire l2_bl;
+  assign l2_bl = l2_ok5_ & ~l2_dn_old;
+  wire [29:0] l2_wp;
+  assign l2_wp = {18'd0, l2_alpha} * {13'd0, l2_t_old} + 30'd2048;
+  wire [16:0] l2_wt;
+  assign l2_wt = l2_wp[28:12];
+  wire [16:0] l2_tt;
+  assign l2_tt = l2_t_old - l2_wt;
+  wire l2_fin;
+  assign l2_fin = l2_tt < 17'd7;
+  wire l2_add;
+  assign l2_add = l2_bl & ~l2_fin;
+  wire [16:0] l2_t_new;
+  assign l2_t_new = l2_add ? l2_tt : l2_t_old;
+  wire l2_dn_new;
+  assign l2_dn_new = l2_dn_old | (l2_bl & l2_fin);
+  wire [27:0] l2_csr;
+  assign l2_csr = l2_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l2_wt};
+  wire [27:0] l2_csg;
+  assign l2_csg = l2_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l2_wt};
+  wire [27:0] l2_csb;
+  assign l2_csb = l2_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l2_wt};
+  wire [83:0] l2_c_new;
+  assign l2_c_new = l2_add ? {l2_csb, l2_csg, l2_csr} : l2_c_old;
 
   // lane 3
-  wire [5:0] ix3;
-  assign ix3 = {issue_bundle[197:196], 4'd3};
-  wire [16:0] pxx3;
-  assign pxx3 = {1'b0, issue_bundle[165:150]} + {14'd0, ix3[2:0]};
-  wire [26:0] dx3;
-  assign dx3 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx3, 8'd0};
-  wire [25:0] ax3;
-  assign ax3 = dx3[26] ? (~dx3[25:0] + 26'd1) : dx3[25:0];
-  wire [16:0] pxy3;
-  assign pxy3 = {1'b0, issue_bundle[181:166]} + {14'd0, ix3[5:3]};
-  wire [26:0] dy3;
-  assign dy3 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy3, 8'd0};
-  wire [25:0] ay3;
-  assign ay3 = dy3[26] ? (~dy3[25:0] + 26'd1) : dy3[25:0];
-  reg  [51:0] sxx3;
-  reg  [51:0] syy3;
-  reg  [51:0] sxy3;
-  reg  sneg3;
+  wire [5:0] l3_ix;
+  assign l3_ix = {issue_bundle[197:196], 4'd3};
+  wire [16:0] l3_pxx;
+  assign l3_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l3_ix[2:0]};
+  wire [26:0] l3_dx;
+  assign l3_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l3_pxx, 8'd0};
+  wire [25:0] l3_ax;
+  assign l3_ax = l3_dx[26] ? (~l3_dx[25:0] + 26'd1) : l3_dx[25:0];
+  wire [16:0] l3_pxy;
+  assign l3_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l3_ix[5:3]};
+  wire [26:0] l3_dy;
+  assign l3_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l3_pxy, 8'd0};
+  wire [25:0] l3_ay;
+  assign l3_ay = l3_dy[26] ? (~l3_dy[25:0] + 26'd1) : l3_dy[25:0];
+  reg  [51:0] l3_sxx;
+  reg  [51:0] l3_syy;
+  reg  [51:0] l3_sxy;
+  reg  l3_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx3 <= {26'd0, ax3} * {26'd0, ax3};
-      syy3 <= {26'd0, ay3} * {26'd0, ay3};
-      sxy3 <= {26'd0, ax3} * {26'd0, ay3};
-      sneg3 <= dx3[26] ^ dy3[26];
+      l3_sxx <= {26'd0, l3_ax} * {26'd0, l3_ax};
+      l3_syy <= {26'd0, l3_ay} * {26'd0, l3_ay};
+      l3_sxy <= {26'd0, l3_ax} * {26'd0, l3_ay};
+      l3_sneg <= l3_dx[26] ^ l3_dy[26];
     end
   end
-  wire cbs3;
-  assign cbs3 = d1_q[84];
-  wire [18:0] babs3;
-  assign babs3 = cbs3 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta3;
-  assign ta3 = {53'd0, d1_q[65:48]} * {19'd0, sxx3};
-  wire [70:0] tc3;
-  assign tc3 = {53'd0, d1_q[102:85]} * {19'd0, syy3};
-  wire [71:0] tb3;
-  assign tb3 = {53'd0, babs3} * {20'd0, sxy3};
-  wire [72:0] tbx3;
-  assign tbx3 = {tb3, 1'b0};
-  reg  [72:0] q3;
+  wire l3_cbs;
+  assign l3_cbs = d1_q[84];
+  wire [18:0] l3_babs;
+  assign l3_babs = l3_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l3_ta;
+  assign l3_ta = {53'd0, d1_q[65:48]} * {19'd0, l3_sxx};
+  wire [70:0] l3_tc;
+  assign l3_tc = {53'd0, d1_q[102:85]} * {19'd0, l3_syy};
+  wire [71:0] l3_tb;
+  assign l3_tb = {53'd0, l3_babs} * {20'd0, l3_sxy};
+  wire [72:0] l3_tbx;
+  assign l3_tbx = {l3_tb, 1'b0};
+  reg  [72:0] l3_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q3 <= {2'd0, ta3} + {2'd0, tc3} + ((sneg3 ^ cbs3) ? (~tbx3 + 73'd1) : tbx3);
+      l3_q <= {2'd0, l3_ta} + {2'd0, l3_tc} + ((l3_sneg ^ l3_cbs) ? (~l3_tbx + 73'd1) : l3_tbx);
     end
   end
-  wire [6:0] shm13;
-  assign shm13 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt3;
-  assign qt3 = $signed(q3) >>> shm13;
-  wire [72:0] qt13;
-  assign qt13 = qt3 + 73'd1;
-  wire [72:0] npf3;
-  assign npf3 = $signed(qt13) >>> 1;
-  reg  [12:0] np3;
-  reg  pos3;
+  wire [6:0] l3_shm1;
+  assign l3_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l3_qt;
+  assign l3_qt = $signed(l3_q) >>> l3_shm1;
+  wire [72:0] l3_qt1;
+  assign l3_qt1 = l3_qt + 73'd1;
+  wire [72:0] l3_npf;
+  assign l3_npf = $signed(l3_qt1) >>> 1;
+  reg  [12:0] l3_np;
+  reg  l3_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np3 <= (|npf3[71:13]) ? 13'd8191 : npf3[12:0];
-      pos3 <= ~npf3[72] & ~d2_q[190];
+      l3_np <= (|l3_npf[71:13]) ? 13'd8191 : l3_npf[12:0];
+      l3_pos <= ~l3_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex3;
+  wire [16:0] l3_ex;
   neo_scu_exp u_exp3 (
-    .np_i(np3),
-    .e_o(ex3)
+    .np_i(l3_np),
+    .e_o(l3_ex)
   );
-  reg  [16:0] e3;
-  reg  ok4_3;
+  reg  [16:0] l3_e;
+  reg  l3_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e3 <= ex3;
-      ok4_3 <= pos3;
+      l3_e <= l3_ex;
+      l3_ok4_ <= l3_pos;
     end
   end
-  wire [25:0] oe3;
-  assign oe3 = {18'd0, d4_q[116:109]} * {9'd0, e3};
-  wire [25:0] oer3;
-  assign oer3 = oe3 + 26'd2048;
-  wire [13:0] ar3;
-  assign ar3 = oer3[25:12];
-  wire [13:0] arx3;
-  assign arx3 = ar3;
-  wire [11:0] acap3;
-  assign acap3 = (arx3 > 14'd4055) ? 12'd4055 : arx3[11:0];
-  reg  [11:0] alpha3;
-  reg  ok5_3;
+  wire [25:0] l3_oe;
+  assign l3_oe = {18'd0, d4_q[116:109]} * {9'd0, l3_e};
+  wire [25:0] l3_oer;
+  assign l3_oer = l3_oe + 26'd2048;
+  wire [13:0] l3_ar;
+  assign l3_ar = l3_oer[25:12];
+  wire [13:0] l3_arx;
+  assign l3_arx = l3_ar;
+  wire [11:0] l3_acap;
+  assign l3_acap = (l3_arx > 14'd4055) ? 12'd4055 : l3_arx[11:0];
+  reg  [11:0] l3_alpha;
+  reg  l3_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha3 <= acap3;
-      ok5_3 <= ok4_3 & (acap3 >= 12'd17);
+      l3_alpha <= l3_acap;
+      l3_ok5_ <= l3_ok4_ & (l3_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_3;
-  assign ix6_3 = {d6_q[197:196], 4'd3};
-  wire inside3;
-  assign inside3 = ({1'b0, ix6_3[2:0]} < d6_q[185:182]) & ({1'b0, ix6_3[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old3;
-  assign t_old3 = d6_q[192] ? 17'd65536 : rd_t3;
-  wire [83:0] c_old3;
-  assign c_old3 = d6_q[192] ? 84'd0 : rd_c3;
-  wire dn_old3;
-  assign dn_old3 = d6_q[192] ? ~inside3 : rd_dn3;
-  wire bl3;
-  assign bl3 = ok5_3 & ~dn_old3;
-  wire [29:0] wp3;
-  assign wp3 = {18'd0, alpha3} * {13'd0, t_old3} + 30'd2048;
-  wire [16:0] wt3;
-  assign wt3 = wp3[28:12];
-  wire [16:0] tt3;
-  assign tt3 = t_old3 - wt3;
-  wire fin3;
-  assign fin3 = tt3 < 17'd7;
-  wire add3;
-  assign add3 = bl3 & ~fin3;
-  wire [16:0] t_new3;
-  assign t_new3 = add3 ? tt3 : t_old3;
-  wire dn_new3;
-  assign dn_new3 = dn_old3 | (bl3 & fin3);
-  wire [27:0] csr3;
-  assign csr3 = c_old3[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt3};
-  wire [27:0] csg3;
-  assign csg3 = c_old3[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt3};
-  wire [27:0] csb3;
-  assign csb3 = c_old3[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt3};
-  wire [83:0] c_new3;
-  assign c_new3 = add3 ? {csb3, csg3, csr3} : c_old3;
+  wire [5:0] l3_ix6_;
+  assign l3_ix6_ = {d5_q[197:196], 4'd3};
+  wire l3_inside;
+  assign l3_inside = ({1'b0, l3_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l3_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l3_t_old;
+  assign l3_t_old = d5_q[192] ? 17'd65536 : rd_t3;
+  wire [83:0] l3_c_old;
+  assign l3_c_old = d5_q[192] ? 84'd0 : rd_c3;
+  wire l3_dn_old;
+  assign l3_dn_old = d5_q[192] ? ~l3_inside : rd_dn3;
+  wire l3_bl;
+  assign l3_bl = l3_ok5_ & ~l3_dn_old;
+  wire [29:0] l3_wp;
+  assign l3_wp = {18'd0, l3_alpha} * {13'd0, l3_t_old} + 30'd2048;
+  wire [16:0] l3_wt;
+  assign l3_wt = l3_wp[28:12];
+  wire [16:0] l3_tt;
+  assign l3_tt = l3_t_old - l3_wt;
+  wire l3_fin;
+  assign l3_fin = l3_tt < 17'd7;
+  wire l3_add;
+  assign l3_add = l3_bl & ~l3_fin;
+  wire [16:0] l3_t_new;
+  assign l3_t_new = l3_add ? l3_tt : l3_t_old;
+  wire l3_dn_new;
+  assign l3_dn_new = l3_dn_old | (l3_bl & l3_fin);
+  wire [27:0] l3_csr;
+  assign l3_csr = l3_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l3_wt};
+  wire [27:0] l3_csg;
+  assign l3_csg = l3_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l3_wt};
+  wire [27:0] l3_csb;
+  assign l3_csb = l3_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l3_wt};
+  wire [83:0] l3_c_new;
+  assign l3_c_new = l3_add ? {l3_csb, l3_csg, l3_csr} : l3_c_old;
 
   // lane 4
-  wire [5:0] ix4;
-  assign ix4 = {issue_bundle[197:196], 4'd4};
-  wire [16:0] pxx4;
-  assign pxx4 = {1'b0, issue_bundle[165:150]} + {14'd0, ix4[2:0]};
-  wire [26:0] dx4;
-  assign dx4 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx4, 8'd0};
-  wire [25:0] ax4;
-  assign ax4 = dx4[26] ? (~dx4[25:0] + 26'd1) : dx4[25:0];
-  wire [16:0] pxy4;
-  assign pxy4 = {1'b0, issue_bundle[181:166]} + {14'd0, ix4[5:3]};
-  wire [26:0] dy4;
-  assign dy4 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy4, 8'd0};
-  wire [25:0] ay4;
-  assign ay4 = dy4[26] ? (~dy4[25:0] + 26'd1) : dy4[25:0];
-  reg  [51:0] sxx4;
-  reg  [51:0] syy4;
-  reg  [51:0] sxy4;
-  reg  sneg4;
+  wire [5:0] l4_ix;
+  assign l4_ix = {issue_bundle[197:196], 4'd4};
+  wire [16:0] l4_pxx;
+  assign l4_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l4_ix[2:0]};
+  wire [26:0] l4_dx;
+  assign l4_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l4_pxx, 8'd0};
+  wire [25:0] l4_ax;
+  assign l4_ax = l4_dx[26] ? (~l4_dx[25:0] + 26'd1) : l4_dx[25:0];
+  wire [16:0] l4_pxy;
+  assign l4_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l4_ix[5:3]};
+  wire [26:0] l4_dy;
+  assign l4_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l4_pxy, 8'd0};
+  wire [25:0] l4_ay;
+  assign l4_ay = l4_dy[26] ? (~l4_dy[25:0] + 26'd1) : l4_dy[25:0];
+  reg  [51:0] l4_sxx;
+  reg  [51:0] l4_syy;
+  reg  [51:0] l4_sxy;
+  reg  l4_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx4 <= {26'd0, ax4} * {26'd0, ax4};
-      syy4 <= {26'd0, ay4} * {26'd0, ay4};
-      sxy4 <= {26'd0, ax4} * {26'd0, ay4};
-      sneg4 <= dx4[26] ^ dy4[26];
+      l4_sxx <= {26'd0, l4_ax} * {26'd0, l4_ax};
+      l4_syy <= {26'd0, l4_ay} * {26'd0, l4_ay};
+      l4_sxy <= {26'd0, l4_ax} * {26'd0, l4_ay};
+      l4_sneg <= l4_dx[26] ^ l4_dy[26];
     end
   end
-  wire cbs4;
-  assign cbs4 = d1_q[84];
-  wire [18:0] babs4;
-  assign babs4 = cbs4 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta4;
-  assign ta4 = {53'd0, d1_q[65:48]} * {19'd0, sxx4};
-  wire [70:0] tc4;
-  assign tc4 = {53'd0, d1_q[102:85]} * {19'd0, syy4};
-  wire [71:0] tb4;
-  assign tb4 = {53'd0, babs4} * {20'd0, sxy4};
-  wire [72:0] tbx4;
-  assign tbx4 = {tb4, 1'b0};
-  reg  [72:0] q4;
+  wire l4_cbs;
+  assign l4_cbs = d1_q[84];
+  wire [18:0] l4_babs;
+  assign l4_babs = l4_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l4_ta;
+  assign l4_ta = {53'd0, d1_q[65:48]} * {19'd0, l4_sxx};
+  wire [70:0] l4_tc;
+  assign l4_tc = {53'd0, d1_q[102:85]} * {19'd0, l4_syy};
+  wire [71:0] l4_tb;
+  assign l4_tb = {53'd0, l4_babs} * {20'd0, l4_sxy};
+  wire [72:0] l4_tbx;
+  assign l4_tbx = {l4_tb, 1'b0};
+  reg  [72:0] l4_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q4 <= {2'd0, ta4} + {2'd0, tc4} + ((sneg4 ^ cbs4) ? (~tbx4 + 73'd1) : tbx4);
+      l4_q <= {2'd0, l4_ta} + {2'd0, l4_tc} + ((l4_sneg ^ l4_cbs) ? (~l4_tbx + 73'd1) : l4_tbx);
     end
   end
-  wire [6:0] shm14;
-  assign shm14 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt4;
-  assign qt4 = $signed(q4) >>> shm14;
-  wire [72:0] qt14;
-  assign qt14 = qt4 + 73'd1;
-  wire [72:0] npf4;
-  assign npf4 = $signed(qt14) >>> 1;
-  reg  [12:0] np4;
-  reg  pos4;
+  wire [6:0] l4_shm1;
+  assign l4_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l4_qt;
+  assign l4_qt = $signed(l4_q) >>> l4_shm1;
+  wire [72:0] l4_qt1;
+  assign l4_qt1 = l4_qt + 73'd1;
+  wire [72:0] l4_npf;
+  assign l4_npf = $signed(l4_qt1) >>> 1;
+  reg  [12:0] l4_np;
+  reg  l4_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np4 <= (|npf4[71:13]) ? 13'd8191 : npf4[12:0];
-      pos4 <= ~npf4[72] & ~d2_q[190];
+      l4_np <= (|l4_npf[71:13]) ? 13'd8191 : l4_npf[12:0];
+      l4_pos <= ~l4_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex4;
+  wire [16:0] l4_ex;
   neo_scu_exp u_exp4 (
-    .np_i(np4),
-    .e_o(ex4)
+    .np_i(l4_np),
+    .e_o(l4_ex)
   );
-  reg  [16:0] e4;
-  reg  ok4_4;
+  reg  [16:0] l4_e;
+  reg  l4_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e4 <= ex4;
-      ok4_4 <= pos4;
+      l4_e <= l4_ex;
+      l4_ok4_ <= l4_pos;
     end
   end
-  wire [25:0] oe4;
-  assign oe4 = {18'd0, d4_q[116:109]} * {9'd0, e4};
-  wire [25:0] oer4;
-  assign oer4 = oe4 + 26'd2048;
-  wire [13:0] ar4;
-  assign ar4 = oer4[25:12];
-  wire [13:0] arx4;
-  assign arx4 = ar4;
-  wire [11:0] acap4;
-  assign acap4 = (arx4 > 14'd4055) ? 12'd4055 : arx4[11:0];
-  reg  [11:0] alpha4;
-  reg  ok5_4;
+  wire [25:0] l4_oe;
+  assign l4_oe = {18'd0, d4_q[116:109]} * {9'd0, l4_e};
+  wire [25:0] l4_oer;
+  assign l4_oer = l4_oe + 26'd2048;
+  wire [13:0] l4_ar;
+  assign l4_ar = l4_oer[25:12];
+  wire [13:0] l4_arx;
+  assign l4_arx = l4_ar;
+  wire [11:0] l4_acap;
+  assign l4_acap = (l4_arx > 14'd4055) ? 12'd4055 : l4_arx[11:0];
+  reg  [11:0] l4_alpha;
+  reg  l4_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha4 <= acap4;
-      ok5_4 <= ok4_4 & (acap4 >= 12'd17);
+      l4_alpha <= l4_acap;
+      l4_ok5_ <= l4_ok4_ & (l4_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_4;
-  assign ix6_4 = {d6_q[197:196], 4'd4};
-  wire inside4;
-  assign inside4 = ({1'b0, ix6_4[2:0]} < d6_q[185:182]) & ({1'b0, ix6_4[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old4;
-  assign t_old4 = d6_q[192] ? 17'd65536 : rd_t4;
-  wire [83:0] c_old4;
-  assign c_old4 = d6_q[192] ? 84'd0 : rd_c4;
-  wire dn_old4;
-  assign dn_old4 = d6_q[192] ? ~inside4 : rd_dn4;
-  wire bl4;
-  assign bl4 = ok5_4 & ~dn_old4;
-  wire [29:0] wp4;
-  assign wp4 = {18'd0, alpha4} * {13'd0, t_old4} + 30'd2048;
-  wire [16:0] wt4;
-  assign wt4 = wp4[28:12];
-  wire [16:0] tt4;
-  assign tt4 = t_old4 - wt4;
-  wire fin4;
-  assign fin4 = tt4 < 17'd7;
-  wire add4;
-  assign add4 = bl4 & ~fin4;
-  wire [16:0] t_new4;
-  assign t_new4 = add4 ? tt4 : t_old4;
-  wire dn_new4;
-  assign dn_new4 = dn_old4 | (bl4 & fin4);
-  wire [27:0] csr4;
-  assign csr4 = c_old4[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt4};
-  wire [27:0] csg4;
-  assign csg4 = c_old4[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt4};
-  wire [27:0] csb4;
-  assign csb4 = c_old4[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt4};
-  wire [83:0] c_new4;
-  assign c_new4 = add4 ? {csb4, csg4, csr4} : c_old4;
+  wire [5:0] l4_ix6_;
+  assign l4_ix6_ = {d5_q[197:196], 4'd4};
+  wire l4_inside;
+  assign l4_inside = ({1'b0, l4_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l4_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l4_t_old;
+  assign l4_t_old = d5_q[192] ? 17'd65536 : rd_t4;
+  wire [83:0] l4_c_old;
+  assign l4_c_old = d5_q[192] ? 84'd0 : rd_c4;
+  wire l4_dn_old;
+  assign l4_dn_old = d5_q[192] ? ~l4_inside : rd_dn4;
+  wire l4_bl;
+  assign l4_bl = l4_ok5_ & ~l4_dn_old;
+  wire [29:0] l4_wp;
+  assign l4_wp = {18'd0, l4_alpha} * {13'd0, l4_t_old} + 30'd2048;
+  wire [16:0] l4_wt;
+  assign l4_wt = l4_wp[28:12];
+  wire [16:0] l4_tt;
+  assign l4_tt = l4_t_old - l4_wt;
+  wire l4_fin;
+  assign l4_fin = l4_tt < 17'd7;
+  wire l4_add;
+  assign l4_add = l4_bl & ~l4_fin;
+  wire [16:0] l4_t_new;
+  assign l4_t_new = l4_add ? l4_tt : l4_t_old;
+  wire l4_dn_new;
+  assign l4_dn_new = l4_dn_old | (l4_bl & l4_fin);
+  wire [27:0] l4_csr;
+  assign l4_csr = l4_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l4_wt};
+  wire [27:0] l4_csg;
+  assign l4_csg = l4_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l4_wt};
+  wire [27:0] l4_csb;
+  assign l4_csb = l4_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l4_wt};
+  wire [83:0] l4_c_new;
+  assign l4_c_new = l4_add ? {l4_csb, l4_csg, l4_csr} : l4_c_old;
 
   // lane 5
-  wire [5:0] ix5;
-  assign ix5 = {issue_bundle[197:196], 4'd5};
-  wire [16:0] pxx5;
-  assign pxx5 = {1'b0, issue_bundle[165:150]} + {14'd0, ix5[2:0]};
-  wire [26:0] dx5;
-  assign dx5 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx5, 8'd0};
-  wire [25:0] ax5;
-  assign ax5 = dx5[26] ? (~dx5[25:0] + 26'd1) : dx5[25:0];
-  wire [16:0] pxy5;
-  assign pxy5 = {1'b0, issue_bundle[181:166]} + {14'd0, ix5[5:3]};
-  wire [26:0] dy5;
-  assign dy5 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy5, 8'd0};
-  wire [25:0] ay5;
-  assign ay5 = dy5[26] ? (~dy5[25:0] + 26'd1) : dy5[25:0];
-  reg  [51:0] sxx5;
-  reg  [51:0] syy5;
-  reg  [51:0] sxy5;
-  reg  sneg5;
+  wire [5:0] l5_ix;
+  assign l5_ix = {issue_bundle[197:196], 4'd5};
+  wire [16:0] l5_pxx;
+  assign l5_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l5_ix[2:0]};
+  wire [26:0] l5_dx;
+  assign l5_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l5_pxx, 8'd0};
+  wire [25:0] l5_ax;
+  assign l5_ax = l5_dx[26] ? (~l5_dx[25:0] + 26'd1) : l5_dx[25:0];
+  wire [16:0] l5_pxy;
+  assign l5_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l5_ix[5:3]};
+  wire [26:0] l5_dy;
+  assign l5_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l5_pxy, 8'd0};
+  wire [25:0] l5_ay;
+  assign l5_ay = l5_dy[26] ? (~l5_dy[25:0] + 26'd1) : l5_dy[25:0];
+  reg  [51:0] l5_sxx;
+  reg  [51:0] l5_syy;
+  reg  [51:0] l5_sxy;
+  reg  l5_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx5 <= {26'd0, ax5} * {26'd0, ax5};
-      syy5 <= {26'd0, ay5} * {26'd0, ay5};
-      sxy5 <= {26'd0, ax5} * {26'd0, ay5};
-      sneg5 <= dx5[26] ^ dy5[26];
+      l5_sxx <= {26'd0, l5_ax} * {26'd0, l5_ax};
+      l5_syy <= {26'd0, l5_ay} * {26'd0, l5_ay};
+      l5_sxy <= {26'd0, l5_ax} * {26'd0, l5_ay};
+      l5_sneg <= l5_dx[26] ^ l5_dy[26];
     end
   end
-  wire cbs5;
-  assign cbs5 = d1_q[84];
-  wire [18:0] babs5;
-  assign babs5 = cbs5 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta5;
-  assign ta5 = {53'd0, d1_q[65:48]} * {19'd0, sxx5};
-  wire [70:0] tc5;
-  assign tc5 = {53'd0, d1_q[102:85]} * {19'd0, syy5};
-  wire [71:0] tb5;
-  assign tb5 = {53'd0, babs5} * {20'd0, sxy5};
-  wire [72:0] tbx5;
-  assign tbx5 = {tb5, 1'b0};
-  reg  [72:0] q5;
+  wire l5_cbs;
+  assign l5_cbs = d1_q[84];
+  wire [18:0] l5_babs;
+  assign l5_babs = l5_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l5_ta;
+  assign l5_ta = {53'd0, d1_q[65:48]} * {19'd0, l5_sxx};
+  wire [70:0] l5_tc;
+  assign l5_tc = {53'd0, d1_q[102:85]} * {19'd0, l5_syy};
+  wire [71:0] l5_tb;
+  assign l5_tb = {53'd0, l5_babs} * {20'd0, l5_sxy};
+  wire [72:0] l5_tbx;
+  assign l5_tbx = {l5_tb, 1'b0};
+  reg  [72:0] l5_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q5 <= {2'd0, ta5} + {2'd0, tc5} + ((sneg5 ^ cbs5) ? (~tbx5 + 73'd1) : tbx5);
+      l5_q <= {2'd0, l5_ta} + {2'd0, l5_tc} + ((l5_sneg ^ l5_cbs) ? (~l5_tbx + 73'd1) : l5_tbx);
     end
   end
-  wire [6:0] shm15;
-  assign shm15 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt5;
-  assign qt5 = $signed(q5) >>> shm15;
-  wire [72:0] qt15;
-  assign qt15 = qt5 + 73'd1;
-  wire [72:0] npf5;
-  assign npf5 = $signed(qt15) >>> 1;
-  reg  [12:0] np5;
-  reg  pos5;
+  wire [6:0] l5_shm1;
+  assign l5_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l5_qt;
+  assign l5_qt = $signed(l5_q) >>> l5_shm1;
+  wire [72:0] l5_qt1;
+  assign l5_qt1 = l5_qt + 73'd1;
+  wire [72:0] l5_npf;
+  assign l5_npf = $signed(l5_qt1) >>> 1;
+  reg  [12:0] l5_np;
+  reg  l5_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np5 <= (|npf5[71:13]) ? 13'd8191 : npf5[12:0];
-      pos5 <= ~npf5[72] & ~d2_q[190];
+      l5_np <= (|l5_npf[71:13]) ? 13'd8191 : l5_npf[12:0];
+      l5_pos <= ~l5_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex5;
+  wire [16:0] l5_ex;
   neo_scu_exp u_exp5 (
-    .np_i(np5),
-    .e_o(ex5)
+    .np_i(l5_np),
+    .e_o(l5_ex)
   );
-  reg  [16:0] e5;
-  reg  ok4_5;
+  reg  [16:0] l5_e;
+  reg  l5_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e5 <= ex5;
-      ok4_5 <= pos5;
+      l5_e <= l5_ex;
+      l5_ok4_ <= l5_pos;
     end
   end
-  wire [25:0] oe5;
-  assign oe5 = {18'd0, d4_q[116:109]} * {9'd0, e5};
-  wire [25:0] oer5;
-  assign oer5 = oe5 + 26'd2048;
-  wire [13:0] ar5;
-  assign ar5 = oer5[25:12];
-  wire [13:0] arx5;
-  assign arx5 = ar5;
-  wire [11:0] acap5;
-  assign acap5 = (arx5 > 14'd4055) ? 12'd4055 : arx5[11:0];
-  reg  [11:0] alpha5;
-  reg  ok5_5;
+  wire [25:0] l5_oe;
+  assign l5_oe = {18'd0, d4_q[116:109]} * {9'd0, l5_e};
+  wire [25:0] l5_oer;
+  assign l5_oer = l5_oe + 26'd2048;
+  wire [13:0] l5_ar;
+  assign l5_ar = l5_oer[25:12];
+  wire [13:0] l5_arx;
+  assign l5_arx = l5_ar;
+  wire [11:0] l5_acap;
+  assign l5_acap = (l5_arx > 14'd4055) ? 12'd4055 : l5_arx[11:0];
+  reg  [11:0] l5_alpha;
+  reg  l5_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha5 <= acap5;
-      ok5_5 <= ok4_5 & (acap5 >= 12'd17);
+      l5_alpha <= l5_acap;
+      l5_ok5_ <= l5_ok4_ & (l5_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_5;
-  assign ix6_5 = {d6_q[197:196], 4'd5};
-  wire inside5;
-  assign inside5 = ({1'b0, ix6_5[2:0]} < d6_q[185:182]) & ({1'b0, ix6_5[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old5;
-  assign t_old5 = d6_q[192] ? 17'd65536 : rd_t5;
-  wire [83:0] c_old5;
-  assign c_old5 = d6_q[192] ? 84'd0 : rd_c5;
-  wire dn_old5;
-  assign dn_old5 = d6_q[192] ? ~inside5 : rd_dn5;
-  wire bl5;
-  assign bl5 = ok5_5 & ~dn_old5;
-  wire [29:0] wp5;
-  assign wp5 = {18'd0, alpha5} * {13'd0, t_old5} + 30'd2048;
-  wire [16:0] wt5;
-  assign wt5 = wp5[28:12];
-  wire [16:0] tt5;
-  assign tt5 = t_old5 - wt5;
-  wire fin5;
-  assign fin5 = tt5 < 17'd7;
-  wire add5;
-  assign add5 = bl5 & ~fin5;
-  wire [16:0] t_new5;
-  assign t_new5 = add5 ? tt5 : t_old5;
-  wire dn_new5;
-  assign dn_new5 = dn_old5 | (bl5 & fin5);
-  wire [27:0] csr5;
-  assign csr5 = c_old5[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt5};
-  wire [27:0] csg5;
-  assign csg5 = c_old5[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt5};
-  wire [27:0] csb5;
-  assign csb5 = c_old5[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt5};
-  wire [83:0] c_new5;
-  assign c_new5 = add5 ? {csb5, csg5, csr5} : c_old5;
+  wire [5:0] l5_ix6_;
+  assign l5_ix6_ = {d5_q[197:196], 4'd5};
+  wire l5_inside;
+  assign l5_inside = ({1'b0, l5_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l5_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l5_t_old;
+  assign l5_t_old = d5_q[192] ? 17'd65536 : rd_t5;
+  wire [83:0] l5_c_old;
+  assign l5_c_old = d5_q[192] ? 84'd0 : rd_c5;
+  wire l5_dn_old;
+  assign l5_dn_old = d5_q[192] ? ~l5_inside : rd_dn5;
+  wire l5_bl;
+  assign l5_bl = l5_ok5_ & ~l5_dn_old;
+  wire [29:0] l5_wp;
+  assign l5_wp = {18'd0, l5_alpha} * {13'd0, l5_t_old} + 30'd2048;
+  wire [16:0] l5_wt;
+  assign l5_wt = l5_wp[28:12];
+  wire [16:0] l5_tt;
+  assign l5_tt = l5_t_old - l5_wt;
+  wire l5_fin;
+  assign l5_fin = l5_tt < 17'd7;
+  wire l5_add;
+  assign l5_add = l5_bl & ~l5_fin;
+  wire [16:0] l5_t_new;
+  assign l5_t_new = l5_add ? l5_tt : l5_t_old;
+  wire l5_dn_new;
+  assign l5_dn_new = l5_dn_old | (l5_bl & l5_fin);
+  wire [27:0] l5_csr;
+  assign l5_csr = l5_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l5_wt};
+  wire [27:0] l5_csg;
+  assign l5_csg = l5_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l5_wt};
+  wire [27:0] l5_csb;
+  assign l5_csb = l5_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l5_wt};
+  wire [83:0] l5_c_new;
+  assign l5_c_new = l5_add ? {l5_csb, l5_csg, l5_csr} : l5_c_old;
 
   // lane 6
-  wire [5:0] ix6;
-  assign ix6 = {issue_bundle[197:196], 4'd6};
-  wire [16:0] pxx6;
-  assign pxx6 = {1'b0, issue_bundle[165:150]} + {14'd0, ix6[2:0]};
-  wire [26:0] dx6;
-  assign dx6 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx6, 8'd0};
-  wire [25:0] ax6;
-  assign ax6 = dx6[26] ? (~dx6[25:0] + 26'd1) : dx6[25:0];
-  wire [16:0] pxy6;
-  assign pxy6 = {1'b0, issue_bundle[181:166]} + {14'd0, ix6[5:3]};
-  wire [26:0] dy6;
-  assign dy6 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy6, 8'd0};
-  wire [25:0] ay6;
-  assign ay6 = dy6[26] ? (~dy6[25:0] + 26'd1) : dy6[25:0];
-  reg  [51:0] sxx6;
-  reg  [51:0] syy6;
-  reg  [51:0] sxy6;
-  reg  sneg6;
+  wire [5:0] l6_ix;
+  assign l6_ix = {issue_bundle[197:196], 4'd6};
+  wire [16:0] l6_pxx;
+  assign l6_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l6_ix[2:0]};
+  wire [26:0] l6_dx;
+  assign l6_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l6_pxx, 8'd0};
+  wire [25:0] l6_ax;
+  assign l6_ax = l6_dx[26] ? (~l6_dx[25:0] + 26'd1) : l6_dx[25:0];
+  wire [16:0] l6_pxy;
+  assign l6_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l6_ix[5:3]};
+  wire [26:0] l6_dy;
+  assign l6_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l6_pxy, 8'd0};
+  wire [25:0] l6_ay;
+  assign l6_ay = l6_dy[26] ? (~l6_dy[25:0] + 26'd1) : l6_dy[25:0];
+  reg  [51:0] l6_sxx;
+  reg  [51:0] l6_syy;
+  reg  [51:0] l6_sxy;
+  reg  l6_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx6 <= {26'd0, ax6} * {26'd0, ax6};
-      syy6 <= {26'd0, ay6} * {26'd0, ay6};
-      sxy6 <= {26'd0, ax6} * {26'd0, ay6};
-      sneg6 <= dx6[26] ^ dy6[26];
+      l6_sxx <= {26'd0, l6_ax} * {26'd0, l6_ax};
+      l6_syy <= {26'd0, l6_ay} * {26'd0, l6_ay};
+      l6_sxy <= {26'd0, l6_ax} * {26'd0, l6_ay};
+      l6_sneg <= l6_dx[26] ^ l6_dy[26];
     end
   end
-  wire cbs6;
-  assign cbs6 = d1_q[84];
-  wire [18:0] babs6;
-  assign babs6 = cbs6 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta6;
-  assign ta6 = {53'd0, d1_q[65:48]} * {19'd0, sxx6};
-  wire [70:0] tc6;
-  assign tc6 = {53'd0, d1_q[102:85]} * {19'd0, syy6};
-  wire [71:0] tb6;
-  assign tb6 = {53'd0, babs6} * {20'd0, sxy6};
-  wire [72:0] tbx6;
-  assign tbx6 = {tb6, 1'b0};
-  reg  [72:0] q6;
+  wire l6_cbs;
+  assign l6_cbs = d1_q[84];
+  wire [18:0] l6_babs;
+  assign l6_babs = l6_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l6_ta;
+  assign l6_ta = {53'd0, d1_q[65:48]} * {19'd0, l6_sxx};
+  wire [70:0] l6_tc;
+  assign l6_tc = {53'd0, d1_q[102:85]} * {19'd0, l6_syy};
+  wire [71:0] l6_tb;
+  assign l6_tb = {53'd0, l6_babs} * {20'd0, l6_sxy};
+  wire [72:0] l6_tbx;
+  assign l6_tbx = {l6_tb, 1'b0};
+  reg  [72:0] l6_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q6 <= {2'd0, ta6} + {2'd0, tc6} + ((sneg6 ^ cbs6) ? (~tbx6 + 73'd1) : tbx6);
+      l6_q <= {2'd0, l6_ta} + {2'd0, l6_tc} + ((l6_sneg ^ l6_cbs) ? (~l6_tbx + 73'd1) : l6_tbx);
     end
   end
-  wire [6:0] shm16;
-  assign shm16 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt6;
-  assign qt6 = $signed(q6) >>> shm16;
-  wire [72:0] qt16;
-  assign qt16 = qt6 + 73'd1;
-  wire [72:0] npf6;
-  assign npf6 = $signed(qt16) >>> 1;
-  reg  [12:0] np6;
-  reg  pos6;
+  wire [6:0] l6_shm1;
+  assign l6_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l6_qt;
+  assign l6_qt = $signed(l6_q) >>> l6_shm1;
+  wire [72:0] l6_qt1;
+  assign l6_qt1 = l6_qt + 73'd1;
+  wire [72:0] l6_npf;
+  assign l6_npf = $signed(l6_qt1) >>> 1;
+  reg  [12:0] l6_np;
+  reg  l6_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np6 <= (|npf6[71:13]) ? 13'd8191 : npf6[12:0];
-      pos6 <= ~npf6[72] & ~d2_q[190];
+      l6_np <= (|l6_npf[71:13]) ? 13'd8191 : l6_npf[12:0];
+      l6_pos <= ~l6_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex6;
+  wire [16:0] l6_ex;
   neo_scu_exp u_exp6 (
-    .np_i(np6),
-    .e_o(ex6)
+    .np_i(l6_np),
+    .e_o(l6_ex)
   );
-  reg  [16:0] e6;
-  reg  ok4_6;
+  reg  [16:0] l6_e;
+  reg  l6_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e6 <= ex6;
-      ok4_6 <= pos6;
+      l6_e <= l6_ex;
+      l6_ok4_ <= l6_pos;
     end
   end
-  wire [25:0] oe6;
-  assign oe6 = {18'd0, d4_q[116:109]} * {9'd0, e6};
-  wire [25:0] oer6;
-  assign oer6 = oe6 + 26'd2048;
-  wire [13:0] ar6;
-  assign ar6 = oer6[25:12];
-  wire [13:0] arx6;
-  assign arx6 = ar6;
-  wire [11:0] acap6;
-  assign acap6 = (arx6 > 14'd4055) ? 12'd4055 : arx6[11:0];
-  reg  [11:0] alpha6;
-  reg  ok5_6;
+  wire [25:0] l6_oe;
+  assign l6_oe = {18'd0, d4_q[116:109]} * {9'd0, l6_e};
+  wire [25:0] l6_oer;
+  assign l6_oer = l6_oe + 26'd2048;
+  wire [13:0] l6_ar;
+  assign l6_ar = l6_oer[25:12];
+  wire [13:0] l6_arx;
+  assign l6_arx = l6_ar;
+  wire [11:0] l6_acap;
+  assign l6_acap = (l6_arx > 14'd4055) ? 12'd4055 : l6_arx[11:0];
+  reg  [11:0] l6_alpha;
+  reg  l6_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha6 <= acap6;
-      ok5_6 <= ok4_6 & (acap6 >= 12'd17);
+      l6_alpha <= l6_acap;
+      l6_ok5_ <= l6_ok4_ & (l6_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_6;
-  assign ix6_6 = {d6_q[197:196], 4'd6};
-  wire inside6;
-  assign inside6 = ({1'b0, ix6_6[2:0]} < d6_q[185:182]) & ({1'b0, ix6_6[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old6;
-  assign t_old6 = d6_q[192] ? 17'd65536 : rd_t6;
-  wire [83:0] c_old6;
-  assign c_old6 = d6_q[192] ? 84'd0 : rd_c6;
-  wire dn_old6;
-  assign dn_old6 = d6_q[192] ? ~inside6 : rd_dn6;
-  wire bl6;
-  assign bl6 = ok5_6 & ~dn_old6;
-  wire [29:0] wp6;
-  assign wp6 = {18'd0, alpha6} * {13'd0, t_old6} + 30'd2048;
-  wire [16:0] wt6;
-  assign wt6 = wp6[28:12];
-  wire [16:0] tt6;
-  assign tt6 = t_old6 - wt6;
-  wire fin6;
-  assign fin6 = tt6 < 17'd7;
-  wire add6;
-  assign add6 = bl6 & ~fin6;
-  wire [16:0] t_new6;
-  assign t_new6 = add6 ? tt6 : t_old6;
-  wire dn_new6;
-  assign dn_new6 = dn_old6 | (bl6 & fin6);
-  wire [27:0] csr6;
-  assign csr6 = c_old6[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt6};
-  wire [27:0] csg6;
-  assign csg6 = c_old6[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt6};
-  wire [27:0] csb6;
-  assign csb6 = c_old6[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt6};
-  wire [83:0] c_new6;
-  assign c_new6 = add6 ? {csb6, csg6, csr6} : c_old6;
+  wire [5:0] l6_ix6_;
+  assign l6_ix6_ = {d5_q[197:196], 4'd6};
+  wire l6_inside;
+  assign l6_inside = ({1'b0, l6_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l6_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l6_t_old;
+  assign l6_t_old = d5_q[192] ? 17'd65536 : rd_t6;
+  wire [83:0] l6_c_old;
+  assign l6_c_old = d5_q[192] ? 84'd0 : rd_c6;
+  wire l6_dn_old;
+  assign l6_dn_old = d5_q[192] ? ~l6_inside : rd_dn6;
+  wire l6_bl;
+  assign l6_bl = l6_ok5_ & ~l6_dn_old;
+  wire [29:0] l6_wp;
+  assign l6_wp = {18'd0, l6_alpha} * {13'd0, l6_t_old} + 30'd2048;
+  wire [16:0] l6_wt;
+  assign l6_wt = l6_wp[28:12];
+  wire [16:0] l6_tt;
+  assign l6_tt = l6_t_old - l6_wt;
+  wire l6_fin;
+  assign l6_fin = l6_tt < 17'd7;
+  wire l6_add;
+  assign l6_add = l6_bl & ~l6_fin;
+  wire [16:0] l6_t_new;
+  assign l6_t_new = l6_add ? l6_tt : l6_t_old;
+  wire l6_dn_new;
+  assign l6_dn_new = l6_dn_old | (l6_bl & l6_fin);
+  wire [27:0] l6_csr;
+  assign l6_csr = l6_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l6_wt};
+  wire [27:0] l6_csg;
+  assign l6_csg = l6_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l6_wt};
+  wire [27:0] l6_csb;
+  assign l6_csb = l6_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l6_wt};
+  wire [83:0] l6_c_new;
+  assign l6_c_new = l6_add ? {l6_csb, l6_csg, l6_csr} : l6_c_old;
 
   // lane 7
-  wire [5:0] ix7;
-  assign ix7 = {issue_bundle[197:196], 4'd7};
-  wire [16:0] pxx7;
-  assign pxx7 = {1'b0, issue_bundle[165:150]} + {14'd0, ix7[2:0]};
-  wire [26:0] dx7;
-  assign dx7 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx7, 8'd0};
-  wire [25:0] ax7;
-  assign ax7 = dx7[26] ? (~dx7[25:0] + 26'd1) : dx7[25:0];
-  wire [16:0] pxy7;
-  assign pxy7 = {1'b0, issue_bundle[181:166]} + {14'd0, ix7[5:3]};
-  wire [26:0] dy7;
-  assign dy7 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy7, 8'd0};
-  wire [25:0] ay7;
-  assign ay7 = dy7[26] ? (~dy7[25:0] + 26'd1) : dy7[25:0];
-  reg  [51:0] sxx7;
-  reg  [51:0] syy7;
-  reg  [51:0] sxy7;
-  reg  sneg7;
+  wire [5:0] l7_ix;
+  assign l7_ix = {issue_bundle[197:196], 4'd7};
+  wire [16:0] l7_pxx;
+  assign l7_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l7_ix[2:0]};
+  wire [26:0] l7_dx;
+  assign l7_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l7_pxx, 8'd0};
+  wire [25:0] l7_ax;
+  assign l7_ax = l7_dx[26] ? (~l7_dx[25:0] + 26'd1) : l7_dx[25:0];
+  wire [16:0] l7_pxy;
+  assign l7_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l7_ix[5:3]};
+  wire [26:0] l7_dy;
+  assign l7_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l7_pxy, 8'd0};
+  wire [25:0] l7_ay;
+  assign l7_ay = l7_dy[26] ? (~l7_dy[25:0] + 26'd1) : l7_dy[25:0];
+  reg  [51:0] l7_sxx;
+  reg  [51:0] l7_syy;
+  reg  [51:0] l7_sxy;
+  reg  l7_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx7 <= {26'd0, ax7} * {26'd0, ax7};
-      syy7 <= {26'd0, ay7} * {26'd0, ay7};
-      sxy7 <= {26'd0, ax7} * {26'd0, ay7};
-      sneg7 <= dx7[26] ^ dy7[26];
+      l7_sxx <= {26'd0, l7_ax} * {26'd0, l7_ax};
+      l7_syy <= {26'd0, l7_ay} * {26'd0, l7_ay};
+      l7_sxy <= {26'd0, l7_ax} * {26'd0, l7_ay};
+      l7_sneg <= l7_dx[26] ^ l7_dy[26];
     end
   end
-  wire cbs7;
-  assign cbs7 = d1_q[84];
-  wire [18:0] babs7;
-  assign babs7 = cbs7 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta7;
-  assign ta7 = {53'd0, d1_q[65:48]} * {19'd0, sxx7};
-  wire [70:0] tc7;
-  assign tc7 = {53'd0, d1_q[102:85]} * {19'd0, syy7};
-  wire [71:0] tb7;
-  assign tb7 = {53'd0, babs7} * {20'd0, sxy7};
-  wire [72:0] tbx7;
-  assign tbx7 = {tb7, 1'b0};
-  reg  [72:0] q7;
+  wire l7_cbs;
+  assign l7_cbs = d1_q[84];
+  wire [18:0] l7_babs;
+  assign l7_babs = l7_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l7_ta;
+  assign l7_ta = {53'd0, d1_q[65:48]} * {19'd0, l7_sxx};
+  wire [70:0] l7_tc;
+  assign l7_tc = {53'd0, d1_q[102:85]} * {19'd0, l7_syy};
+  wire [71:0] l7_tb;
+  assign l7_tb = {53'd0, l7_babs} * {20'd0, l7_sxy};
+  wire [72:0] l7_tbx;
+  assign l7_tbx = {l7_tb, 1'b0};
+  reg  [72:0] l7_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q7 <= {2'd0, ta7} + {2'd0, tc7} + ((sneg7 ^ cbs7) ? (~tbx7 + 73'd1) : tbx7);
+      l7_q <= {2'd0, l7_ta} + {2'd0, l7_tc} + ((l7_sneg ^ l7_cbs) ? (~l7_tbx + 73'd1) : l7_tbx);
     end
   end
-  wire [6:0] shm17;
-  assign shm17 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt7;
-  assign qt7 = $signed(q7) >>> shm17;
-  wire [72:0] qt17;
-  assign qt17 = qt7 + 73'd1;
-  wire [72:0] npf7;
-  assign npf7 = $signed(qt17) >>> 1;
-  reg  [12:0] np7;
-  reg  pos7;
+  wire [6:0] l7_shm1;
+  assign l7_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l7_qt;
+  assign l7_qt = $signed(l7_q) >>> l7_shm1;
+  wire [72:0] l7_qt1;
+  assign l7_qt1 = l7_qt + 73'd1;
+  wire [72:0] l7_npf;
+  assign l7_npf = $signed(l7_qt1) >>> 1;
+  reg  [12:0] l7_np;
+  reg  l7_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np7 <= (|npf7[71:13]) ? 13'd8191 : npf7[12:0];
-      pos7 <= ~npf7[72] & ~d2_q[190];
+      l7_np <= (|l7_npf[71:13]) ? 13'd8191 : l7_npf[12:0];
+      l7_pos <= ~l7_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex7;
+  wire [16:0] l7_ex;
   neo_scu_exp u_exp7 (
-    .np_i(np7),
-    .e_o(ex7)
+    .np_i(l7_np),
+    .e_o(l7_ex)
   );
-  reg  [16:0] e7;
-  reg  ok4_7;
+  reg  [16:0] l7_e;
+  reg  l7_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e7 <= ex7;
-      ok4_7 <= pos7;
+      l7_e <= l7_ex;
+      l7_ok4_ <= l7_pos;
     end
   end
-  wire [25:0] oe7;
-  assign oe7 = {18'd0, d4_q[116:109]} * {9'd0, e7};
-  wire [25:0] oer7;
-  assign oer7 = oe7 + 26'd2048;
-  wire [13:0] ar7;
-  assign ar7 = oer7[25:12];
-  wire [13:0] arx7;
-  assign arx7 = ar7;
-  wire [11:0] acap7;
-  assign acap7 = (arx7 > 14'd4055) ? 12'd4055 : arx7[11:0];
-  reg  [11:0] alpha7;
-  reg  ok5_7;
+  wire [25:0] l7_oe;
+  assign l7_oe = {18'd0, d4_q[116:109]} * {9'd0, l7_e};
+  wire [25:0] l7_oer;
+  assign l7_oer = l7_oe + 26'd2048;
+  wire [13:0] l7_ar;
+  assign l7_ar = l7_oer[25:12];
+  wire [13:0] l7_arx;
+  assign l7_arx = l7_ar;
+  wire [11:0] l7_acap;
+  assign l7_acap = (l7_arx > 14'd4055) ? 12'd4055 : l7_arx[11:0];
+  reg  [11:0] l7_alpha;
+  reg  l7_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha7 <= acap7;
-      ok5_7 <= ok4_7 & (acap7 >= 12'd17);
+      l7_alpha <= l7_acap;
+      l7_ok5_ <= l7_ok4_ & (l7_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_7;
-  assign ix6_7 = {d6_q[197:196], 4'd7};
-  wire inside7;
-  assign inside7 = ({1'b0, ix6_7[2:0]} < d6_q[185:182]) & ({1'b0, ix6_7[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old7;
-  assign t_old7 = d6_q[192] ? 17'd65536 : rd_t7;
-  wire [83:0] c_old7;
-  assign c_old7 = d6_q[192] ? 84'd0 : rd_c7;
-  wire dn_old7;
-  assign dn_old7 = d6_q[192] ? ~inside7 : rd_dn7;
-  wire bl7;
-  assign bl7 = ok5_7 & ~dn_old7;
-  wire [29:0] wp7;
-  assign wp7 = {18'd0, alpha7} * {13'd0, t_old7} + 30'd2048;
-  wire [16:0] wt7;
-  assign wt7 = wp7[28:12];
-  wire [16:0] tt7;
-  assign tt7 = t_old7 - wt7;
-  wire fin7;
-  assign fin7 = tt7 < 17'd7;
-  wire add7;
-  assign add7 = bl7 & ~fin7;
-  wire [16:0] t_new7;
-  assign t_new7 = add7 ? tt7 : t_old7;
-  wire dn_new7;
-  assign dn_new7 = dn_old7 | (bl7 & fin7);
-  wire [27:0] csr7;
-  assign csr7 = c_old7[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt7};
-  wire [27:0] csg7;
-  assign csg7 = c_old7[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt7};
-  wire [27:0] csb7;
-  assign csb7 = c_old7[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt7};
-  wire [83:0] c_new7;
-  assign c_new7 = add7 ? {csb7, csg7, csr7} : c_old7;
+  wire [5:0] l7_ix6_;
+  assign l7_ix6_ = {d5_q[197:196], 4'd7};
+  wire l7_inside;
+  assign l7_inside = ({1'b0, l7_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l7_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l7_t_old;
+  assign l7_t_old = d5_q[192] ? 17'd65536 : rd_t7;
+  wire [83:0] l7_c_old;
+  assign l7_c_old = d5_q[192] ? 84'd0 : rd_c7;
+  wire l7_dn_old;
+  assign l7_dn_old = d5_q[192] ? ~l7_inside : rd_dn7;
+  wire l7_bl;
+  assign l7_bl = l7_ok5_ & ~l7_dn_old;
+  wire [29:0] l7_wp;
+  assign l7_wp = {18'd0, l7_alpha} * {13'd0, l7_t_old} + 30'd2048;
+  wire [16:0] l7_wt;
+  assign l7_wt = l7_wp[28:12];
+  wire [16:0] l7_tt;
+  assign l7_tt = l7_t_old - l7_wt;
+  wire l7_fin;
+  assign l7_fin = l7_tt < 17'd7;
+  wire l7_add;
+  assign l7_add = l7_bl & ~l7_fin;
+  wire [16:0] l7_t_new;
+  assign l7_t_new = l7_add ? l7_tt : l7_t_old;
+  wire l7_dn_new;
+  assign l7_dn_new = l7_dn_old | (l7_bl & l7_fin);
+  wire [27:0] l7_csr;
+  assign l7_csr = l7_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l7_wt};
+  wire [27:0] l7_csg;
+  assign l7_csg = l7_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l7_wt};
+  wire [27:0] l7_csb;
+  assign l7_csb = l7_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l7_wt};
+  wire [83:0] l7_c_new;
+  assign l7_c_new = l7_add ? {l7_csb, l7_csg, l7_csr} : l7_c_old;
 
   // lane 8
-  wire [5:0] ix8;
-  assign ix8 = {issue_bundle[197:196], 4'd8};
-  wire [16:0] pxx8;
-  assign pxx8 = {1'b0, issue_bundle[165:150]} + {14'd0, ix8[2:0]};
-  wire [26:0] dx8;
-  assign dx8 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx8, 8'd0};
-  wire [25:0] ax8;
-  assign ax8 = dx8[26] ? (~dx8[25:0] + 26'd1) : dx8[25:0];
-  wire [16:0] pxy8;
-  assign pxy8 = {1'b0, issue_bundle[181:166]} + {14'd0, ix8[5:3]};
-  wire [26:0] dy8;
-  assign dy8 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy8, 8'd0};
-  wire [25:0] ay8;
-  assign ay8 = dy8[26] ? (~dy8[25:0] + 26'd1) : dy8[25:0];
-  reg  [51:0] sxx8;
-  reg  [51:0] syy8;
-  reg  [51:0] sxy8;
-  reg  sneg8;
+  wire [5:0] l8_ix;
+  assign l8_ix = {issue_bundle[197:196], 4'd8};
+  wire [16:0] l8_pxx;
+  assign l8_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l8_ix[2:0]};
+  wire [26:0] l8_dx;
+  assign l8_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l8_pxx, 8'd0};
+  wire [25:0] l8_ax;
+  assign l8_ax = l8_dx[26] ? (~l8_dx[25:0] + 26'd1) : l8_dx[25:0];
+  wire [16:0] l8_pxy;
+  assign l8_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l8_ix[5:3]};
+  wire [26:0] l8_dy;
+  assign l8_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l8_pxy, 8'd0};
+  wire [25:0] l8_ay;
+  assign l8_ay = l8_dy[26] ? (~l8_dy[25:0] + 26'd1) : l8_dy[25:0];
+  reg  [51:0] l8_sxx;
+  reg  [51:0] l8_syy;
+  reg  [51:0] l8_sxy;
+  reg  l8_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx8 <= {26'd0, ax8} * {26'd0, ax8};
-      syy8 <= {26'd0, ay8} * {26'd0, ay8};
-      sxy8 <= {26'd0, ax8} * {26'd0, ay8};
-      sneg8 <= dx8[26] ^ dy8[26];
+      l8_sxx <= {26'd0, l8_ax} * {26'd0, l8_ax};
+      l8_syy <= {26'd0, l8_ay} * {26'd0, l8_ay};
+      l8_sxy <= {26'd0, l8_ax} * {26'd0, l8_ay};
+      l8_sneg <= l8_dx[26] ^ l8_dy[26];
     end
   end
-  wire cbs8;
-  assign cbs8 = d1_q[84];
-  wire [18:0] babs8;
-  assign babs8 = cbs8 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta8;
-  assign ta8 = {53'd0, d1_q[65:48]} * {19'd0, sxx8};
-  wire [70:0] tc8;
-  assign tc8 = {53'd0, d1_q[102:85]} * {19'd0, syy8};
-  wire [71:0] tb8;
-  assign tb8 = {53'd0, babs8} * {20'd0, sxy8};
-  wire [72:0] tbx8;
-  assign tbx8 = {tb8, 1'b0};
-  reg  [72:0] q8;
+  wire l8_cbs;
+  assign l8_cbs = d1_q[84];
+  wire [18:0] l8_babs;
+  assign l8_babs = l8_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l8_ta;
+  assign l8_ta = {53'd0, d1_q[65:48]} * {19'd0, l8_sxx};
+  wire [70:0] l8_tc;
+  assign l8_tc = {53'd0, d1_q[102:85]} * {19'd0, l8_syy};
+  wire [71:0] l8_tb;
+  assign l8_tb = {53'd0, l8_babs} * {20'd0, l8_sxy};
+  wire [72:0] l8_tbx;
+  assign l8_tbx = {l8_tb, 1'b0};
+  reg  [72:0] l8_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q8 <= {2'd0, ta8} + {2'd0, tc8} + ((sneg8 ^ cbs8) ? (~tbx8 + 73'd1) : tbx8);
+      l8_q <= {2'd0, l8_ta} + {2'd0, l8_tc} + ((l8_sneg ^ l8_cbs) ? (~l8_tbx + 73'd1) : l8_tbx);
     end
   end
-  wire [6:0] shm18;
-  assign shm18 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt8;
-  assign qt8 = $signed(q8) >>> shm18;
-  wire [72:0] qt18;
-  assign qt18 = qt8 + 73'd1;
-  wire [72:0] npf8;
-  assign npf8 = $signed(qt18) >>> 1;
-  reg  [12:0] np8;
-  reg  pos8;
+  wire [6:0] l8_shm1;
+  assign l8_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l8_qt;
+  assign l8_qt = $signed(l8_q) >>> l8_shm1;
+  wire [72:0] l8_qt1;
+  assign l8_qt1 = l8_qt + 73'd1;
+  wire [72:0] l8_npf;
+  assign l8_npf = $signed(l8_qt1) >>> 1;
+  reg  [12:0] l8_np;
+  reg  l8_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np8 <= (|npf8[71:13]) ? 13'd8191 : npf8[12:0];
-      pos8 <= ~npf8[72] & ~d2_q[190];
+      l8_np <= (|l8_npf[71:13]) ? 13'd8191 : l8_npf[12:0];
+      l8_pos <= ~l8_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex8;
+  wire [16:0] l8_ex;
   neo_scu_exp u_exp8 (
-    .np_i(np8),
-    .e_o(ex8)
+    .np_i(l8_np),
+    .e_o(l8_ex)
   );
-  reg  [16:0] e8;
-  reg  ok4_8;
+  reg  [16:0] l8_e;
+  reg  l8_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e8 <= ex8;
-      ok4_8 <= pos8;
+      l8_e <= l8_ex;
+      l8_ok4_ <= l8_pos;
     end
   end
-  wire [25:0] oe8;
-  assign oe8 = {18'd0, d4_q[116:109]} * {9'd0, e8};
-  wire [25:0] oer8;
-  assign oer8 = oe8 + 26'd2048;
-  wire [13:0] ar8;
-  assign ar8 = oer8[25:12];
-  wire [13:0] arx8;
-  assign arx8 = ar8;
-  wire [11:0] acap8;
-  assign acap8 = (arx8 > 14'd4055) ? 12'd4055 : arx8[11:0];
-  reg  [11:0] alpha8;
-  reg  ok5_8;
+  wire [25:0] l8_oe;
+  assign l8_oe = {18'd0, d4_q[116:109]} * {9'd0, l8_e};
+  wire [25:0] l8_oer;
+  assign l8_oer = l8_oe + 26'd2048;
+  wire [13:0] l8_ar;
+  assign l8_ar = l8_oer[25:12];
+  wire [13:0] l8_arx;
+  assign l8_arx = l8_ar;
+  wire [11:0] l8_acap;
+  assign l8_acap = (l8_arx > 14'd4055) ? 12'd4055 : l8_arx[11:0];
+  reg  [11:0] l8_alpha;
+  reg  l8_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha8 <= acap8;
-      ok5_8 <= ok4_8 & (acap8 >= 12'd17);
+      l8_alpha <= l8_acap;
+      l8_ok5_ <= l8_ok4_ & (l8_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_8;
-  assign ix6_8 = {d6_q[197:196], 4'd8};
-  wire inside8;
-  assign inside8 = ({1'b0, ix6_8[2:0]} < d6_q[185:182]) & ({1'b0, ix6_8[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old8;
-  assign t_old8 = d6_q[192] ? 17'd65536 : rd_t8;
-  wire [83:0] c_old8;
-  assign c_old8 = d6_q[192] ? 84'd0 : rd_c8;
-  wire dn_old8;
-  assign dn_old8 = d6_q[192] ? ~inside8 : rd_dn8;
-  wire bl8;
-  assign bl8 = ok5_8 & ~dn_old8;
-  wire [29:0] wp8;
-  assign wp8 = {18'd0, alpha8} * {13'd0, t_old8} + 30'd2048;
-  wire [16:0] wt8;
-  assign wt8 = wp8[28:12];
-  wire [16:0] tt8;
-  assign tt8 = t_old8 - wt8;
-  wire fin8;
-  assign fin8 = tt8 < 17'd7;
-  wire add8;
-  assign add8 = bl8 & ~fin8;
-  wire [16:0] t_new8;
-  assign t_new8 = add8 ? tt8 : t_old8;
-  wire dn_new8;
-  assign dn_new8 = dn_old8 | (bl8 & fin8);
-  wire [27:0] csr8;
-  assign csr8 = c_old8[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt8};
-  wire [27:0] csg8;
-  assign csg8 = c_old8[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt8};
-  wire [27:0] csb8;
-  assign csb8 = c_old8[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt8};
-  wire [83:0] c_new8;
-  assign c_new8 = add8 ? {csb8, csg8, csr8} : c_old8;
+  wire [5:0] l8_ix6_;
+  assign l8_ix6_ = {d5_q[197:196], 4'd8};
+  wire l8_inside;
+  assign l8_inside = ({1'b0, l8_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l8_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l8_t_old;
+  assign l8_t_old = d5_q[192] ? 17'd65536 : rd_t8;
+  wire [83:0] l8_c_old;
+  assign l8_c_old = d5_q[192] ? 84'd0 : rd_c8;
+  wire l8_dn_old;
+  assign l8_dn_old = d5_q[192] ? ~l8_inside : rd_dn8;
+  wire l8_bl;
+  assign l8_bl = l8_ok5_ & ~l8_dn_old;
+  wire [29:0] l8_wp;
+  assign l8_wp = {18'd0, l8_alpha} * {13'd0, l8_t_old} + 30'd2048;
+  wire [16:0] l8_wt;
+  assign l8_wt = l8_wp[28:12];
+  wire [16:0] l8_tt;
+  assign l8_tt = l8_t_old - l8_wt;
+  wire l8_fin;
+  assign l8_fin = l8_tt < 17'd7;
+  wire l8_add;
+  assign l8_add = l8_bl & ~l8_fin;
+  wire [16:0] l8_t_new;
+  assign l8_t_new = l8_add ? l8_tt : l8_t_old;
+  wire l8_dn_new;
+  assign l8_dn_new = l8_dn_old | (l8_bl & l8_fin);
+  wire [27:0] l8_csr;
+  assign l8_csr = l8_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l8_wt};
+  wire [27:0] l8_csg;
+  assign l8_csg = l8_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l8_wt};
+  wire [27:0] l8_csb;
+  assign l8_csb = l8_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l8_wt};
+  wire [83:0] l8_c_new;
+  assign l8_c_new = l8_add ? {l8_csb, l8_csg, l8_csr} : l8_c_old;
 
   // lane 9
-  wire [5:0] ix9;
-  assign ix9 = {issue_bundle[197:196], 4'd9};
-  wire [16:0] pxx9;
-  assign pxx9 = {1'b0, issue_bundle[165:150]} + {14'd0, ix9[2:0]};
-  wire [26:0] dx9;
-  assign dx9 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx9, 8'd0};
-  wire [25:0] ax9;
-  assign ax9 = dx9[26] ? (~dx9[25:0] + 26'd1) : dx9[25:0];
-  wire [16:0] pxy9;
-  assign pxy9 = {1'b0, issue_bundle[181:166]} + {14'd0, ix9[5:3]};
-  wire [26:0] dy9;
-  assign dy9 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy9, 8'd0};
-  wire [25:0] ay9;
-  assign ay9 = dy9[26] ? (~dy9[25:0] + 26'd1) : dy9[25:0];
-  reg  [51:0] sxx9;
-  reg  [51:0] syy9;
-  reg  [51:0] sxy9;
-  reg  sneg9;
+  wire [5:0] l9_ix;
+  assign l9_ix = {issue_bundle[197:196], 4'd9};
+  wire [16:0] l9_pxx;
+  assign l9_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l9_ix[2:0]};
+  wire [26:0] l9_dx;
+  assign l9_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l9_pxx, 8'd0};
+  wire [25:0] l9_ax;
+  assign l9_ax = l9_dx[26] ? (~l9_dx[25:0] + 26'd1) : l9_dx[25:0];
+  wire [16:0] l9_pxy;
+  assign l9_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l9_ix[5:3]};
+  wire [26:0] l9_dy;
+  assign l9_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l9_pxy, 8'd0};
+  wire [25:0] l9_ay;
+  assign l9_ay = l9_dy[26] ? (~l9_dy[25:0] + 26'd1) : l9_dy[25:0];
+  reg  [51:0] l9_sxx;
+  reg  [51:0] l9_syy;
+  reg  [51:0] l9_sxy;
+  reg  l9_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx9 <= {26'd0, ax9} * {26'd0, ax9};
-      syy9 <= {26'd0, ay9} * {26'd0, ay9};
-      sxy9 <= {26'd0, ax9} * {26'd0, ay9};
-      sneg9 <= dx9[26] ^ dy9[26];
+      l9_sxx <= {26'd0, l9_ax} * {26'd0, l9_ax};
+      l9_syy <= {26'd0, l9_ay} * {26'd0, l9_ay};
+      l9_sxy <= {26'd0, l9_ax} * {26'd0, l9_ay};
+      l9_sneg <= l9_dx[26] ^ l9_dy[26];
     end
   end
-  wire cbs9;
-  assign cbs9 = d1_q[84];
-  wire [18:0] babs9;
-  assign babs9 = cbs9 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta9;
-  assign ta9 = {53'd0, d1_q[65:48]} * {19'd0, sxx9};
-  wire [70:0] tc9;
-  assign tc9 = {53'd0, d1_q[102:85]} * {19'd0, syy9};
-  wire [71:0] tb9;
-  assign tb9 = {53'd0, babs9} * {20'd0, sxy9};
-  wire [72:0] tbx9;
-  assign tbx9 = {tb9, 1'b0};
-  reg  [72:0] q9;
+  wire l9_cbs;
+  assign l9_cbs = d1_q[84];
+  wire [18:0] l9_babs;
+  assign l9_babs = l9_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l9_ta;
+  assign l9_ta = {53'd0, d1_q[65:48]} * {19'd0, l9_sxx};
+  wire [70:0] l9_tc;
+  assign l9_tc = {53'd0, d1_q[102:85]} * {19'd0, l9_syy};
+  wire [71:0] l9_tb;
+  assign l9_tb = {53'd0, l9_babs} * {20'd0, l9_sxy};
+  wire [72:0] l9_tbx;
+  assign l9_tbx = {l9_tb, 1'b0};
+  reg  [72:0] l9_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q9 <= {2'd0, ta9} + {2'd0, tc9} + ((sneg9 ^ cbs9) ? (~tbx9 + 73'd1) : tbx9);
+      l9_q <= {2'd0, l9_ta} + {2'd0, l9_tc} + ((l9_sneg ^ l9_cbs) ? (~l9_tbx + 73'd1) : l9_tbx);
     end
   end
-  wire [6:0] shm19;
-  assign shm19 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt9;
-  assign qt9 = $signed(q9) >>> shm19;
-  wire [72:0] qt19;
-  assign qt19 = qt9 + 73'd1;
-  wire [72:0] npf9;
-  assign npf9 = $signed(qt19) >>> 1;
-  reg  [12:0] np9;
-  reg  pos9;
+  wire [6:0] l9_shm1;
+  assign l9_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l9_qt;
+  assign l9_qt = $signed(l9_q) >>> l9_shm1;
+  wire [72:0] l9_qt1;
+  assign l9_qt1 = l9_qt + 73'd1;
+  wire [72:0] l9_npf;
+  assign l9_npf = $signed(l9_qt1) >>> 1;
+  reg  [12:0] l9_np;
+  reg  l9_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np9 <= (|npf9[71:13]) ? 13'd8191 : npf9[12:0];
-      pos9 <= ~npf9[72] & ~d2_q[190];
+      l9_np <= (|l9_npf[71:13]) ? 13'd8191 : l9_npf[12:0];
+      l9_pos <= ~l9_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex9;
+  wire [16:0] l9_ex;
   neo_scu_exp u_exp9 (
-    .np_i(np9),
-    .e_o(ex9)
+    .np_i(l9_np),
+    .e_o(l9_ex)
   );
-  reg  [16:0] e9;
-  reg  ok4_9;
+  reg  [16:0] l9_e;
+  reg  l9_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e9 <= ex9;
-      ok4_9 <= pos9;
+      l9_e <= l9_ex;
+      l9_ok4_ <= l9_pos;
     end
   end
-  wire [25:0] oe9;
-  assign oe9 = {18'd0, d4_q[116:109]} * {9'd0, e9};
-  wire [25:0] oer9;
-  assign oer9 = oe9 + 26'd2048;
-  wire [13:0] ar9;
-  assign ar9 = oer9[25:12];
-  wire [13:0] arx9;
-  assign arx9 = ar9;
-  wire [11:0] acap9;
-  assign acap9 = (arx9 > 14'd4055) ? 12'd4055 : arx9[11:0];
-  reg  [11:0] alpha9;
-  reg  ok5_9;
+  wire [25:0] l9_oe;
+  assign l9_oe = {18'd0, d4_q[116:109]} * {9'd0, l9_e};
+  wire [25:0] l9_oer;
+  assign l9_oer = l9_oe + 26'd2048;
+  wire [13:0] l9_ar;
+  assign l9_ar = l9_oer[25:12];
+  wire [13:0] l9_arx;
+  assign l9_arx = l9_ar;
+  wire [11:0] l9_acap;
+  assign l9_acap = (l9_arx > 14'd4055) ? 12'd4055 : l9_arx[11:0];
+  reg  [11:0] l9_alpha;
+  reg  l9_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha9 <= acap9;
-      ok5_9 <= ok4_9 & (acap9 >= 12'd17);
+      l9_alpha <= l9_acap;
+      l9_ok5_ <= l9_ok4_ & (l9_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_9;
-  assign ix6_9 = {d6_q[197:196], 4'd9};
-  wire inside9;
-  assign inside9 = ({1'b0, ix6_9[2:0]} < d6_q[185:182]) & ({1'b0, ix6_9[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old9;
-  assign t_old9 = d6_q[192] ? 17'd65536 : rd_t9;
-  wire [83:0] c_old9;
-  assign c_old9 = d6_q[192] ? 84'd0 : rd_c9;
-  wire dn_old9;
-  assign dn_old9 = d6_q[192] ? ~inside9 : rd_dn9;
-  wire bl9;
-  assign bl9 = ok5_9 & ~dn_old9;
-  wire [29:0] wp9;
-  assign wp9 = {18'd0, alpha9} * {13'd0, t_old9} + 30'd2048;
-  wire [16:0] wt9;
-  assign wt9 = wp9[28:12];
-  wire [16:0] tt9;
-  assign tt9 = t_old9 - wt9;
-  wire fin9;
-  assign fin9 = tt9 < 17'd7;
-  wire add9;
-  assign add9 = bl9 & ~fin9;
-  wire [16:0] t_new9;
-  assign t_new9 = add9 ? tt9 : t_old9;
-  wire dn_new9;
-  assign dn_new9 = dn_old9 | (bl9 & fin9);
-  wire [27:0] csr9;
-  assign csr9 = c_old9[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt9};
-  wire [27:0] csg9;
-  assign csg9 = c_old9[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt9};
-  wire [27:0] csb9;
-  assign csb9 = c_old9[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt9};
-  wire [83:0] c_new9;
-  assign c_new9 = add9 ? {csb9, csg9, csr9} : c_old9;
+  wire [5:0] l9_ix6_;
+  assign l9_ix6_ = {d5_q[197:196], 4'd9};
+  wire l9_inside;
+  assign l9_inside = ({1'b0, l9_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l9_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l9_t_old;
+  assign l9_t_old = d5_q[192] ? 17'd65536 : rd_t9;
+  wire [83:0] l9_c_old;
+  assign l9_c_old = d5_q[192] ? 84'd0 : rd_c9;
+  wire l9_dn_old;
+  assign l9_dn_old = d5_q[192] ? ~l9_inside : rd_dn9;
+  wire l9_bl;
+  assign l9_bl = l9_ok5_ & ~l9_dn_old;
+  wire [29:0] l9_wp;
+  assign l9_wp = {18'd0, l9_alpha} * {13'd0, l9_t_old} + 30'd2048;
+  wire [16:0] l9_wt;
+  assign l9_wt = l9_wp[28:12];
+  wire [16:0] l9_tt;
+  assign l9_tt = l9_t_old - l9_wt;
+  wire l9_fin;
+  assign l9_fin = l9_tt < 17'd7;
+  wire l9_add;
+  assign l9_add = l9_bl & ~l9_fin;
+  wire [16:0] l9_t_new;
+  assign l9_t_new = l9_add ? l9_tt : l9_t_old;
+  wire l9_dn_new;
+  assign l9_dn_new = l9_dn_old | (l9_bl & l9_fin);
+  wire [27:0] l9_csr;
+  assign l9_csr = l9_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l9_wt};
+  wire [27:0] l9_csg;
+  assign l9_csg = l9_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l9_wt};
+  wire [27:0] l9_csb;
+  assign l9_csb = l9_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l9_wt};
+  wire [83:0] l9_c_new;
+  assign l9_c_new = l9_add ? {l9_csb, l9_csg, l9_csr} : l9_c_old;
 
   // lane 10
-  wire [5:0] ix10;
-  assign ix10 = {issue_bundle[197:196], 4'd10};
-  wire [16:0] pxx10;
-  assign pxx10 = {1'b0, issue_bundle[165:150]} + {14'd0, ix10[2:0]};
-  wire [26:0] dx10;
-  assign dx10 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx10, 8'd0};
-  wire [25:0] ax10;
-  assign ax10 = dx10[26] ? (~dx10[25:0] + 26'd1) : dx10[25:0];
-  wire [16:0] pxy10;
-  assign pxy10 = {1'b0, issue_bundle[181:166]} + {14'd0, ix10[5:3]};
-  wire [26:0] dy10;
-  assign dy10 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy10, 8'd0};
-  wire [25:0] ay10;
-  assign ay10 = dy10[26] ? (~dy10[25:0] + 26'd1) : dy10[25:0];
-  reg  [51:0] sxx10;
-  reg  [51:0] syy10;
-  reg  [51:0] sxy10;
-  reg  sneg10;
+  wire [5:0] l10_ix;
+  assign l10_ix = {issue_bundle[197:196], 4'd10};
+  wire [16:0] l10_pxx;
+  assign l10_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l10_ix[2:0]};
+  wire [26:0] l10_dx;
+  assign l10_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l10_pxx, 8'd0};
+  wire [25:0] l10_ax;
+  assign l10_ax = l10_dx[26] ? (~l10_dx[25:0] + 26'd1) : l10_dx[25:0];
+  wire [16:0] l10_pxy;
+  assign l10_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l10_ix[5:3]};
+  wire [26:0] l10_dy;
+  assign l10_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l10_pxy, 8'd0};
+  wire [25:0] l10_ay;
+  assign l10_ay = l10_dy[26] ? (~l10_dy[25:0] + 26'd1) : l10_dy[25:0];
+  reg  [51:0] l10_sxx;
+  reg  [51:0] l10_syy;
+  reg  [51:0] l10_sxy;
+  reg  l10_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx10 <= {26'd0, ax10} * {26'd0, ax10};
-      syy10 <= {26'd0, ay10} * {26'd0, ay10};
-      sxy10 <= {26'd0, ax10} * {26'd0, ay10};
-      sneg10 <= dx10[26] ^ dy10[26];
+      l10_sxx <= {26'd0, l10_ax} * {26'd0, l10_ax};
+      l10_syy <= {26'd0, l10_ay} * {26'd0, l10_ay};
+      l10_sxy <= {26'd0, l10_ax} * {26'd0, l10_ay};
+      l10_sneg <= l10_dx[26] ^ l10_dy[26];
     end
   end
-  wire cbs10;
-  assign cbs10 = d1_q[84];
-  wire [18:0] babs10;
-  assign babs10 = cbs10 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta10;
-  assign ta10 = {53'd0, d1_q[65:48]} * {19'd0, sxx10};
-  wire [70:0] tc10;
-  assign tc10 = {53'd0, d1_q[102:85]} * {19'd0, syy10};
-  wire [71:0] tb10;
-  assign tb10 = {53'd0, babs10} * {20'd0, sxy10};
-  wire [72:0] tbx10;
-  assign tbx10 = {tb10, 1'b0};
-  reg  [72:0] q10;
+  wire l10_cbs;
+  assign l10_cbs = d1_q[84];
+  wire [18:0] l10_babs;
+  assign l10_babs = l10_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l10_ta;
+  assign l10_ta = {53'd0, d1_q[65:48]} * {19'd0, l10_sxx};
+  wire [70:0] l10_tc;
+  assign l10_tc = {53'd0, d1_q[102:85]} * {19'd0, l10_syy};
+  wire [71:0] l10_tb;
+  assign l10_tb = {53'd0, l10_babs} * {20'd0, l10_sxy};
+  wire [72:0] l10_tbx;
+  assign l10_tbx = {l10_tb, 1'b0};
+  reg  [72:0] l10_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q10 <= {2'd0, ta10} + {2'd0, tc10} + ((sneg10 ^ cbs10) ? (~tbx10 + 73'd1) : tbx10);
+      l10_q <= {2'd0, l10_ta} + {2'd0, l10_tc} + ((l10_sneg ^ l10_cbs) ? (~l10_tbx + 73'd1) : l10_tbx);
     end
   end
-  wire [6:0] shm110;
-  assign shm110 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt10;
-  assign qt10 = $signed(q10) >>> shm110;
-  wire [72:0] qt110;
-  assign qt110 = qt10 + 73'd1;
-  wire [72:0] npf10;
-  assign npf10 = $signed(qt110) >>> 1;
-  reg  [12:0] np10;
-  reg  pos10;
+  wire [6:0] l10_shm1;
+  assign l10_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l10_qt;
+  assign l10_qt = $signed(l10_q) >>> l10_shm1;
+  wire [72:0] l10_qt1;
+  assign l10_qt1 = l10_qt + 73'd1;
+  wire [72:0] l10_npf;
+  assign l10_npf = $signed(l10_qt1) >>> 1;
+  reg  [12:0] l10_np;
+  reg  l10_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np10 <= (|npf10[71:13]) ? 13'd8191 : npf10[12:0];
-      pos10 <= ~npf10[72] & ~d2_q[190];
+      l10_np <= (|l10_npf[71:13]) ? 13'd8191 : l10_npf[12:0];
+      l10_pos <= ~l10_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex10;
+  wire [16:0] l10_ex;
   neo_scu_exp u_exp10 (
-    .np_i(np10),
-    .e_o(ex10)
+    .np_i(l10_np),
+    .e_o(l10_ex)
   );
-  reg  [16:0] e10;
-  reg  ok4_10;
+  reg  [16:0] l10_e;
+  reg  l10_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e10 <= ex10;
-      ok4_10 <= pos10;
+      l10_e <= l10_ex;
+      l10_ok4_ <= l10_pos;
     end
   end
-  wire [25:0] oe10;
-  assign oe10 = {18'd0, d4_q[116:109]} * {9'd0, e10};
-  wire [25:0] oer10;
-  assign oer10 = oe10 + 26'd2048;
-  wire [13:0] ar10;
-  assign ar10 = oer10[25:12];
-  wire [13:0] arx10;
-  assign arx10 = ar10;
-  wire [11:0] acap10;
-  assign acap10 = (arx10 > 14'd4055) ? 12'd4055 : arx10[11:0];
-  reg  [11:0] alpha10;
-  reg  ok5_10;
+  wire [25:0] l10_oe;
+  assign l10_oe = {18'd0, d4_q[116:109]} * {9'd0, l10_e};
+  wire [25:0] l10_oer;
+  assign l10_oer = l10_oe + 26'd2048;
+  wire [13:0] l10_ar;
+  assign l10_ar = l10_oer[25:12];
+  wire [13:0] l10_arx;
+  assign l10_arx = l10_ar;
+  wire [11:0] l10_acap;
+  assign l10_acap = (l10_arx > 14'd4055) ? 12'd4055 : l10_arx[11:0];
+  reg  [11:0] l10_alpha;
+  reg  l10_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha10 <= acap10;
-      ok5_10 <= ok4_10 & (acap10 >= 12'd17);
+      l10_alpha <= l10_acap;
+      l10_ok5_ <= l10_ok4_ & (l10_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_10;
-  assign ix6_10 = {d6_q[197:196], 4'd10};
-  wire inside10;
-  assign inside10 = ({1'b0, ix6_10[2:0]} < d6_q[185:182]) & ({1'b0, ix6_10[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old10;
-  assign t_old10 = d6_q[192] ? 17'd65536 : rd_t10;
-  wire [83:0] c_old10;
-  assign c_old10 = d6_q[192] ? 84'd0 : rd_c10;
-  wire dn_old10;
-  assign dn_old10 = d6_q[192] ? ~inside10 : rd_dn10;
-  wire bl10;
-  assign bl10 = ok5_10 & ~dn_old10;
-  wire [29:0] wp10;
-  assign wp10 = {18'd0, alpha10} * {13'd0, t_old10} + 30'd2048;
-  wire [16:0] wt10;
-  assign wt10 = wp10[28:12];
-  wire [16:0] tt10;
-  assign tt10 = t_old10 - wt10;
-  wire fin10;
-  assign fin10 = tt10 < 17'd7;
-  wire add10;
-  assign add10 = bl10 & ~fin10;
-  wire [16:0] t_new10;
-  assign t_new10 = add10 ? tt10 : t_old10;
-  wire dn_new10;
-  assign dn_new10 = dn_old10 | (bl10 & fin10);
-  wire [27:0] csr10;
-  assign csr10 = c_old10[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt10};
-  wire [27:0] csg10;
-  assign csg10 = c_old10[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt10};
-  wire [27:0] csb10;
-  assign csb10 = c_old10[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt10};
-  wire [83:0] c_new10;
-  assign c_new10 = add10 ? {csb10, csg10, csr10} : c_old10;
+  wire [5:0] l10_ix6_;
+  assign l10_ix6_ = {d5_q[197:196], 4'd10};
+  wire l10_inside;
+  assign l10_inside = ({1'b0, l10_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l10_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l10_t_old;
+  assign l10_t_old = d5_q[192] ? 17'd65536 : rd_t10;
+  wire [83:0] l10_c_old;
+  assign l10_c_old = d5_q[192] ? 84'd0 : rd_c10;
+  wire l10_dn_old;
+  assign l10_dn_old = d5_q[192] ? ~l10_inside : rd_dn10;
+  wire l10_bl;
+  assign l10_bl = l10_ok5_ & ~l10_dn_old;
+  wire [29:0] l10_wp;
+  assign l10_wp = {18'd0, l10_alpha} * {13'd0, l10_t_old} + 30'd2048;
+  wire [16:0] l10_wt;
+  assign l10_wt = l10_wp[28:12];
+  wire [16:0] l10_tt;
+  assign l10_tt = l10_t_old - l10_wt;
+  wire l10_fin;
+  assign l10_fin = l10_tt < 17'd7;
+  wire l10_add;
+  assign l10_add = l10_bl & ~l10_fin;
+  wire [16:0] l10_t_new;
+  assign l10_t_new = l10_add ? l10_tt : l10_t_old;
+  wire l10_dn_new;
+  assign l10_dn_new = l10_dn_old | (l10_bl & l10_fin);
+  wire [27:0] l10_csr;
+  assign l10_csr = l10_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l10_wt};
+  wire [27:0] l10_csg;
+  assign l10_csg = l10_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l10_wt};
+  wire [27:0] l10_csb;
+  assign l10_csb = l10_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l10_wt};
+  wire [83:0] l10_c_new;
+  assign l10_c_new = l10_add ? {l10_csb, l10_csg, l10_csr} : l10_c_old;
 
   // lane 11
-  wire [5:0] ix11;
-  assign ix11 = {issue_bundle[197:196], 4'd11};
-  wire [16:0] pxx11;
-  assign pxx11 = {1'b0, issue_bundle[165:150]} + {14'd0, ix11[2:0]};
-  wire [26:0] dx11;
-  assign dx11 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx11, 8'd0};
-  wire [25:0] ax11;
-  assign ax11 = dx11[26] ? (~dx11[25:0] + 26'd1) : dx11[25:0];
-  wire [16:0] pxy11;
-  assign pxy11 = {1'b0, issue_bundle[181:166]} + {14'd0, ix11[5:3]};
-  wire [26:0] dy11;
-  assign dy11 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy11, 8'd0};
-  wire [25:0] ay11;
-  assign ay11 = dy11[26] ? (~dy11[25:0] + 26'd1) : dy11[25:0];
-  reg  [51:0] sxx11;
-  reg  [51:0] syy11;
-  reg  [51:0] sxy11;
-  reg  sneg11;
+  wire [5:0] l11_ix;
+  assign l11_ix = {issue_bundle[197:196], 4'd11};
+  wire [16:0] l11_pxx;
+  assign l11_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l11_ix[2:0]};
+  wire [26:0] l11_dx;
+  assign l11_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l11_pxx, 8'd0};
+  wire [25:0] l11_ax;
+  assign l11_ax = l11_dx[26] ? (~l11_dx[25:0] + 26'd1) : l11_dx[25:0];
+  wire [16:0] l11_pxy;
+  assign l11_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l11_ix[5:3]};
+  wire [26:0] l11_dy;
+  assign l11_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l11_pxy, 8'd0};
+  wire [25:0] l11_ay;
+  assign l11_ay = l11_dy[26] ? (~l11_dy[25:0] + 26'd1) : l11_dy[25:0];
+  reg  [51:0] l11_sxx;
+  reg  [51:0] l11_syy;
+  reg  [51:0] l11_sxy;
+  reg  l11_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx11 <= {26'd0, ax11} * {26'd0, ax11};
-      syy11 <= {26'd0, ay11} * {26'd0, ay11};
-      sxy11 <= {26'd0, ax11} * {26'd0, ay11};
-      sneg11 <= dx11[26] ^ dy11[26];
+      l11_sxx <= {26'd0, l11_ax} * {26'd0, l11_ax};
+      l11_syy <= {26'd0, l11_ay} * {26'd0, l11_ay};
+      l11_sxy <= {26'd0, l11_ax} * {26'd0, l11_ay};
+      l11_sneg <= l11_dx[26] ^ l11_dy[26];
     end
   end
-  wire cbs11;
-  assign cbs11 = d1_q[84];
-  wire [18:0] babs11;
-  assign babs11 = cbs11 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta11;
-  assign ta11 = {53'd0, d1_q[65:48]} * {19'd0, sxx11};
-  wire [70:0] tc11;
-  assign tc11 = {53'd0, d1_q[102:85]} * {19'd0, syy11};
-  wire [71:0] tb11;
-  assign tb11 = {53'd0, babs11} * {20'd0, sxy11};
-  wire [72:0] tbx11;
-  assign tbx11 = {tb11, 1'b0};
-  reg  [72:0] q11;
+  wire l11_cbs;
+  assign l11_cbs = d1_q[84];
+  wire [18:0] l11_babs;
+  assign l11_babs = l11_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l11_ta;
+  assign l11_ta = {53'd0, d1_q[65:48]} * {19'd0, l11_sxx};
+  wire [70:0] l11_tc;
+  assign l11_tc = {53'd0, d1_q[102:85]} * {19'd0, l11_syy};
+  wire [71:0] l11_tb;
+  assign l11_tb = {53'd0, l11_babs} * {20'd0, l11_sxy};
+  wire [72:0] l11_tbx;
+  assign l11_tbx = {l11_tb, 1'b0};
+  reg  [72:0] l11_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q11 <= {2'd0, ta11} + {2'd0, tc11} + ((sneg11 ^ cbs11) ? (~tbx11 + 73'd1) : tbx11);
+      l11_q <= {2'd0, l11_ta} + {2'd0, l11_tc} + ((l11_sneg ^ l11_cbs) ? (~l11_tbx + 73'd1) : l11_tbx);
     end
   end
-  wire [6:0] shm111;
-  assign shm111 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt11;
-  assign qt11 = $signed(q11) >>> shm111;
-  wire [72:0] qt111;
-  assign qt111 = qt11 + 73'd1;
-  wire [72:0] npf11;
-  assign npf11 = $signed(qt111) >>> 1;
-  reg  [12:0] np11;
-  reg  pos11;
+  wire [6:0] l11_shm1;
+  assign l11_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l11_qt;
+  assign l11_qt = $signed(l11_q) >>> l11_shm1;
+  wire [72:0] l11_qt1;
+  assign l11_qt1 = l11_qt + 73'd1;
+  wire [72:0] l11_npf;
+  assign l11_npf = $signed(l11_qt1) >>> 1;
+  reg  [12:0] l11_np;
+  reg  l11_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np11 <= (|npf11[71:13]) ? 13'd8191 : npf11[12:0];
-      pos11 <= ~npf11[72] & ~d2_q[190];
+      l11_np <= (|l11_npf[71:13]) ? 13'd8191 : l11_npf[12:0];
+      l11_pos <= ~l11_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex11;
+  wire [16:0] l11_ex;
   neo_scu_exp u_exp11 (
-    .np_i(np11),
-    .e_o(ex11)
+    .np_i(l11_np),
+    .e_o(l11_ex)
   );
-  reg  [16:0] e11;
-  reg  ok4_11;
+  reg  [16:0] l11_e;
+  reg  l11_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e11 <= ex11;
-      ok4_11 <= pos11;
+      l11_e <= l11_ex;
+      l11_ok4_ <= l11_pos;
     end
   end
-  wire [25:0] oe11;
-  assign oe11 = {18'd0, d4_q[116:109]} * {9'd0, e11};
-  wire [25:0] oer11;
-  assign oer11 = oe11 + 26'd2048;
-  wire [13:0] ar11;
-  assign ar11 = oer11[25:12];
-  wire [13:0] arx11;
-  assign arx11 = ar11;
-  wire [11:0] acap11;
-  assign acap11 = (arx11 > 14'd4055) ? 12'd4055 : arx11[11:0];
-  reg  [11:0] alpha11;
-  reg  ok5_11;
+  wire [25:0] l11_oe;
+  assign l11_oe = {18'd0, d4_q[116:109]} * {9'd0, l11_e};
+  wire [25:0] l11_oer;
+  assign l11_oer = l11_oe + 26'd2048;
+  wire [13:0] l11_ar;
+  assign l11_ar = l11_oer[25:12];
+  wire [13:0] l11_arx;
+  assign l11_arx = l11_ar;
+  wire [11:0] l11_acap;
+  assign l11_acap = (l11_arx > 14'd4055) ? 12'd4055 : l11_arx[11:0];
+  reg  [11:0] l11_alpha;
+  reg  l11_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha11 <= acap11;
-      ok5_11 <= ok4_11 & (acap11 >= 12'd17);
+      l11_alpha <= l11_acap;
+      l11_ok5_ <= l11_ok4_ & (l11_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_11;
-  assign ix6_11 = {d6_q[197:196], 4'd11};
-  wire inside11;
-  assign inside11 = ({1'b0, ix6_11[2:0]} < d6_q[185:182]) & ({1'b0, ix6_11[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old11;
-  assign t_old11 = d6_q[192] ? 17'd65536 : rd_t11;
-  wire [83:0] c_old11;
-  assign c_old11 = d6_q[192] ? 84'd0 : rd_c11;
-  wire dn_old11;
-  assign dn_old11 = d6_q[192] ? ~inside11 : rd_dn11;
-  wire bl11;
-  assign bl11 = ok5_11 & ~dn_old11;
-  wire [29:0] wp11;
-  assign wp11 = {18'd0, alpha11} * {13'd0, t_old11} + 30'd2048;
-  wire [16:0] wt11;
-  assign wt11 = wp11[28:12];
-  wire [16:0] tt11;
-  assign tt11 = t_old11 - wt11;
-  wire fin11;
-  assign fin11 = tt11 < 17'd7;
-  wire add11;
-  assign add11 = bl11 & ~fin11;
-  wire [16:0] t_new11;
-  assign t_new11 = add11 ? tt11 : t_old11;
-  wire dn_new11;
-  assign dn_new11 = dn_old11 | (bl11 & fin11);
-  wire [27:0] csr11;
-  assign csr11 = c_old11[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt11};
-  wire [27:0] csg11;
-  assign csg11 = c_old11[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt11};
-  wire [27:0] csb11;
-  assign csb11 = c_old11[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt11};
-  wire [83:0] c_new11;
-  assign c_new11 = add11 ? {csb11, csg11, csr11} : c_old11;
+  wire [5:0] l11_ix6_;
+  assign l11_ix6_ = {d5_q[197:196], 4'd11};
+  wire l11_inside;
+  assign l11_inside = ({1'b0, l11_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l11_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l11_t_old;
+  assign l11_t_old = d5_q[192] ? 17'd65536 : rd_t11;
+  wire [83:0] l11_c_old;
+  assign l11_c_old = d5_q[192] ? 84'd0 : rd_c11;
+  wire l11_dn_old;
+  assign l11_dn_old = d5_q[192] ? ~l11_inside : rd_dn11;
+  wire l11_bl;
+  assign l11_bl = l11_ok5_ & ~l11_dn_old;
+  wire [29:0] l11_wp;
+  assign l11_wp = {18'd0, l11_alpha} * {13'd0, l11_t_old} + 30'd2048;
+  wire [16:0] l11_wt;
+  assign l11_wt = l11_wp[28:12];
+  wire [16:0] l11_tt;
+  assign l11_tt = l11_t_old - l11_wt;
+  wire l11_fin;
+  assign l11_fin = l11_tt < 17'd7;
+  wire l11_add;
+  assign l11_add = l11_bl & ~l11_fin;
+  wire [16:0] l11_t_new;
+  assign l11_t_new = l11_add ? l11_tt : l11_t_old;
+  wire l11_dn_new;
+  assign l11_dn_new = l11_dn_old | (l11_bl & l11_fin);
+  wire [27:0] l11_csr;
+  assign l11_csr = l11_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l11_wt};
+  wire [27:0] l11_csg;
+  assign l11_csg = l11_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l11_wt};
+  wire [27:0] l11_csb;
+  assign l11_csb = l11_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l11_wt};
+  wire [83:0] l11_c_new;
+  assign l11_c_new = l11_add ? {l11_csb, l11_csg, l11_csr} : l11_c_old;
 
   // lane 12
-  wire [5:0] ix12;
-  assign ix12 = {issue_bundle[197:196], 4'd12};
-  wire [16:0] pxx12;
-  assign pxx12 = {1'b0, issue_bundle[165:150]} + {14'd0, ix12[2:0]};
-  wire [26:0] dx12;
-  assign dx12 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx12, 8'd0};
-  wire [25:0] ax12;
-  assign ax12 = dx12[26] ? (~dx12[25:0] + 26'd1) : dx12[25:0];
-  wire [16:0] pxy12;
-  assign pxy12 = {1'b0, issue_bundle[181:166]} + {14'd0, ix12[5:3]};
-  wire [26:0] dy12;
-  assign dy12 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy12, 8'd0};
-  wire [25:0] ay12;
-  assign ay12 = dy12[26] ? (~dy12[25:0] + 26'd1) : dy12[25:0];
-  reg  [51:0] sxx12;
-  reg  [51:0] syy12;
-  reg  [51:0] sxy12;
-  reg  sneg12;
+  wire [5:0] l12_ix;
+  assign l12_ix = {issue_bundle[197:196], 4'd12};
+  wire [16:0] l12_pxx;
+  assign l12_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l12_ix[2:0]};
+  wire [26:0] l12_dx;
+  assign l12_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l12_pxx, 8'd0};
+  wire [25:0] l12_ax;
+  assign l12_ax = l12_dx[26] ? (~l12_dx[25:0] + 26'd1) : l12_dx[25:0];
+  wire [16:0] l12_pxy;
+  assign l12_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l12_ix[5:3]};
+  wire [26:0] l12_dy;
+  assign l12_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l12_pxy, 8'd0};
+  wire [25:0] l12_ay;
+  assign l12_ay = l12_dy[26] ? (~l12_dy[25:0] + 26'd1) : l12_dy[25:0];
+  reg  [51:0] l12_sxx;
+  reg  [51:0] l12_syy;
+  reg  [51:0] l12_sxy;
+  reg  l12_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx12 <= {26'd0, ax12} * {26'd0, ax12};
-      syy12 <= {26'd0, ay12} * {26'd0, ay12};
-      sxy12 <= {26'd0, ax12} * {26'd0, ay12};
-      sneg12 <= dx12[26] ^ dy12[26];
+      l12_sxx <= {26'd0, l12_ax} * {26'd0, l12_ax};
+      l12_syy <= {26'd0, l12_ay} * {26'd0, l12_ay};
+      l12_sxy <= {26'd0, l12_ax} * {26'd0, l12_ay};
+      l12_sneg <= l12_dx[26] ^ l12_dy[26];
     end
   end
-  wire cbs12;
-  assign cbs12 = d1_q[84];
-  wire [18:0] babs12;
-  assign babs12 = cbs12 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta12;
-  assign ta12 = {53'd0, d1_q[65:48]} * {19'd0, sxx12};
-  wire [70:0] tc12;
-  assign tc12 = {53'd0, d1_q[102:85]} * {19'd0, syy12};
-  wire [71:0] tb12;
-  assign tb12 = {53'd0, babs12} * {20'd0, sxy12};
-  wire [72:0] tbx12;
-  assign tbx12 = {tb12, 1'b0};
-  reg  [72:0] q12;
+  wire l12_cbs;
+  assign l12_cbs = d1_q[84];
+  wire [18:0] l12_babs;
+  assign l12_babs = l12_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l12_ta;
+  assign l12_ta = {53'd0, d1_q[65:48]} * {19'd0, l12_sxx};
+  wire [70:0] l12_tc;
+  assign l12_tc = {53'd0, d1_q[102:85]} * {19'd0, l12_syy};
+  wire [71:0] l12_tb;
+  assign l12_tb = {53'd0, l12_babs} * {20'd0, l12_sxy};
+  wire [72:0] l12_tbx;
+  assign l12_tbx = {l12_tb, 1'b0};
+  reg  [72:0] l12_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q12 <= {2'd0, ta12} + {2'd0, tc12} + ((sneg12 ^ cbs12) ? (~tbx12 + 73'd1) : tbx12);
+      l12_q <= {2'd0, l12_ta} + {2'd0, l12_tc} + ((l12_sneg ^ l12_cbs) ? (~l12_tbx + 73'd1) : l12_tbx);
     end
   end
-  wire [6:0] shm112;
-  assign shm112 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt12;
-  assign qt12 = $signed(q12) >>> shm112;
-  wire [72:0] qt112;
-  assign qt112 = qt12 + 73'd1;
-  wire [72:0] npf12;
-  assign npf12 = $signed(qt112) >>> 1;
-  reg  [12:0] np12;
-  reg  pos12;
+  wire [6:0] l12_shm1;
+  assign l12_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l12_qt;
+  assign l12_qt = $signed(l12_q) >>> l12_shm1;
+  wire [72:0] l12_qt1;
+  assign l12_qt1 = l12_qt + 73'd1;
+  wire [72:0] l12_npf;
+  assign l12_npf = $signed(l12_qt1) >>> 1;
+  reg  [12:0] l12_np;
+  reg  l12_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np12 <= (|npf12[71:13]) ? 13'd8191 : npf12[12:0];
-      pos12 <= ~npf12[72] & ~d2_q[190];
+      l12_np <= (|l12_npf[71:13]) ? 13'd8191 : l12_npf[12:0];
+      l12_pos <= ~l12_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex12;
+  wire [16:0] l12_ex;
   neo_scu_exp u_exp12 (
-    .np_i(np12),
-    .e_o(ex12)
+    .np_i(l12_np),
+    .e_o(l12_ex)
   );
-  reg  [16:0] e12;
-  reg  ok4_12;
+  reg  [16:0] l12_e;
+  reg  l12_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e12 <= ex12;
-      ok4_12 <= pos12;
+      l12_e <= l12_ex;
+      l12_ok4_ <= l12_pos;
     end
   end
-  wire [25:0] oe12;
-  assign oe12 = {18'd0, d4_q[116:109]} * {9'd0, e12};
-  wire [25:0] oer12;
-  assign oer12 = oe12 + 26'd2048;
-  wire [13:0] ar12;
-  assign ar12 = oer12[25:12];
-  wire [13:0] arx12;
-  assign arx12 = ar12;
-  wire [11:0] acap12;
-  assign acap12 = (arx12 > 14'd4055) ? 12'd4055 : arx12[11:0];
-  reg  [11:0] alpha12;
-  reg  ok5_12;
+  wire [25:0] l12_oe;
+  assign l12_oe = {18'd0, d4_q[116:109]} * {9'd0, l12_e};
+  wire [25:0] l12_oer;
+  assign l12_oer = l12_oe + 26'd2048;
+  wire [13:0] l12_ar;
+  assign l12_ar = l12_oer[25:12];
+  wire [13:0] l12_arx;
+  assign l12_arx = l12_ar;
+  wire [11:0] l12_acap;
+  assign l12_acap = (l12_arx > 14'd4055) ? 12'd4055 : l12_arx[11:0];
+  reg  [11:0] l12_alpha;
+  reg  l12_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha12 <= acap12;
-      ok5_12 <= ok4_12 & (acap12 >= 12'd17);
+      l12_alpha <= l12_acap;
+      l12_ok5_ <= l12_ok4_ & (l12_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_12;
-  assign ix6_12 = {d6_q[197:196], 4'd12};
-  wire inside12;
-  assign inside12 = ({1'b0, ix6_12[2:0]} < d6_q[185:182]) & ({1'b0, ix6_12[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old12;
-  assign t_old12 = d6_q[192] ? 17'd65536 : rd_t12;
-  wire [83:0] c_old12;
-  assign c_old12 = d6_q[192] ? 84'd0 : rd_c12;
-  wire dn_old12;
-  assign dn_old12 = d6_q[192] ? ~inside12 : rd_dn12;
-  wire bl12;
-  assign bl12 = ok5_12 & ~dn_old12;
-  wire [29:0] wp12;
-  assign wp12 = {18'd0, alpha12} * {13'd0, t_old12} + 30'd2048;
-  wire [16:0] wt12;
-  assign wt12 = wp12[28:12];
-  wire [16:0] tt12;
-  assign tt12 = t_old12 - wt12;
-  wire fin12;
-  assign fin12 = tt12 < 17'd7;
-  wire add12;
-  assign add12 = bl12 & ~fin12;
-  wire [16:0] t_new12;
-  assign t_new12 = add12 ? tt12 : t_old12;
-  wire dn_new12;
-  assign dn_new12 = dn_old12 | (bl12 & fin12);
-  wire [27:0] csr12;
-  assign csr12 = c_old12[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt12};
-  wire [27:0] csg12;
-  assign csg12 = c_old12[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt12};
-  wire [27:0] csb12;
-  assign csb12 = c_old12[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt12};
-  wire [83:0] c_new12;
-  assign c_new12 = add12 ? {csb12, csg12, csr12} : c_old12;
+  wire [5:0] l12_ix6_;
+  assign l12_ix6_ = {d5_q[197:196], 4'd12};
+  wire l12_inside;
+  assign l12_inside = ({1'b0, l12_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l12_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l12_t_old;
+  assign l12_t_old = d5_q[192] ? 17'd65536 : rd_t12;
+  wire [83:0] l12_c_old;
+  assign l12_c_old = d5_q[192] ? 84'd0 : rd_c12;
+  wire l12_dn_old;
+  assign l12_dn_old = d5_q[192] ? ~l12_inside : rd_dn12;
+  wire l12_bl;
+  assign l12_bl = l12_ok5_ & ~l12_dn_old;
+  wire [29:0] l12_wp;
+  assign l12_wp = {18'd0, l12_alpha} * {13'd0, l12_t_old} + 30'd2048;
+  wire [16:0] l12_wt;
+  assign l12_wt = l12_wp[28:12];
+  wire [16:0] l12_tt;
+  assign l12_tt = l12_t_old - l12_wt;
+  wire l12_fin;
+  assign l12_fin = l12_tt < 17'd7;
+  wire l12_add;
+  assign l12_add = l12_bl & ~l12_fin;
+  wire [16:0] l12_t_new;
+  assign l12_t_new = l12_add ? l12_tt : l12_t_old;
+  wire l12_dn_new;
+  assign l12_dn_new = l12_dn_old | (l12_bl & l12_fin);
+  wire [27:0] l12_csr;
+  assign l12_csr = l12_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l12_wt};
+  wire [27:0] l12_csg;
+  assign l12_csg = l12_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l12_wt};
+  wire [27:0] l12_csb;
+  assign l12_csb = l12_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l12_wt};
+  wire [83:0] l12_c_new;
+  assign l12_c_new = l12_add ? {l12_csb, l12_csg, l12_csr} : l12_c_old;
 
   // lane 13
-  wire [5:0] ix13;
-  assign ix13 = {issue_bundle[197:196], 4'd13};
-  wire [16:0] pxx13;
-  assign pxx13 = {1'b0, issue_bundle[165:150]} + {14'd0, ix13[2:0]};
-  wire [26:0] dx13;
-  assign dx13 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx13, 8'd0};
-  wire [25:0] ax13;
-  assign ax13 = dx13[26] ? (~dx13[25:0] + 26'd1) : dx13[25:0];
-  wire [16:0] pxy13;
-  assign pxy13 = {1'b0, issue_bundle[181:166]} + {14'd0, ix13[5:3]};
-  wire [26:0] dy13;
-  assign dy13 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy13, 8'd0};
-  wire [25:0] ay13;
-  assign ay13 = dy13[26] ? (~dy13[25:0] + 26'd1) : dy13[25:0];
-  reg  [51:0] sxx13;
-  reg  [51:0] syy13;
-  reg  [51:0] sxy13;
-  reg  sneg13;
+  wire [5:0] l13_ix;
+  assign l13_ix = {issue_bundle[197:196], 4'd13};
+  wire [16:0] l13_pxx;
+  assign l13_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l13_ix[2:0]};
+  wire [26:0] l13_dx;
+  assign l13_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l13_pxx, 8'd0};
+  wire [25:0] l13_ax;
+  assign l13_ax = l13_dx[26] ? (~l13_dx[25:0] + 26'd1) : l13_dx[25:0];
+  wire [16:0] l13_pxy;
+  assign l13_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l13_ix[5:3]};
+  wire [26:0] l13_dy;
+  assign l13_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l13_pxy, 8'd0};
+  wire [25:0] l13_ay;
+  assign l13_ay = l13_dy[26] ? (~l13_dy[25:0] + 26'd1) : l13_dy[25:0];
+  reg  [51:0] l13_sxx;
+  reg  [51:0] l13_syy;
+  reg  [51:0] l13_sxy;
+  reg  l13_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx13 <= {26'd0, ax13} * {26'd0, ax13};
-      syy13 <= {26'd0, ay13} * {26'd0, ay13};
-      sxy13 <= {26'd0, ax13} * {26'd0, ay13};
-      sneg13 <= dx13[26] ^ dy13[26];
+      l13_sxx <= {26'd0, l13_ax} * {26'd0, l13_ax};
+      l13_syy <= {26'd0, l13_ay} * {26'd0, l13_ay};
+      l13_sxy <= {26'd0, l13_ax} * {26'd0, l13_ay};
+      l13_sneg <= l13_dx[26] ^ l13_dy[26];
     end
   end
-  wire cbs13;
-  assign cbs13 = d1_q[84];
-  wire [18:0] babs13;
-  assign babs13 = cbs13 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta13;
-  assign ta13 = {53'd0, d1_q[65:48]} * {19'd0, sxx13};
-  wire [70:0] tc13;
-  assign tc13 = {53'd0, d1_q[102:85]} * {19'd0, syy13};
-  wire [71:0] tb13;
-  assign tb13 = {53'd0, babs13} * {20'd0, sxy13};
-  wire [72:0] tbx13;
-  assign tbx13 = {tb13, 1'b0};
-  reg  [72:0] q13;
+  wire l13_cbs;
+  assign l13_cbs = d1_q[84];
+  wire [18:0] l13_babs;
+  assign l13_babs = l13_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l13_ta;
+  assign l13_ta = {53'd0, d1_q[65:48]} * {19'd0, l13_sxx};
+  wire [70:0] l13_tc;
+  assign l13_tc = {53'd0, d1_q[102:85]} * {19'd0, l13_syy};
+  wire [71:0] l13_tb;
+  assign l13_tb = {53'd0, l13_babs} * {20'd0, l13_sxy};
+  wire [72:0] l13_tbx;
+  assign l13_tbx = {l13_tb, 1'b0};
+  reg  [72:0] l13_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q13 <= {2'd0, ta13} + {2'd0, tc13} + ((sneg13 ^ cbs13) ? (~tbx13 + 73'd1) : tbx13);
+      l13_q <= {2'd0, l13_ta} + {2'd0, l13_tc} + ((l13_sneg ^ l13_cbs) ? (~l13_tbx + 73'd1) : l13_tbx);
     end
   end
-  wire [6:0] shm113;
-  assign shm113 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt13;
-  assign qt13 = $signed(q13) >>> shm113;
-  wire [72:0] qt113;
-  assign qt113 = qt13 + 73'd1;
-  wire [72:0] npf13;
-  assign npf13 = $signed(qt113) >>> 1;
-  reg  [12:0] np13;
-  reg  pos13;
+  wire [6:0] l13_shm1;
+  assign l13_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l13_qt;
+  assign l13_qt = $signed(l13_q) >>> l13_shm1;
+  wire [72:0] l13_qt1;
+  assign l13_qt1 = l13_qt + 73'd1;
+  wire [72:0] l13_npf;
+  assign l13_npf = $signed(l13_qt1) >>> 1;
+  reg  [12:0] l13_np;
+  reg  l13_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np13 <= (|npf13[71:13]) ? 13'd8191 : npf13[12:0];
-      pos13 <= ~npf13[72] & ~d2_q[190];
+      l13_np <= (|l13_npf[71:13]) ? 13'd8191 : l13_npf[12:0];
+      l13_pos <= ~l13_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex13;
+  wire [16:0] l13_ex;
   neo_scu_exp u_exp13 (
-    .np_i(np13),
-    .e_o(ex13)
+    .np_i(l13_np),
+    .e_o(l13_ex)
   );
-  reg  [16:0] e13;
-  reg  ok4_13;
+  reg  [16:0] l13_e;
+  reg  l13_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e13 <= ex13;
-      ok4_13 <= pos13;
+      l13_e <= l13_ex;
+      l13_ok4_ <= l13_pos;
     end
   end
-  wire [25:0] oe13;
-  assign oe13 = {18'd0, d4_q[116:109]} * {9'd0, e13};
-  wire [25:0] oer13;
-  assign oer13 = oe13 + 26'd2048;
-  wire [13:0] ar13;
-  assign ar13 = oer13[25:12];
-  wire [13:0] arx13;
-  assign arx13 = ar13;
-  wire [11:0] acap13;
-  assign acap13 = (arx13 > 14'd4055) ? 12'd4055 : arx13[11:0];
-  reg  [11:0] alpha13;
-  reg  ok5_13;
+  wire [25:0] l13_oe;
+  assign l13_oe = {18'd0, d4_q[116:109]} * {9'd0, l13_e};
+  wire [25:0] l13_oer;
+  assign l13_oer = l13_oe + 26'd2048;
+  wire [13:0] l13_ar;
+  assign l13_ar = l13_oer[25:12];
+  wire [13:0] l13_arx;
+  assign l13_arx = l13_ar;
+  wire [11:0] l13_acap;
+  assign l13_acap = (l13_arx > 14'd4055) ? 12'd4055 : l13_arx[11:0];
+  reg  [11:0] l13_alpha;
+  reg  l13_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha13 <= acap13;
-      ok5_13 <= ok4_13 & (acap13 >= 12'd17);
+      l13_alpha <= l13_acap;
+      l13_ok5_ <= l13_ok4_ & (l13_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_13;
-  assign ix6_13 = {d6_q[197:196], 4'd13};
-  wire inside13;
-  assign inside13 = ({1'b0, ix6_13[2:0]} < d6_q[185:182]) & ({1'b0, ix6_13[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old13;
-  assign t_old13 = d6_q[192] ? 17'd65536 : rd_t13;
-  wire [83:0] c_old13;
-  assign c_old13 = d6_q[192] ? 84'd0 : rd_c13;
-  wire dn_old13;
-  assign dn_old13 = d6_q[192] ? ~inside13 : rd_dn13;
-  wire bl13;
-  assign bl13 = ok5_13 & ~dn_old13;
-  wire [29:0] wp13;
-  assign wp13 = {18'd0, alpha13} * {13'd0, t_old13} + 30'd2048;
-  wire [16:0] wt13;
-  assign wt13 = wp13[28:12];
-  wire [16:0] tt13;
-  assign tt13 = t_old13 - wt13;
-  wire fin13;
-  assign fin13 = tt13 < 17'd7;
-  wire add13;
-  assign add13 = bl13 & ~fin13;
-  wire [16:0] t_new13;
-  assign t_new13 = add13 ? tt13 : t_old13;
-  wire dn_new13;
-  assign dn_new13 = dn_old13 | (bl13 & fin13);
-  wire [27:0] csr13;
-  assign csr13 = c_old13[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt13};
-  wire [27:0] csg13;
-  assign csg13 = c_old13[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt13};
-  wire [27:0] csb13;
-  assign csb13 = c_old13[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt13};
-  wire [83:0] c_new13;
-  assign c_new13 = add13 ? {csb13, csg13, csr13} : c_old13;
+  wire [5:0] l13_ix6_;
+  assign l13_ix6_ = {d5_q[197:196], 4'd13};
+  wire l13_inside;
+  assign l13_inside = ({1'b0, l13_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l13_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l13_t_old;
+  assign l13_t_old = d5_q[192] ? 17'd65536 : rd_t13;
+  wire [83:0] l13_c_old;
+  assign l13_c_old = d5_q[192] ? 84'd0 : rd_c13;
+  wire l13_dn_old;
+  assign l13_dn_old = d5_q[192] ? ~l13_inside : rd_dn13;
+  wire l13_bl;
+  assign l13_bl = l13_ok5_ & ~l13_dn_old;
+  wire [29:0] l13_wp;
+  assign l13_wp = {18'd0, l13_alpha} * {13'd0, l13_t_old} + 30'd2048;
+  wire [16:0] l13_wt;
+  assign l13_wt = l13_wp[28:12];
+  wire [16:0] l13_tt;
+  assign l13_tt = l13_t_old - l13_wt;
+  wire l13_fin;
+  assign l13_fin = l13_tt < 17'd7;
+  wire l13_add;
+  assign l13_add = l13_bl & ~l13_fin;
+  wire [16:0] l13_t_new;
+  assign l13_t_new = l13_add ? l13_tt : l13_t_old;
+  wire l13_dn_new;
+  assign l13_dn_new = l13_dn_old | (l13_bl & l13_fin);
+  wire [27:0] l13_csr;
+  assign l13_csr = l13_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l13_wt};
+  wire [27:0] l13_csg;
+  assign l13_csg = l13_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l13_wt};
+  wire [27:0] l13_csb;
+  assign l13_csb = l13_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l13_wt};
+  wire [83:0] l13_c_new;
+  assign l13_c_new = l13_add ? {l13_csb, l13_csg, l13_csr} : l13_c_old;
 
   // lane 14
-  wire [5:0] ix14;
-  assign ix14 = {issue_bundle[197:196], 4'd14};
-  wire [16:0] pxx14;
-  assign pxx14 = {1'b0, issue_bundle[165:150]} + {14'd0, ix14[2:0]};
-  wire [26:0] dx14;
-  assign dx14 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx14, 8'd0};
-  wire [25:0] ax14;
-  assign ax14 = dx14[26] ? (~dx14[25:0] + 26'd1) : dx14[25:0];
-  wire [16:0] pxy14;
-  assign pxy14 = {1'b0, issue_bundle[181:166]} + {14'd0, ix14[5:3]};
-  wire [26:0] dy14;
-  assign dy14 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy14, 8'd0};
-  wire [25:0] ay14;
-  assign ay14 = dy14[26] ? (~dy14[25:0] + 26'd1) : dy14[25:0];
-  reg  [51:0] sxx14;
-  reg  [51:0] syy14;
-  reg  [51:0] sxy14;
-  reg  sneg14;
+  wire [5:0] l14_ix;
+  assign l14_ix = {issue_bundle[197:196], 4'd14};
+  wire [16:0] l14_pxx;
+  assign l14_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l14_ix[2:0]};
+  wire [26:0] l14_dx;
+  assign l14_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l14_pxx, 8'd0};
+  wire [25:0] l14_ax;
+  assign l14_ax = l14_dx[26] ? (~l14_dx[25:0] + 26'd1) : l14_dx[25:0];
+  wire [16:0] l14_pxy;
+  assign l14_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l14_ix[5:3]};
+  wire [26:0] l14_dy;
+  assign l14_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l14_pxy, 8'd0};
+  wire [25:0] l14_ay;
+  assign l14_ay = l14_dy[26] ? (~l14_dy[25:0] + 26'd1) : l14_dy[25:0];
+  reg  [51:0] l14_sxx;
+  reg  [51:0] l14_syy;
+  reg  [51:0] l14_sxy;
+  reg  l14_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx14 <= {26'd0, ax14} * {26'd0, ax14};
-      syy14 <= {26'd0, ay14} * {26'd0, ay14};
-      sxy14 <= {26'd0, ax14} * {26'd0, ay14};
-      sneg14 <= dx14[26] ^ dy14[26];
+      l14_sxx <= {26'd0, l14_ax} * {26'd0, l14_ax};
+      l14_syy <= {26'd0, l14_ay} * {26'd0, l14_ay};
+      l14_sxy <= {26'd0, l14_ax} * {26'd0, l14_ay};
+      l14_sneg <= l14_dx[26] ^ l14_dy[26];
     end
   end
-  wire cbs14;
-  assign cbs14 = d1_q[84];
-  wire [18:0] babs14;
-  assign babs14 = cbs14 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta14;
-  assign ta14 = {53'd0, d1_q[65:48]} * {19'd0, sxx14};
-  wire [70:0] tc14;
-  assign tc14 = {53'd0, d1_q[102:85]} * {19'd0, syy14};
-  wire [71:0] tb14;
-  assign tb14 = {53'd0, babs14} * {20'd0, sxy14};
-  wire [72:0] tbx14;
-  assign tbx14 = {tb14, 1'b0};
-  reg  [72:0] q14;
+  wire l14_cbs;
+  assign l14_cbs = d1_q[84];
+  wire [18:0] l14_babs;
+  assign l14_babs = l14_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l14_ta;
+  assign l14_ta = {53'd0, d1_q[65:48]} * {19'd0, l14_sxx};
+  wire [70:0] l14_tc;
+  assign l14_tc = {53'd0, d1_q[102:85]} * {19'd0, l14_syy};
+  wire [71:0] l14_tb;
+  assign l14_tb = {53'd0, l14_babs} * {20'd0, l14_sxy};
+  wire [72:0] l14_tbx;
+  assign l14_tbx = {l14_tb, 1'b0};
+  reg  [72:0] l14_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q14 <= {2'd0, ta14} + {2'd0, tc14} + ((sneg14 ^ cbs14) ? (~tbx14 + 73'd1) : tbx14);
+      l14_q <= {2'd0, l14_ta} + {2'd0, l14_tc} + ((l14_sneg ^ l14_cbs) ? (~l14_tbx + 73'd1) : l14_tbx);
     end
   end
-  wire [6:0] shm114;
-  assign shm114 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt14;
-  assign qt14 = $signed(q14) >>> shm114;
-  wire [72:0] qt114;
-  assign qt114 = qt14 + 73'd1;
-  wire [72:0] npf14;
-  assign npf14 = $signed(qt114) >>> 1;
-  reg  [12:0] np14;
-  reg  pos14;
+  wire [6:0] l14_shm1;
+  assign l14_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l14_qt;
+  assign l14_qt = $signed(l14_q) >>> l14_shm1;
+  wire [72:0] l14_qt1;
+  assign l14_qt1 = l14_qt + 73'd1;
+  wire [72:0] l14_npf;
+  assign l14_npf = $signed(l14_qt1) >>> 1;
+  reg  [12:0] l14_np;
+  reg  l14_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np14 <= (|npf14[71:13]) ? 13'd8191 : npf14[12:0];
-      pos14 <= ~npf14[72] & ~d2_q[190];
+      l14_np <= (|l14_npf[71:13]) ? 13'd8191 : l14_npf[12:0];
+      l14_pos <= ~l14_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex14;
+  wire [16:0] l14_ex;
   neo_scu_exp u_exp14 (
-    .np_i(np14),
-    .e_o(ex14)
+    .np_i(l14_np),
+    .e_o(l14_ex)
   );
-  reg  [16:0] e14;
-  reg  ok4_14;
+  reg  [16:0] l14_e;
+  reg  l14_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e14 <= ex14;
-      ok4_14 <= pos14;
+      l14_e <= l14_ex;
+      l14_ok4_ <= l14_pos;
     end
   end
-  wire [25:0] oe14;
-  assign oe14 = {18'd0, d4_q[116:109]} * {9'd0, e14};
-  wire [25:0] oer14;
-  assign oer14 = oe14 + 26'd2048;
-  wire [13:0] ar14;
-  assign ar14 = oer14[25:12];
-  wire [13:0] arx14;
-  assign arx14 = ar14;
-  wire [11:0] acap14;
-  assign acap14 = (arx14 > 14'd4055) ? 12'd4055 : arx14[11:0];
-  reg  [11:0] alpha14;
-  reg  ok5_14;
+  wire [25:0] l14_oe;
+  assign l14_oe = {18'd0, d4_q[116:109]} * {9'd0, l14_e};
+  wire [25:0] l14_oer;
+  assign l14_oer = l14_oe + 26'd2048;
+  wire [13:0] l14_ar;
+  assign l14_ar = l14_oer[25:12];
+  wire [13:0] l14_arx;
+  assign l14_arx = l14_ar;
+  wire [11:0] l14_acap;
+  assign l14_acap = (l14_arx > 14'd4055) ? 12'd4055 : l14_arx[11:0];
+  reg  [11:0] l14_alpha;
+  reg  l14_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha14 <= acap14;
-      ok5_14 <= ok4_14 & (acap14 >= 12'd17);
+      l14_alpha <= l14_acap;
+      l14_ok5_ <= l14_ok4_ & (l14_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_14;
-  assign ix6_14 = {d6_q[197:196], 4'd14};
-  wire inside14;
-  assign inside14 = ({1'b0, ix6_14[2:0]} < d6_q[185:182]) & ({1'b0, ix6_14[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old14;
-  assign t_old14 = d6_q[192] ? 17'd65536 : rd_t14;
-  wire [83:0] c_old14;
-  assign c_old14 = d6_q[192] ? 84'd0 : rd_c14;
-  wire dn_old14;
-  assign dn_old14 = d6_q[192] ? ~inside14 : rd_dn14;
-  wire bl14;
-  assign bl14 = ok5_14 & ~dn_old14;
-  wire [29:0] wp14;
-  assign wp14 = {18'd0, alpha14} * {13'd0, t_old14} + 30'd2048;
-  wire [16:0] wt14;
-  assign wt14 = wp14[28:12];
-  wire [16:0] tt14;
-  assign tt14 = t_old14 - wt14;
-  wire fin14;
-  assign fin14 = tt14 < 17'd7;
-  wire add14;
-  assign add14 = bl14 & ~fin14;
-  wire [16:0] t_new14;
-  assign t_new14 = add14 ? tt14 : t_old14;
-  wire dn_new14;
-  assign dn_new14 = dn_old14 | (bl14 & fin14);
-  wire [27:0] csr14;
-  assign csr14 = c_old14[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt14};
-  wire [27:0] csg14;
-  assign csg14 = c_old14[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt14};
-  wire [27:0] csb14;
-  assign csb14 = c_old14[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt14};
-  wire [83:0] c_new14;
-  assign c_new14 = add14 ? {csb14, csg14, csr14} : c_old14;
+  wire [5:0] l14_ix6_;
+  assign l14_ix6_ = {d5_q[197:196], 4'd14};
+  wire l14_inside;
+  assign l14_inside = ({1'b0, l14_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l14_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l14_t_old;
+  assign l14_t_old = d5_q[192] ? 17'd65536 : rd_t14;
+  wire [83:0] l14_c_old;
+  assign l14_c_old = d5_q[192] ? 84'd0 : rd_c14;
+  wire l14_dn_old;
+  assign l14_dn_old = d5_q[192] ? ~l14_inside : rd_dn14;
+  wire l14_bl;
+  assign l14_bl = l14_ok5_ & ~l14_dn_old;
+  wire [29:0] l14_wp;
+  assign l14_wp = {18'd0, l14_alpha} * {13'd0, l14_t_old} + 30'd2048;
+  wire [16:0] l14_wt;
+  assign l14_wt = l14_wp[28:12];
+  wire [16:0] l14_tt;
+  assign l14_tt = l14_t_old - l14_wt;
+  wire l14_fin;
+  assign l14_fin = l14_tt < 17'd7;
+  wire l14_add;
+  assign l14_add = l14_bl & ~l14_fin;
+  wire [16:0] l14_t_new;
+  assign l14_t_new = l14_add ? l14_tt : l14_t_old;
+  wire l14_dn_new;
+  assign l14_dn_new = l14_dn_old | (l14_bl & l14_fin);
+  wire [27:0] l14_csr;
+  assign l14_csr = l14_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l14_wt};
+  wire [27:0] l14_csg;
+  assign l14_csg = l14_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l14_wt};
+  wire [27:0] l14_csb;
+  assign l14_csb = l14_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l14_wt};
+  wire [83:0] l14_c_new;
+  assign l14_c_new = l14_add ? {l14_csb, l14_csg, l14_csr} : l14_c_old;
 
   // lane 15
-  wire [5:0] ix15;
-  assign ix15 = {issue_bundle[197:196], 4'd15};
-  wire [16:0] pxx15;
-  assign pxx15 = {1'b0, issue_bundle[165:150]} + {14'd0, ix15[2:0]};
-  wire [26:0] dx15;
-  assign dx15 = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, pxx15, 8'd0};
-  wire [25:0] ax15;
-  assign ax15 = dx15[26] ? (~dx15[25:0] + 26'd1) : dx15[25:0];
-  wire [16:0] pxy15;
-  assign pxy15 = {1'b0, issue_bundle[181:166]} + {14'd0, ix15[5:3]};
-  wire [26:0] dy15;
-  assign dy15 = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, pxy15, 8'd0};
-  wire [25:0] ay15;
-  assign ay15 = dy15[26] ? (~dy15[25:0] + 26'd1) : dy15[25:0];
-  reg  [51:0] sxx15;
-  reg  [51:0] syy15;
-  reg  [51:0] sxy15;
-  reg  sneg15;
+  wire [5:0] l15_ix;
+  assign l15_ix = {issue_bundle[197:196], 4'd15};
+  wire [16:0] l15_pxx;
+  assign l15_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l15_ix[2:0]};
+  wire [26:0] l15_dx;
+  assign l15_dx = {{3{issue_bundle[23]}}, issue_bundle[23:0]} - {2'd0, l15_pxx, 8'd0};
+  wire [25:0] l15_ax;
+  assign l15_ax = l15_dx[26] ? (~l15_dx[25:0] + 26'd1) : l15_dx[25:0];
+  wire [16:0] l15_pxy;
+  assign l15_pxy = {1'b0, issue_bundle[181:166]} + {14'd0, l15_ix[5:3]};
+  wire [26:0] l15_dy;
+  assign l15_dy = {{3{issue_bundle[47]}}, issue_bundle[47:24]} - {2'd0, l15_pxy, 8'd0};
+  wire [25:0] l15_ay;
+  assign l15_ay = l15_dy[26] ? (~l15_dy[25:0] + 26'd1) : l15_dy[25:0];
+  reg  [51:0] l15_sxx;
+  reg  [51:0] l15_syy;
+  reg  [51:0] l15_sxy;
+  reg  l15_sneg;
   always @(posedge clk_i) begin
     if (en) begin
-      sxx15 <= {26'd0, ax15} * {26'd0, ax15};
-      syy15 <= {26'd0, ay15} * {26'd0, ay15};
-      sxy15 <= {26'd0, ax15} * {26'd0, ay15};
-      sneg15 <= dx15[26] ^ dy15[26];
+      l15_sxx <= {26'd0, l15_ax} * {26'd0, l15_ax};
+      l15_syy <= {26'd0, l15_ay} * {26'd0, l15_ay};
+      l15_sxy <= {26'd0, l15_ax} * {26'd0, l15_ay};
+      l15_sneg <= l15_dx[26] ^ l15_dy[26];
     end
   end
-  wire cbs15;
-  assign cbs15 = d1_q[84];
-  wire [18:0] babs15;
-  assign babs15 = cbs15 ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
-  wire [70:0] ta15;
-  assign ta15 = {53'd0, d1_q[65:48]} * {19'd0, sxx15};
-  wire [70:0] tc15;
-  assign tc15 = {53'd0, d1_q[102:85]} * {19'd0, syy15};
-  wire [71:0] tb15;
-  assign tb15 = {53'd0, babs15} * {20'd0, sxy15};
-  wire [72:0] tbx15;
-  assign tbx15 = {tb15, 1'b0};
-  reg  [72:0] q15;
+  wire l15_cbs;
+  assign l15_cbs = d1_q[84];
+  wire [18:0] l15_babs;
+  assign l15_babs = l15_cbs ? (~d1_q[84:66] + 19'd1) : d1_q[84:66];
+  wire [70:0] l15_ta;
+  assign l15_ta = {53'd0, d1_q[65:48]} * {19'd0, l15_sxx};
+  wire [70:0] l15_tc;
+  assign l15_tc = {53'd0, d1_q[102:85]} * {19'd0, l15_syy};
+  wire [71:0] l15_tb;
+  assign l15_tb = {53'd0, l15_babs} * {20'd0, l15_sxy};
+  wire [72:0] l15_tbx;
+  assign l15_tbx = {l15_tb, 1'b0};
+  reg  [72:0] l15_q;
   always @(posedge clk_i) begin
     if (en) begin
-      q15 <= {2'd0, ta15} + {2'd0, tc15} + ((sneg15 ^ cbs15) ? (~tbx15 + 73'd1) : tbx15);
+      l15_q <= {2'd0, l15_ta} + {2'd0, l15_tc} + ((l15_sneg ^ l15_cbs) ? (~l15_tbx + 73'd1) : l15_tbx);
     end
   end
-  wire [6:0] shm115;
-  assign shm115 = 7'd22 + {1'b0, d2_q[108:103]};
-  wire [72:0] qt15;
-  assign qt15 = $signed(q15) >>> shm115;
-  wire [72:0] qt115;
-  assign qt115 = qt15 + 73'd1;
-  wire [72:0] npf15;
-  assign npf15 = $signed(qt115) >>> 1;
-  reg  [12:0] np15;
-  reg  pos15;
+  wire [6:0] l15_shm1;
+  assign l15_shm1 = 7'd22 + {1'b0, d2_q[108:103]};
+  wire [72:0] l15_qt;
+  assign l15_qt = $signed(l15_q) >>> l15_shm1;
+  wire [72:0] l15_qt1;
+  assign l15_qt1 = l15_qt + 73'd1;
+  wire [72:0] l15_npf;
+  assign l15_npf = $signed(l15_qt1) >>> 1;
+  reg  [12:0] l15_np;
+  reg  l15_pos;
   always @(posedge clk_i) begin
     if (en) begin
-      np15 <= (|npf15[71:13]) ? 13'd8191 : npf15[12:0];
-      pos15 <= ~npf15[72] & ~d2_q[190];
+      l15_np <= (|l15_npf[71:13]) ? 13'd8191 : l15_npf[12:0];
+      l15_pos <= ~l15_npf[72] & ~d2_q[190];
     end
   end
-  wire [16:0] ex15;
+  wire [16:0] l15_ex;
   neo_scu_exp u_exp15 (
-    .np_i(np15),
-    .e_o(ex15)
+    .np_i(l15_np),
+    .e_o(l15_ex)
   );
-  reg  [16:0] e15;
-  reg  ok4_15;
+  reg  [16:0] l15_e;
+  reg  l15_ok4_;
   always @(posedge clk_i) begin
     if (en) begin
-      e15 <= ex15;
-      ok4_15 <= pos15;
+      l15_e <= l15_ex;
+      l15_ok4_ <= l15_pos;
     end
   end
-  wire [25:0] oe15;
-  assign oe15 = {18'd0, d4_q[116:109]} * {9'd0, e15};
-  wire [25:0] oer15;
-  assign oer15 = oe15 + 26'd2048;
-  wire [13:0] ar15;
-  assign ar15 = oer15[25:12];
-  wire [13:0] arx15;
-  assign arx15 = ar15;
-  wire [11:0] acap15;
-  assign acap15 = (arx15 > 14'd4055) ? 12'd4055 : arx15[11:0];
-  reg  [11:0] alpha15;
-  reg  ok5_15;
+  wire [25:0] l15_oe;
+  assign l15_oe = {18'd0, d4_q[116:109]} * {9'd0, l15_e};
+  wire [25:0] l15_oer;
+  assign l15_oer = l15_oe + 26'd2048;
+  wire [13:0] l15_ar;
+  assign l15_ar = l15_oer[25:12];
+  wire [13:0] l15_arx;
+  assign l15_arx = l15_ar;
+  wire [11:0] l15_acap;
+  assign l15_acap = (l15_arx > 14'd4055) ? 12'd4055 : l15_arx[11:0];
+  reg  [11:0] l15_alpha;
+  reg  l15_ok5_;
   always @(posedge clk_i) begin
     if (en) begin
-      alpha15 <= acap15;
-      ok5_15 <= ok4_15 & (acap15 >= 12'd17);
+      l15_alpha <= l15_acap;
+      l15_ok5_ <= l15_ok4_ & (l15_acap >= 12'd17);
     end
   end
-  wire [5:0] ix6_15;
-  assign ix6_15 = {d6_q[197:196], 4'd15};
-  wire inside15;
-  assign inside15 = ({1'b0, ix6_15[2:0]} < d6_q[185:182]) & ({1'b0, ix6_15[5:3]} < d6_q[189:186]);
-  wire [16:0] t_old15;
-  assign t_old15 = d6_q[192] ? 17'd65536 : rd_t15;
-  wire [83:0] c_old15;
-  assign c_old15 = d6_q[192] ? 84'd0 : rd_c15;
-  wire dn_old15;
-  assign dn_old15 = d6_q[192] ? ~inside15 : rd_dn15;
-  wire bl15;
-  assign bl15 = ok5_15 & ~dn_old15;
-  wire [29:0] wp15;
-  assign wp15 = {18'd0, alpha15} * {13'd0, t_old15} + 30'd2048;
-  wire [16:0] wt15;
-  assign wt15 = wp15[28:12];
-  wire [16:0] tt15;
-  assign tt15 = t_old15 - wt15;
-  wire fin15;
-  assign fin15 = tt15 < 17'd7;
-  wire add15;
-  assign add15 = bl15 & ~fin15;
-  wire [16:0] t_new15;
-  assign t_new15 = add15 ? tt15 : t_old15;
-  wire dn_new15;
-  assign dn_new15 = dn_old15 | (bl15 & fin15);
-  wire [27:0] csr15;
-  assign csr15 = c_old15[27:0] + {17'd0, d6_q[127:117]} * {11'd0, wt15};
-  wire [27:0] csg15;
-  assign csg15 = c_old15[55:28] + {17'd0, d6_q[138:128]} * {11'd0, wt15};
-  wire [27:0] csb15;
-  assign csb15 = c_old15[83:56] + {17'd0, d6_q[149:139]} * {11'd0, wt15};
-  wire [83:0] c_new15;
-  assign c_new15 = add15 ? {csb15, csg15, csr15} : c_old15;
+  wire [5:0] l15_ix6_;
+  assign l15_ix6_ = {d5_q[197:196], 4'd15};
+  wire l15_inside;
+  assign l15_inside = ({1'b0, l15_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l15_ix6_[5:3]} < d5_q[189:186]);
+  wire [16:0] l15_t_old;
+  assign l15_t_old = d5_q[192] ? 17'd65536 : rd_t15;
+  wire [83:0] l15_c_old;
+  assign l15_c_old = d5_q[192] ? 84'd0 : rd_c15;
+  wire l15_dn_old;
+  assign l15_dn_old = d5_q[192] ? ~l15_inside : rd_dn15;
+  wire l15_bl;
+  assign l15_bl = l15_ok5_ & ~l15_dn_old;
+  wire [29:0] l15_wp;
+  assign l15_wp = {18'd0, l15_alpha} * {13'd0, l15_t_old} + 30'd2048;
+  wire [16:0] l15_wt;
+  assign l15_wt = l15_wp[28:12];
+  wire [16:0] l15_tt;
+  assign l15_tt = l15_t_old - l15_wt;
+  wire l15_fin;
+  assign l15_fin = l15_tt < 17'd7;
+  wire l15_add;
+  assign l15_add = l15_bl & ~l15_fin;
+  wire [16:0] l15_t_new;
+  assign l15_t_new = l15_add ? l15_tt : l15_t_old;
+  wire l15_dn_new;
+  assign l15_dn_new = l15_dn_old | (l15_bl & l15_fin);
+  wire [27:0] l15_csr;
+  assign l15_csr = l15_c_old[27:0] + {17'd0, d5_q[127:117]} * {11'd0, l15_wt};
+  wire [27:0] l15_csg;
+  assign l15_csg = l15_c_old[55:28] + {17'd0, d5_q[138:128]} * {11'd0, l15_wt};
+  wire [27:0] l15_csb;
+  assign l15_csb = l15_c_old[83:56] + {17'd0, d5_q[149:139]} * {11'd0, l15_wt};
+  wire [83:0] l15_c_new;
+  assign l15_c_new = l15_add ? {l15_csb, l15_csg, l15_csr} : l15_c_old;
 
   // Pixel state: T, colour accumulators, done; pixel k is lane k % L of pass k / L.
   reg  [16:0] t_q0;
   reg  [83:0] c_q0;
   reg  dn_q0;
   wire wr0;
-  assign wr0 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr0 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx0;
-  assign c_nx0 = wr0 ? c_new0 : c_q0;
+  assign c_nx0 = wr0 ? l0_c_new : c_q0;
   wire dn_nx0;
-  assign dn_nx0 = wr0 ? dn_new0 : dn_q0;
+  assign dn_nx0 = wr0 ? l0_dn_new : dn_q0;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q0 <= 1'b1;
     end else begin
       if (en & wr0) begin
-        dn_q0 <= dn_new0;
+        dn_q0 <= l0_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr0) begin
-        t_q0 <= t_new0;
-        c_q0 <= c_new0;
+        t_q0 <= l0_t_new;
+        c_q0 <= l0_c_new;
       end
     end
   end
@@ -2212,25 +2207,25 @@ module neo_scu (
   reg  [83:0] c_q1;
   reg  dn_q1;
   wire wr1;
-  assign wr1 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr1 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx1;
-  assign c_nx1 = wr1 ? c_new1 : c_q1;
+  assign c_nx1 = wr1 ? l1_c_new : c_q1;
   wire dn_nx1;
-  assign dn_nx1 = wr1 ? dn_new1 : dn_q1;
+  assign dn_nx1 = wr1 ? l1_dn_new : dn_q1;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q1 <= 1'b1;
     end else begin
       if (en & wr1) begin
-        dn_q1 <= dn_new1;
+        dn_q1 <= l1_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr1) begin
-        t_q1 <= t_new1;
-        c_q1 <= c_new1;
+        t_q1 <= l1_t_new;
+        c_q1 <= l1_c_new;
       end
     end
   end
@@ -2250,25 +2245,25 @@ module neo_scu (
   reg  [83:0] c_q2;
   reg  dn_q2;
   wire wr2;
-  assign wr2 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr2 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx2;
-  assign c_nx2 = wr2 ? c_new2 : c_q2;
+  assign c_nx2 = wr2 ? l2_c_new : c_q2;
   wire dn_nx2;
-  assign dn_nx2 = wr2 ? dn_new2 : dn_q2;
+  assign dn_nx2 = wr2 ? l2_dn_new : dn_q2;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q2 <= 1'b1;
     end else begin
       if (en & wr2) begin
-        dn_q2 <= dn_new2;
+        dn_q2 <= l2_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr2) begin
-        t_q2 <= t_new2;
-        c_q2 <= c_new2;
+        t_q2 <= l2_t_new;
+        c_q2 <= l2_c_new;
       end
     end
   end
@@ -2288,25 +2283,25 @@ module neo_scu (
   reg  [83:0] c_q3;
   reg  dn_q3;
   wire wr3;
-  assign wr3 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr3 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx3;
-  assign c_nx3 = wr3 ? c_new3 : c_q3;
+  assign c_nx3 = wr3 ? l3_c_new : c_q3;
   wire dn_nx3;
-  assign dn_nx3 = wr3 ? dn_new3 : dn_q3;
+  assign dn_nx3 = wr3 ? l3_dn_new : dn_q3;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q3 <= 1'b1;
     end else begin
       if (en & wr3) begin
-        dn_q3 <= dn_new3;
+        dn_q3 <= l3_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr3) begin
-        t_q3 <= t_new3;
-        c_q3 <= c_new3;
+        t_q3 <= l3_t_new;
+        c_q3 <= l3_c_new;
       end
     end
   end
@@ -2326,25 +2321,25 @@ module neo_scu (
   reg  [83:0] c_q4;
   reg  dn_q4;
   wire wr4;
-  assign wr4 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr4 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx4;
-  assign c_nx4 = wr4 ? c_new4 : c_q4;
+  assign c_nx4 = wr4 ? l4_c_new : c_q4;
   wire dn_nx4;
-  assign dn_nx4 = wr4 ? dn_new4 : dn_q4;
+  assign dn_nx4 = wr4 ? l4_dn_new : dn_q4;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q4 <= 1'b1;
     end else begin
       if (en & wr4) begin
-        dn_q4 <= dn_new4;
+        dn_q4 <= l4_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr4) begin
-        t_q4 <= t_new4;
-        c_q4 <= c_new4;
+        t_q4 <= l4_t_new;
+        c_q4 <= l4_c_new;
       end
     end
   end
@@ -2364,25 +2359,25 @@ module neo_scu (
   reg  [83:0] c_q5;
   reg  dn_q5;
   wire wr5;
-  assign wr5 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr5 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx5;
-  assign c_nx5 = wr5 ? c_new5 : c_q5;
+  assign c_nx5 = wr5 ? l5_c_new : c_q5;
   wire dn_nx5;
-  assign dn_nx5 = wr5 ? dn_new5 : dn_q5;
+  assign dn_nx5 = wr5 ? l5_dn_new : dn_q5;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q5 <= 1'b1;
     end else begin
       if (en & wr5) begin
-        dn_q5 <= dn_new5;
+        dn_q5 <= l5_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr5) begin
-        t_q5 <= t_new5;
-        c_q5 <= c_new5;
+        t_q5 <= l5_t_new;
+        c_q5 <= l5_c_new;
       end
     end
   end
@@ -2402,25 +2397,25 @@ module neo_scu (
   reg  [83:0] c_q6;
   reg  dn_q6;
   wire wr6;
-  assign wr6 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr6 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx6;
-  assign c_nx6 = wr6 ? c_new6 : c_q6;
+  assign c_nx6 = wr6 ? l6_c_new : c_q6;
   wire dn_nx6;
-  assign dn_nx6 = wr6 ? dn_new6 : dn_q6;
+  assign dn_nx6 = wr6 ? l6_dn_new : dn_q6;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q6 <= 1'b1;
     end else begin
       if (en & wr6) begin
-        dn_q6 <= dn_new6;
+        dn_q6 <= l6_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr6) begin
-        t_q6 <= t_new6;
-        c_q6 <= c_new6;
+        t_q6 <= l6_t_new;
+        c_q6 <= l6_c_new;
       end
     end
   end
@@ -2440,25 +2435,25 @@ module neo_scu (
   reg  [83:0] c_q7;
   reg  dn_q7;
   wire wr7;
-  assign wr7 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr7 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx7;
-  assign c_nx7 = wr7 ? c_new7 : c_q7;
+  assign c_nx7 = wr7 ? l7_c_new : c_q7;
   wire dn_nx7;
-  assign dn_nx7 = wr7 ? dn_new7 : dn_q7;
+  assign dn_nx7 = wr7 ? l7_dn_new : dn_q7;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q7 <= 1'b1;
     end else begin
       if (en & wr7) begin
-        dn_q7 <= dn_new7;
+        dn_q7 <= l7_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr7) begin
-        t_q7 <= t_new7;
-        c_q7 <= c_new7;
+        t_q7 <= l7_t_new;
+        c_q7 <= l7_c_new;
       end
     end
   end
@@ -2478,25 +2473,25 @@ module neo_scu (
   reg  [83:0] c_q8;
   reg  dn_q8;
   wire wr8;
-  assign wr8 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr8 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx8;
-  assign c_nx8 = wr8 ? c_new8 : c_q8;
+  assign c_nx8 = wr8 ? l8_c_new : c_q8;
   wire dn_nx8;
-  assign dn_nx8 = wr8 ? dn_new8 : dn_q8;
+  assign dn_nx8 = wr8 ? l8_dn_new : dn_q8;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q8 <= 1'b1;
     end else begin
       if (en & wr8) begin
-        dn_q8 <= dn_new8;
+        dn_q8 <= l8_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr8) begin
-        t_q8 <= t_new8;
-        c_q8 <= c_new8;
+        t_q8 <= l8_t_new;
+        c_q8 <= l8_c_new;
       end
     end
   end
@@ -2516,25 +2511,25 @@ module neo_scu (
   reg  [83:0] c_q9;
   reg  dn_q9;
   wire wr9;
-  assign wr9 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr9 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx9;
-  assign c_nx9 = wr9 ? c_new9 : c_q9;
+  assign c_nx9 = wr9 ? l9_c_new : c_q9;
   wire dn_nx9;
-  assign dn_nx9 = wr9 ? dn_new9 : dn_q9;
+  assign dn_nx9 = wr9 ? l9_dn_new : dn_q9;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q9 <= 1'b1;
     end else begin
       if (en & wr9) begin
-        dn_q9 <= dn_new9;
+        dn_q9 <= l9_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr9) begin
-        t_q9 <= t_new9;
-        c_q9 <= c_new9;
+        t_q9 <= l9_t_new;
+        c_q9 <= l9_c_new;
       end
     end
   end
@@ -2554,25 +2549,25 @@ module neo_scu (
   reg  [83:0] c_q10;
   reg  dn_q10;
   wire wr10;
-  assign wr10 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr10 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx10;
-  assign c_nx10 = wr10 ? c_new10 : c_q10;
+  assign c_nx10 = wr10 ? l10_c_new : c_q10;
   wire dn_nx10;
-  assign dn_nx10 = wr10 ? dn_new10 : dn_q10;
+  assign dn_nx10 = wr10 ? l10_dn_new : dn_q10;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q10 <= 1'b1;
     end else begin
       if (en & wr10) begin
-        dn_q10 <= dn_new10;
+        dn_q10 <= l10_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr10) begin
-        t_q10 <= t_new10;
-        c_q10 <= c_new10;
+        t_q10 <= l10_t_new;
+        c_q10 <= l10_c_new;
       end
     end
   end
@@ -2592,25 +2587,25 @@ module neo_scu (
   reg  [83:0] c_q11;
   reg  dn_q11;
   wire wr11;
-  assign wr11 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr11 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx11;
-  assign c_nx11 = wr11 ? c_new11 : c_q11;
+  assign c_nx11 = wr11 ? l11_c_new : c_q11;
   wire dn_nx11;
-  assign dn_nx11 = wr11 ? dn_new11 : dn_q11;
+  assign dn_nx11 = wr11 ? l11_dn_new : dn_q11;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q11 <= 1'b1;
     end else begin
       if (en & wr11) begin
-        dn_q11 <= dn_new11;
+        dn_q11 <= l11_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr11) begin
-        t_q11 <= t_new11;
-        c_q11 <= c_new11;
+        t_q11 <= l11_t_new;
+        c_q11 <= l11_c_new;
       end
     end
   end
@@ -2630,25 +2625,25 @@ module neo_scu (
   reg  [83:0] c_q12;
   reg  dn_q12;
   wire wr12;
-  assign wr12 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr12 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx12;
-  assign c_nx12 = wr12 ? c_new12 : c_q12;
+  assign c_nx12 = wr12 ? l12_c_new : c_q12;
   wire dn_nx12;
-  assign dn_nx12 = wr12 ? dn_new12 : dn_q12;
+  assign dn_nx12 = wr12 ? l12_dn_new : dn_q12;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q12 <= 1'b1;
     end else begin
       if (en & wr12) begin
-        dn_q12 <= dn_new12;
+        dn_q12 <= l12_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr12) begin
-        t_q12 <= t_new12;
-        c_q12 <= c_new12;
+        t_q12 <= l12_t_new;
+        c_q12 <= l12_c_new;
       end
     end
   end
@@ -2668,25 +2663,25 @@ module neo_scu (
   reg  [83:0] c_q13;
   reg  dn_q13;
   wire wr13;
-  assign wr13 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr13 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx13;
-  assign c_nx13 = wr13 ? c_new13 : c_q13;
+  assign c_nx13 = wr13 ? l13_c_new : c_q13;
   wire dn_nx13;
-  assign dn_nx13 = wr13 ? dn_new13 : dn_q13;
+  assign dn_nx13 = wr13 ? l13_dn_new : dn_q13;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q13 <= 1'b1;
     end else begin
       if (en & wr13) begin
-        dn_q13 <= dn_new13;
+        dn_q13 <= l13_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr13) begin
-        t_q13 <= t_new13;
-        c_q13 <= c_new13;
+        t_q13 <= l13_t_new;
+        c_q13 <= l13_c_new;
       end
     end
   end
@@ -2706,25 +2701,25 @@ module neo_scu (
   reg  [83:0] c_q14;
   reg  dn_q14;
   wire wr14;
-  assign wr14 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr14 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx14;
-  assign c_nx14 = wr14 ? c_new14 : c_q14;
+  assign c_nx14 = wr14 ? l14_c_new : c_q14;
   wire dn_nx14;
-  assign dn_nx14 = wr14 ? dn_new14 : dn_q14;
+  assign dn_nx14 = wr14 ? l14_dn_new : dn_q14;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q14 <= 1'b1;
     end else begin
       if (en & wr14) begin
-        dn_q14 <= dn_new14;
+        dn_q14 <= l14_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr14) begin
-        t_q14 <= t_new14;
-        c_q14 <= c_new14;
+        t_q14 <= l14_t_new;
+        c_q14 <= l14_c_new;
       end
     end
   end
@@ -2744,25 +2739,25 @@ module neo_scu (
   reg  [83:0] c_q15;
   reg  dn_q15;
   wire wr15;
-  assign wr15 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd0);
+  assign wr15 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
   wire [83:0] c_nx15;
-  assign c_nx15 = wr15 ? c_new15 : c_q15;
+  assign c_nx15 = wr15 ? l15_c_new : c_q15;
   wire dn_nx15;
-  assign dn_nx15 = wr15 ? dn_new15 : dn_q15;
+  assign dn_nx15 = wr15 ? l15_dn_new : dn_q15;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q15 <= 1'b1;
     end else begin
       if (en & wr15) begin
-        dn_q15 <= dn_new15;
+        dn_q15 <= l15_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr15) begin
-        t_q15 <= t_new15;
-        c_q15 <= c_new15;
+        t_q15 <= l15_t_new;
+        c_q15 <= l15_c_new;
       end
     end
   end
@@ -2782,25 +2777,25 @@ module neo_scu (
   reg  [83:0] c_q16;
   reg  dn_q16;
   wire wr16;
-  assign wr16 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr16 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx16;
-  assign c_nx16 = wr16 ? c_new0 : c_q16;
+  assign c_nx16 = wr16 ? l0_c_new : c_q16;
   wire dn_nx16;
-  assign dn_nx16 = wr16 ? dn_new0 : dn_q16;
+  assign dn_nx16 = wr16 ? l0_dn_new : dn_q16;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q16 <= 1'b1;
     end else begin
       if (en & wr16) begin
-        dn_q16 <= dn_new0;
+        dn_q16 <= l0_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr16) begin
-        t_q16 <= t_new0;
-        c_q16 <= c_new0;
+        t_q16 <= l0_t_new;
+        c_q16 <= l0_c_new;
       end
     end
   end
@@ -2820,25 +2815,25 @@ module neo_scu (
   reg  [83:0] c_q17;
   reg  dn_q17;
   wire wr17;
-  assign wr17 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr17 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx17;
-  assign c_nx17 = wr17 ? c_new1 : c_q17;
+  assign c_nx17 = wr17 ? l1_c_new : c_q17;
   wire dn_nx17;
-  assign dn_nx17 = wr17 ? dn_new1 : dn_q17;
+  assign dn_nx17 = wr17 ? l1_dn_new : dn_q17;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q17 <= 1'b1;
     end else begin
       if (en & wr17) begin
-        dn_q17 <= dn_new1;
+        dn_q17 <= l1_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr17) begin
-        t_q17 <= t_new1;
-        c_q17 <= c_new1;
+        t_q17 <= l1_t_new;
+        c_q17 <= l1_c_new;
       end
     end
   end
@@ -2858,25 +2853,25 @@ module neo_scu (
   reg  [83:0] c_q18;
   reg  dn_q18;
   wire wr18;
-  assign wr18 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr18 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx18;
-  assign c_nx18 = wr18 ? c_new2 : c_q18;
+  assign c_nx18 = wr18 ? l2_c_new : c_q18;
   wire dn_nx18;
-  assign dn_nx18 = wr18 ? dn_new2 : dn_q18;
+  assign dn_nx18 = wr18 ? l2_dn_new : dn_q18;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q18 <= 1'b1;
     end else begin
       if (en & wr18) begin
-        dn_q18 <= dn_new2;
+        dn_q18 <= l2_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr18) begin
-        t_q18 <= t_new2;
-        c_q18 <= c_new2;
+        t_q18 <= l2_t_new;
+        c_q18 <= l2_c_new;
       end
     end
   end
@@ -2896,25 +2891,25 @@ module neo_scu (
   reg  [83:0] c_q19;
   reg  dn_q19;
   wire wr19;
-  assign wr19 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr19 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx19;
-  assign c_nx19 = wr19 ? c_new3 : c_q19;
+  assign c_nx19 = wr19 ? l3_c_new : c_q19;
   wire dn_nx19;
-  assign dn_nx19 = wr19 ? dn_new3 : dn_q19;
+  assign dn_nx19 = wr19 ? l3_dn_new : dn_q19;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q19 <= 1'b1;
     end else begin
       if (en & wr19) begin
-        dn_q19 <= dn_new3;
+        dn_q19 <= l3_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr19) begin
-        t_q19 <= t_new3;
-        c_q19 <= c_new3;
+        t_q19 <= l3_t_new;
+        c_q19 <= l3_c_new;
       end
     end
   end
@@ -2934,25 +2929,25 @@ module neo_scu (
   reg  [83:0] c_q20;
   reg  dn_q20;
   wire wr20;
-  assign wr20 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr20 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx20;
-  assign c_nx20 = wr20 ? c_new4 : c_q20;
+  assign c_nx20 = wr20 ? l4_c_new : c_q20;
   wire dn_nx20;
-  assign dn_nx20 = wr20 ? dn_new4 : dn_q20;
+  assign dn_nx20 = wr20 ? l4_dn_new : dn_q20;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q20 <= 1'b1;
     end else begin
       if (en & wr20) begin
-        dn_q20 <= dn_new4;
+        dn_q20 <= l4_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr20) begin
-        t_q20 <= t_new4;
-        c_q20 <= c_new4;
+        t_q20 <= l4_t_new;
+        c_q20 <= l4_c_new;
       end
     end
   end
@@ -2972,25 +2967,25 @@ module neo_scu (
   reg  [83:0] c_q21;
   reg  dn_q21;
   wire wr21;
-  assign wr21 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr21 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx21;
-  assign c_nx21 = wr21 ? c_new5 : c_q21;
+  assign c_nx21 = wr21 ? l5_c_new : c_q21;
   wire dn_nx21;
-  assign dn_nx21 = wr21 ? dn_new5 : dn_q21;
+  assign dn_nx21 = wr21 ? l5_dn_new : dn_q21;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q21 <= 1'b1;
     end else begin
       if (en & wr21) begin
-        dn_q21 <= dn_new5;
+        dn_q21 <= l5_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr21) begin
-        t_q21 <= t_new5;
-        c_q21 <= c_new5;
+        t_q21 <= l5_t_new;
+        c_q21 <= l5_c_new;
       end
     end
   end
@@ -3010,25 +3005,25 @@ module neo_scu (
   reg  [83:0] c_q22;
   reg  dn_q22;
   wire wr22;
-  assign wr22 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr22 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx22;
-  assign c_nx22 = wr22 ? c_new6 : c_q22;
+  assign c_nx22 = wr22 ? l6_c_new : c_q22;
   wire dn_nx22;
-  assign dn_nx22 = wr22 ? dn_new6 : dn_q22;
+  assign dn_nx22 = wr22 ? l6_dn_new : dn_q22;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q22 <= 1'b1;
     end else begin
       if (en & wr22) begin
-        dn_q22 <= dn_new6;
+        dn_q22 <= l6_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr22) begin
-        t_q22 <= t_new6;
-        c_q22 <= c_new6;
+        t_q22 <= l6_t_new;
+        c_q22 <= l6_c_new;
       end
     end
   end
@@ -3048,25 +3043,25 @@ module neo_scu (
   reg  [83:0] c_q23;
   reg  dn_q23;
   wire wr23;
-  assign wr23 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr23 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx23;
-  assign c_nx23 = wr23 ? c_new7 : c_q23;
+  assign c_nx23 = wr23 ? l7_c_new : c_q23;
   wire dn_nx23;
-  assign dn_nx23 = wr23 ? dn_new7 : dn_q23;
+  assign dn_nx23 = wr23 ? l7_dn_new : dn_q23;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q23 <= 1'b1;
     end else begin
       if (en & wr23) begin
-        dn_q23 <= dn_new7;
+        dn_q23 <= l7_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr23) begin
-        t_q23 <= t_new7;
-        c_q23 <= c_new7;
+        t_q23 <= l7_t_new;
+        c_q23 <= l7_c_new;
       end
     end
   end
@@ -3086,25 +3081,25 @@ module neo_scu (
   reg  [83:0] c_q24;
   reg  dn_q24;
   wire wr24;
-  assign wr24 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr24 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx24;
-  assign c_nx24 = wr24 ? c_new8 : c_q24;
+  assign c_nx24 = wr24 ? l8_c_new : c_q24;
   wire dn_nx24;
-  assign dn_nx24 = wr24 ? dn_new8 : dn_q24;
+  assign dn_nx24 = wr24 ? l8_dn_new : dn_q24;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q24 <= 1'b1;
     end else begin
       if (en & wr24) begin
-        dn_q24 <= dn_new8;
+        dn_q24 <= l8_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr24) begin
-        t_q24 <= t_new8;
-        c_q24 <= c_new8;
+        t_q24 <= l8_t_new;
+        c_q24 <= l8_c_new;
       end
     end
   end
@@ -3124,25 +3119,25 @@ module neo_scu (
   reg  [83:0] c_q25;
   reg  dn_q25;
   wire wr25;
-  assign wr25 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr25 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx25;
-  assign c_nx25 = wr25 ? c_new9 : c_q25;
+  assign c_nx25 = wr25 ? l9_c_new : c_q25;
   wire dn_nx25;
-  assign dn_nx25 = wr25 ? dn_new9 : dn_q25;
+  assign dn_nx25 = wr25 ? l9_dn_new : dn_q25;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q25 <= 1'b1;
     end else begin
       if (en & wr25) begin
-        dn_q25 <= dn_new9;
+        dn_q25 <= l9_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr25) begin
-        t_q25 <= t_new9;
-        c_q25 <= c_new9;
+        t_q25 <= l9_t_new;
+        c_q25 <= l9_c_new;
       end
     end
   end
@@ -3162,25 +3157,25 @@ module neo_scu (
   reg  [83:0] c_q26;
   reg  dn_q26;
   wire wr26;
-  assign wr26 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr26 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx26;
-  assign c_nx26 = wr26 ? c_new10 : c_q26;
+  assign c_nx26 = wr26 ? l10_c_new : c_q26;
   wire dn_nx26;
-  assign dn_nx26 = wr26 ? dn_new10 : dn_q26;
+  assign dn_nx26 = wr26 ? l10_dn_new : dn_q26;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q26 <= 1'b1;
     end else begin
       if (en & wr26) begin
-        dn_q26 <= dn_new10;
+        dn_q26 <= l10_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr26) begin
-        t_q26 <= t_new10;
-        c_q26 <= c_new10;
+        t_q26 <= l10_t_new;
+        c_q26 <= l10_c_new;
       end
     end
   end
@@ -3200,25 +3195,25 @@ module neo_scu (
   reg  [83:0] c_q27;
   reg  dn_q27;
   wire wr27;
-  assign wr27 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr27 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx27;
-  assign c_nx27 = wr27 ? c_new11 : c_q27;
+  assign c_nx27 = wr27 ? l11_c_new : c_q27;
   wire dn_nx27;
-  assign dn_nx27 = wr27 ? dn_new11 : dn_q27;
+  assign dn_nx27 = wr27 ? l11_dn_new : dn_q27;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q27 <= 1'b1;
     end else begin
       if (en & wr27) begin
-        dn_q27 <= dn_new11;
+        dn_q27 <= l11_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr27) begin
-        t_q27 <= t_new11;
-        c_q27 <= c_new11;
+        t_q27 <= l11_t_new;
+        c_q27 <= l11_c_new;
       end
     end
   end
@@ -3238,25 +3233,25 @@ module neo_scu (
   reg  [83:0] c_q28;
   reg  dn_q28;
   wire wr28;
-  assign wr28 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr28 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx28;
-  assign c_nx28 = wr28 ? c_new12 : c_q28;
+  assign c_nx28 = wr28 ? l12_c_new : c_q28;
   wire dn_nx28;
-  assign dn_nx28 = wr28 ? dn_new12 : dn_q28;
+  assign dn_nx28 = wr28 ? l12_dn_new : dn_q28;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q28 <= 1'b1;
     end else begin
       if (en & wr28) begin
-        dn_q28 <= dn_new12;
+        dn_q28 <= l12_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr28) begin
-        t_q28 <= t_new12;
-        c_q28 <= c_new12;
+        t_q28 <= l12_t_new;
+        c_q28 <= l12_c_new;
       end
     end
   end
@@ -3276,25 +3271,25 @@ module neo_scu (
   reg  [83:0] c_q29;
   reg  dn_q29;
   wire wr29;
-  assign wr29 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr29 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx29;
-  assign c_nx29 = wr29 ? c_new13 : c_q29;
+  assign c_nx29 = wr29 ? l13_c_new : c_q29;
   wire dn_nx29;
-  assign dn_nx29 = wr29 ? dn_new13 : dn_q29;
+  assign dn_nx29 = wr29 ? l13_dn_new : dn_q29;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q29 <= 1'b1;
     end else begin
       if (en & wr29) begin
-        dn_q29 <= dn_new13;
+        dn_q29 <= l13_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr29) begin
-        t_q29 <= t_new13;
-        c_q29 <= c_new13;
+        t_q29 <= l13_t_new;
+        c_q29 <= l13_c_new;
       end
     end
   end
@@ -3314,25 +3309,25 @@ module neo_scu (
   reg  [83:0] c_q30;
   reg  dn_q30;
   wire wr30;
-  assign wr30 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr30 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx30;
-  assign c_nx30 = wr30 ? c_new14 : c_q30;
+  assign c_nx30 = wr30 ? l14_c_new : c_q30;
   wire dn_nx30;
-  assign dn_nx30 = wr30 ? dn_new14 : dn_q30;
+  assign dn_nx30 = wr30 ? l14_dn_new : dn_q30;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q30 <= 1'b1;
     end else begin
       if (en & wr30) begin
-        dn_q30 <= dn_new14;
+        dn_q30 <= l14_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr30) begin
-        t_q30 <= t_new14;
-        c_q30 <= c_new14;
+        t_q30 <= l14_t_new;
+        c_q30 <= l14_c_new;
       end
     end
   end
@@ -3352,25 +3347,25 @@ module neo_scu (
   reg  [83:0] c_q31;
   reg  dn_q31;
   wire wr31;
-  assign wr31 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd1);
+  assign wr31 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
   wire [83:0] c_nx31;
-  assign c_nx31 = wr31 ? c_new15 : c_q31;
+  assign c_nx31 = wr31 ? l15_c_new : c_q31;
   wire dn_nx31;
-  assign dn_nx31 = wr31 ? dn_new15 : dn_q31;
+  assign dn_nx31 = wr31 ? l15_dn_new : dn_q31;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q31 <= 1'b1;
     end else begin
       if (en & wr31) begin
-        dn_q31 <= dn_new15;
+        dn_q31 <= l15_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr31) begin
-        t_q31 <= t_new15;
-        c_q31 <= c_new15;
+        t_q31 <= l15_t_new;
+        c_q31 <= l15_c_new;
       end
     end
   end
@@ -3390,25 +3385,25 @@ module neo_scu (
   reg  [83:0] c_q32;
   reg  dn_q32;
   wire wr32;
-  assign wr32 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr32 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx32;
-  assign c_nx32 = wr32 ? c_new0 : c_q32;
+  assign c_nx32 = wr32 ? l0_c_new : c_q32;
   wire dn_nx32;
-  assign dn_nx32 = wr32 ? dn_new0 : dn_q32;
+  assign dn_nx32 = wr32 ? l0_dn_new : dn_q32;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q32 <= 1'b1;
     end else begin
       if (en & wr32) begin
-        dn_q32 <= dn_new0;
+        dn_q32 <= l0_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr32) begin
-        t_q32 <= t_new0;
-        c_q32 <= c_new0;
+        t_q32 <= l0_t_new;
+        c_q32 <= l0_c_new;
       end
     end
   end
@@ -3428,25 +3423,25 @@ module neo_scu (
   reg  [83:0] c_q33;
   reg  dn_q33;
   wire wr33;
-  assign wr33 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr33 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx33;
-  assign c_nx33 = wr33 ? c_new1 : c_q33;
+  assign c_nx33 = wr33 ? l1_c_new : c_q33;
   wire dn_nx33;
-  assign dn_nx33 = wr33 ? dn_new1 : dn_q33;
+  assign dn_nx33 = wr33 ? l1_dn_new : dn_q33;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q33 <= 1'b1;
     end else begin
       if (en & wr33) begin
-        dn_q33 <= dn_new1;
+        dn_q33 <= l1_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr33) begin
-        t_q33 <= t_new1;
-        c_q33 <= c_new1;
+        t_q33 <= l1_t_new;
+        c_q33 <= l1_c_new;
       end
     end
   end
@@ -3466,25 +3461,25 @@ module neo_scu (
   reg  [83:0] c_q34;
   reg  dn_q34;
   wire wr34;
-  assign wr34 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr34 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx34;
-  assign c_nx34 = wr34 ? c_new2 : c_q34;
+  assign c_nx34 = wr34 ? l2_c_new : c_q34;
   wire dn_nx34;
-  assign dn_nx34 = wr34 ? dn_new2 : dn_q34;
+  assign dn_nx34 = wr34 ? l2_dn_new : dn_q34;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q34 <= 1'b1;
     end else begin
       if (en & wr34) begin
-        dn_q34 <= dn_new2;
+        dn_q34 <= l2_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr34) begin
-        t_q34 <= t_new2;
-        c_q34 <= c_new2;
+        t_q34 <= l2_t_new;
+        c_q34 <= l2_c_new;
       end
     end
   end
@@ -3504,25 +3499,25 @@ module neo_scu (
   reg  [83:0] c_q35;
   reg  dn_q35;
   wire wr35;
-  assign wr35 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr35 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx35;
-  assign c_nx35 = wr35 ? c_new3 : c_q35;
+  assign c_nx35 = wr35 ? l3_c_new : c_q35;
   wire dn_nx35;
-  assign dn_nx35 = wr35 ? dn_new3 : dn_q35;
+  assign dn_nx35 = wr35 ? l3_dn_new : dn_q35;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q35 <= 1'b1;
     end else begin
       if (en & wr35) begin
-        dn_q35 <= dn_new3;
+        dn_q35 <= l3_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr35) begin
-        t_q35 <= t_new3;
-        c_q35 <= c_new3;
+        t_q35 <= l3_t_new;
+        c_q35 <= l3_c_new;
       end
     end
   end
@@ -3542,25 +3537,25 @@ module neo_scu (
   reg  [83:0] c_q36;
   reg  dn_q36;
   wire wr36;
-  assign wr36 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr36 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx36;
-  assign c_nx36 = wr36 ? c_new4 : c_q36;
+  assign c_nx36 = wr36 ? l4_c_new : c_q36;
   wire dn_nx36;
-  assign dn_nx36 = wr36 ? dn_new4 : dn_q36;
+  assign dn_nx36 = wr36 ? l4_dn_new : dn_q36;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q36 <= 1'b1;
     end else begin
       if (en & wr36) begin
-        dn_q36 <= dn_new4;
+        dn_q36 <= l4_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr36) begin
-        t_q36 <= t_new4;
-        c_q36 <= c_new4;
+        t_q36 <= l4_t_new;
+        c_q36 <= l4_c_new;
       end
     end
   end
@@ -3580,25 +3575,25 @@ module neo_scu (
   reg  [83:0] c_q37;
   reg  dn_q37;
   wire wr37;
-  assign wr37 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr37 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx37;
-  assign c_nx37 = wr37 ? c_new5 : c_q37;
+  assign c_nx37 = wr37 ? l5_c_new : c_q37;
   wire dn_nx37;
-  assign dn_nx37 = wr37 ? dn_new5 : dn_q37;
+  assign dn_nx37 = wr37 ? l5_dn_new : dn_q37;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q37 <= 1'b1;
     end else begin
       if (en & wr37) begin
-        dn_q37 <= dn_new5;
+        dn_q37 <= l5_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr37) begin
-        t_q37 <= t_new5;
-        c_q37 <= c_new5;
+        t_q37 <= l5_t_new;
+        c_q37 <= l5_c_new;
       end
     end
   end
@@ -3618,25 +3613,25 @@ module neo_scu (
   reg  [83:0] c_q38;
   reg  dn_q38;
   wire wr38;
-  assign wr38 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr38 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx38;
-  assign c_nx38 = wr38 ? c_new6 : c_q38;
+  assign c_nx38 = wr38 ? l6_c_new : c_q38;
   wire dn_nx38;
-  assign dn_nx38 = wr38 ? dn_new6 : dn_q38;
+  assign dn_nx38 = wr38 ? l6_dn_new : dn_q38;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q38 <= 1'b1;
     end else begin
       if (en & wr38) begin
-        dn_q38 <= dn_new6;
+        dn_q38 <= l6_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr38) begin
-        t_q38 <= t_new6;
-        c_q38 <= c_new6;
+        t_q38 <= l6_t_new;
+        c_q38 <= l6_c_new;
       end
     end
   end
@@ -3656,25 +3651,25 @@ module neo_scu (
   reg  [83:0] c_q39;
   reg  dn_q39;
   wire wr39;
-  assign wr39 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr39 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx39;
-  assign c_nx39 = wr39 ? c_new7 : c_q39;
+  assign c_nx39 = wr39 ? l7_c_new : c_q39;
   wire dn_nx39;
-  assign dn_nx39 = wr39 ? dn_new7 : dn_q39;
+  assign dn_nx39 = wr39 ? l7_dn_new : dn_q39;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q39 <= 1'b1;
     end else begin
       if (en & wr39) begin
-        dn_q39 <= dn_new7;
+        dn_q39 <= l7_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr39) begin
-        t_q39 <= t_new7;
-        c_q39 <= c_new7;
+        t_q39 <= l7_t_new;
+        c_q39 <= l7_c_new;
       end
     end
   end
@@ -3694,25 +3689,25 @@ module neo_scu (
   reg  [83:0] c_q40;
   reg  dn_q40;
   wire wr40;
-  assign wr40 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr40 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx40;
-  assign c_nx40 = wr40 ? c_new8 : c_q40;
+  assign c_nx40 = wr40 ? l8_c_new : c_q40;
   wire dn_nx40;
-  assign dn_nx40 = wr40 ? dn_new8 : dn_q40;
+  assign dn_nx40 = wr40 ? l8_dn_new : dn_q40;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q40 <= 1'b1;
     end else begin
       if (en & wr40) begin
-        dn_q40 <= dn_new8;
+        dn_q40 <= l8_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr40) begin
-        t_q40 <= t_new8;
-        c_q40 <= c_new8;
+        t_q40 <= l8_t_new;
+        c_q40 <= l8_c_new;
       end
     end
   end
@@ -3732,25 +3727,25 @@ module neo_scu (
   reg  [83:0] c_q41;
   reg  dn_q41;
   wire wr41;
-  assign wr41 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr41 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx41;
-  assign c_nx41 = wr41 ? c_new9 : c_q41;
+  assign c_nx41 = wr41 ? l9_c_new : c_q41;
   wire dn_nx41;
-  assign dn_nx41 = wr41 ? dn_new9 : dn_q41;
+  assign dn_nx41 = wr41 ? l9_dn_new : dn_q41;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q41 <= 1'b1;
     end else begin
       if (en & wr41) begin
-        dn_q41 <= dn_new9;
+        dn_q41 <= l9_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr41) begin
-        t_q41 <= t_new9;
-        c_q41 <= c_new9;
+        t_q41 <= l9_t_new;
+        c_q41 <= l9_c_new;
       end
     end
   end
@@ -3770,25 +3765,25 @@ module neo_scu (
   reg  [83:0] c_q42;
   reg  dn_q42;
   wire wr42;
-  assign wr42 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr42 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx42;
-  assign c_nx42 = wr42 ? c_new10 : c_q42;
+  assign c_nx42 = wr42 ? l10_c_new : c_q42;
   wire dn_nx42;
-  assign dn_nx42 = wr42 ? dn_new10 : dn_q42;
+  assign dn_nx42 = wr42 ? l10_dn_new : dn_q42;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q42 <= 1'b1;
     end else begin
       if (en & wr42) begin
-        dn_q42 <= dn_new10;
+        dn_q42 <= l10_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr42) begin
-        t_q42 <= t_new10;
-        c_q42 <= c_new10;
+        t_q42 <= l10_t_new;
+        c_q42 <= l10_c_new;
       end
     end
   end
@@ -3808,25 +3803,25 @@ module neo_scu (
   reg  [83:0] c_q43;
   reg  dn_q43;
   wire wr43;
-  assign wr43 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr43 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx43;
-  assign c_nx43 = wr43 ? c_new11 : c_q43;
+  assign c_nx43 = wr43 ? l11_c_new : c_q43;
   wire dn_nx43;
-  assign dn_nx43 = wr43 ? dn_new11 : dn_q43;
+  assign dn_nx43 = wr43 ? l11_dn_new : dn_q43;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q43 <= 1'b1;
     end else begin
       if (en & wr43) begin
-        dn_q43 <= dn_new11;
+        dn_q43 <= l11_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr43) begin
-        t_q43 <= t_new11;
-        c_q43 <= c_new11;
+        t_q43 <= l11_t_new;
+        c_q43 <= l11_c_new;
       end
     end
   end
@@ -3846,25 +3841,25 @@ module neo_scu (
   reg  [83:0] c_q44;
   reg  dn_q44;
   wire wr44;
-  assign wr44 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr44 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx44;
-  assign c_nx44 = wr44 ? c_new12 : c_q44;
+  assign c_nx44 = wr44 ? l12_c_new : c_q44;
   wire dn_nx44;
-  assign dn_nx44 = wr44 ? dn_new12 : dn_q44;
+  assign dn_nx44 = wr44 ? l12_dn_new : dn_q44;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q44 <= 1'b1;
     end else begin
       if (en & wr44) begin
-        dn_q44 <= dn_new12;
+        dn_q44 <= l12_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr44) begin
-        t_q44 <= t_new12;
-        c_q44 <= c_new12;
+        t_q44 <= l12_t_new;
+        c_q44 <= l12_c_new;
       end
     end
   end
@@ -3884,25 +3879,25 @@ module neo_scu (
   reg  [83:0] c_q45;
   reg  dn_q45;
   wire wr45;
-  assign wr45 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr45 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx45;
-  assign c_nx45 = wr45 ? c_new13 : c_q45;
+  assign c_nx45 = wr45 ? l13_c_new : c_q45;
   wire dn_nx45;
-  assign dn_nx45 = wr45 ? dn_new13 : dn_q45;
+  assign dn_nx45 = wr45 ? l13_dn_new : dn_q45;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q45 <= 1'b1;
     end else begin
       if (en & wr45) begin
-        dn_q45 <= dn_new13;
+        dn_q45 <= l13_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr45) begin
-        t_q45 <= t_new13;
-        c_q45 <= c_new13;
+        t_q45 <= l13_t_new;
+        c_q45 <= l13_c_new;
       end
     end
   end
@@ -3922,25 +3917,25 @@ module neo_scu (
   reg  [83:0] c_q46;
   reg  dn_q46;
   wire wr46;
-  assign wr46 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr46 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx46;
-  assign c_nx46 = wr46 ? c_new14 : c_q46;
+  assign c_nx46 = wr46 ? l14_c_new : c_q46;
   wire dn_nx46;
-  assign dn_nx46 = wr46 ? dn_new14 : dn_q46;
+  assign dn_nx46 = wr46 ? l14_dn_new : dn_q46;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q46 <= 1'b1;
     end else begin
       if (en & wr46) begin
-        dn_q46 <= dn_new14;
+        dn_q46 <= l14_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr46) begin
-        t_q46 <= t_new14;
-        c_q46 <= c_new14;
+        t_q46 <= l14_t_new;
+        c_q46 <= l14_c_new;
       end
     end
   end
@@ -3960,25 +3955,25 @@ module neo_scu (
   reg  [83:0] c_q47;
   reg  dn_q47;
   wire wr47;
-  assign wr47 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd2);
+  assign wr47 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
   wire [83:0] c_nx47;
-  assign c_nx47 = wr47 ? c_new15 : c_q47;
+  assign c_nx47 = wr47 ? l15_c_new : c_q47;
   wire dn_nx47;
-  assign dn_nx47 = wr47 ? dn_new15 : dn_q47;
+  assign dn_nx47 = wr47 ? l15_dn_new : dn_q47;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q47 <= 1'b1;
     end else begin
       if (en & wr47) begin
-        dn_q47 <= dn_new15;
+        dn_q47 <= l15_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr47) begin
-        t_q47 <= t_new15;
-        c_q47 <= c_new15;
+        t_q47 <= l15_t_new;
+        c_q47 <= l15_c_new;
       end
     end
   end
@@ -3998,25 +3993,25 @@ module neo_scu (
   reg  [83:0] c_q48;
   reg  dn_q48;
   wire wr48;
-  assign wr48 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr48 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx48;
-  assign c_nx48 = wr48 ? c_new0 : c_q48;
+  assign c_nx48 = wr48 ? l0_c_new : c_q48;
   wire dn_nx48;
-  assign dn_nx48 = wr48 ? dn_new0 : dn_q48;
+  assign dn_nx48 = wr48 ? l0_dn_new : dn_q48;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q48 <= 1'b1;
     end else begin
       if (en & wr48) begin
-        dn_q48 <= dn_new0;
+        dn_q48 <= l0_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr48) begin
-        t_q48 <= t_new0;
-        c_q48 <= c_new0;
+        t_q48 <= l0_t_new;
+        c_q48 <= l0_c_new;
       end
     end
   end
@@ -4036,25 +4031,25 @@ module neo_scu (
   reg  [83:0] c_q49;
   reg  dn_q49;
   wire wr49;
-  assign wr49 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr49 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx49;
-  assign c_nx49 = wr49 ? c_new1 : c_q49;
+  assign c_nx49 = wr49 ? l1_c_new : c_q49;
   wire dn_nx49;
-  assign dn_nx49 = wr49 ? dn_new1 : dn_q49;
+  assign dn_nx49 = wr49 ? l1_dn_new : dn_q49;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q49 <= 1'b1;
     end else begin
       if (en & wr49) begin
-        dn_q49 <= dn_new1;
+        dn_q49 <= l1_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr49) begin
-        t_q49 <= t_new1;
-        c_q49 <= c_new1;
+        t_q49 <= l1_t_new;
+        c_q49 <= l1_c_new;
       end
     end
   end
@@ -4074,25 +4069,25 @@ module neo_scu (
   reg  [83:0] c_q50;
   reg  dn_q50;
   wire wr50;
-  assign wr50 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr50 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx50;
-  assign c_nx50 = wr50 ? c_new2 : c_q50;
+  assign c_nx50 = wr50 ? l2_c_new : c_q50;
   wire dn_nx50;
-  assign dn_nx50 = wr50 ? dn_new2 : dn_q50;
+  assign dn_nx50 = wr50 ? l2_dn_new : dn_q50;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q50 <= 1'b1;
     end else begin
       if (en & wr50) begin
-        dn_q50 <= dn_new2;
+        dn_q50 <= l2_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr50) begin
-        t_q50 <= t_new2;
-        c_q50 <= c_new2;
+        t_q50 <= l2_t_new;
+        c_q50 <= l2_c_new;
       end
     end
   end
@@ -4112,25 +4107,25 @@ module neo_scu (
   reg  [83:0] c_q51;
   reg  dn_q51;
   wire wr51;
-  assign wr51 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr51 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx51;
-  assign c_nx51 = wr51 ? c_new3 : c_q51;
+  assign c_nx51 = wr51 ? l3_c_new : c_q51;
   wire dn_nx51;
-  assign dn_nx51 = wr51 ? dn_new3 : dn_q51;
+  assign dn_nx51 = wr51 ? l3_dn_new : dn_q51;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q51 <= 1'b1;
     end else begin
       if (en & wr51) begin
-        dn_q51 <= dn_new3;
+        dn_q51 <= l3_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr51) begin
-        t_q51 <= t_new3;
-        c_q51 <= c_new3;
+        t_q51 <= l3_t_new;
+        c_q51 <= l3_c_new;
       end
     end
   end
@@ -4150,25 +4145,25 @@ module neo_scu (
   reg  [83:0] c_q52;
   reg  dn_q52;
   wire wr52;
-  assign wr52 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr52 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx52;
-  assign c_nx52 = wr52 ? c_new4 : c_q52;
+  assign c_nx52 = wr52 ? l4_c_new : c_q52;
   wire dn_nx52;
-  assign dn_nx52 = wr52 ? dn_new4 : dn_q52;
+  assign dn_nx52 = wr52 ? l4_dn_new : dn_q52;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q52 <= 1'b1;
     end else begin
       if (en & wr52) begin
-        dn_q52 <= dn_new4;
+        dn_q52 <= l4_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr52) begin
-        t_q52 <= t_new4;
-        c_q52 <= c_new4;
+        t_q52 <= l4_t_new;
+        c_q52 <= l4_c_new;
       end
     end
   end
@@ -4188,25 +4183,25 @@ module neo_scu (
   reg  [83:0] c_q53;
   reg  dn_q53;
   wire wr53;
-  assign wr53 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr53 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx53;
-  assign c_nx53 = wr53 ? c_new5 : c_q53;
+  assign c_nx53 = wr53 ? l5_c_new : c_q53;
   wire dn_nx53;
-  assign dn_nx53 = wr53 ? dn_new5 : dn_q53;
+  assign dn_nx53 = wr53 ? l5_dn_new : dn_q53;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q53 <= 1'b1;
     end else begin
       if (en & wr53) begin
-        dn_q53 <= dn_new5;
+        dn_q53 <= l5_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr53) begin
-        t_q53 <= t_new5;
-        c_q53 <= c_new5;
+        t_q53 <= l5_t_new;
+        c_q53 <= l5_c_new;
       end
     end
   end
@@ -4226,25 +4221,25 @@ module neo_scu (
   reg  [83:0] c_q54;
   reg  dn_q54;
   wire wr54;
-  assign wr54 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr54 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx54;
-  assign c_nx54 = wr54 ? c_new6 : c_q54;
+  assign c_nx54 = wr54 ? l6_c_new : c_q54;
   wire dn_nx54;
-  assign dn_nx54 = wr54 ? dn_new6 : dn_q54;
+  assign dn_nx54 = wr54 ? l6_dn_new : dn_q54;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q54 <= 1'b1;
     end else begin
       if (en & wr54) begin
-        dn_q54 <= dn_new6;
+        dn_q54 <= l6_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr54) begin
-        t_q54 <= t_new6;
-        c_q54 <= c_new6;
+        t_q54 <= l6_t_new;
+        c_q54 <= l6_c_new;
       end
     end
   end
@@ -4264,25 +4259,25 @@ module neo_scu (
   reg  [83:0] c_q55;
   reg  dn_q55;
   wire wr55;
-  assign wr55 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr55 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx55;
-  assign c_nx55 = wr55 ? c_new7 : c_q55;
+  assign c_nx55 = wr55 ? l7_c_new : c_q55;
   wire dn_nx55;
-  assign dn_nx55 = wr55 ? dn_new7 : dn_q55;
+  assign dn_nx55 = wr55 ? l7_dn_new : dn_q55;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q55 <= 1'b1;
     end else begin
       if (en & wr55) begin
-        dn_q55 <= dn_new7;
+        dn_q55 <= l7_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr55) begin
-        t_q55 <= t_new7;
-        c_q55 <= c_new7;
+        t_q55 <= l7_t_new;
+        c_q55 <= l7_c_new;
       end
     end
   end
@@ -4302,25 +4297,25 @@ module neo_scu (
   reg  [83:0] c_q56;
   reg  dn_q56;
   wire wr56;
-  assign wr56 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr56 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx56;
-  assign c_nx56 = wr56 ? c_new8 : c_q56;
+  assign c_nx56 = wr56 ? l8_c_new : c_q56;
   wire dn_nx56;
-  assign dn_nx56 = wr56 ? dn_new8 : dn_q56;
+  assign dn_nx56 = wr56 ? l8_dn_new : dn_q56;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q56 <= 1'b1;
     end else begin
       if (en & wr56) begin
-        dn_q56 <= dn_new8;
+        dn_q56 <= l8_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr56) begin
-        t_q56 <= t_new8;
-        c_q56 <= c_new8;
+        t_q56 <= l8_t_new;
+        c_q56 <= l8_c_new;
       end
     end
   end
@@ -4340,25 +4335,25 @@ module neo_scu (
   reg  [83:0] c_q57;
   reg  dn_q57;
   wire wr57;
-  assign wr57 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr57 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx57;
-  assign c_nx57 = wr57 ? c_new9 : c_q57;
+  assign c_nx57 = wr57 ? l9_c_new : c_q57;
   wire dn_nx57;
-  assign dn_nx57 = wr57 ? dn_new9 : dn_q57;
+  assign dn_nx57 = wr57 ? l9_dn_new : dn_q57;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q57 <= 1'b1;
     end else begin
       if (en & wr57) begin
-        dn_q57 <= dn_new9;
+        dn_q57 <= l9_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr57) begin
-        t_q57 <= t_new9;
-        c_q57 <= c_new9;
+        t_q57 <= l9_t_new;
+        c_q57 <= l9_c_new;
       end
     end
   end
@@ -4378,25 +4373,25 @@ module neo_scu (
   reg  [83:0] c_q58;
   reg  dn_q58;
   wire wr58;
-  assign wr58 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr58 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx58;
-  assign c_nx58 = wr58 ? c_new10 : c_q58;
+  assign c_nx58 = wr58 ? l10_c_new : c_q58;
   wire dn_nx58;
-  assign dn_nx58 = wr58 ? dn_new10 : dn_q58;
+  assign dn_nx58 = wr58 ? l10_dn_new : dn_q58;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q58 <= 1'b1;
     end else begin
       if (en & wr58) begin
-        dn_q58 <= dn_new10;
+        dn_q58 <= l10_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr58) begin
-        t_q58 <= t_new10;
-        c_q58 <= c_new10;
+        t_q58 <= l10_t_new;
+        c_q58 <= l10_c_new;
       end
     end
   end
@@ -4416,25 +4411,25 @@ module neo_scu (
   reg  [83:0] c_q59;
   reg  dn_q59;
   wire wr59;
-  assign wr59 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr59 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx59;
-  assign c_nx59 = wr59 ? c_new11 : c_q59;
+  assign c_nx59 = wr59 ? l11_c_new : c_q59;
   wire dn_nx59;
-  assign dn_nx59 = wr59 ? dn_new11 : dn_q59;
+  assign dn_nx59 = wr59 ? l11_dn_new : dn_q59;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q59 <= 1'b1;
     end else begin
       if (en & wr59) begin
-        dn_q59 <= dn_new11;
+        dn_q59 <= l11_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr59) begin
-        t_q59 <= t_new11;
-        c_q59 <= c_new11;
+        t_q59 <= l11_t_new;
+        c_q59 <= l11_c_new;
       end
     end
   end
@@ -4454,25 +4449,25 @@ module neo_scu (
   reg  [83:0] c_q60;
   reg  dn_q60;
   wire wr60;
-  assign wr60 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr60 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx60;
-  assign c_nx60 = wr60 ? c_new12 : c_q60;
+  assign c_nx60 = wr60 ? l12_c_new : c_q60;
   wire dn_nx60;
-  assign dn_nx60 = wr60 ? dn_new12 : dn_q60;
+  assign dn_nx60 = wr60 ? l12_dn_new : dn_q60;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q60 <= 1'b1;
     end else begin
       if (en & wr60) begin
-        dn_q60 <= dn_new12;
+        dn_q60 <= l12_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr60) begin
-        t_q60 <= t_new12;
-        c_q60 <= c_new12;
+        t_q60 <= l12_t_new;
+        c_q60 <= l12_c_new;
       end
     end
   end
@@ -4492,25 +4487,25 @@ module neo_scu (
   reg  [83:0] c_q61;
   reg  dn_q61;
   wire wr61;
-  assign wr61 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr61 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx61;
-  assign c_nx61 = wr61 ? c_new13 : c_q61;
+  assign c_nx61 = wr61 ? l13_c_new : c_q61;
   wire dn_nx61;
-  assign dn_nx61 = wr61 ? dn_new13 : dn_q61;
+  assign dn_nx61 = wr61 ? l13_dn_new : dn_q61;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q61 <= 1'b1;
     end else begin
       if (en & wr61) begin
-        dn_q61 <= dn_new13;
+        dn_q61 <= l13_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr61) begin
-        t_q61 <= t_new13;
-        c_q61 <= c_new13;
+        t_q61 <= l13_t_new;
+        c_q61 <= l13_c_new;
       end
     end
   end
@@ -4530,25 +4525,25 @@ module neo_scu (
   reg  [83:0] c_q62;
   reg  dn_q62;
   wire wr62;
-  assign wr62 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr62 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx62;
-  assign c_nx62 = wr62 ? c_new14 : c_q62;
+  assign c_nx62 = wr62 ? l14_c_new : c_q62;
   wire dn_nx62;
-  assign dn_nx62 = wr62 ? dn_new14 : dn_q62;
+  assign dn_nx62 = wr62 ? l14_dn_new : dn_q62;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q62 <= 1'b1;
     end else begin
       if (en & wr62) begin
-        dn_q62 <= dn_new14;
+        dn_q62 <= l14_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr62) begin
-        t_q62 <= t_new14;
-        c_q62 <= c_new14;
+        t_q62 <= l14_t_new;
+        c_q62 <= l14_c_new;
       end
     end
   end
@@ -4568,25 +4563,25 @@ module neo_scu (
   reg  [83:0] c_q63;
   reg  dn_q63;
   wire wr63;
-  assign wr63 = v6_q & ~d6_q[198] & (d6_q[197:196] == 2'd3);
+  assign wr63 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
   wire [83:0] c_nx63;
-  assign c_nx63 = wr63 ? c_new15 : c_q63;
+  assign c_nx63 = wr63 ? l15_c_new : c_q63;
   wire dn_nx63;
-  assign dn_nx63 = wr63 ? dn_new15 : dn_q63;
+  assign dn_nx63 = wr63 ? l15_dn_new : dn_q63;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       dn_q63 <= 1'b1;
     end else begin
       if (en & wr63) begin
-        dn_q63 <= dn_new15;
+        dn_q63 <= l15_dn_new;
       end
     end
   end
   always @(posedge clk_i) begin
     if (en) begin
       if (wr63) begin
-        t_q63 <= t_new15;
-        c_q63 <= c_new15;
+        t_q63 <= l15_t_new;
+        c_q63 <= l15_c_new;
       end
     end
   end
@@ -4603,101 +4598,101 @@ module neo_scu (
   wire [7:0] o63_2;
   assign o63_2 = (|o63_2_x[36:34]) ? 8'd255 : o63_2_x[33:26];
   wire [16:0] rd_t0;
-  assign rd_t0 = (d6_q[197:196] == 2'd0) ? t_q0 : (d6_q[197:196] == 2'd1) ? t_q16 : (d6_q[197:196] == 2'd2) ? t_q32 : t_q48;
+  assign rd_t0 = (d5_q[197:196] == 2'd0) ? t_q0 : (d5_q[197:196] == 2'd1) ? t_q16 : (d5_q[197:196] == 2'd2) ? t_q32 : t_q48;
   wire [83:0] rd_c0;
-  assign rd_c0 = (d6_q[197:196] == 2'd0) ? c_q0 : (d6_q[197:196] == 2'd1) ? c_q16 : (d6_q[197:196] == 2'd2) ? c_q32 : c_q48;
+  assign rd_c0 = (d5_q[197:196] == 2'd0) ? c_q0 : (d5_q[197:196] == 2'd1) ? c_q16 : (d5_q[197:196] == 2'd2) ? c_q32 : c_q48;
   wire rd_dn0;
-  assign rd_dn0 = (d6_q[197:196] == 2'd0) ? dn_q0 : (d6_q[197:196] == 2'd1) ? dn_q16 : (d6_q[197:196] == 2'd2) ? dn_q32 : dn_q48;
+  assign rd_dn0 = (d5_q[197:196] == 2'd0) ? dn_q0 : (d5_q[197:196] == 2'd1) ? dn_q16 : (d5_q[197:196] == 2'd2) ? dn_q32 : dn_q48;
   wire [16:0] rd_t1;
-  assign rd_t1 = (d6_q[197:196] == 2'd0) ? t_q1 : (d6_q[197:196] == 2'd1) ? t_q17 : (d6_q[197:196] == 2'd2) ? t_q33 : t_q49;
+  assign rd_t1 = (d5_q[197:196] == 2'd0) ? t_q1 : (d5_q[197:196] == 2'd1) ? t_q17 : (d5_q[197:196] == 2'd2) ? t_q33 : t_q49;
   wire [83:0] rd_c1;
-  assign rd_c1 = (d6_q[197:196] == 2'd0) ? c_q1 : (d6_q[197:196] == 2'd1) ? c_q17 : (d6_q[197:196] == 2'd2) ? c_q33 : c_q49;
+  assign rd_c1 = (d5_q[197:196] == 2'd0) ? c_q1 : (d5_q[197:196] == 2'd1) ? c_q17 : (d5_q[197:196] == 2'd2) ? c_q33 : c_q49;
   wire rd_dn1;
-  assign rd_dn1 = (d6_q[197:196] == 2'd0) ? dn_q1 : (d6_q[197:196] == 2'd1) ? dn_q17 : (d6_q[197:196] == 2'd2) ? dn_q33 : dn_q49;
+  assign rd_dn1 = (d5_q[197:196] == 2'd0) ? dn_q1 : (d5_q[197:196] == 2'd1) ? dn_q17 : (d5_q[197:196] == 2'd2) ? dn_q33 : dn_q49;
   wire [16:0] rd_t2;
-  assign rd_t2 = (d6_q[197:196] == 2'd0) ? t_q2 : (d6_q[197:196] == 2'd1) ? t_q18 : (d6_q[197:196] == 2'd2) ? t_q34 : t_q50;
+  assign rd_t2 = (d5_q[197:196] == 2'd0) ? t_q2 : (d5_q[197:196] == 2'd1) ? t_q18 : (d5_q[197:196] == 2'd2) ? t_q34 : t_q50;
   wire [83:0] rd_c2;
-  assign rd_c2 = (d6_q[197:196] == 2'd0) ? c_q2 : (d6_q[197:196] == 2'd1) ? c_q18 : (d6_q[197:196] == 2'd2) ? c_q34 : c_q50;
+  assign rd_c2 = (d5_q[197:196] == 2'd0) ? c_q2 : (d5_q[197:196] == 2'd1) ? c_q18 : (d5_q[197:196] == 2'd2) ? c_q34 : c_q50;
   wire rd_dn2;
-  assign rd_dn2 = (d6_q[197:196] == 2'd0) ? dn_q2 : (d6_q[197:196] == 2'd1) ? dn_q18 : (d6_q[197:196] == 2'd2) ? dn_q34 : dn_q50;
+  assign rd_dn2 = (d5_q[197:196] == 2'd0) ? dn_q2 : (d5_q[197:196] == 2'd1) ? dn_q18 : (d5_q[197:196] == 2'd2) ? dn_q34 : dn_q50;
   wire [16:0] rd_t3;
-  assign rd_t3 = (d6_q[197:196] == 2'd0) ? t_q3 : (d6_q[197:196] == 2'd1) ? t_q19 : (d6_q[197:196] == 2'd2) ? t_q35 : t_q51;
+  assign rd_t3 = (d5_q[197:196] == 2'd0) ? t_q3 : (d5_q[197:196] == 2'd1) ? t_q19 : (d5_q[197:196] == 2'd2) ? t_q35 : t_q51;
   wire [83:0] rd_c3;
-  assign rd_c3 = (d6_q[197:196] == 2'd0) ? c_q3 : (d6_q[197:196] == 2'd1) ? c_q19 : (d6_q[197:196] == 2'd2) ? c_q35 : c_q51;
+  assign rd_c3 = (d5_q[197:196] == 2'd0) ? c_q3 : (d5_q[197:196] == 2'd1) ? c_q19 : (d5_q[197:196] == 2'd2) ? c_q35 : c_q51;
   wire rd_dn3;
-  assign rd_dn3 = (d6_q[197:196] == 2'd0) ? dn_q3 : (d6_q[197:196] == 2'd1) ? dn_q19 : (d6_q[197:196] == 2'd2) ? dn_q35 : dn_q51;
+  assign rd_dn3 = (d5_q[197:196] == 2'd0) ? dn_q3 : (d5_q[197:196] == 2'd1) ? dn_q19 : (d5_q[197:196] == 2'd2) ? dn_q35 : dn_q51;
   wire [16:0] rd_t4;
-  assign rd_t4 = (d6_q[197:196] == 2'd0) ? t_q4 : (d6_q[197:196] == 2'd1) ? t_q20 : (d6_q[197:196] == 2'd2) ? t_q36 : t_q52;
+  assign rd_t4 = (d5_q[197:196] == 2'd0) ? t_q4 : (d5_q[197:196] == 2'd1) ? t_q20 : (d5_q[197:196] == 2'd2) ? t_q36 : t_q52;
   wire [83:0] rd_c4;
-  assign rd_c4 = (d6_q[197:196] == 2'd0) ? c_q4 : (d6_q[197:196] == 2'd1) ? c_q20 : (d6_q[197:196] == 2'd2) ? c_q36 : c_q52;
+  assign rd_c4 = (d5_q[197:196] == 2'd0) ? c_q4 : (d5_q[197:196] == 2'd1) ? c_q20 : (d5_q[197:196] == 2'd2) ? c_q36 : c_q52;
   wire rd_dn4;
-  assign rd_dn4 = (d6_q[197:196] == 2'd0) ? dn_q4 : (d6_q[197:196] == 2'd1) ? dn_q20 : (d6_q[197:196] == 2'd2) ? dn_q36 : dn_q52;
+  assign rd_dn4 = (d5_q[197:196] == 2'd0) ? dn_q4 : (d5_q[197:196] == 2'd1) ? dn_q20 : (d5_q[197:196] == 2'd2) ? dn_q36 : dn_q52;
   wire [16:0] rd_t5;
-  assign rd_t5 = (d6_q[197:196] == 2'd0) ? t_q5 : (d6_q[197:196] == 2'd1) ? t_q21 : (d6_q[197:196] == 2'd2) ? t_q37 : t_q53;
+  assign rd_t5 = (d5_q[197:196] == 2'd0) ? t_q5 : (d5_q[197:196] == 2'd1) ? t_q21 : (d5_q[197:196] == 2'd2) ? t_q37 : t_q53;
   wire [83:0] rd_c5;
-  assign rd_c5 = (d6_q[197:196] == 2'd0) ? c_q5 : (d6_q[197:196] == 2'd1) ? c_q21 : (d6_q[197:196] == 2'd2) ? c_q37 : c_q53;
+  assign rd_c5 = (d5_q[197:196] == 2'd0) ? c_q5 : (d5_q[197:196] == 2'd1) ? c_q21 : (d5_q[197:196] == 2'd2) ? c_q37 : c_q53;
   wire rd_dn5;
-  assign rd_dn5 = (d6_q[197:196] == 2'd0) ? dn_q5 : (d6_q[197:196] == 2'd1) ? dn_q21 : (d6_q[197:196] == 2'd2) ? dn_q37 : dn_q53;
+  assign rd_dn5 = (d5_q[197:196] == 2'd0) ? dn_q5 : (d5_q[197:196] == 2'd1) ? dn_q21 : (d5_q[197:196] == 2'd2) ? dn_q37 : dn_q53;
   wire [16:0] rd_t6;
-  assign rd_t6 = (d6_q[197:196] == 2'd0) ? t_q6 : (d6_q[197:196] == 2'd1) ? t_q22 : (d6_q[197:196] == 2'd2) ? t_q38 : t_q54;
+  assign rd_t6 = (d5_q[197:196] == 2'd0) ? t_q6 : (d5_q[197:196] == 2'd1) ? t_q22 : (d5_q[197:196] == 2'd2) ? t_q38 : t_q54;
   wire [83:0] rd_c6;
-  assign rd_c6 = (d6_q[197:196] == 2'd0) ? c_q6 : (d6_q[197:196] == 2'd1) ? c_q22 : (d6_q[197:196] == 2'd2) ? c_q38 : c_q54;
+  assign rd_c6 = (d5_q[197:196] == 2'd0) ? c_q6 : (d5_q[197:196] == 2'd1) ? c_q22 : (d5_q[197:196] == 2'd2) ? c_q38 : c_q54;
   wire rd_dn6;
-  assign rd_dn6 = (d6_q[197:196] == 2'd0) ? dn_q6 : (d6_q[197:196] == 2'd1) ? dn_q22 : (d6_q[197:196] == 2'd2) ? dn_q38 : dn_q54;
+  assign rd_dn6 = (d5_q[197:196] == 2'd0) ? dn_q6 : (d5_q[197:196] == 2'd1) ? dn_q22 : (d5_q[197:196] == 2'd2) ? dn_q38 : dn_q54;
   wire [16:0] rd_t7;
-  assign rd_t7 = (d6_q[197:196] == 2'd0) ? t_q7 : (d6_q[197:196] == 2'd1) ? t_q23 : (d6_q[197:196] == 2'd2) ? t_q39 : t_q55;
+  assign rd_t7 = (d5_q[197:196] == 2'd0) ? t_q7 : (d5_q[197:196] == 2'd1) ? t_q23 : (d5_q[197:196] == 2'd2) ? t_q39 : t_q55;
   wire [83:0] rd_c7;
-  assign rd_c7 = (d6_q[197:196] == 2'd0) ? c_q7 : (d6_q[197:196] == 2'd1) ? c_q23 : (d6_q[197:196] == 2'd2) ? c_q39 : c_q55;
+  assign rd_c7 = (d5_q[197:196] == 2'd0) ? c_q7 : (d5_q[197:196] == 2'd1) ? c_q23 : (d5_q[197:196] == 2'd2) ? c_q39 : c_q55;
   wire rd_dn7;
-  assign rd_dn7 = (d6_q[197:196] == 2'd0) ? dn_q7 : (d6_q[197:196] == 2'd1) ? dn_q23 : (d6_q[197:196] == 2'd2) ? dn_q39 : dn_q55;
+  assign rd_dn7 = (d5_q[197:196] == 2'd0) ? dn_q7 : (d5_q[197:196] == 2'd1) ? dn_q23 : (d5_q[197:196] == 2'd2) ? dn_q39 : dn_q55;
   wire [16:0] rd_t8;
-  assign rd_t8 = (d6_q[197:196] == 2'd0) ? t_q8 : (d6_q[197:196] == 2'd1) ? t_q24 : (d6_q[197:196] == 2'd2) ? t_q40 : t_q56;
+  assign rd_t8 = (d5_q[197:196] == 2'd0) ? t_q8 : (d5_q[197:196] == 2'd1) ? t_q24 : (d5_q[197:196] == 2'd2) ? t_q40 : t_q56;
   wire [83:0] rd_c8;
-  assign rd_c8 = (d6_q[197:196] == 2'd0) ? c_q8 : (d6_q[197:196] == 2'd1) ? c_q24 : (d6_q[197:196] == 2'd2) ? c_q40 : c_q56;
+  assign rd_c8 = (d5_q[197:196] == 2'd0) ? c_q8 : (d5_q[197:196] == 2'd1) ? c_q24 : (d5_q[197:196] == 2'd2) ? c_q40 : c_q56;
   wire rd_dn8;
-  assign rd_dn8 = (d6_q[197:196] == 2'd0) ? dn_q8 : (d6_q[197:196] == 2'd1) ? dn_q24 : (d6_q[197:196] == 2'd2) ? dn_q40 : dn_q56;
+  assign rd_dn8 = (d5_q[197:196] == 2'd0) ? dn_q8 : (d5_q[197:196] == 2'd1) ? dn_q24 : (d5_q[197:196] == 2'd2) ? dn_q40 : dn_q56;
   wire [16:0] rd_t9;
-  assign rd_t9 = (d6_q[197:196] == 2'd0) ? t_q9 : (d6_q[197:196] == 2'd1) ? t_q25 : (d6_q[197:196] == 2'd2) ? t_q41 : t_q57;
+  assign rd_t9 = (d5_q[197:196] == 2'd0) ? t_q9 : (d5_q[197:196] == 2'd1) ? t_q25 : (d5_q[197:196] == 2'd2) ? t_q41 : t_q57;
   wire [83:0] rd_c9;
-  assign rd_c9 = (d6_q[197:196] == 2'd0) ? c_q9 : (d6_q[197:196] == 2'd1) ? c_q25 : (d6_q[197:196] == 2'd2) ? c_q41 : c_q57;
+  assign rd_c9 = (d5_q[197:196] == 2'd0) ? c_q9 : (d5_q[197:196] == 2'd1) ? c_q25 : (d5_q[197:196] == 2'd2) ? c_q41 : c_q57;
   wire rd_dn9;
-  assign rd_dn9 = (d6_q[197:196] == 2'd0) ? dn_q9 : (d6_q[197:196] == 2'd1) ? dn_q25 : (d6_q[197:196] == 2'd2) ? dn_q41 : dn_q57;
+  assign rd_dn9 = (d5_q[197:196] == 2'd0) ? dn_q9 : (d5_q[197:196] == 2'd1) ? dn_q25 : (d5_q[197:196] == 2'd2) ? dn_q41 : dn_q57;
   wire [16:0] rd_t10;
-  assign rd_t10 = (d6_q[197:196] == 2'd0) ? t_q10 : (d6_q[197:196] == 2'd1) ? t_q26 : (d6_q[197:196] == 2'd2) ? t_q42 : t_q58;
+  assign rd_t10 = (d5_q[197:196] == 2'd0) ? t_q10 : (d5_q[197:196] == 2'd1) ? t_q26 : (d5_q[197:196] == 2'd2) ? t_q42 : t_q58;
   wire [83:0] rd_c10;
-  assign rd_c10 = (d6_q[197:196] == 2'd0) ? c_q10 : (d6_q[197:196] == 2'd1) ? c_q26 : (d6_q[197:196] == 2'd2) ? c_q42 : c_q58;
+  assign rd_c10 = (d5_q[197:196] == 2'd0) ? c_q10 : (d5_q[197:196] == 2'd1) ? c_q26 : (d5_q[197:196] == 2'd2) ? c_q42 : c_q58;
   wire rd_dn10;
-  assign rd_dn10 = (d6_q[197:196] == 2'd0) ? dn_q10 : (d6_q[197:196] == 2'd1) ? dn_q26 : (d6_q[197:196] == 2'd2) ? dn_q42 : dn_q58;
+  assign rd_dn10 = (d5_q[197:196] == 2'd0) ? dn_q10 : (d5_q[197:196] == 2'd1) ? dn_q26 : (d5_q[197:196] == 2'd2) ? dn_q42 : dn_q58;
   wire [16:0] rd_t11;
-  assign rd_t11 = (d6_q[197:196] == 2'd0) ? t_q11 : (d6_q[197:196] == 2'd1) ? t_q27 : (d6_q[197:196] == 2'd2) ? t_q43 : t_q59;
+  assign rd_t11 = (d5_q[197:196] == 2'd0) ? t_q11 : (d5_q[197:196] == 2'd1) ? t_q27 : (d5_q[197:196] == 2'd2) ? t_q43 : t_q59;
   wire [83:0] rd_c11;
-  assign rd_c11 = (d6_q[197:196] == 2'd0) ? c_q11 : (d6_q[197:196] == 2'd1) ? c_q27 : (d6_q[197:196] == 2'd2) ? c_q43 : c_q59;
+  assign rd_c11 = (d5_q[197:196] == 2'd0) ? c_q11 : (d5_q[197:196] == 2'd1) ? c_q27 : (d5_q[197:196] == 2'd2) ? c_q43 : c_q59;
   wire rd_dn11;
-  assign rd_dn11 = (d6_q[197:196] == 2'd0) ? dn_q11 : (d6_q[197:196] == 2'd1) ? dn_q27 : (d6_q[197:196] == 2'd2) ? dn_q43 : dn_q59;
+  assign rd_dn11 = (d5_q[197:196] == 2'd0) ? dn_q11 : (d5_q[197:196] == 2'd1) ? dn_q27 : (d5_q[197:196] == 2'd2) ? dn_q43 : dn_q59;
   wire [16:0] rd_t12;
-  assign rd_t12 = (d6_q[197:196] == 2'd0) ? t_q12 : (d6_q[197:196] == 2'd1) ? t_q28 : (d6_q[197:196] == 2'd2) ? t_q44 : t_q60;
+  assign rd_t12 = (d5_q[197:196] == 2'd0) ? t_q12 : (d5_q[197:196] == 2'd1) ? t_q28 : (d5_q[197:196] == 2'd2) ? t_q44 : t_q60;
   wire [83:0] rd_c12;
-  assign rd_c12 = (d6_q[197:196] == 2'd0) ? c_q12 : (d6_q[197:196] == 2'd1) ? c_q28 : (d6_q[197:196] == 2'd2) ? c_q44 : c_q60;
+  assign rd_c12 = (d5_q[197:196] == 2'd0) ? c_q12 : (d5_q[197:196] == 2'd1) ? c_q28 : (d5_q[197:196] == 2'd2) ? c_q44 : c_q60;
   wire rd_dn12;
-  assign rd_dn12 = (d6_q[197:196] == 2'd0) ? dn_q12 : (d6_q[197:196] == 2'd1) ? dn_q28 : (d6_q[197:196] == 2'd2) ? dn_q44 : dn_q60;
+  assign rd_dn12 = (d5_q[197:196] == 2'd0) ? dn_q12 : (d5_q[197:196] == 2'd1) ? dn_q28 : (d5_q[197:196] == 2'd2) ? dn_q44 : dn_q60;
   wire [16:0] rd_t13;
-  assign rd_t13 = (d6_q[197:196] == 2'd0) ? t_q13 : (d6_q[197:196] == 2'd1) ? t_q29 : (d6_q[197:196] == 2'd2) ? t_q45 : t_q61;
+  assign rd_t13 = (d5_q[197:196] == 2'd0) ? t_q13 : (d5_q[197:196] == 2'd1) ? t_q29 : (d5_q[197:196] == 2'd2) ? t_q45 : t_q61;
   wire [83:0] rd_c13;
-  assign rd_c13 = (d6_q[197:196] == 2'd0) ? c_q13 : (d6_q[197:196] == 2'd1) ? c_q29 : (d6_q[197:196] == 2'd2) ? c_q45 : c_q61;
+  assign rd_c13 = (d5_q[197:196] == 2'd0) ? c_q13 : (d5_q[197:196] == 2'd1) ? c_q29 : (d5_q[197:196] == 2'd2) ? c_q45 : c_q61;
   wire rd_dn13;
-  assign rd_dn13 = (d6_q[197:196] == 2'd0) ? dn_q13 : (d6_q[197:196] == 2'd1) ? dn_q29 : (d6_q[197:196] == 2'd2) ? dn_q45 : dn_q61;
+  assign rd_dn13 = (d5_q[197:196] == 2'd0) ? dn_q13 : (d5_q[197:196] == 2'd1) ? dn_q29 : (d5_q[197:196] == 2'd2) ? dn_q45 : dn_q61;
   wire [16:0] rd_t14;
-  assign rd_t14 = (d6_q[197:196] == 2'd0) ? t_q14 : (d6_q[197:196] == 2'd1) ? t_q30 : (d6_q[197:196] == 2'd2) ? t_q46 : t_q62;
+  assign rd_t14 = (d5_q[197:196] == 2'd0) ? t_q14 : (d5_q[197:196] == 2'd1) ? t_q30 : (d5_q[197:196] == 2'd2) ? t_q46 : t_q62;
   wire [83:0] rd_c14;
-  assign rd_c14 = (d6_q[197:196] == 2'd0) ? c_q14 : (d6_q[197:196] == 2'd1) ? c_q30 : (d6_q[197:196] == 2'd2) ? c_q46 : c_q62;
+  assign rd_c14 = (d5_q[197:196] == 2'd0) ? c_q14 : (d5_q[197:196] == 2'd1) ? c_q30 : (d5_q[197:196] == 2'd2) ? c_q46 : c_q62;
   wire rd_dn14;
-  assign rd_dn14 = (d6_q[197:196] == 2'd0) ? dn_q14 : (d6_q[197:196] == 2'd1) ? dn_q30 : (d6_q[197:196] == 2'd2) ? dn_q46 : dn_q62;
+  assign rd_dn14 = (d5_q[197:196] == 2'd0) ? dn_q14 : (d5_q[197:196] == 2'd1) ? dn_q30 : (d5_q[197:196] == 2'd2) ? dn_q46 : dn_q62;
   wire [16:0] rd_t15;
-  assign rd_t15 = (d6_q[197:196] == 2'd0) ? t_q15 : (d6_q[197:196] == 2'd1) ? t_q31 : (d6_q[197:196] == 2'd2) ? t_q47 : t_q63;
+  assign rd_t15 = (d5_q[197:196] == 2'd0) ? t_q15 : (d5_q[197:196] == 2'd1) ? t_q31 : (d5_q[197:196] == 2'd2) ? t_q47 : t_q63;
   wire [83:0] rd_c15;
-  assign rd_c15 = (d6_q[197:196] == 2'd0) ? c_q15 : (d6_q[197:196] == 2'd1) ? c_q31 : (d6_q[197:196] == 2'd2) ? c_q47 : c_q63;
+  assign rd_c15 = (d5_q[197:196] == 2'd0) ? c_q15 : (d5_q[197:196] == 2'd1) ? c_q31 : (d5_q[197:196] == 2'd2) ? c_q47 : c_q63;
   wire rd_dn15;
-  assign rd_dn15 = (d6_q[197:196] == 2'd0) ? dn_q15 : (d6_q[197:196] == 2'd1) ? dn_q31 : (d6_q[197:196] == 2'd2) ? dn_q47 : dn_q63;
+  assign rd_dn15 = (d5_q[197:196] == 2'd0) ? dn_q15 : (d5_q[197:196] == 2'd1) ? dn_q31 : (d5_q[197:196] == 2'd2) ? dn_q47 : dn_q63;
   wire all_done;
   assign all_done = &{dn_nx0, dn_nx1, dn_nx2, dn_nx3, dn_nx4, dn_nx5, dn_nx6, dn_nx7, dn_nx8, dn_nx9, dn_nx10, dn_nx11, dn_nx12, dn_nx13, dn_nx14, dn_nx15, dn_nx16, dn_nx17, dn_nx18, dn_nx19, dn_nx20, dn_nx21, dn_nx22, dn_nx23, dn_nx24, dn_nx25, dn_nx26, dn_nx27, dn_nx28, dn_nx29, dn_nx30, dn_nx31, dn_nx32, dn_nx33, dn_nx34, dn_nx35, dn_nx36, dn_nx37, dn_nx38, dn_nx39, dn_nx40, dn_nx41, dn_nx42, dn_nx43, dn_nx44, dn_nx45, dn_nx46, dn_nx47, dn_nx48, dn_nx49, dn_nx50, dn_nx51, dn_nx52, dn_nx53, dn_nx54, dn_nx55, dn_nx56, dn_nx57, dn_nx58, dn_nx59, dn_nx60, dn_nx61, dn_nx62, dn_nx63};
   always @(posedge clk_i or negedge rst_ni) begin
@@ -4705,11 +4700,11 @@ module neo_scu (
       term_q <= 1'b0;
       term_lid_q <= 3'd0;
     end else begin
-      if (en & v6_q & ~d6_q[198]) begin
-        if (d6_q[197:196] == 2'd3) begin
+      if (en & v5_q & ~d5_q[198]) begin
+        if (d5_q[197:196] == 2'd3) begin
           term_q <= all_done;
-          term_lid_q <= d6_q[195:193];
-        end else if (d6_q[192]) begin
+          term_lid_q <= d5_q[195:193];
+        end else if (d5_q[192]) begin
           term_q <= 1'b0;
         end
       end
@@ -4721,7 +4716,7 @@ module neo_scu (
     if (!rst_ni) begin
       out_valid_q <= 1'b0;
     end else begin
-      if (en & fin6) begin
+      if (en & fin_b) begin
         out_valid_q <= 1'b1;
       end else if (out_ready_i) begin
         out_valid_q <= 1'b0;
@@ -4729,7 +4724,7 @@ module neo_scu (
     end
   end
   always @(posedge clk_i) begin
-    if (en & fin6) begin
+    if (en & fin_b) begin
       out_rgb_q <= rgb_nx;
     end
   end

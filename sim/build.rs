@@ -15,7 +15,11 @@ fn main() {
             .args(["--getenv", "VERILATOR_ROOT"])
             .output()
             .ok()
-            .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()).join("include/verilated.cpp").is_file())
+            .map(|o| {
+                PathBuf::from(String::from_utf8_lossy(&o.stdout).trim())
+                    .join("include/verilated.cpp")
+                    .is_file()
+            })
             .unwrap_or(false);
     if ok {
         println!("cargo::rustc-cfg=neo_sim_rtl");

@@ -29,8 +29,12 @@ enum Command {
     Bench(commands::bench::BenchArgs),
     /// Run the bit-exact golden pipeline along a trajectory with a sorting strategy; write stats.json.
     Frames(commands::frames::FramesArgs),
-    /// The main job: statistics and a render of the default scene (later: the full report).
+    /// The main job: the cycle-model report (throughput, DRAM traffic, strategy timelines, speed
+    /// against error) written to reports/index.md.
     Report(commands::report::ReportArgs),
+    /// Run the cycle model (Neo, GSCore-style, GPU-style) on golden workloads; print or write
+    /// per-point results.
+    Simulate(commands::simulate::SimulateArgs),
     /// Generate the Verilog of the Sorting Core (BSU, MSU+, core), check it, report synthesis.
     Gen(commands::gen::GenArgs),
 }
@@ -45,6 +49,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => commands::bench::run(a),
         Command::Frames(a) => commands::frames::run(a),
         Command::Report(a) => commands::report::run(a),
+        Command::Simulate(a) => commands::simulate::run(a),
         Command::Gen(a) => commands::gen::run(a),
     };
     match result {

@@ -250,6 +250,9 @@ mod tests {
             GenConfig { key_bits: 0, ..GenConfig::default() },
             GenConfig { burst: 3, ..GenConfig::default() },
             GenConfig { max_outstanding: 1, ..GenConfig::default() },
+            GenConfig { tile_bits: 0, ..GenConfig::default() },
+            GenConfig { tile_bits: 17, ..GenConfig::default() },
+            GenConfig { itu_tag_bits: 0, ..GenConfig::default() },
         ];
         for c in bad {
             assert!(c.validate().is_err(), "{c:?}");

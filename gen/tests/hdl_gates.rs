@@ -19,10 +19,10 @@ fn other_configs() -> Vec<(String, GenConfig)> {
     vec![
         ("odd_even_merge".into(), GenConfig { topology: Topology::OddEvenMerge, ..base.clone() }),
         ("best_16".into(), GenConfig { topology: Topology::Best16, ..base.clone() }),
-        ("bitonic k=3".into(), GenConfig { register_every: 3, ..base.clone() }),
+        ("bitonic k=3 scu_lanes=64".into(), GenConfig { register_every: 3, scu_lanes: 64, ..base.clone() }),
         ("best_16 k=1".into(), GenConfig { topology: Topology::Best16, register_every: 1, ..base.clone() }),
         (
-            "bitonic n=8 k=10 chunk=64 narrow".into(),
+            "bitonic n=8 k=10 chunk=64 narrow scu_lanes=4".into(),
             GenConfig {
                 bsu_width: 8,
                 register_every: 10,
@@ -33,6 +33,9 @@ fn other_configs() -> Vec<(String, GenConfig)> {
                 len_bits: 16,
                 burst: 8,
                 max_outstanding: 2,
+                tile_bits: 4,
+                itu_tag_bits: 1,
+                scu_lanes: 4,
                 ..base
             },
         ),

@@ -570,6 +570,7 @@ fn sort_core_small_configuration_matches_golden() {
         len_bits: 16,
         burst: 8,
         max_outstanding: 2,
+        ..GenConfig::default()
     };
     check_core(&cfg, 42, 80, 90);
 }

@@ -65,11 +65,13 @@ pub enum Accel {
     },
 }
 
-/// The raster core's cycles for one tile: subtile groups of `scus` subtiles; per group the ITUs
-/// test every entry (`ceil(entries / itus) * itu_ii`, skipped when bitmaps come from memory) and
-/// each SCU blends its subtile's processed pairs (`ceil(routed * ratio) * scu_cycles_per_pair`);
-/// the ITU of group `g + 1` overlaps the SCUs of group `g`. Returns (total, tail after the
-/// last input).
+/// The raster core's cycles for one tile. The ITUs test every entry against all subtiles of the
+/// tile at once (`ceil(entries / itus) * itu_ii`, skipped when the bitmaps come from memory) and
+/// fill the bitmap buffer; the SCUs take the subtiles in groups of `scus`, each SCU blending its
+/// subtile's routed entries: `processed * scu_ii + (routed - processed) * drain_ii`, with
+/// `processed = ceil(routed * ratio)` (early termination). A group lasts as long as its slowest
+/// SCU; the ITU pass overlaps the SCU groups (entries stream through the bitmap buffer). Returns
+/// (total, tail after the last input arrives).
 pub fn raster_tile_cycles(
     routed: &[u32],
     ratio: f64,
@@ -79,23 +81,23 @@ pub fn raster_tile_cycles(
     scus: u32,
     itu: bool,
 ) -> (f64, f64) {
-    if routed.is_empty() {
-        return (rt.tile_overhead as f64, rt.tile_overhead as f64);
-    }
-    let itu_g = if itu { (entries as f64 / itus as f64).ceil() * rt.itu_ii } else { 0.0 };
+    let itu_total = if itu { (entries as f64 / itus.max(1) as f64).ceil() * rt.itu_ii } else { 0.0 };
     let groups: Vec<f64> = routed
         .chunks(scus.max(1) as usize)
-        .map(|g| g.iter().map(|&r| (r as f64 * ratio).ceil() * rt.scu_cycles_per_pair).fold(0.0, f64::max))
+        .map(|g| {
+            g.iter()
+                .map(|&r| {
+                    let p = (r as f64 * ratio).ceil().min(r as f64);
+                    p * rt.scu_cycles_per_pair + (r as f64 - p) * rt.scu_drain_ii
+                })
+                .fold(0.0, f64::max)
+        })
         .collect();
-    let n = groups.len();
-    let mut total = itu_g;
-    for (i, &s) in groups.iter().enumerate() {
-        let next_itu = if i + 1 < n { itu_g } else { 0.0 };
-        total += s.max(next_itu);
-    }
+    let scu_total: f64 = groups.iter().sum();
     let lat = if itu { rt.itu_latency as f64 } else { 0.0 } + rt.scu_latency as f64 + rt.tile_overhead as f64;
-    let tail = groups[n - 1] + rt.scu_latency as f64;
-    (total + lat, tail.min(total + lat))
+    let total = itu_total.max(scu_total) + lat;
+    let tail = groups.last().copied().unwrap_or(0.0) + rt.scu_latency as f64;
+    (total, tail.min(total))
 }
 
 const MB: u64 = 1 << 20;
@@ -171,7 +173,9 @@ impl<'a> Model<'a> {
             ),
         };
         if hier && wl.frames.iter().any(|f| f.tiles.iter().any(|t| t.hier.entries != t.current)) {
-            return Err("the workload has no hierarchical-sort record (generate it with hierarchical on)".into());
+            return Err(
+                "the workload has no hierarchical-sort record (generate it with hierarchical on)".into()
+            );
         }
         cfg.check_buffers(eb as u32)?;
         if wl.info.chunk != cfg.pipeline.chunk {
@@ -207,7 +211,10 @@ impl<'a> Model<'a> {
             slot,
             scratch: region(&mut next, sort_cores as u64 * 3 * scratch_part),
             scratch_part,
-            framebuffer: region(&mut next, wl.info.width as u64 * wl.info.height as u64 * cfg.sizes.pixel_bytes as u64),
+            framebuffer: region(
+                &mut next,
+                wl.info.width as u64 * wl.info.height as u64 * cfg.sizes.pixel_bytes as u64,
+            ),
         };
         let mut shot_start = Vec::with_capacity(wl.frames.len());
         let mut s = 0;
@@ -243,7 +250,11 @@ impl<'a> Model<'a> {
         let n = &self.cfg.neo;
         let mut v = vec![AgentSpec { class: CLASS_PRE, window: n.preprocess_read_window, overlap: false }];
         for _ in 0..self.sort_cores {
-            v.push(AgentSpec { class: CLASS_SORT, window: n.sort_read_window, overlap: n.double_buffered_io });
+            v.push(AgentSpec {
+                class: CLASS_SORT,
+                window: n.sort_read_window,
+                overlap: n.double_buffered_io,
+            });
         }
         let rwin = ((n.raster_buffer_bytes / 2 / self.line).max(1) as u32).min(n.raster_read_window);
         for _ in 0..self.raster_cores {
@@ -415,7 +426,15 @@ impl<'a> Model<'a> {
         if self.hier {
             self.hier_sort(&mut segs, tw, list, cur, sc);
         } else if tw.from_scratch {
-            self.conv_sort(&mut segs, tw.sort_n as u64, list, Stage::IncomingList, cur, [sc[0], sc[1]], Stage::SortTable);
+            self.conv_sort(
+                &mut segs,
+                tw.sort_n as u64,
+                list,
+                Stage::IncomingList,
+                cur,
+                [sc[0], sc[1]],
+                Stage::SortTable,
+            );
         } else {
             let (prev, prev_stage) = match self.strategy {
                 Strategy::Background(k) => {
@@ -431,7 +450,15 @@ impl<'a> Model<'a> {
             let fused = self.cfg.neo.fused_dps_merge && passes > 0 && tw.dps_len > 0;
             if fused {
                 // Sorted incoming list first; DPS passes; the last pass feeds the MSU+.
-                self.conv_sort(&mut segs, b, list, Stage::IncomingList, sc[2], [sc[0], sc[1]], Stage::SortTable);
+                self.conv_sort(
+                    &mut segs,
+                    b,
+                    list,
+                    Stage::IncomingList,
+                    sc[2],
+                    [sc[0], sc[1]],
+                    Stage::SortTable,
+                );
                 let len = tw.dps_len as u64;
                 for p in 0..passes - 1 {
                     let mut off = 0;
@@ -455,7 +482,9 @@ impl<'a> Model<'a> {
                     let writes = vec![Access::seq(Stage::SortTable, cur + o_done * eb, oi * eb)];
                     let share = extra * cmd.len_a as f64 / len as f64;
                     let mut s = self.cmd_segment(cmd, reads, writes, share);
-                    s.load = self.ps(((cmd.len_a + bi) as f64 * self.lat.msu_ii).min(cmd.cycles(self.lat) as f64 + share));
+                    s.load = self
+                        .ps(((cmd.len_a + bi) as f64 * self.lat.msu_ii)
+                            .min(cmd.cycles(self.lat) as f64 + share));
                     segs.push(s);
                     (off, b_done, o_done) = (end, b_to, o_to);
                 }
@@ -469,12 +498,23 @@ impl<'a> Model<'a> {
                         off += cmd.len_a;
                     }
                 }
-                self.conv_sort(&mut segs, b, list, Stage::IncomingList, sc[2], [sc[0], sc[1]], Stage::SortTable);
+                self.conv_sort(
+                    &mut segs,
+                    b,
+                    list,
+                    Stage::IncomingList,
+                    sc[2],
+                    [sc[0], sc[1]],
+                    Stage::SortTable,
+                );
                 if a + b > 0 {
                     let cmd = Cmd { mode: Mode::MergeDelete, len_a: a, len_b: b };
                     segs.push(self.cmd_segment(
                         cmd,
-                        vec![Access::seq(prev_stage, prev, a * eb), Access::seq(Stage::SortTable, sc[2], b * eb)],
+                        vec![
+                            Access::seq(prev_stage, prev, a * eb),
+                            Access::seq(Stage::SortTable, sc[2], b * eb),
+                        ],
                         vec![Access::seq(Stage::SortTable, cur, out * eb)],
                         0.0,
                     ));
@@ -553,7 +593,15 @@ impl<'a> Model<'a> {
         let mut segs = Vec::new();
         let src = self.layout.bg_lists[f % 2] + off * self.eb;
         let dst = self.layout.bg_tables[f % 2] + t as u64 * self.layout.slot;
-        self.conv_sort(&mut segs, tw.background_n as u64, src, Stage::BackgroundSort, dst, [sc[0], sc[1]], Stage::BackgroundSort);
+        self.conv_sort(
+            &mut segs,
+            tw.background_n as u64,
+            src,
+            Stage::BackgroundSort,
+            dst,
+            [sc[0], sc[1]],
+            Stage::BackgroundSort,
+        );
         if segs.is_empty() {
             segs.push(self.empty_segment());
         }
@@ -601,7 +649,11 @@ impl<'a> Model<'a> {
         let x0 = tx * ts;
         let cols = ts.min(w.saturating_sub(x0));
         for y in ty * ts..(ty * ts + ts).min(h) {
-            writes.push(Access::seq(Stage::FrameBuffer, self.layout.framebuffer + (y * w + x0) * pb, cols * pb));
+            writes.push(Access::seq(
+                Stage::FrameBuffer,
+                self.layout.framebuffer + (y * w + x0) * pb,
+                cols * pb,
+            ));
         }
         let compute = self.ps(cyc);
         Job {
@@ -830,5 +882,40 @@ impl Scheduler for Sched<'_, '_> {
 
     fn finished(&self) -> bool {
         self.frame_done.iter().all(|&d| d) && self.bg_left == 0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rt() -> RasterTiming {
+        RasterTiming {
+            itu_ii: 1.0,
+            itu_latency: 3,
+            scu_cycles_per_pair: 4.0,
+            scu_drain_ii: 1.0,
+            scu_latency: 10,
+            tile_overhead: 0,
+        }
+    }
+
+    #[test]
+    fn raster_groups_take_their_slowest_scu_and_overlap_the_itus() {
+        // 8 subtiles in two groups of 4: group maxima 10 and 20 routed entries, no termination.
+        let routed = [1, 10, 3, 0, 20, 5, 5, 5];
+        let (t, tail) = raster_tile_cycles(&routed, 1.0, 40, &rt(), 4, 4, true);
+        // SCUs: (10 + 20) x 4 = 120; ITUs: 40 / 4 = 10, hidden; latencies 3 + 10.
+        assert_eq!(t, 120.0 + 13.0);
+        assert_eq!(tail, 20.0 * 4.0 + 10.0);
+        // Half the pairs terminate early: processed at 4 cycles, the rest drained at 1.
+        let (h, _) = raster_tile_cycles(&routed, 0.5, 40, &rt(), 4, 4, true);
+        assert_eq!(h, (5.0 * 4.0 + 5.0) + (10.0 * 4.0 + 10.0) + 13.0);
+        // Many entries and few routed pairs: the ITUs bound the tile.
+        let (i, _) = raster_tile_cycles(&[1; 8], 1.0, 4000, &rt(), 4, 4, true);
+        assert_eq!(i, 1000.0 + 13.0);
+        // Without ITUs (bitmaps from memory) only the SCUs and their latency count.
+        let (g, _) = raster_tile_cycles(&[1; 8], 1.0, 4000, &rt(), 4, 4, false);
+        assert_eq!(g, 8.0 + 10.0);
     }
 }

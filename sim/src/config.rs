@@ -161,7 +161,12 @@ pub struct GscoreArch {
 
 impl Default for GscoreArch {
     fn default() -> Self {
-        GscoreArch { core_counts: vec![4, 16], bitmap_bytes: 8, approx_entries_per_cycle: 1.0, approx_latency: 8 }
+        GscoreArch {
+            core_counts: vec![4, 16],
+            bitmap_bytes: 8,
+            approx_entries_per_cycle: 1.0,
+            approx_latency: 8,
+        }
     }
 }
 
@@ -234,19 +239,21 @@ impl Default for PreprocessTiming {
     }
 }
 
-/// Raster-core unit timing. The defaults are **assumed, not measured**; when
-/// `reports/latency.json` has a `raster` section its values replace them
-/// ([`crate::latency::Latency::raster`]).
+/// Raster-core unit timing. The defaults are **assumed, not measured**; the fields that
+/// `reports/latency.json` measures replace them ([`crate::latency::Latency::raster`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RasterTiming {
-    /// Cycles an ITU needs per table entry per subtile group (one entry tested against its
-    /// subtile each cycle).
+    /// Cycles an ITU needs per table entry (one entry tested against every subtile of the tile).
     pub itu_ii: f64,
     /// ITU pipeline latency in cycles.
     pub itu_latency: u64,
-    /// Cycles an SCU spends per routed entry-subtile pair (8x8 pixels on 16 lanes: 4).
+    /// Cycles an SCU spends per routed entry while pixels of its subtile are active (8x8
+    /// pixels on 16 lanes: 4).
     pub scu_cycles_per_pair: f64,
+    /// Cycles per routed entry once every pixel of the subtile has terminated (the rest of the
+    /// list drains).
+    pub scu_drain_ii: f64,
     /// SCU pipeline latency in cycles.
     pub scu_latency: u64,
     /// Fixed cycles per tile (setup, pixel-buffer drain).
@@ -255,7 +262,14 @@ pub struct RasterTiming {
 
 impl Default for RasterTiming {
     fn default() -> Self {
-        RasterTiming { itu_ii: 1.0, itu_latency: 6, scu_cycles_per_pair: 4.0, scu_latency: 12, tile_overhead: 64 }
+        RasterTiming {
+            itu_ii: 1.0,
+            itu_latency: 6,
+            scu_cycles_per_pair: 4.0,
+            scu_drain_ii: 1.0,
+            scu_latency: 12,
+            tile_overhead: 64,
+        }
     }
 }
 
@@ -425,7 +439,10 @@ impl DramConfig {
             ));
         }
         if self.n_ccd > self.n_bl {
-            return Err(format!("dram.n_ccd = {} > n_bl = {}: not modelled (bursts are n_bl apart)", self.n_ccd, self.n_bl));
+            return Err(format!(
+                "dram.n_ccd = {} > n_bl = {}: not modelled (bursts are n_bl apart)",
+                self.n_ccd, self.n_bl
+            ));
         }
         if self.write_queue == 0 {
             return Err("dram.write_queue must be at least 1".into());
@@ -438,8 +455,8 @@ impl SimConfig {
     /// Reads a JSON configuration (missing fields keep their defaults).
     pub fn from_file(path: &Path) -> InputResult<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| InputError::new(path, e.to_string()))?;
-        let cfg: SimConfig =
-            serde_json::from_str(&text).map_err(|e| InputError::new(path, format!("bad configuration: {e}")))?;
+        let cfg: SimConfig = serde_json::from_str(&text)
+            .map_err(|e| InputError::new(path, format!("bad configuration: {e}")))?;
         cfg.check().map_err(|e| InputError::new(path, e))?;
         Ok(cfg)
     }
@@ -482,7 +499,10 @@ impl SimConfig {
         }
         let subtiles = (p.tile / p.subtile).pow(2);
         if subtiles % n.scus_per_core != 0 {
-            return Err(format!("neo.scus_per_core = {} must divide the {subtiles} subtiles", n.scus_per_core));
+            return Err(format!(
+                "neo.scus_per_core = {} must divide the {subtiles} subtiles",
+                n.scus_per_core
+            ));
         }
         if p.chunk < 2 {
             return Err(format!("pipeline.chunk = {}: must be at least 2", p.chunk));

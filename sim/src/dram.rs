@@ -25,7 +25,7 @@
 //! Not modelled: command-bus conflicts between banks, FR-FCFS reordering of reads, per-bank
 //! refresh, power-down, on-die ECC, data bus inversion, rank switching (one rank).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::config::DramConfig;
 
@@ -67,7 +67,7 @@ struct Channel {
 }
 
 /// Counters of the DRAM model.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct DramStats {
     /// Read requests served.
     pub reads: u64,
@@ -376,24 +376,36 @@ impl Dram {
         };
         let lat = if write { tm.cwl } else { tm.cl };
         let ready = (col_ready + lat).max(ch.floor);
-        // Earliest free burst slot at or after `ready`.
+        // Earliest free burst slot at or after `ready`. Busy blocks are merged when the gap
+        // between them is shorter than a burst, so a saturated bus is one block.
         while ch.busy.front().is_some_and(|&(_, e)| e <= t) {
             ch.busy.pop_front();
         }
+        let mut i = ch.busy.partition_point(|&(_, e)| e <= ready);
         let mut start = ready;
-        let mut pos = ch.busy.len();
-        for (i, &(s, e)) in ch.busy.iter().enumerate() {
-            if e <= start {
-                continue;
-            }
+        while i < ch.busy.len() {
+            let (s, e) = ch.busy[i];
             if s >= start + tm.bl {
-                pos = i;
                 break;
             }
-            start = e;
+            start = start.max(e);
+            i += 1;
         }
         let end = start + tm.bl;
-        ch.busy.insert(pos, (start, end));
+        // Insert [start, end) before block i, merging with neighbours closer than a burst (such
+        // a gap can never hold a burst, so the merge loses nothing and keeps the calendar short).
+        let touches_prev = i > 0 && start - ch.busy[i - 1].1 < tm.bl;
+        let touches_next = i < ch.busy.len() && ch.busy[i].0 - end < tm.bl;
+        match (touches_prev, touches_next) {
+            (true, true) => {
+                let next_end = ch.busy[i].1;
+                ch.busy[i - 1].1 = next_end;
+                ch.busy.remove(i);
+            }
+            (true, false) => ch.busy[i - 1].1 = end,
+            (false, true) => ch.busy[i].0 = start,
+            (false, false) => ch.busy.insert(i, (start, end)),
+        }
         ch.bus_free = ch.bus_free.max(end);
         let col = start - lat;
         if write {

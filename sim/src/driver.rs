@@ -237,7 +237,11 @@ impl<'s> WorkDriver<'s> {
 
     /// Runs frame `frame` from `cam`.
     pub fn step(&mut self, cam: &Camera, frame: usize, cut: bool) -> FrameWork {
-        assert_eq!((cam.width, cam.height), (self.width, self.height), "camera size differs from the driver's");
+        assert_eq!(
+            (cam.width, cam.height),
+            (self.width, self.height),
+            "camera size differs from the driver's"
+        );
         if cut || !self.started {
             self.shot_start = frame;
         }
@@ -259,7 +263,8 @@ impl<'s> WorkDriver<'s> {
         let strategy = self.strategy;
         let write_keys = strategy.writes_back_keys();
         let reuses = strategy.reuses_tables();
-        let (features, feature_of, binning, rcfg) = (&self.features, &self.feature_of, &self.binning, &self.rcfg);
+        let (features, feature_of, binning, rcfg) =
+            (&self.features, &self.feature_of, &self.binning, &self.rcfg);
         let (w, h, gx) = (self.width, self.height, self.grid[0]);
         let (want_hier, sample) = (self.hierarchical, self.raster_sample);
         let n = rcfg.subtiles_per_side();
@@ -275,7 +280,8 @@ impl<'s> WorkDriver<'s> {
                     let current = binning.tile(ti);
                     let out = sort_tile(strategy, pos, state, current, &mut ctx.tile);
                     let hier = if want_hier {
-                        let hw = hierarchical_sort(current, &mut ctx.hier_out, &mut ctx.sorter, &mut ctx.bins);
+                        let hw =
+                            hierarchical_sort(current, &mut ctx.hier_out, &mut ctx.sorter, &mut ctx.bins);
                         HierTile {
                             entries: hw.entries as u32,
                             approx_entries: hw.approx_entries as u32,
@@ -426,7 +432,11 @@ pub fn gpu_duplication(
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
-fn check_frame(fw: &FrameWork, stats: &neo_golden::pipeline::FrameStats, table_lens: &[u32]) -> Result<(), String> {
+fn check_frame(
+    fw: &FrameWork,
+    stats: &neo_golden::pipeline::FrameStats,
+    table_lens: &[u32],
+) -> Result<(), String> {
     let w = &stats.work;
     let g = &fw.golden;
     let pairs = [
@@ -455,7 +465,10 @@ fn check_frame(fw: &FrameWork, stats: &neo_golden::pipeline::FrameStats, table_l
     }
     let routed: u64 = fw.tiles.iter().flat_map(|t| t.routed.iter()).map(|&r| r as u64).sum();
     if routed > stats.raster.subtile_blends {
-        return Err(format!("routed pairs {routed} exceed the golden raster's {}", stats.raster.subtile_blends));
+        return Err(format!(
+            "routed pairs {routed} exceed the golden raster's {}",
+            stats.raster.subtile_blends
+        ));
     }
     Ok(())
 }
@@ -474,7 +487,8 @@ pub fn generate(
         return Err(DriverError::Other("no frames".into()));
     };
     let (w, h) = (first.width, first.height);
-    let mut drv = WorkDriver::new(scene, spec.strategy, &spec.params, w, h, spec.hierarchical, spec.raster_sample)?;
+    let mut drv =
+        WorkDriver::new(scene, spec.strategy, &spec.params, w, h, spec.hierarchical, spec.raster_sample)?;
     let mut golden = if spec.golden_raster != GoldenRaster::Off {
         let cfg = pipeline_config(spec.strategy, &spec.params, spec.golden_raster);
         let formats = Formats::artifact(cfg.chunk)?;
@@ -506,7 +520,10 @@ pub fn generate(
     let mut frames = Vec::with_capacity(cams.len());
     for (i, cam) in cams.iter().enumerate() {
         if (cam.width, cam.height) != (w, h) {
-            return Err(DriverError::Other(format!("camera {i} is {}x{}, not {w}x{h}", cam.width, cam.height)));
+            return Err(DriverError::Other(format!(
+                "camera {i} is {}x{}, not {w}x{h}",
+                cam.width, cam.height
+            )));
         }
         let cut = cuts.contains(&i);
         let mut fw = drv.step(cam, i, cut);
@@ -528,8 +545,8 @@ pub fn generate(
             if let Some((dir, which)) = &spec.trace {
                 if which.is_empty() || which.contains(&i) {
                     let path = dir.join(format!("frame_{i:05}.poc.trace"));
-                    let mut file =
-                        std::fs::File::create(&path).map_err(|err| DriverError::Io { path: path.clone(), err })?;
+                    let mut file = std::fs::File::create(&path)
+                        .map_err(|err| DriverError::Io { path: path.clone(), err })?;
                     p.write_trace(&mut file).map_err(|err| DriverError::Io { path: path.clone(), err })?;
                 }
             }

@@ -62,7 +62,8 @@ pub fn frame(cfg: &SimConfig, fw: &FrameWork, width: u32, height: u32) -> GpuFra
     let vis = fw.visible;
 
     // 1. Preprocess.
-    let r = lines(fw.gaussians * s.gaussian_geometry_bytes as u64, line) + lines(vis * s.gaussian_sh_bytes as u64, line);
+    let r = lines(fw.gaussians * s.gaussian_geometry_bytes as u64, line)
+        + lines(vis * s.gaussian_sh_bytes as u64, line);
     let w = lines(vis * g.record_bytes as u64, line);
     tr.add(Stage::Preprocess, Dir::Read, r);
     tr.add(Stage::FeatureTable, Dir::Write, w);
@@ -110,7 +111,13 @@ mod tests {
     #[test]
     fn sort_traffic_scales_with_pairs_and_passes() {
         let cfg = SimConfig::default();
-        let mut fw = FrameWork { gaussians: 1000, visible: 800, gpu_pairs: 1 << 20, processed_ratio: 0.5, ..FrameWork::default() };
+        let mut fw = FrameWork {
+            gaussians: 1000,
+            visible: 800,
+            gpu_pairs: 1 << 20,
+            processed_ratio: 0.5,
+            ..FrameWork::default()
+        };
         let a = frame(&cfg, &fw, 2560, 1440);
         // QHD, 16-pixel tiles: 160 x 90 = 14400 tiles, 14 bits: (32 + 14) / 8 -> 6 passes.
         assert_eq!(radix_passes(&cfg.gpu, 2560, 1440), 6);

@@ -16,10 +16,11 @@
 //!   both streams non-empty, and, when one stream is empty (a copy), over the points with an
 //!   empty stream (falling back to the two-stream points when there are none); `c` per entry
 //!   is kept from the nearest point beyond the measured range.
-//! - **Raster units**: the optional `raster` section (written when the raster core is measured):
-//!   `raster.itu.{ii, latency}`, `raster.scu.{cycles_per_pair, latency}`,
-//!   `raster.core.tile_overhead`. Fields present replace the assumed values of
-//!   [`crate::config::RasterTiming`]; [`RasterSource`] records which.
+//! - **Raster units** (written when the raster units are measured): `raster.itu.{ii, latency}`,
+//!   the SCU's `raster.scu.{cycles_per_pair | ii, drain_ii, latency}` or
+//!   `units.neo_scu.{ii, drain_ii, latency}`, and `raster.core.tile_overhead`. Fields present
+//!   replace the assumed values of [`crate::config::RasterTiming`]; [`RasterSource`] records
+//!   which were measured and which are still assumed.
 
 use serde::Serialize;
 use serde_json::Value;
@@ -59,10 +60,12 @@ pub struct MergePoint {
 pub enum RasterSource {
     /// No `raster` section: every raster number is assumed, not measured.
     Assumed,
-    /// From `latency.json`; the listed fields were measured, the others assumed.
+    /// From `latency.json`: the `fields` were measured, the `assumed` ones were not.
     Measured {
-        /// Fields read from the file (e.g. `scu.cycles_per_pair`).
+        /// Fields read from the file (e.g. `raster.itu.ii`).
         fields: Vec<String>,
+        /// Raster parameters still assumed (e.g. `tile_overhead`).
+        assumed: Vec<String>,
     },
 }
 
@@ -70,13 +73,14 @@ impl RasterSource {
     /// A one-line label for reports.
     pub fn label(&self) -> String {
         match self {
-            RasterSource::Assumed => "raster-core timing ASSUMED, not measured (no `raster` section in latency.json)".into(),
-            RasterSource::Measured { fields } if fields.len() == 5 => {
-                "raster-core timing measured (latency.json `raster`)".into()
+            RasterSource::Assumed => "raster-core timing ASSUMED, not measured (no raster figures in latency.json)".into(),
+            RasterSource::Measured { fields, assumed } if assumed.is_empty() => {
+                format!("raster-core timing measured (latency.json: {})", fields.join(", "))
             }
-            RasterSource::Measured { fields } => format!(
-                "raster-core timing partly measured ({} from latency.json `raster`), the rest ASSUMED",
-                fields.join(", ")
+            RasterSource::Measured { fields, assumed } => format!(
+                "raster-core timing measured for {} (latency.json); ASSUMED, not measured: {} (config raster_assumed)",
+                fields.join(", "),
+                assumed.join(", ")
             ),
         }
     }
@@ -198,7 +202,8 @@ impl Latency {
 
     /// Parses the document `text` (named `path` in errors).
     pub fn from_json_str(text: &str, path: &Path) -> InputResult<Self> {
-        let v: Value = serde_json::from_str(text).map_err(|e| InputError::new(path, format!("not JSON: {e}")))?;
+        let v: Value =
+            serde_json::from_str(text).map_err(|e| InputError::new(path, format!("not JSON: {e}")))?;
         Self::from_value(&v, path).map_err(|e| InputError::new(path, e))
     }
 
@@ -316,57 +321,74 @@ impl Latency {
     }
 }
 
-/// The raster section, when present: measured fields over the assumed defaults.
+/// Where each raster-core number may be measured, first match wins (`raster.*` is the section
+/// the raster cosimulation writes; the SCU's unit figures may also sit in `units.neo_scu`).
+const RASTER_FIELDS: [(&str, &[&str]); 6] = [
+    ("itu_ii", &["raster.itu.ii"]),
+    ("itu_latency", &["raster.itu.latency"]),
+    ("scu_cycles_per_pair", &["raster.scu.cycles_per_pair", "raster.scu.ii", "units.neo_scu.ii"]),
+    ("scu_drain_ii", &["raster.scu.drain_ii", "units.neo_scu.drain_ii"]),
+    ("scu_latency", &["raster.scu.latency", "units.neo_scu.latency"]),
+    ("tile_overhead", &["raster.core.tile_overhead"]),
+];
+
+/// Raster timing: measured fields (see [`RASTER_FIELDS`]) over the assumed defaults.
 fn raster_timing(v: &Value) -> Result<(RasterTiming, RasterSource), String> {
     let mut t = RasterTiming::default();
-    let Some(r) = v.get("raster") else {
-        return Ok((t, RasterSource::Assumed));
-    };
-    if !r.is_object() {
-        return Err("`raster` must be an object".into());
+    if let Some(r) = v.get("raster") {
+        if !r.is_object() {
+            return Err("`raster` must be an object".into());
+        }
     }
-    let mut fields = Vec::new();
-    let mut get = |path: &str| -> Result<Option<f64>, String> {
-        let mut cur = r;
-        for k in path.split('.') {
-            match cur.get(k) {
-                Some(x) => cur = x,
-                None => return Ok(None),
+    let mut measured = Vec::new();
+    let mut assumed = Vec::new();
+    for (field, paths) in RASTER_FIELDS {
+        let mut found = None;
+        for path in paths {
+            let mut cur = Some(v);
+            for k in path.split('.') {
+                cur = cur.and_then(|c| c.get(k));
+            }
+            if let Some(x) = cur {
+                let x = x.as_f64().ok_or_else(|| format!("`{path}` is not a number"))?;
+                if !(x >= 0.0 && x.is_finite()) {
+                    return Err(format!("`{path}` = {x}: must be non-negative"));
+                }
+                found = Some((x, *path));
+                break;
             }
         }
-        let x = cur.as_f64().ok_or_else(|| format!("`raster.{path}` is not a number"))?;
-        if !(x >= 0.0 && x.is_finite()) {
-            return Err(format!("`raster.{path}` = {x}: must be non-negative"));
+        match found {
+            Some((x, path)) => {
+                match field {
+                    "itu_ii" => t.itu_ii = x,
+                    "itu_latency" => t.itu_latency = x as u64,
+                    "scu_cycles_per_pair" => t.scu_cycles_per_pair = x,
+                    "scu_drain_ii" => t.scu_drain_ii = x,
+                    "scu_latency" => t.scu_latency = x as u64,
+                    _ => t.tile_overhead = x as u64,
+                }
+                measured.push(path.to_string());
+            }
+            None => assumed.push(field.to_string()),
         }
-        fields.push(path.to_string());
-        Ok(Some(x))
-    };
-    if let Some(x) = get("itu.ii")? {
-        t.itu_ii = x;
     }
-    if let Some(x) = get("itu.latency")? {
-        t.itu_latency = x as u64;
+    if t.itu_ii <= 0.0 || t.scu_cycles_per_pair <= 0.0 {
+        return Err("raster: the ITU and SCU initiation intervals must be positive".into());
     }
-    if let Some(x) = get("scu.cycles_per_pair")? {
-        t.scu_cycles_per_pair = x;
-    }
-    if let Some(x) = get("scu.latency")? {
-        t.scu_latency = x as u64;
-    }
-    if let Some(x) = get("core.tile_overhead")? {
-        t.tile_overhead = x as u64;
-    }
-    if fields.is_empty() {
+    if v.get("raster").is_some() && measured.iter().all(|m| !m.starts_with("raster.")) {
         return Err(
-            "`raster` has none of itu.ii, itu.latency, scu.cycles_per_pair, scu.latency, core.tile_overhead \
-             (see docs/cycle-model.md)"
+            "`raster` has none of itu.ii, itu.latency, scu.cycles_per_pair (or scu.ii), scu.drain_ii, scu.latency, \
+             core.tile_overhead (see docs/cycle-model.md)"
                 .into(),
         );
     }
-    if t.itu_ii <= 0.0 || t.scu_cycles_per_pair <= 0.0 {
-        return Err("`raster.itu.ii` and `raster.scu.cycles_per_pair` must be positive".into());
-    }
-    Ok((t, RasterSource::Measured { fields }))
+    let src = if measured.is_empty() {
+        RasterSource::Assumed
+    } else {
+        RasterSource::Measured { fields: measured, assumed }
+    };
+    Ok((t, src))
 }
 
 #[cfg(test)]
@@ -424,10 +446,22 @@ mod tests {
         v["units"]["neo_msu"].as_object_mut().unwrap().remove("ii");
         assert!(bad(&v.to_string()).contains("units.neo_msu.ii"));
         let mut v: Value = serde_json::from_str(&text).unwrap();
-        v["raster"] = serde_json::json!({"scu": {"cycles_per_pair": 2.5}});
+        v.as_object_mut().unwrap().remove("raster");
+        v["units"].as_object_mut().unwrap().remove("neo_scu");
         let l = Latency::from_json_str(&v.to_string(), p).unwrap();
-        assert_eq!(l.raster.scu_cycles_per_pair, 2.5);
-        assert_eq!(l.raster_source, RasterSource::Measured { fields: vec!["scu.cycles_per_pair".into()] });
+        assert_eq!(l.raster_source, RasterSource::Assumed);
+        assert_eq!(l.raster, RasterTiming::default());
+        v["raster"] = serde_json::json!({"scu": {"cycles_per_pair": 2.5}, "itu": {"ii": 0.5}});
+        let l = Latency::from_json_str(&v.to_string(), p).unwrap();
+        assert_eq!((l.raster.scu_cycles_per_pair, l.raster.itu_ii), (2.5, 0.5));
+        match &l.raster_source {
+            RasterSource::Measured { fields, assumed } => {
+                assert_eq!(fields, &vec!["raster.itu.ii".to_string(), "raster.scu.cycles_per_pair".into()]);
+                assert!(assumed.contains(&"tile_overhead".to_string()));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(l.raster_source.label().contains("ASSUMED"));
         v["raster"] = serde_json::json!({"other": 1});
         assert!(bad(&v.to_string()).contains("raster"));
     }

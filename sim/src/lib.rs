@@ -7,15 +7,17 @@
 //!
 //! See docs/cycle-model.md for what is modelled and how.
 
+pub mod arch;
 pub mod config;
 pub mod dram;
-pub mod latency;
-pub mod traffic;
 pub mod driver;
-pub mod workload;
 pub mod engine;
-pub mod arch;
-pub mod sortcmd;
 pub mod gpu;
-pub mod run;
+pub mod latency;
 pub mod plot;
+pub mod report;
+pub mod run;
+pub mod sortcmd;
+pub mod suite;
+pub mod traffic;
+pub mod workload;

@@ -50,13 +50,23 @@ pub struct HLine {
 }
 
 /// Grouped bars: one group per entry of `groups`, one bar per series in each.
-pub fn grouped_bars(title: &str, y_desc: &str, groups: &[String], series: &[(String, Vec<f64>)], hline: Option<HLine>) -> R {
+pub fn grouped_bars(
+    title: &str,
+    y_desc: &str,
+    groups: &[String],
+    series: &[(String, Vec<f64>)],
+    hline: Option<HLine>,
+) -> R {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (820, 460)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        let ymax = series.iter().flat_map(|s| s.1.iter().copied()).chain(hline.iter().map(|h| h.y)).fold(0.0, f64::max);
-        let ymax = nice_max(ymax);
+        let ymax = series
+            .iter()
+            .flat_map(|s| s.1.iter().copied())
+            .chain(hline.iter().map(|h| h.y))
+            .fold(0.0, f64::max);
+        let ymax = nice_max(ymax * 1.3);
         let ng = groups.len().max(1) as f64;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
@@ -69,6 +79,9 @@ pub fn grouped_bars(title: &str, y_desc: &str, groups: &[String], series: &[(Str
         chart
             .configure_mesh()
             .disable_x_mesh()
+            .light_line_style(WHITE)
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 15))
             .x_labels(groups.len().max(1) * 2 + 1)
             .x_label_formatter(&|x| {
                 let i = x.floor() as usize;
@@ -103,7 +116,8 @@ pub fn grouped_bars(title: &str, y_desc: &str, groups: &[String], series: &[(Str
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font(("sans-serif", 14))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .draw()
@@ -119,7 +133,9 @@ pub fn stacked_bars(title: &str, y_desc: &str, bars: &[String], stacks: &[(Strin
     {
         let root = SVGBackend::with_string(&mut out, (820, 480)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        let totals: Vec<f64> = (0..bars.len()).map(|b| stacks.iter().map(|s| s.1.get(b).copied().unwrap_or(0.0)).sum()).collect();
+        let totals: Vec<f64> = (0..bars.len())
+            .map(|b| stacks.iter().map(|s| s.1.get(b).copied().unwrap_or(0.0)).sum())
+            .collect();
         let ymax = nice_max(totals.iter().copied().fold(0.0, f64::max));
         let nb = bars.len().max(1) as f64;
         let mut chart = ChartBuilder::on(&root)
@@ -127,13 +143,15 @@ pub fn stacked_bars(title: &str, y_desc: &str, bars: &[String], stacks: &[(Strin
             .margin(12)
             .x_label_area_size(36)
             .y_label_area_size(64)
-            .right_y_label_area_size(10)
             .build_cartesian_2d(0f64..nb + 1.6, 0f64..ymax)
             .map_err(err)?;
         let names = bars.to_vec();
         chart
             .configure_mesh()
             .disable_x_mesh()
+            .light_line_style(WHITE)
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 15))
             .x_labels(bars.len().max(1) * 2 + 4)
             .x_label_formatter(&|x| {
                 let i = x.floor() as usize;
@@ -152,7 +170,10 @@ pub fn stacked_bars(title: &str, y_desc: &str, bars: &[String], stacks: &[(Strin
             let rects: Vec<_> = (0..bars.len())
                 .map(|b| {
                     let v = vals.get(b).copied().unwrap_or(0.0).max(0.0);
-                    let r = Rectangle::new([(b as f64 + 0.15, base[b]), (b as f64 + 0.85, base[b] + v)], c.filled());
+                    let r = Rectangle::new(
+                        [(b as f64 + 0.15, base[b]), (b as f64 + 0.85, base[b] + v)],
+                        c.filled(),
+                    );
                     base[b] += v;
                     r
                 })
@@ -176,7 +197,13 @@ pub fn stacked_bars(title: &str, y_desc: &str, bars: &[String], stacks: &[(Strin
 }
 
 /// Line chart of `(x, y)` series.
-pub fn lines(title: &str, x_desc: &str, y_desc: &str, series: &[(String, Vec<(f64, f64)>)], hline: Option<HLine>) -> R {
+pub fn lines(
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    hline: Option<HLine>,
+) -> R {
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (820, 460)).into_drawing_area();
@@ -191,7 +218,15 @@ pub fn lines(title: &str, x_desc: &str, y_desc: &str, series: &[(String, Vec<(f6
             .y_label_area_size(64)
             .build_cartesian_2d(0f64..xmax, 0f64..ymax)
             .map_err(err)?;
-        chart.configure_mesh().x_desc(x_desc).y_desc(y_desc).draw().map_err(err)?;
+        chart
+            .configure_mesh()
+            .light_line_style(WHITE)
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 15))
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .draw()
+            .map_err(err)?;
         for (si, (name, p)) in series.iter().enumerate() {
             let c = color(si);
             chart
@@ -233,18 +268,30 @@ pub fn scatter_front(
         let root = SVGBackend::with_string(&mut out, (820, 500)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
         let pts = || groups.iter().flat_map(|g| g.1.iter().copied());
-        let xmax = nice_max(pts().map(|p| p.0).fold(0.0, f64::max));
+        let (xlo, xhi) =
+            (pts().map(|p| p.0).fold(f64::INFINITY, f64::min), pts().map(|p| p.0).fold(0.0, f64::max));
+        let pad = ((xhi - xlo) * 0.08).max(xhi * 0.02).max(1e-9);
+        let (xmin, xmax) = if xlo.is_finite() { ((xlo - pad).max(0.0), xhi + pad) } else { (0.0, 1.0) };
         let ymin = pts().map(|p| p.1).fold(f64::INFINITY, f64::min);
         let ymax = pts().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
-        let (ymin, ymax) = if ymin.is_finite() { ((ymin - 2.0).floor(), (ymax + 2.0).ceil()) } else { (0.0, 1.0) };
+        let (ymin, ymax) =
+            if ymin.is_finite() { ((ymin - 2.0).floor(), (ymax + 2.0).ceil()) } else { (0.0, 1.0) };
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(64)
-            .build_cartesian_2d(0f64..xmax, ymin..ymax)
+            .build_cartesian_2d(xmin..xmax, ymin..ymax)
             .map_err(err)?;
-        chart.configure_mesh().x_desc(x_desc).y_desc(y_desc).draw().map_err(err)?;
+        chart
+            .configure_mesh()
+            .light_line_style(WHITE)
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 15))
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .draw()
+            .map_err(err)?;
         if front.len() > 1 {
             chart
                 .draw_series(LineSeries::new(front.iter().copied(), BLACK.stroke_width(1)))
@@ -274,7 +321,8 @@ pub fn scatter_front(
 
 /// The Pareto front of points where larger `x` and larger `y` are better, sorted by `x`.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    let mut p: Vec<(f64, f64)> = points.iter().copied().filter(|q| q.0.is_finite() && q.1.is_finite()).collect();
+    let mut p: Vec<(f64, f64)> =
+        points.iter().copied().filter(|q| q.0.is_finite() && q.1.is_finite()).collect();
     // By x descending; keep a point when its y beats every point with a larger x.
     p.sort_by(|a, b| b.0.total_cmp(&a.0).then(b.1.total_cmp(&a.1)));
     let mut front = Vec::new();
@@ -324,11 +372,24 @@ mod tests {
         )
         .unwrap();
         assert_eq!(s, s2);
-        let st = stacked_bars("DRAM", "GB", &["neo".into()], &[("sort".into(), vec![1.0]), ("raster".into(), vec![2.0])]).unwrap();
+        let st = stacked_bars(
+            "DRAM",
+            "GB",
+            &["neo".into()],
+            &[("sort".into(), vec![1.0]), ("raster".into(), vec![2.0])],
+        )
+        .unwrap();
         assert!(st.contains("raster"));
         let l = lines("t", "frame", "ms", &[("neo".into(), vec![(0.0, 1.0), (1.0, 2.0)])], None).unwrap();
         assert!(l.contains("neo"));
-        let sc = scatter_front("s", "FPS", "dB", &[("neo".into(), vec![(1.0, 40.0), (2.0, 30.0)])], &[(1.0, 40.0), (2.0, 30.0)]).unwrap();
+        let sc = scatter_front(
+            "s",
+            "FPS",
+            "dB",
+            &[("neo".into(), vec![(1.0, 40.0), (2.0, 30.0)])],
+            &[(1.0, 40.0), (2.0, 30.0)],
+        )
+        .unwrap();
         assert!(sc.contains("Pareto"));
     }
 }

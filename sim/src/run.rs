@@ -1,6 +1,6 @@
 //! Running an architecture on a workload and summarising the result.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 use crate::arch::{Accel, Model, CLASS_PRE, CLASS_RASTER, CLASS_SORT};
@@ -49,7 +49,11 @@ impl Arch {
                 }
                 other => match other.strip_prefix("gscore").map(str::parse::<u32>) {
                     Some(Ok(c)) if c > 0 => v.push(Arch::Gscore(c)),
-                    _ => return Err(format!("unknown architecture '{other}' (expected neo, gscore, gscoreN, gpu or all)")),
+                    _ => {
+                        return Err(format!(
+                            "unknown architecture '{other}' (expected neo, gscore, gscoreN, gpu or all)"
+                        ))
+                    }
                 },
             }
         }
@@ -63,7 +67,7 @@ impl Arch {
 }
 
 /// One frame's result.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct FrameResult {
     /// Frame index.
     pub frame: usize,
@@ -88,7 +92,7 @@ pub struct FrameResult {
 }
 
 /// Utilisation of each engine over the run (busy time / (agents x run time)).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Utilisation {
     /// Preprocessing engine.
     pub preprocess: f64,
@@ -101,7 +105,7 @@ pub struct Utilisation {
 }
 
 /// One architecture on one workload.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ArchResult {
     /// Architecture name.
     pub arch: String,
@@ -162,7 +166,11 @@ fn percentile(v: &[f64], q: f64) -> f64 {
     s[k - 1]
 }
 
-fn summarise(arch: String, strategy: String, mut frames: Vec<FrameResult>) -> (Vec<FrameResult>, f64, f64, f64, f64, f64) {
+fn summarise(
+    arch: String,
+    strategy: String,
+    mut frames: Vec<FrameResult>,
+) -> (Vec<FrameResult>, f64, f64, f64, f64, f64) {
     let mut last = 0.0;
     for (i, f) in frames.iter_mut().enumerate() {
         f.latency_ms = f.done_ms - f.pre_start_ms;
@@ -170,8 +178,11 @@ fn summarise(arch: String, strategy: String, mut frames: Vec<FrameResult>) -> (V
         last = f.done_ms;
     }
     let _ = (arch, strategy);
-    let steady: Vec<f64> =
-        if frames.len() > 1 { frames[1..].iter().map(|f| f.interval_ms).collect() } else { vec![frames[0].interval_ms] };
+    let steady: Vec<f64> = if frames.len() > 1 {
+        frames[1..].iter().map(|f| f.interval_ms).collect()
+    } else {
+        vec![frames[0].interval_ms]
+    };
     let mean = steady.iter().sum::<f64>() / steady.len() as f64;
     let p99 = percentile(&steady, 0.99);
     let max = steady.iter().copied().fold(0.0, f64::max);
@@ -180,7 +191,13 @@ fn summarise(arch: String, strategy: String, mut frames: Vec<FrameResult>) -> (V
 }
 
 /// Runs `arch` on `wl`.
-pub fn simulate(arch: Arch, cfg: &SimConfig, lat: &Latency, wl: &Workload, opt: RunOptions) -> Result<ArchResult, String> {
+pub fn simulate(
+    arch: Arch,
+    cfg: &SimConfig,
+    lat: &Latency,
+    wl: &Workload,
+    opt: RunOptions,
+) -> Result<ArchResult, String> {
     if wl.frames.is_empty() {
         return Err("the workload has no frames".into());
     }
@@ -208,7 +225,8 @@ pub fn simulate(arch: Arch, cfg: &SimConfig, lat: &Latency, wl: &Workload, opt: 
                 t += ms;
                 traffic.merge(&g.traffic);
             }
-            let (frames, mean, p99, max, latm, fps) = summarise(arch.name(), wl.info.strategy.clone(), frames);
+            let (frames, mean, p99, max, latm, fps) =
+                summarise(arch.name(), wl.info.strategy.clone(), frames);
             Ok(ArchResult {
                 arch: arch.name(),
                 strategy: "radix (from scratch)".into(),
@@ -233,7 +251,11 @@ pub fn simulate(arch: Arch, cfg: &SimConfig, lat: &Latency, wl: &Workload, opt: 
             };
             let model = Model::new(accel, cfg, lat, wl)?;
             let line = cfg.dram.line_bytes as u64;
-            let dram = if opt.ideal_memory { Dram::ideal(cfg.dram.line_bytes, cfg.cycle_ps().round() as u64) } else { Dram::new(&cfg.dram) };
+            let dram = if opt.ideal_memory {
+                Dram::ideal(cfg.dram.line_bytes, cfg.cycle_ps().round() as u64)
+            } else {
+                Dram::new(&cfg.dram)
+            };
             let agents = model.agents();
             let mut engine = Engine::new(dram, line, agents, wl.frames.len());
             let mut sched = model.scheduler();
@@ -255,7 +277,8 @@ pub fn simulate(arch: Arch, cfg: &SimConfig, lat: &Latency, wl: &Workload, opt: 
                     ..FrameResult::default()
                 })
                 .collect();
-            let (frames, mean, p99, max, latm, fps) = summarise(arch.name(), wl.info.strategy.clone(), frames);
+            let (frames, mean, p99, max, latm, fps) =
+                summarise(arch.name(), wl.info.strategy.clone(), frames);
             let stats = engine.agent_stats();
             let util = |class: u8| {
                 let (busy, n) = stats

@@ -127,7 +127,11 @@ mod tests {
             let sorts = cmds.iter().filter(|c| c.mode == Mode::Sort).count();
             assert_eq!(sorts, w.chunk.chunks, "n = {n}");
             let merged: u64 = cmds.iter().filter(|c| c.mode == Mode::Merge).map(|c| c.entries_in()).sum();
-            assert_eq!(merged as usize, w.global_passes.iter().map(|p| p.entries()).sum::<usize>(), "n = {n}");
+            assert_eq!(
+                merged as usize,
+                w.global_passes.iter().map(|p| p.entries()).sum::<usize>(),
+                "n = {n}"
+            );
             // Every command reads what it writes: DRAM entries equal the golden accounting.
             let read: u64 = cmds.iter().map(|c| c.entries_in()).sum();
             assert_eq!(read as usize, w.dram_entries_read());

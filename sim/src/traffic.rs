@@ -2,7 +2,7 @@
 //! to a pipeline stage and a direction. A partial line costs a whole line; nothing is lost:
 //! `bytes == requests * line_bytes` for every cell.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt;
 
 /// Pipeline stages that touch DRAM.
@@ -80,7 +80,7 @@ pub enum Dir {
 }
 
 /// Requests and bytes per stage and direction.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Traffic {
     /// Line size the bytes were counted with.
     pub line_bytes: u64,

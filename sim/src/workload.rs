@@ -204,7 +204,10 @@ impl Workload {
             .iter()
             .map(|f| {
                 std::mem::size_of::<FrameWork>()
-                    + f.tiles.iter().map(|t| std::mem::size_of::<TileWork>() + 4 * t.routed.capacity()).sum::<usize>()
+                    + f.tiles
+                        .iter()
+                        .map(|t| std::mem::size_of::<TileWork>() + 4 * t.routed.capacity())
+                        .sum::<usize>()
             })
             .sum()
     }

@@ -8,7 +8,9 @@ use neo_sim::driver::{generate, GoldenRaster, WorkloadSpec};
 
 fn setup(frames: usize, traj: &str) -> (neo_golden::scene::Scene, trajectory::Trajectory) {
     let (scene, _) = source::load_scene("synthetic:outdoor?gaussians=20k&seed=3", false).unwrap();
-    let t = trajectory::parse_trajectory(traj, source::robust_bounds(&scene), frames).unwrap().with_resolution(200, 136);
+    let t = trajectory::parse_trajectory(traj, source::robust_bounds(&scene), frames)
+        .unwrap()
+        .with_resolution(200, 136);
     (scene, t)
 }
 
@@ -50,7 +52,12 @@ fn work_only_sampled_termination_is_close_to_the_whole_frame() {
     let golden = generate(&scene, &traj.frames, &traj.cuts, &spec, |_| {}).unwrap();
     for (a, g) in all.frames.iter().zip(&golden.frames) {
         // Sampling every tile is the whole frame.
-        assert!((a.processed_ratio - g.processed_ratio).abs() < 1e-9, "{} vs {}", a.processed_ratio, g.processed_ratio);
+        assert!(
+            (a.processed_ratio - g.processed_ratio).abs() < 1e-9,
+            "{} vs {}",
+            a.processed_ratio,
+            g.processed_ratio
+        );
         assert_eq!(a.tiles, g.tiles);
     }
 }

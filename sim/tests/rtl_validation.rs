@@ -41,15 +41,19 @@ impl Split {
 
 /// Returns (model cycles, RTL cycles, commands run).
 fn compare(scene: &Scene, traj: &Trajectory) -> (u64, u64, usize) {
-    let mut parts: [(&str, Split); 3] =
-        [("conventional sorts", Split::default()), ("DPS passes", Split::default()), ("MERGE_DELETE", Split::default())];
+    let mut parts: [(&str, Split); 3] = [
+        ("conventional sorts", Split::default()),
+        ("DPS passes", Split::default()),
+        ("MERGE_DELETE", Split::default()),
+    ];
     let lat = latency();
     let gen = neo_tb::config();
     let params = PipelineParams::default();
     assert_eq!(gen.chunk, params.chunk, "the RTL's chunk is the model's");
     let c = params.chunk as u64;
     let first = &traj.frames[0];
-    let mut drv = WorkDriver::new(scene, Strategy::Neo, &params, first.width, first.height, false, 0).unwrap();
+    let mut drv =
+        WorkDriver::new(scene, Strategy::Neo, &params, first.width, first.height, false, 0).unwrap();
     let mut core = Core::new(&gen, 7, MemTiming::IDEAL);
     let sort_cfg = gen.sort_config();
     let (mut model, mut rtl, mut cmds) = (0u64, 0u64, 0usize);
@@ -69,7 +73,8 @@ fn compare(scene: &Scene, traj: &Trajectory) -> (u64, u64, usize) {
             }
             let table = &prev[t];
             let valid: HashSet<u32> = table.iter().filter(|e| e.valid).map(|e| e.id).collect();
-            let incoming: Vec<SortEntry> = current.iter().filter(|e| !valid.contains(&e.id)).copied().collect();
+            let incoming: Vec<SortEntry> =
+                current.iter().filter(|e| !valid.contains(&e.id)).copied().collect();
             assert_eq!(incoming.len() as u32, fw.tiles[t].sort_n, "tile {t}: incoming list");
             let seq = update(table.len() as u64, incoming.len() as u64, f as u64, 1, c);
             cmds += seq.len();
@@ -107,14 +112,17 @@ fn check(label: &str, scene: &Scene, traj: &Trajectory) {
 
 #[test]
 fn sorting_core_cycles_match_the_rtl_on_biker_crops() {
-    let Some(path) = shared::shared_file_for_test("sorting_core_cycles_match_the_rtl_on_biker_crops", "scenes/biker.ply")
+    let Some(path) =
+        shared::shared_file_for_test("sorting_core_cycles_match_the_rtl_on_biker_crops", "scenes/biker.ply")
     else {
         return;
     };
     let (scene, _) = source::load_scene(path.to_str().unwrap(), false).unwrap();
     // The subject at the centre of a 256x256 view, orbiting.
     let spec = "orbit:radius=5,height=0,target=0/-1.6/0,start=0,fov=56.145,speed=4";
-    let traj = trajectory::parse_trajectory(spec, source::robust_bounds(&scene), 3).unwrap().with_resolution(256, 256);
+    let traj = trajectory::parse_trajectory(spec, source::robust_bounds(&scene), 3)
+        .unwrap()
+        .with_resolution(256, 256);
     check("biker 256x256, 3 frames", &scene, &traj);
 }
 

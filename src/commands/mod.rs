@@ -7,5 +7,6 @@ pub mod gen;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod simulate;
 pub mod trajectory;
 pub mod view;

@@ -11,7 +11,8 @@
 //!   "units": {
 //!     "neo_bsu": { "latency": L, "ii": 1, "vectors": N, "cycles": C },
 //!     "neo_msu": { "latency": L, "ii": 1, "merge_gap": G, "entries": N, "cycles": C },
-//!     "neo_sort_core": { "command_overhead": O }
+//!     "neo_sort_core": { "command_overhead": O },
+//!     "neo_scu": { "latency": L, "ii": I, "drain_ii": 1, "gaussians": N, "lanes": 16 }
 //!   },
 //!   "sort_core": {
 //!     "conventional": [ { "entries": n, "cycles": c, "artifact_cycles": a }, ... ],
@@ -233,6 +234,7 @@ pub fn report(cfg: &GenConfig) -> Value {
             "units.*.ii": "initiation interval: cycles between accepted inputs (BSU: vectors; MSU+: output entries) at full rate",
             "units.neo_msu.merge_gap": "idle output cycles between the last beat of a merge and the first beat of the next one fed back to back (the end-of-merge flush)",
             "units.neo_msu.entries": "output entries of the measurement: two back-to-back merges of two 64-entry streams",
+            "units.neo_scu": "neo_scu (one subtile's blending): latency = rising edges from the edge that accepts a list's last Gaussian to the first cycle its 64 pixels are offered (pipeline otherwise empty); ii = cycles per Gaussian in a list that does not terminate (64 / scu_lanes passes); drain_ii = cycles per Gaussian once every pixel is done (the rest of the list is drained); lanes = scu_lanes",
             "units.neo_sort_core.command_overhead": "cycles from accepting a zero-length SORT to its done_o pulse",
             "raster.itu.latency": "neo_itu: rising edges from the edge that accepts a (Gaussian, tile) job to the first cycle its subtile bitmap is offered",
             "raster.itu.ii": "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once",
@@ -249,7 +251,8 @@ pub fn report(cfg: &GenConfig) -> Value {
         "units": {
             "neo_bsu": { "latency": bl, "ii": bii, "vectors": bv, "cycles": bc },
             "neo_msu": { "latency": ml, "ii": mii, "merge_gap": mgap, "entries": me, "cycles": mc },
-            "neo_sort_core": { "command_overhead": overhead }
+            "neo_sort_core": { "command_overhead": overhead },
+            "neo_scu": scu_unit(cfg)
         },
         "raster": raster_section(cfg),
         "sort_core": {
@@ -258,6 +261,20 @@ pub fn report(cfg: &GenConfig) -> Value {
             "merge": merge,
             "merge_delete": merge_delete
         }
+    })
+}
+
+/// The `units.neo_scu` entry: latency, II and drain rate of the SCU (outputs checked against
+/// golden on the way).
+pub fn scu_unit(cfg: &GenConfig) -> Value {
+    let mut dut = crate::models::NeoScu::new();
+    let t = crate::scu::measure_timing(&mut dut, cfg, SEED ^ 5);
+    json!({
+        "latency": t.latency,
+        "ii": t.ii,
+        "drain_ii": t.drain_ii,
+        "gaussians": t.gaussians,
+        "lanes": cfg.scu_lanes
     })
 }
 

@@ -258,12 +258,26 @@ pub fn random_gaussian(rng: &mut Rng, fmt: &FeatureFormat, origin: [u32; 2]) -> 
         85..=92 => {
             // Far away (outside the subtile, up to a few hundred pixels).
             let mean = [o[0] + uniform(rng, -300.0, 300.0), o[1] + uniform(rng, -300.0, 300.0)];
-            gaussian(mean, log_uniform(rng, 0.5, 80.0), log_uniform(rng, 0.5, 80.0), 1.0, 0.8, [0.7, 0.2, 0.9])
+            gaussian(
+                mean,
+                log_uniform(rng, 0.5, 80.0),
+                log_uniform(rng, 0.5, 80.0),
+                1.0,
+                0.8,
+                [0.7, 0.2, 0.9],
+            )
         }
         _ => {
             // Screen-filling.
             let mean = [o[0] + uniform(rng, -500.0, 500.0), o[1] + uniform(rng, -500.0, 500.0)];
-            gaussian(mean, log_uniform(rng, 300.0, 3000.0), log_uniform(rng, 300.0, 3000.0), 0.4, 0.3, [1.0, 0.9, 0.1])
+            gaussian(
+                mean,
+                log_uniform(rng, 300.0, 3000.0),
+                log_uniform(rng, 300.0, 3000.0),
+                0.4,
+                0.3,
+                [1.0, 0.9, 0.1],
+            )
         }
     }
 }
@@ -274,8 +288,11 @@ pub fn random_list(rng: &mut Rng, fmt: &FeatureFormat, side: u32, max_len: usize
     let far = rng.percent(5);
     let span = if far { 8000 } else { 512 };
     let origin = [rng.below(span) as u32 * side, rng.below(span) as u32 * side];
-    let (cols, rows) =
-        if rng.percent(15) { (rng.below(side as u64 + 1) as u32, rng.below(side as u64 + 1) as u32) } else { (side, side) };
+    let (cols, rows) = if rng.percent(15) {
+        (rng.below(side as u64 + 1) as u32, rng.below(side as u64 + 1) as u32)
+    } else {
+        (side, side)
+    };
     let n = rng.below(max_len as u64 + 1) as usize;
     let entries = (0..n).map(|_| random_gaussian(rng, fmt, origin)).collect();
     ScuList { origin, cols, rows, entries }
@@ -324,8 +341,13 @@ fn timed(dut: &mut NeoScu, cfg: &GenConfig, seed: u64, list: &ScuList) -> (u64, 
         if dut.out_valid_o() {
             let got = dut.out_rgb_o();
             for (k, px) in want.iter().enumerate() {
-                for c in 0..3 {
-                    checker.value(dut.cycle(), &format!("pixel {k}.{c}"), px[c] as u64, get_bits(&got, 24 * k + 8 * c, 8));
+                for (c, &v) in px.iter().enumerate() {
+                    checker.value(
+                        dut.cycle(),
+                        &format!("pixel {k}.{c}"),
+                        v as u64,
+                        get_bits(&got, 24 * k + 8 * c, 8),
+                    );
                 }
             }
             let out = dut.cycle();
@@ -341,7 +363,12 @@ pub fn measure_timing(dut: &mut NeoScu, cfg: &GenConfig, seed: u64) -> ScuTiming
     let fmt = cfg.feature_format();
     let side = cfg.raster_config().subtile;
     let origin = [64, 128];
-    let one = ScuList { origin, cols: side, rows: side, entries: vec![gaussian([67.0, 131.0], 2.0, 2.0, 0.0, 0.5, [0.5; 3])] };
+    let one = ScuList {
+        origin,
+        cols: side,
+        rows: side,
+        entries: vec![gaussian([67.0, 131.0], 2.0, 2.0, 0.0, 0.5, [0.5; 3])],
+    };
     let (out, sent) = timed(dut, cfg, seed, &one);
     let last = sent[sent.len() - 1];
     // A long list of faint Gaussians: never terminates.

@@ -74,16 +74,26 @@ mod cosim {
         cases.push(("empty list", full(o, vec![])));
         cases.push(("list of one", full(o, vec![gaussian(c, 2.0, 1.5, 0.3, 0.7, [1.0, 0.5, 0.25])])));
         // An opaque stack drives T below 1e-4 (pixels finish; the rest is drained).
-        let stack: Vec<_> = (0..40).map(|i| gaussian(c, 30.0, 30.0, 0.0, 0.99, [0.1 * (i % 10) as f64, 0.9, 0.3])).collect();
+        let stack: Vec<_> =
+            (0..40).map(|i| gaussian(c, 30.0, 30.0, 0.0, 0.99, [0.1 * (i % 10) as f64, 0.9, 0.3])).collect();
         cases.push(("opaque stack", full(o, stack)));
         cases.push(("needle", full(o, vec![gaussian(c, 40.0, 0.05, 0.7, 0.95, [0.9, 0.9, 0.1])])));
-        cases.push(("screen filling", full(o, vec![gaussian([5000.0, -3000.0], 9000.0, 7000.0, 0.2, 0.5, [0.3, 0.6, 0.9])])));
-        cases.push(("centred outside", full(o, vec![gaussian([o[0] as f64 - 6.0, o[1] as f64 + 12.0], 3.0, 2.0, 0.5, 0.9, [1.0; 3])])));
+        cases.push((
+            "screen filling",
+            full(o, vec![gaussian([5000.0, -3000.0], 9000.0, 7000.0, 0.2, 0.5, [0.3, 0.6, 0.9])]),
+        ));
+        cases.push((
+            "centred outside",
+            full(o, vec![gaussian([o[0] as f64 - 6.0, o[1] as f64 + 12.0], 3.0, 2.0, 0.5, 0.9, [1.0; 3])]),
+        ));
         cases.push((
             "partly outside the image",
             ScuList { origin: o, cols: 5, rows: 3, entries: vec![gaussian(c, 6.0, 6.0, 0.0, 0.8, [1.0; 3])] },
         ));
-        cases.push(("subtile outside the image", ScuList { origin: o, cols: 0, rows: 8, entries: vec![gaussian(c, 6.0, 6.0, 0.0, 0.8, [1.0; 3])] }));
+        cases.push((
+            "subtile outside the image",
+            ScuList { origin: o, cols: 0, rows: 8, entries: vec![gaussian(c, 6.0, 6.0, 0.0, 0.8, [1.0; 3])] },
+        ));
         // Alpha exactly at 1/255 (min_alpha_raw) and one LSB below, at a subtile pixel: search
         // the opacity and offset with golden pixel_alpha, then check the golden decision.
         let min_alpha = rc.blend.min_alpha_raw();
@@ -133,11 +143,14 @@ mod cosim {
         maybe_trace(&mut dut, name);
         let o = [8u32, 8u32];
         let n = 200;
-        let stack: Vec<_> = (0..n).map(|_| gaussian([12.0, 12.0], 50.0, 50.0, 0.0, 0.99, [0.5, 0.5, 0.5])).collect();
+        let stack: Vec<_> =
+            (0..n).map(|_| gaussian([12.0, 12.0], 50.0, 50.0, 0.0, 0.99, [0.5, 0.5, 0.5])).collect();
         let run = run_checked(&mut dut, &cfg, seed, &[full(o, stack)], 0, 100);
         let passes = 64 / cfg.scu_lanes as u64;
-        // Without the drain it would take n * passes cycles.
-        assert!(run.cycles < n as u64 * passes / 2 + 40, "{} cycles for {n} Gaussians", run.cycles);
+        // Without the drain it would take n * passes cycles (with one pass, II is 1 anyway).
+        if passes > 1 {
+            assert!(run.cycles < n as u64 * passes / 2 + 40, "{} cycles for {n} Gaussians", run.cycles);
+        }
         assert!(run.term_cycles > n as u64 / 2, "term_o high for {} cycles", run.term_cycles);
         let t = measure_timing(&mut dut, &cfg, seed);
         assert_eq!(t.ii, passes, "{t:?}");
@@ -169,8 +182,12 @@ mod cosim {
         for j in 0..n * n {
             let (sx, sy) = (j % n, j / n);
             let origin = [x0 + sx * s, y0 + sy * s];
-            let routed: Vec<FeatureEntry> =
-                entries.iter().zip(&tile.bitmaps).filter(|(_, &b)| b >> j & 1 == 1).map(|(e, _)| *e).collect();
+            let routed: Vec<FeatureEntry> = entries
+                .iter()
+                .zip(&tile.bitmaps)
+                .filter(|(_, &b)| b >> j & 1 == 1)
+                .map(|(e, _)| *e)
+                .collect();
             let cols = width.saturating_sub(origin[0]).min(s);
             let rows = height.saturating_sub(origin[1]).min(s);
             lists.push(ScuList { origin, cols, rows, entries: routed });

@@ -29,7 +29,9 @@
 //! 3. per subtile, the projections are stepped by constant multiples of `C` and `S` (the
 //!    centre moves by `2 S 2^mean.frac` units per subtile): `|pu0 - kc[sx] - ks[sy]| > Tu` is
 //!    tested as `kc[sx]` outside the window `[ru - Tu, ru + Tu]`, `ru = pu0 - ks[sy]`, one
-//!    window per row (likewise for V), so each subtile costs four signed comparisons.
+//!    window per row (likewise for V), so each subtile costs four signed comparisons. The steps
+//!    fit in [`step_bits`] bits and the windows are saturated to that width (a window edge beyond
+//!    every step compares the same way saturated), so the 256 comparators are narrow.
 //!
 //! All arithmetic is in `W`-bit two's complement (see [`datapath_bits`]), wide enough for every
 //! input bit pattern, so the unit matches golden on arbitrary field values, not just on
@@ -77,6 +79,17 @@ pub fn datapath_bits(cfg: &GenConfig) -> u32 {
     bits_for(p_max.max(t_max) as u64) + 3
 }
 
+/// Width `K` of the stage-3 comparisons: the subtile steps `kc[k] = 2 S 2^mean.frac k C` (and
+/// `ks`) fit in `K - 1` signed bits, and the per-row windows are saturated to `K` bits (their
+/// extreme values then still compare the same way against every step).
+pub fn step_bits(cfg: &GenConfig) -> u32 {
+    let fmt = cfg.feature_format();
+    let r = cfg.raster_config();
+    let step = (2 * r.subtile as u64) << fmt.mean.frac;
+    let kmax = (r.subtiles_per_side() as u64 - 1) * step * (1u64 << (fmt.axis.bits - 1));
+    bits_for(kmax) + 2
+}
+
 /// `{{(to-from){x[from-1]}}, x}` (sign extension; `x` when the widths match).
 fn sext(x: &str, from: u32, to: u32) -> String {
     if to == from {
@@ -113,6 +126,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let eb = fmt.extent.bits as u32;
     let ab = fmt.axis.bits as u32;
     let w = datapath_bits(cfg);
+    let kb = step_bits(cfg);
     let tb = cfg.tile_bits;
     let tg = cfg.itu_tag_bits;
     let (gb, _) = geom_bits_lsb(cfg);
@@ -235,15 +249,18 @@ pub fn module(cfg: &GenConfig) -> Module {
             m.assign(format!("{ok}[{k}]"), format!("{u} | ~({} > t{a}1_q)", abs(&d, w)));
         }
     }
-    m.wire_assign("pu0", w, "dx0_q * c1_q + dy0_q * s1_q");
-    m.wire_assign("pv0", w, "dy0_q * c1_q - dx0_q * s1_q");
+    m.comment("Signed products (the same low W bits as unsigned ones): synthesis then drops the operands'");
+    m.comment("sign-extension bits, so the multipliers are W x axis.bits, not W x W.");
+    m.wire_assign("pu0", w, "$signed(dx0_q) * $signed(c1_q) + $signed(dy0_q) * $signed(s1_q)");
+    m.wire_assign("pv0", w, "$signed(dy0_q) * $signed(c1_q) - $signed(dx0_q) * $signed(s1_q)");
+    let (c1_low, s1_low) = (slice("c1_q", kb - 1, 0), slice("s1_q", kb - 1, 0));
     let s2 = [
         ("col2_q", n, "col_ok"),
         ("row2_q", n, "row_ok"),
         ("pu2_q", w, "pu0"),
         ("pv2_q", w, "pv0"),
-        ("c2_q", w, "c1_q"),
-        ("s2_q", w, "s1_q"),
+        ("c2_q", kb, c1_low.as_str()),
+        ("s2_q", kb, s1_low.as_str()),
         ("tu2_q", w, "tu1_q"),
         ("tv2_q", w, "tv1_q"),
         ("uu2_q", 1, "uu1_q"),
@@ -261,23 +278,37 @@ pub fn module(cfg: &GenConfig) -> Module {
         "Stage 3: pu = pu0 - kc[sx] - ks[sy], pv = pv0 - kc[sy] + ks[sx] (kc[k] = {step} k C, ks[k] = {step} k S):"
     ));
     m.comment("|pu| > Tu iff kc[sx] lies outside [ru - Tu, ru + Tu], ru = pu0 - ks[sy] (one window per row), likewise V.");
-    m.wire("kc", n * w).wire("ks", n * w);
-    for k in 0..n as u64 {
-        m.assign(slice("kc", (k as u32 + 1) * w - 1, k as u32 * w), format!("c2_q * {}", l(k * step)));
-        m.assign(slice("ks", (k as u32 + 1) * w - 1, k as u32 * w), format!("s2_q * {}", l(k * step)));
-    }
-    m.wire("lu", n * w).wire("hu", n * w).wire("lv", n * w).wire("hv", n * w);
+    m.wire("kc", n * kb).wire("ks", n * kb);
+    m.wire("lu", n * kb).wire("hu", n * kb).wire("lv", n * kb).wire("hv", n * kb);
+    let sat = |x: &str| {
+        let top = slice(x, w - 1, kb - 1);
+        format!(
+            "(&{top} | ~|{top}) ? {} : ({x}[{}] ? {} : {})",
+            slice(x, kb - 1, 0),
+            w - 1,
+            lit(kb, 1 << (kb - 1)),
+            lit(kb, (1 << (kb - 1)) - 1)
+        )
+    };
     for k in 0..n {
-        let ln = |v: &str| slice(v, (k + 1) * w - 1, k * w);
-        m.wire_assign(format!("ru_{k}"), w, format!("pu2_q - {}", ln("ks")));
-        m.wire_assign(format!("rv_{k}"), w, format!("pv2_q - {}", ln("kc")));
-        m.assign(ln("lu"), format!("ru_{k} - tu2_q"));
-        m.assign(ln("hu"), format!("ru_{k} + tu2_q"));
-        m.assign(ln("lv"), format!("{} - tv2_q - rv_{k}", l(0)));
-        m.assign(ln("hv"), format!("tv2_q - rv_{k}"));
+        let ln = |v: &str| slice(v, (k + 1) * kb - 1, k * kb);
+        let kl = lit(kb, k as u64 * step);
+        m.wire_assign(format!("kc_{k}"), kb, format!("$signed(c2_q) * $signed({kl})"));
+        m.wire_assign(format!("ks_{k}"), kb, format!("$signed(s2_q) * $signed({kl})"));
+        m.assign(ln("kc"), format!("kc_{k}"));
+        m.assign(ln("ks"), format!("ks_{k}"));
+        m.wire_assign(format!("ru_{k}"), w, format!("pu2_q - {}", sext(&format!("ks_{k}"), kb, w)));
+        m.wire_assign(format!("rv_{k}"), w, format!("pv2_q - {}", sext(&format!("kc_{k}"), kb, w)));
+        m.wire_assign(format!("lu_{k}"), w, format!("ru_{k} - tu2_q"));
+        m.wire_assign(format!("hu_{k}"), w, format!("ru_{k} + tu2_q"));
+        m.wire_assign(format!("lv_{k}"), w, format!("{} - tv2_q - rv_{k}", l(0)));
+        m.wire_assign(format!("hv_{k}"), w, format!("tv2_q - rv_{k}"));
+        for v in ["lu", "hu", "lv", "hv"] {
+            m.assign(ln(v), sat(&format!("{v}_{k}")));
+        }
     }
     m.wire("bitmap_d", nb);
-    let lane = |v: &str, idx: &str| format!("$signed({v}[({idx})*{w} +: {w}])");
+    let lane = |v: &str, idx: &str| format!("$signed({v}[({idx})*{kb} +: {kb}])");
     let (col, row) = (format!("gi % {n}"), format!("gi / {n}"));
     m.gen_for(
         "gi",

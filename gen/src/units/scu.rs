@@ -818,6 +818,18 @@ mod tests {
     }
 
     #[test]
+    fn lanes_must_be_a_power_of_two_up_to_the_pixel_count() {
+        for (lanes, ok) in [(1, false), (2, true), (3, false), (16, true), (64, true), (128, false)] {
+            let cfg = GenConfig { scu_lanes: lanes, ..GenConfig::default() };
+            assert_eq!(cfg.validate().is_ok(), ok, "{lanes}");
+            if ok {
+                let v = module(&cfg).to_verilog();
+                assert_eq!(v.matches("neo_scu_exp u_exp").count(), lanes, "{lanes}");
+            }
+        }
+    }
+
+    #[test]
     fn widths_follow_the_golden_formats() {
         let w = ScuWidths::new(&GenConfig::default());
         assert_eq!(w.passes * w.lanes, 64);

@@ -1,0 +1,482 @@
+//! The report (`reports/index.md` and its SVG figures) from point results, and the text tables
+//! `neo simulate` prints. Everything here is a pure function of the results, so the same results
+//! give byte-identical files.
+
+use std::fmt::Write as _;
+
+use crate::plot::{self, HLine};
+use crate::run::ArchResult;
+use crate::suite::PointResult;
+use crate::traffic::Stage;
+
+/// Figures published in the paper, for comparison (its scenes differ from ours: compare
+/// ratios, not absolute values).
+pub mod published {
+    /// GSCore FPS at HD, FHD, QHD (4 cores, 51.2 GB/s; Section 3.1).
+    pub const GSCORE_FPS: [(&str, f64); 3] = [("hd", 66.7), ("fhd", 31.1), ("qhd", 15.8)];
+    /// Neo's average FPS at QHD (Section 6.2).
+    pub const NEO_QHD_FPS: f64 = 99.3;
+    /// Neo's speedup over GSCore at HD, FHD, QHD (Section 6.2).
+    pub const NEO_OVER_GSCORE: [(&str, f64); 3] = [("hd", 1.8), ("fhd", 3.3), ("qhd", 5.6)];
+    /// Neo's speedup over Orin AGX at HD, FHD, QHD.
+    pub const NEO_OVER_ORIN: [(&str, f64); 3] = [("hd", 5.0), ("fhd", 7.2), ("qhd", 10.0)];
+    /// DRAM GB for 60 QHD frames: Orin AGX, GSCore, Neo (Fig. 16).
+    pub const DRAM_60_QHD: [(&str, f64); 3] = [("Orin AGX", 346.5), ("GSCore", 104.6), ("Neo", 19.6)];
+}
+
+/// What the report shows besides the results.
+#[derive(Clone, Debug, Default)]
+pub struct ReportSettings {
+    /// The command that produced it.
+    pub command: String,
+    /// Raster-timing provenance label.
+    pub raster_timing: String,
+    /// `latency.json` used.
+    pub latency_file: String,
+    /// Free-form lines about the reduced sizes used (frames, Gaussians, resolutions).
+    pub notes: Vec<String>,
+}
+
+/// Everything the report shows.
+#[derive(Clone, Debug, Default)]
+pub struct ReportData {
+    /// Headline runs: per scene and resolution, Neo's strategy on every architecture.
+    pub headline: Vec<PointResult>,
+    /// Sorting strategies on Neo's hardware (Fig. 19).
+    pub timelines: Vec<PointResult>,
+    /// The speed/error sweep.
+    pub sweep: Vec<PointResult>,
+    /// Settings.
+    pub settings: ReportSettings,
+}
+
+fn f1(v: f64) -> String {
+    format!("{v:.1}")
+}
+
+fn f2(v: f64) -> String {
+    format!("{v:.2}")
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("-".into(), |x| format!("{x:.2}"))
+}
+
+fn scene_name(s: &str) -> String {
+    s.rsplit('/').next().unwrap_or(s).to_string()
+}
+
+fn res_order(r: &str) -> usize {
+    match r {
+        "hd" => 0,
+        "fhd" => 1,
+        "qhd" => 2,
+        _ => 3,
+    }
+}
+
+/// Architecture names in display order.
+fn arch_order(a: &str) -> (usize, u32) {
+    match a {
+        "neo" => (0, 0),
+        "gpu" => (2, 0),
+        g => (1, g.trim_start_matches("gscore").parse().unwrap_or(0)),
+    }
+}
+
+fn speedup(neo: &ArchResult, other: &ArchResult) -> f64 {
+    if other.fps > 0.0 {
+        neo.fps / other.fps
+    } else {
+        0.0
+    }
+}
+
+/// The text table `neo simulate` prints for one point.
+pub fn point_table(r: &PointResult) -> String {
+    let mut s = String::new();
+    let p = &r.point;
+    let _ = writeln!(
+        s,
+        "{} | {} x{} | {} ({}x{}) | {} frames | strategy {} | chunk {} | passes {}",
+        scene_name(&p.scene),
+        p.trajectory,
+        p.speed,
+        p.res,
+        p.width,
+        p.height,
+        p.frames,
+        p.strategy,
+        p.chunk,
+        p.passes
+    );
+    let w = &r.workload;
+    let _ = writeln!(
+        s,
+        "workload: {} Gaussians, {} tiles, {:.0} pairs/frame, {:.0} incoming/frame, SCU termination ratio {:.2}{}",
+        w.gaussians,
+        w.tiles,
+        w.pairs_mean,
+        w.incoming_mean,
+        w.processed_ratio_mean,
+        if w.golden_raster { " (golden raster)" } else { " (sampled)" }
+    );
+    let neo = r.arch("neo");
+    let _ = writeln!(
+        s,
+        "{:<9} {:>8} {:>9} {:>9} {:>9} {:>9}  DRAM GB per 60 frames by stage",
+        "arch", "FPS", "mean ms", "p99 ms", "speedup", "GB/60"
+    );
+    let mut archs: Vec<&ArchResult> = r.archs.iter().collect();
+    archs.sort_by_key(|a| arch_order(&a.arch));
+    for a in archs {
+        let sp = neo.map_or("-".into(), |n| if n.arch == a.arch { "1.00".into() } else { f2(speedup(n, a)) });
+        let stages: Vec<String> = Stage::ALL
+            .iter()
+            .filter(|&&st| a.traffic.stage_bytes(st) > 0)
+            .map(|&st| format!("{} {:.2}", st.name(), a.gb_per_60(Some(st))))
+            .collect();
+        let _ = writeln!(
+            s,
+            "{:<9} {:>8.1} {:>9.3} {:>9.3} {:>9} {:>9.2}  {}",
+            a.arch,
+            a.fps,
+            a.frame_ms_mean,
+            a.frame_ms_p99,
+            sp,
+            a.gb_per_60(None),
+            stages.join(", ")
+        );
+    }
+    let q = &r.quality;
+    if q.exact_by_construction {
+        let _ = writeln!(s, "quality: exact order by construction (PSNR vs exact: identical)");
+    } else if q.frames > 0 {
+        let _ = writeln!(
+            s,
+            "quality ({} frames, {} identical to exact): PSNR vs exact mean {} dB (pooled {}), vs float {} dB (exact order: {})",
+            q.frames,
+            q.identical,
+            opt(q.psnr_vs_exact_mean),
+            opt(q.psnr_vs_exact_pooled),
+            opt(q.psnr_vs_float_mean),
+            opt(q.exact_psnr_vs_float_mean)
+        );
+    } else {
+        let _ = writeln!(s, "quality: not computed (work-only workload; run with --quality for PSNR)");
+    }
+    if let Some(a) = r.archs.iter().find(|a| a.arch == "neo" || a.arch.starts_with("gscore")) {
+        let _ = writeln!(s, "{}", a.raster_timing);
+    }
+    s
+}
+
+/// Renders the report: the markdown and the SVG files `(name, content)`.
+pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String> {
+    let mut md = String::new();
+    let mut svgs = Vec::new();
+    let st = &d.settings;
+    let _ = writeln!(md, "# Neo cycle-model report\n");
+    let _ = writeln!(md, "Generated by `{}` (the model, its inputs and its limits: [docs/cycle-model.md](../docs/cycle-model.md)).\n", st.command);
+    let _ = writeln!(md, "- **{}**", st.raster_timing);
+    let _ = writeln!(md, "- Sorting-core timing: measured on the RTL (`{}`); preprocessing-engine timing and the GPU baseline's rates are assumed (config `preprocess.*`, `gpu.*`).", st.latency_file);
+    for n in &st.notes {
+        let _ = writeln!(md, "- {n}");
+    }
+    md.push('\n');
+
+    // 1. Throughput.
+    let mut head: Vec<&PointResult> = d.headline.iter().collect();
+    head.sort_by(|a, b| {
+        (a.point.scene.clone(), res_order(&a.point.res))
+            .cmp(&(b.point.scene.clone(), res_order(&b.point.res)))
+    });
+    let _ = writeln!(md, "## 1. Throughput (paper Fig. 15)\n");
+    let _ = writeln!(md, "| scene | res | arch | FPS | mean frame (ms) | p99 frame (ms) | Neo speedup | DRAM GB / 60 frames | of which sorting |");
+    let _ = writeln!(md, "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |");
+    for r in &head {
+        let neo = r.arch("neo");
+        let mut archs: Vec<&ArchResult> = r.archs.iter().collect();
+        archs.sort_by_key(|a| arch_order(&a.arch));
+        for a in archs {
+            let sp = neo.map_or("-".into(), |n| format!("{:.2}x", speedup(n, a)));
+            let sorting = a.traffic.sorting_bytes() as f64 * 60.0 / a.frames.len().max(1) as f64 / 1e9;
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {:.3} | {:.3} | {} | {} | {} |",
+                scene_name(&r.point.scene),
+                r.point.res,
+                a.arch,
+                f1(a.fps),
+                a.frame_ms_mean,
+                a.frame_ms_p99,
+                sp,
+                f2(a.gb_per_60(None)),
+                f2(sorting)
+            );
+        }
+    }
+    md.push('\n');
+    let scenes: Vec<String> = {
+        let mut v: Vec<String> = head.iter().map(|r| r.point.scene.clone()).collect();
+        v.dedup();
+        v
+    };
+    for (si, scene) in scenes.iter().enumerate() {
+        let rs: Vec<&&PointResult> = head.iter().filter(|r| &r.point.scene == scene).collect();
+        let groups: Vec<String> = rs.iter().map(|r| r.point.res.to_uppercase()).collect();
+        let mut names: Vec<String> = rs.iter().flat_map(|r| r.archs.iter().map(|a| a.arch.clone())).collect();
+        names.sort_by_key(|a| arch_order(a));
+        names.dedup();
+        let series: Vec<(String, Vec<f64>)> = names
+            .iter()
+            .map(|n| (n.clone(), rs.iter().map(|r| r.arch(n).map_or(0.0, |a| a.fps)).collect()))
+            .collect();
+        let file = format!("fig15_fps_{si}.svg");
+        svgs.push((
+            file.clone(),
+            plot::grouped_bars(
+                &format!("Throughput, {}", scene_name(scene)),
+                "frames per second",
+                &groups,
+                &series,
+                Some(HLine { y: 60.0, label: "60 FPS SLO".into() }),
+            )?,
+        ));
+        let _ = writeln!(md, "![throughput {}]({file})\n", scene_name(scene));
+    }
+    let _ = writeln!(md, "Speedup ratios beside the paper's (different scenes; the paper's GSCore is the 16-core scaled one):\n");
+    let _ = writeln!(md, "| scene | res | Neo / GSCore-16 | Neo / GSCore-4 | Neo / GPU | paper: Neo / GSCore | paper: Neo / Orin AGX |");
+    let _ = writeln!(md, "| --- | --- | ---: | ---: | ---: | ---: | ---: |");
+    for r in &head {
+        let Some(neo) = r.arch("neo") else { continue };
+        let ratio = |n: &str| r.arch(n).map_or("-".into(), |a| format!("{:.2}x", speedup(neo, a)));
+        let pg = published::NEO_OVER_GSCORE
+            .iter()
+            .find(|x| x.0 == r.point.res)
+            .map_or("-".into(), |x| format!("{}x", x.1));
+        let po = published::NEO_OVER_ORIN
+            .iter()
+            .find(|x| x.0 == r.point.res)
+            .map_or("-".into(), |x| format!("{}x", x.1));
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            scene_name(&r.point.scene),
+            r.point.res,
+            ratio("gscore16"),
+            ratio("gscore4"),
+            ratio("gpu"),
+            pg,
+            po
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\nPublished absolute figures: GSCore (4 cores, 51.2 GB/s) {} FPS at HD/FHD/QHD; Neo {} FPS average at QHD.\n",
+        published::GSCORE_FPS.iter().map(|x| x.1.to_string()).collect::<Vec<_>>().join(" / "),
+        published::NEO_QHD_FPS
+    );
+
+    // 2. DRAM traffic.
+    let _ = writeln!(md, "## 2. DRAM traffic (paper Fig. 16)\n");
+    for (si, scene) in scenes.iter().enumerate() {
+        let Some(r) = head
+            .iter()
+            .filter(|r| &r.point.scene == scene)
+            .max_by_key(|r| r.point.width as u64 * r.point.height as u64)
+        else {
+            continue;
+        };
+        let mut archs: Vec<&ArchResult> = r.archs.iter().collect();
+        archs.sort_by_key(|a| arch_order(&a.arch));
+        let _ = writeln!(
+            md,
+            "GB per 60 frames at {} ({}x{}), {}, by stage (read + write, whole 64-byte requests):\n",
+            r.point.res,
+            r.point.width,
+            r.point.height,
+            scene_name(scene)
+        );
+        let _ = write!(md, "| stage |");
+        for a in &archs {
+            let _ = write!(md, " {} |", a.arch);
+        }
+        let _ = write!(md, "\n| --- |");
+        for _ in &archs {
+            let _ = write!(md, " ---: |");
+        }
+        md.push('\n');
+        let used: Vec<Stage> = Stage::ALL
+            .iter()
+            .copied()
+            .filter(|&s| archs.iter().any(|a| a.traffic.stage_bytes(s) > 0))
+            .collect();
+        for &s in &used {
+            let _ = write!(md, "| {} |", s.name());
+            for a in &archs {
+                let _ = write!(md, " {} |", f2(a.gb_per_60(Some(s))));
+            }
+            md.push('\n');
+        }
+        let _ = write!(md, "| **total** |");
+        for a in &archs {
+            let _ = write!(md, " **{}** |", f2(a.gb_per_60(None)));
+        }
+        md.push('\n');
+        if let Some(neo) = r.arch("neo") {
+            let ng = neo.gb_per_60(None);
+            let mut line = String::from("\nNeo's traffic relative to:");
+            for a in &archs {
+                if a.arch != "neo" {
+                    let _ = write!(line, " {} {:.3};", a.arch, ng / a.gb_per_60(None).max(1e-12));
+                }
+            }
+            let p = published::DRAM_60_QHD;
+            let _ = write!(
+                line,
+                " paper (QHD, 60 frames: Orin AGX {} GB, GSCore {} GB, Neo {} GB): Neo / GSCore {:.3}, Neo / Orin AGX {:.3}.",
+                p[0].1,
+                p[1].1,
+                p[2].1,
+                p[2].1 / p[1].1,
+                p[2].1 / p[0].1
+            );
+            let _ = writeln!(md, "{line}\n");
+        }
+        let bars: Vec<String> = archs.iter().map(|a| a.arch.clone()).collect();
+        let stacks: Vec<(String, Vec<f64>)> = used
+            .iter()
+            .map(|&s| (s.name().to_string(), archs.iter().map(|a| a.gb_per_60(Some(s))).collect()))
+            .collect();
+        let file = format!("fig16_dram_{si}.svg");
+        svgs.push((
+            file.clone(),
+            plot::stacked_bars(
+                &format!("DRAM per 60 frames, {} {}", scene_name(scene), r.point.res.to_uppercase()),
+                "GB",
+                &bars,
+                &stacks,
+            )?,
+        ));
+        let _ = writeln!(md, "![DRAM traffic]({file})\n");
+    }
+
+    // 3. Strategies on Neo's hardware.
+    if !d.timelines.is_empty() {
+        let p0 = &d.timelines[0].point;
+        let _ = writeln!(md, "## 3. Sorting strategies on Neo's hardware (paper Fig. 19)\n");
+        let _ = writeln!(
+            md,
+            "{} at {} ({}x{}), {} frames, camera speed {}x. Frame time is the interval between completed frames; the periodic strategy re-sorts from scratch at its refresh frames, the background sorter adds its full sort of every frame to the sorting cores and DRAM.\n",
+            scene_name(&p0.scene),
+            p0.res,
+            p0.width,
+            p0.height,
+            p0.frames,
+            p0.speed
+        );
+        let _ = writeln!(md, "| strategy | FPS | mean frame (ms) | p99 frame (ms) | max frame (ms) | DRAM GB / 60 | sorting GB / 60 |");
+        let _ = writeln!(md, "| --- | ---: | ---: | ---: | ---: | ---: | ---: |");
+        let mut series = Vec::new();
+        for r in &d.timelines {
+            let Some(a) = r.arch("neo") else { continue };
+            let sorting = a.traffic.sorting_bytes() as f64 * 60.0 / a.frames.len().max(1) as f64 / 1e9;
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.3} | {:.3} | {:.3} | {} | {} |",
+                r.point.strategy,
+                f1(a.fps),
+                a.frame_ms_mean,
+                a.frame_ms_p99,
+                a.frame_ms_max,
+                f2(a.gb_per_60(None)),
+                f2(sorting)
+            );
+            series.push((
+                r.point.strategy.clone(),
+                a.frames.iter().skip(1).map(|f| (f.frame as f64, f.interval_ms)).collect::<Vec<_>>(),
+            ));
+        }
+        let file = "fig19_timeline.svg".to_string();
+        svgs.push((
+            file.clone(),
+            plot::lines(
+                "Frame time per frame on Neo's hardware",
+                "frame",
+                "frame time (ms)",
+                &series,
+                Some(HLine { y: 1000.0 / 60.0, label: "16.6 ms (60 FPS)".into() }),
+            )?,
+        ));
+        let _ = writeln!(md, "\n![frame times]({file})\n");
+    }
+
+    // 4. Speed against error.
+    if !d.sweep.is_empty() {
+        let p0 = &d.sweep[0].point;
+        let _ = writeln!(md, "## 4. Speed against error\n");
+        let _ = writeln!(
+            md,
+            "One point per (strategy, chunk, DPS passes, camera speed) on Neo's hardware: {} at {}x{}, {} frames of `{}`. Speed: the model's FPS on that workload. Error: PSNR against the exact-order frame of the same fixed-point pipeline, from the mean squared error over all frames (higher is better; exact strategies are drawn at the top of the axis). DPS passes apply to `neo` only.\n",
+            scene_name(&p0.scene),
+            p0.width,
+            p0.height,
+            p0.frames,
+            p0.trajectory
+        );
+        let finite: Vec<f64> = d.sweep.iter().filter_map(|r| r.quality.psnr_vs_exact_pooled).collect();
+        let cap = finite.iter().copied().fold(30.0, f64::max).ceil() + 3.0;
+        let y_of =
+            |r: &PointResult| if r.quality.is_exact() { Some(cap) } else { r.quality.psnr_vs_exact_pooled };
+        let mut by_strategy: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+        let mut all = Vec::new();
+        for r in &d.sweep {
+            let (Some(a), Some(y)) = (r.arch("neo"), y_of(r)) else { continue };
+            let key = r.point.strategy.clone();
+            match by_strategy.iter_mut().find(|g| g.0 == key) {
+                Some(g) => g.1.push((a.fps, y)),
+                None => by_strategy.push((key, vec![(a.fps, y)])),
+            }
+            all.push((a.fps, y));
+        }
+        let front = plot::pareto_front(&all);
+        let file = "sweep_pareto.svg".to_string();
+        svgs.push((
+            file.clone(),
+            plot::scatter_front(
+                &format!("Speed against error (exact order drawn at {cap:.0} dB)"),
+                "FPS (model)",
+                "PSNR vs exact order (dB)",
+                &by_strategy,
+                &front,
+            )?,
+        ));
+        let _ = writeln!(md, "![speed against error]({file})\n");
+        let _ = writeln!(md, "| strategy | chunk | passes | speed | FPS | p99 frame (ms) | DRAM GB / 60 | PSNR vs exact (dB) | PSNR vs float (dB) | Pareto |");
+        let _ = writeln!(md, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |");
+        for r in &d.sweep {
+            let Some(a) = r.arch("neo") else { continue };
+            let y = y_of(r);
+            let on = y.is_some_and(|y| front.contains(&(a.fps, y)));
+            let q =
+                if r.quality.is_exact() { "exact".to_string() } else { opt(r.quality.psnr_vs_exact_pooled) };
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {}x | {} | {:.3} | {} | {} | {} | {} |",
+                r.point.strategy,
+                r.point.chunk,
+                r.point.passes,
+                r.point.speed,
+                f1(a.fps),
+                a.frame_ms_p99,
+                f2(a.gb_per_60(None)),
+                q,
+                opt(r.quality.psnr_vs_float_mean),
+                if on { "yes" } else { "" }
+            );
+        }
+        md.push('\n');
+    }
+    Ok((md, svgs))
+}

@@ -1,0 +1,419 @@
+//! Sweeps: points (one workload each, evaluated on several architectures), the grid that
+//! enumerates them, sharding (`--shard i/n`), and the result of one point.
+//!
+//! Every point is an independent job with its own JSON result, so a sweep runs under a job
+//! array or GNU parallel as `--shard i/n` with `i = 0..n`: shard `i` takes the points whose index
+//! in the grid's order is `i mod n`; the shards partition the grid.
+
+use serde::{Deserialize, Serialize};
+
+use neo_golden::pipeline::Strategy;
+use neo_golden::scene::Scene;
+use neo_golden::{source, trajectory};
+
+use crate::config::{PipelineParams, SimConfig};
+use crate::driver::{generate, GoldenRaster, WorkloadSpec};
+use crate::latency::Latency;
+use crate::run::{simulate, Arch, ArchResult, RunOptions};
+use crate::workload::Workload;
+
+/// One point: a workload and the architectures to run on it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Point {
+    /// Scene spec or path.
+    pub scene: String,
+    /// Trajectory spec (without `speed=`).
+    pub trajectory: String,
+    /// Camera speed multiplier.
+    pub speed: f64,
+    /// Frames.
+    pub frames: usize,
+    /// Resolution label (`hd`, `fhd`, `qhd` or `WxH`).
+    pub res: String,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// Strategy on Neo's hardware.
+    pub strategy: String,
+    /// Chunk size.
+    pub chunk: usize,
+    /// DPS passes.
+    pub passes: usize,
+}
+
+/// `hd`, `fhd`, `qhd` or `WxH` to `(label, width, height)`.
+pub fn parse_res(s: &str) -> Result<(String, u32, u32), String> {
+    let l = s.trim().to_ascii_lowercase();
+    let (w, h) = match l.as_str() {
+        "hd" => (1280, 720),
+        "fhd" => (1920, 1080),
+        "qhd" => (2560, 1440),
+        other => {
+            let (w, h) = other
+                .split_once('x')
+                .ok_or_else(|| format!("resolution '{s}': expected hd, fhd, qhd or WxH"))?;
+            let w: u32 = w.parse().map_err(|_| format!("resolution '{s}': bad width"))?;
+            let h: u32 = h.parse().map_err(|_| format!("resolution '{s}': bad height"))?;
+            if w == 0 || h == 0 || w > 16384 || h > 16384 {
+                return Err(format!("resolution '{s}': sizes must be in 1..=16384"));
+            }
+            (w, h)
+        }
+    };
+    Ok((l, w, h))
+}
+
+impl Point {
+    /// A file-name-safe identifier, unique within a grid.
+    pub fn id(&self) -> String {
+        let scene: String = self
+            .scene
+            .rsplit('/')
+            .next()
+            .unwrap_or("")
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+            .collect();
+        let traj: String =
+            self.trajectory.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect();
+        format!(
+            "{scene}_{traj}_{}_{}f_{}_c{}_p{}_s{}x",
+            self.res,
+            self.frames,
+            self.strategy.replace(':', "-"),
+            self.chunk,
+            self.passes,
+            self.speed
+        )
+    }
+
+    /// The trajectory spec with the speed applied.
+    pub fn trajectory_spec(&self) -> Result<String, String> {
+        let t = self.trajectory.trim();
+        if self.speed == 1.0 {
+            return Ok(t.to_string());
+        }
+        if t.starts_with("file:") || t.to_ascii_lowercase().ends_with(".json") {
+            return Err(format!("trajectory '{t}' is a file: its speed cannot be changed"));
+        }
+        if t.contains("speed=") {
+            return Err(format!("trajectory '{t}' already sets speed=; give the speed with --speed only"));
+        }
+        Ok(if t.contains(':') {
+            format!("{t},speed={}", self.speed)
+        } else {
+            format!("{t}:speed={}", self.speed)
+        })
+    }
+
+    /// The strategy.
+    pub fn strategy(&self) -> Result<Strategy, String> {
+        self.strategy.parse()
+    }
+}
+
+/// A cartesian grid of points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grid {
+    /// Scenes.
+    pub scenes: Vec<String>,
+    /// Trajectory spec.
+    pub trajectory: String,
+    /// Frames.
+    pub frames: usize,
+    /// Resolutions.
+    pub res: Vec<String>,
+    /// Strategies.
+    pub strategies: Vec<String>,
+    /// Chunk sizes.
+    pub chunks: Vec<usize>,
+    /// DPS passes (only strategies with DPS, i.e. `neo`, take more than one value).
+    pub passes: Vec<usize>,
+    /// Camera speeds.
+    pub speeds: Vec<f64>,
+}
+
+impl Grid {
+    /// Every point, in a fixed order (scene, resolution, strategy, chunk, passes, speed).
+    pub fn points(&self) -> Result<Vec<Point>, String> {
+        let mut v = Vec::new();
+        for scene in &self.scenes {
+            for r in &self.res {
+                let (label, w, h) = parse_res(r)?;
+                for s in &self.strategies {
+                    let strategy: Strategy = s.parse()?;
+                    let passes: Vec<usize> = if strategy == Strategy::Neo {
+                        self.passes.clone()
+                    } else {
+                        vec![self.passes.first().copied().unwrap_or(1)]
+                    };
+                    for &chunk in &self.chunks {
+                        for &p in &passes {
+                            for &speed in &self.speeds {
+                                if !(speed > 0.0 && speed <= 64.0) {
+                                    return Err(format!("speed {speed}: expected 0 < speed <= 64"));
+                                }
+                                v.push(Point {
+                                    scene: scene.clone(),
+                                    trajectory: self.trajectory.clone(),
+                                    speed,
+                                    frames: self.frames,
+                                    res: label.clone(),
+                                    width: w,
+                                    height: h,
+                                    strategy: strategy.to_string(),
+                                    chunk,
+                                    passes: p,
+                                });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(v)
+    }
+}
+
+/// Parses `i/n` (`0 <= i < n`).
+pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or_else(|| format!("--shard '{s}': expected i/n"))?;
+    let i: usize = i.trim().parse().map_err(|_| format!("--shard '{s}': bad index"))?;
+    let n: usize = n.trim().parse().map_err(|_| format!("--shard '{s}': bad count"))?;
+    if n == 0 || i >= n {
+        return Err(format!("--shard '{s}': need 0 <= i < n"));
+    }
+    Ok((i, n))
+}
+
+/// The items of shard `i` of `n`: those whose index is `i mod n`.
+pub fn shard<T: Clone>(items: &[T], i: usize, n: usize) -> Vec<T> {
+    items.iter().enumerate().filter(|(k, _)| k % n == i).map(|(_, x)| x.clone()).collect()
+}
+
+/// Image quality over a workload (golden statistics).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct QualitySummary {
+    /// Frames with statistics.
+    pub frames: usize,
+    /// Frames identical to the exact-order frame.
+    pub identical: usize,
+    /// True when the order is exact by construction (`full`, `hierarchical`): every frame is the
+    /// exact-order frame.
+    pub exact_by_construction: bool,
+    /// Mean PSNR vs the exact-order frame over the frames that differ.
+    pub psnr_vs_exact_mean: Option<f64>,
+    /// PSNR vs exact of the mean squared error over all frames (identical frames count as 0):
+    /// the sweep's error axis; `None` when every frame is identical.
+    pub psnr_vs_exact_pooled: Option<f64>,
+    /// Mean PSNR vs the float reference.
+    pub psnr_vs_float_mean: Option<f64>,
+    /// Mean PSNR of the exact-order frames vs the float reference.
+    pub exact_psnr_vs_float_mean: Option<f64>,
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
+    let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    (n > 0).then(|| s / n as f64)
+}
+
+impl QualitySummary {
+    /// From a workload.
+    pub fn of(wl: &Workload, strategy: Strategy) -> Self {
+        let q: Vec<_> = wl.frames.iter().filter_map(|f| f.quality).collect();
+        let exact = strategy.is_exact();
+        let identical = q.iter().filter(|x| x.identical_to_exact == Some(true)).count();
+        let mse: Vec<f64> = q
+            .iter()
+            .map(|x| match (x.identical_to_exact, x.psnr_vs_exact) {
+                (Some(true), _) => 0.0,
+                (_, Some(p)) => 255.0f64.powi(2) / 10f64.powf(p / 10.0),
+                _ => 0.0,
+            })
+            .collect();
+        let pooled =
+            mean(mse.iter().copied()).filter(|&m| m > 0.0).map(|m| 10.0 * (255.0f64.powi(2) / m).log10());
+        QualitySummary {
+            frames: q.len(),
+            identical,
+            exact_by_construction: exact,
+            psnr_vs_exact_mean: mean(q.iter().filter_map(|x| x.psnr_vs_exact)),
+            psnr_vs_exact_pooled: pooled,
+            psnr_vs_float_mean: mean(q.iter().filter_map(|x| x.psnr_vs_float)),
+            exact_psnr_vs_float_mean: mean(q.iter().filter_map(|x| x.exact_psnr_vs_float)),
+        }
+    }
+
+    /// True when the frames are (known to be) the exact-order frames.
+    pub fn is_exact(&self) -> bool {
+        self.exact_by_construction || (self.frames > 0 && self.identical == self.frames)
+    }
+}
+
+/// Workload statistics for reports.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct WorkloadSummary {
+    /// Gaussians.
+    pub gaussians: u64,
+    /// Tiles.
+    pub tiles: u64,
+    /// Mean tile-Gaussian pairs per frame.
+    pub pairs_mean: f64,
+    /// Mean newly visible entries per frame (after the first).
+    pub incoming_mean: f64,
+    /// Mean SCU early-termination ratio.
+    pub processed_ratio_mean: f64,
+    /// Generation seconds.
+    pub generation_s: f64,
+    /// The golden raster ran.
+    pub golden_raster: bool,
+    /// Approximate workload memory (bytes).
+    pub heap_bytes: usize,
+}
+
+/// The result of one point.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointResult {
+    /// The point.
+    pub point: Point,
+    /// Its workload.
+    pub workload: WorkloadSummary,
+    /// Image quality.
+    pub quality: QualitySummary,
+    /// One result per architecture.
+    pub archs: Vec<ArchResult>,
+}
+
+impl PointResult {
+    /// The result of `arch` (by name).
+    pub fn arch(&self, name: &str) -> Option<&ArchResult> {
+        self.archs.iter().find(|a| a.arch == name)
+    }
+}
+
+/// Loads a scene (any spec `neo_golden::source` reads).
+pub fn load_scene(spec: &str) -> Result<Scene, String> {
+    source::load_scene(spec, false).map(|(s, _)| s).map_err(|e| e.to_string())
+}
+
+/// Generates the workload of `point` (`on_frame(i)` after each frame).
+pub fn workload(
+    scene: &Scene,
+    point: &Point,
+    cfg: &SimConfig,
+    golden: GoldenRaster,
+    raster_sample: u32,
+    on_frame: impl FnMut(usize),
+) -> Result<Workload, String> {
+    let spec = point.trajectory_spec()?;
+    let traj = trajectory::parse_trajectory(&spec, source::robust_bounds(scene), point.frames)
+        .map_err(|e| e.to_string())?
+        .with_resolution(point.width, point.height);
+    if traj.is_empty() {
+        return Err(format!("trajectory '{spec}' has no frames"));
+    }
+    let strategy = point.strategy()?;
+    let mut ws = WorkloadSpec::new(&point.scene, &spec, strategy);
+    ws.params = PipelineParams { chunk: point.chunk, dps_passes: point.passes, ..cfg.pipeline.clone() };
+    ws.golden_raster = if strategy.is_exact() { GoldenRaster::Off } else { golden };
+    ws.raster_sample = raster_sample;
+    generate(scene, &traj.frames, &traj.cuts, &ws, on_frame).map_err(|e| e.to_string())
+}
+
+/// Runs `archs` on a workload of `point`.
+pub fn evaluate(
+    point: &Point,
+    wl: &Workload,
+    cfg: &SimConfig,
+    lat: &Latency,
+    archs: &[Arch],
+) -> Result<PointResult, String> {
+    let mut cfg = cfg.clone();
+    cfg.pipeline.chunk = point.chunk;
+    cfg.pipeline.dps_passes = point.passes;
+    let strategy = point.strategy()?;
+    // Architectures are independent single-threaded simulations: run them in parallel.
+    use rayon::prelude::*;
+    let results: Vec<ArchResult> = archs
+        .par_iter()
+        .map(|&a| simulate(a, &cfg, lat, wl, RunOptions::default()))
+        .collect::<Result<_, _>>()?;
+    let n = wl.frames.len().max(1) as f64;
+    let pairs: u64 = wl.frames.iter().flat_map(|f| f.tiles.iter().map(|t| t.current as u64)).sum();
+    let incoming: u64 =
+        wl.frames.iter().skip(1).flat_map(|f| f.tiles.iter().map(|t| t.incoming as u64)).sum();
+    Ok(PointResult {
+        point: point.clone(),
+        workload: WorkloadSummary {
+            gaussians: wl.info.gaussians,
+            tiles: wl.info.grid[0] as u64 * wl.info.grid[1] as u64,
+            pairs_mean: pairs as f64 / n,
+            incoming_mean: if wl.frames.len() > 1 { incoming as f64 / (n - 1.0) } else { 0.0 },
+            processed_ratio_mean: wl.frames.iter().map(|f| f.processed_ratio).sum::<f64>() / n,
+            generation_s: wl.generation_s,
+            golden_raster: wl.info.golden_raster,
+            heap_bytes: wl.heap_bytes(),
+        },
+        quality: QualitySummary::of(wl, strategy),
+        archs: results,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid() -> Grid {
+        Grid {
+            scenes: vec!["synthetic:outdoor".into()],
+            trajectory: "orbit".into(),
+            frames: 4,
+            res: vec!["320x180".into()],
+            strategies: vec!["neo".into(), "periodic:4".into(), "background:2".into(), "hierarchical".into()],
+            chunks: vec![64, 128, 256, 512],
+            passes: vec![1, 2],
+            speeds: vec![1.0, 2.0, 4.0, 8.0, 16.0],
+        }
+    }
+
+    #[test]
+    fn grid_enumerates_passes_only_for_neo() {
+        let p = grid().points().unwrap();
+        assert_eq!(p.len(), 4 * 2 * 5 + 3 * 4 * 5);
+        let ids: std::collections::HashSet<String> = p.iter().map(Point::id).collect();
+        assert_eq!(ids.len(), p.len(), "ids are unique");
+    }
+
+    #[test]
+    fn shards_partition_the_points() {
+        let p = grid().points().unwrap();
+        for n in [1usize, 2, 3, 7, 100, 200] {
+            let mut seen = vec![0u32; p.len()];
+            for i in 0..n {
+                for q in shard(&p, i, n) {
+                    let k = p.iter().position(|x| x == &q).unwrap();
+                    seen[k] += 1;
+                }
+            }
+            assert!(seen.iter().all(|&c| c == 1), "n = {n}: union is all, pairwise disjoint");
+        }
+        assert_eq!(parse_shard("2/5").unwrap(), (2, 5));
+        for bad in ["5/5", "1", "a/2", "0/0", "-1/3"] {
+            assert!(parse_shard(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn speed_is_appended_to_the_trajectory() {
+        let mut p = grid().points().unwrap().remove(0);
+        p.speed = 4.0;
+        assert_eq!(p.trajectory_spec().unwrap(), "orbit:speed=4");
+        p.trajectory = "orbit:radius=5".into();
+        assert_eq!(p.trajectory_spec().unwrap(), "orbit:radius=5,speed=4");
+        p.trajectory = "orbit:speed=2".into();
+        assert!(p.trajectory_spec().is_err());
+        assert_eq!(parse_res("QHD").unwrap(), ("qhd".into(), 2560, 1440));
+        assert!(parse_res("0x3").is_err());
+    }
+}
