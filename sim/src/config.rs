@@ -491,14 +491,18 @@ impl SimConfig {
             }
         }
         let p = &self.pipeline;
-        if p.tile == 0 || p.subtile == 0 || p.tile % p.subtile != 0 || (p.tile / p.subtile).pow(2) > 64 {
+        if p.tile == 0
+            || p.subtile == 0
+            || !p.tile.is_multiple_of(p.subtile)
+            || (p.tile / p.subtile).pow(2) > 64
+        {
             return Err(format!(
                 "pipeline: tile {} must be a multiple of subtile {} with at most 64 subtiles",
                 p.tile, p.subtile
             ));
         }
         let subtiles = (p.tile / p.subtile).pow(2);
-        if subtiles % n.scus_per_core != 0 {
+        if !subtiles.is_multiple_of(n.scus_per_core) {
             return Err(format!(
                 "neo.scus_per_core = {} must divide the {subtiles} subtiles",
                 n.scus_per_core
@@ -507,10 +511,10 @@ impl SimConfig {
         if p.chunk < 2 {
             return Err(format!("pipeline.chunk = {}: must be at least 2", p.chunk));
         }
-        if self.gscore.core_counts.iter().any(|&c| c == 0) {
+        if self.gscore.core_counts.contains(&0) {
             return Err("gscore.core_counts must be positive".into());
         }
-        if !(self.gscore.approx_entries_per_cycle > 0.0) {
+        if self.gscore.approx_entries_per_cycle.is_nan() || self.gscore.approx_entries_per_cycle <= 0.0 {
             return Err("gscore.approx_entries_per_cycle must be positive".into());
         }
         let g = &self.gpu;

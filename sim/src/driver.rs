@@ -303,7 +303,7 @@ impl<'s> WorkDriver<'s> {
                             }
                         }
                     }
-                    let sampled = sample > 0 && ti as u32 % sample == 0;
+                    let sampled = sample > 0 && (ti as u32).is_multiple_of(sample);
                     let mut routed = vec![0u32; (n * n) as usize];
                     let mut raster_entries = 0u32;
                     ctx.feats.clear();
@@ -348,7 +348,7 @@ impl<'s> WorkDriver<'s> {
                         current: out.counts.current,
                         incoming: out.counts.incoming,
                         sort_n: sw.entries_sorted as u32 * (strategy != Strategy::Hierarchical) as u32,
-                        dps_len: if sw.dps_passes > 0 { (sw.dps_entries / sw.dps_passes) as u32 } else { 0 },
+                        dps_len: sw.dps_entries.checked_div(sw.dps_passes).unwrap_or(0) as u32,
                         dps_passes: sw.dps_passes as u32,
                         merge_a: sw.merge_in_table as u32,
                         merge_b: sw.merge_in_incoming as u32,

@@ -423,10 +423,12 @@ impl Engine {
             }
             let arrival = self.dram.read(t, addr);
             self.count(frame, stage, Dir::Read);
-            for i in 0..wlines.len() {
-                let (w, ws) = wlines[i];
+            for &(w, ws) in &wlines {
                 self.dram.write(t, w);
-                self.count(frame, ws, Dir::Write);
+                self.traffic.add(ws, Dir::Write, 1);
+                if let Some(f) = self.frame_traffic.get_mut(frame as usize) {
+                    f.add(ws, Dir::Write, 1);
+                }
             }
             let st = &mut self.agents[a];
             st.last_arrival = st.last_arrival.max(arrival);

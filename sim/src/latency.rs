@@ -218,7 +218,7 @@ impl Latency {
             return Err("`config.bsu_width` must be positive".into());
         }
         let msu_ii = num(v, "units.neo_msu.ii")?;
-        if !(msu_ii > 0.0) {
+        if msu_ii.is_nan() || msu_ii <= 0.0 {
             return Err("`units.neo_msu.ii` must be positive".into());
         }
         let (raster, raster_source) = raster_timing(v)?;

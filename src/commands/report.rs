@@ -78,6 +78,9 @@ pub struct ReportArgs {
     /// Measured unit timing.
     #[arg(long, default_value = latency::DEFAULT_PATH)]
     pub latency: PathBuf,
+    /// Leave the default scene out (only the `--scene`s; for quick checks).
+    #[arg(long, hide = true)]
+    pub no_default_scene: bool,
 }
 
 fn peak_rss_mb() -> Option<f64> {
@@ -120,12 +123,16 @@ pub fn run(a: ReportArgs) -> Result<()> {
     let cfg = load_config(a.config.as_deref())?;
     let lat = load_latency(&a.latency)?;
     let (chunk, passes) = (cfg.pipeline.chunk, cfg.pipeline.dps_passes);
-    let mut scenes_list = vec![synthetic::DEFAULT_SCENE.to_string()];
+    let mut scenes_list =
+        if a.no_default_scene { Vec::new() } else { vec![synthetic::DEFAULT_SCENE.to_string()] };
     for s in &a.scene {
         if !scenes_list.contains(s) {
             scenes_list.push(s.clone());
         }
     }
+    let Some(main_scene) = scenes_list.first().cloned() else {
+        bail!("no scene: give --scene when leaving the default scene out");
+    };
     let all_archs = Arch::parse_list("all", &cfg).map_err(|e| anyhow!(e))?;
 
     // Plan.
@@ -209,10 +216,7 @@ pub fn run(a: ReportArgs) -> Result<()> {
     // 3. Timelines (Neo's own run comes from the throughput runs when it matches).
     let t_tl = Instant::now();
     let mut timelines: Vec<PointResult> = Vec::new();
-    let neo_tl = headline
-        .iter()
-        .find(|r| r.point.scene == synthetic::DEFAULT_SCENE && r.point.res == tl_label)
-        .cloned();
+    let neo_tl = headline.iter().find(|r| r.point.scene == main_scene && r.point.res == tl_label).cloned();
     let neo_tl = match neo_tl {
         Some(mut r) => {
             r.archs.retain(|x| x.arch == "neo");
@@ -345,7 +349,7 @@ mod tests {
     fn a_tiny_report_writes_index_and_figures() {
         let dir = tempfile::tempdir().unwrap();
         let args = ReportArgs {
-            scene: vec![],
+            scene: vec!["synthetic:outdoor?gaussians=10k&seed=2".into()],
             out: dir.path().to_path_buf(),
             trajectory: "orbit".into(),
             frames: 3,
@@ -364,6 +368,7 @@ mod tests {
             raster_sample: 4,
             config: None,
             latency: PathBuf::from(latency::DEFAULT_PATH),
+            no_default_scene: true,
         };
         run(args).unwrap();
         let md = std::fs::read_to_string(dir.path().join("index.md")).unwrap();
