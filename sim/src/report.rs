@@ -125,7 +125,7 @@ pub fn point_table(r: &PointResult) -> String {
     let _ = writeln!(
         s,
         "{:<9} {:>8} {:>9} {:>9} {:>9} {:>9}  DRAM GB per 60 frames by stage",
-        "arch", "FPS", "mean ms", "p99 ms", "speedup", "GB/60"
+        "arch", "FPS", "mean ms", "p99 ms", "neo vs", "GB/60"
     );
     let mut archs: Vec<&ArchResult> = r.archs.iter().collect();
     archs.sort_by_key(|a| arch_order(&a.arch));

@@ -21,9 +21,10 @@
 //! `L = scu_lanes` pixel lanes, `P = S*S / L` passes: a Gaussian occupies the issue stage for
 //! `P` cycles (pass `p` evaluates pixels `p*L .. p*L+L-1`), so II = `P` cycles per Gaussian.
 //! Stages: issue (S0), squares of `|dx|, |dy|` (S1), the exact quadratic form `q` (S2), `np` by
-//! the rounding shift and saturation (S3), exp (S4), alpha with the 1/255 test (S5), blend
-//! (S6: transmittance and colour update, a read-modify-write of the pass's pixels, so there is
-//! no hazard). When every pixel of the list is done (`term_o` high while the list is still being
+//! the rounding shift and saturation (S3), exp (S4), alpha with the 1/255 test (S5), then the
+//! blend from S5's registers into the pixel state (transmittance and colour update, a
+//! read-modify-write of the pass's pixels in one cycle, so there is no hazard). Latency from
+//! accepting a list's last beat to `out_valid_o`: `P + 6` cycles. When every pixel of the list is done (`term_o` high while the list is still being
 //! accepted) the rest of the list is drained at one beat per cycle without evaluation. A global
 //! stall holds everything only while a finished list waits for the output register.
 
@@ -596,7 +597,7 @@ fn convert(m: &mut Module, w: &ScuWidths, c: &str, name: &str) -> String {
     name.to_string()
 }
 
-/// Lane `l`: stages S1..S6 for pixel `pass * L + l`.
+/// Lane `l`: stages S1..S5 and the blend for pixel `pass * L + l`.
 fn lane(m: &mut Module, w: &ScuWidths, bd: &Bundle, l: u32) {
     let (pb, lb) = (w.pass_bits(), bits_for(w.lanes as u64 - 1));
     let sb = w.side_bits;
@@ -748,7 +749,7 @@ fn lane(m: &mut Module, w: &ScuWidths, bd: &Bundle, l: u32) {
         set(s("alpha"), s("acap")),
         set(s("ok5_"), format!("{} & ({} >= {})", s("ok4_"), s("acap"), lit(a, w.min_alpha))),
     ]));
-    // S6: blend (state read-modify-write).
+    // Blend from S5's registers (state read-modify-write).
     let fb = |n: &str| bd.f("d5_q", n);
     let (t, c) = (w.t, w.c);
     m.wire_assign(s("ix6_"), ib, idx("d5_q"));
@@ -766,7 +767,6 @@ fn lane(m: &mut Module, w: &ScuWidths, bd: &Bundle, l: u32) {
     m.wire_assign(s("c_old"), 3 * c, format!("{} ? {} : rd_c{l}", fb("first"), lit(3 * c, 0)));
     m.wire_assign(s("dn_old"), 1, format!("{} ? ~{} : rd_dn{l}", fb("first"), s("inside")));
     m.wire_assign(s("bl"), 1, format!("{} & ~{}", s("ok5_"), s("dn_old")));
-    // (ok5_ sits in S5's register and is consumed by S6: alpha and ok are the S6 operands.)
     let ww = a + t + 1;
     m.wire_assign(
         s("wp"),
