@@ -83,14 +83,7 @@ pub fn grouped_bars(
             .label_style(("sans-serif", 15))
             .axis_desc_style(("sans-serif", 15))
             .x_labels(groups.len().max(1) * 2 + 1)
-            .x_label_formatter(&|x| {
-                let i = x.floor() as usize;
-                if (x - x.floor() - 0.5).abs() < 0.26 && i < names.len() {
-                    names[i].clone()
-                } else {
-                    String::new()
-                }
-            })
+            .x_label_formatter(&|x| category_label(&names, *x))
             .y_desc(y_desc)
             .draw()
             .map_err(err)?;
@@ -127,6 +120,17 @@ pub fn grouped_bars(
     Ok(out)
 }
 
+/// The label of category `i` on a bar chart whose category `i` spans `[i, i + 1)` on the x axis:
+/// the name at the middle of the span, nothing elsewhere.
+fn category_label(names: &[String], x: f64) -> String {
+    let i = x.floor() as usize;
+    if (x - x.floor() - 0.5).abs() < 0.26 && i < names.len() {
+        names[i].clone()
+    } else {
+        String::new()
+    }
+}
+
 /// Stacked bars: one bar per entry of `bars`; each stack series gives one value per bar.
 pub fn stacked_bars(title: &str, y_desc: &str, bars: &[String], stacks: &[(String, Vec<f64>)]) -> R {
     let mut out = String::new();
@@ -153,14 +157,7 @@ pub fn stacked_bars(title: &str, y_desc: &str, bars: &[String], stacks: &[(Strin
             .label_style(("sans-serif", 15))
             .axis_desc_style(("sans-serif", 15))
             .x_labels(bars.len().max(1) * 2 + 4)
-            .x_label_formatter(&|x| {
-                let i = x.floor() as usize;
-                if (x - x.floor() - 0.5).abs() < 0.26 && i < names.len() {
-                    names[i].clone()
-                } else {
-                    String::new()
-                }
-            })
+            .x_label_formatter(&|x| category_label(&names, *x))
             .y_desc(y_desc)
             .draw()
             .map_err(err)?;
