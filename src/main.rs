@@ -35,7 +35,7 @@ enum Command {
     /// Run the cycle model (Neo, GSCore-style, GPU-style) on golden workloads; print or write
     /// per-point results.
     Simulate(commands::simulate::SimulateArgs),
-    /// Generate the Verilog of the Sorting Core (BSU, MSU+, core), check it, report synthesis.
+    /// Generate the Verilog of every unit (BSU, MSU+, sorting core, ITU, SCU), check it, report synthesis.
     Gen(commands::gen::GenArgs),
 }
 
