@@ -73,6 +73,18 @@ fn main() {
             r.traffic.total_requests() as f64 / frames as f64 / 1e6
         );
     }
+    // The cost of the FR-FCFS read queue, measured in this run.
+    let mut in_order = cfg.clone();
+    in_order.dram.read_queue = 0;
+    let t = Instant::now();
+    let r = simulate(Arch::Neo, &in_order, &lat, &wl, RunOptions::default()).expect("model");
+    let s = t.elapsed().as_secs_f64();
+    println!(
+        "model neo, DRAM reads in issue order: {:.3} s/frame ({:.1} FPS simulated); FR-FCFS costs {:.2}x the model time",
+        s / frames as f64,
+        r.fps,
+        model_total / s
+    );
     let per_frame = model_total / frames as f64;
     println!(
         "target: model < 1 s per QHD frame: {:.3} s -> {}",

@@ -358,6 +358,12 @@ pub struct DramConfig {
     pub n_rfc: u64,
     /// Posted writes per channel that trigger a write drain.
     pub write_queue: u32,
+    /// Read-queue entries per channel the scheduler looks at (FR-FCFS: the oldest row hit among
+    /// them goes first); `0` serves reads strictly in issue order.
+    pub read_queue: u32,
+    /// Times the oldest queued read may be bypassed by younger row hits before it is served
+    /// regardless (starvation cap).
+    pub bypass_cap: u32,
 }
 
 impl Default for DramConfig {
@@ -389,6 +395,8 @@ impl Default for DramConfig {
             n_refi: 6247,
             n_rfc: 288,
             write_queue: 32,
+            read_queue: 32,
+            bypass_cap: 16,
         }
     }
 }
@@ -443,6 +451,9 @@ impl DramConfig {
                 "dram.n_ccd = {} > n_bl = {}: not modelled (bursts are n_bl apart)",
                 self.n_ccd, self.n_bl
             ));
+        }
+        if self.read_queue > 1024 {
+            return Err(format!("dram.read_queue = {}: at most 1024 entries", self.read_queue));
         }
         if self.write_queue == 0 {
             return Err("dram.write_queue must be at least 1".into());

@@ -22,7 +22,7 @@
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, VecDeque};
 
-use crate::dram::{Dram, Ps};
+use crate::dram::{Dram, Ps, Ticket};
 use crate::traffic::{Dir, Stage, Traffic};
 
 /// How an access walks memory.
@@ -218,7 +218,7 @@ struct AgentState {
     cursor: Cursor,
     rs: Ps,
     interval: Ps,
-    inflight: VecDeque<Ps>,
+    inflight: VecDeque<Ticket>,
     last_arrival: Ps,
     reads_done: u64,
     reads_est: f64,
@@ -368,7 +368,7 @@ impl Engine {
             st.rs = rs;
             st.cursor = Cursor::default();
             st.wcursor = Cursor::default();
-            st.inflight.clear();
+            debug_assert!(st.inflight.is_empty(), "the previous segment resolved its reads");
             st.last_arrival = rs;
             st.reads_done = 0;
             st.reads_est = est;
@@ -421,7 +421,7 @@ impl Engine {
                     }
                 }
             }
-            let arrival = self.dram.read(t, addr);
+            let ticket = self.dram.submit_read(t, addr);
             self.count(frame, stage, Dir::Read);
             for &(w, ws) in &wlines {
                 self.dram.write(t, w);
@@ -431,14 +431,15 @@ impl Engine {
                 }
             }
             let st = &mut self.agents[a];
-            st.last_arrival = st.last_arrival.max(arrival);
-            st.inflight.push_back(arrival);
+            st.inflight.push_back(ticket);
             while st.inflight.len() > window {
-                st.inflight.pop_front();
+                let old = st.inflight.pop_front().expect("a read in flight");
+                st.last_arrival = st.last_arrival.max(self.dram.arrival(old));
+                self.dram.release(old);
             }
             let mut next = t + st.interval;
             if st.inflight.len() == window {
-                next = next.max(*st.inflight.front().expect("window > 0"));
+                next = next.max(self.dram.arrival(*st.inflight.front().expect("window > 0")));
             }
             let top = self.heap.peek().map_or(Ps::MAX, |r| r.0 .0);
             if next < top {
@@ -456,6 +457,12 @@ impl Engine {
     /// in `next_rs`) or schedules the job's end (false).
     fn finish_segment(&mut self, a: usize, t: Ps) -> bool {
         let line = self.line;
+        while let Some(k) = self.agents[a].inflight.pop_front() {
+            let arrival = self.dram.arrival(k);
+            self.dram.release(k);
+            let st = &mut self.agents[a];
+            st.last_arrival = st.last_arrival.max(arrival);
+        }
         let overlap = self.specs[a].overlap;
         let st = &mut self.agents[a];
         let job = st.job.as_ref().expect("a job");
