@@ -4,7 +4,11 @@
 //! - the output is the merge of `a` and `b` by THE ORDER `(key, id)`;
 //! - on equal `(key, id)` (not expected for distinct ids, but defined) `a`'s entry goes first;
 //! - with `drop_invalid`, entries whose valid bit is 0 are consumed from either input and not
-//!   emitted (the merge does not stop at them);
+//!   emitted (the merge does not stop at them); an invalid head is consumed **before** it is
+//!   compared, so it never decides which input goes next. On sorted inputs this makes no
+//!   difference; on inputs that are not sorted (a reused table after a DPS pass may be locally
+//!   out of order next to an invalid entry) it is the hardware's rule ([`MergeStream`], the
+//!   MSU+ RTL), and [`merge2`] follows it;
 //! - the output is sorted whenever both inputs are; the merge never reorders entries of one
 //!   input relative to each other.
 
@@ -42,6 +46,12 @@ pub fn merge2_into(
     let (mut i, mut j) = (0, 0);
     let keep = |e: &SortEntry| !drop_invalid || e.valid;
     while i < a.len() && j < b.len() {
+        // Invalid heads are consumed first (as the MSU+ does), never compared.
+        if drop_invalid && !(a[i].valid && b[j].valid) {
+            i += !a[i].valid as usize;
+            j += !b[j].valid as usize;
+            continue;
+        }
         // Take `a` unless `b` strictly precedes it: ties go to `a`.
         let e = if b[j].precedes(&a[i]) {
             j += 1;
@@ -186,5 +196,31 @@ mod tests {
         let steps: Vec<MergeStep> = MergeStream::new(&a, &b, true).collect();
         assert_eq!(steps[0], MergeStep { pop_a: true, pop_b: true, out: None });
         assert_eq!(steps.len(), 3);
+    }
+
+    #[test]
+    fn an_invalid_head_never_decides_the_order_of_unsorted_inputs() {
+        // `a` is out of order next to its invalid head: dropping it first lets 1 compete.
+        let a = [e(5, 0, false), e(1, 0, true)];
+        let b = [e(3, 1, true)];
+        assert_eq!(merge2(&a, &b, true), vec![e(1, 0, true), e(3, 1, true)]);
+        // Without dropping the invalid head competes like any entry.
+        assert_eq!(merge2(&a, &b, false), vec![e(3, 1, true), e(5, 0, false), e(1, 0, true)]);
+    }
+
+    proptest::proptest! {
+        /// The merge and the cycle-level stream emit the same entries on any inputs, sorted
+        /// or not (the RTL is checked against the stream's schedule and the merge's output).
+        #[test]
+        fn merge2_equals_the_stream_on_any_input(
+            a in proptest::collection::vec((0u32..6, 0u32..4, proptest::bool::ANY), 0..12),
+            b in proptest::collection::vec((0u32..6, 0u32..4, proptest::bool::ANY), 0..12),
+            drop in proptest::bool::ANY,
+        ) {
+            let a: Vec<SortEntry> = a.into_iter().map(|(k, i, v)| e(k, i, v)).collect();
+            let b: Vec<SortEntry> = b.into_iter().map(|(k, i, v)| e(k, i, v)).collect();
+            let stream: Vec<SortEntry> = MergeStream::new(&a, &b, drop).filter_map(|st| st.out).collect();
+            proptest::prop_assert_eq!(stream, merge2(&a, &b, drop));
+        }
     }
 }
