@@ -15,15 +15,17 @@ module neo_sort_core (
   input  wire [31:0] cmd_dst_i,        // entry address of the output
   output wire        done_o,           // one-cycle pulse: the oldest command finished
   output wire [31:0] done_len_o,       // entries written by the last finished command
-  output wire        mem_req_valid_o,  // a memory request is offered
-  input  wire        mem_req_ready_i,  // the memory takes the request
-  output wire        mem_req_write_o,  // 1: write one entry; 0: read a burst
-  output wire [31:0] mem_req_addr_o,   // entry address
-  output wire [4:0]  mem_req_len_o,    // entries (reads: 1..burst; writes: 1)
-  output wire [47:0] mem_wdata_o,      // entry to write (writes)
+  output wire        mem_req_valid_o,  // a read request (burst) is offered
+  input  wire        mem_req_ready_i,  // the memory takes the read request
+  output wire [31:0] mem_req_addr_o,   // entry address of the burst
+  output wire [4:0]  mem_req_len_o,    // entries of the burst (1..burst)
   input  wire        mem_rsp_valid_i,  // a read response beat (one entry), in request order
   output wire        mem_rsp_ready_o,  // the core takes the response beat
-  input  wire [47:0] mem_rsp_data_i    // the entry read
+  input  wire [47:0] mem_rsp_data_i,   // the entry read
+  output wire        mem_wr_valid_o,   // a write of one entry is offered
+  input  wire        mem_wr_ready_i,   // the memory takes the write
+  output wire [31:0] mem_wr_addr_o,    // entry address of the write
+  output wire [47:0] mem_wr_data_o     // the entry to write
 );
 
   localparam [1:0] S_IDLE = 2'd0;
@@ -244,7 +246,7 @@ module neo_sort_core (
     .rdata1_o(work1_rdata1)
   );
 
-  // Read issuer: bursts of up to the burst size; merge modes reserve FIFO space first.
+  // Read issuer (read port): bursts of up to the burst size; merge modes reserve FIFO space first.
   wire [4:0] len_a_next;
   assign len_a_next = (rd_a_left_q < 32'd16) ? rd_a_left_q[4:0] : 5'd16;
   wire [4:0] len_b_next;
@@ -264,16 +266,16 @@ module neo_sort_core (
   wire wr_want;
   assign wr_want = to_mem & o_valid & ~o_empty;
   wire rd_fire;
-  assign rd_fire = rd_want & ~wr_want & mem_req_ready_i;
+  assign rd_fire = rd_want & mem_req_ready_i;
   wire wr_fire;
-  assign wr_fire = wr_want & mem_req_ready_i;
-  wire [31:0] wr_addr;
-  assign wr_addr = bk_dst_q + ocnt_q;
-  assign mem_req_valid_o = wr_want | rd_want;
-  assign mem_req_write_o = wr_want;
-  assign mem_req_addr_o = wr_want ? wr_addr : (rd_pick_b ? rd_b_addr_q : rd_a_addr_q);
-  assign mem_req_len_o = wr_want ? 5'd1 : (rd_pick_b ? len_b_next : len_a_next);
-  assign mem_wdata_o = o_data;
+  assign wr_fire = wr_want & mem_wr_ready_i;
+  assign mem_req_valid_o = rd_want;
+  assign mem_req_addr_o = rd_pick_b ? rd_b_addr_q : rd_a_addr_q;
+  assign mem_req_len_o = rd_pick_b ? len_b_next : len_a_next;
+  // Write port: the MSU+ output of the final pass / a merge, one entry per write.
+  assign mem_wr_valid_o = wr_want;
+  assign mem_wr_addr_o = bk_dst_q + ocnt_q;
+  assign mem_wr_data_o = o_data;
 
   // Responses: routed by the oldest outstanding burst's tag.
   wire [5:0] tag_head;
@@ -410,7 +412,7 @@ module neo_sort_core (
   assign b_pop_ent = b_pop & ~sb_none;
 
   // MSU+ output: to the other work buffer during non-final passes, else memory writes.
-  assign o_ready = ~to_mem | o_empty | mem_req_ready_i;
+  assign o_ready = ~to_mem | o_empty | mem_wr_ready_i;
   wire o_ent;
   assign o_ent = o_valid & o_ready & ~o_empty;
   wire o_buf;

@@ -109,7 +109,12 @@ fn compare(scene: &Scene, traj: &Trajectory) -> (u64, u64, usize) {
 }
 
 fn check(label: &str, scene: &Scene, traj: &Trajectory) {
+    let start = std::time::Instant::now();
     let (model, rtl, cmds) = compare(scene, traj);
+    let secs = start.elapsed().as_secs_f64();
+    eprintln!(
+        "{label}: {rtl} RTL cycles cosimulated (with golden checks and the work driver) in {secs:.2} s"
+    );
     let err = (model as f64 - rtl as f64) / rtl as f64;
     eprintln!("{label}: {cmds} commands, model {model} cycles, RTL {rtl} cycles, error {:+.2}%", 100.0 * err);
     assert!(rtl > 10_000, "{label}: too little work to validate ({rtl} cycles)");

@@ -13,8 +13,9 @@
 //! the previous chunk's merge passes); [`queue_checked`] checks a mixed queue against golden.
 //!
 //! Memory: word-addressed by entry (`mem_req_addr_o` is an entry index). A read request of
-//! `len` entries is answered by `len` response beats in request order, the first after a random
-//! latency; a write request carries one entry. A read outside the sources of the commands in
+//! `len` entries (read port) is answered by `len` response beats in request order, the first
+//! after a random latency (the data is read when the request is taken); a write (write port)
+//! carries one entry. A read outside the sources of the commands in
 //! flight, or a write outside the destination of the oldest one (commands complete in order),
 //! is a protocol error.
 
@@ -59,7 +60,8 @@ pub struct Command {
 /// Timing of the memory model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemTiming {
-    /// Probability (percent) that `mem_req_ready_i` is high in a cycle.
+    /// Probability (percent) that `mem_req_ready_i` (reads) is high in a cycle; the same,
+    /// drawn independently, for `mem_wr_ready_i` (writes).
     pub req_ready_pct: u32,
     /// Read latency range (cycles from the request's acceptance to its first response beat).
     pub min_latency: u32,
@@ -239,6 +241,8 @@ impl Core {
         let c = self.dut.cycle();
         let ready = self.mem.rng.percent(self.mem.timing.req_ready_pct);
         self.dut.set_mem_req_ready_i(ready);
+        let wr_ready = self.mem.rng.percent(self.mem.timing.req_ready_pct);
+        self.dut.set_mem_wr_ready_i(wr_ready);
         if !self.mem.offering {
             if let Some(&(due, data)) = self.mem.rsp.front() {
                 if due <= c && !self.mem.rng.percent(self.mem.timing.rsp_gap_pct) {
@@ -257,53 +261,52 @@ impl Core {
             self.mem.rsp.pop_front();
             self.mem.offering = false;
         }
+        if wr_ready && self.dut.mem_wr_valid_o() {
+            let addr = self.dut.mem_wr_addr_o();
+            let ok = self.mem.inflight.front().map(|f| f.write.contains(&addr));
+            self.checker.protocol(
+                c,
+                ok == Some(true),
+                &format!(
+                    "write to 0x{addr:x} outside the destination of the oldest command in flight {:x?}",
+                    self.mem.inflight.front().map(|f| f.write.clone())
+                ),
+            );
+            self.mem.words.insert(addr, self.dut.mem_wr_data_o());
+            self.mem.inflight[0].entries_written += 1;
+        }
         if ready && self.dut.mem_req_valid_o() {
             let addr = self.dut.mem_req_addr_o();
             let len = self.dut.mem_req_len_o();
-            if self.dut.mem_req_write_o() {
-                self.checker.value(c, "mem_req_len_o (write)", 1, len);
-                let ok = self.mem.inflight.front().map(|f| f.write.contains(&addr));
-                self.checker.protocol(
-                    c,
-                    ok == Some(true),
-                    &format!(
-                        "write to 0x{addr:x} outside the destination of the oldest command in flight {:x?}",
-                        self.mem.inflight.front().map(|f| f.write.clone())
-                    ),
-                );
-                self.mem.words.insert(addr, self.dut.mem_wdata_o());
-                self.mem.inflight[0].entries_written += 1;
-            } else {
-                self.checker.protocol(
-                    c,
-                    (1..=self.burst).contains(&len),
-                    &format!("read burst of {len} entries"),
-                );
-                let owner = self
-                    .mem
-                    .inflight
-                    .iter()
-                    .position(|f| f.reads.iter().any(|r| r.start <= addr && addr + len <= r.end));
-                let sources: Vec<_> = self.mem.inflight.iter().map(|f| f.reads.clone()).collect();
-                self.checker.protocol(
-                    c,
-                    owner.is_some(),
-                    &format!("read of {len} at 0x{addr:x} outside the sources in flight {sources:x?}"),
-                );
-                let t = self.mem.timing;
-                let mut due =
-                    c + self.mem.rng.range(t.min_latency as u64, t.max_latency.max(t.min_latency) as u64);
-                if let Some(&(last_due, _)) = self.mem.rsp.back() {
-                    due = due.max(last_due);
-                }
-                for i in 0..len {
-                    let data = *self.mem.words.get(&(addr + i)).unwrap_or(&0);
-                    self.mem.rsp.push_back((due, data));
-                }
-                let f = &mut self.mem.inflight[owner.unwrap_or(0)];
-                f.read_bursts += 1;
-                f.entries_read += len;
+            self.checker.protocol(
+                c,
+                (1..=self.burst).contains(&len),
+                &format!("read burst of {len} entries"),
+            );
+            let owner = self
+                .mem
+                .inflight
+                .iter()
+                .position(|f| f.reads.iter().any(|r| r.start <= addr && addr + len <= r.end));
+            let sources: Vec<_> = self.mem.inflight.iter().map(|f| f.reads.clone()).collect();
+            self.checker.protocol(
+                c,
+                owner.is_some(),
+                &format!("read of {len} at 0x{addr:x} outside the sources in flight {sources:x?}"),
+            );
+            let t = self.mem.timing;
+            let mut due =
+                c + self.mem.rng.range(t.min_latency as u64, t.max_latency.max(t.min_latency) as u64);
+            if let Some(&(last_due, _)) = self.mem.rsp.back() {
+                due = due.max(last_due);
             }
+            for i in 0..len {
+                let data = *self.mem.words.get(&(addr + i)).unwrap_or(&0);
+                self.mem.rsp.push_back((due, data));
+            }
+            let f = &mut self.mem.inflight[owner.unwrap_or(0)];
+            f.read_bursts += 1;
+            f.entries_read += len;
         }
         self.dut.tick();
     }

@@ -30,7 +30,9 @@
 //!
 //! So command `k + 1`'s load overlaps command `k`'s merge passes, and command `k`'s final pass
 //! (the write-back) overlaps command `k + 1`'s (and `k + 2`'s) loads. The MSU+ is the
-//! bottleneck: back to back, a chunk of `L` entries costs about `passes(L) * L` cycles.
+//! bottleneck: back to back, a chunk of `L` entries costs about `passes(L) * L` cycles. Reads
+//! (a read-request port and a response port) and writes (a write port) are separate, so the
+//! write-back of one command never holds up the reads of the next.
 //!
 //! MERGE modes serialise with everything else: such a command is taken only when the core is
 //! idle, and no command is taken while it runs. Both streams are prefetched in bursts into the
@@ -138,15 +140,17 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.input_c("cmd_dst_i", aw, "entry address of the output");
     m.output_c("done_o", 1, "one-cycle pulse: the oldest command finished");
     m.output_c("done_len_o", lw, "entries written by the last finished command");
-    m.output_c("mem_req_valid_o", 1, "a memory request is offered");
-    m.input_c("mem_req_ready_i", 1, "the memory takes the request");
-    m.output_c("mem_req_write_o", 1, "1: write one entry; 0: read a burst");
-    m.output_c("mem_req_addr_o", aw, "entry address");
-    m.output_c("mem_req_len_o", bl, "entries (reads: 1..burst; writes: 1)");
-    m.output_c("mem_wdata_o", w, "entry to write (writes)");
+    m.output_c("mem_req_valid_o", 1, "a read request (burst) is offered");
+    m.input_c("mem_req_ready_i", 1, "the memory takes the read request");
+    m.output_c("mem_req_addr_o", aw, "entry address of the burst");
+    m.output_c("mem_req_len_o", bl, "entries of the burst (1..burst)");
     m.input_c("mem_rsp_valid_i", 1, "a read response beat (one entry), in request order");
     m.output_c("mem_rsp_ready_o", 1, "the core takes the response beat");
     m.input_c("mem_rsp_data_i", w, "the entry read");
+    m.output_c("mem_wr_valid_o", 1, "a write of one entry is offered");
+    m.input_c("mem_wr_ready_i", 1, "the memory takes the write");
+    m.output_c("mem_wr_addr_o", aw, "entry address of the write");
+    m.output_c("mem_wr_data_o", w, "the entry to write");
 
     m.localparam("S_IDLE", 2, lit(2, S_IDLE));
     m.localparam("S_PASS", 2, lit(2, S_PASS));
@@ -288,7 +292,9 @@ pub fn module(cfg: &GenConfig) -> Module {
 
     // ---------------------------------------------------------------- read issuer
     m.blank();
-    m.comment("Read issuer: bursts of up to the burst size; merge modes reserve FIFO space first.");
+    m.comment(
+        "Read issuer (read port): bursts of up to the burst size; merge modes reserve FIFO space first.",
+    );
     let blit = lit(lw, burst);
     m.wire_assign(
         "len_a_next",
@@ -314,14 +320,15 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign("rd_want", 1, "(req_a_ok | req_b_ok) & tag_free");
     m.wire_assign("to_mem", 1, "st_merge | (st_pass & final_pass)");
     m.wire_assign("wr_want", 1, "to_mem & o_valid & ~o_empty");
-    m.wire_assign("rd_fire", 1, "rd_want & ~wr_want & mem_req_ready_i");
-    m.wire_assign("wr_fire", 1, "wr_want & mem_req_ready_i");
-    m.wire_assign("wr_addr", aw, format!("bk_dst_q + {}", resize("ocnt_q", lw, aw)));
-    m.assign("mem_req_valid_o", "wr_want | rd_want");
-    m.assign("mem_req_write_o", "wr_want");
-    m.assign("mem_req_addr_o", "wr_want ? wr_addr : (rd_pick_b ? rd_b_addr_q : rd_a_addr_q)");
-    m.assign("mem_req_len_o", format!("wr_want ? {} : (rd_pick_b ? len_b_next : len_a_next)", lit(bl, 1)));
-    m.assign("mem_wdata_o", "o_data");
+    m.wire_assign("rd_fire", 1, "rd_want & mem_req_ready_i");
+    m.wire_assign("wr_fire", 1, "wr_want & mem_wr_ready_i");
+    m.assign("mem_req_valid_o", "rd_want");
+    m.assign("mem_req_addr_o", "rd_pick_b ? rd_b_addr_q : rd_a_addr_q");
+    m.assign("mem_req_len_o", "rd_pick_b ? len_b_next : len_a_next");
+    m.comment("Write port: the MSU+ output of the final pass / a merge, one entry per write.");
+    m.assign("mem_wr_valid_o", "wr_want");
+    m.assign("mem_wr_addr_o", format!("bk_dst_q + {}", resize("ocnt_q", lw, aw)));
+    m.assign("mem_wr_data_o", "o_data");
 
     // ---------------------------------------------------------------- responses
     m.blank();
@@ -412,7 +419,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     // ---------------------------------------------------------------- output side
     m.blank();
     m.comment("MSU+ output: to the other work buffer during non-final passes, else memory writes.");
-    m.assign("o_ready", "~to_mem | o_empty | mem_req_ready_i");
+    m.assign("o_ready", "~to_mem | o_empty | mem_wr_ready_i");
     m.wire_assign("o_ent", 1, "o_valid & o_ready & ~o_empty");
     m.wire_assign("o_buf", 1, "o_ent & st_pass & ~final_pass");
     m.wire_assign("o_count", 1, "o_buf | wr_fire");
@@ -742,13 +749,15 @@ mod tests {
             ("done_len_o", Dir::Out, 32),
             ("mem_req_valid_o", Dir::Out, 1),
             ("mem_req_ready_i", Dir::In, 1),
-            ("mem_req_write_o", Dir::Out, 1),
             ("mem_req_addr_o", Dir::Out, 32),
             ("mem_req_len_o", Dir::Out, 5),
-            ("mem_wdata_o", Dir::Out, 48),
             ("mem_rsp_valid_i", Dir::In, 1),
             ("mem_rsp_ready_o", Dir::Out, 1),
             ("mem_rsp_data_i", Dir::In, 48),
+            ("mem_wr_valid_o", Dir::Out, 1),
+            ("mem_wr_ready_i", Dir::In, 1),
+            ("mem_wr_addr_o", Dir::Out, 32),
+            ("mem_wr_data_o", Dir::Out, 48),
         ];
         let got: Vec<(&str, Dir, u32)> = i.ports.iter().map(|p| (p.name.as_str(), p.dir, p.width)).collect();
         assert_eq!(got, expect);
