@@ -60,9 +60,10 @@ pub struct Command {
 /// Timing of the memory model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemTiming {
-    /// Probability (percent) that `mem_req_ready_i` (reads) is high in a cycle; the same,
-    /// drawn independently, for `mem_wr_ready_i` (writes).
+    /// Probability (percent) that `mem_req_ready_i` (read requests) is high in a cycle.
     pub req_ready_pct: u32,
+    /// Probability (percent) that `mem_wr_ready_i` (writes) is high in a cycle.
+    pub wr_ready_pct: u32,
     /// Read latency range (cycles from the request's acceptance to its first response beat).
     pub min_latency: u32,
     /// Upper end of the latency range.
@@ -74,10 +75,14 @@ pub struct MemTiming {
 impl MemTiming {
     /// An ideal memory: always ready, first beat the cycle after the request, no gaps.
     pub const IDEAL: MemTiming =
-        MemTiming { req_ready_pct: 100, min_latency: 1, max_latency: 1, rsp_gap_pct: 0 };
+        MemTiming { req_ready_pct: 100, wr_ready_pct: 100, min_latency: 1, max_latency: 1, rsp_gap_pct: 0 };
     /// A hostile memory: frequent stalls and gaps, latency 1..40 cycles.
     pub const RANDOM: MemTiming =
-        MemTiming { req_ready_pct: 60, min_latency: 1, max_latency: 40, rsp_gap_pct: 25 };
+        MemTiming { req_ready_pct: 60, wr_ready_pct: 60, min_latency: 1, max_latency: 40, rsp_gap_pct: 25 };
+    /// Fast reads, slow writes (a quarter of the cycles): the write-back lags far behind the
+    /// next commands' loads, so a buffer reused too early shows up.
+    pub const SLOW_WRITES: MemTiming =
+        MemTiming { req_ready_pct: 100, wr_ready_pct: 25, min_latency: 1, max_latency: 1, rsp_gap_pct: 0 };
 }
 
 /// What a command did.
@@ -241,7 +246,7 @@ impl Core {
         let c = self.dut.cycle();
         let ready = self.mem.rng.percent(self.mem.timing.req_ready_pct);
         self.dut.set_mem_req_ready_i(ready);
-        let wr_ready = self.mem.rng.percent(self.mem.timing.req_ready_pct);
+        let wr_ready = self.mem.rng.percent(self.mem.timing.wr_ready_pct);
         self.dut.set_mem_wr_ready_i(wr_ready);
         if !self.mem.offering {
             if let Some(&(due, data)) = self.mem.rsp.front() {

@@ -331,4 +331,31 @@ mod cosim {
             }
         }
     }
+
+    #[test]
+    fn core_input_buffer_is_not_reused_before_its_first_pass_ends() {
+        // A 32-entry chunk whose first run sorts entirely after its second (its only pass, to
+        // memory, pops B first and A's entries 0..15 last), written back at a quarter rate;
+        // behind it a 1-entry chunk (loaded at once) and a 32-entry chunk that the LOAD engine
+        // may only put into the first chunk's input buffer once that pass is over.
+        let name = "core_input_buffer_is_not_reused_before_its_first_pass_ends";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let mut rng = Rng::new(seed);
+        let w = cfg.bsu_width as u32;
+        for round in 0..6u64 {
+            let mut c = core(name, seed ^ round, MemTiming::SLOW_WRITES);
+            c.set_cmd_gap(0);
+            let first: Vec<SortEntry> =
+                (0..2 * w).map(|i| SortEntry::new(if i < w { 1000 + i } else { i }, i)).collect();
+            let one = tile_entries(&cfg.format(), &mut rng, 1, false, 100);
+            let third = tile_entries(&cfg.format(), &mut rng, 2 * w as usize, false, 100);
+            let jobs = vec![
+                chunk_cmd(&mut c, &cfg, 3 * round, &first, Mode::Sort),
+                chunk_cmd(&mut c, &cfg, 3 * round + 1, &one, Mode::Sort),
+                chunk_cmd(&mut c, &cfg, 3 * round + 2, &third, Mode::Dps),
+            ];
+            queue_checked(&mut c, &jobs);
+        }
+    }
 }
