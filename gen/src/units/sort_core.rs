@@ -456,53 +456,8 @@ pub fn module(cfg: &GenConfig) -> Module {
     // ---------------------------------------------------------------- sequential
     m.blank();
     m.seq_noreset(vec![if_("rd_fire", vec![set("tag_mem[tag_wp_q]", "{rd_pick_b, mem_req_len_o}")])]);
-    let resets = vec![
-        set("ld_act_q", z(1)),
-        set("ld_sel_q", z(1)),
-        set("ld_len_q", z(dc)),
-        set("ib_full_q", z(2)),
-        set("ib0_len_q", z(dc)),
-        set("ib0_dst_q", z(aw)),
-        set("ib1_len_q", z(dc)),
-        set("ib1_dst_q", z(aw)),
-        set("state_q", "S_IDLE"),
-        set("bk_sel_q", z(1)),
-        set("drop_q", z(1)),
-        set("bk_dst_q", z(aw)),
-        set("bk_len_q", z(dc)),
-        set("ocnt_q", z(lw)),
-        set("done_len_q", z(lw)),
-        set("rd_a_addr_q", z(aw)),
-        set("rd_a_left_q", z(lw)),
-        set("rd_b_addr_q", z(aw)),
-        set("rd_b_left_q", z(lw)),
-        set("a_resv_q", z(dc + 1)),
-        set("b_resv_q", z(dc + 1)),
-        set("rr_q", z(1)),
-        set("tag_wp_q", z(tw)),
-        set("tag_rp_q", z(tw)),
-        set("tag_cnt_q", z(tc)),
-        set("rsp_cnt_q", z(bl)),
-        set("sa_act_q", z(1)),
-        set("sa_rem_q", z(lw)),
-        set("sa_ptr_q", z(da)),
-        set("sb_act_q", z(1)),
-        set("sb_rem_q", z(lw)),
-        set("sb_ptr_q", z(da)),
-        set("fa_wp_q", z(da)),
-        set("fa_cnt_q", z(dc)),
-        set("fb_wp_q", z(da)),
-        set("fb_cnt_q", z(dc)),
-        set("run_q", z(pw)),
-        set("first_q", z(1)),
-        set("wsrc_q", z(1)),
-        set("pair_q", z(pw)),
-        set("des_lane_q", z(nl)),
-        set("des_full_q", z(1)),
-        set("rcv_q", z(dc)),
-        set("ser_lane_q", z(nl)),
-        set("ser_cnt_q", z(dc)),
-    ];
+    // Every control register resets to zero (the state machine to S_IDLE, which is 0).
+    let resets = m.q_resets(&[("state_q", "S_IDLE")]);
     let mut body = Vec::new();
     // LOAD engine: command capture and completion.
     body.push(Stmt::Comment("LOAD engine: takes chunk commands".into()));
