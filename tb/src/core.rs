@@ -15,9 +15,8 @@
 //! Memory: word-addressed by entry (`mem_req_addr_o` is an entry index). A read request of
 //! `len` entries (read port) is answered by `len` response beats in request order, the first
 //! after a random latency (the data is read when the request is taken); a write (write port)
-//! carries one entry. A read outside the sources of the commands in
-//! flight, or a write outside the destination of the oldest one (commands complete in order),
-//! is a protocol error.
+//! carries one entry. A read outside the sources of the commands in flight, or a write outside
+//! the destination of the oldest one (commands complete in order), is a protocol error.
 
 use crate::check::Checker;
 use crate::models::NeoSortCore;
