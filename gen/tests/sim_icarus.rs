@@ -405,7 +405,10 @@ fn golden_core(cfg: &GenConfig, mem: &mut [SortEntry], cmds: &[Cmd]) -> Vec<u64>
     lens
 }
 
-/// Runs `cmds` on the core with a random-latency, random-ready memory model.
+/// Runs `cmds` on the core with a random-latency, random-ready memory model. With
+/// `back_to_back` the next command is offered as soon as the previous one was taken (several in
+/// flight), else only once every earlier command is done. Returns the memory, `done_len` per
+/// command and the cycle of each `done_o` pulse.
 fn core_run(
     cfg: &GenConfig,
     mem: &[SortEntry],
@@ -413,7 +416,8 @@ fn core_run(
     seed: u64,
     p_valid: u32,
     p_ready: u32,
-) -> (Vec<SortEntry>, Vec<u64>, u64) {
+    back_to_back: bool,
+) -> (Vec<SortEntry>, Vec<u64>, Vec<u64>) {
     let f = cfg.format();
     let w = cfg.entry_bits();
     let (aw, lw) = (cfg.addr_bits, cfg.len_bits);
@@ -428,8 +432,9 @@ fn core_run(
          reg [{aw1}:0] c_src_b [0:{nc1}];\n  reg [{lw1}:0] c_len_b [0:{nc1}];\n  reg [{aw1}:0] c_dst [0:{nc1}];\n\
          initial begin $readmemh(\"mode.hex\", c_mode); $readmemh(\"src_a.hex\", c_src_a); $readmemh(\"len_a.hex\", c_len_a);\n\
            $readmemh(\"src_b.hex\", c_src_b); $readmemh(\"len_b.hex\", c_len_b); $readmemh(\"dst.hex\", c_dst); end\n\
-         integer ic = 0;\n  reg busy = 1'b0;\n  reg cmd_valid = 1'b0;\n  wire cmd_ready;\n  wire done;\n  wire [{lw1}:0] done_len;\n\
-         wire req_valid;\n  reg req_ready = 1'b0;\n  wire req_write;\n  wire [{aw1}:0] req_addr;\n  wire [{bl1}:0] req_len;\n  wire [{w1}:0] wdata;\n\
+         integer ic = 0;\n  integer nd = 0;\n  reg cmd_valid = 1'b0;\n  wire cmd_ready;\n  wire done;\n  wire [{lw1}:0] done_len;\n\
+         wire req_valid;\n  reg req_ready = 1'b0;\n  wire [{aw1}:0] req_addr;\n  wire [{bl1}:0] req_len;\n\
+         wire wr_valid;\n  reg wr_ready = 1'b0;\n  wire [{aw1}:0] wr_addr;\n  wire [{w1}:0] wdata;\n\
          reg rsp_valid = 1'b0;\n  wire rsp_ready;\n  reg [{w1}:0] rsp_data = {w}'d0;\n\
          reg [{aw1}:0] q_addr [0:255];\n  reg [{bl1}:0] q_len [0:255];\n  integer q_wp = 0;\n  integer q_rp = 0;\n\
          reg [{aw1}:0] r_addr;\n  integer r_left = 0;\n  integer k;\n\
@@ -437,20 +442,24 @@ fn core_run(
            .cmd_valid_i(cmd_valid), .cmd_ready_o(cmd_ready), .cmd_mode_i(c_mode[ic]), .cmd_src_a_i(c_src_a[ic]),\n\
            .cmd_len_a_i(c_len_a[ic]), .cmd_src_b_i(c_src_b[ic]), .cmd_len_b_i(c_len_b[ic]), .cmd_dst_i(c_dst[ic]),\n\
            .done_o(done), .done_len_o(done_len),\n\
-           .mem_req_valid_o(req_valid), .mem_req_ready_i(req_ready), .mem_req_write_o(req_write), .mem_req_addr_o(req_addr),\n\
-           .mem_req_len_o(req_len), .mem_wdata_o(wdata), .mem_rsp_valid_i(rsp_valid), .mem_rsp_ready_o(rsp_ready), .mem_rsp_data_i(rsp_data));\n\
+           .mem_req_valid_o(req_valid), .mem_req_ready_i(req_ready), .mem_req_addr_o(req_addr), .mem_req_len_o(req_len),\n\
+           .mem_rsp_valid_i(rsp_valid), .mem_rsp_ready_o(rsp_ready), .mem_rsp_data_i(rsp_data),\n\
+           .mem_wr_valid_o(wr_valid), .mem_wr_ready_i(wr_ready), .mem_wr_addr_o(wr_addr), .mem_wr_data_o(wdata));\n\
          always @(posedge clk) if (rst_n) begin\n\
-           // commands, one at a time\n\
-           if (cmd_valid & cmd_ready) begin cmd_valid <= 1'b0; busy <= 1'b1; end\n\
-           else if (~busy & ~cmd_valid & (ic < {nc}) & chance(P_VALID)) cmd_valid <= 1'b1;\n\
-           if (done) begin $display(\"DONE %0d %0d %0d\", ic, done_len, cycle); busy <= 1'b0; ic <= ic + 1; end\n\
-           // requests: writes apply at once, reads queue up\n\
+           // commands: ic offered next, nd done\n\
+           if (cmd_valid & cmd_ready) begin cmd_valid <= {b2b} && (ic + 1 < {nc}) && chance(P_VALID); ic <= ic + 1; end\n\
+           else if (~cmd_valid & (ic < {nc}) & ({b2b} || (nd == ic)) & chance(P_VALID)) cmd_valid <= 1'b1;\n\
+           if (done) begin\n\
+             if (nd >= ic) $display(\"SPURIOUS done at %0d\", cycle);\n\
+             $display(\"DONE %0d %0d %0d\", nd, done_len, cycle); nd <= nd + 1;\n\
+           end\n\
+           // writes apply at once; read requests queue up\n\
+           wr_ready <= chance(P_READY);\n\
+           if (wr_valid & wr_ready) mem[wr_addr] <= wdata;\n\
            req_ready <= chance(P_READY);\n\
            if (req_valid & req_ready) begin\n\
-             if (req_write) begin\n\
-               if (req_len != {bl}'d1) begin $display(\"BADLEN\"); end\n\
-               mem[req_addr] <= wdata;\n\
-             end else begin q_addr[q_wp % 256] <= req_addr; q_len[q_wp % 256] <= req_len; q_wp <= q_wp + 1; end\n\
+             if (req_len == {bl}'d0 || req_len > {burst}) begin $display(\"BADLEN\"); end\n\
+             q_addr[q_wp % 256] <= req_addr; q_len[q_wp % 256] <= req_len; q_wp <= q_wp + 1;\n\
            end\n\
            // responses, in order, with random gaps\n\
            if (~rsp_valid | rsp_ready) begin\n\
@@ -461,7 +470,7 @@ fn core_run(
                if (r_left == 0 && q_rp != q_wp) begin r_addr <= q_addr[q_rp % 256]; r_left <= q_len[q_rp % 256]; q_rp <= q_rp + 1; end\n\
              end\n\
            end\n\
-           if (ic == {nc}) begin\n\
+           if (nd == {nc}) begin\n\
              for (k = 0; k < {mn}; k = k + 1) $display(\"MEM %h\", mem[k]);\n\
              $finish;\n\
            end\n\
@@ -475,6 +484,8 @@ fn core_run(
         mn1 = mn - 1,
         nc1 = nc - 1,
         limit = 400_000,
+        b2b = back_to_back as u32,
+        burst = cfg.burst,
     );
     let data = [
         ("mem.hex", mem_hex),
@@ -486,13 +497,15 @@ fn core_run(
         ("dst.hex", field(|c| c.dst)),
     ];
     let out = simulate(&files_for(cfg, "neo_sort_core"), &tb, &data);
-    assert!(!out.contains("BADLEN"), "a write request had len != 1");
+    assert!(!out.contains("BADLEN"), "a read request of 0 or more than a burst of entries");
+    assert!(!out.contains("SPURIOUS"), "done_o with no command in flight:\n{out}");
+    assert!(!out.contains("TIMEOUT"), "timeout");
     let mut lens = Vec::new();
-    let mut last_cycle = 0;
+    let mut done_at = Vec::new();
     for line in out.lines().filter(|l| l.starts_with("DONE ")) {
         let p: Vec<&str> = line.split_whitespace().collect();
         lens.push(p[2].parse().unwrap());
-        last_cycle = p[3].parse().unwrap();
+        done_at.push(p[3].parse().unwrap());
     }
     let got: Vec<SortEntry> = out
         .lines()
@@ -500,10 +513,10 @@ fn core_run(
         .map(|h| f.unpack(u64::from_str_radix(h, 16).unwrap()))
         .collect();
     assert_eq!(got.len(), mem.len(), "memory dump");
-    (got, lens, last_cycle)
+    (got, lens, done_at)
 }
 
-fn check_core(cfg: &GenConfig, seed: u64, p_valid: u32, p_ready: u32) {
+fn check_core(cfg: &GenConfig, seed: u64, p_valid: u32, p_ready: u32, back_to_back: bool) {
     let f = cfg.format();
     let c = cfg.chunk as u64;
     let mut rng = Rng(seed);
@@ -539,7 +552,7 @@ fn check_core(cfg: &GenConfig, seed: u64, p_valid: u32, p_ready: u32) {
     ];
     let mut expect = mem.clone();
     let lens = golden_core(cfg, &mut expect, &cmds);
-    let (got, got_lens, _) = core_run(cfg, &mem, &cmds, seed, p_valid, p_ready);
+    let (got, got_lens, _) = core_run(cfg, &mem, &cmds, seed, p_valid, p_ready, back_to_back);
     assert_eq!(got_lens, lens, "done_len per command");
     for (k, (g, e)) in got.iter().zip(&expect).enumerate() {
         assert_eq!(g, e, "memory entry {k} (first difference)");
@@ -551,7 +564,17 @@ fn sort_core_matches_golden_under_backpressure() {
     if !require_for_test("iverilog", "sort_core_matches_golden_under_backpressure") {
         return;
     }
-    check_core(&GenConfig::default(), 41, 60, 55);
+    check_core(&GenConfig::default(), 41, 60, 55, false);
+}
+
+#[test]
+fn sort_core_back_to_back_commands_match_golden() {
+    if !require_for_test("iverilog", "sort_core_back_to_back_commands_match_golden") {
+        return;
+    }
+    // Every command offered as soon as the previous one was taken (loads overlap passes).
+    check_core(&GenConfig::default(), 43, 90, 70, true);
+    check_core(&GenConfig::default(), 44, 100, 100, true);
 }
 
 #[test]
@@ -572,7 +595,8 @@ fn sort_core_small_configuration_matches_golden() {
         max_outstanding: 2,
         ..GenConfig::default()
     };
-    check_core(&cfg, 42, 80, 90);
+    check_core(&cfg, 42, 80, 90, false);
+    check_core(&cfg, 45, 85, 60, true);
 }
 
 #[test]
@@ -590,9 +614,46 @@ fn sort_core_full_rate_chunk_sort_time() {
     let cmds = vec![Cmd { mode: mode::SORT, src_a: 0, len_a: c, src_b: 0, len_b: 0, dst: c }];
     let mut expect = mem.clone();
     golden_core(&cfg, &mut expect, &cmds);
-    let (got, _, cycles) = core_run(&cfg, &mem, &cmds, 51, 100, 100);
+    let (got, _, done_at) = core_run(&cfg, &mem, &cmds, 51, 100, 100, false);
     assert_eq!(got, expect);
+    let cycles = done_at[0];
     let passes = (c / cfg.bsu_width as u64).ilog2() as u64 + 1;
     assert!(cycles <= c * (passes + 1) + 200, "chunk sort took {cycles} cycles");
     eprintln!("full-rate 256-entry chunk sort: {cycles} cycles ({passes} merge passes)");
+}
+
+#[test]
+fn sort_core_back_to_back_chunks_overlap_loads_with_passes() {
+    if !require_for_test("iverilog", "sort_core_back_to_back_chunks_overlap_loads_with_passes") {
+        return;
+    }
+    // Four 256-entry SORTs offered back to back at full memory rate: after the first, each
+    // chunk's load is hidden under the previous chunk's merge passes, so the interval between
+    // `done_o` pulses is bounded by the MSU+ work (passes x entries, plus a few cycles per
+    // merge), well under one command's latency (which adds the load of `c` entries).
+    let cfg = GenConfig::default();
+    let f = cfg.format();
+    let mut rng = Rng(52);
+    let c = cfg.chunk as u64;
+    let k = 4u64;
+    let mem: Vec<SortEntry> =
+        (0..2 * k as usize * c as usize).map(|_| entry(&mut rng, f, 1 << 16, 100)).collect();
+    let cmds: Vec<Cmd> = (0..k)
+        .map(|i| Cmd { mode: mode::SORT, src_a: i * c, len_a: c, src_b: 0, len_b: 0, dst: (k + i) * c })
+        .collect();
+    let mut expect = mem.clone();
+    golden_core(&cfg, &mut expect, &cmds);
+    let (got, _, done_at) = core_run(&cfg, &mem, &cmds, 52, 100, 100, true);
+    assert_eq!(got, expect);
+    let (single, _, one) = core_run(&cfg, &mem, &cmds[..1], 52, 100, 100, false);
+    assert_eq!(
+        &single[k as usize * c as usize..][..c as usize],
+        &expect[k as usize * c as usize..][..c as usize]
+    );
+    let passes = (c / cfg.bsu_width as u64).ilog2() as u64;
+    let merges = c / cfg.bsu_width as u64 - 1;
+    let interval = (done_at[k as usize - 1] - done_at[0]) / (k - 1);
+    eprintln!("back-to-back 256-entry SORTs: interval {interval} cycles, single {} cycles", one[0]);
+    assert!(interval <= passes * c + 4 * merges + 16, "interval {interval} above the MSU+ bound");
+    assert!(interval + c <= one[0], "load not hidden: interval {interval}, single {}", one[0]);
 }

@@ -323,10 +323,19 @@ impl<'a> Model<'a> {
         }
     }
 
+    /// A sorting-core command. Chunk commands (serial segments) take their single latency `T`
+    /// with the load phase `T - I` (the measured part a back-to-back command overlaps with the
+    /// previous one: with `double_buffered_io` the engine starts it under the previous segment,
+    /// so a steady stream costs the measured interval `I` each); merges (streaming, they
+    /// serialise on the core) take their measured back-to-back `interval`.
     fn cmd_segment(&self, cmd: Cmd, reads: Vec<Access>, writes: Vec<Access>, extra_cycles: f64) -> Segment {
-        let t = cmd.cycles(self.lat) as f64 + extra_cycles;
-        let load = cmd.entries_in() as f64 * self.lat.msu_ii;
-        let serial = matches!(cmd.mode, Mode::Sort | Mode::Dps);
+        let serial = cmd.is_chunk();
+        let (t, load) = if serial {
+            (cmd.cycles(self.lat) as f64 + extra_cycles, cmd.overlappable(self.lat) as f64)
+        } else {
+            let t = cmd.interval(self.lat) as f64 + extra_cycles;
+            (t, cmd.entries_in() as f64 * self.lat.msu_ii)
+        };
         Segment {
             compute: self.ps(t.max(1.0)),
             load: self.ps(load.min(t)),

@@ -101,8 +101,9 @@ pub struct NeoArch {
     pub scus_per_core: u32,
     /// Raster-core buffer in bytes (200 KB); bounds the feature prefetch window.
     pub raster_buffer_bytes: u64,
-    /// Double-buffered sorting-core I/O: the next command's load overlaps the current one's
-    /// passes (the paper's design; the measured RTL core runs one command at a time).
+    /// Double-buffered sorting-core I/O: the next chunk command's load overlaps the current
+    /// one's passes (the paper's design and the RTL's: `latency.json`'s `interval`); `false`
+    /// runs every command alone (its single-command latency).
     pub double_buffered_io: bool,
     /// DPS and the MSU+ insert/delete merge are one stream (the last DPS pass feeds the MSU+,
     /// as in the golden accounting); `false` runs the RTL's separate DPS and MERGE_DELETE

@@ -11,6 +11,12 @@
 //!   `ii` cycles. The remainder `c(n) = cycles - ii n (1 + p(n))` (BSU fill, merge gaps, command
 //!   overhead) is interpolated linearly in `n` between the two nearest measured points
 //!   (extrapolated from the last two beyond the largest one).
+//! - **Back to back** (`interval` of each point: cycles per command when identical commands
+//!   stream): SORT / DPS `I(n) = ii * n * max(1, p(n)) + c_I(n)` (the MSU+ passes; the load is
+//!   hidden under the previous chunk's passes), `c_I` interpolated as above; MERGE /
+//!   MERGE_DELETE (which serialise) `T + t`, `t` the mean measured turnaround `interval - cycles`
+//!   of the mode. [`crate::sortcmd`] charges a batch of commands issued back to back as one fill
+//!   (the first command's single latency) plus the later commands' intervals.
 //! - **MERGE / MERGE_DELETE of streams `a` and `b`**: `T = in + c`, `in = a + b`, where the
 //!   overhead `c` is interpolated linearly in `in` over the measured points of the same mode with
 //!   both streams non-empty, and, when one stream is empty (a copy), over the points with an
@@ -40,8 +46,10 @@ pub const DEFAULT_PATH: &str = "reports/latency.json";
 pub struct ChunkPoint {
     /// Entries in the chunk.
     pub entries: u64,
-    /// Measured cycles.
+    /// Measured cycles of one command alone.
     pub cycles: u64,
+    /// Measured steady-state cycles per command back to back.
+    pub interval: u64,
 }
 
 /// One measured merge command.
@@ -51,8 +59,10 @@ pub struct MergePoint {
     pub len_a: u64,
     /// Entries of stream B.
     pub len_b: u64,
-    /// Measured cycles.
+    /// Measured cycles of one command alone.
     pub cycles: u64,
+    /// Measured steady-state cycles per command back to back.
+    pub interval: u64,
 }
 
 /// Where the raster-core timing came from.
@@ -153,7 +163,7 @@ fn chunk_points(v: &Value, key: &str) -> Result<Vec<ChunkPoint>, String> {
     let mut out = Vec::with_capacity(arr.len());
     for (i, p) in arr.iter().enumerate() {
         let e = |f: &str| int(p, f).map_err(|m| format!("sort_core.{key}[{i}]: {m}"));
-        out.push(ChunkPoint { entries: e("entries")?, cycles: e("cycles")? });
+        out.push(ChunkPoint { entries: e("entries")?, cycles: e("cycles")?, interval: e("interval")? });
     }
     out.sort_by_key(|p| p.entries);
     out.dedup_by_key(|p| p.entries);
@@ -172,7 +182,12 @@ fn merge_points(v: &Value, key: &str) -> Result<Vec<MergePoint>, String> {
     let mut out = Vec::with_capacity(arr.len());
     for (i, p) in arr.iter().enumerate() {
         let e = |f: &str| int(p, f).map_err(|m| format!("sort_core.{key}[{i}]: {m}"));
-        out.push(MergePoint { len_a: e("len_a")?, len_b: e("len_b")?, cycles: e("cycles")? });
+        out.push(MergePoint {
+            len_a: e("len_a")?,
+            len_b: e("len_b")?,
+            cycles: e("cycles")?,
+            interval: e("interval")?,
+        });
     }
     if out.iter().filter(|p| p.len_a > 0 && p.len_b > 0).count() < 2 {
         return Err(format!("`sort_core.{key}` needs at least two measured merges of two non-empty streams"));
@@ -254,26 +269,65 @@ impl Latency {
         self.msu_ii * n as f64 * (1 + self.passes(n)) as f64
     }
 
-    /// Cycles of one SORT or DPS command on an `n`-entry chunk (0 for an empty chunk: no
-    /// command is issued). See the module docs for the interpolation.
-    pub fn chunk_cycles(&self, mode: ChunkMode, n: u64) -> u64 {
+    /// The MSU+ work of an `n`-entry chunk: `max(1, passes)` passes of `n` entries.
+    fn structural_interval(&self, n: u64) -> f64 {
+        self.msu_ii * n as f64 * self.passes(n).max(1) as f64
+    }
+
+    fn chunk_points(&self, mode: ChunkMode) -> &[ChunkPoint] {
+        match mode {
+            ChunkMode::Sort => &self.conventional,
+            ChunkMode::Dps => &self.dps,
+        }
+    }
+
+    /// `value` of the measured point at `n`, else `structural(n)` plus the remainder
+    /// interpolated between the measured points.
+    fn chunk_interp(
+        &self,
+        mode: ChunkMode,
+        n: u64,
+        value: impl Fn(&ChunkPoint) -> u64,
+        structural: impl Fn(u64) -> f64,
+    ) -> u64 {
         if n == 0 {
             return 0;
         }
-        let pts = match mode {
-            ChunkMode::Sort => &self.conventional,
-            ChunkMode::Dps => &self.dps,
-        };
+        let pts = self.chunk_points(mode);
         if let Some(p) = pts.iter().find(|p| p.entries == n) {
-            return p.cycles;
+            return value(p);
         }
         let rem: Vec<(f64, f64)> = pts
             .iter()
             .filter(|p| p.entries > 0)
-            .map(|p| (p.entries as f64, p.cycles as f64 - self.structural(p.entries)))
+            .map(|p| (p.entries as f64, value(p) as f64 - structural(p.entries)))
             .collect();
         let c = interp(&rem, n as f64);
-        (self.structural(n) + c).round().max(1.0) as u64
+        (structural(n) + c).round().max(1.0) as u64
+    }
+
+    /// Cycles of one SORT or DPS command on an `n`-entry chunk alone (0 for an empty chunk: no
+    /// command is issued). See the module docs for the interpolation.
+    pub fn chunk_cycles(&self, mode: ChunkMode, n: u64) -> u64 {
+        self.chunk_interp(mode, n, |p| p.cycles, |n| self.structural(n))
+    }
+
+    /// Steady-state cycles per SORT or DPS command of `n` entries issued back to back (0 for an
+    /// empty chunk). See the module docs for the interpolation.
+    pub fn chunk_interval(&self, mode: ChunkMode, n: u64) -> u64 {
+        self.chunk_interp(mode, n, |p| p.interval, |n| self.structural_interval(n))
+    }
+
+    /// Steady-state cycles per MERGE / MERGE_DELETE command back to back: the measured
+    /// `interval` of the point, else [`Latency::merge_cycles`] plus the mode's mean measured
+    /// turnaround (`interval - cycles`).
+    pub fn merge_interval(&self, a: u64, b: u64, drop_invalid: bool) -> u64 {
+        let pts = if drop_invalid { &self.merge_delete } else { &self.merge };
+        if let Some(p) = pts.iter().find(|p| p.len_a == a && p.len_b == b) {
+            return p.interval;
+        }
+        let turn = pts.iter().map(|p| p.interval as f64 - p.cycles as f64).sum::<f64>() / pts.len() as f64;
+        (self.merge_cycles(a, b, drop_invalid) as f64 + turn.max(0.0)).round() as u64
     }
 
     /// Cycles of a MERGE (`drop_invalid = false`) or MERGE_DELETE command of streams of `a` and
@@ -404,12 +458,17 @@ mod tests {
         let l = Latency::from_file(&project_file()).unwrap();
         for p in &l.conventional {
             assert_eq!(l.chunk_cycles(ChunkMode::Sort, p.entries), if p.entries == 0 { 0 } else { p.cycles });
+            assert_eq!(
+                l.chunk_interval(ChunkMode::Sort, p.entries),
+                if p.entries == 0 { 0 } else { p.interval }
+            );
         }
         for p in &l.dps {
             assert_eq!(l.chunk_cycles(ChunkMode::Dps, p.entries), if p.entries == 0 { 0 } else { p.cycles });
         }
         for p in &l.merge {
             assert_eq!(l.merge_cycles(p.len_a, p.len_b, false), p.cycles);
+            assert_eq!(l.merge_interval(p.len_a, p.len_b, false), p.interval);
         }
         for p in &l.merge_delete {
             assert_eq!(l.merge_cycles(p.len_a, p.len_b, true), p.cycles);
@@ -424,8 +483,12 @@ mod tests {
             let c = l.chunk_cycles(ChunkMode::Sort, n);
             assert!(c >= last, "SORT cycles not monotone at {n}: {c} < {last}");
             assert!(c as f64 >= l.msu_ii * n as f64, "a chunk cannot beat one entry per cycle");
+            let i = l.chunk_interval(ChunkMode::Sort, n);
+            assert!(i as f64 >= l.msu_ii * n as f64, "back to back, a chunk still takes one MSU+ pass: {n}");
+            assert!(i <= c, "the interval at {n} ({i}) exceeds the single-command latency ({c})");
             last = c;
         }
+        assert!(l.merge_interval(300, 200, true) >= l.merge_cycles(300, 200, true));
         let mut last = 0;
         for n in (0..3000).step_by(7) {
             let c = l.merge_cycles(n / 2, n - n / 2, false);
@@ -445,6 +508,17 @@ mod tests {
         let mut v: Value = serde_json::from_str(&text).unwrap();
         v["units"]["neo_msu"].as_object_mut().unwrap().remove("ii");
         assert!(bad(&v.to_string()).contains("units.neo_msu.ii"));
+        for key in ["conventional", "merge_delete"] {
+            let mut v: Value = serde_json::from_str(&text).unwrap();
+            v["sort_core"][key][1].as_object_mut().unwrap().remove("interval");
+            let e = bad(&v.to_string());
+            assert!(
+                e.contains("lat.json")
+                    && e.contains(&format!("sort_core.{key}[1]"))
+                    && e.contains("interval"),
+                "{e}"
+            );
+        }
         let mut v: Value = serde_json::from_str(&text).unwrap();
         v.as_object_mut().unwrap().remove("raster");
         v["units"].as_object_mut().unwrap().remove("neo_scu");
@@ -478,6 +552,8 @@ mod tests {
             if let Ok(l) = Latency::from_json_str(&s, Path::new("x.json")) {
                 for n in [0u64, 1, 17, 200, 256, 300] {
                     let _ = l.chunk_cycles(ChunkMode::Sort, n);
+                    let _ = l.chunk_interval(ChunkMode::Dps, n);
+                    let _ = l.merge_interval(n, n / 2, false);
                     let _ = l.merge_cycles(n, n / 3, true);
                     let _ = l.merge_cycles(n, 0, false);
                 }

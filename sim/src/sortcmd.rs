@@ -8,6 +8,19 @@
 //!   ([`Parity::chunks`]);
 //! - the reuse-and-update step of a tile: DPS passes, the conventional sort of the incoming
 //!   list, `MERGE_DELETE` of the two (`tb::core::update_checked`).
+//!
+//! # Timing of commands issued back to back
+//! The core takes a chunk command (SORT / DPS) while the previous one is still merging: its
+//! load runs under the previous chunk's merge passes. Merge commands serialise. A **batch** is
+//! a sequence issued back to back with no data dependency on a command still running (the next
+//! DPS pass reads the previous pass's output, so it starts a new batch). A batch costs
+//! ([`batch_cycles`]): the first command's single-command latency (the fill), then per later
+//! command [`Cmd::charge`]: a chunk after a chunk its steady-state interval `I(n)` plus the part
+//! of its load the previous command's time cannot hide, `max(0, load(n) - charge(prev))` with
+//! `load(n) = T(n) - I(n)` (0 for equal chunks: the measured interval); a merge its measured
+//! `interval` (single latency plus the turnaround); a chunk after a merge its single latency.
+//! The engine (`crate::arch`, with `double_buffered_io`) gives the same with an ideal memory: a
+//! chunk segment's load phase is `T(n) - I(n)`, started under the previous segment.
 
 use neo_golden::sort::Parity;
 
@@ -43,7 +56,46 @@ impl Cmd {
         self.len_a + self.len_b
     }
 
-    /// Measured (or interpolated) cycles of the command.
+    /// Whether this is a chunk command (SORT or DPS), which overlaps its neighbours.
+    pub fn is_chunk(&self) -> bool {
+        matches!(self.mode, Mode::Sort | Mode::Dps)
+    }
+
+    /// Measured (or interpolated) steady-state cycles per command of this shape back to back.
+    pub fn interval(&self, lat: &Latency) -> u64 {
+        match self.mode {
+            Mode::Sort => lat.chunk_interval(ChunkMode::Sort, self.len_a),
+            Mode::Dps => lat.chunk_interval(ChunkMode::Dps, self.len_a),
+            Mode::Merge => lat.merge_interval(self.len_a, self.len_b, false),
+            Mode::MergeDelete => lat.merge_interval(self.len_a, self.len_b, true),
+        }
+    }
+
+    /// The part of a chunk command's single latency that overlaps the previous command when
+    /// issued back to back (its load: memory reads, BSU, writes into the input buffer):
+    /// `T(n) - I(n)`; 0 for merges (they serialise).
+    pub fn overlappable(&self, lat: &Latency) -> u64 {
+        if self.is_chunk() {
+            self.cycles(lat).saturating_sub(self.interval(lat))
+        } else {
+            0
+        }
+    }
+
+    /// Cycles this command adds to a batch after `prev`, given with the cycles it was charged
+    /// (`None`: the batch's first command, charged its single latency). See the module docs.
+    pub fn charge(&self, prev: Option<(&Cmd, u64)>, lat: &Latency) -> u64 {
+        match prev {
+            None => self.cycles(lat),
+            Some((p, p_charge)) if self.is_chunk() && p.is_chunk() => {
+                self.interval(lat) + self.overlappable(lat).saturating_sub(p_charge)
+            }
+            Some(_) if self.is_chunk() => self.cycles(lat),
+            Some(_) => self.interval(lat),
+        }
+    }
+
+    /// Measured (or interpolated) cycles of the command alone.
     pub fn cycles(&self, lat: &Latency) -> u64 {
         match self.mode {
             Mode::Sort => lat.chunk_cycles(ChunkMode::Sort, self.len_a),
@@ -94,21 +146,40 @@ pub fn dps_pass(len: u64, c: u64, parity: Parity) -> Vec<Cmd> {
         .collect()
 }
 
-/// The RTL command sequence of one reuse-and-update step (`tb::core::update_checked`): DPS
-/// passes over the `table` reused entries (pass `p` with parity `(frame + p) % 2`), the
-/// conventional sort of `incoming` entries, and the `MERGE_DELETE` of the two.
-pub fn update(table: u64, incoming: u64, frame: u64, passes: usize, c: u64) -> Vec<Cmd> {
-    let mut v = Vec::new();
-    for p in 0..passes {
-        v.extend(dps_pass(table, c, Parity::of(frame, p)));
-    }
-    v.extend(conventional_sort(incoming, c));
-    v.push(Cmd { mode: Mode::MergeDelete, len_a: table, len_b: incoming });
+/// The RTL command batches of one reuse-and-update step (`tb::core::update_checked`): each DPS
+/// pass over the `table` reused entries (pass `p` with parity `(frame + p) % 2`), the
+/// conventional sort of `incoming` entries, and the `MERGE_DELETE` of the two; each batch waits
+/// for the previous one (it reads its output).
+pub fn update_batches(table: u64, incoming: u64, frame: u64, passes: usize, c: u64) -> Vec<Vec<Cmd>> {
+    let mut v: Vec<Vec<Cmd>> = (0..passes).map(|p| dps_pass(table, c, Parity::of(frame, p))).collect();
+    v.push(conventional_sort(incoming, c));
+    v.push(vec![Cmd { mode: Mode::MergeDelete, len_a: table, len_b: incoming }]);
+    v.retain(|b| !b.is_empty());
     v
 }
 
-/// Total cycles of `cmds` run back to back (the cosimulation's ideal-memory sequence).
-pub fn total_cycles(cmds: &[Cmd], lat: &Latency) -> u64 {
+/// The commands of [`update_batches`] in order.
+pub fn update(table: u64, incoming: u64, frame: u64, passes: usize, c: u64) -> Vec<Cmd> {
+    update_batches(table, incoming, frame, passes, c).concat()
+}
+
+/// Cycles of one batch `cmds` issued back to back (the cosimulation's ideal-memory queue, from
+/// the first command's acceptance to the last `done_o`): the fill plus each later command's
+/// [`Cmd::charge`].
+pub fn batch_cycles(cmds: &[Cmd], lat: &Latency) -> u64 {
+    let mut prev = None;
+    let mut t = 0;
+    for c in cmds {
+        let x = c.charge(prev, lat);
+        t += x;
+        prev = Some((c, x));
+    }
+    t
+}
+
+/// Cycles of `cmds` run one at a time (each waiting for the previous `done_o`): the sum of the
+/// single-command latencies.
+pub fn serial_cycles(cmds: &[Cmd], lat: &Latency) -> u64 {
     cmds.iter().map(|c| c.cycles(lat)).sum()
 }
 
@@ -147,5 +218,30 @@ mod tests {
         let u = update(600, 40, 1, 1, 256);
         assert_eq!(u.len(), 3 + 1 + 1);
         assert_eq!(u.last().unwrap().mode, Mode::MergeDelete);
+        let b = update_batches(600, 40, 1, 2, 256);
+        assert_eq!(b.iter().map(Vec::len).collect::<Vec<_>>(), vec![3, 3, 1, 1]);
+    }
+
+    #[test]
+    fn back_to_back_batches_charge_one_fill_and_then_intervals() {
+        let lat = Latency::from_file(
+            &std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../reports/latency.json"),
+        )
+        .unwrap();
+        let c = lat.chunk;
+        let chunk = Cmd { mode: Mode::Sort, len_a: c, len_b: 0 };
+        let k = 8;
+        let batch = vec![chunk; k];
+        let t = batch_cycles(&batch, &lat);
+        assert_eq!(t, chunk.cycles(&lat) + (k as u64 - 1) * chunk.interval(&lat));
+        assert!(t < serial_cycles(&batch, &lat), "overlap makes a batch cheaper than serial commands");
+        // A merge after chunks serialises: its single latency plus the turnaround.
+        let m = Cmd { mode: Mode::Merge, len_a: c, len_b: c };
+        let t2 = batch_cycles(&[chunk, chunk, m], &lat);
+        assert_eq!(t2, chunk.cycles(&lat) + chunk.interval(&lat) + m.interval(&lat));
+        assert!(m.interval(&lat) >= m.cycles(&lat));
+        // A big chunk after a tiny one cannot hide its load: charged more than its interval.
+        let tiny = Cmd { mode: Mode::Sort, len_a: 1, len_b: 0 };
+        assert!(chunk.charge(Some((&tiny, tiny.cycles(&lat))), &lat) > chunk.interval(&lat));
     }
 }

@@ -7,7 +7,7 @@ use neo_sim::config::SimConfig;
 use neo_sim::driver::{generate, WorkloadSpec};
 use neo_sim::latency::{ChunkMode, Latency};
 use neo_sim::run::{simulate, Arch, RunOptions};
-use neo_sim::sortcmd::{conventional_sort, total_cycles};
+use neo_sim::sortcmd::{batch_cycles, conventional_sort};
 use neo_sim::traffic::{Dir, Stage};
 use neo_sim::workload::{FrameWork, HierTile, TileWork, Workload, WorkloadInfo};
 
@@ -62,7 +62,6 @@ fn scratch_workload(tiles: u32, n: u32) -> Workload {
 
 fn rtl_like() -> SimConfig {
     let mut c = SimConfig::default();
-    c.neo.double_buffered_io = false;
     c.neo.fused_dps_merge = false;
     c
 }
@@ -93,7 +92,7 @@ fn a_chunk_sort_takes_exactly_the_measured_cycles_for_every_listed_size() {
     }
     // A longer list: chunks and merge passes, each timed from latency.json, back to back.
     let wl = scratch_workload(1, 1000);
-    let want = total_cycles(&conventional_sort(1000, 256), &lat) as f64;
+    let want = batch_cycles(&conventional_sort(1000, 256), &lat) as f64;
     assert!((sort_cycles(&cfg, &lat, &wl, true) - want).abs() < 1e-6);
 }
 
@@ -104,13 +103,16 @@ fn changing_latency_json_changes_the_modelled_cycles() {
     for p in v["sort_core"]["conventional"].as_array_mut().unwrap() {
         let c = p["cycles"].as_u64().unwrap();
         p["cycles"] = (c + 100).into();
+        let i = p["interval"].as_u64().unwrap();
+        p["interval"] = (i + 100).into();
     }
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("latency.json");
     std::fs::write(&path, v.to_string()).unwrap();
     let (base, changed) = (latency(), Latency::from_file(&path).unwrap());
     let cfg = rtl_like();
-    // Two chunks of 256 entries and one merge: two SORT commands take 100 cycles more each.
+    // Two chunks of 256 entries and one merge: the first SORT (the fill, its single latency) and
+    // the second (back to back, its interval) take 100 cycles more each.
     let wl = scratch_workload(1, 512);
     let d = sort_cycles(&cfg, &changed, &wl, true) - sort_cycles(&cfg, &base, &wl, true);
     assert!((d - 200.0).abs() < 1e-6, "two chunks, +100 cycles each: {d}");

@@ -4,8 +4,11 @@
 //! For every tile of a few small frames, the golden work-only driver gives the tables and lists;
 //! the RTL runs them through `neo_tb` (conventional sort on frame 0; DPS pass, incoming sort and
 //! MERGE_DELETE on later frames, as `tb::core::update_checked`, every output checked against
-//! golden), and the model times the same commands from `reports/latency.json`
-//! ([`neo_sim::sortcmd`]). The difference comes only from interpolating between measured points.
+//! golden), each phase's commands issued back to back (the next offered as soon as the previous
+//! one was taken, no idle gap), and the model times the same batches from
+//! `reports/latency.json` ([`neo_sim::sortcmd::batch_cycles`]: one fill, then intervals). The
+//! difference comes from interpolating between measured points and from mixing chunk sizes in
+//! one batch.
 #![cfg(neo_sim_rtl)]
 
 use std::collections::HashSet;
@@ -18,7 +21,7 @@ use neo_golden::{shared, source, trajectory};
 use neo_sim::config::PipelineParams;
 use neo_sim::driver::WorkDriver;
 use neo_sim::latency::Latency;
-use neo_sim::sortcmd::{conventional_sort, total_cycles, update, Mode};
+use neo_sim::sortcmd::{batch_cycles, conventional_sort, update_batches, Mode};
 use neo_tb::core::{dps_pass_checked, full_sort_checked, merge_checked, Core, MemTiming};
 
 fn latency() -> Latency {
@@ -55,6 +58,7 @@ fn compare(scene: &Scene, traj: &Trajectory) -> (u64, u64, usize) {
     let mut drv =
         WorkDriver::new(scene, Strategy::Neo, &params, first.width, first.height, false, 0).unwrap();
     let mut core = Core::new(&gen, 7, MemTiming::IDEAL);
+    core.set_cmd_gap(0);
     let sort_cfg = gen.sort_config();
     let (mut model, mut rtl, mut cmds) = (0u64, 0u64, 0usize);
     let mut prev: Vec<Vec<SortEntry>> = Vec::new();
@@ -65,7 +69,7 @@ fn compare(scene: &Scene, traj: &Trajectory) -> (u64, u64, usize) {
             if f == 0 {
                 let seq = conventional_sort(current.len() as u64, c);
                 cmds += seq.len();
-                let (m, r) = (total_cycles(&seq, &lat), full_sort_checked(&mut core, &gen, current));
+                let (m, r) = (batch_cycles(&seq, &lat), full_sort_checked(&mut core, &gen, current));
                 parts[0].1.add(m, r);
                 model += m;
                 rtl += r;
@@ -76,9 +80,9 @@ fn compare(scene: &Scene, traj: &Trajectory) -> (u64, u64, usize) {
             let incoming: Vec<SortEntry> =
                 current.iter().filter(|e| !valid.contains(&e.id)).copied().collect();
             assert_eq!(incoming.len() as u32, fw.tiles[t].sort_n, "tile {t}: incoming list");
-            let seq = update(table.len() as u64, incoming.len() as u64, f as u64, 1, c);
-            cmds += seq.len();
-            model += total_cycles(&seq, &lat);
+            let batches = update_batches(table.len() as u64, incoming.len() as u64, f as u64, 1, c);
+            cmds += batches.iter().map(Vec::len).sum::<usize>();
+            let seq = batches.concat();
             let (dps_table, c1) = dps_pass_checked(&mut core, &gen, table, Parity::of(f as u64, 0));
             let c2 = full_sort_checked(&mut core, &gen, &incoming);
             let (sorted, _) = full_sort(&incoming, &sort_cfg);
@@ -87,9 +91,11 @@ fn compare(scene: &Scene, traj: &Trajectory) -> (u64, u64, usize) {
             let dps: Vec<_> = seq.iter().filter(|c| c.mode == Mode::Dps).copied().collect();
             let conv = conventional_sort(incoming.len() as u64, c);
             let md = &seq[seq.len() - 1..];
-            parts[1].1.add(total_cycles(&dps, &lat), c1);
-            parts[0].1.add(total_cycles(&conv, &lat), c2);
-            parts[2].1.add(total_cycles(md, &lat), c3);
+            let (m1, m2, m3) = (batch_cycles(&dps, &lat), batch_cycles(&conv, &lat), batch_cycles(md, &lat));
+            model += m1 + m2 + m3;
+            parts[1].1.add(m1, c1);
+            parts[0].1.add(m2, c2);
+            parts[2].1.add(m3, c3);
         }
         prev = drv.tables().map(|t| t.to_vec()).collect();
     }
@@ -103,7 +109,12 @@ fn compare(scene: &Scene, traj: &Trajectory) -> (u64, u64, usize) {
 }
 
 fn check(label: &str, scene: &Scene, traj: &Trajectory) {
+    let start = std::time::Instant::now();
     let (model, rtl, cmds) = compare(scene, traj);
+    let secs = start.elapsed().as_secs_f64();
+    eprintln!(
+        "{label}: {rtl} RTL cycles cosimulated (with golden checks and the work driver) in {secs:.2} s"
+    );
     let err = (model as f64 - rtl as f64) / rtl as f64;
     eprintln!("{label}: {cmds} commands, model {model} cycles, RTL {rtl} cycles, error {:+.2}%", 100.0 * err);
     assert!(rtl > 10_000, "{label}: too little work to validate ({rtl} cycles)");

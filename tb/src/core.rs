@@ -8,10 +8,15 @@
 //! - (c) merges: `MERGE_DELETE` (golden `merge2(a, b, true)`) and `MERGE` (`merge2(a, b, false)`);
 //!   and the whole per-tile update (golden `update_tile`) composed from the three.
 //!
+//! Commands are issued back to back ([`Core::run_queue`]): the next one is offered as soon as
+//! the previous one was taken, so several are in flight (the core overlaps a chunk's load with
+//! the previous chunk's merge passes); [`queue_checked`] checks a mixed queue against golden.
+//!
 //! Memory: word-addressed by entry (`mem_req_addr_o` is an entry index). A read request of
-//! `len` entries is answered by `len` response beats in request order, the first after a random
-//! latency; a write request carries one entry. Accesses outside the command's source and
-//! destination ranges are protocol errors.
+//! `len` entries (read port) is answered by `len` response beats in request order, the first
+//! after a random latency (the data is read when the request is taken); a write (write port)
+//! carries one entry. A read outside the sources of the commands in flight, or a write outside
+//! the destination of the oldest one (commands complete in order), is a protocol error.
 
 use crate::check::Checker;
 use crate::models::NeoSortCore;
@@ -54,8 +59,10 @@ pub struct Command {
 /// Timing of the memory model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemTiming {
-    /// Probability (percent) that `mem_req_ready_i` is high in a cycle.
+    /// Probability (percent) that `mem_req_ready_i` (read requests) is high in a cycle.
     pub req_ready_pct: u32,
+    /// Probability (percent) that `mem_wr_ready_i` (writes) is high in a cycle.
+    pub wr_ready_pct: u32,
     /// Read latency range (cycles from the request's acceptance to its first response beat).
     pub min_latency: u32,
     /// Upper end of the latency range.
@@ -67,26 +74,82 @@ pub struct MemTiming {
 impl MemTiming {
     /// An ideal memory: always ready, first beat the cycle after the request, no gaps.
     pub const IDEAL: MemTiming =
-        MemTiming { req_ready_pct: 100, min_latency: 1, max_latency: 1, rsp_gap_pct: 0 };
+        MemTiming { req_ready_pct: 100, wr_ready_pct: 100, min_latency: 1, max_latency: 1, rsp_gap_pct: 0 };
     /// A hostile memory: frequent stalls and gaps, latency 1..40 cycles.
     pub const RANDOM: MemTiming =
-        MemTiming { req_ready_pct: 60, min_latency: 1, max_latency: 40, rsp_gap_pct: 25 };
+        MemTiming { req_ready_pct: 60, wr_ready_pct: 60, min_latency: 1, max_latency: 40, rsp_gap_pct: 25 };
+    /// Fast reads, slow writes (a quarter of the cycles): the write-back lags far behind the
+    /// next commands' loads, so a buffer reused too early shows up.
+    pub const SLOW_WRITES: MemTiming =
+        MemTiming { req_ready_pct: 100, wr_ready_pct: 25, min_latency: 1, max_latency: 1, rsp_gap_pct: 0 };
 }
 
 /// What a command did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CmdResult {
     /// Rising edges from the one that accepts the command (`cmd_valid_i & cmd_ready_o`) to the
-    /// cycle with the `done_o` pulse (at least 1).
+    /// cycle with its `done_o` pulse (at least 1); with commands in flight before it, this
+    /// includes the time it waited for them.
     pub cycles: u64,
+    /// Cycle of the accepting edge.
+    pub accepted_at: u64,
+    /// Cycle of the `done_o` pulse.
+    pub done_at: u64,
     /// `done_len_o`.
     pub done_len: u64,
-    /// Read requests and entries read, writes.
+    /// Read requests issued for the command.
     pub read_bursts: u64,
-    /// Entries read.
+    /// Entries read for the command.
     pub entries_read: u64,
-    /// Entries written.
+    /// Entries written by the command.
     pub entries_written: u64,
+}
+
+/// A command queue run back to back: every command offered as soon as the previous one was
+/// taken (after the random gap of [`Core::set_cmd_gap`], and after any earlier command whose
+/// output it reads is done).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct QueueRun {
+    /// Per command, in order.
+    pub results: Vec<CmdResult>,
+    /// Cycles from the edge that accepts the first command to the last `done_o` pulse.
+    pub span: u64,
+}
+
+/// A command accepted and not yet done.
+struct InFlight {
+    index: usize,
+    reads: [Range<u64>; 2],
+    write: Range<u64>,
+    accepted_at: u64,
+    read_bursts: u64,
+    entries_read: u64,
+    entries_written: u64,
+}
+
+impl Command {
+    /// Entry ranges the command reads (A, B).
+    fn reads(&self) -> [Range<u64>; 2] {
+        match self.mode {
+            Mode::Sort | Mode::Dps => [self.src_a..self.src_a + self.len_a, 0..0],
+            Mode::MergeDelete | Mode::Merge => {
+                [self.src_a..self.src_a + self.len_a, self.src_b..self.src_b + self.len_b]
+            }
+        }
+    }
+
+    /// The entry range the command may write (before deletions / the chunk clamp).
+    fn write(&self) -> Range<u64> {
+        let out = match self.mode {
+            Mode::Sort | Mode::Dps => self.len_a,
+            Mode::MergeDelete | Mode::Merge => self.len_a + self.len_b,
+        };
+        self.dst..self.dst + out
+    }
+}
+
+fn overlaps(a: &Range<u64>, b: &Range<u64>) -> bool {
+    a.start < b.end && b.start < a.end
 }
 
 /// The memory model.
@@ -97,11 +160,8 @@ struct Memory {
     /// Response beats due: (cycle from which it may be offered, data).
     rsp: VecDeque<(u64, u64)>,
     offering: bool,
-    read_ok: Vec<Range<u64>>,
-    write_ok: Range<u64>,
-    read_bursts: u64,
-    entries_read: u64,
-    entries_written: u64,
+    /// Commands accepted and not done, oldest first.
+    inflight: VecDeque<InFlight>,
 }
 
 /// The Sorting Core with its memory, command driver and checker.
@@ -114,6 +174,8 @@ pub struct Core {
     fmt: SortFormat,
     burst: u64,
     rng: Rng,
+    cmd_gap: u64,
+    last_done_len: Option<u64>,
 }
 
 impl Core {
@@ -131,11 +193,7 @@ impl Core {
             rng: rng.fork(1),
             rsp: VecDeque::new(),
             offering: false,
-            read_ok: Vec::new(),
-            write_ok: 0..0,
-            read_bursts: 0,
-            entries_read: 0,
-            entries_written: 0,
+            inflight: VecDeque::new(),
         };
         Core {
             dut,
@@ -144,12 +202,20 @@ impl Core {
             fmt: cfg.format(),
             burst: cfg.burst as u64,
             rng: rng.fork(2),
+            cmd_gap: 2,
+            last_done_len: None,
         }
     }
 
     /// Changes the memory timing.
     pub fn set_timing(&mut self, timing: MemTiming) {
         self.mem.timing = timing;
+    }
+
+    /// Sets the longest random idle gap (cycles) before each command is offered (default 2; 0
+    /// offers every command at once, as the cycle measurements need).
+    pub fn set_cmd_gap(&mut self, max: u64) {
+        self.cmd_gap = max;
     }
 
     /// Stores `entries` at entry address `addr`.
@@ -172,11 +238,15 @@ impl Core {
         self.mem.words.retain(|a, _| !range.contains(a));
     }
 
-    /// One cycle of the memory model and the clock.
+    /// One cycle of the memory model and the clock. Writes must fall in the destination of the
+    /// oldest command in flight (commands complete in order), reads in the sources of one in
+    /// flight.
     fn step(&mut self) {
         let c = self.dut.cycle();
         let ready = self.mem.rng.percent(self.mem.timing.req_ready_pct);
         self.dut.set_mem_req_ready_i(ready);
+        let wr_ready = self.mem.rng.percent(self.mem.timing.wr_ready_pct);
+        self.dut.set_mem_wr_ready_i(wr_ready);
         if !self.mem.offering {
             if let Some(&(due, data)) = self.mem.rsp.front() {
                 if due <= c && !self.mem.rng.percent(self.mem.timing.rsp_gap_pct) {
@@ -195,45 +265,163 @@ impl Core {
             self.mem.rsp.pop_front();
             self.mem.offering = false;
         }
+        if wr_ready && self.dut.mem_wr_valid_o() {
+            let addr = self.dut.mem_wr_addr_o();
+            let ok = self.mem.inflight.front().map(|f| f.write.contains(&addr));
+            self.checker.protocol(
+                c,
+                ok == Some(true),
+                &format!(
+                    "write to 0x{addr:x} outside the destination of the oldest command in flight {:x?}",
+                    self.mem.inflight.front().map(|f| f.write.clone())
+                ),
+            );
+            self.mem.words.insert(addr, self.dut.mem_wr_data_o());
+            self.mem.inflight[0].entries_written += 1;
+        }
         if ready && self.dut.mem_req_valid_o() {
             let addr = self.dut.mem_req_addr_o();
             let len = self.dut.mem_req_len_o();
-            if self.dut.mem_req_write_o() {
-                self.checker.value(c, "mem_req_len_o (write)", 1, len);
-                self.checker.protocol(
-                    c,
-                    self.mem.write_ok.contains(&addr),
-                    &format!("write to 0x{addr:x} outside the destination {:x?}", self.mem.write_ok),
-                );
-                self.mem.words.insert(addr, self.dut.mem_wdata_o());
-                self.mem.entries_written += 1;
-            } else {
-                self.checker.protocol(
-                    c,
-                    (1..=self.burst).contains(&len),
-                    &format!("read burst of {len} entries"),
-                );
-                let inside = self.mem.read_ok.iter().any(|r| r.start <= addr && addr + len <= r.end);
-                self.checker.protocol(
-                    c,
-                    inside,
-                    &format!("read of {len} at 0x{addr:x} outside the sources {:x?}", self.mem.read_ok),
-                );
-                let t = self.mem.timing;
-                let mut due =
-                    c + self.mem.rng.range(t.min_latency as u64, t.max_latency.max(t.min_latency) as u64);
-                if let Some(&(last_due, _)) = self.mem.rsp.back() {
-                    due = due.max(last_due);
-                }
-                for i in 0..len {
-                    let data = *self.mem.words.get(&(addr + i)).unwrap_or(&0);
-                    self.mem.rsp.push_back((due, data));
-                }
-                self.mem.read_bursts += 1;
-                self.mem.entries_read += len;
+            self.checker.protocol(
+                c,
+                (1..=self.burst).contains(&len),
+                &format!("read burst of {len} entries"),
+            );
+            let owner = self
+                .mem
+                .inflight
+                .iter()
+                .position(|f| f.reads.iter().any(|r| r.start <= addr && addr + len <= r.end));
+            let sources: Vec<_> = self.mem.inflight.iter().map(|f| f.reads.clone()).collect();
+            self.checker.protocol(
+                c,
+                owner.is_some(),
+                &format!("read of {len} at 0x{addr:x} outside the sources in flight {sources:x?}"),
+            );
+            let t = self.mem.timing;
+            let mut due =
+                c + self.mem.rng.range(t.min_latency as u64, t.max_latency.max(t.min_latency) as u64);
+            if let Some(&(last_due, _)) = self.mem.rsp.back() {
+                due = due.max(last_due);
             }
+            for i in 0..len {
+                let data = *self.mem.words.get(&(addr + i)).unwrap_or(&0);
+                self.mem.rsp.push_back((due, data));
+            }
+            let f = &mut self.mem.inflight[owner.unwrap_or(0)];
+            f.read_bursts += 1;
+            f.entries_read += len;
         }
         self.dut.tick();
+    }
+
+    /// Runs `cmds` back to back (each offered as soon as the previous one was taken, after a
+    /// random gap of up to [`Core::set_cmd_gap`] cycles; a command that reads the output of one
+    /// still in flight waits for its `done_o`) and returns each command's cost.
+    ///
+    /// # Panics
+    /// On a timeout, a protocol violation, `done_o` with no command in flight, or `done_len_o`
+    /// not held between pulses.
+    pub fn run_queue(&mut self, cmds: &[Command]) -> QueueRun {
+        let mut results: Vec<Option<CmdResult>> = vec![None; cmds.len()];
+        let budget: u64 = cmds.iter().map(|c| 2000 + 400 * (c.len_a + c.len_b)).sum();
+        let limit = self.dut.cycle() + budget;
+        let mut next = 0;
+        let mut gap = self.rng.below(self.cmd_gap + 1);
+        let mut offered = false;
+        let mut first_accept = None;
+        loop {
+            let c = self.dut.cycle();
+            if !offered && next < cmds.len() {
+                let waits = cmds[next]
+                    .reads()
+                    .iter()
+                    .any(|r| self.mem.inflight.iter().any(|f| overlaps(r, &f.write)));
+                if gap > 0 {
+                    gap -= 1;
+                } else if !waits {
+                    let cmd = cmds[next];
+                    self.dut.set_cmd_mode_i(cmd.mode as u64);
+                    self.dut.set_cmd_src_a_i(cmd.src_a);
+                    self.dut.set_cmd_len_a_i(cmd.len_a);
+                    self.dut.set_cmd_src_b_i(cmd.src_b);
+                    self.dut.set_cmd_len_b_i(cmd.len_b);
+                    self.dut.set_cmd_dst_i(cmd.dst);
+                    self.dut.set_cmd_valid_i(true);
+                    offered = true;
+                }
+            }
+            self.dut.eval();
+            if self.dut.done_o() {
+                let f = self.mem.inflight.pop_front();
+                self.checker.protocol(c, f.is_some(), "done_o while no command is running");
+                let f = f.expect("checked");
+                let done_len = self.dut.done_len_o();
+                results[f.index] = Some(CmdResult {
+                    cycles: c - f.accepted_at,
+                    accepted_at: f.accepted_at,
+                    done_at: c,
+                    done_len,
+                    read_bursts: f.read_bursts,
+                    entries_read: f.entries_read,
+                    entries_written: f.entries_written,
+                });
+                self.last_done_len = Some(done_len);
+                if self.mem.inflight.is_empty() {
+                    self.checker.protocol(
+                        c,
+                        self.mem.rsp.is_empty() && !self.mem.offering,
+                        "done_o of the last command in flight with read responses pending",
+                    );
+                }
+            } else if let Some(l) = self.last_done_len {
+                self.checker.value(c, "done_len_o (held between done_o pulses)", l, self.dut.done_len_o());
+            }
+            let accepted = offered && self.dut.cmd_ready_o();
+            if accepted {
+                let cmd = cmds[next];
+                self.mem.inflight.push_back(InFlight {
+                    index: next,
+                    reads: cmd.reads(),
+                    write: cmd.write(),
+                    accepted_at: c,
+                    read_bursts: 0,
+                    entries_read: 0,
+                    entries_written: 0,
+                });
+                first_accept.get_or_insert(c);
+            }
+            self.step();
+            if accepted {
+                self.dut.set_cmd_valid_i(false);
+                // Random garbage on the idle command fields.
+                self.dut.set_cmd_src_a_i(self.rng.next_u64());
+                self.dut.set_cmd_len_a_i(self.rng.next_u64());
+                offered = false;
+                next += 1;
+                gap = self.rng.below(self.cmd_gap + 1);
+            }
+            if next == cmds.len() && self.mem.inflight.is_empty() {
+                break;
+            }
+            if self.dut.cycle() > limit {
+                let what = if offered { "cmd_ready_o" } else { "done_o" };
+                self.checker.fail(
+                    self.dut.cycle(),
+                    what,
+                    "progress",
+                    &format!(
+                        "none: timeout with {} of {} commands taken, {} in flight",
+                        next,
+                        cmds.len(),
+                        self.mem.inflight.len()
+                    ),
+                );
+            }
+        }
+        let results: Vec<CmdResult> = results.into_iter().map(|r| r.expect("every command done")).collect();
+        let span = results.last().map_or(0, |r| r.done_at) - first_accept.unwrap_or(0);
+        QueueRun { results, span }
     }
 
     /// Runs one command to completion (random delay before it is offered) and returns its cost.
@@ -241,85 +429,16 @@ impl Core {
     /// # Panics
     /// On a timeout, a protocol violation, or `done_o` at the wrong time.
     pub fn run(&mut self, cmd: Command) -> CmdResult {
-        let in_range = |a: u64, l: u64| a..a + l;
-        self.mem.read_ok = vec![in_range(cmd.src_a, cmd.len_a), in_range(cmd.src_b, cmd.len_b)];
-        let out_len = match cmd.mode {
-            Mode::Sort | Mode::Dps => cmd.len_a,
-            Mode::MergeDelete | Mode::Merge => cmd.len_a + cmd.len_b,
-        };
-        self.mem.write_ok = in_range(cmd.dst, out_len);
-        let before = (self.mem.read_bursts, self.mem.entries_read, self.mem.entries_written);
-        // A random idle gap before the command.
-        for _ in 0..self.rng.below(3) {
-            self.step();
-        }
-        self.dut.set_cmd_mode_i(cmd.mode as u64);
-        self.dut.set_cmd_src_a_i(cmd.src_a);
-        self.dut.set_cmd_len_a_i(cmd.len_a);
-        self.dut.set_cmd_src_b_i(cmd.src_b);
-        self.dut.set_cmd_len_b_i(cmd.len_b);
-        self.dut.set_cmd_dst_i(cmd.dst);
-        self.dut.set_cmd_valid_i(true);
-        let limit = self.dut.cycle() + 2000 + 400 * (cmd.len_a + cmd.len_b);
-        let mut start;
-        loop {
-            self.dut.eval();
-            let accepted = self.dut.cmd_ready_o();
-            let c = self.dut.cycle();
-            start = c;
-            self.checker.protocol(c, !self.dut.done_o(), "done_o while no command is running");
-            self.step();
-            if accepted {
-                break;
-            }
-            if self.dut.cycle() > limit {
-                self.checker.fail(c, "cmd_ready_o", "1", "0 (timeout)");
-            }
-        }
-        self.dut.set_cmd_valid_i(false);
-        // Random garbage on the idle command fields.
-        self.dut.set_cmd_src_a_i(self.rng.next_u64());
-        self.dut.set_cmd_len_a_i(self.rng.next_u64());
-        loop {
-            self.dut.eval();
-            if self.dut.done_o() {
-                break;
-            }
-            let c = self.dut.cycle();
-            if c > limit {
-                self.checker.fail(
-                    c,
-                    "done_o",
-                    "a pulse",
-                    &format!("none after {} cycles ({cmd:?})", c - start),
-                );
-            }
-            self.step();
-        }
-        let c = self.dut.cycle();
-        let cycles = c - start;
-        let done_len = self.dut.done_len_o();
-        self.checker.protocol(
-            c,
-            self.mem.rsp.is_empty() && !self.mem.offering,
-            "done_o with read responses pending",
-        );
-        self.step();
+        self.checker.protocol(self.dut.cycle(), self.mem.inflight.is_empty(), "run with commands in flight");
+        let r = self.run_queue(&[cmd]).results[0];
         self.dut.eval();
         self.checker.protocol(self.dut.cycle(), !self.dut.done_o(), "done_o longer than one cycle");
         self.checker.protocol(
             self.dut.cycle(),
             self.dut.cmd_ready_o(),
-            "cmd_ready_o low the cycle after done_o",
+            "cmd_ready_o low the cycle after the only command's done_o",
         );
-        self.checker.value(self.dut.cycle(), "done_len_o (held)", done_len, self.dut.done_len_o());
-        CmdResult {
-            cycles,
-            done_len,
-            read_bursts: self.mem.read_bursts - before.0,
-            entries_read: self.mem.entries_read - before.1,
-            entries_written: self.mem.entries_written - before.2,
-        }
+        r
     }
 
     /// Checks `len` entries at `addr` against `want`, naming the first mismatch.
@@ -373,19 +492,60 @@ pub fn sort_chunk_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry
     r
 }
 
+/// (a) Sorts several chunks (each `<= C` entries; chunk `k` read from `SRC + k C`, written to
+/// `DST + k C`) with `mode` commands issued back to back, and checks every one against golden.
+pub fn sort_chunks_checked(
+    core: &mut Core,
+    cfg: &GenConfig,
+    chunks: &[Vec<SortEntry>],
+    mode: Mode,
+) -> QueueRun {
+    let c = cfg.chunk as u64;
+    core.clear(layout::DST..layout::DST + layout::REGION);
+    let mut cmds = Vec::new();
+    for (k, v) in chunks.iter().enumerate() {
+        assert!(v.len() <= cfg.chunk, "one chunk at most");
+        let off = k as u64 * c;
+        core.write_entries(layout::SRC + off, v);
+        cmds.push(Command {
+            mode,
+            src_a: layout::SRC + off,
+            len_a: v.len() as u64,
+            src_b: 0,
+            len_b: 0,
+            dst: layout::DST + off,
+        });
+    }
+    let q = core.run_queue(&cmds);
+    for (k, v) in chunks.iter().enumerate() {
+        let (want, _) = neo_golden::sort::full_sort(v, &cfg.sort_config());
+        core.checker.value(
+            core.dut.cycle(),
+            &format!("done_len_o (chunk {k})"),
+            want.len() as u64,
+            q.results[k].done_len,
+        );
+        core.expect(&format!("sorted chunk {k}"), layout::DST + k as u64 * c, &want);
+    }
+    q
+}
+
 /// (a) Conventional sort of any number of entries, as golden `full_sort`: `SORT` per chunk into
 /// runs, then `MERGE` passes over runs of `C, 2C, ...` (a lone last run is copied by merging it
-/// with an empty B). Checks the result and returns the total cycles.
+/// with an empty B), all issued as one back-to-back queue (the chunk SORTs overlap; each MERGE
+/// waits for the commands whose output it reads). Checks the result and returns the cycles from
+/// the first command's acceptance to the last `done_o`.
 pub fn full_sort_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry]) -> u64 {
     let c = cfg.chunk;
     let len = entries.len() as u64;
     core.write_entries(layout::SRC, entries);
     core.clear(layout::PING..layout::DST + layout::REGION);
-    let mut cycles = 0;
+    let mut cmds = Vec::new();
+    let mut want_len = Vec::new();
     // Chunks into PING.
     for (k, chunk) in entries.chunks(c).enumerate() {
         let off = (k * c) as u64;
-        let r = core.run(Command {
+        cmds.push(Command {
             mode: Mode::Sort,
             src_a: layout::SRC + off,
             len_a: chunk.len() as u64,
@@ -393,13 +553,7 @@ pub fn full_sort_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry]
             len_b: 0,
             dst: layout::PING + off,
         });
-        core.checker.value(
-            core.dut.cycle(),
-            &format!("done_len_o (chunk {k})"),
-            chunk.len() as u64,
-            r.done_len,
-        );
-        cycles += r.cycles;
+        want_len.push(chunk.len() as u64);
     }
     let (mut from, mut to) = (layout::PING, layout::PONG);
     let mut run = c as u64;
@@ -408,7 +562,7 @@ pub fn full_sort_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry]
         while start < len {
             let la = run.min(len - start);
             let lb = run.min(len - start - la);
-            let r = core.run(Command {
+            cmds.push(Command {
                 mode: Mode::Merge,
                 src_a: from + start,
                 len_a: la,
@@ -416,20 +570,29 @@ pub fn full_sort_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry]
                 len_b: lb,
                 dst: to + start,
             });
-            core.checker.value(core.dut.cycle(), "done_len_o (merge pass)", la + lb, r.done_len);
-            cycles += r.cycles;
+            want_len.push(la + lb);
             start += la + lb;
         }
         std::mem::swap(&mut from, &mut to);
         run *= 2;
     }
+    let q = core.run_queue(&cmds);
+    for (k, (r, w)) in q.results.iter().zip(&want_len).enumerate() {
+        core.checker.value(
+            core.dut.cycle(),
+            &format!("done_len_o (command {k}: {:?})", cmds[k].mode),
+            *w,
+            r.done_len,
+        );
+    }
     let (want, _) = neo_golden::sort::full_sort(entries, &cfg.sort_config());
     core.expect("full sort", from, &want);
-    cycles
+    q.span
 }
 
 /// (b) One DPS pass over `table` with `parity`: a `DPS` command per chunk of the parity's
-/// boundaries, checked against golden `dps_pass`. Returns the sorted table and the cycles.
+/// boundaries, issued back to back, checked against golden `dps_pass`. Returns the sorted table
+/// and the cycles from the first command's acceptance to the last `done_o`.
 pub fn dps_pass_checked(
     core: &mut Core,
     cfg: &GenConfig,
@@ -438,28 +601,31 @@ pub fn dps_pass_checked(
 ) -> (Vec<SortEntry>, u64) {
     core.write_entries(layout::SRC, table);
     core.clear(layout::DST..layout::DST + layout::REGION);
-    let mut cycles = 0;
-    for r in parity.chunks(table.len(), cfg.chunk) {
-        let res = core.run(Command {
+    let ranges: Vec<_> = parity.chunks(table.len(), cfg.chunk).collect();
+    let cmds: Vec<Command> = ranges
+        .iter()
+        .map(|r| Command {
             mode: Mode::Dps,
             src_a: layout::SRC + r.start as u64,
             len_a: r.len() as u64,
             src_b: 0,
             len_b: 0,
             dst: layout::DST + r.start as u64,
-        });
+        })
+        .collect();
+    let q = core.run_queue(&cmds);
+    for (r, res) in ranges.iter().zip(&q.results) {
         core.checker.value(
             core.dut.cycle(),
             &format!("done_len_o (DPS chunk {r:?})"),
             r.len() as u64,
             res.done_len,
         );
-        cycles += res.cycles;
     }
     let mut want = table.to_vec();
     neo_golden::sort::dps_pass(&mut want, parity, &cfg.sort_config());
     core.expect(&format!("DPS pass {parity:?}"), layout::DST, &want);
-    (want, cycles)
+    (want, q.span)
 }
 
 /// (c) Merges sorted `a` and `b` (`MERGE_DELETE` when `drop_invalid`, else `MERGE`) and checks
@@ -500,4 +666,76 @@ pub fn update_checked(
     let golden = neo_golden::sort::update_tile(prev, incoming, frame, &ucfg);
     core.expect("update table", layout::DST, &golden.table);
     golden.table
+}
+
+/// A command of a mixed queue, its inputs already placed in memory, and its golden output.
+#[derive(Clone, Debug)]
+pub struct CheckedCmd {
+    /// The command.
+    pub cmd: Command,
+    /// The golden output at `cmd.dst` (its length is the expected `done_len_o`).
+    pub want: Vec<SortEntry>,
+}
+
+/// Entry addresses reserved per queue slot in each region (inputs of a slot never overlap).
+pub const SLOT: u64 = 0x1000;
+
+/// Places `entries` in slot `slot` and returns a chunk command (`mode` SORT or DPS) with its
+/// golden output (golden `sort_chunk` of the first `min(len, C)` entries: the core clamps).
+pub fn chunk_cmd(
+    core: &mut Core,
+    cfg: &GenConfig,
+    slot: u64,
+    entries: &[SortEntry],
+    mode: Mode,
+) -> CheckedCmd {
+    let src = layout::SRC + slot * SLOT;
+    let dst = layout::DST + slot * SLOT;
+    core.write_entries(src, entries);
+    core.clear(dst..dst + SLOT);
+    let n = entries.len().min(cfg.chunk);
+    let (want, _) = neo_golden::sort::full_sort(&entries[..n], &cfg.sort_config());
+    CheckedCmd {
+        cmd: Command { mode, src_a: src, len_a: entries.len() as u64, src_b: 0, len_b: 0, dst },
+        want,
+    }
+}
+
+/// Places sorted `a` and `b` in slot `slot` and returns a MERGE (`drop_invalid` false) or
+/// MERGE_DELETE command with its golden output (`merge2`).
+pub fn merge_cmd(
+    core: &mut Core,
+    slot: u64,
+    a: &[SortEntry],
+    b: &[SortEntry],
+    drop_invalid: bool,
+) -> CheckedCmd {
+    let (sa, sb, dst) = (layout::SRC + slot * SLOT, layout::SRC_B + slot * SLOT, layout::DST + slot * SLOT);
+    core.write_entries(sa, a);
+    core.write_entries(sb, b);
+    core.clear(dst..dst + SLOT);
+    CheckedCmd {
+        cmd: Command {
+            mode: if drop_invalid { Mode::MergeDelete } else { Mode::Merge },
+            src_a: sa,
+            len_a: a.len() as u64,
+            src_b: sb,
+            len_b: b.len() as u64,
+            dst,
+        },
+        want: merge2(a, b, drop_invalid),
+    }
+}
+
+/// Runs `cmds` back to back ([`Core::run_queue`]) and checks every command's `done_len_o` and
+/// output against its golden result.
+pub fn queue_checked(core: &mut Core, cmds: &[CheckedCmd]) -> QueueRun {
+    let plain: Vec<Command> = cmds.iter().map(|c| c.cmd).collect();
+    let q = core.run_queue(&plain);
+    for (k, (c, r)) in cmds.iter().zip(&q.results).enumerate() {
+        let what = format!("command {k} ({:?}, len_a {}, len_b {})", c.cmd.mode, c.cmd.len_a, c.cmd.len_b);
+        core.checker.value(r.done_at, &format!("done_len_o of {what}"), c.want.len() as u64, r.done_len);
+        core.expect(&format!("output of {what}"), c.cmd.dst, &c.want);
+    }
+    q
 }

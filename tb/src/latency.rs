@@ -15,10 +15,10 @@
 //!     "neo_scu": { "latency": L, "ii": I, "drain_ii": 1, "gaussians": N, "lanes": 16 }
 //!   },
 //!   "sort_core": {
-//!     "conventional": [ { "entries": n, "cycles": c, "artifact_cycles": a }, ... ],
-//!     "dps":          [ { "entries": n, "cycles": c, "artifact_cycles": a }, ... ],
-//!     "merge":        [ { "entries": n, "len_a": .., "len_b": .., "cycles": c }, ... ],
-//!     "merge_delete": [ { "entries": n, "len_a": .., "len_b": .., "invalid": k, "out": m, "cycles": c }, ... ]
+//!     "conventional": [ { "entries": n, "cycles": c, "interval": i, "artifact_cycles": a }, ... ],
+//!     "dps":          [ { "entries": n, "cycles": c, "interval": i, "artifact_cycles": a }, ... ],
+//!     "merge":        [ { "entries": n, "len_a": .., "len_b": .., "cycles": c, "interval": i }, ... ],
+//!     "merge_delete": [ { "entries": n, "len_a": .., "len_b": .., "invalid": k, "out": m, "cycles": c, "interval": i }, ... ]
 //!   },
 //!   "raster": {
 //!     "itu": { "latency": L, "ii": 1, "jobs": N, "subtiles_per_job": 64 }
@@ -31,10 +31,13 @@
 //! `subtiles_per_job` subtiles of the tile). The raster core (`raster.core.*`) is not measured
 //! yet (no `neo_raster_core` RTL), so those fields are absent and the cycle model assumes them.
 //!
+//! `cycles` is one command alone (accept to `done_o`); `interval` is the steady-state cost per
+//! command when identical commands stream back to back (see [`STREAM`]).
+//!
 //! All numbers are measured on the Verilated RTL with fixed stimulus (seeded), full-rate inputs,
 //! an always-ready output and the ideal memory, so the file is reproducible bit for bit.
 
-use crate::core::{layout, Command, Core, MemTiming, Mode};
+use crate::core::{layout, merge_cmd, queue_checked, sort_chunks_checked, Command, Core, MemTiming, Mode};
 use crate::models::{NeoBsu, NeoMsu};
 use crate::rng::Rng;
 use crate::stimulus::{sorted_stream, tile_entries};
@@ -160,6 +163,33 @@ pub fn artifact_chunk_cycles(n: u64, bsu: u64) -> u64 {
     (64 - (vectors - 1).leading_zeros()) as u64 * n
 }
 
+/// Commands per back-to-back stream of the interval measurement: the interval is the mean
+/// spacing of the `done_o` pulses of commands `2..STREAM` (the first is the fill).
+pub const STREAM: usize = 6;
+
+/// Steady-state interval from the `done_o` cycles of a stream (rounded to whole cycles).
+fn stream_interval(done_at: &[u64]) -> u64 {
+    let k = done_at.len();
+    assert!(k >= 3, "a stream of at least 3 commands");
+    ((done_at[k - 1] - done_at[1]) as f64 / (k - 2) as f64).round() as u64
+}
+
+/// Interval of `STREAM` chunk commands of `n` entries each, back to back with no gap (every
+/// output checked against golden).
+fn chunk_interval(core: &mut Core, cfg: &GenConfig, mode: Mode, n: u64, rng: &mut Rng) -> u64 {
+    let chunks: Vec<Vec<SortEntry>> =
+        (0..STREAM).map(|_| tile_entries(&cfg.format(), rng, n as usize, false, 100)).collect();
+    let q = sort_chunks_checked(core, cfg, &chunks, mode);
+    stream_interval(&q.results.iter().map(|r| r.done_at).collect::<Vec<_>>())
+}
+
+/// Interval of `STREAM` copies of the same merge back to back (every output checked).
+fn merge_interval(core: &mut Core, a: &[SortEntry], b: &[SortEntry], drop_invalid: bool) -> u64 {
+    let cmds: Vec<_> = (0..STREAM as u64).map(|slot| merge_cmd(core, slot, a, b, drop_invalid)).collect();
+    let q = queue_checked(core, &cmds);
+    stream_interval(&q.results.iter().map(|r| r.done_at).collect::<Vec<_>>())
+}
+
 /// Cycles of one core command with the ideal memory, checked against golden on the way.
 fn core_cycles(core: &mut Core, cfg: &GenConfig, mode: Mode, a: &[SortEntry], b: &[SortEntry]) -> (u64, u64) {
     let r = match mode {
@@ -178,6 +208,7 @@ pub fn report(cfg: &GenConfig) -> Value {
     let (ml, mii, mgap, me, mc) = msu_latency(cfg, 64);
 
     let mut core = Core::new(cfg, SEED, MemTiming::IDEAL);
+    core.set_cmd_gap(0);
     let mut rng = Rng::new(SEED ^ 2);
     // A zero-length command: the fixed cost of accepting and finishing.
     let overhead = core
@@ -190,7 +221,13 @@ pub fn report(cfg: &GenConfig) -> Value {
             .map(|&n| {
                 let v = tile_entries(&fmt, rng, n as usize, false, 100);
                 let (cycles, _) = core_cycles(&mut core, cfg, mode, &v, &[]);
-                json!({ "entries": n, "cycles": cycles, "artifact_cycles": artifact_chunk_cycles(n, bsu_w) })
+                let interval = chunk_interval(&mut core, cfg, mode, n, rng);
+                json!({
+                    "entries": n,
+                    "cycles": cycles,
+                    "interval": interval,
+                    "artifact_cycles": artifact_chunk_cycles(n, bsu_w)
+                })
             })
             .collect()
     };
@@ -212,7 +249,10 @@ pub fn report(cfg: &GenConfig) -> Value {
         };
         let (a, b) = (fix(a), fix(b));
         let (cycles, _) = core_cycles(&mut core, cfg, Mode::Merge, &a, &b);
-        merge.push(json!({ "entries": la + lb, "len_a": la, "len_b": lb, "cycles": cycles }));
+        let interval = merge_interval(&mut core, &a, &b, false);
+        merge.push(
+            json!({ "entries": la + lb, "len_a": la, "len_b": lb, "cycles": cycles, "interval": interval }),
+        );
         // A quarter of the entries invalid (every fourth of each stream).
         let kill = |v: &[SortEntry]| -> Vec<SortEntry> {
             v.iter().enumerate().map(|(i, e)| e.with_valid(i % 4 != 3)).collect()
@@ -220,8 +260,10 @@ pub fn report(cfg: &GenConfig) -> Value {
         let (ka, kb) = (kill(&a), kill(&b));
         let invalid = ka.iter().chain(&kb).filter(|e| !e.valid).count();
         let (cycles, out) = core_cycles(&mut core, cfg, Mode::MergeDelete, &ka, &kb);
+        let interval = merge_interval(&mut core, &ka, &kb, true);
         merge_delete.push(json!({
-            "entries": la + lb, "len_a": la, "len_b": lb, "invalid": invalid, "out": out, "cycles": cycles
+            "entries": la + lb, "len_a": la, "len_b": lb, "invalid": invalid, "out": out, "cycles": cycles,
+            "interval": interval
         }));
     }
 
@@ -239,12 +281,13 @@ pub fn report(cfg: &GenConfig) -> Value {
             "raster.itu.latency": "neo_itu: rising edges from the edge that accepts a (Gaussian, tile) job to the first cycle its subtile bitmap is offered",
             "raster.itu.ii": "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once",
             "raster.itu.jobs": "random jobs of the II measurement (every bitmap checked against golden subtile_bitmap)",
-            "sort_core.*.cycles": "cycles from the edge that accepts the command (cmd_valid_i & cmd_ready_o) to the done_o pulse, ideal memory, output verified against golden",
+            "sort_core.*.cycles": "one command alone: cycles from the edge that accepts the command (cmd_valid_i & cmd_ready_o) to the done_o pulse, ideal memory, output verified against golden",
+            "sort_core.*.interval": "steady state: cycles per command when 6 identical commands stream back to back (each offered as soon as the previous one was taken; mean spacing of the done_o pulses of commands 2..6), ideal memory, outputs verified; chunk commands overlap (a chunk's load runs under the previous chunk's merge passes), merge commands serialise (interval = cycles + the turnaround)",
             "sort_core.conventional": "SORT of one chunk of `entries` entries: load, BSU vectors, in-chunk merge passes, write-back (golden full_sort of one chunk)",
             "sort_core.dps": "DPS command on one chunk (same datapath as SORT; golden dps_pass)",
             "sort_core.merge": "MERGE of sorted streams A and B (golden merge2(a, b, false))",
             "sort_core.merge_delete": "MERGE_DELETE with every fourth entry of each stream invalid (golden merge2(a, b, true)); `out` entries written",
-            "sort_core.*.artifact_cycles": "the Neo artifact's cycle model for the in-chunk merge passes of an n-entry chunk, ceil(log2(n/16)) * n: it counts only the merge passes at one entry per cycle, while `cycles` is the whole command (load, BSU, passes, write-back) measured on the RTL"
+            "sort_core.*.artifact_cycles": "the Neo artifact's cycle model for the in-chunk merge passes of an n-entry chunk, ceil(log2(n/16)) * n: it counts only the merge passes at one entry per cycle, while `cycles` is the whole command (load, BSU, passes, write-back) measured on the RTL and `interval` the command's share of a back-to-back stream"
         },
         "config": serde_json::to_value(cfg).expect("GenConfig serializes"),
         "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },

@@ -2,7 +2,10 @@
 //! memory served by the test bench's model (random request stalls, random response latency).
 //!
 //! Chunks of 1, 255, 256 entries are one `SORT` each; 257 entries is two chunks (256 + 1) plus
-//! a `MERGE` of the two runs, exactly golden `full_sort`'s schedule.
+//! a `MERGE` of the two runs, exactly golden `full_sort`'s schedule. The flows issue their
+//! commands back to back (several in flight); mixed random queues and directed chunks run back
+//! to back too, and `core_back_to_back_chunks_overlap` shows the load of one chunk is hidden
+//! under the previous chunk's merge passes.
 
 #[cfg(not(neo_has_verilator))]
 #[test]
@@ -14,8 +17,8 @@ fn sort_core_skipped_without_verilator() {
 mod cosim {
     use neo_golden::sort::{Parity, SortEntry};
     use neo_tb::core::{
-        dps_pass_checked, full_sort_checked, layout, merge_checked, sort_chunk_checked, update_checked,
-        Command, Core, MemTiming, Mode,
+        chunk_cmd, dps_pass_checked, full_sort_checked, layout, merge_checked, merge_cmd, queue_checked,
+        sort_chunk_checked, sort_chunks_checked, update_checked, CheckedCmd, Command, Core, MemTiming, Mode,
     };
     use neo_tb::rng::{test_seed, Rng};
     use neo_tb::stimulus::{nearly_sorted, sorted_stream, tile_entries};
@@ -194,6 +197,165 @@ mod cosim {
             let incoming = all[next..next + n_in].to_vec();
             next += n_in;
             table = update_checked(&mut c, &cfg, &table, &incoming, frame);
+        }
+    }
+
+    /// Random commands for a mixed queue: mostly chunks (SORT / DPS of 0..=C entries, some
+    /// clamped), some merges of two sorted streams (with and without delete).
+    fn random_queue(c: &mut Core, rng: &mut Rng, len: usize) -> Vec<CheckedCmd> {
+        let cfg = neo_tb::config();
+        let fmt = cfg.format();
+        let chunk = cfg.chunk as u64;
+        (0..len as u64)
+            .map(|slot| {
+                if rng.percent(80) {
+                    let n = match rng.below(8) {
+                        0 => *rng.pick(&[0, 1, 16, 17, chunk - 1, chunk, chunk + 1]),
+                        _ => rng.range(1, chunk),
+                    } as usize;
+                    let ties = rng.percent(30);
+                    let v = tile_entries(&fmt, rng, n, ties, 80);
+                    chunk_cmd(c, &cfg, slot, &v, if rng.percent(50) { Mode::Sort } else { Mode::Dps })
+                } else {
+                    let (la, lb) = (rng.below(300) as usize, rng.below(300) as usize);
+                    let fix = |v: Vec<SortEntry>| -> Vec<SortEntry> {
+                        v.into_iter()
+                            .map(|mut e| {
+                                e.id = e.id.min(fmt.id_max() - 1);
+                                e
+                            })
+                            .collect()
+                    };
+                    let ties = rng.percent(30);
+                    let a = fix(sorted_stream(&fmt, rng, la, 75, ties));
+                    let b = fix(sorted_stream(&fmt, rng, lb, 75, false));
+                    merge_cmd(c, slot, &a, &b, rng.percent(50))
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn core_back_to_back_random_queues_match_golden() {
+        let name = "core_back_to_back_random_queues_match_golden";
+        let seed = test_seed(name);
+        let mut rng = Rng::new(seed);
+        let mut c = core(name, seed, MemTiming::RANDOM);
+        let mut cmds = 0;
+        for q in 0..8 {
+            // Alternate a hostile memory with gaps between commands and an ideal one with none.
+            let ideal = q % 4 == 3;
+            c.set_timing(if ideal { MemTiming::IDEAL } else { MemTiming::RANDOM });
+            c.set_cmd_gap(if q % 2 == 0 { 0 } else { 3 });
+            let jobs = random_queue(&mut c, &mut rng, 12);
+            queue_checked(&mut c, &jobs);
+            cmds += jobs.len();
+        }
+        println!("{name}: {cmds} commands back to back");
+    }
+
+    #[test]
+    fn core_back_to_back_directed_chunks() {
+        let name = "core_back_to_back_directed_chunks";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let fmt = cfg.format();
+        let mut rng = Rng::new(seed);
+        let n = cfg.chunk as u32;
+        let cases: Vec<(&str, Vec<SortEntry>)> = vec![
+            ("1 entry", tile_entries(&fmt, &mut rng, 1, false, 100)),
+            ("255 entries", tile_entries(&fmt, &mut rng, 255, true, 90)),
+            ("256 entries", tile_entries(&fmt, &mut rng, 256, false, 90)),
+            ("257 entries (clamped to one chunk)", tile_entries(&fmt, &mut rng, 257, false, 90)),
+            ("empty", Vec::new()),
+            ("all invalid", (0..n).map(|i| SortEntry { key: i % 7, id: i, valid: false }).collect()),
+            ("one valid", (0..37).map(|i| SortEntry { key: 40 - i, id: i, valid: i == 20 }).collect()),
+            ("equal keys, different ids", (0..n).map(|i| SortEntry::new(9, (i * 37) % n)).collect()),
+            ("reversed", (0..n).map(|i| SortEntry::new(n - i, i)).collect()),
+            ("already sorted", (0..n).map(|i| SortEntry::new(i, 1000 + i)).collect()),
+        ];
+        for (timing, gap) in [(MemTiming::RANDOM, 2), (MemTiming::IDEAL, 0)] {
+            let mut c = core(name, seed, timing);
+            c.set_cmd_gap(gap);
+            for mode in [Mode::Sort, Mode::Dps] {
+                let jobs: Vec<CheckedCmd> = cases
+                    .iter()
+                    .enumerate()
+                    .map(|(k, (case, v))| {
+                        println!("case {k}: {case}");
+                        chunk_cmd(&mut c, &cfg, k as u64, v, mode)
+                    })
+                    .collect();
+                queue_checked(&mut c, &jobs);
+            }
+        }
+    }
+
+    /// The structural bound of one chunk's merge passes at one MSU+ output per cycle: `passes`
+    /// passes of `n` entries, plus a few cycles per merge (pair set-up, end-of-merge flush) and
+    /// per pass (pipeline drain).
+    fn msu_bound(n: u64, bsu: u64) -> u64 {
+        let vectors = n.div_ceil(bsu);
+        let passes = if vectors <= 1 { 1 } else { (vectors - 1).ilog2() as u64 + 1 };
+        let merges: u64 = (0..passes).map(|p| vectors.div_ceil(2 << p)).sum();
+        passes * n + 4 * merges + 4 * passes + 16
+    }
+
+    #[test]
+    fn core_back_to_back_chunks_overlap() {
+        let name = "core_back_to_back_chunks_overlap";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let mut rng = Rng::new(seed);
+        let bsu = cfg.bsu_width as u64;
+        for n in [64u64, cfg.chunk as u64] {
+            for mode in [Mode::Sort, Mode::Dps] {
+                let mut c = core(name, seed, MemTiming::IDEAL);
+                c.set_cmd_gap(0);
+                let v = tile_entries(&cfg.format(), &mut rng, n as usize, false, 100);
+                let single = sort_chunk_checked(&mut c, &cfg, &v, mode).cycles;
+                let k = 8;
+                let chunks: Vec<Vec<SortEntry>> =
+                    (0..k).map(|_| tile_entries(&cfg.format(), &mut rng, n as usize, true, 90)).collect();
+                let q = sort_chunks_checked(&mut c, &cfg, &chunks, mode);
+                let d: Vec<u64> = q.results.iter().map(|r| r.done_at).collect();
+                let interval = (d[k - 1] - d[1]) / (k as u64 - 2);
+                let bound = msu_bound(n, bsu);
+                println!("{mode:?} of {n}: single {single} cycles, back to back {interval} cycles per chunk (MSU+ bound {bound})");
+                assert!(interval <= bound, "{mode:?} {n}: interval {interval} above the MSU+ bound {bound}");
+                // The load (n entries at one per cycle) no longer adds to the interval.
+                assert!(
+                    interval + n <= single,
+                    "{mode:?} {n}: load not hidden (interval {interval}, single {single})"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn core_input_buffer_is_not_reused_before_its_first_pass_ends() {
+        // A 32-entry chunk whose first run sorts entirely after its second (its only pass, to
+        // memory, pops B first and A's entries 0..15 last), written back at a quarter rate;
+        // behind it a 1-entry chunk (loaded at once) and a 32-entry chunk that the LOAD engine
+        // may only put into the first chunk's input buffer once that pass is over.
+        let name = "core_input_buffer_is_not_reused_before_its_first_pass_ends";
+        let seed = test_seed(name);
+        let cfg = neo_tb::config();
+        let mut rng = Rng::new(seed);
+        let w = cfg.bsu_width as u32;
+        for round in 0..6u64 {
+            let mut c = core(name, seed ^ round, MemTiming::SLOW_WRITES);
+            c.set_cmd_gap(0);
+            let first: Vec<SortEntry> =
+                (0..2 * w).map(|i| SortEntry::new(if i < w { 1000 + i } else { i }, i)).collect();
+            let one = tile_entries(&cfg.format(), &mut rng, 1, false, 100);
+            let third = tile_entries(&cfg.format(), &mut rng, 2 * w as usize, false, 100);
+            let jobs = vec![
+                chunk_cmd(&mut c, &cfg, 3 * round, &first, Mode::Sort),
+                chunk_cmd(&mut c, &cfg, 3 * round + 1, &one, Mode::Sort),
+                chunk_cmd(&mut c, &cfg, 3 * round + 2, &third, Mode::Dps),
+            ];
+            queue_checked(&mut c, &jobs);
         }
     }
 }

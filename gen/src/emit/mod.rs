@@ -279,6 +279,35 @@ impl Module {
         self.item(Item::Seq { reset: Some(reset), body })
     }
 
+    /// Reset statements for every control register declared so far at the top level (a `reg`
+    /// whose name ends in `_q`), in declaration order: zero of the register's width, or the
+    /// value given in `overrides` (`(name, value)`).
+    ///
+    /// # Panics
+    /// When an override names no declared `_q` register (a generator bug).
+    pub fn q_resets(&self, overrides: &[(&str, &str)]) -> Vec<Stmt> {
+        let regs: Vec<(&str, u32)> = self
+            .items
+            .iter()
+            .filter_map(|i| match i {
+                Item::Reg { name, width } if name.ends_with("_q") => Some((name.as_str(), *width)),
+                _ => None,
+            })
+            .collect();
+        for (name, _) in overrides {
+            assert!(regs.iter().any(|(r, _)| r == name), "reset override for undeclared register {name}");
+        }
+        regs.iter()
+            .map(|&(name, width)| {
+                let value = overrides
+                    .iter()
+                    .find(|(o, _)| *o == name)
+                    .map_or_else(|| expr::lit(width, 0), |(_, v)| v.to_string());
+                set(name, value)
+            })
+            .collect()
+    }
+
     /// A clocked block without reset (memory writes, datapath-only registers).
     pub fn seq_noreset(&mut self, body: Vec<Stmt>) -> &mut Self {
         self.item(Item::Seq { reset: None, body })
@@ -359,6 +388,22 @@ pub fn conns(pairs: &[(&str, String)]) -> Vec<(String, String)> {
 mod tests {
     use super::expr::lit;
     use super::*;
+
+    #[test]
+    fn q_resets_cover_every_control_register_in_order() {
+        let mut m = Module::new("r");
+        m.reg("a_q", 3).reg("data", 8).reg("s_q", 2).wire("w_q", 1);
+        let r = m.q_resets(&[("s_q", "S_IDLE")]);
+        assert_eq!(r, vec![set("a_q", "3'd0"), set("s_q", "S_IDLE")]);
+    }
+
+    #[test]
+    #[should_panic(expected = "undeclared register nope_q")]
+    fn q_resets_reject_an_unknown_override() {
+        let mut m = Module::new("r");
+        m.reg("a_q", 3);
+        m.q_resets(&[("nope_q", "1'b1")]);
+    }
 
     fn counter() -> Module {
         let mut m = Module::new("cnt");

@@ -1,5 +1,6 @@
-//! `neo_sort_core`: one Sorting Core (paper Section 5.3): BSU + MSU+ + two chunk buffers, a
-//! command port and a memory-request port. The protocols are documented in `docs/rtl.md`.
+//! `neo_sort_core`: one Sorting Core (paper Section 5.3): BSU + MSU+ + double-buffered I/O
+//! buffers, a command port and a memory-request port. The protocols are documented in
+//! `docs/rtl.md`.
 //!
 //! # Commands (`cmd_mode_i`)
 //! - `0` SORT: sort the chunk `src_a[0 .. min(len_a, chunk))` into `dst` (conventional sort of
@@ -9,24 +10,34 @@
 //!   into `dst`, dropping entries whose valid bit is 0 (golden `merge2(a, b, true)`);
 //! - `3` MERGE: the same without dropping (golden `merge2(a, b, false)`, the global passes).
 //!
-//! `done_o` pulses for one cycle when the command has finished (every write accepted by the
-//! memory); `done_len_o` then holds the number of entries written, and keeps it until the
-//! next command is accepted. `cmd_ready_o` is high while the core is idle.
+//! Commands complete in the order they were accepted; `done_o` pulses for one cycle per
+//! command once its last write has been accepted by the memory, with `done_len_o` = the
+//! entries it wrote (held until the next `done_o`).
 //!
-//! # Datapath
-//! SORT/DPS: LOAD reads the chunk in bursts; the responses fill an `n`-lane deserializer
-//! (lanes start as golden padding), each full (or final partial) vector goes through the BSU,
-//! whose output lanes are written one per cycle into buffer 0 (the padding, which sorts last, is
-//! not written). Then merge passes: runs of `n, 2n, ...` are merged pairwise by the MSU+ from one
-//! buffer into the other (a lone last run is merged with an empty stream, i.e. copied); the
-//! final pass (the one that leaves a single run, also when the chunk is a single vector) writes
-//! to memory instead.
-//! MERGE modes: both streams are prefetched in bursts into the two buffers used as circular
-//! FIFOs (space reserved before a read is issued, so responses are always accepted); the MSU+
-//! output is written to memory.
+//! # Buffers and overlap
+//! Four chunk buffers: two input buffers `u_in0`, `u_in1` (ping-pong between consecutive chunk
+//! commands) and two work buffers `u_work0`, `u_work1` (ping-pong between merge passes).
+//! Two engines run concurrently:
+//! - the LOAD engine (front end) takes a chunk command as soon as the next input buffer is free
+//!   and no load is running: it reads the chunk in bursts into an `n`-lane deserializer (lanes
+//!   start as golden padding), each full (or final partial) vector goes through the BSU, whose
+//!   output lanes are written one per cycle into the input buffer (padding is not written);
+//! - the PASS engine (back end) takes the loaded input buffers in order: runs of `n, 2n, ...`
+//!   are merged pairwise by the MSU+ (a lone last run is merged with an empty stream, i.e.
+//!   copied); the first pass reads the input buffer (which is then free for the load after the
+//!   next one), the others ping-pong between the work buffers, and the final pass (the one that
+//!   leaves a single run, also when the chunk is a single vector) streams to memory.
 //!
-//! This is the reduced form of the paper's core: two chunk buffers (not two input and two
-//! output buffers), and no overlap of one command's load with the previous one's passes.
+//! So command `k + 1`'s load overlaps command `k`'s merge passes, and command `k`'s final pass
+//! (the write-back) overlaps command `k + 1`'s (and `k + 2`'s) loads. The MSU+ is the
+//! bottleneck: back to back, a chunk of `L` entries costs about `passes(L) * L` cycles. Reads
+//! (a read-request port and a response port) and writes (a write port) are separate, so the
+//! write-back of one command never holds up the reads of the next.
+//!
+//! MERGE modes serialise with everything else: such a command is taken only when the core is
+//! idle, and no command is taken while it runs. Both streams are prefetched in bursts into the
+//! two input buffers used as circular FIFOs (space reserved before a read is issued, so
+//! responses are always accepted); the MSU+ output is written to memory.
 
 use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, hex, lane, lit};
@@ -47,11 +58,11 @@ pub mod mode {
     pub const MERGE: u64 = 3;
 }
 
+/// Back-end (PASS engine) states.
 const S_IDLE: u64 = 0;
-const S_LOAD: u64 = 1;
-const S_PASS: u64 = 2;
-const S_MERGE: u64 = 3;
-const S_FINISH: u64 = 4;
+const S_PASS: u64 = 1;
+const S_MERGE: u64 = 2;
+const S_FINISH: u64 = 3;
 
 /// Width of `mem_req_len_o` for `cfg` (holds `0..=burst`).
 pub fn mem_len_bits(cfg: &GenConfig) -> u32 {
@@ -65,6 +76,27 @@ fn resize(x: &str, from: u32, to: u32) -> String {
         std::cmp::Ordering::Greater => format!("{x}[{}:0]", to - 1),
         std::cmp::Ordering::Less => format!("{{{}, {x}}}", lit(to - from, 0)),
     }
+}
+
+/// The chunk buffers: (instance suffix, write-enable expression, write address, write data).
+fn buffers(da: u32, dc: u32) -> Vec<(&'static str, String, String, String)> {
+    let ser_addr = resize("ser_cnt_q", dc, da);
+    vec![
+        (
+            "in0",
+            "(ser_fire & ~ld_sel_q) | beat_a".into(),
+            format!("ld_act_q ? {ser_addr} : fa_wp_q"),
+            "ld_act_q ? ser_entry : mem_rsp_data_i".into(),
+        ),
+        (
+            "in1",
+            "(ser_fire & ld_sel_q) | beat_b".into(),
+            format!("ld_act_q ? {ser_addr} : fb_wp_q"),
+            "ld_act_q ? ser_entry : mem_rsp_data_i".into(),
+        ),
+        ("work0", "o_buf & (first_q | wsrc_q)".into(), "ocnt_buf".into(), "o_data".into()),
+        ("work1", "o_buf & ~first_q & ~wsrc_q".into(), "ocnt_buf".into(), "o_data".into()),
+    ]
 }
 
 /// The Sorting Core for `cfg`.
@@ -85,47 +117,56 @@ pub fn module(cfg: &GenConfig) -> Module {
     let nl = bits_for(n as u64 - 1); // lane index
     let pad = cfg.format().pack(&cfg.format().padding());
     let vw = n * w;
+    let z = |bits: u32| lit(bits, 0);
+    let one = |bits: u32| lit(bits, 1);
 
     let mut m = Module::new(NAME);
     m.doc(format!(
-        "Sorting Core: {}-input {} BSU, MSU+, two {}-entry chunk buffers; entries of {w} bits.",
+        "Sorting Core: {}-input {} BSU, MSU+, 2 input + 2 work {}-entry chunk buffers; entries of {w} bits.",
         n,
         cfg.topology.name(),
         d
     ));
     m.doc("Modes: 0 SORT chunk, 1 DPS chunk, 2 MERGE with delete, 3 MERGE keeping invalid. See docs/rtl.md.");
+    m.doc("A chunk command's load overlaps the previous command's merge passes and write-back.");
     m.clock_reset();
     m.input_c("cmd_valid_i", 1, "a command is offered");
-    m.output_c("cmd_ready_o", 1, "the core is idle and takes the command");
+    m.output_c("cmd_ready_o", 1, "the core takes the offered command (depends on cmd_mode_i)");
     m.input_c("cmd_mode_i", 2, "0 sort, 1 dps, 2 merge-delete, 3 merge");
     m.input_c("cmd_src_a_i", aw, "entry address of the chunk / stream A");
     m.input_c("cmd_len_a_i", lw, "entries of the chunk (<= chunk size) / stream A");
     m.input_c("cmd_src_b_i", aw, "entry address of stream B (merge modes)");
     m.input_c("cmd_len_b_i", lw, "entries of stream B (merge modes)");
     m.input_c("cmd_dst_i", aw, "entry address of the output");
-    m.output_c("done_o", 1, "one-cycle pulse: the command finished");
-    m.output_c("done_len_o", lw, "entries written by the last command");
-    m.output_c("mem_req_valid_o", 1, "a memory request is offered");
-    m.input_c("mem_req_ready_i", 1, "the memory takes the request");
-    m.output_c("mem_req_write_o", 1, "1: write one entry; 0: read a burst");
-    m.output_c("mem_req_addr_o", aw, "entry address");
-    m.output_c("mem_req_len_o", bl, "entries (reads: 1..burst; writes: 1)");
-    m.output_c("mem_wdata_o", w, "entry to write (writes)");
+    m.output_c("done_o", 1, "one-cycle pulse: the oldest command finished");
+    m.output_c("done_len_o", lw, "entries written by the last finished command");
+    m.output_c("mem_req_valid_o", 1, "a read request (burst) is offered");
+    m.input_c("mem_req_ready_i", 1, "the memory takes the read request");
+    m.output_c("mem_req_addr_o", aw, "entry address of the burst");
+    m.output_c("mem_req_len_o", bl, "entries of the burst (1..burst)");
     m.input_c("mem_rsp_valid_i", 1, "a read response beat (one entry), in request order");
     m.output_c("mem_rsp_ready_o", 1, "the core takes the response beat");
     m.input_c("mem_rsp_data_i", w, "the entry read");
+    m.output_c("mem_wr_valid_o", 1, "a write of one entry is offered");
+    m.input_c("mem_wr_ready_i", 1, "the memory takes the write");
+    m.output_c("mem_wr_addr_o", aw, "entry address of the write");
+    m.output_c("mem_wr_data_o", w, "the entry to write");
 
-    m.localparam("S_IDLE", 3, lit(3, S_IDLE));
-    m.localparam("S_LOAD", 3, lit(3, S_LOAD));
-    m.localparam("S_PASS", 3, lit(3, S_PASS));
-    m.localparam("S_MERGE", 3, lit(3, S_MERGE));
-    m.localparam("S_FINISH", 3, lit(3, S_FINISH));
+    m.localparam("S_IDLE", 2, lit(2, S_IDLE));
+    m.localparam("S_PASS", 2, lit(2, S_PASS));
+    m.localparam("S_MERGE", 2, lit(2, S_MERGE));
+    m.localparam("S_FINISH", 2, lit(2, S_FINISH));
     m.localparam("PAD", w, hex(w, pad));
 
     // ---------------------------------------------------------------- registers
     m.blank();
-    m.comment("Command and state.");
-    m.reg("state_q", 3).reg("mode_q", 2).reg("dst_q", aw).reg("len_q", dc).reg("ocnt_q", lw);
+    m.comment("LOAD engine: active, input buffer being loaded next, entries of the load.");
+    m.reg("ld_act_q", 1).reg("ld_sel_q", 1).reg("ld_len_q", dc);
+    m.comment("Input buffers: loaded (waiting for or in their first pass), and each one's command.");
+    m.reg("ib_full_q", 2).reg("ib0_len_q", dc).reg("ib0_dst_q", aw).reg("ib1_len_q", dc).reg("ib1_dst_q", aw);
+    m.comment("PASS engine: state, input buffer of the next command, command, outputs, last done length.");
+    m.reg("state_q", 2).reg("bk_sel_q", 1).reg("drop_q", 1).reg("bk_dst_q", aw).reg("bk_len_q", dc);
+    m.reg("ocnt_q", lw).reg("done_len_q", lw);
     m.comment("Read issuer: next address and entries left to request per stream, reservations.");
     m.reg("rd_a_addr_q", aw).reg("rd_a_left_q", lw).reg("rd_b_addr_q", aw).reg("rd_b_left_q", lw);
     m.reg("a_resv_q", dc + 1).reg("b_resv_q", dc + 1).reg("rr_q", 1);
@@ -135,32 +176,51 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.comment("Stream sources feeding the MSU+ (read pointer, entries left, active).");
     m.reg("sa_act_q", 1).reg("sa_rem_q", lw).reg("sa_ptr_q", da);
     m.reg("sb_act_q", 1).reg("sb_rem_q", lw).reg("sb_ptr_q", da);
-    m.comment("Merge-mode FIFOs in the chunk buffers (write pointer, entries present).");
+    m.comment("Merge-mode FIFOs in the input buffers (write pointer, entries present).");
     m.reg("fa_wp_q", da).reg("fa_cnt_q", dc).reg("fb_wp_q", da).reg("fb_cnt_q", dc);
-    m.comment("Merge passes: run length, source buffer, next pair start.");
-    m.reg("run_q", pw).reg("src_q", 1).reg("pair_q", pw);
+    m.comment(
+        "Merge passes: run length, first pass (reads the input buffer), source work buffer, next pair.",
+    );
+    m.reg("run_q", pw).reg("first_q", 1).reg("wsrc_q", 1).reg("pair_q", pw);
     m.comment("LOAD: deserializer (lanes, fill index, full), entries received, BSU output serializer.");
     m.reg("des_lane_q", nl).reg("des_full_q", 1).reg("rcv_q", dc).reg("ser_lane_q", nl).reg("ser_cnt_q", dc);
 
-    // ---------------------------------------------------------------- decode
+    // ---------------------------------------------------------------- commands
     m.blank();
     m.wire_assign("st_idle", 1, "state_q == S_IDLE");
-    m.wire_assign("st_load", 1, "state_q == S_LOAD");
     m.wire_assign("st_pass", 1, "state_q == S_PASS");
     m.wire_assign("st_merge", 1, "state_q == S_MERGE");
     m.wire_assign("st_finish", 1, "state_q == S_FINISH");
-    m.wire_assign("cmd_sort", 1, "~cmd_mode_i[1]");
+    m.wire_assign("cmd_chunk", 1, "~cmd_mode_i[1]");
     let dlit = lit(lw, d);
     m.wire_assign(
         "cmd_len_clamped",
         dc,
         format!("(cmd_len_a_i > {dlit}) ? {} : {}", lit(dc, d), resize("cmd_len_a_i", lw, dc)),
     );
-    m.wire_assign("final_pass", 1, format!("{{run_q[{}:0], 1'b0}} >= {}", pw - 2, resize("len_q", dc, pw)));
+    m.comment("A chunk command needs the next input buffer free and no load or merge running;");
+    m.comment("a merge command needs the whole core idle.");
+    m.wire_assign("ld_buf_full", 1, "ld_sel_q ? ib_full_q[1] : ib_full_q[0]");
+    m.wire_assign("chunk_ok", 1, "~ld_act_q & ~ld_buf_full & ~st_merge");
+    m.wire_assign("merge_ok", 1, format!("st_idle & ~ld_act_q & (ib_full_q == {})", z(2)));
+    m.assign("cmd_ready_o", "cmd_chunk ? chunk_ok : merge_ok");
+    m.wire_assign("take_chunk", 1, "cmd_valid_i & cmd_chunk & chunk_ok");
+    m.wire_assign("take_merge", 1, "cmd_valid_i & ~cmd_chunk & merge_ok");
+    m.wire_assign("take_empty", 1, format!("take_chunk & (cmd_len_clamped == {})", z(dc)));
+    m.comment("PASS engine: the next command's input buffer, and the start of its passes.");
+    m.wire_assign("bk_buf_full", 1, "bk_sel_q ? ib_full_q[1] : ib_full_q[0]");
+    m.wire_assign("bk_len_in", dc, "bk_sel_q ? ib1_len_q : ib0_len_q");
+    m.wire_assign("bk_start", 1, "st_idle & bk_buf_full");
+    m.wire_assign("bk_start_empty", 1, format!("bk_start & (bk_len_in == {})", z(dc)));
+    m.wire_assign(
+        "final_pass",
+        1,
+        format!("{{run_q[{}:0], 1'b0}} >= {}", pw - 2, resize("bk_len_q", dc, pw)),
+    );
 
     // ---------------------------------------------------------------- instances
     m.blank();
-    m.comment("BSU: fed by the deserializer during LOAD, drained lane by lane into buffer 0.");
+    m.comment("BSU: fed by the deserializer during a load, drained lane by lane into the input buffer.");
     m.wire("bsu_in_ready", 1).wire("bsu_out_valid", 1).wire("bsu_out_ready", 1).wire("bsu_out_data", vw);
     m.wire("des_data", vw);
     m.instance(
@@ -178,7 +238,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         ]),
     );
     m.blank();
-    m.comment("MSU+: A and B from the chunk buffers (pass runs or merge FIFOs).");
+    m.comment("MSU+: A and B from the buffers (pass runs or merge FIFOs).");
     for s in ["a", "b"] {
         m.wire(format!("{s}_valid"), 1).wire(format!("{s}_ready"), 1).wire(format!("{s}_data"), w);
         m.wire(format!("{s}_last"), 1).wire(format!("{s}_empty"), 1);
@@ -190,7 +250,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         conns(&[
             ("clk_i", "clk_i".into()),
             ("rst_ni", "rst_ni".into()),
-            ("drop_invalid_i", format!("mode_q == {}", lit(2, mode::MERGE_DELETE))),
+            ("drop_invalid_i", "drop_q".into()),
             ("a_valid_i", "a_valid".into()),
             ("a_ready_o", "a_ready".into()),
             ("a_data_i", "a_data".into()),
@@ -209,29 +269,32 @@ pub fn module(cfg: &GenConfig) -> Module {
         ]),
     );
     m.blank();
-    m.comment("Chunk buffers: port 0 reads source A, port 1 source B.");
-    for b in 0..2 {
-        m.wire(format!("buf{b}_we"), 1).wire(format!("buf{b}_waddr"), da).wire(format!("buf{b}_wdata"), w);
-        m.wire(format!("buf{b}_rdata0"), w).wire(format!("buf{b}_rdata1"), w);
+    m.comment("Chunk buffers: input buffers (loads, merge FIFOs A and B), work buffers (passes).");
+    m.comment("Read port 0 reads source A, port 1 source B.");
+    for (b, ..) in buffers(da, dc) {
+        m.wire(format!("{b}_we"), 1).wire(format!("{b}_waddr"), da).wire(format!("{b}_wdata"), w);
+        m.wire(format!("{b}_rdata0"), w).wire(format!("{b}_rdata1"), w);
         m.instance(
             "neo_chunk_ram",
-            format!("u_buf{b}"),
+            format!("u_{b}"),
             conns(&[
                 ("clk_i", "clk_i".into()),
-                ("we_i", format!("buf{b}_we")),
-                ("waddr_i", format!("buf{b}_waddr")),
-                ("wdata_i", format!("buf{b}_wdata")),
+                ("we_i", format!("{b}_we")),
+                ("waddr_i", format!("{b}_waddr")),
+                ("wdata_i", format!("{b}_wdata")),
                 ("raddr0_i", "sa_ptr_q".into()),
-                ("rdata0_o", format!("buf{b}_rdata0")),
+                ("rdata0_o", format!("{b}_rdata0")),
                 ("raddr1_i", "sb_ptr_q".into()),
-                ("rdata1_o", format!("buf{b}_rdata1")),
+                ("rdata1_o", format!("{b}_rdata1")),
             ]),
         );
     }
 
     // ---------------------------------------------------------------- read issuer
     m.blank();
-    m.comment("Read issuer: bursts of up to the burst size; merge modes reserve FIFO space first.");
+    m.comment(
+        "Read issuer (read port): bursts of up to the burst size; merge modes reserve FIFO space first.",
+    );
     let blit = lit(lw, burst);
     m.wire_assign(
         "len_a_next",
@@ -249,22 +312,23 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign(
         "req_a_ok",
         1,
-        format!("(rd_a_left_q != {}) & (st_load | (st_merge & ({})))", lit(lw, 0), fits("a")),
+        format!("(rd_a_left_q != {}) & (ld_act_q | (st_merge & ({})))", z(lw), fits("a")),
     );
-    m.wire_assign("req_b_ok", 1, format!("(rd_b_left_q != {}) & st_merge & ({})", lit(lw, 0), fits("b")));
+    m.wire_assign("req_b_ok", 1, format!("(rd_b_left_q != {}) & st_merge & ({})", z(lw), fits("b")));
     m.wire_assign("tag_free", 1, format!("tag_cnt_q != {}", lit(tc, mo)));
     m.wire_assign("rd_pick_b", 1, "req_b_ok & (~req_a_ok | rr_q)");
     m.wire_assign("rd_want", 1, "(req_a_ok | req_b_ok) & tag_free");
     m.wire_assign("to_mem", 1, "st_merge | (st_pass & final_pass)");
     m.wire_assign("wr_want", 1, "to_mem & o_valid & ~o_empty");
-    m.wire_assign("rd_fire", 1, "rd_want & ~wr_want & mem_req_ready_i");
-    m.wire_assign("wr_fire", 1, "wr_want & mem_req_ready_i");
-    m.wire_assign("wr_addr", aw, format!("dst_q + {}", resize("ocnt_q", lw, aw)));
-    m.assign("mem_req_valid_o", "wr_want | rd_want");
-    m.assign("mem_req_write_o", "wr_want");
-    m.assign("mem_req_addr_o", "wr_want ? wr_addr : (rd_pick_b ? rd_b_addr_q : rd_a_addr_q)");
-    m.assign("mem_req_len_o", format!("wr_want ? {} : (rd_pick_b ? len_b_next : len_a_next)", lit(bl, 1)));
-    m.assign("mem_wdata_o", "o_data");
+    m.wire_assign("rd_fire", 1, "rd_want & mem_req_ready_i");
+    m.wire_assign("wr_fire", 1, "wr_want & mem_wr_ready_i");
+    m.assign("mem_req_valid_o", "rd_want");
+    m.assign("mem_req_addr_o", "rd_pick_b ? rd_b_addr_q : rd_a_addr_q");
+    m.assign("mem_req_len_o", "rd_pick_b ? len_b_next : len_a_next");
+    m.comment("Write port: the MSU+ output of the final pass / a merge, one entry per write.");
+    m.assign("mem_wr_valid_o", "wr_want");
+    m.assign("mem_wr_addr_o", format!("bk_dst_q + {}", resize("ocnt_q", lw, aw)));
+    m.assign("mem_wr_data_o", "o_data");
 
     // ---------------------------------------------------------------- responses
     m.blank();
@@ -275,11 +339,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign("des_accept", 1, "~des_full_q | bsu_in_ready");
     m.assign(
         "mem_rsp_ready_o",
-        format!("(tag_cnt_q != {}) & (st_merge | (st_load & des_accept))", lit(tc, 0)),
+        format!("(tag_cnt_q != {}) & (st_merge | (ld_act_q & des_accept))", lit(tc, 0)),
     );
     m.wire_assign("rsp_fire", 1, "mem_rsp_valid_i & mem_rsp_ready_o");
     m.wire_assign("rsp_burst_end", 1, format!("rsp_fire & (rsp_cnt_q + {} == tag_head_len)", lit(bl, 1)));
-    m.wire_assign("beat_load", 1, "rsp_fire & st_load");
+    m.wire_assign("beat_load", 1, "rsp_fire & ld_act_q");
     m.wire_assign("beat_a", 1, "rsp_fire & st_merge & ~tag_head_b");
     m.wire_assign("beat_b", 1, "rsp_fire & st_merge & tag_head_b");
 
@@ -292,7 +356,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign(
         "des_vec_end",
         1,
-        format!("(des_lane_q == {}) | (rcv_q + {} == len_q)", lit(nl, n as u64 - 1), lit(dc, 1)),
+        format!("(des_lane_q == {}) | (rcv_q + {} == ld_len_q)", lit(nl, n as u64 - 1), lit(dc, 1)),
     );
     let lane_items = vec![
         Item::LocalParam { name: "LANE".into(), width: nl, value: "g".into() },
@@ -311,62 +375,66 @@ pub fn module(cfg: &GenConfig) -> Module {
 
     // ---------------------------------------------------------------- serializer
     m.blank();
-    m.comment("Serializer: BSU output lanes to buffer 0, one per cycle; padding lanes are not written.");
+    m.comment(
+        "Serializer: BSU output lanes to the input buffer, one per cycle; padding lanes are not written.",
+    );
     m.reg("ser_entry", w);
     let arms =
         (0..n).map(|i| (lit(nl, i as u64), vec![set("ser_entry", lane("bsu_out_data", i, w))])).collect();
     m.comb(vec![set("ser_entry", lit(w, 0)), Stmt::Case("ser_lane_q".into(), arms, vec![])]);
-    m.wire_assign("ser_fire", 1, "st_load & bsu_out_valid");
+    m.wire_assign("ser_fire", 1, "ld_act_q & bsu_out_valid");
     m.wire_assign(
         "ser_vec_end",
         1,
-        format!("(ser_lane_q == {}) | (ser_cnt_q + {} == len_q)", lit(nl, n as u64 - 1), lit(dc, 1)),
+        format!("(ser_lane_q == {}) | (ser_cnt_q + {} == ld_len_q)", lit(nl, n as u64 - 1), lit(dc, 1)),
     );
     m.assign("bsu_out_ready", "ser_fire & ser_vec_end");
+    m.wire_assign("ld_done", 1, format!("ser_fire & ser_vec_end & (ser_cnt_q + {} == ld_len_q)", one(dc)));
 
     // ---------------------------------------------------------------- sources
     m.blank();
-    m.comment("Stream sources: an empty stream is one beat with empty = last = 1.");
-    for (s, f, buf_sel) in [
-        ("a", "fa", "(~st_merge & src_q) ? buf1_rdata0 : buf0_rdata0"),
-        ("b", "fb", "(st_merge | src_q) ? buf1_rdata1 : buf0_rdata1"),
-    ] {
-        let zero = lit(lw, 0);
+    m.comment("Stream sources: an empty stream is one beat with empty = last = 1. The first pass reads");
+    m.comment("the command's input buffer, later passes the source work buffer, merges the input FIFOs.");
+    for (s, f, port) in [("a", "fa", "0"), ("b", "fb", "1")] {
+        let zero = z(lw);
         m.wire_assign(format!("s{s}_none"), 1, format!("s{s}_rem_q == {zero}"));
         m.assign(
             format!("{s}_valid"),
-            format!("s{s}_act_q & (s{s}_none | ~st_merge | ({f}_cnt_q != {}))", lit(dc, 0)),
+            format!("s{s}_act_q & (s{s}_none | ~st_merge | ({f}_cnt_q != {}))", z(dc)),
         );
-        m.assign(format!("{s}_data"), buf_sel);
+        let fifo = if s == "a" { "in0" } else { "in1" };
+        m.assign(
+            format!("{s}_data"),
+            format!(
+                "st_merge ? {fifo}_rdata{port} : (first_q ? (bk_sel_q ? in1_rdata{port} : in0_rdata{port}) \
+                 : (wsrc_q ? work1_rdata{port} : work0_rdata{port}))"
+            ),
+        );
         m.assign(format!("{s}_empty"), format!("s{s}_none"));
-        m.assign(format!("{s}_last"), format!("s{s}_rem_q <= {}", lit(lw, 1)));
+        m.assign(format!("{s}_last"), format!("s{s}_rem_q <= {}", one(lw)));
         m.wire_assign(format!("{s}_pop"), 1, format!("{s}_valid & {s}_ready"));
         m.wire_assign(format!("{s}_pop_ent"), 1, format!("{s}_pop & ~s{s}_none"));
     }
 
     // ---------------------------------------------------------------- output side
     m.blank();
-    m.comment("MSU+ output: to the other buffer during non-final passes, else memory writes.");
-    m.assign("o_ready", "~to_mem | o_empty | mem_req_ready_i");
+    m.comment("MSU+ output: to the other work buffer during non-final passes, else memory writes.");
+    m.assign("o_ready", "~to_mem | o_empty | mem_wr_ready_i");
     m.wire_assign("o_ent", 1, "o_valid & o_ready & ~o_empty");
     m.wire_assign("o_buf", 1, "o_ent & st_pass & ~final_pass");
     m.wire_assign("o_count", 1, "o_buf | wr_fire");
     m.wire_assign("merge_end", 1, "st_merge & o_valid & o_ready & o_last");
     m.wire_assign("ocnt_buf", da, resize("ocnt_q", lw, da));
-    m.assign("buf0_we", "(ser_fire & ~st_pass) | beat_a | (o_buf & src_q)");
-    m.assign(
-        "buf0_waddr",
-        format!("st_load ? {} : (st_merge ? fa_wp_q : ocnt_buf)", resize("ser_cnt_q", dc, da)),
-    );
-    m.assign("buf0_wdata", "st_load ? ser_entry : (st_merge ? mem_rsp_data_i : o_data)");
-    m.assign("buf1_we", "beat_b | (o_buf & ~src_q)");
-    m.assign("buf1_waddr", "st_merge ? fb_wp_q : ocnt_buf");
-    m.assign("buf1_wdata", "st_merge ? mem_rsp_data_i : o_data");
+    for (b, we, waddr, wdata) in buffers(da, dc) {
+        m.assign(format!("{b}_we"), we);
+        m.assign(format!("{b}_waddr"), waddr);
+        m.assign(format!("{b}_wdata"), wdata);
+    }
 
     // ---------------------------------------------------------------- pass control
     m.blank();
     m.comment("Pass control: next pair A = [pair, pair + alen), B = [pair + alen, pair + alen + blen).");
-    let len_pw = resize("len_q", dc, pw);
+    let len_pw = resize("bk_len_q", dc, pw);
     m.wire_assign("pair_left", pw, format!("{len_pw} - pair_q"));
     m.wire_assign("pair_alen", pw, "(pair_left < run_q) ? pair_left : run_q");
     m.wire_assign("pair_rest", pw, "pair_left - pair_alen");
@@ -377,108 +445,94 @@ pub fn module(cfg: &GenConfig) -> Module {
         format!("{} + {}", resize("pair_q", pw, da), resize("pair_alen", pw, da)),
     );
     m.wire_assign("pair_start", 1, format!("st_pass & ~sa_act_q & ~sb_act_q & (pair_q < {len_pw})"));
-    m.wire_assign("pass_end", 1, format!("st_pass & (ocnt_q == {})", resize("len_q", dc, lw)));
-    m.assign("cmd_ready_o", "st_idle");
+    m.wire_assign("pass_end", 1, format!("st_pass & (ocnt_q == {})", resize("bk_len_q", dc, lw)));
+    m.comment("Input buffers: loaded at the end of a load (or at once for an empty chunk), free after");
+    m.comment("their command's first pass (or its start when empty).");
+    m.wire_assign("ib_set", 1, "ld_done | take_empty");
+    m.wire_assign("ib_clr", 1, "(pass_end & first_q) | bk_start_empty");
     m.assign("done_o", "st_finish");
-    m.assign("done_len_o", "ocnt_q");
+    m.assign("done_len_o", "st_finish ? ocnt_q : done_len_q");
 
     // ---------------------------------------------------------------- sequential
     m.blank();
     m.seq_noreset(vec![if_("rd_fire", vec![set("tag_mem[tag_wp_q]", "{rd_pick_b, mem_req_len_o}")])]);
-    let z = |bits: u32| lit(bits, 0);
-    let one = |bits: u32| lit(bits, 1);
-    let resets = vec![
-        set("state_q", "S_IDLE"),
-        set("mode_q", z(2)),
-        set("dst_q", z(aw)),
-        set("len_q", z(dc)),
-        set("ocnt_q", z(lw)),
-        set("rd_a_addr_q", z(aw)),
-        set("rd_a_left_q", z(lw)),
-        set("rd_b_addr_q", z(aw)),
-        set("rd_b_left_q", z(lw)),
-        set("a_resv_q", z(dc + 1)),
-        set("b_resv_q", z(dc + 1)),
-        set("rr_q", z(1)),
-        set("tag_wp_q", z(tw)),
-        set("tag_rp_q", z(tw)),
-        set("tag_cnt_q", z(tc)),
-        set("rsp_cnt_q", z(bl)),
-        set("sa_act_q", z(1)),
-        set("sa_rem_q", z(lw)),
-        set("sa_ptr_q", z(da)),
-        set("sb_act_q", z(1)),
-        set("sb_rem_q", z(lw)),
-        set("sb_ptr_q", z(da)),
-        set("fa_wp_q", z(da)),
-        set("fa_cnt_q", z(dc)),
-        set("fb_wp_q", z(da)),
-        set("fb_cnt_q", z(dc)),
-        set("run_q", z(pw)),
-        set("src_q", z(1)),
-        set("pair_q", z(pw)),
-        set("des_lane_q", z(nl)),
-        set("des_full_q", z(1)),
-        set("rcv_q", z(dc)),
-        set("ser_lane_q", z(nl)),
-        set("ser_cnt_q", z(dc)),
-    ];
+    // Every control register resets to zero (the state machine to S_IDLE, which is 0).
+    let resets = m.q_resets(&[("state_q", "S_IDLE")]);
     let mut body = Vec::new();
-    // State machine and command capture.
-    body.push(Stmt::Comment("state machine".into()));
+    // LOAD engine: command capture and completion.
+    body.push(Stmt::Comment("LOAD engine: takes chunk commands".into()));
+    let ib_capture = |b: u32| {
+        vec![set(format!("ib{b}_len_q"), "cmd_len_clamped"), set(format!("ib{b}_dst_q"), "cmd_dst_i")]
+    };
+    body.push(if_(
+        "take_chunk",
+        vec![
+            if_else("ld_sel_q", ib_capture(1), ib_capture(0)),
+            set("ld_len_q", "cmd_len_clamped"),
+            set("ld_act_q", "~take_empty"),
+            set("rd_a_addr_q", "cmd_src_a_i"),
+            set("rd_a_left_q", resize("cmd_len_clamped", dc, lw)),
+            set("rd_b_left_q", z(lw)),
+            set("des_lane_q", z(nl)),
+            set("rcv_q", z(dc)),
+            set("ser_lane_q", z(nl)),
+            set("ser_cnt_q", z(dc)),
+        ],
+    ));
+    body.push(if_("ld_done", vec![set("ld_act_q", z(1))]));
+    body.push(if_("ib_set", vec![set("ld_sel_q", "~ld_sel_q")]));
+    body.push(set(
+        "ib_full_q",
+        "(ib_full_q | {ib_set & ld_sel_q, ib_set & ~ld_sel_q}) & ~{ib_clr & bk_sel_q, ib_clr & ~bk_sel_q}",
+    ));
+    // PASS engine.
+    body.push(Stmt::Comment("PASS engine".into()));
     body.push(Stmt::Case(
         "state_q".into(),
         vec![
             (
                 "S_IDLE".into(),
-                vec![if_(
-                    "cmd_valid_i",
+                vec![if_else(
+                    "take_merge",
                     vec![
-                        set("mode_q", "cmd_mode_i"),
-                        set("dst_q", "cmd_dst_i"),
-                        set("len_q", "cmd_len_clamped"),
+                        set("drop_q", format!("cmd_mode_i == {}", lit(2, mode::MERGE_DELETE))),
+                        set("bk_dst_q", "cmd_dst_i"),
                         set("ocnt_q", z(lw)),
                         set("rd_a_addr_q", "cmd_src_a_i"),
                         set("rd_b_addr_q", "cmd_src_b_i"),
+                        set("rd_a_left_q", "cmd_len_a_i"),
+                        set("rd_b_left_q", "cmd_len_b_i"),
                         set("a_resv_q", z(dc + 1)),
                         set("b_resv_q", z(dc + 1)),
                         set("rr_q", z(1)),
+                        set("sa_act_q", one(1)),
+                        set("sa_rem_q", "cmd_len_a_i"),
                         set("sa_ptr_q", z(da)),
+                        set("sb_act_q", one(1)),
+                        set("sb_rem_q", "cmd_len_b_i"),
                         set("sb_ptr_q", z(da)),
                         set("fa_wp_q", z(da)),
                         set("fb_wp_q", z(da)),
-                        set("run_q", lit(pw, n as u64)),
-                        set("src_q", z(1)),
-                        set("pair_q", z(pw)),
-                        set("des_lane_q", z(nl)),
-                        set("rcv_q", z(dc)),
-                        set("ser_lane_q", z(nl)),
-                        set("ser_cnt_q", z(dc)),
-                        if_else(
-                            "cmd_sort",
-                            vec![
-                                set("rd_a_left_q", resize("cmd_len_clamped", dc, lw)),
-                                set("rd_b_left_q", z(lw)),
-                                set("state_q", format!("(cmd_len_clamped == {}) ? S_FINISH : S_LOAD", z(dc))),
-                            ],
-                            vec![
-                                set("rd_a_left_q", "cmd_len_a_i"),
-                                set("rd_b_left_q", "cmd_len_b_i"),
-                                set("sa_act_q", one(1)),
-                                set("sa_rem_q", "cmd_len_a_i"),
-                                set("sb_act_q", one(1)),
-                                set("sb_rem_q", "cmd_len_b_i"),
-                                set("state_q", "S_MERGE"),
-                            ],
-                        ),
+                        set("state_q", "S_MERGE"),
                     ],
-                )],
-            ),
-            (
-                "S_LOAD".into(),
-                vec![if_(
-                    format!("ser_fire & ser_vec_end & (ser_cnt_q + {} == len_q)", one(dc)),
-                    vec![set("state_q", "S_PASS")],
+                    vec![if_(
+                        "bk_start",
+                        vec![
+                            set("drop_q", z(1)),
+                            set("bk_len_q", "bk_len_in"),
+                            set("bk_dst_q", "bk_sel_q ? ib1_dst_q : ib0_dst_q"),
+                            set("ocnt_q", z(lw)),
+                            set("run_q", lit(pw, n as u64)),
+                            set("first_q", one(1)),
+                            set("wsrc_q", z(1)),
+                            set("pair_q", z(pw)),
+                            if_else(
+                                "bk_start_empty",
+                                vec![set("bk_sel_q", "~bk_sel_q"), set("state_q", "S_FINISH")],
+                                vec![set("state_q", "S_PASS")],
+                            ),
+                        ],
+                    )],
                 )],
             ),
             (
@@ -487,10 +541,11 @@ pub fn module(cfg: &GenConfig) -> Module {
                     "pass_end",
                     vec![if_else(
                         "final_pass",
-                        vec![set("state_q", "S_FINISH")],
+                        vec![set("bk_sel_q", "~bk_sel_q"), set("state_q", "S_FINISH")],
                         vec![
                             set("run_q", format!("{{run_q[{}:0], 1'b0}}", pw - 2)),
-                            set("src_q", "~src_q"),
+                            set("first_q", z(1)),
+                            set("wsrc_q", "~first_q & ~wsrc_q"),
                             set("pair_q", z(pw)),
                             set("ocnt_q", z(lw)),
                         ],
@@ -498,7 +553,7 @@ pub fn module(cfg: &GenConfig) -> Module {
                 )],
             ),
             ("S_MERGE".into(), vec![if_("merge_end", vec![set("state_q", "S_FINISH")])]),
-            ("S_FINISH".into(), vec![set("state_q", "S_IDLE")]),
+            ("S_FINISH".into(), vec![set("done_len_q", "ocnt_q"), set("state_q", "S_IDLE")]),
         ],
         vec![set("state_q", "S_IDLE")],
     ));
@@ -649,13 +704,15 @@ mod tests {
             ("done_len_o", Dir::Out, 32),
             ("mem_req_valid_o", Dir::Out, 1),
             ("mem_req_ready_i", Dir::In, 1),
-            ("mem_req_write_o", Dir::Out, 1),
             ("mem_req_addr_o", Dir::Out, 32),
             ("mem_req_len_o", Dir::Out, 5),
-            ("mem_wdata_o", Dir::Out, 48),
             ("mem_rsp_valid_i", Dir::In, 1),
             ("mem_rsp_ready_o", Dir::Out, 1),
             ("mem_rsp_data_i", Dir::In, 48),
+            ("mem_wr_valid_o", Dir::Out, 1),
+            ("mem_wr_ready_i", Dir::In, 1),
+            ("mem_wr_addr_o", Dir::Out, 32),
+            ("mem_wr_data_o", Dir::Out, 48),
         ];
         let got: Vec<(&str, Dir, u32)> = i.ports.iter().map(|p| (p.name.as_str(), p.dir, p.width)).collect();
         assert_eq!(got, expect);
