@@ -290,7 +290,48 @@ pub fn raster_section(cfg: &GenConfig) -> Value {
             "ii": t.ii,
             "jobs": jobs,
             "subtiles_per_job": cfg.raster_config().subtiles_per_tile()
-        }
+        },
+        "core": raster_core_section(cfg)
+    })
+}
+
+/// The `raster.core` section: `neo_raster_core` cycles per tile (command to `done_o`, ideal
+/// memory) over a grid of table lengths x subtile bits per Gaussian, and `tile_overhead`, the
+/// cycles of an empty table (loads, one empty list per subtile, the 64x64 pixel writes).
+pub fn raster_core_section(cfg: &GenConfig) -> Value {
+    let f = cfg.raster_feature_buffer as u64;
+    let grid = crate::raster::measure_grid(cfg, SEED ^ 7, &[0, 16, 64, f, 2 * f], &[1, 4, 16, 64]);
+    let overhead = grid.iter().find(|p| p.entries == 0).map(|p| p.cycles).unwrap_or(0);
+    // Loads: the slope of the last read's cycle over the table length (one segment).
+    let at = |n: u64| grid.iter().find(|p| p.entries == n && p.bits_per_gaussian == 1).map(|p| p.last_read);
+    let load = match (at(16), at(f)) {
+        (Some(a), Some(b)) => (b - a) as f64 / (f - 16) as f64,
+        _ => 0.0,
+    };
+    let rc = cfg.raster_config();
+    let points: Vec<Value> = grid
+        .iter()
+        .map(|p| {
+            json!({
+                "entries": p.entries,
+                "bits_per_gaussian": p.bits_per_gaussian,
+                "set_bits": p.set_bits,
+                "group_max_routed": p.group_max_routed,
+                "cycles": p.cycles,
+                "load_cycles": p.last_read,
+                "artifact_cycles": p.set_bits
+            })
+        })
+        .collect();
+    json!({
+        "tile_overhead": overhead,
+        "load_cycles_per_entry": load,
+        "itus": cfg.raster_itus,
+        "scus": cfg.raster_scus,
+        "feature_buffer": cfg.raster_feature_buffer,
+        "pixel_writes": (rc.tile * rc.tile / rc.subtile) as u64,
+        "grid": points,
+        "memory": "ideal: always ready, first response beat 1 cycle after the request"
     })
 }
 

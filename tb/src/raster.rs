@@ -79,6 +79,8 @@ pub struct TileRun {
     pub writebacks: u64,
     /// Pixel-row writes.
     pub pixel_writes: u64,
+    /// Cycles from the command to the last read request taken (the end of the last LOAD).
+    pub last_read: u64,
 }
 
 /// Addresses of the three spaces for one tile.
@@ -99,6 +101,7 @@ struct Memory {
     written: HashMap<u64, u64>,
     rsp: VecDeque<(u64, Vec<u32>)>,
     offering: bool,
+    last_read: u64,
 }
 
 /// The raster core with its memory model, command driver and checker.
@@ -141,6 +144,7 @@ impl RasterCore {
             written: HashMap::new(),
             rsp: VecDeque::new(),
             offering: false,
+            last_read: 0,
         };
         RasterCore {
             dut,
@@ -237,6 +241,7 @@ impl RasterCore {
             }
             return;
         }
+        self.mem.last_read = c;
         let t = self.mem.timing;
         let mut due = c + self.mem.rng.range(t.min_latency as u64, t.max_latency.max(t.min_latency) as u64);
         if let Some((last, _)) = self.mem.rsp.back() {
@@ -282,6 +287,7 @@ impl RasterCore {
         self.mem.feats.clear();
         self.mem.pixels.clear();
         self.mem.written.clear();
+        self.mem.last_read = 0;
         for (i, e) in case.table.iter().enumerate() {
             self.mem.table.insert(b.table + i as u64, self.sort.pack(e));
             let mut w = match case.features.get(&e.id) {
@@ -349,6 +355,7 @@ impl RasterCore {
             reads,
             writebacks: self.mem.written.len() as u64,
             pixel_writes: self.mem.pixels.len() as u64 / self.rc.subtile as u64,
+            last_read: self.mem.last_read.saturating_sub(start),
         };
         self.check(c, case, want, &b);
         self.step(&b, len);
@@ -461,20 +468,20 @@ pub struct PipelineTile {
     pub set_bits: u64,
 }
 
-/// The biker scene at 256x256 along a short orbit (the camera the sorting-core validation
-/// uses), golden pipeline (Neo strategy) over `frames` consecutive frames; per frame the
-/// `per_frame` tiles with the longest tables (the busiest first).
+/// The biker scene at `res x res` along a short orbit (the camera the sorting-core validation
+/// uses, 256x256 there), golden pipeline (Neo strategy) over `frames` consecutive frames; per
+/// frame the `per_frame` tiles with the longest tables (the busiest first).
 ///
 /// # Panics
 /// When the scene cannot be loaded or the pipeline fails (a test-environment error).
-pub fn biker_tiles(path: &std::path::Path, frames: usize, per_frame: usize) -> Vec<PipelineTile> {
+pub fn biker_tiles(path: &std::path::Path, res: u32, frames: usize, per_frame: usize) -> Vec<PipelineTile> {
     use neo_golden::pipeline::{Formats, Pipeline, PipelineConfig};
     use neo_golden::{source, trajectory};
     let (scene, _) = source::load_scene(path.to_str().expect("utf-8 path"), false).expect("biker scene");
     let spec = "orbit:radius=5,height=0,target=0/-1.6/0,start=0,fov=56.145,speed=4";
     let traj = trajectory::parse_trajectory(spec, source::robust_bounds(&scene), frames)
         .expect("trajectory")
-        .with_resolution(256, 256);
+        .with_resolution(res, res);
     let cfg = PipelineConfig {
         compare_exact: false,
         compare_float: false,
@@ -483,7 +490,7 @@ pub fn biker_tiles(path: &std::path::Path, frames: usize, per_frame: usize) -> V
     };
     let formats = Formats::artifact(cfg.chunk).expect("artifact formats");
     let tile = cfg.raster.tile;
-    let mut p = Pipeline::new(&scene, cfg, formats, 256, 256).expect("pipeline");
+    let mut p = Pipeline::new(&scene, cfg, formats, res, res).expect("pipeline");
     let key_max = p.formats().sort.format().key_max();
     let mut out = Vec::new();
     for (f, cam) in traj.frames.iter().enumerate() {
@@ -495,7 +502,7 @@ pub fn biker_tiles(path: &std::path::Path, frames: usize, per_frame: usize) -> V
         order.sort_by_key(|&i| std::cmp::Reverse(tables[i].len()));
         for &ti in order.iter().take(per_frame) {
             let t = [ti as u32 % grid[0], ti as u32 / grid[0]];
-            let mut case = TileCase { tile: t, size: [256, 256], ..TileCase::default() };
+            let mut case = TileCase { tile: t, size: [res, res], ..TileCase::default() };
             for e in &tables[ti] {
                 let feat = p.feature(e.id).copied();
                 let key = if feat.is_some() { (e.key ^ 0x5a5a) & key_max } else { e.key };
@@ -508,8 +515,8 @@ pub fn biker_tiles(path: &std::path::Path, frames: usize, per_frame: usize) -> V
             for y in 0..tile {
                 for x in 0..tile {
                     let (gx, gy) = (t[0] * tile + x, t[1] * tile + y);
-                    let px = if gx < 256 && gy < 256 {
-                        let i = 3 * (gy as usize * 256 + gx as usize);
+                    let px = if gx < res && gy < res {
+                        let i = 3 * (gy as usize * res as usize + gx as usize);
                         [o.image.data[i], o.image.data[i + 1], o.image.data[i + 2]]
                     } else {
                         [0; 3]
@@ -522,6 +529,76 @@ pub fn biker_tiles(path: &std::path::Path, frames: usize, per_frame: usize) -> V
                 case,
                 want: Expected { pixels, table: tables[ti].clone() },
                 set_bits: bits[ti],
+            });
+        }
+    }
+    out
+}
+
+/// One measured point of the raster core's cycles per tile.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridPoint {
+    /// Table entries.
+    pub entries: u64,
+    /// Subtile bits set per Gaussian (by construction; `set_bits` is the measured total).
+    pub bits_per_gaussian: u64,
+    /// Set subtile bits of the whole table (golden bitmaps).
+    pub set_bits: u64,
+    /// Sum over the subtile groups of the largest per-SCU routed count.
+    pub group_max_routed: u64,
+    /// Cycles from command to `done_o` (ideal memory), output checked against golden.
+    pub cycles: u64,
+    /// Cycles from the command to the last read request (the loads).
+    pub last_read: u64,
+}
+
+/// Gaussian `i` of a grid table touching about `bits` subtiles (1, 4, 16 or 64) of tile `t`,
+/// spread over the subtiles round-robin; low opacity so no pixel terminates.
+fn grid_gaussian(t: [u32; 2], rc: &RasterConfig, i: u64, bits: u64) -> FeatureEntry {
+    let n = rc.subtiles_per_side() as u64;
+    let s = rc.subtile as f64;
+    let k = i % (n * n);
+    let (sx, sy) = ((k % n) as f64, (k / n) as f64);
+    let (mean, sigma) = match bits {
+        1 => ([sx * s + 3.5, sy * s + 3.5], 0.4),
+        4 => ([(sx.min(n as f64 - 2.0) + 1.0) * s - 0.5, (sy.min(n as f64 - 2.0) + 1.0) * s - 0.5], 0.4),
+        16 => {
+            let (bx, by) = ((k % 3) as f64 * 2.0 + 2.0, (k / 3 % 3) as f64 * 2.0 + 2.0);
+            ([bx * s - 0.5, by * s - 0.5], 2.2)
+        }
+        _ => ([31.5, 31.5], 400.0),
+    };
+    gaussian(at(t, rc, mean[0], mean[1]), sigma, sigma, 0.0, 0.02, [0.8, 0.4, 0.2])
+}
+
+/// The raster core's cycles per tile over a grid of table lengths and subtile bits per
+/// Gaussian, ideal memory (every output checked against golden).
+pub fn measure_grid(cfg: &GenConfig, seed: u64, lengths: &[u64], bits: &[u64]) -> Vec<GridPoint> {
+    let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
+    let mut core = RasterCore::new(cfg, seed, MemTiming::IDEAL);
+    let t = [4, 6];
+    let mut out = Vec::new();
+    for &b in bits {
+        for &len in lengths {
+            if len == 0 && b != bits[0] {
+                continue;
+            }
+            let gs: Vec<FeatureEntry> = (0..len).map(|i| grid_gaussian(t, &rc, i, b)).collect();
+            let case = case_of(t, [1024, 1024], &gs);
+            let want = golden(&case, &fmt, &rc);
+            let r = raster_tile(&gs, &fmt, t[0], t[1], 1024, 1024, &rc);
+            let set_bits = r.bitmaps.iter().map(|m| m.count_ones() as u64).sum();
+            let routed: Vec<u64> = r.work.iter().map(|w| w.routed as u64).collect();
+            let group_max_routed =
+                routed.chunks(cfg.raster_scus).map(|g| g.iter().copied().max().unwrap_or(0)).sum();
+            let run = core.run(&case, &want);
+            out.push(GridPoint {
+                entries: len,
+                bits_per_gaussian: b,
+                set_bits,
+                group_max_routed,
+                cycles: run.cycles,
+                last_read: run.last_read,
             });
         }
     }

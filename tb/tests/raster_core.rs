@@ -191,7 +191,7 @@ mod cosim {
         let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
         maybe_trace(&mut core.dut, name);
         let mut checked = 0;
-        for tile in neo_tb::raster::biker_tiles(&path, 3, 3) {
+        for tile in neo_tb::raster::biker_tiles(&path, 256, 3, 3) {
             core.set_timing(TIMINGS[checked % TIMINGS.len()]);
             let cycles = core.run(&tile.case, &tile.want).cycles;
             println!(
