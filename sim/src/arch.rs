@@ -78,8 +78,10 @@ pub enum Accel {
 /// `reports/latency.json`): the loads (`load_cycles_per_entry` per table entry) come first, then
 /// `max(ITU walk, SCU groups, pixel writes)`, and `tile_overhead` (the empty tile) holds the
 /// latencies and the pixel writes. A table longer than `rt.feature_buffer` is reloaded, walked
-/// and blended group by group (each group costs the loads plus the larger of its walk and its
-/// slowest SCU), plus the serial write-back of one cycle per entry. Returns (total, tail after
+/// and blended group by group, segment by segment, the SCU FIFOs drained before each reload:
+/// each group costs the loads, its walk plus its slowest SCU (serial: an upper bound, tight when
+/// a group's blending comes in bursts, as with real tables, loose when it hides under the walk),
+/// and `segment_overhead` per segment; plus the serial write-back of one cycle per entry. Returns (total, tail after
 /// the last input arrives).
 #[allow(clippy::too_many_arguments)]
 pub fn raster_tile_cycles(
@@ -109,14 +111,16 @@ pub fn raster_tile_cycles(
     let walk = if itu { (len as f64 / itus.max(1) as f64).ceil().max(1.0) * rt.itu_ii } else { 0.0 };
     let itu_total = walk * groups.len().max(1) as f64;
     let total = if rt.pixel_write_cycles == 0 {
-        let lat = if itu { rt.itu_latency as f64 } else { 0.0 } + rt.scu_latency as f64 + rt.tile_overhead as f64;
+        let lat =
+            if itu { rt.itu_latency as f64 } else { 0.0 } + rt.scu_latency as f64 + rt.tile_overhead as f64;
         rt.load_cycles_per_entry * len as f64 + itu_total.max(scu_total) + lat
     } else {
         let load = rt.load_cycles_per_entry * len as f64;
         let pix = rt.pixel_write_cycles as f64;
         let segmented = rt.feature_buffer > 0 && len as u64 > rt.feature_buffer;
         let body = if segmented {
-            groups.iter().map(|&g| load + walk.max(g)).sum::<f64>() + len as f64
+            let segs = (len as u64).div_ceil(rt.feature_buffer) as f64;
+            groups.iter().map(|&g| load + walk + g + segs * rt.segment_overhead).sum::<f64>() + len as f64
         } else {
             load + itu_total.max(scu_total).max(pix)
         };
@@ -926,6 +930,7 @@ mod tests {
             load_cycles_per_entry: 0.0,
             pixel_write_cycles: 0,
             feature_buffer: 0,
+            segment_overhead: 0.0,
         }
     }
 
@@ -964,8 +969,9 @@ mod tests {
         // Heavy tile: 16 groups of 4 SCUs with 50 routed each = 16 x 200 cycles.
         let (h, _) = raster_tile_cycles(&[50; 64], 1.0, 80, 80, &shaped, 4, 4, true);
         assert_eq!(h, 160.0 + 3200.0 - 512.0 + 535.0);
-        // 200 entries > 100: per group the loads (400) and max(walk 50, SCU 200), + write-back.
+        // 200 entries > 100: per group the loads (400), the walk (50) and the SCU (200), plus
+        // the write-back.
         let (s, _) = raster_tile_cycles(&[50; 64], 1.0, 200, 200, &shaped, 4, 4, true);
-        assert_eq!(s, 16.0 * (400.0 + 200.0) + 200.0 - 512.0 + 535.0);
+        assert_eq!(s, 16.0 * (400.0 + 50.0 + 200.0) + 200.0 - 512.0 + 535.0);
     }
 }

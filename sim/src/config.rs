@@ -270,6 +270,10 @@ pub struct RasterTiming {
     /// subtile group, segment by segment (the RTL's schedule); 0 (the assumed default) is
     /// unbounded.
     pub feature_buffer: u64,
+    /// Fixed cycles per (group, segment) of a table longer than `feature_buffer` (the reload's
+    /// handshakes, the ITU latency and the drain of the SCUs' FIFOs before the buffer is
+    /// reused).
+    pub segment_overhead: f64,
 }
 
 impl Default for RasterTiming {
@@ -284,6 +288,7 @@ impl Default for RasterTiming {
             load_cycles_per_entry: 0.0,
             pixel_write_cycles: 0,
             feature_buffer: 0,
+            segment_overhead: 0.0,
         }
     }
 }

@@ -20,17 +20,22 @@ fn raster_core_cycles_match_the_rtl_on_biker_tiles_of_three_frames() {
     };
     let lat = Latency::from_file(&shared::workspace_root().join("reports/latency.json")).unwrap();
     let rt = lat.raster.clone();
-    assert!(rt.pixel_write_cycles > 0 && rt.load_cycles_per_entry > 0.0, "latency.json lacks raster.core: {rt:?}");
+    assert!(
+        rt.pixel_write_cycles > 0 && rt.load_cycles_per_entry > 0.0,
+        "latency.json lacks raster.core: {rt:?}"
+    );
     let cfg = neo_tb::config();
     let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
     let mut core = RasterCore::new(&cfg, 0x5eed, MemTiming::IDEAL);
     let mut frames = [(0u64, 0f64); 3];
     for tile in biker_tiles(&path, 256, 3, 3) {
         let rtl = core.run(&tile.case, &tile.want).cycles;
-        let feats: Vec<_> = tile.case.table.iter().filter_map(|e| tile.case.features.get(&e.id).copied()).collect();
+        let feats: Vec<_> =
+            tile.case.table.iter().filter_map(|e| tile.case.features.get(&e.id).copied()).collect();
         let r = raster_tile(&feats, &fmt, tile.case.tile[0], tile.case.tile[1], 256, 256, &rc);
         let routed: Vec<u32> = r.work.iter().map(|w| w.routed).collect();
-        let (sum_r, sum_p) = r.work.iter().fold((0u64, 0u64), |(a, b), w| (a + w.routed as u64, b + w.processed as u64));
+        let (sum_r, sum_p) =
+            r.work.iter().fold((0u64, 0u64), |(a, b), w| (a + w.routed as u64, b + w.processed as u64));
         let ratio = if sum_r == 0 { 1.0 } else { sum_p as f64 / sum_r as f64 };
         let (model, _) = raster_tile_cycles(
             &routed,

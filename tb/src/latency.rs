@@ -309,6 +309,25 @@ pub fn raster_core_section(cfg: &GenConfig) -> Value {
         _ => 0.0,
     };
     let rc = cfg.raster_config();
+    // Per (group, segment) fixed cycles of tables longer than the buffer: what the multi-segment
+    // points cost beyond `tile_overhead + write-back + groups x (loads + walk + slowest SCU)`
+    // (the cycle model's serial formula, neo_sim::arch::raster_tile_cycles), averaged over the
+    // points without early termination (1, 4 and 16 bits per Gaussian; the SCUs' cost spread
+    // evenly over the groups), at least 0.
+    let groups = (rc.subtiles_per_tile() as usize / cfg.raster_scus) as f64;
+    let seg: Vec<f64> = grid
+        .iter()
+        .filter(|p| p.entries > f && p.bits_per_gaussian < 64)
+        .map(|p| {
+            let n = p.entries as f64;
+            let walk = (n / cfg.raster_itus as f64).ceil();
+            let scu = 4.0 * p.group_max_routed as f64 / groups;
+            let model = overhead as f64 + n + groups * (load * n + walk + scu);
+            (p.cycles as f64 - model) / (groups * (p.entries.div_ceil(f)) as f64)
+        })
+        .collect();
+    let segment_overhead =
+        if seg.is_empty() { 0.0 } else { (seg.iter().sum::<f64>() / seg.len() as f64).round().max(0.0) };
     let points: Vec<Value> = grid
         .iter()
         .map(|p| {
@@ -326,6 +345,7 @@ pub fn raster_core_section(cfg: &GenConfig) -> Value {
     json!({
         "tile_overhead": overhead,
         "load_cycles_per_entry": load,
+        "segment_overhead": segment_overhead,
         "itus": cfg.raster_itus,
         "scus": cfg.raster_scus,
         "feature_buffer": cfg.raster_feature_buffer,

@@ -313,7 +313,7 @@ impl RasterCore {
         self.dut.set_cmd_feat_i(b.feat);
         self.dut.set_cmd_pix_i(b.pix);
         self.dut.set_cmd_valid_i(true);
-        let limit = self.dut.cycle() + 20_000 + 600 * len;
+        let limit = self.dut.cycle() + 20_000 + 200 * len;
         let start;
         loop {
             self.dut.eval();
