@@ -136,8 +136,6 @@ module neo_raster_core (
   assign li0 = base_q + 8'd0;
   wire lv0;
   assign lv0 = ({1'b0, li0} < seg_len_q) & fbuf[li0][246];
-  wire [15:0] tag_in0;
-  assign tag_in0 = {1'b0, {(last_quad & last_seg), last_quad, grp_q, base_q, lv0}};
   wire itu_rdy0;
   wire itu_ov0;
   wire [63:0] bm0;
@@ -152,7 +150,7 @@ module neo_raster_core (
     .geom_i(fbuf[li0][229:150]),
     .tile_x_i(tx_q),
     .tile_y_i(ty_q),
-    .tag_i(tag_in0),
+    .tag_i(16'd0),
     .out_valid_o(itu_ov0),
     .out_ready_i(itu_out_ready),
     .bitmap_o(bm0),
@@ -163,8 +161,6 @@ module neo_raster_core (
   assign li1 = base_q + 8'd1;
   wire lv1;
   assign lv1 = ({1'b0, li1} < seg_len_q) & fbuf[li1][246];
-  wire [15:0] tag_in1;
-  assign tag_in1 = {1'b0, {(last_quad & last_seg), last_quad, grp_q, base_q, lv1}};
   wire itu_rdy1;
   wire itu_ov1;
   wire [63:0] bm1;
@@ -179,7 +175,7 @@ module neo_raster_core (
     .geom_i(fbuf[li1][229:150]),
     .tile_x_i(tx_q),
     .tile_y_i(ty_q),
-    .tag_i(tag_in1),
+    .tag_i(16'd0),
     .out_valid_o(itu_ov1),
     .out_ready_i(itu_out_ready),
     .bitmap_o(bm1),
@@ -190,8 +186,6 @@ module neo_raster_core (
   assign li2 = base_q + 8'd2;
   wire lv2;
   assign lv2 = ({1'b0, li2} < seg_len_q) & fbuf[li2][246];
-  wire [15:0] tag_in2;
-  assign tag_in2 = {1'b0, {(last_quad & last_seg), last_quad, grp_q, base_q, lv2}};
   wire itu_rdy2;
   wire itu_ov2;
   wire [63:0] bm2;
@@ -206,7 +200,7 @@ module neo_raster_core (
     .geom_i(fbuf[li2][229:150]),
     .tile_x_i(tx_q),
     .tile_y_i(ty_q),
-    .tag_i(tag_in2),
+    .tag_i(16'd0),
     .out_valid_o(itu_ov2),
     .out_ready_i(itu_out_ready),
     .bitmap_o(bm2),
@@ -217,8 +211,6 @@ module neo_raster_core (
   assign li3 = base_q + 8'd3;
   wire lv3;
   assign lv3 = ({1'b0, li3} < seg_len_q) & fbuf[li3][246];
-  wire [15:0] tag_in3;
-  assign tag_in3 = {1'b0, {(last_quad & last_seg), last_quad, grp_q, base_q, lv3}};
   wire itu_rdy3;
   wire itu_ov3;
   wire [63:0] bm3;
@@ -233,7 +225,7 @@ module neo_raster_core (
     .geom_i(fbuf[li3][229:150]),
     .tile_x_i(tx_q),
     .tile_y_i(ty_q),
-    .tag_i(tag_in3),
+    .tag_i(16'd0),
     .out_valid_o(itu_ov3),
     .out_ready_i(itu_out_ready),
     .bitmap_o(bm3),
@@ -243,24 +235,37 @@ module neo_raster_core (
   // The ITUs share every control input, so they run in lockstep.
   assign itu_in_ready = itu_rdy0 & itu_rdy1 & itu_rdy2 & itu_rdy3;
   assign itu_out_valid = itu_ov0 & itu_ov1 & itu_ov2 & itu_ov3;
-  wire o_lv0;
-  assign o_lv0 = tag_out0[0];
-  wire [7:0] o_base;
-  assign o_base = tag_out0[8:1];
-  wire [3:0] o_grp;
-  assign o_grp = tag_out0[12:9];
-  wire o_seg_last;
-  assign o_seg_last = tag_out0[13];
-  wire o_list_last;
-  assign o_list_last = tag_out0[14];
-  wire o_lv1;
-  assign o_lv1 = tag_out1[0];
-  wire o_lv2;
-  assign o_lv2 = tag_out2[0];
-  wire o_lv3;
-  assign o_lv3 = tag_out3[0];
   wire unused_tags;
-  assign unused_tags = ^{tag_out0[15:15], tag_out1[15:1], tag_out2[15:1], tag_out3[15:1]};
+  assign unused_tags = ^{tag_out0, tag_out1, tag_out2, tag_out3};
+  // Quad sideband through 3 stages that advance with the ITUs' (in_ready_o = their stage enable).
+  wire [17:0] sb_in;
+  assign sb_in = {(last_quad & last_seg), last_quad, grp_q, base_q, lv3, lv2, lv1, lv0};
+  reg  [17:0] sb1_q;
+  reg  [17:0] sb2_q;
+  reg  [17:0] sb3_q;
+  always @(posedge clk_i) begin
+    if (itu_in_ready) begin
+      sb1_q <= sb_in;
+      sb2_q <= sb1_q;
+      sb3_q <= sb2_q;
+    end
+  end
+  wire o_lv0;
+  assign o_lv0 = sb3_q[0];
+  wire o_lv1;
+  assign o_lv1 = sb3_q[1];
+  wire o_lv2;
+  assign o_lv2 = sb3_q[2];
+  wire o_lv3;
+  assign o_lv3 = sb3_q[3];
+  wire [7:0] o_base;
+  assign o_base = sb3_q[11:4];
+  wire [3:0] o_grp;
+  assign o_grp = sb3_q[15:12];
+  wire o_seg_last;
+  assign o_seg_last = sb3_q[16];
+  wire o_list_last;
+  assign o_list_last = sb3_q[17];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       inflight_q <= 3'd0;

@@ -229,20 +229,6 @@ impl GenConfig {
         if (f as u64) >= 1u64 << self.len_bits {
             return err(format!("raster_feature_buffer {f} does not fit len_bits {}", self.len_bits));
         }
-        if self.feature_format().depth_key_bits != self.key_bits {
-            return err(format!(
-                "raster core: the feature depth key ({} bits) must fill the table key ({} bits)",
-                self.feature_format().depth_key_bits,
-                self.key_bits
-            ));
-        }
-        let need = crate::units::raster_core::itu_tag_bits_needed(self);
-        if (self.itu_tag_bits as usize) < need {
-            return err(format!(
-                "itu_tag_bits {} is below the {need} the raster core needs",
-                self.itu_tag_bits
-            ));
-        }
         Ok(())
     }
 

@@ -69,13 +69,6 @@ pub fn wdata_bits(cfg: &GenConfig) -> u32 {
     (cfg.raster_config().subtile * 24).max(cfg.entry_bits())
 }
 
-/// ITU tag bits the core uses: `{list_last, seg_last, group, base, lane_valid}`.
-pub fn itu_tag_bits_needed(cfg: &GenConfig) -> usize {
-    let f = cfg.raster_feature_buffer as u64;
-    let groups = (cfg.raster_config().subtiles_per_tile() as usize / cfg.raster_scus.max(1)).max(2);
-    3 + bits_for(f - 1) as usize + bits_for(groups as u64 - 1) as usize
-}
-
 /// `x` (`from` bits) resized to `to` bits (zero-extended or truncated).
 fn resize(x: &str, from: u32, to: u32) -> String {
     match from.cmp(&to) {
@@ -132,7 +125,6 @@ pub fn module(cfg: &GenConfig) -> Module {
     let (mean_lsb, _) = field("mean_x");
     let (geom_w, geom_lsb) = itu::geom_bits_lsb(cfg);
     let (dk_lsb, dk_w) = field("depth_key");
-    assert_eq!(dk_w, kb, "depth key fills the table key");
 
     let mut m = Module::new(NAME);
     m.doc(format!(
@@ -282,20 +274,15 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire("itu_in_ready", 1).wire("itu_out_valid", 1).wire("itu_out_ready", 1);
     m.wire_assign("itu_fire", 1, "walk & itu_in_ready");
     m.wire_assign("itu_out_fire", 1, "itu_out_valid & itu_out_ready");
-    let tag_used = 2 + gw + fa + 1;
     let mut in_readies = Vec::new();
     let mut out_valids = Vec::new();
+    let mut unused = Vec::new();
     for u in 0..ni {
         m.wire_assign(format!("li{u}"), fa, format!("base_q + {}", lit(fa, u as u64)));
         m.wire_assign(
             format!("lv{u}"),
             1,
             format!("({} < seg_len_q) & fbuf[li{u}][{present}]", resize(&format!("li{u}"), fa, sl)),
-        );
-        m.wire_assign(
-            format!("tag_in{u}"),
-            tg,
-            resize(&format!("{{(last_quad & last_seg), last_quad, grp_q, base_q, lv{u}}}"), tag_used, tg),
         );
         m.wire(format!("itu_rdy{u}"), 1).wire(format!("itu_ov{u}"), 1);
         m.wire(format!("bm{u}"), nsub).wire(format!("hit{u}"), 1).wire(format!("tag_out{u}"), tg);
@@ -311,7 +298,7 @@ pub fn module(cfg: &GenConfig) -> Module {
                 ("geom_i", format!("fbuf[li{u}][{}:{geom_lsb}]", geom_lsb + geom_w - 1)),
                 ("tile_x_i", "tx_q".into()),
                 ("tile_y_i", "ty_q".into()),
-                ("tag_i", format!("tag_in{u}")),
+                ("tag_i", lit(tg, 0)),
                 ("out_valid_o", format!("itu_ov{u}")),
                 ("out_ready_i", "itu_out_ready".into()),
                 ("bitmap_o", format!("bm{u}")),
@@ -321,36 +308,49 @@ pub fn module(cfg: &GenConfig) -> Module {
         );
         in_readies.push(format!("itu_rdy{u}"));
         out_valids.push(format!("itu_ov{u}"));
+        unused.push(format!("tag_out{u}"));
     }
     m.comment("The ITUs share every control input, so they run in lockstep.");
     m.assign("itu_in_ready", in_readies.join(" & "));
     m.assign("itu_out_valid", out_valids.join(" & "));
-    // Tag fields of ITU 0; the lane-valid bit of every ITU.
+    m.wire_assign("unused_tags", 1, format!("^{{{}}}", unused.join(", ")));
+    // Sideband of each quad, {list_last, seg_last, group, base, lane valids}, through a copy of
+    // the ITU pipeline: its stages all advance when in_ready_o is high.
+    let sbw = 2 + gw + fa + ni;
+    let lvs: Vec<String> = (0..ni).rev().map(|u| format!("lv{u}")).collect();
+    m.comment(format!(
+        "Quad sideband through {} stages that advance with the ITUs' (in_ready_o = their stage enable).",
+        itu::LATENCY
+    ));
+    m.wire_assign(
+        "sb_in",
+        sbw,
+        format!("{{(last_quad & last_seg), last_quad, grp_q, base_q, {}}}", lvs.join(", ")),
+    );
+    let mut sh = Vec::new();
+    for k in 1..=itu::LATENCY {
+        m.reg(format!("sb{k}_q"), sbw);
+        let src = if k == 1 { "sb_in".to_string() } else { format!("sb{}_q", k - 1) };
+        sh.push(set(format!("sb{k}_q"), src));
+    }
+    m.seq_noreset(vec![if_("itu_in_ready", sh)]);
+    let sbo = format!("sb{}_q", itu::LATENCY);
     let mut off = 0;
     let mut tf = |n: &str, wi: u32, m: &mut Module| {
         m.wire_assign(
             n,
             wi,
-            if wi == 1 { format!("tag_out0[{off}]") } else { format!("tag_out0[{}:{off}]", off + wi - 1) },
+            if wi == 1 { format!("{sbo}[{off}]") } else { format!("{sbo}[{}:{off}]", off + wi - 1) },
         );
         off += wi;
     };
-    tf("o_lv0", 1, &mut m);
+    for u in 0..ni {
+        tf(&format!("o_lv{u}"), 1, &mut m);
+    }
     tf("o_base", fa, &mut m);
     tf("o_grp", gw, &mut m);
     tf("o_seg_last", 1, &mut m);
     tf("o_list_last", 1, &mut m);
-    let mut unused = Vec::new();
-    if tg > tag_used {
-        unused.push(format!("tag_out0[{}:{tag_used}]", tg - 1));
-    }
-    for u in 1..ni {
-        m.wire_assign(format!("o_lv{u}"), 1, format!("tag_out{u}[0]"));
-        unused.push(format!("tag_out{u}[{}:1]", tg - 1));
-    }
-    if !unused.is_empty() {
-        m.wire_assign("unused_tags", 1, format!("^{{{}}}", unused.join(", ")));
-    }
     m.seq(
         vec![set("inflight_q", lit(ifl, 0))],
         vec![if_else(
@@ -584,9 +584,10 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign(
         "wb_key",
         kb,
+        // The key field takes the depth key (its low key_bits bits when it is wider).
         format!(
-            "wb_present ? fbuf[wb_ptr_q][{}:{dk_lsb}] : tbuf[wb_ptr_q][{}:{ib}]",
-            dk_lsb + kb - 1,
+            "wb_present ? {} : tbuf[wb_ptr_q][{}:{ib}]",
+            resize(&format!("fbuf[wb_ptr_q][{}:{dk_lsb}]", dk_lsb + dk_w.min(kb) - 1), dk_w.min(kb), kb),
             tw - 1
         ),
     );
@@ -804,7 +805,6 @@ mod tests {
         assert_eq!(feature_word_bits(&cfg), cfg.feature_format().bits_per_entry() + 1);
         assert_eq!(image_bits(&cfg), cfg.tile_bits + 6);
         assert_eq!(wdata_bits(&cfg), 192);
-        assert!(itu_tag_bits_needed(&cfg) <= cfg.itu_tag_bits as usize);
         let v = module(&cfg).to_verilog();
         for i in ["neo_itu u_itu3", "neo_scu u_scu3", "reg [246:0] fbuf [0:255];"] {
             assert!(v.contains(i), "{i} missing");
