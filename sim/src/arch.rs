@@ -76,8 +76,10 @@ pub enum Accel {
 ///
 /// With the measured raster core's shape (`rt.pixel_write_cycles > 0`, from
 /// `reports/latency.json`): the loads (`load_cycles_per_entry` per table entry) come first, then
-/// `max(ITU walk, SCU groups, pixel writes)`, and `tile_overhead` (the empty tile) holds the
-/// latencies and the pixel writes. A table longer than `rt.feature_buffer` is reloaded, walked
+/// `max(ITU walk, busiest SCU, pixel writes)` (the RTL's SCUs are decoupled by their routing
+/// FIFOs, so an SCU's cost is the sum over its subtiles of all groups; a lower bound when the
+/// busiest SCU changes from group to group by more than a FIFO's worth), and `tile_overhead`
+/// (the empty tile) holds the latencies and the pixel writes. A table longer than `rt.feature_buffer` is reloaded, walked
 /// and blended group by group, segment by segment, the SCU FIFOs drained before each reload:
 /// each group costs the loads, its walk plus its slowest SCU (serial: an upper bound, tight when
 /// a group's blending comes in bursts, as with real tables, loose when it hides under the walk),
@@ -94,17 +96,12 @@ pub fn raster_tile_cycles(
     scus: u32,
     itu: bool,
 ) -> (f64, f64) {
-    let groups: Vec<f64> = routed
-        .chunks(scus.max(1) as usize)
-        .map(|g| {
-            g.iter()
-                .map(|&r| {
-                    let p = (r as f64 * ratio).ceil().min(r as f64);
-                    p * rt.scu_cycles_per_pair + (r as f64 - p) * rt.scu_drain_ii
-                })
-                .fold(0.0, f64::max)
-        })
-        .collect();
+    let cost = |r: u32| {
+        let p = (r as f64 * ratio).ceil().min(r as f64);
+        p * rt.scu_cycles_per_pair + (r as f64 - p) * rt.scu_drain_ii
+    };
+    let groups: Vec<f64> =
+        routed.chunks(scus.max(1) as usize).map(|g| g.iter().map(|&r| cost(r)).fold(0.0, f64::max)).collect();
     let scu_total: f64 = groups.iter().sum();
     let tail = groups.last().copied().unwrap_or(0.0) + rt.scu_latency as f64;
     let len = if itu { table_len.max(entries) } else { entries };
@@ -122,7 +119,13 @@ pub fn raster_tile_cycles(
             let segs = (len as u64).div_ceil(rt.feature_buffer) as f64;
             groups.iter().map(|&g| load + walk + g + segs * rt.segment_overhead).sum::<f64>() + len as f64
         } else {
-            load + itu_total.max(scu_total).max(pix)
+            // One segment: each SCU runs through its subtiles of every group, decoupled from the
+            // others by its routing FIFO, so the blending takes the busiest SCU's sum.
+            let s = scus.max(1) as usize;
+            let per_scu = (0..s)
+                .map(|j| routed.iter().skip(j).step_by(s).map(|&r| cost(r)).sum::<f64>())
+                .fold(0.0, f64::max);
+            load + itu_total.max(per_scu).max(pix)
         };
         body - pix + rt.tile_overhead as f64
     };

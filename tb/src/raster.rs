@@ -564,7 +564,7 @@ fn grid_gaussian(t: [u32; 2], rc: &RasterConfig, i: u64, bits: u64) -> FeatureEn
         4 => ([(sx.min(n as f64 - 2.0) + 1.0) * s - 0.5, (sy.min(n as f64 - 2.0) + 1.0) * s - 0.5], 0.4),
         16 => {
             let (bx, by) = ((k % 3) as f64 * 2.0 + 2.0, (k / 3 % 3) as f64 * 2.0 + 2.0);
-            ([bx * s - 0.5, by * s - 0.5], 3.5)
+            ([bx * s - 0.5, by * s - 0.5], 6.0)
         }
         _ => ([31.5, 31.5], 400.0),
     };

@@ -806,7 +806,7 @@ mod tests {
         assert_eq!(image_bits(&cfg), cfg.tile_bits + 6);
         assert_eq!(wdata_bits(&cfg), 192);
         let v = module(&cfg).to_verilog();
-        for i in ["neo_itu u_itu3", "neo_scu u_scu3", "reg [246:0] fbuf [0:255];"] {
+        for i in ["neo_itu u_itu3", "neo_scu u_scu3", "reg  [246:0] fbuf [0:255];"] {
             assert!(v.contains(i), "{i} missing");
         }
         assert!(!v.contains("u_itu4") && !v.contains("u_scu4"));
