@@ -210,14 +210,14 @@ impl GenConfig {
             return err(format!("raster_itus {} is outside 1..=16", self.raster_itus));
         }
         let c = self.raster_scus;
-        if !c.is_power_of_two() || c > 32 || subtiles % c != 0 || subtiles / c < 2 {
+        if !c.is_power_of_two() || c > 32 || !subtiles.is_multiple_of(c) || subtiles / c < 2 {
             return err(format!(
                 "raster_scus {c} is not a power of two in 1..=32 leaving at least two groups of {subtiles} subtiles"
             ));
         }
         let f = self.raster_feature_buffer;
         if !f.is_power_of_two()
-            || f % self.raster_itus != 0
+            || !f.is_multiple_of(self.raster_itus)
             || !(4..=4096).contains(&f)
             || f < 2 * self.raster_itus
         {

@@ -224,7 +224,7 @@ impl RasterCore {
                 space::PIXEL => {
                     self.checker.value(c, "mem_req_len_o (pixels)", side, n);
                     let off = addr.wrapping_sub(b.pix);
-                    let ok = off < tile * tile && off % side == 0;
+                    let ok = off < tile * tile && off.is_multiple_of(side);
                     self.checker.protocol(c, ok, &format!("pixel write at 0x{addr:x} outside the tile"));
                     for k in 0..side {
                         let bit = 24 * k as usize;
