@@ -256,12 +256,20 @@ impl<'a> Model<'a> {
             }
             shot_start.push(s);
         }
+        // The simulated core's feature buffer is half the architecture's raster buffer (the other
+        // half double-buffers the prefetch) when that is larger than the measured RTL's
+        // (`raster.core.feature_buffer`); the RTL structure of the rest of the raster timing is
+        // kept.
+        let mut raster = lat.raster.clone();
+        if raster.feature_buffer > 0 {
+            raster.feature_buffer = raster.feature_buffer.max(cfg.neo.raster_buffer_bytes / 2 / fb.max(1));
+        }
         Ok(Model {
             accel,
             cfg,
             lat,
             wl,
-            raster: lat.raster.clone(),
+            raster,
             strategy,
             eb,
             fb,
