@@ -72,6 +72,16 @@ pub struct GenConfig {
     /// SCU: pixel lanes (a power of two dividing the subtile's pixel count; each Gaussian
     /// takes `pixels / scu_lanes` cycles). 16 by default (see docs/rtl.md "SCU").
     pub scu_lanes: usize,
+    /// Raster core: ITUs (`neo_itu` instances; the table is tested this many entries per
+    /// cycle). 4 in the paper (Table 1).
+    pub raster_itus: usize,
+    /// Raster core: SCUs (`neo_scu` instances), a power of two in 1..=32 dividing the subtile
+    /// count: the subtiles are blended in groups of this many, one per SCU. 4 in the paper.
+    pub raster_scus: usize,
+    /// Raster core: feature-buffer entries (a power of two, a multiple of `raster_itus`). A
+    /// longer table is processed in segments of this many entries, re-fetched per subtile group
+    /// (see docs/rtl.md "Raster core").
+    pub raster_feature_buffer: usize,
 }
 
 impl Default for GenConfig {
@@ -91,6 +101,9 @@ impl Default for GenConfig {
             tile_bits: 10,
             itu_tag_bits: 16,
             scu_lanes: 16,
+            raster_itus: 4,
+            raster_scus: 4,
+            raster_feature_buffer: 256,
         }
     }
 }
@@ -184,6 +197,37 @@ impl GenConfig {
         let pixels = (self.raster_config().subtile * self.raster_config().subtile) as usize;
         if !self.scu_lanes.is_power_of_two() || self.scu_lanes < 2 || self.scu_lanes > pixels {
             return err(format!("scu_lanes {} is not a power of two in 2..={pixels}", self.scu_lanes));
+        }
+        self.validate_raster_core()?;
+        Ok(())
+    }
+
+    /// The raster core's constraints (see the fields' docs).
+    fn validate_raster_core(&self) -> Result<(), ConfigError> {
+        let err = |s: String| Err(ConfigError(s));
+        let subtiles = self.raster_config().subtiles_per_tile() as usize;
+        if !(1..=16).contains(&self.raster_itus) {
+            return err(format!("raster_itus {} is outside 1..=16", self.raster_itus));
+        }
+        let c = self.raster_scus;
+        if !c.is_power_of_two() || c > 32 || !subtiles.is_multiple_of(c) || subtiles / c < 2 {
+            return err(format!(
+                "raster_scus {c} is not a power of two in 1..=32 leaving at least two groups of {subtiles} subtiles"
+            ));
+        }
+        let f = self.raster_feature_buffer;
+        if !f.is_power_of_two()
+            || !f.is_multiple_of(self.raster_itus)
+            || !(4..=4096).contains(&f)
+            || f < 2 * self.raster_itus
+        {
+            return err(format!(
+                "raster_feature_buffer {f} is not a power of two in 4..=4096, a multiple of raster_itus {} and at least twice it",
+                self.raster_itus
+            ));
+        }
+        if (f as u64) >= 1u64 << self.len_bits {
+            return err(format!("raster_feature_buffer {f} does not fit len_bits {}", self.len_bits));
         }
         Ok(())
     }

@@ -2,7 +2,7 @@
 //! (`neo gen --stats`, written to `reports/synth.json`).
 
 use crate::config::{GenConfig, Topology};
-use crate::tools::{synth_stats, SynthStats, ToolError};
+use crate::tools::{glue_synth_stats, synth_stats, SynthStats, ToolError};
 use crate::units::{files_for, top_modules};
 use serde::Serialize;
 
@@ -17,8 +17,24 @@ pub struct UnitReport {
     pub depth: Option<usize>,
     /// BSU latency in cycles (BSU only).
     pub latency: Option<usize>,
-    /// Yosys statistics.
+    /// Yosys statistics (for a core reported hierarchically: its own glue, see `hierarchy`).
     pub synth: SynthStats,
+    /// For a core too large to synthesize flat (the raster core): its glue plus, per unit, the
+    /// instance count times the unit's flat cells.
+    pub hierarchy: Option<Hierarchy>,
+}
+
+/// A core reported hierarchically.
+#[derive(Clone, Debug, Serialize)]
+pub struct Hierarchy {
+    /// Per instantiated unit: (module, instances, flat cells of one, flip-flops of one).
+    pub instances: Vec<(String, u64, u64, u64)>,
+    /// Glue cells (the core's own logic, black-box instances excluded).
+    pub glue_cells: u64,
+    /// Glue cells plus instances x unit cells.
+    pub total_cells: u64,
+    /// Glue flip-flops plus instances x unit flip-flops.
+    pub total_flip_flops: u64,
 }
 
 /// The BSU of one topology (other parameters from the base configuration).
@@ -76,22 +92,56 @@ fn parallel<T: Send, R: Send>(jobs: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R>
     out.into_iter().map(|(_, r)| r).collect()
 }
 
-/// Synthesizes every top of `cfg`.
+/// Tops synthesized hierarchically (a flat synthesis of 4 SCUs, ~2 M cells, takes too long):
+/// (top, units kept as black boxes; their flat figures come from their own reports).
+pub const HIERARCHICAL: &[(&str, &[&str])] = &[(
+    crate::units::raster_core::NAME,
+    &[crate::units::itu::NAME, crate::units::scu::NAME, crate::units::scu::EXP_NAME],
+)];
+
+/// Synthesizes every top of `cfg` (flat; the raster core hierarchically, see [`Hierarchy`]).
 pub fn unit_reports(cfg: &GenConfig) -> Result<Vec<UnitReport>, ToolError> {
     let net = cfg.network();
-    parallel(top_modules().to_vec(), |top| {
-        let synth = synth_stats(&files_for(cfg, top), top)?;
+    let mut reports: Vec<UnitReport> = parallel(top_modules().to_vec(), |top| {
         let bsu = top == crate::units::bsu::NAME;
+        let synth = match HIERARCHICAL.iter().find(|(t, _)| *t == top) {
+            Some((_, boxes)) => glue_synth_stats(&files_for(cfg, top), top, boxes)?,
+            None => synth_stats(&files_for(cfg, top), top)?,
+        };
         Ok(UnitReport {
             unit: top.to_string(),
             comparators: bsu.then(|| net.comparator_count()),
             depth: bsu.then(|| net.depth()),
             latency: bsu.then(|| cfg.bsu_latency()),
             synth,
+            hierarchy: None,
         })
     })
     .into_iter()
-    .collect()
+    .collect::<Result<_, ToolError>>()?;
+    for (top, boxes) in HIERARCHICAL {
+        let flat: Vec<(String, u64, u64)> = reports
+            .iter()
+            .filter(|u| boxes.contains(&u.unit.as_str()))
+            .map(|u| (u.unit.clone(), u.synth.cells, u.synth.flip_flops))
+            .collect();
+        if let Some(core) = reports.iter_mut().find(|u| u.unit == *top) {
+            let instances: Vec<(String, u64, u64, u64)> = flat
+                .iter()
+                .map(|(n, c, f)| (n.clone(), core.synth.cells_by_type.get(n).copied().unwrap_or(0), *c, *f))
+                .filter(|i| i.1 > 0)
+                .collect();
+            let boxed: u64 = instances.iter().map(|i| i.1).sum();
+            let glue_cells = core.synth.cells - boxed;
+            core.hierarchy = Some(Hierarchy {
+                total_cells: glue_cells + instances.iter().map(|i| i.1 * i.2).sum::<u64>(),
+                total_flip_flops: core.synth.flip_flops + instances.iter().map(|i| i.1 * i.3).sum::<u64>(),
+                glue_cells,
+                instances,
+            });
+        }
+    }
+    Ok(reports)
 }
 
 /// Synthesizes the BSU of every topology valid at `cfg.bsu_width`.
@@ -139,6 +189,17 @@ pub fn table(r: &SynthReport) -> String {
             dash(u.depth),
             dash(u.latency)
         );
+        if let Some(h) = &u.hierarchy {
+            let parts: Vec<String> =
+                h.instances.iter().map(|(n, k, c, _)| format!("{k} x {n} ({c})")).collect();
+            s += &format!(
+                "  hierarchical: {} glue cells + {} = {} cells, {} flip-flops\n",
+                h.glue_cells,
+                parts.join(" + "),
+                h.total_cells,
+                h.total_flip_flops
+            );
+        }
     }
     if !r.bsu_topologies.is_empty() {
         s += &format!(

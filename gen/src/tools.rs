@@ -144,6 +144,47 @@ pub fn coarse_synth_stats(files: &[VerilogFile], top: &str) -> Result<SynthStats
     yosys_stat(files, top, " -run :fine")
 }
 
+/// Synthesis of `top`'s own logic: the modules in `blackboxes` become black boxes and the design
+/// is not flattened (`hierarchy -top TOP; blackbox ...; synth -top TOP`), so the statistics are
+/// the top's glue cells plus one cell per black-box instance (counted by type in
+/// `cells_by_type`). For cores too large to synthesize flat.
+pub fn glue_synth_stats(
+    files: &[VerilogFile],
+    top: &str,
+    blackboxes: &[&str],
+) -> Result<SynthStats, ToolError> {
+    glue_stat(files, top, blackboxes, "")
+}
+
+/// The coarse part (`-run :fine`, the latch check) of [`glue_synth_stats`].
+pub fn coarse_glue_synth_stats(
+    files: &[VerilogFile],
+    top: &str,
+    blackboxes: &[&str],
+) -> Result<SynthStats, ToolError> {
+    glue_stat(files, top, blackboxes, " -run :fine")
+}
+
+fn glue_stat(
+    files: &[VerilogFile],
+    top: &str,
+    blackboxes: &[&str],
+    synth_args: &str,
+) -> Result<SynthStats, ToolError> {
+    let tmp = TempFiles::write(files).map_err(|e| io_err("yosys", e))?;
+    let json = tmp.dir().join("stat.json");
+    let reads: Vec<String> = tmp.paths().iter().map(|p| format!("read_verilog {};", p.display())).collect();
+    let script = format!(
+        "{} hierarchy -top {top}; blackbox {}; synth -top {top}{synth_args}; tee -q -o {} stat -json",
+        reads.join(" "),
+        blackboxes.join(" "),
+        json.display()
+    );
+    run("yosys", top, Command::new("yosys").args(["-q", "-p", &script]))?;
+    let text = std::fs::read_to_string(&json).map_err(|e| io_err("yosys", e))?;
+    parse_stat_json(top, &text)
+}
+
 fn yosys_stat(files: &[VerilogFile], top: &str, synth_args: &str) -> Result<SynthStats, ToolError> {
     let tmp = TempFiles::write(files).map_err(|e| io_err("yosys", e))?;
     let json = tmp.dir().join("stat.json");

@@ -65,38 +65,70 @@ pub enum Accel {
     },
 }
 
-/// The raster core's cycles for one tile. The ITUs test every entry against all subtiles of the
-/// tile at once (`ceil(entries / itus) * itu_ii`, skipped when the bitmaps come from memory) and
-/// fill the bitmap buffer; the SCUs take the subtiles in groups of `scus`, each SCU blending its
-/// subtile's routed entries: `processed * scu_ii + (routed - processed) * drain_ii`, with
+/// The raster core's cycles for one tile of `table_len` entries, `entries` of them with a
+/// feature entry. The ITUs test every table entry against all subtiles of the tile at once,
+/// `itus` per cycle, once per subtile group (`ceil(table_len / itus) * itu_ii` per group, Fig. 14:
+/// they test the next group while the SCUs blend the current one; skipped when the bitmaps come
+/// from memory, `itu = false`); the SCUs take the subtiles in groups of `scus`, each SCU blending
+/// its subtile's routed entries: `processed * scu_ii + (routed - processed) * drain_ii`, with
 /// `processed = ceil(routed * ratio)` (early termination). A group lasts as long as its slowest
-/// SCU; the ITU pass overlaps the SCU groups (entries stream through the bitmap buffer). Returns
-/// (total, tail after the last input arrives).
+/// SCU.
+///
+/// With the measured raster core's shape (`rt.pixel_write_cycles > 0`, from
+/// `reports/latency.json`): the loads (`load_cycles_per_entry` per table entry) come first, then
+/// `max(ITU walk, busiest SCU, pixel writes)` (the RTL's SCUs are decoupled by their routing
+/// FIFOs, so an SCU's cost is the sum over its subtiles of all groups; a lower bound when the
+/// busiest SCU changes from group to group by more than a FIFO's worth), and `tile_overhead`
+/// (the empty tile) holds the latencies and the pixel writes. A table longer than `rt.feature_buffer` is reloaded, walked
+/// and blended group by group, segment by segment, the SCU FIFOs drained before each reload:
+/// each group costs the loads, its walk plus its slowest SCU (serial: an upper bound, tight when
+/// a group's blending comes in bursts, as with real tables, loose when it hides under the walk),
+/// and `segment_overhead` per segment; plus the serial write-back of one cycle per entry. Returns (total, tail after
+/// the last input arrives).
+#[allow(clippy::too_many_arguments)]
 pub fn raster_tile_cycles(
     routed: &[u32],
     ratio: f64,
     entries: u32,
+    table_len: u32,
     rt: &RasterTiming,
     itus: u32,
     scus: u32,
     itu: bool,
 ) -> (f64, f64) {
-    let itu_total = if itu { (entries as f64 / itus.max(1) as f64).ceil() * rt.itu_ii } else { 0.0 };
-    let groups: Vec<f64> = routed
-        .chunks(scus.max(1) as usize)
-        .map(|g| {
-            g.iter()
-                .map(|&r| {
-                    let p = (r as f64 * ratio).ceil().min(r as f64);
-                    p * rt.scu_cycles_per_pair + (r as f64 - p) * rt.scu_drain_ii
-                })
-                .fold(0.0, f64::max)
-        })
-        .collect();
+    let cost = |r: u32| {
+        let p = (r as f64 * ratio).ceil().min(r as f64);
+        p * rt.scu_cycles_per_pair + (r as f64 - p) * rt.scu_drain_ii
+    };
+    let groups: Vec<f64> =
+        routed.chunks(scus.max(1) as usize).map(|g| g.iter().map(|&r| cost(r)).fold(0.0, f64::max)).collect();
     let scu_total: f64 = groups.iter().sum();
-    let lat = if itu { rt.itu_latency as f64 } else { 0.0 } + rt.scu_latency as f64 + rt.tile_overhead as f64;
-    let total = itu_total.max(scu_total) + lat;
     let tail = groups.last().copied().unwrap_or(0.0) + rt.scu_latency as f64;
+    let len = if itu { table_len.max(entries) } else { entries };
+    let walk = if itu { (len as f64 / itus.max(1) as f64).ceil().max(1.0) * rt.itu_ii } else { 0.0 };
+    let itu_total = walk * groups.len().max(1) as f64;
+    let total = if rt.pixel_write_cycles == 0 {
+        let lat =
+            if itu { rt.itu_latency as f64 } else { 0.0 } + rt.scu_latency as f64 + rt.tile_overhead as f64;
+        rt.load_cycles_per_entry * len as f64 + itu_total.max(scu_total) + lat
+    } else {
+        let load = rt.load_cycles_per_entry * len as f64;
+        let pix = rt.pixel_write_cycles as f64;
+        let segmented = rt.feature_buffer > 0 && len as u64 > rt.feature_buffer;
+        let body = if segmented {
+            let segs = (len as u64).div_ceil(rt.feature_buffer) as f64;
+            groups.iter().map(|&g| load + walk + g + segs * rt.segment_overhead).sum::<f64>() + len as f64
+        } else {
+            // One segment: each SCU runs through its subtiles of every group, decoupled from the
+            // others by its routing FIFO, so the blending takes the busiest SCU's sum.
+            let s = scus.max(1) as usize;
+            let per_scu = (0..s)
+                .map(|j| routed.iter().skip(j).step_by(s).map(|&r| cost(r)).sum::<f64>())
+                .fold(0.0, f64::max);
+            load + itu_total.max(per_scu).max(pix)
+        };
+        body - pix + rt.tile_overhead as f64
+    };
     (total, tail.min(total))
 }
 
@@ -224,12 +256,20 @@ impl<'a> Model<'a> {
             }
             shot_start.push(s);
         }
+        // The simulated core's feature buffer is half the architecture's raster buffer (the other
+        // half double-buffers the prefetch) when that is larger than the measured RTL's
+        // (`raster.core.feature_buffer`); the RTL structure of the rest of the raster timing is
+        // kept.
+        let mut raster = lat.raster.clone();
+        if raster.feature_buffer > 0 {
+            raster.feature_buffer = raster.feature_buffer.max(cfg.neo.raster_buffer_bytes / 2 / fb.max(1));
+        }
         Ok(Model {
             accel,
             cfg,
             lat,
             wl,
-            raster: lat.raster.clone(),
+            raster,
             strategy,
             eb,
             fb,
@@ -628,6 +668,7 @@ impl<'a> Model<'a> {
             &tw.routed,
             fw.processed_ratio,
             entries,
+            table_entries as u32,
             &self.raster,
             self.itus_per_core.max(1),
             self.scus_per_core,
@@ -906,6 +947,10 @@ mod tests {
             scu_drain_ii: 1.0,
             scu_latency: 10,
             tile_overhead: 0,
+            load_cycles_per_entry: 0.0,
+            pixel_write_cycles: 0,
+            feature_buffer: 0,
+            segment_overhead: 0.0,
         }
     }
 
@@ -913,18 +958,40 @@ mod tests {
     fn raster_groups_take_their_slowest_scu_and_overlap_the_itus() {
         // 8 subtiles in two groups of 4: group maxima 10 and 20 routed entries, no termination.
         let routed = [1, 10, 3, 0, 20, 5, 5, 5];
-        let (t, tail) = raster_tile_cycles(&routed, 1.0, 40, &rt(), 4, 4, true);
-        // SCUs: (10 + 20) x 4 = 120; ITUs: 40 / 4 = 10, hidden; latencies 3 + 10.
+        let (t, tail) = raster_tile_cycles(&routed, 1.0, 40, 40, &rt(), 4, 4, true);
+        // SCUs: (10 + 20) x 4 = 120; ITUs: 2 groups x 40 / 4 = 20, hidden; latencies 3 + 10.
         assert_eq!(t, 120.0 + 13.0);
         assert_eq!(tail, 20.0 * 4.0 + 10.0);
         // Half the pairs terminate early: processed at 4 cycles, the rest drained at 1.
-        let (h, _) = raster_tile_cycles(&routed, 0.5, 40, &rt(), 4, 4, true);
+        let (h, _) = raster_tile_cycles(&routed, 0.5, 40, 40, &rt(), 4, 4, true);
         assert_eq!(h, (5.0 * 4.0 + 5.0) + (10.0 * 4.0 + 10.0) + 13.0);
-        // Many entries and few routed pairs: the ITUs bound the tile.
-        let (i, _) = raster_tile_cycles(&[1; 8], 1.0, 4000, &rt(), 4, 4, true);
-        assert_eq!(i, 1000.0 + 13.0);
+        // Many entries and few routed pairs: the ITUs (one walk per group) bound the tile.
+        let (i, _) = raster_tile_cycles(&[1; 8], 1.0, 4000, 4000, &rt(), 4, 4, true);
+        assert_eq!(i, 2.0 * 1000.0 + 13.0);
         // Without ITUs (bitmaps from memory) only the SCUs and their latency count.
-        let (g, _) = raster_tile_cycles(&[1; 8], 1.0, 4000, &rt(), 4, 4, false);
+        let (g, _) = raster_tile_cycles(&[1; 8], 1.0, 4000, 4000, &rt(), 4, 4, false);
         assert_eq!(g, 8.0 + 10.0);
+    }
+
+    #[test]
+    fn measured_raster_core_shape_loads_then_overlaps_writes_and_segments_per_group() {
+        let shaped = RasterTiming {
+            load_cycles_per_entry: 2.0,
+            pixel_write_cycles: 512,
+            feature_buffer: 100,
+            tile_overhead: 535,
+            ..rt()
+        };
+        // Empty tile: the overhead.
+        assert_eq!(raster_tile_cycles(&[0; 64], 1.0, 0, 0, &shaped, 4, 4, true).0, 535.0);
+        // Light tile: loads, then the pixel writes bound the body.
+        assert_eq!(raster_tile_cycles(&[1; 64], 1.0, 20, 20, &shaped, 4, 4, true).0, 40.0 + 535.0);
+        // Heavy tile: 16 groups of 4 SCUs with 50 routed each = 16 x 200 cycles.
+        let (h, _) = raster_tile_cycles(&[50; 64], 1.0, 80, 80, &shaped, 4, 4, true);
+        assert_eq!(h, 160.0 + 3200.0 - 512.0 + 535.0);
+        // 200 entries > 100: per group the loads (400), the walk (50) and the SCU (200), plus
+        // the write-back.
+        let (s, _) = raster_tile_cycles(&[50; 64], 1.0, 200, 200, &shaped, 4, 4, true);
+        assert_eq!(s, 16.0 * (400.0 + 50.0 + 200.0) + 200.0 - 512.0 + 535.0);
     }
 }

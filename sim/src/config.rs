@@ -257,8 +257,24 @@ pub struct RasterTiming {
     pub scu_drain_ii: f64,
     /// SCU pipeline latency in cycles.
     pub scu_latency: u64,
-    /// Fixed cycles per tile (setup, pixel-buffer drain).
+    /// Fixed cycles per tile (setup, pixel-buffer drain). The measured raster core's value is
+    /// its empty tile (loads of nothing, one empty list per subtile, the pixel writes), which
+    /// includes the pipeline latencies and `pixel_write_cycles`.
     pub tile_overhead: u64,
+    /// Cycles per table entry of the loads before the ITU walk (table beat + feature beat in the
+    /// RTL: 2); 0 models loads overlapped with the rest (the assumed default).
+    pub load_cycles_per_entry: f64,
+    /// Pixel-row writes per tile (`tile^2 / subtile` in the RTL, 512), overlapped with blending;
+    /// 0 (the assumed default) ignores them.
+    pub pixel_write_cycles: u64,
+    /// Feature-buffer entries of a raster core: a longer table is reloaded and walked once per
+    /// subtile group, segment by segment (the RTL's schedule); 0 (the assumed default) is
+    /// unbounded.
+    pub feature_buffer: u64,
+    /// Fixed cycles per (group, segment) of a table longer than `feature_buffer` (the reload's
+    /// handshakes, the ITU latency and the drain of the SCUs' FIFOs before the buffer is
+    /// reused).
+    pub segment_overhead: f64,
 }
 
 impl Default for RasterTiming {
@@ -270,6 +286,10 @@ impl Default for RasterTiming {
             scu_drain_ii: 1.0,
             scu_latency: 12,
             tile_overhead: 64,
+            load_cycles_per_entry: 0.0,
+            pixel_write_cycles: 0,
+            feature_buffer: 0,
+            segment_overhead: 0.0,
         }
     }
 }

@@ -377,13 +377,17 @@ impl Latency {
 
 /// Where each raster-core number may be measured, first match wins (`raster.*` is the section
 /// the raster cosimulation writes; the SCU's unit figures may also sit in `units.neo_scu`).
-const RASTER_FIELDS: [(&str, &[&str]); 6] = [
+const RASTER_FIELDS: [(&str, &[&str]); 10] = [
     ("itu_ii", &["raster.itu.ii"]),
     ("itu_latency", &["raster.itu.latency"]),
     ("scu_cycles_per_pair", &["raster.scu.cycles_per_pair", "raster.scu.ii", "units.neo_scu.ii"]),
     ("scu_drain_ii", &["raster.scu.drain_ii", "units.neo_scu.drain_ii"]),
     ("scu_latency", &["raster.scu.latency", "units.neo_scu.latency"]),
     ("tile_overhead", &["raster.core.tile_overhead"]),
+    ("load_cycles_per_entry", &["raster.core.load_cycles_per_entry"]),
+    ("pixel_write_cycles", &["raster.core.pixel_writes"]),
+    ("feature_buffer", &["raster.core.feature_buffer"]),
+    ("segment_overhead", &["raster.core.segment_overhead"]),
 ];
 
 /// Raster timing: measured fields (see [`RASTER_FIELDS`]) over the assumed defaults.
@@ -420,6 +424,10 @@ fn raster_timing(v: &Value) -> Result<(RasterTiming, RasterSource), String> {
                     "scu_cycles_per_pair" => t.scu_cycles_per_pair = x,
                     "scu_drain_ii" => t.scu_drain_ii = x,
                     "scu_latency" => t.scu_latency = x as u64,
+                    "load_cycles_per_entry" => t.load_cycles_per_entry = x,
+                    "pixel_write_cycles" => t.pixel_write_cycles = x as u64,
+                    "feature_buffer" => t.feature_buffer = x as u64,
+                    "segment_overhead" => t.segment_overhead = x,
                     _ => t.tile_overhead = x as u64,
                 }
                 measured.push(path.to_string());

@@ -102,5 +102,24 @@ pub fn run(a: BenchArgs) -> Result<()> {
         ),
         None => println!("BSU cosim       skipped: neo was built without Verilator (run scripts/setup)"),
     }
+
+    let biker = neo_golden::shared::shared_dir_path().join("scenes/biker.ply");
+    if !biker.is_file() {
+        println!("raster cosim    skipped: {} not found", biker.display());
+        return Ok(());
+    }
+    let (res, tiles) = (1024, 4);
+    match spin("raster core cosim, biker tiles", || neo_tb::bench::raster_tile_throughput(&biker, res, tiles)).0 {
+        Some(t) => println!(
+            "raster cosim    {:>9.2} tiles/s ({} busiest 64x64 tiles of a {res}x{res} biker frame, {} entries, {:.0} cycles/tile, {:.0} kcycles/s, golden-checked; target: a tile well under 1 s: {})",
+            t.tiles_per_s(),
+            t.tiles,
+            t.entries,
+            t.cycles as f64 / t.tiles as f64,
+            t.cycles_per_s() / 1e3,
+            verdict(t.seconds / (t.tiles as f64) < 0.5)
+        ),
+        None => println!("raster cosim    skipped: neo was built without Verilator (run scripts/setup)"),
+    }
     Ok(())
 }

@@ -333,7 +333,68 @@ pub fn raster_section(cfg: &GenConfig) -> Value {
             "ii": t.ii,
             "jobs": jobs,
             "subtiles_per_job": cfg.raster_config().subtiles_per_tile()
-        }
+        },
+        "core": raster_core_section(cfg)
+    })
+}
+
+/// The `raster.core` section: `neo_raster_core` cycles per tile (command to `done_o`, ideal
+/// memory) over a grid of table lengths x subtile bits per Gaussian, and `tile_overhead`, the
+/// cycles of an empty table (loads, one empty list per subtile, the 64x64 pixel writes).
+pub fn raster_core_section(cfg: &GenConfig) -> Value {
+    let f = cfg.raster_feature_buffer as u64;
+    let grid = crate::raster::measure_grid(cfg, SEED ^ 7, &[0, 16, 64, f, 2 * f], &[1, 4, 16, 64]);
+    let overhead = grid.iter().find(|p| p.entries == 0).map(|p| p.cycles).unwrap_or(0);
+    // Loads: the slope of the last read's cycle over the table length (one segment).
+    let at = |n: u64| grid.iter().find(|p| p.entries == n && p.bits_per_gaussian == 1).map(|p| p.last_read);
+    let load = match (at(16), at(f)) {
+        (Some(a), Some(b)) => (b - a) as f64 / (f - 16) as f64,
+        _ => 0.0,
+    };
+    let rc = cfg.raster_config();
+    // Per (group, segment) fixed cycles of tables longer than the buffer: what the multi-segment
+    // points cost beyond `tile_overhead + write-back + groups x (loads + walk + slowest SCU)`
+    // (the cycle model's serial formula, neo_sim::arch::raster_tile_cycles), averaged over the
+    // points without early termination (1, 4 and 16 bits per Gaussian; the SCUs' cost spread
+    // evenly over the groups), at least 0.
+    let groups = (rc.subtiles_per_tile() as usize / cfg.raster_scus) as f64;
+    let seg: Vec<f64> = grid
+        .iter()
+        .filter(|p| p.entries > f && p.bits_per_gaussian < 64)
+        .map(|p| {
+            let n = p.entries as f64;
+            let walk = (n / cfg.raster_itus as f64).ceil();
+            let scu = 4.0 * p.group_max_routed as f64 / groups;
+            let model = overhead as f64 + n + groups * (load * n + walk + scu);
+            (p.cycles as f64 - model) / (groups * (p.entries.div_ceil(f)) as f64)
+        })
+        .collect();
+    let segment_overhead =
+        if seg.is_empty() { 0.0 } else { (seg.iter().sum::<f64>() / seg.len() as f64).round().max(0.0) };
+    let points: Vec<Value> = grid
+        .iter()
+        .map(|p| {
+            json!({
+                "entries": p.entries,
+                "bits_per_gaussian": p.bits_per_gaussian,
+                "set_bits": p.set_bits,
+                "group_max_routed": p.group_max_routed,
+                "cycles": p.cycles,
+                "load_cycles": p.last_read,
+                "artifact_cycles": p.set_bits
+            })
+        })
+        .collect();
+    json!({
+        "tile_overhead": overhead,
+        "load_cycles_per_entry": load,
+        "segment_overhead": segment_overhead,
+        "itus": cfg.raster_itus,
+        "scus": cfg.raster_scus,
+        "feature_buffer": cfg.raster_feature_buffer,
+        "pixel_writes": (rc.tile * rc.tile / rc.subtile) as u64,
+        "grid": points,
+        "memory": "ideal: always ready, first response beat 1 cycle after the request"
     })
 }
 

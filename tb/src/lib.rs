@@ -21,6 +21,8 @@ pub mod lanes;
 pub mod latency;
 #[cfg(neo_has_verilator)]
 pub mod msu;
+#[cfg(neo_has_verilator)]
+pub mod raster;
 pub mod rng;
 #[cfg(neo_has_verilator)]
 pub mod scu;

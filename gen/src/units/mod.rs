@@ -10,12 +10,14 @@
 //! | `neo_itu`       | Intersection Test Unit: subtile bitmap of one Gaussian  | yes       |
 //! | `neo_scu_exp`   | SCU exp unit: ROM over one octave + interpolation       | no        |
 //! | `neo_scu`       | Subtile Compute Unit: alpha blending of one subtile     | yes       |
+//! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
 
 pub mod bsu;
 pub mod chunk_ram;
 pub mod cmp_swap;
 pub mod itu;
 pub mod msu;
+pub mod raster_core;
 pub mod scu;
 pub mod sort_core;
 
@@ -41,7 +43,7 @@ impl VerilogFile {
 
 /// Names of the tops that get their own cosimulation model, in order.
 pub fn top_modules() -> &'static [&'static str] {
-    &["neo_bsu", "neo_msu", "neo_sort_core", "neo_itu", "neo_scu"]
+    &["neo_bsu", "neo_msu", "neo_sort_core", "neo_itu", "neo_scu", "neo_raster_core"]
 }
 
 /// Every module of the configuration, leaves first.
@@ -56,6 +58,7 @@ pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
         itu::module(cfg),
         scu::exp_module(cfg),
         scu::module(cfg),
+        raster_core::module(cfg),
     ])
 }
 

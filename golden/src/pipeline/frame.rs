@@ -205,6 +205,15 @@ impl<'s> Pipeline<'s> {
         self.slots.iter().map(|s| s.exact.as_slice())
     }
 
+    /// The last frame's feature entry of Gaussian `id`, or `None` when it has none (culled this
+    /// frame, or `id` out of range): what the raster reads by a table entry's id.
+    pub fn feature(&self, id: u32) -> Option<&FeatureEntry> {
+        match self.feature_of.get(id as usize) {
+            Some(&f) if f != CULLED => self.features.get(f as usize),
+            _ => None,
+        }
+    }
+
     /// The subtile bitmaps of the last frame's rastered tables, per tile, per entry.
     pub fn bitmaps(&self) -> impl Iterator<Item = &[u64]> {
         self.slots.iter().map(|s| s.bitmaps.as_slice())

@@ -1,0 +1,827 @@
+//! `neo_raster_core`: one Rasterization Core (paper Section 5.4, Fig. 14): `raster_itus`
+//! [`super::itu`] units and `raster_scus` [`super::scu`] units, a feature buffer, a command port
+//! and a memory-request port. Renders one 64x64 tile from its sorted table, bit-exact with golden
+//! [`neo_golden::raster::raster_tile`], and writes each table entry back with the current depth
+//! key and the ITU's cumulative-OR valid bit (golden `pipeline::frame`'s deferred write-back).
+//! The protocols, the schedule and the timing are documented in `docs/rtl.md` ("Raster core").
+//!
+//! # Schedule
+//! The table is processed in *segments* of at most `F = raster_feature_buffer` entries (one
+//! segment when the table fits). LOAD reads the segment's table entries (bursts) and then, per
+//! entry, its feature word (`feature base + id`) into the buffers. The subtiles are blended in
+//! `G = subtiles / raster_scus` *groups* of `raster_scus` consecutive subtiles (row-major, SCU
+//! `j` takes subtile `g * raster_scus + j`). WALK issues the segment to the ITUs,
+//! `raster_itus` entries (a *quad*) per cycle, once per group; each ITU result is routed, per
+//! SCU, into a FIFO of `{last, lane mask, base}` elements, and a feeder per SCU sends the masked
+//! entries' features to its SCU in table order. The FIFOs decouple the two: the ITUs test the
+//! next group while the SCUs blend the current one (Fig. 14). With one segment the walk runs
+//! through all groups without reloading; with several, each (group, segment) pair loads its
+//! segment (the SCUs keep their pixel state across segments, `last` marks a list's final
+//! segment) after the previous one has drained.
+//!
+//! Group 0's ITU results give every entry's valid bit (the bitmap covers all subtiles); the
+//! write-back of entry `i` (`{valid = present & |bitmap, key = present ? depth_key : old key,
+//! id}`) follows once the segment's group-0 results are in. A feature word with its `present`
+//! bit clear is a Gaussian culled this frame (no feature entry): it is not rasterised, its
+//! valid bit is cleared and its key kept (golden `raster_phase`). Finished subtiles are written
+//! one pixel row (`S` pixels, 24 bits each) per request.
+
+use crate::config::GenConfig;
+use crate::emit::expr::{bits_for, lit};
+use crate::emit::{conns, if_, if_else, set, Module, Stmt};
+use crate::units::{itu, scu};
+
+/// Module name.
+pub const NAME: &str = "neo_raster_core";
+
+/// Entries per routing FIFO (one per SCU): how far the ITUs may run ahead of an SCU.
+pub const FIFO_DEPTH: u32 = 16;
+
+/// Memory spaces (`mem_req_space_o`).
+pub mod space {
+    /// Table entries `{valid, key, id}` (read in bursts, written back one per request).
+    pub const TABLE: u64 = 0;
+    /// Feature words `{present, entry}` indexed by Gaussian id (read one per request).
+    pub const FEATURE: u64 = 1;
+    /// Pixels (write: one subtile row of `S` pixels at a pixel address).
+    pub const PIXEL: u64 = 2;
+}
+
+const S_IDLE: u64 = 0;
+const S_LOADT: u64 = 1;
+const S_LOADF: u64 = 2;
+const S_WALK: u64 = 3;
+const S_SEGWAIT: u64 = 4;
+const S_DRAIN: u64 = 5;
+
+/// Width of a feature word: the packed entry plus the `present` bit on top.
+pub fn feature_word_bits(cfg: &GenConfig) -> u32 {
+    cfg.feature_format().bits_per_entry() + 1
+}
+
+/// Width of the command's image width / height: pixels of `2^tile_bits` tiles.
+pub fn image_bits(cfg: &GenConfig) -> u32 {
+    cfg.tile_bits + cfg.raster_config().tile.trailing_zeros()
+}
+
+/// Width of `mem_wdata_o`: a pixel row (`S` x 24 bits) or a table entry, whichever is wider.
+pub fn wdata_bits(cfg: &GenConfig) -> u32 {
+    (cfg.raster_config().subtile * 24).max(cfg.entry_bits())
+}
+
+/// `x` (`from` bits) resized to `to` bits (zero-extended or truncated).
+fn resize(x: &str, from: u32, to: u32) -> String {
+    match from.cmp(&to) {
+        std::cmp::Ordering::Equal => x.to_string(),
+        std::cmp::Ordering::Greater => format!("{x}[{}:0]", to - 1),
+        std::cmp::Ordering::Less => format!("{{{}, {x}}}", lit(to - from, 0)),
+    }
+}
+
+/// The raster core for `cfg`.
+pub fn module(cfg: &GenConfig) -> Module {
+    let fmt = cfg.feature_format();
+    let rc = cfg.raster_config();
+    let w = scu::ScuWidths::new(cfg);
+    let layout = fmt.layout();
+    let field = |n: &str| {
+        let f = layout.iter().find(|f| f.name == n).unwrap_or_else(|| panic!("feature field {n}"));
+        (f.lsb, f.width)
+    };
+    let ni = cfg.raster_itus as u32;
+    let nc = cfg.raster_scus as u32;
+    let nsub = rc.subtiles_per_tile();
+    let nside = rc.subtiles_per_side();
+    let groups = nsub / nc;
+    let gw = bits_for(groups as u64 - 1);
+    let cb = nc.trailing_zeros();
+    let sub_w = nsub.trailing_zeros(); // subtile index bits
+    let side_w = nside.trailing_zeros();
+    let s = rc.subtile;
+    let sb = s.trailing_zeros();
+    let t = rc.tile;
+    let tl = t.trailing_zeros();
+    let f = cfg.raster_feature_buffer as u32;
+    let fa = bits_for(f as u64 - 1);
+    let sl = bits_for(f as u64);
+    let fw = feature_word_bits(cfg);
+    let present = fw - 1;
+    let kb = cfg.key_bits as u32;
+    let ib = cfg.id_bits as u32;
+    let tw = kb + ib; // table buffer word {key, id}
+    let eb = cfg.entry_bits();
+    let aw = cfg.addr_bits;
+    let lw = cfg.len_bits;
+    let tb = cfg.tile_bits;
+    let wd = image_bits(cfg);
+    let ow = wd + 1;
+    let bl = bits_for(cfg.burst as u64);
+    let wdb = wdata_bits(cfg);
+    let rw = s * 24;
+    let tg = cfg.itu_tag_bits;
+    let ew = 1 + ni + fa; // FIFO element {last, mask, base}
+    let db = bits_for(FIFO_DEPTH as u64 - 1);
+    let ifl = bits_for(itu::LATENCY as u64 + 1);
+    let (mean_lsb, _) = field("mean_x");
+    let (geom_w, geom_lsb) = itu::geom_bits_lsb(cfg);
+    let (dk_lsb, dk_w) = field("depth_key");
+
+    let mut m = Module::new(NAME);
+    m.doc(format!(
+        "Rasterization core: {ni} ITUs + {nc} SCUs (Fig. 14), feature buffer of {f} entries, bit-exact with golden"
+    ));
+    m.doc("raster_tile plus the deferred write-back {valid = ITU OR, key = depth key, id} of every table entry.");
+    m.doc(
+        "Command: one tile; memory: table / feature reads, write-back and pixel-row writes. See docs/rtl.md.",
+    );
+    m.clock_reset();
+    m.input_c("cmd_valid_i", 1, "command handshake");
+    m.output_c("cmd_ready_o", 1, "idle");
+    m.input_c("cmd_tile_x_i", tb, "tile column (origin x = tile_x * tile)");
+    m.input_c("cmd_tile_y_i", tb, "tile row");
+    m.input_c("cmd_width_i", wd, "image width in pixels (edge tiles: pixels beyond stay black)");
+    m.input_c("cmd_height_i", wd, "image height in pixels");
+    m.input_c("cmd_table_i", aw, "table address (entries); written back in place");
+    m.input_c("cmd_len_i", lw, "table entries");
+    m.input_c("cmd_feat_i", aw, "feature base address (feature words; word = base + id)");
+    m.input_c("cmd_pix_i", aw, "pixel address of the tile's first pixel; pixel (x, y) at + y * tile + x");
+    m.output_c("done_o", 1, "one-cycle pulse: tile finished, every write taken");
+    m.output_c("mem_req_valid_o", 1, "request offered");
+    m.input_c("mem_req_ready_i", 1, "request taken");
+    m.output_c("mem_req_write_o", 1, "1: write; 0: read");
+    m.output_c("mem_req_space_o", 2, "0 table, 1 feature, 2 pixel");
+    m.output_c("mem_req_addr_o", aw, "address in units of the space's element");
+    m.output_c(
+        "mem_req_len_o",
+        bl,
+        "reads: elements (table bursts, features 1); writes: 1 entry or S pixels",
+    );
+    m.output_c("mem_wdata_o", wdb, "table entry (low bits) or S pixels, pixel k at [24k +: 24] = {b, g, r}");
+    m.input_c("mem_rsp_valid_i", 1, "read response beat, in request order");
+    m.output_c("mem_rsp_ready_o", 1, "always 1: buffer space is reserved before a read is issued");
+    m.input_c("mem_rsp_data_i", fw, "table entry (low bits) or feature word {present, entry}");
+
+    // ------------------------------------------------------------ command and state
+    m.blank();
+    m.comment("Command registers and the main state.");
+    for (n, wi) in [
+        ("st_q", 3),
+        ("tx_q", tb),
+        ("ty_q", tb),
+        ("wd_q", wd),
+        ("ht_q", wd),
+        ("tab_q", aw),
+        ("feat_q", aw),
+        ("pix_q", aw),
+        ("len_q", lw),
+        ("multi_q", 1),
+        ("seg_start_q", lw),
+        ("seg_len_q", sl),
+        ("grp_q", gw),
+        ("iss_q", sl),
+        ("rcv_q", sl),
+        ("base_q", fa),
+        ("inflight_q", ifl),
+        ("done_q", 1),
+    ] {
+        m.reg(n, wi);
+    }
+    for (n, v) in [
+        ("S_IDLE", S_IDLE),
+        ("S_LOADT", S_LOADT),
+        ("S_LOADF", S_LOADF),
+        ("S_WALK", S_WALK),
+        ("S_SEGWAIT", S_SEGWAIT),
+        ("S_DRAIN", S_DRAIN),
+    ] {
+        m.localparam(n, 3, lit(3, v));
+    }
+    m.mem("tbuf", tw, f).mem("fbuf", fw, f).mem("hbuf", 1, f);
+    m.wire_assign("cmd_fire", 1, "cmd_valid_i & cmd_ready_o");
+    m.assign("cmd_ready_o", "st_q == S_IDLE");
+    let flit = |wi: u32| lit(wi, f as u64);
+    m.wire_assign(
+        "cmd_seg_len",
+        sl,
+        format!("(cmd_len_i > {}) ? {} : {}", flit(lw), flit(sl), resize("cmd_len_i", lw, sl)),
+    );
+    m.wire_assign("next_start", lw, format!("seg_start_q + {}", flit(lw)));
+    m.wire_assign("rem_next", lw, "len_q - next_start");
+    m.wire_assign(
+        "next_seg_len",
+        sl,
+        format!("(rem_next > {}) ? {} : {}", flit(lw), flit(sl), resize("rem_next", lw, sl)),
+    );
+    m.wire_assign("last_seg", 1, format!("(len_q - seg_start_q) <= {}", flit(lw)));
+    m.wire_assign("last_grp", 1, format!("grp_q == {}", lit(gw, groups as u64 - 1)));
+
+    // ------------------------------------------------------------ memory arbitration
+    m.blank();
+    m.comment("Memory port: pixel writes first, then the write-back, then reads (fixed priority).");
+    m.wire("pw_v", 1).wire("wb_v", 1).wire("rd_v", 1).wire("pw_last_row", 1).wire("pw_scu", cb.max(1));
+    m.wire_assign("pw_g", 1, "pw_v & mem_req_ready_i");
+    m.wire_assign("wb_g", 1, "wb_v & ~pw_v & mem_req_ready_i");
+    m.wire_assign("rd_g", 1, "rd_v & ~pw_v & ~wb_v & mem_req_ready_i");
+    m.assign("mem_req_valid_o", "pw_v | wb_v | rd_v");
+    m.assign("mem_rsp_ready_o", lit(1, 1));
+
+    // ------------------------------------------------------------ load
+    m.blank();
+    m.comment("LOAD: table bursts into tbuf, then one feature read per entry into fbuf.");
+    let bur = cfg.burst as u64;
+    m.wire_assign("left", sl, "seg_len_q - iss_q");
+    m.wire_assign(
+        "tlen",
+        bl,
+        format!("(left > {}) ? {} : {}", lit(sl, bur), lit(bl, bur), resize("left", sl, bl)),
+    );
+    m.wire_assign("rd_t", 1, "st_q == S_LOADT");
+    m.assign("rd_v", "(rd_t | (st_q == S_LOADF)) & (iss_q != seg_len_q)");
+    m.wire_assign("iss_idx", fa, resize("iss_q", sl, fa));
+    m.wire_assign("iss_id", ib, format!("tbuf[iss_idx][{}:0]", ib - 1));
+    m.wire_assign(
+        "rd_addr",
+        aw,
+        format!(
+            "rd_t ? (tab_q + {} + {}) : (feat_q + {})",
+            resize("seg_start_q", lw, aw),
+            resize("iss_q", sl, aw),
+            resize("iss_id", ib, aw)
+        ),
+    );
+    m.wire_assign("rd_len", bl, format!("rd_t ? tlen : {}", lit(bl, 1)));
+    m.wire_assign("rcv_idx", fa, resize("rcv_q", sl, fa));
+    m.wire_assign("loaded", 1, "(iss_q == seg_len_q) & (rcv_q == seg_len_q)");
+    m.seq_noreset(vec![if_(
+        "mem_rsp_valid_i",
+        vec![if_else(
+            "rd_t",
+            vec![set("tbuf[rcv_idx]", format!("mem_rsp_data_i[{}:0]", tw - 1))],
+            vec![set("fbuf[rcv_idx]", "mem_rsp_data_i")],
+        )],
+    )]);
+
+    // ------------------------------------------------------------ ITUs
+    m.blank();
+    m.comment(format!("WALK: {ni} table entries per cycle through the ITUs, once per subtile group."));
+    m.wire_assign("walk", 1, "st_q == S_WALK");
+    m.wire_assign(
+        "quad_end",
+        sl + 1,
+        format!("{} + {}", resize("base_q", fa, sl + 1), lit(sl + 1, ni as u64)),
+    );
+    m.wire_assign("last_quad", 1, format!("quad_end >= {}", resize("seg_len_q", sl, sl + 1)));
+    m.wire("itu_in_ready", 1).wire("itu_out_valid", 1).wire("itu_out_ready", 1);
+    m.wire_assign("itu_fire", 1, "walk & itu_in_ready");
+    m.wire_assign("itu_out_fire", 1, "itu_out_valid & itu_out_ready");
+    let mut in_readies = Vec::new();
+    let mut out_valids = Vec::new();
+    let mut unused = Vec::new();
+    for u in 0..ni {
+        m.wire_assign(format!("li{u}"), fa, format!("base_q + {}", lit(fa, u as u64)));
+        m.wire_assign(
+            format!("lv{u}"),
+            1,
+            format!("({} < seg_len_q) & fbuf[li{u}][{present}]", resize(&format!("li{u}"), fa, sl)),
+        );
+        m.wire(format!("itu_rdy{u}"), 1).wire(format!("itu_ov{u}"), 1);
+        m.wire(format!("bm{u}"), nsub).wire(format!("hit{u}"), 1).wire(format!("tag_out{u}"), tg);
+        m.instance(
+            itu::NAME,
+            format!("u_itu{u}"),
+            conns(&[
+                ("clk_i", "clk_i".into()),
+                ("rst_ni", "rst_ni".into()),
+                ("in_valid_i", "walk".into()),
+                ("in_ready_o", format!("itu_rdy{u}")),
+                ("mean_i", format!("fbuf[li{u}][{}:{mean_lsb}]", mean_lsb + itu::mean_bits(cfg) - 1)),
+                ("geom_i", format!("fbuf[li{u}][{}:{geom_lsb}]", geom_lsb + geom_w - 1)),
+                ("tile_x_i", "tx_q".into()),
+                ("tile_y_i", "ty_q".into()),
+                ("tag_i", lit(tg, 0)),
+                ("out_valid_o", format!("itu_ov{u}")),
+                ("out_ready_i", "itu_out_ready".into()),
+                ("bitmap_o", format!("bm{u}")),
+                ("hit_o", format!("hit{u}")),
+                ("tag_o", format!("tag_out{u}")),
+            ]),
+        );
+        in_readies.push(format!("itu_rdy{u}"));
+        out_valids.push(format!("itu_ov{u}"));
+        unused.push(format!("tag_out{u}"));
+    }
+    m.comment("The ITUs share every control input, so they run in lockstep.");
+    m.assign("itu_in_ready", in_readies.join(" & "));
+    m.assign("itu_out_valid", out_valids.join(" & "));
+    m.wire_assign("unused_tags", 1, format!("^{{{}}}", unused.join(", ")));
+    // Sideband of each quad, {list_last, seg_last, group, base, lane valids}, through a copy of
+    // the ITU pipeline: its stages all advance when in_ready_o is high.
+    let sbw = 2 + gw + fa + ni;
+    let lvs: Vec<String> = (0..ni).rev().map(|u| format!("lv{u}")).collect();
+    m.comment(format!(
+        "Quad sideband through {} stages that advance with the ITUs' (in_ready_o = their stage enable).",
+        itu::LATENCY
+    ));
+    m.wire_assign(
+        "sb_in",
+        sbw,
+        format!("{{(last_quad & last_seg), last_quad, grp_q, base_q, {}}}", lvs.join(", ")),
+    );
+    let mut sh = Vec::new();
+    for k in 1..=itu::LATENCY {
+        m.reg(format!("sb{k}_q"), sbw);
+        let src = if k == 1 { "sb_in".to_string() } else { format!("sb{}_q", k - 1) };
+        sh.push(set(format!("sb{k}_q"), src));
+    }
+    m.seq_noreset(vec![if_("itu_in_ready", sh)]);
+    let sbo = format!("sb{}_q", itu::LATENCY);
+    let mut off = 0;
+    let mut tf = |n: &str, wi: u32, m: &mut Module| {
+        m.wire_assign(
+            n,
+            wi,
+            if wi == 1 { format!("{sbo}[{off}]") } else { format!("{sbo}[{}:{off}]", off + wi - 1) },
+        );
+        off += wi;
+    };
+    for u in 0..ni {
+        tf(&format!("o_lv{u}"), 1, &mut m);
+    }
+    tf("o_base", fa, &mut m);
+    tf("o_grp", gw, &mut m);
+    tf("o_seg_last", 1, &mut m);
+    tf("o_list_last", 1, &mut m);
+    m.seq(
+        vec![set("inflight_q", lit(ifl, 0))],
+        vec![if_else(
+            "itu_fire & ~itu_out_fire",
+            vec![set("inflight_q", format!("inflight_q + {}", lit(ifl, 1)))],
+            vec![if_(
+                "~itu_fire & itu_out_fire",
+                vec![set("inflight_q", format!("inflight_q - {}", lit(ifl, 1)))],
+            )],
+        )],
+    );
+    m.comment("Group 0's results: every entry's valid bit (the OR over all subtiles).");
+    let mut hb = Vec::new();
+    for u in 0..ni {
+        hb.push(set(format!("hbuf[o_base + {}]", lit(fa, u as u64)), format!("hit{u}")));
+    }
+    m.seq_noreset(vec![if_(format!("itu_out_fire & (o_grp == {})", lit(gw, 0)), hb)]);
+
+    // ------------------------------------------------------------ routing FIFOs
+    m.blank();
+    m.comment(format!(
+        "Routing: per SCU j a FIFO of {{last, lane mask, base}} ({FIFO_DEPTH} deep); lane u of the quad goes to SCU j"
+    ));
+    m.comment("when bit (group * SCUs + j) of its bitmap is set. A list's final quad is pushed even with an empty mask.");
+    let mut fulls = Vec::new();
+    for j in 0..nc {
+        let subx = if cb == 0 { "o_grp".to_string() } else { format!("{{o_grp, {}}}", lit(cb, j as u64)) };
+        m.wire_assign(format!("rsub{j}"), sub_w, resize(&subx, gw + cb, sub_w));
+        let mask: Vec<String> = (0..ni).rev().map(|u| format!("(o_lv{u} & bm{u}[rsub{j}])")).collect();
+        m.wire_assign(format!("rmask{j}"), ni, format!("{{{}}}", mask.join(", ")));
+        m.wire_assign(format!("push{j}"), 1, format!("itu_out_fire & ((|rmask{j}) | o_list_last)"));
+        m.mem(format!("fifo{j}"), ew, FIFO_DEPTH);
+        m.reg(format!("fwp{j}_q"), db + 1).reg(format!("frp{j}_q"), db + 1);
+        m.wire_assign(format!("fcnt{j}"), db + 1, format!("fwp{j}_q - frp{j}_q"));
+        m.wire_assign(format!("ffull{j}"), 1, format!("fcnt{j} == {}", lit(db + 1, FIFO_DEPTH as u64)));
+        m.wire_assign(format!("fempty{j}"), 1, format!("fcnt{j} == {}", lit(db + 1, 0)));
+        m.wire(format!("pop{j}"), 1);
+        m.seq_noreset(vec![if_(
+            format!("push{j}"),
+            vec![set(
+                format!("fifo{j}[fwp{j}_q[{}:0]]", db - 1),
+                format!("{{o_list_last, rmask{j}, o_base}}"),
+            )],
+        )]);
+        m.seq(
+            vec![set(format!("fwp{j}_q"), lit(db + 1, 0)), set(format!("frp{j}_q"), lit(db + 1, 0))],
+            vec![
+                if_(
+                    format!("push{j}"),
+                    vec![set(format!("fwp{j}_q"), format!("fwp{j}_q + {}", lit(db + 1, 1)))],
+                ),
+                if_(
+                    format!("pop{j}"),
+                    vec![set(format!("frp{j}_q"), format!("frp{j}_q + {}", lit(db + 1, 1)))],
+                ),
+            ],
+        );
+        fulls.push(format!("ffull{j}"));
+    }
+    m.assign("itu_out_ready", format!("~({})", fulls.join(" | ")));
+
+    // ------------------------------------------------------------ feeders and SCUs
+    m.blank();
+    m.comment("Feeders: per SCU the current element; one beat per set mask bit (lowest first), or one empty");
+    m.comment(
+        "beat for a list's final element with an empty mask. Subtile of SCU j's list: {list group, j}.",
+    );
+    let beat_fields = [
+        ("in_mean_x_i", "mean_x"),
+        ("in_mean_y_i", "mean_y"),
+        ("in_conic_a_i", "conic_a"),
+        ("in_conic_b_i", "conic_b"),
+        ("in_conic_c_i", "conic_c"),
+        ("in_conic_exp_i", "conic_exp"),
+        ("in_opacity_i", "opacity"),
+        ("in_red_i", "red"),
+        ("in_green_i", "green"),
+        ("in_blue_i", "blue"),
+    ];
+    let mut busy = Vec::new();
+    for j in 0..nc {
+        let q = |n: &str| format!("{n}{j}_q");
+        m.reg(q("cv"), 1).reg(q("cbase"), fa).reg(q("cmask"), ni).reg(q("clast"), 1).reg(q("lgrp"), gw);
+        m.reg(q("rel"), 1);
+        // Lowest set bit of the mask.
+        let mut sel = lit(bits_for(ni as u64 - 1), 0);
+        for u in (0..ni).rev() {
+            sel = format!("cmask{j}_q[{u}] ? {} : ({sel})", lit(bits_for(ni as u64 - 1), u as u64));
+        }
+        let lb = bits_for(ni as u64 - 1);
+        m.wire_assign(format!("flane{j}"), lb, sel);
+        m.wire_assign(
+            format!("fidx{j}"),
+            fa,
+            format!("cbase{j}_q + {}", resize(&format!("flane{j}"), lb, fa)),
+        );
+        m.wire_assign(format!("frest{j}"), ni, format!("cmask{j}_q & (cmask{j}_q - {})", lit(ni, 1)));
+        m.wire_assign(format!("fempty_beat{j}"), 1, format!("~(|cmask{j}_q)"));
+        m.wire_assign(format!("flast{j}"), 1, format!("clast{j}_q & ~(|frest{j})"));
+        m.wire(format!("scu_rdy{j}"), 1).wire(format!("term{j}"), 1);
+        m.wire_assign(format!("beat{j}"), 1, format!("cv{j}_q & scu_rdy{j}"));
+        m.wire_assign(format!("edone{j}"), 1, format!("beat{j} & ~(|frest{j})"));
+        m.assign(format!("pop{j}"), format!("~fempty{j} & (~cv{j}_q | edone{j})"));
+        m.wire_assign(format!("fhead{j}"), ew, format!("fifo{j}[frp{j}_q[{}:0]]", db - 1));
+        m.seq(
+            vec![set(q("cv"), lit(1, 0)), set(q("lgrp"), lit(gw, 0)), set(q("rel"), lit(1, 0))],
+            vec![
+                if_("cmd_fire", vec![set(q("lgrp"), lit(gw, 0))]),
+                if_(
+                    format!("beat{j} & flast{j}"),
+                    vec![set(q("lgrp"), format!("lgrp{j}_q + {}", lit(gw, 1)))],
+                ),
+                if_else(
+                    format!("pop{j}"),
+                    vec![set(q("cv"), lit(1, 1))],
+                    vec![if_(format!("edone{j}"), vec![set(q("cv"), lit(1, 0))])],
+                ),
+                set(q("rel"), format!("pw_g & pw_last_row & (pw_scu == {})", lit(cb.max(1), j as u64))),
+            ],
+        );
+        m.seq_noreset(vec![if_else(
+            format!("pop{j}"),
+            vec![
+                set(q("cbase"), format!("fhead{j}[{}:0]", fa - 1)),
+                set(q("cmask"), format!("fhead{j}[{}:{fa}]", fa + ni - 1)),
+                set(q("clast"), format!("fhead{j}[{}]", fa + ni)),
+            ],
+            vec![if_(format!("beat{j}"), vec![set(q("cmask"), format!("frest{j}"))])],
+        )]);
+        // Subtile origin and the inside columns / rows.
+        let lsub =
+            if cb == 0 { format!("lgrp{j}_q") } else { format!("{{lgrp{j}_q, {}}}", lit(cb, j as u64)) };
+        m.wire_assign(format!("lsub{j}"), sub_w, resize(&lsub, gw + cb, sub_w));
+        subtile_origin(&mut m, &format!("s{j}"), &format!("lsub{j}"), side_w, sb, tl, tb, ow, s);
+        let mut c = vec![
+            ("clk_i", "clk_i".to_string()),
+            ("rst_ni", "rst_ni".to_string()),
+            ("in_valid_i", format!("cv{j}_q")),
+            ("in_ready_o", format!("scu_rdy{j}")),
+        ];
+        for (port, fname) in beat_fields {
+            let (lsb, wi) = field(fname);
+            c.push((port, format!("fbuf[fidx{j}][{}:{lsb}]", lsb + wi - 1)));
+        }
+        c.extend([
+            ("in_empty_i", format!("fempty_beat{j}")),
+            ("in_last_i", format!("flast{j}")),
+            ("in_origin_x_i", resize(&format!("s{j}_ox"), ow, w.origin)),
+            ("in_origin_y_i", resize(&format!("s{j}_oy"), ow, w.origin)),
+            ("in_cols_i", format!("s{j}_cols")),
+            ("in_rows_i", format!("s{j}_rows")),
+            ("term_o", format!("term{j}")),
+            ("out_valid_o", format!("scu_ov{j}")),
+            ("out_ready_i", format!("rel{j}_q")),
+            ("out_rgb_o", format!("scu_rgb{j}")),
+        ]);
+        m.wire(format!("scu_ov{j}"), 1).wire(format!("scu_rgb{j}"), 24 * s * s);
+        let cs: Vec<(&str, String)> = c.iter().map(|(a, b)| (*a, b.clone())).collect();
+        m.instance(scu::NAME, format!("u_scu{j}"), conns(&cs));
+        busy.push(format!("cv{j}_q | ~fempty{j}"));
+    }
+    let terms: Vec<String> = (0..nc).map(|j| format!("term{j}")).collect();
+    m.wire_assign("unused_term", 1, format!("^{{{}}}", terms.join(", ")));
+    m.wire_assign("route_busy", 1, format!("(inflight_q != {}) | {}", lit(ifl, 0), busy.join(" | ")));
+    let _ = w.pass_bits();
+
+    // ------------------------------------------------------------ pixel writer
+    m.blank();
+    m.comment(format!(
+        "Pixel writer: subtiles in order, SCU = subtile % {nc}, one row of {s} pixels per write."
+    ));
+    m.reg("pw_sub_q", sub_w + 1).reg("pw_row_q", sb);
+    let pw_scu = if cb == 0 { lit(1, 0) } else { format!("pw_sub_q[{}:0]", cb - 1) };
+    m.assign("pw_scu", pw_scu);
+    m.assign("pw_last_row", format!("pw_row_q == {}", lit(sb, s as u64 - 1)));
+    m.wire_assign("pw_all", 1, format!("pw_sub_q[{sub_w}]"));
+    let mut ov = lit(1, 0);
+    let mut rgb = format!("scu_rgb{}", nc - 1);
+    for j in (0..nc).rev() {
+        ov = format!("((pw_scu == {l}) ? (scu_ov{j} & ~rel{j}_q) : {ov})", l = lit(cb.max(1), j as u64));
+        if j + 1 < nc {
+            rgb = format!("((pw_scu == {l}) ? scu_rgb{j} : {rgb})", l = lit(cb.max(1), j as u64));
+        }
+    }
+    m.wire_assign("pw_rgb", 24 * s * s, rgb);
+    m.assign("pw_v", format!("~pw_all & {ov}"));
+    m.wire_assign("pw_sx", side_w, format!("pw_sub_q[{}:0]", side_w - 1));
+    m.wire_assign("pw_sy", side_w, format!("pw_sub_q[{}:{side_w}]", sub_w - 1));
+    let pa = 2 * tl;
+    m.wire_assign(
+        "pw_off",
+        pa,
+        format!(
+            "{{{}, pw_row_q, {}}} + {}",
+            "pw_sy",
+            lit(tl, 0),
+            resize(&format!("{{pw_sx, {}}}", lit(sb, 0)), side_w + sb, pa)
+        ),
+    );
+    m.wire_assign("pw_addr", aw, format!("pix_q + {}", resize("pw_off", pa, aw)));
+    let mut row = format!("pw_rgb[{}:{}]", s * rw - 1, (s - 1) * rw);
+    for r in (0..s - 1).rev() {
+        row = format!(
+            "(pw_row_q == {}) ? pw_rgb[{}:{}] : ({row})",
+            lit(sb, r as u64),
+            (r + 1) * rw - 1,
+            r * rw
+        );
+    }
+    m.wire_assign("pw_data", rw, row);
+    m.seq(
+        vec![set("pw_sub_q", lit(sub_w + 1, 1 << sub_w)), set("pw_row_q", lit(sb, 0))],
+        vec![
+            if_("cmd_fire", vec![set("pw_sub_q", lit(sub_w + 1, 0)), set("pw_row_q", lit(sb, 0))]),
+            if_(
+                "pw_g",
+                vec![
+                    set("pw_row_q", format!("pw_row_q + {}", lit(sb, 1))),
+                    if_("pw_last_row", vec![set("pw_sub_q", format!("pw_sub_q + {}", lit(sub_w + 1, 1)))]),
+                ],
+            ),
+        ],
+    );
+
+    // ------------------------------------------------------------ write-back
+    m.blank();
+    m.comment("Write-back of the segment once its group-0 results are in: {present & OR, present ? depth key : key, id}.");
+    m.reg("wb_busy_q", 1).reg("wb_ptr_q", fa);
+    m.assign("wb_v", "wb_busy_q");
+    m.wire_assign("wb_present", 1, format!("fbuf[wb_ptr_q][{present}]"));
+    m.wire_assign(
+        "wb_key",
+        kb,
+        // The key field takes the depth key (its low key_bits bits when it is wider).
+        format!(
+            "wb_present ? {} : tbuf[wb_ptr_q][{}:{ib}]",
+            resize(&format!("fbuf[wb_ptr_q][{}:{dk_lsb}]", dk_lsb + dk_w.min(kb) - 1), dk_w.min(kb), kb),
+            tw - 1
+        ),
+    );
+    m.wire_assign(
+        "wb_entry",
+        eb,
+        resize(
+            &format!("{{(wb_present & hbuf[wb_ptr_q]), wb_key, tbuf[wb_ptr_q][{}:0]}}", ib - 1),
+            1 + kb + ib,
+            eb,
+        ),
+    );
+    m.wire_assign(
+        "wb_addr",
+        aw,
+        format!("tab_q + {} + {}", resize("seg_start_q", lw, aw), resize("wb_ptr_q", fa, aw)),
+    );
+    m.wire_assign("wb_next", sl, format!("{} + {}", resize("wb_ptr_q", fa, sl), lit(sl, 1)));
+    m.wire_assign("wb_end", 1, "wb_next == seg_len_q");
+    m.seq(
+        vec![set("wb_busy_q", lit(1, 0)), set("wb_ptr_q", lit(fa, 0))],
+        vec![
+            if_(
+                format!(
+                    "itu_out_fire & (o_grp == {}) & o_seg_last & (seg_len_q != {})",
+                    lit(gw, 0),
+                    lit(sl, 0)
+                ),
+                vec![set("wb_busy_q", lit(1, 1)), set("wb_ptr_q", lit(fa, 0))],
+            ),
+            if_(
+                "wb_g",
+                vec![if_else(
+                    "wb_end",
+                    vec![set("wb_busy_q", lit(1, 0))],
+                    vec![set("wb_ptr_q", format!("wb_ptr_q + {}", lit(fa, 1)))],
+                )],
+            ),
+        ],
+    );
+
+    // ------------------------------------------------------------ request mux
+    m.assign("mem_req_write_o", "pw_v | wb_v");
+    m.assign(
+        "mem_req_space_o",
+        format!(
+            "pw_v ? {} : (wb_v ? {} : (rd_t ? {} : {}))",
+            lit(2, space::PIXEL),
+            lit(2, space::TABLE),
+            lit(2, space::TABLE),
+            lit(2, space::FEATURE)
+        ),
+    );
+    m.assign("mem_req_addr_o", "pw_v ? pw_addr : (wb_v ? wb_addr : rd_addr)");
+    m.assign("mem_req_len_o", format!("pw_v ? {} : (wb_v ? {} : rd_len)", lit(bl, s as u64), lit(bl, 1)));
+    m.assign(
+        "mem_wdata_o",
+        format!("pw_v ? {} : {}", resize("pw_data", rw, wdb), resize("wb_entry", eb, wdb)),
+    );
+
+    // ------------------------------------------------------------ main FSM
+    m.blank();
+    m.comment("Main FSM: LOADT -> LOADF -> WALK (-> SEGWAIT -> LOADT per further segment / group) -> DRAIN.");
+    m.wire_assign("drained", 1, "~route_busy & ~wb_busy_q");
+    let to_load = |start: &str, len: &str| -> Vec<Stmt> {
+        vec![
+            set("st_q", "S_LOADT"),
+            set("seg_start_q", start),
+            set("seg_len_q", len),
+            set("iss_q", lit(sl, 0)),
+            set("rcv_q", lit(sl, 0)),
+        ]
+    };
+    let mut on_cmd = to_load(&lit(lw, 0), "cmd_seg_len");
+    on_cmd.extend([
+        set("tx_q", "cmd_tile_x_i"),
+        set("ty_q", "cmd_tile_y_i"),
+        set("wd_q", "cmd_width_i"),
+        set("ht_q", "cmd_height_i"),
+        set("tab_q", "cmd_table_i"),
+        set("feat_q", "cmd_feat_i"),
+        set("pix_q", "cmd_pix_i"),
+        set("len_q", "cmd_len_i"),
+        set("multi_q", format!("cmd_len_i > {}", flit(lw))),
+        set("grp_q", lit(gw, 0)),
+    ]);
+    let mut next_seg = to_load("next_start", "next_seg_len");
+    next_seg.insert(0, Stmt::Comment("next segment of the same group".into()));
+    let mut next_grp =
+        to_load(&lit(lw, 0), &format!("(len_q > {}) ? {} : {}", flit(lw), flit(sl), resize("len_q", lw, sl)));
+    next_grp.push(set("grp_q", format!("grp_q + {}", lit(gw, 1))));
+    m.seq(
+        vec![
+            set("st_q", "S_IDLE"),
+            set("done_q", lit(1, 0)),
+            set("iss_q", lit(sl, 0)),
+            set("rcv_q", lit(sl, 0)),
+            set("base_q", lit(fa, 0)),
+        ],
+        vec![
+            set("done_q", lit(1, 0)),
+            if_("rd_g", vec![set("iss_q", format!("iss_q + {}", resize("rd_len", bl, sl)))]),
+            if_("mem_rsp_valid_i", vec![set("rcv_q", format!("rcv_q + {}", lit(sl, 1)))]),
+            Stmt::Case(
+                "st_q".into(),
+                vec![
+                    ("S_IDLE".into(), vec![if_("cmd_valid_i", on_cmd)]),
+                    (
+                        "S_LOADT".into(),
+                        vec![if_(
+                            "loaded",
+                            vec![set("st_q", "S_LOADF"), set("iss_q", lit(sl, 0)), set("rcv_q", lit(sl, 0))],
+                        )],
+                    ),
+                    (
+                        "S_LOADF".into(),
+                        vec![if_("loaded", vec![set("st_q", "S_WALK"), set("base_q", lit(fa, 0))])],
+                    ),
+                    (
+                        "S_WALK".into(),
+                        vec![if_(
+                            "itu_fire",
+                            vec![if_else(
+                                "~last_quad",
+                                vec![set("base_q", format!("base_q + {}", lit(fa, ni as u64)))],
+                                vec![
+                                    set("base_q", lit(fa, 0)),
+                                    if_else(
+                                        "multi_q",
+                                        vec![set("st_q", "S_SEGWAIT")],
+                                        vec![if_else(
+                                            "last_grp",
+                                            vec![set("st_q", "S_DRAIN")],
+                                            vec![set("grp_q", format!("grp_q + {}", lit(gw, 1)))],
+                                        )],
+                                    ),
+                                ],
+                            )],
+                        )],
+                    ),
+                    (
+                        "S_SEGWAIT".into(),
+                        vec![if_(
+                            "drained",
+                            vec![if_else(
+                                "~last_seg",
+                                next_seg,
+                                vec![if_else("last_grp", vec![set("st_q", "S_DRAIN")], next_grp)],
+                            )],
+                        )],
+                    ),
+                    (
+                        "S_DRAIN".into(),
+                        vec![if_("drained & pw_all", vec![set("st_q", "S_IDLE"), set("done_q", lit(1, 1))])],
+                    ),
+                ],
+                vec![set("st_q", "S_IDLE")],
+            ),
+        ],
+    );
+    m.assign("done_o", "done_q");
+    m
+}
+
+/// Origin (`P_ox`, `P_oy`, `ow` bits) and inside columns / rows (`P_cols`, `P_rows`) of subtile
+/// `sub` (row-major index) of the command's tile.
+#[allow(clippy::too_many_arguments)]
+fn subtile_origin(
+    m: &mut Module,
+    p: &str,
+    sub: &str,
+    side_w: u32,
+    sb: u32,
+    tl: u32,
+    tb: u32,
+    ow: u32,
+    s: u32,
+) {
+    let sub_w = 2 * side_w;
+    for (a, t, lo, dim) in [("x", "tx_q", 0, "wd_q"), ("y", "ty_q", side_w, "ht_q")] {
+        let idx = format!("{sub}[{}:{lo}]", lo + side_w - 1);
+        let _ = sub_w;
+        m.wire_assign(
+            format!("{p}_o{a}"),
+            ow,
+            format!(
+                "{} + {}",
+                resize(&format!("{{{t}, {}}}", lit(tl, 0)), tb + tl, ow),
+                resize(&format!("{{{idx}, {}}}", lit(sb, 0)), side_w + sb, ow)
+            ),
+        );
+        m.wire_assign(format!("{p}_r{a}"), ow, format!("{} - {p}_o{a}", resize(dim, ow - 1, ow)));
+        let n = if a == "x" { "cols" } else { "rows" };
+        m.wire_assign(
+            format!("{p}_{n}"),
+            sb + 1,
+            format!(
+                "({} <= {p}_o{a}) ? {} : (({p}_r{a} > {}) ? {} : {p}_r{a}[{sb}:0])",
+                resize(dim, ow - 1, ow),
+                lit(sb + 1, 0),
+                lit(ow, s as u64),
+                lit(sb + 1, s as u64)
+            ),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn widths_and_ports() {
+        let cfg = GenConfig::default();
+        assert_eq!(feature_word_bits(&cfg), cfg.feature_format().bits_per_entry() + 1);
+        assert_eq!(image_bits(&cfg), cfg.tile_bits + 6);
+        assert_eq!(wdata_bits(&cfg), 192);
+        let v = module(&cfg).to_verilog();
+        for i in ["neo_itu u_itu3", "neo_scu u_scu3", "reg  [246:0] fbuf [0:255];"] {
+            assert!(v.contains(i), "{i} missing");
+        }
+        assert!(!v.contains("u_itu4") && !v.contains("u_scu4"));
+    }
+
+    #[test]
+    fn unit_counts_follow_the_config() {
+        let cfg =
+            GenConfig { raster_itus: 2, raster_scus: 8, raster_feature_buffer: 64, ..GenConfig::default() };
+        cfg.validate().unwrap();
+        let v = module(&cfg).to_verilog();
+        assert!(v.contains("u_itu1") && !v.contains("u_itu2"));
+        assert!(v.contains("u_scu7") && !v.contains("u_scu8"));
+        assert!(GenConfig { raster_scus: 3, ..GenConfig::default() }.validate().is_err());
+        assert!(GenConfig { raster_feature_buffer: 100, ..GenConfig::default() }.validate().is_err());
+        assert!(GenConfig { raster_itus: 0, ..GenConfig::default() }.validate().is_err());
+    }
+}
