@@ -139,18 +139,23 @@ fn identical_independent_tiles_scale_with_the_core_count() {
         let want = one / cores as f64;
         assert!((c - want).abs() / want < 2e-3, "{cores} cores: {c} cycles, expected {want}");
     }
-    // With the DRAM model more cores still help, but less than linearly once memory binds.
-    let mut last = f64::INFINITY;
-    let mut real = Vec::new();
-    for cores in [1u32, 4, 16] {
-        let mut cfg = SimConfig::default();
-        cfg.neo.sort_cores = cores;
-        let c = sort_cycles(&cfg, &lat, &wl, false);
-        assert!(c < last, "{cores} cores: {c} not faster than {last}");
-        last = c;
-        real.push(c);
+    // With the DRAM model more cores help until memory binds (here by 4 cores), never more than
+    // linearly; past that point more interleaved streams cost some row hits but no collapse.
+    let real: Vec<f64> = [1u32, 2, 4, 8, 16]
+        .iter()
+        .map(|&cores| {
+            let mut cfg = SimConfig::default();
+            cfg.neo.sort_cores = cores;
+            sort_cycles(&cfg, &lat, &wl, false)
+        })
+        .collect();
+    assert!(real[1] < real[0] && real[2] < real[1], "1, 2, 4 cores: {real:?}");
+    assert!(real[0] / real[2] > 2.0, "4 cores at least twice as fast as one: {real:?}");
+    let best = real.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(real.iter().skip(2).all(|&c| c < 1.15 * best), "no collapse past saturation: {real:?}");
+    for (k, &c) in real.iter().enumerate() {
+        assert!(real[0] / c <= (1u32 << k) as f64 + 1e-9, "{} cores faster than linear: {real:?}", 1 << k);
     }
-    assert!(real[0] / real[2] <= 16.0 + 1e-9);
 }
 
 #[test]
@@ -230,11 +235,20 @@ fn neo_moves_less_dram_than_gscore_and_periodic_spikes_at_refreshes() {
         p.frames.iter().filter(|f| f.frame > 0 && f.frame % 4 == 0).map(sort_time).collect();
     let between: Vec<f64> = p.frames.iter().filter(|f| f.frame % 4 != 0).map(sort_time).collect();
     let max_between = between.iter().copied().fold(0.0, f64::max);
+    // The refresh frames sort from scratch: more than twice the sorting traffic, and a longer
+    // sorting phase (between refreshes the phase also waits for the previous frame's raster,
+    // whose write-back it reuses, so its length is not only sorting).
+    let bytes = |pred: &dyn Fn(usize) -> bool| -> Vec<u64> {
+        p.frames.iter().filter(|f| pred(f.frame)).map(|f| f.sort_bytes).collect()
+    };
+    let refresh_bytes = bytes(&|f| f > 0 && f % 4 == 0);
+    let between_bytes = bytes(&|f| f % 4 != 0).into_iter().max().unwrap();
+    assert!(
+        refresh_bytes.iter().all(|&b| b > 2 * between_bytes),
+        "refresh sorting traffic {refresh_bytes:?} vs at most {between_bytes} between refreshes"
+    );
     for r in &refresh {
-        assert!(
-            *r > 2.0 * max_between,
-            "refresh sorting {r} ms vs at most {max_between} ms between refreshes"
-        );
+        assert!(*r > max_between, "refresh sorting {r} ms vs at most {max_between} ms between refreshes");
     }
     let lat_refresh: Vec<f64> =
         p.frames.iter().filter(|f| f.frame > 0 && f.frame % 4 == 0).map(|f| f.latency_ms).collect();

@@ -28,7 +28,7 @@ mod cosim {
     const TIMINGS: [MemTiming; 3] = [
         MemTiming::IDEAL,
         MemTiming::RANDOM,
-        MemTiming { req_ready_pct: 90, min_latency: 4, max_latency: 12, rsp_gap_pct: 5 },
+        MemTiming { req_ready_pct: 90, wr_ready_pct: 90, min_latency: 4, max_latency: 12, rsp_gap_pct: 5 },
     ];
 
     fn check_case(core: &mut RasterCore, case: &TileCase) -> u64 {
