@@ -146,8 +146,13 @@ fn act_slot(acts: &mut std::collections::VecDeque<Ps>, mut x: Ps, t: Ps, rrd: Ps
     while acts.front().is_some_and(|&a| a + faw.max(rrd) <= t) {
         acts.pop_front();
     }
+    // `pos` is the partition point of `x` (the first activate after it); `x` only grows, so
+    // it moves forward.
+    let mut pos = acts.partition_point(|&a| a <= x);
     'search: loop {
-        let pos = acts.partition_point(|&a| a <= x);
+        while pos < acts.len() && acts[pos] <= x {
+            pos += 1;
+        }
         // tRRD to the neighbours.
         if pos > 0 && acts[pos - 1] + rrd > x {
             x = acts[pos - 1] + rrd;
@@ -519,7 +524,11 @@ impl Dram {
         while ch.busy.front().is_some_and(|&(_, e)| e <= horizon) {
             ch.busy.pop_front();
         }
-        let mut i = ch.busy.partition_point(|&(_, e)| e <= ready);
+        let mut i = match ch.busy.back() {
+            // Past every reserved burst (a busy bus): no search.
+            Some(&(_, e)) if e <= ready => ch.busy.len(),
+            _ => ch.busy.partition_point(|&(_, e)| e <= ready),
+        };
         let mut start = ready;
         while i < ch.busy.len() {
             let (s, e) = ch.busy[i];
@@ -685,6 +694,68 @@ mod tests {
         let before = hits.iter().filter(|&&h| d.arrival(h) < t_old).count();
         assert_eq!(before as u32, cfg.bypass_cap, "hits served before the old conflict");
         assert_eq!(d.stats().reordered, cfg.bypass_cap as u64);
+    }
+
+    /// The straightforward `act_slot`: a fresh binary search after every move of `x`.
+    fn act_slot_reference(
+        acts: &mut std::collections::VecDeque<Ps>,
+        mut x: Ps,
+        t: Ps,
+        rrd: Ps,
+        faw: Ps,
+    ) -> Ps {
+        while acts.front().is_some_and(|&a| a + faw.max(rrd) <= t) {
+            acts.pop_front();
+        }
+        'search: loop {
+            let pos = acts.partition_point(|&a| a <= x);
+            if pos > 0 && acts[pos - 1] + rrd > x {
+                x = acts[pos - 1] + rrd;
+                continue;
+            }
+            if pos < acts.len() && x + rrd > acts[pos] {
+                x = acts[pos] + rrd;
+                continue;
+            }
+            for k in 0..5usize {
+                if pos + k < 4 || pos + k > acts.len() {
+                    continue;
+                }
+                let first = if k < 4 { acts[pos + k - 4] } else { x };
+                let last = if k > 0 { acts[pos + k - 1] } else { x };
+                if last - first < faw {
+                    x = if k == 0 { first + faw } else { acts[pos] + rrd };
+                    continue 'search;
+                }
+            }
+            acts.insert(pos, x);
+            return x;
+        }
+    }
+
+    #[test]
+    fn act_slot_places_activates_as_the_reference_search_does() {
+        let mut x = 0x2545_F491_4F6C_DD1Du64;
+        let mut rnd = move |m: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x % m
+        };
+        let (rrd, faw) = (7_500, 40_000);
+        for _ in 0..50 {
+            let (mut fast, mut slow) = (std::collections::VecDeque::new(), std::collections::VecDeque::new());
+            let mut t = 0;
+            for _ in 0..2_000 {
+                t += rnd(20_000);
+                // Requests wanting an activate at, or well after, their issue.
+                let want = t + if rnd(2) == 0 { 0 } else { rnd(400_000) };
+                let a = act_slot(&mut fast, want, t, rrd, faw);
+                let b = act_slot_reference(&mut slow, want, t, rrd, faw);
+                assert_eq!(a, b, "activate slot");
+                assert_eq!(fast, slow, "activate calendar");
+            }
+        }
     }
 
     #[test]
