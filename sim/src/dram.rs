@@ -180,6 +180,26 @@ fn act_slot(acts: &mut std::collections::VecDeque<Ps>, mut x: Ps, t: Ps, rrd: Ps
     }
 }
 
+/// The earliest start at or after `ready` of a `bl`-long burst that overlaps no block of
+/// `busy` (sorted, non-overlapping), and the index of the first block after it.
+fn bus_slot(busy: &std::collections::VecDeque<(Ps, Ps)>, ready: Ps, bl: Ps) -> (usize, Ps) {
+    let mut i = match busy.back() {
+        // Past every reserved burst (a busy bus): no search.
+        Some(&(_, e)) if e <= ready => busy.len(),
+        _ => busy.partition_point(|&(_, e)| e <= ready),
+    };
+    let mut start = ready;
+    while i < busy.len() {
+        let (s, e) = busy[i];
+        if s >= start + bl {
+            break;
+        }
+        start = start.max(e);
+        i += 1;
+    }
+    (i, start)
+}
+
 /// Timing in picoseconds, from the configuration's clock counts.
 #[derive(Clone, Copy, Debug)]
 struct T {
@@ -524,20 +544,7 @@ impl Dram {
         while ch.busy.front().is_some_and(|&(_, e)| e <= horizon) {
             ch.busy.pop_front();
         }
-        let mut i = match ch.busy.back() {
-            // Past every reserved burst (a busy bus): no search.
-            Some(&(_, e)) if e <= ready => ch.busy.len(),
-            _ => ch.busy.partition_point(|&(_, e)| e <= ready),
-        };
-        let mut start = ready;
-        while i < ch.busy.len() {
-            let (s, e) = ch.busy[i];
-            if s >= start + tm.bl {
-                break;
-            }
-            start = start.max(e);
-            i += 1;
-        }
+        let (i, start) = bus_slot(&ch.busy, ready, tm.bl);
         let end = start + tm.bl;
         // Insert [start, end) before block i, merging with neighbours closer than a burst (such
         // a gap can never hold a burst, so the merge loses nothing and keeps the calendar short).
@@ -755,6 +762,40 @@ mod tests {
                 assert_eq!(a, b, "activate slot");
                 assert_eq!(fast, slow, "activate calendar");
             }
+        }
+    }
+
+    #[test]
+    fn bus_slot_is_the_first_gap_that_holds_a_burst() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rnd = move |m: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x % m
+        };
+        let bl = 5_000;
+        for _ in 0..2_000 {
+            // A calendar of random blocks with random gaps.
+            let mut busy = std::collections::VecDeque::new();
+            let mut t = rnd(20_000);
+            for _ in 0..rnd(12) {
+                let s = t + rnd(12_000);
+                let e = s + 1 + rnd(30_000);
+                busy.push_back((s, e));
+                t = e;
+            }
+            let ready = rnd(t + 20_000);
+            let (i, start) = bus_slot(&busy, ready, bl);
+            // Straightforward: the first start at or after `ready` clear of every block.
+            let clear = |x: Ps| busy.iter().all(|&(s, e)| x + bl <= s || x >= e);
+            let want = std::iter::once(ready)
+                .chain(busy.iter().map(|&(_, e)| e).filter(|&e| e >= ready))
+                .filter(|&x| clear(x))
+                .min()
+                .unwrap();
+            assert_eq!(start, want, "calendar {busy:?}, ready {ready}");
+            assert_eq!(i, busy.iter().filter(|&&(_, e)| e <= start).count(), "index after {busy:?}");
         }
     }
 
