@@ -414,7 +414,10 @@ impl Dram {
         let decision = oldest.issue.max(ch.last_col);
         let mut pick = 0;
         if oldest.bypassed < self.bypass_cap && ch.banks[oldest.bank as usize].open != oldest.row {
-            for (i, q) in ch.rq.iter().enumerate().take(self.read_queue).skip(1) {
+            let (front, back) = ch.rq.as_slices();
+            let limit = self.read_queue.min(ch.rq.len());
+            for i in 1..limit {
+                let q = if i < front.len() { &front[i] } else { &back[i - front.len()] };
                 if q.issue > decision {
                     break;
                 }
