@@ -148,7 +148,7 @@ fn act_slot(acts: &mut std::collections::VecDeque<Ps>, mut x: Ps, t: Ps, rrd: Ps
     }
     // `pos` is the partition point of `x` (the first activate after it); `x` only grows, so
     // it moves forward.
-    let mut pos = acts.partition_point(|&a| a <= x);
+    let mut pos = partition_from_back(acts, |&a| a <= x);
     'search: loop {
         while pos < acts.len() && acts[pos] <= x {
             pos += 1;
@@ -180,14 +180,27 @@ fn act_slot(acts: &mut std::collections::VecDeque<Ps>, mut x: Ps, t: Ps, rrd: Ps
     }
 }
 
+/// `v.partition_point(pred)`, looking at the last few elements first (new requests mostly
+/// land near the end of a calendar).
+#[inline]
+fn partition_from_back<T>(v: &std::collections::VecDeque<T>, pred: impl Fn(&T) -> bool) -> usize {
+    let n = v.len();
+    for i in (n.saturating_sub(4)..n).rev() {
+        if pred(&v[i]) {
+            return i + 1;
+        }
+    }
+    if n <= 4 {
+        0
+    } else {
+        v.partition_point(pred)
+    }
+}
+
 /// The earliest start at or after `ready` of a `bl`-long burst that overlaps no block of
 /// `busy` (sorted, non-overlapping), and the index of the first block after it.
 fn bus_slot(busy: &std::collections::VecDeque<(Ps, Ps)>, ready: Ps, bl: Ps) -> (usize, Ps) {
-    let mut i = match busy.back() {
-        // Past every reserved burst (a busy bus): no search.
-        Some(&(_, e)) if e <= ready => busy.len(),
-        _ => busy.partition_point(|&(_, e)| e <= ready),
-    };
+    let mut i = partition_from_back(busy, |&(_, e)| e <= ready);
     let mut start = ready;
     while i < busy.len() {
         let (s, e) = busy[i];
