@@ -771,8 +771,13 @@ mod tests {
             let mut t = 0;
             for _ in 0..2_000 {
                 t += rnd(20_000);
-                // Requests wanting an activate at, or well after, their issue.
-                let want = t + if rnd(2) == 0 { 0 } else { rnd(400_000) };
+                // Requests wanting an activate at, or well after, their issue (some on a coarse
+                // grid, so that many want the same time and the search jumps over several).
+                let want = t + match rnd(3) {
+                    0 => 0,
+                    1 => rnd(400_000),
+                    _ => rnd(8) * 50_000,
+                };
                 let a = act_slot(&mut fast, want, t, rrd, faw);
                 let b = act_slot_reference(&mut slow, want, t, rrd, faw);
                 assert_eq!(a, b, "activate slot");
