@@ -146,8 +146,13 @@ fn act_slot(acts: &mut std::collections::VecDeque<Ps>, mut x: Ps, t: Ps, rrd: Ps
     while acts.front().is_some_and(|&a| a + faw.max(rrd) <= t) {
         acts.pop_front();
     }
+    // `pos` is the partition point of `x` (the first activate after it); `x` only grows, so
+    // it moves forward.
+    let mut pos = partition_from_back(acts, |&a| a <= x);
     'search: loop {
-        let pos = acts.partition_point(|&a| a <= x);
+        while pos < acts.len() && acts[pos] <= x {
+            pos += 1;
+        }
         // tRRD to the neighbours.
         if pos > 0 && acts[pos - 1] + rrd > x {
             x = acts[pos - 1] + rrd;
@@ -173,6 +178,39 @@ fn act_slot(acts: &mut std::collections::VecDeque<Ps>, mut x: Ps, t: Ps, rrd: Ps
         acts.insert(pos, x);
         return x;
     }
+}
+
+/// `v.partition_point(pred)`, looking at the last few elements first (new requests mostly
+/// land near the end of a calendar).
+#[inline]
+fn partition_from_back<T>(v: &std::collections::VecDeque<T>, pred: impl Fn(&T) -> bool) -> usize {
+    let n = v.len();
+    for i in (n.saturating_sub(4)..n).rev() {
+        if pred(&v[i]) {
+            return i + 1;
+        }
+    }
+    if n <= 4 {
+        0
+    } else {
+        v.partition_point(pred)
+    }
+}
+
+/// The earliest start at or after `ready` of a `bl`-long burst that overlaps no block of
+/// `busy` (sorted, non-overlapping), and the index of the first block after it.
+fn bus_slot(busy: &std::collections::VecDeque<(Ps, Ps)>, ready: Ps, bl: Ps) -> (usize, Ps) {
+    let mut i = partition_from_back(busy, |&(_, e)| e <= ready);
+    let mut start = ready;
+    while i < busy.len() {
+        let (s, e) = busy[i];
+        if s >= start + bl {
+            break;
+        }
+        start = start.max(e);
+        i += 1;
+    }
+    (i, start)
 }
 
 /// Timing in picoseconds, from the configuration's clock counts.
@@ -389,7 +427,10 @@ impl Dram {
         let decision = oldest.issue.max(ch.last_col);
         let mut pick = 0;
         if oldest.bypassed < self.bypass_cap && ch.banks[oldest.bank as usize].open != oldest.row {
-            for (i, q) in ch.rq.iter().enumerate().take(self.read_queue).skip(1) {
+            let (front, back) = ch.rq.as_slices();
+            let limit = self.read_queue.min(ch.rq.len());
+            for i in 1..limit {
+                let q = if i < front.len() { &front[i] } else { &back[i - front.len()] };
                 if q.issue > decision {
                     break;
                 }
@@ -519,16 +560,7 @@ impl Dram {
         while ch.busy.front().is_some_and(|&(_, e)| e <= horizon) {
             ch.busy.pop_front();
         }
-        let mut i = ch.busy.partition_point(|&(_, e)| e <= ready);
-        let mut start = ready;
-        while i < ch.busy.len() {
-            let (s, e) = ch.busy[i];
-            if s >= start + tm.bl {
-                break;
-            }
-            start = start.max(e);
-            i += 1;
-        }
+        let (i, start) = bus_slot(&ch.busy, ready, tm.bl);
         let end = start + tm.bl;
         // Insert [start, end) before block i, merging with neighbours closer than a burst (such
         // a gap can never hold a burst, so the merge loses nothing and keeps the calendar short).
@@ -685,6 +717,107 @@ mod tests {
         let before = hits.iter().filter(|&&h| d.arrival(h) < t_old).count();
         assert_eq!(before as u32, cfg.bypass_cap, "hits served before the old conflict");
         assert_eq!(d.stats().reordered, cfg.bypass_cap as u64);
+    }
+
+    /// The straightforward `act_slot`: a fresh binary search after every move of `x`.
+    fn act_slot_reference(
+        acts: &mut std::collections::VecDeque<Ps>,
+        mut x: Ps,
+        t: Ps,
+        rrd: Ps,
+        faw: Ps,
+    ) -> Ps {
+        while acts.front().is_some_and(|&a| a + faw.max(rrd) <= t) {
+            acts.pop_front();
+        }
+        'search: loop {
+            let pos = acts.partition_point(|&a| a <= x);
+            if pos > 0 && acts[pos - 1] + rrd > x {
+                x = acts[pos - 1] + rrd;
+                continue;
+            }
+            if pos < acts.len() && x + rrd > acts[pos] {
+                x = acts[pos] + rrd;
+                continue;
+            }
+            for k in 0..5usize {
+                if pos + k < 4 || pos + k > acts.len() {
+                    continue;
+                }
+                let first = if k < 4 { acts[pos + k - 4] } else { x };
+                let last = if k > 0 { acts[pos + k - 1] } else { x };
+                if last - first < faw {
+                    x = if k == 0 { first + faw } else { acts[pos] + rrd };
+                    continue 'search;
+                }
+            }
+            acts.insert(pos, x);
+            return x;
+        }
+    }
+
+    #[test]
+    fn act_slot_places_activates_as_the_reference_search_does() {
+        let mut x = 0x2545_F491_4F6C_DD1Du64;
+        let mut rnd = move |m: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x % m
+        };
+        let (rrd, faw) = (7_500, 40_000);
+        for _ in 0..50 {
+            let (mut fast, mut slow) = (std::collections::VecDeque::new(), std::collections::VecDeque::new());
+            let mut t = 0;
+            for _ in 0..2_000 {
+                t += rnd(20_000);
+                // Requests wanting an activate at, or well after, their issue (some on a coarse
+                // grid, so that many want the same time and the search jumps over several).
+                let want = t + match rnd(3) {
+                    0 => 0,
+                    1 => rnd(400_000),
+                    _ => rnd(8) * 50_000,
+                };
+                let a = act_slot(&mut fast, want, t, rrd, faw);
+                let b = act_slot_reference(&mut slow, want, t, rrd, faw);
+                assert_eq!(a, b, "activate slot");
+                assert_eq!(fast, slow, "activate calendar");
+            }
+        }
+    }
+
+    #[test]
+    fn bus_slot_is_the_first_gap_that_holds_a_burst() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rnd = move |m: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x % m
+        };
+        let bl = 5_000;
+        for _ in 0..2_000 {
+            // A calendar of random blocks with random gaps.
+            let mut busy = std::collections::VecDeque::new();
+            let mut t = rnd(20_000);
+            for _ in 0..rnd(12) {
+                let s = t + rnd(12_000);
+                let e = s + 1 + rnd(30_000);
+                busy.push_back((s, e));
+                t = e;
+            }
+            let ready = rnd(t + 20_000);
+            let (i, start) = bus_slot(&busy, ready, bl);
+            // Straightforward: the first start at or after `ready` clear of every block.
+            let clear = |x: Ps| busy.iter().all(|&(s, e)| x + bl <= s || x >= e);
+            let want = std::iter::once(ready)
+                .chain(busy.iter().map(|&(_, e)| e).filter(|&e| e >= ready))
+                .filter(|&x| clear(x))
+                .min()
+                .unwrap();
+            assert_eq!(start, want, "calendar {busy:?}, ready {ready}");
+            assert_eq!(i, busy.iter().filter(|&&(_, e)| e <= start).count(), "index after {busy:?}");
+        }
     }
 
     #[test]

@@ -30,9 +30,13 @@ use neo_golden::scene::Scene;
 use neo_golden::sort::{SortEntry, Sorter};
 
 use crate::config::PipelineParams;
+use crate::prefetch::prefetch;
 use crate::workload::{FrameWork, GoldenSums, HierTile, Quality, TileWork, Workload, WorkloadInfo};
 
 const CULLED: u32 = u32::MAX;
+
+/// How many table entries ahead the feature gathers are prefetched.
+const PREFETCH_AHEAD: usize = 16;
 
 /// Whether the golden raster runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -307,7 +311,19 @@ impl<'s> WorkDriver<'s> {
                     let mut routed = vec![0u32; (n * n) as usize];
                     let mut raster_entries = 0u32;
                     ctx.feats.clear();
-                    for e in state.table.iter_mut() {
+                    // Table order is depth order: the feature look-ups are random gathers,
+                    // prefetched ahead (the id map two steps before the entry it names).
+                    let table = &mut state.table;
+                    for i in 0..table.len() {
+                        if let Some(a) = table.get(i + 2 * PREFETCH_AHEAD) {
+                            prefetch(&feature_of[a.id as usize]);
+                        }
+                        if let Some(a) = table.get(i + PREFETCH_AHEAD) {
+                            if let Some(f) = features.get(feature_of[a.id as usize] as usize) {
+                                prefetch(f);
+                            }
+                        }
+                        let e = &mut table[i];
                         let f = feature_of[e.id as usize];
                         if f == CULLED {
                             e.valid = false;

@@ -83,7 +83,17 @@ fn seq_lines(base: u64, bytes: u64, line: u64) -> u64 {
     if bytes == 0 {
         0
     } else {
-        (base + bytes - 1) / line - base / line + 1
+        line_of(base + bytes - 1, line) - line_of(base, line) + 1
+    }
+}
+
+/// `addr / line`, a shift for the power-of-two line sizes the DRAM configuration requires.
+#[inline]
+fn line_of(addr: u64, line: u64) -> u64 {
+    if line.is_power_of_two() {
+        addr >> line.trailing_zeros()
+    } else {
+        addr / line
     }
 }
 
@@ -120,7 +130,7 @@ impl Cursor {
                 AccessKind::Seq { bytes } => {
                     let n = seq_lines(a.base, bytes, line);
                     if self.pos < n {
-                        let l = a.base / line + self.pos;
+                        let l = line_of(a.base, line) + self.pos;
                         self.pos += 1;
                         return Some((l * line, a.stage));
                     }
@@ -129,8 +139,8 @@ impl Cursor {
                     if self.pos < count {
                         let r = mix(seed ^ self.pos) % records_in_region.max(1);
                         let start = a.base + r * record_bytes as u64;
-                        let first = start / line;
-                        self.rec_end_line = (start + record_bytes.max(1) as u64 - 1) / line;
+                        let first = line_of(start, line);
+                        self.rec_end_line = line_of(start + record_bytes.max(1) as u64 - 1, line);
                         self.pending = Some(first + 1);
                         return Some((first * line, a.stage));
                     }
@@ -410,7 +420,8 @@ impl Engine {
             wlines.clear();
             st.reads_done += 1;
             if !seg.writes_at_end && st.writes_est > 0.0 {
-                let due = (st.reads_done as f64 * st.writes_est / st.reads_est.max(1.0)).floor() as u64;
+                // Non-negative, so the truncating cast is the floor (without a libm call).
+                let due = (st.reads_done as f64 * st.writes_est / st.reads_est.max(1.0)) as u64;
                 while st.writes_done < due {
                     match st.wcursor.next(&seg.writes, line) {
                         Some(w) => {

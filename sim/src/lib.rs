@@ -15,6 +15,7 @@ pub mod engine;
 pub mod gpu;
 pub mod latency;
 pub mod plot;
+pub mod prefetch;
 pub mod report;
 pub mod run;
 pub mod sortcmd;
