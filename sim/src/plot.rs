@@ -68,25 +68,7 @@ pub fn grouped_bars(
             .fold(0.0, f64::max);
         let ymax = nice_max(ymax * 1.3);
         let ng = groups.len().max(1) as f64;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(64)
-            .build_cartesian_2d(0f64..ng, 0f64..ymax)
-            .map_err(err)?;
-        let names = groups.to_vec();
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .light_line_style(WHITE)
-            .label_style(("sans-serif", 15))
-            .axis_desc_style(("sans-serif", 15))
-            .x_labels(groups.len().max(1) * 2 + 1)
-            .x_label_formatter(&|x| category_label(&names, *x))
-            .y_desc(y_desc)
-            .draw()
-            .map_err(err)?;
+        let mut chart = category_chart(&root, title, y_desc, groups, ng, ymax, groups.len().max(1) * 2 + 1)?;
         let ns = series.len().max(1) as f64;
         let width = 0.8 / ns;
         for (si, (name, vals)) in series.iter().enumerate() {
@@ -120,6 +102,46 @@ pub fn grouped_bars(
     Ok(out)
 }
 
+/// The axes of a bar chart whose category `i` (named `names[i]`) spans `[i, i + 1)` on an x axis
+/// from 0 to `x_max` with `x_labels` label positions, and values from 0 to `ymax`; drawn with
+/// its caption and mesh.
+fn category_chart<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+    y_desc: &str,
+    names: &[String],
+    x_max: f64,
+    ymax: f64,
+    x_labels: usize,
+) -> Result<
+    ChartContext<
+        'a,
+        SVGBackend<'b>,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    String,
+> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(64)
+        .build_cartesian_2d(0f64..x_max, 0f64..ymax)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .light_line_style(WHITE)
+        .label_style(("sans-serif", 15))
+        .axis_desc_style(("sans-serif", 15))
+        .x_labels(x_labels)
+        .x_label_formatter(&|x| category_label(names, *x))
+        .y_desc(y_desc)
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
 /// The label of category `i` on a bar chart whose category `i` spans `[i, i + 1)` on the x axis:
 /// the name at the middle of the span, nothing elsewhere.
 fn category_label(names: &[String], x: f64) -> String {
@@ -142,25 +164,8 @@ pub fn stacked_bars(title: &str, y_desc: &str, bars: &[String], stacks: &[(Strin
             .collect();
         let ymax = nice_max(totals.iter().copied().fold(0.0, f64::max));
         let nb = bars.len().max(1) as f64;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(64)
-            .build_cartesian_2d(0f64..nb + 1.6, 0f64..ymax)
-            .map_err(err)?;
-        let names = bars.to_vec();
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .light_line_style(WHITE)
-            .label_style(("sans-serif", 15))
-            .axis_desc_style(("sans-serif", 15))
-            .x_labels(bars.len().max(1) * 2 + 4)
-            .x_label_formatter(&|x| category_label(&names, *x))
-            .y_desc(y_desc)
-            .draw()
-            .map_err(err)?;
+        let mut chart =
+            category_chart(&root, title, y_desc, bars, nb + 1.6, ymax, bars.len().max(1) * 2 + 4)?;
         let mut base = vec![0.0; bars.len()];
         for (si, (name, vals)) in stacks.iter().enumerate() {
             let c = color(si);
