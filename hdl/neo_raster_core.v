@@ -48,6 +48,8 @@ module neo_raster_core (
   reg  [7:0] base_q;
   reg  [2:0] inflight_q;
   reg  done_q;
+  reg  seek_q;
+  reg  g0_done_q;
   localparam [2:0] S_IDLE = 3'd0;
   localparam [2:0] S_LOADT = 3'd1;
   localparam [2:0] S_LOADF = 3'd2;
@@ -120,11 +122,35 @@ module neo_raster_core (
 
   // WALK: 4 table entries per cycle through the ITUs, once per subtile group.
   wire walk;
-  assign walk = st_q == S_WALK;
+  assign walk = (st_q == S_WALK) & ~seek_q;
   wire [9:0] quad_end;
   assign quad_end = {2'd0, base_q} + 10'd4;
+  // Quad skipping: qhit[q][g] = quad q of the segment touches group g (from group 0's walk).
+  reg  [15:0] qhit [0:63];
+  wire [5:0] cur_q;
+  assign cur_q = base_q[7:2];
+  wire [63:0] qcol;
+  assign qcol = {(qhit[63][grp_q] & (9'd252 < seg_len_q)), (qhit[62][grp_q] & (9'd248 < seg_len_q)), (qhit[61][grp_q] & (9'd244 < seg_len_q)), (qhit[60][grp_q] & (9'd240 < seg_len_q)), (qhit[59][grp_q] & (9'd236 < seg_len_q)), (qhit[58][grp_q] & (9'd232 < seg_len_q)), (qhit[57][grp_q] & (9'd228 < seg_len_q)), (qhit[56][grp_q] & (9'd224 < seg_len_q)), (qhit[55][grp_q] & (9'd220 < seg_len_q)), (qhit[54][grp_q] & (9'd216 < seg_len_q)), (qhit[53][grp_q] & (9'd212 < seg_len_q)), (qhit[52][grp_q] & (9'd208 < seg_len_q)), (qhit[51][grp_q] & (9'd204 < seg_len_q)), (qhit[50][grp_q] & (9'd200 < seg_len_q)), (qhit[49][grp_q] & (9'd196 < seg_len_q)), (qhit[48][grp_q] & (9'd192 < seg_len_q)), (qhit[47][grp_q] & (9'd188 < seg_len_q)), (qhit[46][grp_q] & (9'd184 < seg_len_q)), (qhit[45][grp_q] & (9'd180 < seg_len_q)), (qhit[44][grp_q] & (9'd176 < seg_len_q)), (qhit[43][grp_q] & (9'd172 < seg_len_q)), (qhit[42][grp_q] & (9'd168 < seg_len_q)), (qhit[41][grp_q] & (9'd164 < seg_len_q)), (qhit[40][grp_q] & (9'd160 < seg_len_q)), (qhit[39][grp_q] & (9'd156 < seg_len_q)), (qhit[38][grp_q] & (9'd152 < seg_len_q)), (qhit[37][grp_q] & (9'd148 < seg_len_q)), (qhit[36][grp_q] & (9'd144 < seg_len_q)), (qhit[35][grp_q] & (9'd140 < seg_len_q)), (qhit[34][grp_q] & (9'd136 < seg_len_q)), (qhit[33][grp_q] & (9'd132 < seg_len_q)), (qhit[32][grp_q] & (9'd128 < seg_len_q)), (qhit[31][grp_q] & (9'd124 < seg_len_q)), (qhit[30][grp_q] & (9'd120 < seg_len_q)), (qhit[29][grp_q] & (9'd116 < seg_len_q)), (qhit[28][grp_q] & (9'd112 < seg_len_q)), (qhit[27][grp_q] & (9'd108 < seg_len_q)), (qhit[26][grp_q] & (9'd104 < seg_len_q)), (qhit[25][grp_q] & (9'd100 < seg_len_q)), (qhit[24][grp_q] & (9'd96 < seg_len_q)), (qhit[23][grp_q] & (9'd92 < seg_len_q)), (qhit[22][grp_q] & (9'd88 < seg_len_q)), (qhit[21][grp_q] & (9'd84 < seg_len_q)), (qhit[20][grp_q] & (9'd80 < seg_len_q)), (qhit[19][grp_q] & (9'd76 < seg_len_q)), (qhit[18][grp_q] & (9'd72 < seg_len_q)), (qhit[17][grp_q] & (9'd68 < seg_len_q)), (qhit[16][grp_q] & (9'd64 < seg_len_q)), (qhit[15][grp_q] & (9'd60 < seg_len_q)), (qhit[14][grp_q] & (9'd56 < seg_len_q)), (qhit[13][grp_q] & (9'd52 < seg_len_q)), (qhit[12][grp_q] & (9'd48 < seg_len_q)), (qhit[11][grp_q] & (9'd44 < seg_len_q)), (qhit[10][grp_q] & (9'd40 < seg_len_q)), (qhit[9][grp_q] & (9'd36 < seg_len_q)), (qhit[8][grp_q] & (9'd32 < seg_len_q)), (qhit[7][grp_q] & (9'd28 < seg_len_q)), (qhit[6][grp_q] & (9'd24 < seg_len_q)), (qhit[5][grp_q] & (9'd20 < seg_len_q)), (qhit[4][grp_q] & (9'd16 < seg_len_q)), (qhit[3][grp_q] & (9'd12 < seg_len_q)), (qhit[2][grp_q] & (9'd8 < seg_len_q)), (qhit[1][grp_q] & (9'd4 < seg_len_q)), (qhit[0][grp_q] & (9'd0 < seg_len_q))};
+  wire [63:0] qabove;
+  assign qabove = qcol & (({64{1'b1}} << cur_q) << 1);
+  wire [63:0] qf_oh;
+  assign qf_oh = qcol & (~qcol + 64'd1);
+  wire [5:0] qf_idx;
+  assign qf_idx = {(qf_oh[32] | qf_oh[33] | qf_oh[34] | qf_oh[35] | qf_oh[36] | qf_oh[37] | qf_oh[38] | qf_oh[39] | qf_oh[40] | qf_oh[41] | qf_oh[42] | qf_oh[43] | qf_oh[44] | qf_oh[45] | qf_oh[46] | qf_oh[47] | qf_oh[48] | qf_oh[49] | qf_oh[50] | qf_oh[51] | qf_oh[52] | qf_oh[53] | qf_oh[54] | qf_oh[55] | qf_oh[56] | qf_oh[57] | qf_oh[58] | qf_oh[59] | qf_oh[60] | qf_oh[61] | qf_oh[62] | qf_oh[63]), (qf_oh[16] | qf_oh[17] | qf_oh[18] | qf_oh[19] | qf_oh[20] | qf_oh[21] | qf_oh[22] | qf_oh[23] | qf_oh[24] | qf_oh[25] | qf_oh[26] | qf_oh[27] | qf_oh[28] | qf_oh[29] | qf_oh[30] | qf_oh[31] | qf_oh[48] | qf_oh[49] | qf_oh[50] | qf_oh[51] | qf_oh[52] | qf_oh[53] | qf_oh[54] | qf_oh[55] | qf_oh[56] | qf_oh[57] | qf_oh[58] | qf_oh[59] | qf_oh[60] | qf_oh[61] | qf_oh[62] | qf_oh[63]), (qf_oh[8] | qf_oh[9] | qf_oh[10] | qf_oh[11] | qf_oh[12] | qf_oh[13] | qf_oh[14] | qf_oh[15] | qf_oh[24] | qf_oh[25] | qf_oh[26] | qf_oh[27] | qf_oh[28] | qf_oh[29] | qf_oh[30] | qf_oh[31] | qf_oh[40] | qf_oh[41] | qf_oh[42] | qf_oh[43] | qf_oh[44] | qf_oh[45] | qf_oh[46] | qf_oh[47] | qf_oh[56] | qf_oh[57] | qf_oh[58] | qf_oh[59] | qf_oh[60] | qf_oh[61] | qf_oh[62] | qf_oh[63]), (qf_oh[4] | qf_oh[5] | qf_oh[6] | qf_oh[7] | qf_oh[12] | qf_oh[13] | qf_oh[14] | qf_oh[15] | qf_oh[20] | qf_oh[21] | qf_oh[22] | qf_oh[23] | qf_oh[28] | qf_oh[29] | qf_oh[30] | qf_oh[31] | qf_oh[36] | qf_oh[37] | qf_oh[38] | qf_oh[39] | qf_oh[44] | qf_oh[45] | qf_oh[46] | qf_oh[47] | qf_oh[52] | qf_oh[53] | qf_oh[54] | qf_oh[55] | qf_oh[60] | qf_oh[61] | qf_oh[62] | qf_oh[63]), (qf_oh[2] | qf_oh[3] | qf_oh[6] | qf_oh[7] | qf_oh[10] | qf_oh[11] | qf_oh[14] | qf_oh[15] | qf_oh[18] | qf_oh[19] | qf_oh[22] | qf_oh[23] | qf_oh[26] | qf_oh[27] | qf_oh[30] | qf_oh[31] | qf_oh[34] | qf_oh[35] | qf_oh[38] | qf_oh[39] | qf_oh[42] | qf_oh[43] | qf_oh[46] | qf_oh[47] | qf_oh[50] | qf_oh[51] | qf_oh[54] | qf_oh[55] | qf_oh[58] | qf_oh[59] | qf_oh[62] | qf_oh[63]), (qf_oh[1] | qf_oh[3] | qf_oh[5] | qf_oh[7] | qf_oh[9] | qf_oh[11] | qf_oh[13] | qf_oh[15] | qf_oh[17] | qf_oh[19] | qf_oh[21] | qf_oh[23] | qf_oh[25] | qf_oh[27] | qf_oh[29] | qf_oh[31] | qf_oh[33] | qf_oh[35] | qf_oh[37] | qf_oh[39] | qf_oh[41] | qf_oh[43] | qf_oh[45] | qf_oh[47] | qf_oh[49] | qf_oh[51] | qf_oh[53] | qf_oh[55] | qf_oh[57] | qf_oh[59] | qf_oh[61] | qf_oh[63])};
+  wire unused_qf0;
+  assign unused_qf0 = qf_oh[0];
+  wire [63:0] qn_oh;
+  assign qn_oh = qabove & (~qabove + 64'd1);
+  wire [5:0] qn_idx;
+  assign qn_idx = {(qn_oh[32] | qn_oh[33] | qn_oh[34] | qn_oh[35] | qn_oh[36] | qn_oh[37] | qn_oh[38] | qn_oh[39] | qn_oh[40] | qn_oh[41] | qn_oh[42] | qn_oh[43] | qn_oh[44] | qn_oh[45] | qn_oh[46] | qn_oh[47] | qn_oh[48] | qn_oh[49] | qn_oh[50] | qn_oh[51] | qn_oh[52] | qn_oh[53] | qn_oh[54] | qn_oh[55] | qn_oh[56] | qn_oh[57] | qn_oh[58] | qn_oh[59] | qn_oh[60] | qn_oh[61] | qn_oh[62] | qn_oh[63]), (qn_oh[16] | qn_oh[17] | qn_oh[18] | qn_oh[19] | qn_oh[20] | qn_oh[21] | qn_oh[22] | qn_oh[23] | qn_oh[24] | qn_oh[25] | qn_oh[26] | qn_oh[27] | qn_oh[28] | qn_oh[29] | qn_oh[30] | qn_oh[31] | qn_oh[48] | qn_oh[49] | qn_oh[50] | qn_oh[51] | qn_oh[52] | qn_oh[53] | qn_oh[54] | qn_oh[55] | qn_oh[56] | qn_oh[57] | qn_oh[58] | qn_oh[59] | qn_oh[60] | qn_oh[61] | qn_oh[62] | qn_oh[63]), (qn_oh[8] | qn_oh[9] | qn_oh[10] | qn_oh[11] | qn_oh[12] | qn_oh[13] | qn_oh[14] | qn_oh[15] | qn_oh[24] | qn_oh[25] | qn_oh[26] | qn_oh[27] | qn_oh[28] | qn_oh[29] | qn_oh[30] | qn_oh[31] | qn_oh[40] | qn_oh[41] | qn_oh[42] | qn_oh[43] | qn_oh[44] | qn_oh[45] | qn_oh[46] | qn_oh[47] | qn_oh[56] | qn_oh[57] | qn_oh[58] | qn_oh[59] | qn_oh[60] | qn_oh[61] | qn_oh[62] | qn_oh[63]), (qn_oh[4] | qn_oh[5] | qn_oh[6] | qn_oh[7] | qn_oh[12] | qn_oh[13] | qn_oh[14] | qn_oh[15] | qn_oh[20] | qn_oh[21] | qn_oh[22] | qn_oh[23] | qn_oh[28] | qn_oh[29] | qn_oh[30] | qn_oh[31] | qn_oh[36] | qn_oh[37] | qn_oh[38] | qn_oh[39] | qn_oh[44] | qn_oh[45] | qn_oh[46] | qn_oh[47] | qn_oh[52] | qn_oh[53] | qn_oh[54] | qn_oh[55] | qn_oh[60] | qn_oh[61] | qn_oh[62] | qn_oh[63]), (qn_oh[2] | qn_oh[3] | qn_oh[6] | qn_oh[7] | qn_oh[10] | qn_oh[11] | qn_oh[14] | qn_oh[15] | qn_oh[18] | qn_oh[19] | qn_oh[22] | qn_oh[23] | qn_oh[26] | qn_oh[27] | qn_oh[30] | qn_oh[31] | qn_oh[34] | qn_oh[35] | qn_oh[38] | qn_oh[39] | qn_oh[42] | qn_oh[43] | qn_oh[46] | qn_oh[47] | qn_oh[50] | qn_oh[51] | qn_oh[54] | qn_oh[55] | qn_oh[58] | qn_oh[59] | qn_oh[62] | qn_oh[63]), (qn_oh[1] | qn_oh[3] | qn_oh[5] | qn_oh[7] | qn_oh[9] | qn_oh[11] | qn_oh[13] | qn_oh[15] | qn_oh[17] | qn_oh[19] | qn_oh[21] | qn_oh[23] | qn_oh[25] | qn_oh[27] | qn_oh[29] | qn_oh[31] | qn_oh[33] | qn_oh[35] | qn_oh[37] | qn_oh[39] | qn_oh[41] | qn_oh[43] | qn_oh[45] | qn_oh[47] | qn_oh[49] | qn_oh[51] | qn_oh[53] | qn_oh[55] | qn_oh[57] | qn_oh[59] | qn_oh[61] | qn_oh[63])};
+  wire unused_qn0;
+  assign unused_qn0 = qn_oh[0];
+  wire [7:0] qnext_base;
+  assign qnext_base = {qn_idx, 2'd0};
+  wire [7:0] qfirst_base;
+  assign qfirst_base = {qf_idx, 2'd0};
   wire last_quad;
-  assign last_quad = quad_end >= {1'b0, seg_len_q};
+  assign last_quad = (grp_q == 4'd0) ? (quad_end >= {1'b0, seg_len_q}) : ~(|qabove);
   wire itu_in_ready;
   wire itu_out_valid;
   wire itu_out_ready;
@@ -238,11 +264,11 @@ module neo_raster_core (
   wire unused_tags;
   assign unused_tags = ^{tag_out0, tag_out1, tag_out2, tag_out3};
   // Quad sideband through 3 stages that advance with the ITUs' (in_ready_o = their stage enable).
-  wire [17:0] sb_in;
-  assign sb_in = {(last_quad & last_seg), last_quad, grp_q, base_q, lv3, lv2, lv1, lv0};
-  reg  [17:0] sb1_q;
-  reg  [17:0] sb2_q;
-  reg  [17:0] sb3_q;
+  wire [18:0] sb_in;
+  assign sb_in = {(seg_start_q != 32'd0), (last_quad & last_seg), last_quad, grp_q, base_q, lv3, lv2, lv1, lv0};
+  reg  [18:0] sb1_q;
+  reg  [18:0] sb2_q;
+  reg  [18:0] sb3_q;
   always @(posedge clk_i) begin
     if (itu_in_ready) begin
       sb1_q <= sb_in;
@@ -266,6 +292,8 @@ module neo_raster_core (
   assign o_seg_last = sb3_q[16];
   wire o_list_last;
   assign o_list_last = sb3_q[17];
+  wire o_resume;
+  assign o_resume = sb3_q[18];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       inflight_q <= 3'd0;
@@ -286,16 +314,36 @@ module neo_raster_core (
       hbuf[o_base + 8'd3] <= hit3;
     end
   end
+  // Group 0's results also give each quad's groups (qhit) and, with its last quad, g0_done.
+  wire [15:0] o_qhit;
+  assign o_qhit = {((o_lv0 & (|bm0[63:60])) | (o_lv1 & (|bm1[63:60])) | (o_lv2 & (|bm2[63:60])) | (o_lv3 & (|bm3[63:60]))), ((o_lv0 & (|bm0[59:56])) | (o_lv1 & (|bm1[59:56])) | (o_lv2 & (|bm2[59:56])) | (o_lv3 & (|bm3[59:56]))), ((o_lv0 & (|bm0[55:52])) | (o_lv1 & (|bm1[55:52])) | (o_lv2 & (|bm2[55:52])) | (o_lv3 & (|bm3[55:52]))), ((o_lv0 & (|bm0[51:48])) | (o_lv1 & (|bm1[51:48])) | (o_lv2 & (|bm2[51:48])) | (o_lv3 & (|bm3[51:48]))), ((o_lv0 & (|bm0[47:44])) | (o_lv1 & (|bm1[47:44])) | (o_lv2 & (|bm2[47:44])) | (o_lv3 & (|bm3[47:44]))), ((o_lv0 & (|bm0[43:40])) | (o_lv1 & (|bm1[43:40])) | (o_lv2 & (|bm2[43:40])) | (o_lv3 & (|bm3[43:40]))), ((o_lv0 & (|bm0[39:36])) | (o_lv1 & (|bm1[39:36])) | (o_lv2 & (|bm2[39:36])) | (o_lv3 & (|bm3[39:36]))), ((o_lv0 & (|bm0[35:32])) | (o_lv1 & (|bm1[35:32])) | (o_lv2 & (|bm2[35:32])) | (o_lv3 & (|bm3[35:32]))), ((o_lv0 & (|bm0[31:28])) | (o_lv1 & (|bm1[31:28])) | (o_lv2 & (|bm2[31:28])) | (o_lv3 & (|bm3[31:28]))), ((o_lv0 & (|bm0[27:24])) | (o_lv1 & (|bm1[27:24])) | (o_lv2 & (|bm2[27:24])) | (o_lv3 & (|bm3[27:24]))), ((o_lv0 & (|bm0[23:20])) | (o_lv1 & (|bm1[23:20])) | (o_lv2 & (|bm2[23:20])) | (o_lv3 & (|bm3[23:20]))), ((o_lv0 & (|bm0[19:16])) | (o_lv1 & (|bm1[19:16])) | (o_lv2 & (|bm2[19:16])) | (o_lv3 & (|bm3[19:16]))), ((o_lv0 & (|bm0[15:12])) | (o_lv1 & (|bm1[15:12])) | (o_lv2 & (|bm2[15:12])) | (o_lv3 & (|bm3[15:12]))), ((o_lv0 & (|bm0[11:8])) | (o_lv1 & (|bm1[11:8])) | (o_lv2 & (|bm2[11:8])) | (o_lv3 & (|bm3[11:8]))), ((o_lv0 & (|bm0[7:4])) | (o_lv1 & (|bm1[7:4])) | (o_lv2 & (|bm2[7:4])) | (o_lv3 & (|bm3[7:4]))), ((o_lv0 & (|bm0[3:0])) | (o_lv1 & (|bm1[3:0])) | (o_lv2 & (|bm2[3:0])) | (o_lv3 & (|bm3[3:0])))};
+  always @(posedge clk_i) begin
+    if (itu_out_fire & (o_grp == 4'd0)) begin
+      qhit[o_base[7:2]] <= o_qhit;
+    end
+  end
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      g0_done_q <= 1'b0;
+    end else begin
+      if (st_q == S_LOADT) begin
+        g0_done_q <= 1'b0;
+      end else if (itu_out_fire & (o_grp == 4'd0) & o_seg_last) begin
+        g0_done_q <= 1'b1;
+      end
+    end
+  end
 
-  // Routing: per SCU j a FIFO of {last, lane mask, base} (16 deep); lane u of the quad goes to SCU j
-  // when bit (group * SCUs + j) of its bitmap is set. A list's final quad is pushed even with an empty mask.
+  // Routing: per SCU j a FIFO of {final, last, resume, lane mask, base} (16 deep); lane u of the
+  // quad goes to SCU j when bit (group * SCUs + j) of its bitmap is set. A piece (one group's walk of a
+  // segment) ends with its last quad, pushed even with an empty mask; the last segment's piece is final.
   wire [5:0] rsub0;
   assign rsub0 = {o_grp, 2'd0};
   wire [3:0] rmask0;
   assign rmask0 = {(o_lv3 & bm3[rsub0]), (o_lv2 & bm2[rsub0]), (o_lv1 & bm1[rsub0]), (o_lv0 & bm0[rsub0])};
   wire push0;
-  assign push0 = itu_out_fire & ((|rmask0) | o_list_last);
-  reg  [12:0] fifo0 [0:15];
+  assign push0 = itu_out_fire & ((|rmask0) | o_seg_last);
+  reg  [14:0] fifo0 [0:15];
   reg  [4:0] fwp0_q;
   reg  [4:0] frp0_q;
   wire [4:0] fcnt0;
@@ -307,7 +355,7 @@ module neo_raster_core (
   wire pop0;
   always @(posedge clk_i) begin
     if (push0) begin
-      fifo0[fwp0_q[3:0]] <= {o_list_last, rmask0, o_base};
+      fifo0[fwp0_q[3:0]] <= {o_list_last, o_seg_last, o_resume, rmask0, o_base};
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
@@ -328,8 +376,8 @@ module neo_raster_core (
   wire [3:0] rmask1;
   assign rmask1 = {(o_lv3 & bm3[rsub1]), (o_lv2 & bm2[rsub1]), (o_lv1 & bm1[rsub1]), (o_lv0 & bm0[rsub1])};
   wire push1;
-  assign push1 = itu_out_fire & ((|rmask1) | o_list_last);
-  reg  [12:0] fifo1 [0:15];
+  assign push1 = itu_out_fire & ((|rmask1) | o_seg_last);
+  reg  [14:0] fifo1 [0:15];
   reg  [4:0] fwp1_q;
   reg  [4:0] frp1_q;
   wire [4:0] fcnt1;
@@ -341,7 +389,7 @@ module neo_raster_core (
   wire pop1;
   always @(posedge clk_i) begin
     if (push1) begin
-      fifo1[fwp1_q[3:0]] <= {o_list_last, rmask1, o_base};
+      fifo1[fwp1_q[3:0]] <= {o_list_last, o_seg_last, o_resume, rmask1, o_base};
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
@@ -362,8 +410,8 @@ module neo_raster_core (
   wire [3:0] rmask2;
   assign rmask2 = {(o_lv3 & bm3[rsub2]), (o_lv2 & bm2[rsub2]), (o_lv1 & bm1[rsub2]), (o_lv0 & bm0[rsub2])};
   wire push2;
-  assign push2 = itu_out_fire & ((|rmask2) | o_list_last);
-  reg  [12:0] fifo2 [0:15];
+  assign push2 = itu_out_fire & ((|rmask2) | o_seg_last);
+  reg  [14:0] fifo2 [0:15];
   reg  [4:0] fwp2_q;
   reg  [4:0] frp2_q;
   wire [4:0] fcnt2;
@@ -375,7 +423,7 @@ module neo_raster_core (
   wire pop2;
   always @(posedge clk_i) begin
     if (push2) begin
-      fifo2[fwp2_q[3:0]] <= {o_list_last, rmask2, o_base};
+      fifo2[fwp2_q[3:0]] <= {o_list_last, o_seg_last, o_resume, rmask2, o_base};
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
@@ -396,8 +444,8 @@ module neo_raster_core (
   wire [3:0] rmask3;
   assign rmask3 = {(o_lv3 & bm3[rsub3]), (o_lv2 & bm2[rsub3]), (o_lv1 & bm1[rsub3]), (o_lv0 & bm0[rsub3])};
   wire push3;
-  assign push3 = itu_out_fire & ((|rmask3) | o_list_last);
-  reg  [12:0] fifo3 [0:15];
+  assign push3 = itu_out_fire & ((|rmask3) | o_seg_last);
+  reg  [14:0] fifo3 [0:15];
   reg  [4:0] fwp3_q;
   reg  [4:0] frp3_q;
   wire [4:0] fcnt3;
@@ -409,7 +457,7 @@ module neo_raster_core (
   wire pop3;
   always @(posedge clk_i) begin
     if (push3) begin
-      fifo3[fwp3_q[3:0]] <= {o_list_last, rmask3, o_base};
+      fifo3[fwp3_q[3:0]] <= {o_list_last, o_seg_last, o_resume, rmask3, o_base};
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
@@ -434,6 +482,8 @@ module neo_raster_core (
   reg  [3:0] cmask0_q;
   reg  clast0_q;
   reg  [3:0] lgrp0_q;
+  reg  cfin0_q;
+  reg  cres0_q;
   reg  rel0_q;
   wire [1:0] flane0;
   assign flane0 = cmask0_q[0] ? 2'd0 : (cmask0_q[1] ? 2'd1 : (cmask0_q[2] ? 2'd2 : (cmask0_q[3] ? 2'd3 : (2'd0))));
@@ -452,7 +502,7 @@ module neo_raster_core (
   wire edone0;
   assign edone0 = beat0 & ~(|frest0);
   assign pop0 = ~fempty0 & (~cv0_q | edone0);
-  wire [12:0] fhead0;
+  wire [14:0] fhead0;
   assign fhead0 = fifo0[frp0_q[3:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -478,7 +528,9 @@ module neo_raster_core (
     if (pop0) begin
       cbase0_q <= fhead0[7:0];
       cmask0_q <= fhead0[11:8];
-      clast0_q <= fhead0[12];
+      cres0_q <= fhead0[12];
+      clast0_q <= fhead0[13];
+      cfin0_q <= fhead0[14];
     end else if (beat0) begin
       cmask0_q <= frest0;
     end
@@ -516,6 +568,9 @@ module neo_raster_core (
     .in_blue_i(fbuf[fidx0][149:139]),
     .in_empty_i(fempty_beat0),
     .in_last_i(flast0),
+    .in_final_i(cfin0_q),
+    .in_resume_i(cres0_q),
+    .in_sub_i(lgrp0_q),
     .in_origin_x_i(s0_ox[15:0]),
     .in_origin_y_i(s0_oy[15:0]),
     .in_cols_i(s0_cols),
@@ -530,6 +585,8 @@ module neo_raster_core (
   reg  [3:0] cmask1_q;
   reg  clast1_q;
   reg  [3:0] lgrp1_q;
+  reg  cfin1_q;
+  reg  cres1_q;
   reg  rel1_q;
   wire [1:0] flane1;
   assign flane1 = cmask1_q[0] ? 2'd0 : (cmask1_q[1] ? 2'd1 : (cmask1_q[2] ? 2'd2 : (cmask1_q[3] ? 2'd3 : (2'd0))));
@@ -548,7 +605,7 @@ module neo_raster_core (
   wire edone1;
   assign edone1 = beat1 & ~(|frest1);
   assign pop1 = ~fempty1 & (~cv1_q | edone1);
-  wire [12:0] fhead1;
+  wire [14:0] fhead1;
   assign fhead1 = fifo1[frp1_q[3:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -574,7 +631,9 @@ module neo_raster_core (
     if (pop1) begin
       cbase1_q <= fhead1[7:0];
       cmask1_q <= fhead1[11:8];
-      clast1_q <= fhead1[12];
+      cres1_q <= fhead1[12];
+      clast1_q <= fhead1[13];
+      cfin1_q <= fhead1[14];
     end else if (beat1) begin
       cmask1_q <= frest1;
     end
@@ -612,6 +671,9 @@ module neo_raster_core (
     .in_blue_i(fbuf[fidx1][149:139]),
     .in_empty_i(fempty_beat1),
     .in_last_i(flast1),
+    .in_final_i(cfin1_q),
+    .in_resume_i(cres1_q),
+    .in_sub_i(lgrp1_q),
     .in_origin_x_i(s1_ox[15:0]),
     .in_origin_y_i(s1_oy[15:0]),
     .in_cols_i(s1_cols),
@@ -626,6 +688,8 @@ module neo_raster_core (
   reg  [3:0] cmask2_q;
   reg  clast2_q;
   reg  [3:0] lgrp2_q;
+  reg  cfin2_q;
+  reg  cres2_q;
   reg  rel2_q;
   wire [1:0] flane2;
   assign flane2 = cmask2_q[0] ? 2'd0 : (cmask2_q[1] ? 2'd1 : (cmask2_q[2] ? 2'd2 : (cmask2_q[3] ? 2'd3 : (2'd0))));
@@ -644,7 +708,7 @@ module neo_raster_core (
   wire edone2;
   assign edone2 = beat2 & ~(|frest2);
   assign pop2 = ~fempty2 & (~cv2_q | edone2);
-  wire [12:0] fhead2;
+  wire [14:0] fhead2;
   assign fhead2 = fifo2[frp2_q[3:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -670,7 +734,9 @@ module neo_raster_core (
     if (pop2) begin
       cbase2_q <= fhead2[7:0];
       cmask2_q <= fhead2[11:8];
-      clast2_q <= fhead2[12];
+      cres2_q <= fhead2[12];
+      clast2_q <= fhead2[13];
+      cfin2_q <= fhead2[14];
     end else if (beat2) begin
       cmask2_q <= frest2;
     end
@@ -708,6 +774,9 @@ module neo_raster_core (
     .in_blue_i(fbuf[fidx2][149:139]),
     .in_empty_i(fempty_beat2),
     .in_last_i(flast2),
+    .in_final_i(cfin2_q),
+    .in_resume_i(cres2_q),
+    .in_sub_i(lgrp2_q),
     .in_origin_x_i(s2_ox[15:0]),
     .in_origin_y_i(s2_oy[15:0]),
     .in_cols_i(s2_cols),
@@ -722,6 +791,8 @@ module neo_raster_core (
   reg  [3:0] cmask3_q;
   reg  clast3_q;
   reg  [3:0] lgrp3_q;
+  reg  cfin3_q;
+  reg  cres3_q;
   reg  rel3_q;
   wire [1:0] flane3;
   assign flane3 = cmask3_q[0] ? 2'd0 : (cmask3_q[1] ? 2'd1 : (cmask3_q[2] ? 2'd2 : (cmask3_q[3] ? 2'd3 : (2'd0))));
@@ -740,7 +811,7 @@ module neo_raster_core (
   wire edone3;
   assign edone3 = beat3 & ~(|frest3);
   assign pop3 = ~fempty3 & (~cv3_q | edone3);
-  wire [12:0] fhead3;
+  wire [14:0] fhead3;
   assign fhead3 = fifo3[frp3_q[3:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -766,7 +837,9 @@ module neo_raster_core (
     if (pop3) begin
       cbase3_q <= fhead3[7:0];
       cmask3_q <= fhead3[11:8];
-      clast3_q <= fhead3[12];
+      cres3_q <= fhead3[12];
+      clast3_q <= fhead3[13];
+      cfin3_q <= fhead3[14];
     end else if (beat3) begin
       cmask3_q <= frest3;
     end
@@ -804,6 +877,9 @@ module neo_raster_core (
     .in_blue_i(fbuf[fidx3][149:139]),
     .in_empty_i(fempty_beat3),
     .in_last_i(flast3),
+    .in_final_i(cfin3_q),
+    .in_resume_i(cres3_q),
+    .in_sub_i(lgrp3_q),
     .in_origin_x_i(s3_ox[15:0]),
     .in_origin_y_i(s3_oy[15:0]),
     .in_cols_i(s3_cols),
@@ -896,7 +972,7 @@ module neo_raster_core (
   assign mem_req_len_o = pw_v ? 5'd8 : (wb_v ? 5'd1 : rd_len);
   assign mem_wdata_o = pw_v ? pw_data : {144'd0, wb_entry};
 
-  // Main FSM: LOADT -> LOADF -> WALK (-> SEGWAIT -> LOADT per further segment / group) -> DRAIN.
+  // Main FSM: LOADT -> LOADF -> WALK, every group (-> SEGWAIT -> LOADT per further segment) -> DRAIN.
   wire drained;
   assign drained = ~route_busy & ~wb_busy_q;
   always @(posedge clk_i or negedge rst_ni) begin
@@ -906,6 +982,7 @@ module neo_raster_core (
       iss_q <= 9'd0;
       rcv_q <= 9'd0;
       base_q <= 8'd0;
+      seek_q <= 1'b0;
     end else begin
       done_q <= 1'b0;
       if (rd_g) begin
@@ -922,6 +999,7 @@ module neo_raster_core (
             seg_len_q <= cmd_seg_len;
             iss_q <= 9'd0;
             rcv_q <= 9'd0;
+            seek_q <= 1'b0;
             tx_q <= cmd_tile_x_i;
             ty_q <= cmd_tile_y_i;
             wd_q <= cmd_width_i;
@@ -948,40 +1026,37 @@ module neo_raster_core (
           end
         end
         S_WALK: begin
+          // a later group starts at its first quad once group 0's results are in
+          if (seek_q & g0_done_q) begin
+            seek_q <= 1'b0;
+            base_q <= (|qcol) ? qfirst_base : 8'd0;
+          end
           if (itu_fire) begin
             if (~last_quad) begin
-              base_q <= base_q + 8'd4;
+              base_q <= (grp_q == 4'd0) ? (base_q + 8'd4) : qnext_base;
             end else begin
               base_q <= 8'd0;
-              if (multi_q) begin
-                st_q <= S_SEGWAIT;
-              end else if (last_grp) begin
-                st_q <= S_DRAIN;
-              end else begin
+              if (~last_grp) begin
                 grp_q <= grp_q + 4'd1;
+                seek_q <= 1'b1;
+              end else if (multi_q & ~last_seg) begin
+                st_q <= S_SEGWAIT;
+              end else begin
+                st_q <= S_DRAIN;
               end
             end
           end
         end
         S_SEGWAIT: begin
           if (drained) begin
-            if (~last_seg) begin
-              // next segment of the same group
-              st_q <= S_LOADT;
-              seg_start_q <= next_start;
-              seg_len_q <= next_seg_len;
-              iss_q <= 9'd0;
-              rcv_q <= 9'd0;
-            end else if (last_grp) begin
-              st_q <= S_DRAIN;
-            end else begin
-              st_q <= S_LOADT;
-              seg_start_q <= 32'd0;
-              seg_len_q <= (len_q > 32'd256) ? 9'd256 : len_q[8:0];
-              iss_q <= 9'd0;
-              rcv_q <= 9'd0;
-              grp_q <= grp_q + 4'd1;
-            end
+            // next segment: its walk starts again at group 0
+            st_q <= S_LOADT;
+            seg_start_q <= next_start;
+            seg_len_q <= next_seg_len;
+            iss_q <= 9'd0;
+            rcv_q <= 9'd0;
+            seek_q <= 1'b0;
+            grp_q <= 4'd0;
           end
         end
         S_DRAIN: begin

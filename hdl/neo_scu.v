@@ -24,6 +24,9 @@ module neo_scu (
   input  wire [15:0]   in_origin_y_i,   // subtile top-left pixel y (first beat of a list)
   input  wire [3:0]    in_cols_i,       // columns inside the image, 0..=S (first beat)
   input  wire [3:0]    in_rows_i,       // rows inside the image, 0..=S (first beat)
+  input  wire          in_final_i,      // with in_last_i: the piece ends the subtile (output it); else save its state
+  input  wire          in_resume_i,     // first beat: continue subtile in_sub_i from its saved state (else start fresh)
+  input  wire [3:0]    in_sub_i,        // first beat: the subtile's state slot (pieces of several subtiles interleave)
   output wire          term_o,          // every pixel of the list being accepted is done: the rest may be skipped
   output wire          out_valid_o,     // a finished subtile is offered
   input  wire          out_ready_i,     // taken when out_valid_o & out_ready_i
@@ -36,27 +39,28 @@ module neo_scu (
   reg  [2:0] lid_in_q;
   reg  [15:0] ox_in_q;
   reg  [15:0] oy_in_q;
+  reg  [3:0] sub_in_q;
   reg  v0_q;
-  reg  [198:0] b0_q;
+  reg  [204:0] b0_q;
   reg  [1:0] p0_q;
   reg  term_q;
   reg  [2:0] term_lid_q;
   reg  v1_q;
-  reg  [198:0] d1_q;
+  reg  [204:0] d1_q;
   reg  v2_q;
-  reg  [198:0] d2_q;
+  reg  [204:0] d2_q;
   reg  v3_q;
-  reg  [198:0] d3_q;
+  reg  [204:0] d3_q;
   reg  v4_q;
-  reg  [198:0] d4_q;
+  reg  [204:0] d4_q;
   reg  v5_q;
-  reg  [198:0] d5_q;
+  reg  [204:0] d5_q;
   reg  out_valid_q;
   reg  [1535:0] out_rgb_q;
   wire in_fire;
   assign in_fire = in_valid_i & in_ready_o;
   wire term_match;
-  assign term_match = term_q & (term_lid_q == b0_q[195:193]);
+  assign term_match = term_q & (term_lid_q == b0_q[201:199]);
   wire skip0;
   assign skip0 = ~b0_q[192] & (b0_q[190] | term_match);
   wire issue0;
@@ -64,15 +68,17 @@ module neo_scu (
   wire end0;
   assign end0 = skip0 | (p0_q == 2'd3);
   wire fin_b;
-  assign fin_b = v5_q & d5_q[191] & (d5_q[198] | (d5_q[197:196] == 2'd3));
+  assign fin_b = v5_q & d5_q[191] & (d5_q[204] | (d5_q[203:202] == 2'd3));
+  wire fin_out;
+  assign fin_out = fin_b & d5_q[193];
   wire en;
-  assign en = ~(fin_b & out_valid_q & ~out_ready_i);
+  assign en = ~(fin_out & out_valid_q & ~out_ready_i);
   assign in_ready_o = en & (~v0_q | end0);
   assign term_o = term_q & (term_lid_q == lid_in_q) & ~first_in_q;
-  wire [198:0] beat_in;
-  assign beat_in = {(1'b0), (2'd0), (lid_in_q), (first_in_q), (in_last_i), (in_empty_i), (in_rows_i), (in_cols_i), (first_in_q ? in_origin_y_i : oy_in_q), (first_in_q ? in_origin_x_i : ox_in_q), (in_blue_i), (in_green_i), (in_red_i), (in_opacity_i), (in_conic_exp_i), (in_conic_c_i), (in_conic_b_i), (in_conic_a_i), (in_mean_y_i), (in_mean_x_i)};
-  wire [198:0] issue_bundle;
-  assign issue_bundle = {skip0, p0_q, b0_q[195:193], b0_q[192], b0_q[191], b0_q[190], b0_q[189:186], b0_q[185:182], b0_q[181:166], b0_q[165:150], b0_q[149:139], b0_q[138:128], b0_q[127:117], b0_q[116:109], b0_q[108:103], b0_q[102:85], b0_q[84:66], b0_q[65:48], b0_q[47:24], b0_q[23:0]};
+  wire [204:0] beat_in;
+  assign beat_in = {(1'b0), (2'd0), (lid_in_q), (first_in_q ? in_sub_i : sub_in_q), (in_resume_i), (in_final_i), (first_in_q), (in_last_i), (in_empty_i), (in_rows_i), (in_cols_i), (first_in_q ? in_origin_y_i : oy_in_q), (first_in_q ? in_origin_x_i : ox_in_q), (in_blue_i), (in_green_i), (in_red_i), (in_opacity_i), (in_conic_exp_i), (in_conic_c_i), (in_conic_b_i), (in_conic_a_i), (in_mean_y_i), (in_mean_x_i)};
+  wire [204:0] issue_bundle;
+  assign issue_bundle = {skip0, p0_q, b0_q[201:199], b0_q[198:195], b0_q[194], b0_q[193], b0_q[192], b0_q[191], b0_q[190], b0_q[189:186], b0_q[185:182], b0_q[181:166], b0_q[165:150], b0_q[149:139], b0_q[138:128], b0_q[127:117], b0_q[116:109], b0_q[108:103], b0_q[102:85], b0_q[84:66], b0_q[65:48], b0_q[47:24], b0_q[23:0]};
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       first_in_q <= 1'b1;
@@ -100,6 +106,7 @@ module neo_scu (
     if (in_fire & first_in_q) begin
       ox_in_q <= in_origin_x_i;
       oy_in_q <= in_origin_y_i;
+      sub_in_q <= in_sub_i;
     end
     if (in_fire) begin
       b0_q <= beat_in;
@@ -134,7 +141,7 @@ module neo_scu (
 
   // lane 0
   wire [5:0] l0_ix;
-  assign l0_ix = {issue_bundle[197:196], 4'd0};
+  assign l0_ix = {issue_bundle[203:202], 4'd0};
   wire [16:0] l0_pxx;
   assign l0_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l0_ix[2:0]};
   wire [26:0] l0_dx;
@@ -225,15 +232,15 @@ module neo_scu (
     end
   end
   wire [5:0] l0_ix6_;
-  assign l0_ix6_ = {d5_q[197:196], 4'd0};
+  assign l0_ix6_ = {d5_q[203:202], 4'd0};
   wire l0_inside;
   assign l0_inside = ({1'b0, l0_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l0_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l0_t_old;
-  assign l0_t_old = d5_q[192] ? 17'd65536 : rd_t0;
+  assign l0_t_old = d5_q[192] ? (d5_q[194] ? bk_t0 : 17'd65536) : rd_t0;
   wire [83:0] l0_c_old;
-  assign l0_c_old = d5_q[192] ? 84'd0 : rd_c0;
+  assign l0_c_old = d5_q[192] ? (d5_q[194] ? bk_c0 : 84'd0) : rd_c0;
   wire l0_dn_old;
-  assign l0_dn_old = d5_q[192] ? ~l0_inside : rd_dn0;
+  assign l0_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn0 : ~l0_inside) : rd_dn0;
   wire l0_bl;
   assign l0_bl = l0_ok5_ & ~l0_dn_old;
   wire [29:0] l0_wp;
@@ -261,7 +268,7 @@ module neo_scu (
 
   // lane 1
   wire [5:0] l1_ix;
-  assign l1_ix = {issue_bundle[197:196], 4'd1};
+  assign l1_ix = {issue_bundle[203:202], 4'd1};
   wire [16:0] l1_pxx;
   assign l1_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l1_ix[2:0]};
   wire [26:0] l1_dx;
@@ -352,15 +359,15 @@ module neo_scu (
     end
   end
   wire [5:0] l1_ix6_;
-  assign l1_ix6_ = {d5_q[197:196], 4'd1};
+  assign l1_ix6_ = {d5_q[203:202], 4'd1};
   wire l1_inside;
   assign l1_inside = ({1'b0, l1_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l1_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l1_t_old;
-  assign l1_t_old = d5_q[192] ? 17'd65536 : rd_t1;
+  assign l1_t_old = d5_q[192] ? (d5_q[194] ? bk_t1 : 17'd65536) : rd_t1;
   wire [83:0] l1_c_old;
-  assign l1_c_old = d5_q[192] ? 84'd0 : rd_c1;
+  assign l1_c_old = d5_q[192] ? (d5_q[194] ? bk_c1 : 84'd0) : rd_c1;
   wire l1_dn_old;
-  assign l1_dn_old = d5_q[192] ? ~l1_inside : rd_dn1;
+  assign l1_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn1 : ~l1_inside) : rd_dn1;
   wire l1_bl;
   assign l1_bl = l1_ok5_ & ~l1_dn_old;
   wire [29:0] l1_wp;
@@ -388,7 +395,7 @@ module neo_scu (
 
   // lane 2
   wire [5:0] l2_ix;
-  assign l2_ix = {issue_bundle[197:196], 4'd2};
+  assign l2_ix = {issue_bundle[203:202], 4'd2};
   wire [16:0] l2_pxx;
   assign l2_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l2_ix[2:0]};
   wire [26:0] l2_dx;
@@ -479,15 +486,15 @@ module neo_scu (
     end
   end
   wire [5:0] l2_ix6_;
-  assign l2_ix6_ = {d5_q[197:196], 4'd2};
+  assign l2_ix6_ = {d5_q[203:202], 4'd2};
   wire l2_inside;
   assign l2_inside = ({1'b0, l2_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l2_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l2_t_old;
-  assign l2_t_old = d5_q[192] ? 17'd65536 : rd_t2;
+  assign l2_t_old = d5_q[192] ? (d5_q[194] ? bk_t2 : 17'd65536) : rd_t2;
   wire [83:0] l2_c_old;
-  assign l2_c_old = d5_q[192] ? 84'd0 : rd_c2;
+  assign l2_c_old = d5_q[192] ? (d5_q[194] ? bk_c2 : 84'd0) : rd_c2;
   wire l2_dn_old;
-  assign l2_dn_old = d5_q[192] ? ~l2_inside : rd_dn2;
+  assign l2_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn2 : ~l2_inside) : rd_dn2;
   wire l2_bl;
   assign l2_bl = l2_ok5_ & ~l2_dn_old;
   wire [29:0] l2_wp;
@@ -515,7 +522,7 @@ module neo_scu (
 
   // lane 3
   wire [5:0] l3_ix;
-  assign l3_ix = {issue_bundle[197:196], 4'd3};
+  assign l3_ix = {issue_bundle[203:202], 4'd3};
   wire [16:0] l3_pxx;
   assign l3_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l3_ix[2:0]};
   wire [26:0] l3_dx;
@@ -606,15 +613,15 @@ module neo_scu (
     end
   end
   wire [5:0] l3_ix6_;
-  assign l3_ix6_ = {d5_q[197:196], 4'd3};
+  assign l3_ix6_ = {d5_q[203:202], 4'd3};
   wire l3_inside;
   assign l3_inside = ({1'b0, l3_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l3_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l3_t_old;
-  assign l3_t_old = d5_q[192] ? 17'd65536 : rd_t3;
+  assign l3_t_old = d5_q[192] ? (d5_q[194] ? bk_t3 : 17'd65536) : rd_t3;
   wire [83:0] l3_c_old;
-  assign l3_c_old = d5_q[192] ? 84'd0 : rd_c3;
+  assign l3_c_old = d5_q[192] ? (d5_q[194] ? bk_c3 : 84'd0) : rd_c3;
   wire l3_dn_old;
-  assign l3_dn_old = d5_q[192] ? ~l3_inside : rd_dn3;
+  assign l3_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn3 : ~l3_inside) : rd_dn3;
   wire l3_bl;
   assign l3_bl = l3_ok5_ & ~l3_dn_old;
   wire [29:0] l3_wp;
@@ -642,7 +649,7 @@ module neo_scu (
 
   // lane 4
   wire [5:0] l4_ix;
-  assign l4_ix = {issue_bundle[197:196], 4'd4};
+  assign l4_ix = {issue_bundle[203:202], 4'd4};
   wire [16:0] l4_pxx;
   assign l4_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l4_ix[2:0]};
   wire [26:0] l4_dx;
@@ -733,15 +740,15 @@ module neo_scu (
     end
   end
   wire [5:0] l4_ix6_;
-  assign l4_ix6_ = {d5_q[197:196], 4'd4};
+  assign l4_ix6_ = {d5_q[203:202], 4'd4};
   wire l4_inside;
   assign l4_inside = ({1'b0, l4_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l4_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l4_t_old;
-  assign l4_t_old = d5_q[192] ? 17'd65536 : rd_t4;
+  assign l4_t_old = d5_q[192] ? (d5_q[194] ? bk_t4 : 17'd65536) : rd_t4;
   wire [83:0] l4_c_old;
-  assign l4_c_old = d5_q[192] ? 84'd0 : rd_c4;
+  assign l4_c_old = d5_q[192] ? (d5_q[194] ? bk_c4 : 84'd0) : rd_c4;
   wire l4_dn_old;
-  assign l4_dn_old = d5_q[192] ? ~l4_inside : rd_dn4;
+  assign l4_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn4 : ~l4_inside) : rd_dn4;
   wire l4_bl;
   assign l4_bl = l4_ok5_ & ~l4_dn_old;
   wire [29:0] l4_wp;
@@ -769,7 +776,7 @@ module neo_scu (
 
   // lane 5
   wire [5:0] l5_ix;
-  assign l5_ix = {issue_bundle[197:196], 4'd5};
+  assign l5_ix = {issue_bundle[203:202], 4'd5};
   wire [16:0] l5_pxx;
   assign l5_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l5_ix[2:0]};
   wire [26:0] l5_dx;
@@ -860,15 +867,15 @@ module neo_scu (
     end
   end
   wire [5:0] l5_ix6_;
-  assign l5_ix6_ = {d5_q[197:196], 4'd5};
+  assign l5_ix6_ = {d5_q[203:202], 4'd5};
   wire l5_inside;
   assign l5_inside = ({1'b0, l5_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l5_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l5_t_old;
-  assign l5_t_old = d5_q[192] ? 17'd65536 : rd_t5;
+  assign l5_t_old = d5_q[192] ? (d5_q[194] ? bk_t5 : 17'd65536) : rd_t5;
   wire [83:0] l5_c_old;
-  assign l5_c_old = d5_q[192] ? 84'd0 : rd_c5;
+  assign l5_c_old = d5_q[192] ? (d5_q[194] ? bk_c5 : 84'd0) : rd_c5;
   wire l5_dn_old;
-  assign l5_dn_old = d5_q[192] ? ~l5_inside : rd_dn5;
+  assign l5_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn5 : ~l5_inside) : rd_dn5;
   wire l5_bl;
   assign l5_bl = l5_ok5_ & ~l5_dn_old;
   wire [29:0] l5_wp;
@@ -896,7 +903,7 @@ module neo_scu (
 
   // lane 6
   wire [5:0] l6_ix;
-  assign l6_ix = {issue_bundle[197:196], 4'd6};
+  assign l6_ix = {issue_bundle[203:202], 4'd6};
   wire [16:0] l6_pxx;
   assign l6_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l6_ix[2:0]};
   wire [26:0] l6_dx;
@@ -987,15 +994,15 @@ module neo_scu (
     end
   end
   wire [5:0] l6_ix6_;
-  assign l6_ix6_ = {d5_q[197:196], 4'd6};
+  assign l6_ix6_ = {d5_q[203:202], 4'd6};
   wire l6_inside;
   assign l6_inside = ({1'b0, l6_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l6_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l6_t_old;
-  assign l6_t_old = d5_q[192] ? 17'd65536 : rd_t6;
+  assign l6_t_old = d5_q[192] ? (d5_q[194] ? bk_t6 : 17'd65536) : rd_t6;
   wire [83:0] l6_c_old;
-  assign l6_c_old = d5_q[192] ? 84'd0 : rd_c6;
+  assign l6_c_old = d5_q[192] ? (d5_q[194] ? bk_c6 : 84'd0) : rd_c6;
   wire l6_dn_old;
-  assign l6_dn_old = d5_q[192] ? ~l6_inside : rd_dn6;
+  assign l6_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn6 : ~l6_inside) : rd_dn6;
   wire l6_bl;
   assign l6_bl = l6_ok5_ & ~l6_dn_old;
   wire [29:0] l6_wp;
@@ -1023,7 +1030,7 @@ module neo_scu (
 
   // lane 7
   wire [5:0] l7_ix;
-  assign l7_ix = {issue_bundle[197:196], 4'd7};
+  assign l7_ix = {issue_bundle[203:202], 4'd7};
   wire [16:0] l7_pxx;
   assign l7_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l7_ix[2:0]};
   wire [26:0] l7_dx;
@@ -1114,15 +1121,15 @@ module neo_scu (
     end
   end
   wire [5:0] l7_ix6_;
-  assign l7_ix6_ = {d5_q[197:196], 4'd7};
+  assign l7_ix6_ = {d5_q[203:202], 4'd7};
   wire l7_inside;
   assign l7_inside = ({1'b0, l7_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l7_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l7_t_old;
-  assign l7_t_old = d5_q[192] ? 17'd65536 : rd_t7;
+  assign l7_t_old = d5_q[192] ? (d5_q[194] ? bk_t7 : 17'd65536) : rd_t7;
   wire [83:0] l7_c_old;
-  assign l7_c_old = d5_q[192] ? 84'd0 : rd_c7;
+  assign l7_c_old = d5_q[192] ? (d5_q[194] ? bk_c7 : 84'd0) : rd_c7;
   wire l7_dn_old;
-  assign l7_dn_old = d5_q[192] ? ~l7_inside : rd_dn7;
+  assign l7_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn7 : ~l7_inside) : rd_dn7;
   wire l7_bl;
   assign l7_bl = l7_ok5_ & ~l7_dn_old;
   wire [29:0] l7_wp;
@@ -1150,7 +1157,7 @@ module neo_scu (
 
   // lane 8
   wire [5:0] l8_ix;
-  assign l8_ix = {issue_bundle[197:196], 4'd8};
+  assign l8_ix = {issue_bundle[203:202], 4'd8};
   wire [16:0] l8_pxx;
   assign l8_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l8_ix[2:0]};
   wire [26:0] l8_dx;
@@ -1241,15 +1248,15 @@ module neo_scu (
     end
   end
   wire [5:0] l8_ix6_;
-  assign l8_ix6_ = {d5_q[197:196], 4'd8};
+  assign l8_ix6_ = {d5_q[203:202], 4'd8};
   wire l8_inside;
   assign l8_inside = ({1'b0, l8_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l8_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l8_t_old;
-  assign l8_t_old = d5_q[192] ? 17'd65536 : rd_t8;
+  assign l8_t_old = d5_q[192] ? (d5_q[194] ? bk_t8 : 17'd65536) : rd_t8;
   wire [83:0] l8_c_old;
-  assign l8_c_old = d5_q[192] ? 84'd0 : rd_c8;
+  assign l8_c_old = d5_q[192] ? (d5_q[194] ? bk_c8 : 84'd0) : rd_c8;
   wire l8_dn_old;
-  assign l8_dn_old = d5_q[192] ? ~l8_inside : rd_dn8;
+  assign l8_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn8 : ~l8_inside) : rd_dn8;
   wire l8_bl;
   assign l8_bl = l8_ok5_ & ~l8_dn_old;
   wire [29:0] l8_wp;
@@ -1277,7 +1284,7 @@ module neo_scu (
 
   // lane 9
   wire [5:0] l9_ix;
-  assign l9_ix = {issue_bundle[197:196], 4'd9};
+  assign l9_ix = {issue_bundle[203:202], 4'd9};
   wire [16:0] l9_pxx;
   assign l9_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l9_ix[2:0]};
   wire [26:0] l9_dx;
@@ -1368,15 +1375,15 @@ module neo_scu (
     end
   end
   wire [5:0] l9_ix6_;
-  assign l9_ix6_ = {d5_q[197:196], 4'd9};
+  assign l9_ix6_ = {d5_q[203:202], 4'd9};
   wire l9_inside;
   assign l9_inside = ({1'b0, l9_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l9_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l9_t_old;
-  assign l9_t_old = d5_q[192] ? 17'd65536 : rd_t9;
+  assign l9_t_old = d5_q[192] ? (d5_q[194] ? bk_t9 : 17'd65536) : rd_t9;
   wire [83:0] l9_c_old;
-  assign l9_c_old = d5_q[192] ? 84'd0 : rd_c9;
+  assign l9_c_old = d5_q[192] ? (d5_q[194] ? bk_c9 : 84'd0) : rd_c9;
   wire l9_dn_old;
-  assign l9_dn_old = d5_q[192] ? ~l9_inside : rd_dn9;
+  assign l9_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn9 : ~l9_inside) : rd_dn9;
   wire l9_bl;
   assign l9_bl = l9_ok5_ & ~l9_dn_old;
   wire [29:0] l9_wp;
@@ -1404,7 +1411,7 @@ module neo_scu (
 
   // lane 10
   wire [5:0] l10_ix;
-  assign l10_ix = {issue_bundle[197:196], 4'd10};
+  assign l10_ix = {issue_bundle[203:202], 4'd10};
   wire [16:0] l10_pxx;
   assign l10_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l10_ix[2:0]};
   wire [26:0] l10_dx;
@@ -1495,15 +1502,15 @@ module neo_scu (
     end
   end
   wire [5:0] l10_ix6_;
-  assign l10_ix6_ = {d5_q[197:196], 4'd10};
+  assign l10_ix6_ = {d5_q[203:202], 4'd10};
   wire l10_inside;
   assign l10_inside = ({1'b0, l10_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l10_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l10_t_old;
-  assign l10_t_old = d5_q[192] ? 17'd65536 : rd_t10;
+  assign l10_t_old = d5_q[192] ? (d5_q[194] ? bk_t10 : 17'd65536) : rd_t10;
   wire [83:0] l10_c_old;
-  assign l10_c_old = d5_q[192] ? 84'd0 : rd_c10;
+  assign l10_c_old = d5_q[192] ? (d5_q[194] ? bk_c10 : 84'd0) : rd_c10;
   wire l10_dn_old;
-  assign l10_dn_old = d5_q[192] ? ~l10_inside : rd_dn10;
+  assign l10_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn10 : ~l10_inside) : rd_dn10;
   wire l10_bl;
   assign l10_bl = l10_ok5_ & ~l10_dn_old;
   wire [29:0] l10_wp;
@@ -1531,7 +1538,7 @@ module neo_scu (
 
   // lane 11
   wire [5:0] l11_ix;
-  assign l11_ix = {issue_bundle[197:196], 4'd11};
+  assign l11_ix = {issue_bundle[203:202], 4'd11};
   wire [16:0] l11_pxx;
   assign l11_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l11_ix[2:0]};
   wire [26:0] l11_dx;
@@ -1622,15 +1629,15 @@ module neo_scu (
     end
   end
   wire [5:0] l11_ix6_;
-  assign l11_ix6_ = {d5_q[197:196], 4'd11};
+  assign l11_ix6_ = {d5_q[203:202], 4'd11};
   wire l11_inside;
   assign l11_inside = ({1'b0, l11_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l11_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l11_t_old;
-  assign l11_t_old = d5_q[192] ? 17'd65536 : rd_t11;
+  assign l11_t_old = d5_q[192] ? (d5_q[194] ? bk_t11 : 17'd65536) : rd_t11;
   wire [83:0] l11_c_old;
-  assign l11_c_old = d5_q[192] ? 84'd0 : rd_c11;
+  assign l11_c_old = d5_q[192] ? (d5_q[194] ? bk_c11 : 84'd0) : rd_c11;
   wire l11_dn_old;
-  assign l11_dn_old = d5_q[192] ? ~l11_inside : rd_dn11;
+  assign l11_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn11 : ~l11_inside) : rd_dn11;
   wire l11_bl;
   assign l11_bl = l11_ok5_ & ~l11_dn_old;
   wire [29:0] l11_wp;
@@ -1658,7 +1665,7 @@ module neo_scu (
 
   // lane 12
   wire [5:0] l12_ix;
-  assign l12_ix = {issue_bundle[197:196], 4'd12};
+  assign l12_ix = {issue_bundle[203:202], 4'd12};
   wire [16:0] l12_pxx;
   assign l12_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l12_ix[2:0]};
   wire [26:0] l12_dx;
@@ -1749,15 +1756,15 @@ module neo_scu (
     end
   end
   wire [5:0] l12_ix6_;
-  assign l12_ix6_ = {d5_q[197:196], 4'd12};
+  assign l12_ix6_ = {d5_q[203:202], 4'd12};
   wire l12_inside;
   assign l12_inside = ({1'b0, l12_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l12_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l12_t_old;
-  assign l12_t_old = d5_q[192] ? 17'd65536 : rd_t12;
+  assign l12_t_old = d5_q[192] ? (d5_q[194] ? bk_t12 : 17'd65536) : rd_t12;
   wire [83:0] l12_c_old;
-  assign l12_c_old = d5_q[192] ? 84'd0 : rd_c12;
+  assign l12_c_old = d5_q[192] ? (d5_q[194] ? bk_c12 : 84'd0) : rd_c12;
   wire l12_dn_old;
-  assign l12_dn_old = d5_q[192] ? ~l12_inside : rd_dn12;
+  assign l12_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn12 : ~l12_inside) : rd_dn12;
   wire l12_bl;
   assign l12_bl = l12_ok5_ & ~l12_dn_old;
   wire [29:0] l12_wp;
@@ -1785,7 +1792,7 @@ module neo_scu (
 
   // lane 13
   wire [5:0] l13_ix;
-  assign l13_ix = {issue_bundle[197:196], 4'd13};
+  assign l13_ix = {issue_bundle[203:202], 4'd13};
   wire [16:0] l13_pxx;
   assign l13_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l13_ix[2:0]};
   wire [26:0] l13_dx;
@@ -1876,15 +1883,15 @@ module neo_scu (
     end
   end
   wire [5:0] l13_ix6_;
-  assign l13_ix6_ = {d5_q[197:196], 4'd13};
+  assign l13_ix6_ = {d5_q[203:202], 4'd13};
   wire l13_inside;
   assign l13_inside = ({1'b0, l13_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l13_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l13_t_old;
-  assign l13_t_old = d5_q[192] ? 17'd65536 : rd_t13;
+  assign l13_t_old = d5_q[192] ? (d5_q[194] ? bk_t13 : 17'd65536) : rd_t13;
   wire [83:0] l13_c_old;
-  assign l13_c_old = d5_q[192] ? 84'd0 : rd_c13;
+  assign l13_c_old = d5_q[192] ? (d5_q[194] ? bk_c13 : 84'd0) : rd_c13;
   wire l13_dn_old;
-  assign l13_dn_old = d5_q[192] ? ~l13_inside : rd_dn13;
+  assign l13_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn13 : ~l13_inside) : rd_dn13;
   wire l13_bl;
   assign l13_bl = l13_ok5_ & ~l13_dn_old;
   wire [29:0] l13_wp;
@@ -1912,7 +1919,7 @@ module neo_scu (
 
   // lane 14
   wire [5:0] l14_ix;
-  assign l14_ix = {issue_bundle[197:196], 4'd14};
+  assign l14_ix = {issue_bundle[203:202], 4'd14};
   wire [16:0] l14_pxx;
   assign l14_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l14_ix[2:0]};
   wire [26:0] l14_dx;
@@ -2003,15 +2010,15 @@ module neo_scu (
     end
   end
   wire [5:0] l14_ix6_;
-  assign l14_ix6_ = {d5_q[197:196], 4'd14};
+  assign l14_ix6_ = {d5_q[203:202], 4'd14};
   wire l14_inside;
   assign l14_inside = ({1'b0, l14_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l14_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l14_t_old;
-  assign l14_t_old = d5_q[192] ? 17'd65536 : rd_t14;
+  assign l14_t_old = d5_q[192] ? (d5_q[194] ? bk_t14 : 17'd65536) : rd_t14;
   wire [83:0] l14_c_old;
-  assign l14_c_old = d5_q[192] ? 84'd0 : rd_c14;
+  assign l14_c_old = d5_q[192] ? (d5_q[194] ? bk_c14 : 84'd0) : rd_c14;
   wire l14_dn_old;
-  assign l14_dn_old = d5_q[192] ? ~l14_inside : rd_dn14;
+  assign l14_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn14 : ~l14_inside) : rd_dn14;
   wire l14_bl;
   assign l14_bl = l14_ok5_ & ~l14_dn_old;
   wire [29:0] l14_wp;
@@ -2039,7 +2046,7 @@ module neo_scu (
 
   // lane 15
   wire [5:0] l15_ix;
-  assign l15_ix = {issue_bundle[197:196], 4'd15};
+  assign l15_ix = {issue_bundle[203:202], 4'd15};
   wire [16:0] l15_pxx;
   assign l15_pxx = {1'b0, issue_bundle[165:150]} + {14'd0, l15_ix[2:0]};
   wire [26:0] l15_dx;
@@ -2130,15 +2137,15 @@ module neo_scu (
     end
   end
   wire [5:0] l15_ix6_;
-  assign l15_ix6_ = {d5_q[197:196], 4'd15};
+  assign l15_ix6_ = {d5_q[203:202], 4'd15};
   wire l15_inside;
   assign l15_inside = ({1'b0, l15_ix6_[2:0]} < d5_q[185:182]) & ({1'b0, l15_ix6_[5:3]} < d5_q[189:186]);
   wire [16:0] l15_t_old;
-  assign l15_t_old = d5_q[192] ? 17'd65536 : rd_t15;
+  assign l15_t_old = d5_q[192] ? (d5_q[194] ? bk_t15 : 17'd65536) : rd_t15;
   wire [83:0] l15_c_old;
-  assign l15_c_old = d5_q[192] ? 84'd0 : rd_c15;
+  assign l15_c_old = d5_q[192] ? (d5_q[194] ? bk_c15 : 84'd0) : rd_c15;
   wire l15_dn_old;
-  assign l15_dn_old = d5_q[192] ? ~l15_inside : rd_dn15;
+  assign l15_dn_old = d5_q[192] ? (d5_q[194] ? bk_dn15 : ~l15_inside) : rd_dn15;
   wire l15_bl;
   assign l15_bl = l15_ok5_ & ~l15_dn_old;
   wire [29:0] l15_wp;
@@ -2169,7 +2176,9 @@ module neo_scu (
   reg  [83:0] c_q0;
   reg  dn_q0;
   wire wr0;
-  assign wr0 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr0 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx0;
+  assign t_nx0 = wr0 ? l0_t_new : t_q0;
   wire [83:0] c_nx0;
   assign c_nx0 = wr0 ? l0_c_new : c_q0;
   wire dn_nx0;
@@ -2207,7 +2216,9 @@ module neo_scu (
   reg  [83:0] c_q1;
   reg  dn_q1;
   wire wr1;
-  assign wr1 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr1 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx1;
+  assign t_nx1 = wr1 ? l1_t_new : t_q1;
   wire [83:0] c_nx1;
   assign c_nx1 = wr1 ? l1_c_new : c_q1;
   wire dn_nx1;
@@ -2245,7 +2256,9 @@ module neo_scu (
   reg  [83:0] c_q2;
   reg  dn_q2;
   wire wr2;
-  assign wr2 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr2 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx2;
+  assign t_nx2 = wr2 ? l2_t_new : t_q2;
   wire [83:0] c_nx2;
   assign c_nx2 = wr2 ? l2_c_new : c_q2;
   wire dn_nx2;
@@ -2283,7 +2296,9 @@ module neo_scu (
   reg  [83:0] c_q3;
   reg  dn_q3;
   wire wr3;
-  assign wr3 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr3 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx3;
+  assign t_nx3 = wr3 ? l3_t_new : t_q3;
   wire [83:0] c_nx3;
   assign c_nx3 = wr3 ? l3_c_new : c_q3;
   wire dn_nx3;
@@ -2321,7 +2336,9 @@ module neo_scu (
   reg  [83:0] c_q4;
   reg  dn_q4;
   wire wr4;
-  assign wr4 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr4 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx4;
+  assign t_nx4 = wr4 ? l4_t_new : t_q4;
   wire [83:0] c_nx4;
   assign c_nx4 = wr4 ? l4_c_new : c_q4;
   wire dn_nx4;
@@ -2359,7 +2376,9 @@ module neo_scu (
   reg  [83:0] c_q5;
   reg  dn_q5;
   wire wr5;
-  assign wr5 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr5 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx5;
+  assign t_nx5 = wr5 ? l5_t_new : t_q5;
   wire [83:0] c_nx5;
   assign c_nx5 = wr5 ? l5_c_new : c_q5;
   wire dn_nx5;
@@ -2397,7 +2416,9 @@ module neo_scu (
   reg  [83:0] c_q6;
   reg  dn_q6;
   wire wr6;
-  assign wr6 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr6 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx6;
+  assign t_nx6 = wr6 ? l6_t_new : t_q6;
   wire [83:0] c_nx6;
   assign c_nx6 = wr6 ? l6_c_new : c_q6;
   wire dn_nx6;
@@ -2435,7 +2456,9 @@ module neo_scu (
   reg  [83:0] c_q7;
   reg  dn_q7;
   wire wr7;
-  assign wr7 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr7 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx7;
+  assign t_nx7 = wr7 ? l7_t_new : t_q7;
   wire [83:0] c_nx7;
   assign c_nx7 = wr7 ? l7_c_new : c_q7;
   wire dn_nx7;
@@ -2473,7 +2496,9 @@ module neo_scu (
   reg  [83:0] c_q8;
   reg  dn_q8;
   wire wr8;
-  assign wr8 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr8 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx8;
+  assign t_nx8 = wr8 ? l8_t_new : t_q8;
   wire [83:0] c_nx8;
   assign c_nx8 = wr8 ? l8_c_new : c_q8;
   wire dn_nx8;
@@ -2511,7 +2536,9 @@ module neo_scu (
   reg  [83:0] c_q9;
   reg  dn_q9;
   wire wr9;
-  assign wr9 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr9 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx9;
+  assign t_nx9 = wr9 ? l9_t_new : t_q9;
   wire [83:0] c_nx9;
   assign c_nx9 = wr9 ? l9_c_new : c_q9;
   wire dn_nx9;
@@ -2549,7 +2576,9 @@ module neo_scu (
   reg  [83:0] c_q10;
   reg  dn_q10;
   wire wr10;
-  assign wr10 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr10 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx10;
+  assign t_nx10 = wr10 ? l10_t_new : t_q10;
   wire [83:0] c_nx10;
   assign c_nx10 = wr10 ? l10_c_new : c_q10;
   wire dn_nx10;
@@ -2587,7 +2616,9 @@ module neo_scu (
   reg  [83:0] c_q11;
   reg  dn_q11;
   wire wr11;
-  assign wr11 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr11 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx11;
+  assign t_nx11 = wr11 ? l11_t_new : t_q11;
   wire [83:0] c_nx11;
   assign c_nx11 = wr11 ? l11_c_new : c_q11;
   wire dn_nx11;
@@ -2625,7 +2656,9 @@ module neo_scu (
   reg  [83:0] c_q12;
   reg  dn_q12;
   wire wr12;
-  assign wr12 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr12 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx12;
+  assign t_nx12 = wr12 ? l12_t_new : t_q12;
   wire [83:0] c_nx12;
   assign c_nx12 = wr12 ? l12_c_new : c_q12;
   wire dn_nx12;
@@ -2663,7 +2696,9 @@ module neo_scu (
   reg  [83:0] c_q13;
   reg  dn_q13;
   wire wr13;
-  assign wr13 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr13 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx13;
+  assign t_nx13 = wr13 ? l13_t_new : t_q13;
   wire [83:0] c_nx13;
   assign c_nx13 = wr13 ? l13_c_new : c_q13;
   wire dn_nx13;
@@ -2701,7 +2736,9 @@ module neo_scu (
   reg  [83:0] c_q14;
   reg  dn_q14;
   wire wr14;
-  assign wr14 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr14 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx14;
+  assign t_nx14 = wr14 ? l14_t_new : t_q14;
   wire [83:0] c_nx14;
   assign c_nx14 = wr14 ? l14_c_new : c_q14;
   wire dn_nx14;
@@ -2739,7 +2776,9 @@ module neo_scu (
   reg  [83:0] c_q15;
   reg  dn_q15;
   wire wr15;
-  assign wr15 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd0);
+  assign wr15 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd0);
+  wire [16:0] t_nx15;
+  assign t_nx15 = wr15 ? l15_t_new : t_q15;
   wire [83:0] c_nx15;
   assign c_nx15 = wr15 ? l15_c_new : c_q15;
   wire dn_nx15;
@@ -2777,7 +2816,9 @@ module neo_scu (
   reg  [83:0] c_q16;
   reg  dn_q16;
   wire wr16;
-  assign wr16 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr16 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx16;
+  assign t_nx16 = wr16 ? l0_t_new : t_q16;
   wire [83:0] c_nx16;
   assign c_nx16 = wr16 ? l0_c_new : c_q16;
   wire dn_nx16;
@@ -2815,7 +2856,9 @@ module neo_scu (
   reg  [83:0] c_q17;
   reg  dn_q17;
   wire wr17;
-  assign wr17 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr17 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx17;
+  assign t_nx17 = wr17 ? l1_t_new : t_q17;
   wire [83:0] c_nx17;
   assign c_nx17 = wr17 ? l1_c_new : c_q17;
   wire dn_nx17;
@@ -2853,7 +2896,9 @@ module neo_scu (
   reg  [83:0] c_q18;
   reg  dn_q18;
   wire wr18;
-  assign wr18 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr18 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx18;
+  assign t_nx18 = wr18 ? l2_t_new : t_q18;
   wire [83:0] c_nx18;
   assign c_nx18 = wr18 ? l2_c_new : c_q18;
   wire dn_nx18;
@@ -2891,7 +2936,9 @@ module neo_scu (
   reg  [83:0] c_q19;
   reg  dn_q19;
   wire wr19;
-  assign wr19 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr19 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx19;
+  assign t_nx19 = wr19 ? l3_t_new : t_q19;
   wire [83:0] c_nx19;
   assign c_nx19 = wr19 ? l3_c_new : c_q19;
   wire dn_nx19;
@@ -2929,7 +2976,9 @@ module neo_scu (
   reg  [83:0] c_q20;
   reg  dn_q20;
   wire wr20;
-  assign wr20 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr20 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx20;
+  assign t_nx20 = wr20 ? l4_t_new : t_q20;
   wire [83:0] c_nx20;
   assign c_nx20 = wr20 ? l4_c_new : c_q20;
   wire dn_nx20;
@@ -2967,7 +3016,9 @@ module neo_scu (
   reg  [83:0] c_q21;
   reg  dn_q21;
   wire wr21;
-  assign wr21 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr21 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx21;
+  assign t_nx21 = wr21 ? l5_t_new : t_q21;
   wire [83:0] c_nx21;
   assign c_nx21 = wr21 ? l5_c_new : c_q21;
   wire dn_nx21;
@@ -3005,7 +3056,9 @@ module neo_scu (
   reg  [83:0] c_q22;
   reg  dn_q22;
   wire wr22;
-  assign wr22 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr22 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx22;
+  assign t_nx22 = wr22 ? l6_t_new : t_q22;
   wire [83:0] c_nx22;
   assign c_nx22 = wr22 ? l6_c_new : c_q22;
   wire dn_nx22;
@@ -3043,7 +3096,9 @@ module neo_scu (
   reg  [83:0] c_q23;
   reg  dn_q23;
   wire wr23;
-  assign wr23 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr23 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx23;
+  assign t_nx23 = wr23 ? l7_t_new : t_q23;
   wire [83:0] c_nx23;
   assign c_nx23 = wr23 ? l7_c_new : c_q23;
   wire dn_nx23;
@@ -3081,7 +3136,9 @@ module neo_scu (
   reg  [83:0] c_q24;
   reg  dn_q24;
   wire wr24;
-  assign wr24 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr24 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx24;
+  assign t_nx24 = wr24 ? l8_t_new : t_q24;
   wire [83:0] c_nx24;
   assign c_nx24 = wr24 ? l8_c_new : c_q24;
   wire dn_nx24;
@@ -3119,7 +3176,9 @@ module neo_scu (
   reg  [83:0] c_q25;
   reg  dn_q25;
   wire wr25;
-  assign wr25 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr25 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx25;
+  assign t_nx25 = wr25 ? l9_t_new : t_q25;
   wire [83:0] c_nx25;
   assign c_nx25 = wr25 ? l9_c_new : c_q25;
   wire dn_nx25;
@@ -3157,7 +3216,9 @@ module neo_scu (
   reg  [83:0] c_q26;
   reg  dn_q26;
   wire wr26;
-  assign wr26 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr26 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx26;
+  assign t_nx26 = wr26 ? l10_t_new : t_q26;
   wire [83:0] c_nx26;
   assign c_nx26 = wr26 ? l10_c_new : c_q26;
   wire dn_nx26;
@@ -3195,7 +3256,9 @@ module neo_scu (
   reg  [83:0] c_q27;
   reg  dn_q27;
   wire wr27;
-  assign wr27 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr27 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx27;
+  assign t_nx27 = wr27 ? l11_t_new : t_q27;
   wire [83:0] c_nx27;
   assign c_nx27 = wr27 ? l11_c_new : c_q27;
   wire dn_nx27;
@@ -3233,7 +3296,9 @@ module neo_scu (
   reg  [83:0] c_q28;
   reg  dn_q28;
   wire wr28;
-  assign wr28 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr28 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx28;
+  assign t_nx28 = wr28 ? l12_t_new : t_q28;
   wire [83:0] c_nx28;
   assign c_nx28 = wr28 ? l12_c_new : c_q28;
   wire dn_nx28;
@@ -3271,7 +3336,9 @@ module neo_scu (
   reg  [83:0] c_q29;
   reg  dn_q29;
   wire wr29;
-  assign wr29 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr29 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx29;
+  assign t_nx29 = wr29 ? l13_t_new : t_q29;
   wire [83:0] c_nx29;
   assign c_nx29 = wr29 ? l13_c_new : c_q29;
   wire dn_nx29;
@@ -3309,7 +3376,9 @@ module neo_scu (
   reg  [83:0] c_q30;
   reg  dn_q30;
   wire wr30;
-  assign wr30 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr30 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx30;
+  assign t_nx30 = wr30 ? l14_t_new : t_q30;
   wire [83:0] c_nx30;
   assign c_nx30 = wr30 ? l14_c_new : c_q30;
   wire dn_nx30;
@@ -3347,7 +3416,9 @@ module neo_scu (
   reg  [83:0] c_q31;
   reg  dn_q31;
   wire wr31;
-  assign wr31 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd1);
+  assign wr31 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd1);
+  wire [16:0] t_nx31;
+  assign t_nx31 = wr31 ? l15_t_new : t_q31;
   wire [83:0] c_nx31;
   assign c_nx31 = wr31 ? l15_c_new : c_q31;
   wire dn_nx31;
@@ -3385,7 +3456,9 @@ module neo_scu (
   reg  [83:0] c_q32;
   reg  dn_q32;
   wire wr32;
-  assign wr32 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr32 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx32;
+  assign t_nx32 = wr32 ? l0_t_new : t_q32;
   wire [83:0] c_nx32;
   assign c_nx32 = wr32 ? l0_c_new : c_q32;
   wire dn_nx32;
@@ -3423,7 +3496,9 @@ module neo_scu (
   reg  [83:0] c_q33;
   reg  dn_q33;
   wire wr33;
-  assign wr33 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr33 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx33;
+  assign t_nx33 = wr33 ? l1_t_new : t_q33;
   wire [83:0] c_nx33;
   assign c_nx33 = wr33 ? l1_c_new : c_q33;
   wire dn_nx33;
@@ -3461,7 +3536,9 @@ module neo_scu (
   reg  [83:0] c_q34;
   reg  dn_q34;
   wire wr34;
-  assign wr34 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr34 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx34;
+  assign t_nx34 = wr34 ? l2_t_new : t_q34;
   wire [83:0] c_nx34;
   assign c_nx34 = wr34 ? l2_c_new : c_q34;
   wire dn_nx34;
@@ -3499,7 +3576,9 @@ module neo_scu (
   reg  [83:0] c_q35;
   reg  dn_q35;
   wire wr35;
-  assign wr35 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr35 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx35;
+  assign t_nx35 = wr35 ? l3_t_new : t_q35;
   wire [83:0] c_nx35;
   assign c_nx35 = wr35 ? l3_c_new : c_q35;
   wire dn_nx35;
@@ -3537,7 +3616,9 @@ module neo_scu (
   reg  [83:0] c_q36;
   reg  dn_q36;
   wire wr36;
-  assign wr36 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr36 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx36;
+  assign t_nx36 = wr36 ? l4_t_new : t_q36;
   wire [83:0] c_nx36;
   assign c_nx36 = wr36 ? l4_c_new : c_q36;
   wire dn_nx36;
@@ -3575,7 +3656,9 @@ module neo_scu (
   reg  [83:0] c_q37;
   reg  dn_q37;
   wire wr37;
-  assign wr37 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr37 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx37;
+  assign t_nx37 = wr37 ? l5_t_new : t_q37;
   wire [83:0] c_nx37;
   assign c_nx37 = wr37 ? l5_c_new : c_q37;
   wire dn_nx37;
@@ -3613,7 +3696,9 @@ module neo_scu (
   reg  [83:0] c_q38;
   reg  dn_q38;
   wire wr38;
-  assign wr38 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr38 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx38;
+  assign t_nx38 = wr38 ? l6_t_new : t_q38;
   wire [83:0] c_nx38;
   assign c_nx38 = wr38 ? l6_c_new : c_q38;
   wire dn_nx38;
@@ -3651,7 +3736,9 @@ module neo_scu (
   reg  [83:0] c_q39;
   reg  dn_q39;
   wire wr39;
-  assign wr39 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr39 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx39;
+  assign t_nx39 = wr39 ? l7_t_new : t_q39;
   wire [83:0] c_nx39;
   assign c_nx39 = wr39 ? l7_c_new : c_q39;
   wire dn_nx39;
@@ -3689,7 +3776,9 @@ module neo_scu (
   reg  [83:0] c_q40;
   reg  dn_q40;
   wire wr40;
-  assign wr40 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr40 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx40;
+  assign t_nx40 = wr40 ? l8_t_new : t_q40;
   wire [83:0] c_nx40;
   assign c_nx40 = wr40 ? l8_c_new : c_q40;
   wire dn_nx40;
@@ -3727,7 +3816,9 @@ module neo_scu (
   reg  [83:0] c_q41;
   reg  dn_q41;
   wire wr41;
-  assign wr41 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr41 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx41;
+  assign t_nx41 = wr41 ? l9_t_new : t_q41;
   wire [83:0] c_nx41;
   assign c_nx41 = wr41 ? l9_c_new : c_q41;
   wire dn_nx41;
@@ -3765,7 +3856,9 @@ module neo_scu (
   reg  [83:0] c_q42;
   reg  dn_q42;
   wire wr42;
-  assign wr42 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr42 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx42;
+  assign t_nx42 = wr42 ? l10_t_new : t_q42;
   wire [83:0] c_nx42;
   assign c_nx42 = wr42 ? l10_c_new : c_q42;
   wire dn_nx42;
@@ -3803,7 +3896,9 @@ module neo_scu (
   reg  [83:0] c_q43;
   reg  dn_q43;
   wire wr43;
-  assign wr43 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr43 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx43;
+  assign t_nx43 = wr43 ? l11_t_new : t_q43;
   wire [83:0] c_nx43;
   assign c_nx43 = wr43 ? l11_c_new : c_q43;
   wire dn_nx43;
@@ -3841,7 +3936,9 @@ module neo_scu (
   reg  [83:0] c_q44;
   reg  dn_q44;
   wire wr44;
-  assign wr44 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr44 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx44;
+  assign t_nx44 = wr44 ? l12_t_new : t_q44;
   wire [83:0] c_nx44;
   assign c_nx44 = wr44 ? l12_c_new : c_q44;
   wire dn_nx44;
@@ -3879,7 +3976,9 @@ module neo_scu (
   reg  [83:0] c_q45;
   reg  dn_q45;
   wire wr45;
-  assign wr45 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr45 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx45;
+  assign t_nx45 = wr45 ? l13_t_new : t_q45;
   wire [83:0] c_nx45;
   assign c_nx45 = wr45 ? l13_c_new : c_q45;
   wire dn_nx45;
@@ -3917,7 +4016,9 @@ module neo_scu (
   reg  [83:0] c_q46;
   reg  dn_q46;
   wire wr46;
-  assign wr46 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr46 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx46;
+  assign t_nx46 = wr46 ? l14_t_new : t_q46;
   wire [83:0] c_nx46;
   assign c_nx46 = wr46 ? l14_c_new : c_q46;
   wire dn_nx46;
@@ -3955,7 +4056,9 @@ module neo_scu (
   reg  [83:0] c_q47;
   reg  dn_q47;
   wire wr47;
-  assign wr47 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd2);
+  assign wr47 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd2);
+  wire [16:0] t_nx47;
+  assign t_nx47 = wr47 ? l15_t_new : t_q47;
   wire [83:0] c_nx47;
   assign c_nx47 = wr47 ? l15_c_new : c_q47;
   wire dn_nx47;
@@ -3993,7 +4096,9 @@ module neo_scu (
   reg  [83:0] c_q48;
   reg  dn_q48;
   wire wr48;
-  assign wr48 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr48 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx48;
+  assign t_nx48 = wr48 ? l0_t_new : t_q48;
   wire [83:0] c_nx48;
   assign c_nx48 = wr48 ? l0_c_new : c_q48;
   wire dn_nx48;
@@ -4031,7 +4136,9 @@ module neo_scu (
   reg  [83:0] c_q49;
   reg  dn_q49;
   wire wr49;
-  assign wr49 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr49 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx49;
+  assign t_nx49 = wr49 ? l1_t_new : t_q49;
   wire [83:0] c_nx49;
   assign c_nx49 = wr49 ? l1_c_new : c_q49;
   wire dn_nx49;
@@ -4069,7 +4176,9 @@ module neo_scu (
   reg  [83:0] c_q50;
   reg  dn_q50;
   wire wr50;
-  assign wr50 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr50 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx50;
+  assign t_nx50 = wr50 ? l2_t_new : t_q50;
   wire [83:0] c_nx50;
   assign c_nx50 = wr50 ? l2_c_new : c_q50;
   wire dn_nx50;
@@ -4107,7 +4216,9 @@ module neo_scu (
   reg  [83:0] c_q51;
   reg  dn_q51;
   wire wr51;
-  assign wr51 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr51 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx51;
+  assign t_nx51 = wr51 ? l3_t_new : t_q51;
   wire [83:0] c_nx51;
   assign c_nx51 = wr51 ? l3_c_new : c_q51;
   wire dn_nx51;
@@ -4145,7 +4256,9 @@ module neo_scu (
   reg  [83:0] c_q52;
   reg  dn_q52;
   wire wr52;
-  assign wr52 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr52 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx52;
+  assign t_nx52 = wr52 ? l4_t_new : t_q52;
   wire [83:0] c_nx52;
   assign c_nx52 = wr52 ? l4_c_new : c_q52;
   wire dn_nx52;
@@ -4183,7 +4296,9 @@ module neo_scu (
   reg  [83:0] c_q53;
   reg  dn_q53;
   wire wr53;
-  assign wr53 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr53 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx53;
+  assign t_nx53 = wr53 ? l5_t_new : t_q53;
   wire [83:0] c_nx53;
   assign c_nx53 = wr53 ? l5_c_new : c_q53;
   wire dn_nx53;
@@ -4221,7 +4336,9 @@ module neo_scu (
   reg  [83:0] c_q54;
   reg  dn_q54;
   wire wr54;
-  assign wr54 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr54 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx54;
+  assign t_nx54 = wr54 ? l6_t_new : t_q54;
   wire [83:0] c_nx54;
   assign c_nx54 = wr54 ? l6_c_new : c_q54;
   wire dn_nx54;
@@ -4259,7 +4376,9 @@ module neo_scu (
   reg  [83:0] c_q55;
   reg  dn_q55;
   wire wr55;
-  assign wr55 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr55 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx55;
+  assign t_nx55 = wr55 ? l7_t_new : t_q55;
   wire [83:0] c_nx55;
   assign c_nx55 = wr55 ? l7_c_new : c_q55;
   wire dn_nx55;
@@ -4297,7 +4416,9 @@ module neo_scu (
   reg  [83:0] c_q56;
   reg  dn_q56;
   wire wr56;
-  assign wr56 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr56 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx56;
+  assign t_nx56 = wr56 ? l8_t_new : t_q56;
   wire [83:0] c_nx56;
   assign c_nx56 = wr56 ? l8_c_new : c_q56;
   wire dn_nx56;
@@ -4335,7 +4456,9 @@ module neo_scu (
   reg  [83:0] c_q57;
   reg  dn_q57;
   wire wr57;
-  assign wr57 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr57 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx57;
+  assign t_nx57 = wr57 ? l9_t_new : t_q57;
   wire [83:0] c_nx57;
   assign c_nx57 = wr57 ? l9_c_new : c_q57;
   wire dn_nx57;
@@ -4373,7 +4496,9 @@ module neo_scu (
   reg  [83:0] c_q58;
   reg  dn_q58;
   wire wr58;
-  assign wr58 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr58 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx58;
+  assign t_nx58 = wr58 ? l10_t_new : t_q58;
   wire [83:0] c_nx58;
   assign c_nx58 = wr58 ? l10_c_new : c_q58;
   wire dn_nx58;
@@ -4411,7 +4536,9 @@ module neo_scu (
   reg  [83:0] c_q59;
   reg  dn_q59;
   wire wr59;
-  assign wr59 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr59 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx59;
+  assign t_nx59 = wr59 ? l11_t_new : t_q59;
   wire [83:0] c_nx59;
   assign c_nx59 = wr59 ? l11_c_new : c_q59;
   wire dn_nx59;
@@ -4449,7 +4576,9 @@ module neo_scu (
   reg  [83:0] c_q60;
   reg  dn_q60;
   wire wr60;
-  assign wr60 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr60 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx60;
+  assign t_nx60 = wr60 ? l12_t_new : t_q60;
   wire [83:0] c_nx60;
   assign c_nx60 = wr60 ? l12_c_new : c_q60;
   wire dn_nx60;
@@ -4487,7 +4616,9 @@ module neo_scu (
   reg  [83:0] c_q61;
   reg  dn_q61;
   wire wr61;
-  assign wr61 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr61 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx61;
+  assign t_nx61 = wr61 ? l13_t_new : t_q61;
   wire [83:0] c_nx61;
   assign c_nx61 = wr61 ? l13_c_new : c_q61;
   wire dn_nx61;
@@ -4525,7 +4656,9 @@ module neo_scu (
   reg  [83:0] c_q62;
   reg  dn_q62;
   wire wr62;
-  assign wr62 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr62 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx62;
+  assign t_nx62 = wr62 ? l14_t_new : t_q62;
   wire [83:0] c_nx62;
   assign c_nx62 = wr62 ? l14_c_new : c_q62;
   wire dn_nx62;
@@ -4563,7 +4696,9 @@ module neo_scu (
   reg  [83:0] c_q63;
   reg  dn_q63;
   wire wr63;
-  assign wr63 = v5_q & ~d5_q[198] & (d5_q[197:196] == 2'd3);
+  assign wr63 = v5_q & ~d5_q[204] & (d5_q[203:202] == 2'd3);
+  wire [16:0] t_nx63;
+  assign t_nx63 = wr63 ? l15_t_new : t_q63;
   wire [83:0] c_nx63;
   assign c_nx63 = wr63 ? l15_c_new : c_q63;
   wire dn_nx63;
@@ -4598,112 +4733,376 @@ module neo_scu (
   wire [7:0] o63_2;
   assign o63_2 = (|o63_2_x[36:34]) ? 8'd255 : o63_2_x[33:26];
   wire [16:0] rd_t0;
-  assign rd_t0 = (d5_q[197:196] == 2'd0) ? t_q0 : (d5_q[197:196] == 2'd1) ? t_q16 : (d5_q[197:196] == 2'd2) ? t_q32 : t_q48;
+  assign rd_t0 = (d5_q[203:202] == 2'd0) ? t_q0 : (d5_q[203:202] == 2'd1) ? t_q16 : (d5_q[203:202] == 2'd2) ? t_q32 : t_q48;
   wire [83:0] rd_c0;
-  assign rd_c0 = (d5_q[197:196] == 2'd0) ? c_q0 : (d5_q[197:196] == 2'd1) ? c_q16 : (d5_q[197:196] == 2'd2) ? c_q32 : c_q48;
+  assign rd_c0 = (d5_q[203:202] == 2'd0) ? c_q0 : (d5_q[203:202] == 2'd1) ? c_q16 : (d5_q[203:202] == 2'd2) ? c_q32 : c_q48;
   wire rd_dn0;
-  assign rd_dn0 = (d5_q[197:196] == 2'd0) ? dn_q0 : (d5_q[197:196] == 2'd1) ? dn_q16 : (d5_q[197:196] == 2'd2) ? dn_q32 : dn_q48;
+  assign rd_dn0 = (d5_q[203:202] == 2'd0) ? dn_q0 : (d5_q[203:202] == 2'd1) ? dn_q16 : (d5_q[203:202] == 2'd2) ? dn_q32 : dn_q48;
   wire [16:0] rd_t1;
-  assign rd_t1 = (d5_q[197:196] == 2'd0) ? t_q1 : (d5_q[197:196] == 2'd1) ? t_q17 : (d5_q[197:196] == 2'd2) ? t_q33 : t_q49;
+  assign rd_t1 = (d5_q[203:202] == 2'd0) ? t_q1 : (d5_q[203:202] == 2'd1) ? t_q17 : (d5_q[203:202] == 2'd2) ? t_q33 : t_q49;
   wire [83:0] rd_c1;
-  assign rd_c1 = (d5_q[197:196] == 2'd0) ? c_q1 : (d5_q[197:196] == 2'd1) ? c_q17 : (d5_q[197:196] == 2'd2) ? c_q33 : c_q49;
+  assign rd_c1 = (d5_q[203:202] == 2'd0) ? c_q1 : (d5_q[203:202] == 2'd1) ? c_q17 : (d5_q[203:202] == 2'd2) ? c_q33 : c_q49;
   wire rd_dn1;
-  assign rd_dn1 = (d5_q[197:196] == 2'd0) ? dn_q1 : (d5_q[197:196] == 2'd1) ? dn_q17 : (d5_q[197:196] == 2'd2) ? dn_q33 : dn_q49;
+  assign rd_dn1 = (d5_q[203:202] == 2'd0) ? dn_q1 : (d5_q[203:202] == 2'd1) ? dn_q17 : (d5_q[203:202] == 2'd2) ? dn_q33 : dn_q49;
   wire [16:0] rd_t2;
-  assign rd_t2 = (d5_q[197:196] == 2'd0) ? t_q2 : (d5_q[197:196] == 2'd1) ? t_q18 : (d5_q[197:196] == 2'd2) ? t_q34 : t_q50;
+  assign rd_t2 = (d5_q[203:202] == 2'd0) ? t_q2 : (d5_q[203:202] == 2'd1) ? t_q18 : (d5_q[203:202] == 2'd2) ? t_q34 : t_q50;
   wire [83:0] rd_c2;
-  assign rd_c2 = (d5_q[197:196] == 2'd0) ? c_q2 : (d5_q[197:196] == 2'd1) ? c_q18 : (d5_q[197:196] == 2'd2) ? c_q34 : c_q50;
+  assign rd_c2 = (d5_q[203:202] == 2'd0) ? c_q2 : (d5_q[203:202] == 2'd1) ? c_q18 : (d5_q[203:202] == 2'd2) ? c_q34 : c_q50;
   wire rd_dn2;
-  assign rd_dn2 = (d5_q[197:196] == 2'd0) ? dn_q2 : (d5_q[197:196] == 2'd1) ? dn_q18 : (d5_q[197:196] == 2'd2) ? dn_q34 : dn_q50;
+  assign rd_dn2 = (d5_q[203:202] == 2'd0) ? dn_q2 : (d5_q[203:202] == 2'd1) ? dn_q18 : (d5_q[203:202] == 2'd2) ? dn_q34 : dn_q50;
   wire [16:0] rd_t3;
-  assign rd_t3 = (d5_q[197:196] == 2'd0) ? t_q3 : (d5_q[197:196] == 2'd1) ? t_q19 : (d5_q[197:196] == 2'd2) ? t_q35 : t_q51;
+  assign rd_t3 = (d5_q[203:202] == 2'd0) ? t_q3 : (d5_q[203:202] == 2'd1) ? t_q19 : (d5_q[203:202] == 2'd2) ? t_q35 : t_q51;
   wire [83:0] rd_c3;
-  assign rd_c3 = (d5_q[197:196] == 2'd0) ? c_q3 : (d5_q[197:196] == 2'd1) ? c_q19 : (d5_q[197:196] == 2'd2) ? c_q35 : c_q51;
+  assign rd_c3 = (d5_q[203:202] == 2'd0) ? c_q3 : (d5_q[203:202] == 2'd1) ? c_q19 : (d5_q[203:202] == 2'd2) ? c_q35 : c_q51;
   wire rd_dn3;
-  assign rd_dn3 = (d5_q[197:196] == 2'd0) ? dn_q3 : (d5_q[197:196] == 2'd1) ? dn_q19 : (d5_q[197:196] == 2'd2) ? dn_q35 : dn_q51;
+  assign rd_dn3 = (d5_q[203:202] == 2'd0) ? dn_q3 : (d5_q[203:202] == 2'd1) ? dn_q19 : (d5_q[203:202] == 2'd2) ? dn_q35 : dn_q51;
   wire [16:0] rd_t4;
-  assign rd_t4 = (d5_q[197:196] == 2'd0) ? t_q4 : (d5_q[197:196] == 2'd1) ? t_q20 : (d5_q[197:196] == 2'd2) ? t_q36 : t_q52;
+  assign rd_t4 = (d5_q[203:202] == 2'd0) ? t_q4 : (d5_q[203:202] == 2'd1) ? t_q20 : (d5_q[203:202] == 2'd2) ? t_q36 : t_q52;
   wire [83:0] rd_c4;
-  assign rd_c4 = (d5_q[197:196] == 2'd0) ? c_q4 : (d5_q[197:196] == 2'd1) ? c_q20 : (d5_q[197:196] == 2'd2) ? c_q36 : c_q52;
+  assign rd_c4 = (d5_q[203:202] == 2'd0) ? c_q4 : (d5_q[203:202] == 2'd1) ? c_q20 : (d5_q[203:202] == 2'd2) ? c_q36 : c_q52;
   wire rd_dn4;
-  assign rd_dn4 = (d5_q[197:196] == 2'd0) ? dn_q4 : (d5_q[197:196] == 2'd1) ? dn_q20 : (d5_q[197:196] == 2'd2) ? dn_q36 : dn_q52;
+  assign rd_dn4 = (d5_q[203:202] == 2'd0) ? dn_q4 : (d5_q[203:202] == 2'd1) ? dn_q20 : (d5_q[203:202] == 2'd2) ? dn_q36 : dn_q52;
   wire [16:0] rd_t5;
-  assign rd_t5 = (d5_q[197:196] == 2'd0) ? t_q5 : (d5_q[197:196] == 2'd1) ? t_q21 : (d5_q[197:196] == 2'd2) ? t_q37 : t_q53;
+  assign rd_t5 = (d5_q[203:202] == 2'd0) ? t_q5 : (d5_q[203:202] == 2'd1) ? t_q21 : (d5_q[203:202] == 2'd2) ? t_q37 : t_q53;
   wire [83:0] rd_c5;
-  assign rd_c5 = (d5_q[197:196] == 2'd0) ? c_q5 : (d5_q[197:196] == 2'd1) ? c_q21 : (d5_q[197:196] == 2'd2) ? c_q37 : c_q53;
+  assign rd_c5 = (d5_q[203:202] == 2'd0) ? c_q5 : (d5_q[203:202] == 2'd1) ? c_q21 : (d5_q[203:202] == 2'd2) ? c_q37 : c_q53;
   wire rd_dn5;
-  assign rd_dn5 = (d5_q[197:196] == 2'd0) ? dn_q5 : (d5_q[197:196] == 2'd1) ? dn_q21 : (d5_q[197:196] == 2'd2) ? dn_q37 : dn_q53;
+  assign rd_dn5 = (d5_q[203:202] == 2'd0) ? dn_q5 : (d5_q[203:202] == 2'd1) ? dn_q21 : (d5_q[203:202] == 2'd2) ? dn_q37 : dn_q53;
   wire [16:0] rd_t6;
-  assign rd_t6 = (d5_q[197:196] == 2'd0) ? t_q6 : (d5_q[197:196] == 2'd1) ? t_q22 : (d5_q[197:196] == 2'd2) ? t_q38 : t_q54;
+  assign rd_t6 = (d5_q[203:202] == 2'd0) ? t_q6 : (d5_q[203:202] == 2'd1) ? t_q22 : (d5_q[203:202] == 2'd2) ? t_q38 : t_q54;
   wire [83:0] rd_c6;
-  assign rd_c6 = (d5_q[197:196] == 2'd0) ? c_q6 : (d5_q[197:196] == 2'd1) ? c_q22 : (d5_q[197:196] == 2'd2) ? c_q38 : c_q54;
+  assign rd_c6 = (d5_q[203:202] == 2'd0) ? c_q6 : (d5_q[203:202] == 2'd1) ? c_q22 : (d5_q[203:202] == 2'd2) ? c_q38 : c_q54;
   wire rd_dn6;
-  assign rd_dn6 = (d5_q[197:196] == 2'd0) ? dn_q6 : (d5_q[197:196] == 2'd1) ? dn_q22 : (d5_q[197:196] == 2'd2) ? dn_q38 : dn_q54;
+  assign rd_dn6 = (d5_q[203:202] == 2'd0) ? dn_q6 : (d5_q[203:202] == 2'd1) ? dn_q22 : (d5_q[203:202] == 2'd2) ? dn_q38 : dn_q54;
   wire [16:0] rd_t7;
-  assign rd_t7 = (d5_q[197:196] == 2'd0) ? t_q7 : (d5_q[197:196] == 2'd1) ? t_q23 : (d5_q[197:196] == 2'd2) ? t_q39 : t_q55;
+  assign rd_t7 = (d5_q[203:202] == 2'd0) ? t_q7 : (d5_q[203:202] == 2'd1) ? t_q23 : (d5_q[203:202] == 2'd2) ? t_q39 : t_q55;
   wire [83:0] rd_c7;
-  assign rd_c7 = (d5_q[197:196] == 2'd0) ? c_q7 : (d5_q[197:196] == 2'd1) ? c_q23 : (d5_q[197:196] == 2'd2) ? c_q39 : c_q55;
+  assign rd_c7 = (d5_q[203:202] == 2'd0) ? c_q7 : (d5_q[203:202] == 2'd1) ? c_q23 : (d5_q[203:202] == 2'd2) ? c_q39 : c_q55;
   wire rd_dn7;
-  assign rd_dn7 = (d5_q[197:196] == 2'd0) ? dn_q7 : (d5_q[197:196] == 2'd1) ? dn_q23 : (d5_q[197:196] == 2'd2) ? dn_q39 : dn_q55;
+  assign rd_dn7 = (d5_q[203:202] == 2'd0) ? dn_q7 : (d5_q[203:202] == 2'd1) ? dn_q23 : (d5_q[203:202] == 2'd2) ? dn_q39 : dn_q55;
   wire [16:0] rd_t8;
-  assign rd_t8 = (d5_q[197:196] == 2'd0) ? t_q8 : (d5_q[197:196] == 2'd1) ? t_q24 : (d5_q[197:196] == 2'd2) ? t_q40 : t_q56;
+  assign rd_t8 = (d5_q[203:202] == 2'd0) ? t_q8 : (d5_q[203:202] == 2'd1) ? t_q24 : (d5_q[203:202] == 2'd2) ? t_q40 : t_q56;
   wire [83:0] rd_c8;
-  assign rd_c8 = (d5_q[197:196] == 2'd0) ? c_q8 : (d5_q[197:196] == 2'd1) ? c_q24 : (d5_q[197:196] == 2'd2) ? c_q40 : c_q56;
+  assign rd_c8 = (d5_q[203:202] == 2'd0) ? c_q8 : (d5_q[203:202] == 2'd1) ? c_q24 : (d5_q[203:202] == 2'd2) ? c_q40 : c_q56;
   wire rd_dn8;
-  assign rd_dn8 = (d5_q[197:196] == 2'd0) ? dn_q8 : (d5_q[197:196] == 2'd1) ? dn_q24 : (d5_q[197:196] == 2'd2) ? dn_q40 : dn_q56;
+  assign rd_dn8 = (d5_q[203:202] == 2'd0) ? dn_q8 : (d5_q[203:202] == 2'd1) ? dn_q24 : (d5_q[203:202] == 2'd2) ? dn_q40 : dn_q56;
   wire [16:0] rd_t9;
-  assign rd_t9 = (d5_q[197:196] == 2'd0) ? t_q9 : (d5_q[197:196] == 2'd1) ? t_q25 : (d5_q[197:196] == 2'd2) ? t_q41 : t_q57;
+  assign rd_t9 = (d5_q[203:202] == 2'd0) ? t_q9 : (d5_q[203:202] == 2'd1) ? t_q25 : (d5_q[203:202] == 2'd2) ? t_q41 : t_q57;
   wire [83:0] rd_c9;
-  assign rd_c9 = (d5_q[197:196] == 2'd0) ? c_q9 : (d5_q[197:196] == 2'd1) ? c_q25 : (d5_q[197:196] == 2'd2) ? c_q41 : c_q57;
+  assign rd_c9 = (d5_q[203:202] == 2'd0) ? c_q9 : (d5_q[203:202] == 2'd1) ? c_q25 : (d5_q[203:202] == 2'd2) ? c_q41 : c_q57;
   wire rd_dn9;
-  assign rd_dn9 = (d5_q[197:196] == 2'd0) ? dn_q9 : (d5_q[197:196] == 2'd1) ? dn_q25 : (d5_q[197:196] == 2'd2) ? dn_q41 : dn_q57;
+  assign rd_dn9 = (d5_q[203:202] == 2'd0) ? dn_q9 : (d5_q[203:202] == 2'd1) ? dn_q25 : (d5_q[203:202] == 2'd2) ? dn_q41 : dn_q57;
   wire [16:0] rd_t10;
-  assign rd_t10 = (d5_q[197:196] == 2'd0) ? t_q10 : (d5_q[197:196] == 2'd1) ? t_q26 : (d5_q[197:196] == 2'd2) ? t_q42 : t_q58;
+  assign rd_t10 = (d5_q[203:202] == 2'd0) ? t_q10 : (d5_q[203:202] == 2'd1) ? t_q26 : (d5_q[203:202] == 2'd2) ? t_q42 : t_q58;
   wire [83:0] rd_c10;
-  assign rd_c10 = (d5_q[197:196] == 2'd0) ? c_q10 : (d5_q[197:196] == 2'd1) ? c_q26 : (d5_q[197:196] == 2'd2) ? c_q42 : c_q58;
+  assign rd_c10 = (d5_q[203:202] == 2'd0) ? c_q10 : (d5_q[203:202] == 2'd1) ? c_q26 : (d5_q[203:202] == 2'd2) ? c_q42 : c_q58;
   wire rd_dn10;
-  assign rd_dn10 = (d5_q[197:196] == 2'd0) ? dn_q10 : (d5_q[197:196] == 2'd1) ? dn_q26 : (d5_q[197:196] == 2'd2) ? dn_q42 : dn_q58;
+  assign rd_dn10 = (d5_q[203:202] == 2'd0) ? dn_q10 : (d5_q[203:202] == 2'd1) ? dn_q26 : (d5_q[203:202] == 2'd2) ? dn_q42 : dn_q58;
   wire [16:0] rd_t11;
-  assign rd_t11 = (d5_q[197:196] == 2'd0) ? t_q11 : (d5_q[197:196] == 2'd1) ? t_q27 : (d5_q[197:196] == 2'd2) ? t_q43 : t_q59;
+  assign rd_t11 = (d5_q[203:202] == 2'd0) ? t_q11 : (d5_q[203:202] == 2'd1) ? t_q27 : (d5_q[203:202] == 2'd2) ? t_q43 : t_q59;
   wire [83:0] rd_c11;
-  assign rd_c11 = (d5_q[197:196] == 2'd0) ? c_q11 : (d5_q[197:196] == 2'd1) ? c_q27 : (d5_q[197:196] == 2'd2) ? c_q43 : c_q59;
+  assign rd_c11 = (d5_q[203:202] == 2'd0) ? c_q11 : (d5_q[203:202] == 2'd1) ? c_q27 : (d5_q[203:202] == 2'd2) ? c_q43 : c_q59;
   wire rd_dn11;
-  assign rd_dn11 = (d5_q[197:196] == 2'd0) ? dn_q11 : (d5_q[197:196] == 2'd1) ? dn_q27 : (d5_q[197:196] == 2'd2) ? dn_q43 : dn_q59;
+  assign rd_dn11 = (d5_q[203:202] == 2'd0) ? dn_q11 : (d5_q[203:202] == 2'd1) ? dn_q27 : (d5_q[203:202] == 2'd2) ? dn_q43 : dn_q59;
   wire [16:0] rd_t12;
-  assign rd_t12 = (d5_q[197:196] == 2'd0) ? t_q12 : (d5_q[197:196] == 2'd1) ? t_q28 : (d5_q[197:196] == 2'd2) ? t_q44 : t_q60;
+  assign rd_t12 = (d5_q[203:202] == 2'd0) ? t_q12 : (d5_q[203:202] == 2'd1) ? t_q28 : (d5_q[203:202] == 2'd2) ? t_q44 : t_q60;
   wire [83:0] rd_c12;
-  assign rd_c12 = (d5_q[197:196] == 2'd0) ? c_q12 : (d5_q[197:196] == 2'd1) ? c_q28 : (d5_q[197:196] == 2'd2) ? c_q44 : c_q60;
+  assign rd_c12 = (d5_q[203:202] == 2'd0) ? c_q12 : (d5_q[203:202] == 2'd1) ? c_q28 : (d5_q[203:202] == 2'd2) ? c_q44 : c_q60;
   wire rd_dn12;
-  assign rd_dn12 = (d5_q[197:196] == 2'd0) ? dn_q12 : (d5_q[197:196] == 2'd1) ? dn_q28 : (d5_q[197:196] == 2'd2) ? dn_q44 : dn_q60;
+  assign rd_dn12 = (d5_q[203:202] == 2'd0) ? dn_q12 : (d5_q[203:202] == 2'd1) ? dn_q28 : (d5_q[203:202] == 2'd2) ? dn_q44 : dn_q60;
   wire [16:0] rd_t13;
-  assign rd_t13 = (d5_q[197:196] == 2'd0) ? t_q13 : (d5_q[197:196] == 2'd1) ? t_q29 : (d5_q[197:196] == 2'd2) ? t_q45 : t_q61;
+  assign rd_t13 = (d5_q[203:202] == 2'd0) ? t_q13 : (d5_q[203:202] == 2'd1) ? t_q29 : (d5_q[203:202] == 2'd2) ? t_q45 : t_q61;
   wire [83:0] rd_c13;
-  assign rd_c13 = (d5_q[197:196] == 2'd0) ? c_q13 : (d5_q[197:196] == 2'd1) ? c_q29 : (d5_q[197:196] == 2'd2) ? c_q45 : c_q61;
+  assign rd_c13 = (d5_q[203:202] == 2'd0) ? c_q13 : (d5_q[203:202] == 2'd1) ? c_q29 : (d5_q[203:202] == 2'd2) ? c_q45 : c_q61;
   wire rd_dn13;
-  assign rd_dn13 = (d5_q[197:196] == 2'd0) ? dn_q13 : (d5_q[197:196] == 2'd1) ? dn_q29 : (d5_q[197:196] == 2'd2) ? dn_q45 : dn_q61;
+  assign rd_dn13 = (d5_q[203:202] == 2'd0) ? dn_q13 : (d5_q[203:202] == 2'd1) ? dn_q29 : (d5_q[203:202] == 2'd2) ? dn_q45 : dn_q61;
   wire [16:0] rd_t14;
-  assign rd_t14 = (d5_q[197:196] == 2'd0) ? t_q14 : (d5_q[197:196] == 2'd1) ? t_q30 : (d5_q[197:196] == 2'd2) ? t_q46 : t_q62;
+  assign rd_t14 = (d5_q[203:202] == 2'd0) ? t_q14 : (d5_q[203:202] == 2'd1) ? t_q30 : (d5_q[203:202] == 2'd2) ? t_q46 : t_q62;
   wire [83:0] rd_c14;
-  assign rd_c14 = (d5_q[197:196] == 2'd0) ? c_q14 : (d5_q[197:196] == 2'd1) ? c_q30 : (d5_q[197:196] == 2'd2) ? c_q46 : c_q62;
+  assign rd_c14 = (d5_q[203:202] == 2'd0) ? c_q14 : (d5_q[203:202] == 2'd1) ? c_q30 : (d5_q[203:202] == 2'd2) ? c_q46 : c_q62;
   wire rd_dn14;
-  assign rd_dn14 = (d5_q[197:196] == 2'd0) ? dn_q14 : (d5_q[197:196] == 2'd1) ? dn_q30 : (d5_q[197:196] == 2'd2) ? dn_q46 : dn_q62;
+  assign rd_dn14 = (d5_q[203:202] == 2'd0) ? dn_q14 : (d5_q[203:202] == 2'd1) ? dn_q30 : (d5_q[203:202] == 2'd2) ? dn_q46 : dn_q62;
   wire [16:0] rd_t15;
-  assign rd_t15 = (d5_q[197:196] == 2'd0) ? t_q15 : (d5_q[197:196] == 2'd1) ? t_q31 : (d5_q[197:196] == 2'd2) ? t_q47 : t_q63;
+  assign rd_t15 = (d5_q[203:202] == 2'd0) ? t_q15 : (d5_q[203:202] == 2'd1) ? t_q31 : (d5_q[203:202] == 2'd2) ? t_q47 : t_q63;
   wire [83:0] rd_c15;
-  assign rd_c15 = (d5_q[197:196] == 2'd0) ? c_q15 : (d5_q[197:196] == 2'd1) ? c_q31 : (d5_q[197:196] == 2'd2) ? c_q47 : c_q63;
+  assign rd_c15 = (d5_q[203:202] == 2'd0) ? c_q15 : (d5_q[203:202] == 2'd1) ? c_q31 : (d5_q[203:202] == 2'd2) ? c_q47 : c_q63;
   wire rd_dn15;
-  assign rd_dn15 = (d5_q[197:196] == 2'd0) ? dn_q15 : (d5_q[197:196] == 2'd1) ? dn_q31 : (d5_q[197:196] == 2'd2) ? dn_q47 : dn_q63;
+  assign rd_dn15 = (d5_q[203:202] == 2'd0) ? dn_q15 : (d5_q[203:202] == 2'd1) ? dn_q31 : (d5_q[203:202] == 2'd2) ? dn_q47 : dn_q63;
   wire all_done;
   assign all_done = &{dn_nx0, dn_nx1, dn_nx2, dn_nx3, dn_nx4, dn_nx5, dn_nx6, dn_nx7, dn_nx8, dn_nx9, dn_nx10, dn_nx11, dn_nx12, dn_nx13, dn_nx14, dn_nx15, dn_nx16, dn_nx17, dn_nx18, dn_nx19, dn_nx20, dn_nx21, dn_nx22, dn_nx23, dn_nx24, dn_nx25, dn_nx26, dn_nx27, dn_nx28, dn_nx29, dn_nx30, dn_nx31, dn_nx32, dn_nx33, dn_nx34, dn_nx35, dn_nx36, dn_nx37, dn_nx38, dn_nx39, dn_nx40, dn_nx41, dn_nx42, dn_nx43, dn_nx44, dn_nx45, dn_nx46, dn_nx47, dn_nx48, dn_nx49, dn_nx50, dn_nx51, dn_nx52, dn_nx53, dn_nx54, dn_nx55, dn_nx56, dn_nx57, dn_nx58, dn_nx59, dn_nx60, dn_nx61, dn_nx62, dn_nx63};
+
+  // State bank: per pixel k, bank{k}[slot] = {done, colour, T} (102 bits) of 16 subtiles.
+  reg  [101:0] bank0 [0:15];
+  reg  [101:0] bank1 [0:15];
+  reg  [101:0] bank2 [0:15];
+  reg  [101:0] bank3 [0:15];
+  reg  [101:0] bank4 [0:15];
+  reg  [101:0] bank5 [0:15];
+  reg  [101:0] bank6 [0:15];
+  reg  [101:0] bank7 [0:15];
+  reg  [101:0] bank8 [0:15];
+  reg  [101:0] bank9 [0:15];
+  reg  [101:0] bank10 [0:15];
+  reg  [101:0] bank11 [0:15];
+  reg  [101:0] bank12 [0:15];
+  reg  [101:0] bank13 [0:15];
+  reg  [101:0] bank14 [0:15];
+  reg  [101:0] bank15 [0:15];
+  reg  [101:0] bank16 [0:15];
+  reg  [101:0] bank17 [0:15];
+  reg  [101:0] bank18 [0:15];
+  reg  [101:0] bank19 [0:15];
+  reg  [101:0] bank20 [0:15];
+  reg  [101:0] bank21 [0:15];
+  reg  [101:0] bank22 [0:15];
+  reg  [101:0] bank23 [0:15];
+  reg  [101:0] bank24 [0:15];
+  reg  [101:0] bank25 [0:15];
+  reg  [101:0] bank26 [0:15];
+  reg  [101:0] bank27 [0:15];
+  reg  [101:0] bank28 [0:15];
+  reg  [101:0] bank29 [0:15];
+  reg  [101:0] bank30 [0:15];
+  reg  [101:0] bank31 [0:15];
+  reg  [101:0] bank32 [0:15];
+  reg  [101:0] bank33 [0:15];
+  reg  [101:0] bank34 [0:15];
+  reg  [101:0] bank35 [0:15];
+  reg  [101:0] bank36 [0:15];
+  reg  [101:0] bank37 [0:15];
+  reg  [101:0] bank38 [0:15];
+  reg  [101:0] bank39 [0:15];
+  reg  [101:0] bank40 [0:15];
+  reg  [101:0] bank41 [0:15];
+  reg  [101:0] bank42 [0:15];
+  reg  [101:0] bank43 [0:15];
+  reg  [101:0] bank44 [0:15];
+  reg  [101:0] bank45 [0:15];
+  reg  [101:0] bank46 [0:15];
+  reg  [101:0] bank47 [0:15];
+  reg  [101:0] bank48 [0:15];
+  reg  [101:0] bank49 [0:15];
+  reg  [101:0] bank50 [0:15];
+  reg  [101:0] bank51 [0:15];
+  reg  [101:0] bank52 [0:15];
+  reg  [101:0] bank53 [0:15];
+  reg  [101:0] bank54 [0:15];
+  reg  [101:0] bank55 [0:15];
+  reg  [101:0] bank56 [0:15];
+  reg  [101:0] bank57 [0:15];
+  reg  [101:0] bank58 [0:15];
+  reg  [101:0] bank59 [0:15];
+  reg  [101:0] bank60 [0:15];
+  reg  [101:0] bank61 [0:15];
+  reg  [101:0] bank62 [0:15];
+  reg  [101:0] bank63 [0:15];
+  always @(posedge clk_i) begin
+    if (en) begin
+      if (fin_b & ~d5_q[193]) begin
+        bank0[d5_q[198:195]] <= {dn_nx0, c_nx0, t_nx0};
+        bank1[d5_q[198:195]] <= {dn_nx1, c_nx1, t_nx1};
+        bank2[d5_q[198:195]] <= {dn_nx2, c_nx2, t_nx2};
+        bank3[d5_q[198:195]] <= {dn_nx3, c_nx3, t_nx3};
+        bank4[d5_q[198:195]] <= {dn_nx4, c_nx4, t_nx4};
+        bank5[d5_q[198:195]] <= {dn_nx5, c_nx5, t_nx5};
+        bank6[d5_q[198:195]] <= {dn_nx6, c_nx6, t_nx6};
+        bank7[d5_q[198:195]] <= {dn_nx7, c_nx7, t_nx7};
+        bank8[d5_q[198:195]] <= {dn_nx8, c_nx8, t_nx8};
+        bank9[d5_q[198:195]] <= {dn_nx9, c_nx9, t_nx9};
+        bank10[d5_q[198:195]] <= {dn_nx10, c_nx10, t_nx10};
+        bank11[d5_q[198:195]] <= {dn_nx11, c_nx11, t_nx11};
+        bank12[d5_q[198:195]] <= {dn_nx12, c_nx12, t_nx12};
+        bank13[d5_q[198:195]] <= {dn_nx13, c_nx13, t_nx13};
+        bank14[d5_q[198:195]] <= {dn_nx14, c_nx14, t_nx14};
+        bank15[d5_q[198:195]] <= {dn_nx15, c_nx15, t_nx15};
+        bank16[d5_q[198:195]] <= {dn_nx16, c_nx16, t_nx16};
+        bank17[d5_q[198:195]] <= {dn_nx17, c_nx17, t_nx17};
+        bank18[d5_q[198:195]] <= {dn_nx18, c_nx18, t_nx18};
+        bank19[d5_q[198:195]] <= {dn_nx19, c_nx19, t_nx19};
+        bank20[d5_q[198:195]] <= {dn_nx20, c_nx20, t_nx20};
+        bank21[d5_q[198:195]] <= {dn_nx21, c_nx21, t_nx21};
+        bank22[d5_q[198:195]] <= {dn_nx22, c_nx22, t_nx22};
+        bank23[d5_q[198:195]] <= {dn_nx23, c_nx23, t_nx23};
+        bank24[d5_q[198:195]] <= {dn_nx24, c_nx24, t_nx24};
+        bank25[d5_q[198:195]] <= {dn_nx25, c_nx25, t_nx25};
+        bank26[d5_q[198:195]] <= {dn_nx26, c_nx26, t_nx26};
+        bank27[d5_q[198:195]] <= {dn_nx27, c_nx27, t_nx27};
+        bank28[d5_q[198:195]] <= {dn_nx28, c_nx28, t_nx28};
+        bank29[d5_q[198:195]] <= {dn_nx29, c_nx29, t_nx29};
+        bank30[d5_q[198:195]] <= {dn_nx30, c_nx30, t_nx30};
+        bank31[d5_q[198:195]] <= {dn_nx31, c_nx31, t_nx31};
+        bank32[d5_q[198:195]] <= {dn_nx32, c_nx32, t_nx32};
+        bank33[d5_q[198:195]] <= {dn_nx33, c_nx33, t_nx33};
+        bank34[d5_q[198:195]] <= {dn_nx34, c_nx34, t_nx34};
+        bank35[d5_q[198:195]] <= {dn_nx35, c_nx35, t_nx35};
+        bank36[d5_q[198:195]] <= {dn_nx36, c_nx36, t_nx36};
+        bank37[d5_q[198:195]] <= {dn_nx37, c_nx37, t_nx37};
+        bank38[d5_q[198:195]] <= {dn_nx38, c_nx38, t_nx38};
+        bank39[d5_q[198:195]] <= {dn_nx39, c_nx39, t_nx39};
+        bank40[d5_q[198:195]] <= {dn_nx40, c_nx40, t_nx40};
+        bank41[d5_q[198:195]] <= {dn_nx41, c_nx41, t_nx41};
+        bank42[d5_q[198:195]] <= {dn_nx42, c_nx42, t_nx42};
+        bank43[d5_q[198:195]] <= {dn_nx43, c_nx43, t_nx43};
+        bank44[d5_q[198:195]] <= {dn_nx44, c_nx44, t_nx44};
+        bank45[d5_q[198:195]] <= {dn_nx45, c_nx45, t_nx45};
+        bank46[d5_q[198:195]] <= {dn_nx46, c_nx46, t_nx46};
+        bank47[d5_q[198:195]] <= {dn_nx47, c_nx47, t_nx47};
+        bank48[d5_q[198:195]] <= {dn_nx48, c_nx48, t_nx48};
+        bank49[d5_q[198:195]] <= {dn_nx49, c_nx49, t_nx49};
+        bank50[d5_q[198:195]] <= {dn_nx50, c_nx50, t_nx50};
+        bank51[d5_q[198:195]] <= {dn_nx51, c_nx51, t_nx51};
+        bank52[d5_q[198:195]] <= {dn_nx52, c_nx52, t_nx52};
+        bank53[d5_q[198:195]] <= {dn_nx53, c_nx53, t_nx53};
+        bank54[d5_q[198:195]] <= {dn_nx54, c_nx54, t_nx54};
+        bank55[d5_q[198:195]] <= {dn_nx55, c_nx55, t_nx55};
+        bank56[d5_q[198:195]] <= {dn_nx56, c_nx56, t_nx56};
+        bank57[d5_q[198:195]] <= {dn_nx57, c_nx57, t_nx57};
+        bank58[d5_q[198:195]] <= {dn_nx58, c_nx58, t_nx58};
+        bank59[d5_q[198:195]] <= {dn_nx59, c_nx59, t_nx59};
+        bank60[d5_q[198:195]] <= {dn_nx60, c_nx60, t_nx60};
+        bank61[d5_q[198:195]] <= {dn_nx61, c_nx61, t_nx61};
+        bank62[d5_q[198:195]] <= {dn_nx62, c_nx62, t_nx62};
+        bank63[d5_q[198:195]] <= {dn_nx63, c_nx63, t_nx63};
+      end
+    end
+  end
+  wire [101:0] bk0;
+  assign bk0 = (d5_q[203:202] == 2'd0) ? bank0[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank16[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank32[d5_q[198:195]] : bank48[d5_q[198:195]];
+  wire [16:0] bk_t0;
+  assign bk_t0 = bk0[16:0];
+  wire [83:0] bk_c0;
+  assign bk_c0 = bk0[100:17];
+  wire bk_dn0;
+  assign bk_dn0 = bk0[101];
+  wire [101:0] bk1;
+  assign bk1 = (d5_q[203:202] == 2'd0) ? bank1[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank17[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank33[d5_q[198:195]] : bank49[d5_q[198:195]];
+  wire [16:0] bk_t1;
+  assign bk_t1 = bk1[16:0];
+  wire [83:0] bk_c1;
+  assign bk_c1 = bk1[100:17];
+  wire bk_dn1;
+  assign bk_dn1 = bk1[101];
+  wire [101:0] bk2;
+  assign bk2 = (d5_q[203:202] == 2'd0) ? bank2[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank18[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank34[d5_q[198:195]] : bank50[d5_q[198:195]];
+  wire [16:0] bk_t2;
+  assign bk_t2 = bk2[16:0];
+  wire [83:0] bk_c2;
+  assign bk_c2 = bk2[100:17];
+  wire bk_dn2;
+  assign bk_dn2 = bk2[101];
+  wire [101:0] bk3;
+  assign bk3 = (d5_q[203:202] == 2'd0) ? bank3[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank19[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank35[d5_q[198:195]] : bank51[d5_q[198:195]];
+  wire [16:0] bk_t3;
+  assign bk_t3 = bk3[16:0];
+  wire [83:0] bk_c3;
+  assign bk_c3 = bk3[100:17];
+  wire bk_dn3;
+  assign bk_dn3 = bk3[101];
+  wire [101:0] bk4;
+  assign bk4 = (d5_q[203:202] == 2'd0) ? bank4[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank20[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank36[d5_q[198:195]] : bank52[d5_q[198:195]];
+  wire [16:0] bk_t4;
+  assign bk_t4 = bk4[16:0];
+  wire [83:0] bk_c4;
+  assign bk_c4 = bk4[100:17];
+  wire bk_dn4;
+  assign bk_dn4 = bk4[101];
+  wire [101:0] bk5;
+  assign bk5 = (d5_q[203:202] == 2'd0) ? bank5[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank21[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank37[d5_q[198:195]] : bank53[d5_q[198:195]];
+  wire [16:0] bk_t5;
+  assign bk_t5 = bk5[16:0];
+  wire [83:0] bk_c5;
+  assign bk_c5 = bk5[100:17];
+  wire bk_dn5;
+  assign bk_dn5 = bk5[101];
+  wire [101:0] bk6;
+  assign bk6 = (d5_q[203:202] == 2'd0) ? bank6[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank22[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank38[d5_q[198:195]] : bank54[d5_q[198:195]];
+  wire [16:0] bk_t6;
+  assign bk_t6 = bk6[16:0];
+  wire [83:0] bk_c6;
+  assign bk_c6 = bk6[100:17];
+  wire bk_dn6;
+  assign bk_dn6 = bk6[101];
+  wire [101:0] bk7;
+  assign bk7 = (d5_q[203:202] == 2'd0) ? bank7[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank23[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank39[d5_q[198:195]] : bank55[d5_q[198:195]];
+  wire [16:0] bk_t7;
+  assign bk_t7 = bk7[16:0];
+  wire [83:0] bk_c7;
+  assign bk_c7 = bk7[100:17];
+  wire bk_dn7;
+  assign bk_dn7 = bk7[101];
+  wire [101:0] bk8;
+  assign bk8 = (d5_q[203:202] == 2'd0) ? bank8[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank24[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank40[d5_q[198:195]] : bank56[d5_q[198:195]];
+  wire [16:0] bk_t8;
+  assign bk_t8 = bk8[16:0];
+  wire [83:0] bk_c8;
+  assign bk_c8 = bk8[100:17];
+  wire bk_dn8;
+  assign bk_dn8 = bk8[101];
+  wire [101:0] bk9;
+  assign bk9 = (d5_q[203:202] == 2'd0) ? bank9[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank25[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank41[d5_q[198:195]] : bank57[d5_q[198:195]];
+  wire [16:0] bk_t9;
+  assign bk_t9 = bk9[16:0];
+  wire [83:0] bk_c9;
+  assign bk_c9 = bk9[100:17];
+  wire bk_dn9;
+  assign bk_dn9 = bk9[101];
+  wire [101:0] bk10;
+  assign bk10 = (d5_q[203:202] == 2'd0) ? bank10[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank26[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank42[d5_q[198:195]] : bank58[d5_q[198:195]];
+  wire [16:0] bk_t10;
+  assign bk_t10 = bk10[16:0];
+  wire [83:0] bk_c10;
+  assign bk_c10 = bk10[100:17];
+  wire bk_dn10;
+  assign bk_dn10 = bk10[101];
+  wire [101:0] bk11;
+  assign bk11 = (d5_q[203:202] == 2'd0) ? bank11[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank27[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank43[d5_q[198:195]] : bank59[d5_q[198:195]];
+  wire [16:0] bk_t11;
+  assign bk_t11 = bk11[16:0];
+  wire [83:0] bk_c11;
+  assign bk_c11 = bk11[100:17];
+  wire bk_dn11;
+  assign bk_dn11 = bk11[101];
+  wire [101:0] bk12;
+  assign bk12 = (d5_q[203:202] == 2'd0) ? bank12[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank28[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank44[d5_q[198:195]] : bank60[d5_q[198:195]];
+  wire [16:0] bk_t12;
+  assign bk_t12 = bk12[16:0];
+  wire [83:0] bk_c12;
+  assign bk_c12 = bk12[100:17];
+  wire bk_dn12;
+  assign bk_dn12 = bk12[101];
+  wire [101:0] bk13;
+  assign bk13 = (d5_q[203:202] == 2'd0) ? bank13[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank29[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank45[d5_q[198:195]] : bank61[d5_q[198:195]];
+  wire [16:0] bk_t13;
+  assign bk_t13 = bk13[16:0];
+  wire [83:0] bk_c13;
+  assign bk_c13 = bk13[100:17];
+  wire bk_dn13;
+  assign bk_dn13 = bk13[101];
+  wire [101:0] bk14;
+  assign bk14 = (d5_q[203:202] == 2'd0) ? bank14[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank30[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank46[d5_q[198:195]] : bank62[d5_q[198:195]];
+  wire [16:0] bk_t14;
+  assign bk_t14 = bk14[16:0];
+  wire [83:0] bk_c14;
+  assign bk_c14 = bk14[100:17];
+  wire bk_dn14;
+  assign bk_dn14 = bk14[101];
+  wire [101:0] bk15;
+  assign bk15 = (d5_q[203:202] == 2'd0) ? bank15[d5_q[198:195]] : (d5_q[203:202] == 2'd1) ? bank31[d5_q[198:195]] : (d5_q[203:202] == 2'd2) ? bank47[d5_q[198:195]] : bank63[d5_q[198:195]];
+  wire [16:0] bk_t15;
+  assign bk_t15 = bk15[16:0];
+  wire [83:0] bk_c15;
+  assign bk_c15 = bk15[100:17];
+  wire bk_dn15;
+  assign bk_dn15 = bk15[101];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       term_q <= 1'b0;
       term_lid_q <= 3'd0;
     end else begin
-      if (en & v5_q & ~d5_q[198]) begin
-        if (d5_q[197:196] == 2'd3) begin
+      if (en & v5_q & ~d5_q[204]) begin
+        if (d5_q[203:202] == 2'd3) begin
           term_q <= all_done;
-          term_lid_q <= d5_q[195:193];
+          term_lid_q <= d5_q[201:199];
         end else if (d5_q[192]) begin
           term_q <= 1'b0;
         end
@@ -4716,7 +5115,7 @@ module neo_scu (
     if (!rst_ni) begin
       out_valid_q <= 1'b0;
     end else begin
-      if (en & fin_b) begin
+      if (en & fin_out) begin
         out_valid_q <= 1'b1;
       end else if (out_ready_i) begin
         out_valid_q <= 1'b0;
@@ -4724,7 +5123,7 @@ module neo_scu (
     end
   end
   always @(posedge clk_i) begin
-    if (en & fin_b) begin
+    if (en & fin_out) begin
       out_rgb_q <= rgb_nx;
     end
   end

@@ -79,11 +79,13 @@ pub enum Accel {
 /// `max(ITU walk, busiest SCU, pixel writes)` (the RTL's SCUs are decoupled by their routing
 /// FIFOs, so an SCU's cost is the sum over its subtiles of all groups; a lower bound when the
 /// busiest SCU changes from group to group by more than a FIFO's worth), and `tile_overhead`
-/// (the empty tile) holds the latencies and the pixel writes. A table longer than `rt.feature_buffer` is reloaded, walked
-/// and blended group by group, segment by segment, the SCU FIFOs drained before each reload:
-/// each group costs the loads, its walk plus its slowest SCU (serial: an upper bound, tight when
-/// a group's blending comes in bursts, as with real tables, loose when it hides under the walk),
-/// and `segment_overhead` per segment; plus the serial write-back of one cycle per entry. Returns (total, tail after
+/// (the empty tile) holds the latencies and the pixel writes. A table longer than
+/// `rt.feature_buffer` is processed segment by segment, each segment loaded once and walked for
+/// every group (the SCUs save and resume their subtiles' pixel state between segments): each
+/// segment costs its loads, then per group `max(its walk, the segment's share of the group's
+/// slowest SCU)` (a 16-entry FIFO does not hide a busy subtile behind the next group's walk),
+/// then `segment_overhead` (the drain before the next load); the write-back of a segment
+/// overlaps its later groups' walks. Returns (total, tail after
 /// the last input arrives).
 #[allow(clippy::too_many_arguments)]
 pub fn raster_tile_cycles(
@@ -116,20 +118,30 @@ pub fn raster_tile_cycles(
         let pix = rt.pixel_write_cycles as f64;
         let segmented = rt.feature_buffer > 0 && len as u64 > rt.feature_buffer;
         let body = if segmented {
-            let segs = (len as u64).div_ceil(rt.feature_buffer) as f64;
-            groups.iter().map(|&g| load + walk + g + segs * rt.segment_overhead).sum::<f64>() + len as f64
+            let f = rt.feature_buffer;
+            let segs = (len as u64).div_ceil(f);
+            let mut body = load + segs as f64 * rt.segment_overhead;
+            for s in 0..segs {
+                let n = (len as u64 - s * f).min(f) as f64;
+                let walk = (n / itus.max(1) as f64).ceil() * rt.itu_ii;
+                body += groups.iter().map(|&g| walk.max(g * n / len as f64)).sum::<f64>();
+            }
+            body.max(load + pix)
         } else {
             // One segment: each SCU runs through its subtiles of every group, decoupled from the
             // others by its routing FIFO, so the blending takes the busiest SCU's sum.
-            let s = scus.max(1) as usize;
-            let per_scu = (0..s)
-                .map(|j| routed.iter().skip(j).step_by(s).map(|&r| cost(r)).sum::<f64>())
-                .fold(0.0, f64::max);
-            load + itu_total.max(per_scu).max(pix)
+            load + itu_total.max(busiest_scu(routed, scus, &cost)).max(pix)
         };
         body - pix + rt.tile_overhead as f64
     };
     (total, tail.min(total))
+}
+
+/// The busiest SCU's blending: SCU `j` takes subtiles `j, j + scus, ...` (one per group), each
+/// costing `cost(routed)`.
+fn busiest_scu(routed: &[u32], scus: u32, cost: &dyn Fn(u32) -> f64) -> f64 {
+    let s = scus.max(1) as usize;
+    (0..s).map(|j| routed.iter().skip(j).step_by(s).map(|&r| cost(r)).sum::<f64>()).fold(0.0, f64::max)
 }
 
 const MB: u64 = 1 << 20;
@@ -989,9 +1001,13 @@ mod tests {
         // Heavy tile: 16 groups of 4 SCUs with 50 routed each = 16 x 200 cycles.
         let (h, _) = raster_tile_cycles(&[50; 64], 1.0, 80, 80, &shaped, 4, 4, true);
         assert_eq!(h, 160.0 + 3200.0 - 512.0 + 535.0);
-        // 200 entries > 100: per group the loads (400), the walk (50) and the SCU (200), plus
-        // the write-back.
+        // 200 entries > 100: the loads (400) once, then per segment of 100 and group the walk
+        // (25) against half the group's slowest SCU (200 / 2): blending-bound.
         let (s, _) = raster_tile_cycles(&[50; 64], 1.0, 200, 200, &shaped, 4, 4, true);
-        assert_eq!(s, 16.0 * (400.0 + 50.0 + 200.0) + 200.0 - 512.0 + 535.0);
+        assert_eq!(s, 400.0 + 2.0 * 16.0 * 100.0 - 512.0 + 535.0);
+        // Light long table: walk-bound, plus the segment overhead per segment.
+        let o = RasterTiming { segment_overhead: 30.0, ..shaped };
+        let (w, _) = raster_tile_cycles(&[1; 64], 1.0, 250, 250, &o, 4, 4, true);
+        assert_eq!(w, 500.0 + 16.0 * (25.0 + 25.0 + 13.0) + 3.0 * 30.0 - 512.0 + 535.0);
     }
 }

@@ -352,21 +352,27 @@ pub fn raster_core_section(cfg: &GenConfig) -> Value {
         _ => 0.0,
     };
     let rc = cfg.raster_config();
-    // Per (group, segment) fixed cycles of tables longer than the buffer: what the multi-segment
-    // points cost beyond `tile_overhead + write-back + groups x (loads + walk + slowest SCU)`
-    // (the cycle model's serial formula, neo_sim::arch::raster_tile_cycles), averaged over the
-    // points without early termination (1, 4 and 16 bits per Gaussian; the SCUs' cost spread
-    // evenly over the groups), at least 0.
+    // Per-segment fixed cycles of tables longer than the buffer (the drain before the next
+    // segment's load): what the multi-segment points cost beyond `tile_overhead - pixel writes +
+    // loads + per segment and group max(walk, the segment's share of the group's slowest SCU)`
+    // (the cycle model's formula, neo_sim::arch::raster_tile_cycles), averaged over the points
+    // where the walk, not a burst of blending, sets the pace (1 and 4 bits per Gaussian; a group's slowest SCU taken as 4
+    // cycles per routed entry of its busiest subtile, the groups alike), at least 0.
     let groups = (rc.subtiles_per_tile() as usize / cfg.raster_scus) as f64;
+    let pix = (rc.tile * rc.tile / rc.subtile) as f64;
     let seg: Vec<f64> = grid
         .iter()
-        .filter(|p| p.entries > f && p.bits_per_gaussian < 64)
+        .filter(|p| p.entries > f && p.bits_per_gaussian < 16)
         .map(|p| {
             let n = p.entries as f64;
-            let walk = (n / cfg.raster_itus as f64).ceil();
             let scu = 4.0 * p.group_max_routed as f64 / groups;
-            let model = overhead as f64 + n + groups * (load * n + walk + scu);
-            (p.cycles as f64 - model) / (groups * (p.entries.div_ceil(f)) as f64)
+            let segs = p.entries.div_ceil(f);
+            let mut model = overhead as f64 - pix + load * n;
+            for s in 0..segs {
+                let ns = (p.entries - s * f).min(f) as f64;
+                model += groups * (ns / cfg.raster_itus as f64).ceil().max(scu * ns / n);
+            }
+            (p.cycles as f64 - model) / segs as f64
         })
         .collect();
     let segment_overhead =

@@ -49,7 +49,7 @@ pub struct ScuRun {
 }
 
 /// The input data ports, in beat order.
-const IN_PORTS: [&str; 16] = [
+const IN_PORTS: [&str; 19] = [
     "in_mean_x_i",
     "in_mean_y_i",
     "in_conic_a_i",
@@ -66,12 +66,15 @@ const IN_PORTS: [&str; 16] = [
     "in_origin_y_i",
     "in_cols_i",
     "in_rows_i",
+    "in_final_i",
+    "in_resume_i",
+    "in_sub_i",
 ];
 
 /// The beat of Gaussian `e` (None: an empty beat) of a list.
 fn beat(e: Option<&FeatureEntry>, list: &ScuList, last: bool) -> Beat {
     let f = e.copied().unwrap_or_default();
-    let vals: [u64; 16] = [
+    let vals: [u64; 19] = [
         f.mean[0] as u32 as u64,
         f.mean[1] as u32 as u64,
         f.conic.a as u32 as u64,
@@ -88,6 +91,9 @@ fn beat(e: Option<&FeatureEntry>, list: &ScuList, last: bool) -> Beat {
         list.origin[1] as u64,
         list.cols as u64,
         list.rows as u64,
+        last as u64,
+        0,
+        0,
     ];
     vals.iter()
         .enumerate()

@@ -12,12 +12,15 @@
 //! `G = subtiles / raster_scus` *groups* of `raster_scus` consecutive subtiles (row-major, SCU
 //! `j` takes subtile `g * raster_scus + j`). WALK issues the segment to the ITUs,
 //! `raster_itus` entries (a *quad*) per cycle, once per group; each ITU result is routed, per
-//! SCU, into a FIFO of `{last, lane mask, base}` elements, and a feeder per SCU sends the masked
-//! entries' features to its SCU in table order. The FIFOs decouple the two: the ITUs test the
-//! next group while the SCUs blend the current one (Fig. 14). With one segment the walk runs
-//! through all groups without reloading; with several, each (group, segment) pair loads its
-//! segment (the SCUs keep their pixel state across segments, `last` marks a list's final
-//! segment) after the previous one has drained.
+//! SCU, into a FIFO of `{final, last, resume, lane mask, base}` elements, and a feeder per SCU
+//! sends the masked entries' features to its SCU in table order. The FIFOs decouple the two: the
+//! ITUs test the next group while the SCUs blend the current one (Fig. 14). Each segment is
+//! loaded once and walked for every group (paper Section 5.4: "writes the intermediate pixel
+//! values to the pixel buffer and proceeds to the next group"): one group's walk of a segment
+//! is a *piece* of each of its subtiles' lists. A piece that is not the subtile's last saves the
+//! subtile's pixel state in its SCU's state bank (`neo_scu` `in_final_i` low), and the next
+//! segment's piece resumes from it (`in_resume_i`). The next segment is loaded once the SCUs
+//! have taken every beat of the current one.
 //!
 //! Group 0's ITU results give every entry's valid bit (the bitmap covers all subtiles); the
 //! write-back of entry `i` (`{valid = present & |bitmap, key = present ? depth_key : old key,
@@ -119,7 +122,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let wdb = wdata_bits(cfg);
     let rw = s * 24;
     let tg = cfg.itu_tag_bits;
-    let ew = 1 + ni + fa; // FIFO element {last, mask, base}
+    let ew = 3 + ni + fa; // FIFO element {final, last, resume, mask, base}
     let db = bits_for(FIFO_DEPTH as u64 - 1);
     let ifl = bits_for(itu::LATENCY as u64 + 1);
     let (mean_lsb, _) = field("mean_x");
@@ -183,6 +186,8 @@ pub fn module(cfg: &GenConfig) -> Module {
         ("base_q", fa),
         ("inflight_q", ifl),
         ("done_q", 1),
+        ("seek_q", 1),
+        ("g0_done_q", 1),
     ] {
         m.reg(n, wi);
     }
@@ -264,13 +269,56 @@ pub fn module(cfg: &GenConfig) -> Module {
     // ------------------------------------------------------------ ITUs
     m.blank();
     m.comment(format!("WALK: {ni} table entries per cycle through the ITUs, once per subtile group."));
-    m.wire_assign("walk", 1, "st_q == S_WALK");
+    m.wire_assign("walk", 1, "(st_q == S_WALK) & ~seek_q");
     m.wire_assign(
         "quad_end",
         sl + 1,
         format!("{} + {}", resize("base_q", fa, sl + 1), lit(sl + 1, ni as u64)),
     );
-    m.wire_assign("last_quad", 1, format!("quad_end >= {}", resize("seg_len_q", sl, sl + 1)));
+    // Quad skipping: group 0's walk tests every quad of the segment and records, per quad, the
+    // groups it touches (qhit); the later groups walk only the quads that touch them. A group
+    // touched by no quad walks quad 0 alone, to end its pieces.
+    let nq = f / ni;
+    let qb = bits_for(nq as u64 - 1);
+    let ib2 = ni.trailing_zeros();
+    m.comment(format!(
+        "Quad skipping: qhit[q][g] = quad q of the segment touches group g (from group 0's walk)."
+    ));
+    m.mem("qhit", groups, nq);
+    m.wire_assign("cur_q", qb, if nq == 1 { lit(1, 0) } else { format!("base_q[{}:{ib2}]", fa - 1) });
+    let col: Vec<String> = (0..nq)
+        .rev()
+        .map(|q| format!("(qhit[{q}][grp_q] & ({} < seg_len_q))", lit(sl, q as u64 * ni as u64)))
+        .collect();
+    m.wire_assign("qcol", nq, format!("{{{}}}", col.join(", ")));
+    m.wire_assign("qabove", nq, format!("qcol & (({{{nq}{{1'b1}}}} << cur_q) << 1)"));
+    for (src, dst) in [("qcol", "qf"), ("qabove", "qn")] {
+        m.wire_assign(format!("{dst}_oh"), nq, format!("{src} & (~{src} + {})", lit(nq, 1)));
+        let mut bits = Vec::new();
+        for b in (0..qb).rev() {
+            let sel: Vec<String> =
+                (0..nq).filter(|q| (q >> b) & 1 == 1).map(|q| format!("{dst}_oh[{q}]")).collect();
+            bits.push(if sel.is_empty() { "1'b0".to_string() } else { format!("({})", sel.join(" | ")) });
+        }
+        m.wire_assign(format!("{dst}_idx"), qb, format!("{{{}}}", bits.join(", ")));
+        m.wire_assign(format!("unused_{dst}0"), 1, format!("{dst}_oh[0]"));
+    }
+    let to_base = |idx: &str| -> String {
+        if ib2 == 0 {
+            resize(idx, qb, fa)
+        } else if nq == 1 {
+            lit(fa, 0)
+        } else {
+            format!("{{{idx}, {}}}", lit(ib2, 0))
+        }
+    };
+    m.wire_assign("qnext_base", fa, to_base("qn_idx"));
+    m.wire_assign("qfirst_base", fa, to_base("qf_idx"));
+    m.wire_assign(
+        "last_quad",
+        1,
+        format!("(grp_q == {}) ? (quad_end >= {}) : ~(|qabove)", lit(gw, 0), resize("seg_len_q", sl, sl + 1)),
+    );
     m.wire("itu_in_ready", 1).wire("itu_out_valid", 1).wire("itu_out_ready", 1);
     m.wire_assign("itu_fire", 1, "walk & itu_in_ready");
     m.wire_assign("itu_out_fire", 1, "itu_out_valid & itu_out_ready");
@@ -316,7 +364,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign("unused_tags", 1, format!("^{{{}}}", unused.join(", ")));
     // Sideband of each quad, {list_last, seg_last, group, base, lane valids}, through a copy of
     // the ITU pipeline: its stages all advance when in_ready_o is high.
-    let sbw = 2 + gw + fa + ni;
+    let sbw = 3 + gw + fa + ni;
     let lvs: Vec<String> = (0..ni).rev().map(|u| format!("lv{u}")).collect();
     m.comment(format!(
         "Quad sideband through {} stages that advance with the ITUs' (in_ready_o = their stage enable).",
@@ -325,7 +373,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign(
         "sb_in",
         sbw,
-        format!("{{(last_quad & last_seg), last_quad, grp_q, base_q, {}}}", lvs.join(", ")),
+        format!(
+            "{{(seg_start_q != {}), (last_quad & last_seg), last_quad, grp_q, base_q, {}}}",
+            lit(lw, 0),
+            lvs.join(", ")
+        ),
     );
     let mut sh = Vec::new();
     for k in 1..=itu::LATENCY {
@@ -351,6 +403,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     tf("o_grp", gw, &mut m);
     tf("o_seg_last", 1, &mut m);
     tf("o_list_last", 1, &mut m);
+    tf("o_resume", 1, &mut m);
     m.seq(
         vec![set("inflight_q", lit(ifl, 0))],
         vec![if_else(
@@ -368,20 +421,49 @@ pub fn module(cfg: &GenConfig) -> Module {
         hb.push(set(format!("hbuf[o_base + {}]", lit(fa, u as u64)), format!("hit{u}")));
     }
     m.seq_noreset(vec![if_(format!("itu_out_fire & (o_grp == {})", lit(gw, 0)), hb)]);
+    m.comment("Group 0's results also give each quad's groups (qhit) and, with its last quad, g0_done.");
+    let qh: Vec<String> = (0..groups)
+        .rev()
+        .map(|g| {
+            let lanes: Vec<String> =
+                (0..ni).map(|u| format!("(o_lv{u} & (|bm{u}[{}:{}]))", (g + 1) * nc - 1, g * nc)).collect();
+            format!("({})", lanes.join(" | "))
+        })
+        .collect();
+    m.wire_assign("o_qhit", groups, format!("{{{}}}", qh.join(", ")));
+    let o_q = if f / ni == 1 { lit(1, 0) } else { format!("o_base[{}:{}]", fa - 1, ni.trailing_zeros()) };
+    m.seq_noreset(vec![if_(
+        format!("itu_out_fire & (o_grp == {})", lit(gw, 0)),
+        vec![set(format!("qhit[{o_q}]"), "o_qhit")],
+    )]);
+    m.seq(
+        vec![set("g0_done_q", lit(1, 0))],
+        vec![if_else(
+            "st_q == S_LOADT",
+            vec![set("g0_done_q", lit(1, 0))],
+            vec![if_(
+                format!("itu_out_fire & (o_grp == {}) & o_seg_last", lit(gw, 0)),
+                vec![set("g0_done_q", lit(1, 1))],
+            )],
+        )],
+    );
 
     // ------------------------------------------------------------ routing FIFOs
     m.blank();
     m.comment(format!(
-        "Routing: per SCU j a FIFO of {{last, lane mask, base}} ({FIFO_DEPTH} deep); lane u of the quad goes to SCU j"
+        "Routing: per SCU j a FIFO of {{final, last, resume, lane mask, base}} ({FIFO_DEPTH} deep); lane u of the"
     ));
-    m.comment("when bit (group * SCUs + j) of its bitmap is set. A list's final quad is pushed even with an empty mask.");
+    m.comment(
+        "quad goes to SCU j when bit (group * SCUs + j) of its bitmap is set. A piece (one group's walk of a",
+    );
+    m.comment("segment) ends with its last quad, pushed even with an empty mask; the last segment's piece is final.");
     let mut fulls = Vec::new();
     for j in 0..nc {
         let subx = if cb == 0 { "o_grp".to_string() } else { format!("{{o_grp, {}}}", lit(cb, j as u64)) };
         m.wire_assign(format!("rsub{j}"), sub_w, resize(&subx, gw + cb, sub_w));
         let mask: Vec<String> = (0..ni).rev().map(|u| format!("(o_lv{u} & bm{u}[rsub{j}])")).collect();
         m.wire_assign(format!("rmask{j}"), ni, format!("{{{}}}", mask.join(", ")));
-        m.wire_assign(format!("push{j}"), 1, format!("itu_out_fire & ((|rmask{j}) | o_list_last)"));
+        m.wire_assign(format!("push{j}"), 1, format!("itu_out_fire & ((|rmask{j}) | o_seg_last)"));
         m.mem(format!("fifo{j}"), ew, FIFO_DEPTH);
         m.reg(format!("fwp{j}_q"), db + 1).reg(format!("frp{j}_q"), db + 1);
         m.wire_assign(format!("fcnt{j}"), db + 1, format!("fwp{j}_q - frp{j}_q"));
@@ -392,7 +474,7 @@ pub fn module(cfg: &GenConfig) -> Module {
             format!("push{j}"),
             vec![set(
                 format!("fifo{j}[fwp{j}_q[{}:0]]", db - 1),
-                format!("{{o_list_last, rmask{j}, o_base}}"),
+                format!("{{o_list_last, o_seg_last, o_resume, rmask{j}, o_base}}"),
             )],
         )]);
         m.seq(
@@ -434,6 +516,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     for j in 0..nc {
         let q = |n: &str| format!("{n}{j}_q");
         m.reg(q("cv"), 1).reg(q("cbase"), fa).reg(q("cmask"), ni).reg(q("clast"), 1).reg(q("lgrp"), gw);
+        m.reg(q("cfin"), 1).reg(q("cres"), 1);
         m.reg(q("rel"), 1);
         // Lowest set bit of the mask.
         let mut sel = lit(bits_for(ni as u64 - 1), 0);
@@ -476,7 +559,9 @@ pub fn module(cfg: &GenConfig) -> Module {
             vec![
                 set(q("cbase"), format!("fhead{j}[{}:0]", fa - 1)),
                 set(q("cmask"), format!("fhead{j}[{}:{fa}]", fa + ni - 1)),
-                set(q("clast"), format!("fhead{j}[{}]", fa + ni)),
+                set(q("cres"), format!("fhead{j}[{}]", fa + ni)),
+                set(q("clast"), format!("fhead{j}[{}]", fa + ni + 1)),
+                set(q("cfin"), format!("fhead{j}[{}]", fa + ni + 2)),
             ],
             vec![if_(format!("beat{j}"), vec![set(q("cmask"), format!("frest{j}"))])],
         )]);
@@ -498,6 +583,9 @@ pub fn module(cfg: &GenConfig) -> Module {
         c.extend([
             ("in_empty_i", format!("fempty_beat{j}")),
             ("in_last_i", format!("flast{j}")),
+            ("in_final_i", format!("cfin{j}_q")),
+            ("in_resume_i", format!("cres{j}_q")),
+            ("in_sub_i", resize(&format!("lgrp{j}_q"), gw, w.row_bits)),
             ("in_origin_x_i", resize(&format!("s{j}_ox"), ow, w.origin)),
             ("in_origin_y_i", resize(&format!("s{j}_oy"), ow, w.origin)),
             ("in_cols_i", format!("s{j}_cols")),
@@ -650,7 +738,9 @@ pub fn module(cfg: &GenConfig) -> Module {
 
     // ------------------------------------------------------------ main FSM
     m.blank();
-    m.comment("Main FSM: LOADT -> LOADF -> WALK (-> SEGWAIT -> LOADT per further segment / group) -> DRAIN.");
+    m.comment(
+        "Main FSM: LOADT -> LOADF -> WALK, every group (-> SEGWAIT -> LOADT per further segment) -> DRAIN.",
+    );
     m.wire_assign("drained", 1, "~route_busy & ~wb_busy_q");
     let to_load = |start: &str, len: &str| -> Vec<Stmt> {
         vec![
@@ -659,6 +749,7 @@ pub fn module(cfg: &GenConfig) -> Module {
             set("seg_len_q", len),
             set("iss_q", lit(sl, 0)),
             set("rcv_q", lit(sl, 0)),
+            set("seek_q", lit(1, 0)),
         ]
     };
     let mut on_cmd = to_load(&lit(lw, 0), "cmd_seg_len");
@@ -675,10 +766,8 @@ pub fn module(cfg: &GenConfig) -> Module {
         set("grp_q", lit(gw, 0)),
     ]);
     let mut next_seg = to_load("next_start", "next_seg_len");
-    next_seg.insert(0, Stmt::Comment("next segment of the same group".into()));
-    let mut next_grp =
-        to_load(&lit(lw, 0), &format!("(len_q > {}) ? {} : {}", flit(lw), flit(sl), resize("len_q", lw, sl)));
-    next_grp.push(set("grp_q", format!("grp_q + {}", lit(gw, 1))));
+    next_seg.insert(0, Stmt::Comment("next segment: its walk starts again at group 0".into()));
+    next_seg.push(set("grp_q", lit(gw, 0)));
     m.seq(
         vec![
             set("st_q", "S_IDLE"),
@@ -686,6 +775,7 @@ pub fn module(cfg: &GenConfig) -> Module {
             set("iss_q", lit(sl, 0)),
             set("rcv_q", lit(sl, 0)),
             set("base_q", lit(fa, 0)),
+            set("seek_q", lit(1, 0)),
         ],
         vec![
             set("done_q", lit(1, 0)),
@@ -708,37 +798,49 @@ pub fn module(cfg: &GenConfig) -> Module {
                     ),
                     (
                         "S_WALK".into(),
-                        vec![if_(
-                            "itu_fire",
-                            vec![if_else(
-                                "~last_quad",
-                                vec![set("base_q", format!("base_q + {}", lit(fa, ni as u64)))],
+                        vec![
+                            Stmt::Comment(
+                                "a later group starts at its first quad once group 0's results are in".into(),
+                            ),
+                            if_(
+                                "seek_q & g0_done_q",
                                 vec![
-                                    set("base_q", lit(fa, 0)),
-                                    if_else(
-                                        "multi_q",
-                                        vec![set("st_q", "S_SEGWAIT")],
-                                        vec![if_else(
-                                            "last_grp",
-                                            vec![set("st_q", "S_DRAIN")],
-                                            vec![set("grp_q", format!("grp_q + {}", lit(gw, 1)))],
-                                        )],
-                                    ),
+                                    set("seek_q", lit(1, 0)),
+                                    set("base_q", format!("(|qcol) ? qfirst_base : {}", lit(fa, 0))),
                                 ],
-                            )],
-                        )],
+                            ),
+                            if_(
+                                "itu_fire",
+                                vec![if_else(
+                                    "~last_quad",
+                                    vec![set(
+                                        "base_q",
+                                        format!(
+                                            "(grp_q == {}) ? (base_q + {}) : qnext_base",
+                                            lit(gw, 0),
+                                            lit(fa, ni as u64)
+                                        ),
+                                    )],
+                                    vec![
+                                        set("base_q", lit(fa, 0)),
+                                        if_else(
+                                            "~last_grp",
+                                            vec![
+                                                set("grp_q", format!("grp_q + {}", lit(gw, 1))),
+                                                set("seek_q", lit(1, 1)),
+                                            ],
+                                            vec![if_else(
+                                                "multi_q & ~last_seg",
+                                                vec![set("st_q", "S_SEGWAIT")],
+                                                vec![set("st_q", "S_DRAIN")],
+                                            )],
+                                        ),
+                                    ],
+                                )],
+                            ),
+                        ],
                     ),
-                    (
-                        "S_SEGWAIT".into(),
-                        vec![if_(
-                            "drained",
-                            vec![if_else(
-                                "~last_seg",
-                                next_seg,
-                                vec![if_else("last_grp", vec![set("st_q", "S_DRAIN")], next_grp)],
-                            )],
-                        )],
-                    ),
+                    ("S_SEGWAIT".into(), vec![if_("drained", next_seg)]),
                     (
                         "S_DRAIN".into(),
                         vec![if_("drained & pw_all", vec![set("st_q", "S_IDLE"), set("done_q", lit(1, 1))])],

@@ -100,6 +100,11 @@ pub struct ScuWidths {
     pub c: u32,
     /// Output shift `color.frac + t_frac`.
     pub out_shift: u32,
+    /// Subtiles whose state the SCU keeps between pieces of their lists (the tile's subtiles
+    /// over `raster_scus`: one per subtile group), and the width of their index.
+    pub rows: u32,
+    /// Width of `in_sub_i`.
+    pub row_bits: u32,
 }
 
 impl ScuWidths {
@@ -149,12 +154,19 @@ impl ScuWidths {
             min_t: b.min_transmittance_raw() as u64,
             c: fmt.color.bits as u32 + b.transmittance_frac as u32 + 1,
             out_shift: fmt.color.frac as u32 + b.transmittance_frac as u32,
+            rows: rc.subtiles_per_tile() / cfg.raster_scus as u32,
+            row_bits: bits_for((rc.subtiles_per_tile() / cfg.raster_scus as u32).max(2) as u64 - 1),
         }
     }
 
     /// Pixels per subtile.
     pub fn pixels(&self) -> u32 {
         self.side * self.side
+    }
+
+    /// Bits of one pixel's saved state `{done, colour, T}`.
+    pub fn state_bits(&self) -> u32 {
+        self.t + 3 * self.c + 1
     }
 
     /// Width of the pass counter (at least 1).
@@ -198,6 +210,9 @@ fn beat_fields(w: &ScuWidths) -> Vec<(&'static str, u32)> {
         ("empty", 1),
         ("last", 1),
         ("first", 1),
+        ("fin", 1),
+        ("resume", 1),
+        ("sub", w.row_bits),
         ("lid", LID_BITS),
         ("pass", w.pass_bits()),
         ("nop", 1),
@@ -366,6 +381,17 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.input_c("in_origin_y_i", w.origin, "subtile top-left pixel y (first beat of a list)");
     m.input_c("in_cols_i", sb + 1, "columns inside the image, 0..=S (first beat)");
     m.input_c("in_rows_i", sb + 1, "rows inside the image, 0..=S (first beat)");
+    m.input_c("in_final_i", 1, "with in_last_i: the piece ends the subtile (output it); else save its state");
+    m.input_c(
+        "in_resume_i",
+        1,
+        "first beat: continue subtile in_sub_i from its saved state (else start fresh)",
+    );
+    m.input_c(
+        "in_sub_i",
+        w.row_bits,
+        "first beat: the subtile's state slot (pieces of several subtiles interleave)",
+    );
     m.output_c("term_o", 1, "every pixel of the list being accepted is done: the rest may be skipped");
     m.output_c("out_valid_o", 1, "a finished subtile is offered");
     m.input_c("out_ready_i", 1, "taken when out_valid_o & out_ready_i");
@@ -375,6 +401,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.blank();
     m.comment("List tracking: first beat of a list, list id, the list's origin.");
     m.reg("first_in_q", 1).reg("lid_in_q", LID_BITS).reg("ox_in_q", w.origin).reg("oy_in_q", w.origin);
+    m.reg("sub_in_q", w.row_bits);
     m.reg("v0_q", 1).reg("b0_q", bw).reg("p0_q", pb);
     m.reg("term_q", 1).reg("term_lid_q", LID_BITS);
     for s in 1..=STAGES {
@@ -404,7 +431,8 @@ pub fn module(cfg: &GenConfig) -> Module {
             }
         ),
     );
-    m.wire_assign("en", 1, "~(fin_b & out_valid_q & ~out_ready_i)");
+    m.wire_assign("fin_out", 1, format!("fin_b & {}", fb("fin")));
+    m.wire_assign("en", 1, "~(fin_out & out_valid_q & ~out_ready_i)");
     m.assign("in_ready_o", "en & (~v0_q | end0)");
     m.assign("term_o", "term_q & (term_lid_q == lid_in_q) & ~first_in_q");
     // The beat as stored in S0.
@@ -426,6 +454,9 @@ pub fn module(cfg: &GenConfig) -> Module {
         ("empty", "in_empty_i".into()),
         ("last", "in_last_i".into()),
         ("first", "first_in_q".into()),
+        ("fin", "in_final_i".into()),
+        ("resume", "in_resume_i".into()),
+        ("sub", "first_in_q ? in_sub_i : sub_in_q".into()),
         ("lid", "lid_in_q".into()),
         ("pass", lit(pb, 0)),
         ("nop", lit(1, 0)),
@@ -474,7 +505,14 @@ pub fn module(cfg: &GenConfig) -> Module {
         ],
     );
     m.seq_noreset(vec![
-        if_("in_fire & first_in_q", vec![set("ox_in_q", "in_origin_x_i"), set("oy_in_q", "in_origin_y_i")]),
+        if_(
+            "in_fire & first_in_q",
+            vec![
+                set("ox_in_q", "in_origin_x_i"),
+                set("oy_in_q", "in_origin_y_i"),
+                set("sub_in_q", "in_sub_i"),
+            ],
+        ),
         if_("in_fire", vec![set("b0_q", "beat_in")]),
     ]);
     // Valid and bundle chain.
@@ -513,6 +551,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         };
         m.reg(format!("t_q{k}"), w.t).reg(format!("c_q{k}"), 3 * w.c).reg(format!("dn_q{k}"), 1);
         m.wire_assign(format!("wr{k}"), 1, sel);
+        m.wire_assign(format!("t_nx{k}"), w.t, format!("wr{k} ? l{l}_t_new : t_q{k}"));
         m.wire_assign(format!("c_nx{k}"), 3 * w.c, format!("wr{k} ? l{l}_c_new : c_q{k}"));
         m.wire_assign(format!("dn_nx{k}"), 1, format!("wr{k} ? l{l}_dn_new : dn_q{k}"));
         m.seq(
@@ -551,6 +590,34 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.wire_assign(format!("rd_dn{l}"), 1, pick("dn"));
     }
     m.wire_assign("all_done", 1, format!("&{{{}}}", dn_all.join(", ")));
+    // Saved subtile states: a piece that ends without in_final_i stores every pixel's state,
+    // and a resumed piece's first beat reads it back, both in S5, so they stay in order. One
+    // small memory per pixel (one write port each; a row per subtile would be one wide memory
+    // with a write port per pixel).
+    let sw = w.state_bits();
+    let slots = 1u32 << w.row_bits;
+    m.blank();
+    m.comment(format!(
+        "State bank: per pixel k, bank{{k}}[slot] = {{done, colour, T}} ({sw} bits) of {} subtiles.",
+        w.rows
+    ));
+    let mut saves = Vec::new();
+    for k in 0..npix {
+        m.mem(format!("bank{k}"), sw, slots);
+        saves.push(set(format!("bank{k}[{}]", fb("sub")), format!("{{dn_nx{k}, c_nx{k}, t_nx{k}}}")));
+    }
+    m.item(on_en(vec![if_(format!("fin_b & ~{}", fb("fin")), saves)]));
+    for l in 0..l_n {
+        let at = |k: u32| format!("bank{k}[{}]", fb("sub"));
+        let mut e = at((p_n - 1) * l_n + l);
+        for g in (0..p_n - 1).rev() {
+            e = format!("({} == {}) ? {} : {e}", fb("pass"), lit(pb, g as u64), at(g * l_n + l));
+        }
+        m.wire_assign(format!("bk{l}"), sw, e);
+        m.wire_assign(format!("bk_t{l}"), w.t, format!("bk{l}[{}:0]", w.t - 1));
+        m.wire_assign(format!("bk_c{l}"), 3 * w.c, format!("bk{l}[{}:{}]", w.t + 3 * w.c - 1, w.t));
+        m.wire_assign(format!("bk_dn{l}"), 1, format!("bk{l}[{}]", sw - 1));
+    }
     let last_b =
         if p_n == 1 { "1'b1".to_string() } else { format!("{} == {}", fb("pass"), lit(pb, p_n as u64 - 1)) };
     m.seq(
@@ -572,12 +639,12 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.seq(
         vec![set("out_valid_q", lit(1, 0))],
         vec![if_else(
-            "en & fin_b",
+            "en & fin_out",
             vec![set("out_valid_q", lit(1, 1))],
             vec![if_("out_ready_i", vec![set("out_valid_q", lit(1, 0))])],
         )],
     );
-    m.seq_noreset(vec![if_("en & fin_b", vec![set("out_rgb_q", "rgb_nx")])]);
+    m.seq_noreset(vec![if_("en & fin_out", vec![set("out_rgb_q", "rgb_nx")])]);
     m.assign("out_valid_o", "out_valid_q");
     m.assign("out_rgb_o", "out_rgb_q");
     m
@@ -763,9 +830,10 @@ fn lane(m: &mut Module, w: &ScuWidths, bd: &Bundle, l: u32) {
         1,
         format!("({} < {}) & ({} < {})", zx(&lx, sb, sb + 1), fb("cols"), zx(&ly, sb, sb + 1), fb("rows")),
     );
-    m.wire_assign(s("t_old"), t, format!("{} ? {} : rd_t{l}", fb("first"), lit(t, 1 << w.t_frac)));
-    m.wire_assign(s("c_old"), 3 * c, format!("{} ? {} : rd_c{l}", fb("first"), lit(3 * c, 0)));
-    m.wire_assign(s("dn_old"), 1, format!("{} ? ~{} : rd_dn{l}", fb("first"), s("inside")));
+    let (fr, rs) = (fb("first"), fb("resume"));
+    m.wire_assign(s("t_old"), t, format!("{fr} ? ({rs} ? bk_t{l} : {}) : rd_t{l}", lit(t, 1 << w.t_frac)));
+    m.wire_assign(s("c_old"), 3 * c, format!("{fr} ? ({rs} ? bk_c{l} : {}) : rd_c{l}", lit(3 * c, 0)));
+    m.wire_assign(s("dn_old"), 1, format!("{fr} ? ({rs} ? bk_dn{l} : ~{}) : rd_dn{l}", s("inside")));
     m.wire_assign(s("bl"), 1, format!("{} & ~{}", s("ok5_"), s("dn_old")));
     let ww = a + t + 1;
     m.wire_assign(
