@@ -30,7 +30,7 @@ module neo_raster_core (
 
 
   // Command registers and the main state.
-  reg  [2:0] st_q;
+  reg  [1:0] st_q;
   reg  [9:0] tx_q;
   reg  [9:0] ty_q;
   reg  [15:0] wd_q;
@@ -39,9 +39,22 @@ module neo_raster_core (
   reg  [31:0] feat_q;
   reg  [31:0] pix_q;
   reg  [31:0] len_q;
-  reg  multi_q;
-  reg  [31:0] seg_start_q;
-  reg  [8:0] seg_len_q;
+  reg  [1:0] ld_st_q;
+  reg  ld_bank_q;
+  reg  [31:0] ld_start_q;
+  reg  [8:0] ld_len_q;
+  reg  [31:0] ld_left_q;
+  reg  full0_q;
+  reg  full1_q;
+  reg  walked0_q;
+  reg  walked1_q;
+  reg  [8:0] blen0_q;
+  reg  [8:0] blen1_q;
+  reg  [31:0] bstart0_q;
+  reg  [31:0] bstart1_q;
+  reg  [1:0] rel_seg_q;
+  reg  wk_on_q;
+  reg  wk_bank_q;
   reg  [3:0] grp_q;
   reg  [8:0] iss_q;
   reg  [8:0] rcv_q;
@@ -50,28 +63,36 @@ module neo_raster_core (
   reg  done_q;
   reg  seek_q;
   reg  g0_done_q;
-  localparam [2:0] S_IDLE = 3'd0;
-  localparam [2:0] S_LOADT = 3'd1;
-  localparam [2:0] S_LOADF = 3'd2;
-  localparam [2:0] S_WALK = 3'd3;
-  localparam [2:0] S_SEGWAIT = 3'd4;
-  localparam [2:0] S_DRAIN = 3'd5;
-  reg  [46:0] tbuf [0:255];
-  reg  [246:0] fbuf [0:255];
-  reg  hbuf [0:255];
+  localparam [1:0] S_IDLE = 2'd0;
+  localparam [1:0] S_RUN = 2'd1;
+  localparam [1:0] S_DRAIN = 2'd2;
+  localparam [1:0] L_IDLE = 2'd0;
+  localparam [1:0] L_TABLE = 2'd1;
+  localparam [1:0] L_FEAT = 2'd2;
+  // Two banks of 256 entries: the loader fills one while the walk and the SCUs use the other.
+  reg  [46:0] tbuf [0:511];
+  reg  [246:0] fbuf [0:511];
+  reg  hbuf [0:511];
   wire cmd_fire;
   assign cmd_fire = cmd_valid_i & cmd_ready_o;
   assign cmd_ready_o = st_q == S_IDLE;
   wire [8:0] cmd_seg_len;
   assign cmd_seg_len = (cmd_len_i > 32'd256) ? 9'd256 : cmd_len_i[8:0];
+  wire [31:0] cmd_segs;
+  assign cmd_segs = (cmd_len_i == 32'd0) ? 32'd1 : (((cmd_len_i - 32'd1) >> 8) + 32'd1);
   wire [31:0] next_start;
-  assign next_start = seg_start_q + 32'd256;
+  assign next_start = ld_start_q + 32'd256;
   wire [31:0] rem_next;
   assign rem_next = len_q - next_start;
   wire [8:0] next_seg_len;
   assign next_seg_len = (rem_next > 32'd256) ? 9'd256 : rem_next[8:0];
+  // The walked segment (bank wk_bank_q).
+  wire [8:0] seg_len_w;
+  assign seg_len_w = wk_bank_q ? blen1_q : blen0_q;
+  wire [31:0] seg_start_w;
+  assign seg_start_w = wk_bank_q ? bstart1_q : bstart0_q;
   wire last_seg;
-  assign last_seg = (len_q - seg_start_q) <= 32'd256;
+  assign last_seg = (len_q - seg_start_w) <= 32'd256;
   wire last_grp;
   assign last_grp = grp_q == 4'd15;
 
@@ -92,24 +113,26 @@ module neo_raster_core (
 
   // LOAD: table bursts into tbuf, then one feature read per entry into fbuf.
   wire [8:0] left;
-  assign left = seg_len_q - iss_q;
+  assign left = ld_len_q - iss_q;
   wire [4:0] tlen;
   assign tlen = (left > 9'd16) ? 5'd16 : left[4:0];
   wire rd_t;
-  assign rd_t = st_q == S_LOADT;
-  assign rd_v = (rd_t | (st_q == S_LOADF)) & (iss_q != seg_len_q);
-  wire [7:0] iss_idx;
-  assign iss_idx = iss_q[7:0];
+  assign rd_t = ld_st_q == L_TABLE;
+  assign rd_v = (ld_st_q != L_IDLE) & (iss_q != ld_len_q);
+  wire [8:0] iss_idx;
+  assign iss_idx = {ld_bank_q, iss_q[7:0]};
   wire [30:0] iss_id;
   assign iss_id = tbuf[iss_idx][30:0];
   wire [31:0] rd_addr;
-  assign rd_addr = rd_t ? (tab_q + seg_start_q + {23'd0, iss_q}) : (feat_q + {1'b0, iss_id});
+  assign rd_addr = rd_t ? (tab_q + ld_start_q + {23'd0, iss_q}) : (feat_q + {1'b0, iss_id});
   wire [4:0] rd_len;
   assign rd_len = rd_t ? tlen : 5'd1;
-  wire [7:0] rcv_idx;
-  assign rcv_idx = rcv_q[7:0];
+  wire [8:0] rcv_idx;
+  assign rcv_idx = {ld_bank_q, rcv_q[7:0]};
   wire loaded;
-  assign loaded = (iss_q == seg_len_q) & (rcv_q == seg_len_q);
+  assign loaded = (iss_q == ld_len_q) & (rcv_q == ld_len_q);
+  wire ld_done;
+  assign ld_done = (ld_st_q == L_FEAT) & loaded;
   always @(posedge clk_i) begin
     if (mem_rsp_valid_i) begin
       if (rd_t) begin
@@ -122,15 +145,15 @@ module neo_raster_core (
 
   // WALK: 4 table entries per cycle through the ITUs, once per subtile group.
   wire walk;
-  assign walk = (st_q == S_WALK) & ~seek_q;
+  assign walk = (st_q == S_RUN) & wk_on_q & ~seek_q;
   wire [9:0] quad_end;
   assign quad_end = {2'd0, base_q} + 10'd4;
   // Quad skipping: qhit[q][g] = quad q of the segment touches group g (from group 0's walk).
-  reg  [15:0] qhit [0:63];
+  reg  [15:0] qhit [0:127];
   wire [5:0] cur_q;
   assign cur_q = base_q[7:2];
   wire [63:0] qcol;
-  assign qcol = {(qhit[63][grp_q] & (9'd252 < seg_len_q)), (qhit[62][grp_q] & (9'd248 < seg_len_q)), (qhit[61][grp_q] & (9'd244 < seg_len_q)), (qhit[60][grp_q] & (9'd240 < seg_len_q)), (qhit[59][grp_q] & (9'd236 < seg_len_q)), (qhit[58][grp_q] & (9'd232 < seg_len_q)), (qhit[57][grp_q] & (9'd228 < seg_len_q)), (qhit[56][grp_q] & (9'd224 < seg_len_q)), (qhit[55][grp_q] & (9'd220 < seg_len_q)), (qhit[54][grp_q] & (9'd216 < seg_len_q)), (qhit[53][grp_q] & (9'd212 < seg_len_q)), (qhit[52][grp_q] & (9'd208 < seg_len_q)), (qhit[51][grp_q] & (9'd204 < seg_len_q)), (qhit[50][grp_q] & (9'd200 < seg_len_q)), (qhit[49][grp_q] & (9'd196 < seg_len_q)), (qhit[48][grp_q] & (9'd192 < seg_len_q)), (qhit[47][grp_q] & (9'd188 < seg_len_q)), (qhit[46][grp_q] & (9'd184 < seg_len_q)), (qhit[45][grp_q] & (9'd180 < seg_len_q)), (qhit[44][grp_q] & (9'd176 < seg_len_q)), (qhit[43][grp_q] & (9'd172 < seg_len_q)), (qhit[42][grp_q] & (9'd168 < seg_len_q)), (qhit[41][grp_q] & (9'd164 < seg_len_q)), (qhit[40][grp_q] & (9'd160 < seg_len_q)), (qhit[39][grp_q] & (9'd156 < seg_len_q)), (qhit[38][grp_q] & (9'd152 < seg_len_q)), (qhit[37][grp_q] & (9'd148 < seg_len_q)), (qhit[36][grp_q] & (9'd144 < seg_len_q)), (qhit[35][grp_q] & (9'd140 < seg_len_q)), (qhit[34][grp_q] & (9'd136 < seg_len_q)), (qhit[33][grp_q] & (9'd132 < seg_len_q)), (qhit[32][grp_q] & (9'd128 < seg_len_q)), (qhit[31][grp_q] & (9'd124 < seg_len_q)), (qhit[30][grp_q] & (9'd120 < seg_len_q)), (qhit[29][grp_q] & (9'd116 < seg_len_q)), (qhit[28][grp_q] & (9'd112 < seg_len_q)), (qhit[27][grp_q] & (9'd108 < seg_len_q)), (qhit[26][grp_q] & (9'd104 < seg_len_q)), (qhit[25][grp_q] & (9'd100 < seg_len_q)), (qhit[24][grp_q] & (9'd96 < seg_len_q)), (qhit[23][grp_q] & (9'd92 < seg_len_q)), (qhit[22][grp_q] & (9'd88 < seg_len_q)), (qhit[21][grp_q] & (9'd84 < seg_len_q)), (qhit[20][grp_q] & (9'd80 < seg_len_q)), (qhit[19][grp_q] & (9'd76 < seg_len_q)), (qhit[18][grp_q] & (9'd72 < seg_len_q)), (qhit[17][grp_q] & (9'd68 < seg_len_q)), (qhit[16][grp_q] & (9'd64 < seg_len_q)), (qhit[15][grp_q] & (9'd60 < seg_len_q)), (qhit[14][grp_q] & (9'd56 < seg_len_q)), (qhit[13][grp_q] & (9'd52 < seg_len_q)), (qhit[12][grp_q] & (9'd48 < seg_len_q)), (qhit[11][grp_q] & (9'd44 < seg_len_q)), (qhit[10][grp_q] & (9'd40 < seg_len_q)), (qhit[9][grp_q] & (9'd36 < seg_len_q)), (qhit[8][grp_q] & (9'd32 < seg_len_q)), (qhit[7][grp_q] & (9'd28 < seg_len_q)), (qhit[6][grp_q] & (9'd24 < seg_len_q)), (qhit[5][grp_q] & (9'd20 < seg_len_q)), (qhit[4][grp_q] & (9'd16 < seg_len_q)), (qhit[3][grp_q] & (9'd12 < seg_len_q)), (qhit[2][grp_q] & (9'd8 < seg_len_q)), (qhit[1][grp_q] & (9'd4 < seg_len_q)), (qhit[0][grp_q] & (9'd0 < seg_len_q))};
+  assign qcol = {(qhit[{wk_bank_q, 6'd63}][grp_q] & (9'd252 < seg_len_w)), (qhit[{wk_bank_q, 6'd62}][grp_q] & (9'd248 < seg_len_w)), (qhit[{wk_bank_q, 6'd61}][grp_q] & (9'd244 < seg_len_w)), (qhit[{wk_bank_q, 6'd60}][grp_q] & (9'd240 < seg_len_w)), (qhit[{wk_bank_q, 6'd59}][grp_q] & (9'd236 < seg_len_w)), (qhit[{wk_bank_q, 6'd58}][grp_q] & (9'd232 < seg_len_w)), (qhit[{wk_bank_q, 6'd57}][grp_q] & (9'd228 < seg_len_w)), (qhit[{wk_bank_q, 6'd56}][grp_q] & (9'd224 < seg_len_w)), (qhit[{wk_bank_q, 6'd55}][grp_q] & (9'd220 < seg_len_w)), (qhit[{wk_bank_q, 6'd54}][grp_q] & (9'd216 < seg_len_w)), (qhit[{wk_bank_q, 6'd53}][grp_q] & (9'd212 < seg_len_w)), (qhit[{wk_bank_q, 6'd52}][grp_q] & (9'd208 < seg_len_w)), (qhit[{wk_bank_q, 6'd51}][grp_q] & (9'd204 < seg_len_w)), (qhit[{wk_bank_q, 6'd50}][grp_q] & (9'd200 < seg_len_w)), (qhit[{wk_bank_q, 6'd49}][grp_q] & (9'd196 < seg_len_w)), (qhit[{wk_bank_q, 6'd48}][grp_q] & (9'd192 < seg_len_w)), (qhit[{wk_bank_q, 6'd47}][grp_q] & (9'd188 < seg_len_w)), (qhit[{wk_bank_q, 6'd46}][grp_q] & (9'd184 < seg_len_w)), (qhit[{wk_bank_q, 6'd45}][grp_q] & (9'd180 < seg_len_w)), (qhit[{wk_bank_q, 6'd44}][grp_q] & (9'd176 < seg_len_w)), (qhit[{wk_bank_q, 6'd43}][grp_q] & (9'd172 < seg_len_w)), (qhit[{wk_bank_q, 6'd42}][grp_q] & (9'd168 < seg_len_w)), (qhit[{wk_bank_q, 6'd41}][grp_q] & (9'd164 < seg_len_w)), (qhit[{wk_bank_q, 6'd40}][grp_q] & (9'd160 < seg_len_w)), (qhit[{wk_bank_q, 6'd39}][grp_q] & (9'd156 < seg_len_w)), (qhit[{wk_bank_q, 6'd38}][grp_q] & (9'd152 < seg_len_w)), (qhit[{wk_bank_q, 6'd37}][grp_q] & (9'd148 < seg_len_w)), (qhit[{wk_bank_q, 6'd36}][grp_q] & (9'd144 < seg_len_w)), (qhit[{wk_bank_q, 6'd35}][grp_q] & (9'd140 < seg_len_w)), (qhit[{wk_bank_q, 6'd34}][grp_q] & (9'd136 < seg_len_w)), (qhit[{wk_bank_q, 6'd33}][grp_q] & (9'd132 < seg_len_w)), (qhit[{wk_bank_q, 6'd32}][grp_q] & (9'd128 < seg_len_w)), (qhit[{wk_bank_q, 6'd31}][grp_q] & (9'd124 < seg_len_w)), (qhit[{wk_bank_q, 6'd30}][grp_q] & (9'd120 < seg_len_w)), (qhit[{wk_bank_q, 6'd29}][grp_q] & (9'd116 < seg_len_w)), (qhit[{wk_bank_q, 6'd28}][grp_q] & (9'd112 < seg_len_w)), (qhit[{wk_bank_q, 6'd27}][grp_q] & (9'd108 < seg_len_w)), (qhit[{wk_bank_q, 6'd26}][grp_q] & (9'd104 < seg_len_w)), (qhit[{wk_bank_q, 6'd25}][grp_q] & (9'd100 < seg_len_w)), (qhit[{wk_bank_q, 6'd24}][grp_q] & (9'd96 < seg_len_w)), (qhit[{wk_bank_q, 6'd23}][grp_q] & (9'd92 < seg_len_w)), (qhit[{wk_bank_q, 6'd22}][grp_q] & (9'd88 < seg_len_w)), (qhit[{wk_bank_q, 6'd21}][grp_q] & (9'd84 < seg_len_w)), (qhit[{wk_bank_q, 6'd20}][grp_q] & (9'd80 < seg_len_w)), (qhit[{wk_bank_q, 6'd19}][grp_q] & (9'd76 < seg_len_w)), (qhit[{wk_bank_q, 6'd18}][grp_q] & (9'd72 < seg_len_w)), (qhit[{wk_bank_q, 6'd17}][grp_q] & (9'd68 < seg_len_w)), (qhit[{wk_bank_q, 6'd16}][grp_q] & (9'd64 < seg_len_w)), (qhit[{wk_bank_q, 6'd15}][grp_q] & (9'd60 < seg_len_w)), (qhit[{wk_bank_q, 6'd14}][grp_q] & (9'd56 < seg_len_w)), (qhit[{wk_bank_q, 6'd13}][grp_q] & (9'd52 < seg_len_w)), (qhit[{wk_bank_q, 6'd12}][grp_q] & (9'd48 < seg_len_w)), (qhit[{wk_bank_q, 6'd11}][grp_q] & (9'd44 < seg_len_w)), (qhit[{wk_bank_q, 6'd10}][grp_q] & (9'd40 < seg_len_w)), (qhit[{wk_bank_q, 6'd9}][grp_q] & (9'd36 < seg_len_w)), (qhit[{wk_bank_q, 6'd8}][grp_q] & (9'd32 < seg_len_w)), (qhit[{wk_bank_q, 6'd7}][grp_q] & (9'd28 < seg_len_w)), (qhit[{wk_bank_q, 6'd6}][grp_q] & (9'd24 < seg_len_w)), (qhit[{wk_bank_q, 6'd5}][grp_q] & (9'd20 < seg_len_w)), (qhit[{wk_bank_q, 6'd4}][grp_q] & (9'd16 < seg_len_w)), (qhit[{wk_bank_q, 6'd3}][grp_q] & (9'd12 < seg_len_w)), (qhit[{wk_bank_q, 6'd2}][grp_q] & (9'd8 < seg_len_w)), (qhit[{wk_bank_q, 6'd1}][grp_q] & (9'd4 < seg_len_w)), (qhit[{wk_bank_q, 6'd0}][grp_q] & (9'd0 < seg_len_w))};
   wire [63:0] qabove;
   assign qabove = qcol & (({64{1'b1}} << cur_q) << 1);
   wire [63:0] qf_oh;
@@ -150,7 +173,7 @@ module neo_raster_core (
   wire [7:0] qfirst_base;
   assign qfirst_base = {qf_idx, 2'd0};
   wire last_quad;
-  assign last_quad = (grp_q == 4'd0) ? (quad_end >= {1'b0, seg_len_q}) : ~(|qabove);
+  assign last_quad = (grp_q == 4'd0) ? (quad_end >= {1'b0, seg_len_w}) : ~(|qabove);
   wire itu_in_ready;
   wire itu_out_valid;
   wire itu_out_ready;
@@ -160,8 +183,10 @@ module neo_raster_core (
   assign itu_out_fire = itu_out_valid & itu_out_ready;
   wire [7:0] li0;
   assign li0 = base_q + 8'd0;
+  wire [8:0] lb0;
+  assign lb0 = {wk_bank_q, li0};
   wire lv0;
-  assign lv0 = ({1'b0, li0} < seg_len_q) & fbuf[li0][246];
+  assign lv0 = ({1'b0, li0} < seg_len_w) & fbuf[lb0][246];
   wire itu_rdy0;
   wire itu_ov0;
   wire [63:0] bm0;
@@ -172,8 +197,8 @@ module neo_raster_core (
     .rst_ni(rst_ni),
     .in_valid_i(walk),
     .in_ready_o(itu_rdy0),
-    .mean_i(fbuf[li0][47:0]),
-    .geom_i(fbuf[li0][229:150]),
+    .mean_i(fbuf[lb0][47:0]),
+    .geom_i(fbuf[lb0][229:150]),
     .tile_x_i(tx_q),
     .tile_y_i(ty_q),
     .tag_i(16'd0),
@@ -185,8 +210,10 @@ module neo_raster_core (
   );
   wire [7:0] li1;
   assign li1 = base_q + 8'd1;
+  wire [8:0] lb1;
+  assign lb1 = {wk_bank_q, li1};
   wire lv1;
-  assign lv1 = ({1'b0, li1} < seg_len_q) & fbuf[li1][246];
+  assign lv1 = ({1'b0, li1} < seg_len_w) & fbuf[lb1][246];
   wire itu_rdy1;
   wire itu_ov1;
   wire [63:0] bm1;
@@ -197,8 +224,8 @@ module neo_raster_core (
     .rst_ni(rst_ni),
     .in_valid_i(walk),
     .in_ready_o(itu_rdy1),
-    .mean_i(fbuf[li1][47:0]),
-    .geom_i(fbuf[li1][229:150]),
+    .mean_i(fbuf[lb1][47:0]),
+    .geom_i(fbuf[lb1][229:150]),
     .tile_x_i(tx_q),
     .tile_y_i(ty_q),
     .tag_i(16'd0),
@@ -210,8 +237,10 @@ module neo_raster_core (
   );
   wire [7:0] li2;
   assign li2 = base_q + 8'd2;
+  wire [8:0] lb2;
+  assign lb2 = {wk_bank_q, li2};
   wire lv2;
-  assign lv2 = ({1'b0, li2} < seg_len_q) & fbuf[li2][246];
+  assign lv2 = ({1'b0, li2} < seg_len_w) & fbuf[lb2][246];
   wire itu_rdy2;
   wire itu_ov2;
   wire [63:0] bm2;
@@ -222,8 +251,8 @@ module neo_raster_core (
     .rst_ni(rst_ni),
     .in_valid_i(walk),
     .in_ready_o(itu_rdy2),
-    .mean_i(fbuf[li2][47:0]),
-    .geom_i(fbuf[li2][229:150]),
+    .mean_i(fbuf[lb2][47:0]),
+    .geom_i(fbuf[lb2][229:150]),
     .tile_x_i(tx_q),
     .tile_y_i(ty_q),
     .tag_i(16'd0),
@@ -235,8 +264,10 @@ module neo_raster_core (
   );
   wire [7:0] li3;
   assign li3 = base_q + 8'd3;
+  wire [8:0] lb3;
+  assign lb3 = {wk_bank_q, li3};
   wire lv3;
-  assign lv3 = ({1'b0, li3} < seg_len_q) & fbuf[li3][246];
+  assign lv3 = ({1'b0, li3} < seg_len_w) & fbuf[lb3][246];
   wire itu_rdy3;
   wire itu_ov3;
   wire [63:0] bm3;
@@ -247,8 +278,8 @@ module neo_raster_core (
     .rst_ni(rst_ni),
     .in_valid_i(walk),
     .in_ready_o(itu_rdy3),
-    .mean_i(fbuf[li3][47:0]),
-    .geom_i(fbuf[li3][229:150]),
+    .mean_i(fbuf[lb3][47:0]),
+    .geom_i(fbuf[lb3][229:150]),
     .tile_x_i(tx_q),
     .tile_y_i(ty_q),
     .tag_i(16'd0),
@@ -264,11 +295,11 @@ module neo_raster_core (
   wire unused_tags;
   assign unused_tags = ^{tag_out0, tag_out1, tag_out2, tag_out3};
   // Quad sideband through 3 stages that advance with the ITUs' (in_ready_o = their stage enable).
-  wire [18:0] sb_in;
-  assign sb_in = {(seg_start_q != 32'd0), (last_quad & last_seg), last_quad, grp_q, base_q, lv3, lv2, lv1, lv0};
-  reg  [18:0] sb1_q;
-  reg  [18:0] sb2_q;
-  reg  [18:0] sb3_q;
+  wire [19:0] sb_in;
+  assign sb_in = {(seg_start_w != 32'd0), (last_quad & last_seg), last_quad, grp_q, wk_bank_q, base_q, lv3, lv2, lv1, lv0};
+  reg  [19:0] sb1_q;
+  reg  [19:0] sb2_q;
+  reg  [19:0] sb3_q;
   always @(posedge clk_i) begin
     if (itu_in_ready) begin
       sb1_q <= sb_in;
@@ -284,16 +315,16 @@ module neo_raster_core (
   assign o_lv2 = sb3_q[2];
   wire o_lv3;
   assign o_lv3 = sb3_q[3];
-  wire [7:0] o_base;
-  assign o_base = sb3_q[11:4];
+  wire [8:0] o_base;
+  assign o_base = sb3_q[12:4];
   wire [3:0] o_grp;
-  assign o_grp = sb3_q[15:12];
+  assign o_grp = sb3_q[16:13];
   wire o_seg_last;
-  assign o_seg_last = sb3_q[16];
+  assign o_seg_last = sb3_q[17];
   wire o_list_last;
-  assign o_list_last = sb3_q[17];
+  assign o_list_last = sb3_q[18];
   wire o_resume;
-  assign o_resume = sb3_q[18];
+  assign o_resume = sb3_q[19];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       inflight_q <= 3'd0;
@@ -308,10 +339,10 @@ module neo_raster_core (
   // Group 0's results: every entry's valid bit (the OR over all subtiles).
   always @(posedge clk_i) begin
     if (itu_out_fire & (o_grp == 4'd0)) begin
-      hbuf[o_base + 8'd0] <= hit0;
-      hbuf[o_base + 8'd1] <= hit1;
-      hbuf[o_base + 8'd2] <= hit2;
-      hbuf[o_base + 8'd3] <= hit3;
+      hbuf[o_base + 9'd0] <= hit0;
+      hbuf[o_base + 9'd1] <= hit1;
+      hbuf[o_base + 9'd2] <= hit2;
+      hbuf[o_base + 9'd3] <= hit3;
     end
   end
   // Group 0's results also give each quad's groups (qhit) and, with its last quad, g0_done.
@@ -319,14 +350,14 @@ module neo_raster_core (
   assign o_qhit = {((o_lv0 & (|bm0[63:60])) | (o_lv1 & (|bm1[63:60])) | (o_lv2 & (|bm2[63:60])) | (o_lv3 & (|bm3[63:60]))), ((o_lv0 & (|bm0[59:56])) | (o_lv1 & (|bm1[59:56])) | (o_lv2 & (|bm2[59:56])) | (o_lv3 & (|bm3[59:56]))), ((o_lv0 & (|bm0[55:52])) | (o_lv1 & (|bm1[55:52])) | (o_lv2 & (|bm2[55:52])) | (o_lv3 & (|bm3[55:52]))), ((o_lv0 & (|bm0[51:48])) | (o_lv1 & (|bm1[51:48])) | (o_lv2 & (|bm2[51:48])) | (o_lv3 & (|bm3[51:48]))), ((o_lv0 & (|bm0[47:44])) | (o_lv1 & (|bm1[47:44])) | (o_lv2 & (|bm2[47:44])) | (o_lv3 & (|bm3[47:44]))), ((o_lv0 & (|bm0[43:40])) | (o_lv1 & (|bm1[43:40])) | (o_lv2 & (|bm2[43:40])) | (o_lv3 & (|bm3[43:40]))), ((o_lv0 & (|bm0[39:36])) | (o_lv1 & (|bm1[39:36])) | (o_lv2 & (|bm2[39:36])) | (o_lv3 & (|bm3[39:36]))), ((o_lv0 & (|bm0[35:32])) | (o_lv1 & (|bm1[35:32])) | (o_lv2 & (|bm2[35:32])) | (o_lv3 & (|bm3[35:32]))), ((o_lv0 & (|bm0[31:28])) | (o_lv1 & (|bm1[31:28])) | (o_lv2 & (|bm2[31:28])) | (o_lv3 & (|bm3[31:28]))), ((o_lv0 & (|bm0[27:24])) | (o_lv1 & (|bm1[27:24])) | (o_lv2 & (|bm2[27:24])) | (o_lv3 & (|bm3[27:24]))), ((o_lv0 & (|bm0[23:20])) | (o_lv1 & (|bm1[23:20])) | (o_lv2 & (|bm2[23:20])) | (o_lv3 & (|bm3[23:20]))), ((o_lv0 & (|bm0[19:16])) | (o_lv1 & (|bm1[19:16])) | (o_lv2 & (|bm2[19:16])) | (o_lv3 & (|bm3[19:16]))), ((o_lv0 & (|bm0[15:12])) | (o_lv1 & (|bm1[15:12])) | (o_lv2 & (|bm2[15:12])) | (o_lv3 & (|bm3[15:12]))), ((o_lv0 & (|bm0[11:8])) | (o_lv1 & (|bm1[11:8])) | (o_lv2 & (|bm2[11:8])) | (o_lv3 & (|bm3[11:8]))), ((o_lv0 & (|bm0[7:4])) | (o_lv1 & (|bm1[7:4])) | (o_lv2 & (|bm2[7:4])) | (o_lv3 & (|bm3[7:4]))), ((o_lv0 & (|bm0[3:0])) | (o_lv1 & (|bm1[3:0])) | (o_lv2 & (|bm2[3:0])) | (o_lv3 & (|bm3[3:0])))};
   always @(posedge clk_i) begin
     if (itu_out_fire & (o_grp == 4'd0)) begin
-      qhit[o_base[7:2]] <= o_qhit;
+      qhit[o_base[8:2]] <= o_qhit;
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       g0_done_q <= 1'b0;
     end else begin
-      if (st_q == S_LOADT) begin
+      if (wk_start) begin
         g0_done_q <= 1'b0;
       end else if (itu_out_fire & (o_grp == 4'd0) & o_seg_last) begin
         g0_done_q <= 1'b1;
@@ -343,7 +374,7 @@ module neo_raster_core (
   assign rmask0 = {(o_lv3 & bm3[rsub0]), (o_lv2 & bm2[rsub0]), (o_lv1 & bm1[rsub0]), (o_lv0 & bm0[rsub0])};
   wire push0;
   assign push0 = itu_out_fire & ((|rmask0) | o_seg_last);
-  reg  [14:0] fifo0 [0:15];
+  reg  [15:0] fifo0 [0:15];
   reg  [4:0] fwp0_q;
   reg  [4:0] frp0_q;
   wire [4:0] fcnt0;
@@ -377,7 +408,7 @@ module neo_raster_core (
   assign rmask1 = {(o_lv3 & bm3[rsub1]), (o_lv2 & bm2[rsub1]), (o_lv1 & bm1[rsub1]), (o_lv0 & bm0[rsub1])};
   wire push1;
   assign push1 = itu_out_fire & ((|rmask1) | o_seg_last);
-  reg  [14:0] fifo1 [0:15];
+  reg  [15:0] fifo1 [0:15];
   reg  [4:0] fwp1_q;
   reg  [4:0] frp1_q;
   wire [4:0] fcnt1;
@@ -411,7 +442,7 @@ module neo_raster_core (
   assign rmask2 = {(o_lv3 & bm3[rsub2]), (o_lv2 & bm2[rsub2]), (o_lv1 & bm1[rsub2]), (o_lv0 & bm0[rsub2])};
   wire push2;
   assign push2 = itu_out_fire & ((|rmask2) | o_seg_last);
-  reg  [14:0] fifo2 [0:15];
+  reg  [15:0] fifo2 [0:15];
   reg  [4:0] fwp2_q;
   reg  [4:0] frp2_q;
   wire [4:0] fcnt2;
@@ -445,7 +476,7 @@ module neo_raster_core (
   assign rmask3 = {(o_lv3 & bm3[rsub3]), (o_lv2 & bm2[rsub3]), (o_lv1 & bm1[rsub3]), (o_lv0 & bm0[rsub3])};
   wire push3;
   assign push3 = itu_out_fire & ((|rmask3) | o_seg_last);
-  reg  [14:0] fifo3 [0:15];
+  reg  [15:0] fifo3 [0:15];
   reg  [4:0] fwp3_q;
   reg  [4:0] frp3_q;
   wire [4:0] fcnt3;
@@ -478,7 +509,7 @@ module neo_raster_core (
   // Feeders: per SCU the current element; one beat per set mask bit (lowest first), or one empty
   // beat for a list's final element with an empty mask. Subtile of SCU j's list: {list group, j}.
   reg  cv0_q;
-  reg  [7:0] cbase0_q;
+  reg  [8:0] cbase0_q;
   reg  [3:0] cmask0_q;
   reg  clast0_q;
   reg  [3:0] lgrp0_q;
@@ -487,8 +518,8 @@ module neo_raster_core (
   reg  rel0_q;
   wire [1:0] flane0;
   assign flane0 = cmask0_q[0] ? 2'd0 : (cmask0_q[1] ? 2'd1 : (cmask0_q[2] ? 2'd2 : (cmask0_q[3] ? 2'd3 : (2'd0))));
-  wire [7:0] fidx0;
-  assign fidx0 = cbase0_q + {6'd0, flane0};
+  wire [8:0] fidx0;
+  assign fidx0 = cbase0_q + {7'd0, flane0};
   wire [3:0] frest0;
   assign frest0 = cmask0_q & (cmask0_q - 4'd1);
   wire fempty_beat0;
@@ -502,7 +533,7 @@ module neo_raster_core (
   wire edone0;
   assign edone0 = beat0 & ~(|frest0);
   assign pop0 = ~fempty0 & (~cv0_q | edone0);
-  wire [14:0] fhead0;
+  wire [15:0] fhead0;
   assign fhead0 = fifo0[frp0_q[3:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -526,11 +557,11 @@ module neo_raster_core (
   end
   always @(posedge clk_i) begin
     if (pop0) begin
-      cbase0_q <= fhead0[7:0];
-      cmask0_q <= fhead0[11:8];
-      cres0_q <= fhead0[12];
-      clast0_q <= fhead0[13];
-      cfin0_q <= fhead0[14];
+      cbase0_q <= fhead0[8:0];
+      cmask0_q <= fhead0[12:9];
+      cres0_q <= fhead0[13];
+      clast0_q <= fhead0[14];
+      cfin0_q <= fhead0[15];
     end else if (beat0) begin
       cmask0_q <= frest0;
     end
@@ -581,7 +612,7 @@ module neo_raster_core (
     .out_rgb_o(scu_rgb0)
   );
   reg  cv1_q;
-  reg  [7:0] cbase1_q;
+  reg  [8:0] cbase1_q;
   reg  [3:0] cmask1_q;
   reg  clast1_q;
   reg  [3:0] lgrp1_q;
@@ -590,8 +621,8 @@ module neo_raster_core (
   reg  rel1_q;
   wire [1:0] flane1;
   assign flane1 = cmask1_q[0] ? 2'd0 : (cmask1_q[1] ? 2'd1 : (cmask1_q[2] ? 2'd2 : (cmask1_q[3] ? 2'd3 : (2'd0))));
-  wire [7:0] fidx1;
-  assign fidx1 = cbase1_q + {6'd0, flane1};
+  wire [8:0] fidx1;
+  assign fidx1 = cbase1_q + {7'd0, flane1};
   wire [3:0] frest1;
   assign frest1 = cmask1_q & (cmask1_q - 4'd1);
   wire fempty_beat1;
@@ -605,7 +636,7 @@ module neo_raster_core (
   wire edone1;
   assign edone1 = beat1 & ~(|frest1);
   assign pop1 = ~fempty1 & (~cv1_q | edone1);
-  wire [14:0] fhead1;
+  wire [15:0] fhead1;
   assign fhead1 = fifo1[frp1_q[3:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -629,11 +660,11 @@ module neo_raster_core (
   end
   always @(posedge clk_i) begin
     if (pop1) begin
-      cbase1_q <= fhead1[7:0];
-      cmask1_q <= fhead1[11:8];
-      cres1_q <= fhead1[12];
-      clast1_q <= fhead1[13];
-      cfin1_q <= fhead1[14];
+      cbase1_q <= fhead1[8:0];
+      cmask1_q <= fhead1[12:9];
+      cres1_q <= fhead1[13];
+      clast1_q <= fhead1[14];
+      cfin1_q <= fhead1[15];
     end else if (beat1) begin
       cmask1_q <= frest1;
     end
@@ -684,7 +715,7 @@ module neo_raster_core (
     .out_rgb_o(scu_rgb1)
   );
   reg  cv2_q;
-  reg  [7:0] cbase2_q;
+  reg  [8:0] cbase2_q;
   reg  [3:0] cmask2_q;
   reg  clast2_q;
   reg  [3:0] lgrp2_q;
@@ -693,8 +724,8 @@ module neo_raster_core (
   reg  rel2_q;
   wire [1:0] flane2;
   assign flane2 = cmask2_q[0] ? 2'd0 : (cmask2_q[1] ? 2'd1 : (cmask2_q[2] ? 2'd2 : (cmask2_q[3] ? 2'd3 : (2'd0))));
-  wire [7:0] fidx2;
-  assign fidx2 = cbase2_q + {6'd0, flane2};
+  wire [8:0] fidx2;
+  assign fidx2 = cbase2_q + {7'd0, flane2};
   wire [3:0] frest2;
   assign frest2 = cmask2_q & (cmask2_q - 4'd1);
   wire fempty_beat2;
@@ -708,7 +739,7 @@ module neo_raster_core (
   wire edone2;
   assign edone2 = beat2 & ~(|frest2);
   assign pop2 = ~fempty2 & (~cv2_q | edone2);
-  wire [14:0] fhead2;
+  wire [15:0] fhead2;
   assign fhead2 = fifo2[frp2_q[3:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -732,11 +763,11 @@ module neo_raster_core (
   end
   always @(posedge clk_i) begin
     if (pop2) begin
-      cbase2_q <= fhead2[7:0];
-      cmask2_q <= fhead2[11:8];
-      cres2_q <= fhead2[12];
-      clast2_q <= fhead2[13];
-      cfin2_q <= fhead2[14];
+      cbase2_q <= fhead2[8:0];
+      cmask2_q <= fhead2[12:9];
+      cres2_q <= fhead2[13];
+      clast2_q <= fhead2[14];
+      cfin2_q <= fhead2[15];
     end else if (beat2) begin
       cmask2_q <= frest2;
     end
@@ -787,7 +818,7 @@ module neo_raster_core (
     .out_rgb_o(scu_rgb2)
   );
   reg  cv3_q;
-  reg  [7:0] cbase3_q;
+  reg  [8:0] cbase3_q;
   reg  [3:0] cmask3_q;
   reg  clast3_q;
   reg  [3:0] lgrp3_q;
@@ -796,8 +827,8 @@ module neo_raster_core (
   reg  rel3_q;
   wire [1:0] flane3;
   assign flane3 = cmask3_q[0] ? 2'd0 : (cmask3_q[1] ? 2'd1 : (cmask3_q[2] ? 2'd2 : (cmask3_q[3] ? 2'd3 : (2'd0))));
-  wire [7:0] fidx3;
-  assign fidx3 = cbase3_q + {6'd0, flane3};
+  wire [8:0] fidx3;
+  assign fidx3 = cbase3_q + {7'd0, flane3};
   wire [3:0] frest3;
   assign frest3 = cmask3_q & (cmask3_q - 4'd1);
   wire fempty_beat3;
@@ -811,7 +842,7 @@ module neo_raster_core (
   wire edone3;
   assign edone3 = beat3 & ~(|frest3);
   assign pop3 = ~fempty3 & (~cv3_q | edone3);
-  wire [14:0] fhead3;
+  wire [15:0] fhead3;
   assign fhead3 = fifo3[frp3_q[3:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
@@ -835,11 +866,11 @@ module neo_raster_core (
   end
   always @(posedge clk_i) begin
     if (pop3) begin
-      cbase3_q <= fhead3[7:0];
-      cmask3_q <= fhead3[11:8];
-      cres3_q <= fhead3[12];
-      clast3_q <= fhead3[13];
-      cfin3_q <= fhead3[14];
+      cbase3_q <= fhead3[8:0];
+      cmask3_q <= fhead3[12:9];
+      cres3_q <= fhead3[13];
+      clast3_q <= fhead3[14];
+      cfin3_q <= fhead3[15];
     end else if (beat3) begin
       cmask3_q <= frest3;
     end
@@ -935,27 +966,36 @@ module neo_raster_core (
   // Write-back of the segment once its group-0 results are in: {present & OR, present ? depth key : key, id}.
   reg  wb_busy_q;
   reg  [7:0] wb_ptr_q;
+  reg  wb_bank_q;
   assign wb_v = wb_busy_q;
+  wire [8:0] wb_idx;
+  assign wb_idx = {wb_bank_q, wb_ptr_q};
+  wire [31:0] wb_start;
+  assign wb_start = wb_bank_q ? bstart1_q : bstart0_q;
   wire wb_present;
-  assign wb_present = fbuf[wb_ptr_q][246];
+  assign wb_present = fbuf[wb_idx][246];
   wire [15:0] wb_key;
-  assign wb_key = wb_present ? fbuf[wb_ptr_q][245:230] : tbuf[wb_ptr_q][46:31];
+  assign wb_key = wb_present ? fbuf[wb_idx][245:230] : tbuf[wb_idx][46:31];
   wire [47:0] wb_entry;
-  assign wb_entry = {(wb_present & hbuf[wb_ptr_q]), wb_key, tbuf[wb_ptr_q][30:0]};
+  assign wb_entry = {(wb_present & hbuf[wb_idx]), wb_key, tbuf[wb_idx][30:0]};
   wire [31:0] wb_addr;
-  assign wb_addr = tab_q + seg_start_q + {24'd0, wb_ptr_q};
+  assign wb_addr = tab_q + wb_start + {24'd0, wb_ptr_q};
   wire [8:0] wb_next;
   assign wb_next = {1'b0, wb_ptr_q} + 9'd1;
   wire wb_end;
-  assign wb_end = wb_next == seg_len_q;
+  assign wb_end = wb_next == (wb_bank_q ? blen1_q : blen0_q);
+  wire o_bank;
+  assign o_bank = o_base[8];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       wb_busy_q <= 1'b0;
       wb_ptr_q <= 8'd0;
+      wb_bank_q <= 1'b0;
     end else begin
-      if (itu_out_fire & (o_grp == 4'd0) & o_seg_last & (seg_len_q != 9'd0)) begin
+      if (itu_out_fire & (o_grp == 4'd0) & o_seg_last & ((o_bank ? blen1_q : blen0_q) != 9'd0)) begin
         wb_busy_q <= 1'b1;
         wb_ptr_q <= 8'd0;
+        wb_bank_q <= o_bank;
       end
       if (wb_g) begin
         if (wb_end) begin
@@ -972,34 +1012,189 @@ module neo_raster_core (
   assign mem_req_len_o = pw_v ? 5'd8 : (wb_v ? 5'd1 : rd_len);
   assign mem_wdata_o = pw_v ? pw_data : {144'd0, wb_entry};
 
-  // Main FSM: LOADT -> LOADF -> WALK, every group (-> SEGWAIT -> LOADT per further segment) -> DRAIN.
+  // Control: RUN while the loader and the walk work through the segments, then DRAIN.
   wire drained;
   assign drained = ~route_busy & ~wb_busy_q;
+  reg  [1:0] sc0_q;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      st_q <= S_IDLE;
-      done_q <= 1'b0;
+      sc0_q <= 2'd0;
+    end else begin
+      if (cmd_fire) begin
+        sc0_q <= 2'd0;
+      end else if (beat0 & flast0 & (lgrp0_q == 4'd15)) begin
+        sc0_q <= sc0_q + 2'd1;
+      end
+    end
+  end
+  reg  [1:0] sc1_q;
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      sc1_q <= 2'd0;
+    end else begin
+      if (cmd_fire) begin
+        sc1_q <= 2'd0;
+      end else if (beat1 & flast1 & (lgrp1_q == 4'd15)) begin
+        sc1_q <= sc1_q + 2'd1;
+      end
+    end
+  end
+  reg  [1:0] sc2_q;
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      sc2_q <= 2'd0;
+    end else begin
+      if (cmd_fire) begin
+        sc2_q <= 2'd0;
+      end else if (beat2 & flast2 & (lgrp2_q == 4'd15)) begin
+        sc2_q <= sc2_q + 2'd1;
+      end
+    end
+  end
+  reg  [1:0] sc3_q;
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      sc3_q <= 2'd0;
+    end else begin
+      if (cmd_fire) begin
+        sc3_q <= 2'd0;
+      end else if (beat3 & flast3 & (lgrp3_q == 4'd15)) begin
+        sc3_q <= sc3_q + 2'd1;
+      end
+    end
+  end
+  // A bank is released once its segment is walked, every SCU has taken its last piece and
+  // its write-back is done (segments use banks 0, 1, 0, ... and are released in order).
+  wire rel_bank;
+  assign rel_bank = rel_seg_q[0];
+  wire rel_ok;
+  assign rel_ok = (rel_bank ? (full1_q & walked1_q) : (full0_q & walked0_q)) & (sc0_q != rel_seg_q) & (sc1_q != rel_seg_q) & (sc2_q != rel_seg_q) & (sc3_q != rel_seg_q) & ~(wb_busy_q & (wb_bank_q == rel_bank));
+  wire ld_free;
+  assign ld_free = ld_bank_q ? ~full1_q : ~full0_q;
+  wire wk_start;
+  assign wk_start = (st_q == S_RUN) & ~wk_on_q & (wk_bank_q ? (full1_q & ~walked1_q) : (full0_q & ~walked0_q)) & ~wb_busy_q;
+  wire wk_end;
+  assign wk_end = itu_fire & last_quad & last_grp;
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      full0_q <= 1'b0;
+      full1_q <= 1'b0;
+      walked0_q <= 1'b0;
+      walked1_q <= 1'b0;
+      rel_seg_q <= 2'd0;
+    end else begin
+      if (cmd_fire) begin
+        full0_q <= 1'b0;
+        full1_q <= 1'b0;
+        walked0_q <= 1'b0;
+        walked1_q <= 1'b0;
+        rel_seg_q <= 2'd0;
+      end else begin
+        if (rel_ok) begin
+          rel_seg_q <= rel_seg_q + 2'd1;
+        end
+        if (ld_done & (ld_bank_q == 1'b0)) begin
+          full0_q <= 1'b1;
+        end
+        if (wk_end & (wk_bank_q == 1'b0)) begin
+          walked0_q <= 1'b1;
+        end
+        if (rel_ok & (rel_bank == 1'b0)) begin
+          full0_q <= 1'b0;
+          walked0_q <= 1'b0;
+        end
+        if (ld_done & (ld_bank_q == 1'b1)) begin
+          full1_q <= 1'b1;
+        end
+        if (wk_end & (wk_bank_q == 1'b1)) begin
+          walked1_q <= 1'b1;
+        end
+        if (rel_ok & (rel_bank == 1'b1)) begin
+          full1_q <= 1'b0;
+          walked1_q <= 1'b0;
+        end
+      end
+    end
+  end
+  always @(posedge clk_i) begin
+    if (ld_done & ~ld_bank_q) begin
+      blen0_q <= ld_len_q;
+      bstart0_q <= ld_start_q;
+    end
+    if (ld_done & ld_bank_q) begin
+      blen1_q <= ld_len_q;
+      bstart1_q <= ld_start_q;
+    end
+  end
+  // Loader: table bursts then one feature read per entry, a segment per free bank.
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      ld_st_q <= L_IDLE;
+      ld_left_q <= 32'd0;
       iss_q <= 9'd0;
       rcv_q <= 9'd0;
-      base_q <= 8'd0;
-      seek_q <= 1'b0;
     end else begin
-      done_q <= 1'b0;
       if (rd_g) begin
         iss_q <= iss_q + {4'd0, rd_len};
       end
       if (mem_rsp_valid_i) begin
         rcv_q <= rcv_q + 9'd1;
       end
+      if (cmd_fire) begin
+        ld_st_q <= L_IDLE;
+        ld_bank_q <= 1'b0;
+        ld_start_q <= 32'd0;
+        ld_len_q <= cmd_seg_len;
+        ld_left_q <= cmd_segs;
+      end else begin
+        case (ld_st_q)
+          L_IDLE: begin
+            if ((st_q == S_RUN) & (ld_left_q != 32'd0) & ld_free) begin
+              ld_st_q <= L_TABLE;
+              iss_q <= 9'd0;
+              rcv_q <= 9'd0;
+            end
+          end
+          L_TABLE: begin
+            if (loaded) begin
+              ld_st_q <= L_FEAT;
+              iss_q <= 9'd0;
+              rcv_q <= 9'd0;
+            end
+          end
+          L_FEAT: begin
+            if (loaded) begin
+              ld_st_q <= L_IDLE;
+              ld_bank_q <= ~ld_bank_q;
+              ld_start_q <= next_start;
+              ld_len_q <= next_seg_len;
+              ld_left_q <= ld_left_q - 32'd1;
+            end
+          end
+          default: begin
+            ld_st_q <= L_IDLE;
+          end
+        endcase
+      end
+    end
+  end
+  // Walk: every group of the segment in bank wk_bank_q; a later group starts at its first
+  // quad once group 0's results are in.
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      st_q <= S_IDLE;
+      done_q <= 1'b0;
+      base_q <= 8'd0;
+      seek_q <= 1'b0;
+      wk_on_q <= 1'b0;
+      wk_bank_q <= 1'b0;
+      grp_q <= 4'd0;
+    end else begin
+      done_q <= 1'b0;
       case (st_q)
         S_IDLE: begin
           if (cmd_valid_i) begin
-            st_q <= S_LOADT;
-            seg_start_q <= 32'd0;
-            seg_len_q <= cmd_seg_len;
-            iss_q <= 9'd0;
-            rcv_q <= 9'd0;
-            seek_q <= 1'b0;
+            st_q <= S_RUN;
             tx_q <= cmd_tile_x_i;
             ty_q <= cmd_tile_y_i;
             wd_q <= cmd_width_i;
@@ -1008,25 +1203,17 @@ module neo_raster_core (
             feat_q <= cmd_feat_i;
             pix_q <= cmd_pix_i;
             len_q <= cmd_len_i;
-            multi_q <= cmd_len_i > 32'd256;
+            wk_on_q <= 1'b0;
+            wk_bank_q <= 1'b0;
+          end
+        end
+        S_RUN: begin
+          if (wk_start) begin
+            wk_on_q <= 1'b1;
             grp_q <= 4'd0;
-          end
-        end
-        S_LOADT: begin
-          if (loaded) begin
-            st_q <= S_LOADF;
-            iss_q <= 9'd0;
-            rcv_q <= 9'd0;
-          end
-        end
-        S_LOADF: begin
-          if (loaded) begin
-            st_q <= S_WALK;
             base_q <= 8'd0;
+            seek_q <= 1'b0;
           end
-        end
-        S_WALK: begin
-          // a later group starts at its first quad once group 0's results are in
           if (seek_q & g0_done_q) begin
             seek_q <= 1'b0;
             base_q <= (|qcol) ? qfirst_base : 8'd0;
@@ -1039,24 +1226,14 @@ module neo_raster_core (
               if (~last_grp) begin
                 grp_q <= grp_q + 4'd1;
                 seek_q <= 1'b1;
-              end else if (multi_q & ~last_seg) begin
-                st_q <= S_SEGWAIT;
               end else begin
-                st_q <= S_DRAIN;
+                wk_on_q <= 1'b0;
+                wk_bank_q <= ~wk_bank_q;
+                if (last_seg) begin
+                  st_q <= S_DRAIN;
+                end
               end
             end
-          end
-        end
-        S_SEGWAIT: begin
-          if (drained) begin
-            // next segment: its walk starts again at group 0
-            st_q <= S_LOADT;
-            seg_start_q <= next_start;
-            seg_len_q <= next_seg_len;
-            iss_q <= 9'd0;
-            rcv_q <= 9'd0;
-            seek_q <= 1'b0;
-            grp_q <= 4'd0;
           end
         end
         S_DRAIN: begin

@@ -51,11 +51,11 @@ pub mod space {
 }
 
 const S_IDLE: u64 = 0;
-const S_LOADT: u64 = 1;
-const S_LOADF: u64 = 2;
-const S_WALK: u64 = 3;
-const S_SEGWAIT: u64 = 4;
-const S_DRAIN: u64 = 5;
+const S_RUN: u64 = 1;
+const S_DRAIN: u64 = 2;
+const L_IDLE: u64 = 0;
+const L_TABLE: u64 = 1;
+const L_FEAT: u64 = 2;
 
 /// Width of a feature word: the packed entry plus the `present` bit on top.
 pub fn feature_word_bits(cfg: &GenConfig) -> u32 {
@@ -122,7 +122,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let wdb = wdata_bits(cfg);
     let rw = s * 24;
     let tg = cfg.itu_tag_bits;
-    let ew = 3 + ni + fa; // FIFO element {final, last, resume, mask, base}
+    let ew = 3 + ni + fa + 1; // FIFO element {final, last, resume, mask, {bank, base}}
     let db = bits_for(FIFO_DEPTH as u64 - 1);
     let ifl = bits_for(itu::LATENCY as u64 + 1);
     let (mean_lsb, _) = field("mean_x");
@@ -168,7 +168,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.blank();
     m.comment("Command registers and the main state.");
     for (n, wi) in [
-        ("st_q", 3),
+        ("st_q", 2),
         ("tx_q", tb),
         ("ty_q", tb),
         ("wd_q", wd),
@@ -177,9 +177,22 @@ pub fn module(cfg: &GenConfig) -> Module {
         ("feat_q", aw),
         ("pix_q", aw),
         ("len_q", lw),
-        ("multi_q", 1),
-        ("seg_start_q", lw),
-        ("seg_len_q", sl),
+        ("ld_st_q", 2),
+        ("ld_bank_q", 1),
+        ("ld_start_q", lw),
+        ("ld_len_q", sl),
+        ("ld_left_q", lw),
+        ("full0_q", 1),
+        ("full1_q", 1),
+        ("walked0_q", 1),
+        ("walked1_q", 1),
+        ("blen0_q", sl),
+        ("blen1_q", sl),
+        ("bstart0_q", lw),
+        ("bstart1_q", lw),
+        ("rel_seg_q", 2),
+        ("wk_on_q", 1),
+        ("wk_bank_q", 1),
         ("grp_q", gw),
         ("iss_q", sl),
         ("rcv_q", sl),
@@ -191,17 +204,16 @@ pub fn module(cfg: &GenConfig) -> Module {
     ] {
         m.reg(n, wi);
     }
-    for (n, v) in [
-        ("S_IDLE", S_IDLE),
-        ("S_LOADT", S_LOADT),
-        ("S_LOADF", S_LOADF),
-        ("S_WALK", S_WALK),
-        ("S_SEGWAIT", S_SEGWAIT),
-        ("S_DRAIN", S_DRAIN),
-    ] {
-        m.localparam(n, 3, lit(3, v));
+    for (n, v) in [("S_IDLE", S_IDLE), ("S_RUN", S_RUN), ("S_DRAIN", S_DRAIN)] {
+        m.localparam(n, 2, lit(2, v));
     }
-    m.mem("tbuf", tw, f).mem("fbuf", fw, f).mem("hbuf", 1, f);
+    for (n, v) in [("L_IDLE", L_IDLE), ("L_TABLE", L_TABLE), ("L_FEAT", L_FEAT)] {
+        m.localparam(n, 2, lit(2, v));
+    }
+    m.comment(format!(
+        "Two banks of {f} entries: the loader fills one while the walk and the SCUs use the other."
+    ));
+    m.mem("tbuf", tw, 2 * f).mem("fbuf", fw, 2 * f).mem("hbuf", 1, 2 * f);
     m.wire_assign("cmd_fire", 1, "cmd_valid_i & cmd_ready_o");
     m.assign("cmd_ready_o", "st_q == S_IDLE");
     let flit = |wi: u32| lit(wi, f as u64);
@@ -210,14 +222,27 @@ pub fn module(cfg: &GenConfig) -> Module {
         sl,
         format!("(cmd_len_i > {}) ? {} : {}", flit(lw), flit(sl), resize("cmd_len_i", lw, sl)),
     );
-    m.wire_assign("next_start", lw, format!("seg_start_q + {}", flit(lw)));
+    let fl = f.trailing_zeros();
+    m.wire_assign(
+        "cmd_segs",
+        lw,
+        format!(
+            "(cmd_len_i == {z}) ? {one} : (((cmd_len_i - {one}) >> {fl}) + {one})",
+            z = lit(lw, 0),
+            one = lit(lw, 1)
+        ),
+    );
+    m.wire_assign("next_start", lw, format!("ld_start_q + {}", flit(lw)));
     m.wire_assign("rem_next", lw, "len_q - next_start");
     m.wire_assign(
         "next_seg_len",
         sl,
         format!("(rem_next > {}) ? {} : {}", flit(lw), flit(sl), resize("rem_next", lw, sl)),
     );
-    m.wire_assign("last_seg", 1, format!("(len_q - seg_start_q) <= {}", flit(lw)));
+    m.comment("The walked segment (bank wk_bank_q).");
+    m.wire_assign("seg_len_w", sl, "wk_bank_q ? blen1_q : blen0_q");
+    m.wire_assign("seg_start_w", lw, "wk_bank_q ? bstart1_q : bstart0_q");
+    m.wire_assign("last_seg", 1, format!("(len_q - seg_start_w) <= {}", flit(lw)));
     m.wire_assign("last_grp", 1, format!("grp_q == {}", lit(gw, groups as u64 - 1)));
 
     // ------------------------------------------------------------ memory arbitration
@@ -234,29 +259,30 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.blank();
     m.comment("LOAD: table bursts into tbuf, then one feature read per entry into fbuf.");
     let bur = cfg.burst as u64;
-    m.wire_assign("left", sl, "seg_len_q - iss_q");
+    m.wire_assign("left", sl, "ld_len_q - iss_q");
     m.wire_assign(
         "tlen",
         bl,
         format!("(left > {}) ? {} : {}", lit(sl, bur), lit(bl, bur), resize("left", sl, bl)),
     );
-    m.wire_assign("rd_t", 1, "st_q == S_LOADT");
-    m.assign("rd_v", "(rd_t | (st_q == S_LOADF)) & (iss_q != seg_len_q)");
-    m.wire_assign("iss_idx", fa, resize("iss_q", sl, fa));
+    m.wire_assign("rd_t", 1, "ld_st_q == L_TABLE");
+    m.assign("rd_v", "(ld_st_q != L_IDLE) & (iss_q != ld_len_q)");
+    m.wire_assign("iss_idx", fa + 1, format!("{{ld_bank_q, {}}}", resize("iss_q", sl, fa)));
     m.wire_assign("iss_id", ib, format!("tbuf[iss_idx][{}:0]", ib - 1));
     m.wire_assign(
         "rd_addr",
         aw,
         format!(
             "rd_t ? (tab_q + {} + {}) : (feat_q + {})",
-            resize("seg_start_q", lw, aw),
+            resize("ld_start_q", lw, aw),
             resize("iss_q", sl, aw),
             resize("iss_id", ib, aw)
         ),
     );
     m.wire_assign("rd_len", bl, format!("rd_t ? tlen : {}", lit(bl, 1)));
-    m.wire_assign("rcv_idx", fa, resize("rcv_q", sl, fa));
-    m.wire_assign("loaded", 1, "(iss_q == seg_len_q) & (rcv_q == seg_len_q)");
+    m.wire_assign("rcv_idx", fa + 1, format!("{{ld_bank_q, {}}}", resize("rcv_q", sl, fa)));
+    m.wire_assign("loaded", 1, "(iss_q == ld_len_q) & (rcv_q == ld_len_q)");
+    m.wire_assign("ld_done", 1, "(ld_st_q == L_FEAT) & loaded");
     m.seq_noreset(vec![if_(
         "mem_rsp_valid_i",
         vec![if_else(
@@ -269,7 +295,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     // ------------------------------------------------------------ ITUs
     m.blank();
     m.comment(format!("WALK: {ni} table entries per cycle through the ITUs, once per subtile group."));
-    m.wire_assign("walk", 1, "(st_q == S_WALK) & ~seek_q");
+    m.wire_assign("walk", 1, "(st_q == S_RUN) & wk_on_q & ~seek_q");
     m.wire_assign(
         "quad_end",
         sl + 1,
@@ -284,11 +310,17 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.comment(format!(
         "Quad skipping: qhit[q][g] = quad q of the segment touches group g (from group 0's walk)."
     ));
-    m.mem("qhit", groups, nq);
+    m.mem("qhit", groups, 2 * nq);
     m.wire_assign("cur_q", qb, if nq == 1 { lit(1, 0) } else { format!("base_q[{}:{ib2}]", fa - 1) });
     let col: Vec<String> = (0..nq)
         .rev()
-        .map(|q| format!("(qhit[{q}][grp_q] & ({} < seg_len_q))", lit(sl, q as u64 * ni as u64)))
+        .map(|q| {
+            format!(
+                "(qhit[{{wk_bank_q, {}}}][grp_q] & ({} < seg_len_w))",
+                lit(qb, q as u64),
+                lit(sl, q as u64 * ni as u64)
+            )
+        })
         .collect();
     m.wire_assign("qcol", nq, format!("{{{}}}", col.join(", ")));
     m.wire_assign("qabove", nq, format!("qcol & (({{{nq}{{1'b1}}}} << cur_q) << 1)"));
@@ -317,7 +349,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign(
         "last_quad",
         1,
-        format!("(grp_q == {}) ? (quad_end >= {}) : ~(|qabove)", lit(gw, 0), resize("seg_len_q", sl, sl + 1)),
+        format!("(grp_q == {}) ? (quad_end >= {}) : ~(|qabove)", lit(gw, 0), resize("seg_len_w", sl, sl + 1)),
     );
     m.wire("itu_in_ready", 1).wire("itu_out_valid", 1).wire("itu_out_ready", 1);
     m.wire_assign("itu_fire", 1, "walk & itu_in_ready");
@@ -327,10 +359,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     let mut unused = Vec::new();
     for u in 0..ni {
         m.wire_assign(format!("li{u}"), fa, format!("base_q + {}", lit(fa, u as u64)));
+        m.wire_assign(format!("lb{u}"), fa + 1, format!("{{wk_bank_q, li{u}}}"));
         m.wire_assign(
             format!("lv{u}"),
             1,
-            format!("({} < seg_len_q) & fbuf[li{u}][{present}]", resize(&format!("li{u}"), fa, sl)),
+            format!("({} < seg_len_w) & fbuf[lb{u}][{present}]", resize(&format!("li{u}"), fa, sl)),
         );
         m.wire(format!("itu_rdy{u}"), 1).wire(format!("itu_ov{u}"), 1);
         m.wire(format!("bm{u}"), nsub).wire(format!("hit{u}"), 1).wire(format!("tag_out{u}"), tg);
@@ -342,8 +375,8 @@ pub fn module(cfg: &GenConfig) -> Module {
                 ("rst_ni", "rst_ni".into()),
                 ("in_valid_i", "walk".into()),
                 ("in_ready_o", format!("itu_rdy{u}")),
-                ("mean_i", format!("fbuf[li{u}][{}:{mean_lsb}]", mean_lsb + itu::mean_bits(cfg) - 1)),
-                ("geom_i", format!("fbuf[li{u}][{}:{geom_lsb}]", geom_lsb + geom_w - 1)),
+                ("mean_i", format!("fbuf[lb{u}][{}:{mean_lsb}]", mean_lsb + itu::mean_bits(cfg) - 1)),
+                ("geom_i", format!("fbuf[lb{u}][{}:{geom_lsb}]", geom_lsb + geom_w - 1)),
                 ("tile_x_i", "tx_q".into()),
                 ("tile_y_i", "ty_q".into()),
                 ("tag_i", lit(tg, 0)),
@@ -364,7 +397,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign("unused_tags", 1, format!("^{{{}}}", unused.join(", ")));
     // Sideband of each quad, {list_last, seg_last, group, base, lane valids}, through a copy of
     // the ITU pipeline: its stages all advance when in_ready_o is high.
-    let sbw = 3 + gw + fa + ni;
+    let sbw = 3 + gw + fa + 1 + ni;
     let lvs: Vec<String> = (0..ni).rev().map(|u| format!("lv{u}")).collect();
     m.comment(format!(
         "Quad sideband through {} stages that advance with the ITUs' (in_ready_o = their stage enable).",
@@ -374,7 +407,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         "sb_in",
         sbw,
         format!(
-            "{{(seg_start_q != {}), (last_quad & last_seg), last_quad, grp_q, base_q, {}}}",
+            "{{(seg_start_w != {}), (last_quad & last_seg), last_quad, grp_q, wk_bank_q, base_q, {}}}",
             lit(lw, 0),
             lvs.join(", ")
         ),
@@ -399,7 +432,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     for u in 0..ni {
         tf(&format!("o_lv{u}"), 1, &mut m);
     }
-    tf("o_base", fa, &mut m);
+    tf("o_base", fa + 1, &mut m);
     tf("o_grp", gw, &mut m);
     tf("o_seg_last", 1, &mut m);
     tf("o_list_last", 1, &mut m);
@@ -418,7 +451,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.comment("Group 0's results: every entry's valid bit (the OR over all subtiles).");
     let mut hb = Vec::new();
     for u in 0..ni {
-        hb.push(set(format!("hbuf[o_base + {}]", lit(fa, u as u64)), format!("hit{u}")));
+        hb.push(set(format!("hbuf[o_base + {}]", lit(fa + 1, u as u64)), format!("hit{u}")));
     }
     m.seq_noreset(vec![if_(format!("itu_out_fire & (o_grp == {})", lit(gw, 0)), hb)]);
     m.comment("Group 0's results also give each quad's groups (qhit) and, with its last quad, g0_done.");
@@ -431,7 +464,8 @@ pub fn module(cfg: &GenConfig) -> Module {
         })
         .collect();
     m.wire_assign("o_qhit", groups, format!("{{{}}}", qh.join(", ")));
-    let o_q = if f / ni == 1 { lit(1, 0) } else { format!("o_base[{}:{}]", fa - 1, ni.trailing_zeros()) };
+    let o_q =
+        if f / ni == 1 { format!("o_base[{fa}]") } else { format!("o_base[{fa}:{}]", ni.trailing_zeros()) };
     m.seq_noreset(vec![if_(
         format!("itu_out_fire & (o_grp == {})", lit(gw, 0)),
         vec![set(format!("qhit[{o_q}]"), "o_qhit")],
@@ -439,7 +473,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.seq(
         vec![set("g0_done_q", lit(1, 0))],
         vec![if_else(
-            "st_q == S_LOADT",
+            "wk_start",
             vec![set("g0_done_q", lit(1, 0))],
             vec![if_(
                 format!("itu_out_fire & (o_grp == {}) & o_seg_last", lit(gw, 0)),
@@ -515,7 +549,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let mut busy = Vec::new();
     for j in 0..nc {
         let q = |n: &str| format!("{n}{j}_q");
-        m.reg(q("cv"), 1).reg(q("cbase"), fa).reg(q("cmask"), ni).reg(q("clast"), 1).reg(q("lgrp"), gw);
+        m.reg(q("cv"), 1).reg(q("cbase"), fa + 1).reg(q("cmask"), ni).reg(q("clast"), 1).reg(q("lgrp"), gw);
         m.reg(q("cfin"), 1).reg(q("cres"), 1);
         m.reg(q("rel"), 1);
         // Lowest set bit of the mask.
@@ -527,8 +561,8 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.wire_assign(format!("flane{j}"), lb, sel);
         m.wire_assign(
             format!("fidx{j}"),
-            fa,
-            format!("cbase{j}_q + {}", resize(&format!("flane{j}"), lb, fa)),
+            fa + 1,
+            format!("cbase{j}_q + {}", resize(&format!("flane{j}"), lb, fa + 1)),
         );
         m.wire_assign(format!("frest{j}"), ni, format!("cmask{j}_q & (cmask{j}_q - {})", lit(ni, 1)));
         m.wire_assign(format!("fempty_beat{j}"), 1, format!("~(|cmask{j}_q)"));
@@ -557,11 +591,11 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.seq_noreset(vec![if_else(
             format!("pop{j}"),
             vec![
-                set(q("cbase"), format!("fhead{j}[{}:0]", fa - 1)),
-                set(q("cmask"), format!("fhead{j}[{}:{fa}]", fa + ni - 1)),
-                set(q("cres"), format!("fhead{j}[{}]", fa + ni)),
-                set(q("clast"), format!("fhead{j}[{}]", fa + ni + 1)),
-                set(q("cfin"), format!("fhead{j}[{}]", fa + ni + 2)),
+                set(q("cbase"), format!("fhead{j}[{fa}:0]")),
+                set(q("cmask"), format!("fhead{j}[{}:{}]", fa + ni, fa + 1)),
+                set(q("cres"), format!("fhead{j}[{}]", fa + ni + 1)),
+                set(q("clast"), format!("fhead{j}[{}]", fa + ni + 2)),
+                set(q("cfin"), format!("fhead{j}[{}]", fa + ni + 3)),
             ],
             vec![if_(format!("beat{j}"), vec![set(q("cmask"), format!("frest{j}"))])],
         )]);
@@ -666,16 +700,18 @@ pub fn module(cfg: &GenConfig) -> Module {
     // ------------------------------------------------------------ write-back
     m.blank();
     m.comment("Write-back of the segment once its group-0 results are in: {present & OR, present ? depth key : key, id}.");
-    m.reg("wb_busy_q", 1).reg("wb_ptr_q", fa);
+    m.reg("wb_busy_q", 1).reg("wb_ptr_q", fa).reg("wb_bank_q", 1);
     m.assign("wb_v", "wb_busy_q");
-    m.wire_assign("wb_present", 1, format!("fbuf[wb_ptr_q][{present}]"));
+    m.wire_assign("wb_idx", fa + 1, "{wb_bank_q, wb_ptr_q}");
+    m.wire_assign("wb_start", lw, "wb_bank_q ? bstart1_q : bstart0_q");
+    m.wire_assign("wb_present", 1, format!("fbuf[wb_idx][{present}]"));
     m.wire_assign(
         "wb_key",
         kb,
         // The key field takes the depth key (its low key_bits bits when it is wider).
         format!(
-            "wb_present ? {} : tbuf[wb_ptr_q][{}:{ib}]",
-            resize(&format!("fbuf[wb_ptr_q][{}:{dk_lsb}]", dk_lsb + dk_w.min(kb) - 1), dk_w.min(kb), kb),
+            "wb_present ? {} : tbuf[wb_idx][{}:{ib}]",
+            resize(&format!("fbuf[wb_idx][{}:{dk_lsb}]", dk_lsb + dk_w.min(kb) - 1), dk_w.min(kb), kb),
             tw - 1
         ),
     );
@@ -683,7 +719,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         "wb_entry",
         eb,
         resize(
-            &format!("{{(wb_present & hbuf[wb_ptr_q]), wb_key, tbuf[wb_ptr_q][{}:0]}}", ib - 1),
+            &format!("{{(wb_present & hbuf[wb_idx]), wb_key, tbuf[wb_idx][{}:0]}}", ib - 1),
             1 + kb + ib,
             eb,
         ),
@@ -691,20 +727,21 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign(
         "wb_addr",
         aw,
-        format!("tab_q + {} + {}", resize("seg_start_q", lw, aw), resize("wb_ptr_q", fa, aw)),
+        format!("tab_q + {} + {}", resize("wb_start", lw, aw), resize("wb_ptr_q", fa, aw)),
     );
     m.wire_assign("wb_next", sl, format!("{} + {}", resize("wb_ptr_q", fa, sl), lit(sl, 1)));
-    m.wire_assign("wb_end", 1, "wb_next == seg_len_q");
+    m.wire_assign("wb_end", 1, "wb_next == (wb_bank_q ? blen1_q : blen0_q)");
+    m.wire_assign("o_bank", 1, format!("o_base[{fa}]"));
     m.seq(
-        vec![set("wb_busy_q", lit(1, 0)), set("wb_ptr_q", lit(fa, 0))],
+        vec![set("wb_busy_q", lit(1, 0)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", lit(1, 0))],
         vec![
             if_(
                 format!(
-                    "itu_out_fire & (o_grp == {}) & o_seg_last & (seg_len_q != {})",
+                    "itu_out_fire & (o_grp == {}) & o_seg_last & ((o_bank ? blen1_q : blen0_q) != {})",
                     lit(gw, 0),
                     lit(sl, 0)
                 ),
-                vec![set("wb_busy_q", lit(1, 1)), set("wb_ptr_q", lit(fa, 0))],
+                vec![set("wb_busy_q", lit(1, 1)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", "o_bank")],
             ),
             if_(
                 "wb_g",
@@ -736,24 +773,156 @@ pub fn module(cfg: &GenConfig) -> Module {
         format!("pw_v ? {} : {}", resize("pw_data", rw, wdb), resize("wb_entry", eb, wdb)),
     );
 
-    // ------------------------------------------------------------ main FSM
+    // ------------------------------------------------------------ control
     m.blank();
-    m.comment(
-        "Main FSM: LOADT -> LOADF -> WALK, every group (-> SEGWAIT -> LOADT per further segment) -> DRAIN.",
-    );
+    m.comment("Control: RUN while the loader and the walk work through the segments, then DRAIN.");
     m.wire_assign("drained", 1, "~route_busy & ~wb_busy_q");
-    let to_load = |start: &str, len: &str| -> Vec<Stmt> {
+    // Per SCU: segments whose last piece (group G-1) it has taken, to release their bank.
+    let mut consumed = Vec::new();
+    for j in 0..nc {
+        m.reg(format!("sc{j}_q"), 2);
+        m.seq(
+            vec![set(format!("sc{j}_q"), lit(2, 0))],
+            vec![if_else(
+                "cmd_fire",
+                vec![set(format!("sc{j}_q"), lit(2, 0))],
+                vec![if_(
+                    format!("beat{j} & flast{j} & (lgrp{j}_q == {})", lit(gw, groups as u64 - 1)),
+                    vec![set(format!("sc{j}_q"), format!("sc{j}_q + {}", lit(2, 1)))],
+                )],
+            )],
+        );
+        consumed.push(format!("(sc{j}_q != rel_seg_q)"));
+    }
+    m.comment("A bank is released once its segment is walked, every SCU has taken its last piece and");
+    m.comment("its write-back is done (segments use banks 0, 1, 0, ... and are released in order).");
+    m.wire_assign("rel_bank", 1, "rel_seg_q[0]");
+    m.wire_assign(
+        "rel_ok",
+        1,
+        format!(
+            "(rel_bank ? (full1_q & walked1_q) : (full0_q & walked0_q)) & {} & ~(wb_busy_q & (wb_bank_q == rel_bank))",
+            consumed.join(" & ")
+        ),
+    );
+    m.wire_assign("ld_free", 1, "ld_bank_q ? ~full1_q : ~full0_q");
+    m.wire_assign(
+        "wk_start",
+        1,
+        "(st_q == S_RUN) & ~wk_on_q & (wk_bank_q ? (full1_q & ~walked1_q) : (full0_q & ~walked0_q)) & ~wb_busy_q",
+    );
+    m.wire_assign("wk_end", 1, "itu_fire & last_quad & last_grp");
+    let bank_regs = |b: u32| -> Vec<Stmt> {
         vec![
-            set("st_q", "S_LOADT"),
-            set("seg_start_q", start),
-            set("seg_len_q", len),
-            set("iss_q", lit(sl, 0)),
-            set("rcv_q", lit(sl, 0)),
-            set("seek_q", lit(1, 0)),
+            if_(
+                format!("ld_done & (ld_bank_q == {})", lit(1, b as u64)),
+                vec![set(format!("full{b}_q"), lit(1, 1))],
+            ),
+            if_(
+                format!("wk_end & (wk_bank_q == {})", lit(1, b as u64)),
+                vec![set(format!("walked{b}_q"), lit(1, 1))],
+            ),
+            if_(
+                format!("rel_ok & (rel_bank == {})", lit(1, b as u64)),
+                vec![set(format!("full{b}_q"), lit(1, 0)), set(format!("walked{b}_q"), lit(1, 0))],
+            ),
         ]
     };
-    let mut on_cmd = to_load(&lit(lw, 0), "cmd_seg_len");
-    on_cmd.extend([
+    let mut banks = vec![if_("rel_ok", vec![set("rel_seg_q", format!("rel_seg_q + {}", lit(2, 1)))])];
+    banks.extend(bank_regs(0));
+    banks.extend(bank_regs(1));
+    m.seq(
+        vec![
+            set("full0_q", lit(1, 0)),
+            set("full1_q", lit(1, 0)),
+            set("walked0_q", lit(1, 0)),
+            set("walked1_q", lit(1, 0)),
+            set("rel_seg_q", lit(2, 0)),
+        ],
+        vec![if_else(
+            "cmd_fire",
+            vec![
+                set("full0_q", lit(1, 0)),
+                set("full1_q", lit(1, 0)),
+                set("walked0_q", lit(1, 0)),
+                set("walked1_q", lit(1, 0)),
+                set("rel_seg_q", lit(2, 0)),
+            ],
+            banks,
+        )],
+    );
+    m.seq_noreset(vec![
+        if_("ld_done & ~ld_bank_q", vec![set("blen0_q", "ld_len_q"), set("bstart0_q", "ld_start_q")]),
+        if_("ld_done & ld_bank_q", vec![set("blen1_q", "ld_len_q"), set("bstart1_q", "ld_start_q")]),
+    ]);
+    m.comment("Loader: table bursts then one feature read per entry, a segment per free bank.");
+    m.seq(
+        vec![
+            set("ld_st_q", "L_IDLE"),
+            set("ld_left_q", lit(lw, 0)),
+            set("iss_q", lit(sl, 0)),
+            set("rcv_q", lit(sl, 0)),
+        ],
+        vec![
+            if_("rd_g", vec![set("iss_q", format!("iss_q + {}", resize("rd_len", bl, sl)))]),
+            if_("mem_rsp_valid_i", vec![set("rcv_q", format!("rcv_q + {}", lit(sl, 1)))]),
+            if_else(
+                "cmd_fire",
+                vec![
+                    set("ld_st_q", "L_IDLE"),
+                    set("ld_bank_q", lit(1, 0)),
+                    set("ld_start_q", lit(lw, 0)),
+                    set("ld_len_q", "cmd_seg_len"),
+                    set("ld_left_q", "cmd_segs"),
+                ],
+                vec![Stmt::Case(
+                    "ld_st_q".into(),
+                    vec![
+                        (
+                            "L_IDLE".into(),
+                            vec![if_(
+                                format!("(st_q == S_RUN) & (ld_left_q != {}) & ld_free", lit(lw, 0)),
+                                vec![
+                                    set("ld_st_q", "L_TABLE"),
+                                    set("iss_q", lit(sl, 0)),
+                                    set("rcv_q", lit(sl, 0)),
+                                ],
+                            )],
+                        ),
+                        (
+                            "L_TABLE".into(),
+                            vec![if_(
+                                "loaded",
+                                vec![
+                                    set("ld_st_q", "L_FEAT"),
+                                    set("iss_q", lit(sl, 0)),
+                                    set("rcv_q", lit(sl, 0)),
+                                ],
+                            )],
+                        ),
+                        (
+                            "L_FEAT".into(),
+                            vec![if_(
+                                "loaded",
+                                vec![
+                                    set("ld_st_q", "L_IDLE"),
+                                    set("ld_bank_q", "~ld_bank_q"),
+                                    set("ld_start_q", "next_start"),
+                                    set("ld_len_q", "next_seg_len"),
+                                    set("ld_left_q", format!("ld_left_q - {}", lit(lw, 1))),
+                                ],
+                            )],
+                        ),
+                    ],
+                    vec![set("ld_st_q", "L_IDLE")],
+                )],
+            ),
+        ],
+    );
+    m.comment("Walk: every group of the segment in bank wk_bank_q; a later group starts at its first");
+    m.comment("quad once group 0's results are in.");
+    let on_cmd = vec![
+        set("st_q", "S_RUN"),
         set("tx_q", "cmd_tile_x_i"),
         set("ty_q", "cmd_tile_y_i"),
         set("wd_q", "cmd_width_i"),
@@ -762,45 +931,36 @@ pub fn module(cfg: &GenConfig) -> Module {
         set("feat_q", "cmd_feat_i"),
         set("pix_q", "cmd_pix_i"),
         set("len_q", "cmd_len_i"),
-        set("multi_q", format!("cmd_len_i > {}", flit(lw))),
-        set("grp_q", lit(gw, 0)),
-    ]);
-    let mut next_seg = to_load("next_start", "next_seg_len");
-    next_seg.insert(0, Stmt::Comment("next segment: its walk starts again at group 0".into()));
-    next_seg.push(set("grp_q", lit(gw, 0)));
+        set("wk_on_q", lit(1, 0)),
+        set("wk_bank_q", lit(1, 0)),
+    ];
     m.seq(
         vec![
             set("st_q", "S_IDLE"),
             set("done_q", lit(1, 0)),
-            set("iss_q", lit(sl, 0)),
-            set("rcv_q", lit(sl, 0)),
             set("base_q", lit(fa, 0)),
             set("seek_q", lit(1, 0)),
+            set("wk_on_q", lit(1, 0)),
+            set("wk_bank_q", lit(1, 0)),
+            set("grp_q", lit(gw, 0)),
         ],
         vec![
             set("done_q", lit(1, 0)),
-            if_("rd_g", vec![set("iss_q", format!("iss_q + {}", resize("rd_len", bl, sl)))]),
-            if_("mem_rsp_valid_i", vec![set("rcv_q", format!("rcv_q + {}", lit(sl, 1)))]),
             Stmt::Case(
                 "st_q".into(),
                 vec![
                     ("S_IDLE".into(), vec![if_("cmd_valid_i", on_cmd)]),
                     (
-                        "S_LOADT".into(),
-                        vec![if_(
-                            "loaded",
-                            vec![set("st_q", "S_LOADF"), set("iss_q", lit(sl, 0)), set("rcv_q", lit(sl, 0))],
-                        )],
-                    ),
-                    (
-                        "S_LOADF".into(),
-                        vec![if_("loaded", vec![set("st_q", "S_WALK"), set("base_q", lit(fa, 0))])],
-                    ),
-                    (
-                        "S_WALK".into(),
+                        "S_RUN".into(),
                         vec![
-                            Stmt::Comment(
-                                "a later group starts at its first quad once group 0's results are in".into(),
+                            if_(
+                                "wk_start",
+                                vec![
+                                    set("wk_on_q", lit(1, 1)),
+                                    set("grp_q", lit(gw, 0)),
+                                    set("base_q", lit(fa, 0)),
+                                    set("seek_q", lit(1, 0)),
+                                ],
                             ),
                             if_(
                                 "seek_q & g0_done_q",
@@ -829,18 +989,17 @@ pub fn module(cfg: &GenConfig) -> Module {
                                                 set("grp_q", format!("grp_q + {}", lit(gw, 1))),
                                                 set("seek_q", lit(1, 1)),
                                             ],
-                                            vec![if_else(
-                                                "multi_q & ~last_seg",
-                                                vec![set("st_q", "S_SEGWAIT")],
-                                                vec![set("st_q", "S_DRAIN")],
-                                            )],
+                                            vec![
+                                                set("wk_on_q", lit(1, 0)),
+                                                set("wk_bank_q", "~wk_bank_q"),
+                                                if_("last_seg", vec![set("st_q", "S_DRAIN")]),
+                                            ],
                                         ),
                                     ],
                                 )],
                             ),
                         ],
                     ),
-                    ("S_SEGWAIT".into(), vec![if_("drained", next_seg)]),
                     (
                         "S_DRAIN".into(),
                         vec![if_("drained & pw_all", vec![set("st_q", "S_IDLE"), set("done_q", lit(1, 1))])],
