@@ -528,8 +528,11 @@ module neo_raster_core (
   assign flast0 = clast0_q & ~(|frest0);
   wire scu_rdy0;
   wire term0;
+  reg  pfirst0_q;
+  wire fskip0;
+  assign fskip0 = pfirst0_q & fempty_beat0 & clast0_q & cres0_q & ~cfin0_q;
   wire beat0;
-  assign beat0 = cv0_q & scu_rdy0;
+  assign beat0 = cv0_q & (scu_rdy0 | fskip0);
   wire edone0;
   assign edone0 = beat0 & ~(|frest0);
   assign pop0 = ~fempty0 & (~cv0_q | edone0);
@@ -540,9 +543,14 @@ module neo_raster_core (
       cv0_q <= 1'b0;
       lgrp0_q <= 4'd0;
       rel0_q <= 1'b0;
+      pfirst0_q <= 1'b1;
     end else begin
+      if (beat0) begin
+        pfirst0_q <= flast0;
+      end
       if (cmd_fire) begin
         lgrp0_q <= 4'd0;
+        pfirst0_q <= 1'b1;
       end
       if (beat0 & flast0) begin
         lgrp0_q <= lgrp0_q + 4'd1;
@@ -585,7 +593,7 @@ module neo_raster_core (
   neo_scu u_scu0 (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
-    .in_valid_i(cv0_q),
+    .in_valid_i(cv0_q & ~fskip0),
     .in_ready_o(scu_rdy0),
     .in_mean_x_i(fbuf[fidx0][23:0]),
     .in_mean_y_i(fbuf[fidx0][47:24]),
@@ -631,8 +639,11 @@ module neo_raster_core (
   assign flast1 = clast1_q & ~(|frest1);
   wire scu_rdy1;
   wire term1;
+  reg  pfirst1_q;
+  wire fskip1;
+  assign fskip1 = pfirst1_q & fempty_beat1 & clast1_q & cres1_q & ~cfin1_q;
   wire beat1;
-  assign beat1 = cv1_q & scu_rdy1;
+  assign beat1 = cv1_q & (scu_rdy1 | fskip1);
   wire edone1;
   assign edone1 = beat1 & ~(|frest1);
   assign pop1 = ~fempty1 & (~cv1_q | edone1);
@@ -643,9 +654,14 @@ module neo_raster_core (
       cv1_q <= 1'b0;
       lgrp1_q <= 4'd0;
       rel1_q <= 1'b0;
+      pfirst1_q <= 1'b1;
     end else begin
+      if (beat1) begin
+        pfirst1_q <= flast1;
+      end
       if (cmd_fire) begin
         lgrp1_q <= 4'd0;
+        pfirst1_q <= 1'b1;
       end
       if (beat1 & flast1) begin
         lgrp1_q <= lgrp1_q + 4'd1;
@@ -688,7 +704,7 @@ module neo_raster_core (
   neo_scu u_scu1 (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
-    .in_valid_i(cv1_q),
+    .in_valid_i(cv1_q & ~fskip1),
     .in_ready_o(scu_rdy1),
     .in_mean_x_i(fbuf[fidx1][23:0]),
     .in_mean_y_i(fbuf[fidx1][47:24]),
@@ -734,8 +750,11 @@ module neo_raster_core (
   assign flast2 = clast2_q & ~(|frest2);
   wire scu_rdy2;
   wire term2;
+  reg  pfirst2_q;
+  wire fskip2;
+  assign fskip2 = pfirst2_q & fempty_beat2 & clast2_q & cres2_q & ~cfin2_q;
   wire beat2;
-  assign beat2 = cv2_q & scu_rdy2;
+  assign beat2 = cv2_q & (scu_rdy2 | fskip2);
   wire edone2;
   assign edone2 = beat2 & ~(|frest2);
   assign pop2 = ~fempty2 & (~cv2_q | edone2);
@@ -746,9 +765,14 @@ module neo_raster_core (
       cv2_q <= 1'b0;
       lgrp2_q <= 4'd0;
       rel2_q <= 1'b0;
+      pfirst2_q <= 1'b1;
     end else begin
+      if (beat2) begin
+        pfirst2_q <= flast2;
+      end
       if (cmd_fire) begin
         lgrp2_q <= 4'd0;
+        pfirst2_q <= 1'b1;
       end
       if (beat2 & flast2) begin
         lgrp2_q <= lgrp2_q + 4'd1;
@@ -791,7 +815,7 @@ module neo_raster_core (
   neo_scu u_scu2 (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
-    .in_valid_i(cv2_q),
+    .in_valid_i(cv2_q & ~fskip2),
     .in_ready_o(scu_rdy2),
     .in_mean_x_i(fbuf[fidx2][23:0]),
     .in_mean_y_i(fbuf[fidx2][47:24]),
@@ -837,8 +861,11 @@ module neo_raster_core (
   assign flast3 = clast3_q & ~(|frest3);
   wire scu_rdy3;
   wire term3;
+  reg  pfirst3_q;
+  wire fskip3;
+  assign fskip3 = pfirst3_q & fempty_beat3 & clast3_q & cres3_q & ~cfin3_q;
   wire beat3;
-  assign beat3 = cv3_q & scu_rdy3;
+  assign beat3 = cv3_q & (scu_rdy3 | fskip3);
   wire edone3;
   assign edone3 = beat3 & ~(|frest3);
   assign pop3 = ~fempty3 & (~cv3_q | edone3);
@@ -849,9 +876,14 @@ module neo_raster_core (
       cv3_q <= 1'b0;
       lgrp3_q <= 4'd0;
       rel3_q <= 1'b0;
+      pfirst3_q <= 1'b1;
     end else begin
+      if (beat3) begin
+        pfirst3_q <= flast3;
+      end
       if (cmd_fire) begin
         lgrp3_q <= 4'd0;
+        pfirst3_q <= 1'b1;
       end
       if (beat3 & flast3) begin
         lgrp3_q <= lgrp3_q + 4'd1;
@@ -894,7 +926,7 @@ module neo_raster_core (
   neo_scu u_scu3 (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
-    .in_valid_i(cv3_q),
+    .in_valid_i(cv3_q & ~fskip3),
     .in_ready_o(scu_rdy3),
     .in_mean_x_i(fbuf[fidx3][23:0]),
     .in_mean_y_i(fbuf[fidx3][47:24]),

@@ -79,13 +79,15 @@ pub enum Accel {
 /// `max(ITU walk, busiest SCU, pixel writes)` (the RTL's SCUs are decoupled by their routing
 /// FIFOs, so an SCU's cost is the sum over its subtiles of all groups; a lower bound when the
 /// busiest SCU changes from group to group by more than a FIFO's worth), and `tile_overhead`
-/// (the empty tile) holds the latencies and the pixel writes. A table longer than
-/// `rt.feature_buffer` is processed segment by segment, each segment loaded once and walked for
-/// every group (the SCUs save and resume their subtiles' pixel state between segments): each
-/// segment costs its loads, then per group `max(its walk, the segment's share of the group's
-/// slowest SCU)` (a 16-entry FIFO does not hide a busy subtile behind the next group's walk),
-/// then `segment_overhead` (the drain before the next load); the write-back of a segment
-/// overlaps its later groups' walks. Returns (total, tail after
+/// (the empty tile) holds the latencies and the pixel writes. The ITUs walk every quad for group
+/// 0 and, for a later group, only the quads that touch it (2 cycles at least: finding the
+/// first, then one quad). A table longer than `rt.feature_buffer` is processed segment by
+/// segment, each segment loaded once (into one of two banks, while the previous segment is
+/// walked and blended) and walked for every group (the SCUs save and resume their subtiles'
+/// pixel state between segments): each segment costs `max(the next segment's loads, the sum over
+/// groups of max(its walk, the segment's share of the group's slowest SCU))` (a 16-entry FIFO
+/// does not hide a busy subtile behind the next group's walk) and `segment_overhead`. Returns
+/// (total, tail after
 /// the last input arrives).
 #[allow(clippy::too_many_arguments)]
 pub fn raster_tile_cycles(
@@ -117,20 +119,35 @@ pub fn raster_tile_cycles(
         let load = rt.load_cycles_per_entry * len as f64;
         let pix = rt.pixel_write_cycles as f64;
         let segmented = rt.feature_buffer > 0 && len as u64 > rt.feature_buffer;
+        // Quad skipping: group 0 walks every quad; a later group walks only the quads that touch
+        // it, at least one, after a cycle finding the first (hidden under its SCUs' blending).
+        let later = 2.0 * rt.itu_ii * groups.len().saturating_sub(1) as f64;
         let body = if segmented {
+            // Two banks: segment s + 1 loads while segment s is walked and blended.
             let f = rt.feature_buffer;
             let segs = (len as u64).div_ceil(f);
-            let mut body = load + segs as f64 * rt.segment_overhead;
+            let n_of = |s: u64| (len as u64 - s * f).min(f) as f64;
+            let per_scu = busiest_scu(routed, scus, &cost);
+            if std::env::var("NEO_DBG").is_ok() {
+                eprintln!(
+                    "DBG len {len} segs {segs} per_scu {per_scu} groupsum {} ratio {ratio}",
+                    groups.iter().sum::<f64>()
+                );
+            }
+            let mut body = rt.load_cycles_per_entry * n_of(0) + segs as f64 * rt.segment_overhead;
             for s in 0..segs {
-                let n = (len as u64 - s * f).min(f) as f64;
-                let walk = (n / itus.max(1) as f64).ceil() * rt.itu_ii;
-                body += groups.iter().map(|&g| walk.max(g * n / len as f64)).sum::<f64>();
+                let n = n_of(s);
+                let walk0 = (n / itus.max(1) as f64).ceil() * rt.itu_ii;
+                let work = (walk0 + later).max(per_scu * n / len as f64);
+                // The port: this segment's write-back and the next segment's loads.
+                let next = if s + 1 < segs { rt.load_cycles_per_entry * n_of(s + 1) } else { 0.0 };
+                body += work.max(next + n);
             }
             body.max(load + pix)
         } else {
             // One segment: each SCU runs through its subtiles of every group, decoupled from the
             // others by its routing FIFO, so the blending takes the busiest SCU's sum.
-            load + itu_total.max(busiest_scu(routed, scus, &cost)).max(pix)
+            load + (walk + later).max(busiest_scu(routed, scus, &cost)).max(pix)
         };
         body - pix + rt.tile_overhead as f64
     };
@@ -1001,13 +1018,16 @@ mod tests {
         // Heavy tile: 16 groups of 4 SCUs with 50 routed each = 16 x 200 cycles.
         let (h, _) = raster_tile_cycles(&[50; 64], 1.0, 80, 80, &shaped, 4, 4, true);
         assert_eq!(h, 160.0 + 3200.0 - 512.0 + 535.0);
-        // 200 entries > 100: the loads (400) once, then per segment of 100 and group the walk
-        // (25) against half the group's slowest SCU (200 / 2): blending-bound.
+        // 200 entries > 100, two segments: the first segment's loads (200), then per segment
+        // and group the walk against half the group's slowest SCU (200 / 2), the second
+        // segment's loads (200) hidden under the first's blending.
         let (s, _) = raster_tile_cycles(&[50; 64], 1.0, 200, 200, &shaped, 4, 4, true);
-        assert_eq!(s, 400.0 + 2.0 * 16.0 * 100.0 - 512.0 + 535.0);
-        // Light long table: walk-bound, plus the segment overhead per segment.
+        assert_eq!(s, 200.0 + 2.0 * 16.0 * 100.0 - 512.0 + 535.0);
+        // Light long table, 30 segments: load-bound (each segment's 55 cycles of walks, 25 for
+        // group 0 and 2 for each later group, hide under the next segment's 200 cycles of
+        // loads), plus the segment overhead.
         let o = RasterTiming { segment_overhead: 30.0, ..shaped };
-        let (w, _) = raster_tile_cycles(&[1; 64], 1.0, 250, 250, &o, 4, 4, true);
-        assert_eq!(w, 500.0 + 16.0 * (25.0 + 25.0 + 13.0) + 3.0 * 30.0 - 512.0 + 535.0);
+        let (w, _) = raster_tile_cycles(&[1; 64], 1.0, 3000, 3000, &o, 4, 4, true);
+        assert_eq!(w, 200.0 + 30.0 * 30.0 + 29.0 * 200.0 + 55.0 - 512.0 + 535.0);
     }
 }

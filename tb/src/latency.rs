@@ -343,7 +343,7 @@ pub fn raster_section(cfg: &GenConfig) -> Value {
 /// cycles of an empty table (loads, one empty list per subtile, the 64x64 pixel writes).
 pub fn raster_core_section(cfg: &GenConfig) -> Value {
     let f = cfg.raster_feature_buffer as u64;
-    let grid = crate::raster::measure_grid(cfg, SEED ^ 7, &[0, 16, 64, f, 2 * f], &[1, 4, 16, 64]);
+    let grid = crate::raster::measure_grid(cfg, SEED ^ 7, &[0, 16, 64, f, 2 * f, 8 * f], &[1, 4, 16, 64]);
     let overhead = grid.iter().find(|p| p.entries == 0).map(|p| p.cycles).unwrap_or(0);
     // Loads: the slope of the last read's cycle over the table length (one segment).
     let at = |n: u64| grid.iter().find(|p| p.entries == n && p.bits_per_gaussian == 1).map(|p| p.last_read);
@@ -352,25 +352,30 @@ pub fn raster_core_section(cfg: &GenConfig) -> Value {
         _ => 0.0,
     };
     let rc = cfg.raster_config();
-    // Per-segment fixed cycles of tables longer than the buffer (the drain before the next
-    // segment's load): what the multi-segment points cost beyond `tile_overhead - pixel writes +
-    // loads + per segment and group max(walk, the segment's share of the group's slowest SCU)`
-    // (the cycle model's formula, neo_sim::arch::raster_tile_cycles), averaged over the points
-    // where the walk, not a burst of blending, sets the pace (1 and 4 bits per Gaussian; a group's slowest SCU taken as 4
-    // cycles per routed entry of its busiest subtile, the groups alike), at least 0.
+    // Per-segment fixed cycles of tables longer than the buffer: what the multi-segment points
+    // cost beyond the cycle model's formula (neo_sim::arch::raster_tile_cycles: `tile_overhead -
+    // pixel writes + the first segment's loads + per segment max(walk, the segment's share of
+    // the busiest SCU, the port: the segment's write-back and the next segment's loads)`, the walk
+    // being every quad for group 0 and 2 cycles for a later group), averaged over the points
+    // in the steady state (8 segments) where the walk or the port, not a burst of blending, sets
+    // the pace (1 and 4 bits per Gaussian; the
+    // busiest SCU taken as 4 cycles per routed entry of each group's busiest subtile), at least 0.
     let groups = (rc.subtiles_per_tile() as usize / cfg.raster_scus) as f64;
     let pix = (rc.tile * rc.tile / rc.subtile) as f64;
     let seg: Vec<f64> = grid
         .iter()
-        .filter(|p| p.entries > f && p.bits_per_gaussian < 16)
+        .filter(|p| p.entries > 2 * f && p.bits_per_gaussian < 16)
         .map(|p| {
             let n = p.entries as f64;
-            let scu = 4.0 * p.group_max_routed as f64 / groups;
+            let scu = 4.0 * p.group_max_routed as f64;
             let segs = p.entries.div_ceil(f);
-            let mut model = overhead as f64 - pix + load * n;
+            let n_of = |s: u64| (p.entries - s * f).min(f) as f64;
+            let mut model = overhead as f64 - pix + load * n_of(0);
             for s in 0..segs {
-                let ns = (p.entries - s * f).min(f) as f64;
-                model += groups * (ns / cfg.raster_itus as f64).ceil().max(scu * ns / n);
+                let ns = n_of(s);
+                let walk = (ns / cfg.raster_itus as f64).ceil() + 2.0 * (groups - 1.0);
+                let next = if s + 1 < segs { load * n_of(s + 1) } else { 0.0 };
+                model += walk.max(scu * ns / n).max(next + ns);
             }
             (p.cycles as f64 - model) / segs as f64
         })

@@ -568,14 +568,28 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.wire_assign(format!("fempty_beat{j}"), 1, format!("~(|cmask{j}_q)"));
         m.wire_assign(format!("flast{j}"), 1, format!("clast{j}_q & ~(|frest{j})"));
         m.wire(format!("scu_rdy{j}"), 1).wire(format!("term{j}"), 1);
-        m.wire_assign(format!("beat{j}"), 1, format!("cv{j}_q & scu_rdy{j}"));
+        // An empty piece that neither starts nor ends its subtile (resumed, not final) would only
+        // reload and re-save the subtile's state: it is dropped instead of sent.
+        m.reg(q("pfirst"), 1);
+        m.wire_assign(
+            format!("fskip{j}"),
+            1,
+            format!("pfirst{j}_q & fempty_beat{j} & clast{j}_q & cres{j}_q & ~cfin{j}_q"),
+        );
+        m.wire_assign(format!("beat{j}"), 1, format!("cv{j}_q & (scu_rdy{j} | fskip{j})"));
         m.wire_assign(format!("edone{j}"), 1, format!("beat{j} & ~(|frest{j})"));
         m.assign(format!("pop{j}"), format!("~fempty{j} & (~cv{j}_q | edone{j})"));
         m.wire_assign(format!("fhead{j}"), ew, format!("fifo{j}[frp{j}_q[{}:0]]", db - 1));
         m.seq(
-            vec![set(q("cv"), lit(1, 0)), set(q("lgrp"), lit(gw, 0)), set(q("rel"), lit(1, 0))],
             vec![
-                if_("cmd_fire", vec![set(q("lgrp"), lit(gw, 0))]),
+                set(q("cv"), lit(1, 0)),
+                set(q("lgrp"), lit(gw, 0)),
+                set(q("rel"), lit(1, 0)),
+                set(q("pfirst"), lit(1, 1)),
+            ],
+            vec![
+                if_("beat{j}".replace("{j}", &j.to_string()), vec![set(q("pfirst"), format!("flast{j}"))]),
+                if_("cmd_fire", vec![set(q("lgrp"), lit(gw, 0)), set(q("pfirst"), lit(1, 1))]),
                 if_(
                     format!("beat{j} & flast{j}"),
                     vec![set(q("lgrp"), format!("lgrp{j}_q + {}", lit(gw, 1)))],
@@ -607,7 +621,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         let mut c = vec![
             ("clk_i", "clk_i".to_string()),
             ("rst_ni", "rst_ni".to_string()),
-            ("in_valid_i", format!("cv{j}_q")),
+            ("in_valid_i", format!("cv{j}_q & ~fskip{j}")),
             ("in_ready_o", format!("scu_rdy{j}")),
         ];
         for (port, fname) in beat_fields {
