@@ -44,15 +44,7 @@ module neo_raster_core (
   reg  [31:0] ld_start_q;
   reg  [8:0] ld_len_q;
   reg  [31:0] ld_left_q;
-  reg  full0_q;
-  reg  full1_q;
-  reg  walked0_q;
-  reg  walked1_q;
-  reg  [8:0] blen0_q;
-  reg  [8:0] blen1_q;
-  reg  [31:0] bstart0_q;
-  reg  [31:0] bstart1_q;
-  reg  [1:0] rel_seg_q;
+  reg  [2:0] rel_seg_q;
   reg  wk_on_q;
   reg  wk_bank_q;
   reg  [3:0] grp_q;
@@ -69,10 +61,18 @@ module neo_raster_core (
   localparam [1:0] L_IDLE = 2'd0;
   localparam [1:0] L_TABLE = 2'd1;
   localparam [1:0] L_FEAT = 2'd2;
-  // Two banks of 256 entries: the loader fills one while the walk and the SCUs use the other.
+  // 2 banks of 256 entries: the loader fills the next ones while the walk and the SCUs use the oldest.
   reg  [46:0] tbuf [0:511];
   reg  [246:0] fbuf [0:511];
   reg  hbuf [0:511];
+  reg  full0_q;
+  reg  walked0_q;
+  reg  [8:0] blen0_q;
+  reg  [31:0] bstart0_q;
+  reg  full1_q;
+  reg  walked1_q;
+  reg  [8:0] blen1_q;
+  reg  [31:0] bstart1_q;
   wire cmd_fire;
   assign cmd_fire = cmd_valid_i & cmd_ready_o;
   assign cmd_ready_o = st_q == S_IDLE;
@@ -88,9 +88,9 @@ module neo_raster_core (
   assign next_seg_len = (rem_next > 32'd256) ? 9'd256 : rem_next[8:0];
   // The walked segment (bank wk_bank_q).
   wire [8:0] seg_len_w;
-  assign seg_len_w = wk_bank_q ? blen1_q : blen0_q;
+  assign seg_len_w = ((wk_bank_q == 1'b0) ? blen0_q : blen1_q);
   wire [31:0] seg_start_w;
-  assign seg_start_w = wk_bank_q ? bstart1_q : bstart0_q;
+  assign seg_start_w = ((wk_bank_q == 1'b0) ? bstart0_q : bstart1_q);
   wire last_seg;
   assign last_seg = (len_q - seg_start_w) <= 32'd256;
   wire last_grp;
@@ -365,7 +365,7 @@ module neo_raster_core (
     end
   end
 
-  // Routing: per SCU j a FIFO of {final, last, resume, lane mask, base} (16 deep); lane u of the
+  // Routing: per SCU j a FIFO of {final, last, resume, lane mask, base} (64 deep); lane u of the
   // quad goes to SCU j when bit (group * SCUs + j) of its bitmap is set. A piece (one group's walk of a
   // segment) ends with its last quad, pushed even with an empty mask; the last segment's piece is final.
   wire [5:0] rsub0;
@@ -374,31 +374,31 @@ module neo_raster_core (
   assign rmask0 = {(o_lv3 & bm3[rsub0]), (o_lv2 & bm2[rsub0]), (o_lv1 & bm1[rsub0]), (o_lv0 & bm0[rsub0])};
   wire push0;
   assign push0 = itu_out_fire & ((|rmask0) | o_seg_last);
-  reg  [15:0] fifo0 [0:15];
-  reg  [4:0] fwp0_q;
-  reg  [4:0] frp0_q;
-  wire [4:0] fcnt0;
+  reg  [15:0] fifo0 [0:63];
+  reg  [6:0] fwp0_q;
+  reg  [6:0] frp0_q;
+  wire [6:0] fcnt0;
   assign fcnt0 = fwp0_q - frp0_q;
   wire ffull0;
-  assign ffull0 = fcnt0 == 5'd16;
+  assign ffull0 = fcnt0 == 7'd64;
   wire fempty0;
-  assign fempty0 = fcnt0 == 5'd0;
+  assign fempty0 = fcnt0 == 7'd0;
   wire pop0;
   always @(posedge clk_i) begin
     if (push0) begin
-      fifo0[fwp0_q[3:0]] <= {o_list_last, o_seg_last, o_resume, rmask0, o_base};
+      fifo0[fwp0_q[5:0]] <= {o_list_last, o_seg_last, o_resume, rmask0, o_base};
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      fwp0_q <= 5'd0;
-      frp0_q <= 5'd0;
+      fwp0_q <= 7'd0;
+      frp0_q <= 7'd0;
     end else begin
       if (push0) begin
-        fwp0_q <= fwp0_q + 5'd1;
+        fwp0_q <= fwp0_q + 7'd1;
       end
       if (pop0) begin
-        frp0_q <= frp0_q + 5'd1;
+        frp0_q <= frp0_q + 7'd1;
       end
     end
   end
@@ -408,31 +408,31 @@ module neo_raster_core (
   assign rmask1 = {(o_lv3 & bm3[rsub1]), (o_lv2 & bm2[rsub1]), (o_lv1 & bm1[rsub1]), (o_lv0 & bm0[rsub1])};
   wire push1;
   assign push1 = itu_out_fire & ((|rmask1) | o_seg_last);
-  reg  [15:0] fifo1 [0:15];
-  reg  [4:0] fwp1_q;
-  reg  [4:0] frp1_q;
-  wire [4:0] fcnt1;
+  reg  [15:0] fifo1 [0:63];
+  reg  [6:0] fwp1_q;
+  reg  [6:0] frp1_q;
+  wire [6:0] fcnt1;
   assign fcnt1 = fwp1_q - frp1_q;
   wire ffull1;
-  assign ffull1 = fcnt1 == 5'd16;
+  assign ffull1 = fcnt1 == 7'd64;
   wire fempty1;
-  assign fempty1 = fcnt1 == 5'd0;
+  assign fempty1 = fcnt1 == 7'd0;
   wire pop1;
   always @(posedge clk_i) begin
     if (push1) begin
-      fifo1[fwp1_q[3:0]] <= {o_list_last, o_seg_last, o_resume, rmask1, o_base};
+      fifo1[fwp1_q[5:0]] <= {o_list_last, o_seg_last, o_resume, rmask1, o_base};
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      fwp1_q <= 5'd0;
-      frp1_q <= 5'd0;
+      fwp1_q <= 7'd0;
+      frp1_q <= 7'd0;
     end else begin
       if (push1) begin
-        fwp1_q <= fwp1_q + 5'd1;
+        fwp1_q <= fwp1_q + 7'd1;
       end
       if (pop1) begin
-        frp1_q <= frp1_q + 5'd1;
+        frp1_q <= frp1_q + 7'd1;
       end
     end
   end
@@ -442,31 +442,31 @@ module neo_raster_core (
   assign rmask2 = {(o_lv3 & bm3[rsub2]), (o_lv2 & bm2[rsub2]), (o_lv1 & bm1[rsub2]), (o_lv0 & bm0[rsub2])};
   wire push2;
   assign push2 = itu_out_fire & ((|rmask2) | o_seg_last);
-  reg  [15:0] fifo2 [0:15];
-  reg  [4:0] fwp2_q;
-  reg  [4:0] frp2_q;
-  wire [4:0] fcnt2;
+  reg  [15:0] fifo2 [0:63];
+  reg  [6:0] fwp2_q;
+  reg  [6:0] frp2_q;
+  wire [6:0] fcnt2;
   assign fcnt2 = fwp2_q - frp2_q;
   wire ffull2;
-  assign ffull2 = fcnt2 == 5'd16;
+  assign ffull2 = fcnt2 == 7'd64;
   wire fempty2;
-  assign fempty2 = fcnt2 == 5'd0;
+  assign fempty2 = fcnt2 == 7'd0;
   wire pop2;
   always @(posedge clk_i) begin
     if (push2) begin
-      fifo2[fwp2_q[3:0]] <= {o_list_last, o_seg_last, o_resume, rmask2, o_base};
+      fifo2[fwp2_q[5:0]] <= {o_list_last, o_seg_last, o_resume, rmask2, o_base};
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      fwp2_q <= 5'd0;
-      frp2_q <= 5'd0;
+      fwp2_q <= 7'd0;
+      frp2_q <= 7'd0;
     end else begin
       if (push2) begin
-        fwp2_q <= fwp2_q + 5'd1;
+        fwp2_q <= fwp2_q + 7'd1;
       end
       if (pop2) begin
-        frp2_q <= frp2_q + 5'd1;
+        frp2_q <= frp2_q + 7'd1;
       end
     end
   end
@@ -476,31 +476,31 @@ module neo_raster_core (
   assign rmask3 = {(o_lv3 & bm3[rsub3]), (o_lv2 & bm2[rsub3]), (o_lv1 & bm1[rsub3]), (o_lv0 & bm0[rsub3])};
   wire push3;
   assign push3 = itu_out_fire & ((|rmask3) | o_seg_last);
-  reg  [15:0] fifo3 [0:15];
-  reg  [4:0] fwp3_q;
-  reg  [4:0] frp3_q;
-  wire [4:0] fcnt3;
+  reg  [15:0] fifo3 [0:63];
+  reg  [6:0] fwp3_q;
+  reg  [6:0] frp3_q;
+  wire [6:0] fcnt3;
   assign fcnt3 = fwp3_q - frp3_q;
   wire ffull3;
-  assign ffull3 = fcnt3 == 5'd16;
+  assign ffull3 = fcnt3 == 7'd64;
   wire fempty3;
-  assign fempty3 = fcnt3 == 5'd0;
+  assign fempty3 = fcnt3 == 7'd0;
   wire pop3;
   always @(posedge clk_i) begin
     if (push3) begin
-      fifo3[fwp3_q[3:0]] <= {o_list_last, o_seg_last, o_resume, rmask3, o_base};
+      fifo3[fwp3_q[5:0]] <= {o_list_last, o_seg_last, o_resume, rmask3, o_base};
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      fwp3_q <= 5'd0;
-      frp3_q <= 5'd0;
+      fwp3_q <= 7'd0;
+      frp3_q <= 7'd0;
     end else begin
       if (push3) begin
-        fwp3_q <= fwp3_q + 5'd1;
+        fwp3_q <= fwp3_q + 7'd1;
       end
       if (pop3) begin
-        frp3_q <= frp3_q + 5'd1;
+        frp3_q <= frp3_q + 7'd1;
       end
     end
   end
@@ -537,7 +537,7 @@ module neo_raster_core (
   assign edone0 = beat0 & ~(|frest0);
   assign pop0 = ~fempty0 & (~cv0_q | edone0);
   wire [15:0] fhead0;
-  assign fhead0 = fifo0[frp0_q[3:0]];
+  assign fhead0 = fifo0[frp0_q[5:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       cv0_q <= 1'b0;
@@ -648,7 +648,7 @@ module neo_raster_core (
   assign edone1 = beat1 & ~(|frest1);
   assign pop1 = ~fempty1 & (~cv1_q | edone1);
   wire [15:0] fhead1;
-  assign fhead1 = fifo1[frp1_q[3:0]];
+  assign fhead1 = fifo1[frp1_q[5:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       cv1_q <= 1'b0;
@@ -759,7 +759,7 @@ module neo_raster_core (
   assign edone2 = beat2 & ~(|frest2);
   assign pop2 = ~fempty2 & (~cv2_q | edone2);
   wire [15:0] fhead2;
-  assign fhead2 = fifo2[frp2_q[3:0]];
+  assign fhead2 = fifo2[frp2_q[5:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       cv2_q <= 1'b0;
@@ -870,7 +870,7 @@ module neo_raster_core (
   assign edone3 = beat3 & ~(|frest3);
   assign pop3 = ~fempty3 & (~cv3_q | edone3);
   wire [15:0] fhead3;
-  assign fhead3 = fifo3[frp3_q[3:0]];
+  assign fhead3 = fifo3[frp3_q[5:0]];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       cv3_q <= 1'b0;
@@ -1003,7 +1003,7 @@ module neo_raster_core (
   wire [8:0] wb_idx;
   assign wb_idx = {wb_bank_q, wb_ptr_q};
   wire [31:0] wb_start;
-  assign wb_start = wb_bank_q ? bstart1_q : bstart0_q;
+  assign wb_start = ((wb_bank_q == 1'b0) ? bstart0_q : bstart1_q);
   wire wb_present;
   assign wb_present = fbuf[wb_idx][246];
   wire [15:0] wb_key;
@@ -1015,16 +1015,18 @@ module neo_raster_core (
   wire [8:0] wb_next;
   assign wb_next = {1'b0, wb_ptr_q} + 9'd1;
   wire wb_end;
-  assign wb_end = wb_next == (wb_bank_q ? blen1_q : blen0_q);
+  assign wb_end = wb_next == ((wb_bank_q == 1'b0) ? blen0_q : blen1_q);
   wire o_bank;
   assign o_bank = o_base[8];
+  wire [8:0] o_blen;
+  assign o_blen = ((o_bank == 1'b0) ? blen0_q : blen1_q);
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       wb_busy_q <= 1'b0;
       wb_ptr_q <= 8'd0;
       wb_bank_q <= 1'b0;
     end else begin
-      if (itu_out_fire & (o_grp == 4'd0) & o_seg_last & ((o_bank ? blen1_q : blen0_q) != 9'd0)) begin
+      if (itu_out_fire & (o_grp == 4'd0) & o_seg_last & (o_blen != 9'd0)) begin
         wb_busy_q <= 1'b1;
         wb_ptr_q <= 8'd0;
         wb_bank_q <= o_bank;
@@ -1047,83 +1049,83 @@ module neo_raster_core (
   // Control: RUN while the loader and the walk work through the segments, then DRAIN.
   wire drained;
   assign drained = ~route_busy & ~wb_busy_q;
-  reg  [1:0] sc0_q;
+  reg  [2:0] sc0_q;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      sc0_q <= 2'd0;
+      sc0_q <= 3'd0;
     end else begin
       if (cmd_fire) begin
-        sc0_q <= 2'd0;
+        sc0_q <= 3'd0;
       end else if (beat0 & flast0 & (lgrp0_q == 4'd15)) begin
-        sc0_q <= sc0_q + 2'd1;
+        sc0_q <= sc0_q + 3'd1;
       end
     end
   end
-  reg  [1:0] sc1_q;
+  reg  [2:0] sc1_q;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      sc1_q <= 2'd0;
+      sc1_q <= 3'd0;
     end else begin
       if (cmd_fire) begin
-        sc1_q <= 2'd0;
+        sc1_q <= 3'd0;
       end else if (beat1 & flast1 & (lgrp1_q == 4'd15)) begin
-        sc1_q <= sc1_q + 2'd1;
+        sc1_q <= sc1_q + 3'd1;
       end
     end
   end
-  reg  [1:0] sc2_q;
+  reg  [2:0] sc2_q;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      sc2_q <= 2'd0;
+      sc2_q <= 3'd0;
     end else begin
       if (cmd_fire) begin
-        sc2_q <= 2'd0;
+        sc2_q <= 3'd0;
       end else if (beat2 & flast2 & (lgrp2_q == 4'd15)) begin
-        sc2_q <= sc2_q + 2'd1;
+        sc2_q <= sc2_q + 3'd1;
       end
     end
   end
-  reg  [1:0] sc3_q;
+  reg  [2:0] sc3_q;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
-      sc3_q <= 2'd0;
+      sc3_q <= 3'd0;
     end else begin
       if (cmd_fire) begin
-        sc3_q <= 2'd0;
+        sc3_q <= 3'd0;
       end else if (beat3 & flast3 & (lgrp3_q == 4'd15)) begin
-        sc3_q <= sc3_q + 2'd1;
+        sc3_q <= sc3_q + 3'd1;
       end
     end
   end
   // A bank is released once its segment is walked, every SCU has taken its last piece and
-  // its write-back is done (segments use banks 0, 1, 0, ... and are released in order).
+  // its write-back is done (segment k uses bank k mod banks; released in order).
   wire rel_bank;
-  assign rel_bank = rel_seg_q[0];
+  assign rel_bank = rel_seg_q[0:0];
   wire rel_ok;
-  assign rel_ok = (rel_bank ? (full1_q & walked1_q) : (full0_q & walked0_q)) & (sc0_q != rel_seg_q) & (sc1_q != rel_seg_q) & (sc2_q != rel_seg_q) & (sc3_q != rel_seg_q) & ~(wb_busy_q & (wb_bank_q == rel_bank));
+  assign rel_ok = ((rel_bank == 1'b0) ? full0_q : full1_q) & ((rel_bank == 1'b0) ? walked0_q : walked1_q) & (sc0_q != rel_seg_q) & (sc1_q != rel_seg_q) & (sc2_q != rel_seg_q) & (sc3_q != rel_seg_q) & ~(wb_busy_q & (wb_bank_q == rel_bank));
   wire ld_free;
-  assign ld_free = ld_bank_q ? ~full1_q : ~full0_q;
+  assign ld_free = ~((ld_bank_q == 1'b0) ? full0_q : full1_q);
   wire wk_start;
-  assign wk_start = (st_q == S_RUN) & ~wk_on_q & (wk_bank_q ? (full1_q & ~walked1_q) : (full0_q & ~walked0_q)) & ~wb_busy_q;
+  assign wk_start = (st_q == S_RUN) & ~wk_on_q & ((wk_bank_q == 1'b0) ? full0_q : full1_q) & ~((wk_bank_q == 1'b0) ? walked0_q : walked1_q) & ~wb_busy_q;
   wire wk_end;
   assign wk_end = itu_fire & last_quad & last_grp;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
+      rel_seg_q <= 3'd0;
       full0_q <= 1'b0;
-      full1_q <= 1'b0;
       walked0_q <= 1'b0;
+      full1_q <= 1'b0;
       walked1_q <= 1'b0;
-      rel_seg_q <= 2'd0;
     end else begin
       if (cmd_fire) begin
+        rel_seg_q <= 3'd0;
         full0_q <= 1'b0;
-        full1_q <= 1'b0;
         walked0_q <= 1'b0;
+        full1_q <= 1'b0;
         walked1_q <= 1'b0;
-        rel_seg_q <= 2'd0;
       end else begin
         if (rel_ok) begin
-          rel_seg_q <= rel_seg_q + 2'd1;
+          rel_seg_q <= rel_seg_q + 3'd1;
         end
         if (ld_done & (ld_bank_q == 1'b0)) begin
           full0_q <= 1'b1;
@@ -1149,11 +1151,11 @@ module neo_raster_core (
     end
   end
   always @(posedge clk_i) begin
-    if (ld_done & ~ld_bank_q) begin
+    if (ld_done & (ld_bank_q == 1'b0)) begin
       blen0_q <= ld_len_q;
       bstart0_q <= ld_start_q;
     end
-    if (ld_done & ld_bank_q) begin
+    if (ld_done & (ld_bank_q == 1'b1)) begin
       blen1_q <= ld_len_q;
       bstart1_q <= ld_start_q;
     end
@@ -1197,7 +1199,7 @@ module neo_raster_core (
           L_FEAT: begin
             if (loaded) begin
               ld_st_q <= L_IDLE;
-              ld_bank_q <= ~ld_bank_q;
+              ld_bank_q <= ld_bank_q + 1'b1;
               ld_start_q <= next_start;
               ld_len_q <= next_seg_len;
               ld_left_q <= ld_left_q - 32'd1;
@@ -1260,7 +1262,7 @@ module neo_raster_core (
                 seek_q <= 1'b1;
               end else begin
                 wk_on_q <= 1'b0;
-                wk_bank_q <= ~wk_bank_q;
+                wk_bank_q <= wk_bank_q + 1'b1;
                 if (last_seg) begin
                   st_q <= S_DRAIN;
                 end

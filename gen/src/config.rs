@@ -78,10 +78,13 @@ pub struct GenConfig {
     /// Raster core: SCUs (`neo_scu` instances), a power of two in 1..=32 dividing the subtile
     /// count: the subtiles are blended in groups of this many, one per SCU. 4 in the paper.
     pub raster_scus: usize,
-    /// Raster core: feature-buffer entries (a power of two, a multiple of `raster_itus`). A
-    /// longer table is processed in segments of this many entries, re-fetched per subtile group
-    /// (see docs/rtl.md "Raster core").
+    /// Raster core: entries of one feature-buffer bank (a power of two, a multiple of
+    /// `raster_itus`). A longer table is processed in segments of this many entries, each
+    /// loaded once and walked for every subtile group (see docs/rtl.md "Raster core").
     pub raster_feature_buffer: usize,
+    /// Raster core: feature-buffer banks (a power of two in 2..=8): the loader fills the next
+    /// banks while the walk and the SCUs use the oldest.
+    pub raster_feature_banks: usize,
 }
 
 impl Default for GenConfig {
@@ -104,6 +107,7 @@ impl Default for GenConfig {
             raster_itus: 4,
             raster_scus: 4,
             raster_feature_buffer: 256,
+            raster_feature_banks: 2,
         }
     }
 }
@@ -225,6 +229,10 @@ impl GenConfig {
                 "raster_feature_buffer {f} is not a power of two in 4..=4096, a multiple of raster_itus {} and at least twice it",
                 self.raster_itus
             ));
+        }
+        let b = self.raster_feature_banks;
+        if !b.is_power_of_two() || !(2..=8).contains(&b) {
+            return err(format!("raster_feature_banks {b} is not a power of two in 2..=8"));
         }
         if (f as u64) >= 1u64 << self.len_bits {
             return err(format!("raster_feature_buffer {f} does not fit len_bits {}", self.len_bits));

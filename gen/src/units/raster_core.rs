@@ -38,7 +38,7 @@ use crate::units::{itu, scu};
 pub const NAME: &str = "neo_raster_core";
 
 /// Entries per routing FIFO (one per SCU): how far the ITUs may run ahead of an SCU.
-pub const FIFO_DEPTH: u32 = 16;
+pub const FIFO_DEPTH: u32 = 64;
 
 /// Memory spaces (`mem_req_space_o`).
 pub mod space {
@@ -105,7 +105,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     let t = rc.tile;
     let tl = t.trailing_zeros();
     let f = cfg.raster_feature_buffer as u32;
+    let nbk = cfg.raster_feature_banks as u32;
+    let bkb = nbk.trailing_zeros(); // bank index bits
+    let rsw = bkb + 2; // segment counters: up to nbk segments in flight
     let fa = bits_for(f as u64 - 1);
+    let fx = fa + bkb; // buffer index {bank, entry}
     let sl = bits_for(f as u64);
     let fw = feature_word_bits(cfg);
     let present = fw - 1;
@@ -122,7 +126,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let wdb = wdata_bits(cfg);
     let rw = s * 24;
     let tg = cfg.itu_tag_bits;
-    let ew = 3 + ni + fa + 1; // FIFO element {final, last, resume, mask, {bank, base}}
+    let ew = 3 + ni + fx; // FIFO element {final, last, resume, mask, {bank, base}}
     let db = bits_for(FIFO_DEPTH as u64 - 1);
     let ifl = bits_for(itu::LATENCY as u64 + 1);
     let (mean_lsb, _) = field("mean_x");
@@ -178,21 +182,13 @@ pub fn module(cfg: &GenConfig) -> Module {
         ("pix_q", aw),
         ("len_q", lw),
         ("ld_st_q", 2),
-        ("ld_bank_q", 1),
+        ("ld_bank_q", bkb),
         ("ld_start_q", lw),
         ("ld_len_q", sl),
         ("ld_left_q", lw),
-        ("full0_q", 1),
-        ("full1_q", 1),
-        ("walked0_q", 1),
-        ("walked1_q", 1),
-        ("blen0_q", sl),
-        ("blen1_q", sl),
-        ("bstart0_q", lw),
-        ("bstart1_q", lw),
-        ("rel_seg_q", 2),
+        ("rel_seg_q", rsw),
         ("wk_on_q", 1),
-        ("wk_bank_q", 1),
+        ("wk_bank_q", bkb),
         ("grp_q", gw),
         ("iss_q", sl),
         ("rcv_q", sl),
@@ -211,9 +207,13 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.localparam(n, 2, lit(2, v));
     }
     m.comment(format!(
-        "Two banks of {f} entries: the loader fills one while the walk and the SCUs use the other."
+        "{nbk} banks of {f} entries: the loader fills the next ones while the walk and the SCUs use the oldest."
     ));
-    m.mem("tbuf", tw, 2 * f).mem("fbuf", fw, 2 * f).mem("hbuf", 1, 2 * f);
+    m.mem("tbuf", tw, nbk * f).mem("fbuf", fw, nbk * f).mem("hbuf", 1, nbk * f);
+    for b in 0..nbk {
+        m.reg(format!("full{b}_q"), 1).reg(format!("walked{b}_q"), 1);
+        m.reg(format!("blen{b}_q"), sl).reg(format!("bstart{b}_q"), lw);
+    }
     m.wire_assign("cmd_fire", 1, "cmd_valid_i & cmd_ready_o");
     m.assign("cmd_ready_o", "st_q == S_IDLE");
     let flit = |wi: u32| lit(wi, f as u64);
@@ -240,8 +240,8 @@ pub fn module(cfg: &GenConfig) -> Module {
         format!("(rem_next > {}) ? {} : {}", flit(lw), flit(sl), resize("rem_next", lw, sl)),
     );
     m.comment("The walked segment (bank wk_bank_q).");
-    m.wire_assign("seg_len_w", sl, "wk_bank_q ? blen1_q : blen0_q");
-    m.wire_assign("seg_start_w", lw, "wk_bank_q ? bstart1_q : bstart0_q");
+    m.wire_assign("seg_len_w", sl, bank_mux("blen", "wk_bank_q", nbk, bkb));
+    m.wire_assign("seg_start_w", lw, bank_mux("bstart", "wk_bank_q", nbk, bkb));
     m.wire_assign("last_seg", 1, format!("(len_q - seg_start_w) <= {}", flit(lw)));
     m.wire_assign("last_grp", 1, format!("grp_q == {}", lit(gw, groups as u64 - 1)));
 
@@ -267,7 +267,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     );
     m.wire_assign("rd_t", 1, "ld_st_q == L_TABLE");
     m.assign("rd_v", "(ld_st_q != L_IDLE) & (iss_q != ld_len_q)");
-    m.wire_assign("iss_idx", fa + 1, format!("{{ld_bank_q, {}}}", resize("iss_q", sl, fa)));
+    m.wire_assign("iss_idx", fx, format!("{{ld_bank_q, {}}}", resize("iss_q", sl, fa)));
     m.wire_assign("iss_id", ib, format!("tbuf[iss_idx][{}:0]", ib - 1));
     m.wire_assign(
         "rd_addr",
@@ -280,7 +280,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         ),
     );
     m.wire_assign("rd_len", bl, format!("rd_t ? tlen : {}", lit(bl, 1)));
-    m.wire_assign("rcv_idx", fa + 1, format!("{{ld_bank_q, {}}}", resize("rcv_q", sl, fa)));
+    m.wire_assign("rcv_idx", fx, format!("{{ld_bank_q, {}}}", resize("rcv_q", sl, fa)));
     m.wire_assign("loaded", 1, "(iss_q == ld_len_q) & (rcv_q == ld_len_q)");
     m.wire_assign("ld_done", 1, "(ld_st_q == L_FEAT) & loaded");
     m.seq_noreset(vec![if_(
@@ -310,7 +310,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.comment(format!(
         "Quad skipping: qhit[q][g] = quad q of the segment touches group g (from group 0's walk)."
     ));
-    m.mem("qhit", groups, 2 * nq);
+    m.mem("qhit", groups, nbk * nq);
     m.wire_assign("cur_q", qb, if nq == 1 { lit(1, 0) } else { format!("base_q[{}:{ib2}]", fa - 1) });
     let col: Vec<String> = (0..nq)
         .rev()
@@ -359,7 +359,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let mut unused = Vec::new();
     for u in 0..ni {
         m.wire_assign(format!("li{u}"), fa, format!("base_q + {}", lit(fa, u as u64)));
-        m.wire_assign(format!("lb{u}"), fa + 1, format!("{{wk_bank_q, li{u}}}"));
+        m.wire_assign(format!("lb{u}"), fx, format!("{{wk_bank_q, li{u}}}"));
         m.wire_assign(
             format!("lv{u}"),
             1,
@@ -397,7 +397,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign("unused_tags", 1, format!("^{{{}}}", unused.join(", ")));
     // Sideband of each quad, {list_last, seg_last, group, base, lane valids}, through a copy of
     // the ITU pipeline: its stages all advance when in_ready_o is high.
-    let sbw = 3 + gw + fa + 1 + ni;
+    let sbw = 3 + gw + fx + ni;
     let lvs: Vec<String> = (0..ni).rev().map(|u| format!("lv{u}")).collect();
     m.comment(format!(
         "Quad sideband through {} stages that advance with the ITUs' (in_ready_o = their stage enable).",
@@ -432,7 +432,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     for u in 0..ni {
         tf(&format!("o_lv{u}"), 1, &mut m);
     }
-    tf("o_base", fa + 1, &mut m);
+    tf("o_base", fx, &mut m);
     tf("o_grp", gw, &mut m);
     tf("o_seg_last", 1, &mut m);
     tf("o_list_last", 1, &mut m);
@@ -451,7 +451,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.comment("Group 0's results: every entry's valid bit (the OR over all subtiles).");
     let mut hb = Vec::new();
     for u in 0..ni {
-        hb.push(set(format!("hbuf[o_base + {}]", lit(fa + 1, u as u64)), format!("hit{u}")));
+        hb.push(set(format!("hbuf[o_base + {}]", lit(fx, u as u64)), format!("hit{u}")));
     }
     m.seq_noreset(vec![if_(format!("itu_out_fire & (o_grp == {})", lit(gw, 0)), hb)]);
     m.comment("Group 0's results also give each quad's groups (qhit) and, with its last quad, g0_done.");
@@ -464,8 +464,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         })
         .collect();
     m.wire_assign("o_qhit", groups, format!("{{{}}}", qh.join(", ")));
-    let o_q =
-        if f / ni == 1 { format!("o_base[{fa}]") } else { format!("o_base[{fa}:{}]", ni.trailing_zeros()) };
+    let o_q = format!("o_base[{}:{}]", fx - 1, if f / ni == 1 { fa } else { ni.trailing_zeros() });
     m.seq_noreset(vec![if_(
         format!("itu_out_fire & (o_grp == {})", lit(gw, 0)),
         vec![set(format!("qhit[{o_q}]"), "o_qhit")],
@@ -549,7 +548,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let mut busy = Vec::new();
     for j in 0..nc {
         let q = |n: &str| format!("{n}{j}_q");
-        m.reg(q("cv"), 1).reg(q("cbase"), fa + 1).reg(q("cmask"), ni).reg(q("clast"), 1).reg(q("lgrp"), gw);
+        m.reg(q("cv"), 1).reg(q("cbase"), fx).reg(q("cmask"), ni).reg(q("clast"), 1).reg(q("lgrp"), gw);
         m.reg(q("cfin"), 1).reg(q("cres"), 1);
         m.reg(q("rel"), 1);
         // Lowest set bit of the mask.
@@ -561,8 +560,8 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.wire_assign(format!("flane{j}"), lb, sel);
         m.wire_assign(
             format!("fidx{j}"),
-            fa + 1,
-            format!("cbase{j}_q + {}", resize(&format!("flane{j}"), lb, fa + 1)),
+            fx,
+            format!("cbase{j}_q + {}", resize(&format!("flane{j}"), lb, fx)),
         );
         m.wire_assign(format!("frest{j}"), ni, format!("cmask{j}_q & (cmask{j}_q - {})", lit(ni, 1)));
         m.wire_assign(format!("fempty_beat{j}"), 1, format!("~(|cmask{j}_q)"));
@@ -605,11 +604,11 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.seq_noreset(vec![if_else(
             format!("pop{j}"),
             vec![
-                set(q("cbase"), format!("fhead{j}[{fa}:0]")),
-                set(q("cmask"), format!("fhead{j}[{}:{}]", fa + ni, fa + 1)),
-                set(q("cres"), format!("fhead{j}[{}]", fa + ni + 1)),
-                set(q("clast"), format!("fhead{j}[{}]", fa + ni + 2)),
-                set(q("cfin"), format!("fhead{j}[{}]", fa + ni + 3)),
+                set(q("cbase"), format!("fhead{j}[{}:0]", fx - 1)),
+                set(q("cmask"), format!("fhead{j}[{}:{fx}]", fx + ni - 1)),
+                set(q("cres"), format!("fhead{j}[{}]", fx + ni)),
+                set(q("clast"), format!("fhead{j}[{}]", fx + ni + 1)),
+                set(q("cfin"), format!("fhead{j}[{}]", fx + ni + 2)),
             ],
             vec![if_(format!("beat{j}"), vec![set(q("cmask"), format!("frest{j}"))])],
         )]);
@@ -714,10 +713,10 @@ pub fn module(cfg: &GenConfig) -> Module {
     // ------------------------------------------------------------ write-back
     m.blank();
     m.comment("Write-back of the segment once its group-0 results are in: {present & OR, present ? depth key : key, id}.");
-    m.reg("wb_busy_q", 1).reg("wb_ptr_q", fa).reg("wb_bank_q", 1);
+    m.reg("wb_busy_q", 1).reg("wb_ptr_q", fa).reg("wb_bank_q", bkb);
     m.assign("wb_v", "wb_busy_q");
-    m.wire_assign("wb_idx", fa + 1, "{wb_bank_q, wb_ptr_q}");
-    m.wire_assign("wb_start", lw, "wb_bank_q ? bstart1_q : bstart0_q");
+    m.wire_assign("wb_idx", fx, "{wb_bank_q, wb_ptr_q}");
+    m.wire_assign("wb_start", lw, bank_mux("bstart", "wb_bank_q", nbk, bkb));
     m.wire_assign("wb_present", 1, format!("fbuf[wb_idx][{present}]"));
     m.wire_assign(
         "wb_key",
@@ -744,17 +743,18 @@ pub fn module(cfg: &GenConfig) -> Module {
         format!("tab_q + {} + {}", resize("wb_start", lw, aw), resize("wb_ptr_q", fa, aw)),
     );
     m.wire_assign("wb_next", sl, format!("{} + {}", resize("wb_ptr_q", fa, sl), lit(sl, 1)));
-    m.wire_assign("wb_end", 1, "wb_next == (wb_bank_q ? blen1_q : blen0_q)");
-    m.wire_assign("o_bank", 1, format!("o_base[{fa}]"));
+    m.wire_assign("wb_end", 1, format!("wb_next == {}", bank_mux("blen", "wb_bank_q", nbk, bkb)));
+    m.wire_assign(
+        "o_bank",
+        bkb,
+        if bkb == 1 { format!("o_base[{fa}]") } else { format!("o_base[{}:{fa}]", fx - 1) },
+    );
+    m.wire_assign("o_blen", sl, bank_mux("blen", "o_bank", nbk, bkb));
     m.seq(
-        vec![set("wb_busy_q", lit(1, 0)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", lit(1, 0))],
+        vec![set("wb_busy_q", lit(1, 0)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", lit(bkb, 0))],
         vec![
             if_(
-                format!(
-                    "itu_out_fire & (o_grp == {}) & o_seg_last & ((o_bank ? blen1_q : blen0_q) != {})",
-                    lit(gw, 0),
-                    lit(sl, 0)
-                ),
+                format!("itu_out_fire & (o_grp == {}) & o_seg_last & (o_blen != {})", lit(gw, 0), lit(sl, 0)),
                 vec![set("wb_busy_q", lit(1, 1)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", "o_bank")],
             ),
             if_(
@@ -794,81 +794,65 @@ pub fn module(cfg: &GenConfig) -> Module {
     // Per SCU: segments whose last piece (group G-1) it has taken, to release their bank.
     let mut consumed = Vec::new();
     for j in 0..nc {
-        m.reg(format!("sc{j}_q"), 2);
+        m.reg(format!("sc{j}_q"), rsw);
         m.seq(
-            vec![set(format!("sc{j}_q"), lit(2, 0))],
+            vec![set(format!("sc{j}_q"), lit(rsw, 0))],
             vec![if_else(
                 "cmd_fire",
-                vec![set(format!("sc{j}_q"), lit(2, 0))],
+                vec![set(format!("sc{j}_q"), lit(rsw, 0))],
                 vec![if_(
                     format!("beat{j} & flast{j} & (lgrp{j}_q == {})", lit(gw, groups as u64 - 1)),
-                    vec![set(format!("sc{j}_q"), format!("sc{j}_q + {}", lit(2, 1)))],
+                    vec![set(format!("sc{j}_q"), format!("sc{j}_q + {}", lit(rsw, 1)))],
                 )],
             )],
         );
         consumed.push(format!("(sc{j}_q != rel_seg_q)"));
     }
     m.comment("A bank is released once its segment is walked, every SCU has taken its last piece and");
-    m.comment("its write-back is done (segments use banks 0, 1, 0, ... and are released in order).");
-    m.wire_assign("rel_bank", 1, "rel_seg_q[0]");
+    m.comment("its write-back is done (segment k uses bank k mod banks; released in order).");
+    m.wire_assign("rel_bank", bkb, format!("rel_seg_q[{}:0]", bkb - 1));
     m.wire_assign(
         "rel_ok",
         1,
         format!(
-            "(rel_bank ? (full1_q & walked1_q) : (full0_q & walked0_q)) & {} & ~(wb_busy_q & (wb_bank_q == rel_bank))",
+            "{} & {} & {} & ~(wb_busy_q & (wb_bank_q == rel_bank))",
+            bank_mux("full", "rel_bank", nbk, bkb),
+            bank_mux("walked", "rel_bank", nbk, bkb),
             consumed.join(" & ")
         ),
     );
-    m.wire_assign("ld_free", 1, "ld_bank_q ? ~full1_q : ~full0_q");
+    m.wire_assign("ld_free", 1, format!("~{}", bank_mux("full", "ld_bank_q", nbk, bkb)));
     m.wire_assign(
         "wk_start",
         1,
-        "(st_q == S_RUN) & ~wk_on_q & (wk_bank_q ? (full1_q & ~walked1_q) : (full0_q & ~walked0_q)) & ~wb_busy_q",
+        format!(
+            "(st_q == S_RUN) & ~wk_on_q & {} & ~{} & ~wb_busy_q",
+            bank_mux("full", "wk_bank_q", nbk, bkb),
+            bank_mux("walked", "wk_bank_q", nbk, bkb)
+        ),
     );
     m.wire_assign("wk_end", 1, "itu_fire & last_quad & last_grp");
-    let bank_regs = |b: u32| -> Vec<Stmt> {
-        vec![
+    let mut banks = vec![if_("rel_ok", vec![set("rel_seg_q", format!("rel_seg_q + {}", lit(rsw, 1)))])];
+    let mut clear = vec![set("rel_seg_q", lit(rsw, 0))];
+    let mut lens = Vec::new();
+    for b in 0..nbk {
+        let bl_ = lit(bkb, b as u64);
+        banks.extend([
+            if_(format!("ld_done & (ld_bank_q == {bl_})"), vec![set(format!("full{b}_q"), lit(1, 1))]),
+            if_(format!("wk_end & (wk_bank_q == {bl_})"), vec![set(format!("walked{b}_q"), lit(1, 1))]),
             if_(
-                format!("ld_done & (ld_bank_q == {})", lit(1, b as u64)),
-                vec![set(format!("full{b}_q"), lit(1, 1))],
-            ),
-            if_(
-                format!("wk_end & (wk_bank_q == {})", lit(1, b as u64)),
-                vec![set(format!("walked{b}_q"), lit(1, 1))],
-            ),
-            if_(
-                format!("rel_ok & (rel_bank == {})", lit(1, b as u64)),
+                format!("rel_ok & (rel_bank == {bl_})"),
                 vec![set(format!("full{b}_q"), lit(1, 0)), set(format!("walked{b}_q"), lit(1, 0))],
             ),
-        ]
-    };
-    let mut banks = vec![if_("rel_ok", vec![set("rel_seg_q", format!("rel_seg_q + {}", lit(2, 1)))])];
-    banks.extend(bank_regs(0));
-    banks.extend(bank_regs(1));
-    m.seq(
-        vec![
-            set("full0_q", lit(1, 0)),
-            set("full1_q", lit(1, 0)),
-            set("walked0_q", lit(1, 0)),
-            set("walked1_q", lit(1, 0)),
-            set("rel_seg_q", lit(2, 0)),
-        ],
-        vec![if_else(
-            "cmd_fire",
-            vec![
-                set("full0_q", lit(1, 0)),
-                set("full1_q", lit(1, 0)),
-                set("walked0_q", lit(1, 0)),
-                set("walked1_q", lit(1, 0)),
-                set("rel_seg_q", lit(2, 0)),
-            ],
-            banks,
-        )],
-    );
-    m.seq_noreset(vec![
-        if_("ld_done & ~ld_bank_q", vec![set("blen0_q", "ld_len_q"), set("bstart0_q", "ld_start_q")]),
-        if_("ld_done & ld_bank_q", vec![set("blen1_q", "ld_len_q"), set("bstart1_q", "ld_start_q")]),
-    ]);
+        ]);
+        clear.extend([set(format!("full{b}_q"), lit(1, 0)), set(format!("walked{b}_q"), lit(1, 0))]);
+        lens.push(if_(
+            format!("ld_done & (ld_bank_q == {bl_})"),
+            vec![set(format!("blen{b}_q"), "ld_len_q"), set(format!("bstart{b}_q"), "ld_start_q")],
+        ));
+    }
+    m.seq(clear.clone(), vec![if_else("cmd_fire", clear, banks)]);
+    m.seq_noreset(lens);
     m.comment("Loader: table bursts then one feature read per entry, a segment per free bank.");
     m.seq(
         vec![
@@ -884,7 +868,7 @@ pub fn module(cfg: &GenConfig) -> Module {
                 "cmd_fire",
                 vec![
                     set("ld_st_q", "L_IDLE"),
-                    set("ld_bank_q", lit(1, 0)),
+                    set("ld_bank_q", lit(bkb, 0)),
                     set("ld_start_q", lit(lw, 0)),
                     set("ld_len_q", "cmd_seg_len"),
                     set("ld_left_q", "cmd_segs"),
@@ -920,7 +904,7 @@ pub fn module(cfg: &GenConfig) -> Module {
                                 "loaded",
                                 vec![
                                     set("ld_st_q", "L_IDLE"),
-                                    set("ld_bank_q", "~ld_bank_q"),
+                                    set("ld_bank_q", format!("ld_bank_q + {}", lit(bkb, 1))),
                                     set("ld_start_q", "next_start"),
                                     set("ld_len_q", "next_seg_len"),
                                     set("ld_left_q", format!("ld_left_q - {}", lit(lw, 1))),
@@ -946,7 +930,7 @@ pub fn module(cfg: &GenConfig) -> Module {
         set("pix_q", "cmd_pix_i"),
         set("len_q", "cmd_len_i"),
         set("wk_on_q", lit(1, 0)),
-        set("wk_bank_q", lit(1, 0)),
+        set("wk_bank_q", lit(bkb, 0)),
     ];
     m.seq(
         vec![
@@ -955,7 +939,7 @@ pub fn module(cfg: &GenConfig) -> Module {
             set("base_q", lit(fa, 0)),
             set("seek_q", lit(1, 0)),
             set("wk_on_q", lit(1, 0)),
-            set("wk_bank_q", lit(1, 0)),
+            set("wk_bank_q", lit(bkb, 0)),
             set("grp_q", lit(gw, 0)),
         ],
         vec![
@@ -1005,7 +989,7 @@ pub fn module(cfg: &GenConfig) -> Module {
                                             ],
                                             vec![
                                                 set("wk_on_q", lit(1, 0)),
-                                                set("wk_bank_q", "~wk_bank_q"),
+                                                set("wk_bank_q", format!("wk_bank_q + {}", lit(bkb, 1))),
                                                 if_("last_seg", vec![set("st_q", "S_DRAIN")]),
                                             ],
                                         ),
@@ -1025,6 +1009,15 @@ pub fn module(cfg: &GenConfig) -> Module {
     );
     m.assign("done_o", "done_q");
     m
+}
+
+/// `name{sel}_q` of banks `0..n` (`sel`: `bits` wide).
+fn bank_mux(name: &str, sel: &str, n: u32, bits: u32) -> String {
+    let mut e = format!("{name}{}_q", n - 1);
+    for b in (0..n - 1).rev() {
+        e = format!("(({sel} == {}) ? {name}{b}_q : {e})", lit(bits, b as u64));
+    }
+    e
 }
 
 /// Origin (`P_ox`, `P_oy`, `ow` bits) and inside columns / rows (`P_cols`, `P_rows`) of subtile
