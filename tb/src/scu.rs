@@ -71,8 +71,18 @@ const IN_PORTS: [&str; 19] = [
     "in_sub_i",
 ];
 
+/// How a beat ends and starts pieces: `last` ends the piece, `fin` (with `last`) ends the
+/// subtile, `resume` (first beat of a piece) continues the subtile saved in slot `sub`.
+#[derive(Clone, Copy, Debug)]
+struct PieceFlags {
+    last: bool,
+    fin: bool,
+    resume: bool,
+    sub: u64,
+}
+
 /// The beat of Gaussian `e` (None: an empty beat) of a list.
-fn beat(e: Option<&FeatureEntry>, list: &ScuList, last: bool) -> Beat {
+fn beat(e: Option<&FeatureEntry>, list: &ScuList, fl: PieceFlags) -> Beat {
     let f = e.copied().unwrap_or_default();
     let vals: [u64; 19] = [
         f.mean[0] as u32 as u64,
@@ -86,14 +96,14 @@ fn beat(e: Option<&FeatureEntry>, list: &ScuList, last: bool) -> Beat {
         f.rgb[1] as u32 as u64,
         f.rgb[2] as u32 as u64,
         e.is_none() as u64,
-        last as u64,
+        fl.last as u64,
         list.origin[0] as u64,
         list.origin[1] as u64,
         list.cols as u64,
         list.rows as u64,
-        last as u64,
-        0,
-        0,
+        fl.fin as u64,
+        fl.resume as u64,
+        fl.sub,
     ];
     vals.iter()
         .enumerate()
@@ -104,13 +114,51 @@ fn beat(e: Option<&FeatureEntry>, list: &ScuList, last: bool) -> Beat {
         .collect()
 }
 
-/// The beats of `list`.
+/// The beats of `list` (one piece, slot 0).
 pub fn beats(list: &ScuList) -> Vec<Beat> {
-    if list.entries.is_empty() {
-        return vec![beat(None, list, true)];
+    piece_beats(list, 0..list.entries.len(), false, true, 0)
+}
+
+/// The beats of the piece `range` of `list`'s entries (an empty range: one empty beat),
+/// resuming slot `sub` unless it is the first piece, and ending the subtile when `fin`.
+fn piece_beats(
+    list: &ScuList,
+    range: std::ops::Range<usize>,
+    resume: bool,
+    fin: bool,
+    sub: u64,
+) -> Vec<Beat> {
+    let flags = |last: bool| PieceFlags { last, fin: fin && last, resume, sub };
+    if range.is_empty() {
+        return vec![beat(None, list, flags(true))];
     }
-    let n = list.entries.len();
-    list.entries.iter().enumerate().map(|(i, e)| beat(Some(e), list, i + 1 == n)).collect()
+    let end = range.end;
+    range.map(|i| beat(Some(&list.entries[i]), list, flags(i + 1 == end))).collect()
+}
+
+/// The beats of `lists` cut into `pieces` pieces each (random cut points, empty pieces
+/// included) and interleaved as the raster core sends them: piece 0 of every list (list `k` in
+/// slot `k`), then piece 1 of every list, ...; only the last pieces end their subtiles, so the
+/// outputs come in list order.
+pub fn interleaved_piece_beats(rng: &mut Rng, lists: &[ScuList], pieces: usize) -> Vec<Beat> {
+    let cuts: Vec<Vec<usize>> = lists
+        .iter()
+        .map(|l| {
+            let mut c: Vec<usize> =
+                (1..pieces).map(|_| rng.below(l.entries.len() as u64 + 1) as usize).collect();
+            c.push(0);
+            c.push(l.entries.len());
+            c.sort_unstable();
+            c
+        })
+        .collect();
+    let mut out = Vec::new();
+    for p in 0..pieces {
+        for (k, l) in lists.iter().enumerate() {
+            out.extend(piece_beats(l, cuts[k][p]..cuts[k][p + 1], p > 0, p + 1 == pieces, k as u64));
+        }
+    }
+    out
 }
 
 /// Golden: the subtile's pixels (row-major), `shade_pixel` over the whole list for pixels
@@ -142,6 +190,38 @@ pub fn run_checked(
     stall_pct: u32,
     ready_pct: u32,
 ) -> ScuRun {
+    let all: Vec<Beat> = lists.iter().flat_map(beats).collect();
+    run_beats_checked(dut, cfg, seed, lists, all, stall_pct, ready_pct)
+}
+
+/// [`run_checked`] with each list cut into `pieces` interleaved pieces
+/// ([`interleaved_piece_beats`]; at most the SCU's state slots of lists).
+pub fn run_pieces_checked(
+    dut: &mut NeoScu,
+    cfg: &GenConfig,
+    seed: u64,
+    lists: &[ScuList],
+    pieces: usize,
+    stall_pct: u32,
+    ready_pct: u32,
+) -> ScuRun {
+    let slots = neo_gen::units::scu::ScuWidths::new(cfg).rows as usize;
+    assert!(lists.len() <= slots, "{} lists for {slots} state slots", lists.len());
+    let mut rng = Rng::new(seed ^ 0x9e37);
+    let all = interleaved_piece_beats(&mut rng, lists, pieces);
+    run_beats_checked(dut, cfg, seed, lists, all, stall_pct, ready_pct)
+}
+
+/// Sends `beats` (ending `lists`' subtiles in order) and checks the outputs.
+fn run_beats_checked(
+    dut: &mut NeoScu,
+    cfg: &GenConfig,
+    seed: u64,
+    lists: &[ScuList],
+    beats: Vec<Beat>,
+    stall_pct: u32,
+    ready_pct: u32,
+) -> ScuRun {
     let fmt = cfg.feature_format();
     let rc = cfg.raster_config();
     let mut rng = Rng::new(seed);
@@ -149,11 +229,12 @@ pub fn run_checked(
     let mut src = Source::new::<NeoScu>("in_valid_i", "in_ready_o", &IN_PORTS, rng.fork(1), stall_pct);
     let mut sink = Sink::new::<NeoScu>("out_valid_o", "out_ready_i", &["out_rgb_o"], rng.fork(2), ready_pct);
     let mut expected: VecDeque<Vec<[u8; 3]>> = VecDeque::with_capacity(lists.len());
+    let beat_count = beats.len() as u64;
+    for b in beats {
+        src.push(b);
+    }
     let mut gaussians = 0;
     for l in lists {
-        for b in beats(l) {
-            src.push(b);
-        }
         gaussians += l.entries.len();
         expected.push_back(golden_pixels(l, &fmt, &rc));
     }
@@ -161,7 +242,7 @@ pub fn run_checked(
     dut.set_out_ready_i(false);
     dut.reset();
     let passes = (rc.subtile * rc.subtile) as u64 / cfg.scu_lanes as u64;
-    let limit = 1000 + (gaussians as u64 + lists.len() as u64) * (passes + 2) * 8 + 40 * lists.len() as u64;
+    let limit = 1000 + beat_count * (passes + 2) * 8 + 40 * lists.len() as u64;
     let mut index = 0usize;
     let mut term_cycles = 0;
     while let Some(want) = expected.front() {

@@ -13,7 +13,7 @@ mod cosim {
     use neo_golden::raster::{pixel_alpha, raster_tile, ExpTable};
     use neo_tb::models::NeoScu;
     use neo_tb::rng::{test_seed, Rng};
-    use neo_tb::scu::{gaussian, lists_of, measure_timing, run_checked, ScuList};
+    use neo_tb::scu::{gaussian, lists_of, measure_timing, run_checked, run_pieces_checked, ScuList};
     use neo_tb::waves::maybe_trace;
 
     /// Random Gaussians in CI: at least 10k (override with NEO_TB_VECTORS).
@@ -132,6 +132,40 @@ mod cosim {
         let all: Vec<_> = cases.iter().map(|(_, l)| l.clone()).collect();
         let run = run_checked(&mut dut, &cfg, seed, &all, 40, 50);
         assert_eq!(run.lists, cases.len());
+    }
+
+    /// Lists cut into pieces (empty ones included) interleaved over the state slots, as the
+    /// raster core sends a long table's segments: each subtile saved at a piece's end and resumed
+    /// at its next piece gives golden's pixels of the whole list. Opaque stacks terminate in one
+    /// piece and are drained in the later ones.
+    #[test]
+    fn scu_resumes_subtiles_from_saved_state_across_pieces() {
+        let name = "scu_resumes_subtiles_from_saved_state_across_pieces";
+        let seed = test_seed(name);
+        let cfg = scu_config();
+        let slots = neo_gen::units::scu::ScuWidths::new(&cfg).rows as usize;
+        let mut rng = Rng::new(seed);
+        let mut dut = NeoScu::new();
+        maybe_trace(&mut dut, name);
+        let mixes = [(0, 100), (30, 60), (10, 90)];
+        let (mut sent, mut runs) = (0, 0u64);
+        while sent < gaussian_count() / 2 {
+            let (stall, ready) = mixes[runs as usize % mixes.len()];
+            let count = 1 + rng.below(slots as u64) as usize;
+            let mut lists = lists_of(&mut rng, &cfg, count, 40);
+            if runs % 4 == 3 {
+                let o = lists[0].origin;
+                let c = [o[0] as f64 + 4.0, o[1] as f64 + 4.0];
+                lists[0].entries =
+                    (0..60).map(|_| gaussian(c, 40.0, 40.0, 0.0, 0.95, [0.3, 0.6, 0.9])).collect();
+            }
+            let pieces = 1 + rng.below(6) as usize;
+            let run =
+                run_pieces_checked(&mut dut, &cfg, seed.wrapping_add(runs), &lists, pieces, stall, ready);
+            sent += run.gaussians;
+            runs += 1;
+        }
+        println!("{name}: {sent} Gaussians in {runs} runs of up to {slots} interleaved subtiles checked");
     }
 
     #[test]

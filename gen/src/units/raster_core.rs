@@ -1074,7 +1074,9 @@ mod tests {
         assert_eq!(image_bits(&cfg), cfg.tile_bits + 6);
         assert_eq!(wdata_bits(&cfg), 192);
         let v = module(&cfg).to_verilog();
-        for i in ["neo_itu u_itu3", "neo_scu u_scu3", "reg  [246:0] fbuf [0:255];"] {
+        for i in
+            ["neo_itu u_itu3", "neo_scu u_scu3", "reg  [246:0] fbuf [0:511];", "reg  [15:0] qhit [0:127];"]
+        {
             assert!(v.contains(i), "{i} missing");
         }
         assert!(!v.contains("u_itu4") && !v.contains("u_scu4"));
@@ -1090,6 +1092,12 @@ mod tests {
         assert!(v.contains("u_scu7") && !v.contains("u_scu8"));
         assert!(GenConfig { raster_scus: 3, ..GenConfig::default() }.validate().is_err());
         assert!(GenConfig { raster_feature_buffer: 100, ..GenConfig::default() }.validate().is_err());
+        assert!(GenConfig { raster_feature_banks: 3, ..GenConfig::default() }.validate().is_err());
+        assert!(GenConfig { raster_feature_banks: 1, ..GenConfig::default() }.validate().is_err());
+        let four = GenConfig { raster_feature_banks: 4, raster_feature_buffer: 64, ..GenConfig::default() };
+        four.validate().unwrap();
+        let v = module(&four).to_verilog();
+        assert!(v.contains("full3_q") && !v.contains("full4_q") && v.contains("fbuf [0:255]"));
         assert!(GenConfig { raster_itus: 0, ..GenConfig::default() }.validate().is_err());
     }
 }
