@@ -119,27 +119,37 @@ pub fn raster_tile_cycles(
         let load = rt.load_cycles_per_entry * len as f64;
         let pix = rt.pixel_write_cycles as f64;
         let segmented = rt.feature_buffer > 0 && len as u64 > rt.feature_buffer;
-        // Quad skipping: group 0 walks every quad; a later group walks only the quads that touch
-        // it, at least one, after a cycle finding the first (hidden under its SCUs' blending).
-        let later = 2.0 * rt.itu_ii * groups.len().saturating_sub(1) as f64;
+        // Quad skipping: group 0 walks every quad; a later group walks, after a cycle finding the
+        // first, only the quads that touch it: with `n_g` of the table's entries touching the
+        // group (at least its busiest subtile's), a fraction `1 - (1 - n_g / len)^itus` of them.
+        let s_ = scus.max(1) as usize;
+        let hit: Vec<f64> = routed
+            .chunks(s_)
+            .map(|g| {
+                let n_g = g.iter().copied().max().unwrap_or(0) as f64;
+                1.0 - (1.0 - (n_g / len.max(1) as f64).min(1.0)).powi(itus.max(1) as i32)
+            })
+            .collect();
+        let walk_of = |n: f64| -> Vec<f64> {
+            let quads = (n / itus.max(1) as f64).ceil().max(1.0);
+            hit.iter()
+                .enumerate()
+                .map(|(k, &h)| if k == 0 { quads } else { 1.0 + (h * quads).max(1.0) } * rt.itu_ii)
+                .collect()
+        };
         let body = if segmented {
-            // Two banks: segment s + 1 loads while segment s is walked and blended.
+            // Banks: segment s + 1 loads while segment s is walked and blended. Per segment, a
+            // group takes the longer of its walk and its slowest SCU's share (the walk of the
+            // next group waits for FIFO space); the port carries the segment's write-back and the
+            // next segment's loads.
             let f = rt.feature_buffer;
             let segs = (len as u64).div_ceil(f);
             let n_of = |s: u64| (len as u64 - s * f).min(f) as f64;
-            let per_scu = busiest_scu(routed, scus, &cost);
-            if std::env::var("NEO_DBG").is_ok() {
-                eprintln!(
-                    "DBG len {len} segs {segs} per_scu {per_scu} groupsum {} ratio {ratio}",
-                    groups.iter().sum::<f64>()
-                );
-            }
             let mut body = rt.load_cycles_per_entry * n_of(0) + segs as f64 * rt.segment_overhead;
             for s in 0..segs {
                 let n = n_of(s);
-                let walk0 = (n / itus.max(1) as f64).ceil() * rt.itu_ii;
-                let work = (walk0 + later).max(per_scu * n / len as f64);
-                // The port: this segment's write-back and the next segment's loads.
+                let work: f64 =
+                    walk_of(n).iter().zip(&groups).map(|(&w, &g)| w.max(g * n / len as f64)).sum();
                 let next = if s + 1 < segs { rt.load_cycles_per_entry * n_of(s + 1) } else { 0.0 };
                 body += work.max(next + n);
             }
@@ -147,7 +157,8 @@ pub fn raster_tile_cycles(
         } else {
             // One segment: each SCU runs through its subtiles of every group, decoupled from the
             // others by its routing FIFO, so the blending takes the busiest SCU's sum.
-            load + (walk + later).max(busiest_scu(routed, scus, &cost)).max(pix)
+            let walks: f64 = walk_of(len as f64).iter().sum();
+            load + walks.max(busiest_scu(routed, scus, &cost)).max(pix)
         };
         body - pix + rt.tile_overhead as f64
     };
@@ -1019,15 +1030,16 @@ mod tests {
         let (h, _) = raster_tile_cycles(&[50; 64], 1.0, 80, 80, &shaped, 4, 4, true);
         assert_eq!(h, 160.0 + 3200.0 - 512.0 + 535.0);
         // 200 entries > 100, two segments: the first segment's loads (200), then per segment
-        // and group the walk against half the group's slowest SCU (200 / 2), the second
-        // segment's loads (200) hidden under the first's blending.
+        // and group the walk (25 quads for group 0, 18.1 for a later one: 1 + the 68% of the
+        // quads that touch it) against half the group's slowest SCU (200 / 2); the port (the
+        // write-backs and the second segment's loads) hides under the blending.
         let (s, _) = raster_tile_cycles(&[50; 64], 1.0, 200, 200, &shaped, 4, 4, true);
         assert_eq!(s, 200.0 + 2.0 * 16.0 * 100.0 - 512.0 + 535.0);
-        // Light long table, 30 segments: load-bound (each segment's 55 cycles of walks, 25 for
-        // group 0 and 2 for each later group, hide under the next segment's 200 cycles of
-        // loads), plus the segment overhead.
+        // Light long table, 30 segments: port-bound (each segment's 55 cycles of walks, 25 for
+        // group 0 and 2 for each later group, hide under its 100 write-backs and the next
+        // segment's 200 cycles of loads), plus the segment overhead.
         let o = RasterTiming { segment_overhead: 30.0, ..shaped };
         let (w, _) = raster_tile_cycles(&[1; 64], 1.0, 3000, 3000, &o, 4, 4, true);
-        assert_eq!(w, 200.0 + 30.0 * 30.0 + 29.0 * 200.0 + 55.0 - 512.0 + 535.0);
+        assert_eq!(w, 200.0 + 30.0 * 30.0 + 29.0 * 300.0 + 100.0 - 512.0 + 535.0);
     }
 }

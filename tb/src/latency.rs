@@ -352,30 +352,34 @@ pub fn raster_core_section(cfg: &GenConfig) -> Value {
         _ => 0.0,
     };
     let rc = cfg.raster_config();
-    // Per-segment fixed cycles of tables longer than the buffer: what the multi-segment points
-    // cost beyond the cycle model's formula (neo_sim::arch::raster_tile_cycles: `tile_overhead -
-    // pixel writes + the first segment's loads + per segment max(walk, the segment's share of
-    // the busiest SCU, the port: the segment's write-back and the next segment's loads)`, the walk
-    // being every quad for group 0 and 2 cycles for a later group), averaged over the points
-    // in the steady state (8 segments) where the walk or the port, not a burst of blending, sets
-    // the pace (1 and 4 bits per Gaussian; the
-    // busiest SCU taken as 4 cycles per routed entry of each group's busiest subtile), at least 0.
+    // Per-segment fixed cycles of tables longer than the buffer: what the steady-state points (8
+    // segments) cost beyond the cycle model's formula (neo_sim::arch::raster_tile_cycles:
+    // `tile_overhead - pixel writes + the first segment's loads + per segment max(the sum over
+    // groups of max(walk, the segment's share of the group's slowest SCU), the port: the
+    // segment's write-back and the next segment's loads)`; group 0 walks every quad, a later
+    // group 1 + the quads that touch it), averaged over the points where the walk or the port,
+    // not a burst of blending, sets the pace (1 and 4 bits per Gaussian; the groups alike, each
+    // one's slowest SCU 4 cycles per routed entry of its busiest subtile), at least 0.
     let groups = (rc.subtiles_per_tile() as usize / cfg.raster_scus) as f64;
     let pix = (rc.tile * rc.tile / rc.subtile) as f64;
+    let ni = cfg.raster_itus as f64;
     let seg: Vec<f64> = grid
         .iter()
         .filter(|p| p.entries > 2 * f && p.bits_per_gaussian < 16)
         .map(|p| {
             let n = p.entries as f64;
-            let scu = 4.0 * p.group_max_routed as f64;
+            let busiest = p.group_max_routed as f64 / groups;
+            let hit = 1.0 - (1.0 - (busiest / n).min(1.0)).powi(cfg.raster_itus as i32);
             let segs = p.entries.div_ceil(f);
             let n_of = |s: u64| (p.entries - s * f).min(f) as f64;
             let mut model = overhead as f64 - pix + load * n_of(0);
             for s in 0..segs {
                 let ns = n_of(s);
-                let walk = (ns / cfg.raster_itus as f64).ceil() + 2.0 * (groups - 1.0);
+                let quads = (ns / ni).ceil().max(1.0);
+                let share = 4.0 * busiest * ns / n;
+                let work = quads.max(share) + (groups - 1.0) * (1.0 + (hit * quads).max(1.0)).max(share);
                 let next = if s + 1 < segs { load * n_of(s + 1) } else { 0.0 };
-                model += walk.max(scu * ns / n).max(next + ns);
+                model += work.max(next + ns);
             }
             (p.cycles as f64 - model) / segs as f64
         })

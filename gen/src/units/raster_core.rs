@@ -307,9 +307,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let nq = f / ni;
     let qb = bits_for(nq as u64 - 1);
     let ib2 = ni.trailing_zeros();
-    m.comment(format!(
-        "Quad skipping: qhit[q][g] = quad q of the segment touches group g (from group 0's walk)."
-    ));
+    m.comment("Quad skipping: qhit[q][g] = quad q of the segment touches group g (from group 0's walk).");
     m.mem("qhit", groups, nbk * nq);
     m.wire_assign("cur_q", qb, if nq == 1 { lit(1, 0) } else { format!("base_q[{}:{ib2}]", fa - 1) });
     let col: Vec<String> = (0..nq)
