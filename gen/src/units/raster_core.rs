@@ -852,6 +852,8 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.seq(clear.clone(), vec![if_else("cmd_fire", clear, banks)]);
     m.seq_noreset(lens);
     m.comment("Loader: table bursts then one feature read per entry, a segment per free bank.");
+    // A load phase starts with no read issued or received.
+    let phase = |st: &str| vec![set("ld_st_q", st), set("iss_q", lit(sl, 0)), set("rcv_q", lit(sl, 0))];
     m.seq(
         vec![
             set("ld_st_q", "L_IDLE"),
@@ -878,24 +880,10 @@ pub fn module(cfg: &GenConfig) -> Module {
                             "L_IDLE".into(),
                             vec![if_(
                                 format!("(st_q == S_RUN) & (ld_left_q != {}) & ld_free", lit(lw, 0)),
-                                vec![
-                                    set("ld_st_q", "L_TABLE"),
-                                    set("iss_q", lit(sl, 0)),
-                                    set("rcv_q", lit(sl, 0)),
-                                ],
+                                phase("L_TABLE"),
                             )],
                         ),
-                        (
-                            "L_TABLE".into(),
-                            vec![if_(
-                                "loaded",
-                                vec![
-                                    set("ld_st_q", "L_FEAT"),
-                                    set("iss_q", lit(sl, 0)),
-                                    set("rcv_q", lit(sl, 0)),
-                                ],
-                            )],
-                        ),
+                        ("L_TABLE".into(), vec![if_("loaded", phase("L_FEAT"))]),
                         (
                             "L_FEAT".into(),
                             vec![if_(
