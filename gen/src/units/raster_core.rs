@@ -1,5 +1,5 @@
 //! `neo_raster_core`: one Rasterization Core (paper Section 5.4, Fig. 14): `raster_itus`
-//! [`super::itu`] units and `raster_scus` [`super::scu`] units, a feature buffer, a command port
+//! [`super::itu`] units and `raster_scus` [`super::scu`] units, a banked feature buffer, a command port
 //! and a memory-request port. Renders one 64x64 tile from its sorted table, bit-exact with golden
 //! [`neo_golden::raster::raster_tile`], and writes each table entry back with the current depth
 //! key and the ITU's cumulative-OR valid bit (golden `pipeline::frame`'s deferred write-back).
@@ -11,7 +11,8 @@
 //! entry, its feature word (`feature base + id`) into the buffers. The subtiles are blended in
 //! `G = subtiles / raster_scus` *groups* of `raster_scus` consecutive subtiles (row-major, SCU
 //! `j` takes subtile `g * raster_scus + j`). WALK issues the segment to the ITUs,
-//! `raster_itus` entries (a *quad*) per cycle, once per group; each ITU result is routed, per
+//! `raster_itus` entries (a *quad*) per cycle, once per group (group 0 every quad, a later group
+//! only the quads group 0's results showed to touch it); each ITU result is routed, per
 //! SCU, into a FIFO of `{final, last, resume, lane mask, base}` elements, and a feeder per SCU
 //! sends the masked entries' features to its SCU in table order. The FIFOs decouple the two: the
 //! ITUs test the next group while the SCUs blend the current one (Fig. 14). Each segment is
@@ -19,8 +20,10 @@
 //! values to the pixel buffer and proceeds to the next group"): one group's walk of a segment
 //! is a *piece* of each of its subtiles' lists. A piece that is not the subtile's last saves the
 //! subtile's pixel state in its SCU's state bank (`neo_scu` `in_final_i` low), and the next
-//! segment's piece resumes from it (`in_resume_i`). The next segment is loaded once the SCUs
-//! have taken every beat of the current one.
+//! segment's piece resumes from it (`in_resume_i`). The segments go round
+//! `raster_feature_banks` banks: the loader fills the next bank while the current one is walked
+//! and blended, and a bank is refilled once its segment is walked, every SCU has taken its last
+//! piece and its write-back is done.
 //!
 //! Group 0's ITU results give every entry's valid bit (the bitmap covers all subtiles); the
 //! write-back of entry `i` (`{valid = present & |bitmap, key = present ? depth_key : old key,
