@@ -138,7 +138,7 @@ pub fn module(cfg: &GenConfig) -> Module {
 
     let mut m = Module::new(NAME);
     m.doc(format!(
-        "Rasterization core: {ni} ITUs + {nc} SCUs (Fig. 14), feature buffer of {f} entries, bit-exact with golden"
+        "Rasterization core: {ni} ITUs + {nc} SCUs (Fig. 14), {nbk} feature-buffer banks of {f} entries, bit-exact with golden"
     ));
     m.doc("raster_tile plus the deferred write-back {valid = ITU OR, key = depth key, id} of every table entry.");
     m.doc(
