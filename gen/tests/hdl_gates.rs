@@ -24,7 +24,7 @@ fn other_configs() -> Vec<(String, GenConfig)> {
         ("bitonic k=3 scu_lanes=64".into(), GenConfig { register_every: 3, scu_lanes: 64, ..base.clone() }),
         ("best_16 k=1".into(), GenConfig { topology: Topology::Best16, register_every: 1, ..base.clone() }),
         (
-            "bitonic n=8 k=10 chunk=64 narrow scu_lanes=4".into(),
+            "bitonic n=8 k=10 chunk=64 narrow scu_lanes=4, raster 2 ITUs 8 SCUs 4 banks of 16".into(),
             GenConfig {
                 bsu_width: 8,
                 register_every: 10,
@@ -38,6 +38,10 @@ fn other_configs() -> Vec<(String, GenConfig)> {
                 tile_bits: 4,
                 itu_tag_bits: 1,
                 scu_lanes: 4,
+                raster_itus: 2,
+                raster_scus: 8,
+                raster_feature_buffer: 16,
+                raster_feature_banks: 4,
                 ..base
             },
         ),

@@ -125,7 +125,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     let tb = cfg.tile_bits;
     let wd = image_bits(cfg);
     let ow = wd + 1;
-    let bl = bits_for(cfg.burst as u64);
+    let bl = bits_for((cfg.burst as u64).max(rc.subtile as u64)); // a burst or a pixel row
     let wdb = wdata_bits(cfg);
     let rw = s * 24;
     let tg = cfg.itu_tag_bits;
@@ -263,11 +263,13 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.comment("LOAD: table bursts into tbuf, then one feature read per entry into fbuf.");
     let bur = cfg.burst as u64;
     m.wire_assign("left", sl, "ld_len_q - iss_q");
-    m.wire_assign(
-        "tlen",
-        bl,
-        format!("(left > {}) ? {} : {}", lit(sl, bur), lit(bl, bur), resize("left", sl, bl)),
-    );
+    // A burst never crosses the segment's end; with bursts as long as a bank, `left` fits.
+    let tlen = if bur >= f as u64 {
+        resize("left", sl, bl)
+    } else {
+        format!("(left > {}) ? {} : {}", lit(sl, bur), lit(bl, bur), resize("left", sl, bl))
+    };
+    m.wire_assign("tlen", bl, tlen);
     m.wire_assign("rd_t", 1, "ld_st_q == L_TABLE");
     m.assign("rd_v", "(ld_st_q != L_IDLE) & (iss_q != ld_len_q)");
     m.wire_assign("iss_idx", fx, format!("{{ld_bank_q, {}}}", resize("iss_q", sl, fa)));
@@ -323,16 +325,19 @@ pub fn module(cfg: &GenConfig) -> Module {
             )
         })
         .collect();
-    m.wire_assign("qcol", nq, format!("{{{}}}", col.join(", ")));
+    // One assign per quad: a single concatenation is too long a line for large buffers.
+    m.wire("qcol", nq);
+    for (q, c) in col.iter().rev().enumerate() {
+        m.assign(if nq == 1 { "qcol".to_string() } else { format!("qcol[{q}]") }, c.clone());
+    }
     m.wire_assign("qabove", nq, format!("qcol & (({{{nq}{{1'b1}}}} << cur_q) << 1)"));
     for (src, dst) in [("qcol", "qf"), ("qabove", "qn")] {
         m.wire_assign(format!("{dst}_oh"), nq, format!("{src} & (~{src} + {})", lit(nq, 1)));
-        let mut bits = Vec::new();
-        for b in (0..qb).rev() {
-            let sel: Vec<String> =
-                (0..nq).filter(|q| (q >> b) & 1 == 1).map(|q| format!("{dst}_oh[{q}]")).collect();
-            bits.push(if sel.is_empty() { "1'b0".to_string() } else { format!("({})", sel.join(" | ")) });
-        }
+        // Bit b of the index: the one-hot word has its bit at a quad whose index has bit b.
+        let bits: Vec<String> = (0..qb)
+            .rev()
+            .map(|b| format!("(|({dst}_oh & {}))", mask_lit(nq, |q| (q >> b) & 1 == 1)))
+            .collect();
         m.wire_assign(format!("{dst}_idx"), qb, format!("{{{}}}", bits.join(", ")));
         m.wire_assign(format!("unused_{dst}0"), 1, format!("{dst}_oh[0]"));
     }
@@ -554,8 +559,10 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.reg(q("rel"), 1);
         // Lowest set bit of the mask.
         let mut sel = lit(bits_for(ni as u64 - 1), 0);
-        for u in (0..ni).rev() {
-            sel = format!("cmask{j}_q[{u}] ? {} : ({sel})", lit(bits_for(ni as u64 - 1), u as u64));
+        if ni > 1 {
+            for u in (0..ni).rev() {
+                sel = format!("cmask{j}_q[{u}] ? {} : ({sel})", lit(bits_for(ni as u64 - 1), u as u64));
+            }
         }
         let lb = bits_for(ni as u64 - 1);
         m.wire_assign(format!("flane{j}"), lb, sel);
@@ -998,6 +1005,18 @@ pub fn module(cfg: &GenConfig) -> Module {
     );
     m.assign("done_o", "done_q");
     m
+}
+
+/// A `width`-bit hex literal whose bit `q` is `bit(q)` (any width).
+fn mask_lit(width: u32, bit: impl Fn(u32) -> bool) -> String {
+    let digits: String = (0..width.div_ceil(4))
+        .rev()
+        .map(|d| {
+            let v = (0..4).filter(|&k| d * 4 + k < width && bit(d * 4 + k)).fold(0u32, |a, k| a | 1 << k);
+            char::from_digit(v, 16).expect("hex digit")
+        })
+        .collect();
+    format!("{width}'h{digits}")
 }
 
 /// `name{sel}_q` of banks `0..n` (`sel`: `bits` wide).
