@@ -80,15 +80,15 @@ pub enum Accel {
 /// FIFOs, so an SCU's cost is the sum over its subtiles of all groups; a lower bound when the
 /// busiest SCU changes from group to group by more than a FIFO's worth), and `tile_overhead`
 /// (the empty tile) holds the latencies and the pixel writes. The ITUs walk every quad for group
-/// 0 and, for a later group, only the quads that touch it (2 cycles at least: finding the
-/// first, then one quad). A table longer than `rt.feature_buffer` is processed segment by
-/// segment, each segment loaded once (into one of two banks, while the previous segment is
-/// walked and blended) and walked for every group (the SCUs save and resume their subtiles'
-/// pixel state between segments): each segment costs `max(the next segment's loads, the sum over
-/// groups of max(its walk, the segment's share of the group's slowest SCU))` (a 16-entry FIFO
-/// does not hide a busy subtile behind the next group's walk) and `segment_overhead`. Returns
-/// (total, tail after
-/// the last input arrives).
+/// 0 and, for a later group, a cycle finding the first quad that touches it plus those quads
+/// (at least one; estimated from the group's busiest subtile). A table longer than
+/// `rt.feature_buffer` is processed segment by segment, each segment loaded once (into a bank,
+/// while the previous segment is walked and blended) and walked for every group (the SCUs save
+/// and resume their subtiles' pixel state between segments): after the first segment's loads,
+/// each segment costs `max(the sum over groups of max(its walk, the segment's share of the
+/// group's slowest SCU), the memory port: the segment's write-back and the next segment's
+/// loads)` (the routing FIFOs do not hide a busy subtile behind the next group's walk) plus
+/// `segment_overhead`. Returns (total, tail after the last input arrives).
 #[allow(clippy::too_many_arguments)]
 pub fn raster_tile_cycles(
     routed: &[u32],
@@ -122,9 +122,8 @@ pub fn raster_tile_cycles(
         // Quad skipping: group 0 walks every quad; a later group walks, after a cycle finding the
         // first, only the quads that touch it: with `n_g` of the table's entries touching the
         // group (at least its busiest subtile's), a fraction `1 - (1 - n_g / len)^itus` of them.
-        let s_ = scus.max(1) as usize;
         let hit: Vec<f64> = routed
-            .chunks(s_)
+            .chunks(scus.max(1) as usize)
             .map(|g| {
                 let n_g = g.iter().copied().max().unwrap_or(0) as f64;
                 1.0 - (1.0 - (n_g / len.max(1) as f64).min(1.0)).powi(itus.max(1) as i32)
