@@ -120,7 +120,7 @@ pub fn beats(list: &ScuList) -> Vec<Beat> {
 }
 
 /// The beats of the piece `range` of `list`'s entries (an empty range: one empty beat),
-/// resuming slot `sub` unless it is the first piece, and ending the subtile when `fin`.
+/// resuming the subtile saved in slot `sub` when `resume`, and ending it when `fin`.
 fn piece_beats(
     list: &ScuList,
     range: std::ops::Range<usize>,
