@@ -574,17 +574,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     }
     // Lane reads: the state of pixel pass*L + l.
     for l in 0..l_n {
-        let pick = |what: &str| -> String {
-            if p_n == 1 {
-                format!("{what}_q{l}")
-            } else {
-                let mut e = format!("{what}_q{}", (p_n - 1) * l_n + l);
-                for g in (0..p_n - 1).rev() {
-                    e = format!("({} == {}) ? {what}_q{} : {e}", fb("pass"), lit(pb, g as u64), g * l_n + l);
-                }
-                e
-            }
-        };
+        let pick = |what: &str| lane_pixel(&fb("pass"), &w, l, |k| format!("{what}_q{k}"));
         m.wire_assign(format!("rd_t{l}"), w.t, pick("t"));
         m.wire_assign(format!("rd_c{l}"), 3 * w.c, pick("c"));
         m.wire_assign(format!("rd_dn{l}"), 1, pick("dn"));
@@ -608,11 +598,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     }
     m.item(on_en(vec![if_(format!("fin_b & ~{}", fb("fin")), saves)]));
     for l in 0..l_n {
-        let at = |k: u32| format!("bank{k}[{}]", fb("sub"));
-        let mut e = at((p_n - 1) * l_n + l);
-        for g in (0..p_n - 1).rev() {
-            e = format!("({} == {}) ? {} : {e}", fb("pass"), lit(pb, g as u64), at(g * l_n + l));
-        }
+        let e = lane_pixel(&fb("pass"), &w, l, |k| format!("bank{k}[{}]", fb("sub")));
         m.wire_assign(format!("bk{l}"), sw, e);
         m.wire_assign(format!("bk_t{l}"), w.t, format!("bk{l}[{}:0]", w.t - 1));
         m.wire_assign(format!("bk_c{l}"), 3 * w.c, format!("bk{l}[{}:{}]", w.t + 3 * w.c - 1, w.t));
@@ -648,6 +634,17 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.assign("out_valid_o", "out_valid_q");
     m.assign("out_rgb_o", "out_rgb_q");
     m
+}
+
+/// Lane `l`'s pixel of the current pass (`pass`, the bundle's pass field): `pixel(pass * L +
+/// l)` selected by the pass.
+fn lane_pixel(pass: &str, w: &ScuWidths, l: u32, pixel: impl Fn(u32) -> String) -> String {
+    let (l_n, p_n) = (w.lanes, w.passes);
+    let mut e = pixel((p_n - 1) * l_n + l);
+    for g in (0..p_n - 1).rev() {
+        e = format!("({pass} == {}) ? {} : {e}", lit(w.pass_bits(), g as u64), pixel(g * l_n + l));
+    }
+    e
 }
 
 /// `min(255, (c * 255 + 2^(K-1)) >> K)` of accumulator expression `c`; returns the 8-bit wire.
