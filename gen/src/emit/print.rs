@@ -1,6 +1,6 @@
 //! Printing a [`Module`] as Verilog-2005 text.
 
-use super::{Instance, Item, Module, Stmt, HEADER};
+use super::{Instance, Item, Module, Stmt};
 use crate::interface::Dir;
 use std::fmt::Write;
 
@@ -21,7 +21,7 @@ fn indent(level: usize) -> String {
 /// The whole file text of `m`.
 pub(super) fn module(m: &Module) -> String {
     let mut s = String::new();
-    s.push_str(HEADER);
+    s.push_str(&m.header());
     s.push('\n');
     for line in &m.doc {
         push_comment(&mut s, 0, line);

@@ -49,7 +49,8 @@ pub fn top_modules() -> &'static [&'static str] {
 /// Every module of the configuration, leaves first.
 pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
     cfg.validate()?;
-    Ok(vec![
+    let hash = cfg.hash();
+    let mut all = vec![
         cmp_swap::module(cfg),
         bsu::module(cfg),
         msu::module(cfg),
@@ -59,7 +60,11 @@ pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
         scu::exp_module(cfg),
         scu::module(cfg),
         raster_core::module(cfg),
-    ])
+    ];
+    for m in &mut all {
+        m.config_hash = Some(hash);
+    }
+    Ok(all)
 }
 
 /// Every module as a file, or the configuration error.

@@ -26,6 +26,10 @@ use crate::formats::blend::BlendFormat;
 use crate::formats::feature::FeatureFormat;
 use crate::formats::fixed::FormatError;
 
+/// Bits of one output pixel: 8-bit red, green and blue, packed `{blue, green, red}` (red in the
+/// low byte) in the SCU's output, the raster core's pixel rows and the frame buffer.
+pub const RGB_BITS: u32 = 24;
+
 /// Tile geometry and the SCU datapath widths.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct RasterConfig {

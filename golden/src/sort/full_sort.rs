@@ -76,6 +76,23 @@ impl Default for SortConfig {
     }
 }
 
+/// Two-way merge passes that turn `items` entries in sorted runs of `run` entries into one run:
+/// `ceil(log2(ceil(items / run)))`, 0 when one run (or none) is enough. The one definition of
+/// the pass count, for the in-chunk passes (`run` = BSU width) and the passes across chunks
+/// (`run` = chunk size) alike.
+///
+/// # Panics
+/// When `run` is 0.
+pub fn merge_pass_count(items: u64, run: u64) -> u64 {
+    assert!(run > 0, "merge_pass_count: run length 0");
+    let runs = items.div_ceil(run);
+    if runs <= 1 {
+        0
+    } else {
+        u64::from(64 - (runs - 1).leading_zeros())
+    }
+}
+
 /// Work of the on-chip chunk sorts (BSU vectors and in-chunk merge passes), summed over chunks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ChunkWork {
@@ -329,5 +346,22 @@ mod tests {
         assert_eq!(w.merges, 2);
         assert_eq!(w.entries_merged, 32 + 37);
         assert_eq!(w.entries_copied, 5);
+    }
+}
+
+#[cfg(test)]
+mod pass_count_tests {
+    use super::merge_pass_count;
+
+    #[test]
+    fn pass_count_is_ceil_log2_of_the_run_count() {
+        let cases = [(0, 16, 0), (1, 16, 0), (16, 16, 0), (17, 16, 1), (32, 16, 1), (33, 16, 2), (256, 16, 4), (257, 256, 1)];
+        for (items, run, passes) in cases {
+            assert_eq!(merge_pass_count(items, run), passes, "{items} items in runs of {run}");
+        }
+        for runs in 2u64..300 {
+            let expected = (runs as f64).log2().ceil() as u64;
+            assert_eq!(merge_pass_count(runs * 8, 8), expected, "{runs} runs");
+        }
     }
 }

@@ -26,7 +26,7 @@ pub use depth_key::DepthKeyCodec;
 pub use dps::{dps, dps_pass, DpsWork, Parity};
 pub use entry::{SortEntry, SortFormat};
 pub use error::SortParamError;
-pub use full_sort::{full_sort, ChunkWork, PassWork, SortConfig, SortWork, Sorter};
+pub use full_sort::{full_sort, merge_pass_count, ChunkWork, PassWork, SortConfig, SortWork, Sorter};
 pub use msu::{merge2, merge2_into, MergeStats, MergeStep, MergeStream};
 pub use network::Network;
 pub use update::{full_frame_sort, update_tile, TileSorter, TileUpdate, UpdateConfig, UpdateWork};
