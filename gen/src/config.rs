@@ -279,6 +279,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_hash_changes_with_every_field_and_is_stable() {
+        let base = GenConfig::default();
+        assert_eq!(base.hash(), GenConfig::default().hash());
+        let variants = [
+            GenConfig { bsu_width: 32, ..base.clone() },
+            GenConfig { scu_lanes: 8, ..base.clone() },
+            GenConfig { raster_feature_banks: 4, ..base.clone() },
+            GenConfig { topology: Topology::OddEvenMerge, ..base.clone() },
+        ];
+        for v in &variants {
+            assert_ne!(v.hash(), base.hash(), "{v:?}");
+        }
+    }
+
+    #[test]
     fn default_is_the_paper_configuration() {
         let c = GenConfig::default();
         c.validate().unwrap();

@@ -131,7 +131,14 @@ mod tests {
         for f in &files {
             assert!(f.text.contains(&format!("\nmodule {} ", f.name)), "{}", f.name);
             assert_eq!(f.text.matches("\nmodule ").count(), 1, "{}", f.name);
-            assert!(f.text.starts_with(crate::emit::HEADER));
+            let header = f.text.lines().next().unwrap();
+            let hash = format!("config {:#018x})", GenConfig::default().hash());
+            assert!(
+                header.starts_with(crate::emit::HEADER) && header.contains(&hash),
+                "{}: {header}",
+                f.name
+            );
+            assert!(header.contains("gen/src/units/"), "{}: {header}", f.name);
         }
         let mut names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
         names.sort_unstable();

@@ -355,7 +355,16 @@ mod pass_count_tests {
 
     #[test]
     fn pass_count_is_ceil_log2_of_the_run_count() {
-        let cases = [(0, 16, 0), (1, 16, 0), (16, 16, 0), (17, 16, 1), (32, 16, 1), (33, 16, 2), (256, 16, 4), (257, 256, 1)];
+        let cases = [
+            (0, 16, 0),
+            (1, 16, 0),
+            (16, 16, 0),
+            (17, 16, 1),
+            (32, 16, 1),
+            (33, 16, 2),
+            (256, 16, 4),
+            (257, 256, 1),
+        ];
         for (items, run, passes) in cases {
             assert_eq!(merge_pass_count(items, run), passes, "{items} items in runs of {run}");
         }
