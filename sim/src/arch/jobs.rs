@@ -3,7 +3,7 @@
 //! ([`super::raster_tile_cycles`]), each with its DRAM reads and writes.
 
 use neo_golden::pipeline::Strategy;
-use neo_golden::sort::Parity;
+use neo_golden::sort::{merge_pass_count, Parity};
 
 use super::timing::raster_tile_cycles;
 use super::{Accel, Model, K_BG, K_PRE, K_RASTER, K_SORT};
@@ -122,7 +122,7 @@ impl Model<'_> {
         }
         // Merge passes: runs of C, 2C, ... alternate between the scratch buffers; the last pass
         // writes `dst`.
-        let passes = if chunks > 1 { 64 - (chunks - 1).leading_zeros() } else { 0 };
+        let passes = merge_pass_count(n, c);
         let mut from = 0usize;
         for p in 0..passes {
             let to_last = p + 1 == passes;

@@ -44,7 +44,7 @@ use layout::Layout;
 use timing::round_ps;
 
 pub use scheduler::{FrameTimes, Sched};
-pub use timing::raster_tile_cycles;
+pub use timing::{fit_raster_core, raster_tile_cycles};
 
 /// Agent classes.
 pub const CLASS_PRE: u8 = 0;

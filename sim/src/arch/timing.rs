@@ -1,4 +1,7 @@
-//! The raster core's timing: the cycles of one tile ([`raster_tile_cycles`]).
+//! The raster core's timing: the cycles of one tile ([`raster_tile_cycles`]) and the fit of its
+//! measured constants to the grid of `reports/latency.json` ([`fit_raster_core`]).
+
+use neo_golden::formats::latency::RasterCore;
 
 use crate::config::RasterTiming;
 use crate::dram::Ps;
@@ -109,6 +112,90 @@ fn busiest_scu(routed: &[u32], scus: u32, cost: &dyn Fn(u32) -> f64) -> f64 {
     (0..s).map(|j| routed.iter().skip(j).step_by(s).map(|&r| cost(r)).sum::<f64>()).fold(0.0, f64::max)
 }
 
+/// The measured raster core's timing: `base` (the ITU and SCU figures) completed from the grid
+/// of `raster.core` (`reports/latency.json`) with the formula of [`raster_tile_cycles`]:
+///
+/// - `tile_overhead`: the cycles of the empty table (loads of nothing, one empty list per
+///   subtile, the pixel writes, the pipeline latencies);
+/// - `load_cycles_per_entry`: the slope of the loads (the last read's cycle) over the table
+///   length, between the shortest non-empty table and the longest one-segment table of the
+///   fewest subtile bits per Gaussian;
+/// - `segment_overhead`: what the tables of more than two segments cost per segment beyond
+///   [`raster_tile_cycles`] with no segment overhead, averaged over the points where the walk or
+///   the port, not a burst of blending, sets the pace (fewer than 16 subtile bits per Gaussian),
+///   rounded and at least 0. A point's routed counts are rebuilt from its `group_max_routed`:
+///   every subtile of a group routes the group's share (the grid's Gaussians spread evenly).
+///
+/// `subtiles` is the number of subtiles per tile of the measured RTL.
+pub fn fit_raster_core(
+    core: &RasterCore,
+    subtiles: u64,
+    base: &RasterTiming,
+) -> Result<RasterTiming, String> {
+    let (scus, f) = (core.scus, core.feature_buffer);
+    if core.itus == 0 || scus == 0 || subtiles == 0 || !subtiles.is_multiple_of(scus) || subtiles > 4096 {
+        return Err(format!(
+            "itus {}, scus {} and {subtiles} subtiles per tile: expected positive counts, subtiles a multiple of scus",
+            core.itus, scus
+        ));
+    }
+    if f == 0 {
+        return Err("`feature_buffer` must be positive".into());
+    }
+    if let Some(p) = core.grid.iter().find(|p| p.entries > 1 << 20) {
+        return Err(format!("`grid`: a table of {} entries (at most 2^20)", p.entries));
+    }
+    let empty = core.grid.iter().find(|p| p.entries == 0).ok_or("`grid` has no empty table")?;
+    let fewest_bits = core.grid.iter().map(|p| p.bits_per_gaussian).min().unwrap_or(0);
+    let one_segment: Vec<_> = core
+        .grid
+        .iter()
+        .filter(|p| p.bits_per_gaussian == fewest_bits && p.entries > 0 && p.entries <= f)
+        .collect();
+    let (first, last) =
+        match (one_segment.iter().min_by_key(|p| p.entries), one_segment.iter().max_by_key(|p| p.entries)) {
+            (Some(a), Some(b)) if a.entries < b.entries => (*a, *b),
+            _ => return Err("`grid` needs two one-segment tables of the fewest bits per Gaussian".into()),
+        };
+    let load = (last.load_cycles as f64 - first.load_cycles as f64) / (last.entries - first.entries) as f64;
+    if load < 0.0 {
+        return Err(format!(
+            "`grid`: the loads of {} entries end before those of {}",
+            last.entries, first.entries
+        ));
+    }
+    let mut rt = RasterTiming {
+        tile_overhead: empty.cycles,
+        load_cycles_per_entry: load,
+        pixel_write_cycles: core.pixel_writes,
+        feature_buffer: f,
+        segment_overhead: 0.0,
+        ..base.clone()
+    };
+    let groups = subtiles / scus;
+    let per_segment: Vec<f64> = core
+        .grid
+        .iter()
+        .filter(|p| p.entries > 2 * f && p.bits_per_gaussian < 16)
+        .map(|p| {
+            let routed: Vec<u32> = (0..subtiles)
+                .map(|s| {
+                    let g = s / scus;
+                    (p.group_max_routed / groups + u64::from(g < p.group_max_routed % groups))
+                        .min(u32::MAX.into()) as u32
+                })
+                .collect();
+            let n = p.entries as u32;
+            let (model, _) = raster_tile_cycles(&routed, 1.0, n, n, &rt, core.itus as u32, scus as u32, true);
+            (p.cycles as f64 - model) / p.entries.div_ceil(f) as f64
+        })
+        .collect();
+    if !per_segment.is_empty() {
+        rt.segment_overhead = (per_segment.iter().sum::<f64>() / per_segment.len() as f64).round().max(0.0);
+    }
+    Ok(rt)
+}
+
 /// `cycles` clock cycles of `cyc` picoseconds, in whole picoseconds.
 pub(super) fn round_ps(cycles: f64, cyc: f64) -> Ps {
     (cycles * cyc).round().max(0.0) as Ps
@@ -117,6 +204,7 @@ pub(super) fn round_ps(cycles: f64, cyc: f64) -> Ps {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use neo_golden::formats::latency::GridPoint;
 
     fn rt() -> RasterTiming {
         RasterTiming {
@@ -180,5 +268,49 @@ mod tests {
         let o = RasterTiming { segment_overhead: 30.0, ..shaped };
         let (w, _) = raster_tile_cycles(&[1; 64], 1.0, 3000, 3000, &o, 4, 4, true);
         assert_eq!(w, 200.0 + 30.0 * 30.0 + 29.0 * 300.0 + 100.0 - 512.0 + 535.0);
+    }
+
+    #[test]
+    fn the_raster_core_fit_recovers_the_constants_of_a_grid_made_by_the_formula() {
+        let truth = RasterTiming {
+            tile_overhead: 600,
+            load_cycles_per_entry: 3.0,
+            pixel_write_cycles: 512,
+            feature_buffer: 100,
+            segment_overhead: 7.0,
+            ..rt()
+        };
+        let (itus, scus, subtiles) = (4u64, 4u64, 64u64);
+        let mut grid = Vec::new();
+        for bits in [1u64, 4, 16] {
+            for entries in [0u64, 16, 64, 100, 200, 800] {
+                // Every subtile routes the same share: 2 groups' worth of the table per bit.
+                let per = (entries * bits / subtiles) as u32;
+                let routed = vec![per; subtiles as usize];
+                let n = entries as u32;
+                let (cycles, _) =
+                    raster_tile_cycles(&routed, 1.0, n, n, &truth, itus as u32, scus as u32, true);
+                grid.push(GridPoint {
+                    entries,
+                    bits_per_gaussian: bits,
+                    set_bits: entries * bits,
+                    group_max_routed: per as u64 * subtiles / scus,
+                    cycles: cycles as u64,
+                    load_cycles: 9 + 3 * entries,
+                    artifact_cycles: entries * bits,
+                });
+            }
+        }
+        let core =
+            RasterCore { itus, scus, feature_buffer: 100, pixel_writes: 512, memory: String::new(), grid };
+        let fit = fit_raster_core(&core, subtiles, &rt()).unwrap();
+        assert_eq!(fit.tile_overhead, raster_tile_cycles(&[0; 64], 1.0, 0, 0, &truth, 4, 4, true).0 as u64);
+        assert_eq!(fit.load_cycles_per_entry, 3.0);
+        assert_eq!(fit.segment_overhead, 7.0);
+        assert_eq!((fit.pixel_write_cycles, fit.feature_buffer), (512, 100));
+        let mut broken = core.clone();
+        broken.grid.retain(|p| p.entries != 0);
+        assert!(fit_raster_core(&broken, subtiles, &rt()).unwrap_err().contains("no empty table"));
+        assert!(fit_raster_core(&core, 63, &rt()).is_err());
     }
 }
