@@ -1,35 +1,13 @@
 //! Latency and throughput measured by cosimulation, written to `reports/latency.json` for the
 //! cycle model.
 //!
-//! # Schema (`"schema": "neo-latency/1"`; keys are sorted)
-//! ```text
-//! {
-//!   "schema": "neo-latency/1",
-//!   "doc": { field: explanation, ... },
-//!   "config": { the neo_gen::GenConfig the RTL was generated from },
-//!   "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
-//!   "units": {
-//!     "neo_bsu": { "latency": L, "ii": 1, "vectors": N, "cycles": C },
-//!     "neo_msu": { "latency": L, "ii": 1, "merge_gap": G, "entries": N, "cycles": C },
-//!     "neo_sort_core": { "command_overhead": O },
-//!     "neo_scu": { "latency": L, "ii": I, "drain_ii": 1, "gaussians": N, "lanes": 16 }
-//!   },
-//!   "sort_core": {
-//!     "conventional": [ { "entries": n, "cycles": c, "interval": i, "artifact_cycles": a }, ... ],
-//!     "dps":          [ { "entries": n, "cycles": c, "interval": i, "artifact_cycles": a }, ... ],
-//!     "merge":        [ { "entries": n, "len_a": .., "len_b": .., "cycles": c, "interval": i }, ... ],
-//!     "merge_delete": [ { "entries": n, "len_a": .., "len_b": .., "invalid": k, "out": m, "cycles": c, "interval": i }, ... ]
-//!   },
-//!   "raster": {
-//!     "itu": { "latency": L, "ii": 1, "jobs": N, "subtiles_per_job": 64 }
-//!   }
-//! }
-//! ```
-//! `raster` is the section the cycle model (`neo_sim::latency`) reads for the Rasterization
-//! Engine: `raster.itu.latency` (edges from accepting a (Gaussian, tile) job to its bitmap on the
-//! output) and `raster.itu.ii` (cycles per job at full rate; one job tests all
-//! `subtiles_per_job` subtiles of the tile). The raster core (`raster.core.*`) is not measured
-//! yet (no `neo_raster_core` RTL), so those fields are absent and the cycle model assumes them.
+//! The document is a [`neo_golden::formats::latency::LatencyReport`] (schema and field docs
+//! there; `"schema": "neo-latency/2"`). It holds raw measurements only: unit latencies and
+//! rates, sorting-core command cycles over a grid of sizes and modes, the ITU's latency and
+//! rate, and the raster core's cycles per tile over a grid of table lengths x subtile bits per
+//! Gaussian (`raster.core.grid`). The cycle model (`neo_sim::latency`) does every fit next to
+//! the formula it fits (the raster core's empty-tile cost, load rate and per-segment overhead
+//! from the grid, with `neo_sim::arch::raster_tile_cycles`).
 //!
 //! `cycles` is one command alone (accept to `done_o`); `interval` is the steady-state cost per
 //! command when identical commands stream back to back (see [`STREAM`]).
@@ -42,11 +20,12 @@ use crate::models::{NeoBsu, NeoMsu};
 use crate::rng::Rng;
 use crate::stimulus::{sorted_stream, tile_entries};
 use neo_gen::GenConfig;
-use neo_golden::sort::SortEntry;
-use serde_json::{json, Value};
-
-/// Schema identifier written in the report.
-pub const SCHEMA: &str = "neo-latency/1";
+use neo_golden::formats::latency::{
+    BsuUnit, ChunkPoint, GridPoint, ItuUnit, LatencyReport, MemoryModel, MergeDeletePoint, MergePoint,
+    MsuUnit, Raster, RasterCore, RtlConfig, ScuUnit, SortCore, SortCoreUnit, Units, SCHEMA,
+};
+use neo_golden::sort::{merge_pass_count, SortEntry};
+use std::collections::BTreeMap;
 
 /// Seed of the report's stimulus (fixed: the report must be reproducible).
 const SEED: u64 = 0x4E45_4F5F_4C41_5431;
@@ -156,11 +135,7 @@ pub fn msu_latency(cfg: &GenConfig, len: usize) -> (u64, u64, u64, u64, u64) {
 /// The artifact's cycle model for the in-chunk merge passes of an `n`-entry chunk with a
 /// 16-input BSU: `ceil(log2(n / 16)) * n` (0 for `n <= 16`).
 pub fn artifact_chunk_cycles(n: u64, bsu: u64) -> u64 {
-    if n <= bsu {
-        return 0;
-    }
-    let vectors = n.div_ceil(bsu);
-    (64 - (vectors - 1).leading_zeros()) as u64 * n
+    merge_pass_count(n, bsu) * n
 }
 
 /// Commands per back-to-back stream of the interval measurement: the interval is the mean
@@ -200,34 +175,51 @@ fn core_cycles(core: &mut Core, cfg: &GenConfig, mode: Mode, a: &[SortEntry], b:
     (r.cycles, r.done_len)
 }
 
-/// The whole report as JSON (see the module docs for the schema).
-pub fn report(cfg: &GenConfig) -> Value {
-    let fmt = cfg.format();
-    let bsu_w = cfg.bsu_width as u64;
-    let (bl, bii, bv, bc) = bsu_latency(cfg);
-    let (ml, mii, mgap, me, mc) = msu_latency(cfg, 64);
-
+/// The whole report (see [`LatencyReport`] for the schema).
+pub fn report(cfg: &GenConfig) -> LatencyReport {
+    let (latency, ii, vectors, cycles) = bsu_latency(cfg);
+    let neo_bsu = BsuUnit { latency, ii, vectors, cycles };
+    let (latency, ii, merge_gap, entries, cycles) = msu_latency(cfg, 64);
+    let neo_msu = MsuUnit { latency, ii, merge_gap, entries, cycles };
     let mut core = Core::new(cfg, SEED, MemTiming::IDEAL);
     core.set_cmd_gap(0);
-    let mut rng = Rng::new(SEED ^ 2);
     // A zero-length command: the fixed cost of accepting and finishing.
-    let overhead = core
+    let command_overhead = core
         .run(Command { mode: Mode::Sort, src_a: layout::SRC, len_a: 0, src_b: 0, len_b: 0, dst: layout::DST })
         .cycles;
+    let sort_core = sort_core_section(cfg, &mut core);
+    let config = serde_json::to_value(cfg).and_then(serde_json::from_value::<RtlConfig>);
+    LatencyReport {
+        schema: SCHEMA.into(),
+        doc: doc(),
+        config: config.expect("GenConfig serialises with the fields RtlConfig types"),
+        memory: MemoryModel { read_latency: 1, req_ready: "always".into(), rsp_gaps: "none".into() },
+        units: Units {
+            neo_bsu,
+            neo_msu,
+            neo_sort_core: SortCoreUnit { command_overhead },
+            neo_scu: Some(scu_unit(cfg)),
+        },
+        sort_core,
+        raster: Some(raster_section(cfg)),
+    }
+}
+
+/// The `sort_core` section: chunk commands over a grid of sizes, merges over a grid of stream
+/// lengths (every output checked against golden).
+fn sort_core_section(cfg: &GenConfig, core: &mut Core) -> SortCore {
+    let fmt = cfg.format();
+    let bsu_w = cfg.bsu_width as u64;
+    let mut rng = Rng::new(SEED ^ 2);
     let sizes: Vec<u64> = [1, 16, 32, 64, 128, 256].into_iter().filter(|&n| n <= cfg.chunk as u64).collect();
-    let mut chunk_rows = |mode: Mode, rng: &mut Rng| -> Vec<Value> {
+    let mut chunk_rows = |mode: Mode, rng: &mut Rng| -> Vec<ChunkPoint> {
         sizes
             .iter()
             .map(|&n| {
                 let v = tile_entries(&fmt, rng, n as usize, false, 100);
-                let (cycles, _) = core_cycles(&mut core, cfg, mode, &v, &[]);
-                let interval = chunk_interval(&mut core, cfg, mode, n, rng);
-                json!({
-                    "entries": n,
-                    "cycles": cycles,
-                    "interval": interval,
-                    "artifact_cycles": artifact_chunk_cycles(n, bsu_w)
-                })
+                let (cycles, _) = core_cycles(core, cfg, mode, &v, &[]);
+                let interval = chunk_interval(core, cfg, mode, n, rng);
+                ChunkPoint { entries: n, cycles, interval, artifact_cycles: artifact_chunk_cycles(n, bsu_w) }
             })
             .collect()
     };
@@ -236,9 +228,9 @@ pub fn report(cfg: &GenConfig) -> Value {
     let merge_sizes = [(0u64, 0u64), (8, 8), (32, 32), (128, 128), (256, 256), (512, 512), (300, 0)];
     let mut merge = Vec::new();
     let mut merge_delete = Vec::new();
-    for &(la, lb) in &merge_sizes {
-        let a = sorted_stream(&fmt, &mut rng, la as usize, 100, false);
-        let b = sorted_stream(&fmt, &mut rng, lb as usize, 100, false);
+    for &(len_a, len_b) in &merge_sizes {
+        let a = sorted_stream(&fmt, &mut rng, len_a as usize, 100, false);
+        let b = sorted_stream(&fmt, &mut rng, len_b as usize, 100, false);
         let fix = |v: Vec<SortEntry>| -> Vec<SortEntry> {
             v.into_iter()
                 .map(|mut e| {
@@ -248,176 +240,116 @@ pub fn report(cfg: &GenConfig) -> Value {
                 .collect()
         };
         let (a, b) = (fix(a), fix(b));
-        let (cycles, _) = core_cycles(&mut core, cfg, Mode::Merge, &a, &b);
-        let interval = merge_interval(&mut core, &a, &b, false);
-        merge.push(
-            json!({ "entries": la + lb, "len_a": la, "len_b": lb, "cycles": cycles, "interval": interval }),
-        );
+        let (cycles, _) = core_cycles(core, cfg, Mode::Merge, &a, &b);
+        let interval = merge_interval(core, &a, &b, false);
+        merge.push(MergePoint { entries: len_a + len_b, len_a, len_b, cycles, interval });
         // A quarter of the entries invalid (every fourth of each stream).
         let kill = |v: &[SortEntry]| -> Vec<SortEntry> {
             v.iter().enumerate().map(|(i, e)| e.with_valid(i % 4 != 3)).collect()
         };
         let (ka, kb) = (kill(&a), kill(&b));
-        let invalid = ka.iter().chain(&kb).filter(|e| !e.valid).count();
-        let (cycles, out) = core_cycles(&mut core, cfg, Mode::MergeDelete, &ka, &kb);
-        let interval = merge_interval(&mut core, &ka, &kb, true);
-        merge_delete.push(json!({
-            "entries": la + lb, "len_a": la, "len_b": lb, "invalid": invalid, "out": out, "cycles": cycles,
-            "interval": interval
-        }));
+        let invalid = ka.iter().chain(&kb).filter(|e| !e.valid).count() as u64;
+        let (cycles, out) = core_cycles(core, cfg, Mode::MergeDelete, &ka, &kb);
+        let interval = merge_interval(core, &ka, &kb, true);
+        merge_delete.push(MergeDeletePoint {
+            merge: MergePoint { entries: len_a + len_b, len_a, len_b, cycles, interval },
+            invalid,
+            out,
+        });
     }
+    SortCore { conventional, dps, merge, merge_delete }
+}
 
-    json!({
-        "schema": SCHEMA,
-        "doc": {
-            "config": "the neo_gen::GenConfig the measured RTL was generated from",
-            "memory": "the memory model used for sort_core: request always accepted, first read beat the cycle after the request, one beat per cycle",
-            "units.*.latency": "rising edges from the edge that accepts an input to the first cycle its result is offered (out_valid_o high)",
-            "units.*.ii": "initiation interval: cycles between accepted inputs (BSU: vectors; MSU+: output entries) at full rate",
-            "units.neo_msu.merge_gap": "idle output cycles between the last beat of a merge and the first beat of the next one fed back to back (the end-of-merge flush)",
-            "units.neo_msu.entries": "output entries of the measurement: two back-to-back merges of two 64-entry streams",
-            "units.neo_scu": "neo_scu (one subtile's blending): latency = rising edges from the edge that accepts a list's last Gaussian to the first cycle its 64 pixels are offered (pipeline otherwise empty); ii = cycles per Gaussian in a list that does not terminate (64 / scu_lanes passes); drain_ii = cycles per Gaussian once every pixel is done (the rest of the list is drained); lanes = scu_lanes",
-            "units.neo_sort_core.command_overhead": "cycles from accepting a zero-length SORT to its done_o pulse",
-            "raster.itu.latency": "neo_itu: rising edges from the edge that accepts a (Gaussian, tile) job to the first cycle its subtile bitmap is offered",
-            "raster.itu.ii": "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once",
-            "raster.itu.jobs": "random jobs of the II measurement (every bitmap checked against golden subtile_bitmap)",
-            "sort_core.*.cycles": "one command alone: cycles from the edge that accepts the command (cmd_valid_i & cmd_ready_o) to the done_o pulse, ideal memory, output verified against golden",
-            "sort_core.*.interval": "steady state: cycles per command when 6 identical commands stream back to back (each offered as soon as the previous one was taken; mean spacing of the done_o pulses of commands 2..6), ideal memory, outputs verified; chunk commands overlap (a chunk's load runs under the previous chunk's merge passes), merge commands serialise (interval = cycles + the turnaround)",
-            "sort_core.conventional": "SORT of one chunk of `entries` entries: load, BSU vectors, in-chunk merge passes, write-back (golden full_sort of one chunk)",
-            "sort_core.dps": "DPS command on one chunk (same datapath as SORT; golden dps_pass)",
-            "sort_core.merge": "MERGE of sorted streams A and B (golden merge2(a, b, false))",
-            "sort_core.merge_delete": "MERGE_DELETE with every fourth entry of each stream invalid (golden merge2(a, b, true)); `out` entries written",
-            "sort_core.*.artifact_cycles": "the Neo artifact's cycle model for the in-chunk merge passes of an n-entry chunk, ceil(log2(n/16)) * n: it counts only the merge passes at one entry per cycle, while `cycles` is the whole command (load, BSU, passes, write-back) measured on the RTL and `interval` the command's share of a back-to-back stream"
-        },
-        "config": serde_json::to_value(cfg).expect("GenConfig serializes"),
-        "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
-        "units": {
-            "neo_bsu": { "latency": bl, "ii": bii, "vectors": bv, "cycles": bc },
-            "neo_msu": { "latency": ml, "ii": mii, "merge_gap": mgap, "entries": me, "cycles": mc },
-            "neo_sort_core": { "command_overhead": overhead },
-            "neo_scu": scu_unit(cfg)
-        },
-        "raster": raster_section(cfg),
-        "sort_core": {
-            "conventional": conventional,
-            "dps": dps,
-            "merge": merge,
-            "merge_delete": merge_delete
-        }
-    })
+/// The `doc` section: what each field measures, for a reader of the JSON.
+fn doc() -> BTreeMap<String, String> {
+    [
+        ("config", "the neo_gen::GenConfig the measured RTL was generated from"),
+        ("memory", "the memory model used for sort_core: request always accepted, first read beat the cycle after the request, one beat per cycle"),
+        ("units.*.latency", "rising edges from the edge that accepts an input to the first cycle its result is offered (out_valid_o high)"),
+        ("units.*.ii", "initiation interval: cycles between accepted inputs (BSU: vectors; MSU+: output entries) at full rate"),
+        ("units.neo_msu.merge_gap", "idle output cycles between the last beat of a merge and the first beat of the next one fed back to back (the end-of-merge flush)"),
+        ("units.neo_msu.entries", "output entries of the measurement: two back-to-back merges of two 64-entry streams"),
+        ("units.neo_scu", "neo_scu (one subtile's blending): latency = rising edges from the edge that accepts a list's last Gaussian to the first cycle its 64 pixels are offered (pipeline otherwise empty); ii = cycles per Gaussian in a list that does not terminate (64 / scu_lanes passes); drain_ii = cycles per Gaussian once every pixel is done (the rest of the list is drained); lanes = scu_lanes"),
+        ("units.neo_sort_core.command_overhead", "cycles from accepting a zero-length SORT to its done_o pulse"),
+        ("raster.itu.latency", "neo_itu: rising edges from the edge that accepts a (Gaussian, tile) job to the first cycle its subtile bitmap is offered"),
+        ("raster.itu.ii", "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once"),
+        ("raster.itu.jobs", "random jobs of the II measurement (every bitmap checked against golden subtile_bitmap)"),
+        ("raster.core", "neo_raster_core (itus ITUs, scus SCUs, feature_buffer entries per segment, pixel_writes pixel-row writes per tile): measured only; the cycle model fits its empty-tile cost, load rate and per-segment overhead from the grid"),
+        ("raster.core.grid", "one tile per point, pixels and write-back checked against golden: entries = table length, bits_per_gaussian = subtiles each Gaussian touches by construction, set_bits = set subtile bits of the table, group_max_routed = sum over subtile groups of the largest per-SCU routed count, cycles = command to done_o (ideal memory), load_cycles = command to the last read request, artifact_cycles = the artifact's model (one cycle per set bit)"),
+        ("sort_core.*.cycles", "one command alone: cycles from the edge that accepts the command (cmd_valid_i & cmd_ready_o) to the done_o pulse, ideal memory, output verified against golden"),
+        ("sort_core.*.interval", "steady state: cycles per command when 6 identical commands stream back to back (each offered as soon as the previous one was taken; mean spacing of the done_o pulses of commands 2..6), ideal memory, outputs verified; chunk commands overlap (a chunk's load runs under the previous chunk's merge passes), merge commands serialise (interval = cycles + the turnaround)"),
+        ("sort_core.conventional", "SORT of one chunk of `entries` entries: load, BSU vectors, in-chunk merge passes, write-back (golden full_sort of one chunk)"),
+        ("sort_core.dps", "DPS command on one chunk (same datapath as SORT; golden dps_pass)"),
+        ("sort_core.merge", "MERGE of sorted streams A and B (golden merge2(a, b, false))"),
+        ("sort_core.merge_delete", "MERGE_DELETE with every fourth entry of each stream invalid (golden merge2(a, b, true)); `out` entries written"),
+        ("sort_core.*.artifact_cycles", "the Neo artifact's cycle model for the in-chunk merge passes of an n-entry chunk, ceil(log2(n/16)) * n: it counts only the merge passes at one entry per cycle, while `cycles` is the whole command (load, BSU, passes, write-back) measured on the RTL and `interval` the command's share of a back-to-back stream"),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v.to_string()))
+    .collect()
 }
 
 /// The `units.neo_scu` entry: latency, II and drain rate of the SCU (outputs checked against
 /// golden on the way).
-pub fn scu_unit(cfg: &GenConfig) -> Value {
+pub fn scu_unit(cfg: &GenConfig) -> ScuUnit {
     let mut dut = crate::models::NeoScu::new();
     let t = crate::scu::measure_timing(&mut dut, cfg, SEED ^ 5);
-    json!({
-        "latency": t.latency,
-        "ii": t.ii,
-        "drain_ii": t.drain_ii,
-        "gaussians": t.gaussians,
-        "lanes": cfg.scu_lanes
-    })
+    ScuUnit {
+        latency: t.latency,
+        ii: t.ii,
+        drain_ii: t.drain_ii,
+        gaussians: t.gaussians,
+        lanes: cfg.scu_lanes as u64,
+    }
 }
 
-/// The `raster` section: the ITU's latency and II, measured on random jobs (checked against
-/// golden on the way).
-pub fn raster_section(cfg: &GenConfig) -> Value {
-    let jobs = 256;
+/// The `raster` section: the ITU's latency and II, measured on random jobs, and the raster
+/// core's grid (checked against golden on the way).
+pub fn raster_section(cfg: &GenConfig) -> Raster {
+    let jobs = 256usize;
     let mut dut = crate::models::NeoItu::new();
     let t = crate::itu::measure_timing(&mut dut, cfg, SEED ^ 3, jobs);
-    json!({
-        "itu": {
-            "latency": t.latency,
-            "ii": t.ii,
-            "jobs": jobs,
-            "subtiles_per_job": cfg.raster_config().subtiles_per_tile()
-        },
-        "core": raster_core_section(cfg)
-    })
+    let itu = ItuUnit {
+        latency: t.latency,
+        ii: t.ii,
+        jobs: jobs as u64,
+        subtiles_per_job: cfg.raster_config().subtiles_per_tile() as u64,
+    };
+    Raster { itu: Some(itu), core: Some(raster_core_section(cfg)) }
 }
 
 /// The `raster.core` section: `neo_raster_core` cycles per tile (command to `done_o`, ideal
-/// memory) over a grid of table lengths x subtile bits per Gaussian, and `tile_overhead`, the
-/// cycles of an empty table (loads, one empty list per subtile, the 64x64 pixel writes).
-pub fn raster_core_section(cfg: &GenConfig) -> Value {
+/// memory) over a grid of table lengths x subtile bits per Gaussian, and the shape of the
+/// measured core. No fit: the cycle model fits its formula to the grid.
+pub fn raster_core_section(cfg: &GenConfig) -> RasterCore {
     let f = cfg.raster_feature_buffer as u64;
     let grid = crate::raster::measure_grid(cfg, SEED ^ 7, &[0, 16, 64, f, 2 * f, 8 * f], &[1, 4, 16, 64]);
-    let overhead = grid.iter().find(|p| p.entries == 0).map(|p| p.cycles).unwrap_or(0);
-    // Loads: the slope of the last read's cycle over the table length (one segment).
-    let at = |n: u64| grid.iter().find(|p| p.entries == n && p.bits_per_gaussian == 1).map(|p| p.last_read);
-    let load = match (at(16), at(f)) {
-        (Some(a), Some(b)) => (b - a) as f64 / (f - 16) as f64,
-        _ => 0.0,
-    };
     let rc = cfg.raster_config();
-    // Per-segment fixed cycles of tables longer than the buffer: what the steady-state points (8
-    // segments) cost beyond the cycle model's formula (neo_sim::arch::raster_tile_cycles:
-    // `tile_overhead - pixel writes + the first segment's loads + per segment max(the sum over
-    // groups of max(walk, the segment's share of the group's slowest SCU), the port: the
-    // segment's write-back and the next segment's loads)`; group 0 walks every quad, a later
-    // group 1 + the quads that touch it), averaged over the points where the walk or the port,
-    // not a burst of blending, sets the pace (1 and 4 bits per Gaussian; the groups alike, each
-    // one's slowest SCU 4 cycles per routed entry of its busiest subtile), at least 0.
-    let groups = (rc.subtiles_per_tile() as usize / cfg.raster_scus) as f64;
-    let pix = (rc.tile * rc.tile / rc.subtile) as f64;
-    let ni = cfg.raster_itus as f64;
-    let seg: Vec<f64> = grid
-        .iter()
-        .filter(|p| p.entries > 2 * f && p.bits_per_gaussian < 16)
-        .map(|p| {
-            let n = p.entries as f64;
-            let busiest = p.group_max_routed as f64 / groups;
-            let hit = 1.0 - (1.0 - (busiest / n).min(1.0)).powi(cfg.raster_itus as i32);
-            let segs = p.entries.div_ceil(f);
-            let n_of = |s: u64| (p.entries - s * f).min(f) as f64;
-            let mut model = overhead as f64 - pix + load * n_of(0);
-            for s in 0..segs {
-                let ns = n_of(s);
-                let quads = (ns / ni).ceil().max(1.0);
-                let share = 4.0 * busiest * ns / n;
-                let work = quads.max(share) + (groups - 1.0) * (1.0 + (hit * quads).max(1.0)).max(share);
-                let next = if s + 1 < segs { load * n_of(s + 1) } else { 0.0 };
-                model += work.max(next + ns);
-            }
-            (p.cycles as f64 - model) / segs as f64
-        })
-        .collect();
-    let segment_overhead =
-        if seg.is_empty() { 0.0 } else { (seg.iter().sum::<f64>() / seg.len() as f64).round().max(0.0) };
-    let points: Vec<Value> = grid
-        .iter()
-        .map(|p| {
-            json!({
-                "entries": p.entries,
-                "bits_per_gaussian": p.bits_per_gaussian,
-                "set_bits": p.set_bits,
-                "group_max_routed": p.group_max_routed,
-                "cycles": p.cycles,
-                "load_cycles": p.last_read,
-                "artifact_cycles": p.set_bits
+    RasterCore {
+        itus: cfg.raster_itus as u64,
+        scus: cfg.raster_scus as u64,
+        feature_buffer: f,
+        pixel_writes: (rc.tile * rc.tile / rc.subtile) as u64,
+        memory: "ideal: always ready, first response beat 1 cycle after the request".into(),
+        grid: grid
+            .iter()
+            .map(|p| GridPoint {
+                entries: p.entries,
+                bits_per_gaussian: p.bits_per_gaussian,
+                set_bits: p.set_bits,
+                group_max_routed: p.group_max_routed,
+                cycles: p.cycles,
+                load_cycles: p.last_read,
+                artifact_cycles: p.set_bits,
             })
-        })
-        .collect();
-    json!({
-        "tile_overhead": overhead,
-        "load_cycles_per_entry": load,
-        "segment_overhead": segment_overhead,
-        "itus": cfg.raster_itus,
-        "scus": cfg.raster_scus,
-        "feature_buffer": cfg.raster_feature_buffer,
-        "pixel_writes": (rc.tile * rc.tile / rc.subtile) as u64,
-        "grid": points,
-        "memory": "ideal: always ready, first response beat 1 cycle after the request"
-    })
+            .collect(),
+    }
 }
 
-/// The report as the text written to `reports/latency.json` (pretty JSON and a final newline).
+/// The report as the text written to `reports/latency.json` (pretty JSON, sorted keys and a
+/// final newline).
 pub fn report_text(cfg: &GenConfig) -> String {
-    let mut s = serde_json::to_string_pretty(&report(cfg)).expect("JSON");
-    s.push('\n');
-    s
+    report(cfg).to_text()
 }
 
 #[cfg(test)]

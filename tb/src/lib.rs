@@ -36,6 +36,39 @@ pub mod models {
     include!(concat!(env!("OUT_DIR"), "/models.rs"));
 }
 
+/// Whether this build has the Verilated models in `models` (Verilator was found at build time).
+pub const HAS_MODELS: bool = cfg!(neo_has_verilator);
+
+/// Expands to its items when this build of neo-tb has the Verilated models, and to nothing
+/// otherwise: for cosimulation tests in other packages (the root package's RTL validation),
+/// which cannot see neo-tb's `neo_has_verilator` cfg. Pair it with [`require_models`].
+#[cfg(neo_has_verilator)]
+#[macro_export]
+macro_rules! with_models {
+    ($($item:item)*) => { $($item)* };
+}
+
+/// Expands to its items when this build of neo-tb has the Verilated models, and to nothing
+/// otherwise (this build has none).
+#[cfg(not(neo_has_verilator))]
+#[macro_export]
+macro_rules! with_models {
+    ($($item:item)*) => {};
+}
+
+/// For a cosimulation test outside neo-tb: returns whether the models are present. Without them
+/// it prints SKIP for `what` and returns false, or panics when `CI` is set (as `build.rs` refuses
+/// to build without Verilator there: CI runs every cosimulation).
+pub fn require_models(what: &str) -> bool {
+    if HAS_MODELS {
+        return true;
+    }
+    let ci = std::env::var_os("CI").is_some_and(|c| !c.is_empty() && c != "0" && c != "false");
+    assert!(!ci, "{what}: neo-tb was built without Verilator, and CI is set");
+    println!("SKIP: neo-tb was built without Verilator; {what} not checked");
+    false
+}
+
 /// The generator configuration the models in [`models`] were built from (the default one).
 pub fn config() -> neo_gen::GenConfig {
     neo_gen::GenConfig::default()

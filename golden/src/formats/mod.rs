@@ -9,16 +9,20 @@
 //! - [`conic`]: the block floating-point conic;
 //! - [`feature`]: [`FeatureFormat`], [`FeatureEntry`], [`quantize`], packing;
 //! - [`stats`]: [`FeatureStats`] and [`FeatureFormat::fitted`];
-//! - [`blend`]: [`BlendFormat`], the SCU's power / exp / alpha / transmittance widths.
+//! - [`blend`]: [`BlendFormat`], the SCU's power / exp / alpha / transmittance widths;
+//! - [`latency`]: [`LatencyReport`], the timing contract `reports/latency.json` between the
+//!   test bench (which measures the RTL) and the cycle model (which fits and uses it).
 
 pub mod blend;
 pub mod conic;
 pub mod feature;
 pub mod fixed;
+pub mod latency;
 pub mod stats;
 
 pub use blend::{BlendFormat, ExpFormat};
 pub use conic::{ConicFormat, QuantConic};
 pub use feature::{quantize, Cutoff, FeatureEntry, FeatureFormat, FieldLayout};
 pub use fixed::{FormatError, QFormat};
+pub use latency::LatencyReport;
 pub use stats::FeatureStats;

@@ -1,0 +1,415 @@
+//! The jobs each engine runs: preprocessing per frame, the sorting-core commands per tile
+//! (timed by `latency.json`, [`crate::sortcmd`]) and the raster core per tile
+//! ([`super::raster_tile_cycles`]), each with its DRAM reads and writes.
+
+use neo_golden::pipeline::Strategy;
+use neo_golden::sort::{merge_pass_count, Parity};
+
+use super::timing::raster_tile_cycles;
+use super::{Accel, Model, K_BG, K_PRE, K_RASTER, K_SORT};
+use crate::dram::Ps;
+use crate::engine::{Access, AccessKind, Job, JobTag, Segment};
+use crate::sortcmd::{conventional_sort, dps_pass, Cmd, Mode};
+use crate::traffic::Stage;
+use crate::workload::TileWork;
+
+impl Model<'_> {
+    fn sort_port(&self) -> Ps {
+        // One entry per cycle (latency.json: one beat per cycle).
+        self.ps(self.line as f64 / self.eb as f64 * self.lat.msu_ii)
+    }
+
+    pub(super) fn list_len(&self, t: &TileWork) -> u64 {
+        if self.hier {
+            t.current as u64
+        } else {
+            t.sort_n as u64
+        }
+    }
+
+    pub(super) fn preprocess_job(&self, f: usize) -> Job {
+        let fw = &self.wl.frames[f];
+        let p = &self.cfg.preprocess;
+        let n = &self.cfg.neo;
+        let cyc = (fw.gaussians as f64 / n.projection_units as f64).ceil() * p.projection_ii;
+        let cyc = cyc.max((fw.visible as f64 / n.color_units as f64).ceil() * p.color_ii);
+        let cyc = cyc.max((fw.binning_tests as f64 / n.duplication_units as f64).ceil() * p.duplication_ii);
+        let compute = self.ps(cyc + p.latency as f64);
+        let s = &self.cfg.sizes;
+        let l = &self.layout;
+        let reads = vec![
+            Access::seq(Stage::Preprocess, l.geometry, fw.gaussians * s.gaussian_geometry_bytes as u64),
+            Access::seq(Stage::Preprocess, l.sh, fw.visible * s.gaussian_sh_bytes as u64),
+        ];
+        let lists: u64 = fw.tiles.iter().map(|t| self.list_len(t)).sum();
+        let mut writes = vec![
+            Access::seq(Stage::FeatureTable, l.features[f % 2], fw.visible * self.fb),
+            Access::seq(Stage::IncomingList, l.lists[f % 2], lists * self.eb),
+        ];
+        if self.accel == Accel::Neo && matches!(self.strategy, Strategy::Background(_)) {
+            let all: u64 = fw.tiles.iter().map(|t| t.background_n as u64).sum();
+            writes.push(Access::seq(Stage::BackgroundSort, l.bg_lists[f % 2], all * self.eb));
+        }
+        Job {
+            tag: JobTag { frame: f as u32, tile: 0, kind: K_PRE },
+            segments: vec![Segment {
+                compute,
+                load: compute,
+                serial: false,
+                reads,
+                writes,
+                writes_at_end: false,
+                min_interval: self.ps(1.0),
+                spread_reads: true,
+            }],
+        }
+    }
+
+    /// A sorting-core command. Chunk commands (serial segments) take their single latency `T`
+    /// with the load phase `T - I` (the measured part a back-to-back command overlaps with the
+    /// previous one: with `double_buffered_io` the engine starts it under the previous segment,
+    /// so a steady stream costs the measured interval `I` each); merges (streaming, they
+    /// serialise on the core) take their measured back-to-back `interval`.
+    fn cmd_segment(&self, cmd: Cmd, reads: Vec<Access>, writes: Vec<Access>, extra_cycles: f64) -> Segment {
+        let serial = cmd.is_chunk();
+        let (t, load) = if serial {
+            (cmd.cycles(self.lat) as f64 + extra_cycles, cmd.overlappable(self.lat) as f64)
+        } else {
+            let t = cmd.interval(self.lat) as f64 + extra_cycles;
+            (t, cmd.entries_in() as f64 * self.lat.msu_ii)
+        };
+        Segment {
+            compute: self.ps(t.max(1.0)),
+            load: self.ps(load.min(t)),
+            serial,
+            reads,
+            writes,
+            writes_at_end: serial,
+            min_interval: self.sort_port(),
+            spread_reads: false,
+        }
+    }
+
+    /// Conventional sort of `n` entries from `src` (charged to `src_stage`) into `dst`, with
+    /// temporaries in `scratch` (two run buffers); `stage` for everything after the first read.
+    #[allow(clippy::too_many_arguments)]
+    fn conv_sort(
+        &self,
+        segs: &mut Vec<Segment>,
+        n: u64,
+        src: u64,
+        src_stage: Stage,
+        dst: u64,
+        scratch: [u64; 2],
+        stage: Stage,
+    ) {
+        let c = self.cfg.pipeline.chunk as u64;
+        let eb = self.eb;
+        let cmds = conventional_sort(n, c);
+        let chunks = n.div_ceil(c);
+        let mut off = 0;
+        let mut it = cmds.into_iter().peekable();
+        for _ in 0..chunks {
+            let cmd = it.next().expect("a chunk command");
+            let out = if chunks == 1 { dst } else { scratch[0] };
+            segs.push(self.cmd_segment(
+                cmd,
+                vec![Access::seq(src_stage, src + off * eb, cmd.len_a * eb)],
+                vec![Access::seq(stage, out + off * eb, cmd.len_a * eb)],
+                0.0,
+            ));
+            off += cmd.len_a;
+        }
+        // Merge passes: runs of C, 2C, ... alternate between the scratch buffers; the last pass
+        // writes `dst`.
+        let passes = merge_pass_count(n, c);
+        let mut from = 0usize;
+        for p in 0..passes {
+            let to_last = p + 1 == passes;
+            let mut start = 0;
+            while start < n {
+                let cmd = it.next().expect("a merge command");
+                let len = cmd.entries_in();
+                let out = if to_last { dst } else { scratch[1 - from] };
+                segs.push(self.cmd_segment(
+                    cmd,
+                    vec![Access::seq(stage, scratch[from] + start * eb, len * eb)],
+                    vec![Access::seq(stage, out + start * eb, len * eb)],
+                    0.0,
+                ));
+                start += len;
+            }
+            from = 1 - from;
+        }
+        debug_assert!(it.next().is_none());
+    }
+
+    fn empty_segment(&self) -> Segment {
+        Segment {
+            compute: self.ps(self.lat.command_overhead.max(1) as f64),
+            load: 0,
+            serial: true,
+            reads: Vec::new(),
+            writes: Vec::new(),
+            writes_at_end: true,
+            min_interval: self.sort_port(),
+            spread_reads: false,
+        }
+    }
+
+    pub(super) fn sort_job(&self, f: usize, t: usize, agent: usize, list_off: u64) -> Job {
+        let tw = &self.wl.frames[f].tiles[t];
+        let eb = self.eb;
+        let sc = self.layout.scratch(agent);
+        let list = self.layout.lists[f % 2] + list_off * eb;
+        let cur = self.layout.table(f, t);
+        let mut segs = Vec::new();
+        if self.hier {
+            self.hier_sort(&mut segs, tw, list, cur, sc);
+        } else if tw.from_scratch {
+            self.conv_sort(
+                &mut segs,
+                tw.sort_n as u64,
+                list,
+                Stage::IncomingList,
+                cur,
+                [sc[0], sc[1]],
+                Stage::SortTable,
+            );
+        } else {
+            let (prev, prev_stage) = match self.strategy {
+                Strategy::Background(k) => {
+                    let src = f.saturating_sub(k).max(self.shot_start[f]);
+                    (self.layout.bg_tables[src % 2] + t as u64 * self.layout.slot, Stage::SortTable)
+                }
+                _ => (self.layout.table(f + 1, t), Stage::SortTable),
+            };
+            let c = self.cfg.pipeline.chunk as u64;
+            let (a, b) = (tw.merge_a as u64, tw.merge_b as u64);
+            let out = (tw.merge_out - tw.merge_out.min(tw.dropped_capacity)) as u64;
+            let passes = tw.dps_passes as usize;
+            let fused = self.cfg.neo.fused_dps_merge && passes > 0 && tw.dps_len > 0;
+            if fused {
+                // Sorted incoming list first; DPS passes; the last pass feeds the MSU+.
+                self.conv_sort(
+                    &mut segs,
+                    b,
+                    list,
+                    Stage::IncomingList,
+                    sc[2],
+                    [sc[0], sc[1]],
+                    Stage::SortTable,
+                );
+                let len = tw.dps_len as u64;
+                for p in 0..passes - 1 {
+                    let mut off = 0;
+                    for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
+                        let acc = Access::seq(Stage::SortTable, prev + off * eb, cmd.len_a * eb);
+                        segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
+                        off += cmd.len_a;
+                    }
+                }
+                let extra = (self.lat.merge_cycles(a, b, true) as f64 - a as f64).max(b as f64);
+                let (mut off, mut b_done, mut o_done) = (0u64, 0u64, 0u64);
+                for cmd in dps_pass(len, c, Parity::of(f as u64, passes - 1)) {
+                    let end = off + cmd.len_a;
+                    let b_to = b * end / len;
+                    let o_to = out * end / len;
+                    let (bi, oi) = (b_to - b_done, o_to - o_done);
+                    let mut reads = vec![Access::seq(prev_stage, prev + off * eb, cmd.len_a * eb)];
+                    if bi > 0 {
+                        reads.push(Access::seq(Stage::SortTable, sc[2] + b_done * eb, bi * eb));
+                    }
+                    let writes = vec![Access::seq(Stage::SortTable, cur + o_done * eb, oi * eb)];
+                    let share = extra * cmd.len_a as f64 / len as f64;
+                    let mut s = self.cmd_segment(cmd, reads, writes, share);
+                    s.load = self
+                        .ps(((cmd.len_a + bi) as f64 * self.lat.msu_ii)
+                            .min(cmd.cycles(self.lat) as f64 + share));
+                    segs.push(s);
+                    (off, b_done, o_done) = (end, b_to, o_to);
+                }
+            } else {
+                let len = tw.dps_len as u64;
+                for p in 0..passes {
+                    let mut off = 0;
+                    for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
+                        let acc = Access::seq(Stage::SortTable, prev + off * eb, cmd.len_a * eb);
+                        segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
+                        off += cmd.len_a;
+                    }
+                }
+                self.conv_sort(
+                    &mut segs,
+                    b,
+                    list,
+                    Stage::IncomingList,
+                    sc[2],
+                    [sc[0], sc[1]],
+                    Stage::SortTable,
+                );
+                if a + b > 0 {
+                    let cmd = Cmd { mode: Mode::MergeDelete, len_a: a, len_b: b };
+                    segs.push(self.cmd_segment(
+                        cmd,
+                        vec![
+                            Access::seq(prev_stage, prev, a * eb),
+                            Access::seq(Stage::SortTable, sc[2], b * eb),
+                        ],
+                        vec![Access::seq(Stage::SortTable, cur, out * eb)],
+                        0.0,
+                    ));
+                }
+            }
+        }
+        if segs.is_empty() {
+            segs.push(self.empty_segment());
+        }
+        Job { tag: JobTag { frame: f as u32, tile: t as u32, kind: K_SORT }, segments: segs }
+    }
+
+    fn hier_sort(&self, segs: &mut Vec<Segment>, tw: &TileWork, list: u64, cur: u64, sc: [u64; 3]) {
+        let h = &tw.hier;
+        let eb = self.eb;
+        let c = self.cfg.pipeline.chunk as u64;
+        if h.entries == 0 {
+            return;
+        }
+        let g = &self.cfg.gscore;
+        let binned = h.approx_passes > 0;
+        if binned {
+            let n = h.entries as u64;
+            let deeper = h.approx_entries as u64 - n.min(h.approx_entries as u64);
+            let stream = h.approx_entries as f64 / g.approx_entries_per_cycle;
+            let lat = (g.approx_latency * h.approx_passes as u64) as f64;
+            let mut reads = vec![Access::seq(Stage::IncomingList, list, n * eb)];
+            if deeper > 0 {
+                reads.push(Access::seq(Stage::SortTable, sc[1], deeper * eb));
+            }
+            segs.push(Segment {
+                compute: self.ps(stream + lat),
+                load: self.ps(stream),
+                serial: false,
+                reads,
+                writes: vec![Access::seq(Stage::SortTable, sc[0], h.approx_entries as u64 * eb)],
+                writes_at_end: false,
+                min_interval: self.sort_port(),
+                spread_reads: false,
+            });
+        }
+        let k = h.bin_sorts.max(1) as u64;
+        let total = h.bin_entries as u64;
+        let (q, rem) = (total / k, total % k);
+        let mut off = 0;
+        for i in 0..k {
+            let len = (q + (i < rem) as u64).min(c);
+            if len == 0 {
+                continue;
+            }
+            let (src, stage) = if binned { (sc[0], Stage::SortTable) } else { (list, Stage::IncomingList) };
+            let cmd = Cmd { mode: Mode::Sort, len_a: len, len_b: 0 };
+            segs.push(self.cmd_segment(
+                cmd,
+                vec![Access::seq(stage, src + off * eb, len * eb)],
+                vec![Access::seq(Stage::SortTable, cur + off * eb, len * eb)],
+                0.0,
+            ));
+            off += len;
+        }
+        if h.fallback_global > 0 {
+            let n = h.fallback_global as u64;
+            let cmd = Cmd { mode: Mode::Merge, len_a: n / 2, len_b: n - n / 2 };
+            segs.push(self.cmd_segment(
+                cmd,
+                vec![Access::seq(Stage::SortTable, sc[1], n * eb)],
+                vec![Access::seq(Stage::SortTable, cur, n * eb)],
+                0.0,
+            ));
+        }
+    }
+
+    pub(super) fn background_job(&self, f: usize, t: usize, agent: usize, off: u64) -> Job {
+        let tw = &self.wl.frames[f].tiles[t];
+        let sc = self.layout.scratch(agent);
+        let mut segs = Vec::new();
+        let src = self.layout.bg_lists[f % 2] + off * self.eb;
+        let dst = self.layout.bg_tables[f % 2] + t as u64 * self.layout.slot;
+        self.conv_sort(
+            &mut segs,
+            tw.background_n as u64,
+            src,
+            Stage::BackgroundSort,
+            dst,
+            [sc[0], sc[1]],
+            Stage::BackgroundSort,
+        );
+        if segs.is_empty() {
+            segs.push(self.empty_segment());
+        }
+        Job { tag: JobTag { frame: f as u32, tile: t as u32, kind: K_BG }, segments: segs }
+    }
+
+    pub(super) fn raster_job(&self, f: usize, t: usize) -> Job {
+        let fw = &self.wl.frames[f];
+        let tw = &fw.tiles[t];
+        let info = &self.wl.info;
+        let neo = self.accel == Accel::Neo;
+        let (entries, table_entries) =
+            if neo { (tw.raster_entries, tw.table_len as u64) } else { (tw.current, tw.current as u64) };
+        let (cyc, tail) = raster_tile_cycles(
+            &tw.routed,
+            fw.processed_ratio,
+            entries,
+            table_entries as u32,
+            &self.raster,
+            self.itus_per_core.max(1),
+            self.scus_per_core,
+            neo,
+        );
+        let cur = self.layout.table(f, t);
+        let mut reads = vec![Access::seq(Stage::RasterTable, cur, table_entries * self.eb)];
+        if entries > 0 {
+            reads.push(Access {
+                stage: Stage::FeatureTable,
+                base: self.layout.features[f % 2],
+                kind: AccessKind::Gather {
+                    count: entries as u64,
+                    record_bytes: self.fb as u32,
+                    records_in_region: fw.visible.max(1),
+                    seed: crate::engine::mix(((f as u64) << 32) ^ t as u64),
+                },
+            });
+        }
+        let mut writes = Vec::new();
+        if neo && tw.writeback > 0 {
+            writes.push(Access::seq(Stage::DepthWriteback, cur, tw.writeback as u64 * self.eb));
+        }
+        let (gx, ts) = (info.grid[0] as u64, info.tile as u64);
+        let (tx, ty) = (t as u64 % gx, t as u64 / gx);
+        let (w, h) = (info.width as u64, info.height as u64);
+        let pb = self.cfg.sizes.pixel_bytes as u64;
+        let x0 = tx * ts;
+        let cols = ts.min(w.saturating_sub(x0));
+        for y in ty * ts..(ty * ts + ts).min(h) {
+            writes.push(Access::seq(
+                Stage::FrameBuffer,
+                self.layout.framebuffer + (y * w + x0) * pb,
+                cols * pb,
+            ));
+        }
+        let compute = self.ps(cyc);
+        Job {
+            tag: JobTag { frame: f as u32, tile: t as u32, kind: K_RASTER },
+            segments: vec![Segment {
+                compute,
+                load: compute - self.ps(tail).min(compute),
+                serial: false,
+                reads,
+                writes,
+                writes_at_end: true,
+                min_interval: self.ps(1.0),
+                spread_reads: true,
+            }],
+        }
+    }
+}

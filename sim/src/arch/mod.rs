@@ -1,0 +1,195 @@
+//! Neo and the GSCore-style baseline on the engine: the address map ([`layout`]), the jobs each
+//! engine runs per frame and tile ([`jobs`]), the raster core's timing ([`timing`]) and the
+//! scheduler with the real dependencies between them ([`scheduler`]).
+//!
+//! # Engines and jobs
+//! - **Preprocessing** (one agent): per frame, reads every Gaussian's geometry and the SH of the
+//!   visible ones, writes the feature table and the per-tile lists (Neo: incoming lists; GSCore:
+//!   every pair, with its subtile bitmap). Compute: the slowest of projection, colour and
+//!   duplication units (assumed timing).
+//! - **Sorting** (`sort_cores` agents): per tile, the sorting-core commands of the strategy
+//!   ([`crate::sortcmd`]), each a segment timed by `latency.json`: Neo's DPS (the last pass
+//!   fused with the MSU+ insert/delete merge when `fused_dps_merge`), conventional sorts of the
+//!   incoming lists, or, from scratch, of the whole list; GSCore's hierarchical sort (an
+//!   approximate binning pass, then one on-chip sort per bin).
+//! - **Raster** (`raster_cores` agents): per tile, reads the sorted table and gathers the
+//!   features, runs the ITU/SCU pipeline over subtile groups, writes the depth keys and valid
+//!   bits back (Neo) and the tile's pixels.
+//!
+//! # Dependencies
+//! - preprocessing of frame `f` after that of `f - 1` and after every raster of frame
+//!   `f - frame_buffers` (its feature table and lists are double-buffered);
+//! - sorting of tile `(f, t)` after preprocessing of `f`, after the raster of `(f - 2, t)` (tables
+//!   are double-buffered) and, when the strategy reuses tables (Neo hardware), after the raster
+//!   of `(f - 1, t)`, whose write-back it reads; `background:K` also after the background sort of
+//!   the frame whose order it uses;
+//! - the raster of `(f, t)` after its sort.
+//!
+//! Ready jobs run in (frame, tile) order on the first idle agent of their engine; background
+//! sorts run on idle sorting cores after every ready foreground sort.
+
+mod jobs;
+mod layout;
+mod scheduler;
+mod timing;
+
+use neo_golden::pipeline::Strategy;
+
+use crate::config::{RasterTiming, SimConfig};
+use crate::dram::Ps;
+use crate::engine::AgentSpec;
+use crate::latency::Latency;
+use crate::workload::Workload;
+use layout::Layout;
+use timing::round_ps;
+
+pub use scheduler::{FrameTimes, Sched};
+pub use timing::{fit_raster_core, raster_tile_cycles};
+
+/// Agent classes.
+pub const CLASS_PRE: u8 = 0;
+/// Sorting cores.
+pub const CLASS_SORT: u8 = 1;
+/// Raster cores.
+pub const CLASS_RASTER: u8 = 2;
+
+const K_PRE: u8 = 0;
+const K_SORT: u8 = 1;
+const K_RASTER: u8 = 2;
+const K_BG: u8 = 3;
+
+/// Which accelerator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Accel {
+    /// Neo (the workload's strategy on Neo's hardware).
+    Neo,
+    /// GSCore-style with `cores` sorting cores and `cores` subtile units.
+    Gscore {
+        /// Core count.
+        cores: u32,
+    },
+}
+
+/// The model of one accelerator on one workload.
+pub struct Model<'a> {
+    accel: Accel,
+    cfg: &'a SimConfig,
+    lat: &'a Latency,
+    wl: &'a Workload,
+    raster: RasterTiming,
+    strategy: Strategy,
+    /// Sort entry bytes as stored (GSCore: with the bitmap).
+    eb: u64,
+    fb: u64,
+    line: u64,
+    cyc: f64,
+    layout: Layout,
+    sort_cores: u32,
+    raster_cores: u32,
+    scus_per_core: u32,
+    itus_per_core: u32,
+    hier: bool,
+    shot_start: Vec<usize>,
+}
+
+impl<'a> Model<'a> {
+    /// The model of `accel` running `wl`.
+    pub fn new(accel: Accel, cfg: &'a SimConfig, lat: &'a Latency, wl: &'a Workload) -> Result<Self, String> {
+        let strategy: Strategy = wl.info.strategy.parse().map_err(|e: String| e)?;
+        let (eb, sort_cores, raster_cores, scus_per_core, itus_per_core, hier) = match accel {
+            Accel::Neo => (
+                wl.info.sort_entry_bytes as u64,
+                cfg.neo.sort_cores,
+                cfg.neo.raster_cores,
+                cfg.neo.scus_per_core,
+                cfg.neo.itus_per_core,
+                strategy == Strategy::Hierarchical,
+            ),
+            Accel::Gscore { cores } => (
+                (wl.info.sort_entry_bytes + cfg.gscore.bitmap_bytes) as u64,
+                cores,
+                cores.div_ceil(4).max(1),
+                cores.min(4),
+                0,
+                true,
+            ),
+        };
+        if hier && wl.frames.iter().any(|f| f.tiles.iter().any(|t| t.hier.entries != t.current)) {
+            return Err(
+                "the workload has no hierarchical-sort record (generate it with hierarchical on)".into()
+            );
+        }
+        cfg.check_buffers(eb as u32)?;
+        if wl.info.chunk != cfg.pipeline.chunk {
+            return Err(format!(
+                "workload chunk {} differs from the configuration's pipeline.chunk {}",
+                wl.info.chunk, cfg.pipeline.chunk
+            ));
+        }
+        let line = cfg.dram.line_bytes as u64;
+        let fb = wl.info.feature_entry_bytes as u64;
+        let layout = Layout::new(cfg, wl, eb, fb, sort_cores);
+        let mut shot_start = Vec::with_capacity(wl.frames.len());
+        let mut s = 0;
+        for (i, f) in wl.frames.iter().enumerate() {
+            if i == 0 || f.cut {
+                s = i;
+            }
+            shot_start.push(s);
+        }
+        // The simulated core's feature buffer is half the architecture's raster buffer (the other
+        // half double-buffers the prefetch) when that is larger than the measured RTL's
+        // (`raster.core.feature_buffer`); the RTL structure of the rest of the raster timing is
+        // kept.
+        let mut raster = lat.raster.clone();
+        if raster.feature_buffer > 0 {
+            raster.feature_buffer = raster.feature_buffer.max(cfg.neo.raster_buffer_bytes / 2 / fb.max(1));
+        }
+        Ok(Model {
+            accel,
+            cfg,
+            lat,
+            wl,
+            raster,
+            strategy,
+            eb,
+            fb,
+            line,
+            cyc: cfg.cycle_ps(),
+            layout,
+            sort_cores,
+            raster_cores,
+            scus_per_core,
+            itus_per_core,
+            hier,
+            shot_start,
+        })
+    }
+
+    /// The agents: preprocessing, sorting cores, raster cores.
+    pub fn agents(&self) -> Vec<AgentSpec> {
+        let n = &self.cfg.neo;
+        let mut v = vec![AgentSpec { class: CLASS_PRE, window: n.preprocess_read_window, overlap: false }];
+        for _ in 0..self.sort_cores {
+            v.push(AgentSpec {
+                class: CLASS_SORT,
+                window: n.sort_read_window,
+                overlap: n.double_buffered_io,
+            });
+        }
+        let rwin = ((n.raster_buffer_bytes / 2 / self.line).max(1) as u32).min(n.raster_read_window);
+        for _ in 0..self.raster_cores {
+            v.push(AgentSpec { class: CLASS_RASTER, window: rwin, overlap: false });
+        }
+        v
+    }
+
+    /// The scheduler for this model.
+    pub fn scheduler(&self) -> Sched<'_, 'a> {
+        Sched::new(self)
+    }
+
+    fn ps(&self, cycles: f64) -> Ps {
+        round_ps(cycles, self.cyc)
+    }
+}
