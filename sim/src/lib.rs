@@ -15,7 +15,6 @@ pub mod engine;
 pub mod gpu;
 pub mod latency;
 pub mod plot;
-pub mod prefetch;
 pub mod report;
 pub mod run;
 pub mod sortcmd;
