@@ -16,6 +16,7 @@ pub mod gpu;
 pub mod latency;
 pub mod plot;
 pub mod report;
+pub mod report_plan;
 pub mod run;
 pub mod sortcmd;
 pub mod suite;
