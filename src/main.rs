@@ -1,6 +1,8 @@
 //! The `neo` command line: scene tools, the float reference renderer, image metrics and benchmarks.
 
+mod args;
 mod commands;
+mod points;
 mod progress;
 
 use clap::{Parser, Subcommand};

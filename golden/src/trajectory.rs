@@ -12,11 +12,13 @@
 //! Spec strings ([`parse_trajectory`]) are documented in [`spec`].
 
 pub mod orbit;
+pub mod resolution;
 pub mod shake;
 pub mod spec;
 pub mod walk;
 
 pub use orbit::{orbit, OrbitParams};
+pub use resolution::parse_resolution;
 pub use shake::{shake, ShakeParams};
 pub use spec::parse_trajectory;
 pub use walk::{walk, WalkParams};

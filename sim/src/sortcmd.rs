@@ -3,7 +3,8 @@
 //!
 //! - conventional sort of `n` entries: one `SORT` per chunk of at most `C`, then merge passes
 //!   pairing runs of `C, 2C, ...` with `MERGE` (a lone last run is copied by a `MERGE` with an
-//!   empty second stream), as `neo_golden::sort::full_sort` and `tb::core::full_sort_checked`;
+//!   empty second stream): golden's plan `neo_golden::sort::conventional_sort_plan`, which
+//!   `neo_golden::sort::full_sort` executes and `tb::core::full_sort_checked` drives;
 //! - a DPS pass over `L` entries: one `DPS` per chunk of the pass's parity
 //!   ([`Parity::chunks`]);
 //! - the reuse-and-update step of a tile: DPS passes, the conventional sort of the incoming
@@ -22,22 +23,12 @@
 //! The engine (`crate::arch`, with `double_buffered_io`) gives the same with an ideal memory: a
 //! chunk segment's load phase is `T(n) - I(n)`, started under the previous segment.
 
-use neo_golden::sort::Parity;
+use neo_golden::sort::{conventional_sort_plan, Parity};
 
 use crate::latency::{ChunkMode, Latency};
 
-/// A sorting-core command mode.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Mode {
-    /// Sort one chunk.
-    Sort,
-    /// DPS of one chunk.
-    Dps,
-    /// Merge keeping every entry.
-    Merge,
-    /// Merge dropping invalid entries.
-    MergeDelete,
-}
+/// A sorting-core command mode (golden's, with the RTL's codes).
+pub use neo_golden::sort::SortMode as Mode;
 
 /// One command: `len_a` entries (the chunk, or stream A) and `len_b` (stream B).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,7 +49,7 @@ impl Cmd {
 
     /// Whether this is a chunk command (SORT or DPS), which overlaps its neighbours.
     pub fn is_chunk(&self) -> bool {
-        matches!(self.mode, Mode::Sort | Mode::Dps)
+        self.mode.is_chunk()
     }
 
     /// Measured (or interpolated) steady-state cycles per command of this shape back to back.
@@ -106,35 +97,10 @@ impl Cmd {
     }
 }
 
-/// The commands of a conventional sort of `n` entries with chunk `c`.
+/// The commands of a conventional sort of `n` entries with chunk `c` (golden's plan,
+/// [`conventional_sort_plan`]).
 pub fn conventional_sort(n: u64, c: u64) -> Vec<Cmd> {
-    let mut v = Vec::new();
-    if n == 0 {
-        return v;
-    }
-    let mut start = 0;
-    while start < n {
-        let len = c.min(n - start);
-        v.push(Cmd { mode: Mode::Sort, len_a: len, len_b: 0 });
-        start += len;
-    }
-    let mut run = c;
-    while run < n {
-        let mut start = 0;
-        while start < n {
-            let la = run.min(n - start);
-            let lb = run.min(n - start - la);
-            v.push(Cmd { mode: Mode::Merge, len_a: la, len_b: lb });
-            start += la + lb;
-        }
-        run *= 2;
-    }
-    v
-}
-
-/// Number of `SORT` commands (chunks) of a conventional sort; the rest are merges.
-pub fn chunk_count(n: u64, c: u64) -> u64 {
-    n.div_ceil(c)
+    conventional_sort_plan(n, c).map(|p| Cmd { mode: p.mode, len_a: p.len_a, len_b: p.len_b }).collect()
 }
 
 /// The `DPS` commands of one pass over `len` entries with chunk `c` and `parity`.

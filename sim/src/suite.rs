@@ -42,26 +42,11 @@ pub struct Point {
     pub passes: usize,
 }
 
-/// `hd`, `fhd`, `qhd` or `WxH` to `(label, width, height)`.
+/// `hd`, `fhd`, `qhd` or `WxH` to `(label, width, height)` (golden's
+/// [`trajectory::parse_resolution`]; the label is the value trimmed and lowercased).
 pub fn parse_res(s: &str) -> Result<(String, u32, u32), String> {
-    let l = s.trim().to_ascii_lowercase();
-    let (w, h) = match l.as_str() {
-        "hd" => (1280, 720),
-        "fhd" => (1920, 1080),
-        "qhd" => (2560, 1440),
-        other => {
-            let (w, h) = other
-                .split_once('x')
-                .ok_or_else(|| format!("resolution '{s}': expected hd, fhd, qhd or WxH"))?;
-            let w: u32 = w.parse().map_err(|_| format!("resolution '{s}': bad width"))?;
-            let h: u32 = h.parse().map_err(|_| format!("resolution '{s}': bad height"))?;
-            if w == 0 || h == 0 || w > 16384 || h > 16384 {
-                return Err(format!("resolution '{s}': sizes must be in 1..=16384"));
-            }
-            (w, h)
-        }
-    };
-    Ok((l, w, h))
+    let (w, h) = trajectory::parse_resolution(s)?;
+    Ok((s.trim().to_ascii_lowercase(), w, h))
 }
 
 impl Point {

@@ -1,6 +1,7 @@
 //! `neo frames`: the bit-exact golden pipeline along a trajectory, with a sorting strategy;
 //! writes `stats.json` (and optionally PNGs, per-tile statistics and `poc.trace` files).
 
+use crate::args::{FramesArg, SceneArg, StrictArg, TrajectoryArg};
 use crate::progress::spin;
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -9,7 +10,8 @@ use neo_golden::pipeline::{
     formats_for, run_trajectory, ConfigRecord, FrameOutput, Pipeline, PipelineConfig, RunInfo, StatsFile,
     Strategy,
 };
-use neo_golden::{source, synthetic, trajectory};
+use neo_golden::trajectory::parse_resolution;
+use neo_golden::{source, trajectory};
 use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
@@ -18,20 +20,16 @@ use std::time::Duration;
 /// Arguments of `neo frames`.
 #[derive(Args)]
 pub struct FramesArgs {
-    /// A .ply (standard or compressed) or a synthetic spec.
-    #[arg(long, default_value = synthetic::DEFAULT_SCENE)]
-    pub scene: String,
-    /// Trajectory spec (`orbit[:...]`, `walk[:...]`, `shake[:...]`, `file:PATH`); scene cuts
-    /// come from its `cut=` key or the file's `"cut"` entries.
-    #[arg(long, default_value = "orbit")]
-    pub trajectory: String,
-    /// Number of frames, unless the spec sets `frames=`.
-    #[arg(long, default_value_t = 30)]
-    pub frames: usize,
+    #[command(flatten)]
+    pub scene: SceneArg,
+    #[command(flatten)]
+    pub trajectory: TrajectoryArg,
+    #[command(flatten)]
+    pub frames: FramesArg,
     /// Resolution: `hd` (1280x720), `fhd` (1920x1080), `qhd` (2560x1440) or `WxH`; default:
     /// the trajectory's own.
-    #[arg(long)]
-    pub res: Option<String>,
+    #[arg(long, value_parser = parse_resolution)]
+    pub res: Option<(u32, u32)>,
     /// Sorting strategy: `neo`, `full`, `periodic:K`, `background:K` or `hierarchical`.
     #[arg(long, default_value = "neo")]
     pub sort: String,
@@ -77,32 +75,8 @@ pub struct FramesArgs {
     /// Skip SSIM.
     #[arg(long)]
     pub no_ssim: bool,
-    /// Treat Gaussians with NaN values as an error instead of dropping them.
-    #[arg(long)]
-    pub strict: bool,
-}
-
-/// `hd`, `fhd`, `qhd` or `WxH`.
-fn parse_res(s: &str) -> Result<(u32, u32)> {
-    let r = match s.trim().to_ascii_lowercase().as_str() {
-        "hd" => (1280, 720),
-        "fhd" => (1920, 1080),
-        "qhd" => (2560, 1440),
-        other => {
-            let Some((w, h)) = other.split_once('x') else {
-                bail!("--res '{s}': expected hd, fhd, qhd or WxH");
-            };
-            let (w, h): (u32, u32) = (
-                w.parse().with_context(|| format!("--res '{s}': bad width"))?,
-                h.parse().with_context(|| format!("--res '{s}': bad height"))?,
-            );
-            if w == 0 || h == 0 {
-                bail!("--res '{s}': the size must be positive");
-            }
-            (w, h)
-        }
-    };
-    Ok(r)
+    #[command(flatten)]
+    pub strict: StrictArg,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -112,19 +86,21 @@ fn opt(v: Option<f64>) -> String {
 /// Runs `neo frames`.
 pub fn run(a: FramesArgs) -> Result<()> {
     let strategy: Strategy = a.sort.parse().map_err(anyhow::Error::msg)?;
-    let (loaded, _) = spin(&format!("loading {}", a.scene), || source::load_scene(&a.scene, a.strict));
+    let scene_spec = &a.scene.scene;
+    let (loaded, _) =
+        spin(&format!("loading {scene_spec}"), || source::load_scene(scene_spec, a.strict.strict));
     let (scene, report) = loaded?;
     if report.dropped_non_finite > 0 {
         eprintln!("warning: dropped {} Gaussians with NaN values", report.dropped_non_finite);
     }
-    let mut traj = trajectory::parse_trajectory(&a.trajectory, source::robust_bounds(&scene), a.frames)?;
-    if let Some(r) = &a.res {
-        let (w, h) = parse_res(r)?;
+    let traj_spec = &a.trajectory.trajectory;
+    let mut traj = trajectory::parse_trajectory(traj_spec, source::robust_bounds(&scene), a.frames.frames)?;
+    if let Some((w, h)) = a.res {
         traj = traj.with_resolution(w, h);
     }
     let n = traj.len();
     if n == 0 {
-        bail!("trajectory '{}' has no frames", a.trajectory);
+        bail!("trajectory '{traj_spec}' has no frames");
     }
     let mut cfg = PipelineConfig {
         strategy,
@@ -155,8 +131,8 @@ pub fn run(a: FramesArgs) -> Result<()> {
     };
     let (w, h) = (traj.frames[0].width, traj.frames[0].height);
     let run = RunInfo {
-        scene: &a.scene,
-        trajectory: &a.trajectory,
+        scene: scene_spec,
+        trajectory: traj_spec,
         gaussians: scene.len(),
         frames: n,
         cuts: &traj.cuts,
@@ -240,20 +216,4 @@ pub fn run(a: FramesArgs) -> Result<()> {
     );
     println!("wrote {}", path.display());
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn resolutions() {
-        assert_eq!(parse_res("hd").unwrap(), (1280, 720));
-        assert_eq!(parse_res("FHD").unwrap(), (1920, 1080));
-        assert_eq!(parse_res("qhd").unwrap(), (2560, 1440));
-        assert_eq!(parse_res("320x240").unwrap(), (320, 240));
-        for bad in ["", "x", "0x5", "12x", "uhd"] {
-            assert!(parse_res(bad).is_err(), "{bad}");
-        }
-    }
 }

@@ -1,4 +1,5 @@
-//! One module per `neo` subcommand.
+//! One module per `neo` subcommand; none imports another (shared arguments are in
+//! [`crate::args`], shared point runners in [`crate::points`]).
 
 pub mod bench;
 pub mod compare;
@@ -9,4 +10,3 @@ pub mod report;
 pub mod scene;
 pub mod simulate;
 pub mod trajectory;
-pub mod view;

@@ -1,31 +1,30 @@
 //! `neo render`: one view through the float reference renderer, written as an 8-bit PNG.
 
-use super::view::ViewArgs;
+use crate::args::{SceneArg, StrictArg, ViewArgs};
 use crate::progress::spin;
 use anyhow::Result;
 use clap::Args;
-use neo_golden::{render, source, synthetic};
+use neo_golden::{render, source};
 use std::path::PathBuf;
 
 /// Arguments of `neo render`.
 #[derive(Args)]
 pub struct RenderArgs {
-    /// A .ply (standard or compressed) or a synthetic spec.
-    #[arg(long, default_value = synthetic::DEFAULT_SCENE)]
-    pub scene: String,
+    #[command(flatten)]
+    pub scene: SceneArg,
     #[command(flatten)]
     pub view: ViewArgs,
     /// The PNG to write.
     #[arg(long)]
     pub out: PathBuf,
-    /// Treat Gaussians with NaN values as an error instead of dropping them.
-    #[arg(long)]
-    pub strict: bool,
+    #[command(flatten)]
+    pub strict: StrictArg,
 }
 
 /// Runs `neo render`.
 pub fn run(a: RenderArgs) -> Result<()> {
-    let (loaded, t_load) = spin(&format!("loading {}", a.scene), || source::load_scene(&a.scene, a.strict));
+    let (loaded, t_load) =
+        spin(&format!("loading {}", a.scene.scene), || source::load_scene(&a.scene.scene, a.strict.strict));
     let (scene, report) = loaded?;
     if report.dropped_non_finite > 0 {
         eprintln!("warning: dropped {} Gaussians with NaN values", report.dropped_non_finite);

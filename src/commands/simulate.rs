@@ -3,34 +3,27 @@
 //! evaluated on every `--arch`. `--shard i/n` runs only the points whose index is `i mod n`, so
 //! a sweep runs as independent jobs (Slurm arrays, GNU parallel), each writing its own JSON.
 
+use crate::args::{resolution, FramesArg, ModelArgs, SceneArg, TrajectoryArg};
+use crate::points::{load_config, load_latency, run_point, Scenes};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
-use neo_golden::{scene::Scene, shared, synthetic};
-use neo_sim::config::SimConfig;
 use neo_sim::driver::GoldenRaster;
-use neo_sim::latency::{self, Latency};
 use neo_sim::report::point_table;
 use neo_sim::run::Arch;
-use neo_sim::suite::{self, Grid, Point, PointResult};
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-use std::time::Duration;
+use neo_sim::suite::{self, Grid, Point};
+use std::path::PathBuf;
 
 /// Arguments of `neo simulate`.
 #[derive(Args)]
 pub struct SimulateArgs {
-    /// Scene: a .ply or a synthetic spec.
-    #[arg(long, default_value = synthetic::DEFAULT_SCENE)]
-    pub scene: String,
-    /// Trajectory spec (`orbit`, `walk`, `shake` with parameters, or a cameras.json).
-    #[arg(long, default_value = "orbit")]
-    pub trajectory: String,
-    /// Frames.
-    #[arg(long, default_value_t = 30)]
-    pub frames: usize,
+    #[command(flatten)]
+    pub scene: SceneArg,
+    #[command(flatten)]
+    pub trajectory: TrajectoryArg,
+    #[command(flatten)]
+    pub frames: FramesArg,
     /// Resolutions, comma-separated: `hd`, `fhd`, `qhd` or `WxH`.
-    #[arg(long, default_value = "qhd", value_delimiter = ',')]
+    #[arg(long, default_value = "qhd", value_delimiter = ',', value_parser = resolution)]
     pub res: Vec<String>,
     /// Architectures, comma-separated: `neo`, `gscore` (4 and 16 cores), `gscoreN`, `gpu`, `all`.
     #[arg(long, default_value = "all")]
@@ -52,15 +45,8 @@ pub struct SimulateArgs {
     /// vs the exact order) or `full` (also vs the float reference).
     #[arg(long, default_value = "auto")]
     pub quality: String,
-    /// Without the golden raster: measure early termination on every K-th tile.
-    #[arg(long, default_value_t = 16)]
-    pub raster_sample: u32,
-    /// Model configuration (JSON; missing fields keep their defaults).
-    #[arg(long)]
-    pub config: Option<PathBuf>,
-    /// Measured unit timing.
-    #[arg(long, default_value = latency::DEFAULT_PATH)]
-    pub latency: PathBuf,
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Print JSON instead of tables.
     #[arg(long)]
     pub json: bool,
@@ -79,27 +65,8 @@ pub struct SimulateArgs {
     pub trace_frames: Vec<usize>,
 }
 
-/// Reads the configuration file, or the defaults.
-pub(crate) fn load_config(path: Option<&Path>) -> Result<SimConfig> {
-    match path {
-        Some(p) => Ok(SimConfig::from_file(p)?),
-        None => Ok(SimConfig::default()),
-    }
-}
-
-/// Reads `latency.json`: the path as given, else (for the default path) beside the sources.
-pub(crate) fn load_latency(path: &Path) -> Result<Latency> {
-    if !path.exists() && path == Path::new(latency::DEFAULT_PATH) {
-        let alt = shared::workspace_root().join(latency::DEFAULT_PATH);
-        if alt.exists() {
-            return Ok(Latency::from_file(&alt)?);
-        }
-    }
-    Ok(Latency::from_file(path)?)
-}
-
 /// Parses `--quality`; `auto` turns the golden raster on when `pixels x frames` is small.
-pub(crate) fn golden_mode(q: &str, points: &[Point]) -> Result<GoldenRaster> {
+fn golden_mode(q: &str, points: &[Point]) -> Result<GoldenRaster> {
     Ok(match q {
         "off" => GoldenRaster::Off,
         "exact" => GoldenRaster::Exact,
@@ -117,123 +84,22 @@ pub(crate) fn golden_mode(q: &str, points: &[Point]) -> Result<GoldenRaster> {
     })
 }
 
-/// Scenes loaded once per spec.
-#[derive(Default)]
-pub(crate) struct Scenes(HashMap<String, Scene>);
-
-impl Scenes {
-    pub(crate) fn get(&mut self, spec: &str) -> Result<&Scene> {
-        if !self.0.contains_key(spec) {
-            let (s, _) = crate::progress::spin(&format!("loading {spec}"), || suite::load_scene(spec));
-            self.0.insert(spec.to_string(), s.map_err(|e| anyhow!(e))?);
-        }
-        Ok(&self.0[spec])
-    }
-
-    /// A scene already loaded by [`Scenes::get`].
-    pub(crate) fn loaded(&self, spec: &str) -> Option<&Scene> {
-        self.0.get(spec)
-    }
-}
-
-/// Runs `points` two at a time (each workload is only partly parallel, the model not at all),
-/// with one progress bar over the points; `log` reports each finished point. Results keep the
-/// order of `points`.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn run_points_parallel(
-    scenes: &mut Scenes,
-    points: &[Point],
-    cfg: &SimConfig,
-    lat: &Latency,
-    archs: &[Arch],
-    golden: GoldenRaster,
-    raster_sample: u32,
-    what: &str,
-    log: &(dyn Fn(&PointResult, &str) + Sync),
-) -> Result<Vec<PointResult>> {
-    use rayon::prelude::*;
-    for p in points {
-        scenes.get(&p.scene)?;
-    }
-    let scenes = &*scenes;
-    let bar = ProgressBar::new(points.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{prefix} {bar:24} {pos}/{len} points [{elapsed} < {eta}]")
-            .expect("valid template"),
-    );
-    bar.set_prefix(what.to_string());
-    bar.enable_steady_tick(Duration::from_millis(200));
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
-    let out: Result<Vec<PointResult>> = pool.install(|| {
-        points
-            .par_iter()
-            .enumerate()
-            .with_max_len(1)
-            .map(|(k, p)| {
-                let scene = scenes.loaded(&p.scene).expect("loaded above");
-                let wl =
-                    suite::workload(scene, p, cfg, golden, raster_sample, |_| {}).map_err(|e| anyhow!(e))?;
-                let r = suite::evaluate(p, &wl, cfg, lat, archs).map_err(|e| anyhow!(e))?;
-                bar.suspend(|| log(&r, &format!("[{what} {}/{}]", k + 1, points.len())));
-                bar.inc(1);
-                Ok(r)
-            })
-            .collect()
-    });
-    bar.finish_and_clear();
-    out
-}
-
-/// Generates the workload of `point` (with a progress bar) and runs `archs` on it.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn run_point(
-    scenes: &mut Scenes,
-    point: &Point,
-    cfg: &SimConfig,
-    lat: &Latency,
-    archs: &[Arch],
-    golden: GoldenRaster,
-    raster_sample: u32,
-    label: &str,
-) -> Result<PointResult> {
-    let scene = scenes.get(&point.scene)?;
-    let bar = ProgressBar::new(point.frames as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{prefix} {bar:24} {pos}/{len} frames [{elapsed} < {eta}] {msg}")
-            .expect("valid template"),
-    );
-    bar.set_prefix(label.to_string());
-    bar.set_message(format!(
-        "workload {} {} {}",
-        point.res,
-        point.strategy,
-        if golden == GoldenRaster::Off { "" } else { "(golden raster)" }
-    ));
-    bar.enable_steady_tick(Duration::from_millis(200));
-    let wl =
-        suite::workload(scene, point, cfg, golden, raster_sample, |_| bar.inc(1)).map_err(|e| anyhow!(e))?;
-    bar.set_message(format!("model: {}", archs.iter().map(Arch::name).collect::<Vec<_>>().join(", ")));
-    let r = suite::evaluate(point, &wl, cfg, lat, archs).map_err(|e| anyhow!(e))?;
-    bar.finish_and_clear();
-    Ok(r)
-}
-
 /// Runs `neo simulate`.
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let cfg = load_config(a.config.as_deref())?;
-    let lat = load_latency(&a.latency)?;
+    let cfg = load_config(a.model.config.as_deref())?;
+    let lat = load_latency(&a.model.latency)?;
     let archs = Arch::parse_list(&a.arch, &cfg).map_err(|e| anyhow!(e))?;
     let grid = Grid {
-        scenes: vec![a.scene.clone()],
-        trajectory: a.trajectory.clone(),
-        frames: a.frames,
+        scenes: vec![a.scene.scene.clone()],
+        trajectory: a.trajectory.trajectory.clone(),
+        frames: a.frames.frames,
         res: a.res.clone(),
         strategies: a.sort.clone(),
         chunks: if a.chunk.is_empty() { vec![cfg.pipeline.chunk] } else { a.chunk.clone() },
         passes: if a.passes.is_empty() { vec![cfg.pipeline.dps_passes] } else { a.passes.clone() },
         speeds: a.speed.clone(),
     };
-    if a.frames == 0 {
+    if a.frames.frames == 0 {
         bail!("--frames must be at least 1");
     }
     let all = grid.points().map_err(|e| anyhow!(e))?;
@@ -302,7 +168,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
                 &lat,
                 &archs,
                 golden,
-                a.raster_sample,
+                a.model.raster_sample,
                 &label,
             )?);
         }

@@ -1,20 +1,19 @@
 //! `neo trajectory`: generate a camera trajectory and write it as an INRIA cameras.json.
 
+use crate::args::{SceneArg, TrajectoryArg};
 use crate::progress::spin;
 use anyhow::Result;
 use clap::Args;
-use neo_golden::{source, synthetic, trajectory};
+use neo_golden::{source, trajectory};
 use std::path::PathBuf;
 
 /// Arguments of `neo trajectory`.
 #[derive(Args)]
 pub struct TrajectoryArgs {
-    /// The scene whose bounds frame the default trajectories.
-    #[arg(long, default_value = synthetic::DEFAULT_SCENE)]
-    pub scene: String,
-    /// Trajectory spec: `orbit[:radius=R,height=H,speed=S,...]`, `walk[:...]`, `shake[:...]`.
-    #[arg(long, default_value = "orbit")]
-    pub trajectory: String,
+    #[command(flatten)]
+    pub scene: SceneArg,
+    #[command(flatten)]
+    pub trajectory: TrajectoryArg,
     /// Number of frames (30 fps), unless the spec sets `frames=`.
     #[arg(long, default_value_t = 60)]
     pub frames: usize,
@@ -31,9 +30,11 @@ pub struct TrajectoryArgs {
 
 /// Runs `neo trajectory`.
 pub fn run(a: TrajectoryArgs) -> Result<()> {
-    let (loaded, _) = spin(&format!("loading {}", a.scene), || source::load_scene(&a.scene, false));
+    let (loaded, _) =
+        spin(&format!("loading {}", a.scene.scene), || source::load_scene(&a.scene.scene, false));
     let (scene, _) = loaded?;
-    let mut traj = trajectory::parse_trajectory(&a.trajectory, source::robust_bounds(&scene), a.frames)?;
+    let mut traj =
+        trajectory::parse_trajectory(&a.trajectory.trajectory, source::robust_bounds(&scene), a.frames)?;
     if a.width.is_some() || a.height.is_some() {
         let first = &traj.frames[0];
         let (w, h) = (a.width.unwrap_or(first.width), a.height.unwrap_or(first.height));

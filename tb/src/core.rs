@@ -22,22 +22,12 @@ use crate::check::Checker;
 use crate::models::NeoSortCore;
 use crate::rng::Rng;
 use neo_gen::GenConfig;
-use neo_golden::sort::{merge2, Parity, SortEntry, SortFormat};
+use neo_golden::sort::{conventional_sort_plan, merge2, Parity, SortEntry, SortFormat};
 use std::collections::{HashMap, VecDeque};
 use std::ops::Range;
 
-/// Command modes (`cmd_mode_i`), as documented in `gen/src/units/sort_core.rs`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
-    /// 0: sort one chunk (conventional sort, mode (a)).
-    Sort = 0,
-    /// 1: a DPS pass over one chunk (mode (b)).
-    Dps = 1,
-    /// 2: merge A and B dropping invalid entries (mode (c), the update's delete).
-    MergeDelete = 2,
-    /// 3: merge A and B keeping every entry (the conventional sort's global passes).
-    Merge = 3,
-}
+/// Command modes (`cmd_mode_i`): golden's, with the RTL's codes.
+pub use neo_golden::sort::SortMode as Mode;
 
 /// One command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -530,8 +520,8 @@ pub fn sort_chunks_checked(
     q
 }
 
-/// (a) Conventional sort of any number of entries, as golden `full_sort`: `SORT` per chunk into
-/// runs, then `MERGE` passes over runs of `C, 2C, ...` (a lone last run is copied by merging it
+/// (a) Conventional sort of any number of entries, golden's `conventional_sort_plan` (which golden
+/// `full_sort` executes): `SORT` per chunk into runs, then `MERGE` passes over runs of `C, 2C, ...` (a lone last run is copied by merging it
 /// with an empty B), all issued as one back-to-back queue (the chunk SORTs overlap; each MERGE
 /// waits for the commands whose output it reads). Checks the result and returns the cycles from
 /// the first command's acceptance to the last `done_o`.
@@ -540,42 +530,28 @@ pub fn full_sort_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry]
     let len = entries.len() as u64;
     core.write_entries(layout::SRC, entries);
     core.clear(layout::PING..layout::DST + layout::REGION);
-    let mut cmds = Vec::new();
-    let mut want_len = Vec::new();
-    // Chunks into PING.
-    for (k, chunk) in entries.chunks(c).enumerate() {
-        let off = (k * c) as u64;
-        cmds.push(Command {
-            mode: Mode::Sort,
-            src_a: layout::SRC + off,
-            len_a: chunk.len() as u64,
-            src_b: 0,
-            len_b: 0,
-            dst: layout::PING + off,
-        });
-        want_len.push(chunk.len() as u64);
-    }
-    let (mut from, mut to) = (layout::PING, layout::PONG);
-    let mut run = c as u64;
-    while run < len {
-        let mut start = 0;
-        while start < len {
-            let la = run.min(len - start);
-            let lb = run.min(len - start - la);
-            cmds.push(Command {
-                mode: Mode::Merge,
-                src_a: from + start,
-                len_a: la,
-                src_b: from + start + la,
-                len_b: lb,
-                dst: to + start,
-            });
-            want_len.push(la + lb);
-            start += la + lb;
-        }
-        std::mem::swap(&mut from, &mut to);
-        run *= 2;
-    }
+    // golden's plan: the chunk sorts into PING, then each merge pass from one buffer into the
+    // other.
+    let buffer = |stage: u64| if stage.is_multiple_of(2) { layout::PING } else { layout::PONG };
+    let plan: Vec<_> = conventional_sort_plan(len, c as u64).collect();
+    let cmds: Vec<Command> = plan
+        .iter()
+        .map(|p| {
+            let (src, dst) =
+                if p.stage == 0 { (layout::SRC, buffer(0)) } else { (buffer(p.stage - 1), buffer(p.stage)) };
+            let src_b = if p.mode == Mode::Sort { 0 } else { src + p.start_b() };
+            Command {
+                mode: p.mode,
+                src_a: src + p.start,
+                len_a: p.len_a,
+                src_b,
+                len_b: p.len_b,
+                dst: dst + p.start,
+            }
+        })
+        .collect();
+    let want_len: Vec<u64> = plan.iter().map(|p| p.entries()).collect();
+    let from = buffer(plan.last().map_or(0, |p| p.stage));
     let q = core.run_queue(&cmds);
     for (k, (r, w)) in q.results.iter().zip(&want_len).enumerate() {
         core.checker.value(

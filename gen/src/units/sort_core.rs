@@ -46,16 +46,17 @@ use crate::emit::{conns, if_, if_else, set, Item, Module, Stmt};
 /// Module name.
 pub const NAME: &str = "neo_sort_core";
 
-/// Command modes (`cmd_mode_i`).
+/// Command modes (`cmd_mode_i`): the codes of golden's [`SortMode`](neo_golden::sort::SortMode).
 pub mod mode {
+    use neo_golden::sort::SortMode;
     /// Chunk sort.
-    pub const SORT: u64 = 0;
+    pub const SORT: u64 = SortMode::Sort.code();
     /// DPS pass over one chunk (same datapath as SORT).
-    pub const DPS: u64 = 1;
+    pub const DPS: u64 = SortMode::Dps.code();
     /// Merge of A and B dropping invalid entries.
-    pub const MERGE_DELETE: u64 = 2;
+    pub const MERGE_DELETE: u64 = SortMode::MergeDelete.code();
     /// Merge of A and B keeping every entry.
-    pub const MERGE: u64 = 3;
+    pub const MERGE: u64 = SortMode::Merge.code();
 }
 
 /// Back-end (PASS engine) states.

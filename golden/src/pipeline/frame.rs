@@ -4,7 +4,8 @@
 //!
 //! Tiles are independent and processed in parallel (rayon), each phase over all tiles in turn
 //! so that the timing of every stage is a wall-clock figure. Per-tile buffers live in the
-//! pipeline and are reused from frame to frame; per-thread buffers come from a pool.
+//! pipeline and are reused from frame to frame; per-thread buffers come from a pool. The
+//! work-only mode ([`Pipeline::work_frame`], in `frame/work_only.rs`) shares the stages up to the sort.
 
 use std::io::{self, Write};
 use std::sync::Mutex;
@@ -26,9 +27,12 @@ use crate::formats::{quantize, FeatureEntry};
 use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
 use crate::raster::{raster_tile_into, TileRaster};
-use crate::render::{self, preprocess};
+use crate::render::{self, preprocess, Projected};
 use crate::scene::Scene;
 use crate::sort::SortEntry;
+pub use work_only::{gpu_duplication, FrameWork, SampledRaster, TileWork, WorkOptions, GPU_TILE};
+
+mod work_only;
 
 /// Marks a Gaussian without a feature entry this frame.
 const CULLED: u32 = u32::MAX;
@@ -225,59 +229,17 @@ impl<'s> Pipeline<'s> {
     /// # Panics
     /// When the camera's size differs from the pipeline's.
     pub fn render_frame(&mut self, cam: &Camera, frame: usize, cut: bool) -> FrameOutput {
-        assert_eq!(
-            (cam.width, cam.height),
-            (self.width, self.height),
-            "camera size differs from the pipeline's"
-        );
         let t_start = Instant::now();
-        if cut || self.last_frame.is_none() {
-            self.shot_start = frame;
-        }
-        self.last_frame = Some(frame);
-        let pos = FramePos { frame, shot_start: self.shot_start };
+        let pos = self.begin_frame(cam, frame, cut);
         let mut timing = Timing::default();
-
-        // Preprocess and quantise.
+        (timing.preprocess_s, timing.quantize_s) = self.feature_phase(cam, |_| {});
         let t = Instant::now();
-        let projected = preprocess(self.scene, cam, self.cfg.raster.tile);
-        timing.preprocess_s = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let (fmt, key) = (&self.formats.feature, &self.formats.key);
-        projected.par_iter().map(|p| quantize(p, fmt, key)).collect_into_vec(&mut self.features);
-        self.feature_ids.clear();
-        self.feature_ids.extend(projected.iter().map(|p| p.index));
-        self.feature_of.par_iter_mut().for_each(|v| *v = CULLED);
-        for (i, &id) in self.feature_ids.iter().enumerate() {
-            self.feature_of[id as usize] = i as u32;
-        }
-        drop(projected);
-        timing.quantize_s = t.elapsed().as_secs_f64();
-
-        // Binning.
-        let t = Instant::now();
-        self.binning.run(&self.features, &self.feature_ids, fmt, &self.cfg.raster, self.width, self.height);
+        self.binning_phase();
         timing.binning_s = t.elapsed().as_secs_f64();
-
-        // Sorting.
         let t = Instant::now();
-        let strategy = self.cfg.strategy;
-        let binning = &self.binning;
-        let pool = &self.pool;
-        self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each_init(
-            || pool.take(),
-            |ctx, (ti, (state, slot))| {
-                let current = binning.tile(ti);
-                slot.sort = sort_tile(strategy, pos, state, current, ctx);
-                slot.incoming.clear();
-                if slot.sort.from_scratch {
-                    slot.incoming.extend(current.iter().map(|e| e.id));
-                } else {
-                    slot.incoming.extend(ctx.incoming.iter().map(|e| e.id));
-                }
-            },
-        );
+        self.sort_phase(pos);
         timing.sort_s = t.elapsed().as_secs_f64();
+        let strategy = self.cfg.strategy;
 
         // Raster and write-back.
         let t = Instant::now();
@@ -311,6 +273,67 @@ impl<'s> Pipeline<'s> {
         let counts: Vec<_> = self.slots.iter().map(|s| s.sort.counts).collect();
         let tiles = TileColumns::new(frame, self.grid, &counts, &inversions);
         FrameOutput { image, exact_image, float_image, stats, tiles }
+    }
+
+    /// Starts frame `frame`: checks the camera's size and moves the shot start on a cut (the
+    /// first frame is always a shot start).
+    fn begin_frame(&mut self, cam: &Camera, frame: usize, cut: bool) -> FramePos {
+        assert_eq!(
+            (cam.width, cam.height),
+            (self.width, self.height),
+            "camera size differs from the pipeline's"
+        );
+        if cut || self.last_frame.is_none() {
+            self.shot_start = frame;
+        }
+        self.last_frame = Some(frame);
+        FramePos { frame, shot_start: self.shot_start }
+    }
+
+    /// Float preprocess (`inspect` sees the projected Gaussians) and quantisation into the
+    /// feature table. Returns the seconds of the two.
+    fn feature_phase(&mut self, cam: &Camera, inspect: impl FnOnce(&[Projected])) -> (f64, f64) {
+        let t = Instant::now();
+        let projected = preprocess(self.scene, cam, self.cfg.raster.tile);
+        let preprocess_s = t.elapsed().as_secs_f64();
+        inspect(&projected);
+        let t = Instant::now();
+        let (fmt, key) = (&self.formats.feature, &self.formats.key);
+        projected.par_iter().map(|p| quantize(p, fmt, key)).collect_into_vec(&mut self.features);
+        self.feature_ids.clear();
+        self.feature_ids.extend(projected.iter().map(|p| p.index));
+        self.feature_of.par_iter_mut().for_each(|v| *v = CULLED);
+        for (i, &id) in self.feature_ids.iter().enumerate() {
+            self.feature_of[id as usize] = i as u32;
+        }
+        drop(projected);
+        (preprocess_s, t.elapsed().as_secs_f64())
+    }
+
+    /// Binning with the ITU: every tile's current list.
+    fn binning_phase(&mut self) {
+        let fmt = &self.formats.feature;
+        self.binning.run(&self.features, &self.feature_ids, fmt, &self.cfg.raster, self.width, self.height);
+    }
+
+    /// The strategy's sorting step of every tile; records each tile's incoming ids.
+    fn sort_phase(&mut self, pos: FramePos) {
+        let strategy = self.cfg.strategy;
+        let binning = &self.binning;
+        let pool = &self.pool;
+        self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each_init(
+            || pool.take(),
+            |ctx, (ti, (state, slot))| {
+                let current = binning.tile(ti);
+                slot.sort = sort_tile(strategy, pos, state, current, ctx);
+                slot.incoming.clear();
+                if slot.sort.from_scratch {
+                    slot.incoming.extend(current.iter().map(|e| e.id));
+                } else {
+                    slot.incoming.extend(ctx.incoming.iter().map(|e| e.id));
+                }
+            },
+        );
     }
 
     /// Rasterises every tile's table, fills the slots' bitmaps and pixels, and writes keys (when

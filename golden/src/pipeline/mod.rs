@@ -17,6 +17,11 @@
 //!    float reference render, PSNR/SSIM against both, order displacement and inversions against
 //!    the exact order ([`order`]), retention, work and timing.
 //!
+//! The work-only mode ([`Pipeline::work_frame`]) runs steps 1-4, then the write-back without
+//! the raster (the valid bit is membership in the current list, which is what the ITU gives),
+//! and returns the per-tile work counters ([`FrameWork`]) instead of pixels: the cycle model's
+//! input.
+//!
 //! [`run_trajectory`] runs a trajectory; [`StatsFile`] is the `stats.json` document;
 //! [`trace`] exports a frame as the artifact simulator's `poc.trace`.
 
@@ -25,6 +30,7 @@ pub mod config;
 pub mod frame;
 pub mod hierarchical;
 pub mod order;
+mod prefetch;
 pub mod run;
 pub mod stats;
 pub mod strategy;
@@ -33,7 +39,7 @@ pub mod trace;
 pub mod work;
 
 pub use config::{ConfigRecord, Formats, PipelineConfig, PipelineError, RunInfo};
-pub use frame::{FrameOutput, Pipeline};
+pub use frame::{FrameOutput, FrameWork, Pipeline, SampledRaster, TileWork, WorkOptions};
 pub use run::{bench_frames, formats_for, run_trajectory, StatsFile};
 pub use stats::{FrameStats, Summary, TileColumns, Timing};
 pub use strategy::Strategy;

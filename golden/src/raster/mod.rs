@@ -7,7 +7,9 @@
 //!   conservative tile range for binning;
 //! - [`exp`]: the exp unit (table over one octave with linear interpolation);
 //! - [`scu`]: the Subtile Compute Unit: per-pixel power, alpha, transmittance and colour, per
-//!   subtile, in table order, with early termination; [`scu::raster_tile`] renders one tile;
+//!   subtile, in table order, with early termination;
+//! - [`tile`]: the tile driver: [`tile::raster_tile`] routes a tile's table to its subtiles and
+//!   renders the tile with the SCU;
 //! - [`synth`]: hand-made preprocessed Gaussians for tests.
 //!
 //! Pixel centres are at integer coordinates. A subtile whose pixel columns are `x0..x0+S-1`
@@ -17,10 +19,12 @@ pub mod exp;
 pub mod itu;
 pub mod scu;
 pub mod synth;
+pub mod tile;
 
 pub use exp::{ExpError, ExpTable};
 pub use itu::{candidate_tiles, intersects_rect, subtile_bitmap, touches_tile};
-pub use scu::{pixel_alpha, raster_tile, raster_tile_into, shade_pixel, PixelShade, SubtileWork, TileRaster};
+pub use scu::{pixel_alpha, shade_pixel, PixelShade, SubtileWork};
+pub use tile::{raster_tile, raster_tile_into, TileRaster};
 
 use crate::formats::blend::BlendFormat;
 use crate::formats::feature::FeatureFormat;

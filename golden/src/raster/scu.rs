@@ -32,7 +32,7 @@
 //! are never blended: they start done and come out black.
 //!
 //! # How this model evaluates it (speed only; the bits are those of the steps above)
-//! [`raster_tile`] walks entry by entry over a subtile's pixels (the hardware's order). Since
+//! [`raster_tile`](super::raster_tile) walks entry by entry over a subtile's pixels (the hardware's order). Since
 //! `alpha` is non-increasing in `np`, `alpha >= min_alpha` is exactly `q < q_cut` for a
 //! per-entry integer `q_cut`; for a positive definite conic `q` is convex along a row, so those
 //! pixels form one run around the row's minimum, which is found and walked with exact integer
@@ -42,9 +42,10 @@
 //! evaluation of the steps; the tests check that both give the same pixels.
 
 use super::exp::ExpTable;
-use super::itu::{bitmap_of, ItuGeom};
+/// The tile driver, re-exported at its former path (it lives in [`super::tile`]).
+pub use super::tile::{raster_tile, raster_tile_into, TileRaster};
 use super::RasterConfig;
-use crate::formats::blend::{BlendFormat, ExpFormat};
+use crate::formats::blend::BlendFormat;
 use crate::formats::feature::{FeatureEntry, FeatureFormat};
 use crate::formats::fixed::{shr_round, shr_round64};
 
@@ -64,19 +65,6 @@ pub struct SubtileWork {
     pub terminated: bool,
 }
 
-/// The output of [`raster_tile`].
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct TileRaster {
-    /// `tile * tile` pixels, row-major; pixels outside the image are black.
-    pub pixels: Vec<[u8; 3]>,
-    /// Per table entry: the cumulative OR of its subtile bits (false = outgoing).
-    pub valid: Vec<bool>,
-    /// Per table entry: its subtile bitmap (bit `sy * n + sx`).
-    pub bitmaps: Vec<u64>,
-    /// Per subtile (row-major, `n * n`): work counters.
-    pub work: Vec<SubtileWork>,
-}
-
 /// The conic-to-power shift at exponent field 0 (the smallest), `M - top + 2 mean.frac + 1 -
 /// power_frac`; [`RasterConfig::check`] requires it to be at least 1.
 pub fn min_power_shift(fmt: &FeatureFormat, blend: &BlendFormat) -> i32 {
@@ -85,21 +73,21 @@ pub fn min_power_shift(fmt: &FeatureFormat, blend: &BlendFormat) -> i32 {
 
 /// Integer constants of the datapath.
 #[derive(Clone, Copy, Debug)]
-struct Consts {
+pub(super) struct Consts {
     fm: u32,
     power_frac: u32,
-    max_np: i64,
+    pub(super) max_np: i64,
     alpha_shift: i32,
     max_alpha: i64,
     min_alpha: i64,
     alpha_frac: u32,
     one_t: i64,
     min_t: i64,
-    out_shift: u32,
+    pub(super) out_shift: u32,
 }
 
 impl Consts {
-    fn new(fmt: &FeatureFormat, b: &BlendFormat) -> Self {
+    pub(super) fn new(fmt: &FeatureFormat, b: &BlendFormat) -> Self {
         Consts {
             fm: fmt.mean.frac as u32,
             power_frac: b.power_frac as u32,
@@ -117,7 +105,7 @@ impl Consts {
 
 /// One entry's SCU operands.
 #[derive(Clone, Copy, Debug)]
-struct Prep {
+pub(super) struct Prep {
     m: [i64; 2],
     a: i64,
     b2: i64,
@@ -150,7 +138,13 @@ struct Prep {
 
 impl Prep {
     /// Operands of `f` for pixels in `[x0, x1] x [y0, y1]` (decides `wide`).
-    fn new(f: &FeatureEntry, fmt: &FeatureFormat, b: &BlendFormat, np_cut: i64, rect: [i64; 4]) -> Self {
+    pub(super) fn new(
+        f: &FeatureEntry,
+        fmt: &FeatureFormat,
+        b: &BlendFormat,
+        np_cut: i64,
+        rect: [i64; 4],
+    ) -> Self {
         let fm = fmt.mean.frac as u32;
         let m = f.mean.map(|v| v as i64);
         let (a, b2, c) = (f.conic.a as i64, 2 * f.conic.b as i64, f.conic.c as i64);
@@ -292,16 +286,16 @@ fn np_cut(o: i64, fmt: &FeatureFormat, k: &Consts, exp: &ExpTable) -> i64 {
 }
 
 /// A direct-mapped cache of [`np_cut`] by opacity (only saves time).
-struct NpCutCache {
+pub(super) struct NpCutCache {
     slots: [(i64, i64); 256],
 }
 
 impl NpCutCache {
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         NpCutCache { slots: [(-1, 0); 256] }
     }
 
-    fn get(&mut self, o: i64, fmt: &FeatureFormat, k: &Consts, exp: &ExpTable) -> i64 {
+    pub(super) fn get(&mut self, o: i64, fmt: &FeatureFormat, k: &Consts, exp: &ExpTable) -> i64 {
         let slot = &mut self.slots[(o & 255) as usize];
         if slot.0 != o {
             *slot = (o, np_cut(o, fmt, k, exp));
@@ -344,7 +338,7 @@ fn blend(list: &[Prep], k: &Consts, exp: &ExpTable, px: i64, py: i64) -> (PixelS
 
 /// Step 7: one 8-bit channel from the accumulator.
 #[inline]
-fn to_u8(c: i64, out_shift: u32) -> u8 {
+pub(super) fn to_u8(c: i64, out_shift: u32) -> u8 {
     (((c * 255) + (1i64 << (out_shift - 1))) >> out_shift).clamp(0, 255) as u8
 }
 
@@ -362,7 +356,7 @@ pub struct PixelShade {
 }
 
 /// Blends every entry of `entries` (no ITU filtering) at pixel `(px, py)` with the SCU
-/// arithmetic. Inside a tile, [`raster_tile`] gives the same pixel whenever the ITU routes
+/// arithmetic. Inside a tile, [`raster_tile`](super::raster_tile) gives the same pixel whenever the ITU routes
 /// every entry that can reach `alpha >= 1/255` at the pixel.
 pub fn shade_pixel(
     entries: &[FeatureEntry],
@@ -401,133 +395,6 @@ pub fn pixel_alpha(
     Prep::new(f, fmt, &cfg.blend, 0, [px, py, px, py]).alpha(&k, exp, px, py)
 }
 
-/// Rasterises tile `(tile_x, tile_y)` of a `width x height` image from the tile's table
-/// (`entries`, in table order). `cfg` must pass [`RasterConfig::check`] for `fmt`.
-pub fn raster_tile(
-    entries: &[FeatureEntry],
-    fmt: &FeatureFormat,
-    tile_x: u32,
-    tile_y: u32,
-    width: u32,
-    height: u32,
-    cfg: &RasterConfig,
-) -> TileRaster {
-    let mut out = TileRaster::default();
-    raster_tile_into(entries, fmt, tile_x, tile_y, width, height, cfg, &mut out);
-    out
-}
-
-/// [`raster_tile`] into `out`, reusing its buffers.
-#[allow(clippy::too_many_arguments)]
-pub fn raster_tile_into(
-    entries: &[FeatureEntry],
-    fmt: &FeatureFormat,
-    tile_x: u32,
-    tile_y: u32,
-    width: u32,
-    height: u32,
-    cfg: &RasterConfig,
-    out: &mut TileRaster,
-) {
-    let t = cfg.tile as i64;
-    let s = cfg.subtile as i64;
-    let n = cfg.subtiles_per_side() as i64;
-    let (x0, y0) = (tile_x as i64 * t, tile_y as i64 * t);
-    let k = Consts::new(fmt, &cfg.blend);
-    let exp = ExpTable::new(&cfg.blend.exp, cfg.blend.power_frac);
-
-    out.bitmaps.clear();
-    out.bitmaps.extend(entries.iter().map(|f| bitmap_of(&ItuGeom::new(f, fmt), tile_x, tile_y, cfg)));
-    out.valid.clear();
-    out.valid.extend(out.bitmaps.iter().map(|&b| b != 0));
-    out.pixels.clear();
-    out.pixels.resize((t * t) as usize, [0; 3]);
-    out.work.clear();
-    out.work.resize((n * n) as usize, SubtileWork::default());
-
-    // Route entries to subtiles (a counting sort by subtile that keeps table order), and
-    // prepare the operands of every routed entry once per tile.
-    let nsub = (n * n) as usize;
-    let mut offsets = [0u32; 65];
-    for &b in &out.bitmaps {
-        let mut m = b;
-        while m != 0 {
-            offsets[m.trailing_zeros() as usize + 1] += 1;
-            m &= m - 1;
-        }
-    }
-    for j in 0..nsub {
-        offsets[j + 1] += offsets[j];
-    }
-    let mut cursor = offsets;
-    let mut routed = vec![0u32; offsets[nsub] as usize];
-    let rect = [x0, y0, x0 + t - 1, y0 + t - 1];
-    let mut cuts = NpCutCache::new();
-    let mut preps: Vec<Prep> = Vec::with_capacity(entries.len());
-    for (f, &b) in entries.iter().zip(&out.bitmaps) {
-        let i = preps.len() as u32;
-        if b == 0 {
-            continue;
-        }
-        preps.push(Prep::new(f, fmt, &cfg.blend, cuts.get(f.opacity as i64, fmt, &k, &exp), rect));
-        let mut m = b;
-        while m != 0 {
-            let j = m.trailing_zeros() as usize;
-            routed[cursor[j] as usize] = i;
-            cursor[j] += 1;
-            m &= m - 1;
-        }
-    }
-    let lut = exp_lut(&exp, k.max_np);
-    let mut list: Vec<Prep> = Vec::with_capacity(preps.len());
-    let mut st = SubtileState::default();
-    for sy in 0..n {
-        for sx in 0..n {
-            let j = (sy * n + sx) as usize;
-            list.clear();
-            list.extend(
-                routed[offsets[j] as usize..offsets[j + 1] as usize].iter().map(|&i| preps[i as usize]),
-            );
-            let origin = [x0 + sx * s, y0 + sy * s];
-            out.work[j] = st.run(&list, &k, &lut, origin, s, [width as i64, height as i64]);
-            for ly in 0..s {
-                for lx in 0..s {
-                    let p = st.px[(ly * s + lx) as usize];
-                    let c = [p[1], p[2], p[3]];
-                    out.pixels[((sy * s + ly) * t + sx * s + lx) as usize] = c.map(|c| to_u8(c, k.out_shift));
-                }
-            }
-        }
-    }
-}
-
-/// A cached exp table: the unit's format, its input shift, and `exp(np)` for every `np`.
-type CachedLut = (ExpFormat, u32, std::rc::Rc<Vec<i32>>);
-
-thread_local! {
-    /// The last exp lookup table built on this thread (only saves time).
-    static EXP_LUT: std::cell::RefCell<Option<CachedLut>> =
-        const { std::cell::RefCell::new(None) };
-}
-
-/// `exp.eval(np)` for every `np` in `[0, max_np]`, as a table (the same function, evaluated
-/// ahead; only saves time). Cached per thread.
-fn exp_lut(exp: &ExpTable, max_np: i64) -> std::rc::Rc<Vec<i32>> {
-    let key = (*exp.format(), exp.input_shift());
-    EXP_LUT.with(|cell| {
-        let mut cell = cell.borrow_mut();
-        if let Some((f, sh, lut)) = cell.as_ref() {
-            if (*f, *sh) == key && lut.len() == max_np as usize + 1 {
-                return lut.clone();
-            }
-        }
-        // Values are at most 2^out_frac <= 2^24.
-        let lut = std::rc::Rc::new((0..=max_np).map(|np| exp.eval(np) as i32).collect::<Vec<i32>>());
-        *cell = Some((key.0, key.1, lut.clone()));
-        lut
-    })
-}
-
 /// `ceil(v)` as an integer without libm (NaN gives `i64::MIN / 2`, beyond +-1e15 clamps).
 fn ceil_i64(v: f64) -> i64 {
     if v.is_nan() {
@@ -550,9 +417,9 @@ fn floor_i64(v: f64) -> i64 {
 
 /// The pixels of one subtile while the SCU blends it (row-major, `side * side`).
 #[derive(Debug, Default)]
-struct SubtileState {
+pub(super) struct SubtileState {
     /// Per pixel: `[T, C_r, C_g, C_b, active]` (active: inside the image and not finished).
-    px: Vec<[i64; 5]>,
+    pub(super) px: Vec<[i64; 5]>,
     /// Active pixels per row.
     row_active: Vec<u32>,
 }
@@ -563,7 +430,7 @@ impl SubtileState {
     /// is the same sequence as [`blend`]). Only the pixels of a row where `q < q_cut` can blend:
     /// for a positive definite conic they form one run around the row's minimum, found with
     /// exact evaluations, so the others are skipped without changing any result.
-    fn run(
+    pub(super) fn run(
         &mut self,
         list: &[Prep],
         k: &Consts,

@@ -13,6 +13,7 @@
 //! written). Chunk sorting happens in the on-chip buffer (the chunk is read from and written to
 //! DRAM once); each global pass reads and writes every entry once.
 
+use super::command::{conventional_sort_plan, SortMode};
 use super::entry::{SortEntry, SortFormat};
 use super::error::SortParamError;
 use super::msu::merge2_into;
@@ -243,28 +244,47 @@ impl Sorter {
         }
     }
 
-    /// Conventional sort of `input` into `out` (cleared first); returns the work counters.
+    /// Conventional sort of `input` into `out` (cleared first), executing the command plan
+    /// ([`conventional_sort_plan`]): the chunk sorts, then the merge passes across chunks.
+    /// Returns the work counters.
     pub fn full_sort(&mut self, input: &[SortEntry], out: &mut Vec<SortEntry>) -> SortWork {
         out.clear();
         out.extend_from_slice(input);
-        let mut work = SortWork { entries: input.len(), ..SortWork::default() };
-        let c = self.cfg.chunk;
-        for chunk in out.chunks_mut(c) {
-            self.sort_chunk(chunk, &mut work.chunk);
-        }
-        let mut run = c;
-        while run < out.len() {
-            self.scratch.clear();
-            work.global_passes.push(merge_pass(out, run, &mut self.scratch));
-            std::mem::swap(out, &mut self.scratch);
-            run *= 2;
+        let n = input.len();
+        let mut work = SortWork { entries: n, ..SortWork::default() };
+        for cmd in conventional_sort_plan(n as u64, self.cfg.chunk as u64) {
+            let (start, len_a, len_b) = (cmd.start as usize, cmd.len_a as usize, cmd.len_b as usize);
+            if cmd.mode == SortMode::Sort {
+                self.sort_chunk(&mut out[start..start + len_a], &mut work.chunk);
+                continue;
+            }
+            if start == 0 {
+                self.scratch.clear();
+                work.global_passes.push(PassWork::default());
+            }
+            let pass = work.global_passes.last_mut().expect("a merge pass starts at offset 0");
+            let a = &out[start..start + len_a];
+            if len_b == 0 {
+                // A lone run: the MERGE with an empty stream B copies it.
+                self.scratch.extend_from_slice(a);
+                pass.runs_in += 1;
+                pass.entries_copied += len_a;
+            } else {
+                merge2_into(a, &out[start + len_a..start + len_a + len_b], false, &mut self.scratch);
+                pass.runs_in += 2;
+                pass.merges += 1;
+                pass.entries_merged += len_a + len_b;
+            }
+            if start + len_a + len_b == n {
+                std::mem::swap(out, &mut self.scratch);
+            }
         }
         work
     }
 }
 
 /// One two-way merge pass over runs of length `run` (the last may be shorter), appending the
-/// result to `dst`.
+/// result to `dst` (the in-chunk passes; the passes across chunks follow the command plan).
 fn merge_pass(src: &[SortEntry], run: usize, dst: &mut Vec<SortEntry>) -> PassWork {
     let mut pass = PassWork { runs_in: src.len().div_ceil(run), ..PassWork::default() };
     for pair in src.chunks(2 * run) {

@@ -9,10 +9,12 @@
 //! - [`depth_key`]: depth (view-space z) to sort-key encodings;
 //! - [`network`]: comparator networks as data (the 16-input Bitonic Sort Unit, BSU);
 //! - [`msu`]: the two-way Merge Sort Unit+ (MSU+) `merge2`, with optional invalid dropping;
+//! - [`command`]: the core's command modes and the conventional sort's command plan;
 //! - [`full_sort`](mod@full_sort): the conventional sort (BSU vectors, in-chunk merges, global merges);
 //! - [`dps`](mod@dps): Dynamic Partial Sorting of a reused table with interleaved chunk boundaries;
 //! - [`update`]: the per-tile, per-frame reuse-and-update step (DPS, insert, delete, capacity).
 
+pub mod command;
 pub mod depth_key;
 pub mod dps;
 pub mod entry;
@@ -22,6 +24,7 @@ pub mod msu;
 pub mod network;
 pub mod update;
 
+pub use command::{conventional_sort_plan, PlannedCommand, SortMode};
 pub use depth_key::DepthKeyCodec;
 pub use dps::{dps, dps_pass, DpsWork, Parity};
 pub use entry::{SortEntry, SortFormat};

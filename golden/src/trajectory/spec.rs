@@ -9,7 +9,7 @@
 //!
 //! Keys of every kind: `frames=N` (default: the caller's), `speed=S` or `speed=Sx` (multiplier,
 //! 0 < S <= 64, default 1), `cut=K` or `cut=K1/K2/...` (scene cuts, each in `1..frames`),
-//! `res=WxH` (default 1280x720), `fov=DEG` (horizontal, default 60).
+//! `res=WxH` or `res=hd|fhd|qhd` ([`super::parse_resolution`], default 1280x720), `fov=DEG` (horizontal, default 60).
 //!
 //! - `orbit`: `radius=R`, `height=H` (camera height above the target, world up being -y),
 //!   `start=DEG` (azimuth of frame 0; 0 is the -z side), `rate=DEG` (degrees per second at 1x,
@@ -26,6 +26,7 @@
 //! values are errors naming the spec.
 
 use super::orbit::{self, OrbitParams};
+use super::resolution::MAX_SIDE;
 use super::shake::{self, ShakeParams};
 use super::walk::{self, WalkParams};
 use super::{Intrinsics, Shot, Trajectory};
@@ -200,18 +201,11 @@ impl<'a> Keys<'a> {
         }
         let mut intrinsics = Intrinsics::default();
         if let Some(v) = self.get("res") {
-            let parsed = v
-                .split_once(['x', 'X'])
-                .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)));
-            match parsed {
-                Some((w, h)) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => {
-                    intrinsics.width = w;
-                    intrinsics.height = h;
-                }
-                _ => {
-                    return Err(self.bad("res", v, "WIDTHxHEIGHT with sizes from 1 to 16384, e.g. 1920x1080"))
-                }
-            }
+            let (w, h) = super::parse_resolution(v).map_err(|_| {
+                self.bad("res", v, &format!("WIDTHxHEIGHT with sizes from 1 to {MAX_SIDE}, e.g. 1920x1080"))
+            })?;
+            intrinsics.width = w;
+            intrinsics.height = h;
         }
         if let Some(f) = self.number(
             "fov",

@@ -1,4 +1,4 @@
-//! A cache prefetch hint for the random gathers of the workload generation (feature entries by
+//! A cache prefetch hint for the random gathers of the work-only mode (feature entries by
 //! Gaussian id in depth order). A hint only: it never changes a result, and it is a no-op on
 //! targets without one.
 

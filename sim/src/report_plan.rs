@@ -1,0 +1,320 @@
+//! The plan of `neo report`: which points run, on which architectures, in which order, and the
+//! report data they make (rendered by [`crate::report::render`]).
+//!
+//! 1. throughput and traffic (paper Figs. 15-16): Neo's strategy on every architecture, per
+//!    scene and resolution, work-only workloads;
+//! 2. strategy timelines (Fig. 19): Neo's run (taken from step 1 when it matches the timeline
+//!    resolution) and the compared strategies on Neo's hardware;
+//! 3. the speed/error sweep over strategies, chunk sizes, DPS passes and camera speeds, with the
+//!    golden raster on for PSNR (or point results read from files).
+//!
+//! How a point runs (progress display, parallelism) is the caller's: a [`PointRunner`].
+
+use std::path::Path;
+
+use neo_golden::synthetic;
+
+use crate::config::SimConfig;
+use crate::driver::GoldenRaster;
+use crate::latency::{self, Latency};
+use crate::report::{ReportData, ReportSettings};
+use crate::run::Arch;
+use crate::suite::{parse_res, Grid, Point, PointResult};
+
+/// What `neo report` runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReportSpec {
+    /// Scenes besides the default synthetic scene.
+    pub scenes: Vec<String>,
+    /// Include the default synthetic scene (first).
+    pub default_scene: bool,
+    /// Trajectory of every run.
+    pub trajectory: String,
+    /// Frames of the throughput, traffic and timeline runs.
+    pub frames: usize,
+    /// Resolutions of the throughput and traffic runs.
+    pub res: Vec<String>,
+    /// Resolution of the strategy timelines.
+    pub timeline_res: String,
+    /// Strategies compared with `neo` in the timelines.
+    pub timeline_sort: Vec<String>,
+    /// The sweep's grid (scene, resolution, frames, strategies, chunks, passes, speeds; its
+    /// trajectory is [`ReportSpec::trajectory`]), or `None` to run no sweep.
+    pub sweep: Option<SweepSpec>,
+    /// Early termination measured on every K-th tile (work-only workloads).
+    pub raster_sample: u32,
+}
+
+/// The speed/error sweep of a report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepSpec {
+    /// Scene.
+    pub scene: String,
+    /// Resolution.
+    pub res: String,
+    /// Frames per point.
+    pub frames: usize,
+    /// Strategies.
+    pub strategies: Vec<String>,
+    /// Chunk sizes.
+    pub chunks: Vec<usize>,
+    /// DPS passes.
+    pub passes: Vec<usize>,
+    /// Camera speeds.
+    pub speeds: Vec<f64>,
+}
+
+/// Runs the plan's points.
+pub trait PointRunner {
+    /// Runs `point` on `archs`, its workload generated with `golden` and `raster_sample`
+    /// ([`crate::suite::workload`]); `label` names it in progress messages.
+    fn run_one(
+        &mut self,
+        point: &Point,
+        archs: &[Arch],
+        golden: GoldenRaster,
+        raster_sample: u32,
+        label: &str,
+    ) -> Result<PointResult, String>;
+
+    /// Runs `points` as [`PointRunner::run_one`] does (`what` names the group); results in the
+    /// order of `points`.
+    fn run_many(
+        &mut self,
+        points: &[Point],
+        archs: &[Arch],
+        golden: GoldenRaster,
+        raster_sample: u32,
+        what: &str,
+    ) -> Result<Vec<PointResult>, String>;
+}
+
+/// The points of a report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReportPlan {
+    /// What was asked.
+    pub spec: ReportSpec,
+    /// Scenes of the throughput runs (the first is the main one).
+    pub scenes: Vec<String>,
+    /// Chunk size of the non-sweep runs.
+    pub chunk: usize,
+    /// DPS passes of the non-sweep runs.
+    pub passes: usize,
+    /// Every architecture (throughput runs).
+    pub archs: Vec<Arch>,
+    /// Throughput and traffic runs.
+    pub headline: Vec<Point>,
+    /// Timelines of the compared strategies.
+    pub timelines: Vec<Point>,
+    /// Neo's timeline, when no throughput run provides it.
+    pub neo_timeline: Point,
+    /// Label of the timeline resolution.
+    pub timeline_res: String,
+    /// Sweep points to run.
+    pub sweep: Vec<Point>,
+}
+
+/// Wall-clock seconds of a report's steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ReportTimes {
+    /// Throughput and traffic runs.
+    pub headline_s: f64,
+    /// Timelines.
+    pub timelines_s: f64,
+    /// Sweep.
+    pub sweep_s: f64,
+}
+
+/// A point of `frames` frames of `trajectory` at speed 1.
+fn point(
+    scene: &str,
+    traj: &str,
+    frames: usize,
+    res: &str,
+    strategy: &str,
+    chunk: usize,
+    passes: usize,
+) -> Result<Point, String> {
+    let (label, w, h) = parse_res(res)?;
+    Ok(Point {
+        scene: scene.to_string(),
+        trajectory: traj.to_string(),
+        speed: 1.0,
+        frames,
+        res: label,
+        width: w,
+        height: h,
+        strategy: strategy.to_string(),
+        chunk,
+        passes,
+    })
+}
+
+impl ReportPlan {
+    /// The plan of `spec` with the model configuration `cfg` (chunk and passes of the non-sweep
+    /// runs, the architectures).
+    pub fn new(spec: ReportSpec, cfg: &SimConfig) -> Result<Self, String> {
+        if spec.frames == 0 || spec.sweep.as_ref().is_some_and(|s| s.frames == 0) {
+            return Err("the runs and the sweep points need at least 1 frame".into());
+        }
+        let (chunk, passes) = (cfg.pipeline.chunk, cfg.pipeline.dps_passes);
+        let mut scenes =
+            if spec.default_scene { vec![synthetic::DEFAULT_SCENE.to_string()] } else { Vec::new() };
+        for s in &spec.scenes {
+            if !scenes.contains(s) {
+                scenes.push(s.clone());
+            }
+        }
+        if scenes.is_empty() {
+            return Err("no scene: give --scene when leaving the default scene out".into());
+        }
+        let archs = Arch::parse_list("all", cfg)?;
+        let traj = &spec.trajectory;
+        let mut headline = Vec::new();
+        for s in &scenes {
+            for r in &spec.res {
+                headline.push(point(s, traj, spec.frames, r, "neo", chunk, passes)?);
+            }
+        }
+        let (timeline_res, _, _) = parse_res(&spec.timeline_res)?;
+        let timeline = |strategy: &str| {
+            point(synthetic::DEFAULT_SCENE, traj, spec.frames, &spec.timeline_res, strategy, chunk, passes)
+        };
+        let timelines = spec.timeline_sort.iter().map(|s| timeline(s)).collect::<Result<Vec<_>, _>>()?;
+        let neo_timeline = timeline("neo")?;
+        let sweep = match &spec.sweep {
+            None => Vec::new(),
+            Some(s) => Grid {
+                scenes: vec![s.scene.clone()],
+                trajectory: spec.trajectory.clone(),
+                frames: s.frames,
+                res: vec![s.res.clone()],
+                strategies: s.strategies.clone(),
+                chunks: s.chunks.clone(),
+                passes: s.passes.clone(),
+                speeds: s.speeds.clone(),
+            }
+            .points()?,
+        };
+        Ok(ReportPlan {
+            spec,
+            scenes,
+            chunk,
+            passes,
+            archs,
+            headline,
+            timelines,
+            neo_timeline,
+            timeline_res,
+            sweep,
+        })
+    }
+
+    /// Runs the plan with `runner`; `sweep_results` (read from files) come before the sweep's
+    /// own points. Returns the report data and the seconds of each step.
+    pub fn run(
+        &self,
+        runner: &mut dyn PointRunner,
+        lat: &Latency,
+        sweep_results: Vec<PointResult>,
+    ) -> Result<(ReportData, ReportTimes), String> {
+        let mut times = ReportTimes::default();
+        let sample = self.spec.raster_sample;
+
+        // 1-2. Throughput and traffic.
+        let t = std::time::Instant::now();
+        let total = self.headline.len();
+        let mut headline = Vec::new();
+        for (k, p) in self.headline.iter().enumerate() {
+            let label = format!("[{}/{total}]", k + 1);
+            headline.push(runner.run_one(p, &self.archs, GoldenRaster::Off, sample, &label)?);
+        }
+        times.headline_s = t.elapsed().as_secs_f64();
+
+        // 3. Timelines (Neo's own run comes from the throughput runs when it matches).
+        let t = std::time::Instant::now();
+        let main_scene = &self.scenes[0];
+        let neo = headline.iter().find(|r| &r.point.scene == main_scene && r.point.res == self.timeline_res);
+        let neo = match neo.cloned() {
+            Some(mut r) => {
+                r.archs.retain(|x| x.arch == "neo");
+                r
+            }
+            None => {
+                runner.run_one(&self.neo_timeline, &[Arch::Neo], GoldenRaster::Off, sample, "[timeline]")?
+            }
+        };
+        let mut timelines = vec![neo];
+        timelines.extend(runner.run_many(
+            &self.timelines,
+            &[Arch::Neo],
+            GoldenRaster::Off,
+            sample,
+            "timelines",
+        )?);
+        times.timelines_s = t.elapsed().as_secs_f64();
+
+        // 4. Sweep.
+        let t = std::time::Instant::now();
+        let mut sweep = sweep_results;
+        sweep.extend(runner.run_many(&self.sweep, &[Arch::Neo], GoldenRaster::Exact, sample, "sweep")?);
+        times.sweep_s = t.elapsed().as_secs_f64();
+
+        let data = ReportData {
+            headline,
+            timelines,
+            settings: ReportSettings {
+                command: "neo report".into(),
+                raster_timing: lat.raster_source.label(),
+                latency_file: latency::DEFAULT_PATH.into(),
+                notes: self.notes(&sweep),
+            },
+            sweep,
+        };
+        Ok((data, times))
+    }
+
+    /// The report's notes on the reduced sizes used.
+    fn notes(&self, sweep: &[PointResult]) -> Vec<String> {
+        let mut notes = vec![
+            format!(
+                "Throughput, traffic and timelines: {} frames of `{}` per run (the paper renders 60; DRAM per 60 frames is scaled from the frames run), chunk {}, {} DPS pass(es), work-only golden workloads (no golden raster; SCU early termination measured on every {}-th tile).",
+                self.spec.frames, self.spec.trajectory, self.chunk, self.passes, self.spec.raster_sample
+            ),
+            format!("Scenes: {}.", self.scenes.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", ")),
+        ];
+        if let Some(first) = sweep.first() {
+            notes.push(format!(
+                "Speed/error sweep on a smaller workload ({} points): `{}` at {}, {} frames, golden raster on (PSNR against the exact order).",
+                sweep.len(),
+                first.point.scene,
+                first.point.res,
+                first.point.frames
+            ));
+        }
+        notes.push("GSCore-N: N sorting cores and N subtile units (N/4 raster cores of 4), hierarchical sort from scratch every frame, subtile bitmaps carried with every sort entry; GPU: Orin-AGX-like kernels with a global radix sort.".into());
+        notes
+    }
+}
+
+/// The point results (`*.json` written by `neo simulate --out DIR`) in `dir`, by file name.
+pub fn read_point_results(dir: &Path) -> Result<Vec<PointResult>, String> {
+    let entries =
+        std::fs::read_dir(dir).map_err(|e| format!("{}: cannot read the directory: {e}", dir.display()))?;
+    let mut files: Vec<_> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    files.sort();
+    let mut results = Vec::new();
+    for f in files {
+        let text = std::fs::read_to_string(&f).map_err(|e| format!("{}: cannot read: {e}", f.display()))?;
+        let r: PointResult =
+            serde_json::from_str(&text).map_err(|e| format!("{}: not a point result: {e}", f.display()))?;
+        results.push(r);
+    }
+    if results.is_empty() {
+        return Err(format!("{}: no point results (*.json from `neo simulate --out DIR`)", dir.display()));
+    }
+    Ok(results)
+}
