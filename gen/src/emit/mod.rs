@@ -276,6 +276,12 @@ impl Module {
         self.item(Item::LocalParam { name: name.into(), width, value: value.into() })
     }
 
+    /// Declares an untyped integer local parameter, `localparam NAME = VALUE;` (for the bit
+    /// offsets and widths that name the fields of a packed bundle).
+    pub fn localparam_int(&mut self, name: impl Into<String>, value: u32) -> &mut Self {
+        self.item(Item::LocalParam { name: name.into(), width: 1, value: value.to_string() })
+    }
+
     /// Declares a wire.
     pub fn wire(&mut self, name: impl Into<String>, width: u32) -> &mut Self {
         self.item(Item::Wire { name: name.into(), width })

@@ -9,6 +9,9 @@
 //! | `neo_sort_core` | Sorting Core: BSU + MSU+ + buffers + memory/command ports | yes     |
 //! | `neo_itu`       | Intersection Test Unit: subtile bitmap of one Gaussian  | yes       |
 //! | `neo_scu_exp`   | SCU exp unit: ROM over one octave + interpolation       | no        |
+//! | `neo_scu_lane`  | SCU pixel lane: S0..S5, quadratic form, exp, alpha      | no        |
+//! | `neo_scu_blend` | SCU lane blend: a pixel's new T, colour, done bit       | no        |
+//! | `neo_scu_pixel` | SCU pixel: state, saved states, output colour           | no        |
 //! | `neo_scu`       | Subtile Compute Unit: alpha blending of one subtile     | yes       |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
 
@@ -57,7 +60,10 @@ pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
         chunk_ram::module(cfg),
         sort_core::module(cfg),
         itu::module(cfg),
-        scu::exp_module(cfg),
+        scu::exp::module(cfg),
+        scu::lane::module(cfg),
+        scu::blend::module(cfg),
+        scu::pixel::module(cfg),
         scu::module(cfg),
         raster_core::module(cfg),
     ];
