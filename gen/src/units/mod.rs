@@ -10,6 +10,8 @@
 //! | `neo_itu`       | Intersection Test Unit: subtile bitmap of one Gaussian  | yes       |
 //! | `neo_scu_exp`   | SCU exp unit: ROM over one octave + interpolation       | no        |
 //! | `neo_scu`       | Subtile Compute Unit: alpha blending of one subtile     | yes       |
+//! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
+//! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
 
 pub mod bsu;
@@ -59,6 +61,8 @@ pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
         itu::module(cfg),
         scu::exp_module(cfg),
         scu::module(cfg),
+        raster_core::loader::module(cfg),
+        raster_core::feeder::module(cfg),
         raster_core::module(cfg),
     ];
     for m in &mut all {
