@@ -66,6 +66,9 @@ module neo_raster_core (
   wire pix_valid;
   wire wb_valid;
   wire rd_valid;
+  // The pixel writer's SCU (subtile % SCUs) and its last row (see the pixel writer).
+  wire [1:0] pix_scu;
+  wire pix_last_row;
   wire pix_grant;
   assign pix_grant = pix_valid & mem_req_ready_i;
   wire wb_grant;
@@ -244,6 +247,8 @@ module neo_raster_core (
   wire [255:0] itu_bitmaps;
   wire [3:0] itu_hits;
   wire [63:0] itu_tags;
+  // The results are taken when no routing FIFO is full.
+  wire itu_out_ready;
   // Per lane, the subtile groups its bitmap touches (group 0's walk records them per quad).
   wire [63:0] itu_groups;
   genvar u;
@@ -282,7 +287,6 @@ module neo_raster_core (
       assign itu_groups[u*16 +: 16] = {(|bitmap[63:60]), (|bitmap[59:56]), (|bitmap[55:52]), (|bitmap[51:48]), (|bitmap[47:44]), (|bitmap[43:40]), (|bitmap[39:36]), (|bitmap[35:32]), (|bitmap[31:28]), (|bitmap[27:24]), (|bitmap[23:20]), (|bitmap[19:16]), (|bitmap[15:12]), (|bitmap[11:8]), (|bitmap[7:4]), (|bitmap[3:0])};
     end
   endgenerate
-  wire itu_out_ready;
   wire itu_in_ready;
   assign itu_in_ready = &itu_in_readys;
   wire itu_out_valid;
@@ -491,7 +495,6 @@ module neo_raster_core (
   // The subtile being written (the top bit: every subtile written) and its row.
   reg  [6:0] pix_sub_q;
   reg  [2:0] pix_row_q;
-  wire [1:0] pix_scu;
   assign pix_scu = pix_sub_q[1:0];
   wire [2:0] pix_sx;
   assign pix_sx = pix_sub_q[2:0];
@@ -499,7 +502,6 @@ module neo_raster_core (
   assign pix_sy = pix_sub_q[5:3];
   wire pix_all_done;
   assign pix_all_done = pix_sub_q[6];
-  wire pix_last_row;
   assign pix_last_row = pix_row_q == 3'd7;
   wire [1535:0] pix_rgb;
   assign pix_rgb = ((pix_scu == 2'd0) ? scu_rgb[1535:0] : ((pix_scu == 2'd1) ? scu_rgb[3071:1536] : ((pix_scu == 2'd2) ? scu_rgb[4607:3072] : scu_rgb[6143:4608])));

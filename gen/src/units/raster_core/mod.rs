@@ -226,7 +226,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     ports(&mut m, &d);
     command(&mut m, &d);
     buffers(&mut m, &d);
-    writer::arbitration(&mut m);
+    writer::arbitration(&mut m, &d);
     load(&mut m, &d);
     walker::walk(&mut m, &d);
     walker::itus(&mut m, cfg, &d);

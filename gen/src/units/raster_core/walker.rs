@@ -96,6 +96,8 @@ pub(super) fn itus(m: &mut Module, cfg: &GenConfig, d: &Dims) {
     m.comment("ITUs: lane u tests entry quad_base_q + u; they share every control input (lockstep).");
     m.wire("lane_valid", ni).wire("itu_in_readys", ni).wire("itu_out_valids", ni);
     m.wire("itu_bitmaps", ni * nsub).wire("itu_hits", ni).wire("itu_tags", ni * tg);
+    m.comment("The results are taken when no routing FIFO is full.");
+    m.wire("itu_out_ready", 1);
     m.comment("Per lane, the subtile groups its bitmap touches (group 0's walk records them per quad).");
     m.wire("itu_groups", ni * groups);
     let mut items = vec![
@@ -147,7 +149,6 @@ pub(super) fn itus(m: &mut Module, cfg: &GenConfig, d: &Dims) {
         rhs: format!("{{{}}}", touched.join(", ")),
     });
     m.gen_for("u", ni, "g_itu", items);
-    m.wire("itu_out_ready", 1);
     m.wire_assign("itu_in_ready", 1, "&itu_in_readys");
     m.wire_assign("itu_out_valid", 1, "&itu_out_valids");
     m.wire_assign("itu_fire", 1, "walk & itu_in_ready");

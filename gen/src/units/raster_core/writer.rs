@@ -8,10 +8,13 @@ use crate::emit::{if_, if_else, set, Module};
 use neo_golden::raster::RGB_BITS;
 
 /// The request arbitration: pixel writes first, then the write-back, then the loader's reads.
-pub(super) fn arbitration(m: &mut Module) {
+pub(super) fn arbitration(m: &mut Module, d: &Dims) {
+    let cb_bits = d.cb.max(1);
     m.blank();
     m.comment("Memory port: pixel writes first, then the write-back, then reads (fixed priority).");
     m.wire("pix_valid", 1).wire("wb_valid", 1).wire("rd_valid", 1);
+    m.comment("The pixel writer's SCU (subtile % SCUs) and its last row (see the pixel writer).");
+    m.wire("pix_scu", cb_bits).wire("pix_last_row", 1);
     m.wire_assign("pix_grant", 1, "pix_valid & mem_req_ready_i");
     m.wire_assign("wb_grant", 1, "wb_valid & ~pix_valid & mem_req_ready_i");
     m.wire_assign("rd_grant", 1, "rd_valid & ~pix_valid & ~wb_valid & mem_req_ready_i");
@@ -29,11 +32,11 @@ pub(super) fn pixels(m: &mut Module, d: &Dims) {
     ));
     m.comment("The subtile being written (the top bit: every subtile written) and its row.");
     m.reg("pix_sub_q", sub_w + 1).reg("pix_row_q", sb);
-    m.wire_assign("pix_scu", cb.max(1), if cb == 0 { lit(1, 0) } else { slice("pix_sub_q", cb - 1, 0) });
+    m.assign("pix_scu", if cb == 0 { lit(1, 0) } else { slice("pix_sub_q", cb - 1, 0) });
     m.wire_assign("pix_sx", side_w, slice("pix_sub_q", side_w - 1, 0));
     m.wire_assign("pix_sy", side_w, slice("pix_sub_q", sub_w - 1, side_w));
     m.wire_assign("pix_all_done", 1, slice("pix_sub_q", sub_w, sub_w));
-    m.wire_assign("pix_last_row", 1, format!("pix_row_q == {}", lit(sb, s as u64 - 1)));
+    m.assign("pix_last_row", format!("pix_row_q == {}", lit(sb, s as u64 - 1)));
     let mut rgb = lane("scu_rgb", nc - 1, px);
     for j in (0..nc - 1).rev() {
         rgb = format!("((pix_scu == {}) ? {} : {rgb})", lit(cb.max(1), j as u64), lane("scu_rgb", j, px));
