@@ -21,7 +21,7 @@ use crate::scu::{gaussian, random_gaussian};
 use neo_gen::units::raster_core::{feature_word_bits, space};
 use neo_gen::GenConfig;
 use neo_golden::formats::feature::{FeatureEntry, FeatureFormat};
-use neo_golden::raster::{raster_tile, RasterConfig};
+use neo_golden::raster::{raster_tile, RasterConfig, RGB_BITS};
 use neo_golden::sort::{SortEntry, SortFormat};
 use std::collections::{HashMap, VecDeque};
 
@@ -227,7 +227,7 @@ impl RasterCore {
                     let ok = off < tile * tile && off.is_multiple_of(side);
                     self.checker.protocol(c, ok, &format!("pixel write at 0x{addr:x} outside the tile"));
                     for k in 0..side {
-                        let bit = 24 * k as usize;
+                        let bit = RGB_BITS as usize * k as usize;
                         let px = |s: usize| get_bits(&w, bit + s, 8) as u8;
                         let prev = self.mem.pixels.insert(addr + k, ([px(0), px(8), px(16)], c));
                         self.checker.protocol(

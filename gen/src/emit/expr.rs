@@ -39,6 +39,29 @@ pub fn lane(name: &str, i: u32, width: u32) -> String {
     slice(name, (i + 1) * width - 1, i * width)
 }
 
+/// `x` (`from` bits) zero-extended to `to` bits: `{N'd0, x}` (`x` itself when the widths match).
+///
+/// # Panics
+/// When `to < from` (use [`resize`] to truncate).
+pub fn zext(x: &str, from: u32, to: u32) -> String {
+    assert!(to >= from, "zext {x}: {from} > {to} bits");
+    if to == from {
+        x.to_string()
+    } else {
+        format!("{{{}, {x}}}", lit(to - from, 0))
+    }
+}
+
+/// `x` (`from` bits, a net name) resized to `to` bits: zero-extended ([`zext`]) or truncated to
+/// its low bits.
+pub fn resize(x: &str, from: u32, to: u32) -> String {
+    if from > to {
+        format!("{x}[{}:0]", to - 1)
+    } else {
+        zext(x, from, to)
+    }
+}
+
 /// Bits needed to hold the values `0..=max` (at least 1).
 pub fn bits_for(max: u64) -> u32 {
     (64 - max.leading_zeros()).max(1)
@@ -68,6 +91,14 @@ mod tests {
         assert_eq!(slice("x", 3, 3), "x[3]");
         assert_eq!(lane("v", 0, 48), "v[47:0]");
         assert_eq!(lane("v", 2, 48), "v[143:96]");
+    }
+
+    #[test]
+    fn extension_and_resize() {
+        assert_eq!(zext("x", 4, 4), "x");
+        assert_eq!(zext("x", 4, 6), "{2'd0, x}");
+        assert_eq!(resize("x", 8, 3), "x[2:0]");
+        assert_eq!(resize("x", 3, 8), "{5'd0, x}");
     }
 
     #[test]

@@ -38,7 +38,7 @@
 //! quantised Gaussians.
 
 use crate::config::GenConfig;
-use crate::emit::expr::{bits_for, lit, slice};
+use crate::emit::expr::{bits_for, lit, slice, zext};
 use crate::emit::{if_, set, Item, Module};
 
 /// Module name.
@@ -99,42 +99,79 @@ fn sext(x: &str, from: u32, to: u32) -> String {
     }
 }
 
-/// `{{(to-from){1'b0}}, x}` (zero extension).
-fn zext(x: &str, from: u32, to: u32) -> String {
-    if to == from {
-        x.to_string()
-    } else {
-        format!("{{{}, {x}}}", lit(to - from, 0))
-    }
-}
-
 /// `|x|` of a `w`-bit two's complement expression (a net name).
 fn abs(x: &str, w: u32) -> String {
     format!("({x}[{}] ? ({} - {x}) : {x})", w - 1, lit(w, 0))
 }
 
+/// Counts and widths of the ITU datapath.
+#[derive(Clone, Copy)]
+struct Dims {
+    /// Subtiles per side and per tile.
+    n: u32,
+    nb: u32,
+    /// Subtile side (pixels).
+    s: u64,
+    /// Mean fraction bits `F` and the datapath's `G = F + 1`.
+    fm: u32,
+    g: u32,
+    /// Mean, extent and axis field bits.
+    mb: u32,
+    eb: u32,
+    ab: u32,
+    /// Datapath bits, step-product bits, tile-index bits, tag bits, `geom_i` bits.
+    w: u32,
+    kb: u32,
+    tb: u32,
+    tg: u32,
+    gb: u32,
+    /// Subtile size term `w = h` and centre step per subtile, in `2^-G` px.
+    half: u64,
+    step: u64,
+}
+
+impl Dims {
+    fn new(cfg: &GenConfig) -> Self {
+        let fmt = cfg.feature_format();
+        let r = cfg.raster_config();
+        let s = r.subtile as u64;
+        let fm = fmt.mean.frac as u32;
+        Dims {
+            n: r.subtiles_per_side(),
+            nb: r.subtiles_per_tile(),
+            s,
+            fm,
+            g: fm + 1,
+            mb: fmt.mean.bits as u32,
+            eb: fmt.extent.bits as u32,
+            ab: fmt.axis.bits as u32,
+            w: datapath_bits(cfg),
+            kb: step_bits(cfg),
+            tb: cfg.tile_bits,
+            tg: cfg.itu_tag_bits,
+            gb: geom_bits_lsb(cfg).0,
+            half: (s - 1) << fm,
+            step: (2 * s) << fm,
+        }
+    }
+}
+
 /// The ITU for `cfg` (see the module doc).
 pub fn module(cfg: &GenConfig) -> Module {
-    let fmt = cfg.feature_format();
-    let r = cfg.raster_config();
-    let n = r.subtiles_per_side();
-    let nb = r.subtiles_per_tile();
-    let s = r.subtile as u64;
-    let fm = fmt.mean.frac as u32;
-    let g = fm + 1;
-    let mb = fmt.mean.bits as u32;
-    let eb = fmt.extent.bits as u32;
-    let ab = fmt.axis.bits as u32;
-    let w = datapath_bits(cfg);
-    let kb = step_bits(cfg);
-    let tb = cfg.tile_bits;
-    let tg = cfg.itu_tag_bits;
-    let (gb, _) = geom_bits_lsb(cfg);
-    let half = (s - 1) << fm; // subtile size term w = h in 2^-G px
-    let step = (2 * s) << fm; // centre step per subtile in 2^-G px
-    let l = |v: u64| lit(w, v);
-
+    let d = Dims::new(cfg);
     let mut m = Module::new(NAME);
+    ports(&mut m, &d);
+    fields(&mut m, &d);
+    handshake(&mut m);
+    stage1(&mut m, cfg, &d);
+    stage2(&mut m, &d);
+    stage3(&mut m, &d);
+    m
+}
+
+/// The header comment and the ports.
+fn ports(m: &mut Module, d: &Dims) {
+    let Dims { nb, mb, w, tb, tg, gb, .. } = *d;
     m.doc(
         "Intersection Test Unit: subtile bitmap of one Gaussian's cutoff octagon in one tile, bit-exact with",
     );
@@ -156,7 +193,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.output_c("bitmap_o", nb, "bit sy*N+sx: subtile (sx, sy) may be touched");
     m.output_c("hit_o", 1, "OR of bitmap_o");
     m.output("tag_o", tg);
+}
 
+/// The fields of `geom_i` and `mean_i`.
+fn fields(m: &mut Module, d: &Dims) {
+    let Dims { mb, eb, ab, .. } = *d;
     // Field slices of geom_i.
     let mut off = 0;
     let mut field = |name: &str, width: u32, m: &mut Module| {
@@ -165,15 +206,18 @@ pub fn module(cfg: &GenConfig) -> Module {
     };
     m.blank();
     m.comment("Fields.");
-    field("ext_x", eb, &mut m);
-    field("ext_y", eb, &mut m);
-    field("axis_c", ab, &mut m);
-    field("axis_s", ab, &mut m);
-    field("ext_u", eb, &mut m);
-    field("ext_v", eb, &mut m);
+    field("ext_x", eb, m);
+    field("ext_y", eb, m);
+    field("axis_c", ab, m);
+    field("axis_s", ab, m);
+    field("ext_u", eb, m);
+    field("ext_v", eb, m);
     m.wire_assign("mean_x", mb, slice("mean_i", mb - 1, 0));
     m.wire_assign("mean_y", mb, slice("mean_i", 2 * mb - 1, mb));
+}
 
+/// The handshake: one global stage enable.
+fn handshake(m: &mut Module) {
     m.blank();
     m.comment("Handshake: one global stage enable.");
     m.reg("v1_q", 1).reg("v2_q", 1).reg("v3_q", 1);
@@ -183,7 +227,14 @@ pub fn module(cfg: &GenConfig) -> Module {
         vec![set("v1_q", lit(1, 0)), set("v2_q", lit(1, 0)), set("v3_q", lit(1, 0))],
         vec![if_("adv", vec![set("v1_q", "in_valid_i"), set("v2_q", "v1_q"), set("v3_q", "v2_q")])],
     );
+}
 
+/// Stage 1: offsets from the centre of subtile (0, 0) and the thresholds.
+fn stage1(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+    let Dims { s, fm, g, mb, eb, ab, w, tb, tg, half, .. } = *d;
+    let fmt = cfg.feature_format();
+    let r = cfg.raster_config();
+    let l = |v: u64| lit(w, v);
     // Stage 1.
     m.blank();
     m.comment(format!(
@@ -235,7 +286,12 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.reg(q, width);
     }
     m.seq_noreset(vec![if_("adv", s1.iter().map(|(q, _, d)| set(*q, *d)).collect())]);
+}
 
+/// Stage 2: the x / y tests per column / row and the U / V projections.
+fn stage2(m: &mut Module, d: &Dims) {
+    let Dims { n, w, kb, tg, step, .. } = *d;
+    let l = |v: u64| lit(w, v);
     // Stage 2.
     m.blank();
     m.comment(format!(
@@ -271,7 +327,12 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.reg(q, width);
     }
     m.seq_noreset(vec![if_("adv", s2.iter().map(|(q, _, d)| set(*q, *d)).collect())]);
+}
 
+/// Stage 3: the U / V windows per row and the bitmap.
+fn stage3(m: &mut Module, d: &Dims) {
+    let Dims { n, nb, w, kb, tg, step, .. } = *d;
+    let l = |v: u64| lit(w, v);
     // Stage 3.
     m.blank();
     m.comment(format!(
@@ -348,7 +409,6 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.assign("bitmap_o", "bitmap3_q");
     m.assign("hit_o", "|bitmap3_q");
     m.assign("tag_o", "tag3_q");
-    m
 }
 
 #[cfg(test)]

@@ -13,6 +13,8 @@
 //! | `neo_scu_blend` | SCU lane blend: a pixel's new T, colour, done bit       | no        |
 //! | `neo_scu_pixel` | SCU pixel: state, saved states, output colour           | no        |
 //! | `neo_scu`       | Subtile Compute Unit: alpha blending of one subtile     | yes       |
+//! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
+//! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
 
 pub mod bsu;
@@ -65,6 +67,8 @@ pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
         scu::blend::module(cfg),
         scu::pixel::module(cfg),
         scu::module(cfg),
+        raster_core::loader::module(cfg),
+        raster_core::feeder::module(cfg),
         raster_core::module(cfg),
     ];
     for m in &mut all {

@@ -40,7 +40,7 @@
 //! responses are always accepted); the MSU+ output is written to memory.
 
 use crate::config::GenConfig;
-use crate::emit::expr::{bits_for, hex, lane, lit};
+use crate::emit::expr::{bits_for, hex, lane, lit, resize};
 use crate::emit::{conns, if_, if_else, set, Item, Module, Stmt};
 
 /// Module name.
@@ -70,15 +70,6 @@ pub fn mem_len_bits(cfg: &GenConfig) -> u32 {
     bits_for(cfg.burst as u64)
 }
 
-/// `x` (`from` bits) resized to `to` bits (zero-extended or truncated).
-fn resize(x: &str, from: u32, to: u32) -> String {
-    match from.cmp(&to) {
-        std::cmp::Ordering::Equal => x.to_string(),
-        std::cmp::Ordering::Greater => format!("{x}[{}:0]", to - 1),
-        std::cmp::Ordering::Less => format!("{{{}, {x}}}", lit(to - from, 0)),
-    }
-}
-
 /// The chunk buffers: (instance suffix, write-enable expression, write address, write data).
 fn buffers(da: u32, dc: u32) -> Vec<(&'static str, String, String, String)> {
     let ser_addr = resize("ser_cnt_q", dc, da);
@@ -100,28 +91,103 @@ fn buffers(da: u32, dc: u32) -> Vec<(&'static str, String, String, String)> {
     ]
 }
 
+/// Counts and widths of the Sorting Core, from the configuration.
+#[derive(Clone, Copy)]
+struct Dims {
+    /// BSU width (lanes).
+    n: u32,
+    /// Entry bits.
+    w: u32,
+    /// Chunk entries.
+    d: u64,
+    /// Buffer address bits.
+    da: u32,
+    /// Bits of 0..=chunk.
+    dc: u32,
+    /// Pass arithmetic bits (run, pair start: < 3 * chunk).
+    pw: u32,
+    /// Address bits.
+    aw: u32,
+    /// Length bits.
+    lw: u32,
+    /// Burst length bits.
+    bl: u32,
+    /// Burst entries.
+    burst: u64,
+    /// Outstanding read bursts.
+    mo: u64,
+    /// Tag pointer bits.
+    tw: u32,
+    /// Tag count bits.
+    tc: u32,
+    /// Lane index bits.
+    nl: u32,
+    /// The padding entry (packed).
+    pad: u64,
+    /// Vector bits (n entries).
+    vw: u32,
+}
+
+impl Dims {
+    fn new(cfg: &GenConfig) -> Self {
+        let n = cfg.bsu_width as u32;
+        let w = cfg.entry_bits();
+        let d = cfg.chunk as u64;
+        let dc = bits_for(d);
+        let mo = cfg.max_outstanding as u64;
+        Dims {
+            n,
+            w,
+            d,
+            da: bits_for(d - 1),
+            dc,
+            pw: dc + 2,
+            aw: cfg.addr_bits,
+            lw: cfg.len_bits,
+            bl: mem_len_bits(cfg),
+            burst: cfg.burst as u64,
+            mo,
+            tw: bits_for(mo - 1),
+            tc: bits_for(mo),
+            nl: bits_for(n as u64 - 1),
+            pad: cfg.format().pack(&cfg.format().padding()),
+            vw: n * w,
+        }
+    }
+}
+
+/// `bits'd0`.
+fn z(bits: u32) -> String {
+    lit(bits, 0)
+}
+
+/// `bits'd1`.
+fn one(bits: u32) -> String {
+    lit(bits, 1)
+}
+
 /// The Sorting Core for `cfg`.
 pub fn module(cfg: &GenConfig) -> Module {
-    let n = cfg.bsu_width as u32;
-    let w = cfg.entry_bits();
-    let d = cfg.chunk as u64;
-    let da = bits_for(d - 1); // buffer address
-    let dc = bits_for(d); // 0..=chunk
-    let pw = dc + 2; // pass arithmetic (run, pair start: < 3 * chunk)
-    let aw = cfg.addr_bits;
-    let lw = cfg.len_bits;
-    let bl = mem_len_bits(cfg);
-    let burst = cfg.burst as u64;
-    let mo = cfg.max_outstanding as u64;
-    let tw = bits_for(mo - 1); // tag pointer
-    let tc = bits_for(mo); // tag count
-    let nl = bits_for(n as u64 - 1); // lane index
-    let pad = cfg.format().pack(&cfg.format().padding());
-    let vw = n * w;
-    let z = |bits: u32| lit(bits, 0);
-    let one = |bits: u32| lit(bits, 1);
-
+    let k = Dims::new(cfg);
     let mut m = Module::new(NAME);
+    ports(&mut m, cfg, &k);
+    registers(&mut m, &k);
+    commands(&mut m, &k);
+    instances(&mut m, &k);
+    read_issuer(&mut m, &k);
+    responses(&mut m, &k);
+    deserializer(&mut m, &k);
+    serializer(&mut m, &k);
+    sources(&mut m, &k);
+    output_side(&mut m, &k);
+    pass_control(&mut m, &k);
+    sequential(&mut m, &k);
+    m
+}
+
+/// Ports.
+fn ports(m: &mut Module, cfg: &GenConfig, k: &Dims) {
+    let Dims { n, w, aw, lw, bl, d, pad, .. } = *k;
     m.doc(format!(
         "Sorting Core: {}-input {} BSU, MSU+, 2 input + 2 work {}-entry chunk buffers; entries of {w} bits.",
         n,
@@ -158,8 +224,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.localparam("S_MERGE", 2, lit(2, S_MERGE));
     m.localparam("S_FINISH", 2, lit(2, S_FINISH));
     m.localparam("PAD", w, hex(w, pad));
+}
 
-    // ---------------------------------------------------------------- registers
+/// Registers.
+fn registers(m: &mut Module, k: &Dims) {
+    let Dims { da, dc, pw, aw, lw, bl, tw, tc, nl, mo, .. } = *k;
     m.blank();
     m.comment("LOAD engine: active, input buffer being loaded next, entries of the load.");
     m.reg("ld_act_q", 1).reg("ld_sel_q", 1).reg("ld_len_q", dc);
@@ -185,8 +254,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.reg("run_q", pw).reg("first_q", 1).reg("wsrc_q", 1).reg("pair_q", pw);
     m.comment("LOAD: deserializer (lanes, fill index, full), entries received, BSU output serializer.");
     m.reg("des_lane_q", nl).reg("des_full_q", 1).reg("rcv_q", dc).reg("ser_lane_q", nl).reg("ser_cnt_q", dc);
+}
 
-    // ---------------------------------------------------------------- commands
+/// Commands.
+fn commands(m: &mut Module, k: &Dims) {
+    let Dims { dc, pw, lw, d, .. } = *k;
     m.blank();
     m.wire_assign("st_idle", 1, "state_q == S_IDLE");
     m.wire_assign("st_pass", 1, "state_q == S_PASS");
@@ -218,8 +290,11 @@ pub fn module(cfg: &GenConfig) -> Module {
         1,
         format!("{{run_q[{}:0], 1'b0}} >= {}", pw - 2, resize("bk_len_q", dc, pw)),
     );
+}
 
-    // ---------------------------------------------------------------- instances
+/// Instances.
+fn instances(m: &mut Module, k: &Dims) {
+    let Dims { w, da, dc, vw, .. } = *k;
     m.blank();
     m.comment("BSU: fed by the deserializer during a load, drained lane by lane into the input buffer.");
     m.wire("bsu_in_ready", 1).wire("bsu_out_valid", 1).wire("bsu_out_ready", 1).wire("bsu_out_data", vw);
@@ -290,8 +365,11 @@ pub fn module(cfg: &GenConfig) -> Module {
             ]),
         );
     }
+}
 
-    // ---------------------------------------------------------------- read issuer
+/// Read issuer.
+fn read_issuer(m: &mut Module, k: &Dims) {
+    let Dims { dc, aw, lw, bl, tc, d, burst, mo, .. } = *k;
     m.blank();
     m.comment(
         "Read issuer (read port): bursts of up to the burst size; merge modes reserve FIFO space first.",
@@ -330,8 +408,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.assign("mem_wr_valid_o", "wr_want");
     m.assign("mem_wr_addr_o", format!("bk_dst_q + {}", resize("ocnt_q", lw, aw)));
     m.assign("mem_wr_data_o", "o_data");
+}
 
-    // ---------------------------------------------------------------- responses
+/// Responses.
+fn responses(m: &mut Module, k: &Dims) {
+    let Dims { bl, tc, .. } = *k;
     m.blank();
     m.comment("Responses: routed by the oldest outstanding burst's tag.");
     m.wire_assign("tag_head", bl + 1, "tag_mem[tag_rp_q]");
@@ -347,8 +428,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign("beat_load", 1, "rsp_fire & ld_act_q");
     m.wire_assign("beat_a", 1, "rsp_fire & st_merge & ~tag_head_b");
     m.wire_assign("beat_b", 1, "rsp_fire & st_merge & tag_head_b");
+}
 
-    // ---------------------------------------------------------------- deserializer
+/// Deserializer.
+fn deserializer(m: &mut Module, k: &Dims) {
+    let Dims { n, w, dc, nl, .. } = *k;
     m.blank();
     m.comment(
         "Deserializer: lanes start as padding; a vector is complete at lane n-1 or the chunk's last entry.",
@@ -373,8 +457,11 @@ pub fn module(cfg: &GenConfig) -> Module {
         Item::Assign { lhs: format!("des_data[g*{w} +: {w}]"), rhs: "lane_q".into() },
     ];
     m.gen_for("g", n, "g_des_lane", lane_items);
+}
 
-    // ---------------------------------------------------------------- serializer
+/// Serializer.
+fn serializer(m: &mut Module, k: &Dims) {
+    let Dims { n, w, dc, nl, .. } = *k;
     m.blank();
     m.comment(
         "Serializer: BSU output lanes to the input buffer, one per cycle; padding lanes are not written.",
@@ -391,8 +478,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     );
     m.assign("bsu_out_ready", "ser_fire & ser_vec_end");
     m.wire_assign("ld_done", 1, format!("ser_fire & ser_vec_end & (ser_cnt_q + {} == ld_len_q)", one(dc)));
+}
 
-    // ---------------------------------------------------------------- sources
+/// Sources.
+fn sources(m: &mut Module, k: &Dims) {
+    let Dims { dc, lw, .. } = *k;
     m.blank();
     m.comment("Stream sources: an empty stream is one beat with empty = last = 1. The first pass reads");
     m.comment("the command's input buffer, later passes the source work buffer, merges the input FIFOs.");
@@ -416,8 +506,11 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.wire_assign(format!("{s}_pop"), 1, format!("{s}_valid & {s}_ready"));
         m.wire_assign(format!("{s}_pop_ent"), 1, format!("{s}_pop & ~s{s}_none"));
     }
+}
 
-    // ---------------------------------------------------------------- output side
+/// Output side.
+fn output_side(m: &mut Module, k: &Dims) {
+    let Dims { da, dc, lw, .. } = *k;
     m.blank();
     m.comment("MSU+ output: to the other work buffer during non-final passes, else memory writes.");
     m.assign("o_ready", "~to_mem | o_empty | mem_wr_ready_i");
@@ -431,8 +524,11 @@ pub fn module(cfg: &GenConfig) -> Module {
         m.assign(format!("{b}_waddr"), waddr);
         m.assign(format!("{b}_wdata"), wdata);
     }
+}
 
-    // ---------------------------------------------------------------- pass control
+/// Pass control.
+fn pass_control(m: &mut Module, k: &Dims) {
+    let Dims { da, dc, pw, lw, .. } = *k;
     m.blank();
     m.comment("Pass control: next pair A = [pair, pair + alen), B = [pair + alen, pair + alen + blen).");
     let len_pw = resize("bk_len_q", dc, pw);
@@ -453,13 +549,26 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign("ib_clr", 1, "(pass_end & first_q) | bk_start_empty");
     m.assign("done_o", "st_finish");
     m.assign("done_len_o", "st_finish ? ocnt_q : done_len_q");
+}
 
-    // ---------------------------------------------------------------- sequential
+/// The control registers: one clocked block (every `_q` register resets to zero, the state
+/// machine to S_IDLE).
+fn sequential(m: &mut Module, k: &Dims) {
     m.blank();
     m.seq_noreset(vec![if_("rd_fire", vec![set("tag_mem[tag_wp_q]", "{rd_pick_b, mem_req_len_o}")])]);
     // Every control register resets to zero (the state machine to S_IDLE, which is 0).
     let resets = m.q_resets(&[("state_q", "S_IDLE")]);
     let mut body = Vec::new();
+    seq_load(&mut body, k);
+    seq_pass(&mut body, k);
+    seq_reads(&mut body, k);
+    seq_streams(&mut body, k);
+    m.seq(resets, body);
+}
+
+/// LOAD engine: command capture and completion, input-buffer flags.
+fn seq_load(body: &mut Vec<Stmt>, k: &Dims) {
+    let Dims { dc, lw, nl, .. } = *k;
     // LOAD engine: command capture and completion.
     body.push(Stmt::Comment("LOAD engine: takes chunk commands".into()));
     let ib_capture = |b: u32| {
@@ -486,6 +595,11 @@ pub fn module(cfg: &GenConfig) -> Module {
         "ib_full_q",
         "(ib_full_q | {ib_set & ld_sel_q, ib_set & ~ld_sel_q}) & ~{ib_clr & bk_sel_q, ib_clr & ~bk_sel_q}",
     ));
+}
+
+/// PASS engine: the state machine and the output counter.
+fn seq_pass(body: &mut Vec<Stmt>, k: &Dims) {
+    let Dims { n, da, dc, pw, lw, .. } = *k;
     // PASS engine.
     body.push(Stmt::Comment("PASS engine".into()));
     body.push(Stmt::Case(
@@ -561,6 +675,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     // Output counter (pass_end resets it in the case above; counting never coincides with it:
     // at pass_end every entry of the pass has been counted).
     body.push(if_("o_count", vec![set("ocnt_q", format!("ocnt_q + {}", one(lw)))]));
+}
+
+/// Read issuer, outstanding tags, responses and the merge FIFOs.
+fn seq_reads(body: &mut Vec<Stmt>, k: &Dims) {
+    let Dims { da, dc, aw, lw, bl, tw, tc, .. } = *k;
     // Read issuer.
     body.push(Stmt::Comment("read issuer".into()));
     body.push(if_(
@@ -620,6 +739,11 @@ pub fn module(cfg: &GenConfig) -> Module {
             format!("{f}_cnt_q + ({beat} ? {} : {}) - ({pop} ? {} : {})", one(dc), z(dc), one(dc), z(dc)),
         ));
     }
+}
+
+/// LOAD deserializer and serializer, and the stream sources.
+fn seq_streams(body: &mut Vec<Stmt>, k: &Dims) {
+    let Dims { da, dc, pw, lw, nl, .. } = *k;
     body.push(Stmt::Comment("LOAD: deserializer and serializer".into()));
     body.push(if_(
         "beat_load",
@@ -677,8 +801,6 @@ pub fn module(cfg: &GenConfig) -> Module {
             ),
         ],
     ));
-    m.seq(resets, body);
-    m
 }
 
 #[cfg(test)]

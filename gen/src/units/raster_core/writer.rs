@@ -1,0 +1,156 @@
+//! The raster core's memory port: the fixed-priority arbitration, the pixel writer (finished
+//! subtiles, one row of `S` pixels per write) and the table write-back.
+
+use super::{feature_field, feature_wire, space, Dims};
+use crate::config::GenConfig;
+use crate::emit::expr::{lane, lit, resize, slice};
+use crate::emit::{if_, if_else, set, Module};
+use neo_golden::raster::RGB_BITS;
+
+/// The request arbitration: pixel writes first, then the write-back, then the loader's reads.
+pub(super) fn arbitration(m: &mut Module, d: &Dims) {
+    let cb_bits = d.cb.max(1);
+    m.blank();
+    m.comment("Memory port: pixel writes first, then the write-back, then reads (fixed priority).");
+    m.wire("pix_valid", 1).wire("wb_valid", 1).wire("rd_valid", 1);
+    m.comment("The pixel writer's SCU (subtile % SCUs) and its last row (see the pixel writer).");
+    m.wire("pix_scu", cb_bits).wire("pix_last_row", 1);
+    m.wire_assign("pix_grant", 1, "pix_valid & mem_req_ready_i");
+    m.wire_assign("wb_grant", 1, "wb_valid & ~pix_valid & mem_req_ready_i");
+    m.wire_assign("rd_grant", 1, "rd_valid & ~pix_valid & ~wb_valid & mem_req_ready_i");
+    m.assign("mem_req_valid_o", "pix_valid | wb_valid | rd_valid");
+    m.assign("mem_rsp_ready_o", lit(1, 1));
+}
+
+/// The pixel writer: subtiles in order, SCU = subtile % SCUs.
+pub(super) fn pixels(m: &mut Module, d: &Dims) {
+    let (sub_w, sb, side_w, s, tl, rw, cb, nc) = (d.sub_w, d.sb, d.side_w, d.s, d.tl, d.rw, d.cb, d.nc);
+    let px = RGB_BITS * s * s;
+    m.blank();
+    m.comment(format!(
+        "Pixel writer: subtiles in order, SCU = subtile % {nc}, one row of {s} pixels per write."
+    ));
+    m.comment("The subtile being written (the top bit: every subtile written) and its row.");
+    m.reg("pix_sub_q", sub_w + 1).reg("pix_row_q", sb);
+    m.assign("pix_scu", if cb == 0 { lit(1, 0) } else { slice("pix_sub_q", cb - 1, 0) });
+    m.wire_assign("pix_sx", side_w, slice("pix_sub_q", side_w - 1, 0));
+    m.wire_assign("pix_sy", side_w, slice("pix_sub_q", sub_w - 1, side_w));
+    m.wire_assign("pix_all_done", 1, slice("pix_sub_q", sub_w, sub_w));
+    m.assign("pix_last_row", format!("pix_row_q == {}", lit(sb, s as u64 - 1)));
+    let mut rgb = lane("scu_rgb", nc - 1, px);
+    for j in (0..nc - 1).rev() {
+        rgb = format!("((pix_scu == {}) ? {} : {rgb})", lit(cb.max(1), j as u64), lane("scu_rgb", j, px));
+    }
+    m.wire_assign("pix_rgb", px, rgb);
+    m.assign("pix_valid", "~pix_all_done & scu_out_valid[pix_scu] & ~scu_taken[pix_scu]");
+    let pa = 2 * tl;
+    m.wire_assign(
+        "pix_off",
+        pa,
+        format!(
+            "{{pix_sy, pix_row_q, {}}} + {}",
+            lit(tl, 0),
+            resize(&format!("{{pix_sx, {}}}", lit(sb, 0)), side_w + sb, pa)
+        ),
+    );
+    m.wire_assign("pix_addr", d.aw, format!("pix_base_q + {}", resize("pix_off", pa, d.aw)));
+    let mut row = lane("pix_rgb", s - 1, rw);
+    for r in (0..s - 1).rev() {
+        row = format!("(pix_row_q == {}) ? {} : ({row})", lit(sb, r as u64), lane("pix_rgb", r, rw));
+    }
+    m.wire_assign("pix_data", rw, row);
+    m.seq(
+        vec![set("pix_sub_q", lit(sub_w + 1, 1 << sub_w)), set("pix_row_q", lit(sb, 0))],
+        vec![
+            if_("cmd_fire", vec![set("pix_sub_q", lit(sub_w + 1, 0)), set("pix_row_q", lit(sb, 0))]),
+            if_(
+                "pix_grant",
+                vec![
+                    set("pix_row_q", format!("pix_row_q + {}", lit(sb, 1))),
+                    if_("pix_last_row", vec![set("pix_sub_q", format!("pix_sub_q + {}", lit(sub_w + 1, 1)))]),
+                ],
+            ),
+        ],
+    );
+}
+
+/// The write-back of a segment once its group-0 results are in.
+pub(super) fn write_back(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+    let (fa, sl, kb, ib, bkb, gw) = (d.fa, d.sl, d.kb, d.ib, d.bkb, d.gw);
+    m.blank();
+    m.comment("Write-back of the segment once its group-0 results are in: {present & OR, present ? depth key : key, id}.");
+    m.reg("wb_busy_q", 1).reg("wb_ptr_q", fa).reg("wb_bank_q", bkb);
+    m.assign("wb_valid", "wb_busy_q");
+    m.wire_assign("wb_idx", d.fx, "{wb_bank_q, wb_ptr_q}");
+    m.wire_assign("wb_start", d.lw, "bank_start_q[wb_bank_q]");
+    m.comment("The entry's feature-word fields and its table word {key, id}.");
+    feature_wire(m, "wb_present", "fbuf[wb_idx]", (d.present(), 1));
+    // The key field takes the depth key (its low key_bits bits when it is wider).
+    let (dk_lsb, dk_w) = feature_field(cfg, "depth_key");
+    let dkw = dk_w.min(kb);
+    feature_wire(m, "wb_depth_key", "fbuf[wb_idx]", (dk_lsb, dkw));
+    m.wire_assign("wb_old_key", kb, slice("tbuf[wb_idx]", d.tw - 1, ib));
+    m.wire_assign("wb_id", ib, slice("tbuf[wb_idx]", ib - 1, 0));
+    m.wire_assign("wb_key", kb, format!("wb_present ? {} : wb_old_key", resize("wb_depth_key", dkw, kb)));
+    m.wire_assign(
+        "wb_entry",
+        d.eb,
+        resize("{(wb_present & hbuf[wb_idx]), wb_key, wb_id}", 1 + kb + ib, d.eb),
+    );
+    m.wire_assign(
+        "wb_addr",
+        d.aw,
+        format!("table_q + {} + {}", resize("wb_start", d.lw, d.aw), resize("wb_ptr_q", fa, d.aw)),
+    );
+    m.wire_assign("wb_next", sl, format!("{} + {}", resize("wb_ptr_q", fa, sl), lit(sl, 1)));
+    m.wire_assign("wb_end", 1, "wb_next == bank_len_q[wb_bank_q]");
+    m.wire_assign("res_seg_len", sl, "bank_len_q[res_bank]");
+    m.seq(
+        vec![set("wb_busy_q", lit(1, 0)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", lit(bkb, 0))],
+        vec![
+            if_(
+                format!(
+                    "res_fire & (res_group == {}) & res_seg_last & (res_seg_len != {})",
+                    lit(gw, 0),
+                    lit(sl, 0)
+                ),
+                vec![set("wb_busy_q", lit(1, 1)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", "res_bank")],
+            ),
+            if_(
+                "wb_grant",
+                vec![if_else(
+                    "wb_end",
+                    vec![set("wb_busy_q", lit(1, 0))],
+                    vec![set("wb_ptr_q", format!("wb_ptr_q + {}", lit(fa, 1)))],
+                )],
+            ),
+        ],
+    );
+}
+
+/// The request multiplexer.
+pub(super) fn requests(m: &mut Module, d: &Dims) {
+    let bl = d.bl;
+    m.blank();
+    m.comment("The granted request.");
+    m.assign("mem_req_write_o", "pix_valid | wb_valid");
+    m.assign(
+        "mem_req_space_o",
+        format!(
+            "pix_valid ? {} : (wb_valid ? {} : (rd_table ? {} : {}))",
+            lit(2, space::PIXEL),
+            lit(2, space::TABLE),
+            lit(2, space::TABLE),
+            lit(2, space::FEATURE)
+        ),
+    );
+    m.assign("mem_req_addr_o", "pix_valid ? pix_addr : (wb_valid ? wb_addr : rd_addr)");
+    m.assign(
+        "mem_req_len_o",
+        format!("pix_valid ? {} : (wb_valid ? {} : rd_len)", lit(bl, d.s as u64), lit(bl, 1)),
+    );
+    m.assign(
+        "mem_wdata_o",
+        format!("pix_valid ? {} : {}", resize("pix_data", d.rw, d.wdb), resize("wb_entry", d.eb, d.wdb)),
+    );
+}
