@@ -4,9 +4,9 @@
 //! drives `T` below the floor (the pixel is done, the Gaussian is not added) or adds `rgb w` to
 //! the colour and sets `T -= w`.
 
-use super::{pixel_bits, zx, ScuWidths};
+use super::{pixel_bits, ScuWidths};
 use crate::config::GenConfig;
-use crate::emit::expr::lit;
+use crate::emit::expr::{lit, zext};
 use crate::emit::Module;
 
 /// Module name.
@@ -48,7 +48,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign(
         "in_image",
         1,
-        format!("({} < cols_i) & ({} < rows_i)", zx("pixel_x", sb, sb + 1), zx("pixel_y", sb, sb + 1)),
+        format!("({} < cols_i) & ({} < rows_i)", zext("pixel_x", sb, sb + 1), zext("pixel_y", sb, sb + 1)),
     );
     m.comment("The state before this Gaussian.");
     m.wire_assign("t_old", t, format!("first_i ? (resume_i ? saved_t_i : {}) : t_i", lit(t, 1 << w.t_frac)));
@@ -60,7 +60,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m.wire_assign(
         "wp",
         ww,
-        format!("{} * {} + {}", zx("alpha_i", a, ww), zx("t_old", t, ww), lit(ww, 1 << (a - 1))),
+        format!("{} * {} + {}", zext("alpha_i", a, ww), zext("t_old", t, ww), lit(ww, 1 << (a - 1))),
     );
     m.wire_assign("wt", t, format!("wp[{}:{a}]", a + t - 1));
     m.wire_assign("tt", t, "t_old - wt");
@@ -76,7 +76,11 @@ pub fn module(cfg: &GenConfig) -> Module {
     let mut sums = Vec::new();
     for (ch, o) in CHANNELS.iter().zip(&old) {
         let sum = format!("{ch}_sum");
-        m.wire_assign(&sum, c, format!("{o} + {} * {}", zx(&format!("{ch}_i"), w.color, c), zx("wt", t, c)));
+        m.wire_assign(
+            &sum,
+            c,
+            format!("{o} + {} * {}", zext(&format!("{ch}_i"), w.color, c), zext("wt", t, c)),
+        );
         sums.push(sum);
     }
     m.assign("c_o", format!("add ? {{{}}} : c_old", rev(&sums)));

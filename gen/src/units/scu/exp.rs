@@ -2,9 +2,9 @@
 //! [`ExpTable`]; the ROM contents are generated from `ExpTable::table`). One per lane, in
 //! `neo_scu_lane`'s S3 -> S4 step.
 
-use super::{zx, ScuWidths};
+use super::ScuWidths;
 use crate::config::GenConfig;
-use crate::emit::expr::{bits_for, lit};
+use crate::emit::expr::{bits_for, lit, zext};
 use crate::emit::{set, Module, Stmt};
 use neo_golden::raster::ExpTable;
 
@@ -36,16 +36,16 @@ pub fn module(cfg: &GenConfig) -> Module {
     ));
     m.input_c("np_i", w.np, "-power, unsigned, power_frac fraction bits");
     m.output_c("e_o", ew, "exp, out_frac fraction bits");
-    m.wire_assign("prod", pw, format!("{} * {}", zx("np_i", w.np, pw), lit(pw, l2e)));
+    m.wire_assign("prod", pw, format!("{} * {}", zext("np_i", w.np, pw), lit(pw, l2e)));
     // y: the rounding shift of the product (width yw).
     let yw = pw + 1 - is;
     if is == 0 {
-        m.wire_assign("y", yw, zx("prod", pw, yw));
+        m.wire_assign("y", yw, zext("prod", pw, yw));
     } else {
         m.wire_assign(
             "prod_r",
             pw + 1,
-            format!("{} + {}", zx("prod", pw, pw + 1), lit(pw + 1, 1 << (is - 1))),
+            format!("{} + {}", zext("prod", pw, pw + 1), lit(pw + 1, 1 << (is - 1))),
         );
         m.wire_assign("y", yw, format!("prod_r[{}:{is}]", pw));
     }
@@ -71,8 +71,8 @@ pub fn module(cfg: &GenConfig) -> Module {
             iw,
             format!(
                 "{} * {} + {}",
-                zx("diff", ew, iw),
-                zx(&format!("y[{}:0]", ib - 1), ib, iw),
+                zext("diff", ew, iw),
+                zext(&format!("y[{}:0]", ib - 1), ib, iw),
                 lit(iw, 1 << (ib - 1))
             ),
         );

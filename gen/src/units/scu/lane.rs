@@ -5,9 +5,9 @@
 //! stage; the lane keeps only its own datapath registers (no reset: they are qualified by the
 //! beat's valid bit in `neo_scu`).
 
-use super::{exp, pixel_bits, zx, ScuWidths};
+use super::{exp, pixel_bits, ScuWidths};
 use crate::config::GenConfig;
-use crate::emit::expr::{bits_for, lit};
+use crate::emit::expr::{bits_for, lit, zext};
 use crate::emit::{conns, if_, set, Module, Stmt};
 
 /// Module name.
@@ -72,8 +72,8 @@ fn squares(m: &mut Module, w: &ScuWidths) {
             pxw,
             format!(
                 "{} + {}",
-                zx(&format!("origin_{axis}_i"), w.origin, pxw),
-                zx(&format!("pixel_{axis}"), sb, pxw)
+                zext(&format!("origin_{axis}_i"), w.origin, pxw),
+                zext(&format!("pixel_{axis}"), sb, pxw)
             ),
         );
         let mext = format!("{{{{{}{{{mean}[{}]}}}}, {mean}}}", d - w.mean, w.mean - 1);
@@ -85,7 +85,7 @@ fn squares(m: &mut Module, w: &ScuWidths) {
             format!("d{axis}[{}] ? (~d{axis}[{}:0] + {}) : d{axis}[{}:0]", d - 1, u - 1, lit(u, 1), u - 1),
         );
     }
-    let (ax, ay) = (zx("ax", u, 2 * u), zx("ay", u, 2 * u));
+    let (ax, ay) = (zext("ax", u, 2 * u), zext("ay", u, 2 * u));
     m.reg("sq_x_q", 2 * u).reg("sq_y_q", 2 * u).reg("sq_xy_q", 2 * u).reg("neg_xy_q", 1);
     m.item(on_en(vec![
         set("sq_x_q", format!("{ax} * {ax}")),
@@ -103,22 +103,22 @@ fn quadratic_form(m: &mut Module, w: &ScuWidths) {
     m.comment("S1 -> S2: q = a dx^2 + 2 b dx dy + c dy^2, exact.");
     m.wire_assign("b_neg", 1, format!("conic_b_i[{mt}]"));
     m.wire_assign("b_abs", mt + 1, format!("b_neg ? (~conic_b_i + {}) : conic_b_i", lit(mt + 1, 1)));
-    m.wire_assign("ta", tw, format!("{} * {}", zx("conic_a_i", mt, tw), zx("sq_x_q", 2 * u, tw)));
-    m.wire_assign("tc", tw, format!("{} * {}", zx("conic_c_i", mt, tw), zx("sq_y_q", 2 * u, tw)));
+    m.wire_assign("ta", tw, format!("{} * {}", zext("conic_a_i", mt, tw), zext("sq_x_q", 2 * u, tw)));
+    m.wire_assign("tc", tw, format!("{} * {}", zext("conic_c_i", mt, tw), zext("sq_y_q", 2 * u, tw)));
     m.wire_assign(
         "tb",
         tw + 1,
-        format!("{} * {}", zx("b_abs", mt + 1, tw + 1), zx("sq_xy_q", 2 * u, tw + 1)),
+        format!("{} * {}", zext("b_abs", mt + 1, tw + 1), zext("sq_xy_q", 2 * u, tw + 1)),
     );
     m.comment("2 |b| |dx dy| (the quadratic form's cross term is 2 b dx dy).");
-    m.wire_assign("tbx", qw, zx("{tb, 1'b0}", tw + 2, qw));
+    m.wire_assign("tbx", qw, zext("{tb, 1'b0}", tw + 2, qw));
     m.wire_assign(
         "q_d",
         qw,
         format!(
             "{} + {} + ((neg_xy_q ^ b_neg) ? (~tbx + {}) : tbx)",
-            zx("ta", tw, qw),
-            zx("tc", tw, qw),
+            zext("ta", tw, qw),
+            zext("tc", tw, qw),
             lit(qw, 1)
         ),
     );
@@ -135,7 +135,7 @@ fn neg_power(m: &mut Module, w: &ScuWidths) {
     m.wire_assign(
         "shm1",
         shw,
-        format!("{} + {}", lit(shw, w.sh0 as u64 - 1), zx("conic_exp_i", w.cexp, shw)),
+        format!("{} + {}", lit(shw, w.sh0 as u64 - 1), zext("conic_exp_i", w.cexp, shw)),
     );
     m.wire_assign("qt", qw, "$signed(q_q) >>> shm1");
     m.wire_assign("qt1", qw, format!("qt + {}", lit(qw, 1)));
@@ -153,7 +153,7 @@ fn alpha(m: &mut Module, w: &ScuWidths) {
     let a = w.alpha_frac;
     m.blank();
     m.comment("S4 -> S5: alpha = min(shr_round(o e), cap); blended iff alpha >= 1/255.");
-    m.wire_assign("oe", pw, format!("{} * {}", zx("opacity_i", ow, pw), zx("e_q", w.e, pw)));
+    m.wire_assign("oe", pw, format!("{} * {}", zext("opacity_i", ow, pw), zext("e_q", w.e, pw)));
     let aw;
     if w.alpha_shift > 0 {
         let sh = w.alpha_shift as u32;
@@ -166,7 +166,7 @@ fn alpha(m: &mut Module, w: &ScuWidths) {
         m.wire_assign("ar", aw, if sh == 0 { "oe".to_string() } else { format!("{{oe, {}}}", lit(sh, 0)) });
     }
     let aw2 = aw.max(a);
-    m.wire_assign("arx", aw2, zx("ar", aw, aw2));
+    m.wire_assign("arx", aw2, zext("ar", aw, aw2));
     m.wire_assign(
         "alpha_d",
         a,

@@ -46,7 +46,7 @@ pub mod pixel;
 mod top;
 
 use crate::config::GenConfig;
-use crate::emit::expr::{bits_for, lit};
+use crate::emit::expr::bits_for;
 use neo_golden::raster::scu::min_power_shift;
 
 pub use exp::NAME as EXP_NAME;
@@ -188,16 +188,6 @@ impl ScuWidths {
     /// Width of the pass counter (at least 1).
     pub fn pass_bits(&self) -> u32 {
         bits_for(self.passes as u64 - 1)
-    }
-}
-
-/// `{{n{1'b0}}, x}`: `x` (`w` bits) zero-extended to `to` bits.
-fn zx(x: &str, w: u32, to: u32) -> String {
-    assert!(to >= w, "zx {x}: {w} > {to}");
-    if to == w {
-        x.to_string()
-    } else {
-        format!("{{{}, {x}}}", lit(to - w, 0))
     }
 }
 

@@ -3,9 +3,9 @@
 //! lists that arrive in pieces) and its 8-bit output colour.
 
 use super::blend::{rev, CHANNELS};
-use super::{zx, ScuWidths};
+use super::ScuWidths;
 use crate::config::GenConfig;
-use crate::emit::expr::lit;
+use crate::emit::expr::{lit, zext};
 use crate::emit::{if_, set, Module};
 use neo_golden::raster::RGB_BITS;
 
@@ -80,7 +80,7 @@ fn convert(m: &mut Module, w: &ScuWidths, c: &str, name: &str) -> String {
     m.wire_assign(
         &x,
         xw,
-        format!("{{1'b0, {c}, {}}} - {} + {}", lit(OUT_BITS, 0), zx(c, w.c, xw), lit(xw, 1 << (k - 1))),
+        format!("{{1'b0, {c}, {}}} - {} + {}", lit(OUT_BITS, 0), zext(c, w.c, xw), lit(xw, 1 << (k - 1))),
     );
     let out = format!("{name}_u8");
     m.wire_assign(
