@@ -304,6 +304,18 @@ impl Module {
         self.assign(name, rhs)
     }
 
+    /// Names the fields of the packed bundle `bundle`: one `wire` per `(name, width)` field,
+    /// packed in order from bit 0 up, assigned its slice of the bundle. Returns the bundle's
+    /// width (the fields' total).
+    pub fn unpack_fields<S: AsRef<str>>(&mut self, bundle: &str, fields: &[(S, u32)]) -> u32 {
+        let mut lsb = 0;
+        for (name, width) in fields {
+            self.wire_assign(name.as_ref(), *width, expr::slice(bundle, lsb + width - 1, lsb));
+            lsb += width;
+        }
+        lsb
+    }
+
     /// A continuous assignment.
     pub fn assign(&mut self, lhs: impl Into<String>, rhs: impl Into<String>) -> &mut Self {
         self.item(Item::Assign { lhs: lhs.into(), rhs: rhs.into() })

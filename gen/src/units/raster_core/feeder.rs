@@ -122,11 +122,10 @@ fn route(m: &mut Module, d: &Dims) {
     );
     m.comment("The FIFO head's fields.");
     m.wire_assign("head", ew, format!("fifo[rd_ptr_q[{}:0]]", db - 1));
-    let mut lsb = 0;
-    for (name, width) in [("base", d.fx), ("mask", d.ni), ("resume", 1), ("last", 1), ("final", 1)] {
-        m.wire_assign(format!("head_{name}"), width, crate::emit::expr::slice("head", lsb + width - 1, lsb));
-        lsb += width;
-    }
+    m.unpack_fields(
+        "head",
+        &[("head_base", d.fx), ("head_mask", d.ni), ("head_resume", 1), ("head_last", 1), ("head_final", 1)],
+    );
 }
 
 /// The current element and the list state.

@@ -41,7 +41,7 @@ mod writer;
 use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, lit};
 use crate::emit::{if_, if_else, set, Item, Module};
-use crate::units::itu;
+use crate::units::{itu, scu};
 use neo_golden::raster::RGB_BITS;
 
 /// Module name.
@@ -366,7 +366,7 @@ fn scus(m: &mut Module, cfg: &GenConfig, d: &Dims) {
     m.comment("SCUs: SCU j blends subtile {group, j}; its feeder routes the ITU results and feeds it.");
     m.wire("feeder_full", nc).wire("feeder_busy", nc).wire("seg_taken", nc).wire("scu_taken", nc);
     m.wire("scu_out_valid", nc).wire("scu_rgb", nc * px).wire("scu_term", nc);
-    let w = crate::units::scu::ScuWidths::new(cfg);
+    let w = scu::ScuWidths::new(cfg);
     let mut items: Vec<Item> = Vec::new();
     let wire = |n: &str, wi: u32| Item::Wire { name: n.into(), width: wi };
     for (n, wi) in [
@@ -387,20 +387,8 @@ fn scus(m: &mut Module, cfg: &GenConfig, d: &Dims) {
         items.push(wire(n, wi));
     }
     items.push(Item::Comment("The beat's Gaussian: its feature-word fields.".into()));
-    let beat_fields = [
-        ("mean_x", "in_mean_x_i"),
-        ("mean_y", "in_mean_y_i"),
-        ("conic_a", "in_conic_a_i"),
-        ("conic_b", "in_conic_b_i"),
-        ("conic_c", "in_conic_c_i"),
-        ("conic_exp", "in_conic_exp_i"),
-        ("opacity", "in_opacity_i"),
-        ("red", "in_red_i"),
-        ("green", "in_green_i"),
-        ("blue", "in_blue_i"),
-    ];
     let mut fm = Module::new("fields");
-    for (fname, _) in beat_fields {
+    for fname in scu::GAUSSIAN_FIELDS {
         feature_wire(&mut fm, &format!("feat_{fname}"), "fbuf[feat_idx]", feature_field(cfg, fname));
     }
     items.extend(fm.items);
@@ -448,8 +436,8 @@ fn scus(m: &mut Module, cfg: &GenConfig, d: &Dims) {
     }));
     let mut conns =
         vec![s("clk_i", "clk_i"), s("rst_ni", "rst_ni"), s("in_valid_i", "valid"), s("in_ready_o", "ready")];
-    for (fname, port) in beat_fields {
-        conns.push((port.into(), format!("feat_{fname}")));
+    for fname in scu::GAUSSIAN_FIELDS {
+        conns.push((scu::gaussian_port(fname), format!("feat_{fname}")));
     }
     for (p, e) in [
         ("in_empty_i", "empty"),
@@ -469,7 +457,7 @@ fn scus(m: &mut Module, cfg: &GenConfig, d: &Dims) {
     conns.push(("out_ready_i".into(), sel("scu_taken")));
     conns.push(("out_rgb_o".into(), format!("scu_rgb[j*{px} +: {px}]")));
     items.push(Item::Instance(crate::emit::Instance {
-        module: crate::units::scu::NAME.into(),
+        module: scu::NAME.into(),
         name: "u_scu".into(),
         params: Vec::new(),
         conns,

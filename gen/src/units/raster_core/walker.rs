@@ -192,11 +192,7 @@ pub(super) fn results(m: &mut Module, d: &Dims) {
     m.seq_noreset(vec![if_("itu_in_ready", sh)]);
     m.comment("The result's sideband fields.");
     let last = format!("quad_info{}_q", itu::LATENCY);
-    let mut lsb = 0;
-    for (name, width) in fields {
-        m.wire_assign(name, width, slice(&last, lsb + width - 1, lsb));
-        lsb += width;
-    }
+    m.unpack_fields(&last, &fields);
     m.wire_assign("res_base", d.fx, "{res_bank, res_entry}");
     let ifl = d.inflight_bits();
     m.reg("inflight_q", ifl);

@@ -56,6 +56,16 @@ pub use top::module;
 pub const NAME: &str = "neo_scu";
 /// Pipeline stages after issue (S1..=S5).
 pub const STAGES: u32 = 5;
+
+/// The Gaussian's feature fields an SCU takes per beat, in port order: field `f` arrives on
+/// port `in_{f}_i` ([`gaussian_port`]). The raster core feeds them from its feature buffer.
+pub const GAUSSIAN_FIELDS: [&str; 10] =
+    ["mean_x", "mean_y", "conic_a", "conic_b", "conic_c", "conic_exp", "opacity", "red", "green", "blue"];
+
+/// The SCU input port of Gaussian field `field` (one of [`GAUSSIAN_FIELDS`]).
+pub fn gaussian_port(field: &str) -> String {
+    format!("in_{field}_i")
+}
 /// Width of the list counter that tags beats (more lists than fit in the pipeline).
 const LID_BITS: u32 = 3;
 

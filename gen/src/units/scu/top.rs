@@ -3,7 +3,7 @@
 //! (`g_pixel[k]`: `neo_scu_pixel`), subtile termination and the output register.
 
 use super::beat::Beat;
-use super::{blend, lane, pixel, ScuWidths, LID_BITS, NAME, STAGES};
+use super::{blend, gaussian_port, lane, pixel, ScuWidths, GAUSSIAN_FIELDS, LID_BITS, NAME, STAGES};
 use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, lane as part, lit};
 use crate::emit::{if_, if_else, set, Instance, Item, Module};
@@ -176,17 +176,10 @@ fn accepted_beat(m: &mut Module, w: &ScuWidths, beat: &Beat) {
     let pb = w.pass_bits();
     m.comment("b0_d: the accepted beat (S0's next beat).");
     m.wire("b0_d", beat.width);
+    for field in GAUSSIAN_FIELDS {
+        m.assign(beat.get("b0_d", field), gaussian_port(field));
+    }
     for (name, src) in [
-        ("mean_x", "in_mean_x_i"),
-        ("mean_y", "in_mean_y_i"),
-        ("conic_a", "in_conic_a_i"),
-        ("conic_b", "in_conic_b_i"),
-        ("conic_c", "in_conic_c_i"),
-        ("conic_exp", "in_conic_exp_i"),
-        ("opacity", "in_opacity_i"),
-        ("red", "in_red_i"),
-        ("green", "in_green_i"),
-        ("blue", "in_blue_i"),
         ("origin_x", "first_in_q ? in_origin_x_i : origin_x_in_q"),
         ("origin_y", "first_in_q ? in_origin_y_i : origin_y_in_q"),
         ("cols", "in_cols_i"),
