@@ -21,8 +21,8 @@ use crate::rng::Rng;
 use crate::stimulus::{sorted_stream, tile_entries};
 use neo_gen::GenConfig;
 use neo_golden::formats::latency::{
-    BsuUnit, ChunkPoint, GridPoint, ItuUnit, LatencyReport, MemoryModel, MergeDeletePoint, MergePoint,
-    MsuUnit, Raster, RasterCore, RtlConfig, ScuUnit, SortCore, SortCoreUnit, Units, SCHEMA,
+    BsuUnit, ChunkPoint, ItuUnit, LatencyReport, MemoryModel, MergeDeletePoint, MergePoint, MsuUnit, Raster,
+    RasterCore, RtlConfig, ScuUnit, SortCore, SortCoreUnit, Units, SCHEMA,
 };
 use neo_golden::sort::{merge_pass_count, SortEntry};
 use std::collections::BTreeMap;
@@ -331,18 +331,7 @@ pub fn raster_core_section(cfg: &GenConfig) -> RasterCore {
         feature_buffer: f,
         pixel_writes: (rc.tile * rc.tile / rc.subtile) as u64,
         memory: "ideal: always ready, first response beat 1 cycle after the request".into(),
-        grid: grid
-            .iter()
-            .map(|p| GridPoint {
-                entries: p.entries,
-                bits_per_gaussian: p.bits_per_gaussian,
-                set_bits: p.set_bits,
-                group_max_routed: p.group_max_routed,
-                cycles: p.cycles,
-                load_cycles: p.last_read,
-                artifact_cycles: p.set_bits,
-            })
-            .collect(),
+        grid,
     }
 }
 

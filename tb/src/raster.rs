@@ -21,6 +21,7 @@ use crate::scu::{gaussian, random_gaussian};
 use neo_gen::units::raster_core::{feature_word_bits, space};
 use neo_gen::GenConfig;
 use neo_golden::formats::feature::{FeatureEntry, FeatureFormat};
+use neo_golden::formats::latency::GridPoint;
 use neo_golden::raster::{raster_tile, RasterConfig, RGB_BITS};
 use neo_golden::sort::{SortEntry, SortFormat};
 use std::collections::{HashMap, VecDeque};
@@ -535,23 +536,6 @@ pub fn biker_tiles(path: &std::path::Path, res: u32, frames: usize, per_frame: u
     out
 }
 
-/// One measured point of the raster core's cycles per tile.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct GridPoint {
-    /// Table entries.
-    pub entries: u64,
-    /// Subtile bits set per Gaussian (by construction; `set_bits` is the measured total).
-    pub bits_per_gaussian: u64,
-    /// Set subtile bits of the whole table (golden bitmaps).
-    pub set_bits: u64,
-    /// Sum over the subtile groups of the largest per-SCU routed count.
-    pub group_max_routed: u64,
-    /// Cycles from command to `done_o` (ideal memory), output checked against golden.
-    pub cycles: u64,
-    /// Cycles from the command to the last read request (the loads).
-    pub last_read: u64,
-}
-
 /// Gaussian `i` of a grid table touching about `bits` subtiles (1, 4, 16 or 64) of tile `t`,
 /// spread over the subtiles round-robin; low opacity so no pixel terminates.
 fn grid_gaussian(t: [u32; 2], rc: &RasterConfig, i: u64, bits: u64) -> FeatureEntry {
@@ -572,7 +556,8 @@ fn grid_gaussian(t: [u32; 2], rc: &RasterConfig, i: u64, bits: u64) -> FeatureEn
 }
 
 /// The raster core's cycles per tile over a grid of table lengths and subtile bits per
-/// Gaussian, ideal memory (every output checked against golden).
+/// Gaussian, ideal memory (every output checked against golden), as the latency report's
+/// points.
 pub fn measure_grid(cfg: &GenConfig, seed: u64, lengths: &[u64], bits: &[u64]) -> Vec<GridPoint> {
     let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
     let mut core = RasterCore::new(cfg, seed, MemTiming::IDEAL);
@@ -598,7 +583,8 @@ pub fn measure_grid(cfg: &GenConfig, seed: u64, lengths: &[u64], bits: &[u64]) -
                 set_bits,
                 group_max_routed,
                 cycles: run.cycles,
-                last_read: run.last_read,
+                load_cycles: run.last_read,
+                artifact_cycles: set_bits,
             });
         }
     }
