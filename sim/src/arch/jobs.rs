@@ -2,6 +2,8 @@
 //! (timed by `latency.json`, [`crate::sortcmd`]) and the raster core per tile
 //! ([`super::raster_tile_cycles`]), each with its DRAM reads and writes.
 
+use std::ops::Range;
+
 use neo_golden::pipeline::Strategy;
 use neo_golden::sort::{merge_pass_count, Parity};
 
@@ -157,6 +159,20 @@ impl Model<'_> {
         }
     }
 
+    /// DPS passes `passes` of frame `f` over the `len`-entry table at `table`, each chunk read
+    /// and written back in place.
+    fn dps_in_place(&self, segs: &mut Vec<Segment>, len: u64, table: u64, f: usize, passes: Range<usize>) {
+        let (c, eb) = (self.cfg.pipeline.chunk as u64, self.eb);
+        for p in passes {
+            let mut off = 0;
+            for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
+                let acc = Access::seq(Stage::SortTable, table + off * eb, cmd.len_a * eb);
+                segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
+                off += cmd.len_a;
+            }
+        }
+    }
+
     pub(super) fn sort_job(&self, f: usize, t: usize, agent: usize, list_off: u64) -> Job {
         let tw = &self.wl.frames[f].tiles[t];
         let eb = self.eb;
@@ -201,14 +217,7 @@ impl Model<'_> {
                     Stage::SortTable,
                 );
                 let len = tw.dps_len as u64;
-                for p in 0..passes - 1 {
-                    let mut off = 0;
-                    for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
-                        let acc = Access::seq(Stage::SortTable, prev + off * eb, cmd.len_a * eb);
-                        segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
-                        off += cmd.len_a;
-                    }
-                }
+                self.dps_in_place(&mut segs, len, prev, f, 0..passes - 1);
                 let extra = (self.lat.merge_cycles(a, b, true) as f64 - a as f64).max(b as f64);
                 let (mut off, mut b_done, mut o_done) = (0u64, 0u64, 0u64);
                 for cmd in dps_pass(len, c, Parity::of(f as u64, passes - 1)) {
@@ -231,14 +240,7 @@ impl Model<'_> {
                 }
             } else {
                 let len = tw.dps_len as u64;
-                for p in 0..passes {
-                    let mut off = 0;
-                    for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
-                        let acc = Access::seq(Stage::SortTable, prev + off * eb, cmd.len_a * eb);
-                        segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
-                        off += cmd.len_a;
-                    }
-                }
+                self.dps_in_place(&mut segs, len, prev, f, 0..passes);
                 self.conv_sort(
                     &mut segs,
                     b,
