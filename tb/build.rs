@@ -203,7 +203,7 @@ fn fixture_units() -> Result<Vec<Unit>, String> {
 /// The Neo tops from the generator, with their Verilog from `neo_gen` or from `$NEO_HDL_DIR`.
 /// Also returns a description of the source for the tests to print.
 fn gen_units() -> Result<(Vec<Unit>, String), String> {
-    let cfg = neo_gen::GenConfig::default();
+    let cfg = neo_gen::EngineConfig::default();
     let hdl_dir = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()).map(PathBuf::from);
     // The lint waivers that go with the Verilog (hdl/lint.vlt), when there are any.
     let vlt_path = hdl_dir.clone().unwrap_or_else(|| PathBuf::from("../hdl")).join("lint.vlt");

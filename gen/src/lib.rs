@@ -5,11 +5,10 @@
 //! ([`interface::ModuleInterface`]), so the Verilator C++ shim and the Rust bindings in `tb/` are
 //! generated from the same description rather than written twice.
 //!
-//! Entry points: [`GenConfig`] (the parameters, [`GenConfig::default`] = the paper's Sorting
+//! Entry points: [`EngineConfig`] (the parameters, [`EngineConfig::default`] = the paper's Sorting
 //! Core), [`generate`] (every module as a [`VerilogFile`]), [`tops`] (the units with their own
 //! cosimulation model) and [`files_for`] (the files one top needs).
 
-pub mod config;
 pub mod emit;
 pub mod interface;
 pub mod output;
@@ -17,5 +16,5 @@ pub mod report;
 pub mod tools;
 pub mod units;
 
-pub use config::{ConfigError, GenConfig, Topology};
+pub use neo_golden::engine::{ConfigError, EngineConfig, SchedulerPolicy, Topology};
 pub use units::{files_for, generate, top_modules, tops, try_generate, VerilogFile};

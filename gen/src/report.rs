@@ -1,9 +1,9 @@
 //! Synthesis reports: Yosys cells and flip-flops per unit and per BSU topology
 //! (`neo gen --stats`, written to `reports/synth.json`).
 
-use crate::config::{GenConfig, Topology};
 use crate::tools::{glue_synth_stats, synth_stats, SynthStats, ToolError};
 use crate::units::{files_for, top_modules};
+use neo_golden::engine::{EngineConfig, Topology};
 use serde::Serialize;
 
 /// One synthesized unit of a configuration.
@@ -64,7 +64,7 @@ pub struct TopologyReport {
 #[derive(Clone, Debug, Serialize)]
 pub struct SynthReport {
     /// The configuration synthesized.
-    pub config: GenConfig,
+    pub config: EngineConfig,
     /// The Yosys script per top (`TOP` replaced by the module name).
     pub command: String,
     /// Per-unit results, in [`top_modules`] order.
@@ -100,7 +100,7 @@ pub const HIERARCHICAL: &[(&str, &[&str])] = &[(
 )];
 
 /// Synthesizes every top of `cfg` (flat; the raster core hierarchically, see [`Hierarchy`]).
-pub fn unit_reports(cfg: &GenConfig) -> Result<Vec<UnitReport>, ToolError> {
+pub fn unit_reports(cfg: &EngineConfig) -> Result<Vec<UnitReport>, ToolError> {
     let net = cfg.network();
     let mut reports: Vec<UnitReport> = parallel(top_modules().to_vec(), |top| {
         let bsu = top == crate::units::bsu::NAME;
@@ -145,10 +145,10 @@ pub fn unit_reports(cfg: &GenConfig) -> Result<Vec<UnitReport>, ToolError> {
 }
 
 /// Synthesizes the BSU of every topology valid at `cfg.bsu_width`.
-pub fn topology_reports(cfg: &GenConfig) -> Result<Vec<TopologyReport>, ToolError> {
-    let cfgs: Vec<GenConfig> = Topology::ALL
+pub fn topology_reports(cfg: &EngineConfig) -> Result<Vec<TopologyReport>, ToolError> {
+    let cfgs: Vec<EngineConfig> = Topology::ALL
         .iter()
-        .map(|&topology| GenConfig { topology, ..cfg.clone() })
+        .map(|&topology| EngineConfig { topology, ..cfg.clone() })
         .filter(|c| c.validate().is_ok())
         .collect();
     parallel(cfgs, |c| {

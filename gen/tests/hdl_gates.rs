@@ -8,7 +8,7 @@ use neo_gen::tools::{
     coarse_glue_synth_stats, coarse_synth_stats, icarus_compile, require_for_test, verilator_lint,
 };
 use neo_gen::units::VerilogFile;
-use neo_gen::{files_for, generate, top_modules, GenConfig, Topology};
+use neo_gen::{files_for, generate, top_modules, EngineConfig, Topology};
 use std::path::PathBuf;
 
 fn hdl_dir() -> PathBuf {
@@ -16,16 +16,22 @@ fn hdl_dir() -> PathBuf {
 }
 
 /// Non-default configurations every gate also covers.
-fn other_configs() -> Vec<(String, GenConfig)> {
-    let base = GenConfig::default();
+fn other_configs() -> Vec<(String, EngineConfig)> {
+    let base = EngineConfig::default();
     vec![
-        ("odd_even_merge".into(), GenConfig { topology: Topology::OddEvenMerge, ..base.clone() }),
-        ("best_16".into(), GenConfig { topology: Topology::Best16, ..base.clone() }),
-        ("bitonic k=3 scu_lanes=64".into(), GenConfig { register_every: 3, scu_lanes: 64, ..base.clone() }),
-        ("best_16 k=1".into(), GenConfig { topology: Topology::Best16, register_every: 1, ..base.clone() }),
+        ("odd_even_merge".into(), EngineConfig { topology: Topology::OddEvenMerge, ..base.clone() }),
+        ("best_16".into(), EngineConfig { topology: Topology::Best16, ..base.clone() }),
+        (
+            "bitonic k=3 scu_lanes=64".into(),
+            EngineConfig { register_every: 3, scu_lanes: 64, ..base.clone() },
+        ),
+        (
+            "best_16 k=1".into(),
+            EngineConfig { topology: Topology::Best16, register_every: 1, ..base.clone() },
+        ),
         (
             "bitonic n=8 k=10 chunk=64 narrow scu_lanes=4, raster 2 ITUs 8 SCUs 4 banks of 16".into(),
-            GenConfig {
+            EngineConfig {
                 bsu_width: 8,
                 register_every: 10,
                 chunk: 64,
@@ -48,7 +54,7 @@ fn other_configs() -> Vec<(String, GenConfig)> {
     ]
 }
 
-fn for_every_top(cfg: &GenConfig, what: &str, check: impl Fn(&[VerilogFile], &str) -> Result<(), String>) {
+fn for_every_top(cfg: &EngineConfig, what: &str, check: impl Fn(&[VerilogFile], &str) -> Result<(), String>) {
     let mut failures = Vec::new();
     for top in top_modules() {
         if let Err(e) = check(&files_for(cfg, top), top) {
@@ -60,7 +66,7 @@ fn for_every_top(cfg: &GenConfig, what: &str, check: impl Fn(&[VerilogFile], &st
 
 #[test]
 fn checked_in_hdl_is_the_generators_output() {
-    let files = generate(&GenConfig::default());
+    let files = generate(&EngineConfig::default());
     let diffs = check_dir(&hdl_dir(), &files).expect("read hdl/");
     let list: Vec<String> = diffs.iter().map(|d| format!("  hdl/{d}")).collect();
     assert!(
@@ -71,12 +77,12 @@ fn checked_in_hdl_is_the_generators_output() {
     assert!(hdl_dir().join("lint.vlt").exists(), "hdl/lint.vlt is missing");
 }
 
-fn lint(cfg: &GenConfig, what: &str) {
+fn lint(cfg: &EngineConfig, what: &str) {
     let vlt = hdl_dir().join("lint.vlt");
     for_every_top(cfg, what, |files, top| verilator_lint(files, top, Some(&vlt)).map_err(|e| e.to_string()));
 }
 
-fn no_latches(cfg: &GenConfig, what: &str) {
+fn no_latches(cfg: &EngineConfig, what: &str) {
     for_every_top(cfg, what, |files, top| {
         // Cores too large to flatten: their own logic, the units as black boxes (each unit is
         // checked as its own top).
@@ -100,7 +106,7 @@ fn every_top_is_lint_clean() {
     if !require_for_test("verilator", "every_top_is_lint_clean") {
         return;
     }
-    lint(&GenConfig::default(), "default");
+    lint(&EngineConfig::default(), "default");
 }
 
 #[test]
@@ -118,7 +124,7 @@ fn every_top_is_latch_free() {
     if !require_for_test("yosys", "every_top_is_latch_free") {
         return;
     }
-    no_latches(&GenConfig::default(), "default");
+    no_latches(&EngineConfig::default(), "default");
 }
 
 #[test]
@@ -156,7 +162,7 @@ fn icarus_compiles_every_top() {
     if !require_for_test("iverilog", "icarus_compiles_every_top") {
         return;
     }
-    for_every_top(&GenConfig::default(), "default", |files, top| {
+    for_every_top(&EngineConfig::default(), "default", |files, top| {
         icarus_compile(files, top).map_err(|e| e.to_string())
     });
 }

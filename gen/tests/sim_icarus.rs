@@ -7,7 +7,7 @@
 use neo_gen::tools::{require_for_test, TempFiles};
 use neo_gen::units::sort_core::mode;
 use neo_gen::units::VerilogFile;
-use neo_gen::{files_for, GenConfig, Topology};
+use neo_gen::{files_for, EngineConfig, Topology};
 use neo_golden::sort::{merge2, ChunkWork, SortEntry, SortFormat, Sorter};
 use std::process::Command;
 
@@ -81,7 +81,7 @@ fn tb_prelude(seed: u64, p_valid: u32, p_ready: u32) -> String {
 // ------------------------------------------------------------------------------------ BSU
 
 fn bsu_run(
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     vectors: &[Vec<SortEntry>],
     seed: u64,
     p_valid: u32,
@@ -140,7 +140,7 @@ fn bsu_run(
     (got, span)
 }
 
-fn bsu_vectors(cfg: &GenConfig, m: usize, seed: u64) -> Vec<Vec<SortEntry>> {
+fn bsu_vectors(cfg: &EngineConfig, m: usize, seed: u64) -> Vec<Vec<SortEntry>> {
     let mut rng = Rng(seed);
     let f = cfg.format();
     (0..m)
@@ -161,7 +161,7 @@ fn bsu_vectors(cfg: &GenConfig, m: usize, seed: u64) -> Vec<Vec<SortEntry>> {
         .collect()
 }
 
-fn check_bsu(cfg: &GenConfig, seed: u64) {
+fn check_bsu(cfg: &EngineConfig, seed: u64) {
     let vectors = bsu_vectors(cfg, 60, seed);
     let net = cfg.network();
     let expect: Vec<Vec<SortEntry>> = vectors
@@ -188,9 +188,12 @@ fn bsu_sorts_like_the_golden_network_under_backpressure() {
     if !require_for_test("iverilog", "bsu_sorts_like_the_golden_network_under_backpressure") {
         return;
     }
-    check_bsu(&GenConfig::default(), 11);
-    check_bsu(&GenConfig { topology: Topology::Best16, register_every: 3, ..GenConfig::default() }, 12);
-    check_bsu(&GenConfig { topology: Topology::OddEvenMerge, register_every: 1, ..GenConfig::default() }, 13);
+    check_bsu(&EngineConfig::default(), 11);
+    check_bsu(&EngineConfig { topology: Topology::Best16, register_every: 3, ..EngineConfig::default() }, 12);
+    check_bsu(
+        &EngineConfig { topology: Topology::OddEvenMerge, register_every: 1, ..EngineConfig::default() },
+        13,
+    );
 }
 
 // ------------------------------------------------------------------------------------ MSU
@@ -221,7 +224,7 @@ type Streams = Vec<(Vec<SortEntry>, bool)>;
 /// Runs the merges back to back; returns the output streams (entries, empty flag) and the
 /// cycles of the first and the last output beat.
 fn msu_run(
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     merges: &[Merge],
     drop: bool,
     seed: u64,
@@ -321,7 +324,7 @@ fn msu_cases(f: SortFormat, seed: u64) -> Vec<Merge> {
     cases
 }
 
-fn check_msu(cfg: &GenConfig, drop: bool, seed: u64, p_valid: u32, p_ready: u32) {
+fn check_msu(cfg: &EngineConfig, drop: bool, seed: u64, p_valid: u32, p_ready: u32) {
     let cases = msu_cases(cfg.format(), seed);
     let (got, _) = msu_run(cfg, &cases, drop, seed, p_valid, p_ready);
     assert_eq!(got.len(), cases.len(), "one output stream per merge");
@@ -337,7 +340,7 @@ fn msu_merges_like_golden_merge2_under_backpressure() {
     if !require_for_test("iverilog", "msu_merges_like_golden_merge2_under_backpressure") {
         return;
     }
-    let cfg = GenConfig::default();
+    let cfg = EngineConfig::default();
     for (seed, drop) in [(21, false), (22, true), (23, true)] {
         check_msu(&cfg, drop, seed, 55, 60);
     }
@@ -350,7 +353,7 @@ fn msu_sustains_one_entry_per_cycle() {
     }
     // One long merge without invalid entries at full rate: the 500 output beats come in 500
     // consecutive cycles.
-    let cfg = GenConfig::default();
+    let cfg = EngineConfig::default();
     let f = cfg.format();
     let mut rng = Rng(31);
     let a = sorted((0..300).map(|_| entry(&mut rng, f, 1000, 100)).collect());
@@ -382,7 +385,7 @@ struct Cmd {
 }
 
 /// The golden effect of `cmds` on `mem`; returns the expected `done_len` of each command.
-fn golden_core(cfg: &GenConfig, mem: &mut [SortEntry], cmds: &[Cmd]) -> Vec<u64> {
+fn golden_core(cfg: &EngineConfig, mem: &mut [SortEntry], cmds: &[Cmd]) -> Vec<u64> {
     let mut sorter = Sorter::new(cfg.sort_config());
     let mut lens = Vec::new();
     for c in cmds {
@@ -410,7 +413,7 @@ fn golden_core(cfg: &GenConfig, mem: &mut [SortEntry], cmds: &[Cmd]) -> Vec<u64>
 /// flight), else only once every earlier command is done. Returns the memory, `done_len` per
 /// command and the cycle of each `done_o` pulse.
 fn core_run(
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     mem: &[SortEntry],
     cmds: &[Cmd],
     seed: u64,
@@ -516,7 +519,7 @@ fn core_run(
     (got, lens, done_at)
 }
 
-fn check_core(cfg: &GenConfig, seed: u64, p_valid: u32, p_ready: u32, back_to_back: bool) {
+fn check_core(cfg: &EngineConfig, seed: u64, p_valid: u32, p_ready: u32, back_to_back: bool) {
     let f = cfg.format();
     let c = cfg.chunk as u64;
     let mut rng = Rng(seed);
@@ -564,7 +567,7 @@ fn sort_core_matches_golden_under_backpressure() {
     if !require_for_test("iverilog", "sort_core_matches_golden_under_backpressure") {
         return;
     }
-    check_core(&GenConfig::default(), 41, 60, 55, false);
+    check_core(&EngineConfig::default(), 41, 60, 55, false);
 }
 
 #[test]
@@ -573,8 +576,8 @@ fn sort_core_back_to_back_commands_match_golden() {
         return;
     }
     // Every command offered as soon as the previous one was taken (loads overlap passes).
-    check_core(&GenConfig::default(), 43, 90, 70, true);
-    check_core(&GenConfig::default(), 44, 100, 100, true);
+    check_core(&EngineConfig::default(), 43, 90, 70, true);
+    check_core(&EngineConfig::default(), 44, 100, 100, true);
 }
 
 #[test]
@@ -582,7 +585,7 @@ fn sort_core_small_configuration_matches_golden() {
     if !require_for_test("iverilog", "sort_core_small_configuration_matches_golden") {
         return;
     }
-    let cfg = GenConfig {
+    let cfg = EngineConfig {
         bsu_width: 8,
         topology: Topology::OddEvenMerge,
         register_every: 10,
@@ -593,7 +596,7 @@ fn sort_core_small_configuration_matches_golden() {
         len_bits: 16,
         burst: 8,
         max_outstanding: 2,
-        ..GenConfig::default()
+        ..EngineConfig::default()
     };
     check_core(&cfg, 42, 80, 90, false);
     check_core(&cfg, 45, 85, 60, true);
@@ -606,7 +609,7 @@ fn sort_core_full_rate_chunk_sort_time() {
     }
     // A 256-entry chunk at full memory rate: load (256 + BSU latency), 4 buffer passes and the
     // final pass to memory (256 + a few cycles per merge each). The bound documents the schedule.
-    let cfg = GenConfig::default();
+    let cfg = EngineConfig::default();
     let f = cfg.format();
     let mut rng = Rng(51);
     let c = cfg.chunk as u64;
@@ -631,7 +634,7 @@ fn sort_core_back_to_back_chunks_overlap_loads_with_passes() {
     // chunk's load is hidden under the previous chunk's merge passes, so the interval between
     // `done_o` pulses is bounded by the MSU+ work (passes x entries, plus a few cycles per
     // merge), well under one command's latency (which adds the load of `c` entries).
-    let cfg = GenConfig::default();
+    let cfg = EngineConfig::default();
     let f = cfg.format();
     let mut rng = Rng(52);
     let c = cfg.chunk as u64;

@@ -6,6 +6,7 @@
 
 pub mod camera;
 pub mod cameras_json;
+pub mod engine;
 pub mod error;
 pub mod formats;
 pub mod image;

@@ -5,7 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use neo_gen::output::{check_dir, write_dir};
 use neo_gen::report::{table, topology_reports, unit_reports, SynthReport, YOSYS_COMMAND};
-use neo_gen::GenConfig;
+use neo_gen::EngineConfig;
 use std::path::PathBuf;
 
 /// Arguments of `neo gen`.
@@ -34,8 +34,8 @@ pub struct GenArgs {
 /// Runs `neo gen`.
 pub fn run(a: GenArgs) -> Result<()> {
     let cfg = match &a.config {
-        Some(p) => GenConfig::from_json_file(p)?,
-        None => GenConfig::default(),
+        Some(p) => EngineConfig::from_json_file(p)?,
+        None => EngineConfig::default(),
     };
     let files = neo_gen::try_generate(&cfg)?;
     if a.check {

@@ -7,7 +7,7 @@ use crate::lanes::{pack_lanes, packed, unpack_lanes};
 use crate::models::NeoBsu;
 use crate::rng::Rng;
 use crate::stream::{Sink, Source};
-use neo_gen::GenConfig;
+use neo_gen::EngineConfig;
 use neo_golden::sort::SortEntry;
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -28,7 +28,7 @@ pub struct BsuRun {
 /// network of `cfg` and the valid/ready rules; panics at the first mismatch.
 pub fn run_checked(
     dut: &mut NeoBsu,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     seed: u64,
     vectors: &[Vec<SortEntry>],
     stall_pct: u32,
@@ -91,7 +91,7 @@ pub fn run_checked(
 ///
 /// # Panics
 /// At the first mismatch.
-pub fn throughput(cfg: &GenConfig, vectors: u64, seed: u64, threads: usize) -> Throughput {
+pub fn throughput(cfg: &EngineConfig, vectors: u64, seed: u64, threads: usize) -> Throughput {
     let threads = threads.max(1) as u64;
     let t = Instant::now();
     let parts: Vec<(u64, u64)> = std::thread::scope(|s| {
@@ -108,7 +108,7 @@ pub fn throughput(cfg: &GenConfig, vectors: u64, seed: u64, threads: usize) -> T
 }
 
 /// One model at full rate; returns (vectors checked, cycles).
-fn full_rate(cfg: &GenConfig, vectors: u64, seed: u64) -> (u64, u64) {
+fn full_rate(cfg: &EngineConfig, vectors: u64, seed: u64) -> (u64, u64) {
     let fmt = cfg.format();
     let net = cfg.network();
     let n = net.n;

@@ -21,7 +21,7 @@
 use crate::check::Checker;
 use crate::models::NeoSortCore;
 use crate::rng::Rng;
-use neo_gen::GenConfig;
+use neo_gen::EngineConfig;
 use neo_golden::sort::{conventional_sort_plan, merge2, Parity, SortEntry, SortFormat};
 use std::collections::{HashMap, VecDeque};
 use std::ops::Range;
@@ -170,7 +170,7 @@ pub struct Core {
 
 impl Core {
     /// A reset core whose memory follows `timing`.
-    pub fn new(cfg: &GenConfig, seed: u64, timing: MemTiming) -> Core {
+    pub fn new(cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Core {
         let mut rng = Rng::new(seed);
         let mut dut = NeoSortCore::new();
         dut.set_cmd_valid_i(false);
@@ -464,7 +464,12 @@ pub mod layout {
 
 /// (a) Sorts one chunk (`entries.len() <= C`) with `SORT` and checks it against golden
 /// `full_sort` (one chunk: BSU vectors plus in-chunk merges). Returns the command's cost.
-pub fn sort_chunk_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry], mode: Mode) -> CmdResult {
+pub fn sort_chunk_checked(
+    core: &mut Core,
+    cfg: &EngineConfig,
+    entries: &[SortEntry],
+    mode: Mode,
+) -> CmdResult {
     assert!(entries.len() <= cfg.chunk, "one chunk at most");
     core.write_entries(layout::SRC, entries);
     core.clear(layout::DST..layout::DST + layout::REGION);
@@ -486,7 +491,7 @@ pub fn sort_chunk_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry
 /// `DST + k C`) with `mode` commands issued back to back, and checks every one against golden.
 pub fn sort_chunks_checked(
     core: &mut Core,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     chunks: &[Vec<SortEntry>],
     mode: Mode,
 ) -> QueueRun {
@@ -525,7 +530,7 @@ pub fn sort_chunks_checked(
 /// with an empty B), all issued as one back-to-back queue (the chunk SORTs overlap; each MERGE
 /// waits for the commands whose output it reads). Checks the result and returns the cycles from
 /// the first command's acceptance to the last `done_o`.
-pub fn full_sort_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry]) -> u64 {
+pub fn full_sort_checked(core: &mut Core, cfg: &EngineConfig, entries: &[SortEntry]) -> u64 {
     let c = cfg.chunk;
     let len = entries.len() as u64;
     core.write_entries(layout::SRC, entries);
@@ -571,7 +576,7 @@ pub fn full_sort_checked(core: &mut Core, cfg: &GenConfig, entries: &[SortEntry]
 /// and the cycles from the first command's acceptance to the last `done_o`.
 pub fn dps_pass_checked(
     core: &mut Core,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     table: &[SortEntry],
     parity: Parity,
 ) -> (Vec<SortEntry>, u64) {
@@ -629,7 +634,7 @@ pub fn merge_checked(core: &mut Core, a: &[SortEntry], b: &[SortEntry], drop_inv
 /// an unlimited capacity. Returns the new table.
 pub fn update_checked(
     core: &mut Core,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     prev: &[SortEntry],
     incoming: &[SortEntry],
     frame: u64,
@@ -660,7 +665,7 @@ pub const SLOT: u64 = 0x1000;
 /// golden output (golden `sort_chunk` of the first `min(len, C)` entries: the core clamps).
 pub fn chunk_cmd(
     core: &mut Core,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     slot: u64,
     entries: &[SortEntry],
     mode: Mode,

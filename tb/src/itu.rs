@@ -12,7 +12,7 @@ use crate::models::NeoItu;
 use crate::rng::Rng;
 use crate::stream::{Beat, Sink, Source};
 use neo_gen::units::itu::{geom_bits_lsb, mean_bits};
-use neo_gen::GenConfig;
+use neo_gen::EngineConfig;
 use neo_golden::formats::{quantize, FeatureEntry, FeatureFormat};
 use neo_golden::raster::subtile_bitmap;
 use neo_golden::raster::synth::{cov_from_axes, projected_from_cov};
@@ -30,7 +30,7 @@ pub struct ItuJob {
 
 impl ItuJob {
     /// The golden bitmap of this job.
-    pub fn expected(&self, cfg: &GenConfig) -> u64 {
+    pub fn expected(&self, cfg: &EngineConfig) -> u64 {
         subtile_bitmap(&self.entry, &cfg.feature_format(), self.tile[0], self.tile[1], &cfg.raster_config())
     }
 }
@@ -53,7 +53,7 @@ pub fn entry_words(e: &FeatureEntry, fmt: &FeatureFormat) -> Vec<u32> {
 }
 
 /// The input beat of a job: `mean_i`, `geom_i`, `tile_x_i`, `tile_y_i`, `tag_i`.
-pub fn job_beat(cfg: &GenConfig, job: &ItuJob, tag: u64) -> Beat {
+pub fn job_beat(cfg: &EngineConfig, job: &ItuJob, tag: u64) -> Beat {
     let words = entry_words(&job.entry, &cfg.feature_format());
     let (gb, glsb) = geom_bits_lsb(cfg);
     let tag_mask = if cfg.itu_tag_bits >= 64 { u64::MAX } else { (1u64 << cfg.itu_tag_bits) - 1 };
@@ -89,7 +89,7 @@ pub struct ItuRun {
 /// the input, `ready_pct` to the output. Resets the DUT first.
 pub fn run_checked(
     dut: &mut NeoItu,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     seed: u64,
     jobs: &[ItuJob],
     stall_pct: u32,
@@ -190,7 +190,7 @@ fn ext(rng: &mut Rng, fmt: &FeatureFormat) -> i32 {
 }
 
 /// A random tile: mostly small indices, sometimes anywhere in the `tile_bits` range.
-fn tile(rng: &mut Rng, cfg: &GenConfig) -> [u32; 2] {
+fn tile(rng: &mut Rng, cfg: &EngineConfig) -> [u32; 2] {
     let max = 1u64 << cfg.tile_bits;
     let mut t = || if rng.percent(70) { rng.below(max.min(32)) as u32 } else { rng.below(max) as u32 };
     [t(), t()]
@@ -210,7 +210,7 @@ fn mean_near(rng: &mut Rng, fmt: &FeatureFormat, origin: i64, reach: i64) -> i32
 
 /// `count` random jobs: a mix of arbitrary raw fields, random octagons around the tile, and
 /// quantised random Gaussians (needles to screen-fillers, all orientations).
-pub fn random_jobs(cfg: &GenConfig, rng: &mut Rng, count: usize) -> Vec<ItuJob> {
+pub fn random_jobs(cfg: &EngineConfig, rng: &mut Rng, count: usize) -> Vec<ItuJob> {
     let fmt = cfg.feature_format();
     let t = cfg.raster_config().tile as i64;
     (0..count)
@@ -264,7 +264,7 @@ pub fn random_jobs(cfg: &GenConfig, rng: &mut Rng, count: usize) -> Vec<ItuJob> 
 /// The directed hard cases, named: Gaussians on tile and subtile borders (exactly touching and
 /// one LSB short), needles along and across the axes and diagonals, screen-filling ones,
 /// Gaussians centred outside the tile, unbounded extents on each axis, and extreme raw values.
-pub fn directed_jobs(cfg: &GenConfig) -> Vec<(String, ItuJob)> {
+pub fn directed_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
     let fmt = cfg.feature_format();
     let f = fmt.mean.frac as u32;
     let ef = fmt.extent.frac as u32;
@@ -413,7 +413,7 @@ pub struct ItuTiming {
 }
 
 /// Measures [`ItuTiming`] with `jobs` random jobs, no stalls, output always ready.
-pub fn measure_timing(dut: &mut NeoItu, cfg: &GenConfig, seed: u64, jobs: usize) -> ItuTiming {
+pub fn measure_timing(dut: &mut NeoItu, cfg: &EngineConfig, seed: u64, jobs: usize) -> ItuTiming {
     let mut rng = Rng::new(seed);
     let one = random_jobs(cfg, &mut rng, 1);
     let r = run_checked(dut, cfg, seed, &one, 0, 100);

@@ -19,7 +19,7 @@ use crate::core::{layout, merge_cmd, queue_checked, sort_chunks_checked, Command
 use crate::models::{NeoBsu, NeoMsu};
 use crate::rng::Rng;
 use crate::stimulus::{sorted_stream, tile_entries};
-use neo_gen::GenConfig;
+use neo_gen::EngineConfig;
 use neo_golden::formats::latency::{
     BsuUnit, ChunkPoint, ItuUnit, LatencyReport, MemoryModel, MergeDeletePoint, MergePoint, MsuUnit, Raster,
     RasterCore, RtlConfig, ScuUnit, SortCore, SortCoreUnit, Units, SCHEMA,
@@ -33,7 +33,7 @@ const SEED: u64 = 0x4E45_4F5F_4C41_5431;
 /// BSU: (latency, initiation interval, vectors, cycles). Latency is the number of rising edges
 /// from the edge that accepts a vector to the first cycle its result is on `out_data_o` with
 /// `out_valid_o` high; II is measured over `vectors` back-to-back vectors.
-pub fn bsu_latency(cfg: &GenConfig) -> (u64, u64, u64, u64) {
+pub fn bsu_latency(cfg: &EngineConfig) -> (u64, u64, u64, u64) {
     let fmt = cfg.format();
     let mut dut = NeoBsu::new();
     dut.set_in_valid_i(false);
@@ -74,7 +74,7 @@ pub fn bsu_latency(cfg: &GenConfig) -> (u64, u64, u64, u64) {
 /// per output entry within a merge. Merge gap: idle output cycles between the last beat of the
 /// first merge and the first beat of the second (the end-of-merge flush). Entries and cycles
 /// are the totals over both merges.
-pub fn msu_latency(cfg: &GenConfig, len: usize) -> (u64, u64, u64, u64, u64) {
+pub fn msu_latency(cfg: &EngineConfig, len: usize) -> (u64, u64, u64, u64, u64) {
     let fmt = cfg.format();
     let mut rng = Rng::new(SEED ^ 1);
     // Per stream: the beats (entry, last) of merge 1 then merge 2.
@@ -151,7 +151,7 @@ fn stream_interval(done_at: &[u64]) -> u64 {
 
 /// Interval of `STREAM` chunk commands of `n` entries each, back to back with no gap (every
 /// output checked against golden).
-fn chunk_interval(core: &mut Core, cfg: &GenConfig, mode: Mode, n: u64, rng: &mut Rng) -> u64 {
+fn chunk_interval(core: &mut Core, cfg: &EngineConfig, mode: Mode, n: u64, rng: &mut Rng) -> u64 {
     let chunks: Vec<Vec<SortEntry>> =
         (0..STREAM).map(|_| tile_entries(&cfg.format(), rng, n as usize, false, 100)).collect();
     let q = sort_chunks_checked(core, cfg, &chunks, mode);
@@ -166,7 +166,13 @@ fn merge_interval(core: &mut Core, a: &[SortEntry], b: &[SortEntry], drop_invali
 }
 
 /// Cycles of one core command with the ideal memory, checked against golden on the way.
-fn core_cycles(core: &mut Core, cfg: &GenConfig, mode: Mode, a: &[SortEntry], b: &[SortEntry]) -> (u64, u64) {
+fn core_cycles(
+    core: &mut Core,
+    cfg: &EngineConfig,
+    mode: Mode,
+    a: &[SortEntry],
+    b: &[SortEntry],
+) -> (u64, u64) {
     let r = match mode {
         Mode::Sort | Mode::Dps => crate::core::sort_chunk_checked(core, cfg, a, mode),
         Mode::Merge => crate::core::merge_checked(core, a, b, false),
@@ -176,7 +182,7 @@ fn core_cycles(core: &mut Core, cfg: &GenConfig, mode: Mode, a: &[SortEntry], b:
 }
 
 /// The whole report (see [`LatencyReport`] for the schema).
-pub fn report(cfg: &GenConfig) -> LatencyReport {
+pub fn report(cfg: &EngineConfig) -> LatencyReport {
     let (latency, ii, vectors, cycles) = bsu_latency(cfg);
     let neo_bsu = BsuUnit { latency, ii, vectors, cycles };
     let (latency, ii, merge_gap, entries, cycles) = msu_latency(cfg, 64);
@@ -192,7 +198,7 @@ pub fn report(cfg: &GenConfig) -> LatencyReport {
     LatencyReport {
         schema: SCHEMA.into(),
         doc: doc(),
-        config: config.expect("GenConfig serialises with the fields RtlConfig types"),
+        config: config.expect("EngineConfig serialises with the fields RtlConfig types"),
         memory: MemoryModel { read_latency: 1, req_ready: "always".into(), rsp_gaps: "none".into() },
         units: Units {
             neo_bsu,
@@ -207,7 +213,7 @@ pub fn report(cfg: &GenConfig) -> LatencyReport {
 
 /// The `sort_core` section: chunk commands over a grid of sizes, merges over a grid of stream
 /// lengths (every output checked against golden).
-fn sort_core_section(cfg: &GenConfig, core: &mut Core) -> SortCore {
+fn sort_core_section(cfg: &EngineConfig, core: &mut Core) -> SortCore {
     let fmt = cfg.format();
     let bsu_w = cfg.bsu_width as u64;
     let mut rng = Rng::new(SEED ^ 2);
@@ -263,7 +269,7 @@ fn sort_core_section(cfg: &GenConfig, core: &mut Core) -> SortCore {
 /// The `doc` section: what each field measures, for a reader of the JSON.
 fn doc() -> BTreeMap<String, String> {
     [
-        ("config", "the neo_gen::GenConfig the measured RTL was generated from"),
+        ("config", "the neo_gen::EngineConfig the measured RTL was generated from"),
         ("memory", "the memory model used for sort_core: request always accepted, first read beat the cycle after the request, one beat per cycle"),
         ("units.*.latency", "rising edges from the edge that accepts an input to the first cycle its result is offered (out_valid_o high)"),
         ("units.*.ii", "initiation interval: cycles between accepted inputs (BSU: vectors; MSU+: output entries) at full rate"),
@@ -291,7 +297,7 @@ fn doc() -> BTreeMap<String, String> {
 
 /// The `units.neo_scu` entry: latency, II and drain rate of the SCU (outputs checked against
 /// golden on the way).
-pub fn scu_unit(cfg: &GenConfig) -> ScuUnit {
+pub fn scu_unit(cfg: &EngineConfig) -> ScuUnit {
     let mut dut = crate::models::NeoScu::new();
     let t = crate::scu::measure_timing(&mut dut, cfg, SEED ^ 5);
     ScuUnit {
@@ -305,7 +311,7 @@ pub fn scu_unit(cfg: &GenConfig) -> ScuUnit {
 
 /// The `raster` section: the ITU's latency and II, measured on random jobs, and the raster
 /// core's grid (checked against golden on the way).
-pub fn raster_section(cfg: &GenConfig) -> Raster {
+pub fn raster_section(cfg: &EngineConfig) -> Raster {
     let jobs = 256usize;
     let mut dut = crate::models::NeoItu::new();
     let t = crate::itu::measure_timing(&mut dut, cfg, SEED ^ 3, jobs);
@@ -321,7 +327,7 @@ pub fn raster_section(cfg: &GenConfig) -> Raster {
 /// The `raster.core` section: `neo_raster_core` cycles per tile (command to `done_o`, ideal
 /// memory) over a grid of table lengths x subtile bits per Gaussian, and the shape of the
 /// measured core. No fit: the cycle model fits its formula to the grid.
-pub fn raster_core_section(cfg: &GenConfig) -> RasterCore {
+pub fn raster_core_section(cfg: &EngineConfig) -> RasterCore {
     let f = cfg.raster_feature_buffer as u64;
     let grid = crate::raster::measure_grid(cfg, SEED ^ 7, &[0, 16, 64, f, 2 * f, 8 * f], &[1, 4, 16, 64]);
     let rc = cfg.raster_config();
@@ -337,7 +343,7 @@ pub fn raster_core_section(cfg: &GenConfig) -> RasterCore {
 
 /// The report as the text written to `reports/latency.json` (pretty JSON, sorted keys and a
 /// final newline).
-pub fn report_text(cfg: &GenConfig) -> String {
+pub fn report_text(cfg: &EngineConfig) -> String {
     report(cfg).to_text()
 }
 

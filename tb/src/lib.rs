@@ -70,6 +70,6 @@ pub fn require_models(what: &str) -> bool {
 }
 
 /// The generator configuration the models in [`models`] were built from (the default one).
-pub fn config() -> neo_gen::GenConfig {
-    neo_gen::GenConfig::default()
+pub fn config() -> neo_gen::EngineConfig {
+    neo_gen::EngineConfig::default()
 }

@@ -13,7 +13,7 @@ use crate::lanes::packed;
 use crate::models::NeoMsu;
 use crate::rng::Rng;
 use crate::stream::{Beat, Sink, Source};
-use neo_gen::GenConfig;
+use neo_gen::EngineConfig;
 use neo_golden::sort::{merge2, SortEntry};
 use std::collections::VecDeque;
 
@@ -50,7 +50,7 @@ pub fn expected_beats(m: &Merge) -> Vec<OutBeat> {
 }
 
 /// Input beats of one stream, with `empty` filler beats inserted at probability `filler_pct`.
-fn stream_beats(cfg: &GenConfig, s: &[SortEntry], rng: &mut Rng, filler_pct: u32) -> Vec<Beat> {
+fn stream_beats(cfg: &EngineConfig, s: &[SortEntry], rng: &mut Rng, filler_pct: u32) -> Vec<Beat> {
     let fmt = cfg.format();
     let words = cfg.entry_bits().div_ceil(32) as usize;
     let mut beats = Vec::new();
@@ -91,7 +91,7 @@ pub struct MsuRun {
 /// ignored `empty` beats in the inputs.
 pub fn run_checked(
     dut: &mut NeoMsu,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     seed: u64,
     merges: &[Merge],
     stall_pct: u32,
@@ -198,7 +198,7 @@ pub fn run_checked(
 
 /// `count` random merges (lengths `0..=max_len`, random valid densities, ties and duplicates
 /// across A and B, both drop settings, empty streams).
-pub fn random_merges(cfg: &GenConfig, rng: &mut Rng, count: usize, max_len: usize) -> Vec<Merge> {
+pub fn random_merges(cfg: &EngineConfig, rng: &mut Rng, count: usize, max_len: usize) -> Vec<Merge> {
     use crate::stimulus::sorted_stream;
     let fmt = cfg.format();
     (0..count)

@@ -19,7 +19,7 @@ use crate::models::NeoRasterCore;
 use crate::rng::Rng;
 use crate::scu::{gaussian, random_gaussian};
 use neo_gen::units::raster_core::{feature_word_bits, space};
-use neo_gen::GenConfig;
+use neo_gen::EngineConfig;
 use neo_golden::formats::feature::{FeatureEntry, FeatureFormat};
 use neo_golden::formats::latency::GridPoint;
 use neo_golden::raster::{raster_tile, RasterConfig, RGB_BITS};
@@ -129,7 +129,7 @@ struct Ports {
 
 impl RasterCore {
     /// A reset core whose memory follows `timing`.
-    pub fn new(cfg: &GenConfig, seed: u64, timing: MemTiming) -> Self {
+    pub fn new(cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Self {
         let mut rng = Rng::new(seed);
         let mut dut = NeoRasterCore::new();
         dut.set_cmd_valid_i(false);
@@ -399,7 +399,7 @@ impl RasterCore {
 /// keys and valid bits, random depth keys, `culled_pct` percent of the ids without a feature.
 pub fn random_case(
     rng: &mut Rng,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     tile: [u32; 2],
     size: [u32; 2],
     n: usize,
@@ -558,7 +558,7 @@ fn grid_gaussian(t: [u32; 2], rc: &RasterConfig, i: u64, bits: u64) -> FeatureEn
 /// The raster core's cycles per tile over a grid of table lengths and subtile bits per
 /// Gaussian, ideal memory (every output checked against golden), as the latency report's
 /// points.
-pub fn measure_grid(cfg: &GenConfig, seed: u64, lengths: &[u64], bits: &[u64]) -> Vec<GridPoint> {
+pub fn measure_grid(cfg: &EngineConfig, seed: u64, lengths: &[u64], bits: &[u64]) -> Vec<GridPoint> {
     let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
     let mut core = RasterCore::new(cfg, seed, MemTiming::IDEAL);
     let t = [4, 6];

@@ -14,7 +14,7 @@ use crate::dut::Dut;
 use crate::models::NeoScu;
 use crate::rng::Rng;
 use crate::stream::{Beat, Sink, Source};
-use neo_gen::GenConfig;
+use neo_gen::EngineConfig;
 use neo_golden::formats::feature::{quantize, FeatureEntry, FeatureFormat};
 use neo_golden::raster::synth::{cov_from_axes, projected_from_cov};
 use neo_golden::raster::{shade_pixel, RasterConfig};
@@ -184,7 +184,7 @@ pub fn golden_pixels(list: &ScuList, fmt: &FeatureFormat, rc: &RasterConfig) -> 
 /// valid/ready rules; panics at the first mismatch.
 pub fn run_checked(
     dut: &mut NeoScu,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     seed: u64,
     lists: &[ScuList],
     stall_pct: u32,
@@ -198,7 +198,7 @@ pub fn run_checked(
 /// ([`interleaved_piece_beats`]; at most the SCU's state slots of lists).
 pub fn run_pieces_checked(
     dut: &mut NeoScu,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     seed: u64,
     lists: &[ScuList],
     pieces: usize,
@@ -215,7 +215,7 @@ pub fn run_pieces_checked(
 /// Sends `beats` (ending `lists`' subtiles in order) and checks the outputs.
 fn run_beats_checked(
     dut: &mut NeoScu,
-    cfg: &GenConfig,
+    cfg: &EngineConfig,
     seed: u64,
     lists: &[ScuList],
     beats: Vec<Beat>,
@@ -402,7 +402,7 @@ pub struct ScuTiming {
 
 /// Runs one list at full rate; returns the cycle out_valid_o first rises and the cycle of every
 /// input transfer. Checks the pixels against golden.
-fn timed(dut: &mut NeoScu, cfg: &GenConfig, seed: u64, list: &ScuList) -> (u64, Vec<u64>) {
+fn timed(dut: &mut NeoScu, cfg: &EngineConfig, seed: u64, list: &ScuList) -> (u64, Vec<u64>) {
     let fmt = cfg.feature_format();
     let rc = cfg.raster_config();
     let checker = Checker::new(NeoScu::NAME, seed);
@@ -446,7 +446,7 @@ fn timed(dut: &mut NeoScu, cfg: &GenConfig, seed: u64, list: &ScuList) -> (u64, 
 }
 
 /// Measures [`ScuTiming`] (every output checked against golden).
-pub fn measure_timing(dut: &mut NeoScu, cfg: &GenConfig, seed: u64) -> ScuTiming {
+pub fn measure_timing(dut: &mut NeoScu, cfg: &EngineConfig, seed: u64) -> ScuTiming {
     let fmt = cfg.feature_format();
     let side = cfg.raster_config().subtile;
     let origin = [64, 128];
@@ -482,7 +482,7 @@ pub fn measure_timing(dut: &mut NeoScu, cfg: &GenConfig, seed: u64) -> ScuTiming
 }
 
 /// Runs `cfg`'s lists and returns them with the run (for tests that build lists themselves).
-pub fn lists_of(rng: &mut Rng, cfg: &GenConfig, count: usize, max_len: usize) -> Vec<ScuList> {
+pub fn lists_of(rng: &mut Rng, cfg: &EngineConfig, count: usize, max_len: usize) -> Vec<ScuList> {
     let fmt = cfg.feature_format();
     let side = cfg.raster_config().subtile;
     (0..count).map(|_| random_list(rng, &fmt, side, max_len)).collect()

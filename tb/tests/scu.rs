@@ -23,7 +23,7 @@ mod cosim {
 
     /// The default configuration, with `scu_lanes` from NEO_SCU_LANES when set (to cosimulate
     /// RTL generated with other lanes through NEO_HDL_DIR).
-    fn scu_config() -> neo_gen::GenConfig {
+    fn scu_config() -> neo_gen::EngineConfig {
         let mut cfg = neo_tb::config();
         if let Some(l) = std::env::var("NEO_SCU_LANES").ok().and_then(|v| v.parse().ok()) {
             cfg.scu_lanes = l;

@@ -11,9 +11,9 @@
 //! when the next stage takes its content in the same cycle. (Bubbles inside the pipeline are not
 //! squeezed out while the output is stalled.) Data registers have no reset; valid bits do.
 
-use crate::config::GenConfig;
 use crate::emit::expr::{lane, lit};
 use crate::emit::{conns, if_, set, Module};
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_bsu";
@@ -28,7 +28,7 @@ fn stage_suffix(t: usize) -> String {
 }
 
 /// The BSU for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let net = cfg.network();
     let n = net.n as u32;
     let w = cfg.entry_bits();
@@ -118,13 +118,13 @@ pub fn module(cfg: &GenConfig) -> Module {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::Topology;
+    use neo_golden::engine::Topology;
 
     #[test]
     fn one_cmp_swap_per_comparator_and_one_register_per_stage() {
         for topology in Topology::ALL {
             for k in [1, 2, 3, 10] {
-                let cfg = GenConfig { topology, register_every: k, ..GenConfig::default() };
+                let cfg = EngineConfig { topology, register_every: k, ..EngineConfig::default() };
                 let v = module(&cfg).to_verilog();
                 let net = cfg.network();
                 assert_eq!(v.matches("neo_cmp_swap u_cmp_").count(), net.comparator_count());
@@ -148,7 +148,7 @@ mod tests {
 
     #[test]
     fn registers_follow_every_k_layers() {
-        let cfg = GenConfig { register_every: 3, ..GenConfig::default() };
+        let cfg = EngineConfig { register_every: 3, ..EngineConfig::default() };
         let v = module(&cfg).to_verilog();
         // Layers 0..=2 feed data_q; layer 3 reads it; the last layer (9) feeds data_q4.
         assert!(v.contains("data_q <= l2_data;"), "{v}");

@@ -2,15 +2,15 @@
 //! two asynchronous (combinational) read ports, register-file style. An SRAM macro with
 //! registered reads would need a one-entry prefetch in front of each read port.
 
-use crate::config::GenConfig;
 use crate::emit::expr::bits_for;
 use crate::emit::{if_, set, Module};
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_chunk_ram";
 
 /// The chunk buffer for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let w = cfg.entry_bits();
     let depth = cfg.chunk as u32;
     let aw = bits_for(depth as u64 - 1);

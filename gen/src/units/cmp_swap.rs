@@ -1,8 +1,8 @@
 //! `neo_cmp_swap`: one compare-exchange of the BSU network.
 
-use crate::config::GenConfig;
 use crate::emit::expr::slice;
 use crate::emit::Module;
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_cmp_swap";
@@ -10,7 +10,7 @@ pub const NAME: &str = "neo_cmp_swap";
 /// The compare-exchange: `lo_o` gets the entry first in THE ORDER, `hi_o` the other. It swaps
 /// only when `b_i` strictly precedes `a_i`, comparing the low `key_bits + id_bits` bits
 /// unsigned (the valid bit is payload), exactly as golden `Network::apply`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let w = cfg.entry_bits();
     let c = cfg.cmp_bits();
     let mut m = Module::new(NAME);

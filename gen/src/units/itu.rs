@@ -8,7 +8,7 @@
 //!   - `geom_i` = the contiguous ITU block of the entry, from `extent_x` to `extent_v`
 //!     (`{extent_v, extent_u, axis_s, axis_c, extent_y, extent_x}`, LSB first as in
 //!     [`neo_golden::formats::feature`]),
-//!   - `tile_x_i`, `tile_y_i`: tile indices (unsigned, [`GenConfig::tile_bits`]); the tile's
+//!   - `tile_x_i`, `tile_y_i`: tile indices (unsigned, [`EngineConfig::tile_bits`]); the tile's
 //!     first pixel is `(tile_x * tile, tile_y * tile)`,
 //!   - `tag_i`: a sideband tag returned unchanged with the result;
 //! - `out_valid_o` / `out_ready_i`: the result, in input order:
@@ -37,9 +37,9 @@
 //! input bit pattern, so the unit matches golden on arbitrary field values, not just on
 //! quantised Gaussians.
 
-use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, lit, slice, zext};
 use crate::emit::{if_, set, Item, Module};
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_itu";
@@ -48,12 +48,12 @@ pub const NAME: &str = "neo_itu";
 pub const LATENCY: u32 = 3;
 
 /// Width of `mean_i` for `cfg`.
-pub fn mean_bits(cfg: &GenConfig) -> u32 {
+pub fn mean_bits(cfg: &EngineConfig) -> u32 {
     2 * cfg.feature_format().mean.bits as u32
 }
 
 /// Width of `geom_i` for `cfg`, and its first bit in the packed entry.
-pub fn geom_bits_lsb(cfg: &GenConfig) -> (u32, u32) {
+pub fn geom_bits_lsb(cfg: &EngineConfig) -> (u32, u32) {
     let layout = cfg.feature_format().layout();
     let first = layout.iter().find(|f| f.name == "extent_x").expect("extent_x field");
     let last = layout.iter().find(|f| f.name == "extent_v").expect("extent_v field");
@@ -63,7 +63,7 @@ pub fn geom_bits_lsb(cfg: &GenConfig) -> (u32, u32) {
 /// Width `W` of the signed datapath: bounds every offset, projection and threshold for any
 /// input bits and any tile index below `2^tile_bits`, plus a sign bit and two bits of margin (stage 3 adds a
 /// projection, a threshold and a subtile step).
-pub fn datapath_bits(cfg: &GenConfig) -> u32 {
+pub fn datapath_bits(cfg: &EngineConfig) -> u32 {
     let fmt = cfg.feature_format();
     let r = cfg.raster_config();
     let fm = fmt.mean.frac as u32;
@@ -82,7 +82,7 @@ pub fn datapath_bits(cfg: &GenConfig) -> u32 {
 /// Width `K` of the stage-3 comparisons: the subtile steps `kc[k] = 2 S 2^mean.frac k C` (and
 /// `ks`) fit in `K - 1` signed bits, and the per-row windows are saturated to `K` bits (their
 /// extreme values then still compare the same way against every step).
-pub fn step_bits(cfg: &GenConfig) -> u32 {
+pub fn step_bits(cfg: &EngineConfig) -> u32 {
     let fmt = cfg.feature_format();
     let r = cfg.raster_config();
     let step = (2 * r.subtile as u64) << fmt.mean.frac;
@@ -131,7 +131,7 @@ struct Dims {
 }
 
 impl Dims {
-    fn new(cfg: &GenConfig) -> Self {
+    fn new(cfg: &EngineConfig) -> Self {
         let fmt = cfg.feature_format();
         let r = cfg.raster_config();
         let s = r.subtile as u64;
@@ -157,7 +157,7 @@ impl Dims {
 }
 
 /// The ITU for `cfg` (see the module doc).
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let d = Dims::new(cfg);
     let mut m = Module::new(NAME);
     ports(&mut m, &d);
@@ -230,7 +230,7 @@ fn handshake(m: &mut Module) {
 }
 
 /// Stage 1: offsets from the centre of subtile (0, 0) and the thresholds.
-fn stage1(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+fn stage1(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let Dims { s, fm, g, mb, eb, ab, w, tb, tg, half, .. } = *d;
     let fmt = cfg.feature_format();
     let r = cfg.raster_config();
@@ -417,7 +417,7 @@ mod tests {
 
     #[test]
     fn widths_follow_the_formats() {
-        let cfg = GenConfig::default();
+        let cfg = EngineConfig::default();
         assert_eq!(mean_bits(&cfg), 48);
         let (gb, lsb) = geom_bits_lsb(&cfg);
         assert_eq!(gb, 4 * 15 + 2 * 10);
@@ -427,13 +427,13 @@ mod tests {
         assert_eq!(lsb, 150, "after mean (48), conic (61), opacity (8) and colour (33)");
         let w = datapath_bits(&cfg);
         assert!((36..=44).contains(&w), "{w}");
-        let narrow = GenConfig { tile_bits: 4, ..cfg };
+        let narrow = EngineConfig { tile_bits: 4, ..cfg };
         assert!(datapath_bits(&narrow) <= w);
     }
 
     #[test]
     fn ports_and_subtile_generate_block() {
-        let v = module(&GenConfig::default()).to_verilog();
+        let v = module(&EngineConfig::default()).to_verilog();
         assert!(v.contains("output wire [63:0] bitmap_o"), "{v}");
         assert!(v.contains("for (gi = 0; gi < 64; gi = gi + 1) begin : g_subtile"), "{v}");
         assert!(v.contains("assign hit_o = |bitmap3_q;"), "{v}");

@@ -26,9 +26,9 @@ pub mod raster_core;
 pub mod scu;
 pub mod sort_core;
 
-use crate::config::{ConfigError, GenConfig};
 use crate::emit::Module;
 use crate::interface::ModuleInterface;
+use neo_golden::engine::{ConfigError, EngineConfig};
 
 /// One generated file: module `name` in `name.v`.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -52,7 +52,7 @@ pub fn top_modules() -> &'static [&'static str] {
 }
 
 /// Every module of the configuration, leaves first.
-pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
+pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     cfg.validate()?;
     let hash = cfg.hash();
     let mut all = vec![
@@ -78,15 +78,15 @@ pub fn modules(cfg: &GenConfig) -> Result<Vec<Module>, ConfigError> {
 }
 
 /// Every module as a file, or the configuration error.
-pub fn try_generate(cfg: &GenConfig) -> Result<Vec<VerilogFile>, ConfigError> {
+pub fn try_generate(cfg: &EngineConfig) -> Result<Vec<VerilogFile>, ConfigError> {
     Ok(modules(cfg)?.iter().map(|m| VerilogFile { name: m.name.clone(), text: m.to_verilog() }).collect())
 }
 
 /// Every module as a file (one module per file `NAME.v`), in a fixed order.
 ///
 /// # Panics
-/// When `cfg` is invalid ([`GenConfig::validate`]); use [`try_generate`] to get the error.
-pub fn generate(cfg: &GenConfig) -> Vec<VerilogFile> {
+/// When `cfg` is invalid ([`EngineConfig::validate`]); use [`try_generate`] to get the error.
+pub fn generate(cfg: &EngineConfig) -> Vec<VerilogFile> {
     try_generate(cfg).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -94,7 +94,7 @@ pub fn generate(cfg: &GenConfig) -> Vec<VerilogFile> {
 ///
 /// # Panics
 /// When `cfg` is invalid.
-pub fn tops(cfg: &GenConfig) -> Vec<ModuleInterface> {
+pub fn tops(cfg: &EngineConfig) -> Vec<ModuleInterface> {
     let all = modules(cfg).unwrap_or_else(|e| panic!("{e}"));
     top_modules()
         .iter()
@@ -107,7 +107,7 @@ pub fn tops(cfg: &GenConfig) -> Vec<ModuleInterface> {
 ///
 /// # Panics
 /// When `cfg` is invalid.
-pub fn files_for(cfg: &GenConfig, top: &str) -> Vec<VerilogFile> {
+pub fn files_for(cfg: &EngineConfig, top: &str) -> Vec<VerilogFile> {
     let all = modules(cfg).unwrap_or_else(|e| panic!("{e}"));
     let mut order: Vec<String> = Vec::new();
     fn visit(all: &[Module], name: &str, order: &mut Vec<String>) {
@@ -137,12 +137,12 @@ mod tests {
 
     #[test]
     fn one_file_per_module_named_after_it() {
-        let files = generate(&GenConfig::default());
+        let files = generate(&EngineConfig::default());
         for f in &files {
             assert!(f.text.contains(&format!("\nmodule {} ", f.name)), "{}", f.name);
             assert_eq!(f.text.matches("\nmodule ").count(), 1, "{}", f.name);
             let header = f.text.lines().next().unwrap();
-            let hash = format!("config {:#018x})", GenConfig::default().hash());
+            let hash = format!("config {:#018x})", EngineConfig::default().hash());
             assert!(
                 header.starts_with(crate::emit::HEADER) && header.contains(&hash),
                 "{}: {header}",
@@ -158,7 +158,7 @@ mod tests {
 
     #[test]
     fn files_for_is_the_transitive_closure() {
-        let cfg = GenConfig::default();
+        let cfg = EngineConfig::default();
         let names = |t: &str| files_for(&cfg, t).into_iter().map(|f| f.name).collect::<Vec<_>>();
         assert_eq!(names("neo_bsu"), ["neo_cmp_swap", "neo_bsu"]);
         assert_eq!(names("neo_msu"), ["neo_msu"]);
@@ -172,7 +172,7 @@ mod tests {
 
     #[test]
     fn tops_have_clock_and_reset() {
-        let t = tops(&GenConfig::default());
+        let t = tops(&EngineConfig::default());
         assert_eq!(t.iter().map(|i| i.name.as_str()).collect::<Vec<_>>(), top_modules());
         for i in &t {
             assert_eq!(i.ports[0].name, "clk_i");

@@ -30,15 +30,15 @@
 //! `a_ready_o`/`b_ready_o` depend combinationally on both inputs' `valid`/`data` and on
 //! `out_ready_i` (never the other way round); `out_valid_o` is registered.
 
-use crate::config::GenConfig;
 use crate::emit::expr::{lit, slice};
 use crate::emit::{if_, if_else, set, Module};
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_msu";
 
 /// The MSU+ for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let w = cfg.entry_bits();
     let c = cfg.cmp_bits();
     let mut m = Module::new(NAME);

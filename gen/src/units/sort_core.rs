@@ -39,9 +39,9 @@
 //! two input buffers used as circular FIFOs (space reserved before a read is issued, so
 //! responses are always accepted); the MSU+ output is written to memory.
 
-use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, hex, lane, lit, resize};
 use crate::emit::{conns, if_, if_else, set, Item, Module, Stmt};
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_sort_core";
@@ -66,7 +66,7 @@ const S_MERGE: u64 = 2;
 const S_FINISH: u64 = 3;
 
 /// Width of `mem_req_len_o` for `cfg` (holds `0..=burst`).
-pub fn mem_len_bits(cfg: &GenConfig) -> u32 {
+pub fn mem_len_bits(cfg: &EngineConfig) -> u32 {
     bits_for(cfg.burst as u64)
 }
 
@@ -129,7 +129,7 @@ struct Dims {
 }
 
 impl Dims {
-    fn new(cfg: &GenConfig) -> Self {
+    fn new(cfg: &EngineConfig) -> Self {
         let n = cfg.bsu_width as u32;
         let w = cfg.entry_bits();
         let d = cfg.chunk as u64;
@@ -167,7 +167,7 @@ fn one(bits: u32) -> String {
 }
 
 /// The Sorting Core for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let k = Dims::new(cfg);
     let mut m = Module::new(NAME);
     ports(&mut m, cfg, &k);
@@ -186,7 +186,7 @@ pub fn module(cfg: &GenConfig) -> Module {
 }
 
 /// Ports.
-fn ports(m: &mut Module, cfg: &GenConfig, k: &Dims) {
+fn ports(m: &mut Module, cfg: &EngineConfig, k: &Dims) {
     let Dims { n, w, aw, lw, bl, d, pad, .. } = *k;
     m.doc(format!(
         "Sorting Core: {}-input {} BSU, MSU+, 2 input + 2 work {}-entry chunk buffers; entries of {w} bits.",
@@ -810,7 +810,7 @@ mod tests {
 
     #[test]
     fn interface_has_the_documented_ports_and_widths() {
-        let cfg = GenConfig::default();
+        let cfg = EngineConfig::default();
         let i = module(&cfg).interface();
         let expect: &[(&str, Dir, u32)] = &[
             ("clk_i", Dir::In, 1),
@@ -843,7 +843,7 @@ mod tests {
 
     #[test]
     fn padding_and_widths_come_from_the_golden_format() {
-        let cfg = GenConfig { key_bits: 8, id_bits: 10, ..GenConfig::default() };
+        let cfg = EngineConfig { key_bits: 8, id_bits: 10, ..EngineConfig::default() };
         let v = module(&cfg).to_verilog();
         // {valid = 0, key = 0xff, id = 0x3ff} in 19 bits.
         assert!(v.contains("localparam [18:0] PAD = 19'h3ffff;"), "{v}");

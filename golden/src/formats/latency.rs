@@ -14,7 +14,7 @@
 //! {
 //!   "schema": "neo-latency/2",
 //!   "doc": { field: explanation, ... },
-//!   "config": { the neo_gen::GenConfig the RTL was generated from },
+//!   "config": { the neo_gen::EngineConfig the RTL was generated from },
 //!   "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
 //!   "units": {
 //!     "neo_bsu": { "latency", "ii", "vectors", "cycles" },
@@ -70,7 +70,7 @@ pub struct LatencyReport {
     pub raster: Option<Raster>,
 }
 
-/// The generator configuration (`neo_gen::GenConfig`) of the measured RTL: the fields a reader
+/// The generator configuration (`neo_gen::EngineConfig`) of the measured RTL: the fields a reader
 /// of the timing uses, typed, and the others as written.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RtlConfig {

@@ -9,16 +9,16 @@
 //! columns and rows, final / resume) and counts the segments whose last piece it has taken.
 
 use super::{Dims, FIFO_DEPTH};
-use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, lit, resize};
 use crate::emit::{if_, if_else, set, Module};
 use crate::units::scu;
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_raster_feeder";
 
 /// The feeder for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let d = Dims::new(cfg);
     let mut m = Module::new(NAME);
     m.doc(format!(
@@ -38,7 +38,7 @@ pub fn module(cfg: &GenConfig) -> Module {
     m
 }
 
-fn ports(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let w = scu::ScuWidths::new(cfg);
     m.param("SCU", 0).clock_reset();
     m.input_c("clear_i", 1, "command accepted: a new tile starts");
@@ -194,7 +194,7 @@ fn element(m: &mut Module, d: &Dims) {
 }
 
 /// Beats to the SCU and the list inputs.
-fn beats(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+fn beats(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let w = scu::ScuWidths::new(cfg);
     let ni = d.ni;
     let lb = bits_for(ni as u64 - 1);

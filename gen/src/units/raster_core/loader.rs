@@ -4,15 +4,15 @@
 //! always taken; they arrive in request order and are written at `rcv_idx_o`.
 
 use super::{Dims, L_FEAT, L_IDLE, L_TABLE};
-use crate::config::GenConfig;
 use crate::emit::expr::{lit, resize};
 use crate::emit::{if_, set, Module, Stmt};
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_raster_loader";
 
 /// The loader for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let d = Dims::new(cfg);
     let mut m = Module::new(NAME);
     m.doc("Raster core LOAD: per segment, table bursts then one feature read per entry, into the next free bank.");
@@ -86,7 +86,7 @@ fn segments(m: &mut Module, d: &Dims) {
     m.assign("seg_len_o", "seg_len_q");
 }
 
-fn reads(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+fn reads(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (sl, bl, aw, fa) = (d.sl, d.bl, d.aw, d.fa);
     m.blank();
     m.comment("Reads: table bursts (never past the segment's end), then one feature word per entry.");

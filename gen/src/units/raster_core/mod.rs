@@ -38,10 +38,10 @@ pub mod loader;
 mod walker;
 mod writer;
 
-use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, lit};
 use crate::emit::{if_, if_else, set, Item, Module};
 use crate::units::{itu, scu};
+use neo_golden::engine::EngineConfig;
 use neo_golden::raster::RGB_BITS;
 
 /// Module name.
@@ -68,18 +68,18 @@ const L_TABLE: u64 = 1;
 const L_FEAT: u64 = 2;
 
 /// Width of a feature word: the packed entry plus the `present` bit on top.
-pub fn feature_word_bits(cfg: &GenConfig) -> u32 {
+pub fn feature_word_bits(cfg: &EngineConfig) -> u32 {
     cfg.feature_format().bits_per_entry() + 1
 }
 
 /// Width of the command's image width / height: pixels of `2^tile_bits` tiles.
-pub fn image_bits(cfg: &GenConfig) -> u32 {
+pub fn image_bits(cfg: &EngineConfig) -> u32 {
     cfg.tile_bits + cfg.raster_config().tile.trailing_zeros()
 }
 
 /// Width of `mem_wdata_o`: a pixel row (`S` x [`RGB_BITS`] bits) or a table entry, whichever is
 /// wider.
-pub fn wdata_bits(cfg: &GenConfig) -> u32 {
+pub fn wdata_bits(cfg: &EngineConfig) -> u32 {
     (cfg.raster_config().subtile * RGB_BITS).max(cfg.entry_bits())
 }
 
@@ -136,7 +136,7 @@ pub(crate) struct Dims {
 }
 
 impl Dims {
-    fn new(cfg: &GenConfig) -> Self {
+    fn new(cfg: &EngineConfig) -> Self {
         let rc = cfg.raster_config();
         let (ni, nc) = (cfg.raster_itus as u32, cfg.raster_scus as u32);
         let nsub = rc.subtiles_per_tile();
@@ -199,7 +199,7 @@ impl Dims {
 }
 
 /// The `(lsb, width)` of feature field `name` in a feature word.
-fn feature_field(cfg: &GenConfig, name: &str) -> (u32, u32) {
+fn feature_field(cfg: &EngineConfig, name: &str) -> (u32, u32) {
     let layout = cfg.feature_format().layout();
     let f = layout.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("feature field {name}"));
     (f.lsb, f.width)
@@ -212,7 +212,7 @@ fn feature_wire(m: &mut Module, name: &str, word: &str, (lsb, width): (u32, u32)
 }
 
 /// The raster core for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let d = Dims::new(cfg);
     let mut m = Module::new(NAME);
     m.doc(format!(
@@ -359,7 +359,7 @@ fn load(m: &mut Module, d: &Dims) {
 }
 
 /// The SCUs, each behind its routing FIFO and feeder.
-fn scus(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+fn scus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let nc = d.nc;
     let px = RGB_BITS * d.s * d.s;
     m.blank();
@@ -537,7 +537,7 @@ mod tests {
 
     #[test]
     fn widths_and_ports() {
-        let cfg = GenConfig::default();
+        let cfg = EngineConfig::default();
         assert_eq!(feature_word_bits(&cfg), cfg.feature_format().bits_per_entry() + 1);
         assert_eq!(image_bits(&cfg), cfg.tile_bits + 6);
         assert_eq!(wdata_bits(&cfg), 192);
@@ -558,19 +558,24 @@ mod tests {
 
     #[test]
     fn unit_counts_follow_the_config() {
-        let cfg =
-            GenConfig { raster_itus: 2, raster_scus: 8, raster_feature_buffer: 64, ..GenConfig::default() };
+        let cfg = EngineConfig {
+            raster_itus: 2,
+            raster_scus: 8,
+            raster_feature_buffer: 64,
+            ..EngineConfig::default()
+        };
         cfg.validate().unwrap();
         let v = module(&cfg).to_verilog();
         assert!(v.contains("u < 2; u = u + 1") && v.contains("j < 8; j = j + 1"));
-        assert!(GenConfig { raster_scus: 3, ..GenConfig::default() }.validate().is_err());
-        assert!(GenConfig { raster_feature_buffer: 100, ..GenConfig::default() }.validate().is_err());
-        assert!(GenConfig { raster_feature_banks: 3, ..GenConfig::default() }.validate().is_err());
-        assert!(GenConfig { raster_feature_banks: 1, ..GenConfig::default() }.validate().is_err());
-        let four = GenConfig { raster_feature_banks: 4, raster_feature_buffer: 64, ..GenConfig::default() };
+        assert!(EngineConfig { raster_scus: 3, ..EngineConfig::default() }.validate().is_err());
+        assert!(EngineConfig { raster_feature_buffer: 100, ..EngineConfig::default() }.validate().is_err());
+        assert!(EngineConfig { raster_feature_banks: 3, ..EngineConfig::default() }.validate().is_err());
+        assert!(EngineConfig { raster_feature_banks: 1, ..EngineConfig::default() }.validate().is_err());
+        let four =
+            EngineConfig { raster_feature_banks: 4, raster_feature_buffer: 64, ..EngineConfig::default() };
         four.validate().unwrap();
         let v = module(&four).to_verilog();
         assert!(v.contains("reg  [3:0] bank_full_q;") && v.contains("fbuf [0:255]"));
-        assert!(GenConfig { raster_itus: 0, ..GenConfig::default() }.validate().is_err());
+        assert!(EngineConfig { raster_itus: 0, ..EngineConfig::default() }.validate().is_err());
     }
 }

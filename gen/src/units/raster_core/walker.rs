@@ -5,10 +5,10 @@
 //! a copy of the ITU pipeline, and group 0's results give every entry's valid bit (`hbuf`).
 
 use super::{feature_field, feature_wire, mask_lit, Dims};
-use crate::config::GenConfig;
 use crate::emit::expr::{lane, lit, resize, slice};
 use crate::emit::{if_, if_else, set, Instance, Item, Module};
 use crate::units::itu;
+use neo_golden::engine::EngineConfig;
 
 /// The walk position and the quad skipping.
 pub(super) fn walk(m: &mut Module, d: &Dims) {
@@ -89,7 +89,7 @@ pub(super) fn walk(m: &mut Module, d: &Dims) {
 }
 
 /// The ITUs, one per lane of the quad, in lockstep.
-pub(super) fn itus(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+pub(super) fn itus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (ni, nsub, groups, nc, fa) = (d.ni, d.nsub, d.groups, d.nc, d.fa);
     let tg = cfg.itu_tag_bits;
     m.blank();

@@ -2,9 +2,9 @@
 //! subtiles, one row of `S` pixels per write) and the table write-back.
 
 use super::{feature_field, feature_wire, space, Dims};
-use crate::config::GenConfig;
 use crate::emit::expr::{lane, lit, resize, slice};
 use crate::emit::{if_, if_else, set, Module};
+use neo_golden::engine::EngineConfig;
 use neo_golden::raster::RGB_BITS;
 
 /// The request arbitration: pixel writes first, then the write-back, then the loader's reads.
@@ -75,7 +75,7 @@ pub(super) fn pixels(m: &mut Module, d: &Dims) {
 }
 
 /// The write-back of a segment once its group-0 results are in.
-pub(super) fn write_back(m: &mut Module, cfg: &GenConfig, d: &Dims) {
+pub(super) fn write_back(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (fa, sl, kb, ib, bkb, gw) = (d.fa, d.sl, d.kb, d.ib, d.bkb, d.gw);
     m.blank();
     m.comment("Write-back of the segment once its group-0 results are in: {present & OR, present ? depth key : key, id}.");

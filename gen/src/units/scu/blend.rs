@@ -5,9 +5,9 @@
 //! the colour and sets `T -= w`.
 
 use super::{pixel_bits, ScuWidths};
-use crate::config::GenConfig;
 use crate::emit::expr::{lit, zext};
 use crate::emit::Module;
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_scu_blend";
@@ -16,7 +16,7 @@ pub const NAME: &str = "neo_scu_blend";
 pub(super) const CHANNELS: [&str; 3] = ["red", "green", "blue"];
 
 /// The blend for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let w = ScuWidths::new(cfg);
     let (t, c, a, sb) = (w.t, w.c, w.alpha_frac, w.side_bits);
     let mut m = Module::new(NAME);

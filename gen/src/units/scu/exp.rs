@@ -3,16 +3,16 @@
 //! `neo_scu_lane`'s S3 -> S4 step.
 
 use super::ScuWidths;
-use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, lit, zext};
 use crate::emit::{set, Module, Stmt};
+use neo_golden::engine::EngineConfig;
 use neo_golden::raster::ExpTable;
 
 /// Module name of the exp unit.
 pub const NAME: &str = "neo_scu_exp";
 
 /// The exp unit for `cfg`: combinational `e_o = ExpTable::eval(np_i)`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let b = cfg.raster_config().blend;
     let t = ExpTable::new(&b.exp, b.power_frac);
     let w = ScuWidths::new(cfg);
@@ -113,7 +113,7 @@ mod tests {
 
     #[test]
     fn exp_rom_holds_the_golden_table() {
-        let cfg = GenConfig::default();
+        let cfg = EngineConfig::default();
         let b = cfg.raster_config().blend;
         let t = ExpTable::new(&b.exp, b.power_frac);
         let v = module(&cfg).to_verilog();

@@ -6,15 +6,15 @@
 //! beat's valid bit in `neo_scu`).
 
 use super::{exp, pixel_bits, ScuWidths};
-use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, lit, zext};
 use crate::emit::{conns, if_, set, Module, Stmt};
+use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_scu_lane";
 
 /// The lane for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let w = ScuWidths::new(cfg);
     let mut m = Module::new(NAME);
     m.doc(

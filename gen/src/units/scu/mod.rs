@@ -13,8 +13,8 @@
 //! The beat bundle carried down the pipeline is laid out in `beat.rs`; its fields are named by
 //! `localparam` offsets in the emitted Verilog.
 //!
-//! Every width and constant comes from the golden formats ([`GenConfig::feature_format`],
-//! [`GenConfig::raster_config`]); nothing is retyped here.
+//! Every width and constant comes from the golden formats ([`EngineConfig::feature_format`],
+//! [`EngineConfig::raster_config`]); nothing is retyped here.
 //!
 //! # Stream protocol
 //! One input beat per Gaussian (`in_valid_i`/`in_ready_o`) with its feature-entry fields; a
@@ -45,8 +45,8 @@ pub mod lane;
 pub mod pixel;
 mod top;
 
-use crate::config::GenConfig;
 use crate::emit::expr::bits_for;
+use neo_golden::engine::EngineConfig;
 use neo_golden::raster::scu::min_power_shift;
 
 pub use exp::NAME as EXP_NAME;
@@ -135,7 +135,7 @@ pub struct ScuWidths {
 
 impl ScuWidths {
     /// The widths for `cfg`.
-    pub fn new(cfg: &GenConfig) -> Self {
+    pub fn new(cfg: &EngineConfig) -> Self {
         let fmt = cfg.feature_format();
         let rc = cfg.raster_config();
         let b = rc.blend;
@@ -149,7 +149,7 @@ impl ScuWidths {
         let d = mean + 3;
         let u = d - 1;
         let lanes = cfg.scu_lanes as u32;
-        GenConfig::validate(cfg).expect("valid configuration");
+        EngineConfig::validate(cfg).expect("valid configuration");
         let sh0 = min_power_shift(&fmt, &b);
         assert!(sh0 >= 1, "conic-to-power shift {sh0} < 1");
         ScuWidths {
@@ -212,7 +212,7 @@ mod tests {
 
     #[test]
     fn widths_follow_the_golden_formats() {
-        let w = ScuWidths::new(&GenConfig::default());
+        let w = ScuWidths::new(&EngineConfig::default());
         assert_eq!(w.passes * w.lanes, 64);
         assert_eq!(w.max_alpha, 4055);
         assert_eq!(w.sh0, 23);

@@ -4,9 +4,9 @@
 
 use super::blend::{rev, CHANNELS};
 use super::ScuWidths;
-use crate::config::GenConfig;
 use crate::emit::expr::{lit, zext};
 use crate::emit::{if_, set, Module};
+use neo_golden::engine::EngineConfig;
 use neo_golden::raster::RGB_BITS;
 
 /// Module name.
@@ -16,7 +16,7 @@ pub const NAME: &str = "neo_scu_pixel";
 const OUT_BITS: u32 = RGB_BITS / 3;
 
 /// The pixel for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let w = ScuWidths::new(cfg);
     let (t, c) = (w.t, w.c);
     let slots = 1u32 << w.row_bits;

@@ -4,13 +4,13 @@
 
 use super::beat::Beat;
 use super::{blend, gaussian_port, lane, pixel, ScuWidths, GAUSSIAN_FIELDS, LID_BITS, NAME, STAGES};
-use crate::config::GenConfig;
 use crate::emit::expr::{bits_for, lane as part, lit};
 use crate::emit::{if_, if_else, set, Instance, Item, Module};
+use neo_golden::engine::EngineConfig;
 use neo_golden::raster::RGB_BITS;
 
 /// The SCU for `cfg`.
-pub fn module(cfg: &GenConfig) -> Module {
+pub fn module(cfg: &EngineConfig) -> Module {
     let w = ScuWidths::new(cfg);
     let beat = Beat::new(&w);
     let mut m = Module::new(NAME);
@@ -421,7 +421,7 @@ mod tests {
     #[test]
     fn lanes_must_be_a_power_of_two_up_to_the_pixel_count() {
         for (lanes, ok) in [(1, false), (2, true), (3, false), (16, true), (64, true), (128, false)] {
-            let cfg = GenConfig { scu_lanes: lanes, ..GenConfig::default() };
+            let cfg = EngineConfig { scu_lanes: lanes, ..EngineConfig::default() };
             assert_eq!(cfg.validate().is_ok(), ok, "{lanes}");
             if ok {
                 let v = module(&cfg).to_verilog();
@@ -433,7 +433,7 @@ mod tests {
                 assert_eq!(v.matches("neo_scu_lane u_lane").count(), 1, "{lanes}");
             }
         }
-        let lane = lane::module(&GenConfig::default()).to_verilog();
+        let lane = lane::module(&EngineConfig::default()).to_verilog();
         assert_eq!(lane.matches(&format!("{} u_exp", exp::NAME)).count(), 1);
     }
 
@@ -441,7 +441,7 @@ mod tests {
     #[test]
     fn beat_registers_are_read_by_named_fields_only() {
         for lanes in [2, 16, 64] {
-            let cfg = GenConfig { scu_lanes: lanes, ..GenConfig::default() };
+            let cfg = EngineConfig { scu_lanes: lanes, ..EngineConfig::default() };
             let v = module(&cfg).to_verilog();
             for reg in ["b0_d", "b0_q", "d1_d", "d1_q", "d2_q", "d3_q", "d4_q", "d5_q"] {
                 for (k, _) in v.match_indices(&format!("{reg}[")) {
@@ -455,7 +455,7 @@ mod tests {
     /// The SCU and its submodules stay short enough to review.
     #[test]
     fn the_scu_fits_in_1500_lines() {
-        let cfg = GenConfig::default();
+        let cfg = EngineConfig::default();
         let lines: usize =
             [module(&cfg), lane::module(&cfg), blend::module(&cfg), pixel::module(&cfg), exp::module(&cfg)]
                 .iter()

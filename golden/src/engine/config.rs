@@ -1,11 +1,12 @@
-//! [`GenConfig`]: the parameters of the generated Sorting Core, read from JSON by
-//! `neo gen --config FILE`.
+//! [`EngineConfig`]: the one configuration of the Neo engine. Every count and size of the
+//! generated RTL (cores, units, buffers, widths, memory ports) lives here and nowhere else; it is
+//! read from JSON by `neo gen --config FILE` and the other commands that take `--config`.
 //!
 //! Widths, networks and padding are not re-derived here: they come from the golden model
-//! ([`neo_golden::sort`]), which is the single source of truth.
+//! ([`crate::sort`], [`crate::raster`]), which is the single source of truth.
 
-use neo_golden::error::InputError;
-use neo_golden::sort::{Network, SortConfig, SortFormat};
+use crate::error::InputError;
+use crate::sort::{Network, SortConfig, SortFormat};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -36,13 +37,33 @@ impl Topology {
     }
 }
 
-/// Parameters of the generated RTL. [`GenConfig::default`] is the paper's configuration.
+/// How the engine's frame controller spreads tiles over the cores (see docs/rtl.md "Engine").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SchedulerPolicy {
+    /// Tiles in index order, each to the lowest-numbered idle core.
+    FirstFree,
+    /// Tile `t` to sorting core `t mod N` and raster core `t mod M`.
+    RoundRobin,
+}
+
+impl SchedulerPolicy {
+    /// The name used in JSON and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            SchedulerPolicy::FirstFree => "first_free",
+            SchedulerPolicy::RoundRobin => "round_robin",
+        }
+    }
+}
+
+/// Parameters of the generated RTL. [`EngineConfig::default`] is the paper's configuration.
 ///
 /// JSON: an object with any subset of these fields (missing ones take the default), e.g.
 /// `{"topology": "best_16", "register_every": 3}`. Unknown fields are rejected.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct GenConfig {
+pub struct EngineConfig {
     /// BSU comparator network.
     pub topology: Topology,
     /// BSU width `n` (entries per vector): a power of two >= 2; 16 for `best_16`.
@@ -85,12 +106,31 @@ pub struct GenConfig {
     /// Raster core: feature-buffer banks (a power of two in 2..=8): the loader fills the next
     /// banks while the walk and the SCUs use the oldest.
     pub raster_feature_banks: usize,
+    /// Engine: Sorting Cores (`neo_sort_core` instances). 16 in the paper (Table 1).
+    pub sort_cores: usize,
+    /// Engine: Rasterization Cores (`neo_raster_core` instances). 4 in the paper.
+    pub raster_cores: usize,
+    /// Engine: how tiles are spread over the cores.
+    pub scheduler: SchedulerPolicy,
+    /// Engine: entries of one tile's table region in memory. A merged table longer than this
+    /// is cut to the nearest `table_capacity` entries and the overflow is reported.
+    pub table_capacity: usize,
+    /// Engine: AXI4 manager ports to memory (the memory channels).
+    pub mem_channels: usize,
+    /// Engine: AXI4 data width in bits (a power of two in 64..=1024).
+    pub axi_data_bits: u32,
+    /// Engine: AXI4 byte-address width (32..=64).
+    pub axi_addr_bits: u32,
+    /// Engine: AXI4 ID width of each manager port.
+    pub axi_id_bits: u32,
+    /// Engine: AXI4 transactions a requester may have in flight (reads and writes each).
+    pub axi_outstanding: usize,
 }
 
-impl Default for GenConfig {
+impl Default for EngineConfig {
     fn default() -> Self {
         let f = SortFormat::ARTIFACT;
-        GenConfig {
+        EngineConfig {
             topology: Topology::Bitonic,
             bsu_width: 16,
             register_every: 2,
@@ -108,22 +148,31 @@ impl Default for GenConfig {
             raster_scus: 4,
             raster_feature_buffer: 256,
             raster_feature_banks: 2,
+            sort_cores: 16,
+            raster_cores: 4,
+            scheduler: SchedulerPolicy::FirstFree,
+            table_capacity: 1 << 16,
+            mem_channels: 4,
+            axi_data_bits: 64,
+            axi_addr_bits: 32,
+            axi_id_bits: 4,
+            axi_outstanding: 8,
         }
     }
 }
 
 /// A configuration the generator cannot honour.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("invalid generator configuration: {0}")]
+#[error("invalid engine configuration: {0}")]
 pub struct ConfigError(pub String);
 
-impl GenConfig {
+impl EngineConfig {
     /// Reads a JSON configuration file; errors name the file and the problem.
-    pub fn from_json_file(path: &Path) -> Result<GenConfig, InputError> {
+    pub fn from_json_file(path: &Path) -> Result<EngineConfig, InputError> {
         let text =
             std::fs::read_to_string(path).map_err(|e| InputError::new(path, format!("cannot read: {e}")))?;
-        let cfg: GenConfig = serde_json::from_str(&text)
-            .map_err(|e| InputError::new(path, format!("not a valid generator config: {e}")))?;
+        let cfg: EngineConfig = serde_json::from_str(&text)
+            .map_err(|e| InputError::new(path, format!("not a valid engine configuration: {e}")))?;
         cfg.validate().map_err(|e| InputError::new(path, e.0))?;
         Ok(cfg)
     }
@@ -131,7 +180,7 @@ impl GenConfig {
     /// The entry format (golden).
     ///
     /// # Panics
-    /// When the widths are invalid (call [`GenConfig::validate`] first).
+    /// When the widths are invalid (call [`EngineConfig::validate`] first).
     pub fn format(&self) -> SortFormat {
         SortFormat::new(self.key_bits, self.id_bits).expect("validated key/id widths")
     }
@@ -139,7 +188,7 @@ impl GenConfig {
     /// The BSU network (golden), for this topology and width.
     ///
     /// # Panics
-    /// When the topology/width pair is invalid (call [`GenConfig::validate`] first).
+    /// When the topology/width pair is invalid (call [`EngineConfig::validate`] first).
     pub fn network(&self) -> Network {
         match self.topology {
             Topology::Bitonic => Network::bitonic(self.bsu_width),
@@ -154,7 +203,7 @@ impl GenConfig {
     /// The golden Sorting Core configuration this RTL implements (format, chunk, network).
     ///
     /// # Panics
-    /// When the configuration is invalid (call [`GenConfig::validate`] first).
+    /// When the configuration is invalid (call [`EngineConfig::validate`] first).
     pub fn sort_config(&self) -> SortConfig {
         SortConfig::new(self.format(), self.chunk, self.network()).expect("validated sort configuration")
     }
@@ -162,7 +211,7 @@ impl GenConfig {
     /// A stable 64-bit hash of the configuration (FNV-1a over its canonical JSON, every field
     /// written): printed in every generated file's header and recorded with measurements.
     pub fn hash(&self) -> u64 {
-        let text = serde_json::to_string(self).expect("a GenConfig always serialises");
+        let text = serde_json::to_string(self).expect("a EngineConfig always serialises");
         text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
     }
 
@@ -210,6 +259,42 @@ impl GenConfig {
             return err(format!("scu_lanes {} is not a power of two in 2..={pixels}", self.scu_lanes));
         }
         self.validate_raster_core()?;
+        self.validate_engine()?;
+        Ok(())
+    }
+
+    /// The engine's constraints: counts, the table region and the AXI4 ports.
+    fn validate_engine(&self) -> Result<(), ConfigError> {
+        let err = |s: String| Err(ConfigError(s));
+        if !(1..=64).contains(&self.sort_cores) {
+            return err(format!("sort_cores {} is outside 1..=64", self.sort_cores));
+        }
+        if !(1..=16).contains(&self.raster_cores) {
+            return err(format!("raster_cores {} is outside 1..=16", self.raster_cores));
+        }
+        if self.table_capacity < self.chunk || (self.table_capacity as u64) >= 1u64 << self.len_bits {
+            return err(format!(
+                "table_capacity {} is below chunk {} or does not fit len_bits {}",
+                self.table_capacity, self.chunk, self.len_bits
+            ));
+        }
+        if !(1..=16).contains(&self.mem_channels) {
+            return err(format!("mem_channels {} is outside 1..=16", self.mem_channels));
+        }
+        let d = self.axi_data_bits;
+        if !d.is_power_of_two() || !(64..=1024).contains(&d) {
+            return err(format!("axi_data_bits {d} is not a power of two in 64..=1024"));
+        }
+        if !(32..=64).contains(&self.axi_addr_bits) {
+            return err(format!("axi_addr_bits {} is outside 32..=64", self.axi_addr_bits));
+        }
+        if !(1..=16).contains(&self.axi_id_bits) {
+            return err(format!("axi_id_bits {} is outside 1..=16", self.axi_id_bits));
+        }
+        let o = self.axi_outstanding;
+        if !o.is_power_of_two() || !(1..=64).contains(&o) {
+            return err(format!("axi_outstanding {o} is not a power of two in 1..=64"));
+        }
         Ok(())
     }
 
@@ -248,14 +333,14 @@ impl GenConfig {
     }
 
     /// The feature-entry format of the Rasterization Engine (golden default).
-    pub fn feature_format(&self) -> neo_golden::formats::feature::FeatureFormat {
-        neo_golden::formats::feature::FeatureFormat::default()
+    pub fn feature_format(&self) -> crate::formats::feature::FeatureFormat {
+        crate::formats::feature::FeatureFormat::default()
     }
 
     /// The tile geometry of the Rasterization Engine (golden default: 64x64 tiles of 8x8
     /// subtiles).
-    pub fn raster_config(&self) -> neo_golden::raster::RasterConfig {
-        neo_golden::raster::RasterConfig::default()
+    pub fn raster_config(&self) -> crate::raster::RasterConfig {
+        crate::raster::RasterConfig::default()
     }
 
     /// Width of a packed `{valid, key, id}` entry.
@@ -280,13 +365,15 @@ mod tests {
 
     #[test]
     fn the_hash_changes_with_every_field_and_is_stable() {
-        let base = GenConfig::default();
-        assert_eq!(base.hash(), GenConfig::default().hash());
+        let base = EngineConfig::default();
+        assert_eq!(base.hash(), EngineConfig::default().hash());
         let variants = [
-            GenConfig { bsu_width: 32, ..base.clone() },
-            GenConfig { scu_lanes: 8, ..base.clone() },
-            GenConfig { raster_feature_banks: 4, ..base.clone() },
-            GenConfig { topology: Topology::OddEvenMerge, ..base.clone() },
+            EngineConfig { bsu_width: 32, ..base.clone() },
+            EngineConfig { scu_lanes: 8, ..base.clone() },
+            EngineConfig { raster_feature_banks: 4, ..base.clone() },
+            EngineConfig { topology: Topology::OddEvenMerge, ..base.clone() },
+            EngineConfig { sort_cores: 8, ..base.clone() },
+            EngineConfig { mem_channels: 2, ..base.clone() },
         ];
         for v in &variants {
             assert_ne!(v.hash(), base.hash(), "{v:?}");
@@ -295,7 +382,7 @@ mod tests {
 
     #[test]
     fn default_is_the_paper_configuration() {
-        let c = GenConfig::default();
+        let c = EngineConfig::default();
         c.validate().unwrap();
         assert_eq!(c.entry_bits(), SortFormat::ARTIFACT.entry_bits());
         assert_eq!(c.sort_config(), SortConfig::artifact());
@@ -305,28 +392,35 @@ mod tests {
 
     #[test]
     fn json_subset_overrides_defaults() {
-        let c: GenConfig = serde_json::from_str(r#"{"topology": "best_16", "register_every": 3}"#).unwrap();
+        let c: EngineConfig =
+            serde_json::from_str(r#"{"topology": "best_16", "register_every": 3}"#).unwrap();
         assert_eq!(c.topology, Topology::Best16);
         assert_eq!(c.register_every, 3);
         assert_eq!(c.chunk, 256);
         assert_eq!(c.bsu_latency(), 4);
-        assert!(serde_json::from_str::<GenConfig>(r#"{"topolgy": "bitonic"}"#).is_err());
-        assert!(serde_json::from_str::<GenConfig>(r#"{"topology": "odd_even_merge"}"#).is_ok());
+        assert!(serde_json::from_str::<EngineConfig>(r#"{"topolgy": "bitonic"}"#).is_err());
+        assert!(serde_json::from_str::<EngineConfig>(r#"{"topology": "odd_even_merge"}"#).is_ok());
     }
 
     #[test]
     fn invalid_configs_are_rejected() {
         let bad = [
-            GenConfig { register_every: 0, ..GenConfig::default() },
-            GenConfig { bsu_width: 12, ..GenConfig::default() },
-            GenConfig { topology: Topology::Best16, bsu_width: 8, chunk: 64, ..GenConfig::default() },
-            GenConfig { chunk: 200, ..GenConfig::default() },
-            GenConfig { key_bits: 0, ..GenConfig::default() },
-            GenConfig { burst: 3, ..GenConfig::default() },
-            GenConfig { max_outstanding: 1, ..GenConfig::default() },
-            GenConfig { tile_bits: 0, ..GenConfig::default() },
-            GenConfig { tile_bits: 17, ..GenConfig::default() },
-            GenConfig { itu_tag_bits: 0, ..GenConfig::default() },
+            EngineConfig { register_every: 0, ..EngineConfig::default() },
+            EngineConfig { bsu_width: 12, ..EngineConfig::default() },
+            EngineConfig { topology: Topology::Best16, bsu_width: 8, chunk: 64, ..EngineConfig::default() },
+            EngineConfig { chunk: 200, ..EngineConfig::default() },
+            EngineConfig { key_bits: 0, ..EngineConfig::default() },
+            EngineConfig { burst: 3, ..EngineConfig::default() },
+            EngineConfig { max_outstanding: 1, ..EngineConfig::default() },
+            EngineConfig { tile_bits: 0, ..EngineConfig::default() },
+            EngineConfig { tile_bits: 17, ..EngineConfig::default() },
+            EngineConfig { itu_tag_bits: 0, ..EngineConfig::default() },
+            EngineConfig { sort_cores: 0, ..EngineConfig::default() },
+            EngineConfig { raster_cores: 0, ..EngineConfig::default() },
+            EngineConfig { mem_channels: 0, ..EngineConfig::default() },
+            EngineConfig { table_capacity: 100, ..EngineConfig::default() },
+            EngineConfig { axi_data_bits: 48, ..EngineConfig::default() },
+            EngineConfig { axi_outstanding: 3, ..EngineConfig::default() },
         ];
         for c in bad {
             assert!(c.validate().is_err(), "{c:?}");
@@ -339,12 +433,12 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("bad.json");
         std::fs::write(&p, "{\"bsu_width\": 12}").unwrap();
-        let e = GenConfig::from_json_file(&p).unwrap_err().to_string();
+        let e = EngineConfig::from_json_file(&p).unwrap_err().to_string();
         assert!(e.starts_with(&p.display().to_string()) && e.contains("bsu_width 12"), "{e}");
         std::fs::write(&p, "not json").unwrap();
-        let e = GenConfig::from_json_file(&p).unwrap_err().to_string();
-        assert!(e.contains("bad.json") && e.contains("not a valid generator config"), "{e}");
-        let e = GenConfig::from_json_file(&dir.join("missing.json")).unwrap_err().to_string();
+        let e = EngineConfig::from_json_file(&p).unwrap_err().to_string();
+        assert!(e.contains("bad.json") && e.contains("not a valid engine configuration"), "{e}");
+        let e = EngineConfig::from_json_file(&dir.join("missing.json")).unwrap_err().to_string();
         assert!(e.contains("missing.json") && e.contains("cannot read"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
