@@ -47,6 +47,10 @@ pub struct ModelArgs {
     /// Model configuration (JSON; missing fields keep their defaults).
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// Engine configuration: the JSON file `neo gen --config` takes (any subset of its fields);
+    /// replaces the `engine` section of the model configuration.
+    #[arg(long)]
+    pub engine: Option<PathBuf>,
     /// Measured unit timing.
     #[arg(long, default_value = latency::DEFAULT_PATH)]
     pub latency: PathBuf,

@@ -4,6 +4,7 @@
 
 use anyhow::{anyhow, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use neo_golden::engine::EngineConfig;
 use neo_golden::{scene::Scene, shared};
 use neo_sim::config::SimConfig;
 use neo_sim::driver::GoldenRaster;
@@ -16,22 +17,32 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// Reads the configuration file, or the defaults.
-pub fn load_config(path: Option<&Path>) -> Result<SimConfig> {
-    match path {
-        Some(p) => Ok(SimConfig::from_file(p)?),
-        None => Ok(SimConfig::default()),
+/// With `engine`, the engine section comes from that file (`neo gen --config`'s format).
+pub fn load_config(path: Option<&Path>, engine: Option<&Path>) -> Result<SimConfig> {
+    let mut cfg = match path {
+        Some(p) => SimConfig::from_file(p)?,
+        None => SimConfig::default(),
+    };
+    if let Some(e) = engine {
+        cfg.engine = EngineConfig::from_json_file(e)?;
+        cfg.check().map_err(|err| anyhow!("{}: {err}", e.display()))?;
     }
+    Ok(cfg)
 }
 
-/// Reads `latency.json`: the path as given, else (for the default path) beside the sources.
-pub fn load_latency(path: &Path) -> Result<Latency> {
+/// Reads `latency.json` (the path as given, else, for the default path, beside the sources) and
+/// refuses it when it was measured on another engine configuration than `cfg.engine`.
+pub fn load_latency(path: &Path, cfg: &SimConfig) -> Result<Latency> {
+    let mut path = path.to_path_buf();
     if !path.exists() && path == Path::new(latency::DEFAULT_PATH) {
         let alt = shared::workspace_root().join(latency::DEFAULT_PATH);
         if alt.exists() {
-            return Ok(Latency::from_file(&alt)?);
+            path = alt;
         }
     }
-    Ok(Latency::from_file(path)?)
+    let lat = Latency::from_file(&path)?;
+    lat.check_engine(&cfg.engine)?;
+    Ok(lat)
 }
 
 /// Scenes loaded once per spec.

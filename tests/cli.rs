@@ -37,6 +37,30 @@ fn fails_cleanly(args: &[&str], file: &Path, phrase: &str) {
 }
 
 #[test]
+fn simulate_refuses_a_latency_report_of_another_engine() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("engine32.json");
+    std::fs::write(&cfg, r#"{"engine": {"bsu_width": 32}}"#).unwrap();
+    let o = neo(&["simulate", "--config", cfg.to_str().unwrap(), "--frames", "1", "--res", "64x64"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "stderr:\n{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains("latency.json") && err.contains("engine.bsu_width = 32"), "{err}");
+    // The same engine file `neo gen --config` takes.
+    let engine = dir.path().join("engine.json");
+    std::fs::write(&engine, r#"{"topology": "odd_even_merge"}"#).unwrap();
+    let o = neo(&["simulate", "--engine", engine.to_str().unwrap(), "--frames", "1", "--res", "64x64"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "stderr:\n{err}");
+    assert!(err.contains("engine.topology = \"odd_even_merge\""), "{err}");
+    std::fs::write(&engine, r#"{"chunk": 100}"#).unwrap();
+    fails_cleanly(&["simulate", "--engine", engine.to_str().unwrap(), "--frames", "1"], &engine, "chunk");
+    // A configuration the engine cannot be built with names the field.
+    std::fs::write(&cfg, r#"{"engine": {"sort_cores": 0}}"#).unwrap();
+    fails_cleanly(&["simulate", "--config", cfg.to_str().unwrap(), "--frames", "1"], &cfg, "sort_cores 0");
+}
+
+#[test]
 fn synthetic_scene_survives_convert_and_reload() {
     let dir = tempfile::tempdir().unwrap();
     let spec = "synthetic:outdoor?gaussians=5k&seed=7&sh=1";

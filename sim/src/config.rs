@@ -2,8 +2,10 @@
 //! their defaults, unknown fields are errors).
 //!
 //! Two kinds of numbers live here:
-//! - **architecture counts and sizes** (cores, units, chunk, tile, subtile, buffers, data sizes):
-//!   defaults from the paper's Table 1 and the golden model's formats;
+//! - **architecture counts and sizes**: the engine's (cores, units, chunk, tile, subtile,
+//!   buffers) are the one engine configuration, [`EngineConfig`] (`engine`), shared with the RTL
+//!   generator and the latency report; the rest (preprocessing units, data sizes) default from
+//!   the paper's Table 1 and the golden model's formats;
 //! - **assumed timings** of units without measured RTL (preprocessing units, the raster core's
 //!   ITU/SCU until `reports/latency.json` has a `raster` section, the GPU baseline): clearly
 //!   marked `assumed` here and in every report.
@@ -14,6 +16,7 @@
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+use neo_golden::engine::EngineConfig;
 use neo_golden::error::{InputError, InputResult};
 
 /// The whole model configuration.
@@ -22,8 +25,10 @@ use neo_golden::error::{InputError, InputResult};
 pub struct SimConfig {
     /// Accelerator clock in MHz (the paper's 1 GHz, Table 3).
     pub clock_mhz: f64,
-    /// Golden pipeline parameters the workload is generated with.
-    pub pipeline: PipelineParams,
+    /// The engine: every count and size of the RTL (cores, units, chunk, tile, subtile).
+    pub engine: EngineConfig,
+    /// Sorting-policy parameters of the golden pipeline the workload is generated with.
+    pub pipeline: UpdateParams,
     /// Neo's engines (paper Table 1).
     pub neo: NeoArch,
     /// The GSCore-style baseline.
@@ -44,7 +49,8 @@ impl Default for SimConfig {
     fn default() -> Self {
         SimConfig {
             clock_mhz: 1000.0,
-            pipeline: PipelineParams::default(),
+            engine: EngineConfig::default(),
+            pipeline: UpdateParams::default(),
             neo: NeoArch::default(),
             gscore: GscoreArch::default(),
             gpu: GpuArch::default(),
@@ -56,9 +62,25 @@ impl Default for SimConfig {
     }
 }
 
-/// Golden pipeline parameters (tile geometry, chunk, DPS passes, capacity).
+/// The sorting policy of the golden pipeline (the geometry and the chunk are the engine's).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
+pub struct UpdateParams {
+    /// DPS passes per frame (1).
+    pub dps_passes: usize,
+    /// Largest table per tile (`null`: unbounded).
+    pub capacity: Option<usize>,
+}
+
+impl Default for UpdateParams {
+    fn default() -> Self {
+        UpdateParams { dps_passes: 1, capacity: None }
+    }
+}
+
+/// Every golden pipeline parameter a workload is generated with: the engine's geometry and chunk
+/// ([`SimConfig::pipeline_params`]) and the sorting policy.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PipelineParams {
     /// Tile side in pixels (Table 1: 64).
     pub tile: u32,
@@ -72,9 +94,23 @@ pub struct PipelineParams {
     pub capacity: Option<usize>,
 }
 
+impl PipelineParams {
+    /// The parameters of `engine` with the sorting policy `update`.
+    pub fn new(engine: &EngineConfig, update: &UpdateParams) -> Self {
+        PipelineParams {
+            tile: engine.tile,
+            subtile: engine.subtile,
+            chunk: engine.chunk,
+            dps_passes: update.dps_passes,
+            capacity: update.capacity,
+        }
+    }
+}
+
 impl Default for PipelineParams {
+    /// The default engine's geometry and chunk with the default policy.
     fn default() -> Self {
-        PipelineParams { tile: 64, subtile: 8, chunk: 256, dps_passes: 1, capacity: None }
+        PipelineParams::new(&EngineConfig::default(), &UpdateParams::default())
     }
 }
 
@@ -88,17 +124,9 @@ pub struct NeoArch {
     pub color_units: u32,
     /// Duplication units (4).
     pub duplication_units: u32,
-    /// Sorting cores, each one BSU and one MSU+ (16).
-    pub sort_cores: u32,
     /// Sorting-core I/O buffer in bytes (64 KB); the double-buffered input and output chunks
     /// (`4 x chunk x entry bytes`) must fit.
     pub sort_io_buffer_bytes: u64,
-    /// Raster cores (4), each with `itus_per_core` ITUs and `scus_per_core` SCUs (16 of each).
-    pub raster_cores: u32,
-    /// ITUs per raster core (4).
-    pub itus_per_core: u32,
-    /// SCUs per raster core (4).
-    pub scus_per_core: u32,
     /// Raster-core buffer in bytes (200 KB); bounds the feature prefetch window.
     pub raster_buffer_bytes: u64,
     /// Double-buffered sorting-core I/O: the next chunk command's load overlaps the current
@@ -128,11 +156,7 @@ impl Default for NeoArch {
             projection_units: 4,
             color_units: 4,
             duplication_units: 4,
-            sort_cores: 16,
             sort_io_buffer_bytes: 64 * 1024,
-            raster_cores: 4,
-            itus_per_core: 4,
-            scus_per_core: 4,
             raster_buffer_bytes: 200 * 1024,
             double_buffered_io: true,
             fused_dps_merge: true,
@@ -493,6 +517,11 @@ impl SimConfig {
         Ok(cfg)
     }
 
+    /// The golden pipeline parameters of this configuration (engine geometry and chunk, policy).
+    pub fn pipeline_params(&self) -> PipelineParams {
+        PipelineParams::new(&self.engine, &self.pipeline)
+    }
+
     /// Picoseconds per accelerator cycle.
     pub fn cycle_ps(&self) -> f64 {
         1e6 / self.clock_mhz
@@ -509,10 +538,6 @@ impl SimConfig {
             (n.projection_units, "neo.projection_units"),
             (n.color_units, "neo.color_units"),
             (n.duplication_units, "neo.duplication_units"),
-            (n.sort_cores, "neo.sort_cores"),
-            (n.raster_cores, "neo.raster_cores"),
-            (n.itus_per_core, "neo.itus_per_core"),
-            (n.scus_per_core, "neo.scus_per_core"),
             (n.frame_buffers, "neo.frame_buffers"),
             (n.sort_read_window, "neo.sort_read_window"),
             (n.preprocess_read_window, "neo.preprocess_read_window"),
@@ -522,27 +547,7 @@ impl SimConfig {
                 return Err(format!("{what} must be at least 1"));
             }
         }
-        let p = &self.pipeline;
-        if p.tile == 0
-            || p.subtile == 0
-            || !p.tile.is_multiple_of(p.subtile)
-            || (p.tile / p.subtile).pow(2) > 64
-        {
-            return Err(format!(
-                "pipeline: tile {} must be a multiple of subtile {} with at most 64 subtiles",
-                p.tile, p.subtile
-            ));
-        }
-        let subtiles = (p.tile / p.subtile).pow(2);
-        if !subtiles.is_multiple_of(n.scus_per_core) {
-            return Err(format!(
-                "neo.scus_per_core = {} must divide the {subtiles} subtiles",
-                n.scus_per_core
-            ));
-        }
-        if p.chunk < 2 {
-            return Err(format!("pipeline.chunk = {}: must be at least 2", p.chunk));
-        }
+        self.engine.validate().map_err(|e| format!("engine: {}", e.0))?;
         if self.gscore.core_counts.contains(&0) {
             return Err("gscore.core_counts must be positive".into());
         }
@@ -577,12 +582,12 @@ impl SimConfig {
 
     /// Checks that the sorting-core buffers hold the double-buffered chunks of `entry_bytes`.
     pub fn check_buffers(&self, entry_bytes: u32) -> Result<(), String> {
-        let need = 4 * self.pipeline.chunk as u64 * entry_bytes as u64;
+        let need = 4 * self.engine.chunk as u64 * entry_bytes as u64;
         if need > self.neo.sort_io_buffer_bytes {
             return Err(format!(
                 "chunk {} of {entry_bytes}-byte entries needs {need} bytes of double-buffered I/O, more than \
                  neo.sort_io_buffer_bytes = {}",
-                self.pipeline.chunk, self.neo.sort_io_buffer_bytes
+                self.engine.chunk, self.neo.sort_io_buffer_bytes
             ));
         }
         Ok(())
@@ -602,10 +607,13 @@ mod tests {
         let back: SimConfig = serde_json::from_str(&j).unwrap();
         assert_eq!(back, c);
         // Partial documents keep defaults.
-        let p: SimConfig = serde_json::from_str(r#"{"neo": {"sort_cores": 4}}"#).unwrap();
-        assert_eq!(p.neo.sort_cores, 4);
-        assert_eq!(p.neo.raster_cores, 4);
-        assert!(serde_json::from_str::<SimConfig>(r#"{"neo": {"sort_core": 4}}"#).is_err());
+        let p: SimConfig = serde_json::from_str(r#"{"engine": {"sort_cores": 4}}"#).unwrap();
+        assert_eq!(p.engine.sort_cores, 4);
+        assert_eq!(p.engine.raster_cores, 4);
+        assert!(serde_json::from_str::<SimConfig>(r#"{"engine": {"sort_core": 4}}"#).is_err());
+        // The engine's counts live only in `engine`.
+        assert!(serde_json::from_str::<SimConfig>(r#"{"neo": {"sort_cores": 4}}"#).is_err());
+        assert!(serde_json::from_str::<SimConfig>(r#"{"pipeline": {"chunk": 128}}"#).is_err());
     }
 
     #[test]
@@ -614,10 +622,10 @@ mod tests {
         c.dram.n_bl = 4;
         assert!(c.check().unwrap_err().contains("n_bl"));
         let mut c = SimConfig::default();
-        c.neo.sort_cores = 0;
-        assert!(c.check().unwrap_err().contains("sort_cores"));
+        c.engine.sort_cores = 0;
+        assert!(c.check().unwrap_err().contains("engine: sort_cores 0 is outside"));
         let mut c = SimConfig::default();
-        c.pipeline.chunk = 4096;
+        c.engine.chunk = 4096;
         assert!(c.check_buffers(6).unwrap_err().contains("sort_io_buffer_bytes"));
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("c.json");

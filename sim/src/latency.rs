@@ -35,6 +35,7 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 
 use crate::config::RasterTiming;
+use neo_golden::engine::EngineConfig;
 use neo_golden::error::{InputError, InputResult};
 use neo_golden::formats::latency::{self as latency_file, LatencyReport};
 use neo_golden::sort::merge_pass_count;
@@ -114,6 +115,8 @@ pub enum ChunkMode {
 pub struct Latency {
     /// The file read.
     pub source: PathBuf,
+    /// The engine configuration the RTL was measured on.
+    pub config: EngineConfig,
     /// BSU width (entries per vector) of the measured RTL.
     pub bsu_width: u64,
     /// Chunk size of the measured RTL.
@@ -207,10 +210,11 @@ impl Latency {
         let sc = &r.sort_core;
         Ok(Latency {
             source: path.to_path_buf(),
-            bsu_width: r.config.bsu_width,
-            chunk: r.config.chunk,
-            burst: r.config.burst,
-            max_outstanding: r.config.max_outstanding,
+            config: r.config.clone(),
+            bsu_width: r.config.bsu_width as u64,
+            chunk: r.config.chunk as u64,
+            burst: r.config.burst as u64,
+            max_outstanding: r.config.max_outstanding as u64,
             msu_ii: r.units.neo_msu.ii as f64,
             bsu_latency: r.units.neo_bsu.latency,
             command_overhead: r.units.neo_sort_core.command_overhead,
@@ -221,6 +225,21 @@ impl Latency {
             raster,
             raster_source,
         })
+    }
+
+    /// Refuses to time `engine` with these measurements when they were made on another
+    /// configuration: the error names the file, the first field that differs and both values.
+    pub fn check_engine(&self, engine: &EngineConfig) -> InputResult<()> {
+        match engine.first_difference(&self.config) {
+            None => Ok(()),
+            Some((field, ours, measured)) => Err(InputError::new(
+                &self.source,
+                format!(
+                    "measured on an engine with {field} = {measured}, but the model's engine.{field} = {ours}; \
+                     measure that configuration (NEO_UPDATE_REPORTS=1 with its config) or simulate the measured one"
+                ),
+            )),
+        }
     }
 
     /// In-chunk merge passes of an `n`-entry chunk.
@@ -434,6 +453,19 @@ mod tests {
         for p in &l.merge_delete {
             assert_eq!(l.merge_cycles(p.len_a, p.len_b, true), p.cycles);
         }
+    }
+
+    #[test]
+    fn a_report_of_another_engine_is_refused_naming_the_field_and_both_values() {
+        let l = Latency::from_file(&project_file()).unwrap();
+        l.check_engine(&EngineConfig::default()).expect("the project's report is of the default engine");
+        let other = EngineConfig { bsu_width: 32, ..EngineConfig::default() };
+        let e = l.check_engine(&other).unwrap_err().to_string();
+        assert!(e.contains("latency.json"), "{e}");
+        assert!(e.contains("bsu_width = 16") && e.contains("engine.bsu_width = 32"), "{e}");
+        let other = EngineConfig { sort_cores: 8, ..EngineConfig::default() };
+        let e = l.check_engine(&other).unwrap_err().to_string();
+        assert!(e.contains("sort_cores = 16") && e.contains("engine.sort_cores = 8"), "{e}");
     }
 
     #[test]

@@ -157,7 +157,7 @@ impl ReportPlan {
         if spec.frames == 0 || spec.sweep.as_ref().is_some_and(|s| s.frames == 0) {
             return Err("the runs and the sweep points need at least 1 frame".into());
         }
-        let (chunk, passes) = (cfg.pipeline.chunk, cfg.pipeline.dps_passes);
+        let (chunk, passes) = (cfg.engine.chunk, cfg.pipeline.dps_passes);
         let mut scenes =
             if spec.default_scene { vec![synthetic::DEFAULT_SCENE.to_string()] } else { Vec::new() };
         for s in &spec.scenes {

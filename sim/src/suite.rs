@@ -282,15 +282,15 @@ pub fn load_scene(spec: &str) -> Result<Scene, String> {
     source::load_scene(spec, false).map(|(s, _)| s).map_err(|e| e.to_string())
 }
 
-/// Generates the workload of `point` (`on_frame(i)` after each frame).
-pub fn workload(
+/// What generating the workload of `point` takes: the spec (strategy, parameters of `cfg` with
+/// the point's chunk and passes, golden raster mode) and the camera trajectory.
+pub fn workload_spec(
     scene: &Scene,
     point: &Point,
     cfg: &SimConfig,
     golden: GoldenRaster,
     raster_sample: u32,
-    on_frame: impl FnMut(usize),
-) -> Result<Workload, String> {
+) -> Result<(WorkloadSpec, trajectory::Trajectory), String> {
     let spec = point.trajectory_spec()?;
     let traj = trajectory::parse_trajectory(&spec, source::robust_bounds(scene), point.frames)
         .map_err(|e| e.to_string())?
@@ -300,9 +300,22 @@ pub fn workload(
     }
     let strategy = point.strategy()?;
     let mut ws = WorkloadSpec::new(&point.scene, &spec, strategy);
-    ws.params = PipelineParams { chunk: point.chunk, dps_passes: point.passes, ..cfg.pipeline.clone() };
+    ws.params = PipelineParams { chunk: point.chunk, dps_passes: point.passes, ..cfg.pipeline_params() };
     ws.golden_raster = if strategy.is_exact() { GoldenRaster::Off } else { golden };
     ws.raster_sample = raster_sample;
+    Ok((ws, traj))
+}
+
+/// Generates the workload of `point` (`on_frame(i)` after each frame).
+pub fn workload(
+    scene: &Scene,
+    point: &Point,
+    cfg: &SimConfig,
+    golden: GoldenRaster,
+    raster_sample: u32,
+    on_frame: impl FnMut(usize),
+) -> Result<Workload, String> {
+    let (ws, traj) = workload_spec(scene, point, cfg, golden, raster_sample)?;
     generate(scene, &traj.frames, &traj.cuts, &ws, on_frame).map_err(|e| e.to_string())
 }
 
@@ -315,7 +328,7 @@ pub fn evaluate(
     archs: &[Arch],
 ) -> Result<PointResult, String> {
     let mut cfg = cfg.clone();
-    cfg.pipeline.chunk = point.chunk;
+    cfg.engine.chunk = point.chunk;
     cfg.pipeline.dps_passes = point.passes;
     let strategy = point.strategy()?;
     // Architectures are independent single-threaded simulations: run them in parallel.

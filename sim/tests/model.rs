@@ -129,7 +129,7 @@ fn identical_independent_tiles_scale_with_the_core_count() {
     let mut t = Vec::new();
     for cores in [1u32, 2, 4, 8, 16] {
         let mut cfg = rtl_like();
-        cfg.neo.sort_cores = cores;
+        cfg.engine.sort_cores = cores as usize;
         t.push((cores, sort_cycles(&cfg, &lat, &wl, true)));
     }
     let one = t[0].1;
@@ -145,7 +145,7 @@ fn identical_independent_tiles_scale_with_the_core_count() {
         .iter()
         .map(|&cores| {
             let mut cfg = SimConfig::default();
-            cfg.neo.sort_cores = cores;
+            cfg.engine.sort_cores = cores as usize;
             sort_cycles(&cfg, &lat, &wl, false)
         })
         .collect();

@@ -111,8 +111,8 @@ fn peak_rss_mb() -> Option<f64> {
 /// Runs `neo report`.
 pub fn run(a: ReportArgs) -> Result<()> {
     let t0 = Instant::now();
-    let cfg = load_config(a.model.config.as_deref())?;
-    let lat = load_latency(&a.model.latency)?;
+    let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref())?;
+    let lat = load_latency(&a.model.latency, &cfg)?;
     let plan = ReportPlan::new(a.spec(), &cfg).map_err(|e| anyhow!(e))?;
     let sweep_results = match &a.sweep_results {
         Some(dir) => read_point_results(dir).map_err(|e| anyhow!(e))?,

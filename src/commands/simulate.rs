@@ -86,8 +86,8 @@ fn golden_mode(q: &str, points: &[Point]) -> Result<GoldenRaster> {
 
 /// Runs `neo simulate`.
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let cfg = load_config(a.model.config.as_deref())?;
-    let lat = load_latency(&a.model.latency)?;
+    let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref())?;
+    let lat = load_latency(&a.model.latency, &cfg)?;
     let archs = Arch::parse_list(&a.arch, &cfg).map_err(|e| anyhow!(e))?;
     let grid = Grid {
         scenes: vec![a.scene.scene.clone()],
@@ -95,7 +95,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         frames: a.frames.frames,
         res: a.res.clone(),
         strategies: a.sort.clone(),
-        chunks: if a.chunk.is_empty() { vec![cfg.pipeline.chunk] } else { a.chunk.clone() },
+        chunks: if a.chunk.is_empty() { vec![cfg.engine.chunk] } else { a.chunk.clone() },
         passes: if a.passes.is_empty() { vec![cfg.pipeline.dps_passes] } else { a.passes.clone() },
         speeds: a.speed.clone(),
     };
@@ -131,32 +131,18 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     let mut scenes = Scenes::default();
     let mut results = Vec::new();
     for (k, p) in points.iter().enumerate() {
-        let mut point_cfg = cfg.clone();
         if let Some(dir) = &a.trace {
             // Trace through the golden pipeline: generate with the driver's trace option.
             let scene = scenes.get(&p.scene)?;
-            let spec = p.trajectory_spec().map_err(|e| anyhow!(e))?;
-            let traj = neo_golden::trajectory::parse_trajectory(
-                &spec,
-                neo_golden::source::robust_bounds(scene),
-                p.frames,
-            )?
-            .with_resolution(p.width, p.height);
-            let mut ws =
-                neo_sim::driver::WorkloadSpec::new(&p.scene, &spec, p.strategy().map_err(|e| anyhow!(e))?);
-            ws.params = neo_sim::config::PipelineParams {
-                chunk: p.chunk,
-                dps_passes: p.passes,
-                ..cfg.pipeline.clone()
-            };
+            let (mut ws, traj) = suite::workload_spec(scene, p, &cfg, golden, a.model.raster_sample)
+                .map_err(|e| anyhow!(e))?;
             ws.golden_raster = golden;
             ws.trace = Some((dir.join(p.id()), a.trace_frames.clone()));
             let (wl, _) = crate::progress::spin("golden pipeline with trace export", || {
                 neo_sim::driver::generate(scene, &traj.frames, &traj.cuts, &ws, |_| {})
             });
             let wl = wl?;
-            point_cfg.pipeline.chunk = p.chunk;
-            let r = suite::evaluate(p, &wl, &point_cfg, &lat, &archs).map_err(|e| anyhow!(e))?;
+            let r = suite::evaluate(p, &wl, &cfg, &lat, &archs).map_err(|e| anyhow!(e))?;
             eprintln!("wrote poc.trace files into {}", dir.join(p.id()).display());
             results.push(r);
         } else {
@@ -164,7 +150,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             results.push(run_point(
                 &mut scenes,
                 p,
-                &point_cfg,
+                &cfg,
                 &lat,
                 &archs,
                 golden,

@@ -22,7 +22,7 @@ use crate::stimulus::{sorted_stream, tile_entries};
 use neo_gen::EngineConfig;
 use neo_golden::formats::latency::{
     BsuUnit, ChunkPoint, ItuUnit, LatencyReport, MemoryModel, MergeDeletePoint, MergePoint, MsuUnit, Raster,
-    RasterCore, RtlConfig, ScuUnit, SortCore, SortCoreUnit, Units, SCHEMA,
+    RasterCore, ScuUnit, SortCore, SortCoreUnit, Units, SCHEMA,
 };
 use neo_golden::sort::{merge_pass_count, SortEntry};
 use std::collections::BTreeMap;
@@ -194,11 +194,10 @@ pub fn report(cfg: &EngineConfig) -> LatencyReport {
         .run(Command { mode: Mode::Sort, src_a: layout::SRC, len_a: 0, src_b: 0, len_b: 0, dst: layout::DST })
         .cycles;
     let sort_core = sort_core_section(cfg, &mut core);
-    let config = serde_json::to_value(cfg).and_then(serde_json::from_value::<RtlConfig>);
     LatencyReport {
         schema: SCHEMA.into(),
         doc: doc(),
-        config: config.expect("EngineConfig serialises with the fields RtlConfig types"),
+        config: cfg.clone(),
         memory: MemoryModel { read_latency: 1, req_ready: "always".into(), rsp_gaps: "none".into() },
         units: Units {
             neo_bsu,
@@ -269,7 +268,7 @@ fn sort_core_section(cfg: &EngineConfig, core: &mut Core) -> SortCore {
 /// The `doc` section: what each field measures, for a reader of the JSON.
 fn doc() -> BTreeMap<String, String> {
     [
-        ("config", "the neo_gen::EngineConfig the measured RTL was generated from"),
+        ("config", "every field of the engine configuration (neo_golden::engine::EngineConfig) the measured RTL was generated from; the cycle model refuses a report of another configuration"),
         ("memory", "the memory model used for sort_core: request always accepted, first read beat the cycle after the request, one beat per cycle"),
         ("units.*.latency", "rising edges from the edge that accepts an input to the first cycle its result is offered (out_valid_o high)"),
         ("units.*.ii", "initiation interval: cycles between accepted inputs (BSU: vectors; MSU+: output entries) at full rate"),

@@ -85,6 +85,11 @@ pub struct EngineConfig {
     pub burst: usize,
     /// Read bursts in flight at most (depth of the response-routing queue), a power of two.
     pub max_outstanding: usize,
+    /// Tile side in pixels (a power of two; 64 in the paper, Table 1).
+    pub tile: u32,
+    /// Subtile side in pixels (a power of two dividing `tile`, at most 64 subtiles per tile; 8
+    /// in the paper).
+    pub subtile: u32,
     /// ITU: width of the tile indices `tile_x_i` / `tile_y_i` (unsigned; the tile origin is
     /// `tile_x * tile` pixels). 10 bits cover +-32768 px of the default mean format.
     pub tile_bits: u32,
@@ -141,6 +146,8 @@ impl Default for EngineConfig {
             len_bits: 32,
             burst: 16,
             max_outstanding: 4,
+            tile: 64,
+            subtile: 8,
             tile_bits: 10,
             itu_tag_bits: 16,
             scu_lanes: 16,
@@ -215,6 +222,17 @@ impl EngineConfig {
         text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
     }
 
+    /// The first field (in alphabetical order) whose value differs from `other`'s, with this
+    /// configuration's value and `other`'s, as JSON text.
+    pub fn first_difference(&self, other: &EngineConfig) -> Option<(String, String, String)> {
+        let (a, b) = (serde_json::to_value(self).ok()?, serde_json::to_value(other).ok()?);
+        let (a, b) = (a.as_object()?, b.as_object()?);
+        a.iter().find_map(|(k, va)| match b.get(k) {
+            Some(vb) if vb == va => None,
+            vb => Some((k.clone(), va.to_string(), vb.map_or("(absent)".to_string(), |v| v.to_string()))),
+        })
+    }
+
     /// Checks every constraint, naming the first one violated.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let err = |s: String| Err(ConfigError(s));
@@ -247,6 +265,13 @@ impl EngineConfig {
         }
         if !self.max_outstanding.is_power_of_two() || !(2..=64).contains(&self.max_outstanding) {
             return err(format!("max_outstanding {} is not a power of two in 2..=64", self.max_outstanding));
+        }
+        let (t, st) = (self.tile, self.subtile);
+        if !t.is_power_of_two() || !st.is_power_of_two() || !(2..=256).contains(&t) || st >= t || (t / st) > 8
+        {
+            return err(format!(
+                "tile {t} and subtile {st} must be powers of two with 2 <= subtile < tile <= 256 and at most 64 subtiles"
+            ));
         }
         if !(1..=16).contains(&self.tile_bits) {
             return err(format!("tile_bits {} is outside 1..=16", self.tile_bits));
@@ -337,10 +362,10 @@ impl EngineConfig {
         crate::formats::feature::FeatureFormat::default()
     }
 
-    /// The tile geometry of the Rasterization Engine (golden default: 64x64 tiles of 8x8
-    /// subtiles).
+    /// The tile geometry of the Rasterization Engine (`tile`, `subtile`) with golden's default
+    /// SCU widths.
     pub fn raster_config(&self) -> crate::raster::RasterConfig {
-        crate::raster::RasterConfig::default()
+        crate::raster::RasterConfig { tile: self.tile, subtile: self.subtile, ..Default::default() }
     }
 
     /// Width of a packed `{valid, key, id}` entry.
@@ -381,6 +406,17 @@ mod tests {
     }
 
     #[test]
+    fn first_difference_names_the_field_and_both_values() {
+        let base = EngineConfig::default();
+        assert_eq!(base.first_difference(&base), None);
+        let other = EngineConfig { bsu_width: 32, ..base.clone() };
+        assert_eq!(base.first_difference(&other), Some(("bsu_width".into(), "16".into(), "32".into())));
+        let other = EngineConfig { scheduler: SchedulerPolicy::RoundRobin, ..base.clone() };
+        let d = base.first_difference(&other).unwrap();
+        assert_eq!((d.0.as_str(), d.2.as_str()), ("scheduler", "\"round_robin\""));
+    }
+
+    #[test]
     fn default_is_the_paper_configuration() {
         let c = EngineConfig::default();
         c.validate().unwrap();
@@ -416,6 +452,8 @@ mod tests {
             EngineConfig { tile_bits: 17, ..EngineConfig::default() },
             EngineConfig { itu_tag_bits: 0, ..EngineConfig::default() },
             EngineConfig { sort_cores: 0, ..EngineConfig::default() },
+            EngineConfig { tile: 48, ..EngineConfig::default() },
+            EngineConfig { subtile: 2, ..EngineConfig::default() },
             EngineConfig { raster_cores: 0, ..EngineConfig::default() },
             EngineConfig { mem_channels: 0, ..EngineConfig::default() },
             EngineConfig { table_capacity: 100, ..EngineConfig::default() },
@@ -441,5 +479,29 @@ mod tests {
         let e = EngineConfig::from_json_file(&dir.join("missing.json")).unwrap_err().to_string();
         assert!(e.contains("missing.json") && e.contains("cannot read"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    proptest::proptest! {
+        /// Any values of the fields: validation answers without panicking, and a configuration it
+        /// accepts gives its derived values (format, network, sort and raster configs) without
+        /// panicking either.
+        #[test]
+        fn validation_never_panics_and_accepted_configs_derive(
+            bsu in 0usize..80, chunk in 0usize..5000, burst in 0usize..300, tile in 0u32..300,
+            subtile in 0u32..40, lanes in 0usize..80, scus in 0usize..40, itus in 0usize..20,
+            fbuf in 0usize..5000, cores in 0usize..70, cap in 0usize..70000, data in 0u32..2000,
+            key in 0u8..40, id in 0u8..40, topo in 0usize..3,
+        ) {
+            let c = EngineConfig {
+                topology: Topology::ALL[topo], bsu_width: bsu, chunk, burst, tile, subtile,
+                scu_lanes: lanes, raster_scus: scus, raster_itus: itus, raster_feature_buffer: fbuf,
+                sort_cores: cores, table_capacity: cap, axi_data_bits: data, key_bits: key,
+                id_bits: id, ..EngineConfig::default()
+            };
+            if c.validate().is_ok() {
+                let _ = (c.format(), c.network(), c.sort_config(), c.raster_config(), c.bsu_latency());
+                proptest::prop_assert!(c.raster_config().subtiles_per_tile() <= 64);
+            }
+        }
     }
 }

@@ -9,12 +9,12 @@
 //! another version with an error naming the file and the version, and a malformed one with an
 //! error naming the file and the field (`sort_core.merge[1].interval: missing field ...`).
 //!
-//! # Schema `neo-latency/2`
+//! # Schema `neo-latency/3`
 //! ```text
 //! {
-//!   "schema": "neo-latency/2",
+//!   "schema": "neo-latency/3",
 //!   "doc": { field: explanation, ... },
-//!   "config": { the neo_gen::EngineConfig the RTL was generated from },
+//!   "config": { every field of the EngineConfig the RTL was generated from },
 //!   "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
 //!   "units": {
 //!     "neo_bsu": { "latency", "ii", "vectors", "cycles" },
@@ -45,10 +45,11 @@ use std::path::Path;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
+use crate::engine::EngineConfig;
 use crate::error::{InputError, InputResult};
 
 /// The schema identifier (and version) this crate writes and reads.
-pub const SCHEMA: &str = "neo-latency/2";
+pub const SCHEMA: &str = "neo-latency/3";
 
 /// The whole of `reports/latency.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -57,8 +58,8 @@ pub struct LatencyReport {
     pub schema: String,
     /// Field path to explanation, for a reader of the JSON.
     pub doc: BTreeMap<String, String>,
-    /// The generator configuration of the measured RTL.
-    pub config: RtlConfig,
+    /// The engine configuration of the measured RTL (every field).
+    pub config: EngineConfig,
     /// The memory model of the sorting-core measurements.
     pub memory: MemoryModel,
     /// Unit-level latency and throughput.
@@ -68,23 +69,6 @@ pub struct LatencyReport {
     /// The Rasterization Engine's measurements (absent: assumed by the reader).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub raster: Option<Raster>,
-}
-
-/// The generator configuration (`neo_gen::EngineConfig`) of the measured RTL: the fields a reader
-/// of the timing uses, typed, and the others as written.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RtlConfig {
-    /// BSU width (entries per vector).
-    pub bsu_width: u64,
-    /// Chunk size (entries sorted on chip per command).
-    pub chunk: u64,
-    /// Read burst in entries.
-    pub burst: u64,
-    /// Outstanding read bursts of the sorting core.
-    pub max_outstanding: u64,
-    /// Every other generator field, as the generator serialises it.
-    #[serde(flatten)]
-    pub other: BTreeMap<String, serde_json::Value>,
 }
 
 /// The memory model the sorting core was measured with.

@@ -105,7 +105,7 @@ impl Model<'_> {
         scratch: [u64; 2],
         stage: Stage,
     ) {
-        let c = self.cfg.pipeline.chunk as u64;
+        let c = self.cfg.engine.chunk as u64;
         let eb = self.eb;
         let cmds = conventional_sort(n, c);
         let chunks = n.div_ceil(c);
@@ -162,7 +162,7 @@ impl Model<'_> {
     /// DPS passes `passes` of frame `f` over the `len`-entry table at `table`, each chunk read
     /// and written back in place.
     fn dps_in_place(&self, segs: &mut Vec<Segment>, len: u64, table: u64, f: usize, passes: Range<usize>) {
-        let (c, eb) = (self.cfg.pipeline.chunk as u64, self.eb);
+        let (c, eb) = (self.cfg.engine.chunk as u64, self.eb);
         for p in passes {
             let mut off = 0;
             for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
@@ -200,7 +200,7 @@ impl Model<'_> {
                 }
                 _ => (self.layout.table(f + 1, t), Stage::SortTable),
             };
-            let c = self.cfg.pipeline.chunk as u64;
+            let c = self.cfg.engine.chunk as u64;
             let (a, b) = (tw.merge_a as u64, tw.merge_b as u64);
             let out = (tw.merge_out - tw.merge_out.min(tw.dropped_capacity)) as u64;
             let passes = tw.dps_passes as usize;
@@ -273,7 +273,7 @@ impl Model<'_> {
     fn hier_sort(&self, segs: &mut Vec<Segment>, tw: &TileWork, list: u64, cur: u64, sc: [u64; 3]) {
         let h = &tw.hier;
         let eb = self.eb;
-        let c = self.cfg.pipeline.chunk as u64;
+        let c = self.cfg.engine.chunk as u64;
         if h.entries == 0 {
             return;
         }

@@ -99,10 +99,10 @@ impl<'a> Model<'a> {
         let (eb, sort_cores, raster_cores, scus_per_core, itus_per_core, hier) = match accel {
             Accel::Neo => (
                 wl.info.sort_entry_bytes as u64,
-                cfg.neo.sort_cores,
-                cfg.neo.raster_cores,
-                cfg.neo.scus_per_core,
-                cfg.neo.itus_per_core,
+                cfg.engine.sort_cores as u32,
+                cfg.engine.raster_cores as u32,
+                cfg.engine.raster_scus as u32,
+                cfg.engine.raster_itus as u32,
                 strategy == Strategy::Hierarchical,
             ),
             Accel::Gscore { cores } => (
@@ -120,10 +120,10 @@ impl<'a> Model<'a> {
             );
         }
         cfg.check_buffers(eb as u32)?;
-        if wl.info.chunk != cfg.pipeline.chunk {
+        if wl.info.chunk != cfg.engine.chunk {
             return Err(format!(
                 "workload chunk {} differs from the configuration's pipeline.chunk {}",
-                wl.info.chunk, cfg.pipeline.chunk
+                wl.info.chunk, cfg.engine.chunk
             ));
         }
         let line = cfg.dram.line_bytes as u64;
