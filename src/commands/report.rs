@@ -178,6 +178,7 @@ mod tests {
             no_sweep: false,
             model: ModelArgs {
                 config: None,
+                engine: None,
                 latency: PathBuf::from(latency::DEFAULT_PATH),
                 raster_sample: 4,
             },
