@@ -40,7 +40,7 @@ fn main() {
     println!("cargo::rerun-if-changed=build.rs");
     println!("cargo::rerun-if-changed=build");
     println!("cargo::rerun-if-changed={FIXTURE_DIR}");
-    for var in ["NEO_HDL_DIR", "NEO_CACHE_DIR", "CI", "VERILATOR"] {
+    for var in ["NEO_HDL_DIR", "NEO_CACHE_DIR", "NEO_CONFIG", "CI", "VERILATOR"] {
         println!("cargo::rerun-if-env-changed={var}");
     }
     let out_dir = PathBuf::from(std::env::var_os("OUT_DIR").expect("OUT_DIR"));
@@ -53,7 +53,8 @@ fn main() {
 
 fn run(out_dir: &Path) -> Result<(), String> {
     let mut units = fixture_units()?;
-    let (gen_units, source) = gen_units()?;
+    let cfg = engine_config(out_dir)?;
+    let (gen_units, source) = gen_units(&cfg)?;
     units.extend(gen_units);
     println!("cargo::rustc-env=NEO_TB_HDL_SOURCE={source}");
 
@@ -210,19 +211,34 @@ fn fixture_units() -> Result<Vec<Unit>, String> {
         .collect()
 }
 
+/// The engine configuration to build the models of: the JSON file named by `NEO_CONFIG` (the
+/// format `neo gen --config` reads), else the default. Written to `OUT_DIR/engine_config.json`,
+/// which `neo_tb::config` reads back, so the benches check the configuration that was built.
+fn engine_config(out_dir: &Path) -> Result<neo_gen::EngineConfig, String> {
+    let cfg = match std::env::var_os("NEO_CONFIG").filter(|p| !p.is_empty()) {
+        Some(p) => {
+            println!("cargo::rerun-if-changed={}", Path::new(&p).display());
+            neo_gen::EngineConfig::from_json_file(Path::new(&p)).map_err(|e| format!("NEO_CONFIG: {e}"))?
+        }
+        None => neo_gen::EngineConfig::default(),
+    };
+    let json = serde_json::to_string_pretty(&cfg).map_err(|e| e.to_string())?;
+    fs::write(out_dir.join("engine_config.json"), json).map_err(|e| format!("engine_config.json: {e}"))?;
+    Ok(cfg)
+}
+
 /// The Neo tops from the generator, with their Verilog from `neo_gen` or from `$NEO_HDL_DIR`.
 /// Also returns a description of the source for the tests to print.
-fn gen_units() -> Result<(Vec<Unit>, String), String> {
-    let cfg = neo_gen::EngineConfig::default();
+fn gen_units(cfg: &neo_gen::EngineConfig) -> Result<(Vec<Unit>, String), String> {
     let hdl_dir = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()).map(PathBuf::from);
     // The lint waivers that go with the Verilog (hdl/lint.vlt), when there are any.
     let vlt_path = hdl_dir.clone().unwrap_or_else(|| PathBuf::from("../hdl")).join("lint.vlt");
     println!("cargo::rerun-if-changed={}", vlt_path.display());
     let vlt = fs::read_to_string(&vlt_path).ok();
     let mut units = Vec::new();
-    for iface in neo_gen::tops(&cfg) {
+    for iface in neo_gen::tops(cfg) {
         let mut files = Vec::new();
-        for f in neo_gen::files_for(&cfg, &iface.name) {
+        for f in neo_gen::files_for(cfg, &iface.name) {
             let name = if f.name.ends_with(".v") || f.name.ends_with(".sv") {
                 f.name
             } else {

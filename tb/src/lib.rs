@@ -69,7 +69,10 @@ pub fn require_models(what: &str) -> bool {
     false
 }
 
-/// The generator configuration the models in [`models`] were built from (the default one).
+/// The engine configuration the models in [`models`] were built from: the default, or the file
+/// named by `NEO_CONFIG` when this crate was built (`NEO_CONFIG=cfg.json cargo test -p neo-tb`
+/// cosimulates and measures that configuration).
 pub fn config() -> neo_gen::EngineConfig {
-    neo_gen::EngineConfig::default()
+    serde_json::from_str(include_str!(concat!(env!("OUT_DIR"), "/engine_config.json")))
+        .expect("build.rs writes the configuration it built")
 }
