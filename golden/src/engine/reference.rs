@@ -23,7 +23,7 @@ use super::memory::{
     Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES,
     RESULT_BYTES,
 };
-use super::regs::{Counter, Counters, FrameRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
+use super::regs::{Counter, Counters, FrameRegs, Reg, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
 use crate::raster::raster_tile;
 use crate::sort::{
@@ -44,6 +44,27 @@ pub struct FrameOutcome {
     pub overflows: u32,
     /// The counters; the cycle counters ([`Counter::is_golden`] false) are 0.
     pub counters: Counters,
+}
+
+impl FrameOutcome {
+    /// The outcome as the engine reports it: `read_reg(offset)` reads a 32-bit control
+    /// register (`STATUS`, `FIRST_OVERFLOW`, `OVERFLOWS` and both words of every counter), the
+    /// results come from `mem` at `regs.result_base`.
+    pub fn read_back(regs: &FrameRegs, mem: &Memory, mut read_reg: impl FnMut(u32) -> u32) -> FrameOutcome {
+        let mut counters = Counters::default();
+        for c in Counter::ALL {
+            let lo = read_reg(c.offset()) as u64;
+            let hi = read_reg(c.offset() + 4) as u64;
+            counters.0[c.index()] = lo | hi << 32;
+        }
+        FrameOutcome {
+            results: (0..regs.tiles as u64).map(|t| mem.read_result(regs.result_base, t)).collect(),
+            status: read_reg(Reg::Status.offset()),
+            first_overflow: read_reg(Reg::FirstOverflow.offset()),
+            overflows: read_reg(Reg::Overflows.offset()),
+            counters,
+        }
+    }
 }
 
 /// A frame the reference cannot run (bad data in memory or registers).
@@ -234,4 +255,82 @@ struct Cmd {
     len_a: u64,
     len_b: u64,
     dst: u64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sort::SortFormat;
+
+    fn one_tile(mem: &mut Memory, list: &[SortEntry]) -> FrameRegs {
+        let regs = FrameRegs {
+            tiles: 1,
+            width: 64,
+            height: 64,
+            desc_base: 0x1000,
+            result_base: 0x2000,
+            feat_base: 0x10_0000,
+            fb_base: 0x20_0000,
+            scratch_base: 0x100_0000,
+            ..FrameRegs::default()
+        };
+        let d = TileDescriptor {
+            from_scratch: true,
+            list: 0x8000,
+            list_len: list.len() as u32,
+            next: 0x9000,
+            ..TileDescriptor::default()
+        };
+        mem.write_descriptor(regs.desc_base, 0, &d);
+        mem.write_entries(&SortFormat::ARTIFACT, 0x8000, list);
+        regs
+    }
+
+    #[test]
+    fn a_culled_list_sorts_and_clears_every_valid_bit() {
+        let cfg = EngineConfig::default();
+        let list: Vec<SortEntry> = (0..600u32).map(|i| SortEntry::new((i * 7919) % 1000, i)).collect();
+        let mut mem = Memory::new();
+        let regs = one_tile(&mut mem, &list);
+        let out = execute_frame(&cfg, &regs, &mut mem).expect("frame");
+        assert_eq!(out.results, vec![TileResult { next_len: 600, overflow: false }]);
+        let table = mem.read_entries(&SortFormat::ARTIFACT, 0x9000, 600);
+        let mut want = list.clone();
+        want.sort_by_key(|e| e.order_key());
+        // No feature is present: every entry keeps its key and loses its valid bit.
+        assert_eq!(table, want.iter().map(|e| e.with_valid(false)).collect::<Vec<_>>());
+        // 600 entries: 3 chunks, 2 merge passes, so 3 stages of 600 entries.
+        assert_eq!(out.counters.get(Counter::RdSort), 8 * 3 * 600);
+        assert_eq!(out.counters.get(Counter::RdFeat), 32 * 600);
+        assert_eq!(out.counters.get(Counter::WrPixel), 4 * 4096);
+        assert_eq!(mem.read_pixel(0x20_0000 / 4 + 4095), [0; 3]);
+        assert_eq!(out.status, STATUS_DONE);
+    }
+
+    #[test]
+    fn the_reserved_id_is_an_error_naming_the_tile() {
+        let cfg = EngineConfig::default();
+        let mut mem = Memory::new();
+        let regs = one_tile(&mut mem, &[SortEntry::new(1, SortFormat::ARTIFACT.id_max())]);
+        let e = execute_frame(&cfg, &regs, &mut mem).expect_err("reserved id");
+        assert_eq!(e.tile, 0);
+        assert!(e.to_string().contains("reserved id"), "{e}");
+    }
+
+    #[test]
+    fn read_back_assembles_registers_and_results() {
+        let mut mem = Memory::new();
+        let regs = FrameRegs { tiles: 2, result_base: 0x100, ..FrameRegs::default() };
+        mem.write_result(0x100, 1, &TileResult { next_len: 9, overflow: true });
+        let out = FrameOutcome::read_back(&regs, &mem, |a| match a {
+            0x004 => 6,
+            0x040 => 1,
+            0x044 => 1,
+            a if a == Counter::WrPixel.offset() + 4 => 2,
+            _ => 0,
+        });
+        assert_eq!(out.results[1], TileResult { next_len: 9, overflow: true });
+        assert_eq!((out.status, out.first_overflow, out.overflows), (6, 1, 1));
+        assert_eq!(out.counters.get(Counter::WrPixel), 2 << 32);
+    }
 }
