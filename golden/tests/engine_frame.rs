@@ -115,7 +115,7 @@ fn reference_matches_pipeline_on_biker() {
     };
     let (scene, _) = load_scene(path.to_str().expect("utf-8 path"), false).expect("biker");
     let how = CaseScene::biker();
-    for c in [EngineCase::Orbit, EngineCase::Turn, EngineCase::Overflow] {
+    for c in EngineCase::ALL {
         case(&scene, &how, c, 3, [256, 256], &small_config());
     }
 }

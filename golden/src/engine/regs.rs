@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Bytes of the control port's address space (12-bit byte addresses).
+/// Width of the control port's byte addresses (a 4 KiB register space).
 pub const ADDR_BITS: u32 = 12;
 
 /// Width of a control-port register (AXI4-Lite data width).
