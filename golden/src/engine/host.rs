@@ -424,3 +424,27 @@ fn tile_pixels(out: &FrameOutput, d: &TileDescriptor, tile: u32) -> Vec<[u8; 3]>
     }
     px
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layout_regions_are_ordered_aligned_and_disjoint() {
+        let cfg = EngineConfig::default();
+        let l = MemoryLayout::new(&cfg, 80, 150_000).expect("fits 4 GiB");
+        let bases = [l.desc_base, l.result_base, l.fb_base, l.feat_base, l.scratch_base, l.table_bases[0]];
+        assert!(bases.windows(2).all(|w| w[0] < w[1]));
+        assert!(bases.iter().all(|b| b % PAGE == 0 && *b > 0));
+        assert_eq!(l.fb_base - l.result_base, PAGE, "80 results fit a page");
+        assert_eq!(l.table_bases[1] - l.table_bases[0], 80 * 65536 * 8);
+        assert_eq!(l.list_base + l.list_bytes, 1 << 32);
+    }
+
+    #[test]
+    fn a_map_beyond_the_address_width_is_refused() {
+        let cfg = EngineConfig { addr_bits: 16, ..EngineConfig::default() };
+        let e = MemoryLayout::new(&cfg, 4, 1000).expect_err("16-bit entry addresses");
+        assert!(e.to_string().contains("address widths"), "{e}");
+    }
+}
