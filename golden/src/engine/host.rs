@@ -4,6 +4,20 @@
 //! registers to program and what the frame must leave ([`Expected`], from the PIPELINE, not from
 //! [`super::execute_frame`]).
 //!
+//! # A harness, in outline
+//! ```text
+//! let mut session = EngineCase::Orbit.session(&scene, &CaseScene::biker(), 3, [256, 256], &cfg)?;
+//! let mut mem = Memory::new();                 // the AXI memory model's backing store
+//! while let Some(plan) = session.next_frame(&mut mem)? {
+//!     for (reg, v) in plan.regs.writes() { axil_write(reg.offset(), v) }
+//!     axil_write(Reg::Ctrl.offset(), CTRL_START);   // then run until STATUS has STATUS_DONE
+//!     if let Some(m) = plan.expected.compare(&mem) { fail(frame, m) }
+//!     let out = FrameOutcome::read_back(&plan.regs, &mem, axil_read);
+//!     if let Some(m) = plan.expected.compare_outcome(&out) { fail(frame, m) }
+//! }
+//! ```
+//! ([`super::execute_frame`] in place of the RTL passes the same checks: `golden/tests/engine_frame.rs`.)
+//!
 //! # Memory map ([`MemoryLayout`], 4 KiB-aligned regions, in this order)
 //! descriptors, results, frame buffer (tile-major), feature table (one word per Gaussian id),
 //! sort scratch (`2 * table_capacity` entries per sorting core), two table arenas
