@@ -1,7 +1,7 @@
 //! The Neo engine: its configuration (the one owner of every count and size of the generated
 //! RTL, shared by the generator (`gen/`), the test benches (`tb/`), the latency report and the
 //! cycle model (`sim/`)), its control registers ([`regs`]), its memory formats ([`memory`]), the
-//! memory-level reference of a frame ([`reference`]), and the host side of a whole-frame
+//! memory-level reference of a frame ([`mod@reference`]), and the host side of a whole-frame
 //! cosimulation ([`host`], [`expected`], [`cases`]).
 
 pub mod cases;
