@@ -1,7 +1,21 @@
-//! The Neo engine's configuration: the one owner of every count and size of the generated RTL,
-//! shared by the generator (`gen/`), the test benches (`tb/`), the latency report and the cycle
-//! model (`sim/`).
+//! The Neo engine: its configuration (the one owner of every count and size of the generated
+//! RTL, shared by the generator (`gen/`), the test benches (`tb/`), the latency report and the
+//! cycle model (`sim/`)), its control registers ([`regs`]), its memory formats ([`memory`]), the
+//! memory-level reference of a frame ([`mod@reference`]), and the host side of a whole-frame
+//! cosimulation ([`host`], [`expected`], [`cases`]).
 
+pub mod cases;
 mod config;
+pub mod expected;
+pub mod host;
+pub mod memory;
+pub mod reference;
+pub mod regs;
 
+pub use cases::{CaseScene, EngineCase};
 pub use config::{ConfigError, EngineConfig, SchedulerPolicy, Topology};
+pub use expected::{Expected, Mismatch, Place};
+pub use host::{EngineSession, FramePlan, MemoryLayout, SessionError};
+pub use memory::{Memory, TileDescriptor, TileResult};
+pub use reference::{execute_frame, FrameError, FrameOutcome};
+pub use regs::{Counter, Counters, FrameRegs, Reg};

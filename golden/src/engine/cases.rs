@@ -1,0 +1,167 @@
+//! The whole-frame cosimulation cases (issue 11): each is a trajectory, a resolution and an
+//! engine configuration derived from the caller's, for an [`EngineSession`] of a scene.
+//!
+//! | case | what it exercises |
+//! | --- | --- |
+//! | `orbit` | reuse frame after frame (DPS, insert, delete) |
+//! | `cut` | a scene cut at frame 1: every table from scratch, then reused |
+//! | `turn` | the camera orbits 180 degrees per frame with no cut: reuse across a full change of view and back |
+//! | `edge_tiles` | a resolution that is not a multiple of the tile, far camera: partial and empty tiles |
+//! | `overflow` | a small `table_capacity`: some tiles overflow (reported, nothing else written), the next frame from scratch |
+//! | `one_core` | one sorting core and one raster core: every tile on the same cores |
+//! | `many_cores` | two tiles, more cores than busy tiles |
+
+use super::host::{pipeline_for, EngineSession, SessionError};
+use super::EngineConfig;
+use crate::scene::Scene;
+use crate::source::robust_bounds;
+use crate::trajectory::{parse_trajectory, Trajectory};
+
+/// A whole-frame case.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EngineCase {
+    /// Orbit, reuse every frame.
+    Orbit,
+    /// A cut at frame 1.
+    Cut,
+    /// 180 degrees per frame, no cut.
+    Turn,
+    /// Partial and empty tiles.
+    EdgeTiles,
+    /// Tiles longer than the table capacity.
+    Overflow,
+    /// One sorting core, one raster core.
+    OneCore,
+    /// More cores than busy tiles.
+    ManyCores,
+}
+
+/// How to film a scene for the cases: orbit keys (`radius`, `height`, `target`, `fov`; no
+/// `start`, `rate`, `speed`, `frames`, `res` or `cut`, which the cases set), the same for a
+/// camera far enough that border tiles are empty, and the speed multiplier.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CaseScene {
+    /// Keys of the orbit.
+    pub orbit: String,
+    /// Keys of the far orbit (`edge_tiles`).
+    pub far_orbit: String,
+    /// Speed multiplier of the orbit (frame to frame motion).
+    pub speed: f64,
+}
+
+impl CaseScene {
+    /// The biker scene (`../shared/scenes/biker.ply`), framed as the raster-core bench frames it.
+    pub fn biker() -> CaseScene {
+        CaseScene {
+            orbit: "radius=5,height=0,target=0/-1.6/0,fov=56.145".into(),
+            far_orbit: "radius=14,height=0,target=0/-1.6/0,fov=56.145".into(),
+            speed: 4.0,
+        }
+    }
+
+    /// A synthetic scene at its default framing: [`CaseScene::SYNTHETIC`] (a box of random
+    /// Gaussians: the far orbit leaves border tiles empty).
+    pub fn synthetic() -> CaseScene {
+        CaseScene { orbit: String::new(), far_orbit: "radius=60".into(), speed: 4.0 }
+    }
+
+    /// The synthetic scene [`CaseScene::synthetic`] is made for (20000 Gaussians).
+    pub const SYNTHETIC: &'static str = "synthetic:blobs?gaussians=20000&seed=3";
+}
+
+impl EngineCase {
+    /// Every case.
+    pub const ALL: [EngineCase; 7] = [
+        EngineCase::Orbit,
+        EngineCase::Cut,
+        EngineCase::Turn,
+        EngineCase::EdgeTiles,
+        EngineCase::Overflow,
+        EngineCase::OneCore,
+        EngineCase::ManyCores,
+    ];
+
+    /// The case's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            EngineCase::Orbit => "orbit",
+            EngineCase::Cut => "cut",
+            EngineCase::Turn => "turn",
+            EngineCase::EdgeTiles => "edge_tiles",
+            EngineCase::Overflow => "overflow",
+            EngineCase::OneCore => "one_core",
+            EngineCase::ManyCores => "many_cores",
+        }
+    }
+
+    /// The case's trajectory of `frames` frames at about `res` (`[width, height]`) and its engine
+    /// configuration derived from `base`.
+    pub fn setup(
+        self,
+        scene: &Scene,
+        how: &CaseScene,
+        frames: usize,
+        res: [u32; 2],
+        base: &EngineConfig,
+    ) -> Result<(Trajectory, EngineConfig), SessionError> {
+        let mut cfg = base.clone();
+        let mut keys = how.orbit.clone();
+        let mut extra = format!("speed={}", how.speed);
+        let mut res = res;
+        match self {
+            EngineCase::Orbit => {}
+            EngineCase::Cut => extra.push_str(",cut=1"),
+            EngineCase::Turn => extra = "rate=5400".into(),
+            EngineCase::EdgeTiles => {
+                keys = how.far_orbit.clone();
+                res = [res[0].saturating_sub(27).max(8), res[1].saturating_sub(53).max(8)];
+            }
+            EngineCase::Overflow => {}
+            EngineCase::OneCore => (cfg.sort_cores, cfg.raster_cores) = (1, 1),
+            EngineCase::ManyCores => {
+                res = [128, 64];
+                (cfg.sort_cores, cfg.raster_cores) = (4, 3);
+            }
+        }
+        let sep = if keys.is_empty() { "" } else { "," };
+        let spec = format!("orbit:{keys}{sep}start=0,{extra},frames={frames},res={}x{}", res[0], res[1]);
+        let traj = parse_trajectory(&spec, robust_bounds(scene), frames)
+            .map_err(|e| SessionError::Trajectory(format!("case {}: {e}", self.name())))?;
+        if self == EngineCase::Overflow {
+            cfg.table_capacity = overflow_capacity(scene, &traj, &cfg)?;
+        }
+        cfg.validate()?;
+        Ok((traj, cfg))
+    }
+
+    /// [`EngineCase::setup`] and the session.
+    pub fn session<'s>(
+        self,
+        scene: &'s Scene,
+        how: &CaseScene,
+        frames: usize,
+        res: [u32; 2],
+        base: &EngineConfig,
+    ) -> Result<EngineSession<'s>, SessionError> {
+        let (traj, cfg) = self.setup(scene, how, frames, res, base)?;
+        EngineSession::new(scene, traj, &cfg)
+    }
+}
+
+/// A table capacity that some tiles of the first frame exceed but not all: the median of the
+/// tiles' list lengths (every tile is sorted from scratch in frame 0), at least the chunk.
+fn overflow_capacity(scene: &Scene, traj: &Trajectory, cfg: &EngineConfig) -> Result<usize, SessionError> {
+    let cam = traj.frames.first().ok_or(SessionError::NoFrames)?;
+    let mut p = pipeline_for(scene, cfg, cam.width, cam.height)?;
+    p.render_frame(cam, 0, true);
+    let mut lens: Vec<usize> = p.current_lists().map(|l| l.len()).collect();
+    lens.sort_unstable();
+    let cap = lens[(lens.len() - 1) / 2].max(cfg.chunk);
+    if cap >= lens[lens.len() - 1] {
+        return Err(SessionError::Trajectory(format!(
+            "case overflow: no capacity >= chunk {} lets some tiles of {lens:?} overflow but not all",
+            cfg.chunk
+        )));
+    }
+    Ok(cap)
+}

@@ -1,0 +1,464 @@
+//! The host side of a frame: from a scene and a trajectory, the golden pipeline (Neo strategy)
+//! produces every frame's preprocessing outputs; [`EngineSession::next_frame`] writes them into
+//! a [`Memory`] as the host would (descriptors, incoming lists, the feature table), returns the
+//! registers to program and what the frame must leave ([`Expected`], from the PIPELINE, not from
+//! [`super::execute_frame`]).
+//!
+//! # A harness, in outline
+//! ```text
+//! let mut session = EngineCase::Orbit.session(&scene, &CaseScene::biker(), 3, [256, 256], &cfg)?;
+//! let mut mem = Memory::new();                 // the AXI memory model's backing store
+//! while let Some(plan) = session.next_frame(&mut mem)? {
+//!     for (reg, v) in plan.regs.writes() { axil_write(reg.offset(), v) }
+//!     axil_write(Reg::Ctrl.offset(), CTRL_START);   // then run until STATUS has STATUS_DONE
+//!     if let Some(m) = plan.expected.compare(&mem) { fail(frame, m) }
+//!     let out = FrameOutcome::read_back(&plan.regs, &mem, axil_read);
+//!     if let Some(m) = plan.expected.compare_outcome(&out) { fail(frame, m) }
+//! }
+//! ```
+//! ([`super::execute_frame`] in place of the RTL passes the same checks: `golden/tests/engine_frame.rs`.)
+//!
+//! # Memory map ([`MemoryLayout`], 4 KiB-aligned regions, in this order)
+//! descriptors, results, frame buffer (tile-major), feature table (one word per Gaussian id),
+//! sort scratch (`2 * table_capacity` entries per sorting core), two table arenas
+//! (`tiles * table_capacity` entries each; frame `f` writes its next tables into arena `f % 2`
+//! and reads its previous tables from the other), incoming lists (compact, rewritten each frame).
+//!
+//! Tables are placed compactly: tile `t`'s next region follows tile `t - 1`'s and holds
+//! `min(prev_len + list_len, table_capacity)` entries (at most what the engine may write: a
+//! longer tile overflows and writes nothing). The previous table of a tile is the engine's own
+//! write-back of the previous frame (nothing is copied).
+//!
+//! # Cuts and overflow
+//! Frame 0 and the trajectory's cuts are sorted from scratch (every tile's list is its current
+//! list). A tile that overflows has no next table, so the frame after a frame with an overflow
+//! is sorted from scratch too (the host re-bins; the pipeline is told it is a cut). The
+//! overflowing tile's next region is filled with a canary and must be left as it is, its
+//! previous table too ([`super::expected::Untouched`]).
+
+use super::expected::{Expected, Untouched};
+use super::memory::{
+    entry_to_u64, Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
+    PIXEL_BYTES, RESULT_BYTES,
+};
+use super::reference::{sort_traffic, FrameOutcome};
+use super::regs::{Counter, Counters, FrameRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
+use super::EngineConfig;
+use crate::pipeline::{Formats, FrameOutput, Pipeline, PipelineConfig, Strategy};
+use crate::scene::Scene;
+use crate::sort::{DepthKeyCodec, SortEntry};
+use crate::trajectory::Trajectory;
+
+/// A session the host cannot set up or continue.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The configuration does not validate.
+    #[error(transparent)]
+    Config(#[from] super::ConfigError),
+    /// The golden pipeline refuses the scene or formats.
+    #[error("golden pipeline: {0}")]
+    Pipeline(#[from] crate::pipeline::PipelineError),
+    /// The memory map does not fit the address widths.
+    #[error("memory map: {0}")]
+    Layout(String),
+    /// A case's trajectory cannot be built.
+    #[error("trajectory: {0}")]
+    Trajectory(String),
+    /// The pipeline did not do what the host assumed (a bug).
+    #[error("host/pipeline disagreement: {0}")]
+    Inconsistent(String),
+    /// The trajectory has no frame.
+    #[error("the trajectory has no frame")]
+    NoFrames,
+}
+
+/// Where the host puts everything (byte addresses; see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryLayout {
+    /// Tile descriptors.
+    pub desc_base: u64,
+    /// Tile results.
+    pub result_base: u64,
+    /// Frame buffer (tile-major).
+    pub fb_base: u64,
+    /// Feature table.
+    pub feat_base: u64,
+    /// Sort scratch.
+    pub scratch_base: u64,
+    /// The two table arenas.
+    pub table_bases: [u64; 2],
+    /// Incoming lists.
+    pub list_base: u64,
+    /// Bytes available for the incoming lists of one frame.
+    pub list_bytes: u64,
+}
+
+const PAGE: u64 = 4096;
+
+impl MemoryLayout {
+    /// The map for `tiles` tiles and `gaussians` feature words; lists get the rest of the
+    /// address space (at most 4 GiB: entry addresses are 32-bit descriptor fields).
+    pub fn new(cfg: &EngineConfig, tiles: u64, gaussians: u64) -> Result<MemoryLayout, SessionError> {
+        let rc = cfg.raster_config();
+        let cap = cfg.table_capacity as u64;
+        let mut at = PAGE;
+        let mut region = |bytes: u64| {
+            let base = at;
+            at = (at + bytes).div_ceil(PAGE) * PAGE;
+            base
+        };
+        let desc_base = region(tiles * DESCRIPTOR_BYTES);
+        let result_base = region(tiles * RESULT_BYTES);
+        let fb_base = region(tiles * (rc.tile * rc.tile) as u64 * PIXEL_BYTES);
+        let feat_base = region(gaussians * FEATURE_BYTES);
+        let scratch_base = region(cfg.sort_cores as u64 * 2 * cap * ENTRY_BYTES);
+        let table_bases = [region(tiles * cap * ENTRY_BYTES), region(tiles * cap * ENTRY_BYTES)];
+        let list_base = region(0);
+        let top = (1u64 << cfg.axi_addr_bits.min(64 - 1)).min(ENTRY_BYTES << cfg.addr_bits.min(32));
+        if list_base >= top {
+            return Err(SessionError::Layout(format!(
+                "{tiles} tiles, {gaussians} Gaussians and table_capacity {cap} need 0x{list_base:x} bytes before \
+                 the lists, above the 0x{top:x} the address widths reach"
+            )));
+        }
+        Ok(MemoryLayout {
+            desc_base,
+            result_base,
+            fb_base,
+            feat_base,
+            scratch_base,
+            table_bases,
+            list_base,
+            list_bytes: top - list_base,
+        })
+    }
+}
+
+/// One frame for the engine: the host's writes are already in the memory passed to
+/// [`EngineSession::next_frame`]; program `regs`, start, then check against `expected`.
+#[derive(Clone, Debug)]
+pub struct FramePlan {
+    /// Frame index in the trajectory.
+    pub frame: usize,
+    /// Whether every tile is sorted from scratch.
+    pub from_scratch: bool,
+    /// The registers to program.
+    pub regs: FrameRegs,
+    /// What the frame must leave.
+    pub expected: Expected,
+}
+
+/// A table the engine left in memory: entry address and length.
+#[derive(Clone, Copy, Debug, Default)]
+struct Placed {
+    addr: u64,
+    len: u32,
+}
+
+/// Frames of one scene along one trajectory, for the engine (see the module docs).
+pub struct EngineSession<'s> {
+    cfg: EngineConfig,
+    traj: Trajectory,
+    pipeline: Pipeline<'s>,
+    layout: MemoryLayout,
+    gaussians: usize,
+    next: usize,
+    prev: Vec<Placed>,
+    present: Vec<bool>,
+    force_cut: bool,
+}
+
+impl<'s> EngineSession<'s> {
+    /// A session rendering `traj` (its cameras' resolution) of `scene` for engine `cfg`.
+    pub fn new(scene: &'s Scene, traj: Trajectory, cfg: &EngineConfig) -> Result<Self, SessionError> {
+        cfg.validate()?;
+        let first = traj.frames.first().ok_or(SessionError::NoFrames)?;
+        let pipeline = pipeline_for(scene, cfg, first.width, first.height)?;
+        let [gx, gy] = pipeline.grid();
+        let tiles = gx as u64 * gy as u64;
+        let layout = MemoryLayout::new(cfg, tiles, scene.len() as u64)?;
+        Ok(EngineSession {
+            cfg: cfg.clone(),
+            traj,
+            pipeline,
+            layout,
+            gaussians: scene.len(),
+            next: 0,
+            prev: vec![Placed::default(); tiles as usize],
+            present: vec![false; scene.len()],
+            force_cut: false,
+        })
+    }
+
+    /// The memory map.
+    pub fn layout(&self) -> &MemoryLayout {
+        &self.layout
+    }
+
+    /// The engine configuration.
+    pub fn config(&self) -> &EngineConfig {
+        &self.cfg
+    }
+
+    /// Frames in the trajectory.
+    pub fn frames(&self) -> usize {
+        self.traj.len()
+    }
+
+    /// Tiles per frame.
+    pub fn tiles(&self) -> usize {
+        self.prev.len()
+    }
+
+    /// Renders the next frame with the golden pipeline, writes the host's inputs for it into
+    /// `mem` (which holds the engine's previous frame) and returns the plan; `None` after the
+    /// last frame.
+    pub fn next_frame(&mut self, mem: &mut Memory) -> Result<Option<FramePlan>, SessionError> {
+        let f = self.next;
+        let Some(cam) = self.traj.frames.get(f).cloned() else { return Ok(None) };
+        self.next += 1;
+        let cut = f == 0 || self.traj.cuts.contains(&f) || self.force_cut;
+        let prev_tables: Vec<Vec<SortEntry>> = self.pipeline.tables().map(|t| t.to_vec()).collect();
+        let out = self.pipeline.render_frame(&cam, f, cut);
+        if out.stats.from_scratch != cut {
+            return Err(SessionError::Inconsistent(format!(
+                "frame {f}: the pipeline sorted from scratch = {}, the host expected {cut}",
+                out.stats.from_scratch
+            )));
+        }
+        let regs = self.regs(f, &cam);
+        let descriptors = self.write_lists(mem, f, cut, &prev_tables)?;
+        for (t, d) in descriptors.iter().enumerate() {
+            mem.write_descriptor(regs.desc_base, t as u64, d);
+        }
+        self.write_features(mem);
+        let expected = self.expected(mem, regs, descriptors, &prev_tables, &out);
+        self.force_cut = expected.outcome.overflows > 0;
+        for (t, d) in expected.descriptors.iter().enumerate() {
+            self.prev[t] = Placed { addr: d.next as u64, len: expected.outcome.results[t].next_len };
+        }
+        Ok(Some(FramePlan { frame: f, from_scratch: cut, regs, expected }))
+    }
+
+    fn regs(&self, f: usize, cam: &crate::camera::Camera) -> FrameRegs {
+        let l = &self.layout;
+        FrameRegs {
+            frame: f as u32,
+            tiles: self.prev.len() as u32,
+            width: cam.width,
+            height: cam.height,
+            desc_base: l.desc_base,
+            result_base: l.result_base,
+            feat_base: l.feat_base,
+            fb_base: l.fb_base,
+            scratch_base: l.scratch_base,
+        }
+    }
+
+    /// Writes every tile's incoming list (compact) and returns the descriptors.
+    fn write_lists(
+        &self,
+        mem: &mut Memory,
+        f: usize,
+        cut: bool,
+        prev_tables: &[Vec<SortEntry>],
+    ) -> Result<Vec<TileDescriptor>, SessionError> {
+        let fmt = self.cfg.format();
+        let cap = self.cfg.table_capacity as u64;
+        let gx = self.pipeline.grid()[0] as usize;
+        let mut list_at = self.layout.list_base / ENTRY_BYTES;
+        let list_end = list_at + self.layout.list_bytes / ENTRY_BYTES;
+        let mut next_at = self.layout.table_bases[f % 2] / ENTRY_BYTES;
+        let mut out = Vec::with_capacity(self.prev.len());
+        for (t, current) in self.pipeline.current_lists().enumerate() {
+            let list: Vec<SortEntry> = if cut {
+                current.to_vec()
+            } else {
+                let valid: std::collections::HashSet<u32> =
+                    prev_tables[t].iter().filter(|e| e.valid).map(|e| e.id).collect();
+                current.iter().filter(|e| !valid.contains(&e.id)).copied().collect()
+            };
+            if list_at + list.len() as u64 > list_end {
+                return Err(SessionError::Layout(format!(
+                    "frame {f}: the incoming lists exceed the address space"
+                )));
+            }
+            mem.write_entries(&fmt, list_at, &list);
+            let prev = if cut { Placed::default() } else { self.prev[t] };
+            let d = TileDescriptor {
+                tile_x: (t % gx) as u16,
+                tile_y: (t / gx) as u16,
+                from_scratch: cut,
+                prev: prev.addr as u32,
+                prev_len: prev.len,
+                list: list_at as u32,
+                list_len: list.len() as u32,
+                next: next_at as u32,
+            };
+            list_at += list.len() as u64;
+            next_at += (prev.len as u64 + list.len() as u64).min(cap);
+            out.push(d);
+        }
+        Ok(out)
+    }
+
+    /// Writes the feature word of every Gaussian present this frame and clears those present
+    /// in the previous frame only (the rest are still zero).
+    fn write_features(&mut self, mem: &mut Memory) {
+        let fmt = self.cfg.feature_format();
+        let word = self.layout.feat_base / FEATURE_BYTES;
+        for id in 0..self.gaussians {
+            let f = self.pipeline.feature(id as u32);
+            if f.is_some() || self.present[id] {
+                mem.write_feature(&fmt, word + id as u64, f);
+            }
+            self.present[id] = f.is_some();
+        }
+    }
+
+    /// The expected state from the pipeline's tables and frame; writes the canaries of
+    /// overflowing tiles.
+    fn expected(
+        &self,
+        mem: &mut Memory,
+        regs: FrameRegs,
+        descriptors: Vec<TileDescriptor>,
+        prev_tables: &[Vec<SortEntry>],
+        out: &FrameOutput,
+    ) -> Expected {
+        let (fmt, rc) = (self.cfg.format(), self.cfg.raster_config());
+        let (cap, chunk) = (self.cfg.table_capacity as u64, self.cfg.chunk as u64);
+        let mut o =
+            FrameOutcome { status: STATUS_DONE, first_overflow: NO_OVERFLOW, ..FrameOutcome::default() };
+        let (mut tables, mut untouched, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
+        for ((t, d), table) in descriptors.iter().enumerate().zip(self.pipeline.tables()) {
+            let t64 = t as u64;
+            let overflow = d.entries_in() > cap;
+            let table = if overflow { Vec::new() } else { table.to_vec() };
+            if overflow {
+                untouched.extend(self.overflow_regions(mem, t64, d, prev_tables));
+                o.status |= STATUS_OVERFLOW;
+                if o.overflows == 0 {
+                    o.first_overflow = t as u32;
+                }
+                o.overflows += 1;
+            } else {
+                let (rd, wr) = sort_traffic(d, table.len() as u64, chunk);
+                o.counters.add(Counter::TilesSorted, 1);
+                o.counters.add(Counter::EntriesSorted, d.entries_in());
+                o.counters.add(Counter::RdSort, ENTRY_BYTES * rd);
+                o.counters.add(Counter::WrSort, ENTRY_BYTES * wr);
+            }
+            add_raster_counters(&mut o.counters, table.len() as u64, (rc.tile * rc.tile) as u64);
+            o.results.push(TileResult { next_len: table.len() as u32, overflow });
+            pixels.push(if overflow {
+                vec![[0; 3]; (rc.tile * rc.tile) as usize]
+            } else {
+                tile_pixels(out, d, rc.tile)
+            });
+            tables.push(table);
+        }
+        let tiles = descriptors.len() as u64;
+        o.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES * tiles);
+        o.counters.add(Counter::WrResult, RESULT_BYTES * tiles);
+        Expected { regs, descriptors, tables, untouched, pixels, outcome: o, format: fmt, tile: rc.tile }
+    }
+
+    /// An overflowing tile's next region (filled with a canary now) and previous table.
+    fn overflow_regions(
+        &self,
+        mem: &mut Memory,
+        t: u64,
+        d: &TileDescriptor,
+        prev_tables: &[Vec<SortEntry>],
+    ) -> Vec<Untouched> {
+        let fmt = self.cfg.format();
+        let len = (d.prev_len as u64 + d.list_len as u64).min(self.cfg.table_capacity as u64);
+        let canary: Vec<u64> = (0..len).map(|i| 0xCA7A_0000_0000_0000 | (t << 32) | i).collect();
+        for (i, w) in canary.iter().enumerate() {
+            mem.write_u64(ENTRY_BYTES * (d.next as u64 + i as u64), *w);
+        }
+        let mut v = vec![Untouched { tile: t, addr: d.next as u64, words: canary }];
+        if !d.from_scratch && d.prev_len > 0 {
+            let words = prev_tables[t as usize].iter().map(|e| entry_to_u64(&fmt, e)).collect();
+            v.push(Untouched { tile: t, addr: d.prev as u64, words });
+        }
+        v
+    }
+}
+
+/// The golden pipeline (Neo strategy, no capacity cut, no references) for engine `cfg` at
+/// `width x height`.
+pub(crate) fn pipeline_for<'s>(
+    scene: &'s Scene,
+    cfg: &EngineConfig,
+    width: u32,
+    height: u32,
+) -> Result<Pipeline<'s>, SessionError> {
+    let pcfg = PipelineConfig {
+        strategy: Strategy::Neo,
+        raster: cfg.raster_config(),
+        chunk: cfg.chunk,
+        dps_passes: 1,
+        capacity: None,
+        compare_exact: false,
+        compare_float: false,
+        ssim: false,
+        exact_shortcut: true,
+    };
+    let formats =
+        Formats { feature: cfg.feature_format(), key: DepthKeyCodec::Fp16, sort: cfg.sort_config() };
+    Ok(Pipeline::new(scene, pcfg, formats, width, height)?)
+}
+
+/// The raster counters of one tile of `len` entries and `pixels` pixels.
+fn add_raster_counters(c: &mut Counters, len: u64, pixels: u64) {
+    c.add(Counter::TilesRastered, 1);
+    c.add(Counter::EntriesRastered, len);
+    c.add(Counter::RdTable, ENTRY_BYTES * len);
+    c.add(Counter::RdFeat, FEATURE_BYTES * len);
+    c.add(Counter::WrTable, ENTRY_BYTES * len);
+    c.add(Counter::WrPixel, PIXEL_BYTES * pixels);
+}
+
+/// Tile `d`'s pixels of the pipeline's frame (row-major, black outside the image).
+fn tile_pixels(out: &FrameOutput, d: &TileDescriptor, tile: u32) -> Vec<[u8; 3]> {
+    let img = &out.image;
+    let mut px = Vec::with_capacity((tile * tile) as usize);
+    for y in 0..tile {
+        for x in 0..tile {
+            let (gx, gy) = (d.tile_x as u32 * tile + x, d.tile_y as u32 * tile + y);
+            px.push(if gx < img.width && gy < img.height {
+                let i = 3 * (gy as usize * img.width as usize + gx as usize);
+                [img.data[i], img.data[i + 1], img.data[i + 2]]
+            } else {
+                [0; 3]
+            });
+        }
+    }
+    px
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layout_regions_are_ordered_aligned_and_disjoint() {
+        let cfg = EngineConfig::default();
+        let l = MemoryLayout::new(&cfg, 80, 150_000).expect("fits 4 GiB");
+        let bases = [l.desc_base, l.result_base, l.fb_base, l.feat_base, l.scratch_base, l.table_bases[0]];
+        assert!(bases.windows(2).all(|w| w[0] < w[1]));
+        assert!(bases.iter().all(|b| b % PAGE == 0 && *b > 0));
+        assert_eq!(l.fb_base - l.result_base, PAGE, "80 results fit a page");
+        assert_eq!(l.table_bases[1] - l.table_bases[0], 80 * 65536 * 8);
+        assert_eq!(l.list_base + l.list_bytes, 1 << 32);
+    }
+
+    #[test]
+    fn a_map_beyond_the_address_width_is_refused() {
+        let cfg = EngineConfig { addr_bits: 16, ..EngineConfig::default() };
+        let e = MemoryLayout::new(&cfg, 4, 1000).expect_err("16-bit entry addresses");
+        assert!(e.to_string().contains("address widths"), "{e}");
+    }
+}

@@ -1,0 +1,336 @@
+//! The memory-level reference of the engine: [`execute_frame`] runs one frame exactly as the
+//! contract's per-tile sequence does (docs/formats.md "Engine memory"): it reads the descriptors,
+//! lists, tables and feature words from a [`Memory`], issues the Sorting Core's commands (SORT,
+//! MERGE, DPS, MERGE_DELETE) on data read from it with golden's sort functions, writes every
+//! command's output back, writes the tile results, rasterises every tile with golden
+//! [`raster_tile`] and writes the pixels (tile-major) and the table write-back.
+//!
+//! It also counts the performance counters golden knows exactly ([`Counter::is_golden`]), from
+//! the elements each command and each raster tile actually moves:
+//! - a SORT / DPS of `L` entries reads and writes `L` entries; a MERGE reads and writes
+//!   `len_a + len_b`; a MERGE_DELETE reads `len_a + len_b` and writes the entries it keeps;
+//! - a raster tile of `len` entries reads its `len` table entries once (whatever its segments:
+//!   each segment is loaded once), one feature word per entry, writes `len` entries back and
+//!   all `tile * tile` pixels (`tile * tile / subtile` writes of `subtile` pixels), empty tiles
+//!   and pixels outside the image (black) included;
+//! - a descriptor read (32 bytes) and a result write (8 bytes) per tile.
+//!
+//! Which core runs a tile only moves its scratch buffers: the reference uses sorting core
+//! `t mod N` (the round-robin schedule) for tile `t`; the scratch contents are not part of the
+//! outcome.
+
+use super::memory::{
+    Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES,
+    RESULT_BYTES,
+};
+use super::regs::{Counter, Counters, FrameRegs, Reg, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
+use super::EngineConfig;
+use crate::raster::raster_tile;
+use crate::sort::{
+    conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, SortEntry, SortMode, Sorter,
+};
+
+/// What a frame leaves besides memory: the registers and the golden counters.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FrameOutcome {
+    /// Every tile's result (as written to memory).
+    pub results: Vec<TileResult>,
+    /// `STATUS` after the frame ([`STATUS_DONE`], plus [`STATUS_OVERFLOW`] when a tile
+    /// overflowed).
+    pub status: u32,
+    /// `FIRST_OVERFLOW` ([`NO_OVERFLOW`] when none).
+    pub first_overflow: u32,
+    /// `OVERFLOWS`.
+    pub overflows: u32,
+    /// The counters; the cycle counters ([`Counter::is_golden`] false) are 0.
+    pub counters: Counters,
+}
+
+impl FrameOutcome {
+    /// The outcome as the engine reports it: `read_reg(offset)` reads a 32-bit control
+    /// register (`STATUS`, `FIRST_OVERFLOW`, `OVERFLOWS` and both words of every counter), the
+    /// results come from `mem` at `regs.result_base`.
+    pub fn read_back(regs: &FrameRegs, mem: &Memory, mut read_reg: impl FnMut(u32) -> u32) -> FrameOutcome {
+        let mut counters = Counters::default();
+        for c in Counter::ALL {
+            let lo = read_reg(c.offset()) as u64;
+            let hi = read_reg(c.offset() + 4) as u64;
+            counters.0[c.index()] = lo | hi << 32;
+        }
+        FrameOutcome {
+            results: (0..regs.tiles as u64).map(|t| mem.read_result(regs.result_base, t)).collect(),
+            status: read_reg(Reg::Status.offset()),
+            first_overflow: read_reg(Reg::FirstOverflow.offset()),
+            overflows: read_reg(Reg::Overflows.offset()),
+            counters,
+        }
+    }
+}
+
+/// A frame the reference cannot run (bad data in memory or registers).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("engine frame: tile {tile}: {problem}")]
+pub struct FrameError {
+    /// The tile index.
+    pub tile: u64,
+    /// What is wrong.
+    pub problem: String,
+}
+
+/// The closed-form sort traffic of one sorted tile (entries read, entries written) for a tile
+/// whose sort keeps `next_len` entries: the conventional sort reads and writes the list once per
+/// stage (`1 + merge_pass_count` stages); a reuse tile adds the DPS (the previous table read
+/// and written once) and the MERGE_DELETE (both inputs read, `next_len` written).
+pub fn sort_traffic(d: &TileDescriptor, next_len: u64, chunk: u64) -> (u64, u64) {
+    let n = d.list_len as u64;
+    let conventional = if n == 0 { 0 } else { n * (1 + merge_pass_count(n, chunk)) };
+    if d.from_scratch {
+        return (conventional, conventional);
+    }
+    let prev = d.prev_len as u64;
+    (conventional + prev + prev + n, conventional + prev + next_len)
+}
+
+/// Runs one frame on `mem` (see the module docs).
+pub fn execute_frame(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    mem: &mut Memory,
+) -> Result<FrameOutcome, FrameError> {
+    let mut run = FrameRun::new(cfg, regs);
+    for t in 0..regs.tiles as u64 {
+        let d = mem.read_descriptor(regs.desc_base, t);
+        run.out.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES);
+        let result = run.sort_tile(mem, t, &d)?;
+        mem.write_result(regs.result_base, t, &result);
+        run.out.counters.add(Counter::WrResult, RESULT_BYTES);
+        run.out.results.push(result);
+        run.raster_tile(mem, t, &d, result.next_len as u64);
+    }
+    let o = &mut run.out;
+    o.status = STATUS_DONE | if o.overflows > 0 { STATUS_OVERFLOW } else { 0 };
+    Ok(run.out)
+}
+
+/// One frame in progress.
+struct FrameRun<'c> {
+    cfg: &'c EngineConfig,
+    regs: FrameRegs,
+    sorter: Sorter,
+    out: FrameOutcome,
+}
+
+impl<'c> FrameRun<'c> {
+    fn new(cfg: &'c EngineConfig, regs: &FrameRegs) -> Self {
+        let out = FrameOutcome { first_overflow: NO_OVERFLOW, ..FrameOutcome::default() };
+        FrameRun { cfg, regs: *regs, sorter: Sorter::new(cfg.sort_config()), out }
+    }
+
+    /// The tile's sort (or its overflow): the per-tile command sequence of the contract.
+    fn sort_tile(&mut self, mem: &mut Memory, t: u64, d: &TileDescriptor) -> Result<TileResult, FrameError> {
+        let cap = self.cfg.table_capacity as u64;
+        if d.entries_in() > cap {
+            if self.out.overflows == 0 {
+                self.out.first_overflow = t as u32;
+            }
+            self.out.overflows += 1;
+            return Ok(TileResult { next_len: 0, overflow: true });
+        }
+        let chunk = self.cfg.chunk as u64;
+        let core = t % self.cfg.sort_cores as u64;
+        let s0 = self.regs.scratch_base / ENTRY_BYTES + core * 2 * cap;
+        let scratch = [s0, s0 + cap];
+        let n = d.list_len as u64;
+        let passes = merge_pass_count(n, chunk);
+        let last = if d.from_scratch { d.next as u64 } else { scratch[(passes % 2) as usize] };
+        for c in conventional_sort_plan(n, chunk) {
+            let src = if c.stage == 0 { d.list as u64 } else { scratch[((c.stage - 1) % 2) as usize] };
+            let dst = if c.stage == passes { last } else { scratch[(c.stage % 2) as usize] };
+            let cmd = Cmd {
+                mode: c.mode,
+                src_a: src + c.start,
+                len_a: c.len_a,
+                len_b: c.len_b,
+                dst: dst + c.start,
+            };
+            self.command(mem, t, &cmd)?;
+        }
+        let next_len = if d.from_scratch {
+            n
+        } else {
+            let prev = d.prev as u64;
+            for r in Parity::of(self.regs.frame as u64, 0).chunks(d.prev_len as usize, self.cfg.chunk) {
+                let at = prev + r.start as u64;
+                let cmd = Cmd { mode: SortMode::Dps, src_a: at, len_a: r.len() as u64, len_b: 0, dst: at };
+                self.command(mem, t, &cmd)?;
+            }
+            let cmd = Cmd {
+                mode: SortMode::MergeDelete,
+                src_a: prev,
+                len_a: d.prev_len as u64,
+                len_b: n,
+                dst: d.next as u64,
+            };
+            let b = scratch[(passes % 2) as usize];
+            self.merge(mem, &cmd, b, true)
+        };
+        self.out.counters.add(Counter::TilesSorted, 1);
+        self.out.counters.add(Counter::EntriesSorted, d.entries_in());
+        Ok(TileResult { next_len: next_len as u32, overflow: false })
+    }
+
+    /// One SORT / DPS / MERGE command (stream B of a MERGE follows stream A).
+    fn command(&mut self, mem: &mut Memory, t: u64, c: &Cmd) -> Result<(), FrameError> {
+        if c.mode == SortMode::Merge {
+            self.merge(mem, c, c.src_a + c.len_a, false);
+            return Ok(());
+        }
+        let fmt = self.cfg.format();
+        let mut chunk = mem.read_entries(&fmt, c.src_a, c.len_a as usize);
+        if let Some(e) = chunk.iter().find(|e| e.id == fmt.id_max()) {
+            let problem = format!("entry at 0x{:x} carries the reserved id 0x{:x}", c.src_a, e.id);
+            return Err(FrameError { tile: t, problem });
+        }
+        self.sorter.sort_chunk(&mut chunk, &mut ChunkWork::default());
+        mem.write_entries(&fmt, c.dst, &chunk);
+        self.out.counters.add(Counter::RdSort, ENTRY_BYTES * c.len_a);
+        self.out.counters.add(Counter::WrSort, ENTRY_BYTES * c.len_a);
+        Ok(())
+    }
+
+    /// A MERGE (`drop_invalid` false) or MERGE_DELETE of A at `c.src_a` and B at `src_b`;
+    /// returns the entries written.
+    fn merge(&mut self, mem: &mut Memory, c: &Cmd, src_b: u64, drop_invalid: bool) -> u64 {
+        let fmt = self.cfg.format();
+        let a = mem.read_entries(&fmt, c.src_a, c.len_a as usize);
+        let b = mem.read_entries(&fmt, src_b, c.len_b as usize);
+        let out = merge2(&a, &b, drop_invalid);
+        mem.write_entries(&fmt, c.dst, &out);
+        self.out.counters.add(Counter::RdSort, ENTRY_BYTES * (c.len_a + c.len_b));
+        self.out.counters.add(Counter::WrSort, ENTRY_BYTES * out.len() as u64);
+        out.len() as u64
+    }
+
+    /// The tile's raster: table `next` of `len` entries, write-back in place, pixels tile-major.
+    fn raster_tile(&mut self, mem: &mut Memory, t: u64, d: &TileDescriptor, len: u64) {
+        let (sfmt, ffmt, rc) = (self.cfg.format(), self.cfg.feature_format(), self.cfg.raster_config());
+        let table = mem.read_entries(&sfmt, d.next as u64, len as usize);
+        let feat_word = self.regs.feat_base / FEATURE_BYTES;
+        let feats: Vec<_> = table.iter().map(|e| mem.read_feature(&ffmt, feat_word + e.id as u64)).collect();
+        let present: Vec<_> = feats.iter().flatten().copied().collect();
+        let (w, h) = (self.regs.width, self.regs.height);
+        let r = raster_tile(&present, &ffmt, d.tile_x as u32, d.tile_y as u32, w, h, &rc);
+        let mut j = 0;
+        let back: Vec<SortEntry> = table
+            .iter()
+            .zip(&feats)
+            .map(|(e, f)| match f {
+                None => e.with_valid(false),
+                Some(f) => {
+                    j += 1;
+                    SortEntry { valid: r.valid[j - 1], key: f.depth_key, id: e.id }
+                }
+            })
+            .collect();
+        mem.write_entries(&sfmt, d.next as u64, &back);
+        let pixels = (rc.tile * rc.tile) as u64;
+        let base = self.regs.fb_base / PIXEL_BYTES + t * pixels;
+        for (k, p) in r.pixels.iter().enumerate() {
+            mem.write_pixel(base + k as u64, *p);
+        }
+        let c = &mut self.out.counters;
+        c.add(Counter::TilesRastered, 1);
+        c.add(Counter::EntriesRastered, len);
+        c.add(Counter::RdTable, ENTRY_BYTES * len);
+        c.add(Counter::RdFeat, FEATURE_BYTES * len);
+        c.add(Counter::WrTable, ENTRY_BYTES * len);
+        c.add(Counter::WrPixel, PIXEL_BYTES * pixels);
+    }
+}
+
+/// A Sorting Core command at entry addresses (stream B of a MERGE follows stream A).
+struct Cmd {
+    mode: SortMode,
+    src_a: u64,
+    len_a: u64,
+    len_b: u64,
+    dst: u64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sort::SortFormat;
+
+    fn one_tile(mem: &mut Memory, list: &[SortEntry]) -> FrameRegs {
+        let regs = FrameRegs {
+            tiles: 1,
+            width: 64,
+            height: 64,
+            desc_base: 0x1000,
+            result_base: 0x2000,
+            feat_base: 0x10_0000,
+            fb_base: 0x20_0000,
+            scratch_base: 0x100_0000,
+            ..FrameRegs::default()
+        };
+        let d = TileDescriptor {
+            from_scratch: true,
+            list: 0x8000,
+            list_len: list.len() as u32,
+            next: 0x9000,
+            ..TileDescriptor::default()
+        };
+        mem.write_descriptor(regs.desc_base, 0, &d);
+        mem.write_entries(&SortFormat::ARTIFACT, 0x8000, list);
+        regs
+    }
+
+    #[test]
+    fn a_culled_list_sorts_and_clears_every_valid_bit() {
+        let cfg = EngineConfig::default();
+        let list: Vec<SortEntry> = (0..600u32).map(|i| SortEntry::new((i * 7919) % 1000, i)).collect();
+        let mut mem = Memory::new();
+        let regs = one_tile(&mut mem, &list);
+        let out = execute_frame(&cfg, &regs, &mut mem).expect("frame");
+        assert_eq!(out.results, vec![TileResult { next_len: 600, overflow: false }]);
+        let table = mem.read_entries(&SortFormat::ARTIFACT, 0x9000, 600);
+        let mut want = list.clone();
+        want.sort_by_key(|e| e.order_key());
+        // No feature is present: every entry keeps its key and loses its valid bit.
+        assert_eq!(table, want.iter().map(|e| e.with_valid(false)).collect::<Vec<_>>());
+        // 600 entries: 3 chunks, 2 merge passes, so 3 stages of 600 entries.
+        assert_eq!(out.counters.get(Counter::RdSort), 8 * 3 * 600);
+        assert_eq!(out.counters.get(Counter::RdFeat), 32 * 600);
+        assert_eq!(out.counters.get(Counter::WrPixel), 4 * 4096);
+        assert_eq!(mem.read_pixel(0x20_0000 / 4 + 4095), [0; 3]);
+        assert_eq!(out.status, STATUS_DONE);
+    }
+
+    #[test]
+    fn the_reserved_id_is_an_error_naming_the_tile() {
+        let cfg = EngineConfig::default();
+        let mut mem = Memory::new();
+        let regs = one_tile(&mut mem, &[SortEntry::new(1, SortFormat::ARTIFACT.id_max())]);
+        let e = execute_frame(&cfg, &regs, &mut mem).expect_err("reserved id");
+        assert_eq!(e.tile, 0);
+        assert!(e.to_string().contains("reserved id"), "{e}");
+    }
+
+    #[test]
+    fn read_back_assembles_registers_and_results() {
+        let mut mem = Memory::new();
+        let regs = FrameRegs { tiles: 2, result_base: 0x100, ..FrameRegs::default() };
+        mem.write_result(0x100, 1, &TileResult { next_len: 9, overflow: true });
+        let out = FrameOutcome::read_back(&regs, &mem, |a| match a {
+            0x004 => 6,
+            0x040 => 1,
+            0x044 => 1,
+            a if a == Counter::WrPixel.offset() + 4 => 2,
+            _ => 0,
+        });
+        assert_eq!(out.results[1], TileResult { next_len: 9, overflow: true });
+        assert_eq!((out.status, out.first_overflow, out.overflows), (6, 1, 1));
+        assert_eq!(out.counters.get(Counter::WrPixel), 2 << 32);
+    }
+}

@@ -1,0 +1,377 @@
+//! The engine's control port: the AXI4-Lite register map (32-bit data, 12-bit byte addresses),
+//! the STATUS bits and the performance counters (docs/formats.md "Engine control registers").
+//!
+//! This is the one definition of the map: the generator decodes [`Reg::offset`] and
+//! [`Counter::offset`], the test benches program [`FrameRegs::writes`] and read the counters
+//! back with [`Counter::ALL`].
+
+use serde::{Deserialize, Serialize};
+
+/// Width of the control port's byte addresses (a 4 KiB register space).
+pub const ADDR_BITS: u32 = 12;
+
+/// Width of a control-port register (AXI4-Lite data width).
+pub const DATA_BITS: u32 = 32;
+
+/// `CTRL` bit 0: start a frame (write 1; ignored while busy).
+pub const CTRL_START: u32 = 1 << 0;
+
+/// `STATUS` bit 0: a frame is running.
+pub const STATUS_BUSY: u32 = 1 << 0;
+/// `STATUS` bit 1: the last frame is done (cleared by the next start).
+pub const STATUS_DONE: u32 = 1 << 1;
+/// `STATUS` bit 2: at least one tile of the last frame overflowed the table capacity.
+pub const STATUS_OVERFLOW: u32 = 1 << 2;
+
+/// `FIRST_OVERFLOW` when no tile overflowed.
+pub const NO_OVERFLOW: u32 = u32::MAX;
+
+/// Access of a register from the control port.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Access {
+    /// Write only (reads return 0).
+    W,
+    /// Read only (writes are ignored).
+    R,
+    /// Read and write.
+    RW,
+}
+
+/// A 32-bit register of the control port (the counters are [`Counter`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Reg {
+    /// 0x000: bit 0 start ([`CTRL_START`]).
+    Ctrl,
+    /// 0x004: [`STATUS_BUSY`], [`STATUS_DONE`], [`STATUS_OVERFLOW`].
+    Status,
+    /// 0x008: frame index (the DPS parity of the frame: [`crate::sort::Parity::of`]).
+    Frame,
+    /// 0x00C: tile descriptors of the frame.
+    Tiles,
+    /// 0x010: image width in pixels.
+    Width,
+    /// 0x014: image height in pixels.
+    Height,
+    /// 0x018: descriptor base (bytes), low word.
+    DescBaseLo,
+    /// 0x01C: descriptor base, high word.
+    DescBaseHi,
+    /// 0x020: result base (bytes), low word.
+    ResultBaseLo,
+    /// 0x024: result base, high word.
+    ResultBaseHi,
+    /// 0x028: feature-table base (bytes, 32-byte aligned), low word.
+    FeatBaseLo,
+    /// 0x02C: feature-table base, high word.
+    FeatBaseHi,
+    /// 0x030: frame-buffer base (bytes, 4-byte aligned), low word.
+    FbBaseLo,
+    /// 0x034: frame-buffer base, high word.
+    FbBaseHi,
+    /// 0x038: sort scratch base (bytes, 8-byte aligned; `2 * table_capacity` entries per
+    /// sorting core), low word.
+    ScratchBaseLo,
+    /// 0x03C: sort scratch base, high word.
+    ScratchBaseHi,
+    /// 0x040: lowest overflowing tile index of the last frame, [`NO_OVERFLOW`] when none.
+    FirstOverflow,
+    /// 0x044: tiles of the last frame that overflowed.
+    Overflows,
+}
+
+impl Reg {
+    /// Every register, in address order.
+    pub const ALL: [Reg; 18] = [
+        Reg::Ctrl,
+        Reg::Status,
+        Reg::Frame,
+        Reg::Tiles,
+        Reg::Width,
+        Reg::Height,
+        Reg::DescBaseLo,
+        Reg::DescBaseHi,
+        Reg::ResultBaseLo,
+        Reg::ResultBaseHi,
+        Reg::FeatBaseLo,
+        Reg::FeatBaseHi,
+        Reg::FbBaseLo,
+        Reg::FbBaseHi,
+        Reg::ScratchBaseLo,
+        Reg::ScratchBaseHi,
+        Reg::FirstOverflow,
+        Reg::Overflows,
+    ];
+
+    /// Byte address on the control port.
+    pub const fn offset(self) -> u32 {
+        4 * self as u32
+    }
+
+    /// The register's name (as in docs and the RTL).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Reg::Ctrl => "CTRL",
+            Reg::Status => "STATUS",
+            Reg::Frame => "FRAME",
+            Reg::Tiles => "TILES",
+            Reg::Width => "WIDTH",
+            Reg::Height => "HEIGHT",
+            Reg::DescBaseLo => "DESC_BASE_LO",
+            Reg::DescBaseHi => "DESC_BASE_HI",
+            Reg::ResultBaseLo => "RESULT_BASE_LO",
+            Reg::ResultBaseHi => "RESULT_BASE_HI",
+            Reg::FeatBaseLo => "FEAT_BASE_LO",
+            Reg::FeatBaseHi => "FEAT_BASE_HI",
+            Reg::FbBaseLo => "FB_BASE_LO",
+            Reg::FbBaseHi => "FB_BASE_HI",
+            Reg::ScratchBaseLo => "SCRATCH_BASE_LO",
+            Reg::ScratchBaseHi => "SCRATCH_BASE_HI",
+            Reg::FirstOverflow => "FIRST_OVERFLOW",
+            Reg::Overflows => "OVERFLOWS",
+        }
+    }
+
+    /// Access from the control port.
+    pub const fn access(self) -> Access {
+        match self {
+            Reg::Ctrl => Access::W,
+            Reg::Status | Reg::FirstOverflow | Reg::Overflows => Access::R,
+            _ => Access::RW,
+        }
+    }
+
+    /// The register at byte address `offset`, if any.
+    pub fn at(offset: u32) -> Option<Reg> {
+        Reg::ALL.iter().copied().find(|r| r.offset() == offset)
+    }
+}
+
+/// A 64-bit performance counter, read as two words at [`Counter::offset`] (low) and `+ 4`
+/// (high). Every counter is reset by a start; the byte counters count the bytes of the elements
+/// the cores' bridges deliver or accept (entries 8, feature words 32, pixels 4, descriptors 32,
+/// results 8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum Counter {
+    /// 0: cycles from start to done.
+    Cycles,
+    /// 1: cycles with any sorting core busy.
+    SortBusy,
+    /// 2: cycles with any raster core busy.
+    RasterBusy,
+    /// 3: tiles sorted (overflowing tiles are not sorted).
+    TilesSorted,
+    /// 4: tiles rastered (every tile, overflowing ones too).
+    TilesRastered,
+    /// 5: sum of `list_len + prev_len` over the sorted tiles.
+    EntriesSorted,
+    /// 6: sum of `next_len` over the rastered tiles.
+    EntriesRastered,
+    /// 7: bytes of tile descriptors read.
+    RdDesc,
+    /// 8: bytes the sorting cores read.
+    RdSort,
+    /// 9: bytes the sorting cores wrote.
+    WrSort,
+    /// 10: bytes of table entries the raster cores read.
+    RdTable,
+    /// 11: bytes of feature words the raster cores read.
+    RdFeat,
+    /// 12: bytes of table entries the raster cores wrote back.
+    WrTable,
+    /// 13: bytes of pixels the raster cores wrote.
+    WrPixel,
+    /// 14: bytes of tile results written.
+    WrResult,
+}
+
+/// Number of performance counters.
+pub const COUNTERS: usize = 15;
+
+/// Byte address of counter 0's low word.
+pub const COUNTER_BASE: u32 = 0x100;
+
+impl Counter {
+    /// Every counter, in index order.
+    pub const ALL: [Counter; COUNTERS] = [
+        Counter::Cycles,
+        Counter::SortBusy,
+        Counter::RasterBusy,
+        Counter::TilesSorted,
+        Counter::TilesRastered,
+        Counter::EntriesSorted,
+        Counter::EntriesRastered,
+        Counter::RdDesc,
+        Counter::RdSort,
+        Counter::WrSort,
+        Counter::RdTable,
+        Counter::RdFeat,
+        Counter::WrTable,
+        Counter::WrPixel,
+        Counter::WrResult,
+    ];
+
+    /// The counter's index `k`.
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Byte address of the low word (`0x100 + 8 k`); the high word is at `+ 4`.
+    pub const fn offset(self) -> u32 {
+        COUNTER_BASE + 8 * self as u32
+    }
+
+    /// The counter's name (as in docs and the RTL).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Counter::Cycles => "CYCLES",
+            Counter::SortBusy => "SORT_BUSY",
+            Counter::RasterBusy => "RASTER_BUSY",
+            Counter::TilesSorted => "TILES_SORTED",
+            Counter::TilesRastered => "TILES_RASTERED",
+            Counter::EntriesSorted => "ENTRIES_SORTED",
+            Counter::EntriesRastered => "ENTRIES_RASTERED",
+            Counter::RdDesc => "RD_DESC",
+            Counter::RdSort => "RD_SORT",
+            Counter::WrSort => "WR_SORT",
+            Counter::RdTable => "RD_TABLE",
+            Counter::RdFeat => "RD_FEAT",
+            Counter::WrTable => "WR_TABLE",
+            Counter::WrPixel => "WR_PIXEL",
+            Counter::WrResult => "WR_RESULT",
+        }
+    }
+
+    /// Whether golden knows the counter exactly (every counter but the cycle counts, which
+    /// depend on the RTL's timing).
+    pub const fn is_golden(self) -> bool {
+        !matches!(self, Counter::Cycles | Counter::SortBusy | Counter::RasterBusy)
+    }
+}
+
+/// The values of every performance counter, indexed by [`Counter`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Counters(pub [u64; COUNTERS]);
+
+impl Counters {
+    /// The value of `c`.
+    pub fn get(&self, c: Counter) -> u64 {
+        self.0[c.index()]
+    }
+
+    /// Adds `v` to `c`.
+    pub fn add(&mut self, c: Counter, v: u64) {
+        self.0[c.index()] += v;
+    }
+
+    /// The first golden counter ([`Counter::is_golden`]) whose value differs between `self`
+    /// (expected) and `actual`: `(counter, expected, actual)`.
+    pub fn first_golden_mismatch(&self, actual: &Counters) -> Option<(Counter, u64, u64)> {
+        Counter::ALL
+            .iter()
+            .copied()
+            .filter(|c| c.is_golden())
+            .find(|&c| self.get(c) != actual.get(c))
+            .map(|c| (c, self.get(c), actual.get(c)))
+    }
+}
+
+/// The programmable registers of one frame (what the host writes before `CTRL.start`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FrameRegs {
+    /// Frame index ([`Reg::Frame`]).
+    pub frame: u32,
+    /// Tile descriptors ([`Reg::Tiles`]).
+    pub tiles: u32,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Descriptor base (bytes, 32-byte aligned).
+    pub desc_base: u64,
+    /// Result base (bytes, 8-byte aligned).
+    pub result_base: u64,
+    /// Feature-table base (bytes, 32-byte aligned).
+    pub feat_base: u64,
+    /// Frame-buffer base (bytes, 4-byte aligned).
+    pub fb_base: u64,
+    /// Sort scratch base (bytes, 8-byte aligned).
+    pub scratch_base: u64,
+}
+
+impl FrameRegs {
+    /// The register writes that program this frame, in address order (`CTRL` not included).
+    pub fn writes(&self) -> Vec<(Reg, u32)> {
+        let split = |lo: Reg, hi: Reg, v: u64| [(lo, v as u32), (hi, (v >> 32) as u32)];
+        let mut w = vec![
+            (Reg::Frame, self.frame),
+            (Reg::Tiles, self.tiles),
+            (Reg::Width, self.width),
+            (Reg::Height, self.height),
+        ];
+        w.extend(split(Reg::DescBaseLo, Reg::DescBaseHi, self.desc_base));
+        w.extend(split(Reg::ResultBaseLo, Reg::ResultBaseHi, self.result_base));
+        w.extend(split(Reg::FeatBaseLo, Reg::FeatBaseHi, self.feat_base));
+        w.extend(split(Reg::FbBaseLo, Reg::FbBaseHi, self.fb_base));
+        w.extend(split(Reg::ScratchBaseLo, Reg::ScratchBaseHi, self.scratch_base));
+        w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn register_offsets_are_the_contract() {
+        let map: Vec<(u32, &str)> = Reg::ALL.iter().map(|r| (r.offset(), r.name())).collect();
+        assert_eq!(map[0], (0x000, "CTRL"));
+        assert_eq!(map[1], (0x004, "STATUS"));
+        assert_eq!(map[5], (0x014, "HEIGHT"));
+        assert_eq!(map[14], (0x038, "SCRATCH_BASE_LO"));
+        assert_eq!(map[16], (0x040, "FIRST_OVERFLOW"));
+        assert_eq!(map[17], (0x044, "OVERFLOWS"));
+        for r in Reg::ALL {
+            assert_eq!(Reg::at(r.offset()), Some(r));
+            assert!(r.offset() < 1 << ADDR_BITS);
+        }
+        assert_eq!(Reg::at(0x048), None);
+        assert_eq!(Reg::Ctrl.access(), Access::W);
+        assert_eq!(Reg::Overflows.access(), Access::R);
+        assert_eq!(Reg::FbBaseHi.access(), Access::RW);
+    }
+
+    #[test]
+    fn counters_follow_the_registers() {
+        assert_eq!(Counter::Cycles.offset(), 0x100);
+        assert_eq!(Counter::WrResult.offset(), 0x100 + 8 * 14);
+        assert_eq!(Counter::EntriesRastered.name(), "ENTRIES_RASTERED");
+        for (k, c) in Counter::ALL.iter().enumerate() {
+            assert_eq!(c.index(), k);
+            assert!(c.offset() + 4 < 1 << ADDR_BITS);
+            assert!(Reg::at(c.offset()).is_none());
+        }
+        assert_eq!(Counter::ALL.iter().filter(|c| !c.is_golden()).count(), 3);
+    }
+
+    #[test]
+    fn first_golden_mismatch_skips_cycle_counters() {
+        let want = Counters::default();
+        let mut got = Counters::default();
+        got.add(Counter::Cycles, 1000);
+        assert_eq!(want.first_golden_mismatch(&got), None);
+        got.add(Counter::WrPixel, 4);
+        got.add(Counter::RdFeat, 32);
+        assert_eq!(want.first_golden_mismatch(&got), Some((Counter::RdFeat, 0, 32)));
+    }
+
+    #[test]
+    fn frame_writes_split_the_bases() {
+        let r = FrameRegs { frame: 3, fb_base: 0x1_2345_6780, ..FrameRegs::default() };
+        let w = r.writes();
+        assert_eq!(w.len(), 14);
+        assert_eq!(w[0], (Reg::Frame, 3));
+        assert!(w.contains(&(Reg::FbBaseLo, 0x2345_6780)));
+        assert!(w.contains(&(Reg::FbBaseHi, 1)));
+        assert!(w.iter().all(|(r, _)| r.access() == Access::RW));
+    }
+}

@@ -1,0 +1,151 @@
+//! The engine's memory-level reference (`execute_frame`) against the golden pipeline, frame after
+//! frame, through the host session: every tile's result, next table (after the write-back) and
+//! pixels, the registers and the golden counters, for every whole-frame case.
+
+use neo_golden::engine::{
+    execute_frame, CaseScene, EngineCase, EngineConfig, EngineSession, Memory, Place, TileDescriptor,
+};
+use neo_golden::scene::Scene;
+use neo_golden::shared::shared_file_for_test;
+use neo_golden::source::load_scene;
+
+/// What a run saw, for the case-specific assertions.
+#[derive(Debug, Default)]
+struct Seen {
+    frames: usize,
+    tiles: usize,
+    from_scratch: Vec<bool>,
+    overflows: Vec<u32>,
+    empty_tiles: usize,
+    partial_tiles: usize,
+    reused_entries: u64,
+}
+
+/// Runs every frame of `session` through `execute_frame` and checks it against the plan.
+fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
+    let mut mem = Memory::new();
+    let mut seen = Seen { tiles: session.tiles(), ..Seen::default() };
+    while let Some(plan) = session.next_frame(&mut mem).expect("host frame") {
+        let out = execute_frame(cfg, &plan.regs, &mut mem).expect("reference frame");
+        if let Some(m) = plan.expected.compare(&mem) {
+            panic!("frame {}: {m}", plan.frame);
+        }
+        if let Some(m) = plan.expected.compare_outcome(&out) {
+            panic!("frame {}: {m}", plan.frame);
+        }
+        assert_eq!(out.results, plan.expected.outcome.results, "frame {}", plan.frame);
+        let (w, h, tile) = (plan.regs.width, plan.regs.height, cfg.raster_config().tile);
+        for d in &plan.expected.descriptors {
+            let TileDescriptor { tile_x, tile_y, .. } = *d;
+            seen.empty_tiles += (d.prev_len == 0 && d.list_len == 0) as usize;
+            let full = (tile_x as u32 + 1) * tile <= w && (tile_y as u32 + 1) * tile <= h;
+            seen.partial_tiles += !full as usize;
+            seen.reused_entries += if d.from_scratch { 0 } else { d.prev_len as u64 };
+        }
+        if std::env::var_os("ENGINE_DEBUG").is_some() {
+            let v: Vec<u64> = plan.expected.descriptors.iter().map(|d| d.entries_in()).collect();
+            eprintln!("frame {} entries_in {v:?}", plan.frame);
+        }
+        seen.frames += 1;
+        seen.from_scratch.push(plan.from_scratch);
+        seen.overflows.push(out.overflows);
+    }
+    seen
+}
+
+fn case(
+    scene: &Scene,
+    how: &CaseScene,
+    c: EngineCase,
+    frames: usize,
+    res: [u32; 2],
+    base: &EngineConfig,
+) -> Seen {
+    let (traj, cfg) = c.setup(scene, how, frames, res, base).expect("case setup");
+    let mut s = EngineSession::new(scene, traj, &cfg).expect("session");
+    let seen = run(&mut s, &cfg);
+    assert_eq!(seen.frames, frames, "{}", c.name());
+    check_case(c, &seen, &cfg);
+    seen
+}
+
+/// What each case is for actually happens.
+fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
+    let name = c.name();
+    assert!(s.from_scratch[0], "{name}: frame 0 from scratch");
+    match c {
+        EngineCase::Cut => assert_eq!(s.from_scratch, [true, true, false], "{name}"),
+        EngineCase::Overflow => {
+            let first = s.overflows[0];
+            assert!(first > 0 && (first as usize) < s.tiles, "{name}: {first} of {} tiles overflow", s.tiles);
+            assert!(s.from_scratch[1], "{name}: the frame after an overflow is from scratch");
+        }
+        EngineCase::EdgeTiles => {
+            assert!(s.partial_tiles > 0 && s.empty_tiles > 0, "{name}: {s:?}");
+        }
+        EngineCase::ManyCores => assert!(s.tiles < cfg.sort_cores && s.tiles < cfg.raster_cores, "{name}"),
+        EngineCase::Turn => assert!(!s.from_scratch[1], "{name}: frame 1 reuses the tables: {s:?}"),
+        _ => {
+            assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
+            assert!(s.reused_entries > 0, "{name}: tables reused");
+            assert!(s.overflows.iter().all(|&o| o == 0), "{name}: no overflow");
+        }
+    }
+}
+
+/// A small CI engine: 2 sorting cores, 2 raster cores, chunk 256.
+fn small_config() -> EngineConfig {
+    EngineConfig { sort_cores: 2, raster_cores: 2, ..EngineConfig::default() }
+}
+
+#[test]
+fn reference_matches_pipeline_on_every_case_synthetic() {
+    let (scene, _) = load_scene(CaseScene::SYNTHETIC, false).expect("synthetic scene");
+    let how = CaseScene::synthetic();
+    let base = small_config();
+    for c in EngineCase::ALL {
+        case(&scene, &how, c, 3, [128, 128], &base);
+    }
+}
+
+#[test]
+fn reference_matches_pipeline_on_biker() {
+    let Some(path) = shared_file_for_test("reference_matches_pipeline_on_biker", "scenes/biker.ply") else {
+        return;
+    };
+    let (scene, _) = load_scene(path.to_str().expect("utf-8 path"), false).expect("biker");
+    let how = CaseScene::biker();
+    for c in EngineCase::ALL {
+        case(&scene, &how, c, 3, [256, 256], &small_config());
+    }
+}
+
+/// The checker names a corrupted word (a table entry's key, a pixel, a counter).
+#[test]
+fn compare_names_the_first_corruption() {
+    let (scene, _) = load_scene("synthetic:outdoor?gaussians=5000&seed=3", false).expect("synthetic scene");
+    let cfg = small_config();
+    let mut s =
+        EngineCase::Orbit.session(&scene, &CaseScene::synthetic(), 1, [128, 64], &cfg).expect("session");
+    let mut mem = Memory::new();
+    let plan = s.next_frame(&mut mem).expect("frame").expect("one frame");
+    let out = execute_frame(&cfg, &plan.regs, &mut mem).expect("frame");
+    assert_eq!(plan.expected.compare(&mem), None);
+    let (t, _) = plan.expected.tables.iter().enumerate().find(|(_, t)| t.len() > 3).expect("a busy tile");
+    let addr = 8 * (plan.expected.descriptors[t].next as u64 + 3);
+    let mut bad = mem.clone();
+    bad.write_u64(addr, bad.read_u64(addr) ^ (1 << 40));
+    let m = bad.clone();
+    let m = plan.expected.compare(&m).expect("a mismatch");
+    assert_eq!((m.tile, m.place, m.field, m.addr), (Some(t as u64), Place::Entry(3), "key", addr));
+    assert!(m.to_string().contains("table[3]"), "{m}");
+    let px = plan.regs.fb_base + 4 * (4096 * t as u64 + 65);
+    let mut bad = mem.clone();
+    bad.write_u32(px, bad.read_u32(px) ^ 0x0100_0000);
+    let m = plan.expected.compare(&bad).expect("a mismatch");
+    assert_eq!((m.place, m.field), (Place::Pixel(1, 1), "word"));
+    let mut wrong = out.clone();
+    wrong.counters.0[11] += 32;
+    let m = plan.expected.compare_outcome(&wrong).expect("a counter mismatch");
+    assert_eq!(m.field, "RD_FEAT");
+}
