@@ -39,6 +39,7 @@ fn other_configs() -> Vec<(String, EngineConfig)> {
                 id_bits: 10,
                 addr_bits: 20,
                 len_bits: 16,
+                table_capacity: 4096,
                 burst: 8,
                 max_outstanding: 2,
                 tile_bits: 4,

@@ -594,6 +594,7 @@ fn sort_core_small_configuration_matches_golden() {
         id_bits: 11,
         addr_bits: 20,
         len_bits: 16,
+        table_capacity: 4096,
         burst: 8,
         max_outstanding: 2,
         ..EngineConfig::default()
