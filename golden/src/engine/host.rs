@@ -41,8 +41,8 @@ use super::memory::{
     entry_to_u64, Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
     PIXEL_BYTES, RESULT_BYTES,
 };
-use super::reference::{sort_traffic, FrameOutcome};
-use super::regs::{Counter, Counters, FrameRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
+use super::reference::{add_raster_traffic, sort_traffic, FrameOutcome};
+use super::regs::{Counter, FrameRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
 use crate::pipeline::{Formats, FrameOutput, Pipeline, PipelineConfig, Strategy};
 use crate::scene::Scene;
@@ -349,7 +349,7 @@ impl<'s> EngineSession<'s> {
                 o.counters.add(Counter::RdSort, ENTRY_BYTES * rd);
                 o.counters.add(Counter::WrSort, ENTRY_BYTES * wr);
             }
-            add_raster_counters(&mut o.counters, table.len() as u64, (rc.tile * rc.tile) as u64);
+            add_raster_traffic(&mut o.counters, table.len() as u64, (rc.tile * rc.tile) as u64);
             o.results.push(TileResult { next_len: table.len() as u32, overflow });
             pixels.push(if overflow {
                 vec![[0; 3]; (rc.tile * rc.tile) as usize]
@@ -409,16 +409,6 @@ pub(crate) fn pipeline_for<'s>(
     let formats =
         Formats { feature: cfg.feature_format(), key: DepthKeyCodec::Fp16, sort: cfg.sort_config() };
     Ok(Pipeline::new(scene, pcfg, formats, width, height)?)
-}
-
-/// The raster counters of one tile of `len` entries and `pixels` pixels.
-fn add_raster_counters(c: &mut Counters, len: u64, pixels: u64) {
-    c.add(Counter::TilesRastered, 1);
-    c.add(Counter::EntriesRastered, len);
-    c.add(Counter::RdTable, ENTRY_BYTES * len);
-    c.add(Counter::RdFeat, FEATURE_BYTES * len);
-    c.add(Counter::WrTable, ENTRY_BYTES * len);
-    c.add(Counter::WrPixel, PIXEL_BYTES * pixels);
 }
 
 /// Tile `d`'s pixels of the pipeline's frame (row-major, black outside the image).

@@ -77,6 +77,17 @@ pub struct FrameError {
     pub problem: String,
 }
 
+/// Adds the raster counters of one tile of `len` table entries and `pixels` pixels: the table
+/// and one feature word per entry read, every entry written back, every pixel written.
+pub fn add_raster_traffic(c: &mut Counters, len: u64, pixels: u64) {
+    c.add(Counter::TilesRastered, 1);
+    c.add(Counter::EntriesRastered, len);
+    c.add(Counter::RdTable, ENTRY_BYTES * len);
+    c.add(Counter::RdFeat, FEATURE_BYTES * len);
+    c.add(Counter::WrTable, ENTRY_BYTES * len);
+    c.add(Counter::WrPixel, PIXEL_BYTES * pixels);
+}
+
 /// The closed-form sort traffic of one sorted tile (entries read, entries written) for a tile
 /// whose sort keeps `next_len` entries: the conventional sort reads and writes the list once per
 /// stage (`1 + merge_pass_count` stages); a reuse tile adds the DPS (the previous table read
@@ -238,13 +249,7 @@ impl<'c> FrameRun<'c> {
         for (k, p) in r.pixels.iter().enumerate() {
             mem.write_pixel(base + k as u64, *p);
         }
-        let c = &mut self.out.counters;
-        c.add(Counter::TilesRastered, 1);
-        c.add(Counter::EntriesRastered, len);
-        c.add(Counter::RdTable, ENTRY_BYTES * len);
-        c.add(Counter::RdFeat, FEATURE_BYTES * len);
-        c.add(Counter::WrTable, ENTRY_BYTES * len);
-        c.add(Counter::WrPixel, PIXEL_BYTES * pixels);
+        add_raster_traffic(&mut self.out.counters, len, pixels);
     }
 }
 
