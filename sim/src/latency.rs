@@ -115,16 +115,8 @@ pub enum ChunkMode {
 pub struct Latency {
     /// The file read.
     pub source: PathBuf,
-    /// The engine configuration the RTL was measured on.
+    /// The engine configuration the RTL was measured on (BSU width, chunk, ...).
     pub config: EngineConfig,
-    /// BSU width (entries per vector) of the measured RTL.
-    pub bsu_width: u64,
-    /// Chunk size of the measured RTL.
-    pub chunk: u64,
-    /// Read burst in entries.
-    pub burst: u64,
-    /// Outstanding read bursts of the sorting core.
-    pub max_outstanding: u64,
     /// MSU+ initiation interval (cycles per output entry).
     pub msu_ii: f64,
     /// BSU latency.
@@ -211,10 +203,6 @@ impl Latency {
         Ok(Latency {
             source: path.to_path_buf(),
             config: r.config.clone(),
-            bsu_width: r.config.bsu_width as u64,
-            chunk: r.config.chunk as u64,
-            burst: r.config.burst as u64,
-            max_outstanding: r.config.max_outstanding as u64,
             msu_ii: r.units.neo_msu.ii as f64,
             bsu_latency: r.units.neo_bsu.latency,
             command_overhead: r.units.neo_sort_core.command_overhead,
@@ -244,7 +232,7 @@ impl Latency {
 
     /// In-chunk merge passes of an `n`-entry chunk.
     pub fn passes(&self, n: u64) -> u64 {
-        merge_pass_count(n, self.bsu_width)
+        merge_pass_count(n, self.config.bsu_width as u64)
     }
 
     fn structural(&self, n: u64) -> f64 {
@@ -472,7 +460,7 @@ mod tests {
     fn interpolation_is_monotone_and_between_neighbours() {
         let l = Latency::from_file(&project_file()).unwrap();
         let mut last = 0;
-        for n in 1..=l.chunk {
+        for n in 1..=l.config.chunk as u64 {
             let c = l.chunk_cycles(ChunkMode::Sort, n);
             assert!(c >= last, "SORT cycles not monotone at {n}: {c} < {last}");
             assert!(c as f64 >= l.msu_ii * n as f64, "a chunk cannot beat one entry per cycle");

@@ -194,7 +194,7 @@ mod tests {
             &std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../reports/latency.json"),
         )
         .unwrap();
-        let c = lat.chunk;
+        let c = lat.config.chunk as u64;
         let chunk = Cmd { mode: Mode::Sort, len_a: c, len_b: 0 };
         let k = 8;
         let batch = vec![chunk; k];

@@ -122,7 +122,7 @@ impl<'a> Model<'a> {
         cfg.check_buffers(eb as u32)?;
         if wl.info.chunk != cfg.engine.chunk {
             return Err(format!(
-                "workload chunk {} differs from the configuration's pipeline.chunk {}",
+                "workload chunk {} differs from the configuration's engine.chunk {}",
                 wl.info.chunk, cfg.engine.chunk
             ));
         }
