@@ -15,6 +15,8 @@ mod cache;
 mod shim;
 #[path = "build/verilate.rs"]
 mod verilate;
+#[path = "build/verilator.rs"]
+mod verilator;
 
 use neo_gen::interface::ModuleInterface;
 use std::fmt::Write as _;
@@ -59,7 +61,7 @@ fn run(out_dir: &Path) -> Result<(), String> {
     println!("cargo::rustc-env=NEO_TB_HDL_SOURCE={source}");
 
     let models_rs = out_dir.join("models.rs");
-    let Some(v) = verilate::Verilator::find() else {
+    let Some(v) = verilator::Verilator::find() else {
         let ci = std::env::var_os("CI").is_some_and(|c| !c.is_empty() && c != "0" && c != "false");
         if ci {
             return Err("verilator not found (CI is set, so the cosimulation models are required): \
@@ -129,7 +131,7 @@ fn run(out_dir: &Path) -> Result<(), String> {
 }
 
 /// The Verilator runtime library from the cache, built on a miss.
-fn build_runtime(v: &verilate::Verilator, root: &Path, compiler: &str) -> Built {
+fn build_runtime(v: &verilator::Verilator, root: &Path, compiler: &str) -> Built {
     let mut key = cache::Key::new();
     key.add("runtime", verilate::RUNTIME_VERSION.to_string().as_bytes());
     key.add("verilator", v.version.as_bytes());
@@ -151,7 +153,7 @@ fn without_header(text: &str) -> &str {
 
 /// One model's libraries from the cache, built (Verilator, then the C++ and the shim) on a miss.
 fn build_unit(
-    v: &verilate::Verilator,
+    v: &verilator::Verilator,
     root: &Path,
     compiler: &str,
     u: &Unit,
@@ -167,7 +169,7 @@ fn build_unit(
     if let Some(vlt) = &u.vlt {
         key.add("lint.vlt", vlt.as_bytes());
     }
-    key.add("flags", verilate::VERILATOR_FLAGS.join(" ").as_bytes());
+    key.add("flags", verilator::VERILATOR_FLAGS.join(" ").as_bytes());
     key.add("verilator", v.version.as_bytes());
     key.add("compiler", compiler.as_bytes());
     key.add("opt", format!("{} {}", verilate::OPT_FAST, verilate::OPT_SLOW).as_bytes());

@@ -7,7 +7,8 @@
 //! at most 64 bits, `neo_T_set_P_words(void*, const uint32_t*, size_t)` /
 //! `neo_T_get_P_words(void*, uint32_t*, size_t)` for wider ones (little-endian 32-bit words),
 //! `int neo_T_trace_open(void*, const char*)`, `neo_T_trace_dump(void*, uint64_t)`,
-//! `neo_T_trace_close(void*)`. Setters mask the value to the port width (Verilator requires the
+//! `neo_T_trace_close(void*)`; [`cpp_by_index`] adds `neo_T_set_port` / `neo_T_get_port` taking
+//! a port's index in the interface (for models loaded at run time). Setters mask the value to the port width (Verilator requires the
 //! unused high bits of a port to be zero).
 //!
 //! Rust side: a struct named after the top in CamelCase (`neo_bsu` -> `NeoBsu`) with typed
@@ -120,6 +121,49 @@ pub fn cpp(iface: &ModuleInterface) -> String {
     );
     s.push_str("}  // extern \"C\"\n");
     s
+}
+
+/// Appended to [`cpp`] for models loaded at run time (a second `extern "C"` block):
+/// `neo_T_set_port(void*, size_t index, const uint32_t* words, size_t n)` and
+/// `neo_T_get_port(void*, size_t index, uint32_t* words, size_t n)`: every port by its index in
+/// the interface (little-endian 32-bit words; setting an output or an unknown index does
+/// nothing), for callers that bind ports at run time (`neo_tb::dynmodel`).
+pub fn cpp_by_index(s: &mut String, iface: &ModuleInterface) {
+    let t = &iface.name;
+    s.push_str("extern \"C\" {\n\n");
+    let _ = writeln!(
+        s,
+        "void neo_{t}_set_port(void* p, size_t idx, const uint32_t* w, size_t n) {{\n  switch (idx) {{"
+    );
+    for (i, p) in iface.ports.iter().enumerate().filter(|(_, p)| p.dir == Dir::In) {
+        let n = &p.name;
+        if p.width <= 64 {
+            let _ = writeln!(
+                s,
+                "    case {i}: neo_{t}_set_{n}(p, (n > 0 ? (uint64_t)w[0] : 0u) | (n > 1 ? (uint64_t)w[1] << 32 : 0u)); break;"
+            );
+        } else {
+            let _ = writeln!(s, "    case {i}: neo_{t}_set_{n}_words(p, w, n); break;");
+        }
+    }
+    s.push_str("    default: break;\n  }\n}\n\n");
+    let _ = writeln!(
+        s,
+        "void neo_{t}_get_port(void* p, size_t idx, uint32_t* w, size_t n) {{\n  switch (idx) {{"
+    );
+    for (i, p) in iface.ports.iter().enumerate() {
+        let n = &p.name;
+        if p.width <= 64 {
+            let _ = writeln!(
+                s,
+                "    case {i}: {{ uint64_t v = neo_{t}_get_{n}(p); if (n > 0) w[0] = (uint32_t)v; if (n > 1) w[1] = (uint32_t)(v >> 32); break; }}"
+            );
+        } else {
+            let _ = writeln!(s, "    case {i}: neo_{t}_get_{n}_words(p, w, n); break;");
+        }
+    }
+    s.push_str("    default: break;\n  }\n}\n\n");
+    s.push_str("}  // extern \"C\"\n");
 }
 
 fn cpp_port(s: &mut String, t: &str, p: &Port) {

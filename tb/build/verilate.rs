@@ -1,12 +1,10 @@
 //! Running Verilator and compiling its C++ output (plus the shim) into static libraries.
 
+use crate::verilator::{verilate, Verilator, CPP_DEFINES, RUNTIME_SOURCES};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
-
-/// Verilator flags used for every top (part of the cache key). Lint warnings stay fatal.
-pub const VERILATOR_FLAGS: &[&str] = &["--cc", "--trace", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
 
 /// C++ optimisation of the per-cycle code (the `Slow` files, run once at construction, use -O1).
 pub const OPT_FAST: u32 = 3;
@@ -14,33 +12,6 @@ pub const OPT_FAST: u32 = 3;
 pub const OPT_SLOW: u32 = 1;
 /// Version of the way the runtime library is built (part of its cache key).
 pub const RUNTIME_VERSION: u32 = 1;
-
-/// The Verilator installation.
-pub struct Verilator {
-    /// The executable.
-    pub exe: PathBuf,
-    /// `verilator --version`.
-    pub version: String,
-    /// `VERILATOR_ROOT` (holds `include/`).
-    pub root: PathBuf,
-}
-
-impl Verilator {
-    /// Finds `verilator` on `PATH` (or `$VERILATOR`), or `None` when it does not run.
-    pub fn find() -> Option<Verilator> {
-        let exe = std::env::var_os("VERILATOR").map(PathBuf::from).unwrap_or_else(|| "verilator".into());
-        let out = Command::new(&exe).arg("--version").output().ok().filter(|o| o.status.success())?;
-        let version = String::from_utf8_lossy(&out.stdout).trim().to_string();
-        let root = Command::new(&exe).args(["--getenv", "VERILATOR_ROOT"]).output().ok()?;
-        let root = PathBuf::from(String::from_utf8_lossy(&root.stdout).trim());
-        root.join("include/verilated.cpp").is_file().then_some(Verilator { exe, version, root })
-    }
-
-    /// `<root>/include`.
-    pub fn include(&self) -> PathBuf {
-        self.root.join("include")
-    }
-}
 
 /// A C++ build with the flags Verilator's own makefile uses.
 fn cpp_build(v: &Verilator, opt: u32, out_dir: &Path) -> cc::Build {
@@ -55,12 +26,10 @@ fn cpp_build(v: &Verilator, opt: u32, out_dir: &Path) -> cc::Build {
         .include(v.include())
         .include(v.include().join("vltstd"))
         .flag_if_supported("-faligned-new")
-        .flag_if_supported("-fcf-protection=none")
-        .define("VM_COVERAGE", "0")
-        .define("VM_SC", "0")
-        .define("VM_TRACE", "1")
-        .define("VM_TRACE_VCD", "1")
-        .define("VM_TRACE_FST", "0");
+        .flag_if_supported("-fcf-protection=none");
+    for (name, value) in CPP_DEFINES {
+        b.define(name, *value);
+    }
     b
 }
 
@@ -81,7 +50,7 @@ pub fn compiler_id() -> String {
 /// `verilated_threads.cpp`) into `<dir>/libneo_verilated.a`.
 pub fn build_runtime(v: &Verilator, dir: &Path) -> Result<(), String> {
     let mut b = cpp_build(v, OPT_FAST, dir);
-    for f in ["verilated.cpp", "verilated_vcd_c.cpp", "verilated_threads.cpp"] {
+    for f in RUNTIME_SOURCES {
         b.file(v.include().join(f));
     }
     b.try_compile("neo_verilated").map_err(|e| format!("compiling the Verilator runtime: {e}"))?;
@@ -100,33 +69,8 @@ pub fn build_model(
 ) -> Result<String, String> {
     let obj = dir.join("obj");
     let t0 = Instant::now();
-    let mut cmd = Command::new(&v.exe);
-    cmd.args(VERILATOR_FLAGS)
-        .arg("--top-module")
-        .arg(top)
-        .arg("--prefix")
-        .arg(format!("V{top}"))
-        .arg("--Mdir")
-        .arg(&obj)
-        .args(verilog_files);
-    let out = cmd.output().map_err(|e| format!("cannot run {}: {e}", v.exe.display()))?;
-    if !out.status.success() {
-        return Err(format!(
-            "verilator failed on {top} ({:?}):\n{}{}",
-            cmd,
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        ));
-    }
+    let (fast, slow) = verilate(v, top, verilog_files, &obj)?;
     let verilate_s = t0.elapsed().as_secs_f64();
-
-    let classes = fs::read_to_string(obj.join(format!("V{top}_classes.mk")))
-        .map_err(|e| format!("verilator wrote no V{top}_classes.mk: {e}"))?;
-    let fast = mk_list(&classes, &["VM_CLASSES_FAST", "VM_SUPPORT_FAST"]);
-    let slow = mk_list(&classes, &["VM_CLASSES_SLOW", "VM_SUPPORT_SLOW"]);
-    if fast.is_empty() {
-        return Err(format!("V{top}_classes.mk lists no classes"));
-    }
     fs::write(dir.join("shim.cpp"), shim_cpp).map_err(|e| e.to_string())?;
 
     let t1 = Instant::now();
@@ -155,30 +99,6 @@ pub fn build_model(
         fast.len() + 1,
         slow.len()
     ))
-}
-
-/// The names listed under the `+=` variables `vars` of a Verilator `_classes.mk`.
-fn mk_list(mk: &str, vars: &[&str]) -> Vec<String> {
-    let mut names = Vec::new();
-    let mut active = false;
-    for line in mk.lines() {
-        let trimmed = line.trim();
-        if let Some(var) = trimmed.strip_suffix("+= \\").or_else(|| trimmed.strip_suffix("+=")) {
-            active = vars.contains(&var.trim());
-            continue;
-        }
-        if !active {
-            continue;
-        }
-        let name = trimmed.trim_end_matches('\\').trim();
-        if !name.is_empty() {
-            names.push(name.to_string());
-        }
-        if !trimmed.ends_with('\\') {
-            active = false;
-        }
-    }
-    names
 }
 
 /// Deletes the object files (`*.o`) cc left under `dir`; only the archives are kept.

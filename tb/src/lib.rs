@@ -14,6 +14,7 @@ pub mod check;
 #[cfg(neo_has_verilator)]
 pub mod core;
 pub mod dut;
+pub mod dynmodel;
 #[cfg(neo_has_verilator)]
 pub mod itu;
 pub mod lanes;

@@ -1,0 +1,443 @@
+//! `neo_engine`: the Neo engine's top level (docs/rtl.md "Engine").
+//!
+//! - `u_regs` (`neo_engine_regs`): the AXI4-Lite control port; `u_counters`
+//!   (`neo_perf_counters`): the performance counters it reads;
+//! - `u_ctrl` (`neo_frame_ctrl`): descriptors, the tile scheduler, results, raster dispatch; it
+//!   is memory client 0;
+//! - `g_sort[i]`: sequencer `u_seq` (`neo_sort_seq`), Sorting Core `u_core` and its AXI4 bridge
+//!   `u_bridge`; memory client `1 + i`;
+//! - `g_raster[j]`: Rasterization Core `u_core` and its AXI4 bridge `u_bridge`; memory client
+//!   `1 + N + j`;
+//! - `g_port[k]`: the port mux `u_mux` of AXI4 manager port `m{k}_axi_*`.
+//!
+//! Client `c` is served by port `c mod K` in slot `c div K`; every port's mux has
+//! `P = ceil(C / K)` slots (unused slots are tied idle), so one mux module serves every port.
+//! The client buses `cl_<signal>` hold slot `s` of port `k` at index `k P + s`.
+
+use super::axi;
+use super::{engine_regs, frame_ctrl, perf_counters, raster_core, sort_core, sort_seq};
+use crate::emit::expr::lit;
+use crate::emit::{Instance, Item, Module};
+use crate::interface::Dir;
+use neo_golden::engine::memory::{DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES, RESULT_BYTES};
+use neo_golden::engine::regs::{Counter, COUNTERS};
+use neo_golden::engine::EngineConfig;
+
+/// Module name.
+pub const NAME: &str = "neo_engine";
+
+/// The engine's memory clients and ports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Clients {
+    /// Sorting cores `N`.
+    pub sort: usize,
+    /// Raster cores `M`.
+    pub raster: usize,
+    /// AXI4 ports `K`.
+    pub ports: usize,
+}
+
+impl Clients {
+    /// The clients of `cfg`'s engine.
+    pub fn of(cfg: &EngineConfig) -> Clients {
+        Clients { sort: cfg.sort_cores, raster: cfg.raster_cores, ports: cfg.mem_channels }
+    }
+
+    /// Clients `C = 1 + N + M` (the frame controller, the sort bridges, the raster bridges).
+    pub fn count(&self) -> usize {
+        1 + self.sort + self.raster
+    }
+
+    /// Slots per port mux, `ceil(C / K)`.
+    pub fn slots(&self) -> usize {
+        self.count().div_ceil(self.ports)
+    }
+
+    /// Index of client `c` in the client buses: port `c mod K`, slot `c div K`.
+    pub fn position(&self, c: usize) -> usize {
+        (c % self.ports) * self.slots() + c / self.ports
+    }
+}
+
+/// The ports of `module` whose names start with `prefix`: (name, is an output, width).
+fn ports_of(module: &Module, prefix: &str) -> Vec<(String, bool, u32)> {
+    module
+        .interface()
+        .ports
+        .into_iter()
+        .filter(|p| p.name.starts_with(prefix))
+        .map(|p| (p.name, p.dir == Dir::Out, p.width))
+        .collect()
+}
+
+/// A port's name without its `_i` / `_o` suffix (the wire that connects it).
+fn wire_of(port: &str) -> &str {
+    port.strip_suffix("_i").or_else(|| port.strip_suffix("_o")).unwrap_or(port)
+}
+
+/// Connections of an AXI4 manager interface (`prefix`, e.g. `m_axi_`) to position `pos` (a
+/// Verilog constant expression) of the client buses.
+fn client_conns(cfg: &EngineConfig, prefix: &str, pos: &str) -> Vec<(String, String)> {
+    axi::signals(cfg)
+        .iter()
+        .map(|s| (axi::port_name(prefix, s, true), format!("cl_{}[({pos})*{w} +: {w}]", s.name, w = s.width)))
+        .collect()
+}
+
+/// The engine for `cfg`.
+pub fn module(cfg: &EngineConfig) -> Module {
+    let cl = Clients::of(cfg);
+    let mut m = Module::new(NAME);
+    m.doc(format!(
+        "Neo engine: {} Sorting Cores, {} Rasterization Cores, {} AXI4 manager ports (m<k>_axi_*), an",
+        cl.sort, cl.raster, cl.ports
+    ));
+    m.doc("AXI4-Lite control port (s_axil_*). Per tile: conventional sort of the incoming list, DPS of the");
+    m.doc("previous table, merge-with-delete, rasterisation with the table write-back. See docs/rtl.md.");
+    m.clock_reset();
+    control_ports(&mut m, cfg);
+    for k in 0..cl.ports {
+        axi::ports(&mut m, cfg, &format!("m{k}_axi_"), true);
+    }
+    m.output_c("busy_o", 1, "STATUS.busy");
+    m.output_c("done_o", 1, "STATUS.done (an interrupt source)");
+    client_buses(&mut m, cfg, &cl);
+    control(&mut m, cfg, &cl);
+    sort_cores(&mut m, cfg, &cl);
+    raster_cores(&mut m, cfg, &cl);
+    ports(&mut m, cfg, &cl);
+    counters(&mut m, cfg, &cl);
+    m
+}
+
+/// The AXI4-Lite control port (`neo_engine_regs`'s, passed through).
+fn control_ports(m: &mut Module, cfg: &EngineConfig) {
+    for (name, out, w) in ports_of(&engine_regs::module(cfg), "s_axil_") {
+        if out {
+            m.output(name, w);
+        } else {
+            m.input(name, w);
+        }
+    }
+}
+
+/// The client buses, and the idle values of the unused slots.
+fn client_buses(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
+    let total = cl.ports * cl.slots();
+    m.comment(format!(
+        "Client buses: {} clients on {} ports of {} slots; client c at index (c % {}) * {} + c / {}.",
+        cl.count(),
+        cl.ports,
+        cl.slots(),
+        cl.ports,
+        cl.slots(),
+        cl.ports
+    ));
+    for s in axi::signals(cfg) {
+        m.wire(format!("cl_{}", s.name), total as u32 * s.width);
+    }
+    let used: Vec<usize> = (0..cl.count()).map(|c| cl.position(c)).collect();
+    for pos in (0..total).filter(|p| !used.contains(p)) {
+        m.comment(format!("Slot {pos} has no client: idle."));
+        for s in axi::signals(cfg).iter().filter(|s| s.from_manager) {
+            let v = if s.name == "rready" || s.name == "bready" { 1 } else { 0 };
+            m.assign(format!("cl_{}[{pos}*{w} +: {w}]", s.name, w = s.width), lit(s.width, v));
+        }
+        m.wire_assign(format!("unused_slot{pos}"), 1, unused_slot(cfg, pos));
+    }
+}
+
+/// XOR of the responses an unused slot receives (lint: read somewhere).
+fn unused_slot(cfg: &EngineConfig, pos: usize) -> String {
+    let v: Vec<String> = axi::signals(cfg)
+        .iter()
+        .filter(|s| !s.from_manager)
+        .map(|s| format!("cl_{}[{pos}*{w} +: {w}]", s.name, w = s.width))
+        .collect();
+    format!("^{{{}}}", v.join(", "))
+}
+
+/// The control port, the frame controller and the wires between them and the cores.
+fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
+    let (n, mm) = (cl.sort as u32, cl.raster as u32);
+    let (aw, lw, xa) = (cfg.addr_bits, cfg.len_bits, cfg.axi_addr_bits);
+    m.blank();
+    m.comment("Control port -> frame controller.");
+    m.wire("start", 1).wire("frame", 32).wire("tiles", 32).wire("width", 16).wire("height", 16);
+    for b in BASES {
+        m.wire(format!("{b}_base"), xa);
+    }
+    m.wire("busy", 1).wire("done", 1).wire("overflow", 1).wire("first_overflow", 32).wire("overflows", 32);
+    m.wire("counters", 64 * COUNTERS as u32);
+    let mut c: Vec<(String, String)> = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    c.extend(ports_of(&engine_regs::module(cfg), "s_axil_").into_iter().map(|(name, _, _)| (name.clone(), name)));
+    c.push(pair("start_o", "start"));
+    for r in ["frame", "tiles", "width", "height"] {
+        c.push((format!("{r}_o"), r.to_string()));
+    }
+    c.extend(BASES.iter().map(|b| (format!("{b}_base_o"), format!("{b}_base"))));
+    for s in ["busy", "done", "overflow", "first_overflow", "overflows", "counters"] {
+        c.push((format!("{s}_i"), s.to_string()));
+    }
+    m.instance(engine_regs::NAME, "u_regs", c);
+    m.assign("busy_o", "busy");
+    m.assign("done_o", "done");
+
+    m.blank();
+    m.comment("Frame controller <-> sequencers, raster cores, bridges.");
+    m.wire("job_valid", n).wire("job_ready", n).wire("job_from_scratch", 1);
+    m.wire("job_prev", aw).wire("job_prev_len", lw).wire("job_list", aw).wire("job_list_len", lw);
+    m.wire("job_next", aw).wire("job_odd", 1).wire("job_scratch", n * aw);
+    m.wire("cpl_valid", n).wire("cpl_ready", n).wire("cpl_len", n * lw);
+    m.wire("ras_valid", mm).wire("ras_ready", mm).wire("ras_done", mm);
+    m.wire("ras_tile_x", cfg.tile_bits).wire("ras_tile_y", cfg.tile_bits);
+    m.wire("ras_width", 16).wire("ras_height", 16);
+    m.wire("ras_table", aw).wire("ras_len", lw).wire("ras_feat", aw).wire("ras_pix", aw);
+    m.wire("idle", n + mm);
+    let events = ports_of(&frame_ctrl::module(cfg), "ev_");
+    for (e, _, w) in &events {
+        m.wire(wire_of(e), *w);
+    }
+    let mut c: Vec<(String, String)> = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    c.push(pair("start_i", "start"));
+    for r in ["frame", "tiles", "width", "height"] {
+        c.push((format!("{r}_i"), r.to_string()));
+    }
+    c.extend(BASES.iter().map(|b| (format!("{b}_base_i"), format!("{b}_base"))));
+    for s in ["busy", "done", "overflow", "first_overflow", "overflows"] {
+        c.push((format!("{s}_o"), s.to_string()));
+    }
+    c.extend(client_conns(cfg, "m_axi_", &cl.position(0).to_string()));
+    for s in ["job_valid", "job_from_scratch", "job_prev", "job_prev_len", "job_list", "job_list_len"] {
+        c.push((format!("{s}_o"), s.to_string()));
+    }
+    for s in ["job_next", "job_odd", "job_scratch", "cpl_ready", "ras_valid", "ras_tile_x", "ras_tile_y"] {
+        c.push((format!("{s}_o"), s.to_string()));
+    }
+    for s in ["ras_width", "ras_height", "ras_table", "ras_len", "ras_feat", "ras_pix"] {
+        c.push((format!("{s}_o"), s.to_string()));
+    }
+    for s in ["job_ready", "cpl_valid", "cpl_len", "ras_ready", "ras_done", "idle"] {
+        c.push((format!("{s}_i"), s.to_string()));
+    }
+    c.extend(events.iter().map(|(e, _, _)| (e.clone(), wire_of(e).to_string())));
+    m.instance(frame_ctrl::NAME, "u_ctrl", c);
+}
+
+/// The register pairs holding byte addresses.
+const BASES: [&str; 5] = ["desc", "result", "feat", "fb", "scratch"];
+
+fn pair(a: &str, b: &str) -> (String, String) {
+    (a.to_string(), b.to_string())
+}
+
+/// `g_sort[i]`: sequencer, Sorting Core, bridge.
+fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
+    let (n, aw, lw) = (cl.sort as u32, cfg.addr_bits, cfg.len_bits);
+    let (k, p) = (cl.ports, cl.slots());
+    m.blank();
+    m.comment("Sort bridges' events (one bit per core).");
+    m.wire("sort_rd", n).wire("sort_wr", n);
+    let mut items = Vec::new();
+    let w = |name: &str, width: u32| Item::Wire { name: name.into(), width };
+    let core_ports: Vec<(String, bool, u32)> = ports_of(&sort_core::module(cfg), "")
+        .into_iter()
+        .filter(|(p, _, _)| p != "clk_i" && p != "rst_ni")
+        .collect();
+    for (port, _, width) in &core_ports {
+        items.push(w(wire_of(port), *width));
+    }
+    let mut seq = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    seq.push(pair("job_valid_i", "job_valid[i]"));
+    seq.push(pair("job_ready_o", "job_ready[i]"));
+    for s in ["from_scratch", "prev", "prev_len", "list", "list_len", "next", "odd"] {
+        seq.push((format!("job_{s}_i"), format!("job_{s}")));
+    }
+    seq.push(pair("job_scratch_i", &format!("job_scratch[i*{aw} +: {aw}]")));
+    for (port, _, _) in core_ports.iter().filter(|(p, _, _)| p.starts_with("cmd_")) {
+        seq.push((flip(port), wire_of(port).to_string()));
+    }
+    seq.push(pair("done_i", "done"));
+    seq.push(pair("done_len_i", "done_len"));
+    seq.push(pair("idle_i", "idle[i]"));
+    seq.push(pair("cpl_valid_o", "cpl_valid[i]"));
+    seq.push(pair("cpl_ready_i", "cpl_ready[i]"));
+    seq.push(pair("cpl_len_o", &format!("cpl_len[i*{lw} +: {lw}]")));
+    items.push(inst(sort_seq::NAME, "u_seq", seq));
+    let mut core = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    core.extend(core_ports.iter().map(|(p, _, _)| (p.clone(), wire_of(p).to_string())));
+    items.push(inst(sort_core::NAME, "u_core", core));
+    let mut br = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    let mem = core_ports.iter().filter(|(p, _, _)| p.starts_with("mem_"));
+    br.extend(mem.map(|(p, _, _)| (flip(p), wire_of(p).to_string())));
+    br.push(pair("idle_o", "idle[i]"));
+    br.push(pair("rd_beat_o", "sort_rd[i]"));
+    br.push(pair("wr_beat_o", "sort_wr[i]"));
+    br.extend(client_conns(cfg, "m_axi_", &format!("((i + 1) % {k}) * {p} + (i + 1) / {k}")));
+    items.push(inst(axi::sort_bridge::NAME, "u_bridge", br));
+    m.gen_for("i", n, "g_sort", items);
+}
+
+/// `g_raster[j]`: Rasterization Core and bridge.
+fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
+    let (n, mm) = (cl.sort, cl.raster as u32);
+    let (k, p) = (cl.ports, cl.slots());
+    m.blank();
+    m.comment("Raster bridges' events (one bit per core).");
+    for e in ["ras_rd_table", "ras_rd_feat", "ras_wr_table", "ras_wr_pixels"] {
+        m.wire(e, mm);
+    }
+    let core_ports = ports_of(&raster_core::module(cfg), "mem_");
+    let mut items: Vec<Item> =
+        core_ports.iter().map(|(p, _, width)| Item::Wire { name: wire_of(p).into(), width: *width }).collect();
+    let mut core = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    core.push(pair("cmd_valid_i", "ras_valid[j]"));
+    core.push(pair("cmd_ready_o", "ras_ready[j]"));
+    for s in ["tile_x", "tile_y", "width", "height", "table", "len", "feat", "pix"] {
+        core.push((format!("cmd_{s}_i"), format!("ras_{s}")));
+    }
+    core.push(pair("done_o", "ras_done[j]"));
+    core.extend(core_ports.iter().map(|(p, _, _)| (p.clone(), wire_of(p).to_string())));
+    items.push(inst(raster_core::NAME, "u_core", core));
+    let mut br = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    br.extend(core_ports.iter().map(|(p, _, _)| (flip(p), wire_of(p).to_string())));
+    br.push(pair("idle_o", &format!("idle[{n} + j]")));
+    br.push(pair("rd_table_o", "ras_rd_table[j]"));
+    br.push(pair("rd_feat_o", "ras_rd_feat[j]"));
+    br.push(pair("wr_table_o", "ras_wr_table[j]"));
+    br.push(pair("wr_pixels_o", "ras_wr_pixels[j]"));
+    let c0 = 1 + n;
+    br.extend(client_conns(cfg, "m_axi_", &format!("((j + {c0}) % {k}) * {p} + (j + {c0}) / {k}")));
+    items.push(inst(axi::raster_bridge::NAME, "u_bridge", br));
+    m.gen_for("j", mm, "g_raster", items);
+}
+
+/// A port of a core as seen from its bridge (`_i` and `_o` swapped).
+fn flip(port: &str) -> String {
+    if let Some(b) = port.strip_suffix("_i") {
+        format!("{b}_o")
+    } else if let Some(b) = port.strip_suffix("_o") {
+        format!("{b}_i")
+    } else {
+        port.to_string()
+    }
+}
+
+fn inst(module: &str, name: &str, conns: Vec<(String, String)>) -> Item {
+    Item::Instance(Instance { module: module.into(), name: name.into(), params: Vec::new(), conns })
+}
+
+/// `g_port[k]`: the muxes, and the top-level ports from the port buses.
+fn ports(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
+    let (k, p) = (cl.ports as u32, cl.slots());
+    let sigs = axi::signals(cfg);
+    m.blank();
+    m.comment("Port buses: port k's AXI4 signals at [k*W +: W].");
+    for s in &sigs {
+        m.wire(format!("port_{}", s.name), k * s.width);
+    }
+    let mut c = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    for slot in 0..p {
+        for s in &sigs {
+            let bus = format!("cl_{}[(k*{p} + {slot})*{w} +: {w}]", s.name, w = s.width);
+            c.push((axi::port_name(&format!("s{slot}_axi_"), s, false), bus));
+        }
+    }
+    for s in &sigs {
+        c.push((axi::port_name("m_axi_", s, true), format!("port_{}[k*{w} +: {w}]", s.name, w = s.width)));
+    }
+    m.gen_for("k", k, "g_port", vec![inst(&axi::mux::name(p), "u_mux", c)]);
+    for port in 0..k {
+        for s in &sigs {
+            let top = axi::port_name(&format!("m{port}_axi_"), s, true);
+            let bus = format!("port_{}[{port}*{w} +: {w}]", s.name, w = s.width);
+            if s.from_manager {
+                m.assign(top, bus);
+            } else {
+                m.assign(bus, top);
+            }
+        }
+    }
+}
+
+/// A sum of the bits of `v` (`n` bits wide) as a `w`-bit value.
+fn popcount(v: &str, n: u32, w: u32) -> String {
+    let terms: Vec<String> = (0..n).map(|i| format!("{{{}, {v}[{i}]}}", lit(w - 1, 0))).collect();
+    terms.join(" + ")
+}
+
+/// The counters' increments.
+fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
+    let iw = perf_counters::INC_BITS;
+    let (n, mm) = (cl.sort as u32, cl.raster as u32);
+    m.blank();
+    m.comment("Performance counters: each one's increment this cycle (golden engine::regs::Counter).");
+    m.wire("inc", iw * COUNTERS as u32);
+    let pixels = u64::from(cfg.subtile) * PIXEL_BYTES;
+    let bytes = |v: &str, count: u32, b: u64| format!("({}) * {}", popcount(v, count, iw), lit(iw, b));
+    let ev = |e: &str| format!("ev_{e}");
+    let events = ports_of(&frame_ctrl::module(cfg), "ev_");
+    let ew = |e: &str| {
+        let port = format!("ev_{e}_o");
+        events.iter().find(|(p, _, _)| *p == port).map(|(_, _, w)| *w).unwrap_or_else(|| panic!("{} has no {port}", frame_ctrl::NAME))
+    };
+    for c in Counter::ALL {
+        let rhs = match c {
+            Counter::Cycles => format!("{{{}, busy}}", lit(iw - 1, 0)),
+            Counter::SortBusy => format!("{{{}, busy & ~(&job_ready)}}", lit(iw - 1, 0)),
+            Counter::RasterBusy => format!("{{{}, busy & ~(&ras_ready)}}", lit(iw - 1, 0)),
+            Counter::TilesSorted => widen(&ev("tile_sorted"), ew("tile_sorted"), iw),
+            Counter::TilesRastered => widen(&ev("tile_rastered"), ew("tile_rastered"), iw),
+            Counter::EntriesSorted => widen(&ev("entries_sorted"), ew("entries_sorted"), iw),
+            Counter::EntriesRastered => {
+                widen(&ev("entries_rastered"), ew("entries_rastered"), iw)
+            }
+            Counter::RdDesc => bytes(&ev("desc_read"), 1, DESCRIPTOR_BYTES),
+            Counter::RdSort => bytes("sort_rd", n, ENTRY_BYTES),
+            Counter::WrSort => bytes("sort_wr", n, ENTRY_BYTES),
+            Counter::RdTable => bytes("ras_rd_table", mm, ENTRY_BYTES),
+            Counter::RdFeat => bytes("ras_rd_feat", mm, FEATURE_BYTES),
+            Counter::WrTable => bytes("ras_wr_table", mm, ENTRY_BYTES),
+            Counter::WrPixel => bytes("ras_wr_pixels", mm, pixels),
+            Counter::WrResult => bytes(&ev("result_written"), 1, RESULT_BYTES),
+        };
+        m.assign(format!("inc[{}*{iw} +: {iw}]", c.index()), rhs);
+    }
+    let c = vec![
+        pair("clk_i", "clk_i"),
+        pair("rst_ni", "rst_ni"),
+        pair("clear_i", "start"),
+        pair("inc_i", "inc"),
+        pair("counters_o", "counters"),
+    ];
+    m.instance(perf_counters::NAME, "u_counters", c);
+}
+
+/// `v` (`w_in` bits) zero-extended or cut to `w` bits.
+fn widen(v: &str, w_in: u32, w: u32) -> String {
+    match w_in.cmp(&w) {
+        std::cmp::Ordering::Less => format!("{{{}, {v}}}", lit(w - w_in, 0)),
+        std::cmp::Ordering::Equal => v.to_string(),
+        std::cmp::Ordering::Greater => format!("{v}[{} : 0]", w - 1),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_client_has_its_own_slot_and_ports_share_the_load() {
+        for (sort, raster, ports) in [(16, 4, 4), (2, 1, 2), (1, 1, 1), (3, 2, 4), (16, 4, 1)] {
+            let cl = Clients { sort, raster, ports };
+            let mut seen: Vec<usize> = (0..cl.count()).map(|c| cl.position(c)).collect();
+            seen.sort_unstable();
+            seen.dedup();
+            assert_eq!(seen.len(), cl.count(), "{cl:?}");
+            assert!(seen.iter().all(|&p| p < cl.ports * cl.slots()), "{cl:?}");
+            let per_port = |k: usize| (0..cl.count()).filter(|c| c % ports == k).count();
+            let (lo, hi) = ((0..ports).map(per_port).min().unwrap(), (0..ports).map(per_port).max().unwrap());
+            assert!(hi - lo <= 1 && hi == cl.slots(), "{cl:?}: {lo}..{hi}");
+        }
+    }
+}

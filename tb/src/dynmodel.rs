@@ -1,0 +1,411 @@
+//! Verilated models built at run time: for tops whose configuration is only known when the
+//! program runs (`neo cosim --config`, the engine benches), and for tops too large to build with
+//! every `cargo build` (the full engine).
+//!
+//! [`DynModel::build`] verilates a top with the same flags and shim as `build.rs`, compiles it
+//! with the Verilator runtime into one shared library, caches it by content hash beside the
+//! static models (`$NEO_CACHE_DIR` or `<target>/neo-verilator-cache/dyn-<top>-<hash>/`) and
+//! loads it. Ports are bound by index through the shim's `neo_T_set_port` / `neo_T_get_port`.
+
+#[allow(dead_code)]
+#[path = "../build/cache.rs"]
+mod cache;
+#[allow(dead_code)]
+#[path = "../build/shim.rs"]
+mod shim;
+#[allow(dead_code)]
+#[path = "../build/verilator.rs"]
+mod verilator;
+
+use neo_gen::interface::{Dir, ModuleInterface};
+use std::ffi::{c_char, c_int, c_void, CString};
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// Version of the way shared libraries are compiled (part of the cache key).
+const DYN_VERSION: u32 = 1;
+/// C++ optimisation of the per-cycle code.
+const OPT_FAST: &str = "-O3";
+/// C++ optimisation of the construction-time code.
+const OPT_SLOW: &str = "-O1";
+
+/// What a build did: where the library is, whether it came from the cache, how long it took.
+#[derive(Clone, Debug)]
+pub struct BuildInfo {
+    /// The shared library.
+    pub library: PathBuf,
+    /// True when it was already in the cache.
+    pub cached: bool,
+    /// Wall time of the build (or of the cache look-up), in seconds.
+    pub seconds: f64,
+    /// The build log line (Verilator and compile times), empty on a cache hit.
+    pub log: String,
+}
+
+type NewFn = unsafe extern "C" fn() -> *mut c_void;
+type PtrFn = unsafe extern "C" fn(*mut c_void);
+type SetFn = unsafe extern "C" fn(*mut c_void, usize, *const u32, usize);
+type GetFn = unsafe extern "C" fn(*mut c_void, usize, *mut u32, usize);
+type OpenFn = unsafe extern "C" fn(*mut c_void, *const c_char) -> c_int;
+type DumpFn = unsafe extern "C" fn(*mut c_void, u64);
+
+/// The entry points of a loaded library.
+struct Api {
+    new: NewFn,
+    free: PtrFn,
+    eval: PtrFn,
+    set: SetFn,
+    get: GetFn,
+    trace_open: OpenFn,
+    trace_dump: DumpFn,
+    trace_close: PtrFn,
+}
+
+/// A Verilated model loaded from a shared library; the same operations as [`crate::dut::Dut`],
+/// with the port table known at run time.
+pub struct DynModel {
+    api: Api,
+    raw: *mut c_void,
+    iface: ModuleInterface,
+    clk: Option<usize>,
+    rst: Option<usize>,
+    cycle: u64,
+    time: u64,
+    tracing: bool,
+    // Kept last: dropped after `raw` is freed.
+    _lib: libloading::Library,
+}
+
+// SAFETY: the model and its VerilatedContext are owned by this value alone, and `&mut self`
+// serialises every call (as for the static models).
+unsafe impl Send for DynModel {}
+
+impl DynModel {
+    /// Builds (or finds in the cache) and loads the model of `iface.name` from `files` (file
+    /// name, Verilog text) and the optional lint waivers `vlt`.
+    pub fn build(
+        iface: &ModuleInterface,
+        files: &[(String, String)],
+        vlt: Option<&str>,
+    ) -> Result<(DynModel, BuildInfo), String> {
+        let info = build_library(iface, files, vlt)?;
+        let model = DynModel::load(iface, &info.library)?;
+        Ok((model, info))
+    }
+
+    /// Loads a library built by [`DynModel::build`] for `iface`.
+    pub fn load(iface: &ModuleInterface, library: &Path) -> Result<DynModel, String> {
+        let t = &iface.name;
+        // SAFETY: the library is one of ours (built from the shim); loading runs Verilator's
+        // static constructors only.
+        let lib = unsafe { libloading::Library::new(library) }
+            .map_err(|e| format!("cannot load {}: {e}", library.display()))?;
+        macro_rules! sym {
+            ($name:expr, $ty:ty) => {{
+                let name = format!("neo_{t}_{}\0", $name);
+                // SAFETY: the symbol has this signature in the generated shim.
+                let s: libloading::Symbol<$ty> = unsafe { lib.get(name.as_bytes()) }.map_err(|e| {
+                    format!("{}: no symbol {}: {e}", library.display(), name.trim_end_matches('\0'))
+                })?;
+                *s
+            }};
+        }
+        let api = Api {
+            new: sym!("new", NewFn),
+            free: sym!("free", PtrFn),
+            eval: sym!("eval", PtrFn),
+            set: sym!("set_port", SetFn),
+            get: sym!("get_port", GetFn),
+            trace_open: sym!("trace_open", OpenFn),
+            trace_dump: sym!("trace_dump", DumpFn),
+            trace_close: sym!("trace_close", PtrFn),
+        };
+        // SAFETY: plain constructor; a null return is checked.
+        let raw = unsafe { (api.new)() };
+        if raw.is_null() {
+            return Err(format!("{t}: model allocation failed"));
+        }
+        let find = |n: &str| iface.ports.iter().position(|p| p.name == n && p.dir == Dir::In);
+        let (clk, rst) = (find("clk_i"), find("rst_ni"));
+        let iface = iface.clone();
+        let mut m = DynModel { api, raw, iface, clk, rst, cycle: 0, time: 0, tracing: false, _lib: lib };
+        m.set_bit(clk, false);
+        m.set_bit(rst, true);
+        m.eval();
+        Ok(m)
+    }
+
+    /// Index of the port called `name`, or an error naming the module and the port.
+    pub fn port(&self, name: &str) -> Result<usize, String> {
+        let i = &self.iface;
+        i.ports.iter().position(|p| p.name == name).ok_or_else(|| format!("{} has no port {name}", i.name))
+    }
+
+    /// The model's interface (its ports in index order).
+    pub fn interface(&self) -> &ModuleInterface {
+        &self.iface
+    }
+
+    /// Drives input `port` with little-endian words.
+    #[inline]
+    pub fn set_words(&mut self, port: usize, words: &[u32]) {
+        // SAFETY: `raw` is live; the shim reads at most `words.len()` words.
+        unsafe { (self.api.set)(self.raw, port, words.as_ptr(), words.len()) }
+    }
+
+    /// Reads `port` into `out` (at most `out.len()` words).
+    #[inline]
+    pub fn get_words(&self, port: usize, out: &mut [u32]) {
+        // SAFETY: `raw` is live; the shim writes at most `out.len()` words.
+        unsafe { (self.api.get)(self.raw, port, out.as_mut_ptr(), out.len()) }
+    }
+
+    /// Drives a port of at most 64 bits.
+    #[inline]
+    pub fn set_u64(&mut self, port: usize, v: u64) {
+        self.set_words(port, &[v as u32, (v >> 32) as u32]);
+    }
+
+    /// Reads a port of at most 64 bits.
+    #[inline]
+    pub fn get_u64(&self, port: usize) -> u64 {
+        let mut w = [0u32; 2];
+        self.get_words(port, &mut w);
+        w[0] as u64 | (w[1] as u64) << 32
+    }
+
+    fn set_bit(&mut self, port: Option<usize>, v: bool) {
+        if let Some(p) = port {
+            self.set_u64(p, v as u64);
+        }
+    }
+
+    /// Settles combinational logic.
+    #[inline]
+    pub fn eval(&mut self) {
+        // SAFETY: `raw` is live.
+        unsafe { (self.api.eval)(self.raw) }
+    }
+
+    fn dump(&mut self) {
+        if self.tracing {
+            // SAFETY: `raw` is live.
+            unsafe { (self.api.trace_dump)(self.raw, self.time) }
+        }
+    }
+
+    /// One clock cycle, as the static wrappers' `tick`: clock low, eval, dump; clock high, eval,
+    /// dump (10 time units a cycle).
+    pub fn tick(&mut self) {
+        self.set_bit(self.clk, false);
+        self.eval();
+        self.dump();
+        self.time += 5;
+        self.set_bit(self.clk, true);
+        self.eval();
+        self.dump();
+        self.time += 5;
+        self.cycle += 1;
+    }
+
+    /// Asserts the reset for four cycles, releases it and restarts [`DynModel::cycle`] at zero.
+    pub fn reset(&mut self) {
+        self.set_bit(self.rst, true);
+        self.eval();
+        self.set_bit(self.rst, false);
+        self.eval();
+        for _ in 0..4 {
+            self.tick();
+        }
+        self.set_bit(self.rst, true);
+        self.set_bit(self.clk, false);
+        self.eval();
+        self.cycle = 0;
+    }
+
+    /// Rising edges since the last reset.
+    pub fn cycle(&self) -> u64 {
+        self.cycle
+    }
+
+    /// Starts a VCD trace at `path`.
+    pub fn trace_open(&mut self, path: &Path) -> std::io::Result<()> {
+        let c = CString::new(path.as_os_str().to_string_lossy().as_bytes())
+            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
+        // SAFETY: `raw` is live; `c` outlives the call.
+        if unsafe { (self.api.trace_open)(self.raw, c.as_ptr()) } == 0 {
+            return Err(std::io::Error::other(format!("cannot open VCD {}", path.display())));
+        }
+        self.tracing = true;
+        Ok(())
+    }
+
+    /// Flushes and closes the trace, if one is open.
+    pub fn trace_close(&mut self) {
+        if self.tracing {
+            // SAFETY: `raw` is live.
+            unsafe { (self.api.trace_close)(self.raw) };
+            self.tracing = false;
+        }
+    }
+}
+
+impl Drop for DynModel {
+    fn drop(&mut self) {
+        // SAFETY: `raw` came from `new` and is freed once, before the library is unloaded.
+        unsafe { (self.api.free)(self.raw) }
+    }
+}
+
+/// The cache root: `$NEO_CACHE_DIR`, else `<target>/neo-verilator-cache` (as `build.rs`).
+fn cache_root() -> PathBuf {
+    match std::env::var_os("NEO_CACHE_DIR").filter(|d| !d.is_empty()) {
+        Some(d) => PathBuf::from(d),
+        None => PathBuf::from(env!("NEO_TB_TARGET_DIR")).join("neo-verilator-cache"),
+    }
+}
+
+/// The C++ compiler: `$CXX`, else `c++`.
+fn cxx() -> String {
+    std::env::var("CXX").ok().filter(|c| !c.is_empty()).unwrap_or_else(|| "c++".into())
+}
+
+/// `cxx --version`'s first line (part of the cache key).
+fn cxx_version(cxx: &str) -> String {
+    Command::new(cxx)
+        .arg("--version")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).lines().next().unwrap_or("").to_string())
+        .unwrap_or_default()
+}
+
+/// Builds the shared library of `iface.name` into the cache (or finds it there).
+fn build_library(
+    iface: &ModuleInterface,
+    files: &[(String, String)],
+    vlt: Option<&str>,
+) -> Result<BuildInfo, String> {
+    let t0 = Instant::now();
+    shim::validate(iface)?;
+    let v = verilator::Verilator::find()
+        .ok_or("verilator not found: install it (scripts/setup does) or set VERILATOR")?;
+    let top = &iface.name;
+    let mut cpp = shim::cpp(iface);
+    shim::cpp_by_index(&mut cpp, iface);
+    let cxx = cxx();
+    let mut key = cache::Key::new();
+    key.add("top", top.as_bytes());
+    for (name, text) in files {
+        key.add(&format!("file {name}"), text.as_bytes());
+    }
+    if let Some(vlt) = vlt {
+        key.add("lint.vlt", vlt.as_bytes());
+    }
+    key.add("flags", verilator::VERILATOR_FLAGS.join(" ").as_bytes());
+    key.add("verilator", v.version.as_bytes());
+    key.add("compiler", format!("{cxx} {}", cxx_version(&cxx)).as_bytes());
+    key.add("dyn", format!("{DYN_VERSION} {OPT_FAST} {OPT_SLOW} {}", shim::SHIM_VERSION).as_bytes());
+    key.add("shim.cpp", cpp.as_bytes());
+    let lib_name = format!("libneo_{top}.so");
+    let mut log = String::new();
+    let (dir, cached) = cache::get_or_build(&cache_root(), &format!("dyn-{top}"), &key, &lib_name, |d| {
+        log = compile(&v, &cxx, top, files, vlt, &cpp, d)?;
+        fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
+    })?;
+    Ok(BuildInfo { library: dir.join(lib_name), cached, seconds: t0.elapsed().as_secs_f64(), log })
+}
+
+/// Verilates and compiles into `dir/libneo_<top>.so`; returns the log line.
+fn compile(
+    v: &verilator::Verilator,
+    cxx: &str,
+    top: &str,
+    files: &[(String, String)],
+    vlt: Option<&str>,
+    cpp: &str,
+    dir: &Path,
+) -> Result<String, String> {
+    let hdl = dir.join("hdl");
+    fs::create_dir_all(&hdl).map_err(|e| e.to_string())?;
+    let mut paths = Vec::new();
+    if let Some(vlt) = vlt {
+        paths.push(write(&hdl.join("lint.vlt"), vlt)?);
+    }
+    for (name, text) in files {
+        paths.push(write(&hdl.join(name), text)?);
+    }
+    let t0 = Instant::now();
+    let obj = dir.join("obj");
+    let (fast, slow) = verilator::verilate(v, top, &paths, &obj)?;
+    let verilate_s = t0.elapsed().as_secs_f64();
+    let shim = write(&dir.join("shim.cpp"), cpp)?;
+    let mut units: Vec<(PathBuf, &str)> =
+        fast.iter().map(|c| (obj.join(format!("{c}.cpp")), OPT_FAST)).collect();
+    units.extend(slow.iter().map(|c| (obj.join(format!("{c}.cpp")), OPT_SLOW)));
+    units.push((shim, OPT_FAST));
+    units.extend(verilator::RUNTIME_SOURCES.iter().map(|f| (v.include().join(f), OPT_FAST)));
+    let t1 = Instant::now();
+    let objects = compile_all(v, cxx, &obj, &units)?;
+    let lib = dir.join(format!("libneo_{top}.so"));
+    let mut link = Command::new(cxx);
+    link.args(["-shared", "-Wl,-Bsymbolic", "-o"]).arg(&lib).args(&objects).arg("-lpthread");
+    run(&mut link, "linking")?;
+    for o in &objects {
+        let _ = fs::remove_file(o);
+    }
+    Ok(format!(
+        "{top}: verilate {verilate_s:.1} s, compile {:.1} s ({} files)",
+        t1.elapsed().as_secs_f64(),
+        units.len()
+    ))
+}
+
+/// Compiles every `(source, opt)` to an object under `obj`, on all cores; returns the objects.
+fn compile_all(
+    v: &verilator::Verilator,
+    cxx: &str,
+    obj: &Path,
+    units: &[(PathBuf, &str)],
+) -> Result<Vec<PathBuf>, String> {
+    use rayon::prelude::*;
+    units
+        .par_iter()
+        .enumerate()
+        .map(|(i, (src, opt))| {
+            let out = obj.join(format!("u{i}.o"));
+            let mut c = Command::new(cxx);
+            c.args(["-c", "-fPIC", "-std=gnu++17", "-faligned-new", "-fcf-protection=none", "-w", opt])
+                .arg("-I")
+                .arg(v.include())
+                .arg("-I")
+                .arg(v.include().join("vltstd"))
+                .arg("-I")
+                .arg(obj);
+            for (name, value) in verilator::CPP_DEFINES {
+                c.arg(format!("-D{name}={value}"));
+            }
+            c.arg("-o").arg(&out).arg(src);
+            run(&mut c, &format!("compiling {}", src.display()))?;
+            Ok(out)
+        })
+        .collect()
+}
+
+fn run(cmd: &mut Command, what: &str) -> Result<(), String> {
+    let out = cmd.output().map_err(|e| format!("{what}: cannot run {cmd:?}: {e}"))?;
+    if out.status.success() {
+        return Ok(());
+    }
+    Err(format!(
+        "{what} failed:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    ))
+}
+
+fn write(path: &Path, text: &str) -> Result<PathBuf, String> {
+    fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(path.to_path_buf())
+}

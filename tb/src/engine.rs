@@ -1,0 +1,243 @@
+//! Whole-frame cosimulation of `neo_engine` (issue 11): the golden host session
+//! ([`EngineSession`]) writes each frame's inputs into memory, the harness programs the control
+//! port through an AXI4-Lite driver, an [`AxiMemory`] serves the engine's AXI4 ports (with its
+//! latency, bandwidth, random delays and reordering across IDs) under an [`AxiChecker`] per
+//! port, and after `done` the frame buffer, every tile's next table, the results, the status
+//! registers and the golden counters are compared with [`Expected`].
+//!
+//! Driver (AXI4-Lite manager, memory ports), golden model (the session's [`Expected`]) and
+//! checker (`Expected::compare`, the AXI checkers) are apart. The engine model is built at run
+//! time for any configuration ([`EngineModel::build`]) and cached by content hash.
+
+use crate::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, ManagerSignals};
+use crate::axil::{AxilManager, AxilOp};
+use crate::check::Checker;
+use crate::dut::PortIo;
+use crate::dynmodel::{BuildInfo, DynModel};
+use crate::rng::Rng;
+use neo_gen::EngineConfig;
+use neo_golden::engine::expected::Mismatch;
+use neo_golden::engine::memory::Memory;
+use neo_golden::engine::reference::FrameOutcome;
+use neo_golden::engine::regs::{Counter, Counters, Reg, CTRL_START};
+use neo_golden::engine::host::FramePlan;
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+/// The generated Verilog's lint waivers (passed to Verilator before the files).
+const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
+
+/// The engine's top module.
+pub const TOP: &str = "neo_engine";
+
+/// The verilated engine of one configuration.
+pub struct EngineModel {
+    /// The configuration it was generated from.
+    pub cfg: EngineConfig,
+    /// The model.
+    pub model: DynModel,
+    /// How it was built.
+    pub build: BuildInfo,
+}
+
+impl EngineModel {
+    /// Generates `neo_engine` for `cfg`, verilates and compiles it (or finds it in the cache).
+    pub fn build(cfg: &EngineConfig) -> Result<EngineModel, String> {
+        cfg.validate().map_err(|e| e.to_string())?;
+        let files: Vec<(String, String)> =
+            neo_gen::files_for(cfg, TOP).into_iter().map(|f| (f.file_name(), f.text)).collect();
+        let iface = neo_gen::units::modules(cfg)
+            .map_err(|e| e.to_string())?
+            .into_iter()
+            .find(|m| m.name == TOP)
+            .ok_or("the generator emits no neo_engine")?
+            .interface();
+        let (model, build) = DynModel::build(&iface, &files, Some(LINT_VLT))?;
+        Ok(EngineModel { cfg: cfg.clone(), model, build })
+    }
+}
+
+/// Memory timing and stimulus of a run.
+#[derive(Clone, Copy, Debug)]
+pub struct RunOptions {
+    /// The memory's timing on every port.
+    pub timing: AxiTiming,
+    /// Cycles a frame may take before the run is declared hung.
+    pub max_cycles: u64,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions { timing: AxiTiming::RANDOM, max_cycles: 200_000_000 }
+    }
+}
+
+/// The outcome of one frame.
+#[derive(Clone, Debug)]
+pub struct FrameReport {
+    /// Frame index.
+    pub frame: usize,
+    /// Whether the frame was sorted from scratch.
+    pub from_scratch: bool,
+    /// The first difference from golden, `None` when bit-exact.
+    pub mismatch: Option<Mismatch>,
+    /// Cycles from start to done (the `CYCLES` counter).
+    pub rtl_cycles: u64,
+    /// Every counter as the engine reports it.
+    pub counters: Counters,
+    /// Cycles the harness ran (programming and read-back included).
+    pub harness_cycles: u64,
+}
+
+/// The engine under test, its memory and its control-port driver.
+pub struct EngineRig {
+    engine: EngineModel,
+    axi: Vec<AxiBinding>,
+    checkers: Vec<AxiChecker>,
+    mem: AxiMemory,
+    lite: AxilManager,
+    checker: Checker,
+    done: usize,
+    opts: RunOptions,
+    waves: Option<PathBuf>,
+}
+
+impl EngineRig {
+    /// A rig around `engine` with an empty memory; resets the engine. `waves`: a VCD path.
+    pub fn new(engine: EngineModel, opts: RunOptions, seed: u64, waves: Option<PathBuf>) -> Result<EngineRig, String> {
+        let mut engine = engine;
+        let k = engine.cfg.mem_channels;
+        let m = &engine.model;
+        let axi: Vec<AxiBinding> =
+            (0..k).map(|p| AxiBinding::bind(m, &format!("m{p}_axi_"), true)).collect::<Result<_, _>>()?;
+        let out = engine.cfg.axi_outstanding;
+        let clients = 1 + engine.cfg.sort_cores + engine.cfg.raster_cores;
+        let per_port = clients.div_ceil(k);
+        let checkers = (0..k).map(|p| AxiChecker::new(p, &format!("m{p}_axi"), out * per_port, out * per_port)).collect();
+        let mut rng = Rng::new(seed);
+        let lite = AxilManager::bind(m, "s_axil_", rng.fork(1))?;
+        let done = m.port("done_o")?;
+        if let Some(path) = &waves {
+            engine.model.trace_open(path).map_err(|e| e.to_string())?;
+        }
+        engine.model.reset();
+        let mem = AxiMemory::new(k, Memory::new(), opts.timing, rng.next_u64());
+        Ok(EngineRig { engine, axi, checkers, mem, lite, checker: Checker::new(TOP, seed), done, opts, waves })
+    }
+
+    /// The memory the engine sees (the host writes a frame's inputs here).
+    pub fn memory_mut(&mut self) -> &mut Memory {
+        self.mem.memory_mut()
+    }
+
+    /// The memory.
+    pub fn memory(&self) -> &Memory {
+        self.mem.memory()
+    }
+
+    /// The engine's configuration.
+    pub fn config(&self) -> &EngineConfig {
+        &self.engine.cfg
+    }
+
+    /// The VCD being written, if any.
+    pub fn waves(&self) -> Option<&PathBuf> {
+        self.waves.as_ref()
+    }
+
+    /// One clock cycle: drive the control port and the memory's outputs, settle, check and
+    /// sample every port, then the edge.
+    fn cycle(&mut self) -> Result<(), String> {
+        let model = &mut self.engine.model;
+        self.lite.drive(model);
+        for (k, b) in self.axi.iter().enumerate() {
+            b.set_subordinate(model, &self.mem.outputs(k));
+        }
+        model.eval();
+        let cycle = model.cycle();
+        let mut drives: Vec<ManagerSignals> = Vec::with_capacity(self.axi.len());
+        for (k, b) in self.axi.iter().enumerate() {
+            let m = b.get_manager(model);
+            let s = self.mem.outputs(k);
+            if let Err(v) = self.checkers[k].observe(&m, &s) {
+                return Err(format!("cycle {cycle}: {v} (seed 0x{:016x})", self.checker.seed));
+            }
+            drives.push(m);
+        }
+        self.lite.sample(model, &self.checker);
+        for (k, m) in drives.iter().enumerate() {
+            self.mem.tick(k, m);
+        }
+        model.tick();
+        Ok(())
+    }
+
+    /// Runs cycles until the control-port driver has finished every queued operation.
+    fn settle_lite(&mut self) -> Result<(), String> {
+        let start = self.engine.model.cycle();
+        while !self.lite.is_idle() {
+            self.cycle()?;
+            if self.engine.model.cycle() - start > 100_000 {
+                return Err("the control port does not answer (100000 cycles)".into());
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs one frame of `plan` (its inputs already in memory): programs the registers,
+    /// starts, waits for `done`, reads the registers back and compares with golden.
+    pub fn run_frame(&mut self, plan: &FramePlan) -> Result<FrameReport, String> {
+        let t0 = self.engine.model.cycle();
+        for (r, v) in plan.regs.writes() {
+            self.lite.write(r.offset(), v, 0xf);
+        }
+        self.lite.write(Reg::Ctrl.offset(), CTRL_START, 0xf);
+        self.settle_lite()?;
+        while self.lite.pop().is_some() {}
+        let started = self.engine.model.cycle();
+        while self.engine.model.io_get(self.done) == 0 {
+            self.cycle()?;
+            if self.engine.model.cycle() - started > self.opts.max_cycles {
+                return Err(format!(
+                    "frame {}: no done after {} cycles (seed 0x{:016x})",
+                    plan.frame, self.opts.max_cycles, self.checker.seed
+                ));
+            }
+        }
+        let regs = self.read_registers()?;
+        let outcome = FrameOutcome::read_back(&plan.regs, self.mem.memory(), |a| regs.get(&a).copied().unwrap_or(0));
+        let mismatch = plan.expected.compare(self.mem.memory()).or_else(|| plan.expected.compare_outcome(&outcome));
+        Ok(FrameReport {
+            frame: plan.frame,
+            from_scratch: plan.from_scratch,
+            mismatch,
+            rtl_cycles: outcome.counters.get(Counter::Cycles),
+            counters: outcome.counters,
+            harness_cycles: self.engine.model.cycle() - t0,
+        })
+    }
+
+    /// Reads STATUS, FIRST_OVERFLOW, OVERFLOWS and both words of every counter.
+    fn read_registers(&mut self) -> Result<HashMap<u32, u32>, String> {
+        let mut addrs = vec![Reg::Status.offset(), Reg::FirstOverflow.offset(), Reg::Overflows.offset()];
+        for c in Counter::ALL {
+            addrs.extend([c.offset(), c.offset() + 4]);
+        }
+        for &a in &addrs {
+            self.lite.read(a);
+        }
+        self.settle_lite()?;
+        let mut out = HashMap::new();
+        while let Some(d) = self.lite.pop() {
+            if let AxilOp::Read { addr } = d.op {
+                out.insert(addr, d.data);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Closes the VCD, if one is open.
+    pub fn finish(&mut self) {
+        self.engine.model.trace_close();
+    }
+}
