@@ -6,6 +6,7 @@
 //! compare against the bit-exact golden model (`neo_golden::sort`) and stop at the first
 //! mismatch.
 
+pub mod axil;
 pub mod bench;
 pub mod bits;
 #[cfg(neo_has_verilator)]
@@ -14,6 +15,7 @@ pub mod check;
 #[cfg(neo_has_verilator)]
 pub mod core;
 pub mod dut;
+pub mod engine_regs;
 #[cfg(neo_has_verilator)]
 pub mod itu;
 pub mod lanes;
