@@ -6,6 +6,7 @@
 //! compare against the bit-exact golden model (`neo_golden::sort`) and stop at the first
 //! mismatch.
 
+pub mod axil;
 pub mod bench;
 pub mod bits;
 #[cfg(neo_has_verilator)]
@@ -15,6 +16,7 @@ pub mod check;
 pub mod core;
 pub mod dut;
 pub mod dynmodel;
+pub mod engine_regs;
 #[cfg(neo_has_verilator)]
 pub mod itu;
 pub mod lanes;

@@ -16,12 +16,17 @@
 //! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
+//! | `neo_perf_counter` | one 64-bit performance counter                       | no        |
+//! | `neo_perf_counters` | the engine's performance counters                   | yes       |
+//! | `neo_engine_regs` | engine control port: AXI4-Lite register map           | yes       |
 
 pub mod bsu;
 pub mod chunk_ram;
 pub mod cmp_swap;
+pub mod engine_regs;
 pub mod itu;
 pub mod msu;
+pub mod perf_counters;
 pub mod raster_core;
 pub mod scu;
 pub mod sort_core;
@@ -48,7 +53,16 @@ impl VerilogFile {
 
 /// Names of the tops that get their own cosimulation model, in order.
 pub fn top_modules() -> &'static [&'static str] {
-    &["neo_bsu", "neo_msu", "neo_sort_core", "neo_itu", "neo_scu", "neo_raster_core"]
+    &[
+        "neo_bsu",
+        "neo_msu",
+        "neo_sort_core",
+        "neo_itu",
+        "neo_scu",
+        "neo_raster_core",
+        "neo_perf_counters",
+        "neo_engine_regs",
+    ]
 }
 
 /// Every module of the configuration, leaves first.
@@ -70,6 +84,9 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         raster_core::loader::module(cfg),
         raster_core::feeder::module(cfg),
         raster_core::module(cfg),
+        perf_counters::counter_module(cfg),
+        perf_counters::module(cfg),
+        engine_regs::module(cfg),
     ];
     for m in &mut all {
         m.config_hash = Some(hash);

@@ -4,6 +4,13 @@
 //! This is the one definition of the map: the generator decodes [`Reg::offset`] and
 //! [`Counter::offset`], the test benches program [`FrameRegs::writes`] and read the counters
 //! back with [`Counter::ALL`].
+//!
+//! Port behaviour (the RTL `neo_engine_regs` and the test benches' model follow it): accesses are
+//! to 32-bit words (byte address bits `[1:0]` ignored); WSTRB selects the bytes written, and a
+//! start needs byte 0 enabled. Reads of write-only registers ([`Access::W`]) return 0, writes
+//! to read-only ones ([`Access::R`]) are ignored, and an unmapped word (neither a [`Reg`] nor a
+//! counter word) reads 0 and ignores writes. Every response is OKAY: the port never answers
+//! SLVERR or DECERR, so a host that writes a wrong address learns it only from the read-back.
 
 use serde::{Deserialize, Serialize};
 
