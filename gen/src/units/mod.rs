@@ -16,15 +16,19 @@
 //! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
+//! | `neo_sort_seq`  | engine: one Sorting Core's per-tile command sequencer   | yes       |
+//! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | no       |
 
 pub mod bsu;
 pub mod chunk_ram;
 pub mod cmp_swap;
+pub mod frame_ctrl;
 pub mod itu;
 pub mod msu;
 pub mod raster_core;
 pub mod scu;
 pub mod sort_core;
+pub mod sort_seq;
 
 use crate::emit::Module;
 use crate::interface::ModuleInterface;
@@ -48,7 +52,7 @@ impl VerilogFile {
 
 /// Names of the tops that get their own cosimulation model, in order.
 pub fn top_modules() -> &'static [&'static str] {
-    &["neo_bsu", "neo_msu", "neo_sort_core", "neo_itu", "neo_scu", "neo_raster_core"]
+    &["neo_bsu", "neo_msu", "neo_sort_core", "neo_itu", "neo_scu", "neo_raster_core", "neo_sort_seq"]
 }
 
 /// Every module of the configuration, leaves first.
@@ -70,6 +74,8 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         raster_core::loader::module(cfg),
         raster_core::feeder::module(cfg),
         raster_core::module(cfg),
+        sort_seq::module(cfg),
+        frame_ctrl::module(cfg),
     ];
     for m in &mut all {
         m.config_hash = Some(hash);
