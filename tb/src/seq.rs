@@ -4,8 +4,8 @@
 //!   each one on a golden [`Memory`] with golden [`run_command`] (`sort_chunk` / `merge2`) and
 //!   answers with `done_i` pulses in order, at least two cycles apart, after a random latency,
 //!   `done_len_i` = the entries written, held between pulses (as `neo_sort_core` does);
-//! - the bridge model holds `idle_i` low while a command is in flight and for a random time
-//!   after each `done_i` (its writes draining);
+//! - the bridge model raises `idle_i` now and then while commands are in flight (between their
+//!   bursts), and holds it low for a random time after each `done_i` (its writes draining);
 //! - the completion sink takes `cpl_valid_o` under random backpressure.
 //!
 //! The golden model is [`tile_plan`] (the commands, stage by stage) and the plan executed on a
@@ -37,15 +37,17 @@ pub struct SeqTiming {
     pub cpl_ready_pct: u32,
     /// Longest gap before a job is offered (cycles).
     pub max_job_gap: u64,
+    /// Probability (percent) that `idle_i` is high in a cycle while a command is in flight.
+    pub idle_busy_pct: u32,
 }
 
 impl SeqTiming {
     /// Always ready, quick done pulses, the bridge idle at once.
     pub const FAST: SeqTiming =
-        SeqTiming { cmd_ready_pct: 100, min_done: 1, max_done: 2, max_drain: 0, cpl_ready_pct: 100, max_job_gap: 0 };
+        SeqTiming { cmd_ready_pct: 100, min_done: 1, max_done: 2, max_drain: 0, cpl_ready_pct: 100, max_job_gap: 0, idle_busy_pct: 0 };
     /// Random stalls, slow and late done pulses, long drains.
     pub const RANDOM: SeqTiming =
-        SeqTiming { cmd_ready_pct: 50, min_done: 1, max_done: 30, max_drain: 25, cpl_ready_pct: 60, max_job_gap: 5 };
+        SeqTiming { cmd_ready_pct: 50, min_done: 1, max_done: 30, max_drain: 25, cpl_ready_pct: 60, max_job_gap: 5, idle_busy_pct: 30 };
 }
 
 /// One tile job: the descriptor, the frame (registers `frame` and `scratch_base`) and the core.
@@ -215,8 +217,9 @@ impl SeqBench {
             }
             self.dut.set_done_i(pulse.is_some());
             self.dut.set_done_len_i(self.done_len);
-            // Bridge model.
-            let idle = pending.is_empty() && c >= busy_until;
+            // Bridge model: idle now and then while commands run (between their bursts), and
+            // for sure only once they are done and their writes drained.
+            let idle = if pending.is_empty() { c >= busy_until } else { self.rng.percent(t.idle_busy_pct) };
             self.dut.set_idle_i(idle);
             if idle && pulse.is_none() {
                 idle_since_done = true;
