@@ -29,6 +29,8 @@ pub mod raster;
 pub mod rng;
 #[cfg(neo_has_verilator)]
 pub mod scu;
+#[cfg(neo_has_verilator)]
+pub mod seq;
 pub mod stimulus;
 pub mod stream;
 pub mod waves;

@@ -19,17 +19,21 @@
 //! | `neo_perf_counter` | one 64-bit performance counter                       | no        |
 //! | `neo_perf_counters` | the engine's performance counters                   | yes       |
 //! | `neo_engine_regs` | engine control port: AXI4-Lite register map           | yes       |
+//! | `neo_sort_seq`  | engine: one Sorting Core's per-tile command sequencer   | yes       |
+//! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | no       |
 
 pub mod bsu;
 pub mod chunk_ram;
 pub mod cmp_swap;
 pub mod engine_regs;
+pub mod frame_ctrl;
 pub mod itu;
 pub mod msu;
 pub mod perf_counters;
 pub mod raster_core;
 pub mod scu;
 pub mod sort_core;
+pub mod sort_seq;
 
 use crate::emit::Module;
 use crate::interface::ModuleInterface;
@@ -62,6 +66,7 @@ pub fn top_modules() -> &'static [&'static str] {
         "neo_raster_core",
         "neo_perf_counters",
         "neo_engine_regs",
+        "neo_sort_seq",
     ]
 }
 
@@ -87,6 +92,8 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         perf_counters::counter_module(cfg),
         perf_counters::module(cfg),
         engine_regs::module(cfg),
+        sort_seq::module(cfg),
+        frame_ctrl::module(cfg),
     ];
     for m in &mut all {
         m.config_hash = Some(hash);

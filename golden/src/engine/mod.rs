@@ -9,6 +9,7 @@ mod config;
 pub mod expected;
 pub mod host;
 pub mod memory;
+pub mod plan;
 pub mod reference;
 pub mod regs;
 
@@ -17,5 +18,6 @@ pub use config::{ConfigError, EngineConfig, SchedulerPolicy, Topology};
 pub use expected::{Expected, Mismatch, Place};
 pub use host::{EngineSession, FramePlan, MemoryLayout, SessionError};
 pub use memory::{Memory, TileDescriptor, TileResult};
+pub use plan::{run_command, tile_plan, TileCmd, TilePlan};
 pub use reference::{execute_frame, FrameError, FrameOutcome};
 pub use regs::{Counter, Counters, FrameRegs, Reg};

@@ -6,7 +6,8 @@
 //! [`raster_tile`] and writes the pixels (tile-major) and the table write-back.
 //!
 //! It also counts the performance counters golden knows exactly ([`Counter::is_golden`]), from
-//! the elements each command and each raster tile actually moves:
+//! the elements each command (of [`tile_plan`](super::plan::tile_plan)) and each raster tile
+//! actually moves:
 //! - a SORT / DPS of `L` entries reads and writes `L` entries; a MERGE reads and writes
 //!   `len_a + len_b`; a MERGE_DELETE reads `len_a + len_b` and writes the entries it keeps;
 //! - a raster tile of `len` entries reads its `len` table entries once (whatever its segments:
@@ -23,12 +24,11 @@ use super::memory::{
     Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES,
     RESULT_BYTES,
 };
+use super::plan::{run_command, tile_plan};
 use super::regs::{Counter, Counters, FrameRegs, Reg, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
 use crate::raster::raster_tile;
-use crate::sort::{
-    conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, SortEntry, SortMode, Sorter,
-};
+use crate::sort::{merge_pass_count, SortEntry, SortMode, Sorter};
 
 /// What a frame leaves besides memory: the registers and the golden counters.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -137,89 +137,35 @@ impl<'c> FrameRun<'c> {
         FrameRun { cfg, regs: *regs, sorter: Sorter::new(cfg.sort_config()), out }
     }
 
-    /// The tile's sort (or its overflow): the per-tile command sequence of the contract.
+    /// The tile's sort (or its overflow): [`tile_plan`] executed command by command.
     fn sort_tile(&mut self, mem: &mut Memory, t: u64, d: &TileDescriptor) -> Result<TileResult, FrameError> {
-        let cap = self.cfg.table_capacity as u64;
-        if d.entries_in() > cap {
+        let core = t % self.cfg.sort_cores as u64;
+        let plan = tile_plan(self.cfg, &self.regs, d, core);
+        if plan.overflow {
             if self.out.overflows == 0 {
                 self.out.first_overflow = t as u32;
             }
             self.out.overflows += 1;
             return Ok(TileResult { next_len: 0, overflow: true });
         }
-        let chunk = self.cfg.chunk as u64;
-        let core = t % self.cfg.sort_cores as u64;
-        let s0 = self.regs.scratch_base / ENTRY_BYTES + core * 2 * cap;
-        let scratch = [s0, s0 + cap];
-        let n = d.list_len as u64;
-        let passes = merge_pass_count(n, chunk);
-        let last = if d.from_scratch { d.next as u64 } else { scratch[(passes % 2) as usize] };
-        for c in conventional_sort_plan(n, chunk) {
-            let src = if c.stage == 0 { d.list as u64 } else { scratch[((c.stage - 1) % 2) as usize] };
-            let dst = if c.stage == passes { last } else { scratch[(c.stage % 2) as usize] };
-            let cmd = Cmd {
-                mode: c.mode,
-                src_a: src + c.start,
-                len_a: c.len_a,
-                len_b: c.len_b,
-                dst: dst + c.start,
-            };
-            self.command(mem, t, &cmd)?;
-        }
-        let next_len = if d.from_scratch {
-            n
-        } else {
-            let prev = d.prev as u64;
-            for r in Parity::of(self.regs.frame as u64, 0).chunks(d.prev_len as usize, self.cfg.chunk) {
-                let at = prev + r.start as u64;
-                let cmd = Cmd { mode: SortMode::Dps, src_a: at, len_a: r.len() as u64, len_b: 0, dst: at };
-                self.command(mem, t, &cmd)?;
+        let mut next_len = d.list_len as u64;
+        for c in plan.commands() {
+            let e = run_command(&mut self.sorter, mem, c).map_err(|at| FrameError {
+                tile: t,
+                problem: format!(
+                    "entry at 0x{at:x} carries the reserved id 0x{:x}",
+                    self.cfg.format().id_max()
+                ),
+            })?;
+            self.out.counters.add(Counter::RdSort, ENTRY_BYTES * e.read);
+            self.out.counters.add(Counter::WrSort, ENTRY_BYTES * e.written);
+            if c.mode == SortMode::MergeDelete {
+                next_len = e.written;
             }
-            let cmd = Cmd {
-                mode: SortMode::MergeDelete,
-                src_a: prev,
-                len_a: d.prev_len as u64,
-                len_b: n,
-                dst: d.next as u64,
-            };
-            let b = scratch[(passes % 2) as usize];
-            self.merge(mem, &cmd, b, true)
-        };
+        }
         self.out.counters.add(Counter::TilesSorted, 1);
         self.out.counters.add(Counter::EntriesSorted, d.entries_in());
         Ok(TileResult { next_len: next_len as u32, overflow: false })
-    }
-
-    /// One SORT / DPS / MERGE command (stream B of a MERGE follows stream A).
-    fn command(&mut self, mem: &mut Memory, t: u64, c: &Cmd) -> Result<(), FrameError> {
-        if c.mode == SortMode::Merge {
-            self.merge(mem, c, c.src_a + c.len_a, false);
-            return Ok(());
-        }
-        let fmt = self.cfg.format();
-        let mut chunk = mem.read_entries(&fmt, c.src_a, c.len_a as usize);
-        if let Some(e) = chunk.iter().find(|e| e.id == fmt.id_max()) {
-            let problem = format!("entry at 0x{:x} carries the reserved id 0x{:x}", c.src_a, e.id);
-            return Err(FrameError { tile: t, problem });
-        }
-        self.sorter.sort_chunk(&mut chunk, &mut ChunkWork::default());
-        mem.write_entries(&fmt, c.dst, &chunk);
-        self.out.counters.add(Counter::RdSort, ENTRY_BYTES * c.len_a);
-        self.out.counters.add(Counter::WrSort, ENTRY_BYTES * c.len_a);
-        Ok(())
-    }
-
-    /// A MERGE (`drop_invalid` false) or MERGE_DELETE of A at `c.src_a` and B at `src_b`;
-    /// returns the entries written.
-    fn merge(&mut self, mem: &mut Memory, c: &Cmd, src_b: u64, drop_invalid: bool) -> u64 {
-        let fmt = self.cfg.format();
-        let a = mem.read_entries(&fmt, c.src_a, c.len_a as usize);
-        let b = mem.read_entries(&fmt, src_b, c.len_b as usize);
-        let out = merge2(&a, &b, drop_invalid);
-        mem.write_entries(&fmt, c.dst, &out);
-        self.out.counters.add(Counter::RdSort, ENTRY_BYTES * (c.len_a + c.len_b));
-        self.out.counters.add(Counter::WrSort, ENTRY_BYTES * out.len() as u64);
-        out.len() as u64
     }
 
     /// The tile's raster: table `next` of `len` entries, write-back in place, pixels tile-major.
@@ -251,15 +197,6 @@ impl<'c> FrameRun<'c> {
         }
         add_raster_traffic(&mut self.out.counters, len, pixels);
     }
-}
-
-/// A Sorting Core command at entry addresses (stream B of a MERGE follows stream A).
-struct Cmd {
-    mode: SortMode,
-    src_a: u64,
-    len_a: u64,
-    len_b: u64,
-    dst: u64,
 }
 
 #[cfg(test)]

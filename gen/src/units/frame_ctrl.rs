@@ -1,0 +1,548 @@
+//! `neo_frame_ctrl`: the engine's frame controller. On `start_i` it walks the frame's tiles:
+//!
+//! - **descriptors**: AXI client 0 reads tile `t`'s descriptor (one 4-beat INCR burst at
+//!   `DESC_BASE + 32 t`) into a one-descriptor buffer, tiles in index order;
+//! - **overflow check**: a tile with `entries_in = list_len (+ prev_len unless from scratch)`
+//!   above `table_capacity` is not sorted: it goes straight to the completion queue with
+//!   `{next_len 0, overflow 1}` (`FIRST_OVERFLOW` / `OVERFLOWS` updated);
+//! - **sort scheduler** (`EngineConfig::scheduler`): `first_free` hands the tile to the
+//!   lowest-numbered sequencer whose `job_ready_i` is high; `round_robin` to sequencer
+//!   `k = (jobs so far) mod N`, waiting for it. The job payload is shared; each sequencer has its
+//!   own scratch base (`job_scratch_o[k]` = `SCRATCH_BASE / 8 + 2 k table_capacity`);
+//! - **completion queue**: sequencer completions (lowest index first) and overflowing tiles
+//!   enter a FIFO of `{tile, tile_x, tile_y, next, next_len, overflow}`; for its head the
+//!   controller writes the result (one 1-beat AXI write at `RESULT_BASE + 8 t`, at most
+//!   `axi_outstanding` without their B) and hands the raster command to a raster core (same
+//!   scheduler policy over the `M` cores: `table = next`, `len = next_len`, `feat =
+//!   FEAT_BASE / 32`, `pix = FB_BASE / 4 + t * tile * tile`);
+//! - **done**: when every tile was rastered (`raster_done_i` pulses counted), every result's B
+//!   is back, and every bridge's `idle_i` is high; then `busy_o` falls and `done_o` rises (held
+//!   until the next start).
+//!
+//! Event outputs (for `neo_perf_counters`, counted by the engine top): `ev_desc_read_o` (a
+//! descriptor's last beat), `ev_tile_sorted_o` + `ev_entries_sorted_o` (a job handed to a
+//! sequencer, with its `entries_in`), `ev_tile_rastered_o` (raster done pulses this cycle),
+//! `ev_entries_rastered_o` (a raster command's `len`, when taken), `ev_result_written_o` (a
+//! result's B).
+
+use crate::emit::expr::{bits_for, lit, resize};
+use crate::emit::{if_, if_else, set, Module, Stmt};
+use neo_golden::engine::{EngineConfig, SchedulerPolicy};
+
+/// Module name.
+pub const NAME: &str = "neo_frame_ctrl";
+
+/// Widths and counts of the controller for `cfg`.
+struct Dims {
+    n: u32,
+    m: u32,
+    aw: u32,
+    lw: u32,
+    xa: u32,
+    xd: u32,
+    xi: u32,
+    tb: u32,
+    /// Sequencer index bits (at least 1).
+    nb: u32,
+    /// Raster-core index bits (at least 1).
+    mb: u32,
+    /// Completion-queue depth and pointer bits.
+    qd: u32,
+    qb: u32,
+    /// Outstanding-write counter bits.
+    ob: u32,
+    rr: bool,
+}
+
+impl Dims {
+    fn new(cfg: &EngineConfig) -> Dims {
+        let (n, m) = (cfg.sort_cores as u32, cfg.raster_cores as u32);
+        let qd = 4u32;
+        Dims {
+            n,
+            m,
+            aw: cfg.addr_bits,
+            lw: cfg.len_bits,
+            xa: cfg.axi_addr_bits,
+            xd: cfg.axi_data_bits,
+            xi: cfg.axi_id_bits,
+            tb: cfg.tile_bits,
+            nb: bits_for(n as u64 - 1),
+            mb: bits_for(m as u64 - 1),
+            qd,
+            qb: bits_for(qd as u64 - 1),
+            ob: bits_for(cfg.axi_outstanding as u64),
+            rr: cfg.scheduler == SchedulerPolicy::RoundRobin,
+        }
+    }
+}
+
+/// Fields of a completion-queue entry: (name, width), packed from bit 0.
+fn cq_fields(d: &Dims) -> Vec<(&'static str, u32)> {
+    vec![("t", 32), ("x", d.tb), ("y", d.tb), ("next", d.aw), ("len", d.lw), ("ovf", 1)]
+}
+
+/// The frame controller for `cfg`.
+pub fn module(cfg: &EngineConfig) -> Module {
+    let d = Dims::new(cfg);
+    let mut m = Module::new(NAME);
+    m.doc("Engine frame controller: descriptor reads and result writes (AXI client 0), the overflow check,");
+    m.doc(format!(
+        "the {} tile scheduler over {} sequencers and {} raster cores, the completion queue, status and events.",
+        cfg.scheduler.name(),
+        d.n,
+        d.m
+    ));
+    ports(&mut m, cfg, &d);
+    status(&mut m, &d);
+    fetch(&mut m, &d);
+    dispatch(&mut m, cfg, &d);
+    completions(&mut m, &d);
+    head(&mut m, cfg, &d);
+    m
+}
+
+fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
+    let (aw, lw, xa, xd, xi) = (d.aw, d.lw, d.xa, d.xd, d.xi);
+    m.clock_reset();
+    m.input_c("start_i", 1, "CTRL.start (one cycle; ignored while busy)");
+    m.input_c("frame_i", 32, "FRAME");
+    m.input_c("tiles_i", 32, "TILES");
+    m.input_c("width_i", 16, "image width");
+    m.input_c("height_i", 16, "image height");
+    for b in ["desc", "result", "feat", "fb", "scratch"] {
+        m.input_c(format!("{b}_base_i"), xa, "byte address");
+    }
+    m.output_c("busy_o", 1, "STATUS.busy");
+    m.output_c("done_o", 1, "STATUS.done");
+    m.output_c("overflow_o", 1, "STATUS.overflow");
+    m.output_c("first_overflow_o", 32, "FIRST_OVERFLOW");
+    m.output_c("overflows_o", 32, "OVERFLOWS");
+    // AXI client 0.
+    let sigs: [(&str, bool, u32); 29] = [
+        ("arvalid", true, 1),
+        ("arready", false, 1),
+        ("arid", true, xi),
+        ("araddr", true, xa),
+        ("arlen", true, 8),
+        ("arsize", true, 3),
+        ("arburst", true, 2),
+        ("rvalid", false, 1),
+        ("rready", true, 1),
+        ("rid", false, xi),
+        ("rdata", false, xd),
+        ("rresp", false, 2),
+        ("rlast", false, 1),
+        ("awvalid", true, 1),
+        ("awready", false, 1),
+        ("awid", true, xi),
+        ("awaddr", true, xa),
+        ("awlen", true, 8),
+        ("awsize", true, 3),
+        ("awburst", true, 2),
+        ("wvalid", true, 1),
+        ("wready", false, 1),
+        ("wdata", true, xd),
+        ("wstrb", true, xd / 8),
+        ("wlast", true, 1),
+        ("bvalid", false, 1),
+        ("bready", true, 1),
+        ("bid", false, xi),
+        ("bresp", false, 2),
+    ];
+    for (s, out, w) in sigs {
+        if out {
+            m.output(format!("m_axi_{s}_o"), w);
+        } else {
+            m.input(format!("m_axi_{s}_i"), w);
+        }
+    }
+    // Sequencers.
+    m.output_c("job_valid_o", d.n, "per sequencer: a tile job");
+    m.input_c("job_ready_i", d.n, "per sequencer: idle");
+    m.output_c("job_from_scratch_o", 1, "shared job payload: descriptor fields");
+    m.output("job_prev_o", aw);
+    m.output("job_prev_len_o", lw);
+    m.output("job_list_o", aw);
+    m.output("job_list_len_o", lw);
+    m.output("job_next_o", aw);
+    m.output_c("job_odd_o", 1, "FRAME[0]");
+    m.output_c("job_scratch_o", d.n * aw, "sequencer k's scratch entry base at [k*AW +: AW]");
+    m.input_c("cpl_valid_i", d.n, "per sequencer: tile sorted");
+    m.output_c("cpl_ready_o", d.n, "");
+    m.input_c("cpl_len_i", d.n * lw, "sequencer k's next_len at [k*LW +: LW]");
+    // Raster cores.
+    m.output_c("ras_valid_o", d.m, "per raster core: command");
+    m.input_c("ras_ready_i", d.m, "");
+    m.output_c("ras_tile_x_o", d.tb, "shared raster command payload");
+    m.output("ras_tile_y_o", d.tb);
+    m.output("ras_width_o", 16);
+    m.output("ras_height_o", 16);
+    m.output("ras_table_o", aw);
+    m.output("ras_len_o", lw);
+    m.output("ras_feat_o", aw);
+    m.output("ras_pix_o", aw);
+    m.input_c("ras_done_i", d.m, "per raster core: tile finished");
+    m.input_c("idle_i", d.n + d.m, "per bridge (sort bridges, then raster bridges): idle");
+    // Events.
+    m.output_c("ev_desc_read_o", 1, "a descriptor read");
+    m.output_c("ev_tile_sorted_o", 1, "a tile handed to a sequencer ...");
+    m.output_c("ev_entries_sorted_o", lw + 1, "... with its entries_in");
+    m.output_c("ev_tile_rastered_o", bits_for(d.m as u64), "raster done pulses this cycle");
+    m.output_c("ev_entries_rastered_o", lw, "a raster command's len (when taken)");
+    m.output_c("ev_result_written_o", 1, "a result's write response");
+    let _ = cfg;
+}
+
+fn status(m: &mut Module, d: &Dims) {
+    let (qb, qd) = (d.qb, d.qd);
+    m.blank();
+    m.comment("Completion-queue pointers.");
+    m.reg("cq_wp_q", qb + 1).reg("cq_rp_q", qb + 1);
+    m.wire_assign("cq_count", qb + 1, "cq_wp_q - cq_rp_q");
+    m.wire_assign("cq_space", 1, format!("cq_count != {}", lit(qb + 1, qd as u64)));
+    m.wire_assign("cq_empty", 1, "cq_wp_q == cq_rp_q");
+    m.blank();
+    m.comment("Status.");
+    m.reg("busy_q", 1).reg("done_q", 1).reg("first_ovf_q", 32).reg("ovfs_q", 32).reg("rastered_q", 32);
+    m.wire_assign("start", 1, "start_i & ~busy_q");
+    m.assign("busy_o", "busy_q");
+    m.assign("done_o", "done_q");
+    m.assign("overflow_o", format!("ovfs_q != {}", lit(32, 0)));
+    m.assign("first_overflow_o", "first_ovf_q");
+    m.assign("overflows_o", "ovfs_q");
+}
+
+/// Descriptor reads: one 4-beat burst at a time into the descriptor buffer.
+fn fetch(m: &mut Module, d: &Dims) {
+    let (xa, xd, xi) = (d.xa, d.xd, d.xi);
+    m.blank();
+    m.comment("Descriptors: tile fetch_q's 4 words at DESC_BASE + 32 t into w0_q..w3_q (dv_q: buffer full).");
+    m.reg("fetch_q", 32).reg("ar_q", 1).reg("rd_q", 1).reg("beat_q", 2).reg("dv_q", 1).reg("dt_q", 32);
+    m.reg("w0_q", 1 + 2 * d.tb).reg("w1_q", 64).reg("w2_q", 64).reg("w3_q", 32);
+    m.wire_assign("more", 1, "fetch_q != tiles_i");
+    m.wire_assign("ar_start", 1, "busy_q & more & ~ar_q & ~rd_q & ~dv_q");
+    m.assign("m_axi_arvalid_o", "ar_q");
+    m.assign("m_axi_arid_o", lit(xi, 0));
+    m.assign("m_axi_araddr_o", format!("desc_base_i + {{{}, 5'd0}}", resize("fetch_q", 32, xa - 5)));
+    m.assign("m_axi_arlen_o", lit(8, 3));
+    m.assign("m_axi_arsize_o", lit(3, 3));
+    m.assign("m_axi_arburst_o", lit(2, 1));
+    m.assign("m_axi_rready_o", "rd_q");
+    // Register bits below the alignment of their base (and FRAME above the parity) are not used.
+    m.wire_assign(
+        "unused_regs",
+        1,
+        "^{frame_i[31:1], feat_base_i[4:0], fb_base_i[1:0], scratch_base_i[2:0]}",
+    );
+    m.wire_assign("r_fire", 1, "m_axi_rvalid_i & rd_q");
+    m.wire_assign("r_word", 64, "m_axi_rdata_i[63:0]");
+    m.wire_assign("desc_in", 1, "r_fire & (beat_q == 2'd3)");
+    m.assign("ev_desc_read_o", "desc_in");
+    // The unused response fields (single ID, responses in order; errors are not reported).
+    m.wire_assign(
+        "unused_r",
+        1,
+        unused_xor(&[("m_axi_rid_i", xi), ("m_axi_rresp_i", 2), ("m_axi_rlast_i", 1)], xd, "m_axi_rdata_i"),
+    );
+    m.seq(
+        vec![
+            set("fetch_q", lit(32, 0)),
+            set("ar_q", "1'b0"),
+            set("rd_q", "1'b0"),
+            set("beat_q", "2'd0"),
+            set("dt_q", lit(32, 0)),
+        ],
+        vec![
+            if_("start", vec![set("fetch_q", lit(32, 0))]),
+            if_("ar_start", vec![set("ar_q", "1'b1")]),
+            if_(
+                "ar_q & m_axi_arready_i",
+                vec![set("ar_q", "1'b0"), set("rd_q", "1'b1"), set("beat_q", "2'd0")],
+            ),
+            if_(
+                "r_fire",
+                vec![
+                    set("beat_q", "beat_q + 2'd1"),
+                    if_(
+                        "beat_q == 2'd3",
+                        vec![
+                            set("rd_q", "1'b0"),
+                            set("dt_q", "fetch_q"),
+                            set("fetch_q", format!("fetch_q + {}", lit(32, 1))),
+                        ],
+                    ),
+                ],
+            ),
+        ],
+    );
+    let tb = d.tb;
+    let w0 = format!("{{r_word[32], r_word[{}:16], r_word[{}:0]}}", 15 + tb, tb - 1);
+    m.seq_noreset(vec![if_(
+        "r_fire",
+        vec![Stmt::Case(
+            "beat_q".into(),
+            vec![
+                ("2'd0".into(), vec![set("w0_q", w0)]),
+                ("2'd1".into(), vec![set("w1_q", "r_word")]),
+                ("2'd2".into(), vec![set("w2_q", "r_word")]),
+            ],
+            vec![set("w3_q", "r_word[31:0]")],
+        )],
+    )]);
+    m.comment("Decoded descriptor and its overflow check.");
+    m.wire_assign("d_fs", 1, format!("w0_q[{}]", 2 * tb));
+    m.wire_assign("d_x", tb, resize_part("w0_q", tb - 1, 0, tb));
+    m.wire_assign("d_y", tb, resize_part("w0_q", 2 * tb - 1, tb, tb));
+    m.wire_assign("d_ein", 33, "{1'b0, w2_q[63:32]} + (d_fs ? 33'd0 : {1'b0, w1_q[63:32]})");
+}
+
+/// `^{a, b, ...}` over whole inputs that are deliberately unused (lint: read once).
+fn unused_xor(sigs: &[(&str, u32)], data_bits: u32, data: &str) -> String {
+    let mut parts: Vec<String> = sigs.iter().map(|(s, _)| s.to_string()).collect();
+    if data_bits > 64 {
+        parts.push(format!("{data}[{}:64]", data_bits - 1));
+    }
+    format!("^{{{}}}", parts.join(", "))
+}
+
+/// The sort dispatch: overflow tiles to the completion queue, the others to a sequencer.
+fn dispatch(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
+    let (n, aw, lw, nb) = (d.n, d.aw, d.lw, d.nb);
+    let cap = cfg.table_capacity as u64;
+    m.blank();
+    m.comment(format!("Sort dispatch ({} over {n} sequencers).", cfg.scheduler.name()));
+    m.wire_assign("d_ovf", 1, format!("d_ein > {}", lit(33, cap)));
+    m.reg("rr_q", nb);
+    m.wire("job_sel", nb).wire("job_any", 1);
+    if d.rr {
+        m.assign("job_sel", "rr_q");
+        m.assign("job_any", "job_ready_i[rr_q]");
+    } else {
+        let mut body = vec![set("job_sel_c", lit(nb, 0))];
+        for k in (0..n).rev() {
+            body.push(if_(format!("job_ready_i[{k}]"), vec![set("job_sel_c", lit(nb, k as u64))]));
+        }
+        m.reg("job_sel_c", nb);
+        m.comb(body);
+        m.assign("job_sel", "job_sel_c");
+        m.assign("job_any", "|job_ready_i");
+    }
+    m.wire_assign("ovf_push", 1, "dv_q & d_ovf & cq_space");
+    m.wire_assign("job_offer", 1, "dv_q & ~d_ovf");
+    m.wire_assign("job_fire", 1, "job_offer & job_any");
+    m.assign("job_valid_o", format!("job_offer ? ({} << job_sel) : {}", lit(n, 1), lit(n, 0)));
+    m.assign("job_from_scratch_o", "d_fs");
+    m.assign("job_prev_o", resize_part("w1_q", 31, 0, aw));
+    m.assign("job_prev_len_o", resize_part("w1_q", 63, 32, lw));
+    m.assign("job_list_o", resize_part("w2_q", 31, 0, aw));
+    m.assign("job_list_len_o", resize_part("w2_q", 63, 32, lw));
+    m.assign("job_next_o", resize_part("w3_q", 31, 0, aw));
+    m.assign("job_odd_o", "frame_i[0]");
+    m.wire_assign("scratch_entry", aw, resize_part("scratch_base_i", d.xa - 1, 3, aw));
+    let scr: Vec<String> =
+        (0..n).rev().map(|k| format!("scratch_entry + {}", lit(aw, 2 * cap * k as u64))).collect();
+    m.assign("job_scratch_o", format!("{{{}}}", scr.join(", ")));
+    m.assign("ev_tile_sorted_o", "job_fire");
+    m.assign("ev_entries_sorted_o", resize("d_ein", 33, lw + 1));
+    m.comment("Per sequencer: the tile it sorts (index, tile_x, tile_y, next).");
+    m.mem("seq_t", 32, n).mem("seq_x", d.tb, n).mem("seq_y", d.tb, n).mem("seq_next", aw, n);
+    m.seq_noreset(vec![if_(
+        "job_fire",
+        vec![
+            set("seq_t[job_sel]", "dt_q"),
+            set("seq_x[job_sel]", "d_x"),
+            set("seq_y[job_sel]", "d_y"),
+            set("seq_next[job_sel]", resize_part("w3_q", 31, 0, aw)),
+        ],
+    )]);
+}
+
+/// `name[hi:lo]` resized to `to` bits.
+fn resize_part(name: &str, hi: u32, lo: u32, to: u32) -> String {
+    let w = hi - lo + 1;
+    if w > to {
+        format!("{name}[{}:{lo}]", lo + to - 1)
+    } else if w == to {
+        format!("{name}[{hi}:{lo}]")
+    } else {
+        format!("{{{}'d0, {name}[{hi}:{lo}]}}", to - w)
+    }
+}
+
+/// Sequencer completions into the completion queue (overflow tiles first).
+fn completions(m: &mut Module, d: &Dims) {
+    let (n, nb, qb, qd, lw) = (d.n, d.nb, d.qb, d.qd, d.lw);
+    let _ = qd;
+    m.blank();
+    m.comment(format!("Completion queue ({qd} entries): overflow tiles first, then the lowest sequencer."));
+    let fields = cq_fields(d);
+    let ew: u32 = fields.iter().map(|f| f.1).sum();
+    m.mem("cq", ew, qd);
+    let mut body = vec![set("cpl_sel", lit(nb, 0))];
+    for k in (0..n).rev() {
+        body.push(if_(format!("cpl_valid_i[{k}]"), vec![set("cpl_sel", lit(nb, k as u64))]));
+    }
+    m.reg("cpl_sel", nb);
+    m.comb(body);
+    m.wire_assign("cpl_take", 1, "(|cpl_valid_i) & cq_space & ~ovf_push");
+    m.assign("cpl_ready_o", format!("cpl_take ? ({} << cpl_sel) : {}", lit(n, 1), lit(n, 0)));
+    m.wire_assign("cpl_len", lw, format!("cpl_len_i[cpl_sel * {lw} +: {lw}]"));
+    let ovf_entry =
+        format!("{{1'b1, {}, {}, {}, {}, dt_q}}", lit(lw, 0), resize_part("w3_q", 31, 0, d.aw), "d_y", "d_x");
+    let cpl_entry = "{1'b0, cpl_len, seq_next[cpl_sel], seq_y[cpl_sel], seq_x[cpl_sel], seq_t[cpl_sel]}";
+    m.wire_assign("cq_push", 1, "ovf_push | cpl_take");
+    m.wire_assign("cq_in", ew, format!("ovf_push ? {ovf_entry} : {cpl_entry}"));
+    m.seq_noreset(vec![if_("cq_push", vec![set(format!("cq[cq_wp_q[{}:0]]", qb - 1), "cq_in")])]);
+    m.comment("The head entry.");
+    m.wire_assign("cq_head", ew, format!("cq[cq_rp_q[{}:0]]", qb - 1));
+    m.unpack_fields("cq_head", &fields.iter().map(|(f, w)| (format!("h_{f}"), *w)).collect::<Vec<_>>());
+}
+
+/// The head's result write and raster dispatch.
+fn head(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
+    let (mm, mb, xa, xd, xi, aw, lw, ob) = (d.m, d.mb, d.xa, d.xd, d.xi, d.aw, d.lw, d.ob);
+    let o = cfg.axi_outstanding as u64;
+    m.blank();
+    m.comment("Head of the queue: its result write (AW and W, at most axi_outstanding without B) and its raster command.");
+    m.reg("aw_sent_q", 1).reg("w_sent_q", 1).reg("ras_sent_q", 1).reg("wr_out_q", ob).reg("rrr_q", mb);
+    m.wire_assign("wr_room", 1, format!("wr_out_q != {}", lit(ob, o)));
+    m.assign("m_axi_awvalid_o", "~cq_empty & ~aw_sent_q & wr_room");
+    m.assign("m_axi_awid_o", lit(xi, 0));
+    m.assign("m_axi_awaddr_o", format!("result_base_i + {{{}, 3'd0}}", resize("h_t", 32, xa - 3)));
+    m.assign("m_axi_awlen_o", lit(8, 0));
+    m.assign("m_axi_awsize_o", lit(3, 3));
+    m.assign("m_axi_awburst_o", lit(2, 1));
+    m.assign("m_axi_wvalid_o", "~cq_empty & ~w_sent_q & (aw_sent_q | wr_room)");
+    let len32 = resize("h_len", lw, 32);
+    m.assign("m_axi_wdata_o", format!("{{{}'d0, h_ovf, {len32}}}", xd - 33));
+    m.assign("m_axi_wstrb_o", format!("{{{}{{1'b1}}}}", xd / 8));
+    m.assign("m_axi_wlast_o", "1'b1");
+    m.assign("m_axi_bready_o", "1'b1");
+    m.wire_assign("aw_fire", 1, "m_axi_awvalid_o & m_axi_awready_i");
+    m.wire_assign("w_fire", 1, "m_axi_wvalid_o & m_axi_wready_i");
+    m.wire_assign("b_fire", 1, "m_axi_bvalid_i");
+    m.wire_assign("unused_b", 1, "^{m_axi_bid_i, m_axi_bresp_i}");
+    m.assign("ev_result_written_o", "b_fire");
+    m.comment(format!("Raster dispatch ({} over {mm} cores).", cfg.scheduler.name()));
+    m.wire("ras_sel", mb).wire("ras_any", 1);
+    if d.rr {
+        m.assign("ras_sel", "rrr_q");
+        m.assign("ras_any", "ras_ready_i[rrr_q]");
+    } else {
+        let mut body = vec![set("ras_sel_c", lit(mb, 0))];
+        for k in (0..mm).rev() {
+            body.push(if_(format!("ras_ready_i[{k}]"), vec![set("ras_sel_c", lit(mb, k as u64))]));
+        }
+        m.reg("ras_sel_c", mb);
+        m.comb(body);
+        m.assign("ras_sel", "ras_sel_c");
+        m.assign("ras_any", "|ras_ready_i");
+    }
+    m.wire_assign("ras_offer", 1, "~cq_empty & ~ras_sent_q");
+    m.wire_assign("ras_fire", 1, "ras_offer & ras_any");
+    m.assign("ras_valid_o", format!("ras_offer ? ({} << ras_sel) : {}", lit(mm, 1), lit(mm, 0)));
+    m.assign("ras_tile_x_o", "h_x");
+    m.assign("ras_tile_y_o", "h_y");
+    m.assign("ras_width_o", "width_i");
+    m.assign("ras_height_o", "height_i");
+    m.assign("ras_table_o", "h_next");
+    m.assign("ras_len_o", "h_len");
+    m.assign("ras_feat_o", resize_part("feat_base_i", xa - 1, 5, aw));
+    let sh = (cfg.tile * cfg.tile).trailing_zeros();
+    m.wire_assign("pix_off", aw, format!("{} << {sh}", resize("h_t", 32, aw)));
+    m.assign("ras_pix_o", format!("{} + pix_off", resize_part("fb_base_i", xa - 1, 2, aw)));
+    m.assign("ev_entries_rastered_o", format!("ras_fire ? h_len : {}", lit(lw, 0)));
+    m.wire_assign("aw_done", 1, "aw_sent_q | aw_fire");
+    m.wire_assign("w_done", 1, "w_sent_q | w_fire");
+    m.wire_assign("ras_done", 1, "ras_sent_q | ras_fire");
+    m.wire_assign("cq_pop", 1, "~cq_empty & aw_done & w_done & ras_done");
+    let (n, nb, qb) = (d.n, d.nb, d.qb);
+    let _ = aw;
+    let wrap = |reg: &str, bits: u32, count: u32| {
+        if count.is_power_of_two() {
+            format!("{reg} + {}", lit(bits, 1))
+        } else {
+            format!(
+                "({reg} == {}) ? {} : ({reg} + {})",
+                lit(bits, count as u64 - 1),
+                lit(bits, 0),
+                lit(bits, 1)
+            )
+        }
+    };
+    // Every control register but the fetch engine's (reset in its own block) and the
+    // descriptor words (datapath, no reset).
+    let own = ["fetch_q", "ar_q", "rd_q", "beat_q", "dt_q", "w0_q", "w1_q", "w2_q", "w3_q"];
+    finish(m, d);
+    let mut reset = m.q_resets(&[("first_ovf_q", "32'hffffffff")]);
+    reset.retain(|s| !matches!(s, Stmt::Set(n, _) if own.contains(&n.as_str())));
+    m.seq(
+        reset,
+        vec![
+            if_(
+                "start",
+                vec![
+                    set("busy_q", "1'b1"),
+                    set("done_q", "1'b0"),
+                    set("first_ovf_q", "32'hffffffff"),
+                    set("ovfs_q", lit(32, 0)),
+                    set("rr_q", lit(nb, 0)),
+                    set("rrr_q", lit(mb, 0)),
+                ],
+            ),
+            if_("finish", vec![set("busy_q", "1'b0"), set("done_q", "1'b1")]),
+            if_("desc_in", vec![set("dv_q", "1'b1")]),
+            if_("ovf_push | job_fire", vec![set("dv_q", "1'b0")]),
+            if_(
+                "ovf_push",
+                vec![
+                    if_(format!("ovfs_q == {}", lit(32, 0)), vec![set("first_ovf_q", "dt_q")]),
+                    set("ovfs_q", format!("ovfs_q + {}", lit(32, 1))),
+                ],
+            ),
+            if_("job_fire", vec![set("rr_q", wrap("rr_q", nb, n))]),
+            if_("ras_fire", vec![set("rrr_q", wrap("rrr_q", mb, mm))]),
+            if_("cq_push", vec![set("cq_wp_q", format!("cq_wp_q + {}", lit(qb + 1, 1)))]),
+            if_else(
+                "cq_pop",
+                vec![
+                    set("cq_rp_q", format!("cq_rp_q + {}", lit(qb + 1, 1))),
+                    set("aw_sent_q", "1'b0"),
+                    set("w_sent_q", "1'b0"),
+                    set("ras_sent_q", "1'b0"),
+                ],
+                vec![
+                    if_("aw_fire", vec![set("aw_sent_q", "1'b1")]),
+                    if_("w_fire", vec![set("w_sent_q", "1'b1")]),
+                    if_("ras_fire", vec![set("ras_sent_q", "1'b1")]),
+                ],
+            ),
+            if_else(
+                "aw_fire & ~b_fire",
+                vec![set("wr_out_q", format!("wr_out_q + {}", lit(ob, 1)))],
+                vec![if_("~aw_fire & b_fire", vec![set("wr_out_q", format!("wr_out_q - {}", lit(ob, 1)))])],
+            ),
+            if_("ras_done_cnt != 32'd0", vec![set("rastered_q", "rastered_q + ras_done_cnt")]),
+            if_("start", vec![set("rastered_q", lit(32, 0))]),
+        ],
+    );
+}
+
+/// Raster completions and the end of the frame.
+fn finish(m: &mut Module, d: &Dims) {
+    let mm = d.m;
+    m.blank();
+    m.comment("End of the frame: every tile rastered, every B back, every bridge idle.");
+    let sum: Vec<String> = (0..mm).map(|k| format!("{{31'd0, ras_done_i[{k}]}}")).collect();
+    m.wire_assign("ras_done_cnt", 32, sum.join(" + "));
+    m.assign("ev_tile_rastered_o", resize("ras_done_cnt", 32, bits_for(mm as u64)));
+    m.wire_assign(
+        "finish",
+        1,
+        format!(
+            "busy_q & ~start & ~more & ~dv_q & ~ar_q & ~rd_q & cq_empty & (rastered_q == tiles_i) & (wr_out_q == {}) & (&idle_i)",
+            lit(d.ob, 0)
+        ),
+    );
+}

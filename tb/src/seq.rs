@@ -1,0 +1,350 @@
+//! The `neo_sort_seq` test bench. Rust plays the sequencer's surroundings:
+//! - the job driver offers one tile job (after a random gap; random payload while idle);
+//! - the Sorting Core model takes commands when it chooses (random `cmd_ready_i`), executes
+//!   each one on a golden [`Memory`] with golden [`run_command`] (`sort_chunk` / `merge2`) and
+//!   answers with `done_i` pulses in order, at least two cycles apart, after a random latency,
+//!   `done_len_i` = the entries written, held between pulses (as `neo_sort_core` does);
+//! - the bridge model raises `idle_i` now and then while commands are in flight (between their
+//!   bursts), and holds it low for a random time after each `done_i` (its writes draining);
+//! - the completion sink takes `cpl_valid_o` under random backpressure.
+//!
+//! The golden model is [`tile_plan`] (the commands, stage by stage) and the plan executed on a
+//! copy of the memory (the tile's `next_len`). The checker compares every command taken with
+//! the plan's next one field by field, checks the barrier before every stage after the first
+//! and before the completion (every earlier command done, then `idle_i` high in a later cycle),
+//! the completion's `cpl_len_o`, and the handshakes (an offered command held until taken).
+
+use crate::check::Checker;
+use crate::models::NeoSortSeq;
+use crate::rng::Rng;
+use neo_gen::EngineConfig;
+use neo_golden::engine::{run_command, tile_plan, FrameRegs, Memory, TileCmd, TileDescriptor};
+use neo_golden::sort::{SortMode, Sorter};
+use std::collections::VecDeque;
+
+/// Timing of the sequencer's surroundings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SeqTiming {
+    /// Probability (percent) that `cmd_ready_i` is high in a cycle.
+    pub cmd_ready_pct: u32,
+    /// Cycles from a command's acceptance to its `done_i`, at least.
+    pub min_done: u64,
+    /// ... at most.
+    pub max_done: u64,
+    /// Longest time `idle_i` stays low after a `done_i` (cycles).
+    pub max_drain: u64,
+    /// Probability (percent) that `cpl_ready_i` is high in a cycle.
+    pub cpl_ready_pct: u32,
+    /// Longest gap before a job is offered (cycles).
+    pub max_job_gap: u64,
+    /// Probability (percent) that `idle_i` is high in a cycle while a command is in flight.
+    pub idle_busy_pct: u32,
+}
+
+impl SeqTiming {
+    /// Always ready, quick done pulses, the bridge idle at once.
+    pub const FAST: SeqTiming =
+        SeqTiming { cmd_ready_pct: 100, min_done: 1, max_done: 2, max_drain: 0, cpl_ready_pct: 100, max_job_gap: 0, idle_busy_pct: 0 };
+    /// Random stalls, slow and late done pulses, long drains.
+    pub const RANDOM: SeqTiming =
+        SeqTiming { cmd_ready_pct: 50, min_done: 1, max_done: 30, max_drain: 25, cpl_ready_pct: 60, max_job_gap: 5, idle_busy_pct: 30 };
+}
+
+/// One tile job: the descriptor, the frame (registers `frame` and `scratch_base`) and the core.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SeqJob {
+    /// The descriptor.
+    pub desc: TileDescriptor,
+    /// The frame's registers (only `frame` and `scratch_base` matter).
+    pub regs: FrameRegs,
+    /// The sorting core the sequencer drives.
+    pub core: u64,
+}
+
+/// What a tile took.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SeqRun {
+    /// Commands issued.
+    pub commands: usize,
+    /// Stages.
+    pub stages: usize,
+    /// Cycles from the job's acceptance to the completion's.
+    pub cycles: u64,
+    /// The completion's `next_len`.
+    pub next_len: u64,
+}
+
+/// The golden side of one job: the plan and the tile's `next_len`.
+struct Expected {
+    cmds: Vec<(usize, TileCmd)>,
+    stages: usize,
+    next_len: u64,
+}
+
+impl Expected {
+    fn new(cfg: &EngineConfig, job: &SeqJob, mem: &Memory) -> Expected {
+        let plan = tile_plan(cfg, &job.regs, &job.desc, job.core);
+        assert!(!plan.overflow, "the bench only sends tiles that fit: {:?}", job.desc);
+        let mut copy = mem.clone();
+        let mut sorter = Sorter::new(cfg.sort_config());
+        let mut next_len = job.desc.list_len as u64;
+        for c in plan.commands() {
+            let e = run_command(&mut sorter, &mut copy, c).expect("bench data has no reserved id");
+            if c.mode == SortMode::MergeDelete {
+                next_len = e.written;
+            }
+        }
+        let cmds = plan.stages.iter().enumerate().flat_map(|(s, v)| v.iter().map(move |c| (s, *c))).collect();
+        Expected { cmds, stages: plan.stages.len(), next_len }
+    }
+}
+
+/// The sequencer with its surroundings.
+pub struct SeqBench {
+    /// The model.
+    pub dut: NeoSortSeq,
+    /// Mismatch reporting.
+    pub checker: Checker,
+    /// The memory the core model works on.
+    pub mem: Memory,
+    cfg: EngineConfig,
+    sorter: Sorter,
+    timing: SeqTiming,
+    rng: Rng,
+    done_len: u64,
+}
+
+/// A command taken by the core model and not yet done: (due cycle, done_len).
+type Pending = VecDeque<(u64, u64)>;
+
+impl SeqBench {
+    /// A reset sequencer whose surroundings follow `timing`.
+    pub fn new(cfg: &EngineConfig, seed: u64, timing: SeqTiming) -> SeqBench {
+        let mut dut = NeoSortSeq::new();
+        dut.set_job_valid_i(false);
+        dut.set_cmd_ready_i(false);
+        dut.set_done_i(false);
+        dut.set_idle_i(true);
+        dut.set_cpl_ready_i(false);
+        dut.reset();
+        SeqBench {
+            dut,
+            checker: Checker::new(NeoSortSeq::NAME, seed),
+            mem: Memory::new(),
+            cfg: cfg.clone(),
+            sorter: Sorter::new(cfg.sort_config()),
+            timing,
+            rng: Rng::new(seed).fork(7),
+            done_len: 0,
+        }
+    }
+
+    /// Changes the timing.
+    pub fn set_timing(&mut self, timing: SeqTiming) {
+        self.timing = timing;
+    }
+
+    fn drive_job(&mut self, job: Option<&SeqJob>) {
+        let r = &mut self.rng;
+        let (valid, d, odd, scratch) = match job {
+            Some(j) => {
+                let s = neo_golden::engine::plan::scratch_entry_base(&self.cfg, &j.regs, j.core);
+                (true, j.desc, j.regs.frame & 1 == 1, s)
+            }
+            None => {
+                let w = [r.next_u64(), r.next_u64(), r.next_u64(), r.next_u64()];
+                (false, TileDescriptor::from_words(&w), r.percent(50), r.next_u64())
+            }
+        };
+        let dut = &mut self.dut;
+        dut.set_job_valid_i(valid);
+        dut.set_job_from_scratch_i(d.from_scratch);
+        dut.set_job_prev_i(d.prev as u64);
+        dut.set_job_prev_len_i(d.prev_len as u64);
+        dut.set_job_list_i(d.list as u64);
+        dut.set_job_list_len_i(d.list_len as u64);
+        dut.set_job_next_i(d.next as u64);
+        dut.set_job_odd_i(odd);
+        dut.set_job_scratch_i(scratch & mask(self.cfg.addr_bits));
+    }
+
+    fn offered(&self) -> TileCmd {
+        let d = &self.dut;
+        let mode = SortMode::ALL.into_iter().find(|m| m.code() == d.cmd_mode_o()).expect("2-bit mode");
+        TileCmd {
+            mode,
+            src_a: d.cmd_src_a_o(),
+            len_a: d.cmd_len_a_o(),
+            src_b: d.cmd_src_b_o(),
+            len_b: d.cmd_len_b_o(),
+            dst: d.cmd_dst_o(),
+        }
+    }
+
+    /// Runs one tile job to its completion and checks it (see the module docs).
+    ///
+    /// # Panics
+    /// At the first mismatch, protocol violation or timeout.
+    pub fn run(&mut self, job: &SeqJob) -> SeqRun {
+        let want = Expected::new(&self.cfg, job, &self.mem);
+        let work: u64 = want.cmds.iter().map(|(_, c)| c.len_a + c.len_b).sum();
+        let limit = self.dut.cycle() + 2000 + 200 * want.cmds.len() as u64 + work / 4;
+        let t = self.timing;
+        let mut gap = self.rng.below(t.max_job_gap + 1);
+        let (mut accepted_at, mut taken) = (None, 0usize);
+        let mut pending: Pending = VecDeque::new();
+        let mut last_done: Option<u64> = None;
+        let mut idle_since_done = true;
+        let mut busy_until = 0u64;
+        let mut held: Option<TileCmd> = None;
+        loop {
+            let c = self.dut.cycle();
+            self.checker.protocol(c, c < limit, &format!("timeout: tile {:?} not completed", job.desc));
+            // Job driver.
+            let offer_job = accepted_at.is_none() && gap == 0;
+            gap = gap.saturating_sub(1);
+            self.drive_job(offer_job.then_some(job));
+            // Core model: done pulses in order, two cycles apart at least.
+            let pulse = match (pending.front(), last_done) {
+                (Some(&(due, _)), l) if due <= c && l.is_none_or(|l| c >= l + 2) => pending.pop_front(),
+                _ => None,
+            };
+            if let Some((_, len)) = pulse {
+                self.done_len = len;
+                last_done = Some(c);
+                busy_until = c + 1 + self.rng.below(t.max_drain + 1);
+                idle_since_done = false;
+            }
+            self.dut.set_done_i(pulse.is_some());
+            self.dut.set_done_len_i(self.done_len);
+            // Bridge model: idle now and then while commands run (between their bursts), and
+            // for sure only once they are done and their writes drained.
+            let idle = if pending.is_empty() { c >= busy_until } else { self.rng.percent(t.idle_busy_pct) };
+            self.dut.set_idle_i(idle);
+            if idle && pulse.is_none() {
+                idle_since_done = true;
+            }
+            let ready = self.rng.percent(t.cmd_ready_pct);
+            self.dut.set_cmd_ready_i(ready);
+            let cpl_ready = self.rng.percent(t.cpl_ready_pct);
+            self.dut.set_cpl_ready_i(cpl_ready);
+            self.dut.eval();
+
+            // Checker.
+            if offer_job && self.dut.job_ready_o() {
+                accepted_at = Some(c);
+            }
+            let valid = self.dut.cmd_valid_o();
+            if let Some(h) = held {
+                self.checker.protocol(c, valid, "cmd_valid_o dropped before the command was taken");
+                self.checker.protocol(c, self.offered() == h, "the offered command changed before it was taken");
+            }
+            held = None;
+            if valid {
+                self.checker.protocol(c, accepted_at.is_some(), "a command before any job was taken");
+                let got = self.offered();
+                if let Some(&(stage, _)) = want.cmds.get(taken) {
+                    if stage > 0 && want.cmds[taken - 1].0 != stage {
+                        barrier(&self.checker, c, &format!("before stage {stage}"), &pending, idle_since_done);
+                    }
+                }
+                if !ready {
+                    held = Some(got);
+                } else {
+                    let Some(&(_, exp)) = want.cmds.get(taken) else {
+                        self.checker.fail(c, &format!("command {taken}"), "no more commands", &format!("{got:x?}"));
+                    };
+                    compare(&self.checker, c, taken, &exp, &got);
+                    let e = run_command(&mut self.sorter, &mut self.mem, &got).unwrap_or_else(|a| {
+                        self.checker.fail(c, "command data", "no reserved id", &format!("0x{a:x}"))
+                    });
+                    let due = c + self.rng.range(t.min_done, t.max_done);
+                    pending.push_back((due.max(pending.back().map_or(0, |p| p.0)), e.written));
+                    taken += 1;
+                }
+            }
+            if self.dut.cpl_valid_o() {
+                self.checker.value(c, "commands issued before the completion", want.cmds.len() as u64, taken as u64);
+                barrier(&self.checker, c, "before the completion", &pending, idle_since_done);
+                self.checker.value(c, "cpl_len_o", want.next_len, self.dut.cpl_len_o());
+                if cpl_ready {
+                    self.dut.tick();
+                    let start = accepted_at.expect("a completion follows a job");
+                    return SeqRun { commands: taken, stages: want.stages, cycles: c - start, next_len: want.next_len };
+                }
+            }
+            self.dut.tick();
+        }
+    }
+}
+
+fn mask(bits: u32) -> u64 {
+    if bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << bits) - 1
+    }
+}
+
+/// The first differing field of command `i`.
+fn compare(ck: &Checker, cycle: u64, i: usize, want: &TileCmd, got: &TileCmd) {
+    let fields = [
+        ("mode", want.mode.code(), got.mode.code()),
+        ("src_a", want.src_a, got.src_a),
+        ("len_a", want.len_a, got.len_a),
+        ("src_b", want.src_b, got.src_b),
+        ("len_b", want.len_b, got.len_b),
+        ("dst", want.dst, got.dst),
+    ];
+    for (f, w, g) in fields {
+        ck.value(cycle, &format!("command {i} ({:?}).{f}", want.mode), w, g);
+    }
+}
+
+/// The barrier: every command done and the bridge seen idle after the last `done_i`.
+fn barrier(ck: &Checker, cycle: u64, what: &str, pending: &Pending, idle_since_done: bool) {
+    ck.protocol(cycle, pending.is_empty(), &format!("barrier {what}: {} command(s) not done", pending.len()));
+    ck.protocol(cycle, idle_since_done, &format!("barrier {what}: idle_i not seen since the last done_i"));
+}
+
+/// Random entries of a tile's list (`n`) and previous table (`prev_len`, sorted, some invalid)
+/// written where `job` says.
+pub fn fill(cfg: &EngineConfig, rng: &mut Rng, mem: &mut Memory, d: &TileDescriptor) {
+    let fmt = cfg.format();
+    let ties = rng.percent(30);
+    let list = crate::stimulus::tile_entries(&fmt, rng, d.list_len as usize, ties, 100);
+    mem.write_entries(&fmt, d.list as u64, &list);
+    if !d.from_scratch {
+        let ties = rng.percent(30);
+        let mut prev = crate::stimulus::tile_entries(&fmt, rng, d.prev_len as usize, ties, 70);
+        prev.sort_by_key(|e| e.order_key());
+        let prev = crate::stimulus::nearly_sorted(prev, rng, cfg.chunk / 2, d.prev_len as usize / 8);
+        mem.write_entries(&fmt, d.prev as u64, &prev);
+    }
+}
+
+/// A random descriptor: list and previous lengths drawn from the edge cases (0, 1, `C - 1`, `C`,
+/// `C + 1`) or up to `max_chunks` chunks, at random (non-overlapping) addresses.
+pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDescriptor {
+    let c = cfg.chunk as u64;
+    let mut len = |rng: &mut Rng| -> u32 {
+        let edge = [0, 1, c / 2 - 1, c / 2, c / 2 + 1, c - 1, c, c + 1, 2 * c, 2 * c + 1, 4 * c + 1];
+        if rng.percent(40) {
+            *rng.pick(&edge) as u32
+        } else {
+            rng.range(0, max_chunks * c) as u32
+        }
+    };
+    let (list_len, prev_len) = (len(rng), len(rng));
+    let region = 1u32 << 20;
+    TileDescriptor {
+        tile_x: rng.next_u32() as u16,
+        tile_y: rng.next_u32() as u16,
+        from_scratch: rng.percent(40),
+        prev: region + rng.below(1 << 16) as u32,
+        prev_len,
+        list: 2 * region + rng.below(1 << 16) as u32,
+        list_len,
+        next: 3 * region + rng.below(1 << 16) as u32,
+    }
+}
