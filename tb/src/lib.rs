@@ -6,6 +6,7 @@
 //! compare against the bit-exact golden model (`neo_golden::sort`) and stop at the first
 //! mismatch.
 
+pub mod axi;
 pub mod bench;
 pub mod bits;
 #[cfg(neo_has_verilator)]

@@ -16,7 +16,11 @@
 //! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
+//! | `neo_axi_sort_bridge` | sorting core memory port -> AXI4 manager          | yes       |
+//! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
+//! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (one per engine P, and P=3) | P=3 |
 
+pub mod axi;
 pub mod bsu;
 pub mod chunk_ram;
 pub mod cmp_swap;
@@ -48,7 +52,17 @@ impl VerilogFile {
 
 /// Names of the tops that get their own cosimulation model, in order.
 pub fn top_modules() -> &'static [&'static str] {
-    &["neo_bsu", "neo_msu", "neo_sort_core", "neo_itu", "neo_scu", "neo_raster_core"]
+    &[
+        "neo_bsu",
+        "neo_msu",
+        "neo_sort_core",
+        "neo_itu",
+        "neo_scu",
+        "neo_raster_core",
+        "neo_axi_sort_bridge",
+        "neo_axi_raster_bridge",
+        "neo_axi_mux_p3",
+    ]
 }
 
 /// Every module of the configuration, leaves first.
@@ -70,7 +84,12 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         raster_core::loader::module(cfg),
         raster_core::feeder::module(cfg),
         raster_core::module(cfg),
+        axi::sort_bridge::module(cfg),
+        axi::raster_bridge::module(cfg),
     ];
+    for p in axi::mux_sizes(cfg) {
+        all.push(axi::mux::module(cfg, p)?);
+    }
     for m in &mut all {
         m.config_hash = Some(hash);
     }
