@@ -61,7 +61,7 @@ mod cosim {
             }
             let mut dut = NeoAxiMuxP3::new();
             maybe_trace(&mut dut, name);
-            let b = Bench {
+            let mut b = Bench {
                 s_ports: (0..P).map(|i| AxiBinding::new::<NeoAxiMuxP3>(&format!("s{i}_axi_"), false)).collect(),
                 m_port: AxiBinding::new::<NeoAxiMuxP3>("m_axi_", true),
                 mem: AxiMemory::new(1, mem, timing, rng.next_u64()),
@@ -72,7 +72,6 @@ mod cosim {
                 beats: 0,
                 dut,
             };
-            let mut b = b;
             for i in 0..P {
                 b.s_ports[i].set_manager(&mut b.dut, &ManagerSignals::default());
             }

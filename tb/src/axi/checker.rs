@@ -224,16 +224,21 @@ impl AxiChecker {
         // Handshakes at the end of the cycle: R and B first (a response frees its slot), then
         // the new requests.
         if let (Some(r), true) = (s.r, m.rready) {
-            let q = self.reads.get_mut(&r.id).expect("checked above");
-            let left = q.front_mut().expect("checked above");
-            *left -= 1;
-            let last = *left == 0;
+            let last = {
+                let q = self.reads.get_mut(&r.id).expect("checked above");
+                let left = q.front_mut().expect("checked above");
+                *left -= 1;
+                let last = *left == 0;
+                if last {
+                    q.pop_front();
+                }
+                last
+            };
+            if last {
+                self.reads_in_flight -= 1;
+            }
             if r.last != last {
                 return Err(self.v("R", &format!("rlast (ID 0x{:x})", r.id), hex(last.into()), hex(r.last.into())));
-            }
-            if last {
-                q.pop_front();
-                self.reads_in_flight -= 1;
             }
         }
         if let (Some(b), true) = (s.b, m.bready) {

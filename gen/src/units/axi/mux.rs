@@ -66,9 +66,10 @@ fn oh_index(oh: &str, n: usize, xb: u32) -> String {
 }
 
 /// A round-robin arbiter for channel `ch` (`ar` or `aw`) over the clients' `{ch}valid`, gated by
-/// `en`: declares `{ch}_oh` (the one-hot grant), `{ch}_fire`, drives `m_axi_{ch}*` from the
+/// `en` (none: always enabled): declares `{ch}_oh` (the one-hot grant), `{ch}_fire`, drives `m_axi_{ch}*` from the
 /// granted client and the clients' `{ch}ready`.
-fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: &str) {
+fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: Option<&str>) {
+    let gate = en.map_or(String::new(), |e| format!("{e} & "));
     let n = p as u32;
     let xb = index_bits(p);
     m.blank();
@@ -82,7 +83,7 @@ fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: &str) {
     m.wire_assign(format!("{ch}_src"), n, format!("(|{ch}_hi) ? {ch}_hi : {ch}_req"));
     m.wire_assign(format!("{ch}_pick"), n, format!("{ch}_src & (~{ch}_src + {})", lit(n, 1)));
     m.wire_assign(format!("{ch}_oh"), n, format!("{ch}_lock_q ? {ch}_lock_oh_q : {ch}_pick"));
-    m.assign(format!("m_axi_{ch}valid_o"), format!("{en} & (|({ch}_oh & {ch}_req))"));
+    m.assign(format!("m_axi_{ch}valid_o"), format!("{gate}(|({ch}_oh & {ch}_req))"));
     m.wire_assign(format!("{ch}_fire"), 1, format!("m_axi_{ch}valid_o & m_axi_{ch}ready_i"));
     for f in ["addr", "len", "size", "burst"] {
         let w = signals(cfg).iter().find(|s| s.name == format!("{ch}{f}")).expect("AXI field").width;
@@ -91,7 +92,7 @@ fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: &str) {
     let id = if xb == 0 { lit(cfg.axi_id_bits, 0) } else { resize_expr(&oh_index(&format!("{ch}_oh"), p, xb), xb, cfg.axi_id_bits) };
     m.assign(format!("m_axi_{ch}id_o"), id);
     for i in 0..p {
-        m.assign(format!("s{i}_axi_{ch}ready_o"), format!("{en} & {ch}_oh[{i}] & m_axi_{ch}ready_i"));
+        m.assign(format!("s{i}_axi_{ch}ready_o"), format!("{gate}{ch}_oh[{i}] & m_axi_{ch}ready_i"));
     }
     m.seq(
         vec![
@@ -145,7 +146,7 @@ pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
     }
     ports(&mut m, cfg, "m_axi_", true);
 
-    arbiter(&mut m, cfg, p, "ar", "1'b1");
+    arbiter(&mut m, cfg, p, "ar", None);
 
     m.blank();
     m.comment(format!("W order: clients of the accepted AWs ({W_FIFO} at most), the head's beats pass until WLAST."));
@@ -153,7 +154,7 @@ pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
     m.wire_assign("wq_room", 1, format!("wq_cnt_q != {}", lit(fb + 1, u64::from(W_FIFO))));
     m.wire_assign("wq_any", 1, format!("wq_cnt_q != {}", lit(fb + 1, 0)));
     m.wire_assign("w_oh", n, format!("wq_any ? wq_mem[wq_rp_q] : {}", lit(n, 0)));
-    arbiter(&mut m, cfg, p, "aw", "wq_room");
+    arbiter(&mut m, cfg, p, "aw", Some("wq_room"));
     m.wire_assign("w_req", n, concat(p, |i| format!("s{i}_axi_wvalid_i")));
     m.assign("m_axi_wvalid_o", "|(w_oh & w_req)");
     m.assign("m_axi_wdata_o", or_mux("w_oh", p, db, |i| format!("s{i}_axi_wdata_i")));
