@@ -7,6 +7,7 @@
 //! mismatch.
 
 pub mod axil;
+pub mod axi;
 pub mod bench;
 pub mod bits;
 #[cfg(neo_has_verilator)]

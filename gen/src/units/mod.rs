@@ -21,7 +21,11 @@
 //! | `neo_engine_regs` | engine control port: AXI4-Lite register map           | yes       |
 //! | `neo_sort_seq`  | engine: one Sorting Core's per-tile command sequencer   | yes       |
 //! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | no       |
+//! | `neo_axi_sort_bridge` | sorting core memory port -> AXI4 manager          | yes       |
+//! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
+//! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (one per engine P, and P=3) | P=3 |
 
+pub mod axi;
 pub mod bsu;
 pub mod chunk_ram;
 pub mod cmp_swap;
@@ -67,6 +71,9 @@ pub fn top_modules() -> &'static [&'static str] {
         "neo_perf_counters",
         "neo_engine_regs",
         "neo_sort_seq",
+        "neo_axi_sort_bridge",
+        "neo_axi_raster_bridge",
+        "neo_axi_mux_p3",
     ]
 }
 
@@ -94,7 +101,12 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         engine_regs::module(cfg),
         sort_seq::module(cfg),
         frame_ctrl::module(cfg),
+        axi::sort_bridge::module(cfg),
+        axi::raster_bridge::module(cfg),
     ];
+    for p in axi::mux_sizes(cfg) {
+        all.push(axi::mux::module(cfg, p)?);
+    }
     for m in &mut all {
         m.config_hash = Some(hash);
     }

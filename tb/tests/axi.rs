@@ -1,0 +1,178 @@
+//! `neo_axi_mux_p3` between three Rust-driven random AXI4 managers ([`RandomManager`]) and an
+//! [`AxiMemory`] port: random reads and writes (bursts of 1..16 beats, partial strobes) under
+//! contention, with random request rates, backpressure, latencies and responses reordered across
+//! IDs. Every R beat is checked against the manager's shadow, the memory against the shadows at
+//! the end, and every port (the three client ports and the memory port) by an [`AxiChecker`].
+
+#[cfg(not(neo_has_verilator))]
+#[test]
+fn axi_skipped_without_verilator() {
+    println!("SKIP: neo-tb was built without Verilator; AXI mux cosimulation did not run");
+}
+
+#[cfg(neo_has_verilator)]
+mod cosim {
+    use neo_golden::engine::memory::Memory;
+    use neo_tb::axi::manager::{RandomManager, Traffic};
+    use neo_tb::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, ManagerSignals, SubordinateSignals};
+    use neo_tb::check::Checker;
+    use neo_tb::dut::Dut;
+    use neo_tb::models::NeoAxiMuxP3;
+    use neo_tb::rng::{test_seed, Rng};
+    use neo_tb::waves::maybe_trace;
+
+    const P: usize = 3;
+    /// Bytes of each manager's region (4 pages).
+    const REGION: u64 = 16 * 1024;
+
+    /// Transactions per manager (NEO_TB_VECTORS scales them: a tenth of it, at least 100).
+    fn transactions(default: usize) -> usize {
+        std::env::var("NEO_TB_VECTORS").ok().and_then(|v| v.parse::<usize>().ok()).map_or(default, |v| (v / 10).max(100))
+    }
+
+    struct Bench {
+        dut: NeoAxiMuxP3,
+        s_ports: Vec<AxiBinding>,
+        m_port: AxiBinding,
+        mem: AxiMemory,
+        mgrs: Vec<RandomManager>,
+        s_chk: Vec<AxiChecker>,
+        m_chk: AxiChecker,
+        chk: Checker,
+        beats: u64,
+    }
+
+    impl Bench {
+        fn new(name: &str, seed: u64, timing: AxiTiming, traffic: &[Traffic]) -> Bench {
+            let cfg = neo_tb::config();
+            let o = cfg.axi_outstanding;
+            let mut rng = Rng::new(seed);
+            let mut mem = Memory::new();
+            let mut mgrs = Vec::new();
+            for (i, t) in traffic.iter().enumerate() {
+                let base = 0x10_0000 * (i as u64 + 1);
+                let mut init = Memory::new();
+                for w in 0..REGION / 8 {
+                    let v = rng.next_u64();
+                    init.write(base + 8 * w, &v.to_le_bytes());
+                    mem.write(base + 8 * w, &v.to_le_bytes());
+                }
+                mgrs.push(RandomManager::new(&format!("s{i}_axi"), base, REGION, 0, o, *t, rng.next_u64(), init));
+            }
+            let mut dut = NeoAxiMuxP3::new();
+            maybe_trace(&mut dut, name);
+            let mut b = Bench {
+                s_ports: (0..P).map(|i| AxiBinding::new::<NeoAxiMuxP3>(&format!("s{i}_axi_"), false)).collect(),
+                m_port: AxiBinding::new::<NeoAxiMuxP3>("m_axi_", true),
+                mem: AxiMemory::new(1, mem, timing, rng.next_u64()),
+                s_chk: (0..P).map(|i| AxiChecker::new(i, &format!("s{i}_axi"), o, o)).collect(),
+                m_chk: AxiChecker::new(P, "m_axi", P * o, P * o),
+                chk: Checker::new("neo_axi_mux_p3", seed),
+                mgrs,
+                beats: 0,
+                dut,
+            };
+            for i in 0..P {
+                b.s_ports[i].set_manager(&mut b.dut, &ManagerSignals::default());
+            }
+            b.m_port.set_subordinate(&mut b.dut, &SubordinateSignals::default());
+            b.dut.reset();
+            b
+        }
+
+        fn violation(&self, v: neo_tb::axi::Violation) -> ! {
+            panic!("{v} (seed = 0x{s:016x}; reproduce with NEO_SEED=0x{s:016x})", s = self.chk.seed)
+        }
+
+        /// One clock cycle of the whole bench.
+        fn cycle(&mut self) {
+            let ms: Vec<ManagerSignals> = self.mgrs.iter_mut().map(|m| m.drive()).collect();
+            for (i, m) in ms.iter().enumerate() {
+                self.s_ports[i].set_manager(&mut self.dut, m);
+            }
+            let mem_out = self.mem.outputs(0);
+            self.m_port.set_subordinate(&mut self.dut, &mem_out);
+            self.dut.eval();
+            let cycle = self.dut.cycle();
+            for (i, m) in ms.iter().enumerate() {
+                let s = self.s_ports[i].get_subordinate(&self.dut);
+                if let Err(v) = self.s_chk[i].observe(m, &s) {
+                    self.violation(v);
+                }
+                self.mgrs[i].clock(m, &s, &self.chk, cycle);
+            }
+            let down = self.m_port.get_manager(&self.dut);
+            if let Err(v) = self.m_chk.observe(&down, &mem_out) {
+                self.violation(v);
+            }
+            self.beats += u64::from(mem_out.r.is_some() && down.rready);
+            self.mem.tick(0, &down);
+            self.dut.tick();
+        }
+
+        /// Runs until every manager is finished and the memory idle; returns the cycles.
+        fn run(&mut self, limit: u64) -> u64 {
+            let start = self.dut.cycle();
+            while !(self.mgrs.iter().all(RandomManager::finished) && self.mem.idle(0)) {
+                if self.dut.cycle() - start > limit {
+                    let done: Vec<_> = self.mgrs.iter().map(RandomManager::done).collect();
+                    self.chk.fail(self.dut.cycle(), "progress (timeout)", &format!("finished within {limit} cycles"), &format!("done (reads, writes) per manager: {done:?}"));
+                }
+                self.cycle();
+            }
+            // The memory holds every manager's shadow.
+            for (i, m) in self.mgrs.iter().enumerate() {
+                let base = 0x10_0000 * (i as u64 + 1);
+                for w in 0..REGION / 8 {
+                    let a = base + 8 * w;
+                    self.chk.value(self.dut.cycle(), &format!("memory word at 0x{a:x} (s{i}_axi's region)"), m.shadow().read_u64(a), self.mem.memory().read_u64(a));
+                }
+            }
+            self.dut.cycle() - start
+        }
+    }
+
+    fn traffic(n: usize, issue: u32, ready: u32) -> Traffic {
+        Traffic { reads: n, writes: n, issue_percent: issue, ready_percent: ready, max_beats: 16, partial_strobe_percent: 25 }
+    }
+
+    #[test]
+    fn axi_mux_random_traffic_under_contention() {
+        let name = "axi_mux_random_traffic_under_contention";
+        let seed = test_seed(name);
+        let n = transactions(600);
+        let t = [traffic(n, 90, 80), traffic(n, 60, 50), traffic(n, 95, 95)];
+        let mut b = Bench::new(name, seed, AxiTiming::RANDOM, &t);
+        let cycles = b.run(400 * n as u64);
+        println!("{name}: {} transactions in {cycles} cycles, {} R beats", 6 * n, b.beats);
+    }
+
+    #[test]
+    fn axi_mux_single_beat_storm_on_a_fast_memory() {
+        let name = "axi_mux_single_beat_storm_on_a_fast_memory";
+        let seed = test_seed(name);
+        let n = transactions(1500);
+        let t = Traffic { max_beats: 1, partial_strobe_percent: 0, ..traffic(n, 100, 100) };
+        let fast = AxiTiming { latency: 2, ..AxiTiming::IDEAL };
+        let mut b = Bench::new(name, seed, fast, &[t, t, t]);
+        let cycles = b.run(100 * n as u64);
+        // Reads and writes go through the port in parallel, one beat per cycle each at best (3n
+        // cycles); a mux that took two cycles a write (or serialised reads and writes) needs 6n.
+        println!("{name}: {} single-beat transactions in {cycles} cycles", 6 * n);
+        let bound = 3 * n as u64 * 3 / 2;
+        assert!(cycles < bound, "{cycles} cycles (bound {bound}) for {} reads + {} writes: the mux serialises", 3 * n, 3 * n);
+    }
+
+    #[test]
+    fn axi_mux_long_bursts_one_client_at_a_time_and_all_together() {
+        let name = "axi_mux_long_bursts_one_client_at_a_time_and_all_together";
+        let seed = test_seed(name);
+        let n = transactions(200);
+        let long = Traffic { max_beats: 16, ..traffic(n, 100, 100) };
+        let idle = Traffic { reads: 0, writes: 0, ..long };
+        for (k, t) in [[long, idle, idle], [idle, idle, long], [long, long, long]].iter().enumerate() {
+            let mut b = Bench::new(&format!("{name}_{k}"), seed ^ k as u64, AxiTiming { reorder: true, ..AxiTiming::IDEAL }, t);
+            b.run(200 * n as u64);
+        }
+    }
+}
