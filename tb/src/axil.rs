@@ -17,7 +17,7 @@
 //! random ([`AxilManager::ready_pct`]).
 
 use crate::check::Checker;
-use crate::dut::Dut;
+use crate::dut::{Dut, PortIo};
 use crate::rng::Rng;
 use std::collections::VecDeque;
 
@@ -89,26 +89,35 @@ pub struct AxilPorts {
 impl AxilPorts {
     /// The ports `PREFIX<name>_i` / `PREFIX<name>_o` of `D` (the subordinate's view).
     pub fn bind<D: Dut>(prefix: &str) -> Self {
-        let p = |n: &str| D::port(&format!("{prefix}{n}"));
-        AxilPorts {
-            awvalid: p("awvalid_i"),
-            awready: p("awready_o"),
-            awaddr: p("awaddr_i"),
-            wvalid: p("wvalid_i"),
-            wready: p("wready_o"),
-            wdata: p("wdata_i"),
-            wstrb: p("wstrb_i"),
-            bvalid: p("bvalid_o"),
-            bready: p("bready_i"),
-            bresp: p("bresp_o"),
-            arvalid: p("arvalid_i"),
-            arready: p("arready_o"),
-            araddr: p("araddr_i"),
-            rvalid: p("rvalid_o"),
-            rready: p("rready_i"),
-            rdata: p("rdata_o"),
-            rresp: p("rresp_o"),
-        }
+        Self::lookup(prefix, |n| Ok(D::port(n))).expect("D::port panics on a missing port")
+    }
+
+    /// The same ports of a model bound at run time; an error names a missing port.
+    pub fn bind_io(d: &impl PortIo, prefix: &str) -> Result<Self, String> {
+        Self::lookup(prefix, |n| d.io_port(n))
+    }
+
+    fn lookup(prefix: &str, find: impl Fn(&str) -> Result<usize, String>) -> Result<Self, String> {
+        let p = |n: &str| find(&format!("{prefix}{n}"));
+        Ok(AxilPorts {
+            awvalid: p("awvalid_i")?,
+            awready: p("awready_o")?,
+            awaddr: p("awaddr_i")?,
+            wvalid: p("wvalid_i")?,
+            wready: p("wready_o")?,
+            wdata: p("wdata_i")?,
+            wstrb: p("wstrb_i")?,
+            bvalid: p("bvalid_o")?,
+            bready: p("bready_i")?,
+            bresp: p("bresp_o")?,
+            arvalid: p("arvalid_i")?,
+            arready: p("arready_o")?,
+            araddr: p("araddr_i")?,
+            rvalid: p("rvalid_o")?,
+            rready: p("rready_i")?,
+            rdata: p("rdata_o")?,
+            rresp: p("rresp_o")?,
+        })
     }
 }
 
@@ -135,17 +144,17 @@ pub struct AxilSignals {
 
 impl AxilSignals {
     /// Reads the port from `dut`.
-    pub fn read<D: Dut>(dut: &D, p: &AxilPorts) -> Self {
-        let b = |i: usize| dut.get_u64(i) != 0;
+    pub fn read<D: PortIo + ?Sized>(dut: &D, p: &AxilPorts) -> Self {
+        let b = |i: usize| dut.io_get(i) != 0;
         AxilSignals {
             aw: (b(p.awvalid), b(p.awready)),
             w: (b(p.wvalid), b(p.wready)),
             b: (b(p.bvalid), b(p.bready)),
-            bresp: dut.get_u64(p.bresp) as u8,
+            bresp: dut.io_get(p.bresp) as u8,
             ar: (b(p.arvalid), b(p.arready)),
             r: (b(p.rvalid), b(p.rready)),
-            rdata: dut.get_u64(p.rdata) as u32,
-            rresp: dut.get_u64(p.rresp) as u8,
+            rdata: dut.io_get(p.rdata) as u32,
+            rresp: dut.io_get(p.rresp) as u8,
         }
     }
 }
@@ -247,8 +256,17 @@ pub struct AxilManager {
 impl AxilManager {
     /// A manager on `D`'s AXI4-Lite subordinate port `prefix` (e.g. `s_axil_`), timed by `rng`.
     pub fn new<D: Dut>(prefix: &str, rng: Rng) -> Self {
+        Self::with_ports(AxilPorts::bind::<D>(prefix), rng)
+    }
+
+    /// A manager on the port `prefix` of a model bound at run time.
+    pub fn bind(d: &impl PortIo, prefix: &str, rng: Rng) -> Result<Self, String> {
+        Ok(Self::with_ports(AxilPorts::bind_io(d, prefix)?, rng))
+    }
+
+    fn with_ports(ports: AxilPorts, rng: Rng) -> Self {
         AxilManager {
-            ports: AxilPorts::bind::<D>(prefix),
+            ports,
             rng,
             queue: VecDeque::new(),
             flight: VecDeque::new(),
@@ -298,7 +316,7 @@ impl AxilManager {
 
     /// Starts queued operations that may go now, and sets every input of the port for this cycle
     /// (call before `eval`).
-    pub fn drive<D: Dut>(&mut self, dut: &mut D) {
+    pub fn drive<D: PortIo + ?Sized>(&mut self, dut: &mut D) {
         // Start the next operation: same kind as those in flight, one request phase per channel.
         while let Some(&op) = self.queue.front() {
             let same_kind = self.flight.iter().all(|f| f.op.is_write() == op.is_write());
@@ -335,24 +353,24 @@ impl AxilManager {
             }
         }
         let junk = self.rng.next_u64();
-        dut.set_u64(p.awvalid, aw.is_some() as u64);
-        dut.set_u64(p.awaddr, aw.unwrap_or(junk as u32) as u64);
-        dut.set_u64(p.wvalid, w.is_some() as u64);
+        dut.io_set(p.awvalid, aw.is_some() as u64);
+        dut.io_set(p.awaddr, aw.unwrap_or(junk as u32) as u64);
+        dut.io_set(p.wvalid, w.is_some() as u64);
         let (d, s) = w.unwrap_or(((junk >> 32) as u32, (junk >> 12) as u8));
-        dut.set_u64(p.wdata, d as u64);
-        dut.set_u64(p.wstrb, s as u64);
-        dut.set_u64(p.arvalid, ar.is_some() as u64);
-        dut.set_u64(p.araddr, ar.unwrap_or((junk >> 20) as u32) as u64);
+        dut.io_set(p.wdata, d as u64);
+        dut.io_set(p.wstrb, s as u64);
+        dut.io_set(p.arvalid, ar.is_some() as u64);
+        dut.io_set(p.araddr, ar.unwrap_or((junk >> 20) as u32) as u64);
         self.bready = self.rng.percent(self.ready_pct);
         self.rready = self.rng.percent(self.ready_pct);
-        dut.set_u64(p.bready, self.bready as u64);
-        dut.set_u64(p.rready, self.rready as u64);
+        dut.io_set(p.bready, self.bready as u64);
+        dut.io_set(p.rready, self.rready as u64);
     }
 
     /// Records this cycle's handshakes (call after `eval`, before `tick`); protocol violations
     /// panic through `checker`.
-    pub fn sample<D: Dut>(&mut self, dut: &D, checker: &Checker) {
-        let cycle = dut.cycle();
+    pub fn sample<D: PortIo + ?Sized>(&mut self, dut: &D, checker: &Checker) {
+        let cycle = dut.io_cycle();
         let s = AxilSignals::read(dut, &self.ports);
         self.checker.observe(checker, cycle, &s);
         if let Some(f) = self.flight.back_mut() {

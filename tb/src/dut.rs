@@ -73,3 +73,52 @@ pub trait Dut {
         w[0] as u64 | ((w[1] as u64) << 32)
     }
 }
+
+/// Port access by index for drivers shared by statically linked models ([`Dut`]) and models
+/// loaded at run time ([`crate::dynmodel::DynModel`]).
+pub trait PortIo {
+    /// Index of the port called `name`, or an error naming it.
+    fn io_port(&self, name: &str) -> Result<usize, String>;
+    /// Drives a port of at most 64 bits.
+    fn io_set(&mut self, port: usize, v: u64);
+    /// Reads a port of at most 64 bits.
+    fn io_get(&self, port: usize) -> u64;
+    /// Rising edges since the last reset.
+    fn io_cycle(&self) -> u64;
+}
+
+impl<D: Dut> PortIo for D {
+    fn io_port(&self, name: &str) -> Result<usize, String> {
+        D::PORTS.iter().position(|p| p.name == name).ok_or_else(|| format!("{} has no port {name}", D::NAME))
+    }
+
+    fn io_set(&mut self, port: usize, v: u64) {
+        self.set_u64(port, v);
+    }
+
+    fn io_get(&self, port: usize) -> u64 {
+        self.get_u64(port)
+    }
+
+    fn io_cycle(&self) -> u64 {
+        self.cycle()
+    }
+}
+
+impl PortIo for crate::dynmodel::DynModel {
+    fn io_port(&self, name: &str) -> Result<usize, String> {
+        self.port(name)
+    }
+
+    fn io_set(&mut self, port: usize, v: u64) {
+        self.set_u64(port, v);
+    }
+
+    fn io_get(&self, port: usize) -> u64 {
+        self.get_u64(port)
+    }
+
+    fn io_cycle(&self) -> u64 {
+        self.cycle()
+    }
+}

@@ -30,6 +30,12 @@ const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
 /// The engine's top module.
 pub const TOP: &str = "neo_engine";
 
+/// The engine the CI benches build: the default units with 2 Sorting Cores, 1 Rasterization
+/// Core and 2 memory ports (the full 16 + 4 engine is verilated by `neo bench engine`).
+pub fn ci_config() -> EngineConfig {
+    EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..EngineConfig::default() }
+}
+
 /// The verilated engine of one configuration.
 pub struct EngineModel {
     /// The configuration it was generated from.

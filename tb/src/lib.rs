@@ -17,6 +17,7 @@ pub mod check;
 pub mod core;
 pub mod dut;
 pub mod dynmodel;
+pub mod engine;
 pub mod engine_regs;
 #[cfg(neo_has_verilator)]
 pub mod itu;

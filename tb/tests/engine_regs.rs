@@ -20,7 +20,7 @@ mod cosim {
     use neo_tb::axil::{AxilDone, AxilManager, AxilOp, RESP_OKAY};
     use neo_tb::check::Checker;
     use neo_tb::dut::Dut;
-    use neo_tb::engine_regs::{pack_u16s, pack_u64s, CounterModel, RegInputs, RegModel};
+    use neo_tb::engine_regs::{pack_u64s, CounterModel, RegInputs, RegModel};
     use neo_tb::models::{NeoEngineRegs, NeoPerfCounters};
     use neo_tb::rng::{test_seed, Rng};
     use neo_tb::waves::maybe_trace;
@@ -349,21 +349,21 @@ mod cosim {
         for (cycles, clear_pct, full_pct) in phases {
             for _ in 0..cycles {
                 let clear = rng.percent(clear_pct);
-                let mut inc = [0u16; COUNTERS];
+                let mut inc = [0u32; COUNTERS];
                 for i in &mut inc {
                     *i = if rng.percent(full_pct) {
-                        u16::MAX
+                        u32::MAX
                     } else {
                         match rng.below(3) {
                             0 => 0,
-                            1 => rng.below(16) as u16,
-                            _ => rng.next_u32() as u16,
+                            1 => rng.below(16) as u32,
+                            _ => rng.next_u32(),
                         }
                     };
                 }
                 clears_with_inc += (clear && inc.iter().any(|&i| i != 0)) as u64;
                 dut.set_u64(clear_p, clear as u64);
-                dut.set_words(inc_p, &pack_u16s(&inc));
+                dut.set_words(inc_p, &inc);
                 dut.eval();
                 dut.get_words(out_p, &mut out);
                 let cycle = dut.cycle();

@@ -26,6 +26,18 @@ use neo_golden::engine::EngineConfig;
 /// Module name.
 pub const NAME: &str = "neo_engine";
 
+/// The modules `neo_engine` instantiates directly (black boxes when its own glue is checked).
+pub const SUBMODULES: &[&str] = &[
+    engine_regs::NAME,
+    perf_counters::NAME,
+    frame_ctrl::NAME,
+    sort_seq::NAME,
+    sort_core::NAME,
+    axi::sort_bridge::NAME,
+    raster_core::NAME,
+    axi::raster_bridge::NAME,
+];
+
 /// The engine's memory clients and ports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Clients {
@@ -167,7 +179,8 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     for b in BASES {
         m.wire(format!("{b}_base"), xa);
     }
-    m.wire("busy", 1).wire("done", 1).wire("overflow", 1).wire("first_overflow", 32).wire("overflows", 32);
+    m.wire("frame_busy", 1).wire("frame_done", 1).wire("frame_overflow", 1);
+    m.wire("first_overflow", 32).wire("overflows", 32);
     m.wire("counters", 64 * COUNTERS as u32);
     let mut c: Vec<(String, String)> = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
     c.extend(ports_of(&engine_regs::module(cfg), "s_axil_").into_iter().map(|(name, _, _)| (name.clone(), name)));
@@ -176,12 +189,15 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         c.push((format!("{r}_o"), r.to_string()));
     }
     c.extend(BASES.iter().map(|b| (format!("{b}_base_o"), format!("{b}_base"))));
-    for s in ["busy", "done", "overflow", "first_overflow", "overflows", "counters"] {
+    for s in ["busy", "done", "overflow"] {
+        c.push((format!("{s}_i"), format!("frame_{s}")));
+    }
+    for s in ["first_overflow", "overflows", "counters"] {
         c.push((format!("{s}_i"), s.to_string()));
     }
     m.instance(engine_regs::NAME, "u_regs", c);
-    m.assign("busy_o", "busy");
-    m.assign("done_o", "done");
+    m.assign("busy_o", "frame_busy");
+    m.assign("done_o", "frame_done");
 
     m.blank();
     m.comment("Frame controller <-> sequencers, raster cores, bridges.");
@@ -204,7 +220,10 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         c.push((format!("{r}_i"), r.to_string()));
     }
     c.extend(BASES.iter().map(|b| (format!("{b}_base_i"), format!("{b}_base"))));
-    for s in ["busy", "done", "overflow", "first_overflow", "overflows"] {
+    for s in ["busy", "done", "overflow"] {
+        c.push((format!("{s}_o"), format!("frame_{s}")));
+    }
+    for s in ["first_overflow", "overflows"] {
         c.push((format!("{s}_o"), s.to_string()));
     }
     c.extend(client_conns(cfg, "m_axi_", &cl.position(0).to_string()));
@@ -362,6 +381,9 @@ fn ports(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
 
 /// A sum of the bits of `v` (`n` bits wide) as a `w`-bit value.
 fn popcount(v: &str, n: u32, w: u32) -> String {
+    if n == 1 {
+        return format!("{{{}, {v}}}", lit(w - 1, 0));
+    }
     let terms: Vec<String> = (0..n).map(|i| format!("{{{}, {v}[{i}]}}", lit(w - 1, 0))).collect();
     terms.join(" + ")
 }
@@ -383,9 +405,9 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     };
     for c in Counter::ALL {
         let rhs = match c {
-            Counter::Cycles => format!("{{{}, busy}}", lit(iw - 1, 0)),
-            Counter::SortBusy => format!("{{{}, busy & ~(&job_ready)}}", lit(iw - 1, 0)),
-            Counter::RasterBusy => format!("{{{}, busy & ~(&ras_ready)}}", lit(iw - 1, 0)),
+            Counter::Cycles => format!("{{{}, frame_busy}}", lit(iw - 1, 0)),
+            Counter::SortBusy => format!("{{{}, frame_busy & ~(&job_ready)}}", lit(iw - 1, 0)),
+            Counter::RasterBusy => format!("{{{}, frame_busy & ~(&ras_ready)}}", lit(iw - 1, 0)),
             Counter::TilesSorted => widen(&ev("tile_sorted"), ew("tile_sorted"), iw),
             Counter::TilesRastered => widen(&ev("tile_rastered"), ew("tile_rastered"), iw),
             Counter::EntriesSorted => widen(&ev("entries_sorted"), ew("entries_sorted"), iw),
@@ -402,6 +424,13 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
             Counter::WrResult => bytes(&ev("result_written"), 1, RESULT_BYTES),
         };
         m.assign(format!("inc[{}*{iw} +: {iw}]", c.index()), rhs);
+    }
+    for e in ["tile_sorted", "tile_rastered", "entries_sorted", "entries_rastered"] {
+        let w = ew(e);
+        if w > iw {
+            m.comment(format!("ev_{e} above bit {}: never set (a sorted tile holds at most table_capacity entries).", iw - 1));
+            m.wire_assign(format!("unused_ev_{e}"), 1, format!("|ev_{e}[{} : {iw}]", w - 1));
+        }
     }
     let c = vec![
         pair("clk_i", "clk_i"),

@@ -103,7 +103,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
 }
 
 fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
-    let (aw, lw, xa, xd, xi) = (d.aw, d.lw, d.xa, d.xd, d.xi);
+    let (aw, lw, xa) = (d.aw, d.lw, d.xa);
     m.clock_reset();
     m.input_c("start_i", 1, "CTRL.start (one cycle; ignored while busy)");
     m.input_c("frame_i", 32, "FRAME");
@@ -119,44 +119,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.output_c("first_overflow_o", 32, "FIRST_OVERFLOW");
     m.output_c("overflows_o", 32, "OVERFLOWS");
     // AXI client 0.
-    let sigs: [(&str, bool, u32); 29] = [
-        ("arvalid", true, 1),
-        ("arready", false, 1),
-        ("arid", true, xi),
-        ("araddr", true, xa),
-        ("arlen", true, 8),
-        ("arsize", true, 3),
-        ("arburst", true, 2),
-        ("rvalid", false, 1),
-        ("rready", true, 1),
-        ("rid", false, xi),
-        ("rdata", false, xd),
-        ("rresp", false, 2),
-        ("rlast", false, 1),
-        ("awvalid", true, 1),
-        ("awready", false, 1),
-        ("awid", true, xi),
-        ("awaddr", true, xa),
-        ("awlen", true, 8),
-        ("awsize", true, 3),
-        ("awburst", true, 2),
-        ("wvalid", true, 1),
-        ("wready", false, 1),
-        ("wdata", true, xd),
-        ("wstrb", true, xd / 8),
-        ("wlast", true, 1),
-        ("bvalid", false, 1),
-        ("bready", true, 1),
-        ("bid", false, xi),
-        ("bresp", false, 2),
-    ];
-    for (s, out, w) in sigs {
-        if out {
-            m.output(format!("m_axi_{s}_o"), w);
-        } else {
-            m.input(format!("m_axi_{s}_i"), w);
-        }
-    }
+    super::axi::ports(m, cfg, "m_axi_", true);
     // Sequencers.
     m.output_c("job_valid_o", d.n, "per sequencer: a tile job");
     m.input_c("job_ready_i", d.n, "per sequencer: idle");

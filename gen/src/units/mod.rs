@@ -23,12 +23,14 @@
 //! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | no       |
 //! | `neo_axi_sort_bridge` | sorting core memory port -> AXI4 manager          | yes       |
 //! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
-//! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (one per engine P, and P=3) | P=3 |
+//! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (the engine's P, and P=3) | P=3 |
+//! | `neo_engine`    | the engine: control port, frame controller, cores, bridges, port muxes | run time |
 
 pub mod axi;
 pub mod bsu;
 pub mod chunk_ram;
 pub mod cmp_swap;
+pub mod engine;
 pub mod engine_regs;
 pub mod frame_ctrl;
 pub mod itu;
@@ -107,6 +109,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     for p in axi::mux_sizes(cfg) {
         all.push(axi::mux::module(cfg, p)?);
     }
+    all.push(engine::module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }

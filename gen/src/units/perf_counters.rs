@@ -2,7 +2,7 @@
 //! [`neo_golden::engine::regs::Counter`]), one `neo_perf_counter` per counter in the generate
 //! loop `g_counter`.
 //!
-//! Each cycle counter `i` adds `inc_i[16i +: 16]`. `clear_i` (the frame's start) restarts every
+//! Each cycle counter `i` adds `inc_i[32i +: 32]` ([`INC_BITS`]). `clear_i` (the frame's start) restarts every
 //! counter at that cycle's increment: `count <= (clear_i ? 0 : count) + inc`, so an event in
 //! the start cycle itself is counted. Counters are 64 bits and wrap modulo 2^64. Counter `i` is
 //! `counters_o[64i +: 64]`, registered (its value after the last rising edge).
@@ -22,9 +22,9 @@ pub const COUNTER_NAME: &str = "neo_perf_counter";
 pub const COUNT_BITS: u32 = 64;
 
 /// Width of one counter's increment per cycle.
-pub const INC_BITS: u32 = 16;
+pub const INC_BITS: u32 = 32;
 
-/// One 64-bit counter with a 16-bit increment and a synchronous clear.
+/// One 64-bit counter with a 32-bit increment and a synchronous clear.
 pub fn counter_module(_cfg: &EngineConfig) -> Module {
     let (w, iw) = (COUNT_BITS, INC_BITS);
     let mut m = Module::new(COUNTER_NAME);

@@ -18,7 +18,7 @@ pub mod memory;
 pub use checker::{AxiChecker, Violation};
 pub use memory::{AxiMemory, AxiTiming};
 
-use crate::dut::Dut;
+use crate::dut::{Dut, PortIo};
 
 /// An address request (AR or AW).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -164,25 +164,34 @@ impl AxiBinding {
     /// # Panics
     /// When a port is missing.
     pub fn new<D: Dut>(prefix: &str, manager: bool) -> AxiBinding {
+        Self::lookup(prefix, manager, |n| Ok(D::port(n))).expect("D::port panics on a missing port")
+    }
+
+    /// The same for a model bound at run time; an error names a missing port.
+    pub fn bind(d: &impl PortIo, prefix: &str, manager: bool) -> Result<AxiBinding, String> {
+        Self::lookup(prefix, manager, |n| d.io_port(n))
+    }
+
+    fn lookup(prefix: &str, manager: bool, find: impl Fn(&str) -> Result<usize, String>) -> Result<AxiBinding, String> {
         let idx = FIELDS
             .iter()
             .map(|(n, from_m)| {
                 let suffix = if *from_m == manager { "o" } else { "i" };
-                D::port(&format!("{prefix}{n}_{suffix}"))
+                find(&format!("{prefix}{n}_{suffix}"))
             })
-            .collect();
-        AxiBinding { idx }
+            .collect::<Result<_, _>>()?;
+        Ok(AxiBinding { idx })
     }
 
-    fn get<D: Dut>(&self, d: &D, name: &str) -> u64 {
-        d.get_u64(self.idx[f(name)])
+    fn get<D: PortIo + ?Sized>(&self, d: &D, name: &str) -> u64 {
+        d.io_get(self.idx[f(name)])
     }
 
-    fn set<D: Dut>(&self, d: &mut D, name: &str, v: u64) {
-        d.set_u64(self.idx[f(name)], v);
+    fn set<D: PortIo + ?Sized>(&self, d: &mut D, name: &str, v: u64) {
+        d.io_set(self.idx[f(name)], v);
     }
 
-    fn get_addr<D: Dut>(&self, d: &D, ch: &[&str; 6]) -> Option<Addr> {
+    fn get_addr<D: PortIo + ?Sized>(&self, d: &D, ch: &[&str; 6]) -> Option<Addr> {
         (self.get(d, ch[0]) != 0).then(|| Addr {
             id: self.get(d, ch[1]) as u32,
             addr: self.get(d, ch[2]),
@@ -192,7 +201,7 @@ impl AxiBinding {
         })
     }
 
-    fn set_addr<D: Dut>(&self, d: &mut D, ch: &[&str; 6], a: Option<Addr>) {
+    fn set_addr<D: PortIo + ?Sized>(&self, d: &mut D, ch: &[&str; 6], a: Option<Addr>) {
         let a2 = a.unwrap_or_default();
         self.set(d, ch[0], a.is_some() as u64);
         self.set(d, ch[1], u64::from(a2.id));
@@ -203,7 +212,7 @@ impl AxiBinding {
     }
 
     /// Reads what the model drives as the manager.
-    pub fn get_manager<D: Dut>(&self, d: &D) -> ManagerSignals {
+    pub fn get_manager<D: PortIo + ?Sized>(&self, d: &D) -> ManagerSignals {
         ManagerSignals {
             ar: self.get_addr(d, &AR),
             rready: self.get(d, "rready") != 0,
@@ -218,7 +227,7 @@ impl AxiBinding {
     }
 
     /// Drives the model's manager-side inputs (it is the subordinate).
-    pub fn set_manager<D: Dut>(&self, d: &mut D, m: &ManagerSignals) {
+    pub fn set_manager<D: PortIo + ?Sized>(&self, d: &mut D, m: &ManagerSignals) {
         self.set_addr(d, &AR, m.ar);
         self.set_addr(d, &AW, m.aw);
         self.set(d, "rready", m.rready as u64);
@@ -231,7 +240,7 @@ impl AxiBinding {
     }
 
     /// Reads what the model drives as the subordinate.
-    pub fn get_subordinate<D: Dut>(&self, d: &D) -> SubordinateSignals {
+    pub fn get_subordinate<D: PortIo + ?Sized>(&self, d: &D) -> SubordinateSignals {
         SubordinateSignals {
             arready: self.get(d, "arready") != 0,
             awready: self.get(d, "awready") != 0,
@@ -248,7 +257,7 @@ impl AxiBinding {
     }
 
     /// Drives the model's subordinate-side inputs (it is the manager).
-    pub fn set_subordinate<D: Dut>(&self, d: &mut D, s: &SubordinateSignals) {
+    pub fn set_subordinate<D: PortIo + ?Sized>(&self, d: &mut D, s: &SubordinateSignals) {
         self.set(d, "arready", s.arready as u64);
         self.set(d, "awready", s.awready as u64);
         self.set(d, "wready", s.wready as u64);

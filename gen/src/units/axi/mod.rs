@@ -261,14 +261,10 @@ fn unused_responses(m: &mut Module, extra: &[&str]) {
     m.wire_assign("unused_rsp", 1, format!("^{{{}}}", v.join(", ")));
 }
 
-/// The module names of the muxes `cfg`'s engine needs (one per distinct clients-per-port count)
-/// and of the cosimulated one ([`mux::COSIM_P`]), with their client counts, ascending.
+/// The client counts of the muxes: the engine's (every port has `ceil(C / K)` slots, see
+/// [`super::engine::Clients`]) and the cosimulated one ([`mux::COSIM_P`]), ascending.
 pub fn mux_sizes(cfg: &EngineConfig) -> Vec<usize> {
-    let clients = 1 + cfg.sort_cores + cfg.raster_cores;
-    let k = cfg.mem_channels;
-    let mut v: Vec<usize> = (0..k).map(|port| (0..clients).filter(|c| c % k == port).count()).collect();
-    v.push(mux::COSIM_P);
-    v.retain(|&p| p >= 1);
+    let mut v = vec![super::engine::Clients::of(cfg).slots(), mux::COSIM_P];
     v.sort_unstable();
     v.dedup();
     v

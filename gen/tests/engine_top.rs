@@ -1,0 +1,49 @@
+//! `neo_engine` (run-time cosim top, not in `top_modules`): Verilator-lint clean with the
+//! waivers of `hdl/lint.vlt`, and its own glue latch-free, for the default 16 + 4 engine and the
+//! small engines the benches build.
+
+use neo_gen::tools::{coarse_glue_synth_stats, require_for_test, verilator_lint};
+use neo_gen::units::engine::NAME;
+use neo_gen::{files_for, EngineConfig};
+use std::path::PathBuf;
+
+fn configs() -> Vec<(&'static str, EngineConfig)> {
+    let base = EngineConfig::default();
+    vec![
+        ("default 16 + 4, 4 ports", base.clone()),
+        ("2 + 1, 2 ports", EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..base.clone() }),
+        ("1 + 1, 1 port", EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 1, ..base.clone() }),
+        ("4 + 3, 3 ports, round robin", EngineConfig {
+            sort_cores: 4,
+            raster_cores: 3,
+            mem_channels: 3,
+            scheduler: neo_gen::SchedulerPolicy::RoundRobin,
+            ..base
+        }),
+    ]
+}
+
+#[test]
+fn the_engine_is_lint_clean() {
+    if !require_for_test("verilator", "the_engine_is_lint_clean") {
+        return;
+    }
+    let vlt = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../hdl/lint.vlt");
+    for (what, cfg) in configs() {
+        verilator_lint(&files_for(&cfg, NAME), NAME, Some(&vlt)).unwrap_or_else(|e| panic!("{what}: {e}"));
+    }
+}
+
+#[test]
+fn the_engine_glue_is_latch_free() {
+    if !require_for_test("yosys", "the_engine_glue_is_latch_free") {
+        return;
+    }
+    for (what, cfg) in configs().into_iter().skip(1) {
+        let mux = neo_gen::units::axi::mux::name(neo_gen::units::engine::Clients::of(&cfg).slots());
+        let mut boxes: Vec<&str> = neo_gen::units::engine::SUBMODULES.to_vec();
+        boxes.push(&mux);
+        let s = coarse_glue_synth_stats(&files_for(&cfg, NAME), NAME, &boxes).unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert_eq!(s.latches, 0, "{what}: {:?}", s.cells_by_type);
+    }
+}
