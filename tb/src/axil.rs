@@ -181,7 +181,10 @@ impl AxilChecker {
                 checker.protocol(
                     cycle,
                     s.rdata == p.rdata && s.rresp == p.rresp,
-                    &format!("RDATA/RRESP changed while RVALID and not RREADY: {:#x} -> {:#x}", p.rdata, s.rdata),
+                    &format!(
+                        "RDATA/RRESP changed while RVALID and not RREADY: {:#x} -> {:#x}",
+                        p.rdata, s.rdata
+                    ),
                 );
             }
         }
