@@ -190,7 +190,10 @@ impl AxilChecker {
                 checker.protocol(
                     cycle,
                     s.rdata == p.rdata && s.rresp == p.rresp,
-                    &format!("RDATA/RRESP changed while RVALID and not RREADY: {:#x} -> {:#x}", p.rdata, s.rdata),
+                    &format!(
+                        "RDATA/RRESP changed while RVALID and not RREADY: {:#x} -> {:#x}",
+                        p.rdata, s.rdata
+                    ),
                 );
             }
         }
@@ -398,5 +401,55 @@ impl AxilManager {
             let f = f.expect("checked");
             self.done.push_back(AxilDone { op: f.op, resp, data, accepted: f.accepted, done: cycle });
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn idle() -> AxilSignals {
+        AxilSignals::default()
+    }
+
+    #[test]
+    fn a_write_and_a_read_pass() {
+        let c = Checker::new("sub", 1);
+        let mut k = AxilChecker::new();
+        k.observe(&c, 0, &AxilSignals { aw: (true, true), w: (true, true), ..idle() });
+        k.observe(&c, 1, &AxilSignals { b: (true, false), ..idle() });
+        k.observe(&c, 2, &AxilSignals { b: (true, true), ar: (true, true), ..idle() });
+        assert_eq!(k.outstanding(), (0, 1));
+        k.observe(&c, 3, &AxilSignals { r: (true, true), rdata: 5, ..idle() });
+        assert_eq!(k.outstanding(), (0, 0));
+    }
+
+    #[test]
+    #[should_panic(expected = "BVALID dropped before BREADY")]
+    fn a_dropped_bvalid_is_caught() {
+        let c = Checker::new("sub", 1);
+        let mut k = AxilChecker::new();
+        k.observe(&c, 0, &AxilSignals { aw: (true, true), w: (true, true), ..idle() });
+        k.observe(&c, 1, &AxilSignals { b: (true, false), ..idle() });
+        k.observe(&c, 2, &idle());
+    }
+
+    #[test]
+    #[should_panic(expected = "RDATA/RRESP changed")]
+    fn rdata_changing_under_backpressure_is_caught() {
+        let c = Checker::new("sub", 1);
+        let mut k = AxilChecker::new();
+        k.observe(&c, 0, &AxilSignals { ar: (true, true), ..idle() });
+        k.observe(&c, 1, &AxilSignals { r: (true, false), rdata: 1, ..idle() });
+        k.observe(&c, 2, &AxilSignals { r: (true, true), rdata: 2, ..idle() });
+    }
+
+    #[test]
+    #[should_panic(expected = "BVALID without an accepted AW and W")]
+    fn a_response_before_both_halves_is_caught() {
+        let c = Checker::new("sub", 1);
+        let mut k = AxilChecker::new();
+        k.observe(&c, 0, &AxilSignals { aw: (true, true), w: (true, false), ..idle() });
+        k.observe(&c, 1, &AxilSignals { b: (true, true), ..idle() });
     }
 }

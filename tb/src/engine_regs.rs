@@ -148,7 +148,8 @@ mod tests {
     #[test]
     fn the_model_follows_the_access_rules() {
         let mut m = RegModel::new();
-        let mut inp = RegInputs { busy: true, overflow: true, first_overflow: 7, overflows: 2, ..Default::default() };
+        let mut inp =
+            RegInputs { busy: true, overflow: true, first_overflow: 7, overflows: 2, ..Default::default() };
         inp.counters.add(Counter::RdFeat, 0x1_0000_0020);
         assert!(!m.write(Reg::Ctrl.offset(), 1, 0xf, true), "start ignored while busy");
         assert!(!m.write(Reg::Ctrl.offset(), 1, 0xe, false), "start needs byte 0");

@@ -100,7 +100,12 @@ mod cosim {
             self.ops += 1;
             match d.op {
                 AxilOp::Write { addr, data, strb } => {
-                    self.chk.value(cycle, &format!("BRESP of write {addr:#05x}"), RESP_OKAY as u64, d.resp as u64);
+                    self.chk.value(
+                        cycle,
+                        &format!("BRESP of write {addr:#05x}"),
+                        RESP_OKAY as u64,
+                        d.resp as u64,
+                    );
                     if self.model.write(addr, data, strb, self.inp.busy) {
                         self.starts += 1;
                         match self.pulses.pop_front() {
@@ -114,6 +119,16 @@ mod cosim {
                             ),
                             None => self.chk.fail(cycle, "start_o", "a pulse for this CTRL write", "none"),
                         }
+                    }
+                    // Writes complete in order and a later write's pulse comes after this B:
+                    // a pulse left by this B's cycle has no starting write.
+                    if let Some(&p) = self.pulses.front().filter(|&&p| p <= d.done) {
+                        self.chk.fail(
+                            cycle,
+                            "start_o",
+                            "no pulse without a starting CTRL write",
+                            &format!("pulse at cycle {p}"),
+                        );
                     }
                     self.check_outputs(cycle);
                 }
@@ -159,7 +174,12 @@ mod cosim {
             self.step();
             let cycle = self.dut.cycle();
             if let Some(p) = self.pulses.front() {
-                self.chk.fail(cycle, "start_o", "no pulse without a starting CTRL write", &format!("pulse at cycle {p}"));
+                self.chk.fail(
+                    cycle,
+                    "start_o",
+                    "no pulse without a starting CTRL write",
+                    &format!("pulse at cycle {p}"),
+                );
             }
             cycle - t0
         }
@@ -246,7 +266,9 @@ mod cosim {
                 b.mgr.read(c.offset());
                 b.mgr.read(c.offset() + 4);
             }
-            for off in [4 * Reg::ALL.len() as u32, COUNTER_BASE - 4, COUNTER_BASE + 8 * COUNTERS as u32, 0xffc] {
+            for off in
+                [4 * Reg::ALL.len() as u32, COUNTER_BASE - 4, COUNTER_BASE + 8 * COUNTERS as u32, 0xffc]
+            {
                 b.mgr.write(off, u32::MAX, 0xf);
                 b.mgr.read(off);
             }
@@ -338,8 +360,11 @@ mod cosim {
         let mut dut = NeoPerfCounters::new();
         maybe_trace(&mut dut, name);
         dut.reset();
-        let (clear_p, inc_p, out_p) =
-            (NeoPerfCounters::port("clear_i"), NeoPerfCounters::port("inc_i"), NeoPerfCounters::port("counters_o"));
+        let (clear_p, inc_p, out_p) = (
+            NeoPerfCounters::port("clear_i"),
+            NeoPerfCounters::port("inc_i"),
+            NeoPerfCounters::port("counters_o"),
+        );
         let mut model = CounterModel::default();
         let mut out = vec![0u32; 2 * COUNTERS];
         let mut clears_with_inc = 0;
