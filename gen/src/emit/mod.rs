@@ -47,6 +47,9 @@ pub struct Module {
     pub source: String,
     /// Hash of the configuration the module was generated from (set by `units::modules`).
     pub config_hash: Option<u64>,
+    /// Ports and wires that are per-instance vectors (one bit per core, ...): declared with a
+    /// range even when they are one bit wide, so `name[0]` stays legal ([`Module::vector`]).
+    pub vectors: std::collections::BTreeSet<String>,
 }
 
 /// A module parameter: `parameter integer NAME = VALUE`.
@@ -199,6 +202,7 @@ impl Module {
             items: Vec::new(),
             source: workspace_relative(file),
             config_hash: None,
+            vectors: Default::default(),
         }
     }
 
@@ -227,6 +231,12 @@ impl Module {
         assert!(width >= 1, "port {name} of {} has width 0", self.name);
         assert!(self.ports.iter().all(|p| p.name != name), "duplicate port {name} in {}", self.name);
         self.ports.push(PortDecl { name, dir, width, comment: comment.map(str::to_string) });
+        self
+    }
+
+    /// Marks port or wire `name` as a vector: declared `[0:0]` when one bit wide.
+    pub fn vector(&mut self, name: impl Into<String>) -> &mut Self {
+        self.vectors.insert(name.into());
         self
     }
 

@@ -7,7 +7,12 @@ use std::fmt::Write;
 const IND: &str = "  ";
 
 fn range(width: u32) -> String {
-    if width == 1 {
+    vec_range(width, false)
+}
+
+/// `[W-1:0]`, or nothing for one bit unless `vector`.
+fn vec_range(width: u32, vector: bool) -> String {
+    if width == 1 && !vector {
         String::new()
     } else {
         format!("[{}:0]", width - 1)
@@ -36,7 +41,8 @@ pub(super) fn module(m: &Module) -> String {
         s.push(')');
     }
     s.push_str(" (\n");
-    let rw = m.ports.iter().map(|p| range(p.width).len()).max().unwrap_or(0);
+    let pr = |p: &super::PortDecl| vec_range(p.width, m.vectors.contains(&p.name));
+    let rw = m.ports.iter().map(|p| pr(p).len()).max().unwrap_or(0);
     let decls: Vec<String> = m
         .ports
         .iter()
@@ -47,7 +53,7 @@ pub(super) fn module(m: &Module) -> String {
                 Dir::Out => "output",
             };
             let sep = if k + 1 < m.ports.len() { "," } else { "" };
-            format!("{IND}{dir} wire {:<rw$} {}{sep}", range(p.width), p.name)
+            format!("{IND}{dir} wire {:<rw$} {}{sep}", pr(p), p.name)
         })
         .collect();
     // Trailing comments line up one column after the longest commented declaration.
@@ -59,7 +65,7 @@ pub(super) fn module(m: &Module) -> String {
         }
     }
     s.push_str(");\n\n");
-    items(&mut s, 1, &m.items);
+    items(&mut s, 1, &m.items, &m.vectors);
     s.push_str("\nendmodule\n");
     s
 }
@@ -85,7 +91,7 @@ fn decl(kind: &str, width: u32, name: &str) -> String {
     }
 }
 
-fn items(s: &mut String, level: usize, list: &[Item]) {
+fn items(s: &mut String, level: usize, list: &[Item], vectors: &std::collections::BTreeSet<String>) {
     let ind = indent(level);
     for it in list {
         match it {
@@ -95,6 +101,9 @@ fn items(s: &mut String, level: usize, list: &[Item]) {
                 let r = range(*width);
                 let r = if r.is_empty() { String::new() } else { format!("{r} ") };
                 writeln!(s, "{ind}localparam {r}{name} = {value};").unwrap();
+            }
+            Item::Wire { name, width } if *width == 1 && vectors.contains(name) => {
+                writeln!(s, "{ind}wire [0:0] {name};").unwrap()
             }
             Item::Wire { name, width } => writeln!(s, "{ind}{};", decl("wire", *width, name)).unwrap(),
             Item::Reg { name, width } => writeln!(s, "{ind}{};", decl("reg", *width, name)).unwrap(),
@@ -127,7 +136,7 @@ fn items(s: &mut String, level: usize, list: &[Item]) {
                 writeln!(s, "{ind}generate").unwrap();
                 writeln!(s, "{ind}{IND}for ({var} = 0; {var} < {count}; {var} = {var} + 1) begin : {label}")
                     .unwrap();
-                items(s, level + 2, body);
+                items(s, level + 2, body, vectors);
                 writeln!(s, "{ind}{IND}end").unwrap();
                 writeln!(s, "{ind}endgenerate").unwrap();
             }

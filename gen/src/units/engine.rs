@@ -146,7 +146,7 @@ fn client_buses(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         cl.ports
     ));
     for s in axi::signals(cfg) {
-        m.wire(format!("cl_{}", s.name), total as u32 * s.width);
+        m.wire(format!("cl_{}", s.name), total as u32 * s.width).vector(format!("cl_{}", s.name));
     }
     let used: Vec<usize> = (0..cl.count()).map(|c| cl.position(c)).collect();
     for pos in (0..total).filter(|p| !used.contains(p)) {
@@ -210,6 +210,9 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.wire("ras_width", 16).wire("ras_height", 16);
     m.wire("ras_table", aw).wire("ras_len", lw).wire("ras_feat", aw).wire("ras_pix", aw);
     m.wire("idle", n + mm);
+    for v in ["job_valid", "job_ready", "cpl_valid", "cpl_ready", "ras_valid", "ras_ready", "ras_done"] {
+        m.vector(v);
+    }
     let events = ports_of(&frame_ctrl::module(cfg), "ev_");
     for (e, _, w) in &events {
         m.wire(wire_of(e), *w);
@@ -256,7 +259,7 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     let (k, p) = (cl.ports, cl.slots());
     m.blank();
     m.comment("Sort bridges' events (one bit per core).");
-    m.wire("sort_rd", n).wire("sort_wr", n);
+    m.wire("sort_rd", n).wire("sort_wr", n).vector("sort_rd").vector("sort_wr");
     let mut items = Vec::new();
     let w = |name: &str, width: u32| Item::Wire { name: name.into(), width };
     let core_ports: Vec<(String, bool, u32)> = ports_of(&sort_core::module(cfg), "")
@@ -304,7 +307,7 @@ fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.blank();
     m.comment("Raster bridges' events (one bit per core).");
     for e in ["ras_rd_table", "ras_rd_feat", "ras_wr_table", "ras_wr_pixels"] {
-        m.wire(e, mm);
+        m.wire(e, mm).vector(e);
     }
     let core_ports = ports_of(&raster_core::module(cfg), "mem_");
     let mut items: Vec<Item> =
@@ -353,7 +356,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.blank();
     m.comment("Port buses: port k's AXI4 signals at [k*W +: W].");
     for s in &sigs {
-        m.wire(format!("port_{}", s.name), k * s.width);
+        m.wire(format!("port_{}", s.name), k * s.width).vector(format!("port_{}", s.name));
     }
     let mut c = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
     for slot in 0..p {

@@ -120,6 +120,9 @@ fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.output_c("overflows_o", 32, "OVERFLOWS");
     // AXI client 0.
     super::axi::ports(m, cfg, "m_axi_", true);
+    for v in ["job_valid_o", "job_ready_i", "cpl_valid_i", "cpl_ready_o", "ras_valid_o", "ras_ready_i", "ras_done_i"] {
+        m.vector(v);
+    }
     // Sequencers.
     m.output_c("job_valid_o", d.n, "per sequencer: a tile job");
     m.input_c("job_ready_i", d.n, "per sequencer: idle");
