@@ -15,6 +15,8 @@ pub mod check;
 pub mod core;
 pub mod dut;
 #[cfg(neo_has_verilator)]
+pub mod frame;
+#[cfg(neo_has_verilator)]
 pub mod itu;
 pub mod lanes;
 #[cfg(neo_has_verilator)]

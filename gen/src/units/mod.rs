@@ -17,7 +17,7 @@
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
 //! | `neo_sort_seq`  | engine: one Sorting Core's per-tile command sequencer   | yes       |
-//! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | no       |
+//! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | yes      |
 
 pub mod bsu;
 pub mod chunk_ram;
@@ -52,7 +52,16 @@ impl VerilogFile {
 
 /// Names of the tops that get their own cosimulation model, in order.
 pub fn top_modules() -> &'static [&'static str] {
-    &["neo_bsu", "neo_msu", "neo_sort_core", "neo_itu", "neo_scu", "neo_raster_core", "neo_sort_seq"]
+    &[
+        "neo_bsu",
+        "neo_msu",
+        "neo_sort_core",
+        "neo_itu",
+        "neo_scu",
+        "neo_raster_core",
+        "neo_sort_seq",
+        "neo_frame_ctrl",
+    ]
 }
 
 /// Every module of the configuration, leaves first.
