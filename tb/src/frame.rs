@@ -231,7 +231,8 @@ impl FrameBench {
             self.set_lanes("idle_i", &idle, 1);
             self.set("m_axi_arready_i", arready as u64);
             self.set("m_axi_rvalid_i", rbeat.is_some() as u64);
-            self.set("m_axi_rdata_i", rbeat.map_or(self.rng.next_u64(), |b| b.1));
+            let junk = self.rng.next_u64();
+            self.set("m_axi_rdata_i", rbeat.map_or(junk, |b| b.1));
             self.set("m_axi_rlast_i", rbeat.is_some_and(|b| b.2) as u64);
             self.set("m_axi_rid_i", 0);
             self.set("m_axi_rresp_i", 0);

@@ -366,7 +366,7 @@ pub fn fill(cfg: &EngineConfig, rng: &mut Rng, mem: &mut Memory, d: &TileDescrip
 /// `C + 1`) or up to `max_chunks` chunks, at random (non-overlapping) addresses.
 pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDescriptor {
     let c = cfg.chunk as u64;
-    let mut len = |rng: &mut Rng| -> u32 {
+    let len = |rng: &mut Rng| -> u32 {
         let edge = [0, 1, c / 2 - 1, c / 2, c / 2 + 1, c - 1, c, c + 1, 2 * c, 2 * c + 1, 4 * c + 1];
         if rng.percent(40) {
             *rng.pick(&edge) as u32
