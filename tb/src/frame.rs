@@ -315,7 +315,7 @@ impl FrameBench {
                 self.checker.protocol(c, off % 8 == 0 && t < tiles, &format!("result write at 0x{a:x}"));
                 mem.write_u64(a, data);
                 writes[t] += 1;
-                b_due.push_back(c + 1 + self.rng.below(10));
+                b_due.push_back(c + 1 + self.rng.below(60));
             }
             if bvalid {
                 self.checker.protocol(c, self.get("m_axi_bready_o") == 1, "bready low");
