@@ -20,6 +20,8 @@ pub mod dynmodel;
 pub mod engine;
 pub mod engine_regs;
 #[cfg(neo_has_verilator)]
+pub mod frame;
+#[cfg(neo_has_verilator)]
 pub mod itu;
 pub mod lanes;
 #[cfg(neo_has_verilator)]

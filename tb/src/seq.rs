@@ -43,11 +43,25 @@ pub struct SeqTiming {
 
 impl SeqTiming {
     /// Always ready, quick done pulses, the bridge idle at once.
-    pub const FAST: SeqTiming =
-        SeqTiming { cmd_ready_pct: 100, min_done: 1, max_done: 2, max_drain: 0, cpl_ready_pct: 100, max_job_gap: 0, idle_busy_pct: 0 };
+    pub const FAST: SeqTiming = SeqTiming {
+        cmd_ready_pct: 100,
+        min_done: 1,
+        max_done: 2,
+        max_drain: 0,
+        cpl_ready_pct: 100,
+        max_job_gap: 0,
+        idle_busy_pct: 0,
+    };
     /// Random stalls, slow and late done pulses, long drains.
-    pub const RANDOM: SeqTiming =
-        SeqTiming { cmd_ready_pct: 50, min_done: 1, max_done: 30, max_drain: 25, cpl_ready_pct: 60, max_job_gap: 5, idle_busy_pct: 30 };
+    pub const RANDOM: SeqTiming = SeqTiming {
+        cmd_ready_pct: 50,
+        min_done: 1,
+        max_done: 30,
+        max_drain: 25,
+        cpl_ready_pct: 60,
+        max_job_gap: 5,
+        idle_busy_pct: 30,
+    };
 }
 
 /// One tile job: the descriptor, the frame (registers `frame` and `scratch_base`) and the core.
@@ -237,7 +251,11 @@ impl SeqBench {
             let valid = self.dut.cmd_valid_o();
             if let Some(h) = held {
                 self.checker.protocol(c, valid, "cmd_valid_o dropped before the command was taken");
-                self.checker.protocol(c, self.offered() == h, "the offered command changed before it was taken");
+                self.checker.protocol(
+                    c,
+                    self.offered() == h,
+                    "the offered command changed before it was taken",
+                );
             }
             held = None;
             if valid {
@@ -245,14 +263,25 @@ impl SeqBench {
                 let got = self.offered();
                 if let Some(&(stage, _)) = want.cmds.get(taken) {
                     if stage > 0 && want.cmds[taken - 1].0 != stage {
-                        barrier(&self.checker, c, &format!("before stage {stage}"), &pending, idle_since_done);
+                        barrier(
+                            &self.checker,
+                            c,
+                            &format!("before stage {stage}"),
+                            &pending,
+                            idle_since_done,
+                        );
                     }
                 }
                 if !ready {
                     held = Some(got);
                 } else {
                     let Some(&(_, exp)) = want.cmds.get(taken) else {
-                        self.checker.fail(c, &format!("command {taken}"), "no more commands", &format!("{got:x?}"));
+                        self.checker.fail(
+                            c,
+                            &format!("command {taken}"),
+                            "no more commands",
+                            &format!("{got:x?}"),
+                        );
                     };
                     compare(&self.checker, c, taken, &exp, &got);
                     let e = run_command(&mut self.sorter, &mut self.mem, &got).unwrap_or_else(|a| {
@@ -264,13 +293,23 @@ impl SeqBench {
                 }
             }
             if self.dut.cpl_valid_o() {
-                self.checker.value(c, "commands issued before the completion", want.cmds.len() as u64, taken as u64);
+                self.checker.value(
+                    c,
+                    "commands issued before the completion",
+                    want.cmds.len() as u64,
+                    taken as u64,
+                );
                 barrier(&self.checker, c, "before the completion", &pending, idle_since_done);
                 self.checker.value(c, "cpl_len_o", want.next_len, self.dut.cpl_len_o());
                 if cpl_ready {
                     self.dut.tick();
                     let start = accepted_at.expect("a completion follows a job");
-                    return SeqRun { commands: taken, stages: want.stages, cycles: c - start, next_len: want.next_len };
+                    return SeqRun {
+                        commands: taken,
+                        stages: want.stages,
+                        cycles: c - start,
+                        next_len: want.next_len,
+                    };
                 }
             }
             self.dut.tick();
@@ -327,7 +366,7 @@ pub fn fill(cfg: &EngineConfig, rng: &mut Rng, mem: &mut Memory, d: &TileDescrip
 /// `C + 1`) or up to `max_chunks` chunks, at random (non-overlapping) addresses.
 pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDescriptor {
     let c = cfg.chunk as u64;
-    let mut len = |rng: &mut Rng| -> u32 {
+    let len = |rng: &mut Rng| -> u32 {
         let edge = [0, 1, c / 2 - 1, c / 2, c / 2 + 1, c - 1, c, c + 1, 2 * c, 2 * c + 1, 4 * c + 1];
         if rng.percent(40) {
             *rng.pick(&edge) as u32

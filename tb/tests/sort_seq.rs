@@ -55,7 +55,11 @@ mod cosim {
                             next: 0x30_0000 + 8 * p,
                         };
                         fill(&cfg, &mut rng, &mut b.mem, &d);
-                        let job = SeqJob { desc: d, regs: regs(frame, &mut rng), core: rng.below(cfg.sort_cores as u64) };
+                        let job = SeqJob {
+                            desc: d,
+                            regs: regs(frame, &mut rng),
+                            core: rng.below(cfg.sort_cores as u64),
+                        };
                         let r = b.run(&job);
                         tiles += 1;
                         assert_eq!(r.commands > 0, !(from_scratch && n == 0), "{d:?}");

@@ -283,11 +283,11 @@ fn dispatch(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire("job_sel", nb).wire("job_any", 1);
     if d.rr {
         m.assign("job_sel", "rr_q");
-        m.assign("job_any", "job_ready_i[rr_q]");
+        m.assign("job_any", pick("job_ready_i", "rr_q", n));
     } else {
         let mut body = vec![set("job_sel_c", lit(nb, 0))];
         for k in (0..n).rev() {
-            body.push(if_(format!("job_ready_i[{k}]"), vec![set("job_sel_c", lit(nb, k as u64))]));
+            body.push(if_(pick("job_ready_i", &k.to_string(), n), vec![set("job_sel_c", lit(nb, k as u64))]));
         }
         m.reg("job_sel_c", nb);
         m.comb(body);
@@ -324,6 +324,15 @@ fn dispatch(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     )]);
 }
 
+/// Bit `index` of the `count`-bit signal `name` (the signal itself when it has one bit).
+fn pick(name: &str, index: &str, count: u32) -> String {
+    if count == 1 {
+        name.to_string()
+    } else {
+        format!("{name}[{index}]")
+    }
+}
+
 /// `name[hi:lo]` resized to `to` bits.
 fn resize_part(name: &str, hi: u32, lo: u32, to: u32) -> String {
     let w = hi - lo + 1;
@@ -347,7 +356,7 @@ fn completions(m: &mut Module, d: &Dims) {
     m.mem("cq", ew, qd);
     let mut body = vec![set("cpl_sel", lit(nb, 0))];
     for k in (0..n).rev() {
-        body.push(if_(format!("cpl_valid_i[{k}]"), vec![set("cpl_sel", lit(nb, k as u64))]));
+        body.push(if_(pick("cpl_valid_i", &k.to_string(), n), vec![set("cpl_sel", lit(nb, k as u64))]));
     }
     m.reg("cpl_sel", nb);
     m.comb(body);
@@ -394,11 +403,14 @@ fn head(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire("ras_sel", mb).wire("ras_any", 1);
     if d.rr {
         m.assign("ras_sel", "rrr_q");
-        m.assign("ras_any", "ras_ready_i[rrr_q]");
+        m.assign("ras_any", pick("ras_ready_i", "rrr_q", mm));
     } else {
         let mut body = vec![set("ras_sel_c", lit(mb, 0))];
         for k in (0..mm).rev() {
-            body.push(if_(format!("ras_ready_i[{k}]"), vec![set("ras_sel_c", lit(mb, k as u64))]));
+            body.push(if_(
+                pick("ras_ready_i", &k.to_string(), mm),
+                vec![set("ras_sel_c", lit(mb, k as u64))],
+            ));
         }
         m.reg("ras_sel_c", mb);
         m.comb(body);
@@ -419,12 +431,26 @@ fn head(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire_assign("pix_off", aw, format!("{} << {sh}", resize("h_t", 32, aw)));
     m.assign("ras_pix_o", format!("{} + pix_off", resize_part("fb_base_i", xa - 1, 2, aw)));
     m.assign("ev_entries_rastered_o", format!("ras_fire ? h_len : {}", lit(lw, 0)));
+    // Address bits above the entry-address width (narrow configurations) are not used.
+    let mut dropped = Vec::new();
+    if aw < 32 {
+        for w in ["w1_q", "w2_q", "w3_q", "h_t"] {
+            dropped.push(format!("{w}[31:{aw}]"));
+        }
+    }
+    for (b, lo) in [("scratch_base_i", 3), ("feat_base_i", 5), ("fb_base_i", 2)] {
+        if xa - lo > aw {
+            dropped.push(format!("{b}[{}:{}]", xa - 1, lo + aw));
+        }
+    }
+    if !dropped.is_empty() {
+        m.wire_assign("unused_trunc", 1, format!("^{{{}}}", dropped.join(", ")));
+    }
     m.wire_assign("aw_done", 1, "aw_sent_q | aw_fire");
     m.wire_assign("w_done", 1, "w_sent_q | w_fire");
     m.wire_assign("ras_done", 1, "ras_sent_q | ras_fire");
     m.wire_assign("cq_pop", 1, "~cq_empty & aw_done & w_done & ras_done");
     let (n, nb, qb) = (d.n, d.nb, d.qb);
-    let _ = aw;
     let wrap = |reg: &str, bits: u32, count: u32| {
         if count.is_power_of_two() {
             format!("{reg} + {}", lit(bits, 1))
@@ -500,7 +526,8 @@ fn finish(m: &mut Module, d: &Dims) {
     let mm = d.m;
     m.blank();
     m.comment("End of the frame: every tile rastered, every B back, every bridge idle.");
-    let sum: Vec<String> = (0..mm).map(|k| format!("{{31'd0, ras_done_i[{k}]}}")).collect();
+    let sum: Vec<String> =
+        (0..mm).map(|k| format!("{{31'd0, {}}}", pick("ras_done_i", &k.to_string(), mm))).collect();
     m.wire_assign("ras_done_cnt", 32, sum.join(" + "));
     m.assign("ev_tile_rastered_o", resize("ras_done_cnt", 32, bits_for(mm as u64)));
     m.wire_assign(

@@ -20,7 +20,7 @@
 //! | `neo_perf_counters` | the engine's performance counters                   | yes       |
 //! | `neo_engine_regs` | engine control port: AXI4-Lite register map           | yes       |
 //! | `neo_sort_seq`  | engine: one Sorting Core's per-tile command sequencer   | yes       |
-//! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | no       |
+//! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | yes      |
 //! | `neo_axi_sort_bridge` | sorting core memory port -> AXI4 manager          | yes       |
 //! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
 //! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (the engine's P, and P=3) | P=3 |
@@ -73,6 +73,7 @@ pub fn top_modules() -> &'static [&'static str] {
         "neo_perf_counters",
         "neo_engine_regs",
         "neo_sort_seq",
+        "neo_frame_ctrl",
         "neo_axi_sort_bridge",
         "neo_axi_raster_bridge",
         "neo_axi_mux_p3",
