@@ -157,11 +157,8 @@ fn read_issuer(m: &mut Module, cfg: &EngineConfig, lb: u32, feat: bool) {
     m.assign("m_axi_arburst_o", lit(2, 1));
     m.wire_assign("r_fire", 1, "m_axi_rvalid_i & m_axi_rready_o");
     m.wire_assign("r_end", 1, "r_fire & m_axi_rlast_i");
-    let mut take = vec![
-        set("ar_v_q", lit(1, 1)),
-        set("ar_addr_q", "ar_new_addr"),
-        set("ar_len_q", "ar_new_len"),
-    ];
+    let mut take =
+        vec![set("ar_v_q", lit(1, 1)), set("ar_addr_q", "ar_new_addr"), set("ar_len_q", "ar_new_len")];
     if feat {
         take.push(set("ar_feat_q", "ar_new_feat"));
     }
@@ -249,7 +246,10 @@ fn write_constants(m: &mut Module, cfg: &EngineConfig) {
     m.assign("m_axi_awsize_o", lit(3, size_code(cfg)));
     m.assign("m_axi_awburst_o", lit(2, 1));
     let sb = cfg.axi_data_bits / 8;
-    m.assign("m_axi_wstrb_o", if sb >= 64 { format!("{{{sb}{{1'b1}}}}") } else { crate::emit::expr::hex(sb, (1u64 << sb) - 1) });
+    m.assign(
+        "m_axi_wstrb_o",
+        if sb >= 64 { format!("{{{sb}{{1'b1}}}}") } else { crate::emit::expr::hex(sb, (1u64 << sb) - 1) },
+    );
 }
 
 /// Response fields a bridge does not use (IDs: every response is its own; RRESP/BRESP: errors
