@@ -15,9 +15,9 @@ use std::collections::VecDeque;
 /// How a [`RandomManager`] behaves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Traffic {
-    /// Reads and writes to issue.
+    /// Read bursts to issue.
     pub reads: usize,
-    /// Writes to issue.
+    /// Write bursts to issue.
     pub writes: usize,
     /// Percent of cycles a new request is offered when one may be.
     pub issue_percent: u32,
