@@ -61,8 +61,7 @@ mod cosim {
                 }
                 mgrs.push(RandomManager::new(
                     &format!("s{i}_axi"),
-                    base,
-                    REGION,
+                    base..base + REGION,
                     0,
                     o,
                     *t,
@@ -93,7 +92,7 @@ mod cosim {
             b
         }
 
-        fn violation(&self, v: neo_tb::axi::Violation) -> ! {
+        fn violation(&self, v: Box<neo_tb::axi::Violation>) -> ! {
             panic!("{v} (seed = 0x{s:016x}; reproduce with NEO_SEED=0x{s:016x})", s = self.chk.seed)
         }
 

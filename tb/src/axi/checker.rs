@@ -66,7 +66,7 @@ pub struct AxiChecker {
     /// Writes with complete data awaiting B, per ID.
     b_due: HashMap<u32, usize>,
     writes_in_flight: usize,
-    first: Option<Violation>,
+    first: Option<Box<Violation>>,
 }
 
 impl AxiChecker {
@@ -94,7 +94,7 @@ impl AxiChecker {
 
     /// The first violation seen, if any.
     pub fn first_violation(&self) -> Option<&Violation> {
-        self.first.as_ref()
+        self.first.as_deref()
     }
 
     /// Read bursts and writes in flight.
@@ -102,8 +102,8 @@ impl AxiChecker {
         (self.reads_in_flight, self.writes_in_flight)
     }
 
-    fn v(&self, channel: &'static str, field: &str, expected: String, actual: String) -> Violation {
-        Violation {
+    fn v(&self, channel: &'static str, field: &str, expected: String, actual: String) -> Box<Violation> {
+        Box::new(Violation {
             cycle: self.cycle,
             port: self.port,
             name: self.name.clone(),
@@ -111,12 +111,12 @@ impl AxiChecker {
             field: field.to_string(),
             expected,
             actual,
-        }
+        })
     }
 
     /// Observes one cycle (both sides' signals, the handshakes happen at its end). Returns the
     /// first violation (this cycle's or an earlier one).
-    pub fn observe(&mut self, m: &ManagerSignals, s: &SubordinateSignals) -> Result<(), Violation> {
+    pub fn observe(&mut self, m: &ManagerSignals, s: &SubordinateSignals) -> Result<(), Box<Violation>> {
         if let Some(v) = &self.first {
             return Err(v.clone());
         }
@@ -138,7 +138,7 @@ impl AxiChecker {
         prev: Option<Addr>,
         taken: bool,
         now: Option<Addr>,
-    ) -> Result<(), Violation> {
+    ) -> Result<(), Box<Violation>> {
         let Some(a) = prev.filter(|_| !taken) else { return Ok(()) };
         let Some(b) = now else {
             return Err(self.v(ch, &format!("{p}valid (held until {p}ready)"), hex(1), hex(0)));
@@ -157,7 +157,7 @@ impl AxiChecker {
         Ok(())
     }
 
-    fn burst_ok(&self, ch: &'static str, p: &str, a: &Addr) -> Result<(), Violation> {
+    fn burst_ok(&self, ch: &'static str, p: &str, a: &Addr) -> Result<(), Box<Violation>> {
         if a.burst != 1 {
             return Err(self.v(ch, &format!("{p}burst"), hex(1), hex(a.burst.into())));
         }
@@ -176,7 +176,7 @@ impl AxiChecker {
         Ok(())
     }
 
-    fn check(&mut self, m: &ManagerSignals, s: &SubordinateSignals) -> Result<(), Violation> {
+    fn check(&mut self, m: &ManagerSignals, s: &SubordinateSignals) -> Result<(), Box<Violation>> {
         let (pm, ps) = (self.prev_m, self.prev_s);
         // Valids held with stable payloads.
         self.held_addr("AR", "ar", pm.ar, ps.arready, m.ar)?;

@@ -53,13 +53,12 @@ pub struct RandomManager {
 }
 
 impl RandomManager {
-    /// A manager named `name` over bytes `base..base + size` (4 KiB aligned), using ID `id`, at
+    /// A manager named `name` over the bytes of `region` (4 KiB aligned), using ID `id`, at
     /// most `outstanding` reads and writes each in flight; `shadow` holds the region's initial
     /// contents (as the memory does).
     pub fn new(
         name: &str,
-        base: u64,
-        size: u64,
+        region: std::ops::Range<u64>,
         id: u32,
         outstanding: usize,
         t: Traffic,
@@ -68,8 +67,8 @@ impl RandomManager {
     ) -> RandomManager {
         RandomManager {
             name: name.to_string(),
-            base,
-            size,
+            base: region.start,
+            size: region.end - region.start,
             id,
             outstanding,
             t,
