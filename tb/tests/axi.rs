@@ -16,7 +16,6 @@ mod cosim {
     use neo_tb::axi::manager::{RandomManager, Traffic};
     use neo_tb::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, ManagerSignals, SubordinateSignals};
     use neo_tb::check::Checker;
-    use neo_tb::dut::Dut;
     use neo_tb::models::NeoAxiMuxP3;
     use neo_tb::rng::{test_seed, Rng};
     use neo_tb::waves::maybe_trace;
@@ -27,7 +26,10 @@ mod cosim {
 
     /// Transactions per manager (NEO_TB_VECTORS scales them: a tenth of it, at least 100).
     fn transactions(default: usize) -> usize {
-        std::env::var("NEO_TB_VECTORS").ok().and_then(|v| v.parse::<usize>().ok()).map_or(default, |v| (v / 10).max(100))
+        std::env::var("NEO_TB_VECTORS")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+            .map_or(default, |v| (v / 10).max(100))
     }
 
     struct Bench {
@@ -57,12 +59,22 @@ mod cosim {
                     init.write(base + 8 * w, &v.to_le_bytes());
                     mem.write(base + 8 * w, &v.to_le_bytes());
                 }
-                mgrs.push(RandomManager::new(&format!("s{i}_axi"), base, REGION, 0, o, *t, rng.next_u64(), init));
+                mgrs.push(RandomManager::new(
+                    &format!("s{i}_axi"),
+                    base..base + REGION,
+                    0,
+                    o,
+                    *t,
+                    rng.next_u64(),
+                    init,
+                ));
             }
             let mut dut = NeoAxiMuxP3::new();
             maybe_trace(&mut dut, name);
             let mut b = Bench {
-                s_ports: (0..P).map(|i| AxiBinding::new::<NeoAxiMuxP3>(&format!("s{i}_axi_"), false)).collect(),
+                s_ports: (0..P)
+                    .map(|i| AxiBinding::new::<NeoAxiMuxP3>(&format!("s{i}_axi_"), false))
+                    .collect(),
                 m_port: AxiBinding::new::<NeoAxiMuxP3>("m_axi_", true),
                 mem: AxiMemory::new(1, mem, timing, rng.next_u64()),
                 s_chk: (0..P).map(|i| AxiChecker::new(i, &format!("s{i}_axi"), o, o)).collect(),
@@ -80,7 +92,7 @@ mod cosim {
             b
         }
 
-        fn violation(&self, v: neo_tb::axi::Violation) -> ! {
+        fn violation(&self, v: Box<neo_tb::axi::Violation>) -> ! {
             panic!("{v} (seed = 0x{s:016x}; reproduce with NEO_SEED=0x{s:016x})", s = self.chk.seed)
         }
 
@@ -116,7 +128,12 @@ mod cosim {
             while !(self.mgrs.iter().all(RandomManager::finished) && self.mem.idle(0)) {
                 if self.dut.cycle() - start > limit {
                     let done: Vec<_> = self.mgrs.iter().map(RandomManager::done).collect();
-                    self.chk.fail(self.dut.cycle(), "progress (timeout)", &format!("finished within {limit} cycles"), &format!("done (reads, writes) per manager: {done:?}"));
+                    self.chk.fail(
+                        self.dut.cycle(),
+                        "progress (timeout)",
+                        &format!("finished within {limit} cycles"),
+                        &format!("done (reads, writes) per manager: {done:?}"),
+                    );
                 }
                 self.cycle();
             }
@@ -125,7 +142,12 @@ mod cosim {
                 let base = 0x10_0000 * (i as u64 + 1);
                 for w in 0..REGION / 8 {
                     let a = base + 8 * w;
-                    self.chk.value(self.dut.cycle(), &format!("memory word at 0x{a:x} (s{i}_axi's region)"), m.shadow().read_u64(a), self.mem.memory().read_u64(a));
+                    self.chk.value(
+                        self.dut.cycle(),
+                        &format!("memory word at 0x{a:x} (s{i}_axi's region)"),
+                        m.shadow().read_u64(a),
+                        self.mem.memory().read_u64(a),
+                    );
                 }
             }
             self.dut.cycle() - start
@@ -133,7 +155,14 @@ mod cosim {
     }
 
     fn traffic(n: usize, issue: u32, ready: u32) -> Traffic {
-        Traffic { reads: n, writes: n, issue_percent: issue, ready_percent: ready, max_beats: 16, partial_strobe_percent: 25 }
+        Traffic {
+            reads: n,
+            writes: n,
+            issue_percent: issue,
+            ready_percent: ready,
+            max_beats: 16,
+            partial_strobe_percent: 25,
+        }
     }
 
     #[test]
@@ -160,7 +189,12 @@ mod cosim {
         // cycles); a mux that took two cycles a write (or serialised reads and writes) needs 6n.
         println!("{name}: {} single-beat transactions in {cycles} cycles", 6 * n);
         let bound = 3 * n as u64 * 3 / 2;
-        assert!(cycles < bound, "{cycles} cycles (bound {bound}) for {} reads + {} writes: the mux serialises", 3 * n, 3 * n);
+        assert!(
+            cycles < bound,
+            "{cycles} cycles (bound {bound}) for {} reads + {} writes: the mux serialises",
+            3 * n,
+            3 * n
+        );
     }
 
     #[test]
@@ -171,7 +205,12 @@ mod cosim {
         let long = Traffic { max_beats: 16, ..traffic(n, 100, 100) };
         let idle = Traffic { reads: 0, writes: 0, ..long };
         for (k, t) in [[long, idle, idle], [idle, idle, long], [long, long, long]].iter().enumerate() {
-            let mut b = Bench::new(&format!("{name}_{k}"), seed ^ k as u64, AxiTiming { reorder: true, ..AxiTiming::IDEAL }, t);
+            let mut b = Bench::new(
+                &format!("{name}_{k}"),
+                seed ^ k as u64,
+                AxiTiming { reorder: true, ..AxiTiming::IDEAL },
+                t,
+            );
             b.run(200 * n as u64);
         }
     }

@@ -33,12 +33,15 @@ mod cosim {
     /// Feature word address of the read-only feature region.
     const FEAT_BASE: u64 = 0x2_0000;
     const FEAT_WORDS: u64 = 1024;
-    /// Pixel address of the pixel region.
-    const PIX_BASE: u64 = 0x10_0000;
+    /// Pixel address of the pixel region (bytes 0x80_0000.., clear of the others).
+    const PIX_BASE: u64 = 0x20_0000;
     const PIX_ROWS: u64 = 512;
 
     fn requests() -> usize {
-        std::env::var("NEO_TB_VECTORS").ok().and_then(|v| v.parse::<usize>().ok()).map_or(3000, |v| (v / 3).max(300))
+        std::env::var("NEO_TB_VECTORS")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+            .map_or(3000, |v| (v / 3).max(300))
     }
 
     /// A random burst start: often just below a 4 KiB page end, so the burst straddles it.
@@ -131,8 +134,15 @@ mod cosim {
                 chk.value(cyc, "AxiMemory idle while idle_o", 1, mem.idle(0).into());
             }
             if rsp_fire {
-                let Some(a) = expected.pop_front() else { chk.fail(cyc, "mem_rsp_valid_o", "no entry owed", "1") };
-                chk.value(cyc, &format!("mem_rsp_data_o (entry 0x{a:x})"), golden.read_u64(8 * a) & mask(eb), dut.mem_rsp_data_o());
+                let Some(a) = expected.pop_front() else {
+                    chk.fail(cyc, "mem_rsp_valid_o", "no entry owed", "1")
+                };
+                chk.value(
+                    cyc,
+                    &format!("mem_rsp_data_o (entry 0x{a:x})"),
+                    golden.read_u64(8 * a) & mask(eb),
+                    dut.mem_rsp_data_o(),
+                );
             }
             if req_fire {
                 expected.extend(ra..ra + rl);
@@ -149,11 +159,22 @@ mod cosim {
             mem.tick(0, &down);
             dut.tick();
             cycles += 1;
-            if reads_left == 0 && writes_left == 0 && req.is_none() && wr.is_none() && expected.is_empty() && dut.idle_o() {
+            if reads_left == 0
+                && writes_left == 0
+                && req.is_none()
+                && wr.is_none()
+                && expected.is_empty()
+                && dut.idle_o()
+            {
                 break;
             }
             if cycles > 400 * n as u64 {
-                chk.fail(cyc, "progress (timeout)", "every request answered", &format!("{} entries owed", expected.len()));
+                chk.fail(
+                    cyc,
+                    "progress (timeout)",
+                    "every request answered",
+                    &format!("{} entries owed", expected.len()),
+                );
             }
         }
         for (a, d) in &written {
@@ -280,8 +301,18 @@ mod cosim {
             let fire = req.is_some() && dut.mem_req_ready_o();
             let rsp_fire = dut.mem_rsp_valid_o() && rsp_ready;
             let kind = |f: fn(&Req) -> bool| fire && req.as_ref().is_some_and(f);
-            chk.value(cyc, "wr_table_o", kind(|r| matches!(r, Req::WriteEntry(..))).into(), dut.wr_table_o().into());
-            chk.value(cyc, "wr_pixels_o", kind(|r| matches!(r, Req::Pixels(..))).into(), dut.wr_pixels_o().into());
+            chk.value(
+                cyc,
+                "wr_table_o",
+                kind(|r| matches!(r, Req::WriteEntry(..))).into(),
+                dut.wr_table_o().into(),
+            );
+            chk.value(
+                cyc,
+                "wr_pixels_o",
+                kind(|r| matches!(r, Req::Pixels(..))).into(),
+                dut.wr_pixels_o().into(),
+            );
             let head_feat = expected.front().is_some_and(|(what, _)| what.starts_with("feature"));
             chk.value(cyc, "rd_table_o", (rsp_fire && !head_feat).into(), dut.rd_table_o().into());
             chk.value(cyc, "rd_feat_o", (rsp_fire && head_feat).into(), dut.rd_feat_o().into());
@@ -299,7 +330,12 @@ mod cosim {
                 let mut got = vec![0u32; rsp_words];
                 dut.get_words(rsp_port, &mut got);
                 for k in 0..rsp_words {
-                    chk.value(cyc, &format!("mem_rsp_data_o[{} +: 32] ({what})", 32 * k), want[k].into(), got[k].into());
+                    chk.value(
+                        cyc,
+                        &format!("mem_rsp_data_o[{} +: 32] ({what})", 32 * k),
+                        want[k].into(),
+                        got[k].into(),
+                    );
                 }
             }
             if fire {
@@ -336,7 +372,12 @@ mod cosim {
                 break;
             }
             if cycles > 400 * n as u64 {
-                chk.fail(cyc, "progress (timeout)", "every request answered", &format!("{} responses owed", expected.len()));
+                chk.fail(
+                    cyc,
+                    "progress (timeout)",
+                    "every request answered",
+                    &format!("{} responses owed", expected.len()),
+                );
             }
         }
         for (a, d) in &entries {
@@ -346,7 +387,12 @@ mod cosim {
             let mut b = [0u8; 4];
             mem.memory().read(4 * p, &mut b);
             let want = pixel_to_u32([*c as u8, (*c >> 8) as u8, (*c >> 16) as u8]);
-            chk.value(dut.cycle(), &format!("memory pixel 0x{p:x}"), want.into(), u32::from_le_bytes(b).into());
+            chk.value(
+                dut.cycle(),
+                &format!("memory pixel 0x{p:x}"),
+                want.into(),
+                u32::from_le_bytes(b).into(),
+            );
         }
         assert!(idle_seen > 0, "idle_o never seen");
         println!("{name}: {n} requests in {cycles} cycles");

@@ -66,7 +66,7 @@ pub struct AxiChecker {
     /// Writes with complete data awaiting B, per ID.
     b_due: HashMap<u32, usize>,
     writes_in_flight: usize,
-    first: Option<Violation>,
+    first: Option<Box<Violation>>,
 }
 
 impl AxiChecker {
@@ -94,7 +94,7 @@ impl AxiChecker {
 
     /// The first violation seen, if any.
     pub fn first_violation(&self) -> Option<&Violation> {
-        self.first.as_ref()
+        self.first.as_deref()
     }
 
     /// Read bursts and writes in flight.
@@ -102,8 +102,8 @@ impl AxiChecker {
         (self.reads_in_flight, self.writes_in_flight)
     }
 
-    fn v(&self, channel: &'static str, field: &str, expected: String, actual: String) -> Violation {
-        Violation {
+    fn v(&self, channel: &'static str, field: &str, expected: String, actual: String) -> Box<Violation> {
+        Box::new(Violation {
             cycle: self.cycle,
             port: self.port,
             name: self.name.clone(),
@@ -111,12 +111,12 @@ impl AxiChecker {
             field: field.to_string(),
             expected,
             actual,
-        }
+        })
     }
 
     /// Observes one cycle (both sides' signals, the handshakes happen at its end). Returns the
     /// first violation (this cycle's or an earlier one).
-    pub fn observe(&mut self, m: &ManagerSignals, s: &SubordinateSignals) -> Result<(), Violation> {
+    pub fn observe(&mut self, m: &ManagerSignals, s: &SubordinateSignals) -> Result<(), Box<Violation>> {
         if let Some(v) = &self.first {
             return Err(v.clone());
         }
@@ -131,7 +131,14 @@ impl AxiChecker {
         Ok(())
     }
 
-    fn held_addr(&self, ch: &'static str, p: &str, prev: Option<Addr>, taken: bool, now: Option<Addr>) -> Result<(), Violation> {
+    fn held_addr(
+        &self,
+        ch: &'static str,
+        p: &str,
+        prev: Option<Addr>,
+        taken: bool,
+        now: Option<Addr>,
+    ) -> Result<(), Box<Violation>> {
         let Some(a) = prev.filter(|_| !taken) else { return Ok(()) };
         let Some(b) = now else {
             return Err(self.v(ch, &format!("{p}valid (held until {p}ready)"), hex(1), hex(0)));
@@ -150,7 +157,7 @@ impl AxiChecker {
         Ok(())
     }
 
-    fn burst_ok(&self, ch: &'static str, p: &str, a: &Addr) -> Result<(), Violation> {
+    fn burst_ok(&self, ch: &'static str, p: &str, a: &Addr) -> Result<(), Box<Violation>> {
         if a.burst != 1 {
             return Err(self.v(ch, &format!("{p}burst"), hex(1), hex(a.burst.into())));
         }
@@ -169,7 +176,7 @@ impl AxiChecker {
         Ok(())
     }
 
-    fn check(&mut self, m: &ManagerSignals, s: &SubordinateSignals) -> Result<(), Violation> {
+    fn check(&mut self, m: &ManagerSignals, s: &SubordinateSignals) -> Result<(), Box<Violation>> {
         let (pm, ps) = (self.prev_m, self.prev_s);
         // Valids held with stable payloads.
         self.held_addr("AR", "ar", pm.ar, ps.arready, m.ar)?;
@@ -202,13 +209,23 @@ impl AxiChecker {
         if let (Some(a), false) = (ps.b, pm.bready) {
             let Some(b) = s.b else { return Err(self.v("B", "bvalid (held until bready)", hex(1), hex(0))) };
             if (a.id, a.resp) != (b.id, b.resp) {
-                return Err(self.v("B", "bid/bresp (stable while valid)", hex(a.id.into()), hex(b.id.into())));
+                return Err(self.v(
+                    "B",
+                    "bid/bresp (stable while valid)",
+                    hex(a.id.into()),
+                    hex(b.id.into()),
+                ));
             }
         }
         // Responses only to outstanding IDs (checked whenever valid).
         if let Some(r) = s.r {
             if self.reads.get(&r.id).is_none_or(|q| q.is_empty()) {
-                return Err(self.v("R", "rid (an ID with a read outstanding)", "none outstanding".into(), hex(r.id.into())));
+                return Err(self.v(
+                    "R",
+                    "rid (an ID with a read outstanding)",
+                    "none outstanding".into(),
+                    hex(r.id.into()),
+                ));
             }
         }
         if let Some(b) = s.b {
@@ -238,7 +255,12 @@ impl AxiChecker {
                 self.reads_in_flight -= 1;
             }
             if r.last != last {
-                return Err(self.v("R", &format!("rlast (ID 0x{:x})", r.id), hex(last.into()), hex(r.last.into())));
+                return Err(self.v(
+                    "R",
+                    &format!("rlast (ID 0x{:x})", r.id),
+                    hex(last.into()),
+                    hex(r.last.into()),
+                ));
             }
         }
         if let (Some(b), true) = (s.b, m.bready) {
@@ -250,23 +272,43 @@ impl AxiChecker {
             self.reads.entry(a.id).or_default().push_back(a.beats());
             self.reads_in_flight += 1;
             if self.reads_in_flight > self.max_reads {
-                return Err(self.v("AR", "reads in flight", format!("<= {}", self.max_reads), hex(self.reads_in_flight as u64)));
+                return Err(self.v(
+                    "AR",
+                    "reads in flight",
+                    format!("<= {}", self.max_reads),
+                    hex(self.reads_in_flight as u64),
+                ));
             }
         }
         if let (Some(a), true) = (m.aw, s.awready) {
             self.burst_ok("AW", "aw", &a)?;
             self.writes_in_flight += 1;
             if self.writes_in_flight > self.max_writes {
-                return Err(self.v("AW", "writes in flight", format!("<= {}", self.max_writes), hex(self.writes_in_flight as u64)));
+                return Err(self.v(
+                    "AW",
+                    "writes in flight",
+                    format!("<= {}", self.max_writes),
+                    hex(self.writes_in_flight as u64),
+                ));
             }
             if let Some(n) = self.w_early.pop_front() {
                 if n != a.beats() {
-                    return Err(self.v("W", "beats of a burst sent before its AW (AWLEN + 1)", hex(a.beats().into()), hex(n.into())));
+                    return Err(self.v(
+                        "W",
+                        "beats of a burst sent before its AW (AWLEN + 1)",
+                        hex(a.beats().into()),
+                        hex(n.into()),
+                    ));
                 }
                 *self.b_due.entry(a.id).or_default() += 1;
             } else {
                 if self.aw_wait.is_empty() && self.w_cur > a.beats() {
-                    return Err(self.v("W", "beats before WLAST (AWLEN + 1)", hex(a.beats().into()), hex(self.w_cur.into())));
+                    return Err(self.v(
+                        "W",
+                        "beats before WLAST (AWLEN + 1)",
+                        hex(a.beats().into()),
+                        hex(self.w_cur.into()),
+                    ));
                 }
                 self.aw_wait.push_back(a);
             }
@@ -279,7 +321,13 @@ impl AxiChecker {
                 if w.last != last {
                     return Err(self.v(
                         "W",
-                        &format!("wlast (beat {} of {} of AW ID 0x{:x} at 0x{:x})", self.w_cur, a.beats(), a.id, a.addr),
+                        &format!(
+                            "wlast (beat {} of {} of AW ID 0x{:x} at 0x{:x})",
+                            self.w_cur,
+                            a.beats(),
+                            a.id,
+                            a.addr
+                        ),
                         hex(last.into()),
                         hex(w.last.into()),
                     ));
@@ -325,8 +373,11 @@ mod tests {
         };
         c.observe(&w, &SubordinateSignals { awready: true, wready: true, ..idle }).unwrap();
         assert_eq!(c.in_flight(), (0, 1));
-        c.observe(&ManagerSignals { bready: true, ..Default::default() }, &SubordinateSignals { b: Some(Default::default()), ..idle })
-            .unwrap();
+        c.observe(
+            &ManagerSignals { bready: true, ..Default::default() },
+            &SubordinateSignals { b: Some(Default::default()), ..idle },
+        )
+        .unwrap();
         assert_eq!(c.in_flight(), (0, 0));
     }
 
@@ -336,18 +387,28 @@ mod tests {
         // Payload changed while valid.
         let mut c = AxiChecker::new(1, "s1_axi", 4, 4);
         c.observe(&ManagerSignals { ar: Some(ar(0x100, 1)), ..Default::default() }, &idle).unwrap();
-        let e = c.observe(&ManagerSignals { ar: Some(ar(0x108, 1)), ..Default::default() }, &idle).unwrap_err();
+        let e =
+            c.observe(&ManagerSignals { ar: Some(ar(0x108, 1)), ..Default::default() }, &idle).unwrap_err();
         assert_eq!((e.cycle, e.channel, e.expected.as_str(), e.actual.as_str()), (1, "AR", "0x100", "0x108"));
-        assert!(e.to_string().starts_with("AXI PROTOCOL VIOLATION at cycle 1: port 1 (s1_axi), channel AR, field araddr"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("AXI PROTOCOL VIOLATION at cycle 1: port 1 (s1_axi), channel AR, field araddr"),
+            "{e}"
+        );
         // 4 KiB crossing.
         let mut c = AxiChecker::new(0, "m", 4, 4);
         let e = c
-            .observe(&ManagerSignals { ar: Some(ar(0xff8, 1)), ..Default::default() }, &SubordinateSignals { arready: true, ..idle })
+            .observe(
+                &ManagerSignals { ar: Some(ar(0xff8, 1)), ..Default::default() },
+                &SubordinateSignals { arready: true, ..idle },
+            )
             .unwrap_err();
         assert!(e.field.contains("4 KiB"), "{e}");
         // R for an ID with nothing outstanding.
         let mut c = AxiChecker::new(0, "m", 4, 4);
-        let e = c.observe(&ManagerSignals::default(), &SubordinateSignals { r: Some(RBeat::default()), ..idle }).unwrap_err();
+        let e = c
+            .observe(&ManagerSignals::default(), &SubordinateSignals { r: Some(RBeat::default()), ..idle })
+            .unwrap_err();
         assert_eq!(e.channel, "R");
         // WLAST early, and the violation sticks.
         let mut c = AxiChecker::new(0, "m", 4, 4);

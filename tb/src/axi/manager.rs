@@ -15,9 +15,9 @@ use std::collections::VecDeque;
 /// How a [`RandomManager`] behaves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Traffic {
-    /// Reads and writes to issue.
+    /// Read bursts to issue.
     pub reads: usize,
-    /// Writes to issue.
+    /// Write bursts to issue.
     pub writes: usize,
     /// Percent of cycles a new request is offered when one may be.
     pub issue_percent: u32,
@@ -53,14 +53,22 @@ pub struct RandomManager {
 }
 
 impl RandomManager {
-    /// A manager named `name` over bytes `base..base + size` (4 KiB aligned), using ID `id`, at
+    /// A manager named `name` over the bytes of `region` (4 KiB aligned), using ID `id`, at
     /// most `outstanding` reads and writes each in flight; `shadow` holds the region's initial
     /// contents (as the memory does).
-    pub fn new(name: &str, base: u64, size: u64, id: u32, outstanding: usize, t: Traffic, seed: u64, shadow: Memory) -> RandomManager {
+    pub fn new(
+        name: &str,
+        region: std::ops::Range<u64>,
+        id: u32,
+        outstanding: usize,
+        t: Traffic,
+        seed: u64,
+        shadow: Memory,
+    ) -> RandomManager {
         RandomManager {
             name: name.to_string(),
-            base,
-            size,
+            base: region.start,
+            size: region.end - region.start,
             id,
             outstanding,
             t,
@@ -97,8 +105,14 @@ impl RandomManager {
     }
 
     fn busy(&self, lo: u64, hi: u64, with_reads: bool) -> bool {
-        let w = self.wq.iter().map(|x| &x.0).chain(self.bq.iter().map(|x| &x.0)).any(|a| Self::overlaps(a, lo, hi));
-        let r = with_reads && self.reads.iter().map(|x| &x.0).chain(self.ar.iter()).any(|a| Self::overlaps(a, lo, hi));
+        let w = self
+            .wq
+            .iter()
+            .map(|x| &x.0)
+            .chain(self.bq.iter().map(|x| &x.0))
+            .any(|a| Self::overlaps(a, lo, hi));
+        let r = with_reads
+            && self.reads.iter().map(|x| &x.0).chain(self.ar.iter()).any(|a| Self::overlaps(a, lo, hi));
         w || r
     }
 
@@ -106,7 +120,13 @@ impl RandomManager {
         let beats = self.rng.range(1, self.t.max_beats.into());
         let page = self.rng.below(self.size / 4096);
         let word = self.rng.range(0, 512 - beats);
-        Addr { id: self.id, addr: self.base + 4096 * page + 8 * word, len: (beats - 1) as u8, size: 3, burst: 1 }
+        Addr {
+            id: self.id,
+            addr: self.base + 4096 * page + 8 * word,
+            len: (beats - 1) as u8,
+            size: 3,
+            burst: 1,
+        }
     }
 
     /// What the manager drives this cycle (new requests are decided here and then held).
@@ -136,7 +156,11 @@ impl RandomManager {
                 let beats = (0..a.beats())
                     .map(|k| WBeat {
                         data: self.rng.next_u64(),
-                        strb: if self.rng.percent(self.t.partial_strobe_percent) { self.rng.next_u32() as u8 } else { 0xff },
+                        strb: if self.rng.percent(self.t.partial_strobe_percent) {
+                            self.rng.next_u32() as u8
+                        } else {
+                            0xff
+                        },
                         last: k + 1 == a.beats(),
                     })
                     .collect();
@@ -174,7 +198,12 @@ impl RandomManager {
             chk.value(cycle, &format!("{}: rresp", self.name), 0, r.resp.into());
             *k += 1;
             let last = *k == a.beats();
-            chk.value(cycle, &format!("{}: rlast of beat {} of {}", self.name, *k - 1, a.beats()), last.into(), r.last.into());
+            chk.value(
+                cycle,
+                &format!("{}: rlast of beat {} of {}", self.name, *k - 1, a.beats()),
+                last.into(),
+                r.last.into(),
+            );
             if last {
                 self.reads.pop_front();
                 self.done.0 += 1;
@@ -192,7 +221,12 @@ impl RandomManager {
             if front.2 == front.1.len() {
                 let (a, beats, _, accepted) = self.wq.pop_front().expect("front");
                 if !accepted {
-                    chk.fail(cycle, &format!("{}: wready", self.name), "W taken only after its AW", "the last beat before the AW");
+                    chk.fail(
+                        cycle,
+                        &format!("{}: wready", self.name),
+                        "W taken only after its AW",
+                        "the last beat before the AW",
+                    );
                 }
                 self.bq.push_back((a, beats));
             }

@@ -39,12 +39,24 @@ pub struct AxiTiming {
 
 impl AxiTiming {
     /// One-cycle latency, full bandwidth, always ready, in order.
-    pub const IDEAL: AxiTiming =
-        AxiTiming { latency: 1, bandwidth: (1, 1), extra_percent: 0, extra_max: 0, reorder: false, ready_percent: 100 };
+    pub const IDEAL: AxiTiming = AxiTiming {
+        latency: 1,
+        bandwidth: (1, 1),
+        extra_percent: 0,
+        extra_max: 0,
+        reorder: false,
+        ready_percent: 100,
+    };
     /// A hostile memory: latency 6, 3/4 bandwidth, random extra delays up to 24 cycles, responses
     /// reordered across IDs, ready 60 % of the time.
-    pub const RANDOM: AxiTiming =
-        AxiTiming { latency: 6, bandwidth: (3, 4), extra_percent: 30, extra_max: 24, reorder: true, ready_percent: 60 };
+    pub const RANDOM: AxiTiming = AxiTiming {
+        latency: 6,
+        bandwidth: (3, 4),
+        extra_percent: 30,
+        extra_max: 24,
+        reorder: true,
+        ready_percent: 60,
+    };
 }
 
 /// Bytes of a beat.
@@ -134,7 +146,11 @@ impl AxiMemory {
     fn delay(&mut self, k: usize) -> u64 {
         let t = self.timing;
         let rng = &mut self.rngs[k];
-        let extra = if t.extra_max > 0 && rng.percent(t.extra_percent) { rng.range(1, t.extra_max.into()) } else { 0 };
+        let extra = if t.extra_max > 0 && rng.percent(t.extra_percent) {
+            rng.range(1, t.extra_max.into())
+        } else {
+            0
+        };
         u64::from(t.latency) + extra
     }
 
@@ -186,7 +202,13 @@ impl AxiMemory {
     }
 
     /// The next cycle's outputs of port `k` (`out`: this cycle's).
-    fn next_outputs(&mut self, k: usize, out: SubordinateSignals, rready: bool, b_taken: bool) -> SubordinateSignals {
+    fn next_outputs(
+        &mut self,
+        k: usize,
+        out: SubordinateSignals,
+        rready: bool,
+        b_taken: bool,
+    ) -> SubordinateSignals {
         let t = self.timing;
         let (num, den) = t.bandwidth;
         let p = &mut self.ports[k];
@@ -237,7 +259,13 @@ impl AxiMemory {
 /// The index of the next response among `items` (in arrival order, `key` = (ID, ready cycle)):
 /// the oldest of all when it is ready (in order), or with `reorder` a random one among the
 /// oldest item of each ID, when ready.
-fn pick<T>(items: &[T], now: u64, reorder: bool, rng: &mut Rng, key: impl Fn(&T) -> (u32, u64)) -> Option<usize> {
+fn pick<T>(
+    items: &[T],
+    now: u64,
+    reorder: bool,
+    rng: &mut Rng,
+    key: impl Fn(&T) -> (u32, u64),
+) -> Option<usize> {
     if !reorder {
         return items.first().filter(|x| key(x).1 <= now).map(|_| 0);
     }

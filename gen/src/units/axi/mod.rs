@@ -157,11 +157,8 @@ fn read_issuer(m: &mut Module, cfg: &EngineConfig, lb: u32, feat: bool) {
     m.assign("m_axi_arburst_o", lit(2, 1));
     m.wire_assign("r_fire", 1, "m_axi_rvalid_i & m_axi_rready_o");
     m.wire_assign("r_end", 1, "r_fire & m_axi_rlast_i");
-    let mut take = vec![
-        set("ar_v_q", lit(1, 1)),
-        set("ar_addr_q", "ar_new_addr"),
-        set("ar_len_q", "ar_new_len"),
-    ];
+    let mut take =
+        vec![set("ar_v_q", lit(1, 1)), set("ar_addr_q", "ar_new_addr"), set("ar_len_q", "ar_new_len")];
     if feat {
         take.push(set("ar_feat_q", "ar_new_feat"));
     }
@@ -249,7 +246,10 @@ fn write_constants(m: &mut Module, cfg: &EngineConfig) {
     m.assign("m_axi_awsize_o", lit(3, size_code(cfg)));
     m.assign("m_axi_awburst_o", lit(2, 1));
     let sb = cfg.axi_data_bits / 8;
-    m.assign("m_axi_wstrb_o", if sb >= 64 { format!("{{{sb}{{1'b1}}}}") } else { crate::emit::expr::hex(sb, (1u64 << sb) - 1) });
+    m.assign(
+        "m_axi_wstrb_o",
+        if sb >= 64 { format!("{{{sb}{{1'b1}}}}") } else { crate::emit::expr::hex(sb, (1u64 << sb) - 1) },
+    );
 }
 
 /// Response fields a bridge does not use (IDs: every response is its own; RRESP/BRESP: errors
@@ -268,4 +268,55 @@ pub fn mux_sizes(cfg: &EngineConfig) -> Vec<usize> {
     v.sort_unstable();
     v.dedup();
     v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mux_sizes_follow_the_client_to_port_mapping() {
+        // 1 + 16 + 4 clients on 4 ports: 6, 5, 5, 5; plus the cosimulated P = 3.
+        let cfg = EngineConfig::default();
+        assert_eq!(mux_sizes(&cfg), vec![3, 5, 6]);
+        let small = EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..cfg.clone() };
+        assert_eq!(mux_sizes(&small), vec![2, 3]);
+        let one = EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 4, ..cfg };
+        assert_eq!(mux_sizes(&one), vec![1, 3]);
+    }
+
+    #[test]
+    fn a_mux_whose_client_index_does_not_fit_the_id_is_refused() {
+        let cfg = EngineConfig { axi_id_bits: 1, ..EngineConfig::default() };
+        let e = mux::module(&cfg, 3).unwrap_err().to_string();
+        assert!(e.contains("neo_axi_mux_p3") && e.contains("axi_id_bits is 1"), "{e}");
+        assert!(mux::module(&cfg, 2).is_ok());
+        assert!(crate::units::try_generate(&cfg).is_err());
+    }
+
+    #[test]
+    fn bridges_and_muxes_have_the_contract_ports() {
+        let cfg = EngineConfig::default();
+        let has = |m: &Module, p: &str, w: u32| m.ports.iter().any(|x| x.name == p && x.width == w);
+        for m in [sort_bridge::module(&cfg), raster_bridge::module(&cfg)] {
+            for (p, w) in
+                [("m_axi_arvalid_o", 1), ("m_axi_araddr_o", 32), ("m_axi_arlen_o", 8), ("m_axi_rdata_i", 64)]
+            {
+                assert!(has(&m, p, w), "{}: {p}", m.name);
+            }
+            for (p, w) in [("m_axi_wstrb_o", 8), ("m_axi_bid_i", 4), ("idle_o", 1)] {
+                assert!(has(&m, p, w), "{}: {p}", m.name);
+            }
+        }
+        let mux = mux::module(&cfg, 3).unwrap();
+        assert_eq!(mux.name, "neo_axi_mux_p3");
+        assert!(
+            has(&mux, "s2_axi_rdata_o", 64)
+                && has(&mux, "s0_axi_awaddr_i", 32)
+                && has(&mux, "m_axi_bready_o", 1)
+        );
+        assert!(!mux.ports.iter().any(|p| p.name.starts_with("s3_")));
+        // The downstream ID is the client index: bits 1:0 of a 4-bit ID for 3 clients.
+        assert!(mux.to_verilog().contains("assign m_axi_arid_o = {2'd0, {(ar_oh[2]), (ar_oh[1])}};"));
+    }
 }

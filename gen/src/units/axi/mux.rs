@@ -53,7 +53,8 @@ fn oh_index(oh: &str, n: usize, xb: u32) -> String {
     let bits: Vec<String> = (0..xb)
         .rev()
         .map(|b| {
-            let lanes: Vec<String> = (0..n).filter(|i| (i >> b) & 1 == 1).map(|i| format!("{oh}[{i}]")).collect();
+            let lanes: Vec<String> =
+                (0..n).filter(|i| (i >> b) & 1 == 1).map(|i| format!("{oh}[{i}]")).collect();
             if lanes.is_empty() {
                 lit(1, 0)
             } else {
@@ -87,9 +88,16 @@ fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: Option<&s
     m.wire_assign(format!("{ch}_fire"), 1, format!("m_axi_{ch}valid_o & m_axi_{ch}ready_i"));
     for f in ["addr", "len", "size", "burst"] {
         let w = signals(cfg).iter().find(|s| s.name == format!("{ch}{f}")).expect("AXI field").width;
-        m.assign(format!("m_axi_{ch}{f}_o"), or_mux(&format!("{ch}_oh"), p, w, |i| format!("s{i}_axi_{ch}{f}_i")));
+        m.assign(
+            format!("m_axi_{ch}{f}_o"),
+            or_mux(&format!("{ch}_oh"), p, w, |i| format!("s{i}_axi_{ch}{f}_i")),
+        );
     }
-    let id = if xb == 0 { lit(cfg.axi_id_bits, 0) } else { resize_expr(&oh_index(&format!("{ch}_oh"), p, xb), xb, cfg.axi_id_bits) };
+    let id = if xb == 0 {
+        lit(cfg.axi_id_bits, 0)
+    } else {
+        resize_expr(&oh_index(&format!("{ch}_oh"), p, xb), xb, cfg.axi_id_bits)
+    };
     m.assign(format!("m_axi_{ch}id_o"), id);
     for i in 0..p {
         m.assign(format!("s{i}_axi_{ch}ready_o"), format!("{gate}{ch}_oh[{i}] & m_axi_{ch}ready_i"));
@@ -108,7 +116,10 @@ fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: Option<&s
             ],
             vec![if_(
                 format!("m_axi_{ch}valid_o"),
-                vec![set(format!("{ch}_lock_q"), lit(1, 1)), set(format!("{ch}_lock_oh_q"), format!("{ch}_oh"))],
+                vec![
+                    set(format!("{ch}_lock_q"), lit(1, 1)),
+                    set(format!("{ch}_lock_oh_q"), format!("{ch}_oh")),
+                ],
             )],
         )],
     );
@@ -136,9 +147,16 @@ pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
     }
     let (db, fb) = (cfg.axi_data_bits, bits_for(u64::from(W_FIFO - 1)));
     let mut m = Module::new(name(p));
-    m.doc(format!("AXI4 port mux: {p} managers (s0_axi_* .. s{}_axi_*) onto one port (m_axi_*). Round-robin AR and AW", p - 1));
-    m.doc(format!("arbiters; W beats follow the AW order (a {W_FIFO}-entry FIFO of granted clients, each until WLAST)."));
-    m.doc(format!("Downstream ID = client index ({xb} bits, zero-extended); client IDs are ignored, R/B go back by the"));
+    m.doc(format!(
+        "AXI4 port mux: {p} managers (s0_axi_* .. s{}_axi_*) onto one port (m_axi_*). Round-robin AR and AW",
+        p - 1
+    ));
+    m.doc(format!(
+        "arbiters; W beats follow the AW order (a {W_FIFO}-entry FIFO of granted clients, each until WLAST)."
+    ));
+    m.doc(format!(
+        "Downstream ID = client index ({xb} bits, zero-extended); client IDs are ignored, R/B go back by the"
+    ));
     m.doc("index with ID 0. See docs/rtl.md \"AXI4 memory side\".");
     m.clock_reset();
     for i in 0..p {
@@ -149,7 +167,9 @@ pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
     arbiter(&mut m, cfg, p, "ar", None);
 
     m.blank();
-    m.comment(format!("W order: clients of the accepted AWs ({W_FIFO} at most), the head's beats pass until WLAST."));
+    m.comment(format!(
+        "W order: clients of the accepted AWs ({W_FIFO} at most), the head's beats pass until WLAST."
+    ));
     m.mem("wq_mem", n, W_FIFO).reg("wq_wp_q", fb).reg("wq_rp_q", fb).reg("wq_cnt_q", fb + 1);
     m.wire_assign("wq_room", 1, format!("wq_cnt_q != {}", lit(fb + 1, u64::from(W_FIFO))));
     m.wire_assign("wq_any", 1, format!("wq_cnt_q != {}", lit(fb + 1, 0)));
@@ -204,7 +224,8 @@ pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
     }
     m.blank();
     m.comment("The clients' IDs (each client uses one) and the ID bits above the client index are not used.");
-    let mut unused: Vec<String> = (0..p).flat_map(|i| [format!("s{i}_axi_arid_i"), format!("s{i}_axi_awid_i")]).collect();
+    let mut unused: Vec<String> =
+        (0..p).flat_map(|i| [format!("s{i}_axi_arid_i"), format!("s{i}_axi_awid_i")]).collect();
     if xb < ib {
         unused.push(slice("m_axi_rid_i", ib - 1, xb));
         unused.push(slice("m_axi_bid_i", ib - 1, xb));

@@ -100,7 +100,9 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.seq_noreset(vec![if_("ar_fire", vec![set("kind_mem[kind_wp_q]", "ar_feat_q")])]);
 
     m.blank();
-    m.comment("R: table beats straight to the core; feature beats 0..2 collected, beat 3 completes the word.");
+    m.comment(
+        "R: table beats straight to the core; feature beats 0..2 collected, beat 3 completes the word.",
+    );
     m.reg("fasm_q", 3 * db);
     m.wire_assign("r_deliver", 1, "~r_feat | m_axi_rlast_i");
     m.assign("m_axi_rready_o", "~r_deliver | mem_rsp_ready_i");
@@ -108,7 +110,11 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.wire_assign("feat_word", 4 * db, "{m_axi_rdata_i, fasm_q}");
     m.assign(
         "mem_rsp_data_o",
-        format!("r_feat ? {} : {}", slice("feat_word", fw - 1, 0), zext(&format!("m_axi_rdata_i[{}:0]", eb - 1), eb, fw)),
+        format!(
+            "r_feat ? {} : {}",
+            slice("feat_word", fw - 1, 0),
+            zext(&format!("m_axi_rdata_i[{}:0]", eb - 1), eb, fw)
+        ),
     );
     m.seq_noreset(vec![if_(
         "r_fire & r_feat & ~m_axi_rlast_i",
@@ -130,7 +136,11 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.assign("wr_take", "req_wr & wr_ok");
     m.assign("wr_table_o", "wr_take & ~req_pix");
     m.assign("wr_pixels_o", "wr_take & req_pix");
-    let shifted = if wdb > pw { format!("{{{}, {}}}", lit(pw, 0), slice("w_data_q", wdb - 1, pw)) } else { "w_data_q".into() };
+    let shifted = if wdb > pw {
+        format!("{{{}, {}}}", lit(pw, 0), slice("w_data_q", wdb - 1, pw))
+    } else {
+        "w_data_q".into()
+    };
     m.seq(
         vec![
             set("aw_v_q", lit(1, 0)),

@@ -30,7 +30,9 @@ pub fn module(cfg: &EngineConfig) -> Module {
     let mut m = Module::new(NAME);
     m.doc("Sort bridge: a neo_sort_core memory port (mem_*, the core's ports with _i/_o swapped) as an AXI4");
     m.doc("manager (m_axi_*, ID 0). Entry a at byte 8a, one entry per 8-byte beat; a read burst of L entries is");
-    m.doc("ARLEN L-1 (cut at 4 KiB), a write one single-beat AW + W. At most axi_outstanding reads and writes");
+    m.doc(
+        "ARLEN L-1 (cut at 4 KiB), a write one single-beat AW + W. At most axi_outstanding reads and writes",
+    );
     m.doc(format!("({}) each in flight. See docs/rtl.md \"AXI4 memory side\".", cfg.axi_outstanding));
     m.clock_reset();
     m.input_c("mem_req_valid_i", 1, "core: a read request (burst) is offered");
@@ -95,7 +97,10 @@ pub fn module(cfg: &EngineConfig) -> Module {
     write_constants(&mut m, cfg);
 
     m.blank();
-    m.assign("idle_o", format!("~ar_v_q & (rd_cnt_q == {c}) & (wr_cnt_q == {c})", c = lit(super::count_bits(cfg), 0)));
+    m.assign(
+        "idle_o",
+        format!("~ar_v_q & (rd_cnt_q == {c}) & (wr_cnt_q == {c})", c = lit(super::count_bits(cfg), 0)),
+    );
     let mut extra = vec![];
     let hi = if eb < db { format!("m_axi_rdata_i[{}:{eb}]", db - 1) } else { String::new() };
     if eb < db {
