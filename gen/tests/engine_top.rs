@@ -13,13 +13,16 @@ fn configs() -> Vec<(&'static str, EngineConfig)> {
         ("default 16 + 4, 4 ports", base.clone()),
         ("2 + 1, 2 ports", EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..base.clone() }),
         ("1 + 1, 1 port", EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 1, ..base.clone() }),
-        ("4 + 3, 3 ports, round robin", EngineConfig {
-            sort_cores: 4,
-            raster_cores: 3,
-            mem_channels: 3,
-            scheduler: neo_gen::SchedulerPolicy::RoundRobin,
-            ..base
-        }),
+        (
+            "4 + 3, 3 ports, round robin",
+            EngineConfig {
+                sort_cores: 4,
+                raster_cores: 3,
+                mem_channels: 3,
+                scheduler: neo_gen::SchedulerPolicy::RoundRobin,
+                ..base
+            },
+        ),
     ]
 }
 
@@ -43,7 +46,8 @@ fn the_engine_glue_is_latch_free() {
         let mux = neo_gen::units::axi::mux::name(neo_gen::units::engine::Clients::of(&cfg).slots());
         let mut boxes: Vec<&str> = neo_gen::units::engine::SUBMODULES.to_vec();
         boxes.push(&mux);
-        let s = coarse_glue_synth_stats(&files_for(&cfg, NAME), NAME, &boxes).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let s = coarse_glue_synth_stats(&files_for(&cfg, NAME), NAME, &boxes)
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
         assert_eq!(s.latches, 0, "{what}: {:?}", s.cells_by_type);
     }
 }

@@ -17,10 +17,10 @@ use crate::dynmodel::{BuildInfo, DynModel};
 use crate::rng::Rng;
 use neo_gen::EngineConfig;
 use neo_golden::engine::expected::Mismatch;
+use neo_golden::engine::host::FramePlan;
 use neo_golden::engine::memory::Memory;
 use neo_golden::engine::reference::FrameOutcome;
 use neo_golden::engine::regs::{Counter, Counters, Reg, CTRL_START};
-use neo_golden::engine::host::FramePlan;
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -110,7 +110,12 @@ pub struct EngineRig {
 
 impl EngineRig {
     /// A rig around `engine` with an empty memory; resets the engine. `waves`: a VCD path.
-    pub fn new(engine: EngineModel, opts: RunOptions, seed: u64, waves: Option<PathBuf>) -> Result<EngineRig, String> {
+    pub fn new(
+        engine: EngineModel,
+        opts: RunOptions,
+        seed: u64,
+        waves: Option<PathBuf>,
+    ) -> Result<EngineRig, String> {
         let mut engine = engine;
         let k = engine.cfg.mem_channels;
         let m = &engine.model;
@@ -119,7 +124,9 @@ impl EngineRig {
         let out = engine.cfg.axi_outstanding;
         let clients = 1 + engine.cfg.sort_cores + engine.cfg.raster_cores;
         let per_port = clients.div_ceil(k);
-        let checkers = (0..k).map(|p| AxiChecker::new(p, &format!("m{p}_axi"), out * per_port, out * per_port)).collect();
+        let checkers = (0..k)
+            .map(|p| AxiChecker::new(p, &format!("m{p}_axi"), out * per_port, out * per_port))
+            .collect();
         let mut rng = Rng::new(seed);
         let lite = AxilManager::bind(m, "s_axil_", rng.fork(1))?;
         let done = m.port("done_o")?;
@@ -128,7 +135,17 @@ impl EngineRig {
         }
         engine.model.reset();
         let mem = AxiMemory::new(k, Memory::new(), opts.timing, rng.next_u64());
-        Ok(EngineRig { engine, axi, checkers, mem, lite, checker: Checker::new(TOP, seed), done, opts, waves })
+        Ok(EngineRig {
+            engine,
+            axi,
+            checkers,
+            mem,
+            lite,
+            checker: Checker::new(TOP, seed),
+            done,
+            opts,
+            waves,
+        })
     }
 
     /// The memory the engine sees (the host writes a frame's inputs here).
@@ -211,8 +228,10 @@ impl EngineRig {
             }
         }
         let regs = self.read_registers()?;
-        let outcome = FrameOutcome::read_back(&plan.regs, self.mem.memory(), |a| regs.get(&a).copied().unwrap_or(0));
-        let mismatch = plan.expected.compare(self.mem.memory()).or_else(|| plan.expected.compare_outcome(&outcome));
+        let outcome =
+            FrameOutcome::read_back(&plan.regs, self.mem.memory(), |a| regs.get(&a).copied().unwrap_or(0));
+        let mismatch =
+            plan.expected.compare(self.mem.memory()).or_else(|| plan.expected.compare_outcome(&outcome));
         Ok(FrameReport {
             frame: plan.frame,
             from_scratch: plan.from_scratch,

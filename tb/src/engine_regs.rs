@@ -140,7 +140,6 @@ pub fn pack_u64s(v: &[u64]) -> Vec<u32> {
     v.iter().flat_map(|&x| [x as u32, (x >> 32) as u32]).collect()
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

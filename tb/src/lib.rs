@@ -6,8 +6,8 @@
 //! compare against the bit-exact golden model (`neo_golden::sort`) and stop at the first
 //! mismatch.
 
-pub mod axil;
 pub mod axi;
+pub mod axil;
 pub mod bench;
 pub mod bits;
 #[cfg(neo_has_verilator)]

@@ -95,7 +95,8 @@ fn synthetic_overflow_and_core_counts_are_bit_exact() {
 
 #[test]
 fn biker_orbit_is_bit_exact_over_reuse_frames() {
-    let Some(path) = shared_file_for_test("biker_orbit_is_bit_exact_over_reuse_frames", "scenes/biker.ply") else {
+    let Some(path) = shared_file_for_test("biker_orbit_is_bit_exact_over_reuse_frames", "scenes/biker.ply")
+    else {
         return;
     };
     let scene = load_scene(path.to_str().expect("utf-8 path")).expect("biker");

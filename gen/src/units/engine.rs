@@ -183,7 +183,9 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.wire("first_overflow", 32).wire("overflows", 32);
     m.wire("counters", 64 * COUNTERS as u32);
     let mut c: Vec<(String, String)> = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
-    c.extend(ports_of(&engine_regs::module(cfg), "s_axil_").into_iter().map(|(name, _, _)| (name.clone(), name)));
+    c.extend(
+        ports_of(&engine_regs::module(cfg), "s_axil_").into_iter().map(|(name, _, _)| (name.clone(), name)),
+    );
     c.push(pair("start_o", "start"));
     for r in ["frame", "tiles", "width", "height"] {
         c.push((format!("{r}_o"), r.to_string()));
@@ -310,8 +312,10 @@ fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         m.wire(e, mm).vector(e);
     }
     let core_ports = ports_of(&raster_core::module(cfg), "mem_");
-    let mut items: Vec<Item> =
-        core_ports.iter().map(|(p, _, width)| Item::Wire { name: wire_of(p).into(), width: *width }).collect();
+    let mut items: Vec<Item> = core_ports
+        .iter()
+        .map(|(p, _, width)| Item::Wire { name: wire_of(p).into(), width: *width })
+        .collect();
     let mut core = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
     core.push(pair("cmd_valid_i", "ras_valid[j]"));
     core.push(pair("cmd_ready_o", "ras_ready[j]"));
@@ -404,7 +408,11 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     let events = ports_of(&frame_ctrl::module(cfg), "ev_");
     let ew = |e: &str| {
         let port = format!("ev_{e}_o");
-        events.iter().find(|(p, _, _)| *p == port).map(|(_, _, w)| *w).unwrap_or_else(|| panic!("{} has no {port}", frame_ctrl::NAME))
+        events
+            .iter()
+            .find(|(p, _, _)| *p == port)
+            .map(|(_, _, w)| *w)
+            .unwrap_or_else(|| panic!("{} has no {port}", frame_ctrl::NAME))
     };
     for c in Counter::ALL {
         let rhs = match c {
@@ -414,9 +422,7 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
             Counter::TilesSorted => widen(&ev("tile_sorted"), ew("tile_sorted"), iw),
             Counter::TilesRastered => widen(&ev("tile_rastered"), ew("tile_rastered"), iw),
             Counter::EntriesSorted => widen(&ev("entries_sorted"), ew("entries_sorted"), iw),
-            Counter::EntriesRastered => {
-                widen(&ev("entries_rastered"), ew("entries_rastered"), iw)
-            }
+            Counter::EntriesRastered => widen(&ev("entries_rastered"), ew("entries_rastered"), iw),
             Counter::RdDesc => bytes(&ev("desc_read"), 1, DESCRIPTOR_BYTES),
             Counter::RdSort => bytes("sort_rd", n, ENTRY_BYTES),
             Counter::WrSort => bytes("sort_wr", n, ENTRY_BYTES),
@@ -431,7 +437,10 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     for e in ["tile_sorted", "tile_rastered", "entries_sorted", "entries_rastered"] {
         let w = ew(e);
         if w > iw {
-            m.comment(format!("ev_{e} above bit {}: never set (a sorted tile holds at most table_capacity entries).", iw - 1));
+            m.comment(format!(
+                "ev_{e} above bit {}: never set (a sorted tile holds at most table_capacity entries).",
+                iw - 1
+            ));
             m.wire_assign(format!("unused_ev_{e}"), 1, format!("|ev_{e}[{} : {iw}]", w - 1));
         }
     }

@@ -120,7 +120,15 @@ fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.output_c("overflows_o", 32, "OVERFLOWS");
     // AXI client 0.
     super::axi::ports(m, cfg, "m_axi_", true);
-    for v in ["job_valid_o", "job_ready_i", "cpl_valid_i", "cpl_ready_o", "ras_valid_o", "ras_ready_i", "ras_done_i"] {
+    for v in [
+        "job_valid_o",
+        "job_ready_i",
+        "cpl_valid_i",
+        "cpl_ready_o",
+        "ras_valid_o",
+        "ras_ready_i",
+        "ras_done_i",
+    ] {
         m.vector(v);
     }
     // Sequencers.

@@ -172,7 +172,11 @@ impl AxiBinding {
         Self::lookup(prefix, manager, |n| d.io_port(n))
     }
 
-    fn lookup(prefix: &str, manager: bool, find: impl Fn(&str) -> Result<usize, String>) -> Result<AxiBinding, String> {
+    fn lookup(
+        prefix: &str,
+        manager: bool,
+        find: impl Fn(&str) -> Result<usize, String>,
+    ) -> Result<AxiBinding, String> {
         let idx = FIELDS
             .iter()
             .map(|(n, from_m)| {

@@ -276,9 +276,9 @@ mod tests {
 
     #[test]
     fn mux_sizes_follow_the_client_to_port_mapping() {
-        // 1 + 16 + 4 clients on 4 ports: 6, 5, 5, 5; plus the cosimulated P = 3.
+        // 1 + 16 + 4 clients on 4 ports of ceil(21 / 4) = 6 slots; plus the cosimulated P = 3.
         let cfg = EngineConfig::default();
-        assert_eq!(mux_sizes(&cfg), vec![3, 5, 6]);
+        assert_eq!(mux_sizes(&cfg), vec![3, 6]);
         let small = EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..cfg.clone() };
         assert_eq!(mux_sizes(&small), vec![2, 3]);
         let one = EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 4, ..cfg };
