@@ -70,7 +70,7 @@ fn run_case(scene: &Scene, how: &CaseScene, c: EngineCase, frames: usize, res: [
 }
 
 fn synthetic() -> Scene {
-    load_scene(CaseScene::SYNTHETIC).expect("synthetic scene")
+    load_scene(CaseScene::SYNTHETIC, false).expect("synthetic scene").0
 }
 
 #[test]
@@ -99,6 +99,6 @@ fn biker_orbit_is_bit_exact_over_reuse_frames() {
     else {
         return;
     };
-    let scene = load_scene(path.to_str().expect("utf-8 path")).expect("biker");
+    let scene = load_scene(path.to_str().expect("utf-8 path"), false).expect("biker").0;
     run_case(&scene, &CaseScene::biker(), EngineCase::Orbit, 3, [128, 128]);
 }

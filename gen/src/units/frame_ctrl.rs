@@ -21,7 +21,7 @@
 //!
 //! Event outputs (for `neo_perf_counters`, counted by the engine top): `ev_desc_read_o` (a
 //! descriptor's last beat), `ev_tile_sorted_o` + `ev_entries_sorted_o` (a job handed to a
-//! sequencer, with its `entries_in`), `ev_tile_rastered_o` (raster done pulses this cycle),
+//! sequencer, with its `entries_in`; 0 in other cycles), `ev_tile_rastered_o` (raster done pulses this cycle),
 //! `ev_entries_rastered_o` (a raster command's `len`, when taken), `ev_result_written_o` (a
 //! result's B).
 
@@ -318,7 +318,10 @@ fn dispatch(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         (0..n).rev().map(|k| format!("scratch_entry + {}", lit(aw, 2 * cap * k as u64))).collect();
     m.assign("job_scratch_o", format!("{{{}}}", scr.join(", ")));
     m.assign("ev_tile_sorted_o", "job_fire");
-    m.assign("ev_entries_sorted_o", resize("d_ein", 33, lw + 1));
+    m.assign(
+        "ev_entries_sorted_o",
+        format!("job_fire ? {} : {}", resize("d_ein", 33, lw + 1), lit(lw + 1, 0)),
+    );
     m.comment("Per sequencer: the tile it sorts (index, tile_x, tile_y, next).");
     m.mem("seq_t", 32, n).mem("seq_x", d.tb, n).mem("seq_y", d.tb, n).mem("seq_next", aw, n);
     m.seq_noreset(vec![if_(
