@@ -217,6 +217,7 @@ fn bus_slot(busy: &std::collections::VecDeque<(Ps, Ps)>, ready: Ps, bl: Ps) -> (
 #[derive(Clone, Copy, Debug)]
 struct T {
     cl: Ps,
+    dqsck: Ps,
     cwl: Ps,
     rcd: Ps,
     rp: Ps,
@@ -242,6 +243,7 @@ pub struct Dram {
     bank_bits: u32,
     col_bits: u32,
     bank_first: bool,
+    bank_xor: bool,
     t: T,
     channels: Vec<Channel>,
     write_queue: usize,
@@ -253,6 +255,8 @@ pub struct Dram {
     ticket_channel: Vec<u32>,
     ideal: Option<Ps>,
     stats: DramStats,
+    /// `(channel, command time)` of every write drained, when logging ([`Dram::log_writes`]).
+    write_log: Option<Vec<(u32, Ps)>>,
 }
 
 impl Dram {
@@ -261,6 +265,7 @@ impl Dram {
         let ck = cfg.t_ck_ps;
         let t = T {
             cl: cfg.n_cl * ck,
+            dqsck: cfg.n_dqsck * ck,
             cwl: cfg.n_cwl * ck,
             rcd: cfg.n_rcd * ck,
             rp: cfg.n_rp * ck,
@@ -298,6 +303,7 @@ impl Dram {
             bank_bits: cfg.banks.trailing_zeros(),
             col_bits: (cfg.row_bytes / cfg.line_bytes).trailing_zeros(),
             bank_first: cfg.mapping == "RoCoBaCh",
+            bank_xor: cfg.bank_xor,
             t,
             channels,
             write_queue: cfg.write_queue as usize,
@@ -308,6 +314,7 @@ impl Dram {
             ticket_channel: Vec::new(),
             ideal: None,
             stats: DramStats::default(),
+            write_log: None,
         }
     }
 
@@ -329,9 +336,9 @@ impl Dram {
         self.stats
     }
 
-    /// `(channel, bank, row)` of the line holding byte `addr`. The bank index is XORed with the
-    /// low row bits (permutation-based interleaving, as memory controllers do), so streams whose
-    /// bases are aligned alike do not all fall into the same bank.
+    /// `(channel, bank, row)` of the line holding byte `addr`. With `bank_xor` the bank index is
+    /// XORed with the low row bits (permutation-based interleaving, as many memory controllers
+    /// do), so streams whose bases are aligned alike do not all fall into the same bank.
     pub fn map(&self, addr: u64) -> (usize, usize, u32) {
         let line = addr >> self.line_shift;
         let ch = (line & ((1 << self.ch_bits) - 1)) as usize;
@@ -344,7 +351,8 @@ impl Dram {
             let r = rest >> self.col_bits;
             (r & mask, r >> self.bank_bits)
         };
-        (ch, (bank ^ (row & mask)) as usize, row as u32)
+        let bank = if self.bank_xor { bank ^ (row & mask) } else { bank };
+        (ch, bank as usize, row as u32)
     }
 
     /// Reads the line holding `addr`, issued at `t`; returns when its data has arrived (the
@@ -376,7 +384,7 @@ impl Dram {
         let (c, b, r) = self.map(addr);
         self.ticket_channel[ticket as usize] = c as u32;
         if self.read_queue == 0 {
-            let done = self.access(t, t, c, b, r, false);
+            let done = self.access(t, t, c, b, r, false) + self.t.dqsck;
             self.stats.read_latency_ps += done - t;
             self.arrivals[ticket as usize] = done;
         } else {
@@ -413,6 +421,47 @@ impl Dram {
         self.free_tickets.push(ticket.0);
     }
 
+    /// Serves one queued read of channel `c` (the one the scheduler picks next); false when
+    /// none is queued.
+    pub fn schedule_next(&mut self, c: usize) -> bool {
+        if self.channels[c].rq.is_empty() {
+            return false;
+        }
+        self.schedule_one(c);
+        true
+    }
+
+    /// The data time of `ticket` if it is already scheduled (without scheduling anything).
+    pub fn scheduled(&self, ticket: Ticket) -> Option<Ps> {
+        let a = self.arrivals[ticket.0 as usize];
+        (a != PENDING).then_some(a)
+    }
+
+    /// When the read command of a read whose data arrives at `arrival` was issued.
+    pub fn read_command_time(&self, arrival: Ps) -> Ps {
+        arrival - self.t.dqsck - self.t.bl - self.t.cl
+    }
+
+    /// Writes posted to channel `c` and not yet drained.
+    pub fn posted_writes(&self, c: usize) -> usize {
+        self.channels[c].wq.len()
+    }
+
+    /// Drains the posted writes of channel `c` at `t` (after its queued reads).
+    pub fn drain_channel(&mut self, t: Ps, c: usize) {
+        self.drain(t, c);
+    }
+
+    /// Starts recording the command time of every drained write ([`Dram::take_write_log`]).
+    pub fn log_writes(&mut self) {
+        self.write_log.get_or_insert_with(Vec::new);
+    }
+
+    /// The `(channel, command time)` of the writes drained since the last call.
+    pub fn take_write_log(&mut self) -> Vec<(u32, Ps)> {
+        self.write_log.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
     /// Serves every queued read of channel `c`.
     fn schedule_all(&mut self, c: usize) {
         while !self.channels[c].rq.is_empty() {
@@ -447,9 +496,10 @@ impl Dram {
             self.stats.reordered += 1;
         }
         let horizon = ch.rq.front().map_or(q.issue, |o| o.issue.min(q.issue));
-        let done = self.access(q.issue, horizon, c, q.bank as usize, q.row, false);
+        let end = self.access(q.issue, horizon, c, q.bank as usize, q.row, false);
         let ch = &mut self.channels[c];
-        ch.last_col = ch.last_col.max(done - self.t.bl - self.t.cl);
+        ch.last_col = ch.last_col.max(end - self.t.bl - self.t.cl);
+        let done = end + self.t.dqsck;
         self.stats.read_latency_ps += done - q.issue;
         self.arrivals[q.ticket as usize] = done;
     }
@@ -498,6 +548,9 @@ impl Dram {
         for &(b, r) in &q {
             end = self.access(t, t, c, b as usize, r, true);
             self.channels[c].floor = end;
+            if let Some(log) = self.write_log.as_mut() {
+                log.push((c as u32, end - tm.bl - tm.cwl));
+            }
         }
         // Reads wait for the write-to-read turnaround.
         self.channels[c].floor = end + tm.wtr + tm.cl;
@@ -622,9 +675,13 @@ mod tests {
         assert_eq!(d.map(4 * 64), (0, 0, 0));
         // 4 channels x 4 KB rows: the next bank after 16 KB, the next row after 128 KB.
         assert_eq!(d.map(16 * 1024), (0, 1, 0));
-        // Row 1 of bank 0 is XORed onto bank 1.
-        assert_eq!(d.map(128 * 1024), (0, 1, 1));
-        assert_eq!(d.map(128 * 1024 + 16 * 1024), (0, 0, 1));
+        // Ramulator's RoBaRaCoCh: row 1 of bank 0 after 128 KB.
+        assert_eq!(d.map(128 * 1024), (0, 0, 1));
+        assert_eq!(d.map(128 * 1024 + 16 * 1024), (0, 1, 1));
+        // With the bank XOR, row 1 of bank 0 is XORed onto bank 1.
+        let x = Dram::new(&DramConfig { bank_xor: true, ..DramConfig::default() });
+        assert_eq!(x.map(128 * 1024), (0, 1, 1));
+        assert_eq!(x.map(128 * 1024 + 16 * 1024), (0, 0, 1));
     }
 
     #[test]
