@@ -172,6 +172,21 @@ impl Occupancy {
     }
 }
 
+/// Moves the reads of `o` the model has scheduled (by a drain, a refresh or the feeder) to the
+/// command-time heap.
+fn sweep(d: &Dram, o: &mut Occupancy) {
+    let mut i = 0;
+    while i < o.unscheduled.len() {
+        match d.scheduled(o.unscheduled[i]) {
+            Some(a) => {
+                o.reads.push(Reverse(d.read_command_time(a)));
+                o.unscheduled.remove(i);
+            }
+            None => i += 1,
+        }
+    }
+}
+
 /// Runs `reqs` through the DRAM model of `cfg` under Ramulator's trace-mode feeding semantics.
 pub fn run_stream(cfg: &DramConfig, reqs: &[StreamRequest]) -> StreamRun {
     let ck = cfg.t_ck_ps;
@@ -210,25 +225,15 @@ pub fn run_stream(cfg: &DramConfig, reqs: &[StreamRequest]) -> StreamRun {
             collect_writes(&mut d, &mut occ, &mut end);
         } else {
             loop {
+                sweep(&d, &mut occ[c]);
                 occ[c].expire(t);
                 if occ[c].unscheduled.len() + occ[c].reads.len() < rcap {
                     break;
                 }
                 // The queue is full: the model schedules its next read (it sees every read
                 // that can enter before an entry frees), whose command frees one.
-                if d.schedule_next(c) {
-                    let cmd_of = |d: &Dram, k: Ticket| d.scheduled(k).map(|a| d.read_command_time(a));
-                    let o = &mut occ[c];
-                    let before = o.unscheduled.len();
-                    let mut kept = VecDeque::with_capacity(before);
-                    for k in o.unscheduled.drain(..) {
-                        match cmd_of(&d, k) {
-                            Some(cmd) => o.reads.push(Reverse(cmd)),
-                            None => kept.push_back(k),
-                        }
-                    }
-                    o.unscheduled = kept;
-                }
+                d.schedule_next(c);
+                sweep(&d, &mut occ[c]);
                 let first = occ[c].reads.peek().expect("a scheduled read").0;
                 t = t.max(first + 1);
             }
