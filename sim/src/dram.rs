@@ -73,6 +73,10 @@ struct Channel {
     rq: std::collections::VecDeque<QueuedRead>,
     /// Column command of the read scheduled last (the scheduler's clock).
     last_col: Ps,
+    /// Latest end of a read burst.
+    read_end: Ps,
+    /// No write data before this (read-to-write turnaround).
+    write_floor: Ps,
 }
 
 /// A read waiting in a channel's queue.
@@ -295,6 +299,8 @@ impl Dram {
                 wq: Vec::with_capacity(cfg.write_queue as usize),
                 rq: std::collections::VecDeque::new(),
                 last_col: 0,
+                read_end: 0,
+                write_floor: 0,
             })
             .collect();
         Dram {
@@ -511,8 +517,10 @@ impl Dram {
             return;
         }
         let (c, b, r) = self.map(addr);
-        self.channels[c].wq.push((b as u32, r));
-        if self.channels[c].wq.len() >= self.write_queue {
+        let ch = &mut self.channels[c];
+        ch.wq.push((b as u32, r));
+        // Write mode: the queue is full, or no read is waiting (Ramulator's controller).
+        if ch.wq.len() >= self.write_queue || ch.rq.is_empty() {
             self.drain(t, c);
         }
     }
@@ -537,23 +545,24 @@ impl Dram {
         }
         self.stats.drains += 1;
         q.sort_by_key(|&(b, r)| (b, r));
-        // Writes go after the reads already scheduled, with one read-to-write turnaround.
+        // Writes go after the reads already scheduled, with the read-to-write turnaround after
+        // the last read burst; banks work in parallel (the data bus orders the bursts).
         let tm = self.t;
         {
             let ch = &mut self.channels[c];
-            let start = t.max(ch.bus_free) + (tm.cl + tm.bl + tm.rtrs).saturating_sub(tm.cwl);
-            ch.floor = ch.floor.max(start);
+            ch.write_floor = ch.write_floor.max(t.max(ch.read_end + tm.rtrs));
         }
         let mut end = 0;
         for &(b, r) in &q {
-            end = self.access(t, t, c, b as usize, r, true);
-            self.channels[c].floor = end;
+            let e = self.access(t, t, c, b as usize, r, true);
+            end = end.max(e);
             if let Some(log) = self.write_log.as_mut() {
-                log.push((c as u32, end - tm.bl - tm.cwl));
+                log.push((c as u32, e - tm.bl - tm.cwl));
             }
         }
         // Reads wait for the write-to-read turnaround.
-        self.channels[c].floor = end + tm.wtr + tm.cl;
+        let ch = &mut self.channels[c];
+        ch.floor = ch.floor.max(end + tm.wtr + tm.cl);
         q.clear();
         self.channels[c].wq = q;
     }
@@ -607,7 +616,7 @@ impl Dram {
             act + tm.rcd
         };
         let lat = if write { tm.cwl } else { tm.cl };
-        let ready = (col_ready + lat).max(ch.floor);
+        let ready = (col_ready + lat).max(if write { ch.write_floor } else { ch.floor });
         // Earliest free burst slot at or after `ready`. Busy blocks are merged when the gap
         // between them is shorter than a burst, so a saturated bus is one block.
         while ch.busy.front().is_some_and(|&(_, e)| e <= horizon) {
@@ -635,6 +644,7 @@ impl Dram {
             bank.wr_end = bank.wr_end.max(end);
         } else {
             bank.rd_col = bank.rd_col.max(col);
+            ch.read_end = ch.read_end.max(end);
         }
         self.stats.last_data_ps = self.stats.last_data_ps.max(end);
         end
