@@ -479,7 +479,10 @@ impl DramConfig {
             return Err("dram.row_bytes must be at least dram.line_bytes".into());
         }
         if !["RoBaCoCh", "RoBaRaCoCh", "RoCoBaCh"].contains(&self.mapping.as_str()) {
-            return Err(format!("dram.mapping '{}': expected RoBaCoCh (RoBaRaCoCh) or RoCoBaCh", self.mapping));
+            return Err(format!(
+                "dram.mapping '{}': expected RoBaCoCh (RoBaRaCoCh) or RoCoBaCh",
+                self.mapping
+            ));
         }
         if self.channel_bits == 0 || self.data_rate_mts == 0 || self.t_ck_ps == 0 {
             return Err("dram.channel_bits, data_rate_mts and t_ck_ps must be positive".into());

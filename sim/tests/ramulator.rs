@@ -17,7 +17,34 @@ use serde_json::Value;
 const REF: &str = "reference/ramulator";
 
 /// Streams that do not match yet, with the known cause: their figures are printed, not asserted.
-const KNOWN_MISMATCH: &[(&str, &str)] = &[];
+const KNOWN_MISMATCH: &[(&str, &str)] = &[
+    (
+        "seq_rw_5050",
+        "write mode: the model drains a channel's posted writes as soon as no read is queued in it \
+         and reads never wait behind a write batch, where Ramulator stays in write mode until \
+         fewer than 6 writes remain, so its reads queue behind writes (its latency is twice ours) \
+         and alternating rows of the read and write streams cost it row conflicts",
+    ),
+    (
+        "rand_read_1g",
+        "activate rate: Ramulator issues the first ready command among the 32 queued reads each \
+         cycle (17.7 clocks per activate per channel); the model times reads oldest first with \
+         calendars and reaches 21.6 clocks, and its refresh, which waits for every scheduled burst, \
+         costs 7.4% instead of 4.6%",
+    ),
+    (
+        "rand_rw_1g",
+        "as rand_read_1g, plus the write mode of seq_rw_5050: random writes drained without \
+         Ramulator's 80%/20% watermark hysteresis",
+    ),
+    (
+        "stride4k_read",
+        "row-hit classification: Ramulator's FRFCFS_Cap picks the oldest request whose next \
+         command is ready, so a younger conflict's precharge (ready) closes a row while older hits \
+         wait for the data bus (not ready): a quarter of its requests re-open their row (misses); \
+         the model serves hits of the open row before a conflict in the same bank",
+    ),
+];
 
 /// Fails (in CI) or skips with a message naming `path`.
 fn bad_reference(test: &str, path: &Path, why: &str) {
@@ -68,7 +95,9 @@ fn load(test: &str) -> Option<Vec<Reference>> {
                     requests,
                     reads: u(s, "reads")?,
                     writes: u(s, "writes")?,
-                    bandwidth_gbs: s["bandwidth_gbs"].as_f64().ok_or(format!("{name}: no `bandwidth_gbs`"))?,
+                    bandwidth_gbs: s["bandwidth_gbs"]
+                        .as_f64()
+                        .ok_or(format!("{name}: no `bandwidth_gbs`"))?,
                     latency_ns: s["read_latency_avg_ns"].as_f64(),
                     hit_rate: hits as f64 / requests.max(1) as f64,
                     hits,
