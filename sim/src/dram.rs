@@ -898,11 +898,29 @@ mod tests {
     #[test]
     fn writes_are_posted_and_drained() {
         let mut d = Dram::new(&DramConfig::default());
-        for i in 0..400u64 {
+        // No read waits: every write drains at once (write mode).
+        for i in 0..8u64 {
             d.write(i, i * 64);
         }
-        // 100 writes per channel, drained every 32.
-        assert_eq!(d.stats().drains, 12);
+        assert_eq!(d.stats().drains, 8);
+        let mut d = Dram::new(&DramConfig::default());
+        // A read waits in every channel: writes are posted until 32 wait in a channel.
+        let waiting: Vec<Ticket> = (0..4u64).map(|c| d.submit_read(0, (1 << 20) + c * 64)).collect();
+        for i in 0..124u64 {
+            d.write(i, i * 64);
+        }
+        assert_eq!(d.stats().drains, 0, "31 writes per channel are posted");
+        for i in 124..128u64 {
+            d.write(i, i * 64);
+        }
+        assert_eq!(d.stats().drains, 4, "the 32nd drains (after the waiting read)");
+        for k in waiting {
+            assert!(d.scheduled(k).is_some());
+            d.release(k);
+        }
+        for i in 128..400u64 {
+            d.write(i, i * 64);
+        }
         let end = d.flush(1000);
         assert!(end > 100 * 5000, "100 bursts of 5 ns per channel: {end}");
         assert_eq!(d.stats().writes, 400);

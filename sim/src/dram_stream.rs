@@ -292,7 +292,7 @@ mod tests {
 
     #[test]
     fn errors_name_the_file_and_line() {
-        let e = parse_stream("0x0 R\n0x40 W\nbad\n", Path::new("s.trace")).unwrap_err();
+        let e = parse_stream("0x0 R\n0x40 W\nzz\n", Path::new("s.trace")).unwrap_err();
         assert_eq!(e.line, 3);
         assert!(e.to_string().starts_with("s.trace:3: "), "{e}");
     }
