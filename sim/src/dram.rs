@@ -475,6 +475,22 @@ impl Dram {
         }
     }
 
+    /// The earliest activate of queued read `q` on channel `c` as far as its bank allows
+    /// (precharge of another open row, `tRP`, `tRC`).
+    fn act_ready(&self, c: usize, q: &QueuedRead) -> Ps {
+        let tm = self.t;
+        let bank = &self.channels[c].banks[q.bank as usize];
+        let mut act = q.issue;
+        if bank.open != CLOSED {
+            let pre = act.max(bank.act + tm.ras).max(bank.rd_col + tm.rtp).max(bank.wr_end + tm.wr);
+            act = pre + tm.rp;
+        }
+        if bank.activated {
+            act = act.max(bank.act + tm.rc);
+        }
+        act
+    }
+
     /// FR-FCFS: times one queued read of channel `c` (which must have one).
     fn schedule_one(&mut self, c: usize) {
         let ch = &self.channels[c];
@@ -492,6 +508,23 @@ impl Dram {
                 if ch.banks[q.bank as usize].open == q.row {
                     pick = i;
                     break;
+                }
+            }
+            if pick == 0 {
+                // No row hit: the read whose bank can activate first (first ready, as a
+                // cycle-level FR-FCFS issues whichever request's command is ready), the oldest
+                // among equals.
+                let mut best = self.act_ready(c, &oldest);
+                for i in 1..limit {
+                    let q = if i < front.len() { &front[i] } else { &back[i - front.len()] };
+                    if q.issue > decision {
+                        break;
+                    }
+                    let r = self.act_ready(c, q);
+                    if r < best {
+                        best = r;
+                        pick = i;
+                    }
                 }
             }
         }
