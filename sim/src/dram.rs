@@ -577,7 +577,45 @@ impl Dram {
             return;
         }
         self.stats.drains += 1;
-        q.sort_by_key(|&(b, r)| (b, r));
+        // First ready: repeatedly the write whose bank can take it first (row hits at once),
+        // so the activates of different banks interleave as a cycle-level scheduler issues them.
+        let mut order = Vec::with_capacity(q.len());
+        {
+            let tm = self.t;
+            let banks = &self.channels[c].banks;
+            let mut state: Vec<(u32, Ps, bool)> =
+                banks.iter().map(|b| (b.open, b.act, b.activated)).collect();
+            let mut left = q.clone();
+            while !left.is_empty() {
+                let ready = |&(b, r): &(u32, u32), st: &[(u32, Ps, bool)]| -> Ps {
+                    let (open, act, activated) = st[b as usize];
+                    if open == r {
+                        return 0;
+                    }
+                    let mut a = t;
+                    if open != CLOSED {
+                        a = a.max(act + tm.ras) + tm.rp;
+                    }
+                    if activated {
+                        a = a.max(act + tm.rc);
+                    }
+                    a
+                };
+                let (i, at) = left
+                    .iter()
+                    .enumerate()
+                    .map(|(i, w)| (i, ready(w, &state)))
+                    .min_by_key(|&(i, a)| (a, i))
+                    .expect("a write left");
+                let (b, r) = left.remove(i);
+                if state[b as usize].0 != r {
+                    state[b as usize] = (r, at.max(t), true);
+                }
+                order.push((b, r));
+            }
+        }
+        q.clear();
+        q.extend(order);
         // Writes go after the reads already scheduled, with the read-to-write turnaround after
         // the last read burst; banks work in parallel (the data bus orders the bursts).
         let tm = self.t;
