@@ -569,8 +569,11 @@ impl Dram {
     }
 
     fn drain(&mut self, t: Ps, c: usize) {
-        // The reads queued before the drain go first.
-        self.schedule_all(c);
+        // Write mode starts at `t`: the queued reads whose commands come before it are served,
+        // the others wait for the drain (a controller in write mode serves no reads).
+        while !self.channels[c].rq.is_empty() && self.channels[c].last_col < t {
+            self.schedule_one(c);
+        }
         let mut q = std::mem::take(&mut self.channels[c].wq);
         if q.is_empty() {
             self.channels[c].wq = q;
