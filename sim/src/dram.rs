@@ -553,7 +553,7 @@ impl Dram {
         let ch = &mut self.channels[c];
         ch.wq.push((b as u32, r));
         // Write mode: the queue is full, or no read is waiting (Ramulator's controller).
-        if ch.wq.len() >= self.write_queue || ch.rq.is_empty() {
+        if ch.wq.len() * 5 > self.write_queue * 4 || ch.rq.is_empty() {
             self.drain(t, c);
         }
     }
