@@ -409,7 +409,8 @@ pub struct DramConfig {
     pub n_refi: u64,
     /// All-bank refresh time.
     pub n_rfc: u64,
-    /// Posted writes per channel that trigger a write drain.
+    /// Write-queue entries per channel: more than 80% of them waiting trigger a write drain
+    /// (Ramulator's high watermark); `neo dram` also blocks a stream on a full queue.
     pub write_queue: u32,
     /// Read-queue entries per channel the scheduler looks at (FR-FCFS: the oldest row hit among
     /// them goes first); `0` serves reads strictly in issue order.

@@ -17,12 +17,14 @@
 //!   are timed when their arrival is needed ([`Dram::arrival`]). The scheduler looks at the
 //!   first `read_queue` queued reads that had been issued by its decision time (the later of the
 //!   oldest read's issue and the column command of the read it scheduled last) and serves the
-//!   oldest one that hits an open row, else the oldest; the oldest is bypassed at most
-//!   `bypass_cap` times. `read_queue = 0` serves reads in issue order, timed at once;
-//! - **writes** are posted: they return at once and wait in a per-channel queue; when it holds
-//!   `write_queue` requests they are drained together (grouped by bank and row) after the reads
-//!   already scheduled, paying the read-to-write turnaround once, and reads after the drain wait
-//!   for the write-to-read turnaround (`tWTR`), as a write-draining controller does;
+//!   oldest one that hits an open row, else the one whose bank can activate first (first
+//!   ready, the oldest among equals); the oldest is bypassed at most `bypass_cap` times.
+//!   `read_queue = 0` serves reads in issue order, timed at once;
+//! - **writes** are posted: they return at once and wait in a per-channel queue; when more than
+//!   80% of `write_queue` wait, or no read is queued, the channel enters write mode: the queued
+//!   reads whose commands come before it are served, then all posted writes drain (first ready,
+//!   banks in parallel, write data `tRTRS` after the last read burst), and the reads after the
+//!   drain wait for the write-to-read turnaround (`tWTR`), as Ramulator's controller does;
 //! - **refresh**: every `tREFI` each channel is blocked for `tRFCab` (after the data already
 //!   scheduled, as a controller may postpone refreshes) and all its rows close.
 //!
