@@ -63,8 +63,8 @@ fn simulate_refuses_a_latency_report_of_another_engine() {
 #[test]
 fn dram_runs_the_model_alone_on_a_request_stream() {
     let dir = tempfile::tempdir().unwrap();
-    // One channel's row (every 4th line), read twice: 64 misses/hits of one row, then a second
-    // row of the same bank (128 KB on) written.
+    // 16 lines of one channel's row (every 4th line), read twice, then 8 lines of another row of
+    // the same bank (128 KB on) written.
     let mut text = String::new();
     for _ in 0..2 {
         for k in 0..16u64 {
