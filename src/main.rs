@@ -37,6 +37,9 @@ enum Command {
     /// Run the cycle model (Neo, GSCore-style, GPU-style) on golden workloads; print or write
     /// per-point results.
     Simulate(commands::simulate::SimulateArgs),
+    /// Run the DRAM model alone on a request stream (`0xADDR R|W` lines); print bandwidth, mean
+    /// read latency and row hits, misses and conflicts.
+    Dram(commands::dram::DramArgs),
     /// Generate the Verilog of every unit (BSU, MSU+, sorting core, ITU, SCU), check it, report synthesis.
     Gen(commands::gen::GenArgs),
 }
@@ -52,6 +55,7 @@ fn main() -> ExitCode {
         Command::Frames(a) => commands::frames::run(a),
         Command::Report(a) => commands::report::run(a),
         Command::Simulate(a) => commands::simulate::run(a),
+        Command::Dram(a) => commands::dram::run(a),
         Command::Gen(a) => commands::gen::run(a),
     };
     match result {

@@ -61,6 +61,44 @@ fn simulate_refuses_a_latency_report_of_another_engine() {
 }
 
 #[test]
+fn dram_runs_the_model_alone_on_a_request_stream() {
+    let dir = tempfile::tempdir().unwrap();
+    // 16 lines of one channel's row (every 4th line), read twice, then 8 lines of another row of
+    // the same bank (128 KB on) written.
+    let mut text = String::new();
+    for _ in 0..2 {
+        for k in 0..16u64 {
+            text += &format!("0x{:08x} R\n", k * 256);
+        }
+    }
+    for k in 0..8u64 {
+        text += &format!("0x{:08x} W\n", (1 << 17) + k * 256);
+    }
+    let stream = dir.path().join("s.trace");
+    std::fs::write(&stream, &text).unwrap();
+    let v = json(&["dram", "--stream", stream.to_str().unwrap(), "--json"]);
+    assert_eq!(v["requests"], 40);
+    assert_eq!(v["reads"], 32);
+    assert_eq!(v["writes"], 8);
+    // The first read opens the row, the other 31 hit it; the first write closes it for another
+    // row (a conflict) and its 7 successors hit.
+    assert_eq!(v["row_misses"], 1);
+    assert_eq!(v["row_conflicts"], 1);
+    assert_eq!(v["row_hits"], 38);
+    let bw = v["bandwidth_gbs"].as_f64().unwrap();
+    assert!(bw > 0.0 && bw < 12.8, "one channel moves at most 12.8 GB/s: {bw}");
+    assert!(v["read_latency_avg_ns"].as_f64().unwrap() > 0.0);
+    let text_out = ok(&["dram", "--stream", stream.to_str().unwrap()]);
+    assert!(text_out.contains("bandwidth") && text_out.contains("row hits"), "{text_out}");
+
+    let bad = dir.path().join("bad.trace");
+    std::fs::write(&bad, "0x0 R\n0x40 Q\n").unwrap();
+    fails_cleanly(&["dram", "--stream", bad.to_str().unwrap()], &bad, ":2: request type 'Q'");
+    let missing = dir.path().join("missing.trace");
+    fails_cleanly(&["dram", "--stream", missing.to_str().unwrap()], &missing, "missing.trace");
+}
+
+#[test]
 fn synthetic_scene_survives_convert_and_reload() {
     let dir = tempfile::tempdir().unwrap();
     let spec = "synthetic:outdoor?gaussians=5k&seed=7&sh=1";

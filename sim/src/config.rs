@@ -364,13 +364,21 @@ pub struct DramConfig {
     /// Request size in bytes (64): every access moves whole requests.
     pub line_bytes: u32,
     /// Address mapping, most significant first: `RoBaCoCh` (row, bank, column, channel: lines
-    /// interleave over channels, consecutive lines of a channel share a row) or `RoCoBaCh`
-    /// (consecutive lines of a channel rotate over banks).
+    /// interleave over channels, consecutive lines of a channel share a row; Ramulator's default
+    /// `RoBaRaCoCh` with one rank, also accepted under that name) or `RoCoBaCh` (consecutive lines
+    /// of a channel rotate over banks).
     pub mapping: String,
+    /// XOR the bank index with the low row bits (permutation-based interleaving: streams whose
+    /// bases are aligned alike then fall into different banks). Ramulator's mapping does not
+    /// (`false`, the default).
+    pub bank_xor: bool,
     /// Clock period in picoseconds (LPDDR4-3200: 625).
     pub t_ck_ps: u64,
     /// Read latency (command to first data).
     pub n_cl: u64,
+    /// DQS output access time: added to every read's data return (Ramulator's
+    /// `read_latency = nCL + nDQSCK + nBL`), not to the data bus occupancy.
+    pub n_dqsck: u64,
     /// Write latency.
     pub n_cwl: u64,
     /// Activate to column command.
@@ -401,7 +409,8 @@ pub struct DramConfig {
     pub n_refi: u64,
     /// All-bank refresh time.
     pub n_rfc: u64,
-    /// Posted writes per channel that trigger a write drain.
+    /// Write-queue entries per channel: more than 80% of them waiting trigger a write drain
+    /// (Ramulator's high watermark); `neo dram` also blocks a stream on a full queue.
     pub write_queue: u32,
     /// Read-queue entries per channel the scheduler looks at (FR-FCFS: the oldest row hit among
     /// them goes first); `0` serves reads strictly in issue order.
@@ -422,8 +431,10 @@ impl Default for DramConfig {
             row_bytes: 4096,
             line_bytes: 64,
             mapping: "RoBaCoCh".into(),
+            bank_xor: false,
             t_ck_ps: 625,
             n_cl: 32,
+            n_dqsck: 3,
             n_cwl: 18,
             n_rcd: 29,
             n_rp: 27,
@@ -468,8 +479,11 @@ impl DramConfig {
         if self.row_bytes < self.line_bytes {
             return Err("dram.row_bytes must be at least dram.line_bytes".into());
         }
-        if self.mapping != "RoBaCoCh" && self.mapping != "RoCoBaCh" {
-            return Err(format!("dram.mapping '{}': expected RoBaCoCh or RoCoBaCh", self.mapping));
+        if !["RoBaCoCh", "RoBaRaCoCh", "RoCoBaCh"].contains(&self.mapping.as_str()) {
+            return Err(format!(
+                "dram.mapping '{}': expected RoBaCoCh (RoBaRaCoCh) or RoCoBaCh",
+                self.mapping
+            ));
         }
         if self.channel_bits == 0 || self.data_rate_mts == 0 || self.t_ck_ps == 0 {
             return Err("dram.channel_bits, data_rate_mts and t_ck_ps must be positive".into());

@@ -17,12 +17,14 @@
 //!   are timed when their arrival is needed ([`Dram::arrival`]). The scheduler looks at the
 //!   first `read_queue` queued reads that had been issued by its decision time (the later of the
 //!   oldest read's issue and the column command of the read it scheduled last) and serves the
-//!   oldest one that hits an open row, else the oldest; the oldest is bypassed at most
-//!   `bypass_cap` times. `read_queue = 0` serves reads in issue order, timed at once;
-//! - **writes** are posted: they return at once and wait in a per-channel queue; when it holds
-//!   `write_queue` requests they are drained together (grouped by bank and row) after the reads
-//!   already scheduled, paying the read-to-write turnaround once, and reads after the drain wait
-//!   for the write-to-read turnaround (`tWTR`), as a write-draining controller does;
+//!   oldest one that hits an open row, else the one whose bank can activate first (first
+//!   ready, the oldest among equals); the oldest is bypassed at most `bypass_cap` times.
+//!   `read_queue = 0` serves reads in issue order, timed at once;
+//! - **writes** are posted: they return at once and wait in a per-channel queue; when more than
+//!   80% of `write_queue` wait, or no read is queued, the channel enters write mode: the queued
+//!   reads whose commands come before it are served, then all posted writes drain (first ready,
+//!   banks in parallel, write data `tRTRS` after the last read burst), and the reads after the
+//!   drain wait for the write-to-read turnaround (`tWTR`), as Ramulator's controller does;
 //! - **refresh**: every `tREFI` each channel is blocked for `tRFCab` (after the data already
 //!   scheduled, as a controller may postpone refreshes) and all its rows close.
 //!
@@ -73,6 +75,10 @@ struct Channel {
     rq: std::collections::VecDeque<QueuedRead>,
     /// Column command of the read scheduled last (the scheduler's clock).
     last_col: Ps,
+    /// Latest end of a read burst.
+    read_end: Ps,
+    /// No write data before this (read-to-write turnaround).
+    write_floor: Ps,
 }
 
 /// A read waiting in a channel's queue.
@@ -217,6 +223,7 @@ fn bus_slot(busy: &std::collections::VecDeque<(Ps, Ps)>, ready: Ps, bl: Ps) -> (
 #[derive(Clone, Copy, Debug)]
 struct T {
     cl: Ps,
+    dqsck: Ps,
     cwl: Ps,
     rcd: Ps,
     rp: Ps,
@@ -242,6 +249,7 @@ pub struct Dram {
     bank_bits: u32,
     col_bits: u32,
     bank_first: bool,
+    bank_xor: bool,
     t: T,
     channels: Vec<Channel>,
     write_queue: usize,
@@ -253,6 +261,8 @@ pub struct Dram {
     ticket_channel: Vec<u32>,
     ideal: Option<Ps>,
     stats: DramStats,
+    /// `(channel, command time)` of every write drained, when logging ([`Dram::log_writes`]).
+    write_log: Option<Vec<(u32, Ps)>>,
 }
 
 impl Dram {
@@ -261,6 +271,7 @@ impl Dram {
         let ck = cfg.t_ck_ps;
         let t = T {
             cl: cfg.n_cl * ck,
+            dqsck: cfg.n_dqsck * ck,
             cwl: cfg.n_cwl * ck,
             rcd: cfg.n_rcd * ck,
             rp: cfg.n_rp * ck,
@@ -290,6 +301,8 @@ impl Dram {
                 wq: Vec::with_capacity(cfg.write_queue as usize),
                 rq: std::collections::VecDeque::new(),
                 last_col: 0,
+                read_end: 0,
+                write_floor: 0,
             })
             .collect();
         Dram {
@@ -298,6 +311,7 @@ impl Dram {
             bank_bits: cfg.banks.trailing_zeros(),
             col_bits: (cfg.row_bytes / cfg.line_bytes).trailing_zeros(),
             bank_first: cfg.mapping == "RoCoBaCh",
+            bank_xor: cfg.bank_xor,
             t,
             channels,
             write_queue: cfg.write_queue as usize,
@@ -308,6 +322,7 @@ impl Dram {
             ticket_channel: Vec::new(),
             ideal: None,
             stats: DramStats::default(),
+            write_log: None,
         }
     }
 
@@ -329,9 +344,9 @@ impl Dram {
         self.stats
     }
 
-    /// `(channel, bank, row)` of the line holding byte `addr`. The bank index is XORed with the
-    /// low row bits (permutation-based interleaving, as memory controllers do), so streams whose
-    /// bases are aligned alike do not all fall into the same bank.
+    /// `(channel, bank, row)` of the line holding byte `addr`. With `bank_xor` the bank index is
+    /// XORed with the low row bits (permutation-based interleaving, as many memory controllers
+    /// do), so streams whose bases are aligned alike do not all fall into the same bank.
     pub fn map(&self, addr: u64) -> (usize, usize, u32) {
         let line = addr >> self.line_shift;
         let ch = (line & ((1 << self.ch_bits) - 1)) as usize;
@@ -344,7 +359,8 @@ impl Dram {
             let r = rest >> self.col_bits;
             (r & mask, r >> self.bank_bits)
         };
-        (ch, (bank ^ (row & mask)) as usize, row as u32)
+        let bank = if self.bank_xor { bank ^ (row & mask) } else { bank };
+        (ch, bank as usize, row as u32)
     }
 
     /// Reads the line holding `addr`, issued at `t`; returns when its data has arrived (the
@@ -376,7 +392,7 @@ impl Dram {
         let (c, b, r) = self.map(addr);
         self.ticket_channel[ticket as usize] = c as u32;
         if self.read_queue == 0 {
-            let done = self.access(t, t, c, b, r, false);
+            let done = self.access(t, t, c, b, r, false) + self.t.dqsck;
             self.stats.read_latency_ps += done - t;
             self.arrivals[ticket as usize] = done;
         } else {
@@ -413,11 +429,68 @@ impl Dram {
         self.free_tickets.push(ticket.0);
     }
 
+    /// Serves one queued read of channel `c` (the one the scheduler picks next); false when
+    /// none is queued.
+    pub fn schedule_next(&mut self, c: usize) -> bool {
+        if self.channels[c].rq.is_empty() {
+            return false;
+        }
+        self.schedule_one(c);
+        true
+    }
+
+    /// The data time of `ticket` if it is already scheduled (without scheduling anything).
+    pub fn scheduled(&self, ticket: Ticket) -> Option<Ps> {
+        let a = self.arrivals[ticket.0 as usize];
+        (a != PENDING).then_some(a)
+    }
+
+    /// When the read command of a read whose data arrives at `arrival` was issued.
+    pub fn read_command_time(&self, arrival: Ps) -> Ps {
+        arrival - self.t.dqsck - self.t.bl - self.t.cl
+    }
+
+    /// Writes posted to channel `c` and not yet drained.
+    pub fn posted_writes(&self, c: usize) -> usize {
+        self.channels[c].wq.len()
+    }
+
+    /// Drains the posted writes of channel `c` at `t` (after its queued reads).
+    pub fn drain_channel(&mut self, t: Ps, c: usize) {
+        self.drain(t, c);
+    }
+
+    /// Starts recording the command time of every drained write ([`Dram::take_write_log`]).
+    pub fn log_writes(&mut self) {
+        self.write_log.get_or_insert_with(Vec::new);
+    }
+
+    /// The `(channel, command time)` of the writes drained since the last call.
+    pub fn take_write_log(&mut self) -> Vec<(u32, Ps)> {
+        self.write_log.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
     /// Serves every queued read of channel `c`.
     fn schedule_all(&mut self, c: usize) {
         while !self.channels[c].rq.is_empty() {
             self.schedule_one(c);
         }
+    }
+
+    /// The earliest activate of queued read `q` on channel `c` as far as its bank allows
+    /// (precharge of another open row, `tRP`, `tRC`).
+    fn act_ready(&self, c: usize, q: &QueuedRead) -> Ps {
+        let tm = self.t;
+        let bank = &self.channels[c].banks[q.bank as usize];
+        let mut act = q.issue;
+        if bank.open != CLOSED {
+            let pre = act.max(bank.act + tm.ras).max(bank.rd_col + tm.rtp).max(bank.wr_end + tm.wr);
+            act = pre + tm.rp;
+        }
+        if bank.activated {
+            act = act.max(bank.act + tm.rc);
+        }
+        act
     }
 
     /// FR-FCFS: times one queued read of channel `c` (which must have one).
@@ -439,6 +512,23 @@ impl Dram {
                     break;
                 }
             }
+            if pick == 0 {
+                // No row hit: the read whose bank can activate first (first ready, as a
+                // cycle-level FR-FCFS issues whichever request's command is ready), the oldest
+                // among equals.
+                let mut best = self.act_ready(c, &oldest);
+                for i in 1..limit {
+                    let q = if i < front.len() { &front[i] } else { &back[i - front.len()] };
+                    if q.issue > decision {
+                        break;
+                    }
+                    let r = self.act_ready(c, q);
+                    if r < best {
+                        best = r;
+                        pick = i;
+                    }
+                }
+            }
         }
         let ch = &mut self.channels[c];
         let q = ch.rq.remove(pick).expect("a queued read");
@@ -447,9 +537,10 @@ impl Dram {
             self.stats.reordered += 1;
         }
         let horizon = ch.rq.front().map_or(q.issue, |o| o.issue.min(q.issue));
-        let done = self.access(q.issue, horizon, c, q.bank as usize, q.row, false);
+        let end = self.access(q.issue, horizon, c, q.bank as usize, q.row, false);
         let ch = &mut self.channels[c];
-        ch.last_col = ch.last_col.max(done - self.t.bl - self.t.cl);
+        ch.last_col = ch.last_col.max(end - self.t.bl - self.t.cl);
+        let done = end + self.t.dqsck;
         self.stats.read_latency_ps += done - q.issue;
         self.arrivals[q.ticket as usize] = done;
     }
@@ -461,8 +552,10 @@ impl Dram {
             return;
         }
         let (c, b, r) = self.map(addr);
-        self.channels[c].wq.push((b as u32, r));
-        if self.channels[c].wq.len() >= self.write_queue {
+        let ch = &mut self.channels[c];
+        ch.wq.push((b as u32, r));
+        // Write mode: the queue is full, or no read is waiting (Ramulator's controller).
+        if ch.wq.len() * 5 > self.write_queue * 4 || ch.rq.is_empty() {
             self.drain(t, c);
         }
     }
@@ -478,29 +571,74 @@ impl Dram {
     }
 
     fn drain(&mut self, t: Ps, c: usize) {
-        // The reads queued before the drain go first.
-        self.schedule_all(c);
+        // Write mode starts at `t`: the queued reads whose commands come before it are served,
+        // the others wait for the drain (a controller in write mode serves no reads).
+        while !self.channels[c].rq.is_empty() && self.channels[c].last_col < t {
+            self.schedule_one(c);
+        }
         let mut q = std::mem::take(&mut self.channels[c].wq);
         if q.is_empty() {
             self.channels[c].wq = q;
             return;
         }
         self.stats.drains += 1;
-        q.sort_by_key(|&(b, r)| (b, r));
-        // Writes go after the reads already scheduled, with one read-to-write turnaround.
+        // First ready: repeatedly the write whose bank can take it first (row hits at once),
+        // so the activates of different banks interleave as a cycle-level scheduler issues them.
+        let mut order = Vec::with_capacity(q.len());
+        {
+            let tm = self.t;
+            let banks = &self.channels[c].banks;
+            let mut state: Vec<(u32, Ps, bool)> =
+                banks.iter().map(|b| (b.open, b.act, b.activated)).collect();
+            let mut left = q.clone();
+            while !left.is_empty() {
+                let ready = |&(b, r): &(u32, u32), st: &[(u32, Ps, bool)]| -> Ps {
+                    let (open, act, activated) = st[b as usize];
+                    if open == r {
+                        return 0;
+                    }
+                    let mut a = t;
+                    if open != CLOSED {
+                        a = a.max(act + tm.ras) + tm.rp;
+                    }
+                    if activated {
+                        a = a.max(act + tm.rc);
+                    }
+                    a
+                };
+                let (i, at) = left
+                    .iter()
+                    .enumerate()
+                    .map(|(i, w)| (i, ready(w, &state)))
+                    .min_by_key(|&(i, a)| (a, i))
+                    .expect("a write left");
+                let (b, r) = left.remove(i);
+                if state[b as usize].0 != r {
+                    state[b as usize] = (r, at.max(t), true);
+                }
+                order.push((b, r));
+            }
+        }
+        q.clear();
+        q.extend(order);
+        // Writes go after the reads already scheduled, with the read-to-write turnaround after
+        // the last read burst; banks work in parallel (the data bus orders the bursts).
         let tm = self.t;
         {
             let ch = &mut self.channels[c];
-            let start = t.max(ch.bus_free) + (tm.cl + tm.bl + tm.rtrs).saturating_sub(tm.cwl);
-            ch.floor = ch.floor.max(start);
+            ch.write_floor = ch.write_floor.max(t.max(ch.read_end + tm.rtrs));
         }
         let mut end = 0;
         for &(b, r) in &q {
-            end = self.access(t, t, c, b as usize, r, true);
-            self.channels[c].floor = end;
+            let e = self.access(t, t, c, b as usize, r, true);
+            end = end.max(e);
+            if let Some(log) = self.write_log.as_mut() {
+                log.push((c as u32, e - tm.bl - tm.cwl));
+            }
         }
         // Reads wait for the write-to-read turnaround.
-        self.channels[c].floor = end + tm.wtr + tm.cl;
+        let ch = &mut self.channels[c];
+        ch.floor = ch.floor.max(end + tm.wtr + tm.cl);
         q.clear();
         self.channels[c].wq = q;
     }
@@ -554,7 +692,7 @@ impl Dram {
             act + tm.rcd
         };
         let lat = if write { tm.cwl } else { tm.cl };
-        let ready = (col_ready + lat).max(ch.floor);
+        let ready = (col_ready + lat).max(if write { ch.write_floor } else { ch.floor });
         // Earliest free burst slot at or after `ready`. Busy blocks are merged when the gap
         // between them is shorter than a burst, so a saturated bus is one block.
         while ch.busy.front().is_some_and(|&(_, e)| e <= horizon) {
@@ -582,6 +720,7 @@ impl Dram {
             bank.wr_end = bank.wr_end.max(end);
         } else {
             bank.rd_col = bank.rd_col.max(col);
+            ch.read_end = ch.read_end.max(end);
         }
         self.stats.last_data_ps = self.stats.last_data_ps.max(end);
         end
@@ -622,9 +761,13 @@ mod tests {
         assert_eq!(d.map(4 * 64), (0, 0, 0));
         // 4 channels x 4 KB rows: the next bank after 16 KB, the next row after 128 KB.
         assert_eq!(d.map(16 * 1024), (0, 1, 0));
-        // Row 1 of bank 0 is XORed onto bank 1.
-        assert_eq!(d.map(128 * 1024), (0, 1, 1));
-        assert_eq!(d.map(128 * 1024 + 16 * 1024), (0, 0, 1));
+        // Ramulator's RoBaRaCoCh: row 1 of bank 0 after 128 KB.
+        assert_eq!(d.map(128 * 1024), (0, 0, 1));
+        assert_eq!(d.map(128 * 1024 + 16 * 1024), (0, 1, 1));
+        // With the bank XOR, row 1 of bank 0 is XORed onto bank 1.
+        let x = Dram::new(&DramConfig { bank_xor: true, ..DramConfig::default() });
+        assert_eq!(x.map(128 * 1024), (0, 1, 1));
+        assert_eq!(x.map(128 * 1024 + 16 * 1024), (0, 0, 1));
     }
 
     #[test]
@@ -831,11 +974,29 @@ mod tests {
     #[test]
     fn writes_are_posted_and_drained() {
         let mut d = Dram::new(&DramConfig::default());
-        for i in 0..400u64 {
+        // No read waits: every write drains at once (write mode).
+        for i in 0..8u64 {
             d.write(i, i * 64);
         }
-        // 100 writes per channel, drained every 32.
-        assert_eq!(d.stats().drains, 12);
+        assert_eq!(d.stats().drains, 8);
+        let mut d = Dram::new(&DramConfig::default());
+        // A read waits in every channel: writes are posted until more than 80% of 32 wait.
+        let waiting: Vec<Ticket> = (0..4u64).map(|c| d.submit_read(0, (1 << 20) + c * 64)).collect();
+        for i in 0..100u64 {
+            d.write(i, i * 64);
+        }
+        assert_eq!(d.stats().drains, 0, "25 writes per channel are posted");
+        for i in 100..104u64 {
+            d.write(i, i * 64);
+        }
+        assert_eq!(d.stats().drains, 4, "the 26th (above 80% of 32) drains, after the waiting read");
+        for k in waiting {
+            assert!(d.scheduled(k).is_some());
+            d.release(k);
+        }
+        for i in 104..400u64 {
+            d.write(i, i * 64);
+        }
         let end = d.flush(1000);
         assert!(end > 100 * 5000, "100 bursts of 5 ns per channel: {end}");
         assert_eq!(d.stats().writes, 400);

@@ -10,6 +10,7 @@
 pub mod arch;
 pub mod config;
 pub mod dram;
+pub mod dram_stream;
 pub mod driver;
 pub mod engine;
 pub mod gpu;

@@ -139,8 +139,8 @@ fn identical_independent_tiles_scale_with_the_core_count() {
         let want = one / cores as f64;
         assert!((c - want).abs() / want < 2e-3, "{cores} cores: {c} cycles, expected {want}");
     }
-    // With the DRAM model more cores help until memory binds (here by 4 cores), never more than
-    // linearly; past that point more interleaved streams cost some row hits but no collapse.
+    // With the DRAM model more cores help, never more than linearly, and sublinearly once
+    // memory binds; more interleaved streams cost some row hits but never a collapse.
     let real: Vec<f64> = [1u32, 2, 4, 8, 16]
         .iter()
         .map(|&cores| {
@@ -151,8 +151,8 @@ fn identical_independent_tiles_scale_with_the_core_count() {
         .collect();
     assert!(real[1] < real[0] && real[2] < real[1], "1, 2, 4 cores: {real:?}");
     assert!(real[0] / real[2] > 2.0, "4 cores at least twice as fast as one: {real:?}");
-    let best = real.iter().copied().fold(f64::INFINITY, f64::min);
-    assert!(real.iter().skip(2).all(|&c| c < 1.15 * best), "no collapse past saturation: {real:?}");
+    assert!(real.windows(2).all(|w| w[1] < 1.15 * w[0]), "no collapse with more cores: {real:?}");
+    assert!(real[0] / real[4] < 12.0, "16 cores are memory-bound, well short of 16x: {real:?}");
     for (k, &c) in real.iter().enumerate() {
         assert!(real[0] / c <= (1u32 << k) as f64 + 1e-9, "{} cores faster than linear: {real:?}", 1 << k);
     }

@@ -1,0 +1,319 @@
+//! Request streams in Ramulator's DRAM-trace format, and a driver that feeds one to [`Dram`]
+//! the way Ramulator's `--mode=dram` does (docs/cycle-model.md, "DRAM model against Ramulator").
+//!
+//! # Format
+//! One request per line: a hexadecimal byte address (optional leading blanks, optional `0x`),
+//! one separator character, then the first non-blank character decides the type: `R` or nothing
+//! is a read, `W` a write (Ramulator's `Trace::get_dramtrace_request`). Anything else is an
+//! error naming the file and the line.
+//!
+//! # Feeding semantics (Ramulator's `run_dramtrace`)
+//! - requests enter in file order, at most one per DRAM clock;
+//! - a request waits while its channel's queue of its type holds `read_queue` (reads) or
+//!   `write_queue` (writes) requests, and nothing behind it enters meanwhile (head-of-line
+//!   blocking across channels); a read leaves its queue at its read command, a write at its
+//!   write command;
+//! - after the last request the posted writes are drained; the run ends when the last read's
+//!   data has returned and the last write command has issued;
+//! - a read's latency runs from its entry to its data return; bandwidth is all bytes moved
+//!   over the run's time.
+
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, VecDeque};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::DramConfig;
+use crate::dram::{Dram, Ps, Ticket};
+
+/// One request of a stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StreamRequest {
+    /// Byte address.
+    pub addr: u64,
+    /// A write (else a read).
+    pub write: bool,
+}
+
+/// A malformed stream: the file, the 1-based line (0 when the file cannot be read) and why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StreamError {
+    /// The stream file.
+    pub path: PathBuf,
+    /// 1-based line number, 0 for the whole file.
+    pub line: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for StreamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line == 0 {
+            write!(f, "{}: {}", self.path.display(), self.message)
+        } else {
+            write!(f, "{}:{}: {}", self.path.display(), self.line, self.message)
+        }
+    }
+}
+
+impl std::error::Error for StreamError {}
+
+/// Parses one line (without its newline).
+pub fn parse_line(line: &str) -> Result<StreamRequest, String> {
+    let s = line.trim_start_matches([' ', '\t']);
+    let digits = s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")).unwrap_or(s);
+    let n = digits.bytes().take_while(u8::is_ascii_hexdigit).count();
+    if n == 0 {
+        return Err(format!("expected a hexadecimal address, found {:?}", truncate(line)));
+    }
+    let addr = u64::from_str_radix(&digits[..n], 16)
+        .map_err(|_| format!("address {} does not fit in 64 bits", &digits[..n]))?;
+    // One separator after the address, then the first non-blank character decides the type.
+    let rest = &digits[n..];
+    let mut chars = rest.chars();
+    chars.next();
+    let write = match chars.as_str().trim_start_matches(' ').chars().next() {
+        None | Some('R') => false,
+        Some('W') => true,
+        Some(c) => return Err(format!("request type {c:?}: expected R or W")),
+    };
+    Ok(StreamRequest { addr, write })
+}
+
+fn truncate(s: &str) -> String {
+    s.chars().take(40).collect()
+}
+
+/// Parses a whole stream; `path` names it in errors.
+pub fn parse_stream(text: &str, path: &Path) -> Result<Vec<StreamRequest>, StreamError> {
+    let mut out = Vec::with_capacity(text.len() / 13);
+    for (i, line) in text.lines().enumerate() {
+        let req = parse_line(line).map_err(|message| StreamError {
+            path: path.to_path_buf(),
+            line: i + 1,
+            message,
+        })?;
+        out.push(req);
+    }
+    Ok(out)
+}
+
+/// Reads and parses a stream file.
+pub fn read_stream(path: &Path) -> Result<Vec<StreamRequest>, StreamError> {
+    let text = std::fs::read_to_string(path).map_err(|e| StreamError {
+        path: path.to_path_buf(),
+        line: 0,
+        message: e.to_string(),
+    })?;
+    parse_stream(&text, path)
+}
+
+/// The figures of one stream run, in Ramulator's terms.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StreamRun {
+    /// Requests.
+    pub requests: u64,
+    /// Reads.
+    pub reads: u64,
+    /// Writes.
+    pub writes: u64,
+    /// DRAM clocks from the first request's entry to the end (Ramulator's `dram_cycles`).
+    pub dram_cycles: u64,
+    /// Bytes moved (`line_bytes` per request).
+    pub bytes: u64,
+    /// Bytes per nanosecond over the run (GB/s, GB = 1e9 B).
+    pub bandwidth_gbs: f64,
+    /// Mean read latency from entry to data return, in DRAM clocks (`None` without reads).
+    pub read_latency_avg_cycles: Option<f64>,
+    /// The same in nanoseconds.
+    pub read_latency_avg_ns: Option<f64>,
+    /// Requests that found their row open.
+    pub row_hits: u64,
+    /// Requests that found their bank closed.
+    pub row_misses: u64,
+    /// Requests that found another row open.
+    pub row_conflicts: u64,
+}
+
+impl StreamRun {
+    /// Row hits over requests.
+    pub fn row_hit_rate(&self) -> f64 {
+        let n = self.row_hits + self.row_misses + self.row_conflicts;
+        if n == 0 {
+            0.0
+        } else {
+            self.row_hits as f64 / n as f64
+        }
+    }
+}
+
+/// Per-channel queue occupancy as the feeder sees it.
+#[derive(Default)]
+struct Occupancy {
+    /// Reads submitted and not yet scheduled by the model.
+    unscheduled: VecDeque<Ticket>,
+    /// Command times of scheduled reads that may still hold a queue entry.
+    reads: BinaryHeap<Reverse<Ps>>,
+    /// Command times of drained writes that may still hold a queue entry.
+    writes: BinaryHeap<Reverse<Ps>>,
+}
+
+impl Occupancy {
+    /// Drops the entries whose command issued before `t` (freed for an entry at `t`).
+    fn expire(&mut self, t: Ps) {
+        while self.reads.peek().is_some_and(|r| r.0 < t) {
+            self.reads.pop();
+        }
+        while self.writes.peek().is_some_and(|r| r.0 < t) {
+            self.writes.pop();
+        }
+    }
+}
+
+/// Moves the reads of `o` the model has scheduled (by a drain, a refresh or the feeder) to the
+/// command-time heap.
+fn sweep(d: &Dram, o: &mut Occupancy) {
+    let mut i = 0;
+    while i < o.unscheduled.len() {
+        match d.scheduled(o.unscheduled[i]) {
+            Some(a) => {
+                o.reads.push(Reverse(d.read_command_time(a)));
+                o.unscheduled.remove(i);
+            }
+            None => i += 1,
+        }
+    }
+}
+
+/// Runs `reqs` through the DRAM model of `cfg` under Ramulator's trace-mode feeding semantics.
+pub fn run_stream(cfg: &DramConfig, reqs: &[StreamRequest]) -> StreamRun {
+    let ck = cfg.t_ck_ps;
+    let mut d = Dram::new(cfg);
+    d.log_writes();
+    let nch = cfg.channels as usize;
+    let rcap = cfg.read_queue.max(1) as usize;
+    let wcap = cfg.write_queue as usize;
+    let mut occ: Vec<Occupancy> = (0..nch).map(|_| Occupancy::default()).collect();
+    let mut end: Ps = 0;
+    let mut t: Ps = 0;
+    let mut all_reads: Vec<Ticket> = Vec::new();
+    let collect_writes = |d: &mut Dram, occ: &mut [Occupancy], end: &mut Ps| {
+        for (c, cmd) in d.take_write_log() {
+            occ[c as usize].writes.push(Reverse(cmd));
+            *end = (*end).max(cmd + ck);
+        }
+    };
+    for r in reqs {
+        let (c, _, _) = d.map(r.addr);
+        if r.write {
+            loop {
+                occ[c].expire(t);
+                if d.posted_writes(c) + occ[c].writes.len() < wcap {
+                    break;
+                }
+                if occ[c].writes.is_empty() {
+                    d.drain_channel(t, c);
+                    collect_writes(&mut d, &mut occ, &mut end);
+                    continue;
+                }
+                let first = occ[c].writes.peek().expect("a queued write").0;
+                t = t.max(first + 1);
+            }
+            d.write(t, r.addr);
+            collect_writes(&mut d, &mut occ, &mut end);
+        } else {
+            loop {
+                sweep(&d, &mut occ[c]);
+                occ[c].expire(t);
+                if occ[c].unscheduled.len() + occ[c].reads.len() < rcap {
+                    break;
+                }
+                // The queue is full: the model schedules its next read (it sees every read
+                // that can enter before an entry frees), whose command frees one.
+                d.schedule_next(c);
+                sweep(&d, &mut occ[c]);
+                let first = occ[c].reads.peek().expect("a scheduled read").0;
+                t = t.max(first + 1);
+            }
+            let k = d.submit_read(t, r.addr);
+            occ[c].unscheduled.push_back(k);
+            all_reads.push(k);
+        }
+        // The next request enters one clock later at the earliest.
+        t = (t / ck + 1) * ck;
+    }
+    for k in all_reads {
+        end = end.max(d.arrival(k));
+    }
+    let last = t;
+    d.flush(last);
+    collect_writes(&mut d, &mut occ, &mut end);
+    let s = d.stats();
+    let n = reqs.len() as u64;
+    let bytes = n * cfg.line_bytes as u64;
+    let dram_cycles = end.div_ceil(ck).max(1);
+    let time_ns = dram_cycles as f64 * ck as f64 / 1000.0;
+    let lat_ns = (s.reads > 0).then(|| s.read_latency_ps as f64 / s.reads as f64 / 1000.0);
+    StreamRun {
+        requests: n,
+        reads: s.reads,
+        writes: s.writes,
+        dram_cycles,
+        bytes,
+        bandwidth_gbs: bytes as f64 / time_ns,
+        read_latency_avg_cycles: lat_ns.map(|l| l * 1000.0 / ck as f64),
+        read_latency_avg_ns: lat_ns,
+        row_hits: s.row_hits,
+        row_misses: s.row_misses,
+        row_conflicts: s.row_conflicts,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_follow_ramulators_reading_rules() {
+        let r = |s: &str| parse_line(s).unwrap();
+        assert_eq!(r("0x00000040 R"), StreamRequest { addr: 64, write: false });
+        assert_eq!(r("0x10000000 W"), StreamRequest { addr: 1 << 28, write: true });
+        assert_eq!(r("ff"), StreamRequest { addr: 255, write: false });
+        assert_eq!(r("0x80 "), StreamRequest { addr: 128, write: false });
+        assert_eq!(r("0x80    W"), StreamRequest { addr: 128, write: true });
+        assert_eq!(r("  0X80,W"), StreamRequest { addr: 128, write: true });
+        assert!(parse_line("").unwrap_err().contains("hexadecimal"));
+        assert!(parse_line("R 0x40").unwrap_err().contains("hexadecimal"));
+        assert!(parse_line("0x40 X").unwrap_err().contains("expected R or W"));
+        assert!(parse_line("0x1ffffffffffffffff R").unwrap_err().contains("64 bits"));
+    }
+
+    #[test]
+    fn errors_name_the_file_and_line() {
+        let e = parse_stream("0x0 R\n0x40 W\nzz\n", Path::new("s.trace")).unwrap_err();
+        assert_eq!(e.line, 3);
+        assert!(e.to_string().starts_with("s.trace:3: "), "{e}");
+    }
+
+    #[test]
+    fn reads_enter_one_per_clock_and_wait_for_a_full_queue() {
+        let cfg = DramConfig::default();
+        // 4 reads, one per channel, of closed banks: each takes RCD + CL + DQSCK + BL.
+        let reqs: Vec<_> = (0..4).map(|i| StreamRequest { addr: i * 64, write: false }).collect();
+        let run = run_stream(&cfg, &reqs);
+        let miss = cfg.n_rcd + cfg.n_cl + cfg.n_dqsck + cfg.n_bl;
+        assert_eq!(run.row_misses, 4);
+        // The last enters at clock 3 and is not slowed by the others (other channels).
+        assert_eq!(run.dram_cycles, 3 + miss);
+        assert_eq!(run.read_latency_avg_cycles, Some(miss as f64));
+        // 64 reads of one channel's open row: the 32-entry queue fills, so later reads wait
+        // to enter, and one burst per BL clocks leaves.
+        let reqs: Vec<_> = (0..64).map(|i| StreamRequest { addr: i * 256, write: false }).collect();
+        let run = run_stream(&cfg, &reqs);
+        assert_eq!(run.row_hits, 63);
+        let bus = 64 * cfg.n_bl;
+        assert!(run.dram_cycles >= bus && run.dram_cycles < bus + miss + 8, "{run:?}");
+    }
+}
