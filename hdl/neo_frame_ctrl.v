@@ -274,7 +274,7 @@ module neo_frame_ctrl (
   assign scratch_entry = {3'd0, scratch_base_i[31:3]};
   assign job_scratch_o = {scratch_entry + 32'd1966080, scratch_entry + 32'd1835008, scratch_entry + 32'd1703936, scratch_entry + 32'd1572864, scratch_entry + 32'd1441792, scratch_entry + 32'd1310720, scratch_entry + 32'd1179648, scratch_entry + 32'd1048576, scratch_entry + 32'd917504, scratch_entry + 32'd786432, scratch_entry + 32'd655360, scratch_entry + 32'd524288, scratch_entry + 32'd393216, scratch_entry + 32'd262144, scratch_entry + 32'd131072, scratch_entry + 32'd0};
   assign ev_tile_sorted_o = job_fire;
-  assign ev_entries_sorted_o = d_ein;
+  assign ev_entries_sorted_o = job_fire ? d_ein : 33'd0;
   // Per sequencer: the tile it sorts (index, tile_x, tile_y, next).
   reg  [31:0] seq_t [0:15];
   reg  [9:0] seq_x [0:15];

@@ -5,7 +5,7 @@ module neo_perf_counter (
   input  wire        clk_i,    // clock
   input  wire        rst_ni,   // asynchronous reset, active low
   input  wire        clear_i,  // restart the count (the frame's start)
-  input  wire [15:0] inc_i,    // amount added this cycle
+  input  wire [31:0] inc_i,    // amount added this cycle
   output wire [63:0] count_o   // the count after the last rising edge
 );
 
@@ -13,7 +13,7 @@ module neo_perf_counter (
   wire [63:0] base;
   assign base = clear_i ? 64'd0 : count_q;
   wire [63:0] count_d;
-  assign count_d = base + {48'd0, inc_i};
+  assign count_d = base + {32'd0, inc_i};
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       count_q <= 64'd0;

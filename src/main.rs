@@ -40,6 +40,9 @@ enum Command {
     /// Run the DRAM model alone on a request stream (`0xADDR R|W` lines); print bandwidth, mean
     /// read latency and row hits, misses and conflicts.
     Dram(commands::dram::DramArgs),
+    /// Run the verilated engine (neo_engine) on a scene, frame by frame, bit-exact against the
+    /// golden model.
+    Cosim(commands::cosim::CosimArgs),
     /// Generate the Verilog of every unit (BSU, MSU+, sorting core, ITU, SCU), check it, report synthesis.
     Gen(commands::gen::GenArgs),
 }
@@ -57,6 +60,7 @@ fn main() -> ExitCode {
         Command::Simulate(a) => commands::simulate::run(a),
         Command::Dram(a) => commands::dram::run(a),
         Command::Gen(a) => commands::gen::run(a),
+        Command::Cosim(a) => commands::cosim::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

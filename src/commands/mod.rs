@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod compare;
+pub mod cosim;
 pub mod dram;
 pub mod frames;
 pub mod gen;

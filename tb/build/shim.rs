@@ -128,6 +128,7 @@ pub fn cpp(iface: &ModuleInterface) -> String {
 /// `neo_T_get_port(void*, size_t index, uint32_t* words, size_t n)`: every port by its index in
 /// the interface (little-endian 32-bit words; setting an output or an unknown index does
 /// nothing), for callers that bind ports at run time (`neo_tb::dynmodel`).
+#[allow(dead_code)] // used by neo_tb::dynmodel, not by build.rs
 pub fn cpp_by_index(s: &mut String, iface: &ModuleInterface) {
     let t = &iface.name;
     s.push_str("extern \"C\" {\n\n");

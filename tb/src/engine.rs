@@ -48,17 +48,28 @@ pub struct EngineModel {
 
 impl EngineModel {
     /// Generates `neo_engine` for `cfg`, verilates and compiles it (or finds it in the cache).
+    /// With `NEO_HDL_DIR=DIR` (mutation testing) the files of the same names are read from `DIR`
+    /// instead, as the static models do.
     pub fn build(cfg: &EngineConfig) -> Result<EngineModel, String> {
         cfg.validate().map_err(|e| e.to_string())?;
-        let files: Vec<(String, String)> =
+        let mut files: Vec<(String, String)> =
             neo_gen::files_for(cfg, TOP).into_iter().map(|f| (f.file_name(), f.text)).collect();
+        let mut vlt = LINT_VLT.to_string();
+        if let Some(dir) = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()).map(PathBuf::from) {
+            for (name, text) in &mut files {
+                let p = dir.join(&*name);
+                *text =
+                    std::fs::read_to_string(&p).map_err(|e| format!("NEO_HDL_DIR: {}: {e}", p.display()))?;
+            }
+            vlt = std::fs::read_to_string(dir.join("lint.vlt")).unwrap_or(vlt);
+        }
         let iface = neo_gen::units::modules(cfg)
             .map_err(|e| e.to_string())?
             .into_iter()
             .find(|m| m.name == TOP)
             .ok_or("the generator emits no neo_engine")?
             .interface();
-        let (model, build) = DynModel::build(&iface, &files, Some(LINT_VLT))?;
+        let (model, build) = DynModel::build(&iface, &files, Some(&vlt))?;
         Ok(EngineModel { cfg: cfg.clone(), model, build })
     }
 }

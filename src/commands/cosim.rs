@@ -1,0 +1,194 @@
+//! `neo cosim`: the verilated `neo_engine` on a user's scene, frame by frame, checked bit-exactly
+//! against the golden model (frame buffer, next tables, results, registers, golden counters).
+//!
+//! The engine of the configuration is generated, verilated and compiled on first use and cached
+//! by content hash (`neo_tb::dynmodel`); the golden host session writes each frame's inputs into
+//! the harness's AXI memory.
+
+use crate::args::{SceneArg, StrictArg, TrajectoryArg};
+use anyhow::{anyhow, bail, Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use neo_golden::engine::{EngineConfig, EngineSession};
+use neo_golden::trajectory::{parse_resolution, parse_trajectory};
+use neo_golden::{source, trajectory::Trajectory};
+use neo_tb::axi::AxiTiming;
+use neo_tb::engine::{EngineModel, EngineRig, FrameReport, RunOptions};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// Arguments of `neo cosim`.
+#[derive(Args)]
+pub struct CosimArgs {
+    #[command(flatten)]
+    pub scene: SceneArg,
+    #[command(flatten)]
+    pub trajectory: TrajectoryArg,
+    /// Frames to run.
+    #[arg(long, default_value_t = 3)]
+    pub frames: usize,
+    /// Resolution `WxH` (or `hd`, `fhd`, `qhd`).
+    #[arg(long, default_value = "256x256", value_parser = parse_resolution)]
+    pub res: (u32, u32),
+    /// Engine configuration (the JSON `neo gen --config` takes); default: the paper's 16 + 4
+    /// engine (its first build takes several minutes).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Memory timing of the harness: `random` (latency, 3/4 bandwidth, random delays,
+    /// reordering across IDs) or `ideal` (one cycle, full bandwidth, in order).
+    #[arg(long, default_value = "random")]
+    pub memory: String,
+    /// Seed of the harness's random timing (default: from the clock; printed).
+    #[arg(long)]
+    pub seed: Option<String>,
+    /// Write a VCD of the whole run to this path.
+    #[arg(long)]
+    pub waves: Option<PathBuf>,
+    /// Print one JSON record per frame instead of text.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub strict: StrictArg,
+}
+
+/// Runs `neo cosim`.
+pub fn run(a: CosimArgs) -> Result<()> {
+    let cfg = match &a.config {
+        Some(p) => EngineConfig::from_json_file(p)?,
+        None => EngineConfig::default(),
+    };
+    cfg.validate().map_err(|e| {
+        anyhow!("{}: {e}", a.config.as_ref().map_or("default".into(), |p| p.display().to_string()))
+    })?;
+    let timing = match a.memory.as_str() {
+        "random" => AxiTiming::RANDOM,
+        "ideal" => AxiTiming::IDEAL,
+        other => bail!("--memory {other:?}: expected `random` or `ideal`"),
+    };
+    let seed = match &a.seed {
+        Some(s) => neo_tb::rng::parse_seed(s).ok_or_else(|| anyhow!("--seed {s:?} is not a number"))?,
+        None => neo_tb::rng::test_seed("neo cosim"),
+    };
+    let (scene, _) = source::load_scene(&a.scene.scene, a.strict.strict)?;
+    let traj = trajectory_at(&a, &scene)?;
+    let mut session = EngineSession::new(&scene, traj, &cfg).context("engine session")?;
+    eprintln!(
+        "neo cosim: {} Gaussians, {} tiles, {} frames, engine {} + {} cores, {} ports, seed 0x{seed:016x}",
+        scene.len(),
+        session.tiles(),
+        session.frames(),
+        cfg.sort_cores,
+        cfg.raster_cores,
+        cfg.mem_channels
+    );
+    let spin = spinner("building the verilated engine (cached after the first build)");
+    let engine = EngineModel::build(&cfg).map_err(|e| anyhow!("building neo_engine: {e}"))?;
+    spin.finish_and_clear();
+    let b = &engine.build;
+    eprintln!("engine model: {} in {:.1} s {}", if b.cached { "cached" } else { "built" }, b.seconds, b.log);
+    let opts = RunOptions { timing, ..RunOptions::default() };
+    let mut rig = EngineRig::new(engine, opts, seed, a.waves.clone()).map_err(|e| anyhow!(e))?;
+    if let Some(w) = &a.waves {
+        eprintln!("waves: {}", w.display());
+    }
+    let bar = frame_bar(session.frames() as u64, a.json);
+    let mut failed = None;
+    while let Some(plan) = session.next_frame(rig.memory_mut())? {
+        let overflowing: Vec<usize> = plan
+            .expected
+            .outcome
+            .results
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.overflow)
+            .map(|(t, _)| t)
+            .collect();
+        let t0 = Instant::now();
+        let r = rig.run_frame(&plan).map_err(|e| anyhow!(e))?;
+        bar.inc(1);
+        print_frame(&a, &r, t0.elapsed(), &overflowing, &bar);
+        if r.mismatch.is_some() && failed.is_none() {
+            failed = Some(r.frame);
+            break;
+        }
+    }
+    rig.finish();
+    bar.finish_and_clear();
+    match failed {
+        Some(f) => bail!("frame {f} is not bit-exact (seed 0x{seed:016x}; replay with --seed 0x{seed:016x})"),
+        None => Ok(()),
+    }
+}
+
+/// The trajectory of `--trajectory` with `--frames` frames at `--res`.
+fn trajectory_at(a: &CosimArgs, scene: &neo_golden::scene::Scene) -> Result<Trajectory> {
+    let mut traj = parse_trajectory(&a.trajectory.trajectory, source::robust_bounds(scene), a.frames)?;
+    if traj.frames.len() < a.frames {
+        bail!(
+            "--trajectory {:?} has {} frames; {} requested",
+            a.trajectory.trajectory,
+            traj.frames.len(),
+            a.frames
+        );
+    }
+    traj.frames.truncate(a.frames);
+    traj.cuts.retain(|&c| c < a.frames);
+    let (w, h) = a.res;
+    traj.frames = traj.frames.iter().map(|c| c.with_resolution(w, h)).collect();
+    Ok(traj)
+}
+
+fn spinner(msg: &str) -> ProgressBar {
+    let p = ProgressBar::new_spinner();
+    p.set_message(msg.to_string());
+    p.enable_steady_tick(Duration::from_millis(200));
+    p
+}
+
+fn frame_bar(frames: u64, hidden: bool) -> ProgressBar {
+    if hidden {
+        return ProgressBar::hidden();
+    }
+    let p = ProgressBar::new(frames);
+    let style = ProgressStyle::with_template("{bar:30} frame {pos}/{len} {elapsed_precise} (eta {eta})")
+        .unwrap_or_else(|_| ProgressStyle::default_bar());
+    p.set_style(style);
+    p.enable_steady_tick(Duration::from_millis(500));
+    p
+}
+
+/// One frame's line (or JSON record).
+fn print_frame(a: &CosimArgs, r: &FrameReport, took: Duration, overflowing: &[usize], bar: &ProgressBar) {
+    let mismatch = r.mismatch.as_ref().map(|m| m.to_string());
+    if a.json {
+        let v = serde_json::json!({
+            "frame": r.frame,
+            "from_scratch": r.from_scratch,
+            "bit_exact": r.mismatch.is_none(),
+            "rtl_cycles": r.rtl_cycles,
+            "model_cycles": null,
+            "model_error_pct": null,
+            "mismatch": mismatch,
+            "overflowing_tiles": overflowing,
+            "wall_seconds": took.as_secs_f64(),
+        });
+        println!("{v}");
+        return;
+    }
+    let status = match &mismatch {
+        None => "bit-exact".to_string(),
+        Some(m) => format!("MISMATCH {m}"),
+    };
+    let cps = r.harness_cycles as f64 / took.as_secs_f64().max(1e-9);
+    bar.println(format!(
+        "frame {:3}{}: {status}, {} RTL cycles, {:.1} s ({:.0} cycles/s)",
+        r.frame,
+        if r.from_scratch { " (from scratch)" } else { "" },
+        r.rtl_cycles,
+        took.as_secs_f64(),
+        cps
+    ));
+    if !overflowing.is_empty() {
+        bar.println(format!("  tiles over the table capacity (reported, not sorted): {overflowing:?}"));
+    }
+}
