@@ -30,10 +30,11 @@ const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
 /// The engine's top module.
 pub const TOP: &str = "neo_engine";
 
-/// The engine the CI benches build: the default units with 2 Sorting Cores, 1 Rasterization
-/// Core and 2 memory ports (the full 16 + 4 engine is verilated by `neo bench engine`).
+/// The engine the CI benches build (`tb/engine_ci.json`, also what `scripts/mutate-check`
+/// generates for engine mutations): the default units with 2 Sorting Cores, 1 Rasterization
+/// Core and 2 memory ports.
 pub fn ci_config() -> EngineConfig {
-    EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..EngineConfig::default() }
+    serde_json::from_str(include_str!("../engine_ci.json")).expect("tb/engine_ci.json is an engine configuration")
 }
 
 /// The verilated engine of one configuration.
@@ -48,14 +49,16 @@ pub struct EngineModel {
 
 impl EngineModel {
     /// Generates `neo_engine` for `cfg`, verilates and compiles it (or finds it in the cache).
-    /// With `NEO_HDL_DIR=DIR` (mutation testing) the files of the same names are read from `DIR`
-    /// instead, as the static models do.
+    /// With `NEO_HDL_DIR=DIR` (mutation testing) whose `neo_engine.v` was generated from this
+    /// very configuration (its header names `cfg.hash()`), the files of the same names are read
+    /// from `DIR` instead, as the static models do; engines of other configurations are
+    /// generated as usual.
     pub fn build(cfg: &EngineConfig) -> Result<EngineModel, String> {
         cfg.validate().map_err(|e| e.to_string())?;
         let mut files: Vec<(String, String)> =
             neo_gen::files_for(cfg, TOP).into_iter().map(|f| (f.file_name(), f.text)).collect();
         let mut vlt = LINT_VLT.to_string();
-        if let Some(dir) = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()).map(PathBuf::from) {
+        if let Some(dir) = hdl_dir_for(cfg) {
             for (name, text) in &mut files {
                 let p = dir.join(&*name);
                 *text =
@@ -72,6 +75,14 @@ impl EngineModel {
         let (model, build) = DynModel::build(&iface, &files, Some(&vlt))?;
         Ok(EngineModel { cfg: cfg.clone(), model, build })
     }
+}
+
+/// `$NEO_HDL_DIR` when its `neo_engine.v` was generated from `cfg`.
+fn hdl_dir_for(cfg: &EngineConfig) -> Option<PathBuf> {
+    let dir = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()).map(PathBuf::from)?;
+    let text = std::fs::read_to_string(dir.join(format!("{TOP}.v"))).ok()?;
+    let header = text.lines().next()?;
+    header.contains(&format!("config 0x{:016x}", cfg.hash())).then_some(dir)
 }
 
 /// Memory timing and stimulus of a run.
