@@ -34,7 +34,8 @@ pub const TOP: &str = "neo_engine";
 /// generates for engine mutations): the default units with 2 Sorting Cores, 1 Rasterization
 /// Core and 2 memory ports.
 pub fn ci_config() -> EngineConfig {
-    serde_json::from_str(include_str!("../engine_ci.json")).expect("tb/engine_ci.json is an engine configuration")
+    serde_json::from_str(include_str!("../engine_ci.json"))
+        .expect("tb/engine_ci.json is an engine configuration")
 }
 
 /// The verilated engine of one configuration.
