@@ -51,19 +51,21 @@ pub struct EngineModel {
 impl EngineModel {
     /// Generates `neo_engine` for `cfg`, verilates and compiles it (or finds it in the cache).
     /// With `NEO_HDL_DIR=DIR` (mutation testing) whose `neo_engine.v` was generated from this
-    /// very configuration (its header names `cfg.hash()`), the files of the same names are read
-    /// from `DIR` instead, as the static models do; engines of other configurations are
-    /// generated as usual.
+    /// very configuration (its header names `cfg.hash()`), that file is read from `DIR` (the
+    /// units come from the generator: `DIR` holds the default configuration's units for the
+    /// static models); engines of other configurations are generated as usual.
     pub fn build(cfg: &EngineConfig) -> Result<EngineModel, String> {
         cfg.validate().map_err(|e| e.to_string())?;
         let mut files: Vec<(String, String)> =
             neo_gen::files_for(cfg, TOP).into_iter().map(|f| (f.file_name(), f.text)).collect();
         let mut vlt = LINT_VLT.to_string();
         if let Some(dir) = hdl_dir_for(cfg) {
-            for (name, text) in &mut files {
-                let p = dir.join(&*name);
-                *text =
-                    std::fs::read_to_string(&p).map_err(|e| format!("NEO_HDL_DIR: {}: {e}", p.display()))?;
+            let top = format!("{TOP}.v");
+            let p = dir.join(&top);
+            let text =
+                std::fs::read_to_string(&p).map_err(|e| format!("NEO_HDL_DIR: {}: {e}", p.display()))?;
+            if let Some(f) = files.iter_mut().find(|(name, _)| *name == top) {
+                f.1 = text;
             }
             vlt = std::fs::read_to_string(dir.join("lint.vlt")).unwrap_or(vlt);
         }
