@@ -316,6 +316,16 @@ impl EngineConfig {
         if !(1..=16).contains(&self.axi_id_bits) {
             return err(format!("axi_id_bits {} is outside 1..=16", self.axi_id_bits));
         }
+        // Each port's mux prefixes the ID with the client's slot: ceil(clients / ports) slots.
+        let clients = 1 + self.sort_cores + self.raster_cores;
+        let slots = clients.div_ceil(self.mem_channels);
+        let slot_bits = usize::BITS - (slots - 1).leading_zeros();
+        if slot_bits > self.axi_id_bits {
+            return err(format!(
+                "axi_id_bits {} cannot hold the slot index: {clients} memory clients on {} ports need {slot_bits}",
+                self.axi_id_bits, self.mem_channels
+            ));
+        }
         let o = self.axi_outstanding;
         if !o.is_power_of_two() || !(1..=64).contains(&o) {
             return err(format!("axi_outstanding {o} is not a power of two in 1..=64"));
@@ -459,6 +469,7 @@ mod tests {
             EngineConfig { table_capacity: 100, ..EngineConfig::default() },
             EngineConfig { axi_data_bits: 48, ..EngineConfig::default() },
             EngineConfig { axi_outstanding: 3, ..EngineConfig::default() },
+            EngineConfig { axi_id_bits: 2, ..EngineConfig::default() },
         ];
         for c in bad {
             assert!(c.validate().is_err(), "{c:?}");
