@@ -9,7 +9,7 @@
 //! | `edge_tiles` | a resolution that is not a multiple of the tile, far camera: partial and empty tiles |
 //! | `overflow` | a small `table_capacity`: some tiles overflow (reported, nothing else written), the next frame from scratch |
 //! | `one_core` | one sorting core and one raster core: every tile on the same cores |
-//! | `many_cores` | two tiles, more cores than busy tiles |
+//! | `many_cores` | one tile, more cores (3 + 2) than busy tiles |
 
 use super::host::{pipeline_for, EngineSession, SessionError};
 use super::EngineConfig;
@@ -119,8 +119,8 @@ impl EngineCase {
             EngineCase::Overflow => {}
             EngineCase::OneCore => (cfg.sort_cores, cfg.raster_cores) = (1, 1),
             EngineCase::ManyCores => {
-                res = [128, 64];
-                (cfg.sort_cores, cfg.raster_cores) = (4, 3);
+                res = [64, 64];
+                (cfg.sort_cores, cfg.raster_cores) = (3, 2);
             }
         }
         let sep = if keys.is_empty() { "" } else { "," };
