@@ -6,7 +6,10 @@
 //! hostile AXI memory (latency, 3/4 bandwidth, random extra delays, reordering across IDs), and
 //! the frame buffer, every tile's next table, the results, the status registers and the golden
 //! counters must be bit-exact. `NEO_SEED` replays a run; `WAVES=1` writes a VCD per case.
+//! Without Verilator at build time the tests are absent (build.rs warns, and fails when `CI` is
+//! set), as the other cosimulation benches.
 
+neo_tb::with_models! {
 use neo_golden::engine::{CaseScene, EngineCase, EngineConfig, EngineSession};
 use neo_golden::scene::Scene;
 use neo_golden::shared::shared_file_for_test;
@@ -101,4 +104,5 @@ fn biker_orbit_is_bit_exact_over_reuse_frames() {
     };
     let scene = load_scene(path.to_str().expect("utf-8 path"), false).expect("biker").0;
     run_case(&scene, &CaseScene::biker(), EngineCase::Orbit, 3, [128, 128]);
+}
 }
