@@ -33,6 +33,13 @@ pub fn load_config(path: Option<&Path>, engine: Option<&Path>) -> Result<SimConf
 /// Reads `latency.json` (the path as given, else, for the default path, beside the sources) and
 /// refuses it when it was measured on another engine configuration than `cfg.engine`.
 pub fn load_latency(path: &Path, cfg: &SimConfig) -> Result<Latency> {
+    let lat = latency_file(path)?;
+    lat.check_engine(&cfg.engine)?;
+    Ok(lat)
+}
+
+/// Reads `latency.json` (the path as given, else, for the default path, beside the sources).
+pub fn latency_file(path: &Path) -> Result<Latency> {
     let mut path = path.to_path_buf();
     if !path.exists() && path == Path::new(latency::DEFAULT_PATH) {
         let alt = shared::workspace_root().join(latency::DEFAULT_PATH);
@@ -40,9 +47,7 @@ pub fn load_latency(path: &Path, cfg: &SimConfig) -> Result<Latency> {
             path = alt;
         }
     }
-    let lat = Latency::from_file(&path)?;
-    lat.check_engine(&cfg.engine)?;
-    Ok(lat)
+    Ok(Latency::from_file(&path)?)
 }
 
 /// Scenes loaded once per spec.

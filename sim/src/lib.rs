@@ -13,6 +13,7 @@ pub mod dram;
 pub mod dram_stream;
 pub mod driver;
 pub mod engine;
+pub mod engine_frame;
 pub mod gpu;
 pub mod latency;
 pub mod plot;

@@ -9,9 +9,12 @@ use crate::args::{SceneArg, StrictArg, TrajectoryArg};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use neo_golden::engine::{EngineConfig, EngineSession};
+use neo_golden::engine::Counter;
+use neo_golden::engine::{execute_frame_traced, EngineConfig, EngineSession, FramePlan, Memory};
 use neo_golden::trajectory::{parse_resolution, parse_trajectory};
 use neo_golden::{source, trajectory::Trajectory};
+use neo_sim::engine_frame::{EngineFrameModel, FramePrediction, PortTiming};
+use neo_sim::latency;
 use neo_tb::axi::AxiTiming;
 use neo_tb::engine::{EngineModel, EngineRig, FrameReport, RunOptions};
 use std::path::PathBuf;
@@ -47,6 +50,9 @@ pub struct CosimArgs {
     /// Print one JSON record per frame instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Measured unit timing for the cycle model's prediction.
+    #[arg(long, default_value = latency::DEFAULT_PATH)]
+    pub latency: PathBuf,
     #[command(flatten)]
     pub strict: StrictArg,
 }
@@ -86,6 +92,8 @@ pub fn run(a: CosimArgs) -> Result<()> {
     spin.finish_and_clear();
     let b = &engine.build;
     eprintln!("engine model: {} in {:.1} s {}", if b.cached { "cached" } else { "built" }, b.seconds, b.log);
+    let lat = crate::points::latency_file(&a.latency)?;
+    let model = EngineFrameModel::new(&cfg, &lat, port_timing(&timing)).map_err(|e| anyhow!(e))?;
     let opts = RunOptions { timing, ..RunOptions::default() };
     let mut rig = EngineRig::new(engine, opts, seed, a.waves.clone()).map_err(|e| anyhow!(e))?;
     if let Some(w) = &a.waves {
@@ -103,10 +111,11 @@ pub fn run(a: CosimArgs) -> Result<()> {
             .filter(|(_, r)| r.overflow)
             .map(|(t, _)| t)
             .collect();
+        let predicted = predict(&model, &cfg, &plan, rig.memory_mut())?;
         let t0 = Instant::now();
         let r = rig.run_frame(&plan).map_err(|e| anyhow!(e))?;
         bar.inc(1);
-        print_frame(&a, &r, t0.elapsed(), &overflowing, &bar);
+        print_frame(&a, &r, &predicted, t0.elapsed(), &overflowing, &bar);
         if r.mismatch.is_some() && failed.is_none() {
             failed = Some(r.frame);
             break;
@@ -118,6 +127,25 @@ pub fn run(a: CosimArgs) -> Result<()> {
         Some(f) => bail!("frame {f} is not bit-exact (seed 0x{seed:016x}; replay with --seed 0x{seed:016x})"),
         None => Ok(()),
     }
+}
+
+/// The cycle model's timing of the harness's memory (its means).
+pub fn port_timing(t: &AxiTiming) -> PortTiming {
+    let (latency, bandwidth, ready) = t.means();
+    PortTiming { latency, bandwidth, ready }
+}
+
+/// The cycle model's prediction of the frame `plan` the harness has just written into `mem`:
+/// golden's reference runs the frame on a copy of the memory for its per-tile work.
+fn predict(
+    model: &EngineFrameModel,
+    cfg: &EngineConfig,
+    plan: &FramePlan,
+    mem: &Memory,
+) -> Result<FramePrediction> {
+    let mut copy = mem.clone();
+    let (_, trace) = execute_frame_traced(cfg, &plan.regs, &mut copy)?;
+    Ok(model.predict(&trace))
 }
 
 /// The trajectory of `--trajectory` with `--frames` frames at `--res`.
@@ -158,16 +186,33 @@ fn frame_bar(frames: u64, hidden: bool) -> ProgressBar {
 }
 
 /// One frame's line (or JSON record).
-fn print_frame(a: &CosimArgs, r: &FrameReport, took: Duration, overflowing: &[usize], bar: &ProgressBar) {
+fn print_frame(
+    a: &CosimArgs,
+    r: &FrameReport,
+    p: &FramePrediction,
+    took: Duration,
+    overflowing: &[usize],
+    bar: &ProgressBar,
+) {
     let mismatch = r.mismatch.as_ref().map(|m| m.to_string());
+    let err = |model: f64, rtl: u64| (model - rtl as f64) / (rtl as f64).max(1.0) * 100.0;
+    let model_error = err(p.cycles, r.rtl_cycles);
+    let sort_busy = r.counters.get(Counter::SortBusy);
+    let raster_busy = r.counters.get(Counter::RasterBusy);
     if a.json {
         let v = serde_json::json!({
             "frame": r.frame,
             "from_scratch": r.from_scratch,
             "bit_exact": r.mismatch.is_none(),
             "rtl_cycles": r.rtl_cycles,
-            "model_cycles": null,
-            "model_error_pct": null,
+            "model_cycles": p.cycles.round(),
+            "model_error_pct": model_error,
+            "rtl_sort_busy": sort_busy,
+            "model_sort_busy": p.sort_busy.round(),
+            "sort_busy_error_pct": err(p.sort_busy, sort_busy),
+            "rtl_raster_busy": raster_busy,
+            "model_raster_busy": p.raster_busy.round(),
+            "raster_busy_error_pct": err(p.raster_busy, raster_busy),
             "mismatch": mismatch,
             "overflowing_tiles": overflowing,
             "wall_seconds": took.as_secs_f64(),
@@ -180,15 +225,21 @@ fn print_frame(a: &CosimArgs, r: &FrameReport, took: Duration, overflowing: &[us
         Some(m) => format!("MISMATCH {m}"),
     };
     let cps = r.harness_cycles as f64 / took.as_secs_f64().max(1e-9);
-    bar.println(format!(
-        "frame {:3}{}: {status}, {} RTL cycles, {:.1} s ({:.0} cycles/s)",
+    let line = format!(
+        "frame {:3}{}: {status}, {} RTL cycles, model {:.0} ({:+.1}%; busy sort {:+.1}%, raster {:+.1}%), {:.1} s ({:.0} cycles/s)",
         r.frame,
         if r.from_scratch { " (from scratch)" } else { "" },
         r.rtl_cycles,
+        p.cycles,
+        model_error,
+        err(p.sort_busy, sort_busy),
+        err(p.raster_busy, raster_busy),
         took.as_secs_f64(),
         cps
-    ));
+    );
+    // `suspend`, not `println`: a hidden bar (output not a terminal) would drop the line.
+    bar.suspend(|| println!("{line}"));
     if !overflowing.is_empty() {
-        bar.println(format!("  tiles over the table capacity (reported, not sorted): {overflowing:?}"));
+        bar.suspend(|| println!("  tiles over the table capacity (reported, not sorted): {overflowing:?}"));
     }
 }

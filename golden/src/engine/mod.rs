@@ -19,5 +19,7 @@ pub use expected::{Expected, Mismatch, Place};
 pub use host::{EngineSession, FramePlan, MemoryLayout, SessionError};
 pub use memory::{Memory, TileDescriptor, TileResult};
 pub use plan::{run_command, tile_plan, TileCmd, TilePlan};
-pub use reference::{execute_frame, FrameError, FrameOutcome};
+pub use reference::{
+    execute_frame, execute_frame_traced, FrameError, FrameOutcome, FrameTrace, RasterTrace, TileTrace,
+};
 pub use regs::{Counter, Counters, FrameRegs, Reg};

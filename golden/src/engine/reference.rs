@@ -24,10 +24,10 @@ use super::memory::{
     Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES,
     RESULT_BYTES,
 };
-use super::plan::{run_command, tile_plan};
+use super::plan::{run_command, tile_plan, TilePlan};
 use super::regs::{Counter, Counters, FrameRegs, Reg, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
-use crate::raster::raster_tile;
+use crate::raster::{raster_tile, SubtileWork};
 use crate::sort::{merge_pass_count, SortEntry, SortMode, Sorter};
 
 /// What a frame leaves besides memory: the registers and the golden counters.
@@ -108,19 +108,59 @@ pub fn execute_frame(
     regs: &FrameRegs,
     mem: &mut Memory,
 ) -> Result<FrameOutcome, FrameError> {
+    execute_frame_traced(cfg, regs, mem).map(|(out, _)| out)
+}
+
+/// [`execute_frame`], also returning the work of every tile (what the cycle model times).
+pub fn execute_frame_traced(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    mem: &mut Memory,
+) -> Result<(FrameOutcome, FrameTrace), FrameError> {
     let mut run = FrameRun::new(cfg, regs);
+    let mut trace = FrameTrace::default();
     for t in 0..regs.tiles as u64 {
         let d = mem.read_descriptor(regs.desc_base, t);
         run.out.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES);
-        let result = run.sort_tile(mem, t, &d)?;
+        let (result, plan) = run.sort_tile(mem, t, &d)?;
         mem.write_result(regs.result_base, t, &result);
         run.out.counters.add(Counter::WrResult, RESULT_BYTES);
         run.out.results.push(result);
-        run.raster_tile(mem, t, &d, result.next_len as u64);
+        let raster = run.raster_tile(mem, t, &d, result.next_len as u64);
+        trace.tiles.push(TileTrace { plan, next_len: result.next_len as u64, raster });
     }
     let o = &mut run.out;
     o.status = STATUS_DONE | if o.overflows > 0 { STATUS_OVERFLOW } else { 0 };
-    Ok(run.out)
+    Ok((run.out, trace))
+}
+
+/// The work of one frame, tile by tile in descriptor order ([`execute_frame_traced`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FrameTrace {
+    /// One record per tile.
+    pub tiles: Vec<TileTrace>,
+}
+
+/// The work of one tile: its sort's commands and its raster.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TileTrace {
+    /// The sort's command plan (no stage when the tile overflows).
+    pub plan: TilePlan,
+    /// Entries of the tile's next table (what its last command wrote).
+    pub next_len: u64,
+    /// The raster.
+    pub raster: RasterTrace,
+}
+
+/// The work of one tile's raster.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RasterTrace {
+    /// Table entries read (and written back).
+    pub len: u64,
+    /// Of those, entries with a feature word present.
+    pub present: u64,
+    /// Per subtile (row-major): the SCU's work counters.
+    pub subtiles: Vec<SubtileWork>,
 }
 
 /// One frame in progress.
@@ -138,7 +178,12 @@ impl<'c> FrameRun<'c> {
     }
 
     /// The tile's sort (or its overflow): [`tile_plan`] executed command by command.
-    fn sort_tile(&mut self, mem: &mut Memory, t: u64, d: &TileDescriptor) -> Result<TileResult, FrameError> {
+    fn sort_tile(
+        &mut self,
+        mem: &mut Memory,
+        t: u64,
+        d: &TileDescriptor,
+    ) -> Result<(TileResult, TilePlan), FrameError> {
         let core = t % self.cfg.sort_cores as u64;
         let plan = tile_plan(self.cfg, &self.regs, d, core);
         if plan.overflow {
@@ -146,7 +191,7 @@ impl<'c> FrameRun<'c> {
                 self.out.first_overflow = t as u32;
             }
             self.out.overflows += 1;
-            return Ok(TileResult { next_len: 0, overflow: true });
+            return Ok((TileResult { next_len: 0, overflow: true }, plan));
         }
         let mut next_len = d.list_len as u64;
         for c in plan.commands() {
@@ -165,11 +210,11 @@ impl<'c> FrameRun<'c> {
         }
         self.out.counters.add(Counter::TilesSorted, 1);
         self.out.counters.add(Counter::EntriesSorted, d.entries_in());
-        Ok(TileResult { next_len: next_len as u32, overflow: false })
+        Ok((TileResult { next_len: next_len as u32, overflow: false }, plan))
     }
 
     /// The tile's raster: table `next` of `len` entries, write-back in place, pixels tile-major.
-    fn raster_tile(&mut self, mem: &mut Memory, t: u64, d: &TileDescriptor, len: u64) {
+    fn raster_tile(&mut self, mem: &mut Memory, t: u64, d: &TileDescriptor, len: u64) -> RasterTrace {
         let (sfmt, ffmt, rc) = (self.cfg.format(), self.cfg.feature_format(), self.cfg.raster_config());
         let table = mem.read_entries(&sfmt, d.next as u64, len as usize);
         let feat_word = self.regs.feat_base / FEATURE_BYTES;
@@ -196,6 +241,7 @@ impl<'c> FrameRun<'c> {
             mem.write_pixel(base + k as u64, *p);
         }
         add_raster_traffic(&mut self.out.counters, len, pixels);
+        RasterTrace { len, present: present.len() as u64, subtiles: r.work }
     }
 }
 
@@ -247,6 +293,23 @@ mod tests {
         assert_eq!(out.counters.get(Counter::WrPixel), 4 * 4096);
         assert_eq!(mem.read_pixel(0x20_0000 / 4 + 4095), [0; 3]);
         assert_eq!(out.status, STATUS_DONE);
+    }
+
+    #[test]
+    fn the_trace_holds_each_tiles_plan_and_raster_work() {
+        let cfg = EngineConfig::default();
+        let list: Vec<SortEntry> = (0..600u32).map(|i| SortEntry::new((i * 7919) % 1000, i)).collect();
+        let mut mem = Memory::new();
+        let regs = one_tile(&mut mem, &list);
+        let d = mem.read_descriptor(regs.desc_base, 0);
+        let (out, trace) = execute_frame_traced(&cfg, &regs, &mut mem).expect("frame");
+        assert_eq!(trace.tiles.len(), 1);
+        let t = &trace.tiles[0];
+        assert_eq!(t.plan, tile_plan(&cfg, &regs, &d, 0));
+        assert_eq!(t.next_len, 600);
+        assert_eq!(t.raster.len, out.counters.get(Counter::EntriesRastered));
+        assert_eq!(t.raster.present, 0, "no feature word is present");
+        assert_eq!(t.raster.subtiles.len() as u64, (cfg.tile as u64 / cfg.subtile as u64).pow(2));
     }
 
     #[test]

@@ -38,6 +38,15 @@ pub struct AxiTiming {
 }
 
 impl AxiTiming {
+    /// The timing's means, for a cycle model: (cycles to the first response beat, with the
+    /// mean random extra delay; data beats per cycle; fraction of cycles AR, AW and W are
+    /// ready).
+    pub fn means(&self) -> (f64, f64, f64) {
+        let extra = self.extra_percent as f64 / 100.0 * (self.extra_max as f64 + 1.0) / 2.0;
+        let bandwidth = self.bandwidth.0 as f64 / self.bandwidth.1.max(1) as f64;
+        (self.latency as f64 + extra, bandwidth, (self.ready_percent as f64 / 100.0).min(1.0))
+    }
+
     /// One-cycle latency, full bandwidth, always ready, in order.
     pub const IDEAL: AxiTiming = AxiTiming {
         latency: 1,

@@ -1,0 +1,346 @@
+//! The cycle model of one `neo_engine` frame, as the RTL top is built: the frame controller's
+//! descriptor reads and tile scheduler, each Sorting Core's per-tile command plan with its stage
+//! barriers, and the raster cores, over AXI4 ports of a given memory timing.
+//!
+//! Inputs: the golden reference's per-tile work ([`FrameTrace`]: every tile's command plan and
+//! raster work, from `neo_golden::engine::execute_frame_traced`), the unit timing measured on
+//! the RTL ([`Latency`], `reports/latency.json`) and the memory's timing ([`PortTiming`]).
+//! The model adds time only; the algorithm is golden's.
+//!
+//! # Timing
+//! - **Memory.** A request's first beat comes `latency` cycles after the request leaves the
+//!   client, plus the AXI path's register stages ([`AXI_PATH_CYCLES`]); a port moves
+//!   `bandwidth` beats (8 bytes) per cycle per direction, shared by the clients on it
+//!   (client `c` on port `c mod K`). The unit timing of `latency.json` was measured with the
+//!   first beat one cycle after the request (`memory.read_latency`); the model adds the
+//!   difference once per dependent round trip.
+//! - **Sorting.** A stage's commands run back to back ([`crate::sortcmd::batch_cycles`]: the
+//!   first command's latency, then the measured intervals), each command's memory beats at the
+//!   port's share; the stage ends with the barrier: the last write's response.
+//! - **Raster.** [`raster_tile_cycles`] with the engine's load rate: a table entry is one beat
+//!   and its feature word `FEATURE_BYTES / 8` beats on the port; the pixels `tile^2 * 4 / 8`
+//!   write beats, the write-back one beat per entry.
+//! - **Scheduling.** Tiles in index order; a descriptor read (4 beats) per tile into a
+//!   one-descriptor buffer; `first_free` (the lowest-numbered free core) or `round_robin`; a
+//!   tile's raster after its sort, in completion order; the frame ends with the last raster and
+//!   its writes' responses.
+
+use neo_golden::engine::memory::{ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
+use neo_golden::engine::{EngineConfig, FrameTrace, SchedulerPolicy, TileTrace};
+use neo_golden::sort::SortMode;
+
+use crate::arch::raster_tile_cycles;
+use crate::config::RasterTiming;
+use crate::latency::Latency;
+use crate::sortcmd::{batch_cycles, Cmd};
+
+/// Bytes of one AXI beat (the engine's data width, 64 bits).
+const BEAT_BYTES: u64 = 8;
+
+/// Register stages of the AXI path between a core and the memory, both ways (bridge and port
+/// mux), beyond the unit benches' direct memory port.
+pub const AXI_PATH_CYCLES: f64 = 4.0;
+
+/// The memory's timing on every AXI port.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PortTiming {
+    /// Cycles from a request to its first response beat (the harness's `latency`).
+    pub latency: f64,
+    /// Beats per cycle per port and direction.
+    pub bandwidth: f64,
+    /// Fraction of cycles the port accepts a request (AR, AW) or a write beat.
+    pub ready: f64,
+}
+
+impl PortTiming {
+    /// One-cycle latency, one beat per cycle.
+    pub const IDEAL: PortTiming = PortTiming { latency: 1.0, bandwidth: 1.0, ready: 1.0 };
+}
+
+/// The model's prediction of one frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FramePrediction {
+    /// Cycles from start to done.
+    pub cycles: f64,
+    /// Cycles with any sorting core busy.
+    pub sort_busy: f64,
+    /// Cycles with any raster core busy.
+    pub raster_busy: f64,
+}
+
+/// The engine-level model for one configuration, unit timing and memory timing.
+pub struct EngineFrameModel<'a> {
+    cfg: &'a EngineConfig,
+    lat: &'a Latency,
+    raster: RasterTiming,
+    mem: PortTiming,
+}
+
+impl<'a> EngineFrameModel<'a> {
+    /// The model of `cfg` with the unit timing `lat`, over ports of timing `mem`. Refuses unit
+    /// timing measured on cores of another configuration (the engine's counts may differ: they
+    /// do not change a core's timing).
+    pub fn new(cfg: &'a EngineConfig, lat: &'a Latency, mem: PortTiming) -> Result<Self, String> {
+        let same_cores = EngineConfig {
+            sort_cores: lat.config.sort_cores,
+            raster_cores: lat.config.raster_cores,
+            mem_channels: lat.config.mem_channels,
+            scheduler: lat.config.scheduler,
+            table_capacity: lat.config.table_capacity,
+            axi_id_bits: lat.config.axi_id_bits,
+            ..cfg.clone()
+        };
+        if let Some((field, ours, measured)) = same_cores.first_difference(&lat.config) {
+            return Err(format!(
+                "{}: measured on cores with {field} = {measured}, the engine has {field} = {ours}",
+                lat.source.display()
+            ));
+        }
+        if !(mem.bandwidth > 0.0 && mem.ready > 0.0 && mem.latency >= 0.0) {
+            return Err(format!(
+                "memory timing {mem:?}: bandwidth and ready must be positive, latency not negative"
+            ));
+        }
+        Ok(EngineFrameModel { cfg, lat, raster: lat.raster.clone(), mem })
+    }
+
+    /// Extra cycles of one dependent round trip over the unit benches' memory.
+    fn round_trip(&self) -> f64 {
+        self.mem.latency + AXI_PATH_CYCLES - 1.0
+    }
+
+    /// Cycles of `beats` beats through a port (bandwidth-limited).
+    fn beats(&self, beats: u64) -> f64 {
+        beats as f64 / self.mem.bandwidth
+    }
+
+    /// Cycles of one single-beat write through a bridge and its port mux: the bridge holds one
+    /// write until both its AW and its W are accepted, and the mux forwards a W only after its
+    /// AW was granted, so AW and W take turns (two cycles per entry on an always-ready port).
+    fn write_cycles(&self) -> f64 {
+        1.0 / self.mem.ready + 1.0 / (self.mem.ready * self.mem.bandwidth).min(1.0)
+    }
+
+    /// Cycles of one tile's sort: every stage back to back ([`batch_cycles`]: the measured
+    /// latency of the first command, then the measured intervals), each command's output written
+    /// at [`Self::write_cycles`] per entry instead of the unit bench's one, and its input read
+    /// at the port's bandwidth; then the barrier (the last write's response).
+    pub fn sort_cycles(&self, t: &TileTrace) -> f64 {
+        let mut total = 0.0;
+        let last = t.plan.stages.len().saturating_sub(1);
+        for (s, stage) in t.plan.stages.iter().enumerate() {
+            let cmds: Vec<Cmd> =
+                stage.iter().map(|c| Cmd { mode: c.mode, len_a: c.len_a, len_b: c.len_b }).collect();
+            let mut extra = 0.0;
+            for c in &cmds {
+                let written = match c.mode {
+                    SortMode::MergeDelete if s == last => t.next_len,
+                    _ => c.entries_in(),
+                };
+                extra += written as f64 * (self.write_cycles() - 1.0);
+                extra += c.entries_in() as f64 * (1.0 / self.mem.bandwidth - 1.0);
+            }
+            total += batch_cycles(&cmds, self.lat) as f64 + extra + self.round_trip();
+        }
+        total
+    }
+
+    /// Cycles of one tile's raster.
+    pub fn raster_cycles(&self, t: &TileTrace) -> f64 {
+        let r = &t.raster;
+        let routed: Vec<u32> = r.subtiles.iter().map(|s| s.routed).collect();
+        let all: u64 = r.subtiles.iter().map(|s| s.routed as u64).sum();
+        let done: u64 = r.subtiles.iter().map(|s| s.processed as u64).sum();
+        let ratio = if all == 0 { 1.0 } else { done as f64 / all as f64 };
+        let mut rt = self.raster.clone();
+        // Per entry: its table beat and its feature word's beats through the port; the
+        // write-back and the pixels leave in bursts (one AW per burst).
+        let per_entry = (ENTRY_BYTES + FEATURE_BYTES).div_ceil(BEAT_BYTES);
+        rt.load_cycles_per_entry = rt.load_cycles_per_entry.max(self.beats(per_entry));
+        let pixel_beats = (self.cfg.tile * self.cfg.tile) as u64 * PIXEL_BYTES / BEAT_BYTES;
+        rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.beats(pixel_beats).ceil() as u64);
+        let writes = self.beats(pixel_beats + r.len);
+        let (cycles, _) = raster_tile_cycles(
+            &routed,
+            ratio,
+            r.present as u32,
+            r.len as u32,
+            &rt,
+            self.cfg.raster_itus as u32,
+            self.cfg.raster_scus as u32,
+            true,
+        );
+        cycles.max(writes) + 2.0 * self.round_trip()
+    }
+
+    /// The prediction for one frame.
+    pub fn predict(&self, trace: &FrameTrace) -> FramePrediction {
+        let n = self.cfg.sort_cores;
+        let m = self.cfg.raster_cores;
+        let desc = self.round_trip() + self.beats(4) + 2.0;
+        let mut seq_free = vec![0.0f64; n];
+        let mut sort_spans = Vec::new();
+        let mut done_at: Vec<(f64, usize)> = Vec::new();
+        let mut t_ctrl = 0.0f64;
+        for (i, t) in trace.tiles.iter().enumerate() {
+            let ready = t_ctrl + desc;
+            if t.plan.overflow {
+                done_at.push((ready, i));
+                t_ctrl = ready;
+                continue;
+            }
+            let k = pick(&seq_free, ready, i, self.cfg.scheduler);
+            let start = ready.max(seq_free[k]);
+            let end = start + self.sort_cycles(t);
+            seq_free[k] = end;
+            sort_spans.push((start, end));
+            done_at.push((end, i));
+            t_ctrl = start;
+        }
+        done_at.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut raster_free = vec![0.0f64; m];
+        let mut raster_spans = Vec::new();
+        let mut t_cpl = 0.0f64;
+        for (j, &(at, i)) in done_at.iter().enumerate() {
+            let ready = at.max(t_cpl) + 1.0;
+            let k = pick(&raster_free, ready, j, self.cfg.scheduler);
+            let start = ready.max(raster_free[k]);
+            let end = start + self.raster_cycles(&trace.tiles[i]);
+            raster_free[k] = end;
+            raster_spans.push((start, end));
+            t_cpl = start;
+        }
+        let end = raster_free.iter().copied().fold(t_ctrl, f64::max);
+        FramePrediction {
+            cycles: end,
+            sort_busy: union(&mut sort_spans),
+            raster_busy: union(&mut raster_spans),
+        }
+    }
+}
+
+/// The core a job ready at `ready` goes to: the lowest-numbered one free by then (else the one
+/// free first) for `first_free`; job `j mod N` for `round_robin`.
+fn pick(free: &[f64], ready: f64, j: usize, policy: SchedulerPolicy) -> usize {
+    match policy {
+        SchedulerPolicy::RoundRobin => j % free.len(),
+        SchedulerPolicy::FirstFree => match free.iter().position(|&f| f <= ready) {
+            Some(k) => k,
+            None => (0..free.len()).min_by(|&a, &b| free[a].total_cmp(&free[b])).unwrap_or(0),
+        },
+    }
+}
+
+/// Length of the union of the intervals.
+fn union(spans: &mut [(f64, f64)]) -> f64 {
+    spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut total = 0.0;
+    let mut cur: Option<(f64, f64)> = None;
+    for &(s, e) in spans.iter() {
+        cur = match cur {
+            Some((cs, ce)) if s <= ce => Some((cs, ce.max(e))),
+            Some((cs, ce)) => {
+                total += ce - cs;
+                Some((s, e))
+            }
+            None => Some((s, e)),
+        };
+    }
+    if let Some((cs, ce)) = cur {
+        total += ce - cs;
+    }
+    total
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use neo_golden::engine::{RasterTrace, TileCmd, TilePlan};
+    use std::path::PathBuf;
+
+    fn latency() -> Latency {
+        let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../reports/latency.json");
+        Latency::from_file(&p).expect("reports/latency.json")
+    }
+
+    fn sort_tile(n: u64) -> TileTrace {
+        let cmds = (0..n.div_ceil(256))
+            .map(|k| TileCmd {
+                mode: SortMode::Sort,
+                src_a: 256 * k,
+                len_a: (n - 256 * k).min(256),
+                src_b: 0,
+                len_b: 0,
+                dst: 256 * k,
+            })
+            .collect();
+        TileTrace {
+            plan: TilePlan { overflow: false, stages: vec![cmds] },
+            next_len: n,
+            raster: RasterTrace { len: 0, present: 0, subtiles: Vec::new() },
+        }
+    }
+
+    #[test]
+    fn union_merges_overlapping_spans() {
+        assert_eq!(union(&mut [(0.0, 10.0), (5.0, 12.0), (20.0, 25.0)]), 17.0);
+        assert_eq!(union(&mut []), 0.0);
+    }
+
+    #[test]
+    fn first_free_takes_the_lowest_free_core_and_round_robin_the_next() {
+        assert_eq!(pick(&[5.0, 0.0, 0.0], 1.0, 7, SchedulerPolicy::FirstFree), 1);
+        assert_eq!(pick(&[5.0, 3.0], 1.0, 7, SchedulerPolicy::FirstFree), 1);
+        assert_eq!(pick(&[0.0, 0.0, 0.0], 1.0, 7, SchedulerPolicy::RoundRobin), 1);
+    }
+
+    #[test]
+    fn a_sort_stage_costs_the_measured_batch_plus_the_second_write_cycle_per_entry() {
+        let lat = latency();
+        let cfg = lat.config.clone();
+        let m = EngineFrameModel::new(&cfg, &lat, PortTiming::IDEAL).unwrap();
+        let t = sort_tile(600);
+        let cmds: Vec<Cmd> =
+            t.plan.commands().map(|c| Cmd { mode: c.mode, len_a: c.len_a, len_b: 0 }).collect();
+        let want = batch_cycles(&cmds, &lat) as f64 + 600.0 + m.round_trip();
+        assert_eq!(m.sort_cycles(&t), want);
+        // Half the bandwidth doubles every beat's cycles.
+        let slow = PortTiming { bandwidth: 0.5, ..PortTiming::IDEAL };
+        let s = EngineFrameModel::new(&cfg, &lat, slow).unwrap();
+        assert!(
+            s.sort_cycles(&t) > m.sort_cycles(&t) + 600.0,
+            "{} vs {}",
+            s.sort_cycles(&t),
+            m.sort_cycles(&t)
+        );
+    }
+
+    #[test]
+    fn tiles_spread_over_the_cores_and_the_frame_ends_with_the_last_raster() {
+        let lat = latency();
+        let one = EngineConfig { sort_cores: 1, raster_cores: 1, ..lat.config.clone() };
+        let two = EngineConfig { sort_cores: 2, ..one.clone() };
+        let trace = FrameTrace { tiles: vec![sort_tile(2048), sort_tile(2048)] };
+        let p1 = EngineFrameModel::new(&one, &lat, PortTiming::IDEAL).unwrap().predict(&trace);
+        let p2 = EngineFrameModel::new(&two, &lat, PortTiming::IDEAL).unwrap().predict(&trace);
+        // Both sorts at once on two cores; the rasters share one core either way.
+        assert!(p2.sort_busy < 0.55 * p1.sort_busy, "two cores: {p2:?}, one: {p1:?}");
+        assert!(p2.cycles < p1.cycles && p2.raster_busy == p1.raster_busy, "{p2:?} vs {p1:?}");
+        // One core of each: the second sort overlaps the first raster; the last raster follows
+        // the last sort.
+        assert!(p1.sort_busy + p1.raster_busy / 2.0 <= p1.cycles + 1.0, "{p1:?}");
+        assert!(p1.sort_busy + p1.raster_busy > p1.cycles, "{p1:?}");
+    }
+
+    #[test]
+    fn unit_timing_of_other_cores_and_bad_memory_timing_are_refused() {
+        let lat = latency();
+        let wide = EngineConfig { bsu_width: lat.config.bsu_width * 2, ..lat.config.clone() };
+        let e = EngineFrameModel::new(&wide, &lat, PortTiming::IDEAL).err().expect("refused");
+        assert!(e.contains("bsu_width"), "{e}");
+        let counts = EngineConfig { sort_cores: 3, raster_cores: 2, mem_channels: 1, ..lat.config.clone() };
+        assert!(EngineFrameModel::new(&counts, &lat, PortTiming::IDEAL).is_ok());
+        let bad = PortTiming { bandwidth: 0.0, ..PortTiming::IDEAL };
+        assert!(EngineFrameModel::new(&lat.config, &lat, bad).is_err());
+    }
+}
