@@ -109,7 +109,12 @@ impl<'a> EngineFrameModel<'a> {
         self.mem.latency + AXI_PATH_CYCLES - 1.0
     }
 
-    /// Cycles of `beats` beats through a port (bandwidth-limited).
+    /// Cycles of `beats` write beats through a port (bandwidth and readiness).
+    fn write_beats(&self, beats: u64) -> f64 {
+        beats as f64 / (self.mem.bandwidth * self.mem.ready).min(1.0)
+    }
+
+    /// Cycles of `beats` read beats through a port (bandwidth-limited).
     fn beats(&self, beats: u64) -> f64 {
         beats as f64 / self.mem.bandwidth
     }
@@ -153,13 +158,15 @@ impl<'a> EngineFrameModel<'a> {
         let done: u64 = r.subtiles.iter().map(|s| s.processed as u64).sum();
         let ratio = if all == 0 { 1.0 } else { done as f64 / all as f64 };
         let mut rt = self.raster.clone();
-        // Per entry: its table beat and its feature word's beats through the port; the
-        // write-back and the pixels leave in bursts (one AW per burst).
+        // Per entry: its table beat and its feature word's beats through the port, and its
+        // write-back beat (the formula counts one cycle for it; the loads and the write-back
+        // share the core's one request port); the pixels leave in bursts.
         let per_entry = (ENTRY_BYTES + FEATURE_BYTES).div_ceil(BEAT_BYTES);
-        rt.load_cycles_per_entry = rt.load_cycles_per_entry.max(self.beats(per_entry));
+        rt.load_cycles_per_entry =
+            rt.load_cycles_per_entry.max(self.beats(per_entry)) + self.write_beats(1) - 1.0;
         let pixel_beats = (self.cfg.tile * self.cfg.tile) as u64 * PIXEL_BYTES / BEAT_BYTES;
-        rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.beats(pixel_beats).ceil() as u64);
-        let writes = self.beats(pixel_beats + r.len);
+        rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.write_beats(pixel_beats).ceil() as u64);
+        let writes = self.write_beats(pixel_beats + r.len);
         let (cycles, _) = raster_tile_cycles(
             &routed,
             ratio,
