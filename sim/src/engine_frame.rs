@@ -180,49 +180,134 @@ impl<'a> EngineFrameModel<'a> {
         cycles.max(writes) + 2.0 * self.round_trip()
     }
 
-    /// The prediction for one frame.
+    /// Read and write beats of a tile's sort (on its sorting core's port).
+    fn sort_beats(&self, t: &TileTrace) -> (f64, f64) {
+        let last = t.plan.stages.len().saturating_sub(1);
+        let (mut r, mut w) = (0u64, 0u64);
+        for (s, stage) in t.plan.stages.iter().enumerate() {
+            for c in stage {
+                r += c.len_a + c.len_b;
+                w += match c.mode {
+                    SortMode::MergeDelete if s == last => t.next_len,
+                    _ => c.len_a + c.len_b,
+                };
+            }
+        }
+        (self.beats(r), self.write_beats(w))
+    }
+
+    /// Read and write beats of a tile's raster.
+    fn raster_beats(&self, t: &TileTrace) -> (f64, f64) {
+        let per_entry = (ENTRY_BYTES + FEATURE_BYTES).div_ceil(BEAT_BYTES);
+        let pixel_beats = (self.cfg.tile * self.cfg.tile) as u64 * PIXEL_BYTES / BEAT_BYTES;
+        (self.beats(per_entry * t.raster.len), self.write_beats(t.raster.len + pixel_beats))
+    }
+
+    /// The prediction for one frame: the schedule with every job alone on its port, then
+    /// (a few rounds) each job stretched by the ports it shares: while two jobs on one port
+    /// overlap and their read (or write) channel demands add up to more than one beat per
+    /// cycle, both progress at the port's pace (the mux's round-robin shares it).
     pub fn predict(&self, trace: &FrameTrace) -> FramePrediction {
-        let n = self.cfg.sort_cores;
-        let m = self.cfg.raster_cores;
+        let tiles = &trace.tiles;
+        let alone: Vec<[f64; 2]> =
+            tiles.iter().map(|t| [self.sort_cycles(t), self.raster_cycles(t)]).collect();
+        let beats: Vec<[(f64, f64); 2]> =
+            tiles.iter().map(|t| [self.sort_beats(t), self.raster_beats(t)]).collect();
+        let mut dur = alone.clone();
+        let mut sched = self.schedule(tiles, &dur);
+        for _ in 0..CONTENTION_ROUNDS {
+            let demand = |j: &Job| {
+                let (r, w) = beats[j.tile][j.engine];
+                let d = (j.end - j.start).max(1.0);
+                (r / d, w / d)
+            };
+            let mut next = alone.clone();
+            for a in &sched.jobs {
+                let (ra, wa) = demand(a);
+                let mut stretch = 0.0;
+                for b in sched.jobs.iter().filter(|b| b.port == a.port && !std::ptr::eq(*b, a)) {
+                    let overlap = (a.end.min(b.end) - a.start.max(b.start)).max(0.0);
+                    if overlap > 0.0 {
+                        let (rb, wb) = demand(b);
+                        let s = (ra + rb).max(wa + wb).max(1.0);
+                        stretch += overlap / (a.end - a.start).max(1.0) * (s - 1.0);
+                    }
+                }
+                let want = alone[a.tile][a.engine] * (1.0 + stretch);
+                next[a.tile][a.engine] = 0.5 * (dur[a.tile][a.engine] + want);
+            }
+            dur = next;
+            sched = self.schedule(tiles, &dur);
+        }
+        sched.prediction()
+    }
+
+    /// Tiles in order on the cores by the scheduler policy, with `dur[t] = [sort, raster]`.
+    fn schedule(&self, tiles: &[TileTrace], dur: &[[f64; 2]]) -> Schedule {
+        let (n, m, k) = (self.cfg.sort_cores, self.cfg.raster_cores, self.cfg.mem_channels.max(1));
         let desc = self.round_trip() + self.beats(4) + 2.0;
         let mut seq_free = vec![0.0f64; n];
-        let mut sort_spans = Vec::new();
+        let mut jobs = Vec::new();
         let mut done_at: Vec<(f64, usize)> = Vec::new();
         let mut t_ctrl = 0.0f64;
-        for (i, t) in trace.tiles.iter().enumerate() {
+        for (i, t) in tiles.iter().enumerate() {
             let ready = t_ctrl + desc;
             if t.plan.overflow {
                 done_at.push((ready, i));
                 t_ctrl = ready;
                 continue;
             }
-            let k = pick(&seq_free, ready, i, self.cfg.scheduler);
-            let start = ready.max(seq_free[k]);
-            let end = start + self.sort_cycles(t);
-            seq_free[k] = end;
-            sort_spans.push((start, end));
+            let c = pick(&seq_free, ready, i, self.cfg.scheduler);
+            let start = ready.max(seq_free[c]);
+            let end = start + dur[i][0];
+            seq_free[c] = end;
+            jobs.push(Job { tile: i, engine: 0, port: (1 + c) % k, start, end });
             done_at.push((end, i));
             t_ctrl = start;
         }
         done_at.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut raster_free = vec![0.0f64; m];
-        let mut raster_spans = Vec::new();
         let mut t_cpl = 0.0f64;
         for (j, &(at, i)) in done_at.iter().enumerate() {
             let ready = at.max(t_cpl) + 1.0;
-            let k = pick(&raster_free, ready, j, self.cfg.scheduler);
-            let start = ready.max(raster_free[k]);
-            let end = start + self.raster_cycles(&trace.tiles[i]);
-            raster_free[k] = end;
-            raster_spans.push((start, end));
+            let c = pick(&raster_free, ready, j, self.cfg.scheduler);
+            let start = ready.max(raster_free[c]);
+            let end = start + dur[i][1];
+            raster_free[c] = end;
+            jobs.push(Job { tile: i, engine: 1, port: (1 + n + c) % k, start, end });
             t_cpl = start;
         }
         let end = raster_free.iter().copied().fold(t_ctrl, f64::max);
-        FramePrediction {
-            cycles: end,
-            sort_busy: union(&mut sort_spans),
-            raster_busy: union(&mut raster_spans),
-        }
+        Schedule { jobs, end }
+    }
+}
+
+/// Rounds of the port-sharing correction in [`EngineFrameModel::predict`].
+const CONTENTION_ROUNDS: usize = 6;
+
+/// One sort (engine 0) or raster (engine 1) of a tile, on its core's AXI port.
+struct Job {
+    tile: usize,
+    engine: usize,
+    port: usize,
+    start: f64,
+    end: f64,
+}
+
+/// A frame's jobs and its end.
+struct Schedule {
+    jobs: Vec<Job>,
+    end: f64,
+}
+
+impl Schedule {
+    fn prediction(&self) -> FramePrediction {
+        let spans = |e: usize| -> f64 {
+            let mut v: Vec<(f64, f64)> =
+                self.jobs.iter().filter(|j| j.engine == e).map(|j| (j.start, j.end)).collect();
+            union(&mut v)
+        };
+        FramePrediction { cycles: self.end, sort_busy: spans(0), raster_busy: spans(1) }
     }
 }
 
