@@ -86,8 +86,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
     );
     let spin = spinner("building the verilated engine (cached after the first build)");
     let format = a.waves.as_deref().map(WaveFormat::of_path).unwrap_or_default();
-    let engine =
-        EngineModel::build_traced(&cfg, format).map_err(|e| anyhow!("building neo_engine: {e}"))?;
+    let engine = EngineModel::build_traced(&cfg, format).map_err(|e| anyhow!("building neo_engine: {e}"))?;
     spin.finish_and_clear();
     let b = &engine.build;
     eprintln!("engine model: {} in {:.1} s {}", if b.cached { "cached" } else { "built" }, b.seconds, b.log);
