@@ -362,8 +362,13 @@ mod tests {
         let core = sort.children.iter().find(|c| c.module.as_deref() == Some(sort_core::NAME)).expect("core");
         assert_eq!(core.count, cfg.sort_cores as u64);
         assert!(core.children.iter().any(|c| c.module.as_deref() == Some("neo_bsu") && c.count == 16));
-        let ram = core.children.iter().find(|c| c.module.as_deref() == Some("neo_chunk_ram")).expect("buffers");
-        assert_eq!((ram.label.as_str(), ram.count), ("u_* (4)", 4 * 16), "four chunk buffers per core, one row");
+        let ram =
+            core.children.iter().find(|c| c.module.as_deref() == Some("neo_chunk_ram")).expect("buffers");
+        assert_eq!(
+            (ram.label.as_str(), ram.count),
+            ("u_* (4)", 4 * 16),
+            "four chunk buffers per core, one row"
+        );
         let raster = find(&format!("g_raster[{}]", cfg.raster_cores));
         assert_eq!(raster.count, cfg.raster_cores as u64);
         let port = find(&format!("g_port[{}]", cfg.mem_channels));
