@@ -85,7 +85,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
         cfg.mem_channels
     );
     let spin = spinner("building the verilated engine (cached after the first build)");
-    let format = a.waves.as_deref().map(WaveFormat::of_path).unwrap_or_default();
+    let format = a.waves.as_deref().map(WaveFormat::of_path);
     let engine = EngineModel::build_traced(&cfg, format).map_err(|e| anyhow!("building neo_engine: {e}"))?;
     spin.finish_and_clear();
     let b = &engine.build;

@@ -16,6 +16,20 @@ pub const CPP_DEFINES: &[(&str, &str)] =
 /// The Verilator runtime sources (under `include/`) every model links.
 pub const RUNTIME_SOURCES: &[&str] = &["verilated.cpp", "verilated_vcd_c.cpp", "verilated_threads.cpp"];
 
+/// [`VERILATOR_FLAGS`] for a model without tracing (`--trace` left out: a run-time model that
+/// writes no waves; its C++ is about half as large).
+#[allow(dead_code)] // build.rs builds VCD-traced models only
+pub const VERILATOR_FLAGS_UNTRACED: &[&str] = &["--cc", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+
+/// [`CPP_DEFINES`] for a model without tracing.
+#[allow(dead_code)] // build.rs builds VCD-traced models only
+pub const CPP_DEFINES_UNTRACED: &[(&str, &str)] =
+    &[("VM_COVERAGE", "0"), ("VM_SC", "0"), ("VM_TRACE", "0"), ("VM_TRACE_VCD", "0"), ("VM_TRACE_FST", "0")];
+
+/// [`RUNTIME_SOURCES`] for a model without tracing.
+#[allow(dead_code)] // build.rs builds VCD-traced models only
+pub const RUNTIME_SOURCES_UNTRACED: &[&str] = &["verilated.cpp", "verilated_threads.cpp"];
+
 /// [`VERILATOR_FLAGS`] for a model traced as FST (`--trace-fst`; run-time models only).
 #[allow(dead_code)] // build.rs builds VCD-traced models only
 pub const VERILATOR_FLAGS_FST: &[&str] =

@@ -7,9 +7,10 @@
 //! static models (`$NEO_CACHE_DIR` or `<target>/neo-verilator-cache/dyn-<top>-<hash>/`) and
 //! loads it. Ports are bound by index through the shim's `neo_T_set_port` / `neo_T_get_port`.
 //!
-//! A model is traced as VCD (`--trace`, as the static models) or, built with
-//! [`DynModel::build_traced`] and [`WaveFormat::Fst`], as FST (`--trace-fst`, the FST writer and
-//! `-lz`); the two are separate cache entries (`dyn-<top>-<hash>`, `dyn-<top>-fst-<hash>`).
+//! A model is traced as VCD (`--trace`, as the static models; [`DynModel::build`]) or, built with
+//! [`DynModel::build_traced`], as FST (`--trace-fst`, the FST writer and `-lz`) or not at all
+//! (no `--trace`: about half the C++ to compile, for runs that write no waves); each is its own
+//! cache entry (`dyn-<top>-<hash>`, `dyn-<top>-fst-<hash>`, `dyn-<top>-untraced-<hash>`).
 
 #[allow(dead_code)]
 #[path = "../build/cache.rs"]
@@ -79,7 +80,7 @@ pub struct DynModel {
     cycle: u64,
     time: u64,
     tracing: bool,
-    format: WaveFormat,
+    format: Option<WaveFormat>,
     // Kept last: dropped after `raw` is freed.
     _lib: libloading::Library,
 }
@@ -97,16 +98,16 @@ impl DynModel {
         files: &[(String, String)],
         vlt: Option<&str>,
     ) -> Result<(DynModel, BuildInfo), String> {
-        Self::build_traced(iface, files, vlt, WaveFormat::Vcd)
+        Self::build_traced(iface, files, vlt, Some(WaveFormat::Vcd))
     }
 
-    /// [`DynModel::build`] with the trace writer of `format` (an FST-traced model is a
-    /// separate build and cache entry).
+    /// [`DynModel::build`] with the trace writer of `format`, or without tracing (`None`); each
+    /// is a separate build and cache entry.
     pub fn build_traced(
         iface: &ModuleInterface,
         files: &[(String, String)],
         vlt: Option<&str>,
-        format: WaveFormat,
+        format: Option<WaveFormat>,
     ) -> Result<(DynModel, BuildInfo), String> {
         let info = build_library(iface, files, vlt, format)?;
         let model = DynModel::load(iface, &info.library, format)?;
@@ -114,7 +115,11 @@ impl DynModel {
     }
 
     /// Loads a library built by [`DynModel::build_traced`] for `iface` with `format`.
-    pub fn load(iface: &ModuleInterface, library: &Path, format: WaveFormat) -> Result<DynModel, String> {
+    pub fn load(
+        iface: &ModuleInterface,
+        library: &Path,
+        format: Option<WaveFormat>,
+    ) -> Result<DynModel, String> {
         let t = &iface.name;
         // SAFETY: the library is one of ours (built from the shim); loading runs Verilator's
         // static constructors only.
@@ -249,8 +254,8 @@ impl DynModel {
         self.cycle
     }
 
-    /// The format the model traces in.
-    pub fn wave_format(&self) -> WaveFormat {
+    /// The format the model traces in (`None`: built without tracing).
+    pub fn wave_format(&self) -> Option<WaveFormat> {
         self.format
     }
 
@@ -259,15 +264,15 @@ impl DynModel {
     /// for a VCD-traced one).
     pub fn trace_open(&mut self, path: &Path) -> std::io::Result<()> {
         let wanted = WaveFormat::of_path(path);
-        if wanted != self.format {
+        if Some(wanted) != self.format {
+            let built = self.format.map_or("nothing".to_string(), |f| f.extension().to_uppercase());
             return Err(std::io::Error::new(
                 std::io::ErrorKind::InvalidInput,
                 format!(
-                    "{}: a {} file, but the {} model was built to trace {} (build it with that format)",
+                    "{}: a {} file, but the {} model was built to trace {built} (build it with that format)",
                     path.display(),
                     wanted.extension().to_uppercase(),
                     self.iface.name,
-                    self.format.extension().to_uppercase()
                 ),
             ));
         }
@@ -277,7 +282,7 @@ impl DynModel {
         if unsafe { (self.api.trace_open)(self.raw, c.as_ptr()) } == 0 {
             return Err(std::io::Error::other(format!(
                 "cannot open {} {}",
-                self.format.extension().to_uppercase(),
+                wanted.extension().to_uppercase(),
                 path.display()
             )));
         }
@@ -336,16 +341,23 @@ struct Flavour {
 }
 
 impl Flavour {
-    fn of(format: WaveFormat) -> Flavour {
+    fn of(format: Option<WaveFormat>) -> Flavour {
         match format {
-            WaveFormat::Vcd => Flavour {
+            None => Flavour {
+                flags: verilator::VERILATOR_FLAGS_UNTRACED,
+                defines: verilator::CPP_DEFINES_UNTRACED,
+                runtime: verilator::RUNTIME_SOURCES_UNTRACED,
+                libs: &[],
+                suffix: "-untraced",
+            },
+            Some(WaveFormat::Vcd) => Flavour {
                 flags: verilator::VERILATOR_FLAGS,
                 defines: verilator::CPP_DEFINES,
                 runtime: verilator::RUNTIME_SOURCES,
                 libs: &[],
                 suffix: "",
             },
-            WaveFormat::Fst => Flavour {
+            Some(WaveFormat::Fst) => Flavour {
                 flags: verilator::VERILATOR_FLAGS_FST,
                 defines: verilator::CPP_DEFINES_FST,
                 runtime: verilator::RUNTIME_SOURCES_FST,
@@ -361,7 +373,7 @@ fn build_library(
     iface: &ModuleInterface,
     files: &[(String, String)],
     vlt: Option<&str>,
-    format: WaveFormat,
+    format: Option<WaveFormat>,
 ) -> Result<BuildInfo, String> {
     let t0 = Instant::now();
     shim::validate(iface)?;
@@ -369,7 +381,12 @@ fn build_library(
         .ok_or("verilator not found: install it (scripts/setup does) or set VERILATOR")?;
     let top = &iface.name;
     let flavour = Flavour::of(format);
-    let mut cpp = shim::cpp_traced(iface, format == WaveFormat::Fst);
+    let trace = match format {
+        None => shim::ShimTrace::Off,
+        Some(WaveFormat::Vcd) => shim::ShimTrace::Vcd,
+        Some(WaveFormat::Fst) => shim::ShimTrace::Fst,
+    };
+    let mut cpp = shim::cpp_traced(iface, trace);
     shim::cpp_by_index(&mut cpp, iface);
     let cxx = cxx();
     let mut key = cache::Key::new();
@@ -381,8 +398,8 @@ fn build_library(
         key.add("lint.vlt", vlt.as_bytes());
     }
     key.add("flags", flavour.flags.join(" ").as_bytes());
-    if format != WaveFormat::Vcd {
-        // Only for FST, so that the VCD models' keys (and cache entries) stay as they were.
+    if format != Some(WaveFormat::Vcd) {
+        // Only for FST and untraced, so that the VCD models' keys (and cache entries) stay as they were.
         key.add(
             "trace",
             format!("{:?} {:?} {:?}", flavour.defines, flavour.runtime, flavour.libs).as_bytes(),

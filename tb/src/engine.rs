@@ -55,13 +55,15 @@ impl EngineModel {
     /// very configuration (its header names `cfg.hash()`), that file is read from `DIR` (the
     /// units come from the generator: `DIR` holds the default configuration's units for the
     /// static models); engines of other configurations are generated as usual.
+    /// The model is built without tracing (about half the C++ of a traced one); see
+    /// [`EngineModel::build_traced`] for waves.
     pub fn build(cfg: &EngineConfig) -> Result<EngineModel, String> {
-        Self::build_traced(cfg, WaveFormat::Vcd)
+        Self::build_traced(cfg, None)
     }
 
-    /// [`EngineModel::build`] tracing in `format` (an FST-traced engine is a separate build
-    /// and cache entry; [`EngineRig::new`] then takes a `.fst` path).
-    pub fn build_traced(cfg: &EngineConfig, format: WaveFormat) -> Result<EngineModel, String> {
+    /// [`EngineModel::build`] tracing in `format` (`None`: untraced); each is a separate build
+    /// and cache entry, and [`EngineRig::new`] takes a waves path of the model's format only.
+    pub fn build_traced(cfg: &EngineConfig, format: Option<WaveFormat>) -> Result<EngineModel, String> {
         cfg.validate().map_err(|e| e.to_string())?;
         let mut files: Vec<(String, String)> =
             neo_gen::files_for(cfg, TOP).into_iter().map(|f| (f.file_name(), f.text)).collect();

@@ -22,7 +22,23 @@ neo_tb::with_models! {
     #[test]
     fn a_run_time_model_matches_the_static_one_cycle_by_cycle() {
         let (iface, files) = fixture();
-        let (mut dynm, info) = DynModel::build(&iface, &files, None).expect("build");
+        let (dynm, info) = DynModel::build(&iface, &files, None).expect("build");
+        matches_static(&iface, dynm, &info);
+    }
+
+    #[test]
+    fn an_untraced_run_time_model_matches_the_static_one_and_writes_no_waves() {
+        let (iface, files) = fixture();
+        let (mut dynm, info) = DynModel::build_traced(&iface, &files, None, None).expect("build");
+        assert!(info.library.parent().expect("dir").to_string_lossy().contains("dyn-neo_tb_adder-untraced-"));
+        assert_eq!(dynm.wave_format(), None);
+        let dir = neo_tb::waves::target_dir().join("waves");
+        let e = dynm.trace_open(&dir.join("untraced.vcd")).expect_err("no tracing");
+        assert!(e.to_string().contains("built to trace nothing"), "{e}");
+        matches_static(&iface, dynm, &info);
+    }
+
+    fn matches_static(iface: &ModuleInterface, mut dynm: DynModel, info: &neo_tb::dynmodel::BuildInfo) {
         println!("library {} (cached {}, {:.1} s)", info.library.display(), info.cached, info.seconds);
         let mut stat = NeoTbAdder::new();
         dynm.reset();
@@ -60,10 +76,10 @@ neo_tb::with_models! {
     #[test]
     fn an_fst_traced_model_writes_an_fst_file() {
         let (iface, files) = fixture();
-        let (mut m, info) = DynModel::build_traced(&iface, &files, None, WaveFormat::Fst).expect("build");
+        let (mut m, info) = DynModel::build_traced(&iface, &files, None, Some(WaveFormat::Fst)).expect("build");
         println!("library {} (cached {}, {:.1} s) {}", info.library.display(), info.cached, info.seconds, info.log);
         assert!(info.library.parent().expect("dir").to_string_lossy().contains("dyn-neo_tb_adder-fst-"));
-        assert_eq!(m.wave_format(), WaveFormat::Fst);
+        assert_eq!(m.wave_format(), Some(WaveFormat::Fst));
         let dir = neo_tb::waves::target_dir().join("waves");
         std::fs::create_dir_all(&dir).expect("waves dir");
         let vcd = dir.join("dynmodel_adder_wrong.vcd");

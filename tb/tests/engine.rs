@@ -7,7 +7,8 @@
 //! the frame buffer, every tile's next table, the results, the status registers and the golden
 //! counters must be bit-exact. `NEO_SEED` replays a run; `WAVES=1` writes a VCD per case and
 //! `WAVES=fst` an FST (`target/waves/engine_<case>.{vcd,fst}` with a `.gtkw` beside it; the
-//! FST-traced engine is a separate, cached build).
+//! FST-traced engine is a separate, cached build). Without `WAVES` the engine is built without
+//! tracing (half the C++ to compile).
 //! Without Verilator at build time the tests are absent (build.rs warns, and fails when `CI` is
 //! set), as the other cosimulation benches.
 
@@ -25,7 +26,7 @@ use std::sync::Mutex;
 /// Builds are serialised in this process (a second build of a configuration is a cache hit).
 static BUILD: Mutex<()> = Mutex::new(());
 
-fn model(cfg: &EngineConfig, format: WaveFormat) -> EngineModel {
+fn model(cfg: &EngineConfig, format: Option<WaveFormat>) -> EngineModel {
     let _one_at_a_time = BUILD.lock().unwrap_or_else(|e| e.into_inner());
     let m = EngineModel::build_traced(cfg, format).unwrap_or_else(|e| panic!("building neo_engine: {e}"));
     let how = if m.build.cached { "cached" } else { "built" };
@@ -45,7 +46,7 @@ fn run_case(scene: &Scene, how: &CaseScene, c: EngineCase, frames: usize, res: [
     let waves = format.map(|f| {
         neo_tb::waves::target_dir().join("waves").join(format!("engine_{}.{}", c.name(), f.extension()))
     });
-    let engine = model(&cfg, format.unwrap_or_default());
+    let engine = model(&cfg, format);
     let mut rig = EngineRig::new(engine, RunOptions::default(), seed, waves.clone()).expect("rig");
     if let Some(w) = &waves {
         println!("waves: {}\nwaves: gtkwave {}", w.display(), neo_tb::waves::gtkw_path(w).display());
