@@ -105,7 +105,7 @@ fn io_err(tool: &str, e: std::io::Error) -> ToolError {
 }
 
 /// Yosys statistics of one synthesized top (generic gates, flattened).
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct SynthStats {
     /// The top module.
     pub top: String,

@@ -17,6 +17,7 @@ use neo_sim::engine_frame::{EngineFrameModel, FramePrediction, PortTiming};
 use neo_sim::latency;
 use neo_tb::axi::AxiTiming;
 use neo_tb::engine::{EngineModel, EngineRig, FrameReport, RunOptions};
+use neo_tb::waves::WaveFormat;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -44,7 +45,9 @@ pub struct CosimArgs {
     /// Seed of the harness's random timing (default: from the clock; printed).
     #[arg(long)]
     pub seed: Option<String>,
-    /// Write a VCD of the whole run to this path.
+    /// Write a trace of the whole run to this path: FST when it ends in `.fst` (compressed; an
+    /// FST-traced engine is a separate, cached build), else VCD; a GTKWave save file (`.gtkw`)
+    /// is written beside it.
     #[arg(long)]
     pub waves: Option<PathBuf>,
     /// Print one JSON record per frame instead of text.
@@ -88,7 +91,8 @@ pub fn run(a: CosimArgs) -> Result<()> {
         cfg.mem_channels
     );
     let spin = spinner("building the verilated engine (cached after the first build)");
-    let engine = EngineModel::build(&cfg).map_err(|e| anyhow!("building neo_engine: {e}"))?;
+    let format = a.waves.as_deref().map(WaveFormat::of_path);
+    let engine = EngineModel::build_traced(&cfg, format).map_err(|e| anyhow!("building neo_engine: {e}"))?;
     spin.finish_and_clear();
     let b = &engine.build;
     eprintln!("engine model: {} in {:.1} s {}", if b.cached { "cached" } else { "built" }, b.seconds, b.log);
@@ -97,7 +101,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
     let opts = RunOptions { timing, ..RunOptions::default() };
     let mut rig = EngineRig::new(engine, opts, seed, a.waves.clone()).map_err(|e| anyhow!(e))?;
     if let Some(w) = &a.waves {
-        eprintln!("waves: {}", w.display());
+        eprintln!("waves: {}\nwaves: gtkwave {}", w.display(), neo_tb::waves::gtkw_path(w).display());
     }
     let bar = frame_bar(session.frames() as u64, a.json);
     let mut failed = None;

@@ -4,7 +4,7 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use neo_gen::output::{check_dir, write_dir};
-use neo_gen::report::{table, topology_reports, unit_reports, SynthReport, YOSYS_COMMAND};
+use neo_gen::report::{table, topology_reports, tree, unit_reports, SynthReport, YOSYS_COMMAND};
 use neo_gen::EngineConfig;
 use std::path::PathBuf;
 
@@ -20,9 +20,15 @@ pub struct GenArgs {
     /// Compare OUT against fresh output instead of writing; fails listing differing files.
     #[arg(long)]
     pub check: bool,
-    /// Synthesize every top with Yosys, print cells / flip-flops / depth, write the JSON report.
+    /// Synthesize every top with Yosys (the raster core and `neo_engine` hierarchically), print
+    /// cells / flip-flops / depth and the engine's hierarchy (instances, Verilog lines, cells,
+    /// totals per part), write the JSON report. Units whose Verilog is unchanged since the
+    /// report at --report are taken from it.
     #[arg(long)]
     pub stats: bool,
+    /// With --stats: synthesize every top again (ignore the previous report).
+    #[arg(long)]
+    pub fresh: bool,
     /// With --stats: also synthesize the BSU of every topology.
     #[arg(long)]
     pub all_topologies: bool,
@@ -58,10 +64,23 @@ pub fn run(a: GenArgs) -> Result<()> {
         println!("wrote {} files to {}: {}", written.len(), a.out.display(), written.join(" "));
     }
     if a.stats {
-        let units = unit_reports(&cfg)?;
+        let previous: Option<SynthReport> = if a.fresh {
+            None
+        } else {
+            std::fs::read_to_string(&a.report).ok().and_then(|t| serde_json::from_str(&t).ok())
+        };
+        let t0 = std::time::Instant::now();
+        let progress = |u: &neo_gen::report::UnitReport, reused: bool| {
+            let how = if reused { "unchanged, from the previous report" } else { "synthesized" };
+            eprintln!("  {:<24} {how} ({:.0} s)", u.unit, u.seconds);
+        };
+        let units = unit_reports(&cfg, previous.as_ref(), &progress)?;
+        eprintln!("synthesis: {:.0} s", t0.elapsed().as_secs_f64());
         let bsu_topologies = if a.all_topologies { topology_reports(&cfg)? } else { Vec::new() };
         let report = SynthReport { config: cfg, command: YOSYS_COMMAND.to_string(), units, bsu_topologies };
         print!("{}", table(&report));
+        println!();
+        print!("{}", tree::build(&report.config, Some(&report))?.text(&report.config));
         if let Some(dir) = a.report.parent() {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }

@@ -6,6 +6,11 @@
 //! with the Verilator runtime into one shared library, caches it by content hash beside the
 //! static models (`$NEO_CACHE_DIR` or `<target>/neo-verilator-cache/dyn-<top>-<hash>/`) and
 //! loads it. Ports are bound by index through the shim's `neo_T_set_port` / `neo_T_get_port`.
+//!
+//! A model is traced as VCD (`--trace`, as the static models; [`DynModel::build`]) or, built with
+//! [`DynModel::build_traced`], as FST (`--trace-fst`, the FST writer and `-lz`) or not at all
+//! (no `--trace`: about half the C++ to compile, for runs that write no waves); each is its own
+//! cache entry (`dyn-<top>-<hash>`, `dyn-<top>-fst-<hash>`, `dyn-<top>-untraced-<hash>`).
 
 #[allow(dead_code)]
 #[path = "../build/cache.rs"]
@@ -17,6 +22,7 @@ mod shim;
 #[path = "../build/verilator.rs"]
 mod verilator;
 
+use crate::waves::WaveFormat;
 use neo_gen::interface::{Dir, ModuleInterface};
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::fs;
@@ -74,6 +80,7 @@ pub struct DynModel {
     cycle: u64,
     time: u64,
     tracing: bool,
+    format: Option<WaveFormat>,
     // Kept last: dropped after `raw` is freed.
     _lib: libloading::Library,
 }
@@ -85,18 +92,34 @@ unsafe impl Send for DynModel {}
 impl DynModel {
     /// Builds (or finds in the cache) and loads the model of `iface.name` from `files` (file
     /// name, Verilog text) and the optional lint waivers `vlt`.
+    /// The model is VCD-traced.
     pub fn build(
         iface: &ModuleInterface,
         files: &[(String, String)],
         vlt: Option<&str>,
     ) -> Result<(DynModel, BuildInfo), String> {
-        let info = build_library(iface, files, vlt)?;
-        let model = DynModel::load(iface, &info.library)?;
+        Self::build_traced(iface, files, vlt, Some(WaveFormat::Vcd))
+    }
+
+    /// [`DynModel::build`] with the trace writer of `format`, or without tracing (`None`); each
+    /// is a separate build and cache entry.
+    pub fn build_traced(
+        iface: &ModuleInterface,
+        files: &[(String, String)],
+        vlt: Option<&str>,
+        format: Option<WaveFormat>,
+    ) -> Result<(DynModel, BuildInfo), String> {
+        let info = build_library(iface, files, vlt, format)?;
+        let model = DynModel::load(iface, &info.library, format)?;
         Ok((model, info))
     }
 
-    /// Loads a library built by [`DynModel::build`] for `iface`.
-    pub fn load(iface: &ModuleInterface, library: &Path) -> Result<DynModel, String> {
+    /// Loads a library built by [`DynModel::build_traced`] for `iface` with `format`.
+    pub fn load(
+        iface: &ModuleInterface,
+        library: &Path,
+        format: Option<WaveFormat>,
+    ) -> Result<DynModel, String> {
         let t = &iface.name;
         // SAFETY: the library is one of ours (built from the shim); loading runs Verilator's
         // static constructors only.
@@ -130,7 +153,8 @@ impl DynModel {
         let find = |n: &str| iface.ports.iter().position(|p| p.name == n && p.dir == Dir::In);
         let (clk, rst) = (find("clk_i"), find("rst_ni"));
         let iface = iface.clone();
-        let mut m = DynModel { api, raw, iface, clk, rst, cycle: 0, time: 0, tracing: false, _lib: lib };
+        let mut m =
+            DynModel { api, raw, iface, clk, rst, cycle: 0, time: 0, tracing: false, format, _lib: lib };
         m.set_bit(clk, false);
         m.set_bit(rst, true);
         m.eval();
@@ -230,13 +254,37 @@ impl DynModel {
         self.cycle
     }
 
-    /// Starts a VCD trace at `path`.
+    /// The format the model traces in (`None`: built without tracing).
+    pub fn wave_format(&self) -> Option<WaveFormat> {
+        self.format
+    }
+
+    /// Starts a trace at `path` (every later half cycle is dumped). Its extension must name the
+    /// model's format ([`WaveFormat::of_path`]: `.fst` for an FST-traced model, anything else
+    /// for a VCD-traced one).
     pub fn trace_open(&mut self, path: &Path) -> std::io::Result<()> {
+        let wanted = WaveFormat::of_path(path);
+        if Some(wanted) != self.format {
+            let built = self.format.map_or("nothing".to_string(), |f| f.extension().to_uppercase());
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "{}: a {} file, but the {} model was built to trace {built} (build it with that format)",
+                    path.display(),
+                    wanted.extension().to_uppercase(),
+                    self.iface.name,
+                ),
+            ));
+        }
         let c = CString::new(path.as_os_str().to_string_lossy().as_bytes())
             .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
         // SAFETY: `raw` is live; `c` outlives the call.
         if unsafe { (self.api.trace_open)(self.raw, c.as_ptr()) } == 0 {
-            return Err(std::io::Error::other(format!("cannot open VCD {}", path.display())));
+            return Err(std::io::Error::other(format!(
+                "cannot open {} {}",
+                wanted.extension().to_uppercase(),
+                path.display()
+            )));
         }
         self.tracing = true;
         Ok(())
@@ -282,17 +330,63 @@ fn cxx_version(cxx: &str) -> String {
 }
 
 /// Builds the shared library of `iface.name` into the cache (or finds it there).
+/// The trace-dependent parts of a build: Verilator flags, C++ defines, runtime sources, extra
+/// link libraries, cache name suffix.
+struct Flavour {
+    flags: &'static [&'static str],
+    defines: &'static [(&'static str, &'static str)],
+    runtime: &'static [&'static str],
+    libs: &'static [&'static str],
+    suffix: &'static str,
+}
+
+impl Flavour {
+    fn of(format: Option<WaveFormat>) -> Flavour {
+        match format {
+            None => Flavour {
+                flags: verilator::VERILATOR_FLAGS_UNTRACED,
+                defines: verilator::CPP_DEFINES_UNTRACED,
+                runtime: verilator::RUNTIME_SOURCES_UNTRACED,
+                libs: &[],
+                suffix: "-untraced",
+            },
+            Some(WaveFormat::Vcd) => Flavour {
+                flags: verilator::VERILATOR_FLAGS,
+                defines: verilator::CPP_DEFINES,
+                runtime: verilator::RUNTIME_SOURCES,
+                libs: &[],
+                suffix: "",
+            },
+            Some(WaveFormat::Fst) => Flavour {
+                flags: verilator::VERILATOR_FLAGS_FST,
+                defines: verilator::CPP_DEFINES_FST,
+                runtime: verilator::RUNTIME_SOURCES_FST,
+                libs: &["-lz"],
+                suffix: "-fst",
+            },
+        }
+    }
+}
+
+/// Builds the shared library of `iface.name` into the cache (or finds it there).
 fn build_library(
     iface: &ModuleInterface,
     files: &[(String, String)],
     vlt: Option<&str>,
+    format: Option<WaveFormat>,
 ) -> Result<BuildInfo, String> {
     let t0 = Instant::now();
     shim::validate(iface)?;
     let v = verilator::Verilator::find()
         .ok_or("verilator not found: install it (scripts/setup does) or set VERILATOR")?;
     let top = &iface.name;
-    let mut cpp = shim::cpp(iface);
+    let flavour = Flavour::of(format);
+    let trace = match format {
+        None => shim::ShimTrace::Off,
+        Some(WaveFormat::Vcd) => shim::ShimTrace::Vcd,
+        Some(WaveFormat::Fst) => shim::ShimTrace::Fst,
+    };
+    let mut cpp = shim::cpp_traced(iface, trace);
     shim::cpp_by_index(&mut cpp, iface);
     let cxx = cxx();
     let mut key = cache::Key::new();
@@ -303,24 +397,34 @@ fn build_library(
     if let Some(vlt) = vlt {
         key.add("lint.vlt", vlt.as_bytes());
     }
-    key.add("flags", verilator::VERILATOR_FLAGS.join(" ").as_bytes());
+    key.add("flags", flavour.flags.join(" ").as_bytes());
+    if format != Some(WaveFormat::Vcd) {
+        // Only for FST and untraced, so that the VCD models' keys (and cache entries) stay as they were.
+        key.add(
+            "trace",
+            format!("{:?} {:?} {:?}", flavour.defines, flavour.runtime, flavour.libs).as_bytes(),
+        );
+    }
     key.add("verilator", v.version.as_bytes());
     key.add("compiler", format!("{cxx} {}", cxx_version(&cxx)).as_bytes());
     key.add("dyn", format!("{DYN_VERSION} {OPT_FAST} {OPT_SLOW} {}", shim::SHIM_VERSION).as_bytes());
     key.add("shim.cpp", cpp.as_bytes());
     let lib_name = format!("libneo_{top}.so");
     let mut log = String::new();
-    let (dir, cached) = cache::get_or_build(&cache_root(), &format!("dyn-{top}"), &key, &lib_name, |d| {
-        log = compile(&v, &cxx, top, files, vlt, &cpp, d)?;
-        fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
-    })?;
+    let (dir, cached) =
+        cache::get_or_build(&cache_root(), &format!("dyn-{top}{}", flavour.suffix), &key, &lib_name, |d| {
+            log = compile(&v, &cxx, &flavour, top, files, vlt, &cpp, d)?;
+            fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
+        })?;
     Ok(BuildInfo { library: dir.join(lib_name), cached, seconds: t0.elapsed().as_secs_f64(), log })
 }
 
 /// Verilates and compiles into `dir/libneo_<top>.so`; returns the log line.
+#[allow(clippy::too_many_arguments)]
 fn compile(
     v: &verilator::Verilator,
     cxx: &str,
+    flavour: &Flavour,
     top: &str,
     files: &[(String, String)],
     vlt: Option<&str>,
@@ -338,19 +442,23 @@ fn compile(
     }
     let t0 = Instant::now();
     let obj = dir.join("obj");
-    let (fast, slow) = verilator::verilate(v, top, &paths, &obj)?;
+    let (fast, slow) = verilator::verilate_with(v, flavour.flags, top, &paths, &obj)?;
     let verilate_s = t0.elapsed().as_secs_f64();
     let shim = write(&dir.join("shim.cpp"), cpp)?;
     let mut units: Vec<(PathBuf, &str)> =
         fast.iter().map(|c| (obj.join(format!("{c}.cpp")), OPT_FAST)).collect();
     units.extend(slow.iter().map(|c| (obj.join(format!("{c}.cpp")), OPT_SLOW)));
     units.push((shim, OPT_FAST));
-    units.extend(verilator::RUNTIME_SOURCES.iter().map(|f| (v.include().join(f), OPT_FAST)));
+    units.extend(flavour.runtime.iter().map(|f| (v.include().join(f), OPT_FAST)));
     let t1 = Instant::now();
-    let objects = compile_all(v, cxx, &obj, &units)?;
+    let objects = compile_all(v, cxx, flavour.defines, &obj, &units)?;
     let lib = dir.join(format!("libneo_{top}.so"));
     let mut link = Command::new(cxx);
-    link.args(["-shared", "-Wl,-Bsymbolic", "-o"]).arg(&lib).args(&objects).arg("-lpthread");
+    link.args(["-shared", "-Wl,-Bsymbolic", "-o"])
+        .arg(&lib)
+        .args(&objects)
+        .args(flavour.libs)
+        .arg("-lpthread");
     run(&mut link, "linking")?;
     for o in &objects {
         let _ = fs::remove_file(o);
@@ -366,6 +474,7 @@ fn compile(
 fn compile_all(
     v: &verilator::Verilator,
     cxx: &str,
+    defines: &[(&str, &str)],
     obj: &Path,
     units: &[(PathBuf, &str)],
 ) -> Result<Vec<PathBuf>, String> {
@@ -383,7 +492,7 @@ fn compile_all(
                 .arg(v.include().join("vltstd"))
                 .arg("-I")
                 .arg(obj);
-            for (name, value) in verilator::CPP_DEFINES {
+            for (name, value) in defines {
                 c.arg(format!("-D{name}={value}"));
             }
             c.arg("-o").arg(&out).arg(src);

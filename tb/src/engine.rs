@@ -15,6 +15,7 @@ use crate::check::Checker;
 use crate::dut::PortIo;
 use crate::dynmodel::{BuildInfo, DynModel};
 use crate::rng::Rng;
+use crate::waves::WaveFormat;
 use neo_gen::EngineConfig;
 use neo_golden::engine::expected::Mismatch;
 use neo_golden::engine::host::FramePlan;
@@ -54,7 +55,15 @@ impl EngineModel {
     /// very configuration (its header names `cfg.hash()`), that file is read from `DIR` (the
     /// units come from the generator: `DIR` holds the default configuration's units for the
     /// static models); engines of other configurations are generated as usual.
+    /// The model is built without tracing (about half the C++ of a traced one); see
+    /// [`EngineModel::build_traced`] for waves.
     pub fn build(cfg: &EngineConfig) -> Result<EngineModel, String> {
+        Self::build_traced(cfg, None)
+    }
+
+    /// [`EngineModel::build`] tracing in `format` (`None`: untraced); each is a separate build
+    /// and cache entry, and [`EngineRig::new`] takes a waves path of the model's format only.
+    pub fn build_traced(cfg: &EngineConfig, format: Option<WaveFormat>) -> Result<EngineModel, String> {
         cfg.validate().map_err(|e| e.to_string())?;
         let mut files: Vec<(String, String)> =
             neo_gen::files_for(cfg, TOP).into_iter().map(|f| (f.file_name(), f.text)).collect();
@@ -75,7 +84,7 @@ impl EngineModel {
             .find(|m| m.name == TOP)
             .ok_or("the generator emits no neo_engine")?
             .interface();
-        let (model, build) = DynModel::build(&iface, &files, Some(&vlt))?;
+        let (model, build) = DynModel::build_traced(&iface, &files, Some(&vlt), format)?;
         Ok(EngineModel { cfg: cfg.clone(), model, build })
     }
 }
@@ -134,7 +143,10 @@ pub struct EngineRig {
 }
 
 impl EngineRig {
-    /// A rig around `engine` with an empty memory; resets the engine. `waves`: a VCD path.
+    /// A rig around `engine` with an empty memory; resets the engine. `waves`: a trace of the
+    /// whole run, VCD or FST by its extension, which must be the format the model was built
+    /// for ([`EngineModel::build_traced`]); a GTKWave save file listing the engine's ports is
+    /// written beside it ([`crate::waves::write_gtkw`]).
     pub fn new(
         engine: EngineModel,
         opts: RunOptions,
@@ -156,7 +168,12 @@ impl EngineRig {
         let lite = AxilManager::bind(m, "s_axil_", rng.fork(1))?;
         let done = m.port("done_o")?;
         if let Some(path) = &waves {
+            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            }
             engine.model.trace_open(path).map_err(|e| e.to_string())?;
+            let ports = engine.model.interface().ports.iter().map(|p| (p.name.as_str(), p.width));
+            crate::waves::write_gtkw(path, TOP, ports).map_err(|e| format!("{}: {e}", path.display()))?;
         }
         engine.model.reset();
         let mem = AxiMemory::new(k, Memory::new(), opts.timing, rng.next_u64());
@@ -188,7 +205,7 @@ impl EngineRig {
         &self.engine.cfg
     }
 
-    /// The VCD being written, if any.
+    /// The trace being written (VCD or FST), if any.
     pub fn waves(&self) -> Option<&PathBuf> {
         self.waves.as_ref()
     }
@@ -286,7 +303,7 @@ impl EngineRig {
         Ok(out)
     }
 
-    /// Closes the VCD, if one is open.
+    /// Closes the trace, if one is open.
     pub fn finish(&mut self) {
         self.engine.model.trace_close();
     }

@@ -1,9 +1,11 @@
 //! A model built and loaded at run time (`neo_tb::dynmodel`) behaves as the statically linked
-//! one: the harness's adder fixture, built both ways, gives the same outputs cycle by cycle.
+//! one: the harness's adder fixture, built both ways, gives the same outputs cycle by cycle. Its
+//! FST-traced build (`WAVES=fst`, `neo cosim --waves F.fst`) writes an FST file.
 
 use neo_gen::interface::ModuleInterface;
 use neo_tb::dynmodel::DynModel;
 use neo_tb::rng::Rng;
+use neo_tb::waves::WaveFormat;
 
 fn fixture() -> (ModuleInterface, Vec<(String, String)>) {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
@@ -20,7 +22,23 @@ neo_tb::with_models! {
     #[test]
     fn a_run_time_model_matches_the_static_one_cycle_by_cycle() {
         let (iface, files) = fixture();
-        let (mut dynm, info) = DynModel::build(&iface, &files, None).expect("build");
+        let (dynm, info) = DynModel::build(&iface, &files, None).expect("build");
+        matches_static(&iface, dynm, &info);
+    }
+
+    #[test]
+    fn an_untraced_run_time_model_matches_the_static_one_and_writes_no_waves() {
+        let (iface, files) = fixture();
+        let (mut dynm, info) = DynModel::build_traced(&iface, &files, None, None).expect("build");
+        assert!(info.library.parent().expect("dir").to_string_lossy().contains("dyn-neo_tb_adder-untraced-"));
+        assert_eq!(dynm.wave_format(), None);
+        let dir = neo_tb::waves::target_dir().join("waves");
+        let e = dynm.trace_open(&dir.join("untraced.vcd")).expect_err("no tracing");
+        assert!(e.to_string().contains("built to trace nothing"), "{e}");
+        matches_static(&iface, dynm, &info);
+    }
+
+    fn matches_static(iface: &ModuleInterface, mut dynm: DynModel, info: &neo_tb::dynmodel::BuildInfo) {
         println!("library {} (cached {}, {:.1} s)", info.library.display(), info.cached, info.seconds);
         let mut stat = NeoTbAdder::new();
         dynm.reset();
@@ -48,5 +66,55 @@ neo_tb::with_models! {
         }
         assert_eq!(dynm.cycle(), 500);
         assert!(dynm.port("no_such_port").unwrap_err().contains("neo_tb_adder has no port no_such_port"));
+    }
+
+    /// Big-endian u64 at `at` (FST header fields).
+    fn be64(b: &[u8], at: usize) -> u64 {
+        u64::from_be_bytes(b[at..at + 8].try_into().expect("8 bytes"))
+    }
+
+    #[test]
+    fn an_fst_traced_model_writes_an_fst_file() {
+        let (iface, files) = fixture();
+        let (mut m, info) = DynModel::build_traced(&iface, &files, None, Some(WaveFormat::Fst)).expect("build");
+        println!("library {} (cached {}, {:.1} s) {}", info.library.display(), info.cached, info.seconds, info.log);
+        assert!(info.library.parent().expect("dir").to_string_lossy().contains("dyn-neo_tb_adder-fst-"));
+        assert_eq!(m.wave_format(), Some(WaveFormat::Fst));
+        let dir = neo_tb::waves::target_dir().join("waves");
+        std::fs::create_dir_all(&dir).expect("waves dir");
+        let vcd = dir.join("dynmodel_adder_wrong.vcd");
+        let e = m.trace_open(&vcd).expect_err("an FST model refuses a .vcd path");
+        assert!(e.to_string().contains("built to trace FST"), "{e}");
+        let fst = dir.join("dynmodel_adder.fst");
+        let _ = std::fs::remove_file(&fst);
+        m.trace_open(&fst).expect("trace_open");
+        m.reset();
+        let mut rng = Rng::new(7);
+        for _ in 0..200 {
+            for (i, p) in iface.ports.iter().enumerate() {
+                if p.dir == neo_gen::interface::Dir::In && p.name != "clk_i" && p.name != "rst_ni" {
+                    let words: Vec<u32> = (0..p.width.div_ceil(32)).map(|_| rng.next_u64() as u32).collect();
+                    m.set_words(i, &words);
+                }
+            }
+            m.tick();
+        }
+        m.trace_close();
+        let b = std::fs::read(&fst).expect("the FST file exists");
+        println!("{}: {} bytes", fst.display(), b.len());
+        assert!(b.len() > 329, "more than the header block: {} bytes", b.len());
+        // FST header block: tag FST_BL_HDR (0), section length 329, start time, end time, the
+        // endian test double e (native order), ..., variable count at +49.
+        assert_eq!(b[0], 0, "FST_BL_HDR");
+        assert_eq!(be64(&b, 1), 329, "header section length");
+        let e = f64::from_ne_bytes(b[25..33].try_into().expect("8 bytes"));
+        assert_eq!(e, std::f64::consts::E, "endian test");
+        // 4 reset cycles and 200 more, two dumps a cycle, 10 time units a cycle.
+        assert!(be64(&b, 17) >= 10 * 200, "end time {} covers the run", be64(&b, 17));
+        assert!(be64(&b, 49) >= iface.ports.len() as u64, "a variable per port at least: {}", be64(&b, 49));
+
+        let (mut v, _) = DynModel::build(&iface, &files, None).expect("the VCD build");
+        let e = v.trace_open(&fst).expect_err("a VCD model refuses an .fst path");
+        assert!(e.to_string().contains("built to trace VCD"), "{e}");
     }
 }

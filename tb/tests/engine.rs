@@ -5,7 +5,10 @@
 //! Each case: the golden host session writes the frame's inputs, the engine runs it behind a
 //! hostile AXI memory (latency, 3/4 bandwidth, random extra delays, reordering across IDs), and
 //! the frame buffer, every tile's next table, the results, the status registers and the golden
-//! counters must be bit-exact. `NEO_SEED` replays a run; `WAVES=1` writes a VCD per case.
+//! counters must be bit-exact. `NEO_SEED` replays a run; `WAVES=1` writes a VCD per case and
+//! `WAVES=fst` an FST (`target/waves/engine_<case>.{vcd,fst}` with a `.gtkw` beside it; the
+//! FST-traced engine is a separate, cached build). Without `WAVES` the engine is built without
+//! tracing (half the C++ to compile).
 //! Without Verilator at build time the tests are absent (build.rs warns, and fails when `CI` is
 //! set), as the other cosimulation benches.
 
@@ -18,15 +21,16 @@ use neo_golden::shared::shared_file_for_test;
 use neo_golden::source::load_scene;
 use neo_tb::engine::{ci_config, EngineModel, EngineRig, RunOptions};
 use neo_tb::rng::test_seed;
+use neo_tb::waves::WaveFormat;
 use std::collections::HashMap;
 use std::sync::Mutex;
 
 /// Builds are serialised in this process (a second build of a configuration is a cache hit).
 static BUILD: Mutex<()> = Mutex::new(());
 
-fn model(cfg: &EngineConfig) -> EngineModel {
+fn model(cfg: &EngineConfig, format: Option<WaveFormat>) -> EngineModel {
     let _one_at_a_time = BUILD.lock().unwrap_or_else(|e| e.into_inner());
-    let m = EngineModel::build(cfg).unwrap_or_else(|e| panic!("building neo_engine: {e}"));
+    let m = EngineModel::build_traced(cfg, format).unwrap_or_else(|e| panic!("building neo_engine: {e}"));
     let how = if m.build.cached { "cached" } else { "built" };
     println!(
         "neo_engine ({} + {} cores): {how} in {:.1} s {}",
@@ -40,11 +44,14 @@ fn run_case(scene: &Scene, how: &CaseScene, c: EngineCase, frames: usize, res: [
     let seed = test_seed(&format!("engine_{}", c.name()));
     let (traj, cfg) = c.setup(scene, how, frames, res, &ci_config()).expect("case setup");
     let mut session = EngineSession::new(scene, traj, &cfg).expect("session");
-    let waves = neo_tb::waves::waves_requested()
-        .then(|| neo_tb::waves::target_dir().join("waves").join(format!("engine_{}.vcd", c.name())));
-    let mut rig = EngineRig::new(model(&cfg), RunOptions::default(), seed, waves.clone()).expect("rig");
+    let format = neo_tb::waves::requested_format();
+    let waves = format.map(|f| {
+        neo_tb::waves::target_dir().join("waves").join(format!("engine_{}.{}", c.name(), f.extension()))
+    });
+    let engine = model(&cfg, format);
+    let mut rig = EngineRig::new(engine, RunOptions::default(), seed, waves.clone()).expect("rig");
     if let Some(w) = &waves {
-        println!("waves: {}", w.display());
+        println!("waves: {}\nwaves: gtkwave {}", w.display(), neo_tb::waves::gtkw_path(w).display());
     }
     let mut cycles = Vec::new();
     let lat = Latency::from_file(&neo_golden::shared::workspace_root().join("reports/latency.json"))

@@ -420,10 +420,51 @@ impl Module {
         out
     }
 
+    /// The instances in the body, as placed: direct instances and generate loops with their
+    /// bodies' instances (for hierarchical reports, `neo gen --stats`).
+    pub fn placements(&self) -> Vec<Placement> {
+        placements(&self.items)
+    }
+
     /// The module as Verilog-2005 text (header line first, trailing newline).
     pub fn to_verilog(&self) -> String {
         print::module(self)
     }
+}
+
+/// Where an instance sits in a module body ([`Module::placements`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Placement {
+    /// `MODULE NAME (...)` directly in the body (or in the enclosing generate block).
+    Instance {
+        /// Instance name.
+        name: String,
+        /// Instantiated module.
+        module: String,
+    },
+    /// A `generate for` block `LABEL` of `count` iterations and the placements in its body.
+    Loop {
+        /// Block label.
+        label: String,
+        /// Iterations.
+        count: u32,
+        /// The body's placements.
+        body: Vec<Placement>,
+    },
+}
+
+fn placements(items: &[Item]) -> Vec<Placement> {
+    items
+        .iter()
+        .filter_map(|it| match it {
+            Item::Instance(i) => Some(Placement::Instance { name: i.name.clone(), module: i.module.clone() }),
+            Item::GenFor { count, label, items, .. } => {
+                let body = placements(items);
+                (!body.is_empty()).then(|| Placement::Loop { label: label.clone(), count: *count, body })
+            }
+            _ => None,
+        })
+        .collect()
 }
 
 fn collect_instances(items: &[Item], out: &mut Vec<String>) {

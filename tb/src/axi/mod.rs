@@ -112,13 +112,20 @@ pub struct SubordinateSignals {
 
 /// The port indices of one AXI4 interface of a Verilated model, by prefix (`m_axi_`,
 /// `s0_axi_`), on the manager side (the model drives AR/AW/W) or the subordinate side.
+///
+/// The indices are resolved once, when the interface is bound, and kept in [`FIELDS`] order, so
+/// the per-cycle accessors index an array by a field constant and do no string work.
 #[derive(Clone, Debug)]
 pub struct AxiBinding {
-    idx: Vec<usize>,
+    idx: [usize; FIELD_COUNT],
 }
 
-/// The fields in binding order (each with its direction: true = driven by the manager).
-const FIELDS: [(&str, bool); 29] = [
+/// Number of signals of one interface.
+const FIELD_COUNT: usize = 29;
+
+/// The fields in binding order (each with its direction: true = driven by the manager); the
+/// constants below are positions in this table.
+const FIELDS: [(&str, bool); FIELD_COUNT] = [
     ("arvalid", true),
     ("arready", false),
     ("arid", true),
@@ -150,13 +157,29 @@ const FIELDS: [(&str, bool); 29] = [
     ("bresp", false),
 ];
 
-const AR: [&str; 6] = ["arvalid", "arid", "araddr", "arlen", "arsize", "arburst"];
-const AW: [&str; 6] = ["awvalid", "awid", "awaddr", "awlen", "awsize", "awburst"];
+const ARVALID: usize = 0;
+const ARREADY: usize = 1;
+const RVALID: usize = 7;
+const RREADY: usize = 8;
+const RID: usize = 9;
+const RDATA: usize = 10;
+const RRESP: usize = 11;
+const RLAST: usize = 12;
+const AWVALID: usize = 13;
+const AWREADY: usize = 14;
+const WVALID: usize = 20;
+const WREADY: usize = 21;
+const WDATA: usize = 22;
+const WSTRB: usize = 23;
+const WLAST: usize = 24;
+const BVALID: usize = 25;
+const BREADY: usize = 26;
+const BID: usize = 27;
+const BRESP: usize = 28;
 
-/// Index of a field in [`FIELDS`].
-fn f(name: &str) -> usize {
-    FIELDS.iter().position(|(n, _)| *n == name).expect("AXI field")
-}
+/// An address channel's VALID, ID, ADDR, LEN, SIZE and BURST fields.
+const AR: [usize; 6] = [ARVALID, 2, 3, 4, 5, 6];
+const AW: [usize; 6] = [AWVALID, 15, 16, 17, 18, 19];
 
 impl AxiBinding {
     /// Binds the interface `prefix` of model `D`; `manager`: the model is the manager on it.
@@ -177,25 +200,26 @@ impl AxiBinding {
         manager: bool,
         find: impl Fn(&str) -> Result<usize, String>,
     ) -> Result<AxiBinding, String> {
-        let idx = FIELDS
-            .iter()
-            .map(|(n, from_m)| {
-                let suffix = if *from_m == manager { "o" } else { "i" };
-                find(&format!("{prefix}{n}_{suffix}"))
-            })
-            .collect::<Result<_, _>>()?;
+        let mut idx = [0; FIELD_COUNT];
+        for (i, (n, from_m)) in idx.iter_mut().zip(FIELDS) {
+            let suffix = if from_m == manager { "o" } else { "i" };
+            *i = find(&format!("{prefix}{n}_{suffix}"))?;
+        }
         Ok(AxiBinding { idx })
     }
 
-    fn get<D: PortIo + ?Sized>(&self, d: &D, name: &str) -> u64 {
-        d.io_get(self.idx[f(name)])
+    #[inline]
+    fn get<D: PortIo + ?Sized>(&self, d: &D, field: usize) -> u64 {
+        d.io_get(self.idx[field])
     }
 
-    fn set<D: PortIo + ?Sized>(&self, d: &mut D, name: &str, v: u64) {
-        d.io_set(self.idx[f(name)], v);
+    #[inline]
+    fn set<D: PortIo + ?Sized>(&self, d: &mut D, field: usize, v: u64) {
+        d.io_set(self.idx[field], v);
     }
 
-    fn get_addr<D: PortIo + ?Sized>(&self, d: &D, ch: &[&str; 6]) -> Option<Addr> {
+    /// The address channel `ch` ([`AR`] or [`AW`]).
+    fn get_addr<D: PortIo + ?Sized>(&self, d: &D, ch: &[usize; 6]) -> Option<Addr> {
         (self.get(d, ch[0]) != 0).then(|| Addr {
             id: self.get(d, ch[1]) as u32,
             addr: self.get(d, ch[2]),
@@ -205,7 +229,7 @@ impl AxiBinding {
         })
     }
 
-    fn set_addr<D: PortIo + ?Sized>(&self, d: &mut D, ch: &[&str; 6], a: Option<Addr>) {
+    fn set_addr<D: PortIo + ?Sized>(&self, d: &mut D, ch: &[usize; 6], a: Option<Addr>) {
         let a2 = a.unwrap_or_default();
         self.set(d, ch[0], a.is_some() as u64);
         self.set(d, ch[1], u64::from(a2.id));
@@ -219,14 +243,14 @@ impl AxiBinding {
     pub fn get_manager<D: PortIo + ?Sized>(&self, d: &D) -> ManagerSignals {
         ManagerSignals {
             ar: self.get_addr(d, &AR),
-            rready: self.get(d, "rready") != 0,
+            rready: self.get(d, RREADY) != 0,
             aw: self.get_addr(d, &AW),
-            w: (self.get(d, "wvalid") != 0).then(|| WBeat {
-                data: self.get(d, "wdata"),
-                strb: self.get(d, "wstrb") as u8,
-                last: self.get(d, "wlast") != 0,
+            w: (self.get(d, WVALID) != 0).then(|| WBeat {
+                data: self.get(d, WDATA),
+                strb: self.get(d, WSTRB) as u8,
+                last: self.get(d, WLAST) != 0,
             }),
-            bready: self.get(d, "bready") != 0,
+            bready: self.get(d, BREADY) != 0,
         }
     }
 
@@ -234,46 +258,105 @@ impl AxiBinding {
     pub fn set_manager<D: PortIo + ?Sized>(&self, d: &mut D, m: &ManagerSignals) {
         self.set_addr(d, &AR, m.ar);
         self.set_addr(d, &AW, m.aw);
-        self.set(d, "rready", m.rready as u64);
-        self.set(d, "bready", m.bready as u64);
+        self.set(d, RREADY, m.rready as u64);
+        self.set(d, BREADY, m.bready as u64);
         let w = m.w.unwrap_or_default();
-        self.set(d, "wvalid", m.w.is_some() as u64);
-        self.set(d, "wdata", w.data);
-        self.set(d, "wstrb", u64::from(w.strb));
-        self.set(d, "wlast", w.last as u64);
+        self.set(d, WVALID, m.w.is_some() as u64);
+        self.set(d, WDATA, w.data);
+        self.set(d, WSTRB, u64::from(w.strb));
+        self.set(d, WLAST, w.last as u64);
     }
 
     /// Reads what the model drives as the subordinate.
     pub fn get_subordinate<D: PortIo + ?Sized>(&self, d: &D) -> SubordinateSignals {
         SubordinateSignals {
-            arready: self.get(d, "arready") != 0,
-            awready: self.get(d, "awready") != 0,
-            wready: self.get(d, "wready") != 0,
-            r: (self.get(d, "rvalid") != 0).then(|| RBeat {
-                id: self.get(d, "rid") as u32,
-                data: self.get(d, "rdata"),
-                resp: self.get(d, "rresp") as u8,
-                last: self.get(d, "rlast") != 0,
+            arready: self.get(d, ARREADY) != 0,
+            awready: self.get(d, AWREADY) != 0,
+            wready: self.get(d, WREADY) != 0,
+            r: (self.get(d, RVALID) != 0).then(|| RBeat {
+                id: self.get(d, RID) as u32,
+                data: self.get(d, RDATA),
+                resp: self.get(d, RRESP) as u8,
+                last: self.get(d, RLAST) != 0,
             }),
-            b: (self.get(d, "bvalid") != 0)
-                .then(|| BResp { id: self.get(d, "bid") as u32, resp: self.get(d, "bresp") as u8 }),
+            b: (self.get(d, BVALID) != 0)
+                .then(|| BResp { id: self.get(d, BID) as u32, resp: self.get(d, BRESP) as u8 }),
         }
     }
 
     /// Drives the model's subordinate-side inputs (it is the manager).
     pub fn set_subordinate<D: PortIo + ?Sized>(&self, d: &mut D, s: &SubordinateSignals) {
-        self.set(d, "arready", s.arready as u64);
-        self.set(d, "awready", s.awready as u64);
-        self.set(d, "wready", s.wready as u64);
+        self.set(d, ARREADY, s.arready as u64);
+        self.set(d, AWREADY, s.awready as u64);
+        self.set(d, WREADY, s.wready as u64);
         let r = s.r.unwrap_or_default();
-        self.set(d, "rvalid", s.r.is_some() as u64);
-        self.set(d, "rid", u64::from(r.id));
-        self.set(d, "rdata", r.data);
-        self.set(d, "rresp", u64::from(r.resp));
-        self.set(d, "rlast", r.last as u64);
+        self.set(d, RVALID, s.r.is_some() as u64);
+        self.set(d, RID, u64::from(r.id));
+        self.set(d, RDATA, r.data);
+        self.set(d, RRESP, u64::from(r.resp));
+        self.set(d, RLAST, r.last as u64);
         let b = s.b.unwrap_or_default();
-        self.set(d, "bvalid", s.b.is_some() as u64);
-        self.set(d, "bid", u64::from(b.id));
-        self.set(d, "bresp", u64::from(b.resp));
+        self.set(d, BVALID, s.b.is_some() as u64);
+        self.set(d, BID, u64::from(b.id));
+        self.set(d, BRESP, u64::from(b.resp));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn field_constants_name_their_fields() {
+        let named = [
+            (ARVALID, "arvalid"),
+            (ARREADY, "arready"),
+            (RVALID, "rvalid"),
+            (RREADY, "rready"),
+            (RID, "rid"),
+            (RDATA, "rdata"),
+            (RRESP, "rresp"),
+            (RLAST, "rlast"),
+            (AWVALID, "awvalid"),
+            (AWREADY, "awready"),
+            (WVALID, "wvalid"),
+            (WREADY, "wready"),
+            (WDATA, "wdata"),
+            (WSTRB, "wstrb"),
+            (WLAST, "wlast"),
+            (BVALID, "bvalid"),
+            (BREADY, "bready"),
+            (BID, "bid"),
+            (BRESP, "bresp"),
+        ];
+        for (i, n) in named {
+            assert_eq!(FIELDS[i].0, n);
+        }
+        for (ch, pre) in [(AR, "ar"), (AW, "aw")] {
+            for (k, f) in ["valid", "id", "addr", "len", "size", "burst"].iter().enumerate() {
+                assert_eq!(FIELDS[ch[k]].0, format!("{pre}{f}"));
+            }
+        }
+    }
+
+    #[test]
+    fn binding_resolves_every_port_with_its_direction() {
+        let names: Vec<String> =
+            FIELDS.iter().flat_map(|(n, _)| [format!("m_axi_{n}_o"), format!("m_axi_{n}_i")]).collect();
+        let b = AxiBinding::lookup("m_axi_", true, |n| {
+            names.iter().position(|x| x == n).ok_or_else(|| format!("no {n}"))
+        })
+        .expect("every port exists");
+        assert_eq!(names[b.idx[ARVALID]], "m_axi_arvalid_o");
+        assert_eq!(names[b.idx[RDATA]], "m_axi_rdata_i");
+        assert_eq!(names[b.idx[AW[2]]], "m_axi_awaddr_o");
+        let missing = AxiBinding::lookup("m_axi_", true, |n| {
+            if n.contains("bresp") {
+                Err(format!("no {n}"))
+            } else {
+                Ok(0)
+            }
+        });
+        assert_eq!(missing.unwrap_err(), "no m_axi_bresp_i");
     }
 }
