@@ -199,7 +199,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, k: &Dims) {
     m.clock_reset();
     m.input_c("cmd_valid_i", 1, "a command is offered");
     m.output_c("cmd_ready_o", 1, "the core takes the offered command (depends on cmd_mode_i)");
-    m.input_c("cmd_mode_i", 2, "0 sort, 1 dps, 2 merge-delete, 3 merge");
+    m.input_c("cmd_mode_i", neo_golden::sort::SortMode::BITS, "0 sort, 1 dps, 2 merge-delete, 3 merge");
     m.input_c("cmd_src_a_i", aw, "entry address of the chunk / stream A");
     m.input_c("cmd_len_a_i", lw, "entries of the chunk (<= chunk size) / stream A");
     m.input_c("cmd_src_b_i", aw, "entry address of stream B (merge modes)");
