@@ -8,7 +8,7 @@ use neo_gen::tools::{require_for_test, TempFiles};
 use neo_gen::units::sort_core::mode;
 use neo_gen::units::VerilogFile;
 use neo_gen::{files_for, EngineConfig, Topology};
-use neo_golden::sort::{merge2, ChunkWork, SortEntry, SortFormat, Sorter};
+use neo_golden::sort::{merge2, merge_pass_count, ChunkWork, SortEntry, SortFormat, Sorter};
 use std::process::Command;
 
 /// xorshift64*: deterministic test data without extra crates.
@@ -621,7 +621,7 @@ fn sort_core_full_rate_chunk_sort_time() {
     let (got, _, done_at) = core_run(&cfg, &mem, &cmds, 51, 100, 100, false);
     assert_eq!(got, expect);
     let cycles = done_at[0];
-    let passes = (c / cfg.bsu_width as u64).ilog2() as u64 + 1;
+    let passes = merge_pass_count(c, cfg.bsu_width as u64) + 1;
     assert!(cycles <= c * (passes + 1) + 200, "chunk sort took {cycles} cycles");
     eprintln!("full-rate 256-entry chunk sort: {cycles} cycles ({passes} merge passes)");
 }
@@ -654,7 +654,7 @@ fn sort_core_back_to_back_chunks_overlap_loads_with_passes() {
         &single[k as usize * c as usize..][..c as usize],
         &expect[k as usize * c as usize..][..c as usize]
     );
-    let passes = (c / cfg.bsu_width as u64).ilog2() as u64;
+    let passes = merge_pass_count(c, cfg.bsu_width as u64);
     let merges = c / cfg.bsu_width as u64 - 1;
     let interval = (done_at[k as usize - 1] - done_at[0]) / (k - 1);
     eprintln!("back-to-back 256-entry SORTs: interval {interval} cycles, single {} cycles", one[0]);

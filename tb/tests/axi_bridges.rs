@@ -17,6 +17,8 @@ fn axi_bridges_skipped_without_verilator() {
 mod cosim {
     use neo_golden::engine::memory::{pixel_to_u32, Memory};
     use neo_tb::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, SubordinateSignals};
+    use neo_golden::raster::RGB_BITS;
+    use neo_tb::bits::{mask, set_bits};
     use neo_tb::check::Checker;
     use neo_tb::dut::Dut;
     use neo_tb::models::{NeoAxiRasterBridge, NeoAxiSortBridge};
@@ -63,13 +65,6 @@ mod cosim {
         mem
     }
 
-    fn mask(bits: u32) -> u64 {
-        if bits >= 64 {
-            u64::MAX
-        } else {
-            (1 << bits) - 1
-        }
-    }
 
     #[test]
     fn axi_sort_bridge_reads_and_writes() {
@@ -275,13 +270,9 @@ mod cosim {
                 Some(Req::Pixels(p, px)) => {
                     // Pixel k at [24k +: 24].
                     let mut v = vec![0u32; wdata_words];
+                    let pw = RGB_BITS as usize;
                     for (k, &c) in px.iter().take(s).enumerate() {
-                        for bit in 0..24 {
-                            if (c >> bit) & 1 == 1 {
-                                let b = 24 * k + bit;
-                                v[b / 32] |= 1 << (b % 32);
-                            }
-                        }
+                        set_bits(&mut v, pw * k, pw, u64::from(c));
                     }
                     (true, 2, p, s as u64, v)
                 }
