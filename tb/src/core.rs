@@ -107,7 +107,9 @@ struct InFlight {
 fn reads(cmd: &Command) -> [Range<u64>; 2] {
     match cmd.mode {
         Mode::Sort | Mode::Dps => [cmd.src_a..cmd.src_a + cmd.len_a, 0..0],
-        Mode::MergeDelete | Mode::Merge => [cmd.src_a..cmd.src_a + cmd.len_a, cmd.src_b..cmd.src_b + cmd.len_b],
+        Mode::MergeDelete | Mode::Merge => {
+            [cmd.src_a..cmd.src_a + cmd.len_a, cmd.src_b..cmd.src_b + cmd.len_b]
+        }
     }
 }
 

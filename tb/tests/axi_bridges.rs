@@ -16,8 +16,8 @@ fn axi_bridges_skipped_without_verilator() {
 #[cfg(neo_has_verilator)]
 mod cosim {
     use neo_golden::engine::memory::{pixel_to_u32, Memory};
-    use neo_tb::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, SubordinateSignals};
     use neo_golden::raster::RGB_BITS;
+    use neo_tb::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, SubordinateSignals};
     use neo_tb::bits::{mask, set_bits};
     use neo_tb::check::Checker;
     use neo_tb::dut::Dut;
@@ -64,7 +64,6 @@ mod cosim {
         }
         mem
     }
-
 
     #[test]
     fn axi_sort_bridge_reads_and_writes() {

@@ -50,7 +50,14 @@ impl TileCmd {
     /// `dst` (`c`'s offsets are relative to both).
     pub fn planned(c: &PlannedCommand, src: u64, dst: u64) -> TileCmd {
         let src_b = if c.mode == SortMode::Merge { src + c.start_b() } else { 0 };
-        TileCmd { mode: c.mode, src_a: src + c.start, len_a: c.len_a, src_b, len_b: c.len_b, dst: dst + c.start }
+        TileCmd {
+            mode: c.mode,
+            src_a: src + c.start,
+            len_a: c.len_a,
+            src_b,
+            len_b: c.len_b,
+            dst: dst + c.start,
+        }
     }
 }
 

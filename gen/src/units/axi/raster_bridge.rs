@@ -128,7 +128,6 @@ fn header(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.output_c("wr_table_o", 1, "pulse: a table-entry write taken");
     m.output_c("wr_pixels_o", 1, "pulse: a pixel-row write taken");
     ports(m, cfg, "m_axi_", true);
-
 }
 
 /// Request decode and the read issuer.
@@ -147,7 +146,6 @@ fn requests(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.assign("ar_new_addr", "mem_req_addr_i");
     m.assign("ar_new_len", "mem_req_len_i");
     m.assign("ar_new_feat", "req_feat");
-
 }
 
 /// The kind FIFO and the R path (table beats straight through, feature words assembled).
@@ -190,7 +188,6 @@ fn read_path(m: &mut Module, d: &Dims) {
     m.wire_assign("rsp_fire", 1, "mem_rsp_valid_o & mem_rsp_ready_i");
     m.assign("rd_table_o", "rsp_fire & ~r_feat");
     m.assign("rd_feat_o", "rsp_fire & r_feat");
-
 }
 
 /// The AW and W path (table entries and pixel rows).
@@ -263,5 +260,4 @@ fn write_path(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.assign("m_axi_wdata_o", format!("w_pix_q ? {pix} : {}", zext(&slice("w_data_q", eb - 1, 0), eb, db)));
     m.assign("m_axi_wlast_o", "w_last");
     write_constants(m, cfg);
-
 }
