@@ -5,10 +5,10 @@
 //! Icarus missing: fails when `CI` is set, skips otherwise.
 
 use neo_gen::tools::{require_for_test, TempFiles};
-use neo_gen::units::sort_core::mode;
 use neo_gen::units::VerilogFile;
 use neo_gen::{files_for, EngineConfig, Topology};
-use neo_golden::sort::{merge2, ChunkWork, SortEntry, SortFormat, Sorter};
+use neo_golden::engine::{run_command, Memory, TileCmd as Cmd};
+use neo_golden::sort::{merge2, merge_pass_count, SortEntry, SortFormat, SortMode, Sorter};
 use std::process::Command;
 
 /// xorshift64*: deterministic test data without extra crates.
@@ -373,38 +373,18 @@ fn msu_sustains_one_entry_per_cycle() {
 
 // ------------------------------------------------------------------------------------ core
 
-/// One command of the core test.
-#[derive(Clone, Debug)]
-struct Cmd {
-    mode: u64,
-    src_a: u64,
-    len_a: u64,
-    src_b: u64,
-    len_b: u64,
-    dst: u64,
-}
-
-/// The golden effect of `cmds` on `mem`; returns the expected `done_len` of each command.
+/// The golden effect of `cmds` on `mem` (golden's [`run_command`] on a memory holding `mem` at
+/// entry address 0); returns the expected `done_len` of each command.
 fn golden_core(cfg: &EngineConfig, mem: &mut [SortEntry], cmds: &[Cmd]) -> Vec<u64> {
+    let f = cfg.format();
+    let mut memory = Memory::default();
+    memory.write_entries(&f, 0, mem);
     let mut sorter = Sorter::new(cfg.sort_config());
-    let mut lens = Vec::new();
-    for c in cmds {
-        let out = match c.mode {
-            mode::SORT | mode::DPS => {
-                let len = (c.len_a as usize).min(cfg.chunk);
-                let mut chunk = mem[c.src_a as usize..][..len].to_vec();
-                sorter.sort_chunk(&mut chunk, &mut ChunkWork::default());
-                chunk
-            }
-            _ => {
-                let a = &mem[c.src_a as usize..][..c.len_a as usize];
-                let b = &mem[c.src_b as usize..][..c.len_b as usize];
-                merge2(a, b, c.mode == mode::MERGE_DELETE)
-            }
-        };
-        mem[c.dst as usize..][..out.len()].copy_from_slice(&out);
-        lens.push(out.len() as u64);
-    }
+    let lens = cmds
+        .iter()
+        .map(|c| run_command(&mut sorter, &mut memory, c).expect("no reserved id in the stimulus").written)
+        .collect();
+    mem.copy_from_slice(&memory.read_entries(&f, 0, mem.len()));
     lens
 }
 
@@ -492,7 +472,7 @@ fn core_run(
     );
     let data = [
         ("mem.hex", mem_hex),
-        ("mode.hex", field(|c| c.mode)),
+        ("mode.hex", field(|c| c.mode.code())),
         ("src_a.hex", field(|c| c.src_a)),
         ("len_a.hex", field(|c| c.len_a)),
         ("src_b.hex", field(|c| c.src_b)),
@@ -540,18 +520,18 @@ fn check_core(cfg: &EngineConfig, seed: u64, p_valid: u32, p_ready: u32, back_to
     let s = |mode, src_a, len_a, dst| Cmd { mode, src_a, len_a, src_b: 0, len_b: 0, dst };
     let mg = |mode, src_a, len_a, src_b, len_b, dst| Cmd { mode, src_a, len_a, src_b, len_b, dst };
     let cmds = vec![
-        s(mode::SORT, 0, c, out),
-        s(mode::DPS, c, c - 1, out + c),
-        s(mode::SORT, 2 * c, 17, out + 2 * c),
-        s(mode::SORT, 2 * c + 20, 1, out + 2 * c + 20),
-        s(mode::SORT, 2 * c + 30, 0, out + 2 * c + 30),
-        s(mode::DPS, 2 * c + 40, c / 2 + 5, out + 2 * c + 40),
-        s(mode::SORT, 3 * c, c + 9, out + 3 * c), // clamped to one chunk
-        mg(mode::MERGE_DELETE, sa, la, sb, lb, out + 4 * c),
-        mg(mode::MERGE, sa, la, sb, lb, out + 4 * c + la + lb),
-        mg(mode::MERGE_DELETE, sa, 0, sb, 5, out + 7 * c),
-        mg(mode::MERGE_DELETE, sa, 0, sb, 0, out + 7 * c + 10),
-        mg(mode::MERGE, sa, 7, sb, 0, out + 7 * c + 20),
+        s(SortMode::Sort, 0, c, out),
+        s(SortMode::Dps, c, c - 1, out + c),
+        s(SortMode::Sort, 2 * c, 17, out + 2 * c),
+        s(SortMode::Sort, 2 * c + 20, 1, out + 2 * c + 20),
+        s(SortMode::Sort, 2 * c + 30, 0, out + 2 * c + 30),
+        s(SortMode::Dps, 2 * c + 40, c / 2 + 5, out + 2 * c + 40),
+        s(SortMode::Sort, 3 * c, c + 9, out + 3 * c), // clamped to one chunk
+        mg(SortMode::MergeDelete, sa, la, sb, lb, out + 4 * c),
+        mg(SortMode::Merge, sa, la, sb, lb, out + 4 * c + la + lb),
+        mg(SortMode::MergeDelete, sa, 0, sb, 5, out + 7 * c),
+        mg(SortMode::MergeDelete, sa, 0, sb, 0, out + 7 * c + 10),
+        mg(SortMode::Merge, sa, 7, sb, 0, out + 7 * c + 20),
     ];
     let mut expect = mem.clone();
     let lens = golden_core(cfg, &mut expect, &cmds);
@@ -615,13 +595,13 @@ fn sort_core_full_rate_chunk_sort_time() {
     let mut rng = Rng(51);
     let c = cfg.chunk as u64;
     let mem: Vec<SortEntry> = (0..2 * c as usize).map(|_| entry(&mut rng, f, 1 << 16, 100)).collect();
-    let cmds = vec![Cmd { mode: mode::SORT, src_a: 0, len_a: c, src_b: 0, len_b: 0, dst: c }];
+    let cmds = vec![Cmd { mode: SortMode::Sort, src_a: 0, len_a: c, src_b: 0, len_b: 0, dst: c }];
     let mut expect = mem.clone();
     golden_core(&cfg, &mut expect, &cmds);
     let (got, _, done_at) = core_run(&cfg, &mem, &cmds, 51, 100, 100, false);
     assert_eq!(got, expect);
     let cycles = done_at[0];
-    let passes = (c / cfg.bsu_width as u64).ilog2() as u64 + 1;
+    let passes = merge_pass_count(c, cfg.bsu_width as u64) + 1;
     assert!(cycles <= c * (passes + 1) + 200, "chunk sort took {cycles} cycles");
     eprintln!("full-rate 256-entry chunk sort: {cycles} cycles ({passes} merge passes)");
 }
@@ -643,7 +623,7 @@ fn sort_core_back_to_back_chunks_overlap_loads_with_passes() {
     let mem: Vec<SortEntry> =
         (0..2 * k as usize * c as usize).map(|_| entry(&mut rng, f, 1 << 16, 100)).collect();
     let cmds: Vec<Cmd> = (0..k)
-        .map(|i| Cmd { mode: mode::SORT, src_a: i * c, len_a: c, src_b: 0, len_b: 0, dst: (k + i) * c })
+        .map(|i| Cmd { mode: SortMode::Sort, src_a: i * c, len_a: c, src_b: 0, len_b: 0, dst: (k + i) * c })
         .collect();
     let mut expect = mem.clone();
     golden_core(&cfg, &mut expect, &cmds);
@@ -654,7 +634,7 @@ fn sort_core_back_to_back_chunks_overlap_loads_with_passes() {
         &single[k as usize * c as usize..][..c as usize],
         &expect[k as usize * c as usize..][..c as usize]
     );
-    let passes = (c / cfg.bsu_width as u64).ilog2() as u64;
+    let passes = merge_pass_count(c, cfg.bsu_width as u64);
     let merges = c / cfg.bsu_width as u64 - 1;
     let interval = (done_at[k as usize - 1] - done_at[0]) / (k - 1);
     eprintln!("back-to-back 256-entry SORTs: interval {interval} cycles, single {} cycles", one[0]);

@@ -41,6 +41,15 @@ pub fn get_bits(words: &[u32], lo: usize, width: usize) -> u64 {
     v
 }
 
+/// The low `bits` bits set (all 64 for `bits >= 64`).
+pub fn mask(bits: u32) -> u64 {
+    if bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << bits) - 1
+    }
+}
+
 /// Formats words as one hex number, most significant word first.
 pub fn hex(words: &[u32]) -> String {
     let mut s = String::from("0x");

@@ -29,22 +29,8 @@ use std::ops::Range;
 /// Command modes (`cmd_mode_i`): golden's, with the RTL's codes.
 pub use neo_golden::sort::SortMode as Mode;
 
-/// One command.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Command {
-    /// Mode.
-    pub mode: Mode,
-    /// Entry address of the chunk / stream A.
-    pub src_a: u64,
-    /// Entries of the chunk / stream A.
-    pub len_a: u64,
-    /// Entry address of stream B (merge modes).
-    pub src_b: u64,
-    /// Entries of stream B.
-    pub len_b: u64,
-    /// Entry address of the output.
-    pub dst: u64,
-}
+/// One command at entry addresses (golden's, the fields of `cmd_*_i`).
+pub use neo_golden::engine::TileCmd as Command;
 
 /// Timing of the memory model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -117,25 +103,23 @@ struct InFlight {
     entries_written: u64,
 }
 
-impl Command {
-    /// Entry ranges the command reads (A, B).
-    fn reads(&self) -> [Range<u64>; 2] {
-        match self.mode {
-            Mode::Sort | Mode::Dps => [self.src_a..self.src_a + self.len_a, 0..0],
-            Mode::MergeDelete | Mode::Merge => {
-                [self.src_a..self.src_a + self.len_a, self.src_b..self.src_b + self.len_b]
-            }
+/// Entry ranges `cmd` reads (A, B).
+fn reads(cmd: &Command) -> [Range<u64>; 2] {
+    match cmd.mode {
+        Mode::Sort | Mode::Dps => [cmd.src_a..cmd.src_a + cmd.len_a, 0..0],
+        Mode::MergeDelete | Mode::Merge => {
+            [cmd.src_a..cmd.src_a + cmd.len_a, cmd.src_b..cmd.src_b + cmd.len_b]
         }
     }
+}
 
-    /// The entry range the command may write (before deletions / the chunk clamp).
-    fn write(&self) -> Range<u64> {
-        let out = match self.mode {
-            Mode::Sort | Mode::Dps => self.len_a,
-            Mode::MergeDelete | Mode::Merge => self.len_a + self.len_b,
-        };
-        self.dst..self.dst + out
-    }
+/// The entry range `cmd` may write (before deletions / the chunk clamp).
+fn write_range(cmd: &Command) -> Range<u64> {
+    let out = match cmd.mode {
+        Mode::Sort | Mode::Dps => cmd.len_a,
+        Mode::MergeDelete | Mode::Merge => cmd.len_a + cmd.len_b,
+    };
+    cmd.dst..cmd.dst + out
 }
 
 fn overlaps(a: &Range<u64>, b: &Range<u64>) -> bool {
@@ -323,8 +307,7 @@ impl Core {
         loop {
             let c = self.dut.cycle();
             if !offered && next < cmds.len() {
-                let waits = cmds[next]
-                    .reads()
+                let waits = reads(&cmds[next])
                     .iter()
                     .any(|r| self.mem.inflight.iter().any(|f| overlaps(r, &f.write)));
                 if gap > 0 {
@@ -372,8 +355,8 @@ impl Core {
                 let cmd = cmds[next];
                 self.mem.inflight.push_back(InFlight {
                     index: next,
-                    reads: cmd.reads(),
-                    write: cmd.write(),
+                    reads: reads(&cmd),
+                    write: write_range(&cmd),
                     accepted_at: c,
                     read_bursts: 0,
                     entries_read: 0,
@@ -542,17 +525,8 @@ pub fn full_sort_checked(core: &mut Core, cfg: &EngineConfig, entries: &[SortEnt
     let cmds: Vec<Command> = plan
         .iter()
         .map(|p| {
-            let (src, dst) =
-                if p.stage == 0 { (layout::SRC, buffer(0)) } else { (buffer(p.stage - 1), buffer(p.stage)) };
-            let src_b = if p.mode == Mode::Sort { 0 } else { src + p.start_b() };
-            Command {
-                mode: p.mode,
-                src_a: src + p.start,
-                len_a: p.len_a,
-                src_b,
-                len_b: p.len_b,
-                dst: dst + p.start,
-            }
+            let src = if p.stage == 0 { layout::SRC } else { buffer(p.stage - 1) };
+            Command::planned(p, src, buffer(p.stage))
         })
         .collect();
     let want_len: Vec<u64> = plan.iter().map(|p| p.entries()).collect();

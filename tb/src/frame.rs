@@ -18,6 +18,7 @@
 //! all of that, with every B back and every `idle_i` high the cycle before; `FIRST_OVERFLOW` and
 //! `OVERFLOWS` equal golden's.
 
+use crate::bits::mask;
 use crate::check::Checker;
 use crate::dut::Dut;
 use crate::models::NeoFrameCtrl;
@@ -418,13 +419,5 @@ impl FrameBench {
             }
             self.dut.tick();
         }
-    }
-}
-
-fn mask(bits: u32) -> u64 {
-    if bits >= 64 {
-        u64::MAX
-    } else {
-        (1u64 << bits) - 1
     }
 }

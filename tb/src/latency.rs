@@ -2,7 +2,7 @@
 //! cycle model.
 //!
 //! The document is a [`neo_golden::formats::latency::LatencyReport`] (schema and field docs
-//! there; `"schema": "neo-latency/2"`). It holds raw measurements only: unit latencies and
+//! there, versioned by its `SCHEMA`). It holds raw measurements only: unit latencies and
 //! rates, sorting-core command cycles over a grid of sizes and modes, the ITU's latency and
 //! rate, and the raster core's cycles per tile over a grid of table lengths x subtile bits per
 //! Gaussian (`raster.core.grid`). The cycle model (`neo_sim::latency`) does every fit next to

@@ -3,7 +3,7 @@
 //! written-back table entry checked against golden.
 //!
 //! - Driver / memory model: [`RasterCore`] (command port, memory port; tables, feature words and
-//!   pixels live in three address spaces, see `gen/src/units/raster_core.rs`).
+//!   pixels live in three address spaces, see `gen/src/units/raster_core/mod.rs`).
 //! - Golden: [`golden`]: golden [`raster_tile`] on the table's feature entries (culled ids are
 //!   not passed) and the deferred write-back of golden `pipeline::frame` (`valid` = the
 //!   entry's cumulative OR, 0 when culled; `key` = the feature's depth key, kept when culled).

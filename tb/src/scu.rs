@@ -17,7 +17,7 @@ use crate::stream::{Beat, Sink, Source};
 use neo_gen::EngineConfig;
 use neo_golden::formats::feature::{quantize, FeatureEntry, FeatureFormat};
 use neo_golden::raster::synth::{cov_from_axes, projected_from_cov};
-use neo_golden::raster::{shade_pixel, RasterConfig};
+use neo_golden::raster::{shade_pixel, RasterConfig, RGB_BITS};
 use neo_golden::sort::DepthKeyCodec;
 use std::collections::VecDeque;
 
@@ -257,7 +257,7 @@ fn run_beats_checked(
         if let Some(b) = sink.sample(dut, &checker) {
             for (k, px) in want.iter().enumerate() {
                 for (c, name) in ["red", "green", "blue"].iter().enumerate() {
-                    let got = get_bits(&b[0], 24 * k + 8 * c, 8);
+                    let got = get_bits(&b[0], RGB_BITS as usize * k + 8 * c, 8);
                     if got != px[c] as u64 {
                         let s = rc.subtile as usize;
                         checker.value(
@@ -433,7 +433,7 @@ fn timed(dut: &mut NeoScu, cfg: &EngineConfig, seed: u64, list: &ScuList) -> (u6
                         dut.cycle(),
                         &format!("pixel {k}.{c}"),
                         v as u64,
-                        get_bits(&got, 24 * k + 8 * c, 8),
+                        get_bits(&got, RGB_BITS as usize * k + 8 * c, 8),
                     );
                 }
             }

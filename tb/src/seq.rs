@@ -14,6 +14,7 @@
 //! and before the completion (every earlier command done, then `idle_i` high in a later cycle),
 //! the completion's `cpl_len_o`, and the handshakes (an offered command held until taken).
 
+use crate::bits::mask;
 use crate::check::Checker;
 use crate::models::NeoSortSeq;
 use crate::rng::Rng;
@@ -314,14 +315,6 @@ impl SeqBench {
             }
             self.dut.tick();
         }
-    }
-}
-
-fn mask(bits: u32) -> u64 {
-    if bits >= 64 {
-        u64::MAX
-    } else {
-        (1u64 << bits) - 1
     }
 }
 

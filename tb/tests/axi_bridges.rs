@@ -16,7 +16,9 @@ fn axi_bridges_skipped_without_verilator() {
 #[cfg(neo_has_verilator)]
 mod cosim {
     use neo_golden::engine::memory::{pixel_to_u32, Memory};
+    use neo_golden::raster::RGB_BITS;
     use neo_tb::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, SubordinateSignals};
+    use neo_tb::bits::{mask, set_bits};
     use neo_tb::check::Checker;
     use neo_tb::dut::Dut;
     use neo_tb::models::{NeoAxiRasterBridge, NeoAxiSortBridge};
@@ -61,14 +63,6 @@ mod cosim {
             mem.write(32 * FEAT_BASE + 8 * w, &rng.next_u64().to_le_bytes());
         }
         mem
-    }
-
-    fn mask(bits: u32) -> u64 {
-        if bits >= 64 {
-            u64::MAX
-        } else {
-            (1 << bits) - 1
-        }
     }
 
     #[test]
@@ -275,13 +269,9 @@ mod cosim {
                 Some(Req::Pixels(p, px)) => {
                     // Pixel k at [24k +: 24].
                     let mut v = vec![0u32; wdata_words];
+                    let pw = RGB_BITS as usize;
                     for (k, &c) in px.iter().take(s).enumerate() {
-                        for bit in 0..24 {
-                            if (c >> bit) & 1 == 1 {
-                                let b = 24 * k + bit;
-                                v[b / 32] |= 1 << (b % 32);
-                            }
-                        }
+                        set_bits(&mut v, pw * k, pw, u64::from(c));
                     }
                     (true, 2, p, s as u64, v)
                 }

@@ -15,7 +15,7 @@ fn sort_core_skipped_without_verilator() {
 
 #[cfg(neo_has_verilator)]
 mod cosim {
-    use neo_golden::sort::{Parity, SortEntry};
+    use neo_golden::sort::{merge_pass_count, Parity, SortEntry};
     use neo_tb::core::{
         chunk_cmd, dps_pass_checked, full_sort_checked, layout, merge_checked, merge_cmd, queue_checked,
         sort_chunk_checked, sort_chunks_checked, update_checked, CheckedCmd, Command, Core, MemTiming, Mode,
@@ -296,7 +296,7 @@ mod cosim {
     /// per pass (pipeline drain).
     fn msu_bound(n: u64, bsu: u64) -> u64 {
         let vectors = n.div_ceil(bsu);
-        let passes = if vectors <= 1 { 1 } else { (vectors - 1).ilog2() as u64 + 1 };
+        let passes = merge_pass_count(n, bsu).max(1);
         let merges: u64 = (0..passes).map(|p| vectors.div_ceil(2 << p)).sum();
         passes * n + 4 * merges + 4 * passes + 16
     }

@@ -52,6 +52,20 @@ pub fn zext(x: &str, from: u32, to: u32) -> String {
     }
 }
 
+/// `x` (`from` bits, a net name) sign-extended to `to` bits: `{{N{x[from-1]}}, x}` (`x` itself
+/// when the widths match).
+///
+/// # Panics
+/// When `to < from`.
+pub fn sext(x: &str, from: u32, to: u32) -> String {
+    assert!(to >= from, "sext {x}: {from} > {to} bits");
+    if to == from {
+        x.to_string()
+    } else {
+        format!("{{{{{}{{{}}}}}, {x}}}", to - from, slice(x, from - 1, from - 1))
+    }
+}
+
 /// `x` (`from` bits, a net name) resized to `to` bits: zero-extended ([`zext`]) or truncated to
 /// its low bits.
 pub fn resize(x: &str, from: u32, to: u32) -> String {
@@ -97,6 +111,8 @@ mod tests {
     fn extension_and_resize() {
         assert_eq!(zext("x", 4, 4), "x");
         assert_eq!(zext("x", 4, 6), "{2'd0, x}");
+        assert_eq!(sext("x", 4, 6), "{{2{x[3]}}, x}");
+        assert_eq!(sext("x", 4, 4), "x");
         assert_eq!(resize("x", 8, 3), "x[2:0]");
         assert_eq!(resize("x", 3, 8), "{5'd0, x}");
     }

@@ -25,7 +25,7 @@
 //! `ev_entries_rastered_o` (a raster command's `len`, when taken), `ev_result_written_o` (a
 //! result's B).
 
-use crate::emit::expr::{bits_for, lit, resize};
+use crate::emit::expr::{bits_for, lit, resize, zext};
 use crate::emit::{if_, if_else, set, Module, Stmt};
 use neo_golden::engine::{EngineConfig, SchedulerPolicy};
 
@@ -344,15 +344,13 @@ fn pick(name: &str, index: &str, count: u32) -> String {
     }
 }
 
-/// `name[hi:lo]` resized to `to` bits.
+/// `name[hi:lo]` resized to `to` bits: its low `to` bits, or zero-extended ([`zext`]).
 fn resize_part(name: &str, hi: u32, lo: u32, to: u32) -> String {
     let w = hi - lo + 1;
     if w > to {
         format!("{name}[{}:{lo}]", lo + to - 1)
-    } else if w == to {
-        format!("{name}[{hi}:{lo}]")
     } else {
-        format!("{{{}'d0, {name}[{hi}:{lo}]}}", to - w)
+        zext(&format!("{name}[{hi}:{lo}]"), w, to)
     }
 }
 

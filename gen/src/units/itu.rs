@@ -37,7 +37,7 @@
 //! input bit pattern, so the unit matches golden on arbitrary field values, not just on
 //! quantised Gaussians.
 
-use crate::emit::expr::{bits_for, lit, slice, zext};
+use crate::emit::expr::{bits_for, lit, sext, slice, zext};
 use crate::emit::{if_, set, Item, Module};
 use neo_golden::engine::EngineConfig;
 
@@ -88,15 +88,6 @@ pub fn step_bits(cfg: &EngineConfig) -> u32 {
     let step = (2 * r.subtile as u64) << fmt.mean.frac;
     let kmax = (r.subtiles_per_side() as u64 - 1) * step * (1u64 << (fmt.axis.bits - 1));
     bits_for(kmax) + 2
-}
-
-/// `{{(to-from){x[from-1]}}, x}` (sign extension; `x` when the widths match).
-fn sext(x: &str, from: u32, to: u32) -> String {
-    if to == from {
-        x.to_string()
-    } else {
-        format!("{{{{{}{{{}}}}}, {x}}}", to - from, slice(x, from - 1, from - 1))
-    }
 }
 
 /// `|x|` of a `w`-bit two's complement expression (a net name).

@@ -42,22 +42,10 @@
 use crate::emit::expr::{bits_for, hex, lane, lit, resize};
 use crate::emit::{conns, if_, if_else, set, Item, Module, Stmt};
 use neo_golden::engine::EngineConfig;
+use neo_golden::sort::SortMode;
 
 /// Module name.
 pub const NAME: &str = "neo_sort_core";
-
-/// Command modes (`cmd_mode_i`): the codes of golden's [`SortMode`](neo_golden::sort::SortMode).
-pub mod mode {
-    use neo_golden::sort::SortMode;
-    /// Chunk sort.
-    pub const SORT: u64 = SortMode::Sort.code();
-    /// DPS pass over one chunk (same datapath as SORT).
-    pub const DPS: u64 = SortMode::Dps.code();
-    /// Merge of A and B dropping invalid entries.
-    pub const MERGE_DELETE: u64 = SortMode::MergeDelete.code();
-    /// Merge of A and B keeping every entry.
-    pub const MERGE: u64 = SortMode::Merge.code();
-}
 
 /// Back-end (PASS engine) states.
 const S_IDLE: u64 = 0;
@@ -199,7 +187,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, k: &Dims) {
     m.clock_reset();
     m.input_c("cmd_valid_i", 1, "a command is offered");
     m.output_c("cmd_ready_o", 1, "the core takes the offered command (depends on cmd_mode_i)");
-    m.input_c("cmd_mode_i", 2, "0 sort, 1 dps, 2 merge-delete, 3 merge");
+    m.input_c("cmd_mode_i", SortMode::BITS, "0 sort, 1 dps, 2 merge-delete, 3 merge");
     m.input_c("cmd_src_a_i", aw, "entry address of the chunk / stream A");
     m.input_c("cmd_len_a_i", lw, "entries of the chunk (<= chunk size) / stream A");
     m.input_c("cmd_src_b_i", aw, "entry address of stream B (merge modes)");
@@ -610,7 +598,10 @@ fn seq_pass(body: &mut Vec<Stmt>, k: &Dims) {
                 vec![if_else(
                     "take_merge",
                     vec![
-                        set("drop_q", format!("cmd_mode_i == {}", lit(2, mode::MERGE_DELETE))),
+                        set(
+                            "drop_q",
+                            format!("cmd_mode_i == {}", lit(SortMode::BITS, SortMode::MergeDelete.code())),
+                        ),
                         set("bk_dst_q", "cmd_dst_i"),
                         set("ocnt_q", z(lw)),
                         set("rd_a_addr_q", "cmd_src_a_i"),

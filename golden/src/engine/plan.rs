@@ -23,7 +23,9 @@
 use super::memory::{Memory, TileDescriptor, ENTRY_BYTES};
 use super::regs::FrameRegs;
 use super::EngineConfig;
-use crate::sort::{conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, SortMode, Sorter};
+use crate::sort::{
+    conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, PlannedCommand, SortMode, Sorter,
+};
 
 /// One Sorting Core command at entry addresses (the fields of `neo_sort_core`'s cmd port).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -40,6 +42,23 @@ pub struct TileCmd {
     pub len_b: u64,
     /// Entry address of the output.
     pub dst: u64,
+}
+
+impl TileCmd {
+    /// Command `c` of a conventional sort ([`conventional_sort_plan`]) placed in memory: its
+    /// stage reads the data starting at entry address `src` and writes the data starting at
+    /// `dst` (`c`'s offsets are relative to both).
+    pub fn planned(c: &PlannedCommand, src: u64, dst: u64) -> TileCmd {
+        let src_b = if c.mode == SortMode::Merge { src + c.start_b() } else { 0 };
+        TileCmd {
+            mode: c.mode,
+            src_a: src + c.start,
+            len_a: c.len_a,
+            src_b,
+            len_b: c.len_b,
+            dst: dst + c.start,
+        }
+    }
 }
 
 /// A tile's commands (see the module docs).
@@ -81,15 +100,7 @@ pub fn tile_plan(cfg: &EngineConfig, regs: &FrameRegs, d: &TileDescriptor, core:
     for c in conventional_sort_plan(n, chunk) {
         let src = if c.stage == 0 { d.list as u64 } else { scratch[((c.stage - 1) % 2) as usize] };
         let dst = if c.stage == passes { last } else { scratch[(c.stage % 2) as usize] };
-        let src_b = if c.mode == SortMode::Merge { src + c.start_b() } else { 0 };
-        let cmd = TileCmd {
-            mode: c.mode,
-            src_a: src + c.start,
-            len_a: c.len_a,
-            src_b,
-            len_b: c.len_b,
-            dst: dst + c.start,
-        };
+        let cmd = TileCmd::planned(&c, src, dst);
         if stages.len() as u64 == c.stage {
             stages.push(Vec::new());
         }

@@ -12,7 +12,7 @@
 //! - No buffering on R, B: `rready`/`bready` downstream are the addressed client's.
 
 use super::{index_bits, ports, signals};
-use crate::emit::expr::{bits_for, lit, slice};
+use crate::emit::expr::{bits_for, lit, slice, zext};
 use crate::emit::{if_, if_else, set, Module};
 use neo_golden::engine::{ConfigError, EngineConfig};
 
@@ -96,7 +96,7 @@ fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: Option<&s
     let id = if xb == 0 {
         lit(cfg.axi_id_bits, 0)
     } else {
-        resize_expr(&oh_index(&format!("{ch}_oh"), p, xb), xb, cfg.axi_id_bits)
+        zext(&oh_index(&format!("{ch}_oh"), p, xb), xb, cfg.axi_id_bits)
     };
     m.assign(format!("m_axi_{ch}id_o"), id);
     for i in 0..p {
@@ -123,15 +123,6 @@ fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: Option<&s
             )],
         )],
     );
-}
-
-/// `x` (an expression of `from` bits) zero-extended to `to >= from` bits.
-fn resize_expr(x: &str, from: u32, to: u32) -> String {
-    if to == from {
-        x.to_string()
-    } else {
-        format!("{{{}, {x}}}", lit(to - from, 0))
-    }
 }
 
 /// The mux of `p` clients for `cfg`.

@@ -30,24 +30,81 @@ fn len_bits(cfg: &EngineConfig) -> u32 {
     bits_for((cfg.burst as u64).max(u64::from(cfg.raster_config().subtile)))
 }
 
+/// Sizes of the raster bridge, from the configuration.
+#[derive(Clone, Copy)]
+struct Dims {
+    /// Entry bits.
+    eb: u32,
+    /// Core address bits.
+    aw: u32,
+    /// AXI address bits.
+    ab: u32,
+    /// AXI data bits.
+    db: u32,
+    /// Feature word bits.
+    fw: u32,
+    /// Width of `mem_wdata_i`.
+    wdb: u32,
+    /// Width of `mem_req_len_i`.
+    lb: u32,
+    /// Subtile side `S` (pixels a row write).
+    s: u32,
+    /// Beats of a pixel row (`S / 2`).
+    beats: u32,
+    /// Width of the beat counter.
+    bb: u32,
+    /// Bits of two pixels.
+    pw: u32,
+    /// Depth of the burst-kind FIFO.
+    depth: u32,
+    /// Width of its pointers.
+    kb: u32,
+}
+
+impl Dims {
+    fn new(cfg: &EngineConfig) -> Self {
+        let (eb, aw, ab, db) = (cfg.entry_bits(), cfg.addr_bits, cfg.axi_addr_bits, cfg.axi_data_bits);
+        assert_eq!(db, 64, "the raster bridge packs two pixels a beat: 64-bit data only");
+        let fw = feature_word_bits(cfg);
+        assert!(fw <= 256, "a feature word of {fw} bits does not fit 4 beats");
+        let (wdb, lb) = (wdata_bits(cfg), len_bits(cfg));
+        let s = cfg.raster_config().subtile;
+        let beats = s / 2;
+        let bb = bits_for(u64::from(beats - 1));
+        let pw = 2 * RGB_BITS;
+        let depth = cfg.axi_outstanding.max(2) as u32;
+        let kb = bits_for(u64::from(depth - 1));
+        Dims { eb, aw, ab, db, fw, wdb, lb, s, beats, bb, pw, depth, kb }
+    }
+}
+
 /// The raster bridge for `cfg`.
 ///
 /// # Panics
 /// When the AXI data width is not 64 bits (validated by the configuration) or the feature word
 /// does not fit 256 bits.
 pub fn module(cfg: &EngineConfig) -> Module {
-    let (eb, aw, ab, db) = (cfg.entry_bits(), cfg.addr_bits, cfg.axi_addr_bits, cfg.axi_data_bits);
-    assert_eq!(db, 64, "the raster bridge packs two pixels a beat: 64-bit data only");
-    let fw = feature_word_bits(cfg);
-    assert!(fw <= 256, "a feature word of {fw} bits does not fit 4 beats");
-    let (wdb, lb) = (wdata_bits(cfg), len_bits(cfg));
-    let s = cfg.raster_config().subtile;
-    let beats = s / 2;
-    let bb = bits_for(u64::from(beats - 1));
-    let pw = 2 * RGB_BITS;
-    let depth = cfg.axi_outstanding.max(2) as u32;
-    let kb = bits_for(u64::from(depth - 1));
+    let d = Dims::new(cfg);
     let mut m = Module::new(NAME);
+    header(&mut m, cfg, &d);
+    requests(&mut m, cfg, &d);
+    read_path(&mut m, &d);
+    write_path(&mut m, cfg, &d);
+    let Dims { fw, db, .. } = d;
+    m.blank();
+    m.assign(
+        "idle_o",
+        format!("~ar_v_q & (rd_cnt_q == {c}) & (wr_cnt_q == {c})", c = lit(super::count_bits(cfg), 0)),
+    );
+    let unused = if fw < 4 * db { format!("feat_word[{}:{fw}]", 4 * db - 1) } else { String::new() };
+    let extra: Vec<&str> = if fw < 4 * db { vec![unused.as_str()] } else { vec![] };
+    unused_responses(&mut m, &extra);
+    m
+}
+
+/// The header comment and the ports.
+fn header(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
+    let Dims { aw, fw, wdb, lb, s, beats, .. } = *d;
     m.doc("Raster bridge: a neo_raster_core memory port (mem_*, the core's ports with _i/_o swapped) as an AXI4");
     m.doc("manager (m_axi_*, ID 0). Space 0 table entry a at byte 8a (bursts cut at 4 KiB), space 1 feature word w");
     m.doc(format!(
@@ -70,22 +127,30 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.output_c("rd_feat_o", 1, "pulse: a feature word delivered");
     m.output_c("wr_table_o", 1, "pulse: a table-entry write taken");
     m.output_c("wr_pixels_o", 1, "pulse: a pixel-row write taken");
-    ports(&mut m, cfg, "m_axi_", true);
+    ports(m, cfg, "m_axi_", true);
+}
 
+/// Request decode and the read issuer.
+fn requests(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
+    let Dims { aw, lb, .. } = *d;
     m.wire_assign("req_rd", 1, "mem_req_valid_i & ~mem_req_write_i");
     m.wire_assign("req_wr", 1, "mem_req_valid_i & mem_req_write_i");
     m.wire_assign("req_feat", 1, format!("mem_req_space_i == {}", lit(2, 1)));
     m.wire_assign("req_pix", 1, format!("mem_req_space_i == {}", lit(2, 2)));
     m.wire("ar_take", 1).wire("ar_new_addr", aw).wire("ar_new_len", lb).wire("ar_new_feat", 1);
     m.wire("wr_take", 1).wire("wr_ok", 1);
-    read_issuer(&mut m, cfg, lb, true);
+    read_issuer(m, cfg, lb, true);
     m.wire_assign("rd_ok", 1, "~ar_v_q | ar_done");
     m.assign("mem_req_ready_o", "mem_req_write_i ? wr_ok : rd_ok");
     m.assign("ar_take", "req_rd & rd_ok");
     m.assign("ar_new_addr", "mem_req_addr_i");
     m.assign("ar_new_len", "mem_req_len_i");
     m.assign("ar_new_feat", "req_feat");
+}
 
+/// The kind FIFO and the R path (table beats straight through, feature words assembled).
+fn read_path(m: &mut Module, d: &Dims) {
+    let Dims { eb, db, fw, depth, kb, .. } = *d;
     m.blank();
     m.comment(format!("Kind of each burst in flight (1: feature), in AR order ({depth} entries, at most axi_outstanding used)."));
     m.mem("kind_mem", 1, depth).reg("kind_wp_q", kb).reg("kind_rp_q", kb);
@@ -123,10 +188,14 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.wire_assign("rsp_fire", 1, "mem_rsp_valid_o & mem_rsp_ready_i");
     m.assign("rd_table_o", "rsp_fire & ~r_feat");
     m.assign("rd_feat_o", "rsp_fire & r_feat");
+}
 
+/// The AW and W path (table entries and pixel rows).
+fn write_path(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
+    let Dims { eb, aw, ab, db, wdb, beats, bb, pw, .. } = *d;
     m.blank();
     m.comment(format!("AW + W: a table entry (1 beat) or a pixel row ({beats} beats of two pixels, shifted out of w_data_q)."));
-    write_counter(&mut m, cfg);
+    write_counter(m, cfg);
     m.reg("aw_v_q", 1).reg("aw_pix_q", 1).reg("aw_addr_q", aw);
     m.reg("w_v_q", 1).reg("w_pix_q", 1).reg("w_left_q", bb).reg("w_data_q", wdb);
     m.wire_assign("aw_fire", 1, "m_axi_awvalid_o & m_axi_awready_i");
@@ -176,8 +245,8 @@ pub fn module(cfg: &EngineConfig) -> Module {
         vec![set("aw_addr_q", "mem_req_addr_i"), set("w_data_q", "mem_wdata_i")],
         vec![if_("w_fire", vec![set("w_data_q", shifted)])],
     )]);
-    byte_addr(&mut m, "aw_tbyte", "aw_addr_q", aw, 3, ab);
-    byte_addr(&mut m, "aw_pbyte", "aw_addr_q", aw, 2, ab);
+    byte_addr(m, "aw_tbyte", "aw_addr_q", aw, 3, ab);
+    byte_addr(m, "aw_pbyte", "aw_addr_q", aw, 2, ab);
     m.assign("m_axi_awvalid_o", "aw_v_q");
     m.assign("m_axi_awaddr_o", "aw_pix_q ? aw_pbyte : aw_tbyte");
     m.assign("m_axi_awlen_o", format!("aw_pix_q ? {} : {}", lit(8, u64::from(beats - 1)), lit(8, 0)));
@@ -190,15 +259,5 @@ pub fn module(cfg: &EngineConfig) -> Module {
     );
     m.assign("m_axi_wdata_o", format!("w_pix_q ? {pix} : {}", zext(&slice("w_data_q", eb - 1, 0), eb, db)));
     m.assign("m_axi_wlast_o", "w_last");
-    write_constants(&mut m, cfg);
-
-    m.blank();
-    m.assign(
-        "idle_o",
-        format!("~ar_v_q & (rd_cnt_q == {c}) & (wr_cnt_q == {c})", c = lit(super::count_bits(cfg), 0)),
-    );
-    let unused = if fw < 4 * db { format!("feat_word[{}:{fw}]", 4 * db - 1) } else { String::new() };
-    let extra: Vec<&str> = if fw < 4 * db { vec![unused.as_str()] } else { vec![] };
-    unused_responses(&mut m, &extra);
-    m
+    write_constants(m, cfg);
 }

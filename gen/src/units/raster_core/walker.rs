@@ -43,17 +43,17 @@ pub(super) fn walk(m: &mut Module, d: &Dims) {
     m.wire_assign("quad_cur", qb, if nq == 1 { lit(1, 0) } else { slice("quad_base_q", fa - 1, lane_bits) });
     m.comment("quad_touch[q]: quad q is in the segment and touches the walked group.");
     m.wire("quad_touch", nq);
-    // One assign per quad: a single concatenation is too long a line for large buffers.
-    for q in 0..nq {
-        let lhs = if nq == 1 { "quad_touch".to_string() } else { format!("quad_touch[{q}]") };
-        m.assign(
-            lhs,
-            format!(
-                "(quad_hit[{{walk_bank_q, {}}}][group_q] & ({} < walk_seg_len))",
-                lit(qb, q as u64),
-                lit(sl, q as u64 * d.ni as u64)
-            ),
-        );
+    let touch =
+        |q: &str, first: &str| format!("quad_hit[{{walk_bank_q, {q}}}][group_q] & ({first} < walk_seg_len)");
+    if nq == 1 {
+        m.assign("quad_touch", touch(&lit(qb, 0), &lit(sl, 0)));
+    } else {
+        let items = vec![
+            Item::LocalParam { name: "QUAD".into(), width: qb, value: "q".into() },
+            Item::LocalParam { name: "QUAD_FIRST".into(), width: sl, value: format!("q * {}", d.ni) },
+            Item::Assign { lhs: "quad_touch[q]".into(), rhs: touch("QUAD", "QUAD_FIRST") },
+        ];
+        m.gen_for("q", nq, "g_quad", items);
     }
     m.wire_assign("quad_above", nq, format!("quad_touch & (({{{nq}{{1'b1}}}} << quad_cur) << 1)"));
     for (src, dst) in [("quad_touch", "quad_first"), ("quad_above", "quad_next")] {

@@ -6,7 +6,7 @@
 //! beat's valid bit in `neo_scu`).
 
 use super::{exp, pixel_bits, ScuWidths};
-use crate::emit::expr::{bits_for, lit, zext};
+use crate::emit::expr::{bits_for, lit, sext, zext};
 use crate::emit::{conns, if_, set, Module, Stmt};
 use neo_golden::engine::EngineConfig;
 
@@ -76,7 +76,7 @@ fn squares(m: &mut Module, w: &ScuWidths) {
                 zext(&format!("pixel_{axis}"), sb, pxw)
             ),
         );
-        let mext = format!("{{{{{}{{{mean}[{}]}}}}, {mean}}}", d - w.mean, w.mean - 1);
+        let mext = sext(&mean, w.mean, d);
         let pfull = format!("{{{}, pos_{axis}, {}}}", lit(d - pxw - w.mean_frac, 0), lit(w.mean_frac, 0));
         m.wire_assign(format!("d{axis}"), d, format!("{mext} - {pfull}"));
         m.wire_assign(
