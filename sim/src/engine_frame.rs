@@ -26,16 +26,20 @@
 //!   its writes' responses.
 
 use neo_golden::engine::memory::{ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
-use neo_golden::engine::{EngineConfig, FrameTrace, SchedulerPolicy, TileTrace};
+use neo_golden::engine::{
+    execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory, SchedulerPolicy, TileTrace,
+};
 use neo_golden::sort::SortMode;
 
 use crate::arch::raster_tile_cycles;
-use crate::config::RasterTiming;
 use crate::latency::Latency;
 use crate::sortcmd::{batch_cycles, Cmd};
 
 /// Bytes of one AXI beat (the engine's data width, 64 bits).
 const BEAT_BYTES: u64 = 8;
+
+/// Read beats of one raster entry: its table entry and its feature word.
+const RASTER_ENTRY_BEATS: u64 = (ENTRY_BYTES + FEATURE_BYTES).div_ceil(BEAT_BYTES);
 
 /// Register stages of the AXI path between a core and the memory, both ways (bridge and port
 /// mux), beyond the unit benches' direct memory port.
@@ -72,7 +76,6 @@ pub struct FramePrediction {
 pub struct EngineFrameModel<'a> {
     cfg: &'a EngineConfig,
     lat: &'a Latency,
-    raster: RasterTiming,
     mem: PortTiming,
 }
 
@@ -101,7 +104,7 @@ impl<'a> EngineFrameModel<'a> {
                 "memory timing {mem:?}: bandwidth and ready must be positive, latency not negative"
             ));
         }
-        Ok(EngineFrameModel { cfg, lat, raster: lat.raster.clone(), mem })
+        Ok(EngineFrameModel { cfg, lat, mem })
     }
 
     /// Extra cycles of one dependent round trip over the unit benches' memory.
@@ -132,22 +135,20 @@ impl<'a> EngineFrameModel<'a> {
     /// at the port's bandwidth; then the barrier (the last write's response).
     pub fn sort_cycles(&self, t: &TileTrace) -> f64 {
         let mut total = 0.0;
-        let last = t.plan.stages.len().saturating_sub(1);
         for (s, stage) in t.plan.stages.iter().enumerate() {
             let cmds: Vec<Cmd> =
                 stage.iter().map(|c| Cmd { mode: c.mode, len_a: c.len_a, len_b: c.len_b }).collect();
-            let mut extra = 0.0;
-            for c in &cmds {
-                let written = match c.mode {
-                    SortMode::MergeDelete if s == last => t.next_len,
-                    _ => c.entries_in(),
-                };
-                extra += written as f64 * (self.write_cycles() - 1.0);
-                extra += c.entries_in() as f64 * (1.0 / self.mem.bandwidth - 1.0);
-            }
+            let (read, written) = stage_entries(t, s);
+            let extra =
+                written as f64 * (self.write_cycles() - 1.0) + read as f64 * (1.0 / self.mem.bandwidth - 1.0);
             total += batch_cycles(&cmds, self.lat) as f64 + extra + self.round_trip();
         }
         total
+    }
+
+    /// Write beats of a tile's pixels.
+    fn pixel_beats(&self) -> u64 {
+        (self.cfg.tile * self.cfg.tile) as u64 * PIXEL_BYTES / BEAT_BYTES
     }
 
     /// Cycles of one tile's raster.
@@ -157,16 +158,14 @@ impl<'a> EngineFrameModel<'a> {
         let all: u64 = r.subtiles.iter().map(|s| s.routed as u64).sum();
         let done: u64 = r.subtiles.iter().map(|s| s.processed as u64).sum();
         let ratio = if all == 0 { 1.0 } else { done as f64 / all as f64 };
-        let mut rt = self.raster.clone();
+        let mut rt = self.lat.raster.clone();
         // Per entry: its table beat and its feature word's beats through the port, and its
         // write-back beat (the formula counts one cycle for it; the loads and the write-back
         // share the core's one request port); the pixels leave in bursts.
-        let per_entry = (ENTRY_BYTES + FEATURE_BYTES).div_ceil(BEAT_BYTES);
         rt.load_cycles_per_entry =
-            rt.load_cycles_per_entry.max(self.beats(per_entry)) + self.write_beats(1) - 1.0;
-        let pixel_beats = (self.cfg.tile * self.cfg.tile) as u64 * PIXEL_BYTES / BEAT_BYTES;
-        rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.write_beats(pixel_beats).ceil() as u64);
-        let writes = self.write_beats(pixel_beats + r.len);
+            rt.load_cycles_per_entry.max(self.beats(RASTER_ENTRY_BEATS)) + self.write_beats(1) - 1.0;
+        rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.write_beats(self.pixel_beats()).ceil() as u64);
+        let (_, writes) = self.raster_beats(t);
         let (cycles, _) = raster_tile_cycles(
             &routed,
             ratio,
@@ -182,25 +181,24 @@ impl<'a> EngineFrameModel<'a> {
 
     /// Read and write beats of a tile's sort (on its sorting core's port).
     fn sort_beats(&self, t: &TileTrace) -> (f64, f64) {
-        let last = t.plan.stages.len().saturating_sub(1);
-        let (mut r, mut w) = (0u64, 0u64);
-        for (s, stage) in t.plan.stages.iter().enumerate() {
-            for c in stage {
-                r += c.len_a + c.len_b;
-                w += match c.mode {
-                    SortMode::MergeDelete if s == last => t.next_len,
-                    _ => c.len_a + c.len_b,
-                };
-            }
-        }
+        let (r, w) = (0..t.plan.stages.len())
+            .map(|s| stage_entries(t, s))
+            .fold((0, 0), |(r, w), (sr, sw)| (r + sr, w + sw));
         (self.beats(r), self.write_beats(w))
     }
 
     /// Read and write beats of a tile's raster.
     fn raster_beats(&self, t: &TileTrace) -> (f64, f64) {
-        let per_entry = (ENTRY_BYTES + FEATURE_BYTES).div_ceil(BEAT_BYTES);
-        let pixel_beats = (self.cfg.tile * self.cfg.tile) as u64 * PIXEL_BYTES / BEAT_BYTES;
-        (self.beats(per_entry * t.raster.len), self.write_beats(t.raster.len + pixel_beats))
+        let len = t.raster.len;
+        (self.beats(RASTER_ENTRY_BEATS * len), self.write_beats(len + self.pixel_beats()))
+    }
+
+    /// [`Self::predict`] for the frame of `regs` whose inputs are in `mem` (before the engine
+    /// runs it): golden's reference runs the frame on a copy of the memory for its trace.
+    pub fn predict_frame(&self, regs: &FrameRegs, mem: &Memory) -> Result<FramePrediction, FrameError> {
+        let mut copy = mem.clone();
+        let (_, trace) = execute_frame_traced(self.cfg, regs, &mut copy)?;
+        Ok(self.predict(&trace))
     }
 
     /// The prediction for one frame: the schedule with every job alone on its port, then
@@ -309,6 +307,25 @@ impl Schedule {
         };
         FramePrediction { cycles: self.end, sort_busy: spans(0), raster_busy: spans(1) }
     }
+}
+
+/// Entries stage `s` of a tile's sort reads and writes: every command writes what it reads,
+/// except the reuse tile's closing MERGE_DELETE, which writes the next table.
+fn stage_entries(t: &TileTrace, s: usize) -> (u64, u64) {
+    let last = t.plan.stages.len().saturating_sub(1);
+    t.plan.stages[s].iter().fold((0, 0), |(r, w), c| {
+        let read = c.len_a + c.len_b;
+        let written = match c.mode {
+            SortMode::MergeDelete if s == last => t.next_len,
+            _ => read,
+        };
+        (r + read, w + written)
+    })
+}
+
+/// The model's error against the RTL, in percent: `(model - rtl) / rtl`.
+pub fn error_pct(model: f64, rtl: u64) -> f64 {
+    (model - rtl as f64) / (rtl as f64).max(1.0) * 100.0
 }
 
 /// The core a job ready at `ready` goes to: the lowest-numbered one free by then (else the one

@@ -9,11 +9,10 @@ use crate::args::{SceneArg, StrictArg, TrajectoryArg};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use neo_golden::engine::Counter;
-use neo_golden::engine::{execute_frame_traced, EngineConfig, EngineSession, FramePlan, Memory};
+use neo_golden::engine::{Counter, EngineConfig, EngineSession};
 use neo_golden::trajectory::{parse_resolution, parse_trajectory};
 use neo_golden::{source, trajectory::Trajectory};
-use neo_sim::engine_frame::{EngineFrameModel, FramePrediction, PortTiming};
+use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
 use neo_sim::latency;
 use neo_tb::axi::AxiTiming;
 use neo_tb::engine::{EngineModel, EngineRig, FrameReport, RunOptions};
@@ -115,7 +114,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
             .filter(|(_, r)| r.overflow)
             .map(|(t, _)| t)
             .collect();
-        let predicted = predict(&model, &cfg, &plan, rig.memory_mut())?;
+        let predicted = model.predict_frame(&plan.regs, rig.memory_mut())?;
         let t0 = Instant::now();
         let r = rig.run_frame(&plan).map_err(|e| anyhow!(e))?;
         bar.inc(1);
@@ -134,22 +133,9 @@ pub fn run(a: CosimArgs) -> Result<()> {
 }
 
 /// The cycle model's timing of the harness's memory (its means).
-pub fn port_timing(t: &AxiTiming) -> PortTiming {
+fn port_timing(t: &AxiTiming) -> PortTiming {
     let (latency, bandwidth, ready) = t.means();
     PortTiming { latency, bandwidth, ready }
-}
-
-/// The cycle model's prediction of the frame `plan` the harness has just written into `mem`:
-/// golden's reference runs the frame on a copy of the memory for its per-tile work.
-fn predict(
-    model: &EngineFrameModel,
-    cfg: &EngineConfig,
-    plan: &FramePlan,
-    mem: &Memory,
-) -> Result<FramePrediction> {
-    let mut copy = mem.clone();
-    let (_, trace) = execute_frame_traced(cfg, &plan.regs, &mut copy)?;
-    Ok(model.predict(&trace))
 }
 
 /// The trajectory of `--trajectory` with `--frames` frames at `--res`.
@@ -199,8 +185,7 @@ fn print_frame(
     bar: &ProgressBar,
 ) {
     let mismatch = r.mismatch.as_ref().map(|m| m.to_string());
-    let err = |model: f64, rtl: u64| (model - rtl as f64) / (rtl as f64).max(1.0) * 100.0;
-    let model_error = err(p.cycles, r.rtl_cycles);
+    let model_error = error_pct(p.cycles, r.rtl_cycles);
     let sort_busy = r.counters.get(Counter::SortBusy);
     let raster_busy = r.counters.get(Counter::RasterBusy);
     if a.json {
@@ -213,10 +198,10 @@ fn print_frame(
             "model_error_pct": model_error,
             "rtl_sort_busy": sort_busy,
             "model_sort_busy": p.sort_busy.round(),
-            "sort_busy_error_pct": err(p.sort_busy, sort_busy),
+            "sort_busy_error_pct": error_pct(p.sort_busy, sort_busy),
             "rtl_raster_busy": raster_busy,
             "model_raster_busy": p.raster_busy.round(),
-            "raster_busy_error_pct": err(p.raster_busy, raster_busy),
+            "raster_busy_error_pct": error_pct(p.raster_busy, raster_busy),
             "mismatch": mismatch,
             "overflowing_tiles": overflowing,
             "wall_seconds": took.as_secs_f64(),
@@ -236,8 +221,8 @@ fn print_frame(
         r.rtl_cycles,
         p.cycles,
         model_error,
-        err(p.sort_busy, sort_busy),
-        err(p.raster_busy, raster_busy),
+        error_pct(p.sort_busy, sort_busy),
+        error_pct(p.raster_busy, raster_busy),
         took.as_secs_f64(),
         cps
     );

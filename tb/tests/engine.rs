@@ -13,8 +13,8 @@
 //! set), as the other cosimulation benches.
 
 neo_tb::with_models! {
-use neo_golden::engine::{execute_frame_traced, CaseScene, Counter, EngineCase, EngineConfig, EngineSession};
-use neo_sim::engine_frame::{EngineFrameModel, PortTiming};
+use neo_golden::engine::{CaseScene, Counter, EngineCase, EngineConfig, EngineSession};
+use neo_sim::engine_frame::{error_pct, EngineFrameModel, PortTiming};
 use neo_sim::latency::Latency;
 use neo_golden::scene::Scene;
 use neo_golden::shared::shared_file_for_test;
@@ -60,11 +60,8 @@ fn run_case(scene: &Scene, how: &CaseScene, c: EngineCase, frames: usize, res: [
     let model = EngineFrameModel::new(&cfg, &lat, PortTiming { latency, bandwidth, ready }).expect("cycle model");
     let t0 = std::time::Instant::now();
     while let Some(plan) = session.next_frame(rig.memory_mut()).expect("host frame") {
-        let mut copy = rig.memory_mut().clone();
-        let (_, trace) = execute_frame_traced(&cfg, &plan.regs, &mut copy).expect("golden reference");
-        let p = model.predict(&trace);
+        let p = model.predict_frame(&plan.regs, rig.memory_mut()).expect("golden reference");
         let r = rig.run_frame(&plan).unwrap_or_else(|e| panic!("case {}: {e}", c.name()));
-        let err = |m: f64, rtl: u64| (m - rtl as f64) / (rtl as f64).max(1.0) * 100.0;
         println!(
             "case {} frame {}: {} tiles, {} cycles (harness {}), from scratch {}; cycle model {:.0} ({:+.1}%), busy sort {:+.1}%, raster {:+.1}%",
             c.name(),
@@ -74,9 +71,9 @@ fn run_case(scene: &Scene, how: &CaseScene, c: EngineCase, frames: usize, res: [
             r.harness_cycles,
             r.from_scratch,
             p.cycles,
-            err(p.cycles, r.rtl_cycles),
-            err(p.sort_busy, r.counters.get(Counter::SortBusy)),
-            err(p.raster_busy, r.counters.get(Counter::RasterBusy)),
+            error_pct(p.cycles, r.rtl_cycles),
+            error_pct(p.sort_busy, r.counters.get(Counter::SortBusy)),
+            error_pct(p.raster_busy, r.counters.get(Counter::RasterBusy)),
         );
         if let Some(m) = r.mismatch {
             panic!(
