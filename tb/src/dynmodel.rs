@@ -329,10 +329,10 @@ fn cxx_version(cxx: &str) -> String {
         .unwrap_or_default()
 }
 
-/// Builds the shared library of `iface.name` into the cache (or finds it there).
-/// The trace-dependent parts of a build: Verilator flags, C++ defines, runtime sources, extra
-/// link libraries, cache name suffix.
+/// The trace-dependent parts of a build: the shim's trace writer, Verilator flags, C++ defines,
+/// runtime sources, extra link libraries, cache name suffix.
 struct Flavour {
+    shim: shim::ShimTrace,
     flags: &'static [&'static str],
     defines: &'static [(&'static str, &'static str)],
     runtime: &'static [&'static str],
@@ -344,6 +344,7 @@ impl Flavour {
     fn of(format: Option<WaveFormat>) -> Flavour {
         match format {
             None => Flavour {
+                shim: shim::ShimTrace::Off,
                 flags: verilator::VERILATOR_FLAGS_UNTRACED,
                 defines: verilator::CPP_DEFINES_UNTRACED,
                 runtime: verilator::RUNTIME_SOURCES_UNTRACED,
@@ -351,6 +352,7 @@ impl Flavour {
                 suffix: "-untraced",
             },
             Some(WaveFormat::Vcd) => Flavour {
+                shim: shim::ShimTrace::Vcd,
                 flags: verilator::VERILATOR_FLAGS,
                 defines: verilator::CPP_DEFINES,
                 runtime: verilator::RUNTIME_SOURCES,
@@ -358,6 +360,7 @@ impl Flavour {
                 suffix: "",
             },
             Some(WaveFormat::Fst) => Flavour {
+                shim: shim::ShimTrace::Fst,
                 flags: verilator::VERILATOR_FLAGS_FST,
                 defines: verilator::CPP_DEFINES_FST,
                 runtime: verilator::RUNTIME_SOURCES_FST,
@@ -381,12 +384,7 @@ fn build_library(
         .ok_or("verilator not found: install it (scripts/setup does) or set VERILATOR")?;
     let top = &iface.name;
     let flavour = Flavour::of(format);
-    let trace = match format {
-        None => shim::ShimTrace::Off,
-        Some(WaveFormat::Vcd) => shim::ShimTrace::Vcd,
-        Some(WaveFormat::Fst) => shim::ShimTrace::Fst,
-    };
-    let mut cpp = shim::cpp_traced(iface, trace);
+    let mut cpp = shim::cpp_traced(iface, flavour.shim);
     shim::cpp_by_index(&mut cpp, iface);
     let cxx = cxx();
     let mut key = cache::Key::new();
