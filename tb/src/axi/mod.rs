@@ -157,29 +157,58 @@ const FIELDS: [(&str, bool); FIELD_COUNT] = [
     ("bresp", false),
 ];
 
-const ARVALID: usize = 0;
-const ARREADY: usize = 1;
-const RVALID: usize = 7;
-const RREADY: usize = 8;
-const RID: usize = 9;
-const RDATA: usize = 10;
-const RRESP: usize = 11;
-const RLAST: usize = 12;
-const AWVALID: usize = 13;
-const AWREADY: usize = 14;
-const WVALID: usize = 20;
-const WREADY: usize = 21;
-const WDATA: usize = 22;
-const WSTRB: usize = 23;
-const WLAST: usize = 24;
-const BVALID: usize = 25;
-const BREADY: usize = 26;
-const BID: usize = 27;
-const BRESP: usize = 28;
+/// Position of field `name` in [`FIELDS`] (evaluated at compile time; an unknown name does not
+/// compile).
+const fn field(name: &str) -> usize {
+    let mut i = 0;
+    while i < FIELD_COUNT {
+        if bytes_eq(FIELDS[i].0.as_bytes(), name.as_bytes()) {
+            return i;
+        }
+        i += 1;
+    }
+    panic!("not an AXI field")
+}
+
+const fn bytes_eq(a: &[u8], b: &[u8]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+const ARVALID: usize = field("arvalid");
+const ARREADY: usize = field("arready");
+const RVALID: usize = field("rvalid");
+const RREADY: usize = field("rready");
+const RID: usize = field("rid");
+const RDATA: usize = field("rdata");
+const RRESP: usize = field("rresp");
+const RLAST: usize = field("rlast");
+const AWVALID: usize = field("awvalid");
+const AWREADY: usize = field("awready");
+const WVALID: usize = field("wvalid");
+const WREADY: usize = field("wready");
+const WDATA: usize = field("wdata");
+const WSTRB: usize = field("wstrb");
+const WLAST: usize = field("wlast");
+const BVALID: usize = field("bvalid");
+const BREADY: usize = field("bready");
+const BID: usize = field("bid");
+const BRESP: usize = field("bresp");
 
 /// An address channel's VALID, ID, ADDR, LEN, SIZE and BURST fields.
-const AR: [usize; 6] = [ARVALID, 2, 3, 4, 5, 6];
-const AW: [usize; 6] = [AWVALID, 15, 16, 17, 18, 19];
+const AR: [usize; 6] =
+    [ARVALID, field("arid"), field("araddr"), field("arlen"), field("arsize"), field("arburst")];
+const AW: [usize; 6] =
+    [AWVALID, field("awid"), field("awaddr"), field("awlen"), field("awsize"), field("awburst")];
 
 impl AxiBinding {
     /// Binds the interface `prefix` of model `D`; `manager`: the model is the manager on it.
