@@ -18,7 +18,7 @@ pub fn target_dir() -> PathBuf {
 
 /// True when `WAVES` is set to something other than empty or `0`.
 pub fn waves_requested() -> bool {
-    std::env::var("WAVES").is_ok_and(|v| !v.is_empty() && v != "0")
+    requested_format().is_some()
 }
 
 /// A waveform file format.
