@@ -190,6 +190,8 @@ module neo_axi_raster_bridge (
   assign rd_feat_o = rsp_fire & r_feat;
 
   // AW + W: a table entry (1 beat) or a pixel row (4 beats of two pixels, shifted out of w_data_q).
+  // W has a second slot (w2): a port mux forwards W in the cycle after it grants the AW, so with
+  // one slot single-beat writes would be taken only every other cycle.
 
   // B: always taken; wr_cnt_q counts writes taken from the core whose B has not arrived.
   reg  [3:0] wr_cnt_q;
@@ -216,16 +218,28 @@ module neo_axi_raster_bridge (
   reg  w_pix_q;
   reg  [1:0] w_left_q;
   reg  [191:0] w_data_q;
+  reg  w2_v_q;
+  reg  w2_pix_q;
+  reg  [191:0] w2_data_q;
   wire aw_fire;
   assign aw_fire = m_axi_awvalid_o & m_axi_awready_i;
   wire w_fire;
   assign w_fire = m_axi_wvalid_o & m_axi_wready_i;
   wire w_last;
   assign w_last = w_left_q == 2'd0;
-  assign wr_ok = (~aw_v_q | aw_fire) & (~w_v_q | (w_fire & w_last)) & wr_room;
+  wire w_leave;
+  assign w_leave = w_fire & w_last;
+  assign wr_ok = (~aw_v_q | aw_fire) & (~w2_v_q | w_leave) & wr_room;
   assign wr_take = req_wr & wr_ok;
   assign wr_table_o = wr_take & ~req_pix;
   assign wr_pixels_o = wr_take & req_pix;
+  // After the head's last beat leaves, w2 moves to the head; a taken write joins behind it.
+  wire w_shift;
+  assign w_shift = w_leave & w2_v_q;
+  wire w_to_head;
+  assign w_to_head = wr_take & (~w_v_q | (w_leave & ~w2_v_q));
+  wire w_to_w2;
+  assign w_to_w2 = wr_take & ~w_to_head;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       aw_v_q <= 1'b0;
@@ -233,32 +247,50 @@ module neo_axi_raster_bridge (
       w_v_q <= 1'b0;
       w_pix_q <= 1'b0;
       w_left_q <= 2'd0;
+      w2_v_q <= 1'b0;
+      w2_pix_q <= 1'b0;
     end else begin
       if (aw_fire) begin
         aw_v_q <= 1'b0;
       end
+      if (wr_take) begin
+        aw_v_q <= 1'b1;
+        aw_pix_q <= req_pix;
+      end
       if (w_fire) begin
         if (w_last) begin
-          w_v_q <= 1'b0;
+          w_v_q <= w2_v_q;
+          w_pix_q <= w2_pix_q;
+          w_left_q <= w2_pix_q ? 2'd3 : 2'd0;
+          w2_v_q <= 1'b0;
         end else begin
           w_left_q <= w_left_q - 2'd1;
         end
       end
-      if (wr_take) begin
-        aw_v_q <= 1'b1;
-        aw_pix_q <= req_pix;
+      if (w_to_head) begin
         w_v_q <= 1'b1;
         w_pix_q <= req_pix;
         w_left_q <= req_pix ? 2'd3 : 2'd0;
+      end
+      if (w_to_w2) begin
+        w2_v_q <= 1'b1;
+        w2_pix_q <= req_pix;
       end
     end
   end
   always @(posedge clk_i) begin
     if (wr_take) begin
       aw_addr_q <= mem_req_addr_i;
+    end
+    if (w_shift) begin
+      w_data_q <= w2_data_q;
+    end else if (w_to_head) begin
       w_data_q <= mem_wdata_i;
     end else if (w_fire) begin
       w_data_q <= {48'd0, w_data_q[191:48]};
+    end
+    if (w_to_w2) begin
+      w2_data_q <= mem_wdata_i;
     end
   end
   wire [31:0] aw_tbyte;

@@ -129,7 +129,9 @@ module neo_axi_sort_bridge (
   assign mem_rsp_data_o = m_axi_rdata_i[47:0];
   assign rd_beat_o = r_fire;
 
-  // AW + W: one registered single-beat write per entry.
+  // AW + W: one registered single-beat write per entry. W has a second slot (w2): a port mux
+  // forwards W in the cycle after it grants the AW, so with one W slot a write would be taken
+  // only every other cycle; with two the bridge takes one write per cycle.
   wire wr_take;
 
   // B: always taken; wr_cnt_q counts writes taken from the core whose B has not arrived.
@@ -151,37 +153,60 @@ module neo_axi_sort_bridge (
     end
   end
   reg  aw_v_q;
-  reg  w_v_q;
   reg  [31:0] aw_addr_q;
+  reg  w_v_q;
   reg  [47:0] w_data_q;
+  reg  w2_v_q;
+  reg  [47:0] w2_data_q;
   wire aw_fire;
   assign aw_fire = m_axi_awvalid_o & m_axi_awready_i;
   wire w_fire;
   assign w_fire = m_axi_wvalid_o & m_axi_wready_i;
-  assign mem_wr_ready_o = (~aw_v_q | aw_fire) & (~w_v_q | w_fire) & wr_room;
+  assign mem_wr_ready_o = (~aw_v_q | aw_fire) & (~w2_v_q | w_fire) & wr_room;
   assign wr_take = mem_wr_valid_i & mem_wr_ready_o;
   assign wr_beat_o = wr_take;
+  // After a W beat leaves, w2 moves to the head; a taken entry joins the queue behind it.
+  wire w_shift;
+  assign w_shift = w_fire & w2_v_q;
+  wire w_to_head;
+  assign w_to_head = wr_take & (~w_v_q | (w_fire & ~w2_v_q));
+  wire w_to_w2;
+  assign w_to_w2 = wr_take & ~w_to_head;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       aw_v_q <= 1'b0;
       w_v_q <= 1'b0;
+      w2_v_q <= 1'b0;
     end else begin
       if (aw_fire) begin
         aw_v_q <= 1'b0;
       end
-      if (w_fire) begin
-        w_v_q <= 1'b0;
-      end
       if (wr_take) begin
         aw_v_q <= 1'b1;
+      end
+      if (w_fire) begin
+        w_v_q <= w2_v_q;
+        w2_v_q <= 1'b0;
+      end
+      if (w_to_head) begin
         w_v_q <= 1'b1;
+      end
+      if (w_to_w2) begin
+        w2_v_q <= 1'b1;
       end
     end
   end
   always @(posedge clk_i) begin
     if (wr_take) begin
       aw_addr_q <= mem_wr_addr_i;
+    end
+    if (w_shift) begin
+      w_data_q <= w2_data_q;
+    end else if (w_to_head) begin
       w_data_q <= mem_wr_data_i;
+    end
+    if (w_to_w2) begin
+      w2_data_q <= mem_wr_data_i;
     end
   end
   wire [31:0] aw_byte;

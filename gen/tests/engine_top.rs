@@ -16,6 +16,10 @@ fn configs() -> Vec<(&'static str, EngineConfig)> {
         ("2 + 1, 2 ports", EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..base.clone() }),
         ("1 + 1, 1 port", EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 1, ..base.clone() }),
         (
+            "2 + 1, 4 ports (one client a port)",
+            EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 4, ..base.clone() },
+        ),
+        (
             "4 + 3, 3 ports, round robin",
             EngineConfig {
                 sort_cores: 4,

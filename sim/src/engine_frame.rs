@@ -27,7 +27,8 @@
 
 use neo_golden::engine::memory::{ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
 use neo_golden::engine::{
-    execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory, SchedulerPolicy, TileTrace,
+    execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory, SchedulerPolicy,
+    TileTrace, COMPLETION_QUEUE_DEPTH,
 };
 use neo_golden::sort::SortMode;
 
@@ -122,11 +123,11 @@ impl<'a> EngineFrameModel<'a> {
         beats as f64 / self.mem.bandwidth
     }
 
-    /// Cycles of one single-beat write through a bridge and its port mux: the bridge holds one
-    /// write until both its AW and its W are accepted, and the mux forwards a W only after its
-    /// AW was granted, so AW and W take turns (two cycles per entry on an always-ready port).
+    /// Cycles of one single-beat write through a bridge and its port mux: the bridge's two W
+    /// slots take one write per cycle on an always-ready port, fewer as the port's readiness or
+    /// bandwidth falls.
     fn write_cycles(&self) -> f64 {
-        1.0 / self.mem.ready + 1.0 / (self.mem.ready * self.mem.bandwidth).min(1.0)
+        self.write_beats(1)
     }
 
     /// Cycles of one tile's sort: every stage back to back ([`batch_cycles`]: the measured
@@ -216,7 +217,7 @@ impl<'a> EngineFrameModel<'a> {
         for _ in 0..CONTENTION_ROUNDS {
             let demand = |j: &Job| {
                 let (r, w) = beats[j.tile][j.engine];
-                let d = (j.end - j.start).max(1.0);
+                let d = (j.work_end - j.start).max(1.0);
                 (r / d, w / d)
             };
             let mut next = alone.clone();
@@ -224,11 +225,11 @@ impl<'a> EngineFrameModel<'a> {
                 let (ra, wa) = demand(a);
                 let mut stretch = 0.0;
                 for b in sched.jobs.iter().filter(|b| b.port == a.port && !std::ptr::eq(*b, a)) {
-                    let overlap = (a.end.min(b.end) - a.start.max(b.start)).max(0.0);
+                    let overlap = (a.work_end.min(b.work_end) - a.start.max(b.start)).max(0.0);
                     if overlap > 0.0 {
                         let (rb, wb) = demand(b);
                         let s = (ra + rb).max(wa + wb).max(1.0);
-                        stretch += overlap / (a.end - a.start).max(1.0) * (s - 1.0);
+                        stretch += overlap / (a.work_end - a.start).max(1.0) * (s - 1.0);
                     }
                 }
                 let want = alone[a.tile][a.engine] * (1.0 + stretch);
@@ -242,41 +243,121 @@ impl<'a> EngineFrameModel<'a> {
 
     /// Tiles in order on the cores by the scheduler policy, with `dur[t] = [sort, raster]`.
     fn schedule(&self, tiles: &[TileTrace], dur: &[[f64; 2]]) -> Schedule {
-        let (n, m, k) = (self.cfg.sort_cores, self.cfg.raster_cores, self.cfg.mem_channels.max(1));
         let desc = self.round_trip() + self.beats(4) + 2.0;
-        let mut seq_free = vec![0.0f64; n];
-        let mut jobs = Vec::new();
-        let mut done_at: Vec<(f64, usize)> = Vec::new();
+        let mut s = Scheduling::new(self.cfg, dur);
         let mut t_ctrl = 0.0f64;
         for (i, t) in tiles.iter().enumerate() {
             let ready = t_ctrl + desc;
             if t.plan.overflow {
-                done_at.push((ready, i));
+                s.pending.push(Pending { end: ready, tile: i, seq: None });
                 t_ctrl = ready;
                 continue;
             }
-            let c = pick(&seq_free, ready, i, self.cfg.scheduler);
-            let start = ready.max(seq_free[c]);
-            let end = start + dur[i][0];
-            seq_free[c] = end;
-            jobs.push(Job { tile: i, engine: 0, port: (1 + c) % k, start, end });
-            done_at.push((end, i));
+            let c = s.sequencer_for(ready, i);
+            let start = ready.max(s.seq_free[c]);
+            s.seq_free[c] = f64::INFINITY;
+            s.sorts.push(Job {
+                tile: i,
+                engine: 0,
+                port: (1 + c) % s.ports,
+                start,
+                work_end: start + dur[i][0],
+                end: 0.0,
+            });
+            s.pending.push(Pending { end: start + dur[i][0], tile: i, seq: Some((c, s.sorts.len() - 1)) });
             t_ctrl = start;
         }
-        done_at.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let mut raster_free = vec![0.0f64; m];
-        let mut t_cpl = 0.0f64;
-        for (j, &(at, i)) in done_at.iter().enumerate() {
-            let ready = at.max(t_cpl) + 1.0;
-            let c = pick(&raster_free, ready, j, self.cfg.scheduler);
-            let start = ready.max(raster_free[c]);
-            let end = start + dur[i][1];
-            raster_free[c] = end;
-            jobs.push(Job { tile: i, engine: 1, port: (1 + n + c) % k, start, end });
-            t_cpl = start;
-        }
-        let end = raster_free.iter().copied().fold(t_ctrl, f64::max);
+        while s.accept_next() {}
+        let end = s.raster_free.iter().copied().fold(t_ctrl, f64::max);
+        let mut jobs = s.sorts;
+        jobs.extend(s.rasters);
         Schedule { jobs, end }
+    }
+}
+
+/// A finished sort (or an overflowing tile) not yet in the completion queue.
+struct Pending {
+    end: f64,
+    tile: usize,
+    /// The sequencer and its job's index, for a sorted tile.
+    seq: Option<(usize, usize)>,
+}
+
+/// The frame controller's state while [`EngineFrameModel::schedule`] places a frame's jobs:
+/// sequencers, the completion queue ([`COMPLETION_QUEUE_DEPTH`] entries, each leaving when its
+/// raster command is taken) and the raster cores.
+struct Scheduling<'d> {
+    dur: &'d [[f64; 2]],
+    policy: SchedulerPolicy,
+    ports: usize,
+    sort_cores: usize,
+    /// When each sequencer takes a new tile (infinite while its completion is pending).
+    seq_free: Vec<f64>,
+    raster_free: Vec<f64>,
+    pending: Vec<Pending>,
+    /// When each queued completion left the queue (its raster command taken), in queue order.
+    left: Vec<f64>,
+    sorts: Vec<Job>,
+    rasters: Vec<Job>,
+}
+
+impl<'d> Scheduling<'d> {
+    fn new(cfg: &EngineConfig, dur: &'d [[f64; 2]]) -> Self {
+        Scheduling {
+            dur,
+            policy: cfg.scheduler,
+            ports: cfg.mem_channels.max(1),
+            sort_cores: cfg.sort_cores,
+            seq_free: vec![0.0; cfg.sort_cores],
+            raster_free: vec![0.0; cfg.raster_cores],
+            pending: Vec::new(),
+            left: Vec::new(),
+            sorts: Vec::new(),
+            rasters: Vec::new(),
+        }
+    }
+
+    /// The sequencer that takes tile `j`, its descriptor ready at `ready`: completions are
+    /// queued (earliest first) until the policy's choice is known.
+    fn sequencer_for(&mut self, ready: f64, j: usize) -> usize {
+        while self.pending.iter().any(|p| p.end <= ready) {
+            self.accept_next();
+        }
+        loop {
+            let c = pick(&self.seq_free, ready, j, self.policy);
+            if self.seq_free[c].is_finite() || !self.accept_next() {
+                return c;
+            }
+        }
+    }
+
+    /// Moves the earliest pending completion (the lowest sequencer among equals, overflowing
+    /// tiles first) into the completion queue, once a slot is free, and hands its raster to a
+    /// core. Returns false when nothing was pending.
+    fn accept_next(&mut self) -> bool {
+        let key = |p: &Pending| (p.end, p.seq.map_or(0, |(c, _)| c + 1));
+        let Some(k) = (0..self.pending.len()).min_by(|&a, &b| {
+            let (ka, kb) = (key(&self.pending[a]), key(&self.pending[b]));
+            ka.0.total_cmp(&kb.0).then(ka.1.cmp(&kb.1))
+        }) else {
+            return false;
+        };
+        let p = self.pending.swap_remove(k);
+        let slot = self.left.len().checked_sub(COMPLETION_QUEUE_DEPTH).map_or(0.0, |q| self.left[q]);
+        let queued = p.end.max(slot);
+        if let Some((c, job)) = p.seq {
+            self.seq_free[c] = queued;
+            self.sorts[job].end = queued;
+        }
+        let ready = queued.max(self.left.last().copied().unwrap_or(0.0)) + 1.0;
+        let r = pick(&self.raster_free, ready, self.left.len(), self.policy);
+        let start = ready.max(self.raster_free[r]);
+        let end = start + self.dur[p.tile][1];
+        self.raster_free[r] = end;
+        self.left.push(start);
+        let port = (1 + self.sort_cores + r) % self.ports;
+        self.rasters.push(Job { tile: p.tile, engine: 1, port, start, work_end: end, end });
+        true
     }
 }
 
@@ -289,6 +370,9 @@ struct Job {
     engine: usize,
     port: usize,
     start: f64,
+    /// When its work ends (its memory traffic spreads over `start..work_end`).
+    work_end: f64,
+    /// When its core is free again: a sort waits for a completion-queue slot.
     end: f64,
 }
 

@@ -57,7 +57,7 @@ struct Dims {
 impl Dims {
     fn new(cfg: &EngineConfig) -> Dims {
         let (n, m) = (cfg.sort_cores as u32, cfg.raster_cores as u32);
-        let qd = 4u32;
+        let qd = neo_golden::engine::COMPLETION_QUEUE_DEPTH as u32;
         Dims {
             n,
             m,

@@ -57,6 +57,11 @@ impl SchedulerPolicy {
     }
 }
 
+/// Entries of the frame controller's completion queue (`neo_frame_ctrl`): finished sorts (and
+/// overflowing tiles) wait there for a raster core; a sorting core whose completion finds the
+/// queue full holds it, and takes no new tile, until a slot frees.
+pub const COMPLETION_QUEUE_DEPTH: usize = 4;
+
 /// Parameters of the generated RTL. [`EngineConfig::default`] is the paper's configuration.
 ///
 /// JSON: an object with any subset of these fields (missing ones take the default), e.g.

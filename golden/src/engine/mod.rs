@@ -14,7 +14,7 @@ pub mod reference;
 pub mod regs;
 
 pub use cases::{CaseScene, EngineCase};
-pub use config::{ConfigError, EngineConfig, SchedulerPolicy, Topology};
+pub use config::{ConfigError, EngineConfig, SchedulerPolicy, Topology, COMPLETION_QUEUE_DEPTH};
 pub use expected::{Expected, Mismatch, Place};
 pub use host::{EngineSession, FramePlan, MemoryLayout, SessionError};
 pub use memory::{Memory, TileDescriptor, TileResult};

@@ -57,9 +57,7 @@ pub fn raster_tile_cycles(
             if itu { rt.itu_latency as f64 } else { 0.0 } + rt.scu_latency as f64 + rt.tile_overhead as f64;
         rt.load_cycles_per_entry * len as f64 + itu_total.max(scu_total) + lat
     } else {
-        let load = rt.load_cycles_per_entry * len as f64;
         let pix = rt.pixel_write_cycles as f64;
-        let segmented = rt.feature_buffer > 0 && len as u64 > rt.feature_buffer;
         // Quad skipping: group 0 walks every quad; a later group walks, after a cycle finding the
         // first, only the quads that touch it: with `n_g` of the table's entries touching the
         // group (at least its busiest subtile's), a fraction `1 - (1 - n_g / len)^itus` of them.
@@ -77,30 +75,24 @@ pub fn raster_tile_cycles(
                 .map(|(k, &h)| if k == 0 { quads } else { 1.0 + (h * quads).max(1.0) } * rt.itu_ii)
                 .collect()
         };
-        let body = if segmented {
-            // Banks: segment s + 1 loads while segment s is walked and blended. Per segment, a
-            // group takes the longer of its walk and its slowest SCU's share (the walk of the
-            // next group waits for FIFO space); the port carries the segment's write-back and the
-            // next segment's loads.
-            let f = rt.feature_buffer;
-            let segs = (len as u64).div_ceil(f);
-            let n_of = |s: u64| (len as u64 - s * f).min(f) as f64;
-            let mut body = rt.load_cycles_per_entry * n_of(0) + segs as f64 * rt.segment_overhead;
-            for s in 0..segs {
-                let n = n_of(s);
-                let work: f64 =
-                    walk_of(n).iter().zip(&groups).map(|(&w, &g)| w.max(g * n / len as f64)).sum();
-                let next = if s + 1 < segs { rt.load_cycles_per_entry * n_of(s + 1) } else { 0.0 };
-                body += work.max(next + n);
-            }
-            body.max(load + pix)
-        } else {
-            // One segment: each SCU runs through its subtiles of every group, decoupled from the
-            // others by its routing FIFO, so the blending takes the busiest SCU's sum.
-            let walks: f64 = walk_of(len as f64).iter().sum();
-            load + walks.max(busiest_scu(routed, scus, &cost)).max(pix)
-        };
-        body - pix + rt.tile_overhead as f64
+        // Banks: segment s + 1 loads while segment s is walked and blended (one segment when the
+        // table fits the buffer). Per segment, the walks of all groups and the busiest SCU's share
+        // of its blending, each decoupled from the other by the routing FIFOs; against them the
+        // request port: the segment's write-back, the next segment's loads and, after the last
+        // segment (whose groups finish the subtiles), the pixel writes.
+        let f = if rt.feature_buffer > 0 { rt.feature_buffer } else { u64::from(len.max(1)) };
+        let segs = u64::from(len).div_ceil(f).max(1);
+        let n_of = |s: u64| (u64::from(len).saturating_sub(s * f)).min(f) as f64;
+        let busiest = busiest_scu(routed, scus, &cost);
+        let mut body = rt.load_cycles_per_entry * n_of(0) + segs as f64 * rt.segment_overhead;
+        for s in 0..segs {
+            let n = n_of(s);
+            let walks: f64 = walk_of(n).iter().sum();
+            let work = walks.max(if len == 0 { 0.0 } else { busiest * n / len as f64 });
+            let port = if s + 1 < segs { rt.load_cycles_per_entry * n_of(s + 1) } else { pix } + n;
+            body += work.max(port);
+        }
+        body + rt.tile_overhead as f64
     };
     (total, tail.min(total))
 }
@@ -165,7 +157,7 @@ pub fn fit_raster_core(
         ));
     }
     let mut rt = RasterTiming {
-        tile_overhead: empty.cycles,
+        tile_overhead: empty.cycles.saturating_sub(core.pixel_writes),
         load_cycles_per_entry: load,
         pixel_write_cycles: core.pixel_writes,
         feature_buffer: f,

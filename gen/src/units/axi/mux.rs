@@ -79,6 +79,10 @@ fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: Option<&s
         ch.to_uppercase()
     ));
     m.reg(format!("{ch}_lock_q"), 1).reg(format!("{ch}_lock_oh_q"), n).reg(format!("{ch}_mask_q"), n);
+    // One bit per client: declared with a range even for one client, so `oh[0]` stays legal.
+    for v in ["lock_oh_q", "mask_q", "req", "hi", "src", "pick", "oh"] {
+        m.vector(format!("{ch}_{v}"));
+    }
     m.wire_assign(format!("{ch}_req"), n, concat(p, |i| format!("s{i}_axi_{ch}valid_i")));
     m.wire_assign(format!("{ch}_hi"), n, format!("{ch}_req & {ch}_mask_q"));
     m.wire_assign(format!("{ch}_src"), n, format!("(|{ch}_hi) ? {ch}_hi : {ch}_req"));
@@ -164,6 +168,7 @@ pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
     m.mem("wq_mem", n, W_FIFO).reg("wq_wp_q", fb).reg("wq_rp_q", fb).reg("wq_cnt_q", fb + 1);
     m.wire_assign("wq_room", 1, format!("wq_cnt_q != {}", lit(fb + 1, u64::from(W_FIFO))));
     m.wire_assign("wq_any", 1, format!("wq_cnt_q != {}", lit(fb + 1, 0)));
+    m.vector("w_oh").vector("w_req");
     m.wire_assign("w_oh", n, format!("wq_any ? wq_mem[wq_rp_q] : {}", lit(n, 0)));
     arbiter(&mut m, cfg, p, "aw", Some("wq_room"));
     m.wire_assign("w_req", n, concat(p, |i| format!("s{i}_axi_wvalid_i")));
@@ -194,6 +199,7 @@ pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
     m.comment("R and B: back to the client named by the ID's low bits, with ID 0.");
     for (ch, fields) in [("r", &["data", "resp", "last"][..]), ("b", &["resp"][..])] {
         let sel = format!("{ch}_sel");
+        m.vector(sel.clone());
         if xb == 0 {
             m.wire_assign(sel.clone(), n, lit(1, 1));
         } else {

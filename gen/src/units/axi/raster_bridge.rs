@@ -12,6 +12,8 @@
 //!   `pixel_to_u32`). `p` must be even so the row starts on a beat (the engine's rows are
 //!   `S`-aligned), and `4 p` a multiple of `4 S` for the burst to stay in one 4 KiB page.
 //! - A FIFO of each burst's kind (table / feature) in AR order routes the R beats.
+//! - W has two slots, so a port mux that forwards W a cycle after granting AW still takes one
+//!   single-beat write per cycle.
 //! - At most `axi_outstanding` read bursts and writes each in flight; `idle_o` and the pulses
 //!   `rd_table_o`, `rd_feat_o`, `wr_table_o`, `wr_pixels_o`.
 
@@ -195,16 +197,25 @@ fn write_path(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let Dims { eb, aw, ab, db, wdb, beats, bb, pw, .. } = *d;
     m.blank();
     m.comment(format!("AW + W: a table entry (1 beat) or a pixel row ({beats} beats of two pixels, shifted out of w_data_q)."));
+    m.comment("W has a second slot (w2): a port mux forwards W in the cycle after it grants the AW, so with");
+    m.comment("one slot single-beat writes would be taken only every other cycle.");
     write_counter(m, cfg);
     m.reg("aw_v_q", 1).reg("aw_pix_q", 1).reg("aw_addr_q", aw);
     m.reg("w_v_q", 1).reg("w_pix_q", 1).reg("w_left_q", bb).reg("w_data_q", wdb);
+    m.reg("w2_v_q", 1).reg("w2_pix_q", 1).reg("w2_data_q", wdb);
     m.wire_assign("aw_fire", 1, "m_axi_awvalid_o & m_axi_awready_i");
     m.wire_assign("w_fire", 1, "m_axi_wvalid_o & m_axi_wready_i");
     m.wire_assign("w_last", 1, format!("w_left_q == {}", lit(bb, 0)));
-    m.assign("wr_ok", "(~aw_v_q | aw_fire) & (~w_v_q | (w_fire & w_last)) & wr_room");
+    m.wire_assign("w_leave", 1, "w_fire & w_last");
+    m.assign("wr_ok", "(~aw_v_q | aw_fire) & (~w2_v_q | w_leave) & wr_room");
     m.assign("wr_take", "req_wr & wr_ok");
     m.assign("wr_table_o", "wr_take & ~req_pix");
     m.assign("wr_pixels_o", "wr_take & req_pix");
+    m.comment("After the head's last beat leaves, w2 moves to the head; a taken write joins behind it.");
+    m.wire_assign("w_shift", 1, "w_leave & w2_v_q");
+    m.wire_assign("w_to_head", 1, "wr_take & (~w_v_q | (w_leave & ~w2_v_q))");
+    m.wire_assign("w_to_w2", 1, "wr_take & ~w_to_head");
+    let first_left = |pix: &str| format!("{pix} ? {} : {}", lit(bb, u64::from(beats - 1)), lit(bb, 0));
     let shifted = if wdb > pw {
         format!("{{{}, {}}}", lit(pw, 0), slice("w_data_q", wdb - 1, pw))
     } else {
@@ -217,34 +228,49 @@ fn write_path(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
             set("w_v_q", lit(1, 0)),
             set("w_pix_q", lit(1, 0)),
             set("w_left_q", lit(bb, 0)),
+            set("w2_v_q", lit(1, 0)),
+            set("w2_pix_q", lit(1, 0)),
         ],
         vec![
             if_("aw_fire", vec![set("aw_v_q", lit(1, 0))]),
+            if_("wr_take", vec![set("aw_v_q", lit(1, 1)), set("aw_pix_q", "req_pix")]),
             if_(
                 "w_fire",
                 vec![if_else(
                     "w_last",
-                    vec![set("w_v_q", lit(1, 0))],
+                    vec![
+                        set("w_v_q", "w2_v_q"),
+                        set("w_pix_q", "w2_pix_q"),
+                        set("w_left_q", first_left("w2_pix_q")),
+                        set("w2_v_q", lit(1, 0)),
+                    ],
                     vec![set("w_left_q", format!("w_left_q - {}", lit(bb, 1)))],
                 )],
             ),
             if_(
-                "wr_take",
+                "w_to_head",
                 vec![
-                    set("aw_v_q", lit(1, 1)),
-                    set("aw_pix_q", "req_pix"),
                     set("w_v_q", lit(1, 1)),
                     set("w_pix_q", "req_pix"),
-                    set("w_left_q", format!("req_pix ? {} : {}", lit(bb, u64::from(beats - 1)), lit(bb, 0))),
+                    set("w_left_q", first_left("req_pix")),
                 ],
             ),
+            if_("w_to_w2", vec![set("w2_v_q", lit(1, 1)), set("w2_pix_q", "req_pix")]),
         ],
     );
-    m.seq_noreset(vec![if_else(
-        "wr_take",
-        vec![set("aw_addr_q", "mem_req_addr_i"), set("w_data_q", "mem_wdata_i")],
-        vec![if_("w_fire", vec![set("w_data_q", shifted)])],
-    )]);
+    m.seq_noreset(vec![
+        if_("wr_take", vec![set("aw_addr_q", "mem_req_addr_i")]),
+        if_else(
+            "w_shift",
+            vec![set("w_data_q", "w2_data_q")],
+            vec![if_else(
+                "w_to_head",
+                vec![set("w_data_q", "mem_wdata_i")],
+                vec![if_("w_fire", vec![set("w_data_q", shifted)])],
+            )],
+        ),
+        if_("w_to_w2", vec![set("w2_data_q", "mem_wdata_i")]),
+    ]);
     byte_addr(m, "aw_tbyte", "aw_addr_q", aw, 3, ab);
     byte_addr(m, "aw_pbyte", "aw_addr_q", aw, 2, ab);
     m.assign("m_axi_awvalid_o", "aw_v_q");

@@ -6,13 +6,14 @@
 //!   R beats go to the core unbuffered (`rready = mem_rsp_ready_i`), entry in the low bits of
 //!   RDATA. At most `axi_outstanding` bursts in flight.
 //! - Writes: one entry is one single-beat AW + W at byte `8 a` (WSTRB all ones, data
-//!   zero-extended); at most `axi_outstanding` writes without their B.
+//!   zero-extended); at most `axi_outstanding` writes without their B. W has two slots, so a
+//!   port mux that forwards W a cycle after granting AW still takes one write per cycle.
 //! - `idle_o`: nothing pending, no read or write in flight; pulses `rd_beat_o` (an entry
 //!   delivered) and `wr_beat_o` (a write taken from the core).
 
 use super::{byte_addr, ports, read_issuer, unused_responses, write_constants, write_counter, BEAT_SHIFT};
 use crate::emit::expr::{lit, zext};
-use crate::emit::{if_, set, Module};
+use crate::emit::{if_, if_else, set, Module};
 use crate::units::sort_core::mem_len_bits;
 use neo_golden::engine::EngineConfig;
 
@@ -66,27 +67,41 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.assign("rd_beat_o", "r_fire");
 
     m.blank();
-    m.comment("AW + W: one registered single-beat write per entry.");
+    m.comment("AW + W: one registered single-beat write per entry. W has a second slot (w2): a port mux");
+    m.comment("forwards W in the cycle after it grants the AW, so with one W slot a write would be taken");
+    m.comment("only every other cycle; with two the bridge takes one write per cycle.");
     m.wire("wr_take", 1);
     write_counter(&mut m, cfg);
-    m.reg("aw_v_q", 1).reg("w_v_q", 1).reg("aw_addr_q", aw).reg("w_data_q", eb);
+    m.reg("aw_v_q", 1).reg("aw_addr_q", aw);
+    m.reg("w_v_q", 1).reg("w_data_q", eb).reg("w2_v_q", 1).reg("w2_data_q", eb);
     m.wire_assign("aw_fire", 1, "m_axi_awvalid_o & m_axi_awready_i");
     m.wire_assign("w_fire", 1, "m_axi_wvalid_o & m_axi_wready_i");
-    m.assign("mem_wr_ready_o", "(~aw_v_q | aw_fire) & (~w_v_q | w_fire) & wr_room");
+    m.assign("mem_wr_ready_o", "(~aw_v_q | aw_fire) & (~w2_v_q | w_fire) & wr_room");
     m.assign("wr_take", "mem_wr_valid_i & mem_wr_ready_o");
     m.assign("wr_beat_o", "wr_take");
+    m.comment("After a W beat leaves, w2 moves to the head; a taken entry joins the queue behind it.");
+    m.wire_assign("w_shift", 1, "w_fire & w2_v_q");
+    m.wire_assign("w_to_head", 1, "wr_take & (~w_v_q | (w_fire & ~w2_v_q))");
+    m.wire_assign("w_to_w2", 1, "wr_take & ~w_to_head");
     m.seq(
-        vec![set("aw_v_q", lit(1, 0)), set("w_v_q", lit(1, 0))],
+        vec![set("aw_v_q", lit(1, 0)), set("w_v_q", lit(1, 0)), set("w2_v_q", lit(1, 0))],
         vec![
             if_("aw_fire", vec![set("aw_v_q", lit(1, 0))]),
-            if_("w_fire", vec![set("w_v_q", lit(1, 0))]),
-            if_("wr_take", vec![set("aw_v_q", lit(1, 1)), set("w_v_q", lit(1, 1))]),
+            if_("wr_take", vec![set("aw_v_q", lit(1, 1))]),
+            if_("w_fire", vec![set("w_v_q", "w2_v_q"), set("w2_v_q", lit(1, 0))]),
+            if_("w_to_head", vec![set("w_v_q", lit(1, 1))]),
+            if_("w_to_w2", vec![set("w2_v_q", lit(1, 1))]),
         ],
     );
-    m.seq_noreset(vec![if_(
-        "wr_take",
-        vec![set("aw_addr_q", "mem_wr_addr_i"), set("w_data_q", "mem_wr_data_i")],
-    )]);
+    m.seq_noreset(vec![
+        if_("wr_take", vec![set("aw_addr_q", "mem_wr_addr_i")]),
+        if_else(
+            "w_shift",
+            vec![set("w_data_q", "w2_data_q")],
+            vec![if_("w_to_head", vec![set("w_data_q", "mem_wr_data_i")])],
+        ),
+        if_("w_to_w2", vec![set("w2_data_q", "mem_wr_data_i")]),
+    ]);
     byte_addr(&mut m, "aw_byte", "aw_addr_q", aw, BEAT_SHIFT, ab);
     m.assign("m_axi_awvalid_o", "aw_v_q");
     m.assign("m_axi_awaddr_o", "aw_byte");
