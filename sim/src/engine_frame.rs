@@ -488,14 +488,14 @@ mod tests {
     }
 
     #[test]
-    fn a_sort_stage_costs_the_measured_batch_plus_the_second_write_cycle_per_entry() {
+    fn a_sort_stage_costs_the_measured_batch_plus_a_round_trip() {
         let lat = latency();
         let cfg = lat.config.clone();
         let m = EngineFrameModel::new(&cfg, &lat, PortTiming::IDEAL).unwrap();
         let t = sort_tile(600);
         let cmds: Vec<Cmd> =
             t.plan.commands().map(|c| Cmd { mode: c.mode, len_a: c.len_a, len_b: 0 }).collect();
-        let want = batch_cycles(&cmds, &lat) as f64 + 600.0 + m.round_trip();
+        let want = batch_cycles(&cmds, &lat) as f64 + m.round_trip();
         assert_eq!(m.sort_cycles(&t), want);
         // Half the bandwidth doubles every beat's cycles.
         let slow = PortTiming { bandwidth: 0.5, ..PortTiming::IDEAL };

@@ -16,20 +16,22 @@ use crate::dram::Ps;
 /// SCU.
 ///
 /// With the measured raster core's shape (`rt.pixel_write_cycles > 0`, from
-/// `reports/latency.json`): the loads (`load_cycles_per_entry` per table entry) come first, then
-/// `max(ITU walk, busiest SCU, pixel writes)` (the RTL's SCUs are decoupled by their routing
-/// FIFOs, so an SCU's cost is the sum over its subtiles of all groups; a lower bound when the
-/// busiest SCU changes from group to group by more than a FIFO's worth), and `tile_overhead`
-/// (the empty tile) holds the latencies and the pixel writes. The ITUs walk every quad for group
-/// 0 and, for a later group, a cycle finding the first quad that touches it plus those quads
-/// (at least one; estimated from the group's busiest subtile). A table longer than
-/// `rt.feature_buffer` is processed segment by segment, each segment loaded once (into a bank,
-/// while the previous segment is walked and blended) and walked for every group (the SCUs save
-/// and resume their subtiles' pixel state between segments): after the first segment's loads,
-/// each segment costs `max(the sum over groups of max(its walk, the segment's share of the
-/// group's slowest SCU), the memory port: the segment's write-back and the next segment's
-/// loads)` (the routing FIFOs do not hide a busy subtile behind the next group's walk) plus
-/// `segment_overhead`. Returns (total, tail after the last input arrives).
+/// `reports/latency.json`), the table is processed in segments of at most `rt.feature_buffer`
+/// entries (one when it fits), each loaded once into a bank while the previous one is walked and
+/// blended, and walked for every group (the SCUs save and resume their subtiles' pixel state
+/// between segments). After the first segment's loads (`load_cycles_per_entry` per entry), each
+/// segment costs the longer of the two below, plus `segment_overhead` when there are several:
+/// - its work: the walks of all groups (every quad for group 0; for a later group a cycle finding
+///   the first quad that touches it plus those quads, at least one, estimated from the group's
+///   busiest subtile) or the segment's share of the busiest SCU, whichever is longer (the routing
+///   FIFOs decouple the walker from the SCUs and the SCUs from each other, so an SCU's cost is
+///   the sum over its subtiles of every group: a lower bound when the busiest SCU changes from
+///   group to group by more than a FIFO's worth);
+/// - the request port: the segment's write-back plus the next segment's loads or, after the last
+///   segment (which finishes every subtile), the pixel writes.
+///
+/// `tile_overhead` (the empty tile beyond its pixel writes) adds the latencies. Returns (total,
+/// tail after the last input arrives).
 #[allow(clippy::too_many_arguments)]
 pub fn raster_tile_cycles(
     routed: &[u32],
@@ -84,7 +86,8 @@ pub fn raster_tile_cycles(
         let segs = u64::from(len).div_ceil(f).max(1);
         let n_of = |s: u64| (u64::from(len).saturating_sub(s * f)).min(f) as f64;
         let busiest = busiest_scu(routed, scus, &cost);
-        let mut body = rt.load_cycles_per_entry * n_of(0) + segs as f64 * rt.segment_overhead;
+        let seg_overhead = if segs > 1 { segs as f64 * rt.segment_overhead } else { 0.0 };
+        let mut body = rt.load_cycles_per_entry * n_of(0) + seg_overhead;
         for s in 0..segs {
             let n = n_of(s);
             let walks: f64 = walk_of(n).iter().sum();
@@ -108,7 +111,7 @@ fn busiest_scu(routed: &[u32], scus: u32, cost: &dyn Fn(u32) -> f64) -> f64 {
 /// of `raster.core` (`reports/latency.json`) with the formula of [`raster_tile_cycles`]:
 ///
 /// - `tile_overhead`: the cycles of the empty table (loads of nothing, one empty list per
-///   subtile, the pixel writes, the pipeline latencies);
+///   subtile, the pipeline latencies) beyond its pixel writes;
 /// - `load_cycles_per_entry`: the slope of the loads (the last read's cycle) over the table
 ///   length, between the shortest non-empty table and the longest one-segment table of the
 ///   fewest subtile bits per Gaussian;
@@ -241,25 +244,29 @@ mod tests {
             tile_overhead: 535,
             ..rt()
         };
-        // Empty tile: the overhead.
-        assert_eq!(raster_tile_cycles(&[0; 64], 1.0, 0, 0, &shaped, 4, 4, true).0, 535.0);
-        // Light tile: loads, then the pixel writes bound the body.
-        assert_eq!(raster_tile_cycles(&[1; 64], 1.0, 20, 20, &shaped, 4, 4, true).0, 40.0 + 535.0);
-        // Heavy tile: 16 groups of 4 SCUs with 50 routed each = 16 x 200 cycles.
+        // Empty tile: the pixel writes and the overhead.
+        assert_eq!(raster_tile_cycles(&[0; 64], 1.0, 0, 0, &shaped, 4, 4, true).0, 512.0 + 535.0);
+        // Light tile: loads, then the port (the write-back and the pixel writes) bounds the body.
+        assert_eq!(
+            raster_tile_cycles(&[1; 64], 1.0, 20, 20, &shaped, 4, 4, true).0,
+            40.0 + 20.0 + 512.0 + 535.0
+        );
+        // Heavy tile: the busiest SCU takes 16 subtiles of 50 routed entries = 3,200 cycles, and
+        // hides the port.
         let (h, _) = raster_tile_cycles(&[50; 64], 1.0, 80, 80, &shaped, 4, 4, true);
-        assert_eq!(h, 160.0 + 3200.0 - 512.0 + 535.0);
-        // 200 entries > 100, two segments: the first segment's loads (200), then per segment
-        // and group the walk (25 quads for group 0, 18.1 for a later one: 1 + the 68% of the
-        // quads that touch it) against half the group's slowest SCU (200 / 2); the port (the
-        // write-backs and the second segment's loads) hides under the blending.
+        assert_eq!(h, 160.0 + 3200.0 + 535.0);
+        // 200 entries > 100, two segments: the first segment's loads (200), then per segment the
+        // busiest SCU's half (1,600) against the walks (25 quads for group 0, 18.1 for a later one)
+        // and the port (the write-back and the next segment's loads, or the pixel writes).
         let (s, _) = raster_tile_cycles(&[50; 64], 1.0, 200, 200, &shaped, 4, 4, true);
-        assert_eq!(s, 200.0 + 2.0 * 16.0 * 100.0 - 512.0 + 535.0);
+        assert_eq!(s, 200.0 + 2.0 * 1600.0 + 535.0);
         // Light long table, 30 segments: port-bound (each segment's 55 cycles of walks, 25 for
         // group 0 and 2 for each later group, hide under its 100 write-backs and the next
-        // segment's 200 cycles of loads), plus the segment overhead.
+        // segment's 200 cycles of loads; the last one's under its write-back and the 512 pixel
+        // writes), plus the segment overhead.
         let o = RasterTiming { segment_overhead: 30.0, ..shaped };
         let (w, _) = raster_tile_cycles(&[1; 64], 1.0, 3000, 3000, &o, 4, 4, true);
-        assert_eq!(w, 200.0 + 30.0 * 30.0 + 29.0 * 300.0 + 100.0 - 512.0 + 535.0);
+        assert_eq!(w, 200.0 + 30.0 * 30.0 + 29.0 * 300.0 + 612.0 + 535.0);
     }
 
     #[test]
@@ -296,7 +303,7 @@ mod tests {
         let core =
             RasterCore { itus, scus, feature_buffer: 100, pixel_writes: 512, memory: String::new(), grid };
         let fit = fit_raster_core(&core, subtiles, &rt()).unwrap();
-        assert_eq!(fit.tile_overhead, raster_tile_cycles(&[0; 64], 1.0, 0, 0, &truth, 4, 4, true).0 as u64);
+        assert_eq!(fit.tile_overhead, truth.tile_overhead);
         assert_eq!(fit.load_cycles_per_entry, 3.0);
         assert_eq!(fit.segment_overhead, 7.0);
         assert_eq!((fit.pixel_write_cycles, fit.feature_buffer), (512, 100));
