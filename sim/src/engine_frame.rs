@@ -166,7 +166,7 @@ impl<'a> EngineFrameModel<'a> {
         rt.load_cycles_per_entry =
             rt.load_cycles_per_entry.max(self.beats(RASTER_ENTRY_BEATS)) + self.write_beats(1) - 1.0;
         rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.write_beats(self.pixel_beats()).ceil() as u64);
-        let (_, writes) = self.raster_beats(t);
+        let writes = self.raster_traffic(t).write;
         let (cycles, _) = raster_tile_cycles(
             &routed,
             ratio,
@@ -180,18 +180,34 @@ impl<'a> EngineFrameModel<'a> {
         cycles.max(writes) + 2.0 * self.round_trip()
     }
 
-    /// Read and write beats of a tile's sort (on its sorting core's port).
-    fn sort_beats(&self, t: &TileTrace) -> (f64, f64) {
+    /// A tile's sort traffic on its sorting core's port: reads in bursts of up to `burst`
+    /// entries, writes one entry each.
+    fn sort_traffic(&self, t: &TileTrace) -> Traffic {
         let (r, w) = (0..t.plan.stages.len())
             .map(|s| stage_entries(t, s))
             .fold((0, 0), |(r, w), (sr, sw)| (r + sr, w + sw));
-        (self.beats(r), self.write_beats(w))
+        Traffic {
+            read: self.beats(r),
+            read_burst: self.cfg.burst as f64,
+            write: self.write_beats(w),
+            write_burst: 1.0,
+        }
     }
 
-    /// Read and write beats of a tile's raster.
-    fn raster_beats(&self, t: &TileTrace) -> (f64, f64) {
-        let len = t.raster.len;
-        (self.beats(RASTER_ENTRY_BEATS * len), self.write_beats(len + self.pixel_beats()))
+    /// A tile's raster traffic: the table in bursts and a 4-beat burst per feature word; the
+    /// write-back one beat an entry and the pixels in rows of `S / 2` beats.
+    fn raster_traffic(&self, t: &TileTrace) -> Traffic {
+        let len = t.raster.len as f64;
+        let row_beats = (self.cfg.subtile as u64 * PIXEL_BYTES / BEAT_BYTES) as f64;
+        let pixels = self.pixel_beats() as f64;
+        let read = RASTER_ENTRY_BEATS as f64 * len;
+        let read_bursts = len + len / self.cfg.burst as f64;
+        Traffic {
+            read: self.beats(RASTER_ENTRY_BEATS * t.raster.len),
+            read_burst: if len > 0.0 { read / read_bursts } else { 1.0 },
+            write: self.write_beats(t.raster.len + self.pixel_beats()),
+            write_burst: (len + pixels) / (len + pixels / row_beats),
+        }
     }
 
     /// [`Self::predict`] for the frame of `regs` whose inputs are in `mem` (before the engine
@@ -203,33 +219,32 @@ impl<'a> EngineFrameModel<'a> {
     }
 
     /// The prediction for one frame: the schedule with every job alone on its port, then
-    /// (a few rounds) each job stretched by the ports it shares: while two jobs on one port
-    /// overlap and their read (or write) channel demands add up to more than one beat per
-    /// cycle, both progress at the port's pace (the mux's round-robin shares it).
+    /// (a few rounds) each job stretched by the jobs it shares a port with. While two jobs on
+    /// one port overlap and their demands on a channel (R or W) add up to more than one beat per
+    /// cycle, the mux's round-robin grants whole bursts in turn, so each job gets the channel in
+    /// proportion to its mean burst length, or what the other leaves ([`channel_stretch`]).
     pub fn predict(&self, trace: &FrameTrace) -> FramePrediction {
         let tiles = &trace.tiles;
         let alone: Vec<[f64; 2]> =
             tiles.iter().map(|t| [self.sort_cycles(t), self.raster_cycles(t)]).collect();
-        let beats: Vec<[(f64, f64); 2]> =
-            tiles.iter().map(|t| [self.sort_beats(t), self.raster_beats(t)]).collect();
+        let traffic: Vec<[Traffic; 2]> =
+            tiles.iter().map(|t| [self.sort_traffic(t), self.raster_traffic(t)]).collect();
         let mut dur = alone.clone();
         let mut sched = self.schedule(tiles, &dur);
         for _ in 0..CONTENTION_ROUNDS {
-            let demand = |j: &Job| {
-                let (r, w) = beats[j.tile][j.engine];
-                let d = (j.work_end - j.start).max(1.0);
-                (r / d, w / d)
-            };
             let mut next = alone.clone();
             for a in &sched.jobs {
-                let (ra, wa) = demand(a);
+                let ta = &traffic[a.tile][a.engine];
+                let da = (a.work_end - a.start).max(1.0);
                 let mut stretch = 0.0;
                 for b in sched.jobs.iter().filter(|b| b.port == a.port && !std::ptr::eq(*b, a)) {
                     let overlap = (a.work_end.min(b.work_end) - a.start.max(b.start)).max(0.0);
                     if overlap > 0.0 {
-                        let (rb, wb) = demand(b);
-                        let s = (ra + rb).max(wa + wb).max(1.0);
-                        stretch += overlap / (a.work_end - a.start).max(1.0) * (s - 1.0);
+                        let tb = &traffic[b.tile][b.engine];
+                        let db = (b.work_end - b.start).max(1.0);
+                        let r = channel_stretch(ta.read / da, ta.read_burst, tb.read / db, tb.read_burst);
+                        let w = channel_stretch(ta.write / da, ta.write_burst, tb.write / db, tb.write_burst);
+                        stretch += overlap / da * r.max(w);
                     }
                 }
                 let want = alone[a.tile][a.engine] * (1.0 + stretch);
@@ -359,6 +374,27 @@ impl<'d> Scheduling<'d> {
         self.rasters.push(Job { tile: p.tile, engine: 1, port, start, work_end: end, end });
         true
     }
+}
+
+/// A job's memory traffic: cycles of read and write beats alone on a port, and the mean burst
+/// length (beats) of each.
+struct Traffic {
+    read: f64,
+    read_burst: f64,
+    write: f64,
+    write_burst: f64,
+}
+
+/// How much longer job `a` takes on a channel it shares with job `b`: `ra`, `rb` are their
+/// demands (beats per cycle alone), `la`, `lb` their mean burst lengths. When the demands fit
+/// the channel nothing changes; otherwise the round-robin grants bursts in turn, so `a` gets a
+/// share `la / (la + lb)` of the beats, or more when `b` needs less than its share.
+fn channel_stretch(ra: f64, la: f64, rb: f64, lb: f64) -> f64 {
+    if ra + rb <= 1.0 || ra <= 0.0 {
+        return 0.0;
+    }
+    let rate = ra.min((la / (la + lb)).max(1.0 - rb));
+    ra / rate - 1.0
 }
 
 /// Rounds of the port-sharing correction in [`EngineFrameModel::predict`].
