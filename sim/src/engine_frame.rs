@@ -398,7 +398,7 @@ fn channel_stretch(ra: f64, la: f64, rb: f64, lb: f64) -> f64 {
 }
 
 /// Rounds of the port-sharing correction in [`EngineFrameModel::predict`].
-const CONTENTION_ROUNDS: usize = 6;
+const CONTENTION_ROUNDS: usize = 12;
 
 /// One sort (engine 0) or raster (engine 1) of a tile, on its core's AXI port.
 struct Job {
