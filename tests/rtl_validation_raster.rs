@@ -16,7 +16,8 @@ fn models_present() {
 neo_tb::with_models! {
     use neo_golden::raster::raster_tile;
     use neo_golden::shared;
-    use neo_sim::arch::raster_tile_cycles;
+    use neo_golden::engine::segment_work;
+    use neo_sim::arch::raster_tile_cycles_in_segments;
     use neo_sim::latency::Latency;
     use neo_tb::core::MemTiming;
     use neo_tb::raster::{biker_tiles, RasterCore};
@@ -46,7 +47,20 @@ neo_tb::with_models! {
             let (sum_r, sum_p) =
                 r.work.iter().fold((0u64, 0u64), |(a, b), w| (a + w.routed as u64, b + w.processed as u64));
             let ratio = if sum_r == 0 { 1.0 } else { sum_p as f64 / sum_r as f64 };
-            let (model, _) = raster_tile_cycles(
+            let mut k = 0;
+            let index: Vec<Option<usize>> = tile
+                .case
+                .table
+                .iter()
+                .map(|e| {
+                    tile.case.features.get(&e.id).map(|_| {
+                        k += 1;
+                        k - 1
+                    })
+                })
+                .collect();
+            let segments = segment_work(&index, &r.bitmaps, &r.work, cfg.raster_feature_buffer);
+            let (model, _) = raster_tile_cycles_in_segments(
                 &routed,
                 ratio,
                 feats.len() as u32,
@@ -55,6 +69,7 @@ neo_tb::with_models! {
                 cfg.raster_itus as u32,
                 cfg.raster_scus as u32,
                 true,
+                Some(&segments),
             );
             eprintln!(
                 "frame {} tile {:?}: {} entries, RTL {rtl} cycles, model {model:.0} ({:+.2}%)",

@@ -282,20 +282,23 @@ pub struct RasterTiming {
     /// SCU pipeline latency in cycles.
     pub scu_latency: u64,
     /// Fixed cycles per tile (setup, pixel-buffer drain). The measured raster core's value is
-    /// its empty tile (loads of nothing, one empty list per subtile, the pixel writes), which
-    /// includes the pipeline latencies and `pixel_write_cycles`.
+    /// its empty tile (loads of nothing, one empty list per subtile, the pipeline latencies)
+    /// beyond its `pixel_write_cycles`.
     pub tile_overhead: u64,
     /// Cycles per table entry of the loads before the ITU walk (table beat + feature beat in the
     /// RTL: 2); 0 models loads overlapped with the rest (the assumed default).
     pub load_cycles_per_entry: f64,
-    /// Pixel-row writes per tile (`tile^2 / subtile` in the RTL, 512), overlapped with blending;
-    /// 0 (the assumed default) ignores them.
+    /// Pixel-row writes per tile (`tile^2 / subtile` in the RTL, 512), after the last segment's
+    /// walk starts; 0 (the assumed default) ignores them.
     pub pixel_write_cycles: u64,
+    /// Request-port cycles of one entry's write-back, beside the loads (the measured core: 1,
+    /// one request port; 0 where the loads' read beats, not the requests, set the pace).
+    pub write_back_cycles_per_entry: f64,
     /// Feature-buffer entries of a raster core: a longer table is reloaded and walked once per
     /// subtile group, segment by segment (the RTL's schedule); 0 (the assumed default) is
     /// unbounded.
     pub feature_buffer: u64,
-    /// Fixed cycles per (group, segment) of a table longer than `feature_buffer` (the reload's
+    /// Fixed cycles per segment of a table longer than `feature_buffer` (the reload's
     /// handshakes, the ITU latency and the drain of the SCUs' FIFOs before the buffer is
     /// reused).
     pub segment_overhead: f64,
@@ -312,6 +315,7 @@ impl Default for RasterTiming {
             tile_overhead: 64,
             load_cycles_per_entry: 0.0,
             pixel_write_cycles: 0,
+            write_back_cycles_per_entry: 1.0,
             feature_buffer: 0,
             segment_overhead: 0.0,
         }

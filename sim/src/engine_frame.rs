@@ -32,7 +32,7 @@ use neo_golden::engine::{
 };
 use neo_golden::sort::SortMode;
 
-use crate::arch::raster_tile_cycles;
+use crate::arch::raster_tile_cycles_in_segments;
 use crate::latency::Latency;
 use crate::sortcmd::{batch_cycles, Cmd};
 
@@ -160,14 +160,14 @@ impl<'a> EngineFrameModel<'a> {
         let done: u64 = r.subtiles.iter().map(|s| s.processed as u64).sum();
         let ratio = if all == 0 { 1.0 } else { done as f64 / all as f64 };
         let mut rt = self.lat.raster.clone();
-        // Per entry: its table beat and its feature word's beats through the port, and its
-        // write-back beat (the formula counts one cycle for it; the loads and the write-back
-        // share the core's one request port); the pixels leave in bursts.
-        rt.load_cycles_per_entry =
-            rt.load_cycles_per_entry.max(self.beats(RASTER_ENTRY_BEATS)) + self.write_beats(1) - 1.0;
+        // Per entry: its table beat and its feature word's beats on the R channel (or the unit's
+        // load cycles, if longer); its write-back takes the core's one request port, stopping the
+        // loads while it lasts. The pixels leave in bursts.
+        rt.load_cycles_per_entry = rt.load_cycles_per_entry.max(self.beats(RASTER_ENTRY_BEATS));
+        rt.write_back_cycles_per_entry = rt.write_back_cycles_per_entry.max(self.write_beats(1));
         rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.write_beats(self.pixel_beats()).ceil() as u64);
         let writes = self.raster_traffic(t).write;
-        let (cycles, _) = raster_tile_cycles(
+        let (cycles, _) = raster_tile_cycles_in_segments(
             &routed,
             ratio,
             r.present as u32,
@@ -176,6 +176,7 @@ impl<'a> EngineFrameModel<'a> {
             self.cfg.raster_itus as u32,
             self.cfg.raster_scus as u32,
             true,
+            Some(&r.segments),
         );
         cycles.max(writes) + 2.0 * self.round_trip()
     }
@@ -506,7 +507,7 @@ mod tests {
         TileTrace {
             plan: TilePlan { overflow: false, stages: vec![cmds] },
             next_len: n,
-            raster: RasterTrace { len: 0, present: 0, subtiles: Vec::new() },
+            raster: RasterTrace { len: 0, present: 0, subtiles: Vec::new(), segments: Vec::new() },
         }
     }
 

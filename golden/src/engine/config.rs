@@ -62,6 +62,10 @@ impl SchedulerPolicy {
 /// queue full holds it, and takes no new tile, until a slot frees.
 pub const COMPLETION_QUEUE_DEPTH: usize = 4;
 
+/// Elements of each raster core's routing FIFO (`neo_raster_feeder`, one per SCU): how many
+/// walked quads the ITUs may run ahead of an SCU.
+pub const ROUTING_FIFO_DEPTH: u32 = 64;
+
 /// Parameters of the generated RTL. [`EngineConfig::default`] is the paper's configuration.
 ///
 /// JSON: an object with any subset of these fields (missing ones take the default), e.g.

@@ -14,12 +14,15 @@ pub mod reference;
 pub mod regs;
 
 pub use cases::{CaseScene, EngineCase};
-pub use config::{ConfigError, EngineConfig, SchedulerPolicy, Topology, COMPLETION_QUEUE_DEPTH};
+pub use config::{
+    ConfigError, EngineConfig, SchedulerPolicy, Topology, COMPLETION_QUEUE_DEPTH, ROUTING_FIFO_DEPTH,
+};
 pub use expected::{Expected, Mismatch, Place};
 pub use host::{EngineSession, FramePlan, MemoryLayout, SessionError};
 pub use memory::{Memory, TileDescriptor, TileResult};
 pub use plan::{run_command, tile_plan, TileCmd, TilePlan};
 pub use reference::{
-    execute_frame, execute_frame_traced, FrameError, FrameOutcome, FrameTrace, RasterTrace, TileTrace,
+    execute_frame, execute_frame_traced, segment_work, FrameError, FrameOutcome, FrameTrace, RasterTrace,
+    SegmentWork, TileTrace,
 };
 pub use regs::{Counter, Counters, FrameRegs, Reg};

@@ -161,6 +161,56 @@ pub struct RasterTrace {
     pub present: u64,
     /// Per subtile (row-major): the SCU's work counters.
     pub subtiles: Vec<SubtileWork>,
+    /// Per segment of `raster_feature_buffer` table entries (the raster core loads and walks
+    /// the table a segment at a time): each subtile's share of the work.
+    pub segments: Vec<SegmentWork>,
+}
+
+/// One raster segment's work, per subtile (row-major).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SegmentWork {
+    /// Table entries of the segment.
+    pub entries: u32,
+    /// Entries of the segment routed to each subtile.
+    pub routed: Vec<u32>,
+    /// Of those, the entries the subtile's SCU processed (before it terminated).
+    pub processed: Vec<u32>,
+}
+
+/// Splits a tile's raster work into segments of `seg` table entries: `present[p]` is table
+/// entry `p`'s index among the entries with a feature word, `bitmaps` their subtile bitmaps and
+/// `work` the subtiles' counters (an SCU processes the first `processed` entries of its list).
+pub fn segment_work(
+    present: &[Option<usize>],
+    bitmaps: &[u64],
+    work: &[SubtileWork],
+    seg: usize,
+) -> Vec<SegmentWork> {
+    let subtiles = work.len();
+    let mut seen = vec![0u32; subtiles];
+    present
+        .chunks(seg.max(1))
+        .map(|chunk| {
+            let mut w = SegmentWork {
+                entries: chunk.len() as u32,
+                routed: vec![0; subtiles],
+                processed: vec![0; subtiles],
+            };
+            for &i in chunk.iter().flatten() {
+                let mut m = bitmaps[i];
+                while m != 0 {
+                    let j = m.trailing_zeros() as usize;
+                    w.routed[j] += 1;
+                    if seen[j] < work[j].processed {
+                        w.processed[j] += 1;
+                    }
+                    seen[j] += 1;
+                    m &= m - 1;
+                }
+            }
+            w
+        })
+        .collect()
 }
 
 /// One frame in progress.
@@ -241,13 +291,40 @@ impl<'c> FrameRun<'c> {
             mem.write_pixel(base + k as u64, *p);
         }
         add_raster_traffic(&mut self.out.counters, len, pixels);
-        RasterTrace { len, present: present.len() as u64, subtiles: r.work }
+        let mut k = 0;
+        let index: Vec<Option<usize>> = feats
+            .iter()
+            .map(|f| {
+                f.map(|_| {
+                    k += 1;
+                    k - 1
+                })
+            })
+            .collect();
+        let segments = segment_work(&index, &r.bitmaps, &r.work, self.cfg.raster_feature_buffer);
+        RasterTrace { len, present: present.len() as u64, subtiles: r.work, segments }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn segment_work_splits_routed_and_processed_entries_by_table_position() {
+        // Table positions 0..4; position 1 has no feature word. Subtile 0's list is entries 0, 1
+        // (it processed 1), subtile 1's entries 1, 2 (it processed both).
+        let present = [Some(0), None, Some(1), Some(2)];
+        let bitmaps = [0b01, 0b11, 0b10];
+        let work = [
+            SubtileWork { routed: 2, processed: 1, ..SubtileWork::default() },
+            SubtileWork { routed: 2, processed: 2, ..SubtileWork::default() },
+        ];
+        let segs = segment_work(&present, &bitmaps, &work, 2);
+        assert_eq!(segs.len(), 2);
+        assert_eq!((segs[0].entries, &segs[0].routed, &segs[0].processed), (2, &vec![1, 0], &vec![1, 0]));
+        assert_eq!((segs[1].entries, &segs[1].routed, &segs[1].processed), (2, &vec![1, 2], &vec![0, 2]));
+    }
     use crate::sort::SortFormat;
 
     fn one_tile(mem: &mut Memory, list: &[SortEntry]) -> FrameRegs {

@@ -5,6 +5,7 @@ use neo_golden::formats::latency::RasterCore;
 
 use crate::config::RasterTiming;
 use crate::dram::Ps;
+use neo_golden::engine::{SegmentWork, ROUTING_FIFO_DEPTH};
 
 /// The raster core's cycles for one tile of `table_len` entries, `entries` of them with a
 /// feature entry. The ITUs test every table entry against all subtiles of the tile at once,
@@ -43,6 +44,23 @@ pub fn raster_tile_cycles(
     scus: u32,
     itu: bool,
 ) -> (f64, f64) {
+    raster_tile_cycles_in_segments(routed, ratio, entries, table_len, rt, itus, scus, itu, None)
+}
+
+/// [`raster_tile_cycles`] with each segment's own work (`segments`, from golden's engine trace)
+/// instead of an even share of the tile's, for the measured raster core's shape.
+#[allow(clippy::too_many_arguments)]
+pub fn raster_tile_cycles_in_segments(
+    routed: &[u32],
+    ratio: f64,
+    entries: u32,
+    table_len: u32,
+    rt: &RasterTiming,
+    itus: u32,
+    scus: u32,
+    itu: bool,
+    segments: Option<&[SegmentWork]>,
+) -> (f64, f64) {
     let cost = |r: u32| {
         let p = (r as f64 * ratio).ceil().min(r as f64);
         p * rt.scu_cycles_per_pair + (r as f64 - p) * rt.scu_drain_ii
@@ -59,7 +77,6 @@ pub fn raster_tile_cycles(
             if itu { rt.itu_latency as f64 } else { 0.0 } + rt.scu_latency as f64 + rt.tile_overhead as f64;
         rt.load_cycles_per_entry * len as f64 + itu_total.max(scu_total) + lat
     } else {
-        let pix = rt.pixel_write_cycles as f64;
         // Quad skipping: group 0 walks every quad; a later group walks, after a cycle finding the
         // first, only the quads that touch it: with `n_g` of the table's entries touching the
         // group (at least its busiest subtile's), a fraction `1 - (1 - n_g / len)^itus` of them.
@@ -77,34 +94,100 @@ pub fn raster_tile_cycles(
                 .map(|(k, &h)| if k == 0 { quads } else { 1.0 + (h * quads).max(1.0) } * rt.itu_ii)
                 .collect()
         };
-        // Banks: segment s + 1 loads while segment s is walked and blended (one segment when the
-        // table fits the buffer). Per segment, the walks of all groups and the busiest SCU's share
-        // of its blending, each decoupled from the other by the routing FIFOs; against them the
-        // request port: the segment's write-back, the next segment's loads and, after the last
-        // segment (whose groups finish the subtiles), the pixel writes.
         let f = if rt.feature_buffer > 0 { rt.feature_buffer } else { u64::from(len.max(1)) };
-        let segs = u64::from(len).div_ceil(f).max(1);
-        let n_of = |s: u64| (u64::from(len).saturating_sub(s * f)).min(f) as f64;
-        let busiest = busiest_scu(routed, scus, &cost);
+        let segs = segments.map_or(u64::from(len).div_ceil(f).max(1), |v| v.len().max(1) as u64);
         let seg_overhead = if segs > 1 { segs as f64 * rt.segment_overhead } else { 0.0 };
-        let mut body = rt.load_cycles_per_entry * n_of(0) + seg_overhead;
-        for s in 0..segs {
-            let n = n_of(s);
-            let walks: f64 = walk_of(n).iter().sum();
-            let work = walks.max(if len == 0 { 0.0 } else { busiest * n / len as f64 });
-            let port = if s + 1 < segs { rt.load_cycles_per_entry * n_of(s + 1) } else { pix } + n;
-            body += work.max(port);
-        }
-        body + rt.tile_overhead as f64
+        let shape = TileShape { routed, segments, len: len as f64, f: f as f64, segs, itus, scus };
+        let body = segment_pipeline(&shape, rt, &cost, &walk_of);
+        body + seg_overhead + rt.tile_overhead as f64
     };
     (total, tail.min(total))
 }
 
-/// The busiest SCU's blending: SCU `j` takes subtiles `j, j + scus, ...` (one per group), each
-/// costing `cost(routed)`.
-fn busiest_scu(routed: &[u32], scus: u32, cost: &dyn Fn(u32) -> f64) -> f64 {
-    let s = scus.max(1) as usize;
-    (0..s).map(|j| routed.iter().skip(j).step_by(s).map(|&r| cost(r)).sum::<f64>()).fold(0.0, f64::max)
+/// A tile's work as [`segment_pipeline`] sees it.
+struct TileShape<'a> {
+    routed: &'a [u32],
+    /// Each segment's own work, when known.
+    segments: Option<&'a [SegmentWork]>,
+    len: f64,
+    /// Entries per segment.
+    f: f64,
+    segs: u64,
+    itus: u32,
+    scus: u32,
+}
+
+/// The measured raster core's body, piece by piece: segment `s + 1` loads (after the first
+/// segment's loads, on the request port with segment `s`'s write-back) while segment `s` is
+/// walked group by group; each walked group hands every SCU its *piece* (the segment's share of
+/// its subtile's routed entries) through the SCU's routing FIFO of
+/// [`ROUTING_FIFO_DEPTH`] elements (one per walked quad that touches the subtile). The walker
+/// moves on from a group once every SCU's FIFO has room, that is once each SCU is within a
+/// FIFO's worth of the end of its piece, so a busy SCU holds the others back only by what
+/// exceeds its FIFO. After the last segment, whose groups finish the subtiles, the pixel writes.
+fn segment_pipeline(
+    t: &TileShape,
+    rt: &RasterTiming,
+    cost: &dyn Fn(u32) -> f64,
+    walk_of: &dyn Fn(f64) -> Vec<f64>,
+) -> f64 {
+    let n_of = |s: u64| match t.segments {
+        Some(v) => v.get(s as usize).map_or(0.0, |w| f64::from(w.entries)),
+        None => (t.len - s as f64 * t.f).min(t.f).max(0.0),
+    };
+    // Segment `s`'s piece of subtile `j`: its routed entries and its SCU's cycles.
+    let piece = |s: u64, j: usize, n: f64| -> (f64, f64) {
+        let r_all = t.routed.get(j).copied().unwrap_or(0);
+        match t.segments.and_then(|v| v.get(s as usize)) {
+            Some(w) => {
+                let (r, p) =
+                    (w.routed.get(j).copied().unwrap_or(0), w.processed.get(j).copied().unwrap_or(0));
+                let p = p.min(r);
+                (f64::from(r), f64::from(p) * rt.scu_cycles_per_pair + f64::from(r - p) * rt.scu_drain_ii)
+            }
+            None => {
+                let share = if t.len > 0.0 { n / t.len } else { 0.0 };
+                (f64::from(r_all) * share, cost(r_all) * share)
+            }
+        }
+    };
+    let itus = f64::from(t.itus.max(1));
+    let fifo = f64::from(ROUTING_FIFO_DEPTH);
+    let scus = t.scus.max(1) as usize;
+    let mut scu_free = vec![0.0f64; scus];
+    let (mut walker, mut loaded) = (0.0f64, rt.load_cycles_per_entry * n_of(0));
+    let mut end = 0.0f64;
+    for s in 0..t.segs {
+        let n = n_of(s);
+        walker = walker.max(loaded);
+        let seg_start = walker;
+        for (g, walk) in walk_of(n).iter().enumerate() {
+            let start = walker;
+            let mut leave = start + walk;
+            for (jj, free) in scu_free.iter_mut().enumerate() {
+                let (r, c) = piece(s, g * scus + jj, n);
+                if r <= 0.0 {
+                    continue;
+                }
+                let elements = (n / itus * (1.0 - (1.0 - (r / n).min(1.0)).powf(itus))).max(1.0);
+                *free = free.max(start) + c;
+                leave = leave.max(*free - fifo * c / elements);
+            }
+            walker = leave;
+        }
+        let port = if s + 1 < t.segs {
+            rt.load_cycles_per_entry * n_of(s + 1) + rt.write_back_cycles_per_entry * n
+        } else {
+            n
+        };
+        if s + 1 < t.segs {
+            loaded += port;
+        } else {
+            let blended = scu_free.iter().copied().fold(walker, f64::max);
+            end = blended.max(loaded.max(seg_start) + port + rt.pixel_write_cycles as f64);
+        }
+    }
+    end
 }
 
 /// The measured raster core's timing: `base` (the ITU and SCU figures) completed from the grid
@@ -211,6 +294,7 @@ mod tests {
             tile_overhead: 0,
             load_cycles_per_entry: 0.0,
             pixel_write_cycles: 0,
+            write_back_cycles_per_entry: 1.0,
             feature_buffer: 0,
             segment_overhead: 0.0,
         }

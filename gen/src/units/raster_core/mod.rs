@@ -48,7 +48,7 @@ use neo_golden::raster::RGB_BITS;
 pub const NAME: &str = "neo_raster_core";
 
 /// Entries per routing FIFO (one per SCU): how far the ITUs may run ahead of an SCU.
-pub const FIFO_DEPTH: u32 = 64;
+pub const FIFO_DEPTH: u32 = neo_golden::engine::ROUTING_FIFO_DEPTH;
 
 /// Memory spaces (`mem_req_space_o`).
 pub mod space {
