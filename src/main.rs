@@ -2,6 +2,7 @@
 
 mod args;
 mod commands;
+mod engine_run;
 mod points;
 mod progress;
 
