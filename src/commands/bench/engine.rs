@@ -91,6 +91,19 @@ fn children_usage() -> (f64, u64) {
     (secs(u.ru_utime) + secs(u.ru_stime), u.ru_maxrss.max(0) as u64 * 1024)
 }
 
+/// CPU seconds (user + system) of this process so far, every thread included (Verilator's
+/// worker threads with `--threads`).
+fn self_cpu() -> f64 {
+    // SAFETY: getrusage only writes the struct it is given.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: `u` is a valid rusage to fill.
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
+        return 0.0;
+    }
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    secs(u.ru_utime) + secs(u.ru_stime)
+}
+
 fn verdict(cps: f64) -> &'static str {
     super::verdict(cps >= TARGET_CYCLES_PER_S)
 }
@@ -144,30 +157,34 @@ pub fn run(a: EngineBenchArgs) -> Result<()> {
     let opts = RunOptions { timing: AxiTiming::RANDOM, ..RunOptions::default() };
     let mut rig = EngineRig::new(engine, opts, seed, None).map_err(|e| anyhow!(e))?;
     let bar = engine_run::frame_bar(session.frames() as u64, false);
-    let (mut cycles, mut seconds) = (0u64, 0f64);
+    let (mut cycles, mut seconds, mut cpu) = (0u64, 0f64, 0f64);
     let failed = engine_run::run_frames(
         &mut session,
         &mut rig,
-        |_, _| Ok(()),
+        |_, _| Ok(self_cpu()),
         |f| {
+            let c = self_cpu() - f.before;
             bar.inc(1);
             let r = &f.report;
             let s = f.took.as_secs_f64();
             let cps = r.harness_cycles as f64 / s.max(1e-9);
             cycles += r.harness_cycles;
             seconds += s;
+            cpu += c;
             let status = match &r.mismatch {
                 None => "bit-exact".to_string(),
                 Some(m) => format!("MISMATCH {m}"),
             };
             let line = format!(
-                "engine frame {:<3}{:>9.1} s/frame ({status}{}, {} RTL cycles, {} with the harness; {:.1} kcycles/s; target >= {:.0} kcycles/s on one core: {:.2}x, {})",
+                "engine frame {:<3}{:>9.1} s/frame ({status}{}, {} RTL cycles, {} with the harness; {:.1} kcycles/s, {:.1} CPU s, {:.1} kcycles per CPU s; target >= {:.0} kcycles/s on one core: {:.2}x, {})",
                 r.frame,
                 s,
                 if r.from_scratch { ", from scratch" } else { "" },
                 r.rtl_cycles,
                 r.harness_cycles,
                 cps / 1e3,
+                c,
+                r.harness_cycles as f64 / c.max(1e-9) / 1e3,
                 TARGET_CYCLES_PER_S / 1e3,
                 cps / TARGET_CYCLES_PER_S,
                 verdict(cps)
@@ -181,10 +198,11 @@ pub fn run(a: EngineBenchArgs) -> Result<()> {
     }
     let cps = cycles as f64 / seconds.max(1e-9);
     println!(
-        "engine overall  {:>9.1} s/frame ({} frames, {:.1} kcycles/s, {} Verilator thread(s); target >= {:.0} kcycles/s: {:.2}x, {})",
+        "engine overall  {:>9.1} s/frame ({} frames, {:.1} kcycles/s, {:.1} kcycles per CPU s, {} Verilator thread(s); target >= {:.0} kcycles/s: {:.2}x, {})",
         seconds / a.frames.max(1) as f64,
         a.frames,
         cps / 1e3,
+        cycles as f64 / cpu.max(1e-9) / 1e3,
         a.threads,
         TARGET_CYCLES_PER_S / 1e3,
         cps / TARGET_CYCLES_PER_S,
@@ -232,7 +250,7 @@ mod tests {
         assert_eq!((spec.as_str(), res), (CaseScene::SYNTHETIC, (320, 240)));
         let d = parse(&["engine"]).expect("parses");
         let Some(super::super::BenchCommand::Engine(d)) = d.command else { panic!("no engine subcommand") };
-        assert_eq!((d.threads, d.frames, d.res, d.config), (1, 2, None, None));
+        assert_eq!((d.threads, d.frames, d.res, d.config.as_deref()), (1, 2, None, None));
         assert_eq!(scene_and_res(&d).expect("default").1, (256, 256));
     }
 
