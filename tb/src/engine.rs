@@ -262,6 +262,8 @@ impl EngineRig {
     /// Runs one frame of `plan` (its inputs already in memory): programs the registers,
     /// starts, waits for `done`, reads the registers back and compares with golden.
     pub fn run_frame(&mut self, plan: &FramePlan) -> Result<FrameReport, String> {
+        // The RTL ignores a base's low bits: refuse a misaligned one rather than run elsewhere.
+        plan.regs.check(&self.engine.cfg).map_err(|e| format!("frame {}: {e}", plan.frame))?;
         let t0 = self.engine.model.cycle();
         for (r, v) in plan.regs.writes() {
             self.lite.write(r.offset(), v, 0xf);

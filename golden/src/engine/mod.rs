@@ -22,4 +22,4 @@ pub use plan::{run_command, tile_plan, TileCmd, TilePlan};
 pub use reference::{
     execute_frame, execute_frame_traced, FrameError, FrameOutcome, FrameTrace, RasterTrace, TileTrace,
 };
-pub use regs::{Counter, Counters, FrameRegs, Reg};
+pub use regs::{fb_base_alignment, Counter, Counters, FrameRegs, MisalignedBase, Reg};
