@@ -2,6 +2,7 @@
 
 mod args;
 mod commands;
+mod engine_run;
 mod points;
 mod progress;
 
@@ -27,7 +28,8 @@ enum Command {
     Compare(commands::compare::CompareArgs),
     /// Generate a camera trajectory and write it as a cameras.json.
     Trajectory(commands::trajectory::TrajectoryArgs),
-    /// Measure throughput figures (scene loading, rendering) in one run and print them.
+    /// Measure throughput figures (scene loading, rendering, unit cosimulation) in one run and
+    /// print them; `neo bench engine`: the verilated engine's build and simulation speed.
     Bench(commands::bench::BenchArgs),
     /// Run the bit-exact golden pipeline along a trajectory with a sorting strategy; write stats.json.
     Frames(commands::frames::FramesArgs),

@@ -2,21 +2,37 @@
 //!
 //! Speed targets live here rather than in timed unit tests, because the machines are noisy.
 
+mod engine;
+
 use crate::progress::spin;
 use anyhow::Result;
-use clap::Args;
+use clap::{Args, Subcommand};
 use neo_golden::{camera::Camera, pipeline, ply, render, source, trajectory};
 use std::time::Duration;
 
-/// Arguments of `neo bench`.
+/// Arguments of `neo bench`: with no subcommand, the throughput figures of the golden model and
+/// the unit cosimulations.
 #[derive(Args)]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct BenchArgs {
+    /// A benchmark of its own (the default: loading, rendering, BSU and raster-core cosim).
+    #[command(subcommand)]
+    pub command: Option<BenchCommand>,
     /// Gaussians in the loading and rendering workloads.
     #[arg(long, default_value_t = 1_000_000)]
     pub gaussians: usize,
     /// Timed repetitions; the best is reported.
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
+}
+
+/// Benchmarks run on their own (not part of the default `neo bench`).
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// The verilated `neo_engine` (default: the 16 + 4 engine): its build (wall, CPU, peak
+    /// memory, or the cache), then whole frames through the `neo cosim` harness, golden-checked,
+    /// in simulated kcycles/s against the 50 kcycles/s target. Not run in CI.
+    Engine(engine::EngineBenchArgs),
 }
 
 fn best_of<T>(n: usize, what: &str, mut f: impl FnMut() -> T) -> (T, Duration) {
@@ -38,8 +54,11 @@ fn verdict(ok: bool) -> &'static str {
     }
 }
 
-/// Runs `neo bench`.
+/// Runs `neo bench` (or its subcommand).
 pub fn run(a: BenchArgs) -> Result<()> {
+    if let Some(BenchCommand::Engine(e)) = a.command {
+        return engine::run(e);
+    }
     let n = a.gaussians;
     let threads = rayon::current_num_threads();
     println!("neo bench: {n} Gaussians, {threads} threads, best of {}", a.repeat);

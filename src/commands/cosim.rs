@@ -6,19 +6,20 @@
 //! the harness's AXI memory.
 
 use crate::args::{SceneArg, StrictArg, TrajectoryArg};
-use anyhow::{anyhow, bail, Context, Result};
+use crate::engine_run;
+use anyhow::{anyhow, bail, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
-use neo_golden::engine::{Counter, EngineConfig, EngineSession};
-use neo_golden::trajectory::{parse_resolution, parse_trajectory};
-use neo_golden::{source, trajectory::Trajectory};
+use indicatif::ProgressBar;
+use neo_golden::engine::Counter;
+use neo_golden::source;
+use neo_golden::trajectory::parse_resolution;
 use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
 use neo_sim::latency;
 use neo_tb::axi::AxiTiming;
-use neo_tb::engine::{EngineModel, EngineRig, FrameReport, RunOptions};
+use neo_tb::engine::{EngineRig, FrameReport, RunOptions};
 use neo_tb::waves::WaveFormat;
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Arguments of `neo cosim`.
 #[derive(Args)]
@@ -61,13 +62,7 @@ pub struct CosimArgs {
 
 /// Runs `neo cosim`.
 pub fn run(a: CosimArgs) -> Result<()> {
-    let cfg = match &a.config {
-        Some(p) => EngineConfig::from_json_file(p)?,
-        None => EngineConfig::default(),
-    };
-    cfg.validate().map_err(|e| {
-        anyhow!("{}: {e}", a.config.as_ref().map_or("default".into(), |p| p.display().to_string()))
-    })?;
+    let cfg = engine_run::engine_config(a.config.as_deref())?;
     let timing = match a.memory.as_str() {
         "random" => AxiTiming::RANDOM,
         "ideal" => AxiTiming::IDEAL,
@@ -78,8 +73,8 @@ pub fn run(a: CosimArgs) -> Result<()> {
         None => neo_tb::rng::test_seed("neo cosim"),
     };
     let (scene, _) = source::load_scene(&a.scene.scene, a.strict.strict)?;
-    let traj = trajectory_at(&a, &scene)?;
-    let mut session = EngineSession::new(&scene, traj, &cfg).context("engine session")?;
+    let traj = engine_run::trajectory_at(&a.trajectory.trajectory, &scene, a.frames, a.res)?;
+    let mut session = engine_run::session(&scene, traj, &cfg)?;
     eprintln!(
         "neo cosim: {} Gaussians, {} tiles, {} frames, engine {} + {} cores, {} ports, seed 0x{seed:016x}",
         scene.len(),
@@ -89,10 +84,8 @@ pub fn run(a: CosimArgs) -> Result<()> {
         cfg.raster_cores,
         cfg.mem_channels
     );
-    let spin = spinner("building the verilated engine (cached after the first build)");
     let format = a.waves.as_deref().map(WaveFormat::of_path);
-    let engine = EngineModel::build_traced(&cfg, format).map_err(|e| anyhow!("building neo_engine: {e}"))?;
-    spin.finish_and_clear();
+    let engine = engine_run::build_engine(&cfg, format, 1)?;
     let b = &engine.build;
     eprintln!("engine model: {} in {:.1} s {}", if b.cached { "cached" } else { "built" }, b.seconds, b.log);
     let lat = crate::points::latency_file(&a.latency)?;
@@ -102,31 +95,19 @@ pub fn run(a: CosimArgs) -> Result<()> {
     if let Some(w) = &a.waves {
         eprintln!("waves: {}\nwaves: gtkwave {}", w.display(), neo_tb::waves::gtkw_path(w).display());
     }
-    let bar = frame_bar(session.frames() as u64, a.json);
-    let mut failed = None;
-    while let Some(plan) = session.next_frame(rig.memory_mut())? {
-        let overflowing: Vec<usize> = plan
-            .expected
-            .outcome
-            .results
-            .iter()
-            .enumerate()
-            .filter(|(_, r)| r.overflow)
-            .map(|(t, _)| t)
-            .collect();
-        let predicted = model.predict_frame(&plan.regs, rig.memory_mut())?;
-        let t0 = Instant::now();
-        let r = rig.run_frame(&plan).map_err(|e| anyhow!(e))?;
-        bar.inc(1);
-        print_frame(&a, &r, &predicted, t0.elapsed(), &overflowing, &bar);
-        if r.mismatch.is_some() && failed.is_none() {
-            failed = Some(r.frame);
-            break;
-        }
-    }
+    let bar = engine_run::frame_bar(session.frames() as u64, a.json);
+    let failed = engine_run::run_frames(
+        &mut session,
+        &mut rig,
+        |plan, mem| Ok(model.predict_frame(&plan.regs, mem)?),
+        |f| {
+            bar.inc(1);
+            print_frame(&a, &f.report, &f.before, f.took, &f.overflowing, &bar);
+        },
+    );
     rig.finish();
     bar.finish_and_clear();
-    match failed {
+    match failed? {
         Some(f) => bail!("frame {f} is not bit-exact (seed 0x{seed:016x}; replay with --seed 0x{seed:016x})"),
         None => Ok(()),
     }
@@ -136,43 +117,6 @@ pub fn run(a: CosimArgs) -> Result<()> {
 fn port_timing(t: &AxiTiming) -> PortTiming {
     let (latency, bandwidth, ready) = t.means();
     PortTiming { latency, bandwidth, ready }
-}
-
-/// The trajectory of `--trajectory` with `--frames` frames at `--res`.
-fn trajectory_at(a: &CosimArgs, scene: &neo_golden::scene::Scene) -> Result<Trajectory> {
-    let mut traj = parse_trajectory(&a.trajectory.trajectory, source::robust_bounds(scene), a.frames)?;
-    if traj.frames.len() < a.frames {
-        bail!(
-            "--trajectory {:?} has {} frames; {} requested",
-            a.trajectory.trajectory,
-            traj.frames.len(),
-            a.frames
-        );
-    }
-    traj.frames.truncate(a.frames);
-    traj.cuts.retain(|&c| c < a.frames);
-    let (w, h) = a.res;
-    traj.frames = traj.frames.iter().map(|c| c.with_resolution(w, h)).collect();
-    Ok(traj)
-}
-
-fn spinner(msg: &str) -> ProgressBar {
-    let p = ProgressBar::new_spinner();
-    p.set_message(msg.to_string());
-    p.enable_steady_tick(Duration::from_millis(200));
-    p
-}
-
-fn frame_bar(frames: u64, hidden: bool) -> ProgressBar {
-    if hidden {
-        return ProgressBar::hidden();
-    }
-    let p = ProgressBar::new(frames);
-    let style = ProgressStyle::with_template("{bar:30} frame {pos}/{len} {elapsed_precise} (eta {eta})")
-        .unwrap_or_else(|_| ProgressStyle::default_bar());
-    p.set_style(style);
-    p.enable_steady_tick(Duration::from_millis(500));
-    p
 }
 
 /// One frame's line (or JSON record).

@@ -1,5 +1,6 @@
 //! One module per `neo` subcommand; none imports another (shared arguments are in
-//! [`crate::args`], shared point runners in [`crate::points`]).
+//! [`crate::args`], shared point runners in [`crate::points`], the verilated engine's frame loop
+//! of `neo cosim` and `neo bench engine` in [`crate::engine_run`]).
 
 pub mod bench;
 pub mod compare;

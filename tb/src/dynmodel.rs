@@ -109,7 +109,26 @@ impl DynModel {
         vlt: Option<&str>,
         format: Option<WaveFormat>,
     ) -> Result<(DynModel, BuildInfo), String> {
-        let info = build_library(iface, files, vlt, format)?;
+        Self::build_threaded(iface, files, vlt, format, 1)
+    }
+
+    /// [`DynModel::build_traced`] verilated with `--threads threads` (Verilator's multithreaded
+    /// model: the evaluation is split into tasks run on `threads` threads); `threads` is part of
+    /// the cache key and name (`dyn-<top>[-fst|-untraced]-t<threads>-<hash>`), except 1 (the
+    /// default single-threaded model, whose key and name are unchanged). The model's
+    /// `VerilatedContext` takes `std::thread::hardware_concurrency()` threads, so `threads`
+    /// must not exceed the machine's cores (Verilator refuses the model when it is created).
+    pub fn build_threaded(
+        iface: &ModuleInterface,
+        files: &[(String, String)],
+        vlt: Option<&str>,
+        format: Option<WaveFormat>,
+        threads: usize,
+    ) -> Result<(DynModel, BuildInfo), String> {
+        if threads == 0 {
+            return Err(format!("{}: threads must be at least 1", iface.name));
+        }
+        let info = build_library(iface, files, vlt, format, threads)?;
         let model = DynModel::load(iface, &info.library, format)?;
         Ok((model, info))
     }
@@ -377,6 +396,7 @@ fn build_library(
     files: &[(String, String)],
     vlt: Option<&str>,
     format: Option<WaveFormat>,
+    threads: usize,
 ) -> Result<BuildInfo, String> {
     let t0 = Instant::now();
     shim::validate(iface)?;
@@ -396,6 +416,11 @@ fn build_library(
         key.add("lint.vlt", vlt.as_bytes());
     }
     key.add("flags", flavour.flags.join(" ").as_bytes());
+    let thread_flags = thread_flags(threads);
+    if threads > 1 {
+        // Only for threaded models, so that single-threaded keys (and cache entries) stay as they were.
+        key.add("threads", thread_flags.join(" ").as_bytes());
+    }
     if format != Some(WaveFormat::Vcd) {
         // Only for FST and untraced, so that the VCD models' keys (and cache entries) stay as they were.
         key.add(
@@ -409,20 +434,42 @@ fn build_library(
     key.add("shim.cpp", cpp.as_bytes());
     let lib_name = format!("libneo_{top}.so");
     let mut log = String::new();
-    let (dir, cached) =
-        cache::get_or_build(&cache_root(), &format!("dyn-{top}{}", flavour.suffix), &key, &lib_name, |d| {
-            log = compile(&v, &cxx, &flavour, top, files, vlt, &cpp, d)?;
-            fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
-        })?;
+    let name = format!("dyn-{top}{}{}", flavour.suffix, thread_suffix(threads));
+    let (dir, cached) = cache::get_or_build(&cache_root(), &name, &key, &lib_name, |d| {
+        let mut flags: Vec<&str> = flavour.flags.to_vec();
+        flags.extend(thread_flags.iter().map(String::as_str));
+        log = compile(&v, &cxx, &flavour, &flags, top, files, vlt, &cpp, d)?;
+        fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
+    })?;
     Ok(BuildInfo { library: dir.join(lib_name), cached, seconds: t0.elapsed().as_secs_f64(), log })
 }
 
-/// Verilates and compiles into `dir/libneo_<top>.so`; returns the log line.
+/// The Verilator flags of a model evaluated on `threads` threads (none for 1, Verilator's default).
+fn thread_flags(threads: usize) -> Vec<String> {
+    if threads > 1 {
+        vec!["--threads".into(), threads.to_string()]
+    } else {
+        Vec::new()
+    }
+}
+
+/// The cache-name suffix of a model evaluated on `threads` threads (none for 1).
+fn thread_suffix(threads: usize) -> String {
+    if threads > 1 {
+        format!("-t{threads}")
+    } else {
+        String::new()
+    }
+}
+
+/// Verilates with `flags` (the flavour's and the thread flags) and compiles into
+/// `dir/libneo_<top>.so`; returns the log line.
 #[allow(clippy::too_many_arguments)]
 fn compile(
     v: &verilator::Verilator,
     cxx: &str,
     flavour: &Flavour,
+    flags: &[&str],
     top: &str,
     files: &[(String, String)],
     vlt: Option<&str>,
@@ -440,7 +487,7 @@ fn compile(
     }
     let t0 = Instant::now();
     let obj = dir.join("obj");
-    let (fast, slow) = verilator::verilate_with(v, flavour.flags, top, &paths, &obj)?;
+    let (fast, slow) = verilator::verilate_with(v, flags, top, &paths, &obj)?;
     let verilate_s = t0.elapsed().as_secs_f64();
     let shim = write(&dir.join("shim.cpp"), cpp)?;
     let mut units: Vec<(PathBuf, &str)> =
@@ -457,6 +504,10 @@ fn compile(
         .args(&objects)
         .args(flavour.libs)
         .arg("-lpthread");
+    if flags.contains(&"--threads") {
+        // The threaded runtime's atomics (Verilator's makefile links it too).
+        link.arg("-latomic");
+    }
     run(&mut link, "linking")?;
     for o in &objects {
         let _ = fs::remove_file(o);

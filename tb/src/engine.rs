@@ -64,6 +64,16 @@ impl EngineModel {
     /// [`EngineModel::build`] tracing in `format` (`None`: untraced); each is a separate build
     /// and cache entry, and [`EngineRig::new`] takes a waves path of the model's format only.
     pub fn build_traced(cfg: &EngineConfig, format: Option<WaveFormat>) -> Result<EngineModel, String> {
+        Self::build_threaded(cfg, format, 1)
+    }
+
+    /// [`EngineModel::build_traced`] verilated with `--threads threads` (1: the usual
+    /// single-threaded model); see [`DynModel::build_threaded`].
+    pub fn build_threaded(
+        cfg: &EngineConfig,
+        format: Option<WaveFormat>,
+        threads: usize,
+    ) -> Result<EngineModel, String> {
         cfg.validate().map_err(|e| e.to_string())?;
         let mut files: Vec<(String, String)> =
             neo_gen::files_for(cfg, TOP).into_iter().map(|f| (f.file_name(), f.text)).collect();
@@ -84,7 +94,7 @@ impl EngineModel {
             .find(|m| m.name == TOP)
             .ok_or("the generator emits no neo_engine")?
             .interface();
-        let (model, build) = DynModel::build_traced(&iface, &files, Some(&vlt), format)?;
+        let (model, build) = DynModel::build_threaded(&iface, &files, Some(&vlt), format, threads)?;
         Ok(EngineModel { cfg: cfg.clone(), model, build })
     }
 }
@@ -252,6 +262,8 @@ impl EngineRig {
     /// Runs one frame of `plan` (its inputs already in memory): programs the registers,
     /// starts, waits for `done`, reads the registers back and compares with golden.
     pub fn run_frame(&mut self, plan: &FramePlan) -> Result<FrameReport, String> {
+        // The RTL ignores a base's low bits: refuse a misaligned one rather than run elsewhere.
+        plan.regs.check(&self.engine.cfg).map_err(|e| format!("frame {}: {e}", plan.frame))?;
         let t0 = self.engine.model.cycle();
         for (r, v) in plan.regs.writes() {
             self.lite.write(r.offset(), v, 0xf);

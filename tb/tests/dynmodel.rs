@@ -1,6 +1,8 @@
 //! A model built and loaded at run time (`neo_tb::dynmodel`) behaves as the statically linked
 //! one: the harness's adder fixture, built both ways, gives the same outputs cycle by cycle. Its
-//! FST-traced build (`WAVES=fst`, `neo cosim --waves F.fst`) writes an FST file.
+//! FST-traced build (`WAVES=fst`, `neo cosim --waves F.fst`) writes an FST file. Its
+//! two-thread build (Verilator `--threads 2`, `neo bench engine --threads 2`) is a cache entry
+//! of its own and gives the same outputs.
 
 use neo_gen::interface::ModuleInterface;
 use neo_tb::dynmodel::DynModel;
@@ -35,6 +37,21 @@ neo_tb::with_models! {
         let dir = neo_tb::waves::target_dir().join("waves");
         let e = dynm.trace_open(&dir.join("untraced.vcd")).expect_err("no tracing");
         assert!(e.to_string().contains("built to trace nothing"), "{e}");
+        matches_static(&iface, dynm, &info);
+    }
+
+    #[test]
+    fn a_two_thread_run_time_model_matches_the_static_one() {
+        let (iface, files) = fixture();
+        let e = DynModel::build_threaded(&iface, &files, None, None, 0).err().expect("0 threads refused");
+        assert!(e.contains("at least 1"), "{e}");
+        if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
+            println!("SKIP: Verilator --threads 2 needs two hardware threads");
+            return;
+        }
+        let (dynm, info) = DynModel::build_threaded(&iface, &files, None, None, 2).expect("build");
+        let dir = info.library.parent().expect("dir").to_string_lossy().into_owned();
+        assert!(dir.contains("dyn-neo_tb_adder-untraced-t2-"), "{dir}");
         matches_static(&iface, dynm, &info);
     }
 

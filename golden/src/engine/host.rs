@@ -177,7 +177,7 @@ impl<'s> EngineSession<'s> {
         let [gx, gy] = pipeline.grid();
         let tiles = gx as u64 * gy as u64;
         let layout = MemoryLayout::new(cfg, tiles, scene.len() as u64)?;
-        Ok(EngineSession {
+        let session = EngineSession {
             cfg: cfg.clone(),
             traj,
             pipeline,
@@ -187,7 +187,11 @@ impl<'s> EngineSession<'s> {
             prev: vec![Placed::default(); tiles as usize],
             present: vec![false; scene.len()],
             force_cut: false,
-        })
+        };
+        // The bases are the same every frame: refuse a map the engine cannot use up front.
+        let cam = session.traj.frames[0].clone();
+        session.regs(0, &cam).check(cfg).map_err(|e| SessionError::Layout(e.to_string()))?;
+        Ok(session)
     }
 
     /// The memory map.
@@ -227,6 +231,7 @@ impl<'s> EngineSession<'s> {
             )));
         }
         let regs = self.regs(f, &cam);
+        regs.check(&self.cfg).map_err(|e| SessionError::Layout(e.to_string()))?;
         let descriptors = self.write_lists(mem, f, cut, &prev_tables)?;
         for (t, d) in descriptors.iter().enumerate() {
             mem.write_descriptor(regs.desc_base, t as u64, d);

@@ -25,4 +25,4 @@ pub use reference::{
     execute_frame, execute_frame_traced, segment_work, FrameError, FrameOutcome, FrameTrace, RasterTrace,
     SegmentWork, TileTrace,
 };
-pub use regs::{Counter, Counters, FrameRegs, Reg};
+pub use regs::{fb_base_alignment, Counter, Counters, FrameRegs, MisalignedBase, Reg};

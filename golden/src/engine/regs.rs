@@ -12,6 +12,8 @@
 //! counter word) reads 0 and ignores writes. Every response is OKAY: the port never answers
 //! SLVERR or DECERR, so a host that writes a wrong address learns it only from the read-back.
 
+use super::config::EngineConfig;
+use super::memory::PIXEL_BYTES;
 use serde::{Deserialize, Serialize};
 
 /// Width of the control port's byte addresses (a 4 KiB register space).
@@ -299,13 +301,62 @@ pub struct FrameRegs {
     pub result_base: u64,
     /// Feature-table base (bytes, 32-byte aligned).
     pub feat_base: u64,
-    /// Frame-buffer base (bytes, 4-byte aligned).
+    /// Frame-buffer base (bytes, a multiple of `4 subtile`: [`fb_base_alignment`]).
     pub fb_base: u64,
     /// Sort scratch base (bytes, 8-byte aligned).
     pub scratch_base: u64,
 }
 
+/// A base register the engine cannot use: not a multiple of the alignment its data needs.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{field} = 0x{value:x} is not a multiple of {align} bytes ({why})")]
+pub struct MisalignedBase {
+    /// The register's name (`FB_BASE`, ...).
+    pub field: &'static str,
+    /// The value programmed.
+    pub value: u64,
+    /// The alignment it needs, in bytes.
+    pub align: u64,
+    /// Why.
+    pub why: &'static str,
+}
+
+/// The alignment `FB_BASE` needs for engine `cfg`: `4 subtile` bytes (one pixel row of a
+/// subtile), which the raster bridge assumes: a subtile's pixel row is one write burst that
+/// never crosses a 4 KiB page (docs/rtl.md "Memory map").
+pub fn fb_base_alignment(cfg: &EngineConfig) -> u64 {
+    PIXEL_BYTES * cfg.raster_config().subtile as u64
+}
+
 impl FrameRegs {
+    /// Every base register with the alignment the engine needs (the RTL ignores the low bits of
+    /// each, so a misaligned base would silently read or write elsewhere).
+    pub fn base_alignments(&self, cfg: &EngineConfig) -> [(&'static str, u64, u64, &'static str); 5] {
+        [
+            ("DESC_BASE", self.desc_base, 32, "a descriptor is one 32-byte burst"),
+            ("RESULT_BASE", self.result_base, 8, "a result is one 8-byte beat"),
+            ("FEAT_BASE", self.feat_base, 32, "a feature word is 32 bytes"),
+            (
+                "FB_BASE",
+                self.fb_base,
+                fb_base_alignment(cfg),
+                "4 x subtile: a subtile's pixel row must not cross a 4 KiB page",
+            ),
+            ("SCRATCH_BASE", self.scratch_base, 8, "an entry is 8 bytes"),
+        ]
+    }
+
+    /// Refuses a base register the engine `cfg` cannot use, naming the field and the
+    /// alignment it needs ([`FrameRegs::base_alignments`]).
+    pub fn check(&self, cfg: &EngineConfig) -> Result<(), MisalignedBase> {
+        for (field, value, align, why) in self.base_alignments(cfg) {
+            if value % align != 0 {
+                return Err(MisalignedBase { field, value, align, why });
+            }
+        }
+        Ok(())
+    }
+
     /// The register writes that program this frame, in address order (`CTRL` not included).
     pub fn writes(&self) -> Vec<(Reg, u32)> {
         let split = |lo: Reg, hi: Reg, v: u64| [(lo, v as u32), (hi, (v >> 32) as u32)];
@@ -369,6 +420,37 @@ mod tests {
         got.add(Counter::WrPixel, 4);
         got.add(Counter::RdFeat, 32);
         assert_eq!(want.first_golden_mismatch(&got), Some((Counter::RdFeat, 0, 32)));
+    }
+
+    #[test]
+    fn misaligned_bases_are_refused_by_name() {
+        let cfg = EngineConfig::default();
+        let align = fb_base_alignment(&cfg);
+        assert_eq!(align, PIXEL_BYTES * cfg.raster_config().subtile as u64);
+        let ok = FrameRegs {
+            desc_base: 0x1000,
+            result_base: 0x2008,
+            feat_base: 0x3020,
+            fb_base: 0x4000 + 3 * align,
+            scratch_base: 0x5008,
+            ..FrameRegs::default()
+        };
+        assert_eq!(ok.check(&cfg), Ok(()));
+        // A pixel-aligned but not subtile-row-aligned frame buffer (what the RTL would accept
+        // silently) is refused, naming FB_BASE and the alignment.
+        let bad = FrameRegs { fb_base: ok.fb_base + PIXEL_BYTES, ..ok };
+        let e = bad.check(&cfg).unwrap_err();
+        assert_eq!((e.field, e.value, e.align), ("FB_BASE", bad.fb_base, align));
+        let msg = e.to_string();
+        assert!(msg.contains("FB_BASE") && msg.contains(&format!("{align} bytes")), "{msg}");
+        // The alignment follows the configuration's subtile.
+        let mut wide = cfg.clone();
+        wide.subtile *= 2;
+        let half = FrameRegs { fb_base: 0x4000 + align, ..ok };
+        assert_eq!(half.check(&cfg), Ok(()));
+        assert_eq!(half.check(&wide).map_err(|e| (e.field, e.align)), Err(("FB_BASE", 2 * align)));
+        let e = FrameRegs { feat_base: 0x3010, ..ok }.check(&cfg).unwrap_err();
+        assert_eq!((e.field, e.align), ("FEAT_BASE", 32));
     }
 
     #[test]
