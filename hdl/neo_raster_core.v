@@ -534,14 +534,14 @@ module neo_raster_core (
   assign pix_all_done = pix_sub_q[PS_DONE];
   assign pix_last_row = pix_row_q == 3'd7;
   wire [1535:0] pix_rgb;
-  assign pix_rgb = scu_rgb[pix_scu*SUB_RGB_BITS +: SUB_RGB_BITS];
+  assign pix_rgb = ((pix_scu == 2'd0) ? scu_rgb[0*SUB_RGB_BITS +: SUB_RGB_BITS] : ((pix_scu == 2'd1) ? scu_rgb[1*SUB_RGB_BITS +: SUB_RGB_BITS] : ((pix_scu == 2'd2) ? scu_rgb[2*SUB_RGB_BITS +: SUB_RGB_BITS] : scu_rgb[3*SUB_RGB_BITS +: SUB_RGB_BITS])));
   assign pix_valid = ~pix_all_done & scu_out_valid[pix_scu] & ~scu_taken[pix_scu];
   wire [11:0] pix_off;
   assign pix_off = {pix_sy, pix_row_q, 6'd0} + {6'd0, {pix_sx, 3'd0}};
   wire [31:0] pix_addr;
   assign pix_addr = pix_base_q + {20'd0, pix_off};
   wire [191:0] pix_data;
-  assign pix_data = pix_rgb[pix_row_q*ROW_RGB_BITS +: ROW_RGB_BITS];
+  assign pix_data = (pix_row_q == 3'd0) ? pix_rgb[0*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd1) ? pix_rgb[1*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd2) ? pix_rgb[2*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd3) ? pix_rgb[3*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd4) ? pix_rgb[4*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd5) ? pix_rgb[5*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd6) ? pix_rgb[6*ROW_RGB_BITS +: ROW_RGB_BITS] : (pix_rgb[7*ROW_RGB_BITS +: ROW_RGB_BITS])))))));
   reg  [6:0] pix_sub_d;
   reg  [2:0] pix_row_d;
   always @* begin

@@ -48,7 +48,15 @@ pub(super) fn pixels(m: &mut Module, d: &Dims) {
     m.wire_assign("pix_sy", side_w, ps.get("pix_sub_q", "sy"));
     m.wire_assign("pix_all_done", 1, ps.get("pix_sub_q", "done"));
     m.assign("pix_last_row", format!("pix_row_q == {}", lit(sb, s as u64 - 1)));
-    m.wire_assign("pix_rgb", RGB_BITS * s * s, format!("scu_rgb[pix_scu*{SUB_RGB} +: {SUB_RGB}]"));
+    // Lane k of a packed vector of `width`-bit lanes; the selects stay a chain of constant
+    // part-selects (a variable `[sel*W +: W]` would synthesise as a barrel shifter).
+    let part = |v: &str, k: u32, width: &str| format!("{v}[{k}*{width} +: {width}]");
+    let mut rgb = part("scu_rgb", nc - 1, SUB_RGB);
+    for j in (0..nc - 1).rev() {
+        rgb =
+            format!("((pix_scu == {}) ? {} : {rgb})", lit(cb.max(1), j as u64), part("scu_rgb", j, SUB_RGB));
+    }
+    m.wire_assign("pix_rgb", RGB_BITS * s * s, rgb);
     m.assign("pix_valid", "~pix_all_done & scu_out_valid[pix_scu] & ~scu_taken[pix_scu]");
     let pa = 2 * tl;
     m.wire_assign(
@@ -61,7 +69,11 @@ pub(super) fn pixels(m: &mut Module, d: &Dims) {
         ),
     );
     m.wire_assign("pix_addr", d.aw, format!("pix_base_q + {}", resize("pix_off", pa, d.aw)));
-    m.wire_assign("pix_data", d.rw, format!("pix_rgb[pix_row_q*{ROW_RGB} +: {ROW_RGB}]"));
+    let mut row = part("pix_rgb", s - 1, ROW_RGB);
+    for r in (0..s - 1).rev() {
+        row = format!("(pix_row_q == {}) ? {} : ({row})", lit(sb, r as u64), part("pix_rgb", r, ROW_RGB));
+    }
+    m.wire_assign("pix_data", d.rw, row);
     m.seq_d(
         Some(vec![set("pix_sub_q", lit(sub_w + 1, 1 << sub_w)), set("pix_row_q", lit(sb, 0))]),
         vec![
