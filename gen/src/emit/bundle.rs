@@ -115,15 +115,12 @@ impl Bundle {
         }
     }
 
-    /// The low `width` bits of field `name` of `sig` (the whole field when `width` is its width).
-    pub fn get_low(&self, sig: &str, name: &str, width: u32) -> String {
-        let f = self.field(name);
+    /// The bundle with field `name` cut to its low `width` bits (the part a module reads).
+    pub fn narrowed(mut self, name: &str, width: u32) -> Bundle {
+        let f = self.fields.iter_mut().find(|f| f.name == name).unwrap_or_else(|| panic!("no field {name}"));
         assert!(width >= 1 && width <= f.width, "{width} bits of field {name} ({} bits)", f.width);
-        if width == f.width {
-            self.get(sig, name)
-        } else {
-            format!("{sig}[{} +: {width}]", self.offset(name))
-        }
+        f.width = width;
+        self
     }
 
     /// The whole bundle in the low bits of the wider signal `sig`: `sig[0 +: PREFIX_BITS]`.
@@ -142,7 +139,7 @@ mod tests {
         assert_eq!(b.width(), 14);
         assert_eq!(b.get("head", "mask"), "head[EL_MASK +: EL_MASK_W]");
         assert_eq!(b.get("head", "last"), "head[EL_LAST]");
-        assert_eq!(b.get_low("head", "base", 3), "head[EL_BASE +: 3]");
+        assert_eq!(b.clone().narrowed("base", 3).get("head", "base"), "head[EL_BASE +: EL_BASE_W]");
         let mut m = Module::new("t");
         b.declare_bits(&mut m);
         b.declare(&mut m);

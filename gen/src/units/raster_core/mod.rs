@@ -206,7 +206,7 @@ fn table_word(d: &Dims) -> Bundle {
 
 /// The feature word `{present, entry}`: the fields of golden's feature format (`FEAT_*`), the
 /// `present` bit on top, and the runs the ITU takes whole (`FEAT_ITU_MEAN`, `FEAT_ITU_GEOM`).
-fn feature_word(cfg: &EngineConfig) -> Bundle {
+fn feature_word(cfg: &EngineConfig, d: &Dims) -> Bundle {
     let fmt = cfg.feature_format();
     let mut fields: Vec<Field> =
         fmt.layout().iter().map(|f| Field { name: f.name.to_string(), lsb: f.lsb, width: f.width }).collect();
@@ -217,7 +217,11 @@ fn feature_word(cfg: &EngineConfig) -> Bundle {
     fields.push(Field { name: "itu_geom".into(), lsb: geom_lsb, width: geom_w });
     let b = Bundle::placed("FEAT", fields);
     debug_assert_eq!(b.width(), feature_word_bits(cfg));
-    b
+    // Only the fields the core reads (no unused localparam); of the depth key, the low key bits.
+    let mut used: Vec<&str> = scu::GAUSSIAN_FIELDS.to_vec();
+    used.extend(["depth_key", "present", "itu_mean", "itu_geom"]);
+    let dk = b.width_of("depth_key").min(d.kb);
+    b.subset(&used).narrowed("depth_key", dk)
 }
 
 /// The raster core for `cfg`.
@@ -317,9 +321,7 @@ fn buffers(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let tw = table_word(d);
     tw.declare_bits(m);
     tw.declare(m);
-    let mut used: Vec<&str> = scu::GAUSSIAN_FIELDS.to_vec();
-    used.extend(["depth_key", "present", "itu_mean", "itu_geom"]);
-    feature_word(cfg).subset(&used).declare(m);
+    feature_word(cfg, d).declare(m);
     m.mem("tbuf", d.tw, n).mem("fbuf", d.fw, n).mem("hbuf", 1, n);
     m.comment("Per bank: loaded, walked (every group), and its segment's length and first entry.");
     m.reg("bank_full_q", d.nbk).reg("bank_walked_q", d.nbk);
@@ -411,7 +413,7 @@ fn scus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         items.push(wire(n, wi));
     }
     items.push(Item::Comment("The beat's Gaussian: its feature-word fields.".into()));
-    let feat = feature_word(cfg);
+    let feat = feature_word(cfg, d);
     for fname in scu::GAUSSIAN_FIELDS {
         let name = format!("feat_{fname}");
         items.push(Item::Wire { name: name.clone(), width: feat.width_of(fname) });

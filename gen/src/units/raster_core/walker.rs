@@ -110,7 +110,7 @@ pub(super) fn itus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         Item::Wire { name: "idx".into(), width: d.fx },
         Item::Assign { lhs: "idx".into(), rhs: "{walk_bank_q, entry}".into() },
     ];
-    let feat = feature_word(cfg);
+    let feat = feature_word(cfg, d);
     for (name, field) in [("present", "present"), ("mean", "itu_mean"), ("geom", "itu_geom")] {
         items.push(Item::Wire { name: name.into(), width: feat.width_of(field) });
         items.push(Item::Assign { lhs: name.into(), rhs: feat.get("fbuf[idx]", field) });

@@ -92,7 +92,7 @@ pub(super) fn pixels(m: &mut Module, d: &Dims) {
 /// The write-back of a segment once its group-0 results are in.
 pub(super) fn write_back(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (fa, sl, kb, ib, bkb, gw) = (d.fa, d.sl, d.kb, d.ib, d.bkb, d.gw);
-    let (feat, tw) = (feature_word(cfg), table_word(d));
+    let (feat, tw) = (feature_word(cfg, d), table_word(d));
     m.blank();
     m.comment("Write-back of the segment once its group-0 results are in: {present & OR, present ? depth key : key, id}.");
     m.reg("wb_busy_q", 1).reg("wb_ptr_q", fa).reg("wb_bank_q", bkb);
@@ -102,8 +102,8 @@ pub(super) fn write_back(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.comment("The entry's feature-word fields and its table word {key, id}.");
     m.wire_assign("wb_present", 1, feat.get("fbuf[wb_idx]", "present"));
     // The key field takes the depth key (its low key_bits bits when it is wider).
-    let dkw = feat.width_of("depth_key").min(kb);
-    m.wire_assign("wb_depth_key", dkw, feat.get_low("fbuf[wb_idx]", "depth_key", dkw));
+    let dkw = feat.width_of("depth_key");
+    m.wire_assign("wb_depth_key", dkw, feat.get("fbuf[wb_idx]", "depth_key"));
     m.wire_assign("wb_old_key", kb, tw.get("tbuf[wb_idx]", "key"));
     m.wire_assign("wb_id", ib, tw.get("tbuf[wb_idx]", "id"));
     m.wire_assign("wb_key", kb, format!("wb_present ? {} : wb_old_key", resize("wb_depth_key", dkw, kb)));
