@@ -50,7 +50,41 @@ module neo_raster_core (
   assign running = state_q == S_RUN;
 
   // 2 banks of 256 entries: the loader fills the next ones while the walk and the SCUs use the oldest.
-  // Table words {key, id}, feature words {present, entry}, and each entry's ITU OR (group 0).
+  // Table words {key, id}, feature words {present, entry}, and each entry's ITU OR (group 0):
+  // RAMs (one write port, no reset). Their words' fields (golden's formats): TW_*, and the FEAT_*
+  // this core reads (ITU_MEAN / ITU_GEOM: the runs of fields the ITUs take whole).
+  localparam TW_BITS = 47;
+  localparam TW_ID = 0;
+  localparam TW_ID_W = 31;
+  localparam TW_KEY = 31;
+  localparam TW_KEY_W = 16;
+  localparam FEAT_MEAN_X = 0;
+  localparam FEAT_MEAN_X_W = 24;
+  localparam FEAT_MEAN_Y = 24;
+  localparam FEAT_MEAN_Y_W = 24;
+  localparam FEAT_CONIC_A = 48;
+  localparam FEAT_CONIC_A_W = 18;
+  localparam FEAT_CONIC_B = 66;
+  localparam FEAT_CONIC_B_W = 19;
+  localparam FEAT_CONIC_C = 85;
+  localparam FEAT_CONIC_C_W = 18;
+  localparam FEAT_CONIC_EXP = 103;
+  localparam FEAT_CONIC_EXP_W = 6;
+  localparam FEAT_OPACITY = 109;
+  localparam FEAT_OPACITY_W = 8;
+  localparam FEAT_RED = 117;
+  localparam FEAT_RED_W = 11;
+  localparam FEAT_GREEN = 128;
+  localparam FEAT_GREEN_W = 11;
+  localparam FEAT_BLUE = 139;
+  localparam FEAT_BLUE_W = 11;
+  localparam FEAT_DEPTH_KEY = 230;
+  localparam FEAT_DEPTH_KEY_W = 16;
+  localparam FEAT_PRESENT = 246;
+  localparam FEAT_ITU_MEAN = 0;
+  localparam FEAT_ITU_MEAN_W = 48;
+  localparam FEAT_ITU_GEOM = 150;
+  localparam FEAT_ITU_GEOM_W = 80;
   reg  [46:0] tbuf [0:511];
   reg  [246:0] fbuf [0:511];
   reg  hbuf [0:511];
@@ -90,7 +124,7 @@ module neo_raster_core (
   wire [8:0] ld_rcv_idx;
   // The id of the next feature read's table entry.
   wire [30:0] ld_iss_id;
-  assign ld_iss_id = tbuf[ld_iss_idx][30:0];
+  assign ld_iss_id = tbuf[ld_iss_idx][TW_ID +: TW_ID_W];
   wire ld_bank_free;
   assign ld_bank_free = ~bank_full_q[ld_bank];
   neo_raster_loader u_loader (
@@ -120,7 +154,7 @@ module neo_raster_core (
   always @(posedge clk_i) begin
     if (mem_rsp_valid_i) begin
       if (rd_table) begin
-        tbuf[ld_rcv_idx] <= mem_rsp_data_i[46:0];
+        tbuf[ld_rcv_idx] <= mem_rsp_data_i[0 +: TW_BITS];
       end else begin
         fbuf[ld_rcv_idx] <= mem_rsp_data_i;
       end
@@ -195,6 +229,10 @@ module neo_raster_core (
   wire itu_out_ready;
   // Per lane, the subtile groups its bitmap touches (group 0's walk records them per quad).
   wire [63:0] itu_groups;
+  // A bitmap's subtiles (group-major: group g's at [g * SCUS +: SCUS]), the SCUs and the groups.
+  localparam SUBTILES = 64;
+  localparam SCUS = 4;
+  localparam GROUPS = 16;
   genvar u;
   generate
     for (u = 0; u < 4; u = u + 1) begin : g_itu
@@ -204,11 +242,11 @@ module neo_raster_core (
       wire [8:0] idx;
       assign idx = {walk_bank_q, entry};
       wire present;
-      assign present = fbuf[idx][246];
+      assign present = fbuf[idx][FEAT_PRESENT];
       wire [47:0] mean;
-      assign mean = fbuf[idx][47:0];
+      assign mean = fbuf[idx][FEAT_ITU_MEAN +: FEAT_ITU_MEAN_W];
       wire [79:0] geom;
-      assign geom = fbuf[idx][229:150];
+      assign geom = fbuf[idx][FEAT_ITU_GEOM +: FEAT_ITU_GEOM_W];
       assign lane_valid[u] = ({1'b0, entry} < walk_seg_len) & present;
       wire [63:0] bitmap;
       neo_itu u_itu (
@@ -227,8 +265,14 @@ module neo_raster_core (
         .hit_o(itu_hits[u]),
         .tag_o(itu_tags[u*16 +: 16])
       );
-      assign itu_bitmaps[u*64 +: 64] = bitmap;
-      assign itu_groups[u*16 +: 16] = {(|bitmap[63:60]), (|bitmap[59:56]), (|bitmap[55:52]), (|bitmap[51:48]), (|bitmap[47:44]), (|bitmap[43:40]), (|bitmap[39:36]), (|bitmap[35:32]), (|bitmap[31:28]), (|bitmap[27:24]), (|bitmap[23:20]), (|bitmap[19:16]), (|bitmap[15:12]), (|bitmap[11:8]), (|bitmap[7:4]), (|bitmap[3:0])};
+      assign itu_bitmaps[u*SUBTILES +: SUBTILES] = bitmap;
+    end
+  endgenerate
+  // Group k % G of lane k / G: the OR of its SCUs' subtile bits.
+  genvar k;
+  generate
+    for (k = 0; k < 64; k = k + 1) begin : g_touch
+      assign itu_groups[k] = |itu_bitmaps[k*SCUS +: SCUS];
     end
   endgenerate
   wire itu_in_ready;
@@ -243,46 +287,72 @@ module neo_raster_core (
   assign unused_tags = ^itu_tags;
 
   // Quad sideband through 3 stages that advance with the ITUs (in_ready_o = their stage enable):
-  // {resume, list last, segment last (last quad), group, bank, entry, lane valids}.
+  // {resume, list last, segment last (last quad), group, bank, entry, lane valids}: fields QI_*.
+  localparam QI_LANES = 0;
+  localparam QI_LANES_W = 4;
+  localparam QI_ENTRY = 4;
+  localparam QI_ENTRY_W = 8;
+  localparam QI_BANK = 12;
+  localparam QI_GROUP = 13;
+  localparam QI_GROUP_W = 4;
+  localparam QI_SEG_LAST = 17;
+  localparam QI_LIST_LAST = 18;
+  localparam QI_RESUME = 19;
   wire [19:0] quad_info;
   assign quad_info = {(walk_seg_start != 32'd0), (last_quad & last_seg), last_quad, group_q, walk_bank_q, quad_base_q, lane_valid};
   reg  [19:0] quad_info1_q;
   reg  [19:0] quad_info2_q;
   reg  [19:0] quad_info3_q;
-  always @(posedge clk_i) begin
+  reg  [19:0] quad_info1_d;
+  reg  [19:0] quad_info2_d;
+  reg  [19:0] quad_info3_d;
+  always @* begin
+    quad_info1_d = quad_info1_q;
+    quad_info2_d = quad_info2_q;
+    quad_info3_d = quad_info3_q;
     if (itu_in_ready) begin
-      quad_info1_q <= quad_info;
-      quad_info2_q <= quad_info1_q;
-      quad_info3_q <= quad_info2_q;
+      quad_info1_d = quad_info;
+      quad_info2_d = quad_info1_q;
+      quad_info3_d = quad_info2_q;
     end
+  end
+  always @(posedge clk_i) begin
+    quad_info1_q <= quad_info1_d;
+    quad_info2_q <= quad_info2_d;
+    quad_info3_q <= quad_info3_d;
   end
   // The result's sideband fields.
   wire [3:0] res_lanes;
-  assign res_lanes = quad_info3_q[3:0];
+  assign res_lanes = quad_info3_q[QI_LANES +: QI_LANES_W];
   wire [7:0] res_entry;
-  assign res_entry = quad_info3_q[11:4];
+  assign res_entry = quad_info3_q[QI_ENTRY +: QI_ENTRY_W];
   wire res_bank;
-  assign res_bank = quad_info3_q[12];
+  assign res_bank = quad_info3_q[QI_BANK];
   wire [3:0] res_group;
-  assign res_group = quad_info3_q[16:13];
+  assign res_group = quad_info3_q[QI_GROUP +: QI_GROUP_W];
   wire res_seg_last;
-  assign res_seg_last = quad_info3_q[17];
+  assign res_seg_last = quad_info3_q[QI_SEG_LAST];
   wire res_list_last;
-  assign res_list_last = quad_info3_q[18];
+  assign res_list_last = quad_info3_q[QI_LIST_LAST];
   wire res_resume;
-  assign res_resume = quad_info3_q[19];
+  assign res_resume = quad_info3_q[QI_RESUME];
   wire [8:0] res_base;
   assign res_base = {res_bank, res_entry};
   reg  [2:0] inflight_q;
+  reg  [2:0] inflight_d;
+  always @* begin
+    inflight_d = inflight_q;
+    if (itu_fire & ~res_fire) begin
+      inflight_d = inflight_q + 3'd1;
+    end else if (~itu_fire & res_fire) begin
+      inflight_d = inflight_q - 3'd1;
+    end
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       inflight_q <= 3'd0;
     end else begin
-      if (itu_fire & ~res_fire) begin
-        inflight_q <= inflight_q + 3'd1;
-      end else if (~itu_fire & res_fire) begin
-        inflight_q <= inflight_q - 3'd1;
-      end
+      inflight_q <= inflight_d;
     end
   end
   // Group 0's results: every entry's valid bit (the OR over all subtiles).
@@ -296,7 +366,7 @@ module neo_raster_core (
   end
   // Group 0's results also give each quad's groups (quad_hit) and, with its last quad, g0_done.
   wire [15:0] res_quad_hit;
-  assign res_quad_hit = ({16{res_lanes[0]}} & itu_groups[15:0]) | ({16{res_lanes[1]}} & itu_groups[31:16]) | ({16{res_lanes[2]}} & itu_groups[47:32]) | ({16{res_lanes[3]}} & itu_groups[63:48]);
+  assign res_quad_hit = ({GROUPS{res_lanes[0]}} & itu_groups[0*GROUPS +: GROUPS]) | ({GROUPS{res_lanes[1]}} & itu_groups[1*GROUPS +: GROUPS]) | ({GROUPS{res_lanes[2]}} & itu_groups[2*GROUPS +: GROUPS]) | ({GROUPS{res_lanes[3]}} & itu_groups[3*GROUPS +: GROUPS]);
   wire [6:0] res_quad;
   assign res_quad = {res_bank, res_entry[7:2]};
   always @(posedge clk_i) begin
@@ -304,19 +374,27 @@ module neo_raster_core (
       quad_hit[res_quad] <= res_quad_hit;
     end
   end
+  reg  g0_done_d;
+  always @* begin
+    g0_done_d = g0_done_q;
+    if (walk_start) begin
+      g0_done_d = 1'b0;
+    end else if (res_fire & (res_group == 4'd0) & res_seg_last) begin
+      g0_done_d = 1'b1;
+    end
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       g0_done_q <= 1'b0;
     end else begin
-      if (walk_start) begin
-        g0_done_q <= 1'b0;
-      end else if (res_fire & (res_group == 4'd0) & res_seg_last) begin
-        g0_done_q <= 1'b1;
-      end
+      g0_done_q <= g0_done_d;
     end
   end
 
   // SCUs: SCU j blends subtile {group, j}; its feeder routes the ITU results and feeds it.
+  // An SCU's subtile (8x8 pixels of 24 bits, row-major) and a row of it.
+  localparam SUB_RGB_BITS = 1536;
+  localparam ROW_RGB_BITS = 192;
   wire [3:0] feeder_full;
   wire [3:0] feeder_busy;
   wire [3:0] seg_taken;
@@ -342,25 +420,25 @@ module neo_raster_core (
       wire [2:0] segs_done;
       // The beat's Gaussian: its feature-word fields.
       wire [23:0] feat_mean_x;
-      assign feat_mean_x = fbuf[feat_idx][23:0];
+      assign feat_mean_x = fbuf[feat_idx][FEAT_MEAN_X +: FEAT_MEAN_X_W];
       wire [23:0] feat_mean_y;
-      assign feat_mean_y = fbuf[feat_idx][47:24];
+      assign feat_mean_y = fbuf[feat_idx][FEAT_MEAN_Y +: FEAT_MEAN_Y_W];
       wire [17:0] feat_conic_a;
-      assign feat_conic_a = fbuf[feat_idx][65:48];
+      assign feat_conic_a = fbuf[feat_idx][FEAT_CONIC_A +: FEAT_CONIC_A_W];
       wire [18:0] feat_conic_b;
-      assign feat_conic_b = fbuf[feat_idx][84:66];
+      assign feat_conic_b = fbuf[feat_idx][FEAT_CONIC_B +: FEAT_CONIC_B_W];
       wire [17:0] feat_conic_c;
-      assign feat_conic_c = fbuf[feat_idx][102:85];
+      assign feat_conic_c = fbuf[feat_idx][FEAT_CONIC_C +: FEAT_CONIC_C_W];
       wire [5:0] feat_conic_exp;
-      assign feat_conic_exp = fbuf[feat_idx][108:103];
+      assign feat_conic_exp = fbuf[feat_idx][FEAT_CONIC_EXP +: FEAT_CONIC_EXP_W];
       wire [7:0] feat_opacity;
-      assign feat_opacity = fbuf[feat_idx][116:109];
+      assign feat_opacity = fbuf[feat_idx][FEAT_OPACITY +: FEAT_OPACITY_W];
       wire [10:0] feat_red;
-      assign feat_red = fbuf[feat_idx][127:117];
+      assign feat_red = fbuf[feat_idx][FEAT_RED +: FEAT_RED_W];
       wire [10:0] feat_green;
-      assign feat_green = fbuf[feat_idx][138:128];
+      assign feat_green = fbuf[feat_idx][FEAT_GREEN +: FEAT_GREEN_W];
       wire [10:0] feat_blue;
-      assign feat_blue = fbuf[feat_idx][149:139];
+      assign feat_blue = fbuf[feat_idx][FEAT_BLUE +: FEAT_BLUE_W];
       neo_raster_feeder #(
         .SCU(j)
       ) u_feeder (
@@ -425,7 +503,7 @@ module neo_raster_core (
         .term_o(scu_term[j]),
         .out_valid_o(scu_out_valid[j]),
         .out_ready_i(scu_taken[j]),
-        .out_rgb_o(scu_rgb[j*1536 +: 1536])
+        .out_rgb_o(scu_rgb[j*SUB_RGB_BITS +: SUB_RGB_BITS])
       );
       // Segments whose last piece this SCU has not yet taken hold their bank.
       assign seg_taken[j] = segs_done != rel_seg_q;
@@ -437,40 +515,56 @@ module neo_raster_core (
 
   // Pixel writer: subtiles in order, SCU = subtile % 4, one row of 8 pixels per write.
   // The subtile being written (the top bit: every subtile written) and its row.
+  // pix_sub_q fields PS_*: {done, sy, sx}; its SCU is the subtile's low bits.
+  localparam PS_SX = 0;
+  localparam PS_SX_W = 3;
+  localparam PS_SY = 3;
+  localparam PS_SY_W = 3;
+  localparam PS_DONE = 6;
+  localparam PS_SCU = 0;
+  localparam PS_SCU_W = 2;
   reg  [6:0] pix_sub_q;
   reg  [2:0] pix_row_q;
-  assign pix_scu = pix_sub_q[1:0];
+  assign pix_scu = pix_sub_q[PS_SCU +: PS_SCU_W];
   wire [2:0] pix_sx;
-  assign pix_sx = pix_sub_q[2:0];
+  assign pix_sx = pix_sub_q[PS_SX +: PS_SX_W];
   wire [2:0] pix_sy;
-  assign pix_sy = pix_sub_q[5:3];
+  assign pix_sy = pix_sub_q[PS_SY +: PS_SY_W];
   wire pix_all_done;
-  assign pix_all_done = pix_sub_q[6];
+  assign pix_all_done = pix_sub_q[PS_DONE];
   assign pix_last_row = pix_row_q == 3'd7;
   wire [1535:0] pix_rgb;
-  assign pix_rgb = ((pix_scu == 2'd0) ? scu_rgb[1535:0] : ((pix_scu == 2'd1) ? scu_rgb[3071:1536] : ((pix_scu == 2'd2) ? scu_rgb[4607:3072] : scu_rgb[6143:4608])));
+  assign pix_rgb = ((pix_scu == 2'd0) ? scu_rgb[0*SUB_RGB_BITS +: SUB_RGB_BITS] : ((pix_scu == 2'd1) ? scu_rgb[1*SUB_RGB_BITS +: SUB_RGB_BITS] : ((pix_scu == 2'd2) ? scu_rgb[2*SUB_RGB_BITS +: SUB_RGB_BITS] : scu_rgb[3*SUB_RGB_BITS +: SUB_RGB_BITS])));
   assign pix_valid = ~pix_all_done & scu_out_valid[pix_scu] & ~scu_taken[pix_scu];
   wire [11:0] pix_off;
   assign pix_off = {pix_sy, pix_row_q, 6'd0} + {6'd0, {pix_sx, 3'd0}};
   wire [31:0] pix_addr;
   assign pix_addr = pix_base_q + {20'd0, pix_off};
   wire [191:0] pix_data;
-  assign pix_data = (pix_row_q == 3'd0) ? pix_rgb[191:0] : ((pix_row_q == 3'd1) ? pix_rgb[383:192] : ((pix_row_q == 3'd2) ? pix_rgb[575:384] : ((pix_row_q == 3'd3) ? pix_rgb[767:576] : ((pix_row_q == 3'd4) ? pix_rgb[959:768] : ((pix_row_q == 3'd5) ? pix_rgb[1151:960] : ((pix_row_q == 3'd6) ? pix_rgb[1343:1152] : (pix_rgb[1535:1344])))))));
+  assign pix_data = (pix_row_q == 3'd0) ? pix_rgb[0*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd1) ? pix_rgb[1*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd2) ? pix_rgb[2*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd3) ? pix_rgb[3*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd4) ? pix_rgb[4*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd5) ? pix_rgb[5*ROW_RGB_BITS +: ROW_RGB_BITS] : ((pix_row_q == 3'd6) ? pix_rgb[6*ROW_RGB_BITS +: ROW_RGB_BITS] : (pix_rgb[7*ROW_RGB_BITS +: ROW_RGB_BITS])))))));
+  reg  [6:0] pix_sub_d;
+  reg  [2:0] pix_row_d;
+  always @* begin
+    pix_sub_d = pix_sub_q;
+    pix_row_d = pix_row_q;
+    if (cmd_fire) begin
+      pix_sub_d = 7'd0;
+      pix_row_d = 3'd0;
+    end
+    if (pix_grant) begin
+      pix_row_d = pix_row_q + 3'd1;
+      if (pix_last_row) begin
+        pix_sub_d = pix_sub_q + 7'd1;
+      end
+    end
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       pix_sub_q <= 7'd64;
       pix_row_q <= 3'd0;
     end else begin
-      if (cmd_fire) begin
-        pix_sub_q <= 7'd0;
-        pix_row_q <= 3'd0;
-      end
-      if (pix_grant) begin
-        pix_row_q <= pix_row_q + 3'd1;
-        if (pix_last_row) begin
-          pix_sub_q <= pix_sub_q + 7'd1;
-        end
-      end
+      pix_sub_q <= pix_sub_d;
+      pix_row_q <= pix_row_d;
     end
   end
 
@@ -485,13 +579,13 @@ module neo_raster_core (
   assign wb_start = bank_start_q[wb_bank_q];
   // The entry's feature-word fields and its table word {key, id}.
   wire wb_present;
-  assign wb_present = fbuf[wb_idx][246];
+  assign wb_present = fbuf[wb_idx][FEAT_PRESENT];
   wire [15:0] wb_depth_key;
-  assign wb_depth_key = fbuf[wb_idx][245:230];
+  assign wb_depth_key = fbuf[wb_idx][FEAT_DEPTH_KEY +: FEAT_DEPTH_KEY_W];
   wire [15:0] wb_old_key;
-  assign wb_old_key = tbuf[wb_idx][46:31];
+  assign wb_old_key = tbuf[wb_idx][TW_KEY +: TW_KEY_W];
   wire [30:0] wb_id;
-  assign wb_id = tbuf[wb_idx][30:0];
+  assign wb_id = tbuf[wb_idx][TW_ID +: TW_ID_W];
   wire [15:0] wb_key;
   assign wb_key = wb_present ? wb_depth_key : wb_old_key;
   wire [47:0] wb_entry;
@@ -504,24 +598,35 @@ module neo_raster_core (
   assign wb_end = wb_next == bank_len_q[wb_bank_q];
   wire [8:0] res_seg_len;
   assign res_seg_len = bank_len_q[res_bank];
+  reg  wb_busy_d;
+  reg  [7:0] wb_ptr_d;
+  reg  wb_bank_d;
+  always @* begin
+    wb_busy_d = wb_busy_q;
+    wb_ptr_d = wb_ptr_q;
+    wb_bank_d = wb_bank_q;
+    if (res_fire & (res_group == 4'd0) & res_seg_last & (res_seg_len != 9'd0)) begin
+      wb_busy_d = 1'b1;
+      wb_ptr_d = 8'd0;
+      wb_bank_d = res_bank;
+    end
+    if (wb_grant) begin
+      if (wb_end) begin
+        wb_busy_d = 1'b0;
+      end else begin
+        wb_ptr_d = wb_ptr_q + 8'd1;
+      end
+    end
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       wb_busy_q <= 1'b0;
       wb_ptr_q <= 8'd0;
       wb_bank_q <= 1'b0;
     end else begin
-      if (res_fire & (res_group == 4'd0) & res_seg_last & (res_seg_len != 9'd0)) begin
-        wb_busy_q <= 1'b1;
-        wb_ptr_q <= 8'd0;
-        wb_bank_q <= res_bank;
-      end
-      if (wb_grant) begin
-        if (wb_end) begin
-          wb_busy_q <= 1'b0;
-        end else begin
-          wb_ptr_q <= wb_ptr_q + 8'd1;
-        end
-      end
+      wb_busy_q <= wb_busy_d;
+      wb_ptr_q <= wb_ptr_d;
+      wb_bank_q <= wb_bank_d;
     end
   end
 
@@ -546,41 +651,52 @@ module neo_raster_core (
   assign walk_start = running & ~walk_on_q & bank_full_q[walk_bank_q] & ~bank_walked_q[walk_bank_q] & ~wb_busy_q;
   wire walk_end;
   assign walk_end = itu_fire & last_quad & last_group;
+  reg  [2:0] rel_seg_d;
+  reg  [1:0] bank_full_d;
+  reg  [1:0] bank_walked_d;
+  always @* begin
+    rel_seg_d = rel_seg_q;
+    bank_full_d = bank_full_q;
+    bank_walked_d = bank_walked_q;
+    if (cmd_fire) begin
+      rel_seg_d = 3'd0;
+      bank_full_d = 2'd0;
+      bank_walked_d = 2'd0;
+    end else begin
+      if (rel_ok) begin
+        rel_seg_d = rel_seg_q + 3'd1;
+      end
+      if (ld_done & (ld_bank == 1'b0)) begin
+        bank_full_d[0] = 1'b1;
+      end
+      if (walk_end & (walk_bank_q == 1'b0)) begin
+        bank_walked_d[0] = 1'b1;
+      end
+      if (rel_ok & (rel_bank == 1'b0)) begin
+        bank_full_d[0] = 1'b0;
+        bank_walked_d[0] = 1'b0;
+      end
+      if (ld_done & (ld_bank == 1'b1)) begin
+        bank_full_d[1] = 1'b1;
+      end
+      if (walk_end & (walk_bank_q == 1'b1)) begin
+        bank_walked_d[1] = 1'b1;
+      end
+      if (rel_ok & (rel_bank == 1'b1)) begin
+        bank_full_d[1] = 1'b0;
+        bank_walked_d[1] = 1'b0;
+      end
+    end
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       rel_seg_q <= 3'd0;
       bank_full_q <= 2'd0;
       bank_walked_q <= 2'd0;
     end else begin
-      if (cmd_fire) begin
-        rel_seg_q <= 3'd0;
-        bank_full_q <= 2'd0;
-        bank_walked_q <= 2'd0;
-      end else begin
-        if (rel_ok) begin
-          rel_seg_q <= rel_seg_q + 3'd1;
-        end
-        if (ld_done & (ld_bank == 1'b0)) begin
-          bank_full_q[0] <= 1'b1;
-        end
-        if (walk_end & (walk_bank_q == 1'b0)) begin
-          bank_walked_q[0] <= 1'b1;
-        end
-        if (rel_ok & (rel_bank == 1'b0)) begin
-          bank_full_q[0] <= 1'b0;
-          bank_walked_q[0] <= 1'b0;
-        end
-        if (ld_done & (ld_bank == 1'b1)) begin
-          bank_full_q[1] <= 1'b1;
-        end
-        if (walk_end & (walk_bank_q == 1'b1)) begin
-          bank_walked_q[1] <= 1'b1;
-        end
-        if (rel_ok & (rel_bank == 1'b1)) begin
-          bank_full_q[1] <= 1'b0;
-          bank_walked_q[1] <= 1'b0;
-        end
-      end
+      rel_seg_q <= rel_seg_d;
+      bank_full_q <= bank_full_d;
+      bank_walked_q <= bank_walked_d;
     end
   end
   always @(posedge clk_i) begin
@@ -592,6 +708,94 @@ module neo_raster_core (
 
   // Main state and walk: every group of the segment in bank walk_bank_q; a later group starts at
   // its first quad once group 0's results are in.
+  reg  done_d;
+  reg  [1:0] state_d;
+  reg  [9:0] tile_x_d;
+  reg  [9:0] tile_y_d;
+  reg  [15:0] width_d;
+  reg  [15:0] height_d;
+  reg  [31:0] table_d;
+  reg  [31:0] feat_base_d;
+  reg  [31:0] pix_base_d;
+  reg  [31:0] len_d;
+  reg  walk_on_d;
+  reg  walk_bank_d;
+  reg  [3:0] group_d;
+  reg  [7:0] quad_base_d;
+  reg  seek_d;
+  always @* begin
+    done_d = done_q;
+    state_d = state_q;
+    tile_x_d = tile_x_q;
+    tile_y_d = tile_y_q;
+    width_d = width_q;
+    height_d = height_q;
+    table_d = table_q;
+    feat_base_d = feat_base_q;
+    pix_base_d = pix_base_q;
+    len_d = len_q;
+    walk_on_d = walk_on_q;
+    walk_bank_d = walk_bank_q;
+    group_d = group_q;
+    quad_base_d = quad_base_q;
+    seek_d = seek_q;
+    done_d = 1'b0;
+    case (state_q)
+      S_IDLE: begin
+        if (cmd_valid_i) begin
+          state_d = S_RUN;
+          tile_x_d = cmd_tile_x_i;
+          tile_y_d = cmd_tile_y_i;
+          width_d = cmd_width_i;
+          height_d = cmd_height_i;
+          table_d = cmd_table_i;
+          feat_base_d = cmd_feat_i;
+          pix_base_d = cmd_pix_i;
+          len_d = cmd_len_i;
+          walk_on_d = 1'b0;
+          walk_bank_d = 1'b0;
+        end
+      end
+      S_RUN: begin
+        if (walk_start) begin
+          walk_on_d = 1'b1;
+          group_d = 4'd0;
+          quad_base_d = 8'd0;
+          seek_d = 1'b0;
+        end
+        if (seek_q & g0_done_q) begin
+          seek_d = 1'b0;
+          quad_base_d = (|quad_touch) ? quad_first_base : 8'd0;
+        end
+        if (itu_fire) begin
+          if (~last_quad) begin
+            quad_base_d = (group_q == 4'd0) ? (quad_base_q + 8'd4) : quad_next_base;
+          end else begin
+            quad_base_d = 8'd0;
+            if (~last_group) begin
+              group_d = group_q + 4'd1;
+              seek_d = 1'b1;
+            end else begin
+              walk_on_d = 1'b0;
+              walk_bank_d = walk_bank_q + 1'b1;
+              if (last_seg) begin
+                state_d = S_DRAIN;
+              end
+            end
+          end
+        end
+      end
+      S_DRAIN: begin
+        if (drained & pix_all_done) begin
+          state_d = S_IDLE;
+          done_d = 1'b1;
+        end
+      end
+      default: begin
+        state_d = S_IDLE;
+      end
+    endcase
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       state_q <= S_IDLE;
@@ -602,62 +806,21 @@ module neo_raster_core (
       walk_bank_q <= 1'b0;
       group_q <= 4'd0;
     end else begin
-      done_q <= 1'b0;
-      case (state_q)
-        S_IDLE: begin
-          if (cmd_valid_i) begin
-            state_q <= S_RUN;
-            tile_x_q <= cmd_tile_x_i;
-            tile_y_q <= cmd_tile_y_i;
-            width_q <= cmd_width_i;
-            height_q <= cmd_height_i;
-            table_q <= cmd_table_i;
-            feat_base_q <= cmd_feat_i;
-            pix_base_q <= cmd_pix_i;
-            len_q <= cmd_len_i;
-            walk_on_q <= 1'b0;
-            walk_bank_q <= 1'b0;
-          end
-        end
-        S_RUN: begin
-          if (walk_start) begin
-            walk_on_q <= 1'b1;
-            group_q <= 4'd0;
-            quad_base_q <= 8'd0;
-            seek_q <= 1'b0;
-          end
-          if (seek_q & g0_done_q) begin
-            seek_q <= 1'b0;
-            quad_base_q <= (|quad_touch) ? quad_first_base : 8'd0;
-          end
-          if (itu_fire) begin
-            if (~last_quad) begin
-              quad_base_q <= (group_q == 4'd0) ? (quad_base_q + 8'd4) : quad_next_base;
-            end else begin
-              quad_base_q <= 8'd0;
-              if (~last_group) begin
-                group_q <= group_q + 4'd1;
-                seek_q <= 1'b1;
-              end else begin
-                walk_on_q <= 1'b0;
-                walk_bank_q <= walk_bank_q + 1'b1;
-                if (last_seg) begin
-                  state_q <= S_DRAIN;
-                end
-              end
-            end
-          end
-        end
-        S_DRAIN: begin
-          if (drained & pix_all_done) begin
-            state_q <= S_IDLE;
-            done_q <= 1'b1;
-          end
-        end
-        default: begin
-          state_q <= S_IDLE;
-        end
-      endcase
+      done_q <= done_d;
+      state_q <= state_d;
+      tile_x_q <= tile_x_d;
+      tile_y_q <= tile_y_d;
+      width_q <= width_d;
+      height_q <= height_d;
+      table_q <= table_d;
+      feat_base_q <= feat_base_d;
+      pix_base_q <= pix_base_d;
+      len_q <= len_d;
+      walk_on_q <= walk_on_d;
+      walk_bank_q <= walk_bank_d;
+      group_q <= group_d;
+      quad_base_q <= quad_base_d;
+      seek_q <= seek_d;
     end
   end
   assign done_o = done_q;

@@ -46,19 +46,26 @@ module neo_raster_feeder #(
   wire [5:0] route_sub;
   assign route_sub = {res_group_i, SCU_IDX};
   wire [3:0] route_mask;
-  wire [63:0] res_bitmap0;
-  assign res_bitmap0 = res_bitmaps_i[63:0];
-  wire [63:0] res_bitmap1;
-  assign res_bitmap1 = res_bitmaps_i[127:64];
-  wire [63:0] res_bitmap2;
-  assign res_bitmap2 = res_bitmaps_i[191:128];
-  wire [63:0] res_bitmap3;
-  assign res_bitmap3 = res_bitmaps_i[255:192];
-  assign route_mask = {(res_lanes_i[3] & res_bitmap3[route_sub]), (res_lanes_i[2] & res_bitmap2[route_sub]), (res_lanes_i[1] & res_bitmap1[route_sub]), (res_lanes_i[0] & res_bitmap0[route_sub])};
+  localparam SUBTILES = 64;
+  genvar u;
+  generate
+    for (u = 0; u < 4; u = u + 1) begin : g_route
+      wire [63:0] bitmap;
+      assign bitmap = res_bitmaps_i[u*SUBTILES +: SUBTILES];
+      assign route_mask[u] = res_lanes_i[u] & bitmap[route_sub];
+    end
+  endgenerate
   wire push;
   assign push = res_fire_i & ((|route_mask) | res_seg_last_i);
 
-  // FIFO of 64 elements {final, last, resume, lane mask, base}.
+  // FIFO of 64 elements {final, last, resume, lane mask, base} (fields EL_*): a RAM (no reset).
+  localparam EL_BASE = 0;
+  localparam EL_BASE_W = 9;
+  localparam EL_MASK = 9;
+  localparam EL_MASK_W = 4;
+  localparam EL_RESUME = 13;
+  localparam EL_LAST = 14;
+  localparam EL_FINAL = 15;
   reg  [15:0] fifo [0:63];
   reg  [6:0] wr_ptr_q;
   reg  [6:0] rd_ptr_q;
@@ -75,32 +82,40 @@ module neo_raster_feeder #(
       fifo[wr_ptr_q[5:0]] <= {res_list_last_i, res_seg_last_i, res_resume_i, route_mask, res_base_i};
     end
   end
+  reg  [6:0] wr_ptr_d;
+  reg  [6:0] rd_ptr_d;
+  always @* begin
+    wr_ptr_d = wr_ptr_q;
+    rd_ptr_d = rd_ptr_q;
+    if (push) begin
+      wr_ptr_d = wr_ptr_q + 7'd1;
+    end
+    if (pop) begin
+      rd_ptr_d = rd_ptr_q + 7'd1;
+    end
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       wr_ptr_q <= 7'd0;
       rd_ptr_q <= 7'd0;
     end else begin
-      if (push) begin
-        wr_ptr_q <= wr_ptr_q + 7'd1;
-      end
-      if (pop) begin
-        rd_ptr_q <= rd_ptr_q + 7'd1;
-      end
+      wr_ptr_q <= wr_ptr_d;
+      rd_ptr_q <= rd_ptr_d;
     end
   end
   // The FIFO head's fields.
   wire [15:0] head;
   assign head = fifo[rd_ptr_q[5:0]];
   wire [8:0] head_base;
-  assign head_base = head[8:0];
+  assign head_base = head[EL_BASE +: EL_BASE_W];
   wire [3:0] head_mask;
-  assign head_mask = head[12:9];
+  assign head_mask = head[EL_MASK +: EL_MASK_W];
   wire head_resume;
-  assign head_resume = head[13];
+  assign head_resume = head[EL_RESUME];
   wire head_last;
-  assign head_last = head[14];
+  assign head_last = head[EL_LAST];
   wire head_final;
-  assign head_final = head[15];
+  assign head_final = head[EL_FINAL];
 
   // The current element (popped from the FIFO) and its list state.
   reg  elem_valid_q;
@@ -119,6 +134,32 @@ module neo_raster_feeder #(
   wire elem_done;
   wire beat_last;
   wire [3:0] rest;
+  reg  piece_first_d;
+  reg  [3:0] group_d;
+  reg  elem_valid_d;
+  reg  out_ready_d;
+  always @* begin
+    piece_first_d = piece_first_q;
+    group_d = group_q;
+    elem_valid_d = elem_valid_q;
+    out_ready_d = out_ready_q;
+    if (beat) begin
+      piece_first_d = beat_last;
+    end
+    if (clear_i) begin
+      group_d = 4'd0;
+      piece_first_d = 1'b1;
+    end
+    if (beat & beat_last) begin
+      group_d = group_q + 4'd1;
+    end
+    if (pop) begin
+      elem_valid_d = 1'b1;
+    end else if (elem_done) begin
+      elem_valid_d = 1'b0;
+    end
+    out_ready_d = pix_taken_i & (pix_scu_i == SCU_IDX);
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       elem_valid_q <= 1'b0;
@@ -126,44 +167,54 @@ module neo_raster_feeder #(
       out_ready_q <= 1'b0;
       piece_first_q <= 1'b1;
     end else begin
-      if (beat) begin
-        piece_first_q <= beat_last;
-      end
-      if (clear_i) begin
-        group_q <= 4'd0;
-        piece_first_q <= 1'b1;
-      end
-      if (beat & beat_last) begin
-        group_q <= group_q + 4'd1;
-      end
-      if (pop) begin
-        elem_valid_q <= 1'b1;
-      end else if (elem_done) begin
-        elem_valid_q <= 1'b0;
-      end
-      out_ready_q <= pix_taken_i & (pix_scu_i == SCU_IDX);
+      piece_first_q <= piece_first_d;
+      group_q <= group_d;
+      elem_valid_q <= elem_valid_d;
+      out_ready_q <= out_ready_d;
+    end
+  end
+  reg  [8:0] elem_base_d;
+  reg  [3:0] elem_mask_d;
+  reg  elem_resume_d;
+  reg  elem_last_d;
+  reg  elem_final_d;
+  always @* begin
+    elem_base_d = elem_base_q;
+    elem_mask_d = elem_mask_q;
+    elem_resume_d = elem_resume_q;
+    elem_last_d = elem_last_q;
+    elem_final_d = elem_final_q;
+    if (pop) begin
+      elem_base_d = head_base;
+      elem_mask_d = head_mask;
+      elem_resume_d = head_resume;
+      elem_last_d = head_last;
+      elem_final_d = head_final;
+    end else if (beat) begin
+      elem_mask_d = rest;
     end
   end
   always @(posedge clk_i) begin
-    if (pop) begin
-      elem_base_q <= head_base;
-      elem_mask_q <= head_mask;
-      elem_resume_q <= head_resume;
-      elem_last_q <= head_last;
-      elem_final_q <= head_final;
-    end else if (beat) begin
-      elem_mask_q <= rest;
+    elem_base_q <= elem_base_d;
+    elem_mask_q <= elem_mask_d;
+    elem_resume_q <= elem_resume_d;
+    elem_last_q <= elem_last_d;
+    elem_final_q <= elem_final_d;
+  end
+  reg  [2:0] segs_done_d;
+  always @* begin
+    segs_done_d = segs_done_q;
+    if (clear_i) begin
+      segs_done_d = 3'd0;
+    end else if (beat & beat_last & (group_q == 4'd15)) begin
+      segs_done_d = segs_done_q + 3'd1;
     end
   end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       segs_done_q <= 3'd0;
     end else begin
-      if (clear_i) begin
-        segs_done_q <= 3'd0;
-      end else if (beat & beat_last & (group_q == 4'd15)) begin
-        segs_done_q <= segs_done_q + 3'd1;
-      end
+      segs_done_q <= segs_done_d;
     end
   end
   assign segs_done_o = segs_done_q;
@@ -193,14 +244,19 @@ module neo_raster_feeder #(
   // The list's subtile {group, SCU}: origin and the columns / rows inside the image.
   wire [5:0] sub;
   assign sub = {group_q, SCU_IDX};
+  // The subtile index's fields SUB_*: {row, column} (row-major).
+  localparam SUB_X = 0;
+  localparam SUB_X_W = 3;
+  localparam SUB_Y = 3;
+  localparam SUB_Y_W = 3;
   wire [16:0] origin_x;
-  assign origin_x = {1'b0, {tile_x_i, 6'd0}} + {11'd0, {sub[2:0], 3'd0}};
+  assign origin_x = {1'b0, {tile_x_i, 6'd0}} + {11'd0, {sub[SUB_X +: SUB_X_W], 3'd0}};
   wire [16:0] left_x;
   assign left_x = {1'b0, width_i} - origin_x;
   wire [3:0] cols;
   assign cols = ({1'b0, width_i} <= origin_x) ? 4'd0 : ((left_x > 17'd8) ? 4'd8 : left_x[3:0]);
   wire [16:0] origin_y;
-  assign origin_y = {1'b0, {tile_y_i, 6'd0}} + {11'd0, {sub[5:3], 3'd0}};
+  assign origin_y = {1'b0, {tile_y_i, 6'd0}} + {11'd0, {sub[SUB_Y +: SUB_Y_W], 3'd0}};
   wire [16:0] left_y;
   assign left_y = {1'b0, height_i} - origin_y;
   wire [3:0] rows;

@@ -73,6 +73,64 @@ module neo_raster_loader (
   assign done_o = (state_q == L_FEAT) & loaded;
 
   // Phases: IDLE -> TABLE -> FEAT -> IDLE, a segment per free bank.
+  reg  [8:0] issued_d;
+  reg  [8:0] received_d;
+  reg  [1:0] state_d;
+  reg  bank_d;
+  reg  [31:0] start_d;
+  reg  [8:0] seg_len_d;
+  reg  [31:0] segs_left_d;
+  always @* begin
+    issued_d = issued_q;
+    received_d = received_q;
+    state_d = state_q;
+    bank_d = bank_q;
+    start_d = start_q;
+    seg_len_d = seg_len_q;
+    segs_left_d = segs_left_q;
+    if (rd_grant_i) begin
+      issued_d = issued_q + {4'd0, rd_len};
+    end
+    if (rsp_valid_i) begin
+      received_d = received_q + 9'd1;
+    end
+    if (clear_i) begin
+      state_d = L_IDLE;
+      bank_d = 1'b0;
+      start_d = 32'd0;
+      seg_len_d = cmd_seg_len;
+      segs_left_d = cmd_segs;
+    end else begin
+      case (state_q)
+        L_IDLE: begin
+          if (run_i & (segs_left_q != 32'd0) & bank_free_i) begin
+            state_d = L_TABLE;
+            issued_d = 9'd0;
+            received_d = 9'd0;
+          end
+        end
+        L_TABLE: begin
+          if (loaded) begin
+            state_d = L_FEAT;
+            issued_d = 9'd0;
+            received_d = 9'd0;
+          end
+        end
+        L_FEAT: begin
+          if (loaded) begin
+            state_d = L_IDLE;
+            bank_d = bank_q + 1'b1;
+            start_d = next_start;
+            seg_len_d = next_seg_len;
+            segs_left_d = segs_left_q - 32'd1;
+          end
+        end
+        default: begin
+          state_d = L_IDLE;
+        end
+      endcase
+    end
+  end
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       state_q <= L_IDLE;
@@ -80,48 +138,13 @@ module neo_raster_loader (
       issued_q <= 9'd0;
       received_q <= 9'd0;
     end else begin
-      if (rd_grant_i) begin
-        issued_q <= issued_q + {4'd0, rd_len};
-      end
-      if (rsp_valid_i) begin
-        received_q <= received_q + 9'd1;
-      end
-      if (clear_i) begin
-        state_q <= L_IDLE;
-        bank_q <= 1'b0;
-        start_q <= 32'd0;
-        seg_len_q <= cmd_seg_len;
-        segs_left_q <= cmd_segs;
-      end else begin
-        case (state_q)
-          L_IDLE: begin
-            if (run_i & (segs_left_q != 32'd0) & bank_free_i) begin
-              state_q <= L_TABLE;
-              issued_q <= 9'd0;
-              received_q <= 9'd0;
-            end
-          end
-          L_TABLE: begin
-            if (loaded) begin
-              state_q <= L_FEAT;
-              issued_q <= 9'd0;
-              received_q <= 9'd0;
-            end
-          end
-          L_FEAT: begin
-            if (loaded) begin
-              state_q <= L_IDLE;
-              bank_q <= bank_q + 1'b1;
-              start_q <= next_start;
-              seg_len_q <= next_seg_len;
-              segs_left_q <= segs_left_q - 32'd1;
-            end
-          end
-          default: begin
-            state_q <= L_IDLE;
-          end
-        endcase
-      end
+      issued_q <= issued_d;
+      received_q <= received_d;
+      state_q <= state_d;
+      bank_q <= bank_d;
+      start_q <= start_d;
+      seg_len_q <= seg_len_d;
+      segs_left_q <= segs_left_d;
     end
   end
 

@@ -235,6 +235,14 @@ impl Latency {
         merge_pass_count(n, self.config.bsu_width as u64)
     }
 
+    /// The Neo artifact's cycle model of an `n`-entry chunk's sort, for comparison
+    /// (docs/cycle-model.md): the in-chunk merge passes only, one entry per cycle,
+    /// `ceil(log2(n / bsu_width)) * n`. A model, not a measurement: derived here, not stored in
+    /// `latency.json`.
+    pub fn artifact_chunk_cycles(&self, n: u64) -> u64 {
+        self.passes(n) * n
+    }
+
     fn structural(&self, n: u64) -> f64 {
         self.msu_ii * n as f64 * (1 + self.passes(n)) as f64
     }
@@ -419,6 +427,15 @@ mod tests {
 
     fn project_file() -> PathBuf {
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(DEFAULT_PATH)
+    }
+
+    #[test]
+    fn the_artifact_model_counts_the_merge_passes_at_one_entry_a_cycle() {
+        let l = Latency::from_file(&project_file()).unwrap();
+        assert_eq!(l.config.bsu_width, 16);
+        for (n, cycles) in [(1, 0), (16, 0), (32, 32), (100, 3 * 100), (256, 4 * 256)] {
+            assert_eq!(l.artifact_chunk_cycles(n), cycles, "n = {n}");
+        }
     }
 
     #[test]

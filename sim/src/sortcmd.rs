@@ -23,7 +23,7 @@
 //! The engine (`crate::arch`, with `double_buffered_io`) gives the same with an ideal memory: a
 //! chunk segment's load phase is `T(n) - I(n)`, started under the previous segment.
 
-use neo_golden::sort::{conventional_sort_plan, Parity};
+use neo_golden::sort::{conventional_sort_plan, Parity, PlannedCommand};
 
 use crate::latency::{ChunkMode, Latency};
 
@@ -100,7 +100,14 @@ impl Cmd {
 /// The commands of a conventional sort of `n` entries with chunk `c` (golden's plan,
 /// [`conventional_sort_plan`]).
 pub fn conventional_sort(n: u64, c: u64) -> Vec<Cmd> {
-    conventional_sort_plan(n, c).map(|p| Cmd { mode: p.mode, len_a: p.len_a, len_b: p.len_b }).collect()
+    conventional_sort_plan(n, c).map(|p| Cmd::from(&p)).collect()
+}
+
+impl From<&PlannedCommand> for Cmd {
+    /// The command of a planned one (its placement aside).
+    fn from(p: &PlannedCommand) -> Cmd {
+        Cmd { mode: p.mode, len_a: p.len_a, len_b: p.len_b }
+    }
 }
 
 /// The `DPS` commands of one pass over `len` entries with chunk `c` and `parity`.

@@ -24,7 +24,7 @@ use neo_golden::formats::latency::{
     BsuUnit, ChunkPoint, ItuUnit, LatencyReport, MemoryModel, MergeDeletePoint, MergePoint, MsuUnit, Raster,
     RasterCore, ScuUnit, SortCore, SortCoreUnit, Units, SCHEMA,
 };
-use neo_golden::sort::{merge_pass_count, SortEntry};
+use neo_golden::sort::SortEntry;
 use std::collections::BTreeMap;
 
 /// Seed of the report's stimulus (fixed: the report must be reproducible).
@@ -132,12 +132,6 @@ pub fn msu_latency(cfg: &EngineConfig, len: usize) -> (u64, u64, u64, u64, u64) 
     (outs[0].0 - first, ii, gap, total as u64, outs[total - 1].0 + 1)
 }
 
-/// The artifact's cycle model for the in-chunk merge passes of an `n`-entry chunk with a
-/// 16-input BSU: `ceil(log2(n / 16)) * n` (0 for `n <= 16`).
-pub fn artifact_chunk_cycles(n: u64, bsu: u64) -> u64 {
-    merge_pass_count(n, bsu) * n
-}
-
 /// Commands per back-to-back stream of the interval measurement: the interval is the mean
 /// spacing of the `done_o` pulses of commands `2..STREAM` (the first is the fill).
 pub const STREAM: usize = 6;
@@ -214,7 +208,6 @@ pub fn report(cfg: &EngineConfig) -> LatencyReport {
 /// lengths (every output checked against golden).
 fn sort_core_section(cfg: &EngineConfig, core: &mut Core) -> SortCore {
     let fmt = cfg.format();
-    let bsu_w = cfg.bsu_width as u64;
     let mut rng = Rng::new(SEED ^ 2);
     let sizes: Vec<u64> = [1, 16, 32, 64, 128, 256].into_iter().filter(|&n| n <= cfg.chunk as u64).collect();
     let mut chunk_rows = |mode: Mode, rng: &mut Rng| -> Vec<ChunkPoint> {
@@ -224,7 +217,7 @@ fn sort_core_section(cfg: &EngineConfig, core: &mut Core) -> SortCore {
                 let v = tile_entries(&fmt, rng, n as usize, false, 100);
                 let (cycles, _) = core_cycles(core, cfg, mode, &v, &[]);
                 let interval = chunk_interval(core, cfg, mode, n, rng);
-                ChunkPoint { entries: n, cycles, interval, artifact_cycles: artifact_chunk_cycles(n, bsu_w) }
+                ChunkPoint { entries: n, cycles, interval }
             })
             .collect()
     };
@@ -280,14 +273,13 @@ fn doc() -> BTreeMap<String, String> {
         ("raster.itu.ii", "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once"),
         ("raster.itu.jobs", "random jobs of the II measurement (every bitmap checked against golden subtile_bitmap)"),
         ("raster.core", "neo_raster_core (itus ITUs, scus SCUs, feature_buffer entries per segment, pixel_writes pixel-row writes per tile): measured only; the cycle model fits its empty-tile cost, load rate and per-segment overhead from the grid"),
-        ("raster.core.grid", "one tile per point, pixels and write-back checked against golden: entries = table length, bits_per_gaussian = subtiles each Gaussian touches by construction, set_bits = set subtile bits of the table, group_max_routed = sum over subtile groups of the largest per-SCU routed count, cycles = command to done_o (ideal memory), load_cycles = command to the last read request, artifact_cycles = the artifact's model (one cycle per set bit)"),
+        ("raster.core.grid", "one tile per point, pixels and write-back checked against golden: entries = table length, bits_per_gaussian = subtiles each Gaussian touches by construction, set_bits = set subtile bits of the table, group_max_routed = sum over subtile groups of the largest per-SCU routed count, cycles = command to done_o (ideal memory), load_cycles = command to the last read request"),
         ("sort_core.*.cycles", "one command alone: cycles from the edge that accepts the command (cmd_valid_i & cmd_ready_o) to the done_o pulse, ideal memory, output verified against golden"),
         ("sort_core.*.interval", "steady state: cycles per command when 6 identical commands stream back to back (each offered as soon as the previous one was taken; mean spacing of the done_o pulses of commands 2..6), ideal memory, outputs verified; chunk commands overlap (a chunk's load runs under the previous chunk's merge passes), merge commands serialise (interval = cycles + the turnaround)"),
         ("sort_core.conventional", "SORT of one chunk of `entries` entries: load, BSU vectors, in-chunk merge passes, write-back (golden full_sort of one chunk)"),
         ("sort_core.dps", "DPS command on one chunk (same datapath as SORT; golden dps_pass)"),
         ("sort_core.merge", "MERGE of sorted streams A and B (golden merge2(a, b, false))"),
         ("sort_core.merge_delete", "MERGE_DELETE with every fourth entry of each stream invalid (golden merge2(a, b, true)); `out` entries written"),
-        ("sort_core.*.artifact_cycles", "the Neo artifact's cycle model for the in-chunk merge passes of an n-entry chunk, ceil(log2(n/16)) * n: it counts only the merge passes at one entry per cycle, while `cycles` is the whole command (load, BSU, passes, write-back) measured on the RTL and `interval` the command's share of a back-to-back stream"),
     ]
     .into_iter()
     .map(|(k, v)| (k.to_string(), v.to_string()))
@@ -344,18 +336,4 @@ pub fn raster_core_section(cfg: &EngineConfig) -> RasterCore {
 /// final newline).
 pub fn report_text(cfg: &EngineConfig) -> String {
     report(cfg).to_text()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn artifact_model_matches_its_formula() {
-        assert_eq!(artifact_chunk_cycles(16, 16), 0);
-        assert_eq!(artifact_chunk_cycles(32, 16), 32);
-        assert_eq!(artifact_chunk_cycles(256, 16), 4 * 256);
-        assert_eq!(artifact_chunk_cycles(100, 16), 3 * 100);
-        assert_eq!(artifact_chunk_cycles(1, 16), 0);
-    }
 }

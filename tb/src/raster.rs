@@ -584,7 +584,6 @@ pub fn measure_grid(cfg: &EngineConfig, seed: u64, lengths: &[u64], bits: &[u64]
                 group_max_routed,
                 cycles: run.cycles,
                 load_cycles: run.last_read,
-                artifact_cycles: set_bits,
             });
         }
     }

@@ -10,7 +10,9 @@
 //! The printed text depends only on the builder calls (no hashing, no clocks), so the
 //! generated files are byte-for-byte reproducible.
 
+pub mod bundle;
 pub mod expr;
+mod next_state;
 mod print;
 
 use crate::interface::{Dir, ModuleInterface, Port};

@@ -24,7 +24,8 @@ use super::memory::{Memory, TileDescriptor, ENTRY_BYTES};
 use super::regs::FrameRegs;
 use super::EngineConfig;
 use crate::sort::{
-    conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, PlannedCommand, SortMode, Sorter,
+    conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, PlannedCommand, SortBuffer,
+    SortMode, Sorter,
 };
 
 /// One Sorting Core command at entry addresses (the fields of `neo_sort_core`'s cmd port).
@@ -97,10 +98,13 @@ pub fn tile_plan(cfg: &EngineConfig, regs: &FrameRegs, d: &TileDescriptor, core:
     let passes = merge_pass_count(n, chunk);
     let last = if d.from_scratch { d.next as u64 } else { scratch[(passes % 2) as usize] };
     let mut stages: Vec<Vec<TileCmd>> = Vec::new();
+    let at = |b: SortBuffer| match b {
+        SortBuffer::Input => d.list as u64,
+        SortBuffer::Scratch(k) => scratch[k],
+        SortBuffer::Output => last,
+    };
     for c in conventional_sort_plan(n, chunk) {
-        let src = if c.stage == 0 { d.list as u64 } else { scratch[((c.stage - 1) % 2) as usize] };
-        let dst = if c.stage == passes { last } else { scratch[(c.stage % 2) as usize] };
-        let cmd = TileCmd::planned(&c, src, dst);
+        let cmd = TileCmd::planned(&c, at(c.source()), at(c.target(passes)));
         if stages.len() as u64 == c.stage {
             stages.push(Vec::new());
         }

@@ -9,10 +9,10 @@
 //! another version with an error naming the file and the version, and a malformed one with an
 //! error naming the file and the field (`sort_core.merge[1].interval: missing field ...`).
 //!
-//! # Schema `neo-latency/3`
+//! # Schema `neo-latency/4`
 //! ```text
 //! {
-//!   "schema": "neo-latency/3",
+//!   "schema": "neo-latency/4",
 //!   "doc": { field: explanation, ... },
 //!   "config": { every field of the EngineConfig the RTL was generated from },
 //!   "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
@@ -23,7 +23,7 @@
 //!     "neo_scu": { "latency", "ii", "drain_ii", "gaussians", "lanes" }
 //!   },
 //!   "sort_core": {
-//!     "conventional" | "dps": [ { "entries", "cycles", "interval", "artifact_cycles" }, ... ],
+//!     "conventional" | "dps": [ { "entries", "cycles", "interval" }, ... ],
 //!     "merge": [ { "entries", "len_a", "len_b", "cycles", "interval" }, ... ],
 //!     "merge_delete": [ { ...as merge, "invalid", "out" }, ... ]
 //!   },
@@ -31,7 +31,7 @@
 //!     "itu": { "latency", "ii", "jobs", "subtiles_per_job" },
 //!     "core": { "itus", "scus", "feature_buffer", "pixel_writes", "memory",
 //!               "grid": [ { "entries", "bits_per_gaussian", "set_bits", "group_max_routed",
-//!                           "cycles", "load_cycles", "artifact_cycles" }, ... ] }
+//!                           "cycles", "load_cycles" }, ... ] }
 //!   }
 //! }
 //! ```
@@ -49,7 +49,7 @@ use crate::engine::EngineConfig;
 use crate::error::{InputError, InputResult};
 
 /// The schema identifier (and version) this crate writes and reads.
-pub const SCHEMA: &str = "neo-latency/3";
+pub const SCHEMA: &str = "neo-latency/4";
 
 /// The whole of `reports/latency.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -168,8 +168,6 @@ pub struct ChunkPoint {
     pub cycles: u64,
     /// Steady-state cycles per command back to back.
     pub interval: u64,
-    /// The Neo artifact's cycle model of the in-chunk merge passes (for comparison).
-    pub artifact_cycles: u64,
 }
 
 /// One measured MERGE command.
@@ -256,8 +254,6 @@ pub struct GridPoint {
     pub cycles: u64,
     /// Cycles from the command to the last read request (the loads).
     pub load_cycles: u64,
-    /// The artifact's cycle model of the tile (one cycle per set bit), for comparison.
-    pub artifact_cycles: u64,
 }
 
 impl LatencyReport {

@@ -79,6 +79,39 @@ impl PlannedCommand {
     }
 }
 
+/// A buffer of a conventional sort: its input, one of two scratch regions (the stages
+/// ping-pong between them), or its output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SortBuffer {
+    /// The entries to sort (read by stage 0).
+    Input,
+    /// Scratch region 0 or 1.
+    Scratch(usize),
+    /// Where the sorted entries go (written by the last stage).
+    Output,
+}
+
+impl PlannedCommand {
+    /// The buffer the command reads: the input in stage 0, else scratch region
+    /// `(stage - 1) % 2` (what the previous stage wrote).
+    pub fn source(&self) -> SortBuffer {
+        match self.stage {
+            0 => SortBuffer::Input,
+            s => SortBuffer::Scratch(((s - 1) % 2) as usize),
+        }
+    }
+
+    /// The buffer the command writes: the output in the last stage (`stage == passes`, with
+    /// `passes` = [`merge_pass_count`] of the sort), else scratch region `stage % 2`.
+    pub fn target(&self, passes: u64) -> SortBuffer {
+        if self.stage == passes {
+            SortBuffer::Output
+        } else {
+            SortBuffer::Scratch((self.stage % 2) as usize)
+        }
+    }
+}
+
 /// The commands of a conventional sort of `n` entries with chunk `chunk`, in issue order: one
 /// `Sort` per chunk, then the merge passes (see the module docs).
 ///
@@ -130,6 +163,27 @@ mod tests {
             assert!(plan.iter().all(|c| (c.mode == SortMode::Sort) == (c.stage == 0)));
             assert_eq!(plan.iter().filter(|c| c.mode == SortMode::Sort).count() as u64, n.div_ceil(256));
         }
+    }
+
+    #[test]
+    fn stages_ping_pong_between_the_scratch_regions_and_end_in_the_output() {
+        let passes = merge_pass_count(700, 256);
+        let bufs: Vec<(u64, SortBuffer, SortBuffer)> =
+            conventional_sort_plan(700, 256).map(|c| (c.stage, c.source(), c.target(passes))).collect();
+        use SortBuffer::{Input, Output, Scratch};
+        assert_eq!(
+            bufs,
+            [
+                (0, Input, Scratch(0)),
+                (0, Input, Scratch(0)),
+                (0, Input, Scratch(0)),
+                (1, Scratch(0), Scratch(1)),
+                (1, Scratch(0), Scratch(1)),
+                (2, Scratch(1), Output)
+            ]
+        );
+        let one: Vec<_> = conventional_sort_plan(100, 256).map(|c| (c.source(), c.target(0))).collect();
+        assert_eq!(one, [(Input, Output)], "a single chunk sorts straight into the output");
     }
 
     #[test]

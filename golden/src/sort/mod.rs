@@ -24,7 +24,7 @@ pub mod msu;
 pub mod network;
 pub mod update;
 
-pub use command::{conventional_sort_plan, PlannedCommand, SortMode};
+pub use command::{conventional_sort_plan, PlannedCommand, SortBuffer, SortMode};
 pub use depth_key::DepthKeyCodec;
 pub use dps::{dps, dps_pass, DpsWork, Parity};
 pub use entry::{SortEntry, SortFormat};

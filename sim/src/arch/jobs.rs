@@ -5,13 +5,13 @@
 use std::ops::Range;
 
 use neo_golden::pipeline::Strategy;
-use neo_golden::sort::{merge_pass_count, Parity};
+use neo_golden::sort::{conventional_sort_plan, merge_pass_count, Parity, SortBuffer};
 
 use super::timing::raster_tile_cycles;
 use super::{Accel, Model, K_BG, K_PRE, K_RASTER, K_SORT};
 use crate::dram::Ps;
 use crate::engine::{Access, AccessKind, Job, JobTag, Segment};
-use crate::sortcmd::{conventional_sort, dps_pass, Cmd, Mode};
+use crate::sortcmd::{dps_pass, Cmd, Mode};
 use crate::traffic::Stage;
 use crate::workload::TileWork;
 
@@ -94,6 +94,8 @@ impl Model<'_> {
 
     /// Conventional sort of `n` entries from `src` (charged to `src_stage`) into `dst`, with
     /// temporaries in `scratch` (two run buffers); `stage` for everything after the first read.
+    /// The commands and the buffers each reads and writes are golden's plan
+    /// ([`conventional_sort_plan`], [`neo_golden::sort::PlannedCommand::source`] and `target`).
     #[allow(clippy::too_many_arguments)]
     fn conv_sort(
         &self,
@@ -107,43 +109,22 @@ impl Model<'_> {
     ) {
         let c = self.cfg.engine.chunk as u64;
         let eb = self.eb;
-        let cmds = conventional_sort(n, c);
-        let chunks = n.div_ceil(c);
-        let mut off = 0;
-        let mut it = cmds.into_iter().peekable();
-        for _ in 0..chunks {
-            let cmd = it.next().expect("a chunk command");
-            let out = if chunks == 1 { dst } else { scratch[0] };
+        let passes = merge_pass_count(n, c);
+        let at = |b: SortBuffer| match b {
+            SortBuffer::Input => src,
+            SortBuffer::Scratch(k) => scratch[k],
+            SortBuffer::Output => dst,
+        };
+        for p in conventional_sort_plan(n, c) {
+            let read_stage = if p.source() == SortBuffer::Input { src_stage } else { stage };
+            let (off, len) = (p.start * eb, p.entries() * eb);
             segs.push(self.cmd_segment(
-                cmd,
-                vec![Access::seq(src_stage, src + off * eb, cmd.len_a * eb)],
-                vec![Access::seq(stage, out + off * eb, cmd.len_a * eb)],
+                Cmd::from(&p),
+                vec![Access::seq(read_stage, at(p.source()) + off, len)],
+                vec![Access::seq(stage, at(p.target(passes)) + off, len)],
                 0.0,
             ));
-            off += cmd.len_a;
         }
-        // Merge passes: runs of C, 2C, ... alternate between the scratch buffers; the last pass
-        // writes `dst`.
-        let passes = merge_pass_count(n, c);
-        let mut from = 0usize;
-        for p in 0..passes {
-            let to_last = p + 1 == passes;
-            let mut start = 0;
-            while start < n {
-                let cmd = it.next().expect("a merge command");
-                let len = cmd.entries_in();
-                let out = if to_last { dst } else { scratch[1 - from] };
-                segs.push(self.cmd_segment(
-                    cmd,
-                    vec![Access::seq(stage, scratch[from] + start * eb, len * eb)],
-                    vec![Access::seq(stage, out + start * eb, len * eb)],
-                    0.0,
-                ));
-                start += len;
-            }
-            from = 1 - from;
-        }
-        debug_assert!(it.next().is_none());
     }
 
     fn empty_segment(&self) -> Segment {

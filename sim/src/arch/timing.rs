@@ -380,7 +380,6 @@ mod tests {
                     group_max_routed: per as u64 * subtiles / scus,
                     cycles: cycles as u64,
                     load_cycles: 9 + 3 * entries,
-                    artifact_cycles: entries * bits,
                 });
             }
         }

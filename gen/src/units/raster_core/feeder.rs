@@ -9,8 +9,9 @@
 //! columns and rows, final / resume) and counts the segments whose last piece it has taken.
 
 use super::{Dims, FIFO_DEPTH};
+use crate::emit::bundle::Bundle;
 use crate::emit::expr::{bits_for, lit, resize};
-use crate::emit::{if_, if_else, set, Module};
+use crate::emit::{if_, if_else, set, Item, Module};
 use crate::units::scu;
 use neo_golden::engine::EngineConfig;
 
@@ -87,17 +88,24 @@ fn route(m: &mut Module, d: &Dims) {
     m.comment("Routing: lane u goes to this SCU when bit {group, SCU} of its bitmap is set.");
     m.wire_assign("route_sub", d.sub_w, scu_subtile(d, "res_group_i"));
     m.wire("route_mask", d.ni);
-    let mut lanes = Vec::new();
-    for u in 0..d.ni {
-        let bm = format!("res_bitmap{u}");
-        m.wire_assign(bm.clone(), d.nsub, crate::emit::expr::lane("res_bitmaps_i", u, d.nsub));
-        lanes.push(format!("(res_lanes_i[{u}] & {bm}[route_sub])"));
-    }
-    lanes.reverse();
-    m.assign("route_mask", format!("{{{}}}", lanes.join(", ")));
+    m.localparam_int("SUBTILES", d.nsub);
+    m.gen_for(
+        "u",
+        d.ni,
+        "g_route",
+        vec![
+            Item::Wire { name: "bitmap".into(), width: d.nsub },
+            Item::Assign { lhs: "bitmap".into(), rhs: "res_bitmaps_i[u*SUBTILES +: SUBTILES]".into() },
+            Item::Assign { lhs: "route_mask[u]".into(), rhs: "res_lanes_i[u] & bitmap[route_sub]".into() },
+        ],
+    );
     m.wire_assign("push", 1, "res_fire_i & ((|route_mask) | res_seg_last_i)");
     m.blank();
-    m.comment(format!("FIFO of {FIFO_DEPTH} elements {{final, last, resume, lane mask, base}}."));
+    m.comment(format!(
+        "FIFO of {FIFO_DEPTH} elements {{final, last, resume, lane mask, base}} (fields EL_*): a RAM (no reset)."
+    ));
+    let el = element_fields(d);
+    el.declare(m);
     m.mem("fifo", ew, FIFO_DEPTH);
     m.reg("wr_ptr_q", db + 1).reg("rd_ptr_q", db + 1);
     m.wire("pop", 1);
@@ -113,8 +121,8 @@ fn route(m: &mut Module, d: &Dims) {
         )],
     )]);
     let one = lit(db + 1, 1);
-    m.seq(
-        vec![set("wr_ptr_q", lit(db + 1, 0)), set("rd_ptr_q", lit(db + 1, 0))],
+    m.seq_d(
+        Some(vec![set("wr_ptr_q", lit(db + 1, 0)), set("rd_ptr_q", lit(db + 1, 0))]),
         vec![
             if_("push", vec![set("wr_ptr_q", format!("wr_ptr_q + {one}"))]),
             if_("pop", vec![set("rd_ptr_q", format!("rd_ptr_q + {one}"))]),
@@ -122,10 +130,16 @@ fn route(m: &mut Module, d: &Dims) {
     );
     m.comment("The FIFO head's fields.");
     m.wire_assign("head", ew, format!("fifo[rd_ptr_q[{}:0]]", db - 1));
-    m.unpack_fields(
-        "head",
-        &[("head_base", d.fx), ("head_mask", d.ni), ("head_resume", 1), ("head_last", 1), ("head_final", 1)],
-    );
+    for f in el.fields() {
+        m.wire_assign(format!("head_{}", f.name), f.width, el.get("head", &f.name));
+    }
+}
+
+/// The FIFO element `{final, last, resume, lane mask, base}`.
+fn element_fields(d: &Dims) -> Bundle {
+    let b = Bundle::packed("EL", &[("base", d.fx), ("mask", d.ni), ("resume", 1), ("last", 1), ("final", 1)]);
+    debug_assert_eq!(b.width(), d.ew);
+    b
 }
 
 /// The current element and the list state.
@@ -141,13 +155,13 @@ fn element(m: &mut Module, d: &Dims) {
     m.comment("Segments whose last piece (group G-1) the SCU has taken, to release their bank.");
     m.reg("segs_done_q", d.rsw);
     m.wire("beat", 1).wire("elem_done", 1).wire("beat_last", 1).wire("rest", d.ni);
-    m.seq(
-        vec![
+    m.seq_d(
+        Some(vec![
             set("elem_valid_q", lit(1, 0)),
             set("group_q", lit(gw, 0)),
             set("out_ready_q", lit(1, 0)),
             set("piece_first_q", lit(1, 1)),
-        ],
+        ]),
         vec![
             if_("beat", vec![set("piece_first_q", "beat_last")]),
             if_("clear_i", vec![set("group_q", lit(gw, 0)), set("piece_first_q", lit(1, 1))]),
@@ -166,19 +180,22 @@ fn element(m: &mut Module, d: &Dims) {
             ),
         ],
     );
-    m.seq_noreset(vec![if_else(
-        "pop",
-        vec![
-            set("elem_base_q", "head_base"),
-            set("elem_mask_q", "head_mask"),
-            set("elem_resume_q", "head_resume"),
-            set("elem_last_q", "head_last"),
-            set("elem_final_q", "head_final"),
-        ],
-        vec![if_("beat", vec![set("elem_mask_q", "rest")])],
-    )]);
-    m.seq(
-        vec![set("segs_done_q", lit(d.rsw, 0))],
+    m.seq_d(
+        None,
+        vec![if_else(
+            "pop",
+            vec![
+                set("elem_base_q", "head_base"),
+                set("elem_mask_q", "head_mask"),
+                set("elem_resume_q", "head_resume"),
+                set("elem_last_q", "head_last"),
+                set("elem_final_q", "head_final"),
+            ],
+            vec![if_("beat", vec![set("elem_mask_q", "rest")])],
+        )],
+    );
+    m.seq_d(
+        Some(vec![set("segs_done_q", lit(d.rsw, 0))]),
         vec![if_else(
             "clear_i",
             vec![set("segs_done_q", lit(d.rsw, 0))],
@@ -234,10 +251,11 @@ fn beats(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
 /// `origin_{x,y}` (`ow` bits) and the inside `cols` / `rows` of subtile `sub`.
 fn subtile_origin(m: &mut Module, d: &Dims) {
     let (side_w, sb, tl, ow) = (d.side_w, d.sb, d.tl, d.ow);
-    for (a, tile, lo, dim, n) in
-        [("x", "tile_x_i", 0, "width_i", "cols"), ("y", "tile_y_i", side_w, "height_i", "rows")]
-    {
-        let idx = format!("sub[{}:{lo}]", lo + side_w - 1);
+    let sub = Bundle::packed("SUB", &[("x", side_w), ("y", side_w)]);
+    m.comment("The subtile index's fields SUB_*: {row, column} (row-major).");
+    sub.declare(m);
+    for (a, tile, dim, n) in [("x", "tile_x_i", "width_i", "cols"), ("y", "tile_y_i", "height_i", "rows")] {
+        let idx = sub.get("sub", a);
         m.wire_assign(
             format!("origin_{a}"),
             ow,

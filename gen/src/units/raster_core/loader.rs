@@ -126,13 +126,13 @@ fn control(m: &mut Module, d: &Dims) {
     // A load phase starts with no read issued or received.
     let phase =
         |st: &str| vec![set("state_q", st), set("issued_q", lit(sl, 0)), set("received_q", lit(sl, 0))];
-    m.seq(
-        vec![
+    m.seq_d(
+        Some(vec![
             set("state_q", "L_IDLE"),
             set("segs_left_q", lit(lw, 0)),
             set("issued_q", lit(sl, 0)),
             set("received_q", lit(sl, 0)),
-        ],
+        ]),
         vec![
             if_("rd_grant_i", vec![set("issued_q", format!("issued_q + {}", resize("rd_len", d.bl, sl)))]),
             if_("rsp_valid_i", vec![set("received_q", format!("received_q + {}", lit(sl, 1)))]),

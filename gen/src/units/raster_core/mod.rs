@@ -38,6 +38,7 @@ pub mod loader;
 mod walker;
 mod writer;
 
+use crate::emit::bundle::{Bundle, Field};
 use crate::emit::expr::{bits_for, lit};
 use crate::emit::{if_, if_else, set, Item, Module};
 use crate::units::{itu, scu};
@@ -59,6 +60,10 @@ pub mod space {
     /// Pixels (write: one subtile row of `S` pixels at a pixel address).
     pub const PIXEL: u64 = 2;
 }
+
+/// Localparams: the bits of an SCU's subtile of pixels and of one pixel row.
+const SUB_RGB: &str = "SUB_RGB_BITS";
+const ROW_RGB: &str = "ROW_RGB_BITS";
 
 const S_IDLE: u64 = 0;
 const S_RUN: u64 = 1;
@@ -191,24 +196,32 @@ impl Dims {
     fn inflight_bits(&self) -> u32 {
         bits_for(itu::LATENCY as u64 + 1)
     }
-
-    /// The `present` bit of a feature word.
-    fn present(&self) -> u32 {
-        self.fw - 1
-    }
 }
 
-/// The `(lsb, width)` of feature field `name` in a feature word.
-fn feature_field(cfg: &EngineConfig, name: &str) -> (u32, u32) {
-    let layout = cfg.feature_format().layout();
-    let f = layout.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("feature field {name}"));
-    (f.lsb, f.width)
+/// The table-buffer word `{key, id}` (golden's sort entry without its valid bit): localparams
+/// `TW_*`.
+fn table_word(d: &Dims) -> Bundle {
+    Bundle::packed("TW", &[("id", d.ib), ("key", d.kb)])
 }
 
-/// A wire named `name` holding field `field` (`(lsb, width)`) of the feature word `word`
-/// (a feature-buffer read).
-fn feature_wire(m: &mut Module, name: &str, word: &str, (lsb, width): (u32, u32)) {
-    m.wire_assign(name, width, crate::emit::expr::slice(word, lsb + width - 1, lsb));
+/// The feature word `{present, entry}`: the fields of golden's feature format (`FEAT_*`), the
+/// `present` bit on top, and the runs the ITU takes whole (`FEAT_ITU_MEAN`, `FEAT_ITU_GEOM`).
+fn feature_word(cfg: &EngineConfig, d: &Dims) -> Bundle {
+    let fmt = cfg.feature_format();
+    let mut fields: Vec<Field> =
+        fmt.layout().iter().map(|f| Field { name: f.name.to_string(), lsb: f.lsb, width: f.width }).collect();
+    fields.push(Field { name: "present".into(), lsb: fmt.bits_per_entry(), width: 1 });
+    let mean_lsb = fields.iter().find(|f| f.name == "mean_x").expect("mean_x field").lsb;
+    fields.push(Field { name: "itu_mean".into(), lsb: mean_lsb, width: itu::mean_bits(cfg) });
+    let (geom_w, geom_lsb) = itu::geom_bits_lsb(cfg);
+    fields.push(Field { name: "itu_geom".into(), lsb: geom_lsb, width: geom_w });
+    let b = Bundle::placed("FEAT", fields);
+    debug_assert_eq!(b.width(), feature_word_bits(cfg));
+    // Only the fields the core reads (no unused localparam); of the depth key, the low key bits.
+    let mut used: Vec<&str> = scu::GAUSSIAN_FIELDS.to_vec();
+    used.extend(["depth_key", "present", "itu_mean", "itu_geom"]);
+    let dk = b.width_of("depth_key").min(d.kb);
+    b.subset(&used).narrowed("depth_key", dk)
 }
 
 /// The raster core for `cfg`.
@@ -225,7 +238,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     );
     ports(&mut m, &d);
     command(&mut m, &d);
-    buffers(&mut m, &d);
+    buffers(&mut m, cfg, &d);
     writer::arbitration(&mut m, &d);
     load(&mut m, &d);
     walker::walk(&mut m, &d);
@@ -293,14 +306,22 @@ fn command(m: &mut Module, d: &Dims) {
 }
 
 /// The banked buffers and the per-bank state.
-fn buffers(m: &mut Module, d: &Dims) {
+fn buffers(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let n = d.nbk * d.f;
     m.blank();
     m.comment(format!(
         "{} banks of {} entries: the loader fills the next ones while the walk and the SCUs use the oldest.",
         d.nbk, d.f
     ));
-    m.comment("Table words {key, id}, feature words {present, entry}, and each entry's ITU OR (group 0).");
+    m.comment("Table words {key, id}, feature words {present, entry}, and each entry's ITU OR (group 0):");
+    m.comment(
+        "RAMs (one write port, no reset). Their words' fields (golden's formats): TW_*, and the FEAT_*",
+    );
+    m.comment("this core reads (ITU_MEAN / ITU_GEOM: the runs of fields the ITUs take whole).");
+    let tw = table_word(d);
+    tw.declare_bits(m);
+    tw.declare(m);
+    feature_word(cfg, d).declare(m);
     m.mem("tbuf", d.tw, n).mem("fbuf", d.fw, n).mem("hbuf", 1, n);
     m.comment("Per bank: loaded, walked (every group), and its segment's length and first entry.");
     m.reg("bank_full_q", d.nbk).reg("bank_walked_q", d.nbk);
@@ -317,7 +338,7 @@ fn load(m: &mut Module, d: &Dims) {
     m.wire("rd_table", 1).wire("rd_addr", d.aw).wire("rd_len", d.bl);
     m.wire("ld_iss_idx", d.fx).wire("ld_rcv_idx", d.fx);
     m.comment("The id of the next feature read's table entry.");
-    m.wire_assign("ld_iss_id", d.ib, format!("tbuf[ld_iss_idx][{}:0]", d.ib - 1));
+    m.wire_assign("ld_iss_id", d.ib, table_word(d).get("tbuf[ld_iss_idx]", "id"));
     m.wire_assign("ld_bank_free", 1, "~bank_full_q[ld_bank]");
     let c = |p: &str, e: &str| (p.to_string(), e.to_string());
     m.instance(
@@ -352,7 +373,7 @@ fn load(m: &mut Module, d: &Dims) {
         "mem_rsp_valid_i",
         vec![if_else(
             "rd_table",
-            vec![set("tbuf[ld_rcv_idx]", format!("mem_rsp_data_i[{}:0]", d.tw - 1))],
+            vec![set("tbuf[ld_rcv_idx]", table_word(d).low_of("mem_rsp_data_i"))],
             vec![set("fbuf[ld_rcv_idx]", "mem_rsp_data_i")],
         )],
     )]);
@@ -364,6 +385,11 @@ fn scus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let px = RGB_BITS * d.s * d.s;
     m.blank();
     m.comment("SCUs: SCU j blends subtile {group, j}; its feeder routes the ITU results and feeds it.");
+    m.comment(format!(
+        "An SCU's subtile ({0}x{0} pixels of {RGB_BITS} bits, row-major) and a row of it.",
+        d.s
+    ));
+    m.localparam_int(SUB_RGB, px).localparam_int(ROW_RGB, d.rw);
     m.wire("feeder_full", nc).wire("feeder_busy", nc).wire("seg_taken", nc).wire("scu_taken", nc);
     m.wire("scu_out_valid", nc).wire("scu_rgb", nc * px).wire("scu_term", nc);
     let w = scu::ScuWidths::new(cfg);
@@ -387,11 +413,12 @@ fn scus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         items.push(wire(n, wi));
     }
     items.push(Item::Comment("The beat's Gaussian: its feature-word fields.".into()));
-    let mut fm = Module::new("fields");
+    let feat = feature_word(cfg, d);
     for fname in scu::GAUSSIAN_FIELDS {
-        feature_wire(&mut fm, &format!("feat_{fname}"), "fbuf[feat_idx]", feature_field(cfg, fname));
+        let name = format!("feat_{fname}");
+        items.push(Item::Wire { name: name.clone(), width: feat.width_of(fname) });
+        items.push(Item::Assign { lhs: name, rhs: feat.get("fbuf[feat_idx]", fname) });
     }
-    items.extend(fm.items);
     let s = |p: &str, e: &str| (p.to_string(), e.to_string());
     let sel = |v: &str| format!("{v}[j]");
     items.push(Item::Instance(crate::emit::Instance {
@@ -455,7 +482,7 @@ fn scus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     conns.push(("term_o".into(), sel("scu_term")));
     conns.push(("out_valid_o".into(), sel("scu_out_valid")));
     conns.push(("out_ready_i".into(), sel("scu_taken")));
-    conns.push(("out_rgb_o".into(), format!("scu_rgb[j*{px} +: {px}]")));
+    conns.push(("out_rgb_o".into(), format!("scu_rgb[j*{SUB_RGB} +: {SUB_RGB}]")));
     items.push(Item::Instance(crate::emit::Instance {
         module: scu::NAME.into(),
         name: "u_scu".into(),
@@ -512,7 +539,7 @@ fn control(m: &mut Module, d: &Dims) {
         set("bank_full_q", lit(nbk, 0)),
         set("bank_walked_q", lit(nbk, 0)),
     ];
-    m.seq(clear.clone(), vec![if_else("cmd_fire", clear, banks)]);
+    m.seq_d(Some(clear.clone()), vec![if_else("cmd_fire", clear, banks)]);
     m.seq_noreset(vec![if_(
         "ld_done",
         vec![set("bank_len_q[ld_bank]", "ld_seg_len"), set("bank_start_q[ld_bank]", "ld_start")],

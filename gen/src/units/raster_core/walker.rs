@@ -4,8 +4,9 @@
 //! touched by no quad walks quad 0 alone, to end its pieces). Each quad's sideband goes through
 //! a copy of the ITU pipeline, and group 0's results give every entry's valid bit (`hbuf`).
 
-use super::{feature_field, feature_wire, mask_lit, Dims};
-use crate::emit::expr::{lane, lit, resize, slice};
+use super::{feature_word, mask_lit, Dims};
+use crate::emit::bundle::Bundle;
+use crate::emit::expr::{lit, resize, slice};
 use crate::emit::{if_, if_else, set, Instance, Item, Module};
 use crate::units::itu;
 use neo_golden::engine::EngineConfig;
@@ -100,6 +101,8 @@ pub(super) fn itus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire("itu_out_ready", 1);
     m.comment("Per lane, the subtile groups its bitmap touches (group 0's walk records them per quad).");
     m.wire("itu_groups", ni * groups);
+    m.comment("A bitmap's subtiles (group-major: group g's at [g * SCUS +: SCUS]), the SCUs and the groups.");
+    m.localparam_int("SUBTILES", nsub).localparam_int("SCUS", nc).localparam_int("GROUPS", groups);
     let mut items = vec![
         Item::LocalParam { name: "LANE".into(), width: fa, value: "u".into() },
         Item::Wire { name: "entry".into(), width: fa },
@@ -107,13 +110,11 @@ pub(super) fn itus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         Item::Wire { name: "idx".into(), width: d.fx },
         Item::Assign { lhs: "idx".into(), rhs: "{walk_bank_q, entry}".into() },
     ];
-    let mut fm = Module::new("fields");
-    let (mean_lsb, _) = feature_field(cfg, "mean_x");
-    let (geom_w, geom_lsb) = itu::geom_bits_lsb(cfg);
-    feature_wire(&mut fm, "present", "fbuf[idx]", (d.present(), 1));
-    feature_wire(&mut fm, "mean", "fbuf[idx]", (mean_lsb, itu::mean_bits(cfg)));
-    feature_wire(&mut fm, "geom", "fbuf[idx]", (geom_lsb, geom_w));
-    items.extend(fm.items);
+    let feat = feature_word(cfg, d);
+    for (name, field) in [("present", "present"), ("mean", "itu_mean"), ("geom", "itu_geom")] {
+        items.push(Item::Wire { name: name.into(), width: feat.width_of(field) });
+        items.push(Item::Assign { lhs: name.into(), rhs: feat.get("fbuf[idx]", field) });
+    }
     items.push(Item::Assign {
         lhs: "lane_valid[u]".into(),
         rhs: format!("({} < walk_seg_len) & present", resize("entry", fa, d.sl)),
@@ -141,14 +142,17 @@ pub(super) fn itus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
             c("tag_o", format!("itu_tags[u*{tg} +: {tg}]")),
         ],
     }));
-    items.push(Item::Assign { lhs: format!("itu_bitmaps[u*{nsub} +: {nsub}]"), rhs: "bitmap".into() });
-    let touched: Vec<String> =
-        (0..groups).rev().map(|g| format!("(|{})", slice("bitmap", (g + 1) * nc - 1, g * nc))).collect();
-    items.push(Item::Assign {
-        lhs: format!("itu_groups[u*{groups} +: {groups}]"),
-        rhs: format!("{{{}}}", touched.join(", ")),
-    });
+    items.push(Item::Assign { lhs: "itu_bitmaps[u*SUBTILES +: SUBTILES]".into(), rhs: "bitmap".into() });
     m.gen_for("u", ni, "g_itu", items);
+    // Lane u's bitmap holds group g's subtiles at [g * SCUs +: SCUs], so group g of lane u is
+    // run u * groups + g of the packed bitmaps.
+    m.comment("Group k % G of lane k / G: the OR of its SCUs' subtile bits.");
+    m.gen_for(
+        "k",
+        ni * groups,
+        "g_touch",
+        vec![Item::Assign { lhs: "itu_groups[k]".into(), rhs: "|itu_bitmaps[k*SCUS +: SCUS]".into() }],
+    );
     m.wire_assign("itu_in_ready", 1, "&itu_in_readys");
     m.wire_assign("itu_out_valid", 1, "&itu_out_valids");
     m.wire_assign("itu_fire", 1, "walk & itu_in_ready");
@@ -160,21 +164,23 @@ pub(super) fn itus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
 pub(super) fn results(m: &mut Module, d: &Dims) {
     let (ni, gw, fa, bkb) = (d.ni, d.gw, d.fa, d.bkb);
     let fields = [
-        ("res_lanes", ni),
-        ("res_entry", fa),
-        ("res_bank", bkb),
-        ("res_group", gw),
-        ("res_seg_last", 1),
-        ("res_list_last", 1),
-        ("res_resume", 1),
+        ("lanes", ni),
+        ("entry", fa),
+        ("bank", bkb),
+        ("group", gw),
+        ("seg_last", 1),
+        ("list_last", 1),
+        ("resume", 1),
     ];
-    let sbw: u32 = fields.iter().map(|f| f.1).sum();
+    let info = Bundle::packed("QI", &fields);
+    let sbw = info.width();
     m.blank();
     m.comment(format!(
         "Quad sideband through {} stages that advance with the ITUs (in_ready_o = their stage enable):",
         itu::LATENCY
     ));
-    m.comment("{resume, list last, segment last (last quad), group, bank, entry, lane valids}.");
+    m.comment("{resume, list last, segment last (last quad), group, bank, entry, lane valids}: fields QI_*.");
+    info.declare(m);
     m.wire_assign(
         "quad_info",
         sbw,
@@ -189,15 +195,17 @@ pub(super) fn results(m: &mut Module, d: &Dims) {
         let src = if k == 1 { "quad_info".to_string() } else { format!("quad_info{}_q", k - 1) };
         sh.push(set(format!("quad_info{k}_q"), src));
     }
-    m.seq_noreset(vec![if_("itu_in_ready", sh)]);
+    m.seq_d(None, vec![if_("itu_in_ready", sh)]);
     m.comment("The result's sideband fields.");
     let last = format!("quad_info{}_q", itu::LATENCY);
-    m.unpack_fields(&last, &fields);
+    for (name, width) in fields {
+        m.wire_assign(format!("res_{name}"), width, info.get(&last, name));
+    }
     m.wire_assign("res_base", d.fx, "{res_bank, res_entry}");
     let ifl = d.inflight_bits();
     m.reg("inflight_q", ifl);
-    m.seq(
-        vec![set("inflight_q", lit(ifl, 0))],
+    m.seq_d(
+        Some(vec![set("inflight_q", lit(ifl, 0))]),
         vec![if_else(
             "itu_fire & ~res_fire",
             vec![set("inflight_q", format!("inflight_q + {}", lit(ifl, 1)))],
@@ -214,9 +222,9 @@ pub(super) fn results(m: &mut Module, d: &Dims) {
         .collect();
     m.seq_noreset(vec![if_(g0.clone(), hb)]);
     m.comment("Group 0's results also give each quad's groups (quad_hit) and, with its last quad, g0_done.");
-    let g = d.groups;
-    let lanes: Vec<String> =
-        (0..ni).map(|u| format!("({{{g}{{res_lanes[{u}]}}}} & {})", lane("itu_groups", u, g))).collect();
+    let lanes: Vec<String> = (0..ni)
+        .map(|u| format!("({{GROUPS{{res_lanes[{u}]}}}} & itu_groups[{u}*GROUPS +: GROUPS])"))
+        .collect();
     m.wire_assign("res_quad_hit", d.groups, lanes.join(" | "));
     let quad = if d.nq == 1 {
         "res_bank".to_string()
@@ -225,8 +233,8 @@ pub(super) fn results(m: &mut Module, d: &Dims) {
     };
     m.wire_assign("res_quad", bkb + if d.nq == 1 { 0 } else { d.qb }, quad);
     m.seq_noreset(vec![if_(g0.clone(), vec![set("quad_hit[res_quad]", "res_quad_hit")])]);
-    m.seq(
-        vec![set("g0_done_q", lit(1, 0))],
+    m.seq_d(
+        Some(vec![set("g0_done_q", lit(1, 0))]),
         vec![if_else(
             "walk_start",
             vec![set("g0_done_q", lit(1, 0))],
@@ -297,8 +305,8 @@ pub(super) fn walk_state(m: &mut Module, d: &Dims) {
         ),
         if_("itu_fire", vec![next_quad]),
     ];
-    m.seq(
-        vec![
+    m.seq_d(
+        Some(vec![
             set("state_q", "S_IDLE"),
             set("done_q", lit(1, 0)),
             set("quad_base_q", lit(fa, 0)),
@@ -306,7 +314,7 @@ pub(super) fn walk_state(m: &mut Module, d: &Dims) {
             set("walk_on_q", lit(1, 0)),
             set("walk_bank_q", lit(bkb, 0)),
             set("group_q", lit(gw, 0)),
-        ],
+        ]),
         vec![
             set("done_q", lit(1, 0)),
             crate::emit::Stmt::Case(

@@ -1,8 +1,9 @@
 //! The raster core's memory port: the fixed-priority arbitration, the pixel writer (finished
 //! subtiles, one row of `S` pixels per write) and the table write-back.
 
-use super::{feature_field, feature_wire, space, Dims};
-use crate::emit::expr::{lane, lit, resize, slice};
+use super::{feature_word, space, table_word, Dims, ROW_RGB, SUB_RGB};
+use crate::emit::bundle::{Bundle, Field};
+use crate::emit::expr::{lit, resize};
 use crate::emit::{if_, if_else, set, Module};
 use neo_golden::engine::EngineConfig;
 use neo_golden::raster::RGB_BITS;
@@ -24,24 +25,38 @@ pub(super) fn arbitration(m: &mut Module, d: &Dims) {
 
 /// The pixel writer: subtiles in order, SCU = subtile % SCUs.
 pub(super) fn pixels(m: &mut Module, d: &Dims) {
-    let (sub_w, sb, side_w, s, tl, rw, cb, nc) = (d.sub_w, d.sb, d.side_w, d.s, d.tl, d.rw, d.cb, d.nc);
-    let px = RGB_BITS * s * s;
+    let (sub_w, sb, side_w, s, tl, cb, nc) = (d.sub_w, d.sb, d.side_w, d.s, d.tl, d.cb, d.nc);
     m.blank();
     m.comment(format!(
         "Pixel writer: subtiles in order, SCU = subtile % {nc}, one row of {s} pixels per write."
     ));
     m.comment("The subtile being written (the top bit: every subtile written) and its row.");
-    m.reg("pix_sub_q", sub_w + 1).reg("pix_row_q", sb);
-    m.assign("pix_scu", if cb == 0 { lit(1, 0) } else { slice("pix_sub_q", cb - 1, 0) });
-    m.wire_assign("pix_sx", side_w, slice("pix_sub_q", side_w - 1, 0));
-    m.wire_assign("pix_sy", side_w, slice("pix_sub_q", sub_w - 1, side_w));
-    m.wire_assign("pix_all_done", 1, slice("pix_sub_q", sub_w, sub_w));
-    m.assign("pix_last_row", format!("pix_row_q == {}", lit(sb, s as u64 - 1)));
-    let mut rgb = lane("scu_rgb", nc - 1, px);
-    for j in (0..nc - 1).rev() {
-        rgb = format!("((pix_scu == {}) ? {} : {rgb})", lit(cb.max(1), j as u64), lane("scu_rgb", j, px));
+    m.comment("pix_sub_q fields PS_*: {done, sy, sx}; its SCU is the subtile's low bits.");
+    let mut fields = vec![
+        Field { name: "sx".into(), lsb: 0, width: side_w },
+        Field { name: "sy".into(), lsb: side_w, width: side_w },
+        Field { name: "done".into(), lsb: sub_w, width: 1 },
+    ];
+    if cb > 0 {
+        fields.push(Field { name: "scu".into(), lsb: 0, width: cb });
     }
-    m.wire_assign("pix_rgb", px, rgb);
+    let ps = Bundle::placed("PS", fields);
+    ps.declare(m);
+    m.reg("pix_sub_q", sub_w + 1).reg("pix_row_q", sb);
+    m.assign("pix_scu", if cb == 0 { lit(1, 0) } else { ps.get("pix_sub_q", "scu") });
+    m.wire_assign("pix_sx", side_w, ps.get("pix_sub_q", "sx"));
+    m.wire_assign("pix_sy", side_w, ps.get("pix_sub_q", "sy"));
+    m.wire_assign("pix_all_done", 1, ps.get("pix_sub_q", "done"));
+    m.assign("pix_last_row", format!("pix_row_q == {}", lit(sb, s as u64 - 1)));
+    // Lane k of a packed vector of `width`-bit lanes; the selects stay a chain of constant
+    // part-selects (a variable `[sel*W +: W]` would synthesise as a barrel shifter).
+    let part = |v: &str, k: u32, width: &str| format!("{v}[{k}*{width} +: {width}]");
+    let mut rgb = part("scu_rgb", nc - 1, SUB_RGB);
+    for j in (0..nc - 1).rev() {
+        rgb =
+            format!("((pix_scu == {}) ? {} : {rgb})", lit(cb.max(1), j as u64), part("scu_rgb", j, SUB_RGB));
+    }
+    m.wire_assign("pix_rgb", RGB_BITS * s * s, rgb);
     m.assign("pix_valid", "~pix_all_done & scu_out_valid[pix_scu] & ~scu_taken[pix_scu]");
     let pa = 2 * tl;
     m.wire_assign(
@@ -54,13 +69,13 @@ pub(super) fn pixels(m: &mut Module, d: &Dims) {
         ),
     );
     m.wire_assign("pix_addr", d.aw, format!("pix_base_q + {}", resize("pix_off", pa, d.aw)));
-    let mut row = lane("pix_rgb", s - 1, rw);
+    let mut row = part("pix_rgb", s - 1, ROW_RGB);
     for r in (0..s - 1).rev() {
-        row = format!("(pix_row_q == {}) ? {} : ({row})", lit(sb, r as u64), lane("pix_rgb", r, rw));
+        row = format!("(pix_row_q == {}) ? {} : ({row})", lit(sb, r as u64), part("pix_rgb", r, ROW_RGB));
     }
-    m.wire_assign("pix_data", rw, row);
-    m.seq(
-        vec![set("pix_sub_q", lit(sub_w + 1, 1 << sub_w)), set("pix_row_q", lit(sb, 0))],
+    m.wire_assign("pix_data", d.rw, row);
+    m.seq_d(
+        Some(vec![set("pix_sub_q", lit(sub_w + 1, 1 << sub_w)), set("pix_row_q", lit(sb, 0))]),
         vec![
             if_("cmd_fire", vec![set("pix_sub_q", lit(sub_w + 1, 0)), set("pix_row_q", lit(sb, 0))]),
             if_(
@@ -77,6 +92,7 @@ pub(super) fn pixels(m: &mut Module, d: &Dims) {
 /// The write-back of a segment once its group-0 results are in.
 pub(super) fn write_back(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (fa, sl, kb, ib, bkb, gw) = (d.fa, d.sl, d.kb, d.ib, d.bkb, d.gw);
+    let (feat, tw) = (feature_word(cfg, d), table_word(d));
     m.blank();
     m.comment("Write-back of the segment once its group-0 results are in: {present & OR, present ? depth key : key, id}.");
     m.reg("wb_busy_q", 1).reg("wb_ptr_q", fa).reg("wb_bank_q", bkb);
@@ -84,13 +100,12 @@ pub(super) fn write_back(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire_assign("wb_idx", d.fx, "{wb_bank_q, wb_ptr_q}");
     m.wire_assign("wb_start", d.lw, "bank_start_q[wb_bank_q]");
     m.comment("The entry's feature-word fields and its table word {key, id}.");
-    feature_wire(m, "wb_present", "fbuf[wb_idx]", (d.present(), 1));
+    m.wire_assign("wb_present", 1, feat.get("fbuf[wb_idx]", "present"));
     // The key field takes the depth key (its low key_bits bits when it is wider).
-    let (dk_lsb, dk_w) = feature_field(cfg, "depth_key");
-    let dkw = dk_w.min(kb);
-    feature_wire(m, "wb_depth_key", "fbuf[wb_idx]", (dk_lsb, dkw));
-    m.wire_assign("wb_old_key", kb, slice("tbuf[wb_idx]", d.tw - 1, ib));
-    m.wire_assign("wb_id", ib, slice("tbuf[wb_idx]", ib - 1, 0));
+    let dkw = feat.width_of("depth_key");
+    m.wire_assign("wb_depth_key", dkw, feat.get("fbuf[wb_idx]", "depth_key"));
+    m.wire_assign("wb_old_key", kb, tw.get("tbuf[wb_idx]", "key"));
+    m.wire_assign("wb_id", ib, tw.get("tbuf[wb_idx]", "id"));
     m.wire_assign("wb_key", kb, format!("wb_present ? {} : wb_old_key", resize("wb_depth_key", dkw, kb)));
     m.wire_assign(
         "wb_entry",
@@ -105,8 +120,8 @@ pub(super) fn write_back(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire_assign("wb_next", sl, format!("{} + {}", resize("wb_ptr_q", fa, sl), lit(sl, 1)));
     m.wire_assign("wb_end", 1, "wb_next == bank_len_q[wb_bank_q]");
     m.wire_assign("res_seg_len", sl, "bank_len_q[res_bank]");
-    m.seq(
-        vec![set("wb_busy_q", lit(1, 0)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", lit(bkb, 0))],
+    m.seq_d(
+        Some(vec![set("wb_busy_q", lit(1, 0)), set("wb_ptr_q", lit(fa, 0)), set("wb_bank_q", lit(bkb, 0))]),
         vec![
             if_(
                 format!(

@@ -4,19 +4,12 @@
 //! of a bundle appears outside this layout.
 
 use super::{ScuWidths, LID_BITS};
+use crate::emit::bundle::Bundle;
 use crate::emit::Module;
-
-/// One field: name (lower case, as in the Rust), least significant bit, width.
-#[derive(Clone, Debug, PartialEq, Eq)]
-struct Field {
-    name: &'static str,
-    lsb: u32,
-    width: u32,
-}
 
 /// The layout of the beat bundle, fields packed from bit 0 in declaration order.
 pub(super) struct Beat {
-    fields: Vec<Field>,
+    bundle: Bundle,
     /// Total width.
     pub width: u32,
 }
@@ -53,52 +46,35 @@ fn fields(w: &ScuWidths) -> Vec<(&'static str, u32, &'static str)> {
 impl Beat {
     /// The layout for `w`.
     pub fn new(w: &ScuWidths) -> Self {
-        let mut lsb = 0;
-        let mut out = Vec::new();
-        for (name, width, _) in fields(w) {
-            out.push(Field { name, lsb, width });
-            lsb += width;
-        }
-        Beat { fields: out, width: lsb }
-    }
-
-    fn field(&self, name: &str) -> &Field {
-        self.fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no beat field {name}"))
+        let named: Vec<(&str, u32)> = fields(w).into_iter().map(|(n, width, _)| (n, width)).collect();
+        let bundle = Bundle::packed("BEAT", &named);
+        Beat { width: bundle.width(), bundle }
     }
 
     /// The field names in layout order.
-    pub fn names(&self) -> Vec<&'static str> {
-        self.fields.iter().map(|f| f.name).collect()
+    pub fn names(&self) -> Vec<&str> {
+        self.bundle.fields().iter().map(|f| f.name.as_str()).collect()
     }
 
     /// `BEAT_NAME`: the localparam holding the field's least significant bit.
     pub fn offset(&self, name: &str) -> String {
-        format!("BEAT_{}", self.field(name).name.to_uppercase())
+        self.bundle.offset(name)
     }
 
     /// Declares the layout as localparams (with a comment per field group).
     pub fn declare(&self, m: &mut Module, w: &ScuWidths) {
         m.comment(format!("Beat bundle ({} bits): field offsets BEAT_*, widths BEAT_*_W.", self.width));
-        for ((name, _, what), f) in fields(w).into_iter().zip(&self.fields) {
-            debug_assert_eq!(name, f.name);
+        for (name, _, what) in fields(w) {
             if !what.is_empty() {
                 m.comment(what);
             }
-            m.localparam_int(self.offset(name), f.lsb);
-            if f.width > 1 {
-                m.localparam_int(format!("{}_W", self.offset(name)), f.width);
-            }
+            self.bundle.declare_field(m, name);
         }
     }
 
     /// Field `name` of bundle signal `reg`: `reg[BEAT_NAME +: BEAT_NAME_W]` (`reg[BEAT_NAME]`
     /// for a one-bit field).
     pub fn get(&self, reg: &str, name: &str) -> String {
-        let o = self.offset(name);
-        if self.field(name).width == 1 {
-            format!("{reg}[{o}]")
-        } else {
-            format!("{reg}[{o} +: {o}_W]")
-        }
+        self.bundle.get(reg, name)
     }
 }
