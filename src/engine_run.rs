@@ -100,6 +100,14 @@ pub fn run_frames<T>(
     Ok(None)
 }
 
+/// A frame's verdict for the text output: `bit-exact`, or `MISMATCH` and the first mismatch.
+pub fn frame_status(report: &FrameReport) -> String {
+    match &report.mismatch {
+        None => "bit-exact".to_string(),
+        Some(m) => format!("MISMATCH {m}"),
+    }
+}
+
 /// A spinner with `msg` on stderr.
 pub fn spinner(msg: &str) -> ProgressBar {
     let p = ProgressBar::new_spinner();

@@ -153,10 +153,7 @@ fn print_frame(
         println!("{v}");
         return;
     }
-    let status = match &mismatch {
-        None => "bit-exact".to_string(),
-        Some(m) => format!("MISMATCH {m}"),
-    };
+    let status = crate::engine_run::frame_status(r);
     let cps = r.harness_cycles as f64 / took.as_secs_f64().max(1e-9);
     let line = format!(
         "frame {:3}{}: {status}, {} RTL cycles, model {:.0} ({:+.1}%; busy sort {:+.1}%, raster {:+.1}%), {:.1} s ({:.0} cycles/s)",

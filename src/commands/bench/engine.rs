@@ -184,10 +184,7 @@ pub fn run(a: EngineBenchArgs) -> Result<()> {
             cycles += r.harness_cycles;
             seconds += s;
             cpu += c;
-            let status = match &r.mismatch {
-                None => "bit-exact".to_string(),
-                Some(m) => format!("MISMATCH {m}"),
-            };
+            let status = crate::engine_run::frame_status(r);
             let line = format!(
                 "engine frame {:<3}{:>9.1} s/frame ({status}{}, {} RTL cycles, {} with the harness, {:.1} CPU s; {})",
                 r.frame,
