@@ -233,7 +233,7 @@ module neo_axi_raster_bridge (
   assign wr_take = req_wr & wr_ok;
   assign wr_table_o = wr_take & ~req_pix;
   assign wr_pixels_o = wr_take & req_pix;
-  // After the head's last beat leaves, w2 moves to the head; a taken write joins behind it.
+  // After the head's last W beat leaves, w2 moves to the head; a taken write joins behind it.
   wire w_shift;
   assign w_shift = w_leave & w2_v_q;
   wire w_to_head;

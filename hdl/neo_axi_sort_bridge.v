@@ -165,7 +165,7 @@ module neo_axi_sort_bridge (
   assign mem_wr_ready_o = (~aw_v_q | aw_fire) & (~w2_v_q | w_fire) & wr_room;
   assign wr_take = mem_wr_valid_i & mem_wr_ready_o;
   assign wr_beat_o = wr_take;
-  // After a W beat leaves, w2 moves to the head; a taken entry joins the queue behind it.
+  // After the head's last W beat leaves, w2 moves to the head; a taken write joins behind it.
   wire w_shift;
   assign w_shift = w_fire & w2_v_q;
   wire w_to_head;

@@ -240,6 +240,16 @@ fn write_counter(m: &mut Module, cfg: &EngineConfig) {
     );
 }
 
+/// The moves of a bridge's two W slots (head `w_*_q`, second `w2_*_q`), for a head whose last
+/// beat leaves on `leave`: `w_shift` (w2 moves to the head), `w_to_head` and `w_to_w2` (where a
+/// write taken on `wr_take` goes).
+fn w_slot_moves(m: &mut Module, leave: &str) {
+    m.comment("After the head's last W beat leaves, w2 moves to the head; a taken write joins behind it.");
+    m.wire_assign("w_shift", 1, format!("{leave} & w2_v_q"));
+    m.wire_assign("w_to_head", 1, format!("wr_take & (~w_v_q | ({leave} & ~w2_v_q))"));
+    m.wire_assign("w_to_w2", 1, "wr_take & ~w_to_head");
+}
+
 /// The constant AW fields (ID 0, full beats, INCR) and WSTRB all ones.
 fn write_constants(m: &mut Module, cfg: &EngineConfig) {
     m.assign("m_axi_awid_o", lit(cfg.axi_id_bits, 0));

@@ -17,7 +17,7 @@
 //! - At most `axi_outstanding` read bursts and writes each in flight; `idle_o` and the pulses
 //!   `rd_table_o`, `rd_feat_o`, `wr_table_o`, `wr_pixels_o`.
 
-use super::{byte_addr, ports, read_issuer, unused_responses, write_constants, write_counter};
+use super::{byte_addr, ports, read_issuer, unused_responses, w_slot_moves, write_constants, write_counter};
 use crate::emit::expr::{bits_for, lit, slice, zext};
 use crate::emit::{if_, if_else, set, Module};
 use crate::units::raster_core::{feature_word_bits, wdata_bits};
@@ -211,10 +211,7 @@ fn write_path(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.assign("wr_take", "req_wr & wr_ok");
     m.assign("wr_table_o", "wr_take & ~req_pix");
     m.assign("wr_pixels_o", "wr_take & req_pix");
-    m.comment("After the head's last beat leaves, w2 moves to the head; a taken write joins behind it.");
-    m.wire_assign("w_shift", 1, "w_leave & w2_v_q");
-    m.wire_assign("w_to_head", 1, "wr_take & (~w_v_q | (w_leave & ~w2_v_q))");
-    m.wire_assign("w_to_w2", 1, "wr_take & ~w_to_head");
+    w_slot_moves(m, "w_leave");
     let first_left = |pix: &str| format!("{pix} ? {} : {}", lit(bb, u64::from(beats - 1)), lit(bb, 0));
     let shifted = if wdb > pw {
         format!("{{{}, {}}}", lit(pw, 0), slice("w_data_q", wdb - 1, pw))

@@ -11,7 +11,9 @@
 //! - `idle_o`: nothing pending, no read or write in flight; pulses `rd_beat_o` (an entry
 //!   delivered) and `wr_beat_o` (a write taken from the core).
 
-use super::{byte_addr, ports, read_issuer, unused_responses, write_constants, write_counter, BEAT_SHIFT};
+use super::{
+    byte_addr, ports, read_issuer, unused_responses, w_slot_moves, write_constants, write_counter, BEAT_SHIFT,
+};
 use crate::emit::expr::{lit, zext};
 use crate::emit::{if_, if_else, set, Module};
 use crate::units::sort_core::mem_len_bits;
@@ -79,10 +81,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.assign("mem_wr_ready_o", "(~aw_v_q | aw_fire) & (~w2_v_q | w_fire) & wr_room");
     m.assign("wr_take", "mem_wr_valid_i & mem_wr_ready_o");
     m.assign("wr_beat_o", "wr_take");
-    m.comment("After a W beat leaves, w2 moves to the head; a taken entry joins the queue behind it.");
-    m.wire_assign("w_shift", 1, "w_fire & w2_v_q");
-    m.wire_assign("w_to_head", 1, "wr_take & (~w_v_q | (w_fire & ~w2_v_q))");
-    m.wire_assign("w_to_w2", 1, "wr_take & ~w_to_head");
+    w_slot_moves(&mut m, "w_fire");
     m.seq(
         vec![set("aw_v_q", lit(1, 0)), set("w_v_q", lit(1, 0)), set("w2_v_q", lit(1, 0))],
         vec![
