@@ -123,17 +123,12 @@ impl<'a> EngineFrameModel<'a> {
         beats as f64 / self.mem.bandwidth
     }
 
-    /// Cycles of one single-beat write through a bridge and its port mux: the bridge's two W
-    /// slots take one write per cycle on an always-ready port, fewer as the port's readiness or
-    /// bandwidth falls.
-    fn write_cycles(&self) -> f64 {
-        self.write_beats(1)
-    }
-
     /// Cycles of one tile's sort: every stage back to back ([`batch_cycles`]: the measured
     /// latency of the first command, then the measured intervals), each command's output written
-    /// at [`Self::write_cycles`] per entry instead of the unit bench's one, and its input read
-    /// at the port's bandwidth; then the barrier (the last write's response).
+    /// at the port's write rate ([`Self::write_beats`]: the bridges' two W slots take one
+    /// single-beat write a cycle on an always-ready port) instead of the unit bench's one a
+    /// cycle, and its input read at the port's bandwidth; then the barrier (the last write's
+    /// response).
     pub fn sort_cycles(&self, t: &TileTrace) -> f64 {
         let mut total = 0.0;
         for (s, stage) in t.plan.stages.iter().enumerate() {
@@ -141,7 +136,7 @@ impl<'a> EngineFrameModel<'a> {
                 stage.iter().map(|c| Cmd { mode: c.mode, len_a: c.len_a, len_b: c.len_b }).collect();
             let (read, written) = stage_entries(t, s);
             let extra =
-                written as f64 * (self.write_cycles() - 1.0) + read as f64 * (1.0 / self.mem.bandwidth - 1.0);
+                written as f64 * (self.write_beats(1) - 1.0) + read as f64 * (1.0 / self.mem.bandwidth - 1.0);
             total += batch_cycles(&cmds, self.lat) as f64 + extra + self.round_trip();
         }
         total
