@@ -47,18 +47,8 @@ neo_tb::with_models! {
             let (sum_r, sum_p) =
                 r.work.iter().fold((0u64, 0u64), |(a, b), w| (a + w.routed as u64, b + w.processed as u64));
             let ratio = if sum_r == 0 { 1.0 } else { sum_p as f64 / sum_r as f64 };
-            let mut k = 0;
-            let index: Vec<Option<usize>> = tile
-                .case
-                .table
-                .iter()
-                .map(|e| {
-                    tile.case.features.get(&e.id).map(|_| {
-                        k += 1;
-                        k - 1
-                    })
-                })
-                .collect();
+            let index: Vec<bool> =
+                tile.case.table.iter().map(|e| tile.case.features.contains_key(&e.id)).collect();
             let segments = segment_work(&index, &r.bitmaps, &r.work, cfg.raster_feature_buffer);
             let (model, _) = raster_tile_cycles_in_segments(
                 &routed,

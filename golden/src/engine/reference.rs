@@ -177,17 +177,14 @@ pub struct SegmentWork {
     pub processed: Vec<u32>,
 }
 
-/// Splits a tile's raster work into segments of `seg` table entries: `present[p]` is table
-/// entry `p`'s index among the entries with a feature word, `bitmaps` their subtile bitmaps and
-/// `work` the subtiles' counters (an SCU processes the first `processed` entries of its list).
-pub fn segment_work(
-    present: &[Option<usize>],
-    bitmaps: &[u64],
-    work: &[SubtileWork],
-    seg: usize,
-) -> Vec<SegmentWork> {
+/// Splits a tile's raster work into segments of `seg` table entries: `present[p]` says whether
+/// table entry `p` has a feature word (the rasterised entries are those, in table order),
+/// `bitmaps` their subtile bitmaps and `work` the subtiles' counters (an SCU processes the first
+/// `processed` entries of its list).
+pub fn segment_work(present: &[bool], bitmaps: &[u64], work: &[SubtileWork], seg: usize) -> Vec<SegmentWork> {
     let subtiles = work.len();
     let mut seen = vec![0u32; subtiles];
+    let mut next = bitmaps.iter();
     present
         .chunks(seg.max(1))
         .map(|chunk| {
@@ -196,8 +193,8 @@ pub fn segment_work(
                 routed: vec![0; subtiles],
                 processed: vec![0; subtiles],
             };
-            for &i in chunk.iter().flatten() {
-                let mut m = bitmaps[i];
+            for &m in chunk.iter().filter(|&&p| p).filter_map(|_| next.next()) {
+                let mut m = m;
                 while m != 0 {
                     let j = m.trailing_zeros() as usize;
                     w.routed[j] += 1;
@@ -291,16 +288,7 @@ impl<'c> FrameRun<'c> {
             mem.write_pixel(base + k as u64, *p);
         }
         add_raster_traffic(&mut self.out.counters, len, pixels);
-        let mut k = 0;
-        let index: Vec<Option<usize>> = feats
-            .iter()
-            .map(|f| {
-                f.map(|_| {
-                    k += 1;
-                    k - 1
-                })
-            })
-            .collect();
+        let index: Vec<bool> = feats.iter().map(Option::is_some).collect();
         let segments = segment_work(&index, &r.bitmaps, &r.work, self.cfg.raster_feature_buffer);
         RasterTrace { len, present: present.len() as u64, subtiles: r.work, segments }
     }
@@ -314,7 +302,7 @@ mod tests {
     fn segment_work_splits_routed_and_processed_entries_by_table_position() {
         // Table positions 0..4; position 1 has no feature word. Subtile 0's list is entries 0, 1
         // (it processed 1), subtile 1's entries 1, 2 (it processed both).
-        let present = [Some(0), None, Some(1), Some(2)];
+        let present = [true, false, true, true];
         let bitmaps = [0b01, 0b11, 0b10];
         let work = [
             SubtileWork { routed: 2, processed: 1, ..SubtileWork::default() },
