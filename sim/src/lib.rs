@@ -8,6 +8,7 @@
 //! See docs/cycle-model.md for what is modelled and how.
 
 pub mod arch;
+pub mod artifact;
 pub mod config;
 pub mod dram;
 pub mod dram_stream;

@@ -1,0 +1,156 @@
+//! neo's restatement of the official artifact simulator's DRAM accounting
+//! (`neo_sim::artifact`) against the artifact's own counters, `../shared/reference/artifact/`
+//! (see its README): the reference's `neo frames --trace` commands are rerun, and on every frame
+//! the lines of each of the artifact's 15 request names must be equal.
+//!
+//! The reference is read in place. Missing or malformed, it fails the test when `CI` is set and
+//! skips it otherwise, naming the file. A regenerated trace whose statistics differ from the
+//! recorded ones means the reference is stale: that run is reported and not compared, and the
+//! test fails when no run is left to compare.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use neo_golden::shared::{shared_dir_path, shared_file_for_test};
+use neo_sim::artifact::poc::{read_poc_trace, PocStats};
+use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request};
+use serde_json::Value;
+
+const TEST: &str = "artifact_lines_match_the_artifact";
+
+/// The reference's `results.json`, parsed; `None` when skipped.
+fn reference() -> Option<(PathBuf, Value)> {
+    let path = shared_file_for_test(TEST, "reference/artifact/results.json")?;
+    let text =
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: cannot read: {e}", path.display()));
+    let v: Value =
+        serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: malformed JSON: {e}", path.display()));
+    assert_eq!(v["schema"], "neo-artifact-reference/1", "{}: unknown schema {}", path.display(), v["schema"]);
+    Some((path, v))
+}
+
+/// Splits a shell command line with single-quoted words (the form the reference records).
+fn shell_words(cmd: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut any = false;
+    for c in cmd.chars() {
+        match c {
+            '\'' => {
+                quoted = !quoted;
+                any = true;
+            }
+            c if c.is_whitespace() && !quoted => {
+                if any || !cur.is_empty() {
+                    words.push(std::mem::take(&mut cur));
+                }
+                any = false;
+            }
+            c => cur.push(c),
+        }
+    }
+    if any || !cur.is_empty() {
+        words.push(cur);
+    }
+    words
+}
+
+/// Reruns a recorded `neo frames` command with its output in `out` and the shared directory
+/// where this machine has it.
+fn rerun(cmd: &str, out: &Path, file: &Path) {
+    let words = shell_words(cmd);
+    assert_eq!(words.first().map(String::as_str), Some("neo"), "{}: command {cmd:?}", file.display());
+    let shared = shared_dir_path();
+    let mut args: Vec<String> = Vec::new();
+    let mut it = words[1..].iter();
+    while let Some(w) = it.next() {
+        args.push(w.replace("../shared/", &format!("{}/", shared.display())));
+        if w == "--out" {
+            it.next();
+            args.push(out.display().to_string());
+        }
+    }
+    let o = Command::new(env!("CARGO_BIN_EXE_neo")).args(&args).output().expect("run neo");
+    assert!(o.status.success(), "neo {args:?} failed:\n{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn recorded_stats(s: &Value) -> PocStats {
+    let n = |k: &str| s[k].as_u64().unwrap_or_else(|| panic!("trace_stats.{k} missing"));
+    PocStats {
+        table_entries: n("table_entries"),
+        incoming_entries: n("incoming_entries"),
+        reused_entries: n("reused_entries"),
+        nonempty_tiles: n("nonempty_tiles"),
+        gaussians: n("gaussians"),
+        culled: n("culled"),
+        incoming_pairs: n("incoming_pairs_per_gaussian_lists"),
+        max_table_len: n("max_table_len"),
+        bitmap_popcount: n("bitmap_popcount"),
+    }
+}
+
+/// Compares one run; false when its trace is stale.
+fn check_run(run: &Value, dir: &Path, file: &Path) -> bool {
+    let label = format!("{} {} frame {}", run["scene"], run["res"], run["frame"]);
+    let trace = dir.join(run["trace_file"].as_str().expect("trace_file"));
+    let frame = read_poc_trace(&trace).unwrap_or_else(|e| panic!("{label}: {e}"));
+    let stats = frame.stats();
+    let want = recorded_stats(&run["trace_stats"]);
+    if stats != want {
+        eprintln!(
+            "STALE {label}: {} was made from other work: recorded {want:?}, now {stats:?}",
+            file.display()
+        );
+        return false;
+    }
+    let lines = artifact_lines(&frame, &ArtifactSizes::default());
+    let per = &run["artifact"]["dram"]["per_request_type"];
+    for r in Request::ALL {
+        let rec = &per[r.name()];
+        let dir = if r.is_write() { "W" } else { "R" };
+        assert_eq!(rec["direction"], dir, "{label}: {} direction", r.name());
+        let key = if r.is_write() { "write_lines" } else { "read_lines" };
+        let artifact = rec[key].as_u64().unwrap_or_else(|| panic!("{label}: {} {key} missing", r.name()));
+        assert_eq!(lines.get(r), artifact, "{label}: {} lines, neo's accounting vs the artifact", r.name());
+    }
+    let dram = &run["artifact"]["dram"];
+    assert_eq!(Some(lines.reads()), dram["read_lines"].as_u64(), "{label}: read lines");
+    assert_eq!(Some(lines.writes()), dram["write_lines"].as_u64(), "{label}: write lines");
+    eprintln!("{label}: {} read and {} write lines, all 15 names equal", lines.reads(), lines.writes());
+    true
+}
+
+#[test]
+fn artifact_lines_match_the_artifact() {
+    let Some((file, reference)) = reference() else { return };
+    let runs = reference["runs"].as_array().unwrap_or_else(|| panic!("{}: no runs", file.display()));
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let mut commands: Vec<&str> =
+        runs.iter().map(|r| r["neo_command"].as_str().expect("neo_command")).collect();
+    commands.dedup();
+    let (mut compared, mut stale) = (0, 0);
+    for (i, cmd) in commands.iter().enumerate() {
+        let out = tmp.path().join(format!("run{i}"));
+        rerun(cmd, &out, &file);
+        for run in runs.iter().filter(|r| r["neo_command"] == *cmd) {
+            if check_run(run, &out, &file) {
+                compared += 1;
+            } else {
+                stale += 1;
+            }
+        }
+    }
+    assert!(
+        compared > 0,
+        "{}: all {stale} runs are stale; regenerate the reference (its README)",
+        file.display()
+    );
+}
+
+#[test]
+fn shell_words_keep_quoted_arguments() {
+    let w = shell_words("neo frames --scene 'synthetic:outdoor?gaussians=200k&seed=1' --out out/x");
+    assert_eq!(w, ["neo", "frames", "--scene", "synthetic:outdoor?gaussians=200k&seed=1", "--out", "out/x"]);
+    assert_eq!(shell_words("a ''  b"), ["a", "", "b"]);
+}
