@@ -187,70 +187,130 @@ fn sweep(d: &Dram, o: &mut Occupancy) {
     }
 }
 
+/// The DRAM model behind Ramulator's request queues: a request enters its channel's read or
+/// write queue only while that queue has room (`read_queue`, `write_queue` entries; a read
+/// leaves at its read command, a write at its write command). Callers ask for room, then submit.
+pub struct QueueFeeder {
+    /// The DRAM model.
+    pub dram: Dram,
+    occ: Vec<Occupancy>,
+    rcap: usize,
+    wcap: usize,
+    ck: Ps,
+    /// The latest write command's end seen so far.
+    pub write_end: Ps,
+}
+
+impl QueueFeeder {
+    /// A fresh DRAM of `cfg` behind empty queues.
+    pub fn new(cfg: &DramConfig) -> Self {
+        let mut dram = Dram::new(cfg);
+        dram.log_writes();
+        QueueFeeder {
+            dram,
+            occ: (0..cfg.channels as usize).map(|_| Occupancy::default()).collect(),
+            rcap: cfg.read_queue.max(1) as usize,
+            wcap: cfg.write_queue as usize,
+            ck: cfg.t_ck_ps,
+            write_end: 0,
+        }
+    }
+
+    /// The channel of `addr`.
+    pub fn channel(&self, addr: u64) -> usize {
+        self.dram.map(addr).0
+    }
+
+    fn collect_writes(&mut self) {
+        for (c, cmd) in self.dram.take_write_log() {
+            self.occ[c as usize].writes.push(Reverse(cmd));
+            self.write_end = self.write_end.max(cmd + self.ck);
+        }
+    }
+
+    /// `Ok` when channel `c`'s read queue has room at `t`; else the time to ask again (the
+    /// model schedules the queue's next read, whose command frees an entry).
+    pub fn read_room(&mut self, t: Ps, c: usize) -> Result<(), Ps> {
+        let o = &mut self.occ[c];
+        sweep(&self.dram, o);
+        o.expire(t);
+        if o.unscheduled.len() + o.reads.len() < self.rcap {
+            return Ok(());
+        }
+        self.dram.schedule_next(c);
+        sweep(&self.dram, o);
+        let first = o.reads.peek().expect("a scheduled read").0;
+        Err(t.max(first + 1))
+    }
+
+    /// `Ok` when channel `c`'s write queue has room at `t`; else the time to ask again.
+    pub fn write_room(&mut self, t: Ps, c: usize) -> Result<(), Ps> {
+        loop {
+            self.occ[c].expire(t);
+            if self.dram.posted_writes(c) + self.occ[c].writes.len() < self.wcap {
+                return Ok(());
+            }
+            match self.occ[c].writes.peek() {
+                Some(first) => return Err(t.max(first.0 + 1)),
+                None => {
+                    self.dram.drain_channel(t, c);
+                    self.collect_writes();
+                }
+            }
+        }
+    }
+
+    /// Queues a read of `addr` at `t` (after [`QueueFeeder::read_room`] said yes).
+    pub fn submit_read(&mut self, t: Ps, addr: u64) -> Ticket {
+        let c = self.channel(addr);
+        let k = self.dram.submit_read(t, addr);
+        self.occ[c].unscheduled.push_back(k);
+        k
+    }
+
+    /// Posts a write of `addr` at `t` (after [`QueueFeeder::write_room`] said yes).
+    pub fn write(&mut self, t: Ps, addr: u64) {
+        self.dram.write(t, addr);
+        self.collect_writes();
+    }
+
+    /// Serves every queued read and drains every write at `last`.
+    pub fn flush(&mut self, last: Ps) {
+        self.dram.flush(last);
+        self.collect_writes();
+    }
+}
+
 /// Runs `reqs` through the DRAM model of `cfg` under Ramulator's trace-mode feeding semantics.
 pub fn run_stream(cfg: &DramConfig, reqs: &[StreamRequest]) -> StreamRun {
     let ck = cfg.t_ck_ps;
-    let mut d = Dram::new(cfg);
-    d.log_writes();
-    let nch = cfg.channels as usize;
-    let rcap = cfg.read_queue.max(1) as usize;
-    let wcap = cfg.write_queue as usize;
-    let mut occ: Vec<Occupancy> = (0..nch).map(|_| Occupancy::default()).collect();
-    let mut end: Ps = 0;
+    let mut f = QueueFeeder::new(cfg);
     let mut t: Ps = 0;
     let mut all_reads: Vec<Ticket> = Vec::new();
-    let collect_writes = |d: &mut Dram, occ: &mut [Occupancy], end: &mut Ps| {
-        for (c, cmd) in d.take_write_log() {
-            occ[c as usize].writes.push(Reverse(cmd));
-            *end = (*end).max(cmd + ck);
-        }
-    };
     for r in reqs {
-        let (c, _, _) = d.map(r.addr);
+        let c = f.channel(r.addr);
+        loop {
+            let room = if r.write { f.write_room(t, c) } else { f.read_room(t, c) };
+            match room {
+                Ok(()) => break,
+                Err(next) => t = next,
+            }
+        }
         if r.write {
-            loop {
-                occ[c].expire(t);
-                if d.posted_writes(c) + occ[c].writes.len() < wcap {
-                    break;
-                }
-                if occ[c].writes.is_empty() {
-                    d.drain_channel(t, c);
-                    collect_writes(&mut d, &mut occ, &mut end);
-                    continue;
-                }
-                let first = occ[c].writes.peek().expect("a queued write").0;
-                t = t.max(first + 1);
-            }
-            d.write(t, r.addr);
-            collect_writes(&mut d, &mut occ, &mut end);
+            f.write(t, r.addr);
         } else {
-            loop {
-                sweep(&d, &mut occ[c]);
-                occ[c].expire(t);
-                if occ[c].unscheduled.len() + occ[c].reads.len() < rcap {
-                    break;
-                }
-                // The queue is full: the model schedules its next read (it sees every read
-                // that can enter before an entry frees), whose command frees one.
-                d.schedule_next(c);
-                sweep(&d, &mut occ[c]);
-                let first = occ[c].reads.peek().expect("a scheduled read").0;
-                t = t.max(first + 1);
-            }
-            let k = d.submit_read(t, r.addr);
-            occ[c].unscheduled.push_back(k);
-            all_reads.push(k);
+            all_reads.push(f.submit_read(t, r.addr));
         }
         // The next request enters one clock later at the earliest.
         t = (t / ck + 1) * ck;
     }
+    let mut end = f.write_end;
     for k in all_reads {
-        end = end.max(d.arrival(k));
+        end = end.max(f.dram.arrival(k));
     }
-    let last = t;
-    d.flush(last);
-    collect_writes(&mut d, &mut occ, &mut end);
-    let s = d.stats();
+    f.flush(t);
+    end = end.max(f.write_end);
+    let s = f.dram.stats();
     let n = reqs.len() as u64;
     let bytes = n * cfg.line_bytes as u64;
     let dram_cycles = end.div_ceil(ck).max(1);
