@@ -13,7 +13,9 @@ use std::process::Command;
 
 use neo_golden::shared::{shared_dir_path, shared_file_for_test};
 use neo_sim::artifact::poc::{read_poc_trace, PocStats};
+use neo_sim::artifact::timing::artifact_timing;
 use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request};
+use neo_sim::config::DramConfig;
 use serde_json::Value;
 
 const TEST: &str = "artifact_lines_match_the_artifact";
@@ -118,6 +120,10 @@ fn check_run(run: &Value, dir: &Path, file: &Path) -> bool {
     assert_eq!(Some(lines.reads()), dram["read_lines"].as_u64(), "{label}: read lines");
     assert_eq!(Some(lines.writes()), dram["write_lines"].as_u64(), "{label}: write lines");
     eprintln!("{label}: {} read and {} write lines, all 15 names equal", lines.reads(), lines.writes());
+    let timing = artifact_timing(&frame, &ArtifactSizes::default(), &DramConfig::default());
+    let want = run["artifact"]["core_cycles"].as_u64().expect("core_cycles");
+    let err = timing.core_cycles as f64 / want as f64 - 1.0;
+    eprintln!("{label}: cycles {} vs the artifact's {want} ({:+.1}%)", timing.core_cycles, 100.0 * err);
     true
 }
 

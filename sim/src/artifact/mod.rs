@@ -21,6 +21,7 @@
 //! neo's trace exports.
 
 pub mod poc;
+pub mod timing;
 
 use poc::PocFrame;
 
@@ -249,8 +250,10 @@ mod tests {
 
     #[test]
     fn lines_of_a_small_frame() {
-        let tile =
-            |new: u32, reused: u32| PocTile { new, reused, entry_bits: vec![1; (new + reused) as usize] };
+        let tile = |new: u32, reused: u32| {
+            let n = (new + reused) as usize;
+            PocTile { new, reused, entry_bits: vec![1; n], ids: vec![0; n] }
+        };
         let f = PocFrame {
             culled: vec![false, true, false],
             incoming_tiles: vec![2, 5, 1],

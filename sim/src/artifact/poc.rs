@@ -18,6 +18,8 @@ pub struct PocTile {
     pub reused: u32,
     /// Set subtile bits of each table entry, in table order (`count` entries).
     pub entry_bits: Vec<u8>,
+    /// The Gaussian id of each table entry, in table order.
+    pub ids: Vec<u32>,
 }
 
 impl PocTile {
@@ -44,6 +46,9 @@ pub struct PocFrame {
     pub culled: Vec<bool>,
     /// Per Gaussian: the number of tiles it is incoming in.
     pub incoming_tiles: Vec<u32>,
+    /// The tiles each Gaussian is incoming in, Gaussian after Gaussian (`incoming_tiles[g]`
+    /// each, ascending).
+    pub incoming_list: Vec<u32>,
     /// Per tile, row-major.
     pub tiles: Vec<PocTile>,
 }
@@ -150,6 +155,7 @@ pub fn parse_poc_trace(text: &str, path: &Path) -> Result<PocFrame, PocError> {
         chunk: chunk as u32,
         culled: Vec::with_capacity(n),
         incoming_tiles: Vec::with_capacity(n),
+        incoming_list: Vec::new(),
         tiles: Vec::with_capacity(tiles as usize),
     };
     for _ in 0..n {
@@ -165,6 +171,7 @@ pub fn parse_poc_trace(text: &str, path: &Path) -> Result<PocFrame, PocError> {
         }
         frame.culled.push(g[0] == 1);
         frame.incoming_tiles.push(g[1] as u32);
+        frame.incoming_list.extend(g[2..].iter().map(|&t| t as u32));
     }
     let bits = ((tile / subtile) * (tile / subtile)) as usize;
     for _ in 0..tiles {
@@ -181,8 +188,13 @@ fn tile_block(lines: &mut Lines<'_>, gaussians: u64, bits: usize) -> Result<PocT
     if h[0] + h[1] != h[2] {
         return Err(lines.err(format!("num_new {} + num_reuse {} is not count {}", h[0], h[1], h[2])));
     }
-    let mut t =
-        PocTile { new: h[0] as u32, reused: h[1] as u32, entry_bits: Vec::with_capacity(h[2] as usize) };
+    let n = h[2] as usize;
+    let mut t = PocTile {
+        new: h[0] as u32,
+        reused: h[1] as u32,
+        entry_bits: Vec::with_capacity(n),
+        ids: Vec::with_capacity(n),
+    };
     for _ in 0..h[2] {
         let e = lines.numbers("a table entry (id and subtile bits)", 1 + bits)?;
         if e[0] >= gaussians {
@@ -192,6 +204,7 @@ fn tile_block(lines: &mut Lines<'_>, gaussians: u64, bits: usize) -> Result<PocT
             return Err(lines.err("subtile bits must be 0 or 1".to_string()));
         }
         t.entry_bits.push(e[1..].iter().sum::<u64>() as u8);
+        t.ids.push(e[0] as u32);
     }
     Ok(t)
 }
@@ -275,8 +288,9 @@ mod tests {
         assert_eq!((f.width, f.height, f.tile, f.subtile, f.chunk), (32, 16, 16, 8, 256));
         assert_eq!(f.culled, [false, true, false, false]);
         assert_eq!(f.incoming_tiles, [2, 0, 1, 0]);
-        assert_eq!(f.tiles[0], PocTile { new: 1, reused: 1, entry_bits: vec![2, 1] });
-        assert_eq!(f.tiles[1], PocTile { new: 0, reused: 1, entry_bits: vec![2] });
+        assert_eq!(f.incoming_list, [0, 1, 0]);
+        assert_eq!(f.tiles[0], PocTile { new: 1, reused: 1, entry_bits: vec![2, 1], ids: vec![2, 0] });
+        assert_eq!(f.tiles[1], PocTile { new: 0, reused: 1, entry_bits: vec![2], ids: vec![0] });
         let s = f.stats();
         assert_eq!((s.table_entries, s.incoming_entries, s.reused_entries), (3, 1, 2));
         assert_eq!((s.culled, s.incoming_pairs, s.max_table_len, s.bitmap_popcount), (1, 3, 2, 5));
