@@ -228,3 +228,38 @@ fn biker_render_matches_the_reference_through_the_cli() {
     let psnr = m["psnr"].as_f64().unwrap_or(f64::INFINITY);
     assert!(psnr >= 40.0, "PSNR {psnr} dB against the reference render");
 }
+
+#[test]
+fn simulate_reports_every_frame_by_stage_and_engine() {
+    let args = [
+        "simulate",
+        "--scene",
+        "synthetic:blobs?gaussians=3000&seed=3",
+        "--res",
+        "128x128",
+        "--frames",
+        "2",
+        "--arch",
+        "neo,gpu",
+        "--quality",
+        "off",
+    ];
+    let v = json(&[&args[..], &["--json"]].concat());
+    for arch in v[0]["archs"].as_array().expect("archs") {
+        for f in arch["frames"].as_array().expect("frames") {
+            let stages = f["stages"].as_array().expect("stages");
+            assert_eq!(stages.len(), 8, "{}: every stage named", arch["arch"]);
+            let sum: u64 =
+                stages.iter().map(|s| s["read_bytes"].as_u64().unwrap() + s["write_bytes"].as_u64().unwrap()).sum();
+            assert_eq!(Some(sum), f["dram_bytes"].as_u64(), "{}: stage bytes add up", arch["arch"]);
+            let accel = arch["arch"] == "neo";
+            assert_eq!(f["busy"].is_object(), accel, "{}: busy time only for accelerators", arch["arch"]);
+            if accel {
+                assert!(f["busy"]["sort_ms"].as_f64().unwrap() > 0.0);
+            }
+        }
+    }
+    let text = ok(&[&args[..], &["--per-frame"]].concat());
+    assert!(text.contains("frame  interval   pre ms  sort ms  rast ms"), "{text}");
+    assert!(text.contains("preprocess R/W MB"), "{text}");
+}

@@ -273,6 +273,9 @@ pub struct Engine {
     pub traffic: Traffic,
     /// Traffic per frame (by the frame of the job that caused it).
     pub frame_traffic: Vec<Traffic>,
+    /// Busy time per frame (by the frame of the job) and agent class, summed over the agents
+    /// of the class.
+    pub frame_busy: Vec<Vec<Ps>>,
     jobs: Vec<u64>,
     now: Ps,
 }
@@ -292,6 +295,7 @@ impl Engine {
             free_writes: Vec::new(),
             traffic: Traffic::new(line_bytes),
             frame_traffic: vec![Traffic::new(line_bytes); frames],
+            frame_busy: vec![Vec::new(); frames],
             jobs: vec![0; n],
             now: 0,
         }
@@ -337,7 +341,15 @@ impl Engine {
                     let job = self.agents[a].job.take().expect("a job");
                     let st = &mut self.agents[a];
                     st.busy_ps += t - st.job_start;
+                    let busy = t - st.job_start;
                     self.jobs[a] += 1;
+                    let class = self.specs[a].class as usize;
+                    if let Some(f) = self.frame_busy.get_mut(job.tag.frame as usize) {
+                        if f.len() <= class {
+                            f.resize(class + 1, 0);
+                        }
+                        f[class] += busy;
+                    }
                     sched.job_done(job.tag, t);
                     self.dispatch(sched, t);
                 }

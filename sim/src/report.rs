@@ -92,6 +92,48 @@ fn speedup(neo: &ArchResult, other: &ArchResult) -> f64 {
     }
 }
 
+/// Per-frame table of one architecture (`neo simulate --per-frame`): interval, engine busy
+/// time and the MB each stage read / wrote, from the same records as `--json`.
+pub fn frame_table(a: &ArchResult) -> String {
+    let mut s = String::new();
+    let used: Vec<usize> = (0..Stage::ALL.len())
+        .filter(|&k| {
+            a.frames.iter().any(|f| f.stages.get(k).is_some_and(|b| b.read_bytes + b.write_bytes > 0))
+        })
+        .collect();
+    let _ = write!(
+        s,
+        "{:<6} {:>5} {:>9} {:>8} {:>8} {:>8}",
+        a.arch, "frame", "interval", "pre ms", "sort ms", "rast ms"
+    );
+    for &k in &used {
+        let _ = write!(s, " {:>22}", format!("{} R/W MB", Stage::ALL[k].name()));
+    }
+    s.push('\n');
+    let mb = |b: u64| b as f64 / 1e6;
+    for f in &a.frames {
+        let busy = |get: fn(&crate::run::EngineBusy) -> f64| {
+            f.busy.as_ref().map_or("-".into(), |b| format!("{:.4}", get(b)))
+        };
+        let _ = write!(
+            s,
+            "{:<6} {:>5} {:>9.4} {:>8} {:>8} {:>8}",
+            "",
+            f.frame,
+            f.interval_ms,
+            busy(|b| b.preprocess_ms),
+            busy(|b| b.sort_ms),
+            busy(|b| b.raster_ms)
+        );
+        for &k in &used {
+            let st = &f.stages[k];
+            let _ = write!(s, " {:>22}", format!("{:.3}/{:.3}", mb(st.read_bytes), mb(st.write_bytes)));
+        }
+        s.push('\n');
+    }
+    s
+}
+
 /// The text table `neo simulate` prints for one point.
 pub fn point_table(r: &PointResult) -> String {
     let mut s = String::new();

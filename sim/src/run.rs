@@ -5,11 +5,11 @@ use std::time::Instant;
 
 use crate::arch::{Accel, Model, CLASS_PRE, CLASS_RASTER, CLASS_SORT};
 use crate::config::SimConfig;
-use crate::dram::{Dram, DramStats};
+use crate::dram::{Dram, DramStats, Ps};
 use crate::engine::Engine;
 use crate::gpu;
 use crate::latency::Latency;
-use crate::traffic::{Stage, Traffic};
+use crate::traffic::{Dir, Stage, Traffic};
 use crate::workload::Workload;
 
 /// An architecture to evaluate.
@@ -89,6 +89,48 @@ pub struct FrameResult {
     pub sort_bytes: u64,
     /// Every tile sorted from scratch.
     pub from_scratch: bool,
+    /// Bytes read and written by stage (by the frame of the job that caused them; every stage,
+    /// in report order).
+    #[serde(default)]
+    pub stages: Vec<StageBytes>,
+    /// Busy time of each engine on this frame's jobs (accelerators; summed over the engine's
+    /// units, so it can exceed the frame's interval).
+    #[serde(default)]
+    pub busy: Option<EngineBusy>,
+}
+
+/// DRAM bytes of one stage in one frame.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StageBytes {
+    /// Stage name ([`Stage::name`]).
+    pub stage: String,
+    /// Bytes read.
+    pub read_bytes: u64,
+    /// Bytes written.
+    pub write_bytes: u64,
+}
+
+/// The stages of `t`, every one named.
+pub fn stage_bytes(t: &Traffic) -> Vec<StageBytes> {
+    Stage::ALL
+        .iter()
+        .map(|&s| StageBytes {
+            stage: s.name().to_string(),
+            read_bytes: t.bytes(s, Dir::Read),
+            write_bytes: t.bytes(s, Dir::Write),
+        })
+        .collect()
+}
+
+/// Busy milliseconds of each engine, summed over its units.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct EngineBusy {
+    /// Preprocessing engine.
+    pub preprocess_ms: f64,
+    /// Sorting cores together.
+    pub sort_ms: f64,
+    /// Raster cores together.
+    pub raster_ms: f64,
 }
 
 /// Utilisation of each engine over the run (busy time / (agents x run time)).
@@ -190,6 +232,11 @@ fn summarise(
     (frames, mean, p99, max, lat, if mean > 0.0 { 1000.0 / mean } else { 0.0 })
 }
 
+fn frame_busy(by_class: &[Ps]) -> EngineBusy {
+    let ms = |class: u8| by_class.get(class as usize).map_or(0.0, |&p| p as f64 / 1e9);
+    EngineBusy { preprocess_ms: ms(CLASS_PRE), sort_ms: ms(CLASS_SORT), raster_ms: ms(CLASS_RASTER) }
+}
+
 /// Runs `arch` on `wl`.
 pub fn simulate(
     arch: Arch,
@@ -220,6 +267,7 @@ pub fn simulate(
                     dram_bytes: g.traffic.total_bytes(),
                     sort_bytes: g.traffic.sorting_bytes(),
                     from_scratch: true,
+                    stages: stage_bytes(&g.traffic),
                     ..FrameResult::default()
                 });
                 t += ms;
@@ -274,6 +322,8 @@ pub fn simulate(
                     dram_bytes: engine.frame_traffic[i].total_bytes(),
                     sort_bytes: engine.frame_traffic[i].sorting_bytes(),
                     from_scratch: wl.frames[i].from_scratch,
+                    stages: stage_bytes(&engine.frame_traffic[i]),
+                    busy: Some(frame_busy(&engine.frame_busy[i])),
                     ..FrameResult::default()
                 })
                 .collect();

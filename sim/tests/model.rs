@@ -158,6 +158,33 @@ fn identical_independent_tiles_scale_with_the_core_count() {
     }
 }
 
+/// Each frame's named stage bytes add up to its total, and over the frames to the run's stage
+/// bytes; each frame's engine busy time adds up to the run's utilisation.
+fn per_frame_records_add_up(r: &neo_sim::run::ArchResult) {
+    for f in &r.frames {
+        assert_eq!(f.stages.len(), Stage::ALL.len(), "every stage named");
+        let sum: u64 = f.stages.iter().map(|s| s.read_bytes + s.write_bytes).sum();
+        assert_eq!(sum, f.dram_bytes, "frame {}: stage bytes add up", f.frame);
+    }
+    for (k, s) in Stage::ALL.iter().enumerate() {
+        assert!(r.frames.iter().all(|f| f.stages[k].stage == s.name()));
+        let reads: u64 = r.frames.iter().map(|f| f.stages[k].read_bytes).sum();
+        let writes: u64 = r.frames.iter().map(|f| f.stages[k].write_bytes).sum();
+        assert_eq!((reads, writes), (r.traffic.bytes(*s, Dir::Read), r.traffic.bytes(*s, Dir::Write)), "{s}");
+    }
+    let u = r.utilisation.expect("accelerator");
+    let busy = |get: fn(&neo_sim::run::EngineBusy) -> f64| -> f64 {
+        r.frames.iter().map(|f| get(f.busy.as_ref().expect("busy"))).sum()
+    };
+    let sort = busy(|b| b.sort_ms);
+    assert!(sort > 0.0, "the sorting cores worked");
+    let pre = busy(|b| b.preprocess_ms);
+    // One preprocessing engine: its busy time over the run is its utilisation times the run.
+    let want = u.preprocess * r.total_ms;
+    assert!((pre - want).abs() <= 1e-6 * r.total_ms.max(1.0), "preprocess busy {pre} ms vs {want} ms");
+    assert!(busy(|b| b.raster_ms) > 0.0, "the raster cores worked");
+}
+
 #[test]
 fn every_request_is_accounted_by_stage_and_frame() {
     let lat = latency();
@@ -185,6 +212,7 @@ fn every_request_is_accounted_by_stage_and_frame() {
             assert_eq!(t.dir_bytes(Dir::Read) + t.dir_bytes(Dir::Write), t.total_bytes());
             let per_frame: u64 = r.frames.iter().map(|f| f.dram_bytes).sum();
             assert_eq!(per_frame, t.total_bytes(), "per-frame attribution sums to the total");
+            per_frame_records_add_up(&r);
             // The sorting stage moves at least the golden model's entries (whole lines round up).
             if arch == Arch::Neo && strategy == Strategy::Neo {
                 let g: u64 = wl.frames.iter().map(|f| f.golden.sort_read + f.golden.sort_written).sum();

@@ -50,6 +50,10 @@ pub struct SimulateArgs {
     /// Print JSON instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Also print, per architecture, a table of every frame: interval, engine busy time and
+    /// the bytes each stage read and wrote (the `frames` records of `--json`).
+    #[arg(long)]
+    pub per_frame: bool,
     /// Write one `<point id>.json` per point into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -167,6 +171,11 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         }
         if !a.json {
             println!("{}", point_table(r));
+            if a.per_frame {
+                for arch in &r.archs {
+                    println!("{}", neo_sim::report::frame_table(arch));
+                }
+            }
         }
     }
     if a.json && a.out.is_none() {
