@@ -42,6 +42,9 @@ enum Command {
     /// Run the DRAM model alone on a request stream (`0xADDR R|W` lines); print bandwidth, mean
     /// read latency and row hits, misses and conflicts.
     Dram(commands::dram::DramArgs),
+    /// The official artifact simulator's DRAM lines for `poc.trace` frames, the waterfall from
+    /// its bytes to neo's charging, and (`--time`) its timing on neo's DRAM model.
+    Artifact(commands::artifact::ArtifactArgs),
     /// Run the verilated engine (neo_engine) on a scene, frame by frame, bit-exact against the
     /// golden model.
     Cosim(commands::cosim::CosimArgs),
@@ -61,6 +64,7 @@ fn main() -> ExitCode {
         Command::Report(a) => commands::report::run(a),
         Command::Simulate(a) => commands::simulate::run(a),
         Command::Dram(a) => commands::dram::run(a),
+        Command::Artifact(a) => commands::artifact::run(a),
         Command::Gen(a) => commands::gen::run(a),
         Command::Cosim(a) => commands::cosim::run(a),
     };

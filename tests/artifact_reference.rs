@@ -16,8 +16,10 @@ use std::process::Command;
 use neo_golden::shared::{shared_dir_path, shared_file_for_test};
 use neo_sim::artifact::poc::{read_poc_trace, PocStats};
 use neo_sim::artifact::timing::artifact_timing;
+use neo_sim::artifact::waterfall::{waterfall, NeoSizes};
 use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request};
 use neo_sim::config::DramConfig;
+use neo_sim::traffic::{Dir, Stage};
 use serde_json::Value;
 
 const TEST: &str = "artifact_lines_match_the_artifact";
@@ -155,6 +157,66 @@ fn artifact_lines_match_the_artifact() {
         "{}: all {stale} runs are stale; regenerate the reference (its README)",
         file.display()
     );
+}
+
+/// The waterfall's last row (the artifact's structure with neo's charging and byte sizes)
+/// against neo's own model of the same frames (`neo simulate --json`, per-frame stage bytes):
+/// the stages whose work both see the same way are equal; the feature gathers (neo's model
+/// estimates straddles over pseudo-random records, the waterfall counts the trace's ids) within
+/// 0.5%; the sorting stages (neo's exact per-tile commands against the artifact's approximation
+/// passes and 256-entry chunks) within 5%.
+#[test]
+fn waterfall_reaches_neos_own_bytes() {
+    let Some((file, reference)) = reference() else { return };
+    let runs = reference["runs"].as_array().unwrap_or_else(|| panic!("{}: no runs", file.display()));
+    let run0 = &runs[0];
+    let cmd = run0["neo_command"].as_str().expect("neo_command");
+    let tmp = tempfile::tempdir().expect("temp dir");
+    rerun(cmd, tmp.path(), &file);
+    let words = shell_words(cmd);
+    let arg = |k: &str| words.iter().position(|w| w == k).map(|i| words[i + 1].clone()).expect(k);
+    let scene = arg("--scene").replace("../shared/", &format!("{}/", shared_dir_path().display()));
+    let args = ["simulate", "--scene", &scene, "--res", &arg("--res"), "--frames", &arg("--frames")];
+    let o = Command::new(env!("CARGO_BIN_EXE_neo"))
+        .args(args)
+        .args(["--trajectory", &arg("--trajectory"), "--arch", "neo", "--quality", "off", "--json"])
+        .output()
+        .expect("run neo");
+    assert!(o.status.success(), "neo simulate failed:\n{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let frames = v[0]["archs"][0]["frames"].as_array().expect("frames");
+    let neo_sizes = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3 };
+    let cfg = neo_sim::config::SimConfig::default();
+    assert_eq!(
+        (neo_sizes.geometry, neo_sizes.sh, neo_sizes.pixel),
+        (
+            cfg.sizes.gaussian_geometry_bytes as u64,
+            cfg.sizes.gaussian_sh_bytes as u64,
+            cfg.sizes.pixel_bytes as u64
+        ),
+        "neo's default sizes"
+    );
+    for run in runs.iter().filter(|r| r["neo_command"] == cmd) {
+        let k = run["frame"].as_u64().expect("frame") as usize;
+        let trace = tmp.path().join(run["trace_file"].as_str().expect("trace_file"));
+        let frame = read_poc_trace(&trace).unwrap_or_else(|e| panic!("{e}"));
+        let last = waterfall(&frame, &ArtifactSizes::default(), &neo_sizes).pop().expect("steps").bytes;
+        let neo = &frames[k]["stages"];
+        for (i, st) in Stage::ALL.iter().enumerate() {
+            let got = last.get(*st, Dir::Read) + last.get(*st, Dir::Write);
+            let n = &neo[i];
+            assert_eq!(n["stage"], st.name());
+            let want = n["read_bytes"].as_u64().unwrap() + n["write_bytes"].as_u64().unwrap();
+            let tol = match st {
+                Stage::FeatureTable => 0.005,
+                Stage::IncomingList | Stage::SortTable => 0.05,
+                _ => 0.0,
+            };
+            let err = if want == 0 { got as f64 } else { got as f64 / want as f64 - 1.0 };
+            eprintln!("frame {k} {st}: waterfall {got} vs neo {want} ({:+.2}%)", 100.0 * err);
+            assert!(err.abs() <= tol, "frame {k} {st}: waterfall {got} B vs neo's model {want} B");
+        }
+    }
 }
 
 #[test]

@@ -249,8 +249,10 @@ fn simulate_reports_every_frame_by_stage_and_engine() {
         for f in arch["frames"].as_array().expect("frames") {
             let stages = f["stages"].as_array().expect("stages");
             assert_eq!(stages.len(), 8, "{}: every stage named", arch["arch"]);
-            let sum: u64 =
-                stages.iter().map(|s| s["read_bytes"].as_u64().unwrap() + s["write_bytes"].as_u64().unwrap()).sum();
+            let sum: u64 = stages
+                .iter()
+                .map(|s| s["read_bytes"].as_u64().unwrap() + s["write_bytes"].as_u64().unwrap())
+                .sum();
             assert_eq!(Some(sum), f["dram_bytes"].as_u64(), "{}: stage bytes add up", arch["arch"]);
             let accel = arch["arch"] == "neo";
             assert_eq!(f["busy"].is_object(), accel, "{}: busy time only for accelerators", arch["arch"]);

@@ -2,6 +2,7 @@
 //! [`crate::args`], shared point runners in [`crate::points`], the verilated engine's frame loop
 //! of `neo cosim` and `neo bench engine` in [`crate::engine_run`]).
 
+pub mod artifact;
 pub mod bench;
 pub mod compare;
 pub mod cosim;

@@ -22,6 +22,7 @@
 
 pub mod poc;
 pub mod timing;
+pub mod waterfall;
 
 use poc::PocFrame;
 

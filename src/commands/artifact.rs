@@ -1,0 +1,94 @@
+//! `neo artifact`: the official artifact simulator's accounting of `poc.trace` frames (the lines
+//! of each of its request names), the waterfall from its bytes to neo's way of charging them,
+//! and optionally its timing on neo's DRAM model (docs/cycle-model.md section 5).
+
+use anyhow::Result;
+use clap::Args;
+use neo_golden::pipeline::Formats;
+use neo_sim::artifact::poc::read_poc_trace;
+use neo_sim::artifact::timing::artifact_timing;
+use neo_sim::artifact::waterfall::{waterfall, NeoSizes};
+use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request};
+use neo_sim::config::SimConfig;
+use neo_sim::traffic::{Dir, Stage};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Arguments of `neo artifact`.
+#[derive(Args)]
+pub struct ArtifactArgs {
+    /// `poc.trace` files (`neo frames --trace` or `neo simulate --trace` write them).
+    #[arg(required = true)]
+    pub traces: Vec<PathBuf>,
+    /// Also time each frame the artifact's way on neo's DRAM model (seconds per frame).
+    #[arg(long)]
+    pub time: bool,
+    /// Model configuration (JSON; its `dram` section and frame-buffer pixel size are used).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+}
+
+/// Runs `neo artifact`.
+pub fn run(a: ArtifactArgs) -> Result<()> {
+    let cfg = match &a.config {
+        Some(p) => SimConfig::from_file(p)?,
+        None => SimConfig::default(),
+    };
+    let sizes = ArtifactSizes::default();
+    let neo = NeoSizes {
+        geometry: cfg.sizes.gaussian_geometry_bytes as u64,
+        sh: cfg.sizes.gaussian_sh_bytes as u64,
+        feature: Formats::artifact(sizes.global_chunk as usize)?.feature.bytes_per_entry() as u64,
+        pixel: cfg.sizes.pixel_bytes as u64,
+    };
+    for path in &a.traces {
+        let f = read_poc_trace(path)?;
+        let lines = artifact_lines(&f, &sizes);
+        println!(
+            "{} ({}x{}, {} Gaussians, {} tiles)",
+            path.display(),
+            f.width,
+            f.height,
+            f.culled.len(),
+            f.tiles.len()
+        );
+        println!("artifact's 64-byte lines by request name:");
+        for r in Request::ALL {
+            println!("  {:<36} {} {:>10}", r.name(), if r.is_write() { "W" } else { "R" }, lines.get(r));
+        }
+        println!("  {:<36}   {:>10} read, {} written", "total", lines.reads(), lines.writes());
+        println!("{}", waterfall_table(&f, &sizes, &neo));
+        if a.time {
+            let t = artifact_timing(&f, &sizes, &cfg.dram);
+            println!(
+                "artifact's timing on neo's DRAM model ({}): {} core cycles at 1 GHz ({:.1} FPS)\n",
+                cfg.dram.name,
+                t.core_cycles,
+                1e9 / t.core_cycles as f64
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The waterfall as a text table, MB (1e6 bytes) by neo stage, read + written.
+fn waterfall_table(f: &neo_sim::artifact::poc::PocFrame, sizes: &ArtifactSizes, neo: &NeoSizes) -> String {
+    let steps = waterfall(f, sizes, neo);
+    let mut s =
+        String::from("from the artifact's bytes to neo's charging (MB read + written, cumulative):\n");
+    let _ = write!(s, "  {:<60} {:>9}", "step", "total");
+    for st in Stage::ALL {
+        let _ = write!(s, " {:>10}", st.name().split(' ').next().unwrap_or(""));
+    }
+    s.push('\n');
+    let mb = |b: u64| b as f64 / 1e6;
+    for step in &steps {
+        let _ = write!(s, "  {:<60} {:>9.3}", step.name, mb(step.bytes.total()));
+        for st in Stage::ALL {
+            let _ =
+                write!(s, " {:>10.3}", mb(step.bytes.get(st, Dir::Read) + step.bytes.get(st, Dir::Write)));
+        }
+        s.push('\n');
+    }
+    s
+}
