@@ -1,0 +1,51 @@
+//! The report sets the paper's published figures beside neo's simulated ones and labels the
+//! GSCore figures that are published constants (typed into the official artifact's plotting
+//! script), never combining them with a simulated figure.
+
+use neo_golden::{shared, source};
+use neo_sim::config::SimConfig;
+use neo_sim::latency::Latency;
+use neo_sim::report::{published, render, ReportData};
+use neo_sim::run::Arch;
+use neo_sim::suite::{evaluate, workload, Point};
+
+#[test]
+fn published_constants_are_labelled_and_kept_apart() {
+    let lat = Latency::from_file(&shared::workspace_root().join("reports/latency.json")).unwrap();
+    let cfg = SimConfig::default();
+    let scene_spec = "synthetic:outdoor?gaussians=3000&seed=2";
+    let (scene, _) = source::load_scene(scene_spec, false).unwrap();
+    let point = Point {
+        scene: scene_spec.into(),
+        trajectory: "orbit".into(),
+        speed: 1.0,
+        frames: 2,
+        res: "qhd".into(),
+        width: 2560,
+        height: 1440,
+        strategy: "neo".into(),
+        chunk: 256,
+        passes: 1,
+    };
+    let wl = workload(&scene, &point, &cfg, neo_sim::driver::GoldenRaster::Off, 16, |_| {}).unwrap();
+    let r = evaluate(&point, &wl, &cfg, &lat, &[Arch::Neo, Arch::Gscore(16)]).unwrap();
+    let data = ReportData { headline: vec![r], ..ReportData::default() };
+    let (md, _) = render(&data).unwrap();
+    // The speed-up table names the paper's ratio as one over a published constant, with the
+    // paper's value, beside neo's own simulated ratio.
+    let lines: Vec<&str> = md.lines().collect();
+    let at =
+        lines.iter().position(|l| l.starts_with("| scene | res | Neo / GSCore-16")).expect("speed-up table");
+    assert!(lines[at].contains("paper: Neo / GSCore (published constant)"), "{}", lines[at]);
+    let row = lines[at + 2];
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    let paper = published::NEO_OVER_GSCORE.iter().find(|x| x.0 == "qhd").unwrap().1;
+    assert_eq!(cells[6], format!("{paper}x"), "{row}");
+    assert_ne!(cells[3], cells[6], "neo's simulated ratio is its own: {row}");
+    // The absolute figures and the DRAM comparison say which GSCore numbers are constants.
+    assert!(
+        md.contains("published constants); Neo 99.3 FPS average at QHD (simulated by the artifact)"),
+        "{md}"
+    );
+    assert!(md.contains("GSCore 104.6 GB as a published constant (Fig. 5's constant says 79.9 GB)"), "{md}");
+}
