@@ -57,6 +57,11 @@ pub struct ModelArgs {
     /// Work-only workloads (no golden raster): measure early termination on every K-th tile.
     #[arg(long, default_value_t = 16)]
     pub raster_sample: u32,
+    /// Byte-size preset replacing the configuration's `sizes`: `neo` (FP32 parameters, golden's
+    /// feature entries) or `artifact` (the official artifact's FP16 parameters and 22-byte
+    /// feature entries).
+    #[arg(long)]
+    pub sizes: Option<String>,
 }
 
 /// A resolution argument (`hd`, `fhd`, `qhd` or `WxH`), checked by golden's parser and kept as

@@ -17,8 +17,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// Reads the configuration file, or the defaults.
-/// With `engine`, the engine section comes from that file (`neo gen --config`'s format).
-pub fn load_config(path: Option<&Path>, engine: Option<&Path>) -> Result<SimConfig> {
+/// With `engine`, the engine section comes from that file (`neo gen --config`'s format); with
+/// `sizes`, the byte sizes are that preset's.
+pub fn load_config(path: Option<&Path>, engine: Option<&Path>, sizes: Option<&str>) -> Result<SimConfig> {
     let mut cfg = match path {
         Some(p) => SimConfig::from_file(p)?,
         None => SimConfig::default(),
@@ -26,6 +27,9 @@ pub fn load_config(path: Option<&Path>, engine: Option<&Path>) -> Result<SimConf
     if let Some(e) = engine {
         cfg.engine = EngineConfig::from_json_file(e)?;
         cfg.check().map_err(|err| anyhow!("{}: {err}", e.display()))?;
+    }
+    if let Some(name) = sizes {
+        cfg.sizes = neo_sim::config::DataSizes::preset(name).map_err(|err| anyhow!("--sizes: {err}"))?;
     }
     Ok(cfg)
 }

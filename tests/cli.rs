@@ -265,3 +265,39 @@ fn simulate_reports_every_frame_by_stage_and_engine() {
     assert!(text.contains("frame  interval   pre ms  sort ms  rast ms"), "{text}");
     assert!(text.contains("preprocess R/W MB"), "{text}");
 }
+
+#[test]
+fn simulate_takes_the_artifacts_byte_sizes() {
+    let args = [
+        "simulate",
+        "--scene",
+        "synthetic:blobs?gaussians=3000&seed=3",
+        "--res",
+        "128x128",
+        "--frames",
+        "1",
+        "--arch",
+        "neo",
+        "--quality",
+        "off",
+        "--json",
+    ];
+    let stage = |v: &serde_json::Value, name: &str| -> (u64, u64) {
+        let s = v[0]["archs"][0]["frames"][0]["stages"].as_array().unwrap();
+        let s = s.iter().find(|s| s["stage"] == name).unwrap();
+        (s["read_bytes"].as_u64().unwrap(), s["write_bytes"].as_u64().unwrap())
+    };
+    let base = json(&args);
+    let art = json(&[&args[..], &["--sizes", "artifact"]].concat());
+    let g = base[0]["workload"]["gaussians"].as_u64().unwrap();
+    // Every Gaussian's geometry: 44 B (FP32) against 6 B (FP16 positions); the SH / other
+    // parameters of the visible ones: 192 B against 112 B.
+    let (pre_neo, pre_art) = (stage(&base, "preprocess").0, stage(&art, "preprocess").0);
+    assert!(pre_art < pre_neo && pre_art >= g * 6, "preprocess {pre_art} vs {pre_neo}");
+    // Feature entries: 22 B against golden's 31 B, written once per visible Gaussian.
+    let (fw_neo, fw_art) = (stage(&base, "feature table").1, stage(&art, "feature table").1);
+    assert!(fw_art < fw_neo, "feature writes {fw_art} vs {fw_neo}");
+    let o = neo(&[&args[..], &["--sizes", "fp8"]].concat());
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--sizes: unknown byte-size preset \"fp8\""), "{}", stderr(&o));
+}

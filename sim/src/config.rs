@@ -323,7 +323,8 @@ impl Default for RasterTiming {
 }
 
 /// Sizes of the data in DRAM. Sort entries and feature entries come from the golden formats of
-/// the workload (`sort_entry_bytes`, `feature_entry_bytes`); these are the rest.
+/// the workload (`sort_entry_bytes`, `feature_entry_bytes`) unless `feature_entry_bytes` is set
+/// here (a byte-size preset such as [`DataSizes::artifact`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DataSizes {
@@ -334,11 +335,41 @@ pub struct DataSizes {
     pub gaussian_sh_bytes: u32,
     /// Frame-buffer bytes per pixel (RGB8, the golden frame).
     pub pixel_bytes: u32,
+    /// Feature-entry bytes in place of the golden format's (`None`: the format's).
+    pub feature_entry_bytes: Option<u32>,
 }
 
 impl Default for DataSizes {
     fn default() -> Self {
-        DataSizes { gaussian_geometry_bytes: 44, gaussian_sh_bytes: 192, pixel_bytes: 3 }
+        DataSizes {
+            gaussian_geometry_bytes: 44,
+            gaussian_sh_bytes: 192,
+            pixel_bytes: 3,
+            feature_entry_bytes: None,
+        }
+    }
+}
+
+impl DataSizes {
+    /// The official artifact's byte sizes (`config.artifact_constants` of the artifact
+    /// reference): FP16 positions (6 B) read for every Gaussian, 112 B of other FP16 parameters
+    /// for each non-culled one, 22-byte feature entries. Its 6-byte sort entries are golden's.
+    pub fn artifact() -> Self {
+        DataSizes {
+            gaussian_geometry_bytes: 6,
+            gaussian_sh_bytes: 112,
+            pixel_bytes: 3,
+            feature_entry_bytes: Some(22),
+        }
+    }
+
+    /// The named preset: `neo` (the default) or `artifact`.
+    pub fn preset(name: &str) -> Result<Self, String> {
+        match name {
+            "neo" => Ok(DataSizes::default()),
+            "artifact" => Ok(DataSizes::artifact()),
+            _ => Err(format!("unknown byte-size preset {name:?}: expected neo or artifact")),
+        }
     }
 }
 
@@ -594,6 +625,9 @@ impl SimConfig {
         let pp = &self.preprocess;
         if !(pp.projection_ii > 0.0 && pp.color_ii > 0.0 && pp.duplication_ii > 0.0) {
             return Err("preprocess.*_ii must be positive".into());
+        }
+        if self.sizes.feature_entry_bytes == Some(0) {
+            return Err("sizes.feature_entry_bytes = 0: must be positive (or absent: golden's format)".into());
         }
         Ok(())
     }

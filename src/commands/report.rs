@@ -111,7 +111,7 @@ fn peak_rss_mb() -> Option<f64> {
 /// Runs `neo report`.
 pub fn run(a: ReportArgs) -> Result<()> {
     let t0 = Instant::now();
-    let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref())?;
+    let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref(), a.model.sizes.as_deref())?;
     let lat = load_latency(&a.model.latency, &cfg)?;
     let plan = ReportPlan::new(a.spec(), &cfg).map_err(|e| anyhow!(e))?;
     let sweep_results = match &a.sweep_results {
@@ -181,6 +181,7 @@ mod tests {
                 engine: None,
                 latency: PathBuf::from(latency::DEFAULT_PATH),
                 raster_sample: 4,
+                sizes: None,
             },
             no_default_scene: true,
         };

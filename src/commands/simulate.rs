@@ -90,7 +90,7 @@ fn golden_mode(q: &str, points: &[Point]) -> Result<GoldenRaster> {
 
 /// Runs `neo simulate`.
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref())?;
+    let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref(), a.model.sizes.as_deref())?;
     let lat = load_latency(&a.model.latency, &cfg)?;
     let archs = Arch::parse_list(&a.arch, &cfg).map_err(|e| anyhow!(e))?;
     let grid = Grid {
@@ -131,6 +131,9 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             golden,
             lat.raster_source.label()
         );
+        if cfg.sizes != neo_sim::config::DataSizes::default() {
+            eprintln!("byte sizes (not neo's defaults): {:?}", cfg.sizes);
+        }
     }
     let mut scenes = Scenes::default();
     let mut results = Vec::new();

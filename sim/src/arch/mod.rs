@@ -127,7 +127,7 @@ impl<'a> Model<'a> {
             ));
         }
         let line = cfg.dram.line_bytes as u64;
-        let fb = wl.info.feature_entry_bytes as u64;
+        let fb = cfg.sizes.feature_entry_bytes.unwrap_or(wl.info.feature_entry_bytes) as u64;
         let layout = Layout::new(cfg, wl, eb, fb, sort_cores);
         let mut shot_start = Vec::with_capacity(wl.frames.len());
         let mut s = 0;
