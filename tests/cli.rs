@@ -229,21 +229,27 @@ fn biker_render_matches_the_reference_through_the_cli() {
     assert!(psnr >= 40.0, "PSNR {psnr} dB against the reference render");
 }
 
-#[test]
-fn simulate_reports_every_frame_by_stage_and_engine() {
-    let args = [
+/// `neo simulate` on a 3000-Gaussian scene at 128x128, without the golden raster.
+fn small_simulate<'a>(frames: &'a str, arch: &'a str) -> Vec<&'a str> {
+    let scene = "synthetic:blobs?gaussians=3000&seed=3";
+    vec![
         "simulate",
         "--scene",
-        "synthetic:blobs?gaussians=3000&seed=3",
+        scene,
         "--res",
         "128x128",
         "--frames",
-        "2",
+        frames,
         "--arch",
-        "neo,gpu",
+        arch,
         "--quality",
         "off",
-    ];
+    ]
+}
+
+#[test]
+fn simulate_reports_every_frame_by_stage_and_engine() {
+    let args = small_simulate("2", "neo,gpu");
     let v = json(&[&args[..], &["--json"]].concat());
     for arch in v[0]["archs"].as_array().expect("archs") {
         for f in arch["frames"].as_array().expect("frames") {
@@ -268,20 +274,7 @@ fn simulate_reports_every_frame_by_stage_and_engine() {
 
 #[test]
 fn simulate_takes_the_artifacts_byte_sizes() {
-    let args = [
-        "simulate",
-        "--scene",
-        "synthetic:blobs?gaussians=3000&seed=3",
-        "--res",
-        "128x128",
-        "--frames",
-        "1",
-        "--arch",
-        "neo",
-        "--quality",
-        "off",
-        "--json",
-    ];
+    let args = [&small_simulate("1", "neo")[..], &["--json"]].concat();
     let stage = |v: &serde_json::Value, name: &str| -> (u64, u64) {
         let s = v[0]["archs"][0]["frames"][0]["stages"].as_array().unwrap();
         let s = s.iter().find(|s| s["stage"] == name).unwrap();

@@ -20,8 +20,8 @@
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, VecDeque};
-use std::fmt;
-use std::path::{Path, PathBuf};
+
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -38,27 +38,7 @@ pub struct StreamRequest {
 }
 
 /// A malformed stream: the file, the 1-based line (0 when the file cannot be read) and why.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct StreamError {
-    /// The stream file.
-    pub path: PathBuf,
-    /// 1-based line number, 0 for the whole file.
-    pub line: usize,
-    /// What is wrong.
-    pub message: String,
-}
-
-impl fmt::Display for StreamError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.line == 0 {
-            write!(f, "{}: {}", self.path.display(), self.message)
-        } else {
-            write!(f, "{}:{}: {}", self.path.display(), self.line, self.message)
-        }
-    }
-}
-
-impl std::error::Error for StreamError {}
+pub type StreamError = crate::file_error::LineError;
 
 /// Parses one line (without its newline).
 pub fn parse_line(line: &str) -> Result<StreamRequest, String> {

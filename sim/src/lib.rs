@@ -15,6 +15,7 @@ pub mod dram_stream;
 pub mod driver;
 pub mod engine;
 pub mod engine_frame;
+pub mod file_error;
 pub mod gpu;
 pub mod latency;
 pub mod plot;

@@ -6,8 +6,7 @@
 //! table entry's number of set subtile bits. Every malformed line is an error naming the file,
 //! the 1-based line and the problem.
 
-use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// One tile of a trace.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -99,34 +98,14 @@ impl PocFrame {
 }
 
 /// A malformed trace: the file, the 1-based line (0: the file as a whole) and why.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct PocError {
-    /// The trace file.
-    pub path: PathBuf,
-    /// 1-based line, 0 for the file as a whole.
-    pub line: usize,
-    /// The problem.
-    pub msg: String,
-}
-
-impl fmt::Display for PocError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.line == 0 {
-            write!(f, "{}: {}", self.path.display(), self.msg)
-        } else {
-            write!(f, "{}:{}: {}", self.path.display(), self.line, self.msg)
-        }
-    }
-}
-
-impl std::error::Error for PocError {}
+pub type PocError = crate::file_error::LineError;
 
 /// Reads the trace file at `path`.
 pub fn read_poc_trace(path: &Path) -> Result<PocFrame, PocError> {
     let text = std::fs::read_to_string(path).map_err(|e| PocError {
         path: path.to_path_buf(),
         line: 0,
-        msg: format!("cannot read: {e}"),
+        message: format!("cannot read: {e}"),
     })?;
     parse_poc_trace(&text, path)
 }
@@ -221,7 +200,7 @@ struct Lines<'a> {
 
 impl<'a> Lines<'a> {
     fn err(&self, msg: String) -> PocError {
-        PocError { path: self.path.to_path_buf(), line: self.line, msg }
+        PocError { path: self.path.to_path_buf(), line: self.line, message: msg }
     }
 
     fn next_nonblank(&mut self) -> Option<&'a str> {
@@ -313,10 +292,10 @@ mod tests {
             let e = parse_poc_trace(&bad, Path::new("t.trace")).unwrap_err();
             assert_eq!(e.line, line, "{e}");
             assert!(e.to_string().starts_with(&format!("t.trace:{line}: ")), "{e}");
-            assert!(e.msg.contains(phrase), "{e}");
+            assert!(e.message.contains(phrase), "{e}");
         }
         let cut = &good[..good.len() - 12];
-        assert!(parse_poc_trace(cut, Path::new("t.trace")).unwrap_err().msg.contains("expected"));
+        assert!(parse_poc_trace(cut, Path::new("t.trace")).unwrap_err().message.contains("expected"));
         let e = read_poc_trace(Path::new("/nonexistent/t.trace")).unwrap_err();
         assert!(e.to_string().contains("/nonexistent/t.trace: cannot read"), "{e}");
     }
