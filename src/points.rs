@@ -225,4 +225,8 @@ impl PointRunner for ProgressRunner<'_> {
         )
         .map_err(|e| format!("{e:#}"))
     }
+
+    fn headline_done(&mut self, result: &PointResult) {
+        println!("{}", neo_sim::report::point_table(result));
+    }
 }

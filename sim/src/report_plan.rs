@@ -87,6 +87,10 @@ pub trait PointRunner {
         raster_sample: u32,
         what: &str,
     ) -> Result<Vec<PointResult>, String>;
+
+    /// Called as soon as a throughput point is done (the headline tables need not wait for the
+    /// rest of the report).
+    fn headline_done(&mut self, _result: &PointResult) {}
 }
 
 /// The points of a report.
@@ -227,7 +231,9 @@ impl ReportPlan {
         let mut headline = Vec::new();
         for (k, p) in self.headline.iter().enumerate() {
             let label = format!("[{}/{total}]", k + 1);
-            headline.push(runner.run_one(p, &self.archs, GoldenRaster::Off, sample, &label)?);
+            let r = runner.run_one(p, &self.archs, GoldenRaster::Off, sample, &label)?;
+            runner.headline_done(&r);
+            headline.push(r);
         }
         times.headline_s = t.elapsed().as_secs_f64();
 

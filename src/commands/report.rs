@@ -137,9 +137,6 @@ pub fn run(a: ReportArgs) -> Result<()> {
         std::fs::write(&p, svg).with_context(|| format!("{}: cannot write", p.display()))?;
     }
     println!("wrote {} and {} figures", index.display(), svgs.len());
-    for r in &data.headline {
-        println!("{}", neo_sim::report::point_table(r));
-    }
     println!(
         "time: throughput {:.0} s, timelines {:.0} s, sweep {:.0} s, total {:.0} s; peak memory {}",
         times.headline_s,
