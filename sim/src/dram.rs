@@ -117,6 +117,10 @@ pub struct DramStats {
     pub refreshes: u64,
     /// Write drains.
     pub drains: u64,
+    /// Reads answered from a queued write to the same line (no DRAM access; Ramulator's
+    /// enqueue shortcut, used by [`crate::dram_stream::QueueFeeder`]).
+    #[serde(default)]
+    pub forwarded: u64,
     /// Sum over reads of (data end - issue), picoseconds.
     pub read_latency_ps: u64,
     /// Latest data-bus activity.
@@ -405,6 +409,22 @@ impl Dram {
                 bypassed: 0,
             });
         }
+        Ticket(ticket)
+    }
+
+    /// A read answered at `done` without a DRAM access (the line is in a queued write).
+    pub fn forwarded_read(&mut self, done: Ps) -> Ticket {
+        self.stats.reads += 1;
+        self.stats.forwarded += 1;
+        let ticket = match self.free_tickets.pop() {
+            Some(k) => k,
+            None => {
+                self.arrivals.push(PENDING);
+                self.ticket_channel.push(0);
+                (self.arrivals.len() - 1) as u32
+            }
+        };
+        self.arrivals[ticket as usize] = done;
         Ticket(ticket)
     }
 

@@ -13,6 +13,8 @@
 //!   `write_queue` (writes) requests, and nothing behind it enters meanwhile (head-of-line
 //!   blocking across channels); a read leaves its queue at its read command, a write at its
 //!   write command;
+//! - a read of a line whose write is still queued is answered one clock later from that write
+//!   (Ramulator's enqueue shortcut; here "queued" means posted since the channel's last drain);
 //! - after the last request the posted writes are drained; the run ends when the last read's
 //!   data has returned and the last write command has issued;
 //! - a read's latency runs from its entry to its data return; bandwidth is all bytes moved
@@ -177,8 +179,11 @@ pub struct QueueFeeder {
     rcap: usize,
     wcap: usize,
     ck: Ps,
+    line: u64,
     /// The latest write command's end seen so far.
     pub write_end: Ps,
+    /// Per channel, the lines of the writes posted since its last drain.
+    queued_lines: Vec<Vec<u64>>,
 }
 
 impl QueueFeeder {
@@ -192,7 +197,9 @@ impl QueueFeeder {
             rcap: cfg.read_queue.max(1) as usize,
             wcap: cfg.write_queue as usize,
             ck: cfg.t_ck_ps,
+            line: cfg.line_bytes.max(1) as u64,
             write_end: 0,
+            queued_lines: vec![Vec::new(); cfg.channels as usize],
         }
     }
 
@@ -234,15 +241,22 @@ impl QueueFeeder {
                 Some(first) => return Err(t.max(first.0 + 1)),
                 None => {
                     self.dram.drain_channel(t, c);
+                    self.queued_lines[c].clear();
                     self.collect_writes();
                 }
             }
         }
     }
 
-    /// Queues a read of `addr` at `t` (after [`QueueFeeder::read_room`] said yes).
+    /// Queues a read of `addr` at `t` (after [`QueueFeeder::read_room`] said yes). A read of a
+    /// line with a write still in the write queue is answered one clock later from that write,
+    /// as Ramulator's controller does on enqueue.
     pub fn submit_read(&mut self, t: Ps, addr: u64) -> Ticket {
         let c = self.channel(addr);
+        let line = addr / self.line;
+        if self.queued_lines[c].contains(&line) {
+            return self.dram.forwarded_read(t + self.ck);
+        }
         let k = self.dram.submit_read(t, addr);
         self.occ[c].unscheduled.push_back(k);
         k
@@ -250,13 +264,20 @@ impl QueueFeeder {
 
     /// Posts a write of `addr` at `t` (after [`QueueFeeder::write_room`] said yes).
     pub fn write(&mut self, t: Ps, addr: u64) {
+        let c = self.channel(addr);
         self.dram.write(t, addr);
+        if self.dram.posted_writes(c) == 0 {
+            self.queued_lines[c].clear();
+        } else {
+            self.queued_lines[c].push(addr / self.line);
+        }
         self.collect_writes();
     }
 
     /// Serves every queued read and drains every write at `last`.
     pub fn flush(&mut self, last: Ps) {
         self.dram.flush(last);
+        self.queued_lines.iter_mut().for_each(Vec::clear);
         self.collect_writes();
     }
 }
@@ -335,6 +356,24 @@ mod tests {
         let e = parse_stream("0x0 R\n0x40 W\nzz\n", Path::new("s.trace")).unwrap_err();
         assert_eq!(e.line, 3);
         assert!(e.to_string().starts_with("s.trace:3: "), "{e}");
+    }
+
+    #[test]
+    fn a_read_of_a_queued_write_is_answered_from_it() {
+        let cfg = DramConfig::default();
+        // A read waiting on channel 0 keeps its 4 writes posted (no drain below 80% full).
+        let mut f = QueueFeeder::new(&cfg);
+        let _other = f.submit_read(0, 100 * 256);
+        for i in 0..4 {
+            f.write(0, i * 256);
+        }
+        let k = f.submit_read(1000, 2 * 256);
+        assert_eq!(f.dram.scheduled(k), Some(1000 + cfg.t_ck_ps));
+        assert_eq!(f.dram.stats().forwarded, 1);
+        // A line not written goes to the DRAM.
+        let k = f.submit_read(1000, 9 * 256);
+        assert!(f.dram.arrival(k) > 1000 + 20 * cfg.t_ck_ps);
+        assert_eq!(f.dram.stats().forwarded, 1);
     }
 
     #[test]
