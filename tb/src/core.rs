@@ -58,6 +58,10 @@ impl MemTiming {
     /// next commands' loads, so a buffer reused too early shows up.
     pub const SLOW_WRITES: MemTiming =
         MemTiming { req_ready_pct: 100, wr_ready_pct: 25, min_latency: 1, max_latency: 1, rsp_gap_pct: 0 };
+    /// Worst case: long stalls everywhere (requests and writes taken in one cycle of ten, read
+    /// latency 30..120 cycles, a gap in half the cycles a response is due).
+    pub const LONG_STALLS: MemTiming =
+        MemTiming { req_ready_pct: 10, wr_ready_pct: 10, min_latency: 30, max_latency: 120, rsp_gap_pct: 50 };
 }
 
 /// What a command did.

@@ -21,7 +21,7 @@ mod cosim {
         sort_chunk_checked, sort_chunks_checked, update_checked, CheckedCmd, Command, Core, MemTiming, Mode,
     };
     use neo_tb::rng::{for_each_seed, Rng};
-    use neo_tb::stimulus::{nearly_sorted, sorted_stream, tile_entries};
+    use neo_tb::stimulus::{nearly_sorted, sorted_stream, starved_merge, tile_entries, MergeShape};
     use neo_tb::waves::maybe_trace;
 
     fn core(name: &str, seed: u64, timing: MemTiming) -> Core {
@@ -184,6 +184,41 @@ mod cosim {
             let r = merge_checked(&mut c, &dead, &dead[1..], true);
             assert_eq!(r.done_len, 0);
             println!("{name}: {entries} entries merged");
+        });
+    }
+
+    /// Stream lengths of the merge stress: around the burst (16) and the input FIFO (256)
+    /// capacities, and thousands.
+    const STRESS_LENGTHS: [usize; 9] = [0, 1, 15, 16, 17, 255, 256, 257, 3000];
+
+    /// The FIFO-capacity class: merges where one stream is held back (all its keys above the
+    /// other's, or long alternating runs) for longer than an input FIFO holds while the other
+    /// goes out, from both sides, at every length of [`STRESS_LENGTHS`] against a stream longer
+    /// than a FIFO (600) and against itself, under random, slow-write (the read side fills the
+    /// FIFOs at full speed) and long-stall memory timing.
+    #[test]
+    fn core_merges_with_a_starved_stream_match_golden() {
+        let name = "core_merges_with_a_starved_stream_match_golden";
+        for_each_seed(name, |seed| {
+            let cfg = neo_tb::config();
+            let fmt = cfg.format();
+            let mut rng = Rng::new(seed);
+            let mut c = core(name, seed, MemTiming::RANDOM);
+            let (mut merges, mut entries) = (0, 0);
+            for timing in [MemTiming::SLOW_WRITES, MemTiming::RANDOM, MemTiming::LONG_STALLS] {
+                c.set_timing(timing);
+                for &l in &STRESS_LENGTHS {
+                    for shape in [MergeShape::ALow, MergeShape::BLow, MergeShape::Runs(300)] {
+                        for (la, lb) in [(l, 600), (600, l), (l, l)] {
+                            let (a, b) = starved_merge(&fmt, &mut rng, la, lb, shape, 85);
+                            merge_checked(&mut c, &a, &b, merges % 2 == 0);
+                            merges += 1;
+                            entries += la + lb;
+                        }
+                    }
+                }
+            }
+            println!("{name}: {merges} merges, {entries} entries");
         });
     }
 

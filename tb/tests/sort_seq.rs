@@ -15,6 +15,7 @@ fn sort_seq_skipped_without_verilator() {
 #[cfg(neo_has_verilator)]
 mod cosim {
     use neo_golden::engine::{FrameRegs, TileDescriptor};
+    use neo_golden::sort::SortMode;
     use neo_tb::rng::{for_each_seed, Rng};
     use neo_tb::seq::{fill, random_desc, SeqBench, SeqJob, SeqTiming};
     use neo_tb::waves::maybe_trace;
@@ -68,6 +69,77 @@ mod cosim {
                 }
             }
             println!("{tiles} directed tiles");
+        });
+    }
+
+    /// The DPS chunks of a previous table of `len` entries, restated plainly (independent of
+    /// golden `Parity::chunks`, which drives the plan the bench compares against): an even frame
+    /// cuts at every multiple of the chunk size `c`, an odd frame at `c/2`, `c/2 + c`, ...;
+    /// every piece between two cuts (or the table's ends) is one chunk.
+    fn restated_dps_chunks(len: u64, c: u64, odd_frame: bool) -> Vec<(u64, u64)> {
+        let mut cuts = vec![0];
+        let mut cut = if odd_frame { c / 2 } else { c };
+        while cut < len {
+            cuts.push(cut);
+            cut += c;
+        }
+        cuts.push(len);
+        cuts.windows(2).filter(|w| w[1] > w[0]).map(|w| (w[0], w[1] - w[0])).collect()
+    }
+
+    /// Every DPS chunk boundary position on both parities: previous tables whose length ends
+    /// one before, on and one after every boundary of either parity up to 4 chunks; the DPS
+    /// commands the sequencer issues (offset from the table, length) must be the plainly
+    /// restated chunks.
+    #[test]
+    fn seq_dps_chunks_at_every_boundary_on_both_parities() {
+        let name = "seq_dps_chunks_at_every_boundary_on_both_parities";
+        for_each_seed(name, |seed| {
+            let cfg = neo_tb::config();
+            let c = cfg.chunk as u64;
+            let mut rng = Rng::new(seed);
+            let mut b = bench(name, seed, SeqTiming::FAST);
+            let mut lens = vec![0u64, 1, 2];
+            for k in 1..=8 {
+                let boundary = k * c / 2;
+                lens.extend([boundary - 1, boundary, boundary + 1]);
+            }
+            let mut checked = 0;
+            for frame in [10u32, 11] {
+                for &p in &lens {
+                    let d = TileDescriptor {
+                        tile_x: 1,
+                        tile_y: 2,
+                        from_scratch: false,
+                        prev: 0x10_0000,
+                        prev_len: p as u32,
+                        list: 0x20_0000,
+                        list_len: rng.below(3) as u32,
+                        next: 0x30_0000,
+                    };
+                    fill(&cfg, &mut rng, &mut b.mem, &d);
+                    let job = SeqJob { desc: d, regs: regs(frame, &mut rng), core: 0 };
+                    let r = b.run(&job);
+                    let got: Vec<(u64, u64)> = r
+                        .cmds
+                        .iter()
+                        .filter(|x| x.mode == SortMode::Dps)
+                        .map(|x| {
+                            assert_eq!(x.dst, x.src_a, "DPS sorts in place");
+                            (x.src_a - d.prev as u64, x.len_a)
+                        })
+                        .collect();
+                    let want = restated_dps_chunks(p, c, frame % 2 == 1);
+                    assert_eq!(
+                        got, want,
+                        "DPS chunks of a {p}-entry table, frame {frame} (seed 0x{seed:016x})"
+                    );
+                    checked += 1;
+                }
+            }
+            assert_eq!(restated_dps_chunks(600, 256, false), [(0, 256), (256, 256), (512, 88)]);
+            assert_eq!(restated_dps_chunks(600, 256, true), [(0, 128), (128, 256), (384, 216)]);
+            println!("{name}: {checked} tiles");
         });
     }
 
