@@ -140,7 +140,6 @@ pub fn nearly_sorted(mut v: Vec<SortEntry>, rng: &mut Rng, max_dist: usize, swap
     v
 }
 
-
 /// The shape of a merge-stress pair (see [`starved_merge`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MergeShape {
