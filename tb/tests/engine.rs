@@ -12,6 +12,12 @@
 //! Without Verilator at build time the tests are absent (build.rs warns, and fails when `CI` is
 //! set), as the other cosimulation benches.
 
+/// Without Verilator the cosimulation below is compiled out: SKIP, or a failure when `CI` is set.
+#[test]
+fn models_present() {
+    assert_eq!(neo_tb::require_models("models_present: whole-engine cosimulation"), neo_tb::HAS_MODELS);
+}
+
 neo_tb::with_models! {
 use neo_golden::engine::{CaseScene, Counter, EngineCase, EngineConfig, EngineSession};
 use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
