@@ -186,7 +186,7 @@ pub fn starved_merge(
             MergeShape::ALow => a.len() < la,
             MergeShape::BLow => b.len() == lb,
             MergeShape::Runs(n) => {
-                let turn_a = (p as usize / n.max(1)) % 2 == 0;
+                let turn_a = (p as usize / n.max(1)).is_multiple_of(2);
                 if a.len() == la {
                     false
                 } else if b.len() == lb {
