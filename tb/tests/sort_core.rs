@@ -5,7 +5,9 @@
 //! a `MERGE` of the two runs, exactly golden `full_sort`'s schedule. The flows issue their
 //! commands back to back (several in flight); mixed random queues and directed chunks run back
 //! to back too, and `core_back_to_back_chunks_overlap` shows the load of one chunk is hidden
-//! under the previous chunk's merge passes.
+//! under the previous chunk's merge passes. `core_merges_with_a_starved_stream_match_golden` is
+//! the FIFO-capacity stress class (docs/rtl.md "Verification harness"): one merge input held
+//! back for longer than its FIFO holds while the other goes out.
 
 #[cfg(not(neo_has_verilator))]
 #[test]
