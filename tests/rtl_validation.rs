@@ -16,7 +16,10 @@
 
 #[test]
 fn models_present() {
-    neo_tb::require_models("the sorting core's cycles against the model");
+    assert_eq!(
+        neo_tb::require_models("models_present: the sorting core's cycles against the model"),
+        neo_tb::HAS_MODELS
+    );
 }
 
 neo_tb::with_models! {

@@ -58,6 +58,51 @@ impl Checker {
     }
 }
 
+/// The memory-port rule "no write is duplicated": every address a run (a command, a tile) writes,
+/// with the cycle of its write. A second write to an address is a protocol violation (no unit
+/// documents one). Shared by the Sorting Core's and the raster core's memory models.
+#[derive(Clone, Debug, Default)]
+pub struct WriteOnce {
+    at: std::collections::HashMap<u64, u64>,
+}
+
+impl WriteOnce {
+    /// Records a write of `what` at `addr` in `cycle`; panics through `checker` when `addr` was
+    /// written before in this run.
+    #[track_caller]
+    pub fn record(&mut self, checker: &Checker, cycle: u64, what: &str, addr: u64) {
+        if let Some(first) = self.at.insert(addr, cycle) {
+            checker.protocol(
+                cycle,
+                false,
+                &format!(
+                    "{what} 0x{addr:x} written twice (first in cycle {first}; no write may be duplicated)"
+                ),
+            );
+        }
+    }
+
+    /// The cycle `addr` was written in, if it was.
+    pub fn get(&self, addr: u64) -> Option<u64> {
+        self.at.get(&addr).copied()
+    }
+
+    /// Addresses written.
+    pub fn len(&self) -> usize {
+        self.at.len()
+    }
+
+    /// True when nothing was written.
+    pub fn is_empty(&self) -> bool {
+        self.at.is_empty()
+    }
+
+    /// Starts a new run.
+    pub fn clear(&mut self) {
+        self.at.clear();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,6 +114,19 @@ mod tests {
     fn entry_mismatch_names_the_field() {
         let c = Checker::new("neo_bsu", 0xabc);
         c.entry(7, "out[2]", &SortEntry::new(0x1f, 3), &SortEntry::new(0x20, 3));
+    }
+
+    #[test]
+    #[should_panic(
+        expected = "PROTOCOL VIOLATION at cycle 9: unit u: table entry 0x40 written twice (first in cycle 3"
+    )]
+    fn a_second_write_to_an_address_is_a_violation() {
+        let c = Checker::new("u", 1);
+        let mut w = WriteOnce::default();
+        w.record(&c, 3, "table entry", 0x40);
+        w.record(&c, 5, "table entry", 0x41);
+        assert_eq!((w.len(), w.get(0x40)), (2, Some(3)));
+        w.record(&c, 9, "table entry", 0x40);
     }
 
     #[test]

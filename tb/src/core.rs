@@ -15,12 +15,15 @@
 //! Memory: word-addressed by entry (`mem_req_addr_o` is an entry index). A read request of
 //! `len` entries (read port) is answered by `len` response beats in request order, the first
 //! after a random latency (the data is read when the request is taken); a write (write port)
-//! carries one entry. A read outside the sources of the commands in flight, or a write outside
-//! the destination of the oldest one (commands complete in order), is a protocol error.
+//! carries one entry. A read outside the sources of the commands in flight, a write outside
+//! the destination of the oldest one (commands complete in order), a second write of one command
+//! to the same address ([`WriteOnce`]), and a request or write whose valid or payload depends on
+//! ready or changes before it is taken ([`Handshake`]) are protocol errors.
 
-use crate::check::Checker;
+use crate::check::{Checker, WriteOnce};
 use crate::models::NeoSortCore;
 use crate::rng::Rng;
+use crate::stream::Handshake;
 use neo_gen::EngineConfig;
 use neo_golden::sort::{conventional_sort_plan, merge2, Parity, SortEntry, SortFormat};
 use std::collections::{HashMap, VecDeque};
@@ -58,6 +61,10 @@ impl MemTiming {
     /// next commands' loads, so a buffer reused too early shows up.
     pub const SLOW_WRITES: MemTiming =
         MemTiming { req_ready_pct: 100, wr_ready_pct: 25, min_latency: 1, max_latency: 1, rsp_gap_pct: 0 };
+    /// Worst case: long stalls everywhere (requests and writes taken in one cycle of ten, read
+    /// latency 30..120 cycles, a gap in half the cycles a response is due).
+    pub const LONG_STALLS: MemTiming =
+        MemTiming { req_ready_pct: 10, wr_ready_pct: 10, min_latency: 30, max_latency: 120, rsp_gap_pct: 50 };
 }
 
 /// What a command did.
@@ -101,6 +108,8 @@ struct InFlight {
     read_bursts: u64,
     entries_read: u64,
     entries_written: u64,
+    /// Addresses this command wrote (a second write to one is a protocol violation).
+    written: WriteOnce,
 }
 
 /// Entry ranges `cmd` reads (A, B).
@@ -128,6 +137,9 @@ fn overlaps(a: &Range<u64>, b: &Range<u64>) -> bool {
 
 /// The memory model.
 struct Memory {
+    /// The protocol checkers of the read-request and write ports.
+    req_hs: Handshake,
+    wr_hs: Handshake,
     words: HashMap<u64, u64>,
     timing: MemTiming,
     rng: Rng,
@@ -161,7 +173,24 @@ impl Core {
         dut.set_mem_req_ready_i(false);
         dut.set_mem_rsp_valid_i(false);
         dut.reset();
+        // docs/rtl.md "Memory protocol": an offered read request that is not taken may change
+        // or be withdrawn, so only "valid does not depend on ready" applies to it; a write holds
+        // with its data until taken.
+        let mut req_hs = Handshake::new::<NeoSortCore>(
+            "read-request port",
+            "mem_req_valid_o",
+            "mem_req_ready_i",
+            &["mem_req_addr_o", "mem_req_len_o"],
+        );
+        req_hs.check_stable = false;
         let mem = Memory {
+            req_hs,
+            wr_hs: Handshake::new::<NeoSortCore>(
+                "write port",
+                "mem_wr_valid_o",
+                "mem_wr_ready_i",
+                &["mem_wr_addr_o", "mem_wr_data_o"],
+            ),
             words: HashMap::new(),
             timing,
             rng: rng.fork(1),
@@ -234,6 +263,8 @@ impl Core {
         }
         self.dut.set_mem_rsp_valid_i(self.mem.offering);
         self.dut.eval();
+        self.mem.wr_hs.check(&mut self.dut, wr_ready, &self.checker);
+        self.mem.req_hs.check(&mut self.dut, ready, &self.checker);
 
         if self.mem.offering && self.dut.mem_rsp_ready_o() {
             self.mem.rsp.pop_front();
@@ -251,7 +282,9 @@ impl Core {
                 ),
             );
             self.mem.words.insert(addr, self.dut.mem_wr_data_o());
-            self.mem.inflight[0].entries_written += 1;
+            let f = &mut self.mem.inflight[0];
+            f.entries_written += 1;
+            f.written.record(&self.checker, c, "entry", addr);
         }
         if ready && self.dut.mem_req_valid_o() {
             let addr = self.dut.mem_req_addr_o();
@@ -361,6 +394,7 @@ impl Core {
                     read_bursts: 0,
                     entries_read: 0,
                     entries_written: 0,
+                    written: WriteOnce::default(),
                 });
                 first_accept.get_or_insert(c);
             }

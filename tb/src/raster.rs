@@ -11,13 +11,14 @@
 //! - Checker: [`Checker`], first mismatch with cycle, field, expected and actual (hex).
 
 use crate::bits::get_bits;
-use crate::check::Checker;
+use crate::check::{Checker, WriteOnce};
 use crate::core::MemTiming;
 use crate::dut::Dut;
 use crate::itu::entry_words;
 use crate::models::NeoRasterCore;
 use crate::rng::Rng;
 use crate::scu::{gaussian, random_gaussian};
+use crate::stream::Handshake;
 use neo_gen::units::raster_core::{feature_word_bits, space};
 use neo_gen::EngineConfig;
 use neo_golden::formats::feature::{FeatureEntry, FeatureFormat};
@@ -99,7 +100,7 @@ struct Memory {
     feats: HashMap<u64, Vec<u32>>,
     /// Pixel address -> (colour, write cycle).
     pixels: HashMap<u64, ([u8; 3], u64)>,
-    written: HashMap<u64, u64>,
+    written: WriteOnce,
     rsp: VecDeque<(u64, Vec<u32>)>,
     offering: bool,
     last_read: u64,
@@ -119,6 +120,7 @@ pub struct RasterCore {
     fwords: usize,
     burst: u64,
     ports: Ports,
+    req_hs: Handshake,
 }
 
 #[derive(Clone, Copy)]
@@ -142,11 +144,20 @@ impl RasterCore {
             table: HashMap::new(),
             feats: HashMap::new(),
             pixels: HashMap::new(),
-            written: HashMap::new(),
+            written: WriteOnce::default(),
             rsp: VecDeque::new(),
             offering: false,
             last_read: 0,
         };
+        // docs/rtl.md "Memory protocol": an offered request that is not taken may change in the
+        // next cycle (fixed priority), so only "valid does not depend on ready" applies.
+        let mut req_hs = Handshake::new::<NeoRasterCore>(
+            "memory request port",
+            "mem_req_valid_o",
+            "mem_req_ready_i",
+            &["mem_req_write_o", "mem_req_space_o", "mem_req_addr_o", "mem_req_len_o", "mem_wdata_o"],
+        );
+        req_hs.check_stable = false;
         RasterCore {
             dut,
             checker: Checker::new(NeoRasterCore::NAME, seed),
@@ -161,6 +172,7 @@ impl RasterCore {
                 rsp_data: NeoRasterCore::port("mem_rsp_data_i"),
                 wdata: NeoRasterCore::port("mem_wdata_o"),
             },
+            req_hs,
         }
     }
 
@@ -189,6 +201,7 @@ impl RasterCore {
         }
         self.dut.set_mem_rsp_valid_i(self.mem.offering);
         self.dut.eval();
+        self.req_hs.check(&mut self.dut, ready, &self.checker);
         if self.mem.offering {
             self.checker.protocol(c, self.dut.mem_rsp_ready_o(), "mem_rsp_ready_o low");
             self.mem.rsp.pop_front();
@@ -214,12 +227,7 @@ impl RasterCore {
                     self.checker.value(c, "mem_req_len_o (write-back)", 1, n);
                     let ok = (b.table..b.table + len).contains(&addr);
                     self.checker.protocol(c, ok, &format!("write-back to 0x{addr:x} outside the table"));
-                    let prev = self.mem.written.insert(addr, c);
-                    self.checker.protocol(
-                        c,
-                        prev.is_none(),
-                        &format!("table entry 0x{addr:x} written twice"),
-                    );
+                    self.mem.written.record(&self.checker, c, "table entry", addr);
                     self.mem.table.insert(addr, w[0] as u64 | (w[1] as u64) << 32);
                 }
                 space::PIXEL => {
@@ -380,7 +388,7 @@ impl RasterCore {
         }
         for (i, w) in want.table.iter().enumerate() {
             let a = b.table + i as u64;
-            let Some(at) = self.mem.written.get(&a) else {
+            let Some(at) = self.mem.written.get(a) else {
                 self.checker.fail(
                     done,
                     &format!("table[{i}] (id {:#x})", case.table[i].id),
@@ -389,7 +397,7 @@ impl RasterCore {
                 );
             };
             let got = self.sort.unpack(self.mem.table[&a]);
-            self.checker.entry(*at, &format!("table[{i}]"), w, &got);
+            self.checker.entry(at, &format!("table[{i}]"), w, &got);
         }
     }
 }

@@ -1,7 +1,11 @@
 //! A small, fast, seedable PRNG (xoshiro256**, seeded through SplitMix64) and the per-test seed.
 //!
-//! Every test bench prints `seed = 0x...`; running it again with `NEO_SEED=0x...` replays exactly
-//! the same stimulus, stalls and backpressure.
+//! Every cosimulation test runs a fixed list of seeds ([`FIXED_SEEDS`], the same on every run, so
+//! a result is reproducible) and then one fresh seed drawn from the clock ([`test_seeds`],
+//! [`for_each_seed`]). Each seed is printed as `seed = 0x...`; running the test again with
+//! `NEO_SEED=0x...` replays exactly that seed's stimulus, stalls and backpressure (and only that
+//! seed). `NEO_FIXED_SEEDS=1` drops the fresh seed (`scripts/mutate-check`: a mutant counts as
+//! caught only when the fixed seeds catch it).
 
 /// xoshiro256** (Blackman and Vigna): good statistical quality, a few ns per draw.
 #[derive(Clone, Debug)]
@@ -91,25 +95,108 @@ pub fn parse_seed(s: &str) -> Option<u64> {
     }
 }
 
-/// The seed of test `test`: `$NEO_SEED` when set, else a fresh one from the clock and the
+/// The seeds every cosimulation test runs when `NEO_SEED` is not set, before one fresh seed.
+pub const FIXED_SEEDS: [u64; 3] = [0x0000_0000_5eed_0001, 0x9e37_79b9_7f4a_7c15, 0xc0de_d00d_f00d_beef];
+
+/// The number of seeds a test runs without `NEO_SEED`: the fixed ones and a fresh one. A bench
+/// that splits a fixed amount of work over its seeds gives each [`seed_share`] of it, whatever
+/// the number of seeds actually run, so that `NEO_SEED` replays exactly the failing run.
+pub const SEED_RUNS: usize = FIXED_SEEDS.len() + 1;
+
+/// `total` work items split over [`SEED_RUNS`] seeds: the share of one seed (rounded up, at
+/// least one).
+pub fn seed_share(total: usize) -> usize {
+    total.div_ceil(SEED_RUNS).max(1)
+}
+
+fn env_flag(name: &str) -> bool {
+    std::env::var(name).is_ok_and(|v| !v.is_empty() && v != "0" && v != "false")
+}
+
+/// The seeds of test `test`: `$NEO_SEED` alone when set; else [`FIXED_SEEDS`] and one fresh seed
+/// (left out when `NEO_FIXED_SEEDS` is set). Prints the list and how to replay one.
+///
+/// # Panics
+/// When `NEO_SEED` is set but not a number.
+pub fn test_seeds(test: &str) -> Vec<u64> {
+    let seeds = match replay_seed() {
+        Some(seed) => vec![seed],
+        None => {
+            let mut v = FIXED_SEEDS.to_vec();
+            if !env_flag("NEO_FIXED_SEEDS") {
+                v.push(fresh_seed(test));
+            }
+            v
+        }
+    };
+    let list: Vec<String> = seeds.iter().map(|s| format!("0x{s:016x}")).collect();
+    println!("{test}: seeds = [{}] (replay one with NEO_SEED=0x...)", list.join(", "));
+    seeds
+}
+
+/// Runs `body(seed)` for each of [`test_seeds`]`(test)`, in order. A panic in a run is raised
+/// again with the test, the seed and how to replay it in front of the original message.
+pub fn for_each_seed(test: &str, mut body: impl FnMut(u64)) {
+    for seed in test_seeds(test) {
+        println!("{test}: seed = 0x{seed:016x}");
+        let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| body(seed)));
+        if let Err(e) = run {
+            let msg = e
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| e.downcast_ref::<&str>().copied())
+                .unwrap_or("(non-text panic)");
+            panic!("{test} FAILED with seed 0x{seed:016x} (replay with NEO_SEED=0x{seed:016x}): {msg}");
+        }
+    }
+}
+
+/// A seed per work item of a test whose items are too long to repeat for every seed (whole
+/// engine frames, biker tiles): item `k` runs with seed `k mod n` of [`test_seeds`], so each seed
+/// takes a share of the items; with `NEO_SEED` every item runs with that seed.
+#[derive(Clone, Debug)]
+pub struct SeedSplit {
+    /// The test's seeds.
+    pub seeds: Vec<u64>,
+}
+
+impl SeedSplit {
+    /// The seeds of `test` ([`test_seeds`]).
+    pub fn new(test: &str) -> Self {
+        SeedSplit { seeds: test_seeds(test) }
+    }
+
+    /// The seed of item `k`.
+    pub fn seed(&self, k: usize) -> u64 {
+        self.seeds[k % self.seeds.len()]
+    }
+}
+
+fn replay_seed() -> Option<u64> {
+    match std::env::var("NEO_SEED") {
+        Ok(s) if !s.trim().is_empty() => Some(
+            parse_seed(&s).unwrap_or_else(|| panic!("NEO_SEED={s:?} is not a number (use 0x... or decimal)")),
+        ),
+        _ => None,
+    }
+}
+
+fn fresh_seed(test: &str) -> u64 {
+    let t = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos() as u64)
+        .unwrap_or(0);
+    let mut x = t ^ ((std::process::id() as u64) << 32) ^ fnv(test);
+    splitmix64(&mut x)
+}
+
+/// One seed for a command (`neo cosim`, a benchmark): `$NEO_SEED` when set, else a fresh one from the clock and the
 /// process id. Prints `seed = 0x...` and how to reproduce it.
 ///
 /// # Panics
 /// When `NEO_SEED` is set but not a number.
 pub fn test_seed(test: &str) -> u64 {
-    let seed = match std::env::var("NEO_SEED") {
-        Ok(s) if !s.trim().is_empty() => {
-            parse_seed(&s).unwrap_or_else(|| panic!("NEO_SEED={s:?} is not a number (use 0x... or decimal)"))
-        }
-        _ => {
-            let t = std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map(|d| d.as_nanos() as u64)
-                .unwrap_or(0);
-            let mut x = t ^ ((std::process::id() as u64) << 32) ^ fnv(test);
-            splitmix64(&mut x)
-        }
-    };
+    let seed = replay_seed().unwrap_or_else(|| fresh_seed(test));
     println!("{test}: seed = 0x{seed:016x} (reproduce with NEO_SEED=0x{seed:016x})");
     seed
 }
@@ -140,6 +227,22 @@ mod tests {
         assert!(seen.iter().all(|&s| s), "every value of a small range appears");
         let hits = (0..10_000).filter(|_| r.percent(30)).count();
         assert!((2_700..3_300).contains(&hits), "30% came out as {hits} / 10000");
+    }
+
+    #[test]
+    fn a_failing_run_names_its_seed() {
+        let first = FIXED_SEEDS[0];
+        let r = std::panic::catch_unwind(|| {
+            for_each_seed("t", |seed| assert_ne!(seed, FIXED_SEEDS[1], "boom"));
+        });
+        let e = r.expect_err("the second fixed seed fails");
+        let msg = e.downcast_ref::<String>().expect("a formatted message");
+        let second = format!("0x{:016x}", FIXED_SEEDS[1]);
+        assert!(msg.contains(&format!("t FAILED with seed {second}")), "{msg}");
+        assert!(msg.contains(&format!("NEO_SEED={second}")) && msg.contains("boom"), "{msg}");
+        assert!(!msg.contains(&format!("0x{first:016x}")), "{msg}");
+        assert_eq!(seed_share(10), 3);
+        assert_eq!(seed_share(0), 1);
     }
 
     #[test]

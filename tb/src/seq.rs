@@ -77,7 +77,7 @@ pub struct SeqJob {
 }
 
 /// What a tile took.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SeqRun {
     /// Commands issued.
     pub commands: usize,
@@ -87,6 +87,8 @@ pub struct SeqRun {
     pub cycles: u64,
     /// The completion's `next_len`.
     pub next_len: u64,
+    /// The commands the sequencer issued, in order (each already checked against the plan).
+    pub cmds: Vec<TileCmd>,
 }
 
 /// The golden side of one job: the plan and the tile's `next_len`.
@@ -212,6 +214,7 @@ impl SeqBench {
         let mut idle_since_done = true;
         let mut busy_until = 0u64;
         let mut held: Option<TileCmd> = None;
+        let mut issued = Vec::new();
         loop {
             let c = self.dut.cycle();
             self.checker.protocol(c, c < limit, &format!("timeout: tile {:?} not completed", job.desc));
@@ -285,6 +288,7 @@ impl SeqBench {
                         );
                     };
                     compare(&self.checker, c, taken, &exp, &got);
+                    issued.push(got);
                     let e = run_command(&mut self.sorter, &mut self.mem, &got).unwrap_or_else(|a| {
                         self.checker.fail(c, "command data", "no reserved id", &format!("0x{a:x}"))
                     });
@@ -310,6 +314,7 @@ impl SeqBench {
                         stages: want.stages,
                         cycles: c - start,
                         next_len: want.next_len,
+                        cmds: issued,
                     };
                 }
             }

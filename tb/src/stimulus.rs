@@ -140,9 +140,99 @@ pub fn nearly_sorted(mut v: Vec<SortEntry>, rng: &mut Rng, max_dist: usize, swap
     v
 }
 
+/// The shape of a merge-stress pair (see [`starved_merge`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MergeShape {
+    /// Every key of A below every key of B: A drains first while B waits (B's input FIFO fills
+    /// and stays full), then B runs alone.
+    ALow,
+    /// Every key of B below every key of A (the reverse).
+    BLow,
+    /// Alternating runs of `n` entries: `n` of A, then `n` of B, then `n` of A, ... (with `n`
+    /// longer than an input FIFO, each stream in turn starves while the other waits full).
+    Runs(usize),
+}
+
+/// Two sorted streams of `la` and `lb` entries shaped by `shape` (distinct real ids, keys spread
+/// over the key field, about `valid_pct` percent valid): the merge-stress stimulus of the FIFO
+/// capacity class, where one input stream is held back for longer than any buffer holds while
+/// the other one goes out.
+///
+/// # Panics
+/// When the key or id field cannot hold `la + lb` distinct values.
+pub fn starved_merge(
+    fmt: &SortFormat,
+    rng: &mut Rng,
+    la: usize,
+    lb: usize,
+    shape: MergeShape,
+    valid_pct: u32,
+) -> (Vec<SortEntry>, Vec<SortEntry>) {
+    let total = (la + lb) as u64;
+    assert!(total < fmt.id_capacity() && total <= fmt.key_max() as u64, "{total} entries do not fit");
+    // Position p (0..total) of the merged order takes key p * stride + a small random offset
+    // (keys strictly increase along the merged order); ids are distinct.
+    let stride = (fmt.key_max() as u64 + 1) / total.max(1);
+    let base = rng.below(fmt.id_capacity() - total);
+    let slot = |p: u64, rng: &mut Rng| SortEntry {
+        key: (p * stride + rng.below(stride)) as u32,
+        id: (base + p) as u32,
+        valid: rng.percent(valid_pct),
+    };
+    // Which stream position p of the merged order belongs to.
+    let (mut a, mut b) = (Vec::with_capacity(la), Vec::with_capacity(lb));
+    for p in 0..total {
+        let to_a = match shape {
+            MergeShape::ALow => a.len() < la,
+            MergeShape::BLow => b.len() == lb,
+            MergeShape::Runs(n) => {
+                let turn_a = (p as usize / n.max(1)).is_multiple_of(2);
+                if a.len() == la {
+                    false
+                } else if b.len() == lb {
+                    true
+                } else {
+                    turn_a
+                }
+            }
+        };
+        let e = slot(p, rng);
+        if to_a {
+            a.push(e);
+        } else {
+            b.push(e);
+        }
+    }
+    (a, b)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn fmt() -> SortFormat {
+        neo_gen::EngineConfig::default().format()
+    }
+
+    #[test]
+    fn starved_merges_have_the_shape_they_promise() {
+        let f = fmt();
+        let mut rng = Rng::new(3);
+        let sorted = |v: &[SortEntry]| v.windows(2).all(|w| w[0].order_key() < w[1].order_key());
+        let (a, b) = starved_merge(&f, &mut rng, 300, 5, MergeShape::ALow, 80);
+        assert_eq!((a.len(), b.len()), (300, 5));
+        assert!(sorted(&a) && sorted(&b));
+        assert!(a.last().unwrap().key < b[0].key, "every A key below every B key");
+        let (a, b) = starved_merge(&f, &mut rng, 17, 257, MergeShape::BLow, 80);
+        assert!(b.last().unwrap().key < a[0].key, "every B key below every A key");
+        let (a, b) = starved_merge(&f, &mut rng, 700, 650, MergeShape::Runs(300), 100);
+        assert!(sorted(&a) && sorted(&b));
+        // A holds positions 0..300 and 600..900 of the merged order: B's first key lies between
+        // A's 300th and 301st.
+        assert!(a[299].key < b[0].key && b[299].key < a[300].key && a[599].key < b[300].key);
+        let (a, b) = starved_merge(&f, &mut rng, 0, 0, MergeShape::Runs(16), 50);
+        assert!(a.is_empty() && b.is_empty());
+    }
 
     #[test]
     fn generated_entries_fit_the_format() {

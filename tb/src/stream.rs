@@ -96,46 +96,53 @@ impl Source {
     }
 }
 
-/// Takes a valid/ready output stream under random backpressure and checks that valid and data
-/// stay stable while valid is high and ready low.
-pub struct Sink {
+/// The protocol checker of one valid/ready interface the DUT drives (an output stream, a memory
+/// request or write port), bound to port indices: the reusable harness piece behind [`Sink`] and
+/// the memory models. After each `eval` of a cycle, with ready as driven for that cycle,
+/// [`Handshake::check`] asserts
+///
+/// - **valid and payload hold until taken**: after a cycle with valid high and ready low, valid
+///   is still high and every payload port unchanged (no dropped valid, no data changing under
+///   stall);
+/// - **valid does not depend on ready**: ready is flipped, the model re-evaluated
+///   (combinational settle only, no clock), and valid and payload must not have changed; ready is
+///   then restored and the model re-evaluated, so the rest of the bench sees the cycle as driven.
+///
+/// A violation stops the run through [`Checker::protocol`] with the cycle, the interface and
+/// the rule.
+pub struct Handshake {
+    name: String,
     valid: usize,
     ready: usize,
     data: Vec<(usize, usize)>,
-    rng: Rng,
-    ready_now: bool,
     stalled: Option<Beat>,
-    /// Probability (percent) of ready being high in a given cycle.
-    pub ready_pct: u32,
-    /// Beats received so far.
-    pub received: u64,
-    /// Check valid/data stability under backpressure (on by default).
+    /// Check that valid and payload stay stable until taken (on by default).
     pub check_stable: bool,
+    /// Check that valid and payload do not depend on ready (on by default).
+    pub check_independent: bool,
 }
 
-impl Sink {
-    /// A sink on `D`'s ports `valid` (output), `ready` (input) and `data` (outputs).
-    pub fn new<D: Dut>(valid: &str, ready: &str, data: &[&str], rng: Rng, ready_pct: u32) -> Self {
-        Sink {
+fn hex_beat(b: &Beat) -> Vec<String> {
+    b.iter().map(|w| crate::bits::hex(w)).collect()
+}
+
+impl Handshake {
+    /// The checker of interface `name` on `D`'s ports `valid` (output), `ready` (input) and
+    /// `data` (outputs).
+    pub fn new<D: Dut>(name: &str, valid: &str, ready: &str, data: &[&str]) -> Self {
+        Handshake {
+            name: name.to_string(),
             valid: D::port(valid),
             ready: D::port(ready),
             data: data.iter().map(|d| (D::port(d), D::PORTS[D::port(d)].words())).collect(),
-            rng,
-            ready_now: false,
             stalled: None,
-            ready_pct,
-            received: 0,
             check_stable: true,
+            check_independent: true,
         }
     }
 
-    /// Sets ready for this cycle (call before `eval`).
-    pub fn drive<D: Dut>(&mut self, dut: &mut D) {
-        self.ready_now = self.rng.percent(self.ready_pct);
-        dut.set_u64(self.ready, self.ready_now as u64);
-    }
-
-    fn read<D: Dut>(&self, dut: &D) -> Beat {
+    /// The payload ports' values now.
+    pub fn read<D: Dut>(&self, dut: &D) -> Beat {
         self.data
             .iter()
             .map(|&(port, words)| {
@@ -146,41 +153,132 @@ impl Sink {
             .collect()
     }
 
-    /// After `eval`: the beat transferred at this edge, if any. Panics through `checker` when
-    /// valid dropped or data changed while a beat was waiting for ready.
-    pub fn sample<D: Dut>(&mut self, dut: &D, checker: &Checker) -> Option<Beat> {
+    /// Forgets a stalled beat (after a reset of the DUT).
+    pub fn clear(&mut self) {
+        self.stalled = None;
+    }
+
+    /// After `eval`, with ready as driven this cycle (`ready`): checks the rules (see the type's
+    /// docs) and returns the beat that transfers at this edge (valid and ready high), if any.
+    pub fn check<D: Dut>(&mut self, dut: &mut D, ready: bool, checker: &Checker) -> Option<Beat> {
+        let cycle = dut.cycle();
         let valid = dut.get_u64(self.valid) != 0;
+        let beat = if valid || self.stalled.is_some() { Some(self.read(dut)) } else { None };
         if let Some(prev) = self.stalled.take() {
             if self.check_stable {
                 checker.protocol(
-                    dut.cycle(),
+                    cycle,
                     valid,
-                    "output valid dropped before ready (no transfer happened)",
+                    &format!(
+                        "{}: valid dropped before it was taken (valid must hold until ready)",
+                        self.name
+                    ),
                 );
-                let now = self.read(dut);
-                if now != prev {
+                let now = beat.as_ref().expect("read above");
+                if *now != prev {
                     checker.protocol(
-                        dut.cycle(),
+                        cycle,
                         false,
                         &format!(
-                            "output data changed while valid and not ready: was {:?}, now {:?}",
-                            prev.iter().map(|w| crate::bits::hex(w)).collect::<Vec<_>>(),
-                            now.iter().map(|w| crate::bits::hex(w)).collect::<Vec<_>>()
+                            "{}: payload changed while valid and not ready (must hold until taken): was {:?}, now {:?}",
+                            self.name,
+                            hex_beat(&prev),
+                            hex_beat(now)
                         ),
                     );
                 }
             }
         }
+        if self.check_independent {
+            dut.set_u64(self.ready, !ready as u64);
+            dut.eval();
+            let flipped_valid = dut.get_u64(self.valid) != 0;
+            let flipped = if valid || flipped_valid { Some(self.read(dut)) } else { None };
+            dut.set_u64(self.ready, ready as u64);
+            dut.eval();
+            checker.protocol(
+                cycle,
+                flipped_valid == valid,
+                &format!(
+                    "{}: valid depends on ready (valid must not depend on ready): valid {} with ready {}, {} with ready {}",
+                    self.name, valid as u8, ready as u8, flipped_valid as u8, !ready as u8
+                ),
+            );
+            if valid {
+                let (a, b) = (beat.as_ref().expect("valid"), flipped.as_ref().expect("valid"));
+                checker.protocol(
+                    cycle,
+                    a == b,
+                    &format!(
+                        "{}: payload depends on ready while valid: {:?} with ready {}, {:?} with ready {}",
+                        self.name,
+                        hex_beat(a),
+                        ready as u8,
+                        hex_beat(b),
+                        !ready as u8
+                    ),
+                );
+            }
+        }
         if !valid {
             return None;
         }
-        let beat = self.read(dut);
-        if self.ready_now {
-            self.received += 1;
+        let beat = beat.expect("valid");
+        if ready {
             Some(beat)
         } else {
             self.stalled = Some(beat);
             None
         }
+    }
+}
+
+/// Takes a valid/ready output stream under random backpressure (ready drawn at random each
+/// cycle, independently of valid) and checks it with a [`Handshake`]: valid and data stable while
+/// valid is high and ready low, and neither depending on ready.
+pub struct Sink {
+    hs: Handshake,
+    ready: usize,
+    rng: Rng,
+    ready_now: bool,
+    /// Probability (percent) of ready being high in a given cycle.
+    pub ready_pct: u32,
+    /// Beats received so far.
+    pub received: u64,
+}
+
+impl Sink {
+    /// A sink on `D`'s ports `valid` (output), `ready` (input) and `data` (outputs).
+    pub fn new<D: Dut>(valid: &str, ready: &str, data: &[&str], rng: Rng, ready_pct: u32) -> Self {
+        Sink {
+            hs: Handshake::new::<D>(&format!("{valid}/{ready}"), valid, ready, data),
+            ready: D::port(ready),
+            rng,
+            ready_now: false,
+            ready_pct,
+            received: 0,
+        }
+    }
+
+    /// The protocol checker (to switch a rule off: `sink.handshake().check_stable = false`).
+    pub fn handshake(&mut self) -> &mut Handshake {
+        &mut self.hs
+    }
+
+    /// Sets ready for this cycle (call before `eval`).
+    pub fn drive<D: Dut>(&mut self, dut: &mut D) {
+        self.ready_now = self.rng.percent(self.ready_pct);
+        dut.set_u64(self.ready, self.ready_now as u64);
+    }
+
+    /// After `eval`: the beat transferred at this edge, if any. Panics through `checker` when
+    /// valid dropped or data changed while a beat was waiting for ready, or when valid or data
+    /// depend on ready (see [`Handshake`]; ready is flipped and restored with two extra `eval`s).
+    pub fn sample<D: Dut>(&mut self, dut: &mut D, checker: &Checker) -> Option<Beat> {
+        let beat = self.hs.check(dut, self.ready_now, checker);
+        if beat.is_some() {
+            self.received += 1;
+        }
+        beat
     }
 }

@@ -17,6 +17,15 @@ fn fixture() -> (ModuleInterface, Vec<(String, String)>) {
     (iface, vec![("neo_tb_adder.v".to_string(), text)])
 }
 
+/// Without Verilator the cosimulation below is compiled out: SKIP, or a failure when `CI` is set.
+#[test]
+fn models_present() {
+    assert_eq!(
+        neo_tb::require_models("models_present: run-time models against the static ones"),
+        neo_tb::HAS_MODELS
+    );
+}
+
 neo_tb::with_models! {
     use neo_tb::dut::Dut;
     use neo_tb::models::NeoTbAdder;

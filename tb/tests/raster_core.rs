@@ -6,7 +6,10 @@
 #[cfg(not(neo_has_verilator))]
 #[test]
 fn raster_core_skipped_without_verilator() {
-    println!("SKIP: neo-tb was built without Verilator; raster-core cosimulation did not run");
+    // Prints SKIP (or fails when CI is set); the models must really be absent in this build.
+    assert!(!neo_tb::require_models(
+        "raster_core_skipped_without_verilator: raster-core cosimulation did not run"
+    ));
 }
 
 #[cfg(neo_has_verilator)]
@@ -16,7 +19,7 @@ mod cosim {
     use neo_golden::{source, trajectory};
     use neo_tb::core::MemTiming;
     use neo_tb::raster::{at, case_of, g, golden, random_case, RasterCore, TileCase};
-    use neo_tb::rng::{test_seed, Rng};
+    use neo_tb::rng::{for_each_seed, seed_share, Rng, SeedSplit};
     use neo_tb::waves::maybe_trace;
 
     /// Random Gaussians (override with NEO_TB_VECTORS; the core test uses a fifth of the unit
@@ -40,144 +43,153 @@ mod cosim {
     #[test]
     fn raster_core_random_tiles_under_memory_stalls() {
         let name = "raster_core_random_tiles_under_memory_stalls";
-        let seed = test_seed(name);
-        let cfg = neo_tb::config();
-        let mut rng = Rng::new(seed);
-        let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
-        maybe_trace(&mut core.dut, name);
-        let total = gaussian_count();
-        let (mut sent, mut tiles, mut edge) = (0, 0, 0);
-        while sent < total {
-            core.set_timing(TIMINGS[tiles % TIMINGS.len()]);
-            let tile = [rng.below(40) as u32, rng.below(40) as u32];
-            let mut size =
-                [(tile[0] + 1 + rng.below(3) as u32) * 64, (tile[1] + 1 + rng.below(3) as u32) * 64];
-            if rng.percent(25) {
-                size = [tile[0] * 64 + 1 + rng.below(64) as u32, tile[1] * 64 + 1 + rng.below(64) as u32];
-                edge += 1;
+        for_each_seed(name, |seed| {
+            let cfg = neo_tb::config();
+            let mut rng = Rng::new(seed);
+            let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
+            maybe_trace(&mut core.dut, name);
+            // The Gaussians are split over the seeds (each seed its share: the same with NEO_SEED).
+            let total = seed_share(gaussian_count());
+            let (mut sent, mut tiles, mut edge) = (0, 0, 0);
+            while sent < total {
+                core.set_timing(TIMINGS[tiles % TIMINGS.len()]);
+                let tile = [rng.below(40) as u32, rng.below(40) as u32];
+                let mut size =
+                    [(tile[0] + 1 + rng.below(3) as u32) * 64, (tile[1] + 1 + rng.below(3) as u32) * 64];
+                if rng.percent(25) {
+                    size = [tile[0] * 64 + 1 + rng.below(64) as u32, tile[1] * 64 + 1 + rng.below(64) as u32];
+                    edge += 1;
+                }
+                let n = rng.below(48) as usize;
+                let case = random_case(&mut rng, &cfg, tile, size, n, 5);
+                check_case(&mut core, &case);
+                sent += n;
+                tiles += 1;
             }
-            let n = rng.below(48) as usize;
-            let case = random_case(&mut rng, &cfg, tile, size, n, 5);
-            check_case(&mut core, &case);
-            sent += n;
-            tiles += 1;
-        }
-        assert!(edge > 0);
-        println!("{name}: {sent} Gaussians in {tiles} tiles ({edge} edge tiles) checked");
+            assert!(edge > 0);
+            println!("{name}: {sent} Gaussians in {tiles} tiles ({edge} edge tiles) checked");
+        });
     }
 
     #[test]
     fn raster_core_directed_cases() {
         let name = "raster_core_directed_cases";
-        let seed = test_seed(name);
-        let cfg = neo_tb::config();
-        let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
-        let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
-        maybe_trace(&mut core.dut, name);
-        let t = [5, 3];
-        let size = [640, 480];
-        let c = at(t, &rc, 31.5, 30.0);
-        let mut cases: Vec<(&str, TileCase)> = vec![
-            ("empty table", case_of(t, size, &[])),
-            ("one entry", case_of(t, size, &[g(c, 9.0, 5.0, 0.4, 0.8, [1.0, 0.5, 0.25])])),
-            (
-                "centred outside the tile",
-                case_of(t, size, &[g(at(t, &rc, -6.0, 12.0), 5.0, 3.0, 0.3, 0.9, [1.0; 3])]),
-            ),
-            ("screen-filling", case_of(t, size, &[g(c, 3000.0, 2500.0, 0.2, 0.5, [0.2, 0.9, 0.4])])),
-            ("needle", case_of(t, size, &[g(c, 40.0, 0.3, 0.7, 0.9, [1.0, 1.0, 0.0])])),
-        ];
-        // Opaque stack: T of every pixel falls below 1e-4 (golden terminates every subtile).
-        let stack: Vec<_> = (0..40)
-            .map(|i| g(at(t, &rc, 30.0 + i as f64, 33.0), 200.0, 180.0, 0.1, 0.99, [0.9, 0.1, 0.3]))
-            .collect();
-        let opaque = case_of(t, size, &stack);
-        let feats: Vec<_> = opaque.table.iter().map(|e| opaque.features[&e.id]).collect();
-        let r = raster_tile(&feats, &fmt, t[0], t[1], size[0], size[1], &rc);
-        assert!(r.work.iter().all(|w| w.terminated), "the opaque stack terminates every subtile");
-        cases.push(("opaque stack", opaque));
-        // Degenerate conics: non-positive-definite and zero mantissas.
-        let mut d1 = g(c, 6.0, 6.0, 0.0, 0.8, [1.0; 3]);
-        // b^2 > a c with every field inside its width (b has one more bit than a, c).
-        d1.conic.b = d1.conic.a / 2;
-        d1.conic.a /= 4;
-        d1.conic.c /= 4;
-        assert!((d1.conic.b as i64).pow(2) > d1.conic.a as i64 * d1.conic.c as i64);
-        let mut d2 = g(at(t, &rc, 10.0, 50.0), 6.0, 6.0, 0.0, 0.8, [0.5; 3]);
-        d2.conic.a = 0;
-        d2.conic.b = 0;
-        d2.conic.c = 0;
-        cases.push(("non-positive-definite conic", case_of(t, size, &[d1])));
-        cases.push(("zero conic", case_of(t, size, &[d2])));
-        cases.push(("degenerate conics", case_of(t, size, &[d1, d2, g(c, 4.0, 4.0, 0.0, 0.7, [0.3; 3])])));
-        // Alpha exactly 1/255 at a tile pixel (found with golden pixel_alpha).
-        let exp = ExpTable::new(&rc.blend.exp, rc.blend.power_frac);
-        let (px, py) = ((t[0] * rc.tile) as i64 + 20, (t[1] * rc.tile) as i64 + 41);
-        let mut exact = None;
-        'search: for op in 1..(1i32 << fmt.opacity.bits) {
-            for off in 0..400 {
-                let mut e = g([px as f64 + 1.0, py as f64], 1.5, 1.5, 0.0, 0.5, [1.0, 0.25, 0.5]);
-                e.opacity = op;
-                e.mean[0] += off;
-                if pixel_alpha(&e, &fmt, &rc, &exp, px, py) == Some(rc.blend.min_alpha_raw()) {
-                    exact = Some(e);
-                    break 'search;
+        for_each_seed(name, |seed| {
+            let cfg = neo_tb::config();
+            let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
+            let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
+            maybe_trace(&mut core.dut, name);
+            let t = [5, 3];
+            let size = [640, 480];
+            let c = at(t, &rc, 31.5, 30.0);
+            let mut cases: Vec<(&str, TileCase)> = vec![
+                ("empty table", case_of(t, size, &[])),
+                ("one entry", case_of(t, size, &[g(c, 9.0, 5.0, 0.4, 0.8, [1.0, 0.5, 0.25])])),
+                (
+                    "centred outside the tile",
+                    case_of(t, size, &[g(at(t, &rc, -6.0, 12.0), 5.0, 3.0, 0.3, 0.9, [1.0; 3])]),
+                ),
+                ("screen-filling", case_of(t, size, &[g(c, 3000.0, 2500.0, 0.2, 0.5, [0.2, 0.9, 0.4])])),
+                ("needle", case_of(t, size, &[g(c, 40.0, 0.3, 0.7, 0.9, [1.0, 1.0, 0.0])])),
+            ];
+            // Opaque stack: T of every pixel falls below 1e-4 (golden terminates every subtile).
+            let stack: Vec<_> = (0..40)
+                .map(|i| g(at(t, &rc, 30.0 + i as f64, 33.0), 200.0, 180.0, 0.1, 0.99, [0.9, 0.1, 0.3]))
+                .collect();
+            let opaque = case_of(t, size, &stack);
+            let feats: Vec<_> = opaque.table.iter().map(|e| opaque.features[&e.id]).collect();
+            let r = raster_tile(&feats, &fmt, t[0], t[1], size[0], size[1], &rc);
+            assert!(r.work.iter().all(|w| w.terminated), "the opaque stack terminates every subtile");
+            cases.push(("opaque stack", opaque));
+            // Degenerate conics: non-positive-definite and zero mantissas.
+            let mut d1 = g(c, 6.0, 6.0, 0.0, 0.8, [1.0; 3]);
+            // b^2 > a c with every field inside its width (b has one more bit than a, c).
+            d1.conic.b = d1.conic.a / 2;
+            d1.conic.a /= 4;
+            d1.conic.c /= 4;
+            assert!((d1.conic.b as i64).pow(2) > d1.conic.a as i64 * d1.conic.c as i64);
+            let mut d2 = g(at(t, &rc, 10.0, 50.0), 6.0, 6.0, 0.0, 0.8, [0.5; 3]);
+            d2.conic.a = 0;
+            d2.conic.b = 0;
+            d2.conic.c = 0;
+            cases.push(("non-positive-definite conic", case_of(t, size, &[d1])));
+            cases.push(("zero conic", case_of(t, size, &[d2])));
+            cases
+                .push(("degenerate conics", case_of(t, size, &[d1, d2, g(c, 4.0, 4.0, 0.0, 0.7, [0.3; 3])])));
+            // Alpha exactly 1/255 at a tile pixel (found with golden pixel_alpha).
+            let exp = ExpTable::new(&rc.blend.exp, rc.blend.power_frac);
+            let (px, py) = ((t[0] * rc.tile) as i64 + 20, (t[1] * rc.tile) as i64 + 41);
+            let mut exact = None;
+            'search: for op in 1..(1i32 << fmt.opacity.bits) {
+                for off in 0..400 {
+                    let mut e = g([px as f64 + 1.0, py as f64], 1.5, 1.5, 0.0, 0.5, [1.0, 0.25, 0.5]);
+                    e.opacity = op;
+                    e.mean[0] += off;
+                    if pixel_alpha(&e, &fmt, &rc, &exp, px, py) == Some(rc.blend.min_alpha_raw()) {
+                        exact = Some(e);
+                        break 'search;
+                    }
                 }
             }
-        }
-        let exact = exact.expect("a Gaussian with alpha exactly 1/255");
-        let one = case_of(t, size, &[exact]);
-        let k = ((py - (t[1] * rc.tile) as i64) * rc.tile as i64 + px - (t[0] * rc.tile) as i64) as usize;
-        assert_ne!(golden(&one, &fmt, &rc).pixels[k], [0; 3], "alpha 1/255 is blended");
-        cases.push(("alpha exactly 1/255", one));
-        // Culled Gaussians in the table (no feature entry): valid cleared, key kept.
-        let mut culled = case_of(
-            t,
-            size,
-            &[g(c, 9.0, 9.0, 0.0, 0.8, [1.0; 3]), g(c, 3.0, 3.0, 0.0, 0.8, [0.0, 1.0, 0.0])],
-        );
-        culled.features.remove(&culled.table[0].id);
-        cases.push(("culled entry", culled));
-        // Edge tile: partly outside the image; a tile far from the origin.
-        let e = [3, 2];
-        cases.push((
-            "edge tile",
-            case_of(
-                e,
-                [3 * 64 + 13, 2 * 64 + 40],
-                &[g(at(e, &rc, 20.0, 20.0), 30.0, 30.0, 0.0, 0.8, [1.0; 3])],
-            ),
-        ));
-        let far = [1000, 999];
-        cases.push((
-            "far tile",
-            case_of(far, [64_000, 64_000], &[g(at(far, &rc, 20.0, 50.0), 12.0, 30.0, 1.0, 0.8, [1.0; 3])]),
-        ));
-        for (k, (label, case)) in cases.iter().enumerate() {
-            for (i, timing) in TIMINGS.iter().enumerate() {
-                core.set_timing(*timing);
-                let cycles = check_case(&mut core, case);
-                println!("{name}: {label} (memory {i}): {cycles} cycles");
-                let _ = k;
+            let exact = exact.expect("a Gaussian with alpha exactly 1/255");
+            let one = case_of(t, size, &[exact]);
+            let k = ((py - (t[1] * rc.tile) as i64) * rc.tile as i64 + px - (t[0] * rc.tile) as i64) as usize;
+            assert_ne!(golden(&one, &fmt, &rc).pixels[k], [0; 3], "alpha 1/255 is blended");
+            cases.push(("alpha exactly 1/255", one));
+            // Culled Gaussians in the table (no feature entry): valid cleared, key kept.
+            let mut culled = case_of(
+                t,
+                size,
+                &[g(c, 9.0, 9.0, 0.0, 0.8, [1.0; 3]), g(c, 3.0, 3.0, 0.0, 0.8, [0.0, 1.0, 0.0])],
+            );
+            culled.features.remove(&culled.table[0].id);
+            cases.push(("culled entry", culled));
+            // Edge tile: partly outside the image; a tile far from the origin.
+            let e = [3, 2];
+            cases.push((
+                "edge tile",
+                case_of(
+                    e,
+                    [3 * 64 + 13, 2 * 64 + 40],
+                    &[g(at(e, &rc, 20.0, 20.0), 30.0, 30.0, 0.0, 0.8, [1.0; 3])],
+                ),
+            ));
+            let far = [1000, 999];
+            cases.push((
+                "far tile",
+                case_of(
+                    far,
+                    [64_000, 64_000],
+                    &[g(at(far, &rc, 20.0, 50.0), 12.0, 30.0, 1.0, 0.8, [1.0; 3])],
+                ),
+            ));
+            for (k, (label, case)) in cases.iter().enumerate() {
+                for (i, timing) in TIMINGS.iter().enumerate() {
+                    core.set_timing(*timing);
+                    let cycles = check_case(&mut core, case);
+                    println!("{name}: {label} (memory {i}): {cycles} cycles");
+                    let _ = k;
+                }
             }
-        }
+        });
     }
 
     #[test]
     fn raster_core_tables_longer_than_the_feature_buffer() {
         let name = "raster_core_tables_longer_than_the_feature_buffer";
-        let seed = test_seed(name);
-        let cfg = neo_tb::config();
-        let f = cfg.raster_feature_buffer;
-        let mut rng = Rng::new(seed);
-        let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
-        maybe_trace(&mut core.dut, name);
-        for (i, n) in [f + 1, f + 37, 2 * f + 5].into_iter().enumerate() {
-            core.set_timing(TIMINGS[i % TIMINGS.len()]);
-            let case = random_case(&mut rng, &cfg, [7, 9], [1024, 1024], n, 3);
-            let cycles = check_case(&mut core, &case);
-            println!("{name}: {n} entries (buffer {f}): {cycles} cycles");
-        }
+        for_each_seed(name, |seed| {
+            let cfg = neo_tb::config();
+            let f = cfg.raster_feature_buffer;
+            let mut rng = Rng::new(seed);
+            let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
+            maybe_trace(&mut core.dut, name);
+            for (i, n) in [f + 1, f + 37, 2 * f + 5].into_iter().enumerate() {
+                core.set_timing(TIMINGS[i % TIMINGS.len()]);
+                let case = random_case(&mut rng, &cfg, [7, 9], [1024, 1024], n, 3);
+                let cycles = check_case(&mut core, &case);
+                println!("{name}: {n} entries (buffer {f}): {cycles} cycles");
+            }
+        });
     }
 
     #[test]
@@ -186,16 +198,18 @@ mod cosim {
         let Some(path) = shared_file_for_test(name, "scenes/biker.ply") else {
             return;
         };
-        let seed = test_seed(name);
+        // The 9 tiles (golden pipeline: the slow part) are split over the seeds: tile k runs
+        // behind seed k mod n (every tile behind NEO_SEED when it is set).
+        let seeds = SeedSplit::new(name);
         let cfg = neo_tb::config();
-        let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
-        maybe_trace(&mut core.dut, name);
         let mut checked = 0;
-        for tile in neo_tb::raster::biker_tiles(&path, 256, 3, 3) {
-            core.set_timing(TIMINGS[checked % TIMINGS.len()]);
+        for (k, tile) in neo_tb::raster::biker_tiles(&path, 256, 3, 3).into_iter().enumerate() {
+            let seed = seeds.seed(k);
+            let mut core = RasterCore::new(&cfg, seed, TIMINGS[k % TIMINGS.len()]);
+            maybe_trace(&mut core.dut, name);
             let cycles = core.run(&tile.case, &tile.want).cycles;
             println!(
-                "{name}: frame {} tile {:?}: {} entries, {} set subtile bits, {cycles} cycles",
+                "{name}: frame {} tile {:?} (seed 0x{seed:016x}): {} entries, {} set subtile bits, {cycles} cycles",
                 tile.frame,
                 tile.case.tile,
                 tile.case.table.len(),
