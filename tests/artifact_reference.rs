@@ -15,9 +15,9 @@ use std::process::Command;
 
 use neo_golden::shared::{shared_dir_path, shared_file_for_test};
 use neo_sim::artifact::poc::{read_poc_trace, PocStats};
-use neo_sim::artifact::timing::artifact_timing;
+use neo_sim::artifact::timing::{artifact_timing, artifact_timing_with};
 use neo_sim::artifact::waterfall::{waterfall, NeoSizes};
-use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request};
+use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request, Rules};
 use neo_sim::config::DramConfig;
 use neo_sim::traffic::{Dir, Stage};
 use serde_json::Value;
@@ -200,7 +200,28 @@ fn waterfall_reaches_neos_own_bytes() {
         let k = run["frame"].as_u64().expect("frame") as usize;
         let trace = tmp.path().join(run["trace_file"].as_str().expect("trace_file"));
         let frame = read_poc_trace(&trace).unwrap_or_else(|e| panic!("{e}"));
-        let last = waterfall(&frame, &ArtifactSizes::default(), &neo_sizes).pop().expect("steps").bytes;
+        let steps = waterfall(&frame, &ArtifactSizes::default(), &neo_sizes);
+        if k == 1 {
+            // The timing restatement issues exactly each step's bytes (same rules, same frame).
+            for (j, step) in steps.iter().enumerate() {
+                let rules = Rules::step(j, &neo_sizes);
+                let t =
+                    artifact_timing_with(&frame, &ArtifactSizes::default(), &rules, &DramConfig::default());
+                assert_eq!(
+                    (t.reads + t.writes) * 64,
+                    step.bytes.total(),
+                    "frame {k} step {j}: {}",
+                    step.name
+                );
+                eprintln!(
+                    "frame {k} step {j}: {:.3} MB, {} cycles ({})",
+                    step.bytes.total() as f64 / 1e6,
+                    t.core_cycles,
+                    step.name
+                );
+            }
+        }
+        let last = steps.last().expect("steps").bytes;
         let neo = &frames[k]["stages"];
         for (i, st) in Stage::ALL.iter().enumerate() {
             let got = last.get(*st, Dir::Read) + last.get(*st, Dir::Write);

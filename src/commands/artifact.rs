@@ -6,9 +6,9 @@ use anyhow::Result;
 use clap::Args;
 use neo_golden::pipeline::Formats;
 use neo_sim::artifact::poc::read_poc_trace;
-use neo_sim::artifact::timing::artifact_timing;
+use neo_sim::artifact::timing::artifact_timing_with;
 use neo_sim::artifact::waterfall::{waterfall, NeoSizes};
-use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request};
+use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request, Rules};
 use neo_sim::config::SimConfig;
 use neo_sim::traffic::{Dir, Stage};
 use std::fmt::Write as _;
@@ -20,7 +20,8 @@ pub struct ArtifactArgs {
     /// `poc.trace` files (`neo frames --trace` or `neo simulate --trace` write them).
     #[arg(required = true)]
     pub traces: Vec<PathBuf>,
-    /// Also time each frame the artifact's way on neo's DRAM model (seconds per frame).
+    /// Also time each frame, and each step of the waterfall, with the artifact's structure on
+    /// neo's DRAM model (about a second per step and frame).
     #[arg(long)]
     pub time: bool,
     /// Model configuration (JSON; its `dram` section and frame-buffer pixel size are used).
@@ -57,14 +58,19 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
             println!("  {:<36} {} {:>10}", r.name(), if r.is_write() { "W" } else { "R" }, lines.get(r));
         }
         println!("  {:<36}   {:>10} read, {} written", "total", lines.reads(), lines.writes());
-        println!("{}", waterfall_table(&f, &sizes, &neo));
-        if a.time {
-            let t = artifact_timing(&f, &sizes, &cfg.dram);
+        let cycles: Vec<u64> = if a.time {
+            (0..Rules::STEPS.len())
+                .map(|k| artifact_timing_with(&f, &sizes, &Rules::step(k, &neo), &cfg.dram).core_cycles)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        println!("{}", waterfall_table(&f, &sizes, &neo, &cycles));
+        if let Some(c) = cycles.first() {
             println!(
-                "artifact's timing on neo's DRAM model ({}): {} core cycles at 1 GHz ({:.1} FPS)\n",
+                "the artifact's timing on neo's DRAM model ({}): {c} core cycles at 1 GHz ({:.1} FPS)\n",
                 cfg.dram.name,
-                t.core_cycles,
-                1e9 / t.core_cycles as f64
+                1e9 / *c as f64
             );
         }
     }
@@ -72,18 +78,30 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
 }
 
 /// The waterfall as a text table, MB (1e6 bytes) by neo stage, read + written.
-fn waterfall_table(f: &neo_sim::artifact::poc::PocFrame, sizes: &ArtifactSizes, neo: &NeoSizes) -> String {
+/// The waterfall as a text table; `cycles` (one per step, or empty) adds the timing column.
+fn waterfall_table(
+    f: &neo_sim::artifact::poc::PocFrame,
+    sizes: &ArtifactSizes,
+    neo: &NeoSizes,
+    cycles: &[u64],
+) -> String {
     let steps = waterfall(f, sizes, neo);
     let mut s =
         String::from("from the artifact's bytes to neo's charging (MB read + written, cumulative):\n");
     let _ = write!(s, "  {:<60} {:>9}", "step", "total");
+    if !cycles.is_empty() {
+        let _ = write!(s, " {:>10}", "Mcycles");
+    }
     for st in Stage::ALL {
         let _ = write!(s, " {:>10}", st.name().split(' ').next().unwrap_or(""));
     }
     s.push('\n');
     let mb = |b: u64| b as f64 / 1e6;
-    for step in &steps {
+    for (k, step) in steps.iter().enumerate() {
         let _ = write!(s, "  {:<60} {:>9.3}", step.name, mb(step.bytes.total()));
+        if let Some(c) = cycles.get(k) {
+            let _ = write!(s, " {:>10.3}", *c as f64 / 1e6);
+        }
         for st in Stage::ALL {
             let _ =
                 write!(s, " {:>10.3}", mb(step.bytes.get(st, Dir::Read) + step.bytes.get(st, Dir::Write)));

@@ -63,6 +63,61 @@ impl Default for ArtifactSizes {
     }
 }
 
+/// Which of the artifact's ways of charging a frame are replaced by neo's (all off: the
+/// artifact). The waterfall ([`waterfall::waterfall`]) switches them on one at a time, in the
+/// order of [`Rules::step`]; the timing restatement ([`timing::artifact_timing_with`]) issues
+/// the requests each set of rules implies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Rules {
+    /// The precise sort's store writes its chunk (the artifact's has size 0).
+    pub precise_store: bool,
+    /// Contiguous lists move every line they need (the artifact rounds down).
+    pub round_up: bool,
+    /// A feature entry that straddles two lines costs both.
+    pub straddle: bool,
+    /// Duplication writes one sort entry per incoming pair, each tile's list contiguous (the
+    /// artifact: three line writes per pair).
+    pub dup_entries: bool,
+    /// The incoming merge is charged as golden's accounting fuses it with DPS: the sorted
+    /// incoming list is read and the merged table written instead of DPS's store.
+    pub merge_fused: bool,
+    /// Preprocessing writes the feature table as one stream (the artifact: a line per Gaussian).
+    pub feature_stream: bool,
+    /// The frame buffer is written, this many bytes per pixel.
+    pub frame_buffer: Option<u64>,
+    /// neo's parameter and feature-entry sizes replace the artifact's.
+    pub neo_sizes: Option<waterfall::NeoSizes>,
+}
+
+impl Rules {
+    /// The names of the steps, in order (step 0: the artifact).
+    pub const STEPS: [&'static str; 9] = [
+        "the artifact",
+        "+ the precise sort's store is written (not size 0)",
+        "+ partial lines are moved (lists round up, not down)",
+        "+ straddling feature entries cost two lines",
+        "+ duplication writes 6 B per pair, not 3 lines",
+        "+ the incoming merge is charged, fused with DPS",
+        "+ the feature table is written as one stream",
+        "+ the frame buffer is written",
+        "+ neo's byte sizes (parameters, feature entries)",
+    ];
+
+    /// The rules after the first `k` steps of the waterfall, with neo's sizes `neo`.
+    pub fn step(k: usize, neo: &waterfall::NeoSizes) -> Rules {
+        Rules {
+            precise_store: k >= 1,
+            round_up: k >= 2,
+            straddle: k >= 3,
+            dup_entries: k >= 4,
+            merge_fused: k >= 5,
+            feature_stream: k >= 6,
+            frame_buffer: (k >= 7).then_some(neo.pixel),
+            neo_sizes: (k >= 8).then_some(*neo),
+        }
+    }
+}
+
 /// The artifact's request names, in the order of its source.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Request {

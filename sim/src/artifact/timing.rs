@@ -24,7 +24,8 @@
 use std::collections::VecDeque;
 
 use super::poc::PocFrame;
-use super::{approx_passes, ArtifactSizes};
+use super::waterfall::tile_pixels;
+use super::{approx_passes, ArtifactSizes, Rules};
 use crate::config::DramConfig;
 use crate::dram::{Ps, Ticket};
 use crate::dram_stream::QueueFeeder;
@@ -44,6 +45,8 @@ pub struct ArtifactLayout {
     pub new: u64,
     /// Entries per tile region (`MAX_GAUSSIAN_IN_TILE`).
     pub tile_entries: u64,
+    /// The frame buffer (not in the artifact; for the waterfall's frame-buffer step).
+    pub frame_buffer: u64,
 }
 
 impl Default for ArtifactLayout {
@@ -55,6 +58,7 @@ impl Default for ArtifactLayout {
             reuse: 201_326_592,
             new: 251_658_240,
             tile_entries: 8198,
+            frame_buffer: 0x4000_0000,
         }
     }
 }
@@ -217,11 +221,6 @@ fn tile_base(base: u64, t: usize, l: &ArtifactLayout, s: &ArtifactSizes) -> u64 
     base + t as u64 * l.tile_entries * s.entry
 }
 
-/// `floor(bytes / line)` consecutive lines from `base` (the artifact's contiguous access).
-fn contiguous(base: u64, bytes: u64, s: &ArtifactSizes) -> Vec<u64> {
-    (0..bytes / s.line).map(|i| (base + i * s.line) / s.line * s.line).collect()
-}
-
 fn align(a: u64, s: &ArtifactSizes) -> u64 {
     a / s.line * s.line
 }
@@ -243,24 +242,79 @@ fn morton_tiles(f: &PocFrame) -> Vec<usize> {
     out
 }
 
-/// The artifact's frame on neo's DRAM model.
+/// The artifact's frame on neo's DRAM model, its requests as `r` charges them.
 struct Frame<'a> {
     f: &'a PocFrame,
     s: ArtifactSizes,
     l: ArtifactLayout,
+    r: Rules,
 }
 
 impl Frame<'_> {
+    /// Lines of a contiguous list of `bytes` from `base`: rounded down (the artifact) or up.
+    fn lines(&self, base: u64, bytes: u64) -> Vec<u64> {
+        let s = &self.s;
+        let n = if self.r.round_up { bytes.div_ceil(s.line) } else { bytes / s.line };
+        (0..n).map(|i| align(base, s) + i * s.line).collect()
+    }
+
+    /// Feature-entry bytes.
+    fn feature_bytes(&self) -> u64 {
+        self.r.neo_sizes.map_or(self.s.feature, |n| n.feature)
+    }
+
+    /// The lines one feature entry of Gaussian `id` costs: its first, and its second when it
+    /// straddles and straddles are charged.
+    fn feature_lines(&self, id: u64, out: &mut Vec<u64>) {
+        let (s, fb) = (&self.s, self.feature_bytes());
+        let at = self.l.features + id * fb;
+        out.push(align(at, s));
+        if self.r.straddle && align(at + fb - 1, s) != align(at, s) {
+            out.push(align(at, s) + s.line);
+        }
+    }
+
     fn preprocess_lists(&self) -> Vec<ReqList> {
         let (f, s, l) = (self.f, &self.s, &self.l);
         let visible: Vec<usize> = (0..f.culled.len()).filter(|&i| !f.culled[i]).collect();
-        let cull = contiguous(l.positions, f.culled.len() as u64 * s.position, s);
-        let per = s.others.div_ceil(s.line);
-        let load = visible
-            .iter()
-            .flat_map(|&i| (0..per).map(move |j| align(l.others + i as u64 * s.others, s) + j * s.line))
-            .collect();
-        let store = visible.iter().map(|&i| align(l.features + i as u64 * s.feature, s)).collect();
+        let geometry = self.r.neo_sizes.map_or(s.position, |n| n.geometry);
+        let cull = self.lines(l.positions, f.culled.len() as u64 * geometry);
+        let load = match self.r.neo_sizes {
+            // neo's parameters: every line each record touches.
+            Some(n) => visible
+                .iter()
+                .flat_map(|&i| {
+                    let at = l.others + i as u64 * n.sh;
+                    let first = align(at, s);
+                    (0..(align(at + n.sh - 1, s) - first) / s.line + 1).map(move |j| first + j * s.line)
+                })
+                .collect(),
+            None => {
+                let per = s.others.div_ceil(s.line);
+                visible
+                    .iter()
+                    .flat_map(|&i| {
+                        (0..per).map(move |j| align(l.others + i as u64 * s.others, s) + j * s.line)
+                    })
+                    .collect()
+            }
+        };
+        let store = if self.r.feature_stream {
+            self.lines(l.features, visible.len() as u64 * self.feature_bytes())
+        } else {
+            let mut v = Vec::new();
+            for &i in &visible {
+                self.feature_lines(i as u64, &mut v);
+            }
+            v
+        };
+        vec![(cull, false), (load, false), (store, true), (self.duplication(), true)]
+    }
+
+    /// The duplication writes: three lines per incoming pair (the artifact), or each tile's
+    /// list of sort entries written contiguously.
+    fn duplication(&self) -> Vec<u64> {
+        let (f, s, l) = (self.f, &self.s, &self.l);
         let mut dup = Vec::new();
         let mut filled = vec![0u64; f.tiles.len()];
         let mut at = 0usize;
@@ -272,11 +326,22 @@ impl Frame<'_> {
             }
             for &t in tiles {
                 let base = tile_base(l.new, t as usize, l, s);
-                dup.extend([align(base, s), align(base, s), align(base + filled[t as usize] * s.entry, s)]);
+                if !self.r.dup_entries {
+                    dup.extend([
+                        align(base, s),
+                        align(base, s),
+                        align(base + filled[t as usize] * s.entry, s),
+                    ]);
+                }
                 filled[t as usize] += 1;
             }
         }
-        vec![(cull, false), (load, false), (store, true), (dup, true)]
+        if self.r.dup_entries {
+            for (t, &n) in filled.iter().enumerate() {
+                dup.extend(self.lines(tile_base(l.new, t, l, s), n * s.entry));
+            }
+        }
+        dup
     }
 
     /// The incoming sort of tile `t`: its approximation lists, then its precise chunks.
@@ -284,7 +349,7 @@ impl Frame<'_> {
         let s = &self.s;
         let n = self.f.tiles[t].new as u64;
         let base = tile_base(self.l.new, t, &self.l, s);
-        let list = || contiguous(base, n * s.entry, s);
+        let list = || self.lines(base, n * s.entry);
         let passes = approx_passes(n, s.global_chunk);
         let mut approx = vec![(list(), false)];
         for k in 0..2 * passes - 1 {
@@ -294,49 +359,89 @@ impl Frame<'_> {
             .step_by(s.global_chunk as usize)
             .map(|a| {
                 let c = (n - a).min(s.global_chunk);
+                let store = if self.r.precise_store { self.lines(base, c * s.entry) } else { Vec::new() };
                 vec![
-                    Work::Read(contiguous(base, c * s.entry, s)),
+                    Work::Read(self.lines(base, c * s.entry)),
                     Work::Compute(sort_cycles(c)),
-                    Work::Write(Vec::new()),
+                    Work::Write(store),
                 ]
             })
             .collect();
         (approx, chunks)
     }
 
-    /// DPS of tile `t`'s reused entries.
+    /// DPS of tile `t`'s reused entries; with the merge fused, the first chunk also reads the
+    /// sorted incoming list and the last writes the merged table (the other chunks write
+    /// nothing).
     fn adaptive_sort(&self, t: usize) -> Vec<Vec<Work>> {
-        let s = &self.s;
-        let n = self.f.tiles[t].reused as u64;
-        let base = tile_base(self.l.reuse, t, &self.l, s);
-        (0..n)
-            .step_by(s.adaptive_chunk as usize)
-            .map(|a| {
-                let c = (n - a).min(s.adaptive_chunk);
-                let lines = contiguous(base, c * s.entry, s);
-                vec![Work::Read(lines.clone()), Work::Compute(sort_cycles(c)), Work::Write(lines)]
+        let (s, l) = (&self.s, &self.l);
+        let tile = &self.f.tiles[t];
+        let m = tile.reused as u64;
+        let base = tile_base(l.reuse, t, l, s);
+        let starts: Vec<u64> = (0..m).step_by(s.adaptive_chunk as usize).collect();
+        let last = starts.len().saturating_sub(1);
+        starts
+            .iter()
+            .enumerate()
+            .map(|(k, &a)| {
+                let c = (m - a).min(s.adaptive_chunk);
+                let lines = self.lines(base, c * s.entry);
+                if !self.r.merge_fused {
+                    return vec![
+                        Work::Read(lines.clone()),
+                        Work::Compute(sort_cycles(c)),
+                        Work::Write(lines),
+                    ];
+                }
+                let mut read = lines;
+                if k == 0 {
+                    read.extend(self.lines(tile_base(l.new, t, l, s), tile.new as u64 * s.entry));
+                }
+                let write =
+                    if k == last { self.lines(base, tile.count() as u64 * s.entry) } else { Vec::new() };
+                vec![Work::Read(read), Work::Compute(sort_cycles(c)), Work::Write(write)]
             })
             .collect()
     }
 
-    /// The render of tile `t`.
+    /// The render of tile `t` (with the frame buffer, its pixels written after the last chunk).
     fn render(&self, t: usize) -> Vec<Vec<Work>> {
         let (s, l) = (&self.s, &self.l);
         let tile = &self.f.tiles[t];
         let base = tile_base(l.new, t, l, s);
         let n = tile.count() as usize;
         let rc = s.render_chunk as usize;
-        (0..n)
+        let mut chunks: Vec<Vec<Work>> = (0..n)
             .step_by(rc)
             .map(|a| {
                 let e = (a + rc).min(n);
-                let order = contiguous(base, (e - a) as u64 * s.entry, s);
-                let feats =
-                    tile.ids[a..e].iter().map(|&id| align(l.features + id as u64 * s.feature, s)).collect();
+                let order = self.lines(base, (e - a) as u64 * s.entry);
+                let mut feats = Vec::with_capacity(e - a);
+                for &id in &tile.ids[a..e] {
+                    self.feature_lines(id as u64, &mut feats);
+                }
                 let bits: u64 = tile.entry_bits[a..e].iter().map(|&b| b as u64).sum();
                 vec![Work::Read(order.clone()), Work::Read(feats), Work::Compute(bits), Work::Write(order)]
             })
-            .collect()
+            .collect();
+        if let Some(px) = self.r.frame_buffer {
+            let tile_bytes = (self.f.tile as u64).pow(2) * px;
+            let pixels = self.lines(l.frame_buffer + t as u64 * tile_bytes, tile_pixels(self.f, t) * px);
+            match chunks.last_mut() {
+                Some(c) => {
+                    if let Work::Write(w) = &mut c[3] {
+                        w.extend(pixels);
+                    }
+                }
+                None => chunks.push(vec![
+                    Work::Read(Vec::new()),
+                    Work::Read(Vec::new()),
+                    Work::Compute(0),
+                    Work::Write(pixels),
+                ]),
+            }
+        }
+        chunks
     }
 }
 
@@ -379,7 +484,17 @@ impl Ready {
 
 /// Runs one trace frame the artifact's way on the DRAM model of `cfg`.
 pub fn artifact_timing(f: &PocFrame, sizes: &ArtifactSizes, cfg: &DramConfig) -> ArtifactTiming {
-    let fr = Frame { f, s: *sizes, l: ArtifactLayout::default() };
+    artifact_timing_with(f, sizes, &Rules::default(), cfg)
+}
+
+/// Runs one trace frame with the artifact's structure and the requests `rules` charge.
+pub fn artifact_timing_with(
+    f: &PocFrame,
+    sizes: &ArtifactSizes,
+    rules: &Rules,
+    cfg: &DramConfig,
+) -> ArtifactTiming {
+    let fr = Frame { f, s: *sizes, l: ArtifactLayout::default(), r: *rules };
     let tiles = f.tiles.len();
     let order = morton_tiles(f);
     let mut w = Wrapper { feeder: QueueFeeder::new(cfg), lists: Vec::new(), active: Vec::new() };
@@ -498,6 +613,22 @@ mod tests {
         assert_eq!(sort_cycles(16), 16);
         assert_eq!(sort_cycles(100), 300);
         assert_eq!(sort_cycles(1), 1);
+    }
+
+    /// Every step of the waterfall issues, in the timing restatement, exactly the bytes the
+    /// waterfall charges (the two read the same rules).
+    #[test]
+    fn each_waterfall_step_times_the_bytes_it_charges() {
+        use crate::artifact::waterfall::{test_frame, waterfall, NeoSizes};
+        let f = test_frame();
+        let s = ArtifactSizes::default();
+        let neo = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3 };
+        let steps = waterfall(&f, &s, &neo);
+        for (k, step) in steps.iter().enumerate() {
+            let t = artifact_timing_with(&f, &s, &Rules::step(k, &neo), &DramConfig::default());
+            assert_eq!((t.reads + t.writes) * s.line, step.bytes.total(), "step {k}: {}", step.name);
+            assert!(t.core_cycles > 0);
+        }
     }
 
     #[test]

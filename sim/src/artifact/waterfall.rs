@@ -8,7 +8,7 @@
 //! exact per-tile commands instead of the artifact's approximation passes).
 
 use super::poc::PocFrame;
-use super::{approx_passes, artifact_lines, ArtifactSizes, Request};
+use super::{approx_passes, artifact_lines, ArtifactSizes, Request, Rules};
 use crate::traffic::{Dir, Stage};
 
 /// Bytes by neo stage and direction ([`Stage::ALL`] order; read, write).
@@ -65,6 +65,15 @@ fn touched(base: u64, bytes: u64, line: u64) -> u64 {
     }
 }
 
+/// Pixels of tile `t` (row-major) inside the image.
+pub fn tile_pixels(f: &PocFrame, t: usize) -> u64 {
+    let tw = f.width.div_ceil(f.tile.max(1)) as usize;
+    let (tx, ty) = ((t % tw) as u32, (t / tw) as u32);
+    let w = f.width.min((tx + 1) * f.tile) - tx * f.tile;
+    let h = f.height.min((ty + 1) * f.tile) - ty * f.tile;
+    w as u64 * h as u64
+}
+
 /// Chunks of `n` entries by `chunk`, each `f(chunk length)`, summed.
 fn per_chunk(n: u64, chunk: u64, f: impl Fn(u64) -> u64) -> u64 {
     (0..n).step_by(chunk.max(1) as usize).map(|a| f((n - a).min(chunk))).sum()
@@ -93,7 +102,7 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
         let (stage, dir) = stage_of(r);
         b.add(stage, dir, lines.get(r) * line);
     }
-    let mut steps = vec![Step { name: "the artifact", bytes: b }];
+    let mut steps = vec![Step { name: Rules::STEPS[0], bytes: b }];
     let mut push = |name, b: &StageBytes| steps.push(Step { name, bytes: *b });
     // (first loads, other sorting reads, sorting writes) in lines, each list rounded by `round`.
     let sort_lists = |round: &dyn Fn(u64) -> u64| -> (u64, u64, u64) {
@@ -117,7 +126,7 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
     let precise: u64 =
         f.tiles.iter().map(|t| per_chunk(t.new as u64, s.global_chunk, |c| c * s.entry / line)).sum();
     b.add(Stage::SortTable, Dir::Write, precise * line);
-    push("+ the precise sort's store is written (not size 0)", &b);
+    push(Rules::STEPS[1], &b);
     // 2. Partial lines move: every contiguous list costs the lines it touches.
     let floor = |n: u64| n * s.entry / line;
     let ceil = |n: u64| (n * s.entry).div_ceil(line);
@@ -134,14 +143,14 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
     b.add(Stage::DepthWriteback, Dir::Write, extra);
     let pos = f.culled.len() as u64 * s.position;
     b.add(Stage::Preprocess, Dir::Read, (pos.div_ceil(line) - pos / line) * line);
-    push("+ partial lines are moved (lists round up, not down)", &b);
+    push(Rules::STEPS[2], &b);
     // 3. A feature entry that straddles two lines costs two, written and gathered.
     let feat = |id: u64| touched(id * s.feature, s.feature, line) - 1;
     let stores: u64 = (0..f.culled.len() as u64).filter(|&i| !f.culled[i as usize]).map(feat).sum();
     let gathers: u64 = f.tiles.iter().flat_map(|t| &t.ids).map(|&id| feat(id as u64)).sum();
     b.add(Stage::FeatureTable, Dir::Write, stores * line);
     b.add(Stage::FeatureTable, Dir::Read, gathers * line);
-    push("+ straddling feature entries cost two lines", &b);
+    push(Rules::STEPS[3], &b);
     // 4. Duplication writes one entry per incoming pair, each tile's list contiguous.
     let mut per_tile = vec![0u64; f.tiles.len()];
     let mut at = 0;
@@ -153,7 +162,7 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
     }
     let dup: u64 = per_tile.iter().map(|&n| ceil(n)).sum();
     b.0[Stage::IncomingList as usize][Dir::Write as usize] = dup * line;
-    push("+ duplication writes 6 B per pair, not 3 lines", &b);
+    push(Rules::STEPS[4], &b);
     // 5. The merge is charged the way neo's golden accounting fuses it with DPS: the last DPS
     // pass feeds the MSU+, which reads the sorted incoming list and writes the merged table
     // (instead of DPS writing the reused entries back).
@@ -167,18 +176,18 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
             *w = *w + merged * line - dps_store * line;
         }
     }
-    push("+ the incoming merge is charged, fused with DPS", &b);
+    push(Rules::STEPS[5], &b);
     // 6. Preprocessing writes the feature table as one stream (not a line per Gaussian).
     let visible = f.culled.iter().filter(|&&c| !c).count() as u64;
     let stream = (visible * s.feature).div_ceil(line);
     let per_gaussian = lines.get(Request::ProjectionStore) + stores;
     let w = &mut b.0[Stage::FeatureTable as usize][Dir::Write as usize];
     *w = *w + stream * line - per_gaussian * line;
-    push("+ the feature table is written as one stream", &b);
-    // 7. The frame buffer is written.
-    let fb = (f.width as u64 * f.height as u64 * neo.pixel).div_ceil(line) * line;
-    b.add(Stage::FrameBuffer, Dir::Write, fb);
-    push("+ the frame buffer is written", &b);
+    push(Rules::STEPS[6], &b);
+    // 7. The frame buffer is written, tile by tile.
+    let fb: u64 = (0..f.tiles.len()).map(|t| tile_pixels(f, t) * neo.pixel).map(|b| b.div_ceil(line)).sum();
+    b.add(Stage::FrameBuffer, Dir::Write, fb * line);
+    push(Rules::STEPS[7], &b);
     // 8. neo's byte sizes: parameters and feature entries.
     let params = (f.culled.len() as u64 * neo.geometry).div_ceil(line) + (visible * neo.sh).div_ceil(line);
     b.0[Stage::Preprocess as usize][Dir::Read as usize] = params * line;
@@ -189,8 +198,31 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
         .map(|&id| touched(id as u64 * neo.feature, neo.feature, line))
         .sum();
     b.0[Stage::FeatureTable as usize] = [gathers * line, (visible * neo.feature).div_ceil(line) * line];
-    push("+ neo's byte sizes (parameters, feature entries)", &b);
+    push(Rules::STEPS[8], &b);
     steps
+}
+
+/// A two-tile frame with a culled Gaussian, reused and incoming entries (unit tests).
+#[cfg(test)]
+pub(crate) fn test_frame() -> PocFrame {
+    use super::poc::PocTile;
+
+    let tile = |new: u32, reused: u32, ids: Vec<u32>| {
+        let n = (new + reused) as usize;
+        assert_eq!(ids.len(), n);
+        PocTile { new, reused, entry_bits: vec![1; n], ids }
+    };
+    PocFrame {
+        width: 128,
+        height: 64,
+        tile: 64,
+        subtile: 8,
+        chunk: 256,
+        culled: vec![false, false, true, false],
+        incoming_tiles: vec![2, 1, 1, 0],
+        incoming_list: vec![0, 1, 0, 1],
+        tiles: vec![tile(2, 0, vec![0, 1]), tile(1, 2, vec![3, 0, 1])],
+    }
 }
 
 #[cfg(test)]
@@ -200,28 +232,9 @@ mod tests {
 
     const NEO: NeoSizes = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3 };
 
-    fn frame() -> PocFrame {
-        let tile = |new: u32, reused: u32, ids: Vec<u32>| {
-            let n = (new + reused) as usize;
-            assert_eq!(ids.len(), n);
-            PocTile { new, reused, entry_bits: vec![1; n], ids }
-        };
-        PocFrame {
-            width: 128,
-            height: 64,
-            tile: 64,
-            subtile: 8,
-            chunk: 256,
-            culled: vec![false, false, true, false],
-            incoming_tiles: vec![2, 1, 1, 0],
-            incoming_list: vec![0, 1, 0, 1],
-            tiles: vec![tile(2, 0, vec![0, 1]), tile(1, 2, vec![3, 0, 1])],
-        }
-    }
-
     #[test]
     fn the_first_row_is_the_artifacts_accounting() {
-        let f = frame();
+        let f = test_frame();
         let s = ArtifactSizes::default();
         let steps = waterfall(&f, &s, &NEO);
         let lines = artifact_lines(&f, &s);
@@ -231,7 +244,7 @@ mod tests {
 
     #[test]
     fn each_step_changes_what_it_names() {
-        let f = frame();
+        let f = test_frame();
         let steps = waterfall(&f, &ArtifactSizes::default(), &NEO);
         let d = |k: usize, st: Stage, dir: Dir| {
             steps[k].bytes.get(st, dir) as i64 - steps[k - 1].bytes.get(st, dir) as i64
