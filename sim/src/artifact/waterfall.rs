@@ -227,7 +227,6 @@ pub(crate) fn test_frame() -> PocFrame {
 
 #[cfg(test)]
 mod tests {
-    use super::super::poc::PocTile;
     use super::*;
 
     const NEO: NeoSizes = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3 };
