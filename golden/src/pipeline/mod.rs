@@ -25,6 +25,7 @@
 //! [`run_trajectory`] runs a trajectory; [`StatsFile`] is the `stats.json` document;
 //! [`trace`] exports a frame as the artifact simulator's `poc.trace`.
 
+pub mod adaptive;
 pub mod binning;
 pub mod config;
 pub mod frame;

@@ -92,7 +92,18 @@ impl TileSorter {
     /// Reuse-and-update of `table` (the previous frame's table, replaced by this frame's) with
     /// `incoming` at frame index `frame`.
     pub fn update(&mut self, table: &mut Vec<SortEntry>, incoming: &[SortEntry], frame: u64) -> UpdateWork {
-        let dps = self.sorter.dps(table, frame, self.cfg.dps_passes);
+        self.update_passes(table, incoming, frame, self.cfg.dps_passes)
+    }
+
+    /// [`TileSorter::update`] with `passes` DPS passes instead of the configured number.
+    pub fn update_passes(
+        &mut self,
+        table: &mut Vec<SortEntry>,
+        incoming: &[SortEntry],
+        frame: u64,
+        passes: usize,
+    ) -> UpdateWork {
+        let dps = self.sorter.dps(table, frame, passes);
         let incoming_sort = self.sorter.full_sort(incoming, &mut self.incoming);
         self.merged.clear();
         let merge = merge2_into(table, &self.incoming, true, &mut self.merged);
@@ -155,7 +166,7 @@ mod tests {
         assert_eq!(u.table, vec![e(0, 21, true), e(1, 10, true), e(3, 12, true), e(4, 20, true)]);
         assert_eq!(u.work.dropped_invalid, 1);
         assert_eq!(u.work.dropped_capacity, 0);
-        assert_eq!(u.work.merge, MergeStats { in_a: 3, in_b: 2, out: 4, dropped_invalid: 1 });
+        assert_eq!(u.work.merge, MergeStats { in_a: 3, in_b: 2, out: 4, dropped_invalid: 1, a_inversions: 0 });
         assert_eq!(u.work.dps.passes, 1);
         assert_eq!(u.work.dps.chunk.entries, 3);
         assert_eq!(u.work.incoming_sort.entries, 2);

@@ -1,0 +1,341 @@
+//! Disorder signals the hardware counts for free, and the `adaptive` and `motion` strategies
+//! built on them (issue 14).
+//!
+//! # Signals (per tile and frame, no extra memory traffic)
+//! - **Write-back disorder** ([`WritebackSignals`]): the raster writes the current depth keys
+//!   back in table order, so comparators on that stream see the table's order against the
+//!   *current* keys: `descents` (valid entries that precede the previous valid entry), `behind`
+//!   (valid entries that precede the running maximum) and `reach` (the largest distance, in
+//!   valid entries, from the running maximum's position to a later entry that precedes it: a
+//!   lower bound on how far that maximum must move, since every entry in between is at most
+//!   it). The table rastered in frame `f` is the table DPS sorts in frame `f + 1`, so these are
+//!   the disorder the next sort faces, known to the frame controller before it sorts.
+//! - **Merge disorder** ([`crate::sort::MergeStats::a_inversions`]): boundary inversions of
+//!   the reused stream seen by the MSU+ (what the DPS passes left unsorted, on the stale keys).
+//! - **Set churn**: incoming and outgoing shares ([`super::tile::TileCounts`]).
+//! - **Camera motion** ([`CameraMotion`]): rotation and translation since the last frame.
+//!
+//! # `adaptive[:params]`
+//! Per tile and frame the frame controller chooses a [`TilePlan`] from the tile's previous
+//! write-back signals (and the previous frame's merge inversions), within a traffic budget for
+//! the frame. All decisions are integer functions of integer counters:
+//!
+//! 1. **Request** ([`request`]): with `h = C / 2` and `R` the tile's write-back reach, the tile
+//!    asks for `p = 1 + R / h` DPS passes (integer division; one pass, as Neo, while `R < h`),
+//!    plus one when the previous frame's merge still saw inversions (`M > 0`) and `p > 1`. A
+//!    full re-sort of the tile's current list costs `2 L (1 + ceil(log2(ceil(L / C))))` entries of
+//!    traffic (chunk phase plus global merge passes) against `2 L p` for `p` passes; the tile
+//!    asks for a re-sort instead when `p > 1` and the re-sort is no dearer (`resort=1`), or when
+//!    `p > max`.
+//! 2. **Budget** ([`allocate`]): the frame may spend `budget` percent of `2 sum(L)` (one pass
+//!    per tile, Neo's traffic) on top of one pass per tile. Each plan has a level
+//!    `ceil(cost / 2L)` (passes, or the re-sort's pass equivalent). The controller takes the
+//!    largest cap `c` such that granting every tile `min(request, c)` (a re-sort above the cap
+//!    becomes `c` passes) fits the budget, then raises tiles above the cap by one level in
+//!    tile order while the rest of the budget lasts. One pass over the tiles builds a histogram of extra
+//!    cost per level, a second picks `c`: a frame controller does this from per-tile counters in
+//!    its result records (a few adders per level), with no sort of the tiles.
+//!
+//! Parameters (`adaptive:budget=50,max=4,resort=1`): `budget` percent (0..=1000, default 50),
+//! `max` passes per tile (1..=16, default 4), `resort` (0 or 1, default 1) allows full re-sorts.
+//!
+//! # `motion:DEG`
+//! The web viewers' rule: a full sort of every tile whenever the view direction has turned more
+//! than `DEG` degrees since the last full sort; in between the last order is reused as by
+//! `periodic` (valid bits and MSU+ insertion of newly visible Gaussians, frozen keys, no DPS).
+
+use std::fmt;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::camera::Camera;
+use crate::sort::SortEntry;
+
+/// Disorder of a table against the keys written back into it (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct WritebackSignals {
+    /// Valid entries in the table.
+    pub len: u32,
+    /// Valid entries preceding the previous valid entry.
+    pub descents: u32,
+    /// Valid entries preceding the running maximum.
+    pub behind: u32,
+    /// Largest distance from the running maximum to a later valid entry preceding it.
+    pub reach: u32,
+}
+
+/// The write-back signals of `table` (its valid entries in table order, with the keys written
+/// back): one comparator with the previous entry, one with a running maximum and its position.
+pub fn writeback_signals(table: &[SortEntry]) -> WritebackSignals {
+    let mut s = WritebackSignals::default();
+    let mut prev: Option<SortEntry> = None;
+    let mut max: Option<(SortEntry, u32)> = None;
+    for e in table.iter().filter(|e| e.valid) {
+        let i = s.len;
+        s.len += 1;
+        if prev.is_some_and(|p| e.precedes(&p)) {
+            s.descents += 1;
+        }
+        prev = Some(*e);
+        match max {
+            Some((m, at)) if e.precedes(&m) => {
+                s.behind += 1;
+                s.reach = s.reach.max(i - at);
+            }
+            _ => max = Some((*e, i)),
+        }
+    }
+    s
+}
+
+/// What the sorting step does with one tile this frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+pub enum TilePlan {
+    /// The strategy's own step.
+    #[default]
+    Default,
+    /// Reuse-and-update with this many DPS passes (alternating parity).
+    Passes(u32),
+    /// Conventional sort of the tile's current list from scratch.
+    Resort,
+}
+
+impl TilePlan {
+    /// Pass count of the plan (0 for a re-sort, `default` for [`TilePlan::Default`]).
+    pub fn passes_or(self, default: usize) -> usize {
+        match self {
+            TilePlan::Default => default,
+            TilePlan::Passes(p) => p as usize,
+            TilePlan::Resort => 0,
+        }
+    }
+}
+
+/// Parameters of `adaptive` (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct AdaptiveParams {
+    /// Extra sorting traffic allowed per frame, in percent of one pass over every table.
+    pub budget: u32,
+    /// Most DPS passes per tile.
+    pub max_passes: u32,
+    /// Whether a tile may be re-sorted from scratch.
+    pub resort: bool,
+}
+
+impl Default for AdaptiveParams {
+    fn default() -> Self {
+        AdaptiveParams { budget: 50, max_passes: 4, resort: true }
+    }
+}
+
+impl fmt::Display for AdaptiveParams {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "budget={},max={},resort={}", self.budget, self.max_passes, self.resort as u8)
+    }
+}
+
+impl AdaptiveParams {
+    /// Parses `key=value` pairs separated by commas (any subset, defaults for the rest).
+    pub fn parse(s: &str) -> Result<Self, String> {
+        let mut p = AdaptiveParams::default();
+        for kv in s.split(',').map(str::trim).filter(|kv| !kv.is_empty()) {
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| format!("adaptive: '{kv}' is not key=value (budget=, max=, resort=)"))?;
+            let (k, v) = (k.trim(), v.trim());
+            let num = |lo: u32, hi: u32| -> Result<u32, String> {
+                match v.parse::<u32>() {
+                    Ok(n) if (lo..=hi).contains(&n) => Ok(n),
+                    _ => Err(format!("adaptive: parameter '{k}' needs an integer in {lo}..={hi}, got '{v}'")),
+                }
+            };
+            match k {
+                "budget" => p.budget = num(0, 1000)?,
+                "max" => p.max_passes = num(1, 16)?,
+                "resort" => p.resort = num(0, 1)? == 1,
+                _ => return Err(format!("adaptive: unknown parameter '{k}' (expected budget, max or resort)")),
+            }
+        }
+        Ok(p)
+    }
+}
+
+/// Traffic (entries read + written) of a conventional sort of `len` entries with chunk `chunk`:
+/// the chunk phase and `ceil(log2(chunks))` global merge passes, each reading and writing all.
+pub fn resort_cost(len: u64, chunk: u64) -> u64 {
+    let chunks = len.div_ceil(chunk.max(1)).max(1);
+    let passes = 64 - (chunks - 1).leading_zeros() as u64;
+    2 * len * (1 + passes)
+}
+
+/// A tile's request: its desired plan and that plan's level (pass equivalents).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Request {
+    /// Passes asked for (at least 1, at most the parameter `max`).
+    pub passes: u32,
+    /// Whether the tile asks for a re-sort instead.
+    pub resort: bool,
+    /// Entries of one pass over the tile (`2 L`, at least 1 so levels are defined).
+    pub pass_cost: u64,
+    /// The re-sort's traffic.
+    pub resort_cost: u64,
+}
+
+impl Request {
+    /// Level of the re-sort: `ceil(resort_cost / pass_cost)`.
+    pub fn resort_level(&self) -> u32 {
+        self.resort_cost.div_ceil(self.pass_cost).min(u32::MAX as u64) as u32
+    }
+
+    /// The plan granted under cap `c >= 1` and its extra cost over one pass.
+    pub fn capped(&self, c: u32) -> (TilePlan, u64) {
+        if self.resort && self.resort_level() <= c {
+            return (TilePlan::Resort, self.resort_cost.saturating_sub(self.pass_cost));
+        }
+        let p = if self.resort { c } else { self.passes.min(c) }.max(1);
+        (TilePlan::Passes(p), (p as u64 - 1) * self.pass_cost)
+    }
+}
+
+/// A tile's request from its previous write-back signals `wb` (of the table it reuses), the
+/// previous frame's merge inversions `merge`, the current list length and the chunk size.
+pub fn request(p: &AdaptiveParams, wb: &WritebackSignals, merge: u32, current: u32, chunk: u32) -> Request {
+    let h = (chunk / 2).max(1);
+    let mut passes = 1 + wb.reach / h;
+    if passes > 1 && merge > 0 {
+        passes += 1;
+    }
+    let len = wb.len as u64;
+    let pass_cost = (2 * len).max(1);
+    let resort_cost = resort_cost(current as u64, chunk as u64);
+    let resort =
+        p.resort && passes > 1 && (resort_cost <= pass_cost * passes as u64 || passes > p.max_passes);
+    Request { passes: passes.min(p.max_passes), resort, pass_cost, resort_cost }
+}
+
+/// The budget allocation of one frame (see the module docs): the plans granted to `requests`.
+pub fn allocate(p: &AdaptiveParams, requests: &[Request]) -> Vec<TilePlan> {
+    let budget = requests.iter().map(|r| r.pass_cost).sum::<u64>() * p.budget as u64 / 100;
+    let top = requests
+        .iter()
+        .map(|r| if r.resort { r.resort_level().max(r.passes) } else { r.passes })
+        .max()
+        .unwrap_or(1)
+        .max(1);
+    let extra = |c: u32| requests.iter().map(|r| r.capped(c).1).sum::<u64>();
+    // The extra cost grows with the cap; the largest cap within the budget (1 always fits).
+    let (mut lo, mut hi) = (1u32, top);
+    while lo < hi {
+        let mid = lo + (hi - lo).div_ceil(2);
+        if extra(mid) <= budget {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    // The rest of the budget raises tiles above the cap by one level, in tile order.
+    let mut left = budget - extra(lo);
+    requests
+        .iter()
+        .map(|r| {
+            let (plan, x) = r.capped(lo);
+            let (up, y) = r.capped(lo + 1);
+            if up != plan && y - x <= left {
+                left -= y - x;
+                up
+            } else {
+                plan
+            }
+        })
+        .collect()
+}
+
+/// Camera motion between two frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct CameraMotion {
+    /// Angle between the view directions, degrees.
+    pub rotation_deg: f64,
+    /// Distance between the camera positions (scene units).
+    pub translation: f64,
+}
+
+impl CameraMotion {
+    /// Motion from `a` to `b`.
+    pub fn between(a: &Camera, b: &Camera) -> Self {
+        CameraMotion { rotation_deg: angle_deg(a.forward(), b.forward()), translation: a.position.distance(b.position) }
+    }
+}
+
+/// Angle between two directions in degrees.
+pub fn angle_deg(a: DVec3, b: DVec3) -> f64 {
+    let (a, b) = (a.normalize_or_zero(), b.normalize_or_zero());
+    a.dot(b).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn e(key: u32, id: u32) -> SortEntry {
+        SortEntry::new(key, id)
+    }
+
+    #[test]
+    fn writeback_signals_count_descents_behind_and_reach() {
+        let sorted: Vec<SortEntry> = (0..10).map(|k| e(k, k)).collect();
+        assert_eq!(writeback_signals(&sorted), WritebackSignals { len: 10, ..Default::default() });
+        // 9 at the front must move past the 5 entries after it.
+        let t = [e(9, 0), e(1, 1), e(2, 2), e(3, 3), e(4, 4), e(5, 5)];
+        let s = writeback_signals(&t);
+        assert_eq!((s.descents, s.behind, s.reach), (1, 5, 5));
+        // Invalid entries are skipped.
+        let mut t2 = t.to_vec();
+        t2[0].valid = false;
+        assert_eq!(writeback_signals(&t2).behind, 0);
+    }
+
+    #[test]
+    fn params_parse_print_and_reject() {
+        let p = AdaptiveParams::parse("budget=30, max=6,resort=0").unwrap();
+        assert_eq!(p, AdaptiveParams { budget: 30, max_passes: 6, resort: false });
+        assert_eq!(AdaptiveParams::parse(&p.to_string()), Ok(p));
+        assert_eq!(AdaptiveParams::parse(""), Ok(AdaptiveParams::default()));
+        for (bad, name) in [("max=0", "max"), ("budget=x", "budget"), ("resort=2", "resort"), ("speed=1", "speed")]
+        {
+            let err = AdaptiveParams::parse(bad).unwrap_err();
+            assert!(err.contains(&format!("'{name}'")), "{bad}: {err}");
+        }
+        assert!(AdaptiveParams::parse("budget").is_err());
+    }
+
+    #[test]
+    fn resort_cost_counts_global_passes() {
+        assert_eq!(resort_cost(100, 256), 200);
+        assert_eq!(resort_cost(256, 256), 512);
+        assert_eq!(resort_cost(257, 256), 2 * 257 * 2);
+        assert_eq!(resort_cost(1024, 256), 2 * 1024 * 3);
+    }
+
+    #[test]
+    fn allocation_fits_the_budget_and_serves_small_requests_first() {
+        let p = AdaptiveParams { budget: 50, max_passes: 8, resort: false };
+        let wb = |len, reach| WritebackSignals { len, reach, ..Default::default() };
+        let reqs: Vec<Request> =
+            [wb(1000, 0), wb(1000, 128), wb(1000, 1000)].iter().map(|w| request(&p, w, 0, 1000, 256)).collect();
+        assert_eq!(reqs.iter().map(|r| r.passes).collect::<Vec<_>>(), vec![1, 2, 8]);
+        let plans = allocate(&p, &reqs);
+        let extra: u64 = reqs.iter().zip(&plans).map(|(r, pl)| (pl.passes_or(1) as u64 - 1) * r.pass_cost).sum();
+        assert!(extra <= 3000, "{plans:?}");
+        assert_eq!(plans[0], TilePlan::Passes(1));
+        assert_eq!(plans[1], TilePlan::Passes(2));
+        assert_eq!(plans[2], TilePlan::Passes(1));
+        // No budget: everything one pass.
+        let none = allocate(&AdaptiveParams { budget: 0, ..p }, &reqs);
+        assert!(none.iter().all(|pl| *pl == TilePlan::Passes(1)));
+        // A small tile far out of order is re-sorted (no dearer than its passes).
+        let r = request(&AdaptiveParams::default(), &wb(200, 150), 0, 200, 256);
+        assert!(r.resort);
+        assert_eq!(allocate(&AdaptiveParams::default(), &[r, reqs[0]]), vec![TilePlan::Resort, TilePlan::Passes(1)]);
+    }
+}
