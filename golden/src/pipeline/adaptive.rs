@@ -97,6 +97,8 @@ pub enum TilePlan {
     Default,
     /// Reuse-and-update with this many DPS passes (alternating parity).
     Passes(u32),
+    /// The same with the wide chunk (`wide` times the chunk).
+    Wide(u32),
     /// Conventional sort of the tile's current list from scratch.
     Resort,
 }
@@ -106,9 +108,14 @@ impl TilePlan {
     pub fn passes_or(self, default: usize) -> usize {
         match self {
             TilePlan::Default => default,
-            TilePlan::Passes(p) => p as usize,
+            TilePlan::Passes(p) | TilePlan::Wide(p) => p as usize,
             TilePlan::Resort => 0,
         }
+    }
+
+    /// Whether the plan's DPS uses the wide chunk.
+    pub fn is_wide(self) -> bool {
+        matches!(self, TilePlan::Wide(_))
     }
 }
 
@@ -121,17 +128,19 @@ pub struct AdaptiveParams {
     pub max_passes: u32,
     /// Whether a tile may be re-sorted from scratch.
     pub resort: bool,
+    /// The wide chunk as a multiple of the chunk (a power of two, 1 for none).
+    pub wide: u32,
 }
 
 impl Default for AdaptiveParams {
     fn default() -> Self {
-        AdaptiveParams { budget: 50, max_passes: 4, resort: true }
+        AdaptiveParams { budget: 50, max_passes: 4, resort: true, wide: 1 }
     }
 }
 
 impl fmt::Display for AdaptiveParams {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "budget={},max={},resort={}", self.budget, self.max_passes, self.resort as u8)
+        write!(f, "budget={},max={},resort={},wide={}", self.budget, self.max_passes, self.resort as u8, self.wide)
     }
 }
 
@@ -142,7 +151,7 @@ impl AdaptiveParams {
         for kv in s.split(',').map(str::trim).filter(|kv| !kv.is_empty()) {
             let (k, v) = kv
                 .split_once('=')
-                .ok_or_else(|| format!("adaptive: '{kv}' is not key=value (budget=, max=, resort=)"))?;
+                .ok_or_else(|| format!("adaptive: '{kv}' is not key=value (budget=, max=, resort=, wide=)"))?;
             let (k, v) = (k.trim(), v.trim());
             let num = |lo: u32, hi: u32| -> Result<u32, String> {
                 match v.parse::<u32>() {
@@ -154,7 +163,17 @@ impl AdaptiveParams {
                 "budget" => p.budget = num(0, 1000)?,
                 "max" => p.max_passes = num(1, 16)?,
                 "resort" => p.resort = num(0, 1)? == 1,
-                _ => return Err(format!("adaptive: unknown parameter '{k}' (expected budget, max or resort)")),
+                "wide" => {
+                    p.wide = num(1, 64)?;
+                    if !p.wide.is_power_of_two() {
+                        return Err(format!("adaptive: parameter 'wide' needs a power of two in 1..=64, got '{v}'"));
+                    }
+                }
+                _ => {
+                    return Err(format!(
+                        "adaptive: unknown parameter '{k}' (expected budget, max, resort or wide)"
+                    ))
+                }
             }
         }
         Ok(p)
@@ -174,6 +193,8 @@ pub fn resort_cost(len: u64, chunk: u64) -> u64 {
 pub struct Request {
     /// Passes asked for (at least 1, at most the parameter `max`).
     pub passes: u32,
+    /// Whether they use the wide chunk.
+    pub wide: bool,
     /// Whether the tile asks for a re-sort instead.
     pub resort: bool,
     /// Entries of one pass over the tile (`2 L`, at least 1 so levels are defined).
@@ -194,15 +215,19 @@ impl Request {
             return (TilePlan::Resort, self.resort_cost.saturating_sub(self.pass_cost));
         }
         let p = if self.resort { c } else { self.passes.min(c) }.max(1);
-        (TilePlan::Passes(p), (p as u64 - 1) * self.pass_cost)
+        let plan = if self.wide { TilePlan::Wide(p) } else { TilePlan::Passes(p) };
+        (plan, (p as u64 - 1) * self.pass_cost)
     }
 }
 
 /// A tile's request from its previous write-back signals `wb` (of the table it reuses), the
 /// previous frame's merge inversions `merge`, the current list length and the chunk size.
 pub fn request(p: &AdaptiveParams, wb: &WritebackSignals, merge: u32, current: u32, chunk: u32) -> Request {
-    let h = (chunk / 2).max(1);
-    let mut passes = 1 + wb.reach / h;
+    let chunk = chunk.max(1);
+    // Neo's single pass while the reach is below a chunk; beyond, the wide chunk if there is one.
+    let wide = p.wide > 1 && wb.reach >= chunk;
+    let unit = if wide { chunk.saturating_mul(p.wide) } else { chunk };
+    let mut passes = 1 + wb.reach / unit;
     if passes > 1 && merge > 0 {
         passes += 1;
     }
@@ -211,7 +236,7 @@ pub fn request(p: &AdaptiveParams, wb: &WritebackSignals, merge: u32, current: u
     let resort_cost = resort_cost(current as u64, chunk as u64);
     let resort =
         p.resort && passes > 1 && (resort_cost <= pass_cost * passes as u64 || passes > p.max_passes);
-    Request { passes: passes.min(p.max_passes), resort, pass_cost, resort_cost }
+    Request { passes: passes.min(p.max_passes), wide, resort, pass_cost, resort_cost }
 }
 
 /// The budget allocation of one frame (see the module docs): the plans granted to `requests`.
@@ -297,11 +322,11 @@ mod tests {
 
     #[test]
     fn params_parse_print_and_reject() {
-        let p = AdaptiveParams::parse("budget=30, max=6,resort=0").unwrap();
-        assert_eq!(p, AdaptiveParams { budget: 30, max_passes: 6, resort: false });
+        let p = AdaptiveParams::parse("budget=30, max=6,resort=0,wide=8").unwrap();
+        assert_eq!(p, AdaptiveParams { budget: 30, max_passes: 6, resort: false, wide: 8 });
         assert_eq!(AdaptiveParams::parse(&p.to_string()), Ok(p));
         assert_eq!(AdaptiveParams::parse(""), Ok(AdaptiveParams::default()));
-        for (bad, name) in [("max=0", "max"), ("budget=x", "budget"), ("resort=2", "resort"), ("speed=1", "speed")]
+        for (bad, name) in [("max=0", "max"), ("budget=x", "budget"), ("resort=2", "resort"), ("speed=1", "speed"), ("wide=3", "wide")]
         {
             let err = AdaptiveParams::parse(bad).unwrap_err();
             assert!(err.contains(&format!("'{name}'")), "{bad}: {err}");
@@ -319,11 +344,15 @@ mod tests {
 
     #[test]
     fn allocation_fits_the_budget_and_serves_small_requests_first() {
-        let p = AdaptiveParams { budget: 50, max_passes: 8, resort: false };
+        let p = AdaptiveParams { budget: 50, max_passes: 8, resort: false, wide: 1 };
         let wb = |len, reach| WritebackSignals { len, reach, ..Default::default() };
         let reqs: Vec<Request> =
-            [wb(1000, 0), wb(1000, 128), wb(1000, 1000)].iter().map(|w| request(&p, w, 0, 1000, 256)).collect();
+            [wb(1000, 0), wb(1000, 256), wb(1000, 2000)].iter().map(|w| request(&p, w, 0, 1000, 256)).collect();
         assert_eq!(reqs.iter().map(|r| r.passes).collect::<Vec<_>>(), vec![1, 2, 8]);
+        // With a wide chunk of 4 x 256 the far tile asks for 1 + 2000 / 1024 = 2 wide passes.
+        let w4 = request(&AdaptiveParams { wide: 4, ..p }, &wb(1000, 2000), 0, 1000, 256);
+        assert_eq!((w4.passes, w4.wide), (2, true));
+        assert_eq!(w4.capped(1).0, TilePlan::Wide(1));
         let plans = allocate(&p, &reqs);
         let extra: u64 = reqs.iter().zip(&plans).map(|(r, pl)| (pl.passes_or(1) as u64 - 1) * r.pass_cost).sum();
         assert!(extra <= 3000, "{plans:?}");
@@ -334,7 +363,7 @@ mod tests {
         let none = allocate(&AdaptiveParams { budget: 0, ..p }, &reqs);
         assert!(none.iter().all(|pl| *pl == TilePlan::Passes(1)));
         // A small tile far out of order is re-sorted (no dearer than its passes).
-        let r = request(&AdaptiveParams::default(), &wb(200, 150), 0, 200, 256);
+        let r = request(&AdaptiveParams::default(), &wb(200, 300), 0, 200, 256);
         assert!(r.resort);
         assert_eq!(allocate(&AdaptiveParams::default(), &[r, reqs[0]]), vec![TilePlan::Resort, TilePlan::Passes(1)]);
     }

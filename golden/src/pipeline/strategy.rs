@@ -147,7 +147,7 @@ impl FromStr for Strategy {
 fn unknown(s: &str) -> String {
     format!(
         "unknown sort strategy '{s}' (expected neo, full, periodic:K, background:K, hierarchical, \
-         adaptive[:budget=B,max=P,resort=0|1] or motion:DEG)"
+         adaptive[:budget=B,max=P,resort=0|1,wide=W] or motion:DEG)"
     )
 }
 
@@ -176,7 +176,7 @@ mod tests {
             Strategy::Background(2),
             Strategy::Hierarchical,
             Strategy::Adaptive(AdaptiveParams::default()),
-            Strategy::Adaptive(AdaptiveParams { budget: 20, max_passes: 3, resort: false }),
+            Strategy::Adaptive(AdaptiveParams { budget: 20, max_passes: 3, resort: false, wide: 16 }),
             Strategy::Motion(5000),
             Strategy::Motion(2500),
             Strategy::Motion(1),
@@ -185,7 +185,7 @@ mod tests {
         }
         assert_eq!(" periodic:16 ".parse::<Strategy>(), Ok(Strategy::Periodic(16)));
         assert_eq!("motion:2.5".parse::<Strategy>(), Ok(Strategy::Motion(2500)));
-        assert_eq!("adaptive:max=2".parse::<Strategy>().unwrap().to_string(), "adaptive:budget=50,max=2,resort=1");
+        assert_eq!("adaptive:max=2".parse::<Strategy>().unwrap().to_string(), "adaptive:budget=50,max=2,resort=1,wide=1");
         for bad in [
             "",
             "periodic",

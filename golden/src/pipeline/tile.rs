@@ -68,6 +68,8 @@ pub struct TileCounts {
     pub bitmap_popcount: u32,
     /// DPS passes run on the tile.
     pub dps_passes: u32,
+    /// Whether those passes used the wide chunk (`adaptive` with `wide > 1`).
+    pub dps_wide: bool,
     /// MSU+ boundary inversions of the reused stream ([`crate::sort::MergeStats::a_inversions`]).
     pub merge_inversions: u32,
     /// Write-back descents of the rastered table against the current keys (filled at the
@@ -152,7 +154,13 @@ impl TileCtx {
     /// Buffers for `strategy` with sorting parameters `sort`, `dps_passes` and `capacity`.
     pub fn new(strategy: Strategy, sort: &SortConfig, dps_passes: usize, capacity: usize) -> Self {
         let passes = if matches!(strategy, Strategy::Neo | Strategy::Adaptive(_)) { dps_passes } else { 0 };
-        let updater = TileSorter::new(UpdateConfig { sort: sort.clone(), capacity, dps_passes: passes });
+        let mut updater = TileSorter::new(UpdateConfig { sort: sort.clone(), capacity, dps_passes: passes });
+        if let Strategy::Adaptive(p) = strategy {
+            if p.wide > 1 {
+                // A chunk times a power of two is a valid chunk; were it not, no wide chunk.
+                let _ = updater.set_wide_chunk(sort.chunk() * p.wide as usize);
+            }
+        }
         let scratch_sorter = TileSorter::new(UpdateConfig { sort: sort.clone(), capacity, dps_passes: 0 });
         TileCtx {
             updater,
@@ -232,11 +240,13 @@ pub fn sort_tile(
         match strategy {
             Strategy::Neo | Strategy::Periodic(_) | Strategy::Adaptive(_) | Strategy::Motion(_) => {
                 let passes = plan.passes_or(ctx.updater.config().dps_passes);
-                let uw = ctx.updater.update_passes(&mut state.table, &ctx.incoming, pos.frame as u64, passes);
+                let frame = pos.frame as u64;
+                let uw = ctx.updater.update_wide(&mut state.table, &ctx.incoming, frame, passes, plan.is_wide());
                 w.add_update(&uw);
                 w.binned_written += ctx.incoming.len() as u64;
                 c.dps_chunks = uw.dps.chunk.chunks as u32;
                 c.dps_passes = uw.dps.passes as u32;
+                c.dps_wide = plan.is_wide();
                 c.merge_inversions = uw.merge.a_inversions as u32;
             }
             Strategy::Background(k) => background_step(k, pos, state, current, ctx, w),

@@ -73,6 +73,8 @@ pub struct TileUpdate {
 pub struct TileSorter {
     cfg: UpdateConfig,
     sorter: Sorter,
+    /// A Sorting Core with a wider chunk for [`TileSorter::update_wide`] (`None`: not built).
+    wide: Option<Sorter>,
     incoming: Vec<SortEntry>,
     merged: Vec<SortEntry>,
 }
@@ -81,7 +83,15 @@ impl TileSorter {
     /// A tile sorter for `cfg`.
     pub fn new(cfg: UpdateConfig) -> Self {
         let sorter = Sorter::new(cfg.sort.clone());
-        TileSorter { cfg, sorter, incoming: Vec::new(), merged: Vec::new() }
+        TileSorter { cfg, sorter, wide: None, incoming: Vec::new(), merged: Vec::new() }
+    }
+
+    /// The same sorter with a second chunk size `wide_chunk` for DPS ([`TileSorter::update_wide`]).
+    /// Fails (and keeps the sorter without a wide chunk) when `wide_chunk` is not a valid chunk.
+    pub fn set_wide_chunk(&mut self, wide_chunk: usize) -> Result<(), super::SortParamError> {
+        let c = &self.cfg.sort;
+        self.wide = Some(Sorter::new(SortConfig::new(c.format(), wide_chunk, c.network().clone())?));
+        Ok(())
     }
 
     /// Its configuration.
@@ -103,7 +113,24 @@ impl TileSorter {
         frame: u64,
         passes: usize,
     ) -> UpdateWork {
-        let dps = self.sorter.dps(table, frame, passes);
+        self.update_wide(table, incoming, frame, passes, false)
+    }
+
+    /// [`TileSorter::update_passes`] whose DPS uses the wide chunk when `wide` (and a wide chunk
+    /// was configured, [`TileSorter::set_wide_chunk`]); the incoming sort keeps the normal one.
+    pub fn update_wide(
+        &mut self,
+        table: &mut Vec<SortEntry>,
+        incoming: &[SortEntry],
+        frame: u64,
+        passes: usize,
+        wide: bool,
+    ) -> UpdateWork {
+        let dps_sorter = match (&mut self.wide, wide) {
+            (Some(w), true) => w,
+            _ => &mut self.sorter,
+        };
+        let dps = dps_sorter.dps(table, frame, passes);
         let incoming_sort = self.sorter.full_sort(incoming, &mut self.incoming);
         self.merged.clear();
         let merge = merge2_into(table, &self.incoming, true, &mut self.merged);
