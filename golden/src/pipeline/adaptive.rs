@@ -20,13 +20,14 @@
 //! write-back signals (and the previous frame's merge inversions), within a traffic budget for
 //! the frame. All decisions are integer functions of integer counters:
 //!
-//! 1. **Request** ([`request`]): with `h = C / 2` and `R` the tile's write-back reach, the tile
-//!    asks for `p = 1 + R / h` DPS passes (integer division; one pass, as Neo, while `R < h`),
-//!    plus one when the previous frame's merge still saw inversions (`M > 0`) and `p > 1`. A
-//!    full re-sort of the tile's current list costs `2 L (1 + ceil(log2(ceil(L / C))))` entries of
-//!    traffic (chunk phase plus global merge passes) against `2 L p` for `p` passes; the tile
-//!    asks for a re-sort instead when `p > 1` and the re-sort is no dearer (`resort=1`), or when
-//!    `p > max`.
+//! 1. **Request** ([`request`]): with `R` the tile's write-back reach and `C` the chunk, a tile
+//!    with `R < C` asks for Neo's single pass. Beyond, it asks for `p = 1 + R / U` passes
+//!    (integer division) with `U = wide * C` on the wide chunk when the core has one
+//!    (`wide > 1`), else `U = C` on the normal chunk; plus one when the previous frame's merge
+//!    still saw inversions (`M > 0`) and `p > 1`; at most `max`. A full re-sort of the tile's
+//!    list costs `2 L (1 + ceil(log2(ceil(L / C))))` entries of traffic (chunk phase plus global
+//!    merge passes) against `2 L p` for `p` passes of either chunk; the tile asks for a re-sort
+//!    instead when `p > 1` and the re-sort is no dearer (`resort=1`), or when `p` exceeded `max`.
 //! 2. **Budget** ([`allocate`]): the frame may spend `budget` percent of `2 sum(L)` (one pass
 //!    per tile, Neo's traffic) on top of one pass per tile. Each plan has a level
 //!    `ceil(cost / 2L)` (passes, or the re-sort's pass equivalent). The controller takes the
@@ -36,8 +37,19 @@
 //!    cost per level, a second picks `c`: a frame controller does this from per-tile counters in
 //!    its result records (a few adders per level), with no sort of the tiles.
 //!
-//! Parameters (`adaptive:budget=50,max=4,resort=1`): `budget` percent (0..=1000, default 50),
-//! `max` passes per tile (1..=16, default 4), `resort` (0 or 1, default 1) allows full re-sorts.
+//! Parameters (`adaptive:budget=50,max=4,resort=1,wide=16`, any subset): `budget` percent
+//! (0..=1000, default 50), `max` passes per tile (1..=16, default 4), `resort` (0 or 1, default
+//! 1) allows full re-sorts, `wide` the wide chunk as a multiple of `C` (a power of two in
+//! 1..=64, default 16; 1: none). A wide pass costs the same DRAM traffic as a normal one (each
+//! entry read and written once) but needs a chunk buffer of `wide * C` entries in the sorting
+//! core (4096 entries, 24 KiB at 6-byte entries, for the default) and `log2(wide)` more
+//! in-chunk merge passes on chip; the cycle model times it with that chunk.
+//!
+//! The frame controller's part: before a frame it holds, per tile, the previous result
+//! record's counters (`len`, `reach`, merge inversions, current length); it computes each
+//! request with a divider-free comparison chain (`R / U` by shifts: `C` and `wide` are powers
+//! of two), accumulates the per-level extra costs, picks the cap, and writes each tile's plan
+//! (passes, wide flag, re-sort flag) into the tile's job descriptor.
 //!
 //! # `motion:DEG`
 //! The web viewers' rule: a full sort of every tile whenever the view direction has turned more
@@ -134,7 +146,7 @@ pub struct AdaptiveParams {
 
 impl Default for AdaptiveParams {
     fn default() -> Self {
-        AdaptiveParams { budget: 50, max_passes: 4, resort: true, wide: 1 }
+        AdaptiveParams { budget: 50, max_passes: 4, resort: true, wide: 16 }
     }
 }
 
@@ -363,8 +375,9 @@ mod tests {
         let none = allocate(&AdaptiveParams { budget: 0, ..p }, &reqs);
         assert!(none.iter().all(|pl| *pl == TilePlan::Passes(1)));
         // A small tile far out of order is re-sorted (no dearer than its passes).
-        let r = request(&AdaptiveParams::default(), &wb(200, 300), 0, 200, 256);
+        let narrow = AdaptiveParams { wide: 1, ..AdaptiveParams::default() };
+        let r = request(&narrow, &wb(200, 300), 0, 200, 256);
         assert!(r.resort);
-        assert_eq!(allocate(&AdaptiveParams::default(), &[r, reqs[0]]), vec![TilePlan::Resort, TilePlan::Passes(1)]);
+        assert_eq!(allocate(&narrow, &[r, reqs[0]]), vec![TilePlan::Resort, TilePlan::Passes(1)]);
     }
 }

@@ -185,7 +185,7 @@ mod tests {
         }
         assert_eq!(" periodic:16 ".parse::<Strategy>(), Ok(Strategy::Periodic(16)));
         assert_eq!("motion:2.5".parse::<Strategy>(), Ok(Strategy::Motion(2500)));
-        assert_eq!("adaptive:max=2".parse::<Strategy>().unwrap().to_string(), "adaptive:budget=50,max=2,resort=1,wide=1");
+        assert_eq!("adaptive:max=2".parse::<Strategy>().unwrap().to_string(), "adaptive:budget=50,max=2,resort=1,wide=16");
         for bad in [
             "",
             "periodic",
