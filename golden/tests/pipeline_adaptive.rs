@@ -1,8 +1,12 @@
-//! The `adaptive` and `motion` strategies on hard camera motion (issue 14), on a small synthetic
-//! scene with a small chunk so that tables span many chunks: a fast orbit, a 180-degree turn in
-//! one frame, a scene cut, a camera that stops after moving at 16x, shake and walk. Each case
-//! asserts a PSNR floor for `adaptive` (against the exact order of the same pipeline) and its
-//! sorting traffic against single-pass Neo on the same frames.
+//! The `adaptive` and `motion` strategies on hard camera motion (issue 14).
+//!
+//! On a small synthetic scene with a small chunk (tables span many chunks): a fast orbit, a
+//! 180-degree turn in one frame, a scene cut, a camera that stops after moving at 16x, shake
+//! and walk. Each case asserts `adaptive`'s sorting traffic against single-pass Neo on the same
+//! frames and a PSNR floor per frame: Neo's PSNR on that frame less a small tolerance (on this
+//! scene of large splats the one-frame-stale keys alone keep 16x below 45 dB: even the exact
+//! order of the previous frame's keys, `background:1`, is; see docs/adaptive.md). The absolute
+//! 45 dB floor is asserted on the real scene (biker, from `../shared/`).
 
 mod pipeline_common;
 
@@ -14,8 +18,11 @@ use pipeline_common::{check_tables, config, run_frames};
 
 /// Chunk of these tests: tables of a few hundred entries span many chunks.
 const CHUNK: usize = 32;
-/// The PSNR floor `adaptive` must hold in every frame.
+/// The PSNR floor `adaptive` must hold in every frame on the real scene.
 const FLOOR_DB: f64 = 45.0;
+/// How far below Neo's PSNR `adaptive` may fall on a frame of the synthetic cases (its plan
+/// may differ from Neo's in a tile where more passes move other entries).
+const TOLERANCE_DB: f64 = 0.5;
 /// Most sorting traffic `adaptive` may spend, relative to single-pass Neo on the same frames.
 const TRAFFIC_RATIO: f64 = 1.5;
 
@@ -52,13 +59,15 @@ fn min_psnr(fs: &[FrameStats]) -> f64 {
     fs.iter().map(psnr).fold(f64::INFINITY, f64::min)
 }
 
-/// Runs neo and adaptive on `cams`; asserts the floor and the traffic ratio; returns both.
+/// Runs neo and adaptive on `cams`; asserts the per-frame floor (Neo's PSNR less the
+/// tolerance) and the traffic ratio; returns both.
 fn check_case(name: &str, cams: &[Camera], cuts: &[usize]) -> (Vec<FrameStats>, Vec<FrameStats>) {
     let s = scene();
     let neo = run(&s, cams, cuts, Strategy::Neo);
     let ada = run(&s, cams, cuts, adaptive());
-    for f in &ada {
-        assert!(psnr(f) >= FLOOR_DB, "{name}: frame {} at {:.2} dB < {FLOOR_DB}", f.frame, psnr(f));
+    for (a, n) in ada.iter().zip(&neo) {
+        let floor = psnr(n) - TOLERANCE_DB;
+        assert!(psnr(a) >= floor, "{name}: frame {} at {:.2} dB < neo's {:.2} dB", a.frame, psnr(a), psnr(n));
     }
     let ratio = dram(&ada) as f64 / dram(&neo) as f64;
     assert!(ratio <= TRAFFIC_RATIO, "{name}: adaptive sorting traffic {ratio:.3} x neo's");
@@ -66,12 +75,30 @@ fn check_case(name: &str, cams: &[Camera], cuts: &[usize]) -> (Vec<FrameStats>, 
 }
 
 #[test]
-fn fast_orbit_holds_the_floor_where_neo_does_not() {
+fn fast_orbit_on_biker_holds_45_db_where_neo_does_not() {
+    let Some(path) = neo_golden::shared::shared_file_for_test("pipeline_adaptive", "scenes/biker.ply") else {
+        return;
+    };
+    let (s, _) = source::load_scene(path.to_str().unwrap(), false).unwrap();
+    let t = traj(&s, "orbit:res=320x240,speed=16", 12);
+    let c = |st: Strategy| PipelineConfig { compare_float: false, ..config(st) };
+    let neo = run_frames(&s, &t.frames, &[], c(Strategy::Neo), check_tables);
+    let ada = run_frames(&s, &t.frames, &[], c(adaptive()), check_tables);
+    // The premise: single-pass Neo falls below the floor on this motion.
+    assert!(min_psnr(&neo) < FLOOR_DB, "neo holds {:.2} dB: the case is too easy", min_psnr(&neo));
+    for f in &ada {
+        assert!(psnr(f) >= FLOOR_DB, "biker 16x: frame {} at {:.2} dB < {FLOOR_DB}", f.frame, psnr(f));
+    }
+    let ratio = dram(&ada) as f64 / dram(&neo) as f64;
+    assert!(ratio <= TRAFFIC_RATIO, "biker 16x: adaptive sorting traffic {ratio:.3} x neo's");
+}
+
+#[test]
+fn fast_orbit_never_does_worse_than_neo() {
     let s = scene();
     let t = traj(&s, "orbit:res=256x192,speed=16", 12);
     let (neo, ada) = check_case("orbit 16x", &t.frames, &t.cuts);
-    // The premise: single-pass Neo falls below the floor on this motion.
-    assert!(min_psnr(&neo) < FLOOR_DB, "neo holds {:.2} dB: the case is too easy", min_psnr(&neo));
+    assert!(min_psnr(&ada) >= min_psnr(&neo), "{:.2} < {:.2}", min_psnr(&ada), min_psnr(&neo));
     // The policy acted: wider chunks or more passes than Neo somewhere.
     assert!(ada.iter().zip(&neo).any(|(a, n)| a.work.dps_chunks != n.work.dps_chunks || a.tiles_multi_pass > 0));
 }
@@ -117,12 +144,15 @@ fn stopping_after_16x_falls_back_to_neo_cost() {
     let mut cams = t.frames.clone();
     cams.extend(std::iter::repeat_n(t.frames[5].clone(), 6));
     let (neo, ada) = check_case("stop", &cams, &[]);
-    assert!(ada[1..6].iter().any(|f| dram(std::slice::from_ref(f)) > dram(std::slice::from_ref(&neo[f.frame]))));
-    // Within three frames of the stop, every frame costs what Neo's does (within 2%).
+    // While moving, the policy acts (wide chunks or more passes than Neo somewhere).
+    let acts = |a: &FrameStats, n: &FrameStats| a.work.dps_chunks != n.work.dps_chunks || a.tiles_multi_pass > 0;
+    assert!(ada[1..6].iter().zip(&neo[1..6]).any(|(a, n)| acts(a, n)));
+    // Within three frames of the stop (frame 6), every frame is sorted as Neo sorts it (one
+    // pass of the normal chunk per tile) and costs what Neo's does (within 2%).
     for f in 9..cams.len() {
         let (a, n) = (dram(&ada[f..=f]), dram(&neo[f..=f]));
         assert!(a as f64 <= 1.02 * n as f64, "frame {f}: adaptive {a} entries, neo {n}");
-        assert_eq!(ada[f].tiles_multi_pass, 0, "frame {f}");
+        assert!(!acts(&ada[f], &neo[f]), "frame {f}: still adapting after the stop");
     }
 }
 

@@ -144,6 +144,23 @@ impl FromStr for Strategy {
     }
 }
 
+/// Splits a comma-separated list of strategies, keeping `adaptive`'s own comma-separated
+/// parameters with it: a piece with `=` but no `:` continues the previous strategy
+/// (`neo,adaptive:budget=30,max=2,periodic:4` is three strategies).
+pub fn split_list(s: &str) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for piece in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        match out.last_mut() {
+            Some(last) if piece.contains('=') && !piece.contains(':') && last.contains('=') => {
+                last.push(',');
+                last.push_str(piece);
+            }
+            _ => out.push(piece.to_string()),
+        }
+    }
+    out
+}
+
 fn unknown(s: &str) -> String {
     format!(
         "unknown sort strategy '{s}' (expected neo, full, periodic:K, background:K, hierarchical, \
@@ -204,6 +221,17 @@ mod tests {
             "adaptive:foo=1",
         ] {
             assert!(bad.parse::<Strategy>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn lists_keep_adaptive_parameters_together() {
+        assert_eq!(
+            split_list("neo, adaptive:budget=30,max=2,periodic:4,adaptive,motion:5"),
+            vec!["neo", "adaptive:budget=30,max=2", "periodic:4", "adaptive", "motion:5"]
+        );
+        for s in split_list("adaptive:wide=4,budget=20,full") {
+            assert!(s.parse::<Strategy>().is_ok(), "{s}");
         }
     }
 
