@@ -323,6 +323,12 @@ impl<'s> Pipeline<'s> {
     fn plan_phase(&mut self, pos: FramePos, cam: &Camera) {
         let shot_start = pos.frame == pos.shot_start;
         match self.cfg.strategy {
+            // A still camera (the pose of the last frame) adds no disorder: Neo's single pass.
+            Strategy::Adaptive(_) if !shot_start && self.motion == CameraMotion::default() => {
+                for s in &mut self.states {
+                    s.plan = TilePlan::Passes(1);
+                }
+            }
             Strategy::Adaptive(p) if !shot_start => {
                 let chunk = self.cfg.chunk as u32;
                 let requests: Vec<adaptive::Request> = self
