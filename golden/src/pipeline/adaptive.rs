@@ -388,4 +388,44 @@ mod tests {
         assert!(r.resort);
         assert_eq!(allocate(&narrow, &[r, reqs[0]]), vec![TilePlan::Resort, TilePlan::Passes(1)]);
     }
+
+    proptest::proptest! {
+        #[test]
+        fn any_valid_params_round_trip(
+            budget in 0u32..=1000,
+            max_passes in 1u32..=16,
+            resort: bool,
+            wide_log in 0u32..=6,
+        ) {
+            let p = AdaptiveParams { budget, max_passes, resort, wide: 1 << wide_log };
+            proptest::prop_assert_eq!(AdaptiveParams::parse(&p.to_string()), Ok(p));
+            let s = crate::pipeline::Strategy::Adaptive(p);
+            proptest::prop_assert_eq!(s.to_string().parse::<crate::pipeline::Strategy>(), Ok(s));
+        }
+
+        #[test]
+        fn out_of_range_values_name_their_parameter(
+            key in proptest::sample::select(vec!["budget", "max", "resort", "wide"]),
+            v in 0u64..100_000,
+        ) {
+            let ok = match key {
+                "budget" => v <= 1000,
+                "max" => (1..=16).contains(&v),
+                "resort" => v <= 1,
+                _ => v <= 64 && v.is_power_of_two(),
+            };
+            let r = AdaptiveParams::parse(&format!("{key}={v}"));
+            proptest::prop_assert_eq!(r.is_ok(), ok);
+            if let Err(e) = r {
+                proptest::prop_assert!(e.contains(&format!("'{key}'")), "{}", e);
+            }
+        }
+
+        #[test]
+        fn any_text_parses_or_errs_without_panicking(s in "[a-z=,0-9 .:-]{0,24}") {
+            let _ = AdaptiveParams::parse(&s);
+            let _ = format!("adaptive:{s}").parse::<crate::pipeline::Strategy>();
+            let _ = format!("motion:{s}").parse::<crate::pipeline::Strategy>();
+        }
+    }
 }
