@@ -108,7 +108,10 @@ fn fast_orbit_never_does_worse_than_neo() {
     let (neo, ada) = check_case("orbit 16x", &t.frames, &t.cuts);
     assert!(min_psnr(&ada) >= min_psnr(&neo), "{:.2} < {:.2}", min_psnr(&ada), min_psnr(&neo));
     // The policy acted: wider chunks or more passes than Neo somewhere.
-    assert!(ada.iter().zip(&neo).any(|(a, n)| a.work.dps_chunks != n.work.dps_chunks || a.tiles_multi_pass > 0));
+    assert!(ada
+        .iter()
+        .zip(&neo)
+        .any(|(a, n)| a.work.dps_chunks != n.work.dps_chunks || a.tiles_multi_pass > 0));
 }
 
 #[test]
@@ -153,7 +156,8 @@ fn stopping_after_16x_falls_back_to_neo_cost() {
     cams.extend(std::iter::repeat_n(t.frames[5].clone(), 6));
     let (neo, ada) = check_case("stop", &cams, &[]);
     // While moving, the policy acts (wide chunks or more passes than Neo somewhere).
-    let acts = |a: &FrameStats, n: &FrameStats| a.work.dps_chunks != n.work.dps_chunks || a.tiles_multi_pass > 0;
+    let acts =
+        |a: &FrameStats, n: &FrameStats| a.work.dps_chunks != n.work.dps_chunks || a.tiles_multi_pass > 0;
     assert!(ada[1..6].iter().zip(&neo[1..6]).any(|(a, n)| acts(a, n)));
     // From the first still frame (6, whose pose equals frame 5's) every frame is sorted as Neo
     // sorts it (one pass of the normal chunk per tile) and costs what Neo's does (within 2%).

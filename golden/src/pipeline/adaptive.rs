@@ -157,7 +157,11 @@ impl Default for AdaptiveParams {
 
 impl fmt::Display for AdaptiveParams {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "budget={},max={},resort={},wide={}", self.budget, self.max_passes, self.resort as u8, self.wide)
+        write!(
+            f,
+            "budget={},max={},resort={},wide={}",
+            self.budget, self.max_passes, self.resort as u8, self.wide
+        )
     }
 }
 
@@ -166,9 +170,9 @@ impl AdaptiveParams {
     pub fn parse(s: &str) -> Result<Self, String> {
         let mut p = AdaptiveParams::default();
         for kv in s.split(',').map(str::trim).filter(|kv| !kv.is_empty()) {
-            let (k, v) = kv
-                .split_once('=')
-                .ok_or_else(|| format!("adaptive: '{kv}' is not key=value (budget=, max=, resort=, wide=)"))?;
+            let (k, v) = kv.split_once('=').ok_or_else(|| {
+                format!("adaptive: '{kv}' is not key=value (budget=, max=, resort=, wide=)")
+            })?;
             let (k, v) = (k.trim(), v.trim());
             let num = |lo: u32, hi: u32| -> Result<u32, String> {
                 match v.parse::<u32>() {
@@ -183,7 +187,9 @@ impl AdaptiveParams {
                 "wide" => {
                     p.wide = num(1, 64)?;
                     if !p.wide.is_power_of_two() {
-                        return Err(format!("adaptive: parameter 'wide' needs a power of two in 1..=64, got '{v}'"));
+                        return Err(format!(
+                            "adaptive: parameter 'wide' needs a power of two in 1..=64, got '{v}'"
+                        ));
                     }
                 }
                 _ => {
@@ -308,7 +314,10 @@ pub struct CameraMotion {
 impl CameraMotion {
     /// Motion from `a` to `b`.
     pub fn between(a: &Camera, b: &Camera) -> Self {
-        CameraMotion { rotation_deg: angle_deg(a.forward(), b.forward()), translation: a.position.distance(b.position) }
+        CameraMotion {
+            rotation_deg: angle_deg(a.forward(), b.forward()),
+            translation: a.position.distance(b.position),
+        }
     }
 }
 
@@ -346,8 +355,13 @@ mod tests {
         assert_eq!(p, AdaptiveParams { budget: 30, max_passes: 6, resort: false, wide: 8 });
         assert_eq!(AdaptiveParams::parse(&p.to_string()), Ok(p));
         assert_eq!(AdaptiveParams::parse(""), Ok(AdaptiveParams::default()));
-        for (bad, name) in [("max=0", "max"), ("budget=x", "budget"), ("resort=2", "resort"), ("speed=1", "speed"), ("wide=3", "wide")]
-        {
+        for (bad, name) in [
+            ("max=0", "max"),
+            ("budget=x", "budget"),
+            ("resort=2", "resort"),
+            ("speed=1", "speed"),
+            ("wide=3", "wide"),
+        ] {
             let err = AdaptiveParams::parse(bad).unwrap_err();
             assert!(err.contains(&format!("'{name}'")), "{bad}: {err}");
         }
@@ -366,15 +380,18 @@ mod tests {
     fn allocation_fits_the_budget_and_serves_small_requests_first() {
         let p = AdaptiveParams { budget: 50, max_passes: 8, resort: false, wide: 1 };
         let wb = |len, reach| WritebackSignals { len, reach, ..Default::default() };
-        let reqs: Vec<Request> =
-            [wb(1000, 0), wb(1000, 256), wb(1000, 2000)].iter().map(|w| request(&p, w, 0, 1000, 256)).collect();
+        let reqs: Vec<Request> = [wb(1000, 0), wb(1000, 256), wb(1000, 2000)]
+            .iter()
+            .map(|w| request(&p, w, 0, 1000, 256))
+            .collect();
         assert_eq!(reqs.iter().map(|r| r.passes).collect::<Vec<_>>(), vec![1, 2, 8]);
         // With a wide chunk of 4 x 256 the far tile asks for 1 + 2000 / 1024 = 2 wide passes.
         let w4 = request(&AdaptiveParams { wide: 4, ..p }, &wb(1000, 2000), 0, 1000, 256);
         assert_eq!((w4.passes, w4.wide), (2, true));
         assert_eq!(w4.capped(1).0, TilePlan::Wide(1));
         let plans = allocate(&p, &reqs);
-        let extra: u64 = reqs.iter().zip(&plans).map(|(r, pl)| (pl.passes_or(1) as u64 - 1) * r.pass_cost).sum();
+        let extra: u64 =
+            reqs.iter().zip(&plans).map(|(r, pl)| (pl.passes_or(1) as u64 - 1) * r.pass_cost).sum();
         assert!(extra <= 3000, "{plans:?}");
         assert_eq!(plans[0], TilePlan::Passes(1));
         assert_eq!(plans[1], TilePlan::Passes(2));

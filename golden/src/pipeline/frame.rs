@@ -15,13 +15,13 @@ use rayon::prelude::*;
 
 use super::adaptive::{self, angle_deg, writeback_signals, CameraMotion, TilePlan};
 use super::binning::Binning;
-use super::strategy::Strategy;
 use super::config::{Formats, PipelineConfig, PipelineError};
 use super::order::{compare_orders, TileOrder};
 use super::stats::{
     finite, FrameStats, GaussianCounts, OrderStats, RasterWork, Retention, TileAggregates, TileColumns,
     Timing,
 };
+use super::strategy::Strategy;
 use super::tile::{exact_table, sort_tile, FramePos, TileCtx, TileSortOutput, TileState};
 use super::trace::write_trace;
 use crate::camera::Camera;
@@ -336,7 +336,13 @@ impl<'s> Pipeline<'s> {
                     .iter()
                     .zip(&self.slots)
                     .map(|(s, slot)| {
-                        adaptive::request(&p, &s.writeback, s.merge_inversions, slot.sort.counts.current, chunk)
+                        adaptive::request(
+                            &p,
+                            &s.writeback,
+                            s.merge_inversions,
+                            slot.sort.counts.current,
+                            chunk,
+                        )
                     })
                     .collect();
                 for (s, plan) in self.states.iter_mut().zip(adaptive::allocate(&p, &requests)) {

@@ -136,9 +136,9 @@ impl FromStr for Strategy {
             Some(("periodic", v)) => period(v, "periodic").map(Strategy::Periodic),
             Some(("background", v)) => period(v, "background").map(Strategy::Background),
             Some(("adaptive", v)) => AdaptiveParams::parse(v).map(Strategy::Adaptive),
-            Some(("motion", v)) => parse_mdeg(v.trim())
-                .map(Strategy::Motion)
-                .ok_or_else(|| format!("'{s}': motion needs a threshold DEG in (0, 360] (e.g. motion:5), got '{v}'")),
+            Some(("motion", v)) => parse_mdeg(v.trim()).map(Strategy::Motion).ok_or_else(|| {
+                format!("'{s}': motion needs a threshold DEG in (0, 360] (e.g. motion:5), got '{v}'")
+            }),
             Some(_) => Err(unknown(s)),
         }
     }
@@ -202,7 +202,10 @@ mod tests {
         }
         assert_eq!(" periodic:16 ".parse::<Strategy>(), Ok(Strategy::Periodic(16)));
         assert_eq!("motion:2.5".parse::<Strategy>(), Ok(Strategy::Motion(2500)));
-        assert_eq!("adaptive:max=2".parse::<Strategy>().unwrap().to_string(), "adaptive:budget=50,max=2,resort=1,wide=16");
+        assert_eq!(
+            "adaptive:max=2".parse::<Strategy>().unwrap().to_string(),
+            "adaptive:budget=50,max=2,resort=1,wide=16"
+        );
         for bad in [
             "",
             "periodic",

@@ -241,7 +241,8 @@ pub fn sort_tile(
             Strategy::Neo | Strategy::Periodic(_) | Strategy::Adaptive(_) | Strategy::Motion(_) => {
                 let passes = plan.passes_or(ctx.updater.config().dps_passes);
                 let frame = pos.frame as u64;
-                let uw = ctx.updater.update_wide(&mut state.table, &ctx.incoming, frame, passes, plan.is_wide());
+                let uw =
+                    ctx.updater.update_wide(&mut state.table, &ctx.incoming, frame, passes, plan.is_wide());
                 w.add_update(&uw);
                 w.binned_written += ctx.incoming.len() as u64;
                 c.dps_chunks = uw.dps.chunk.chunks as u32;

@@ -193,7 +193,10 @@ mod tests {
         assert_eq!(u.table, vec![e(0, 21, true), e(1, 10, true), e(3, 12, true), e(4, 20, true)]);
         assert_eq!(u.work.dropped_invalid, 1);
         assert_eq!(u.work.dropped_capacity, 0);
-        assert_eq!(u.work.merge, MergeStats { in_a: 3, in_b: 2, out: 4, dropped_invalid: 1, a_inversions: 0 });
+        assert_eq!(
+            u.work.merge,
+            MergeStats { in_a: 3, in_b: 2, out: 4, dropped_invalid: 1, a_inversions: 0 }
+        );
         assert_eq!(u.work.dps.passes, 1);
         assert_eq!(u.work.dps.chunk.entries, 3);
         assert_eq!(u.work.incoming_sort.entries, 2);

@@ -142,7 +142,14 @@ impl Model<'_> {
 
     /// DPS passes `passes` of frame `f` over the `len`-entry table at `table`, each chunk read
     /// and written back in place.
-    fn dps_in_place(&self, segs: &mut Vec<Segment>, tw: &TileWork, table: u64, f: usize, passes: Range<usize>) {
+    fn dps_in_place(
+        &self,
+        segs: &mut Vec<Segment>,
+        tw: &TileWork,
+        table: u64,
+        f: usize,
+        passes: Range<usize>,
+    ) {
         let (len, c, eb) = (tw.dps_len as u64, self.dps_chunk(tw), self.eb);
         for p in passes {
             let mut off = 0;
