@@ -33,19 +33,20 @@
 //!    `ceil(cost / 2L)` (passes, or the re-sort's pass equivalent). The controller takes the
 //!    largest cap `c` such that granting every tile `min(request, c)` (a re-sort above the cap
 //!    becomes `c` passes) fits the budget, then raises tiles above the cap by one level in
-//!    tile order while the rest of the budget lasts. One pass over the tiles builds a histogram of extra
-//!    cost per level, a second picks `c`: a frame controller does this from per-tile counters in
-//!    its result records (a few adders per level), with no sort of the tiles.
-//!
-//! 3. **Still camera**: a frame whose camera pose equals the previous frame's (rotation and
-//!    translation both zero; the host knows it) adds no disorder, and every tile gets Neo's
-//!    single pass: the cost falls back to Neo's at once when the camera stops. (Disorder left
-//!    from fast motion converges slowly, `O(L / C)` passes, and is not chased then.)
+//!    tile order while the rest of the budget lasts. One pass over the tiles builds a
+//!    histogram of extra cost per level, a second picks `c`: a frame controller does this from
+//!    per-tile counters in its result records (a few adders per level), with no sort of the
+//!    tiles.
+//! 3. **Still camera** (in the frame driver): a frame whose camera pose equals the previous
+//!    frame's (rotation and translation both zero; the host knows it) adds no disorder, and
+//!    every tile gets Neo's single pass: the cost falls back to Neo's at once when the camera
+//!    stops. (Disorder left from fast motion converges slowly, `O(L / C)` passes, and is not
+//!    chased then.)
 //!
 //! Parameters (`adaptive:budget=50,max=4,resort=1,wide=16`, any subset): `budget` percent
-//! (0..=1000, default 50), `max` passes per tile (1..=16, default 4), `resort` (0 or 1, default
-//! 1) allows full re-sorts, `wide` the wide chunk as a multiple of `C` (a power of two in
-//! 1..=64, default 16; 1: none). A wide pass costs the same DRAM traffic as a normal one (each
+//! (0..=1000, default 50), `max` passes per tile (1..=16, default 4), `resort` (0 or 1,
+//! default 1) allows full re-sorts, `wide` the wide chunk as a multiple of `C` (a power of
+//! two up to 64, default 16; 1: none). A wide pass costs the same DRAM traffic as a normal one (each
 //! entry read and written once) but needs a chunk buffer of `wide * C` entries in the sorting
 //! core (4096 entries, 24 KiB at 6-byte entries, for the default) and `log2(wide)` more
 //! in-chunk merge passes on chip; the cycle model times it with that chunk.
