@@ -167,6 +167,7 @@ impl<'s> WorkDriver<'s> {
     pub fn step(&mut self, cam: &Camera, frame: usize, cut: bool) -> FrameWork {
         let gw = self.pipeline.work_frame(cam, frame, cut, &self.options);
         let strategy = self.pipeline.config().strategy;
+        let chunk = self.pipeline.config().chunk as u32;
         let mut sum = StageWork::default();
         let (mut processed, mut sampled_routed) = (0u64, 0u64);
         let mut tiles = Vec::with_capacity(gw.tiles.len());
@@ -176,7 +177,7 @@ impl<'s> WorkDriver<'s> {
                 processed += r.processed;
                 sampled_routed += r.routed;
             }
-            tiles.push(tile_work(strategy, t));
+            tiles.push(tile_work(strategy, chunk, t));
         }
         let raster_read: u64 = tiles.iter().map(|t| t.raster_entries as u64).sum();
         let writeback: u64 = tiles.iter().map(|t| t.writeback as u64).sum();
@@ -208,7 +209,7 @@ impl<'s> WorkDriver<'s> {
 }
 
 /// The model's record of one tile from golden's work counters.
-fn tile_work(strategy: Strategy, t: golden::TileWork) -> TileWork {
+fn tile_work(strategy: Strategy, chunk: u32, t: golden::TileWork) -> TileWork {
     let sw = &t.sort.work;
     TileWork {
         from_scratch: t.sort.from_scratch,
@@ -217,6 +218,10 @@ fn tile_work(strategy: Strategy, t: golden::TileWork) -> TileWork {
         sort_n: sw.entries_sorted as u32 * (strategy != Strategy::Hierarchical) as u32,
         dps_len: sw.dps_entries.checked_div(sw.dps_passes).unwrap_or(0) as u32,
         dps_passes: sw.dps_passes as u32,
+        dps_chunk: match strategy {
+            Strategy::Adaptive(p) if t.sort.counts.dps_wide => chunk * p.wide,
+            _ => 0,
+        },
         merge_a: sw.merge_in_table as u32,
         merge_b: sw.merge_in_incoming as u32,
         merge_out: sw.merge_out as u32,

@@ -509,6 +509,46 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
             )?,
         ));
         let _ = writeln!(md, "![speed against error]({file})\n");
+        // Sorting traffic against the worst frame, per camera speed (issue 14).
+        let sort_gb = |a: &ArchResult| -> f64 {
+            Stage::ALL.iter().filter(|s| s.is_sorting()).map(|&s| a.gb_per_60(Some(s))).sum()
+        };
+        let min_of =
+            |r: &PointResult| if r.quality.is_exact() { Some(cap) } else { r.quality.psnr_vs_exact_min };
+        let _ = writeln!(
+            md,
+            "Sorting DRAM traffic (incoming lists, sort tables, background sorter) against the worst frame's PSNR, per camera speed; the front is the least traffic for a given worst frame (issue 14's target: at least 45 dB in every frame for at most 1.5x `neo`'s traffic; docs/adaptive.md).\n"
+        );
+        let mut speeds: Vec<f64> = d.sweep.iter().map(|r| r.point.speed).collect();
+        speeds.sort_by(f64::total_cmp);
+        speeds.dedup();
+        for (si, &speed) in speeds.iter().enumerate() {
+            let mut groups: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+            let mut pts = Vec::new();
+            for r in d.sweep.iter().filter(|r| r.point.speed == speed) {
+                let (Some(a), Some(y)) = (r.arch("neo"), min_of(r)) else { continue };
+                // Less traffic is better: the front takes the negated traffic as its x.
+                pts.push((-sort_gb(a), y));
+                let key = r.point.strategy.clone();
+                match groups.iter_mut().find(|g| g.0 == key) {
+                    Some(g) => g.1.push((sort_gb(a), y)),
+                    None => groups.push((key, vec![(sort_gb(a), y)])),
+                }
+            }
+            let front: Vec<(f64, f64)> = plot::pareto_front(&pts).into_iter().map(|(x, y)| (-x, y)).collect();
+            let file = format!("sweep_traffic_min_psnr_{si}.svg");
+            svgs.push((
+                file.clone(),
+                plot::scatter_front(
+                    &format!("Sorting traffic against the worst frame at {speed}x (exact at {cap:.0} dB)"),
+                    "sorting DRAM (GB per 60 frames)",
+                    "min-frame PSNR vs exact order (dB)",
+                    &groups,
+                    &front,
+                )?,
+            ));
+            let _ = writeln!(md, "![sorting traffic against the worst frame at {speed}x]({file})\n");
+        }
         let _ = writeln!(md, "| strategy | chunk | passes | speed | FPS | p99 frame (ms) | DRAM GB / 60 | PSNR vs exact (dB) | frames identical to exact | Pareto |");
         let _ = writeln!(md, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |");
         for r in &d.sweep {

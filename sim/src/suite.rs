@@ -192,6 +192,9 @@ pub struct QualitySummary {
     /// PSNR vs exact of the mean squared error over all frames (identical frames count as 0):
     /// the sweep's error axis; `None` when every frame is identical.
     pub psnr_vs_exact_pooled: Option<f64>,
+    /// The worst frame's PSNR vs exact (`None` when every frame is identical).
+    #[serde(default)]
+    pub psnr_vs_exact_min: Option<f64>,
     /// Mean PSNR vs the float reference.
     pub psnr_vs_float_mean: Option<f64>,
     /// Mean PSNR of the exact-order frames vs the float reference.
@@ -225,6 +228,11 @@ impl QualitySummary {
             exact_by_construction: exact,
             psnr_vs_exact_mean: mean(q.iter().filter_map(|x| x.psnr_vs_exact)),
             psnr_vs_exact_pooled: pooled,
+            psnr_vs_exact_min: q
+                .iter()
+                .filter(|x| x.identical_to_exact != Some(true))
+                .filter_map(|x| x.psnr_vs_exact)
+                .reduce(f64::min),
             psnr_vs_float_mean: mean(q.iter().filter_map(|x| x.psnr_vs_float)),
             exact_psnr_vs_float_mean: mean(q.iter().filter_map(|x| x.exact_psnr_vs_float)),
         }

@@ -43,6 +43,10 @@ pub struct TileWork {
     pub dps_len: u32,
     /// DPS passes.
     pub dps_passes: u32,
+    /// Chunk of those DPS passes when it is not the engine's (`adaptive` with a wide chunk);
+    /// 0 for the engine's chunk.
+    #[serde(default)]
+    pub dps_chunk: u32,
     /// MSU+ insert/delete merge: table entries in.
     pub merge_a: u32,
     /// MSU+ merge: incoming entries in.

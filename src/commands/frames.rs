@@ -30,7 +30,8 @@ pub struct FramesArgs {
     /// the trajectory's own.
     #[arg(long, value_parser = parse_resolution)]
     pub res: Option<(u32, u32)>,
-    /// Sorting strategy: `neo`, `full`, `periodic:K`, `background:K` or `hierarchical`.
+    /// Sorting strategy: `neo`, `full`, `periodic:K`, `background:K`, `hierarchical`,
+    /// `adaptive[:budget=B,max=P,resort=0|1,wide=W]` or `motion:DEG` (docs/adaptive.md).
     #[arg(long, default_value = "neo")]
     pub sort: String,
     /// Output directory (created).

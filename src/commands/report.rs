@@ -50,7 +50,11 @@ pub struct ReportArgs {
     #[arg(long, default_value_t = 5)]
     pub sweep_frames: usize,
     /// Strategies of the sweep.
-    #[arg(long, default_value = "neo,periodic:4,background:2,hierarchical", value_delimiter = ',')]
+    #[arg(
+        long,
+        default_value = "neo,periodic:4,background:2,hierarchical,adaptive,motion:5",
+        value_delimiter = ','
+    )]
     pub sweep_sort: Vec<String>,
     /// Chunk sizes of the sweep.
     #[arg(long, default_value = "64,128,256,512", value_delimiter = ',')]

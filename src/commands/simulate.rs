@@ -29,9 +29,10 @@ pub struct SimulateArgs {
     #[arg(long, default_value = "all")]
     pub arch: String,
     /// Strategies Neo's hardware runs, comma-separated: `neo`, `full`, `periodic:K`,
-    /// `background:K`, `hierarchical`.
-    #[arg(long, default_value = "neo", value_delimiter = ',')]
-    pub sort: Vec<String>,
+    /// `background:K`, `hierarchical`, `adaptive[:budget=B,max=P,resort=0|1,wide=W]`,
+    /// `motion:DEG` (adaptive's own comma-separated parameters stay with it).
+    #[arg(long, default_value = "neo")]
+    pub sort: String,
     /// Chunk sizes (default: the configuration's, 256).
     #[arg(long, value_delimiter = ',')]
     pub chunk: Vec<usize>,
@@ -98,7 +99,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         trajectory: a.trajectory.trajectory.clone(),
         frames: a.frames.frames,
         res: a.res.clone(),
-        strategies: a.sort.clone(),
+        strategies: neo_golden::pipeline::split_strategies(&a.sort),
         chunks: if a.chunk.is_empty() { vec![cfg.engine.chunk] } else { a.chunk.clone() },
         passes: if a.passes.is_empty() { vec![cfg.pipeline.dps_passes] } else { a.passes.clone() },
         speeds: a.speed.clone(),

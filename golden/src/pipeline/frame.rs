@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::adaptive::{self, angle_deg, writeback_signals, CameraMotion, TilePlan};
 use super::binning::Binning;
 use super::config::{Formats, PipelineConfig, PipelineError};
 use super::order::{compare_orders, TileOrder};
@@ -20,6 +21,7 @@ use super::stats::{
     finite, FrameStats, GaussianCounts, OrderStats, RasterWork, Retention, TileAggregates, TileColumns,
     Timing,
 };
+use super::strategy::Strategy;
 use super::tile::{exact_table, sort_tile, FramePos, TileCtx, TileSortOutput, TileState};
 use super::trace::write_trace;
 use crate::camera::Camera;
@@ -53,6 +55,8 @@ struct TileSlot {
     exact_pixels: Vec<[u8; 3]>,
     /// The exact pixels equal `pixels`.
     exact_same: bool,
+    /// Sum of `|pixels - exact_pixels|` over the tile.
+    abs_error: u64,
     raster: TileRaster,
     feats: Vec<FeatureEntry>,
     raster_work: RasterWork,
@@ -134,6 +138,21 @@ pub struct Pipeline<'s> {
     binning: Binning,
     shot_start: usize,
     last_frame: Option<usize>,
+    /// The previous frame's camera.
+    prev_cam: Option<Camera>,
+    /// The view direction at the last full sort (`motion`).
+    sorted_forward: Option<glam::DVec3>,
+    /// Camera motion since the previous frame.
+    motion: CameraMotion,
+}
+
+/// Records the write-back's disorder signals of a tile's table (after its keys and valid bits
+/// were written back) in its state, for the next frame's plan, and in this frame's counts.
+fn record_writeback(state: &mut TileState, sort: &mut TileSortOutput) {
+    let wb = writeback_signals(&state.table);
+    state.writeback = wb;
+    let c = &mut sort.counts;
+    (c.wb_descents, c.wb_behind, c.wb_reach) = (wb.descents, wb.behind, wb.reach);
 }
 
 impl<'s> Pipeline<'s> {
@@ -174,6 +193,9 @@ impl<'s> Pipeline<'s> {
             binning: Binning::default(),
             shot_start: 0,
             last_frame: None,
+            prev_cam: None,
+            sorted_forward: None,
+            motion: CameraMotion::default(),
             cfg,
         })
     }
@@ -271,7 +293,9 @@ impl<'s> Pipeline<'s> {
         stats.timing = timing;
         let inversions: Vec<u64> = self.slots.iter().map(|s| s.order.inversions).collect();
         let counts: Vec<_> = self.slots.iter().map(|s| s.sort.counts).collect();
-        let tiles = TileColumns::new(frame, self.grid, &counts, &inversions);
+        let scratch: Vec<bool> = self.slots.iter().map(|s| s.sort.from_scratch).collect();
+        let abs_error: Vec<u64> = self.slots.iter().map(|s| s.abs_error).collect();
+        let tiles = TileColumns::new(frame, self.grid, &counts, &inversions, &scratch, &abs_error);
         FrameOutput { image, exact_image, float_image, stats, tiles }
     }
 
@@ -287,7 +311,56 @@ impl<'s> Pipeline<'s> {
             self.shot_start = frame;
         }
         self.last_frame = Some(frame);
-        FramePos { frame, shot_start: self.shot_start }
+        self.motion = self.prev_cam.as_ref().map(|p| CameraMotion::between(p, cam)).unwrap_or_default();
+        self.prev_cam = Some(cam.clone());
+        let pos = FramePos { frame, shot_start: self.shot_start };
+        self.plan_phase(pos, cam);
+        pos
+    }
+
+    /// Sets every tile's plan for this frame (`adaptive`: the budget allocation from the
+    /// previous write-back; `motion`: a full sort when the view turned past the threshold).
+    fn plan_phase(&mut self, pos: FramePos, cam: &Camera) {
+        let shot_start = pos.frame == pos.shot_start;
+        match self.cfg.strategy {
+            // A still camera (the pose of the last frame) adds no disorder: Neo's single pass.
+            Strategy::Adaptive(_) if !shot_start && self.motion == CameraMotion::default() => {
+                for s in &mut self.states {
+                    s.plan = TilePlan::Passes(1);
+                }
+            }
+            Strategy::Adaptive(p) if !shot_start => {
+                let chunk = self.cfg.chunk as u32;
+                let requests: Vec<adaptive::Request> = self
+                    .states
+                    .iter()
+                    .zip(&self.slots)
+                    .map(|(s, slot)| {
+                        adaptive::request(
+                            &p,
+                            &s.writeback,
+                            s.merge_inversions,
+                            slot.sort.counts.current,
+                            chunk,
+                        )
+                    })
+                    .collect();
+                for (s, plan) in self.states.iter_mut().zip(adaptive::allocate(&p, &requests)) {
+                    s.plan = plan;
+                }
+            }
+            Strategy::Motion(mdeg) => {
+                let fwd = cam.forward();
+                let turned = self.sorted_forward.is_none_or(|f| angle_deg(f, fwd) * 1000.0 > mdeg as f64);
+                if shot_start || turned {
+                    self.sorted_forward = Some(fwd);
+                    for s in &mut self.states {
+                        s.plan = TilePlan::Resort;
+                    }
+                }
+            }
+            _ => {}
+        }
     }
 
     /// Float preprocess (`inspect` sees the projected Gaussians) and quantisation into the
@@ -390,11 +463,13 @@ impl<'s> Pipeline<'s> {
                 }
                 slot.sort.counts.bitmap_popcount = popcount as u32;
                 slot.raster_work = rw;
+                record_writeback(state, &mut slot.sort);
             },
         );
     }
 
-    /// Exact tables of every tile and, when compared, their raster.
+    /// Exact tables of every tile and, when compared, their raster (and each tile's absolute
+    /// error against it).
     fn reference_phase(&mut self) {
         let (features, feature_of, binning) = (&self.features, &self.feature_of, &self.binning);
         let (fmt, cfg, w, h, gx) =
@@ -407,6 +482,7 @@ impl<'s> Pipeline<'s> {
             || pool.take(),
             |ctx, (ti, (state, slot))| {
                 let current = binning.tile(ti);
+                slot.abs_error = 0;
                 exact_table(current, capacity, &mut slot.exact);
                 if exact_strategy {
                     debug_assert!(state.table.iter().map(|e| e.id).eq(slot.exact.iter().map(|e| e.id)));
@@ -434,6 +510,12 @@ impl<'s> Pipeline<'s> {
                 let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
                 raster_tile_into(&slot.feats, fmt, tx, ty, w, h, cfg, &mut slot.raster);
                 std::mem::swap(&mut slot.exact_pixels, &mut slot.raster.pixels);
+                slot.abs_error = slot
+                    .pixels
+                    .iter()
+                    .zip(&slot.exact_pixels)
+                    .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| x.abs_diff(*y) as u64))
+                    .sum();
             },
         );
     }
@@ -557,6 +639,8 @@ impl<'s> Pipeline<'s> {
             retention: Retention::from_counts(&counts),
             dropped_capacity: work.dropped_capacity,
             dropped_invalid: work.dropped_invalid,
+            camera: self.motion,
+            tiles_multi_pass: counts.iter().filter(|c| c.dps_passes > 1).count() as u64,
             work,
             raster,
             timing: Timing::default(),

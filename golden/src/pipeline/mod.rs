@@ -25,6 +25,7 @@
 //! [`run_trajectory`] runs a trajectory; [`StatsFile`] is the `stats.json` document;
 //! [`trace`] exports a frame as the artifact simulator's `poc.trace`.
 
+pub mod adaptive;
 pub mod binning;
 pub mod config;
 pub mod frame;
@@ -42,5 +43,5 @@ pub use config::{ConfigRecord, Formats, PipelineConfig, PipelineError, RunInfo};
 pub use frame::{FrameOutput, FrameWork, Pipeline, SampledRaster, TileWork, WorkOptions};
 pub use run::{bench_frames, formats_for, run_trajectory, StatsFile};
 pub use stats::{FrameStats, Summary, TileColumns, Timing};
-pub use strategy::Strategy;
+pub use strategy::{split_list as split_strategies, Strategy};
 pub use work::StageWork;

@@ -263,6 +263,10 @@ pub struct FrameStats {
     pub dropped_capacity: u64,
     /// Entries removed by the MSU+ for a valid bit of 0 (= `work.dropped_invalid`).
     pub dropped_invalid: u64,
+    /// Camera motion since the previous frame rendered (zero for the first).
+    pub camera: super::adaptive::CameraMotion,
+    /// Tiles sorted with more than one DPS pass (`adaptive`).
+    pub tiles_multi_pass: u64,
     /// Timing.
     pub timing: Timing,
 }
@@ -292,11 +296,32 @@ pub struct TileColumns {
     pub dps_chunks: Vec<u32>,
     /// Inversions against the exact order.
     pub inversions: Vec<u64>,
+    /// DPS passes run on the tile.
+    pub dps_passes: Vec<u32>,
+    /// Sorted from scratch (1) or reused (0).
+    pub from_scratch: Vec<u8>,
+    /// MSU+ boundary inversions of the reused stream.
+    pub merge_inversions: Vec<u32>,
+    /// Write-back descents (the rastered table against the current keys).
+    pub wb_descents: Vec<u32>,
+    /// Write-back entries behind the running maximum.
+    pub wb_behind: Vec<u32>,
+    /// Write-back reach.
+    pub wb_reach: Vec<u32>,
+    /// Sum over the tile's pixels and channels of `|strategy - exact|` (0 when not compared).
+    pub abs_error: Vec<u64>,
 }
 
 impl TileColumns {
     /// Columns from per-tile counts and inversions.
-    pub fn new(frame: usize, grid: [u32; 2], counts: &[TileCounts], inversions: &[u64]) -> Self {
+    pub fn new(
+        frame: usize,
+        grid: [u32; 2],
+        counts: &[TileCounts],
+        inversions: &[u64],
+        from_scratch: &[bool],
+        abs_error: &[u64],
+    ) -> Self {
         let col = |f: fn(&TileCounts) -> u32| counts.iter().map(f).collect::<Vec<u32>>();
         TileColumns {
             frame,
@@ -310,6 +335,13 @@ impl TileColumns {
             bitmap_popcount: col(|c| c.bitmap_popcount),
             dps_chunks: col(|c| c.dps_chunks),
             inversions: inversions.to_vec(),
+            dps_passes: col(|c| c.dps_passes),
+            from_scratch: from_scratch.iter().map(|&b| b as u8).collect(),
+            merge_inversions: col(|c| c.merge_inversions),
+            wb_descents: col(|c| c.wb_descents),
+            wb_behind: col(|c| c.wb_behind),
+            wb_reach: col(|c| c.wb_reach),
+            abs_error: abs_error.to_vec(),
         }
     }
 }

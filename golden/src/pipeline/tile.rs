@@ -11,6 +11,7 @@
 
 use std::collections::VecDeque;
 
+use super::adaptive::{TilePlan, WritebackSignals};
 use super::hierarchical::hierarchical_sort;
 use super::order::OrderScratch;
 use super::strategy::Strategy;
@@ -25,6 +26,12 @@ pub struct TileState {
     pub table: Vec<SortEntry>,
     /// `background:K`: exact tables of the last frames, `(frame, table)`, oldest first.
     background: VecDeque<(usize, Vec<SortEntry>)>,
+    /// This frame's plan, set by the frame driver before the sort (`adaptive`, `motion`).
+    pub plan: TilePlan,
+    /// The last write-back's disorder signals (of the table the next frame reuses).
+    pub writeback: WritebackSignals,
+    /// The MSU+ boundary inversions of the last sort (0 after a sort from scratch).
+    pub merge_inversions: u32,
 }
 
 impl TileState {
@@ -59,6 +66,19 @@ pub struct TileCounts {
     pub dps_chunks: u32,
     /// Set bits over the subtile bitmaps of the rastered table (filled by the raster phase).
     pub bitmap_popcount: u32,
+    /// DPS passes run on the tile.
+    pub dps_passes: u32,
+    /// Whether those passes used the wide chunk (`adaptive` with `wide > 1`).
+    pub dps_wide: bool,
+    /// MSU+ boundary inversions of the reused stream ([`crate::sort::MergeStats::a_inversions`]).
+    pub merge_inversions: u32,
+    /// Write-back descents of the rastered table against the current keys (filled at the
+    /// write-back; see [`super::adaptive::WritebackSignals`]).
+    pub wb_descents: u32,
+    /// Write-back entries behind the running maximum.
+    pub wb_behind: u32,
+    /// Write-back reach.
+    pub wb_reach: u32,
 }
 
 /// What the sorting step tells the frame driver about one tile.
@@ -133,8 +153,14 @@ pub struct TileCtx {
 impl TileCtx {
     /// Buffers for `strategy` with sorting parameters `sort`, `dps_passes` and `capacity`.
     pub fn new(strategy: Strategy, sort: &SortConfig, dps_passes: usize, capacity: usize) -> Self {
-        let passes = if strategy == Strategy::Neo { dps_passes } else { 0 };
-        let updater = TileSorter::new(UpdateConfig { sort: sort.clone(), capacity, dps_passes: passes });
+        let passes = if matches!(strategy, Strategy::Neo | Strategy::Adaptive(_)) { dps_passes } else { 0 };
+        let mut updater = TileSorter::new(UpdateConfig { sort: sort.clone(), capacity, dps_passes: passes });
+        if let Strategy::Adaptive(p) = strategy {
+            if p.wide > 1 {
+                // A chunk times a power of two is a valid chunk; were it not, no wide chunk.
+                let _ = updater.set_wide_chunk(sort.chunk() * p.wide as usize);
+            }
+        }
         let scratch_sorter = TileSorter::new(UpdateConfig { sort: sort.clone(), capacity, dps_passes: 0 });
         TileCtx {
             updater,
@@ -188,7 +214,10 @@ pub fn sort_tile(
     c.retained = c.current - c.incoming;
     c.outgoing = v_len - c.retained;
 
-    let from_scratch = strategy == Strategy::Hierarchical || strategy.full_sort_at(pos.frame, pos.shot_start);
+    let plan = std::mem::take(&mut state.plan);
+    let from_scratch = strategy == Strategy::Hierarchical
+        || strategy.full_sort_at(pos.frame, pos.shot_start)
+        || plan == TilePlan::Resort;
     out.from_scratch = from_scratch;
     let w = &mut out.work;
     if strategy == Strategy::Hierarchical {
@@ -209,16 +238,23 @@ pub fn sort_tile(
         }
     } else {
         match strategy {
-            Strategy::Neo | Strategy::Periodic(_) => {
-                let uw = ctx.updater.update(&mut state.table, &ctx.incoming, pos.frame as u64);
+            Strategy::Neo | Strategy::Periodic(_) | Strategy::Adaptive(_) | Strategy::Motion(_) => {
+                let passes = plan.passes_or(ctx.updater.config().dps_passes);
+                let frame = pos.frame as u64;
+                let uw =
+                    ctx.updater.update_wide(&mut state.table, &ctx.incoming, frame, passes, plan.is_wide());
                 w.add_update(&uw);
                 w.binned_written += ctx.incoming.len() as u64;
                 c.dps_chunks = uw.dps.chunk.chunks as u32;
+                c.dps_passes = uw.dps.passes as u32;
+                c.dps_wide = plan.is_wide();
+                c.merge_inversions = uw.merge.a_inversions as u32;
             }
             Strategy::Background(k) => background_step(k, pos, state, current, ctx, w),
             Strategy::Full | Strategy::Hierarchical => unreachable!("sorted from scratch above"),
         }
     }
+    state.merge_inversions = out.counts.merge_inversions;
     // Composition of the rastered table.
     let c = &mut out.counts;
     c.table_len = state.table.len() as u32;

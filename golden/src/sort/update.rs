@@ -73,6 +73,8 @@ pub struct TileUpdate {
 pub struct TileSorter {
     cfg: UpdateConfig,
     sorter: Sorter,
+    /// A Sorting Core with a wider chunk for [`TileSorter::update_wide`] (`None`: not built).
+    wide: Option<Sorter>,
     incoming: Vec<SortEntry>,
     merged: Vec<SortEntry>,
 }
@@ -81,7 +83,15 @@ impl TileSorter {
     /// A tile sorter for `cfg`.
     pub fn new(cfg: UpdateConfig) -> Self {
         let sorter = Sorter::new(cfg.sort.clone());
-        TileSorter { cfg, sorter, incoming: Vec::new(), merged: Vec::new() }
+        TileSorter { cfg, sorter, wide: None, incoming: Vec::new(), merged: Vec::new() }
+    }
+
+    /// The same sorter with a second chunk size `wide_chunk` for DPS ([`TileSorter::update_wide`]).
+    /// Fails (and keeps the sorter without a wide chunk) when `wide_chunk` is not a valid chunk.
+    pub fn set_wide_chunk(&mut self, wide_chunk: usize) -> Result<(), super::SortParamError> {
+        let c = &self.cfg.sort;
+        self.wide = Some(Sorter::new(SortConfig::new(c.format(), wide_chunk, c.network().clone())?));
+        Ok(())
     }
 
     /// Its configuration.
@@ -92,7 +102,35 @@ impl TileSorter {
     /// Reuse-and-update of `table` (the previous frame's table, replaced by this frame's) with
     /// `incoming` at frame index `frame`.
     pub fn update(&mut self, table: &mut Vec<SortEntry>, incoming: &[SortEntry], frame: u64) -> UpdateWork {
-        let dps = self.sorter.dps(table, frame, self.cfg.dps_passes);
+        self.update_passes(table, incoming, frame, self.cfg.dps_passes)
+    }
+
+    /// [`TileSorter::update`] with `passes` DPS passes instead of the configured number.
+    pub fn update_passes(
+        &mut self,
+        table: &mut Vec<SortEntry>,
+        incoming: &[SortEntry],
+        frame: u64,
+        passes: usize,
+    ) -> UpdateWork {
+        self.update_wide(table, incoming, frame, passes, false)
+    }
+
+    /// [`TileSorter::update_passes`] whose DPS uses the wide chunk when `wide` (and a wide chunk
+    /// was configured, [`TileSorter::set_wide_chunk`]); the incoming sort keeps the normal one.
+    pub fn update_wide(
+        &mut self,
+        table: &mut Vec<SortEntry>,
+        incoming: &[SortEntry],
+        frame: u64,
+        passes: usize,
+        wide: bool,
+    ) -> UpdateWork {
+        let dps_sorter = match (&mut self.wide, wide) {
+            (Some(w), true) => w,
+            _ => &mut self.sorter,
+        };
+        let dps = dps_sorter.dps(table, frame, passes);
         let incoming_sort = self.sorter.full_sort(incoming, &mut self.incoming);
         self.merged.clear();
         let merge = merge2_into(table, &self.incoming, true, &mut self.merged);
@@ -155,7 +193,10 @@ mod tests {
         assert_eq!(u.table, vec![e(0, 21, true), e(1, 10, true), e(3, 12, true), e(4, 20, true)]);
         assert_eq!(u.work.dropped_invalid, 1);
         assert_eq!(u.work.dropped_capacity, 0);
-        assert_eq!(u.work.merge, MergeStats { in_a: 3, in_b: 2, out: 4, dropped_invalid: 1 });
+        assert_eq!(
+            u.work.merge,
+            MergeStats { in_a: 3, in_b: 2, out: 4, dropped_invalid: 1, a_inversions: 0 }
+        );
         assert_eq!(u.work.dps.passes, 1);
         assert_eq!(u.work.dps.chunk.entries, 3);
         assert_eq!(u.work.incoming_sort.entries, 2);

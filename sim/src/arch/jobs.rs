@@ -142,8 +142,15 @@ impl Model<'_> {
 
     /// DPS passes `passes` of frame `f` over the `len`-entry table at `table`, each chunk read
     /// and written back in place.
-    fn dps_in_place(&self, segs: &mut Vec<Segment>, len: u64, table: u64, f: usize, passes: Range<usize>) {
-        let (c, eb) = (self.cfg.engine.chunk as u64, self.eb);
+    fn dps_in_place(
+        &self,
+        segs: &mut Vec<Segment>,
+        tw: &TileWork,
+        table: u64,
+        f: usize,
+        passes: Range<usize>,
+    ) {
+        let (len, c, eb) = (tw.dps_len as u64, self.dps_chunk(tw), self.eb);
         for p in passes {
             let mut off = 0;
             for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
@@ -151,6 +158,15 @@ impl Model<'_> {
                 segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
                 off += cmd.len_a;
             }
+        }
+    }
+
+    /// The chunk of a tile's DPS passes (the engine's unless the workload names another).
+    fn dps_chunk(&self, tw: &TileWork) -> u64 {
+        if tw.dps_chunk > 0 {
+            tw.dps_chunk as u64
+        } else {
+            self.cfg.engine.chunk as u64
         }
     }
 
@@ -181,7 +197,7 @@ impl Model<'_> {
                 }
                 _ => (self.layout.table(f + 1, t), Stage::SortTable),
             };
-            let c = self.cfg.engine.chunk as u64;
+            let c = self.dps_chunk(tw);
             let (a, b) = (tw.merge_a as u64, tw.merge_b as u64);
             let out = (tw.merge_out - tw.merge_out.min(tw.dropped_capacity)) as u64;
             let passes = tw.dps_passes as usize;
@@ -198,7 +214,7 @@ impl Model<'_> {
                     Stage::SortTable,
                 );
                 let len = tw.dps_len as u64;
-                self.dps_in_place(&mut segs, len, prev, f, 0..passes - 1);
+                self.dps_in_place(&mut segs, tw, prev, f, 0..passes - 1);
                 let extra = (self.lat.merge_cycles(a, b, true) as f64 - a as f64).max(b as f64);
                 let (mut off, mut b_done, mut o_done) = (0u64, 0u64, 0u64);
                 for cmd in dps_pass(len, c, Parity::of(f as u64, passes - 1)) {
@@ -220,8 +236,7 @@ impl Model<'_> {
                     (off, b_done, o_done) = (end, b_to, o_to);
                 }
             } else {
-                let len = tw.dps_len as u64;
-                self.dps_in_place(&mut segs, len, prev, f, 0..passes);
+                self.dps_in_place(&mut segs, tw, prev, f, 0..passes);
                 self.conv_sort(
                     &mut segs,
                     b,

@@ -11,7 +11,7 @@
 
 use rayon::prelude::*;
 
-use super::{Pipeline, CULLED};
+use super::{record_writeback, Pipeline, CULLED};
 use crate::camera::Camera;
 use crate::pipeline::hierarchical::{hierarchical_sort, HierWork};
 use crate::pipeline::prefetch::prefetch;
@@ -178,6 +178,7 @@ impl Pipeline<'_> {
                             }
                         }
                     }
+                    record_writeback(state, &mut slot.sort);
                     let sampled = sampled.then(|| {
                         raster_tile_into(&slot.feats, fmt, tx, ty, w, h, rcfg, &mut slot.raster);
                         let mut r = SampledRaster::default();
