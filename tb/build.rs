@@ -6,6 +6,11 @@
 //! - Verilator output and the compiled static libraries are cached in
 //!   `$NEO_CACHE_DIR` or `<target>/neo-verilator-cache/<top>-<hash>/`, keyed by the Verilog text,
 //!   the flags, `verilator --version`, the C++ compiler and the shim generator version.
+//! - The models trace VCD (`--trace`), or FST (`--trace-fst`, `VerilatedFstC`, linked with zlib)
+//!   when `WAVES=fst` is set for the build; the FST builds are cache entries of their own
+//!   (`<top>-fst-<hash>/`, `runtime-fst-<hash>/`), and `NEO_TB_MODEL_WAVES` (`vcd` or `fst`) tells
+//!   `neo_tb::waves` which the models write. A `WAVES` value that is not a waveform choice fails
+//!   the build, naming the accepted values.
 //! - Without Verilator the crate builds without models (no `neo_has_verilator` cfg) and the
 //!   cosimulation tests skip; with `CI` set that is an error instead.
 
@@ -17,6 +22,8 @@ mod shim;
 mod verilate;
 #[path = "build/verilator.rs"]
 mod verilator;
+#[path = "build/waves_env.rs"]
+mod waves_env;
 
 use neo_gen::interface::ModuleInterface;
 use std::fmt::Write as _;
@@ -42,18 +49,32 @@ fn main() {
     println!("cargo::rerun-if-changed=build.rs");
     println!("cargo::rerun-if-changed=build");
     println!("cargo::rerun-if-changed={FIXTURE_DIR}");
-    for var in ["NEO_HDL_DIR", "NEO_CACHE_DIR", "NEO_CONFIG", "CI", "VERILATOR"] {
+    for var in ["NEO_HDL_DIR", "NEO_CACHE_DIR", "NEO_CONFIG", "CI", "VERILATOR", "WAVES"] {
         println!("cargo::rerun-if-env-changed={var}");
     }
     let out_dir = PathBuf::from(std::env::var_os("OUT_DIR").expect("OUT_DIR"));
     let target = cache::target_dir(&out_dir);
     println!("cargo::rustc-env=NEO_TB_TARGET_DIR={}", target.display());
-    if let Err(e) = run(&out_dir) {
+    let trace = match trace_flavour() {
+        Ok(t) => t,
+        Err(e) => panic!("neo-tb build failed:\n{e}"),
+    };
+    println!("cargo::rustc-env=NEO_TB_MODEL_WAVES={}", if trace.is_fst() { "fst" } else { "vcd" });
+    if let Err(e) = run(&out_dir, &trace) {
         panic!("neo-tb build failed:\n{e}");
     }
 }
 
-fn run(out_dir: &Path) -> Result<(), String> {
+/// The trace writer of the static models: FST when `WAVES=fst` at build time, else VCD.
+fn trace_flavour() -> Result<verilate::Trace, String> {
+    let waves = std::env::var("WAVES").unwrap_or_default();
+    Ok(match waves_env::parse_waves(&waves)? {
+        Some("fst") => verilate::Trace::FST,
+        _ => verilate::Trace::VCD,
+    })
+}
+
+fn run(out_dir: &Path, trace: &verilate::Trace) -> Result<(), String> {
     let mut units = fixture_units()?;
     let cfg = engine_config(out_dir)?;
     let (gen_units, source) = gen_units(&cfg)?;
@@ -84,8 +105,9 @@ fn run(out_dir: &Path) -> Result<(), String> {
     // The runtime library (shared by all models) and every model, built in parallel threads on a
     // cache miss (the compilers are the bottleneck; cc also limits itself through the jobserver).
     let (runtime, built): (Built, Vec<Built>) = std::thread::scope(|s| {
-        let rt = s.spawn(|| build_runtime(&v, &root, &compiler));
-        let models: Vec<_> = units.iter().map(|u| s.spawn(|| build_unit(&v, &root, &compiler, u))).collect();
+        let rt = s.spawn(|| build_runtime(&v, trace, &root, &compiler));
+        let models: Vec<_> =
+            units.iter().map(|u| s.spawn(|| build_unit(&v, trace, &root, &compiler, u))).collect();
         let join = |h: std::thread::ScopedJoinHandle<'_, Built>| {
             h.join().unwrap_or_else(|_| Err("a build thread panicked".into()))
         };
@@ -125,20 +147,27 @@ fn run(out_dir: &Path) -> Result<(), String> {
     }
     println!("cargo::rustc-link-search=native={}", rt_dir.display());
     println!("cargo::rustc-link-lib=static=neo_verilated");
+    for lib in trace.libs {
+        println!("cargo::rustc-link-lib=dylib={lib}");
+    }
     println!("cargo::rustc-link-lib=dylib=stdc++");
     println!("cargo::rustc-cfg=neo_has_verilator");
     Ok(())
 }
 
-/// The Verilator runtime library from the cache, built on a miss.
-fn build_runtime(v: &verilator::Verilator, root: &Path, compiler: &str) -> Built {
+/// The Verilator runtime library (with `trace`'s writer) from the cache, built on a miss.
+fn build_runtime(v: &verilator::Verilator, trace: &verilate::Trace, root: &Path, compiler: &str) -> Built {
     let mut key = cache::Key::new();
     key.add("runtime", verilate::RUNTIME_VERSION.to_string().as_bytes());
     key.add("verilator", v.version.as_bytes());
     key.add("root", v.root.to_string_lossy().as_bytes());
     key.add("compiler", compiler.as_bytes());
     key.add("opt", verilate::OPT_FAST.to_string().as_bytes());
-    cache::get_or_build(root, "runtime", &key, "libneo_verilated.a", |d| verilate::build_runtime(v, d))
+    if let Some(k) = trace.key() {
+        key.add("trace", k.as_bytes());
+    }
+    let name = format!("runtime{}", trace.suffix);
+    cache::get_or_build(root, &name, &key, "libneo_verilated.a", |d| verilate::build_runtime(v, trace, d))
 }
 
 /// The Verilog text without its `// generated by neo gen (...)` header line: the header names
@@ -151,16 +180,18 @@ fn without_header(text: &str) -> &str {
     }
 }
 
-/// One model's libraries from the cache, built (Verilator, then the C++ and the shim) on a miss.
+/// One model's libraries (traced with `trace`'s writer) from the cache, built (Verilator, then
+/// the C++ and the shim) on a miss.
 fn build_unit(
     v: &verilator::Verilator,
+    trace: &verilate::Trace,
     root: &Path,
     compiler: &str,
     u: &Unit,
 ) -> Result<(PathBuf, bool), String> {
     shim::validate(&u.iface)?;
     let top = &u.iface.name;
-    let cpp = shim::cpp(&u.iface);
+    let cpp = shim::cpp_traced(&u.iface, trace.shim);
     let mut key = cache::Key::new();
     key.add("top", top.as_bytes());
     for (name, text) in &u.files {
@@ -169,14 +200,19 @@ fn build_unit(
     if let Some(vlt) = &u.vlt {
         key.add("lint.vlt", vlt.as_bytes());
     }
-    key.add("flags", verilator::VERILATOR_FLAGS.join(" ").as_bytes());
+    key.add("flags", trace.flags.join(" ").as_bytes());
+    if let Some(k) = trace.key() {
+        // Only for FST, so that the VCD models' keys (and cache entries) stay as they were.
+        key.add("trace", k.as_bytes());
+    }
     key.add("verilator", v.version.as_bytes());
     key.add("compiler", compiler.as_bytes());
     key.add("opt", format!("{} {}", verilate::OPT_FAST, verilate::OPT_SLOW).as_bytes());
     key.add("shim", shim::SHIM_VERSION.to_string().as_bytes());
     key.add("shim.cpp", cpp.as_bytes());
     let ready = format!("libneo_{top}_slow.a");
-    cache::get_or_build(root, top, &key, &ready, |d| {
+    let name = format!("{top}{}", trace.suffix);
+    cache::get_or_build(root, &name, &key, &ready, |d| {
         let hdl = d.join("hdl");
         fs::create_dir_all(&hdl).map_err(|e| e.to_string())?;
         let mut paths = Vec::new();
@@ -191,7 +227,7 @@ fn build_unit(
             paths.push(p);
         }
         let t = std::time::Instant::now();
-        let log = verilate::build_model(v, top, &paths, &cpp, d)?;
+        let log = verilate::build_model(v, trace, top, &paths, &cpp, d)?;
         let log = format!("{top}: {log}, total {:.1} s\n", t.elapsed().as_secs_f64());
         fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
     })

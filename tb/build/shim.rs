@@ -82,7 +82,7 @@ pub fn validate(iface: &ModuleInterface) -> Result<(), String> {
 }
 
 /// How the model behind a shim is traced.
-#[allow(dead_code)] // build.rs builds VCD-traced models only
+#[allow(dead_code)] // build.rs builds traced models only (no `Off`)
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShimTrace {
     /// Verilated without tracing: `neo_T_trace_open` returns 0, dump and close do nothing.
@@ -91,11 +91,6 @@ pub enum ShimTrace {
     Vcd,
     /// `--trace-fst`: a `VerilatedFstC` writer.
     Fst,
-}
-
-/// The C++ shim for one top (VCD tracing; the model is verilated with `--trace`).
-pub fn cpp(iface: &ModuleInterface) -> String {
-    cpp_traced(iface, ShimTrace::Vcd)
 }
 
 /// The C++ shim for one top with the trace writer of `--trace` (VCD), `--trace-fst` (FST) or
@@ -365,7 +360,7 @@ pub fn rust(iface: &ModuleInterface) -> String {
     s.push_str("    #[inline]\n    pub fn time(&self) -> u64 {\n        self.time\n    }\n\n");
     let _ = writeln!(
         s,
-        "    /// Starts writing a VCD trace to `path` (replacing an open one); every later half cycle is dumped.\n    pub fn trace_open(&mut self, path: &std::path::Path) -> std::io::Result<()> {{\n        let c = std::ffi::CString::new(path.as_os_str().to_string_lossy().as_bytes())\n            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;\n        // SAFETY: `raw` is live; `c` outlives the call.\n        let ok = unsafe {{ ffi_{t}::neo_{t}_trace_open(self.raw.as_ptr(), c.as_ptr()) }};\n        if ok == 0 {{\n            return Err(std::io::Error::other(format!(\"cannot open VCD {{}}\", path.display())));\n        }}\n        self.tracing = true;\n        Ok(())\n    }}\n"
+        "    /// Starts writing a trace to `path` (replacing an open one): a VCD, or an FST when the crate\n    /// was built with `WAVES=fst` (`neo_tb::waves::MODEL_FORMAT`); every later half cycle is dumped.\n    pub fn trace_open(&mut self, path: &std::path::Path) -> std::io::Result<()> {{\n        let c = std::ffi::CString::new(path.as_os_str().to_string_lossy().as_bytes())\n            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;\n        // SAFETY: `raw` is live; `c` outlives the call.\n        let ok = unsafe {{ ffi_{t}::neo_{t}_trace_open(self.raw.as_ptr(), c.as_ptr()) }};\n        if ok == 0 {{\n            return Err(std::io::Error::other(format!(\"cannot open trace {{}}\", path.display())));\n        }}\n        self.tracing = true;\n        Ok(())\n    }}\n"
     );
     let _ = writeln!(
         s,

@@ -1,6 +1,10 @@
 //! Running Verilator and compiling its C++ output (plus the shim) into static libraries.
 
-use crate::verilator::{verilate, Verilator, CPP_DEFINES, RUNTIME_SOURCES};
+use crate::shim::ShimTrace;
+use crate::verilator::{
+    verilate_with, Verilator, CPP_DEFINES, CPP_DEFINES_FST, RUNTIME_SOURCES, RUNTIME_SOURCES_FST,
+    VERILATOR_FLAGS, VERILATOR_FLAGS_FST,
+};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -13,8 +17,58 @@ pub const OPT_SLOW: u32 = 1;
 /// Version of the way the runtime library is built (part of its cache key).
 pub const RUNTIME_VERSION: u32 = 1;
 
+/// The trace writer the static models are built with (`WAVES` at build time): Verilator flags,
+/// C++ defines, runtime sources, extra link libraries, cache name suffix, shim writer.
+pub struct Trace {
+    /// Verilator flags (`--trace` or `--trace-fst`).
+    pub flags: &'static [&'static str],
+    /// Preprocessor definitions of every C++ file of the models and of the runtime.
+    pub defines: &'static [(&'static str, &'static str)],
+    /// The runtime sources under Verilator's `include/`.
+    pub runtime: &'static [&'static str],
+    /// Extra system libraries to link (`z` for the FST writer).
+    pub libs: &'static [&'static str],
+    /// Cache entry name suffix (`-fst`; none for VCD, whose entries keep their names and keys).
+    pub suffix: &'static str,
+    /// The shim's trace writer.
+    pub shim: ShimTrace,
+}
+
+impl Trace {
+    /// `--trace`: `VerilatedVcdC` (the default).
+    pub const VCD: Trace = Trace {
+        flags: VERILATOR_FLAGS,
+        defines: CPP_DEFINES,
+        runtime: RUNTIME_SOURCES,
+        libs: &[],
+        suffix: "",
+        shim: ShimTrace::Vcd,
+    };
+    /// `--trace-fst`: `VerilatedFstC` (GTKWave's FST writer; links zlib).
+    pub const FST: Trace = Trace {
+        flags: VERILATOR_FLAGS_FST,
+        defines: CPP_DEFINES_FST,
+        runtime: RUNTIME_SOURCES_FST,
+        libs: &["z"],
+        suffix: "-fst",
+        shim: ShimTrace::Fst,
+    };
+
+    /// True for the FST flavour.
+    pub fn is_fst(&self) -> bool {
+        self.suffix == Trace::FST.suffix
+    }
+
+    /// The cache key entry of a non-default flavour (`None` for VCD, so that its keys stay as
+    /// they were).
+    pub fn key(&self) -> Option<String> {
+        self.is_fst()
+            .then(|| format!("{:?} {:?} {:?} {:?}", self.flags, self.defines, self.runtime, self.libs))
+    }
+}
+
 /// A C++ build with the flags Verilator's own makefile uses.
-fn cpp_build(v: &Verilator, opt: u32, out_dir: &Path) -> cc::Build {
+fn cpp_build(v: &Verilator, trace: &Trace, opt: u32, out_dir: &Path) -> cc::Build {
     let mut b = cc::Build::new();
     b.cpp(true)
         .opt_level(opt)
@@ -27,7 +81,7 @@ fn cpp_build(v: &Verilator, opt: u32, out_dir: &Path) -> cc::Build {
         .include(v.include().join("vltstd"))
         .flag_if_supported("-faligned-new")
         .flag_if_supported("-fcf-protection=none");
-    for (name, value) in CPP_DEFINES {
+    for (name, value) in trace.defines {
         b.define(name, *value);
     }
     b
@@ -46,11 +100,11 @@ pub fn compiler_id() -> String {
     format!("{} {}", tool.path().display(), version)
 }
 
-/// Compiles the Verilator runtime (`verilated.cpp`, `verilated_vcd_c.cpp`,
-/// `verilated_threads.cpp`) into `<dir>/libneo_verilated.a`.
-pub fn build_runtime(v: &Verilator, dir: &Path) -> Result<(), String> {
-    let mut b = cpp_build(v, OPT_FAST, dir);
-    for f in RUNTIME_SOURCES {
+/// Compiles the Verilator runtime (`verilated.cpp`, `verilated_vcd_c.cpp` or
+/// `verilated_fst_c.cpp`, `verilated_threads.cpp`) into `<dir>/libneo_verilated.a`.
+pub fn build_runtime(v: &Verilator, trace: &Trace, dir: &Path) -> Result<(), String> {
+    let mut b = cpp_build(v, trace, OPT_FAST, dir);
+    for f in trace.runtime {
         b.file(v.include().join(f));
     }
     b.try_compile("neo_verilated").map_err(|e| format!("compiling the Verilator runtime: {e}"))?;
@@ -62,6 +116,7 @@ pub fn build_runtime(v: &Verilator, dir: &Path) -> Result<(), String> {
 /// shim (`shim_cpp`) into `<dir>/libneo_<top>_fast.a` and `<dir>/libneo_<top>_slow.a`.
 pub fn build_model(
     v: &Verilator,
+    trace: &Trace,
     top: &str,
     verilog_files: &[PathBuf],
     shim_cpp: &str,
@@ -69,19 +124,19 @@ pub fn build_model(
 ) -> Result<String, String> {
     let obj = dir.join("obj");
     let t0 = Instant::now();
-    let (fast, slow) = verilate(v, top, verilog_files, &obj)?;
+    let (fast, slow) = verilate_with(v, trace.flags, top, verilog_files, &obj)?;
     let verilate_s = t0.elapsed().as_secs_f64();
     fs::write(dir.join("shim.cpp"), shim_cpp).map_err(|e| e.to_string())?;
 
     let t1 = Instant::now();
-    let mut b = cpp_build(v, OPT_FAST, dir);
+    let mut b = cpp_build(v, trace, OPT_FAST, dir);
     b.include(&obj);
     for c in &fast {
         b.file(obj.join(format!("{c}.cpp")));
     }
     b.file(dir.join("shim.cpp"));
     b.try_compile(&format!("neo_{top}_fast")).map_err(|e| format!("compiling {top}: {e}"))?;
-    let mut b = cpp_build(v, OPT_SLOW, dir);
+    let mut b = cpp_build(v, trace, OPT_SLOW, dir);
     b.include(&obj);
     for c in &slow {
         b.file(obj.join(format!("{c}.cpp")));

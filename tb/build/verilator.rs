@@ -18,31 +18,28 @@ pub const RUNTIME_SOURCES: &[&str] = &["verilated.cpp", "verilated_vcd_c.cpp", "
 
 /// [`VERILATOR_FLAGS`] for a model without tracing (`--trace` left out: a run-time model that
 /// writes no waves; its C++ is about half as large).
-#[allow(dead_code)] // build.rs builds VCD-traced models only
+#[allow(dead_code)] // build.rs builds traced models only
 pub const VERILATOR_FLAGS_UNTRACED: &[&str] = &["--cc", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
 
 /// [`CPP_DEFINES`] for a model without tracing.
-#[allow(dead_code)] // build.rs builds VCD-traced models only
+#[allow(dead_code)] // build.rs builds traced models only
 pub const CPP_DEFINES_UNTRACED: &[(&str, &str)] =
     &[("VM_COVERAGE", "0"), ("VM_SC", "0"), ("VM_TRACE", "0"), ("VM_TRACE_VCD", "0"), ("VM_TRACE_FST", "0")];
 
 /// [`RUNTIME_SOURCES`] for a model without tracing.
-#[allow(dead_code)] // build.rs builds VCD-traced models only
+#[allow(dead_code)] // build.rs builds traced models only
 pub const RUNTIME_SOURCES_UNTRACED: &[&str] = &["verilated.cpp", "verilated_threads.cpp"];
 
-/// [`VERILATOR_FLAGS`] for a model traced as FST (`--trace-fst`; run-time models only).
-#[allow(dead_code)] // build.rs builds VCD-traced models only
+/// [`VERILATOR_FLAGS`] for a model traced as FST (`--trace-fst`; `WAVES=fst` builds).
 pub const VERILATOR_FLAGS_FST: &[&str] =
     &["--cc", "--trace-fst", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
 
 /// [`CPP_DEFINES`] for a model traced as FST.
-#[allow(dead_code)] // build.rs builds VCD-traced models only
 pub const CPP_DEFINES_FST: &[(&str, &str)] =
     &[("VM_COVERAGE", "0"), ("VM_SC", "0"), ("VM_TRACE", "1"), ("VM_TRACE_VCD", "0"), ("VM_TRACE_FST", "1")];
 
 /// [`RUNTIME_SOURCES`] for a model traced as FST (the FST writer includes GTKWave's `fstapi.c`,
 /// LZ4 and FastLZ; the library links `-lz`).
-#[allow(dead_code)] // build.rs builds VCD-traced models only
 pub const RUNTIME_SOURCES_FST: &[&str] = &["verilated.cpp", "verilated_fst_c.cpp", "verilated_threads.cpp"];
 
 /// The Verilator installation.
@@ -96,18 +93,9 @@ fn mk_list(mk: &str, vars: &[&str]) -> Vec<String> {
     names
 }
 
-/// Runs Verilator on `top` from `verilog_files` into `obj`; returns the C++ classes to compile
-/// with the fast and with the slow optimisation level (file stems under `obj`).
-pub fn verilate(
-    v: &Verilator,
-    top: &str,
-    verilog_files: &[PathBuf],
-    obj: &Path,
-) -> Result<(Vec<String>, Vec<String>), String> {
-    verilate_with(v, VERILATOR_FLAGS, top, verilog_files, obj)
-}
-
-/// [`verilate`] with other flags than [`VERILATOR_FLAGS`] (e.g. [`VERILATOR_FLAGS_FST`]).
+/// Runs Verilator with `flags` ([`VERILATOR_FLAGS`], [`VERILATOR_FLAGS_FST`], ...) on `top` from
+/// `verilog_files` into `obj`; returns the C++ classes to compile with the fast and with the slow
+/// optimisation level (file stems under `obj`).
 pub fn verilate_with(
     v: &Verilator,
     flags: &[&str],

@@ -1,12 +1,22 @@
-//! `WAVES=1`: a VCD of the test at `target/waves/<test>.vcd` and a GTKWave save file
-//! `target/waves/<test>.gtkw` listing the unit's ports.
+//! Waves of a test: `WAVES=1` (or `vcd`) writes a VCD at `target/waves/<test>.vcd`, `WAVES=fst`
+//! an FST at `target/waves/<test>.fst`, each with a GTKWave save file `target/waves/<test>.gtkw`
+//! listing the unit's ports ([`maybe_trace`]); any other value but empty or `0` is an error
+//! naming `WAVES` and the accepted values ([`try_requested_format`]).
 //!
-//! `WAVES=fst` asks for FST instead ([`requested_format`]), for the models built at run time
-//! (the whole-frame engine benches; whole-frame VCDs are large): they are verilated with
-//! `--trace-fst` (a separate cached build, [`crate::dynmodel::DynModel::build_traced`]). The
-//! statically linked unit models are VCD-traced only and write a VCD for any `WAVES`.
+//! The statically linked unit models ([`crate::models`]) trace in one format, fixed when the
+//! crate is built: FST when `WAVES=fst` is in cargo's environment (`build.rs` then verilates
+//! every top with `--trace-fst`, as cache entries of their own), else VCD ([`MODEL_FORMAT`]);
+//! `WAVES=fst cargo test ...` therefore builds (once) and runs FST models. The models built at
+//! run time (the whole-frame engine benches) choose theirs per build
+//! ([`crate::dynmodel::DynModel::build_traced`]).
+
+#[path = "../build/waves_env.rs"]
+mod waves_env;
+
+pub use waves_env::WAVES_VALUES;
 
 use crate::dut::{Dut, PortSpec};
+use crate::dynmodel::DynModel;
 use std::path::{Path, PathBuf};
 
 /// The cargo target directory this crate was built into (`target/`).
@@ -16,7 +26,17 @@ pub fn target_dir() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from(env!("NEO_TB_TARGET_DIR")))
 }
 
-/// True when `WAVES` is set to something other than empty or `0`.
+/// The format the statically linked models trace in: FST when the crate was built with
+/// `WAVES=fst`, else VCD.
+pub const MODEL_FORMAT: WaveFormat = match env!("NEO_TB_MODEL_WAVES").as_bytes() {
+    b"fst" => WaveFormat::Fst,
+    _ => WaveFormat::Vcd,
+};
+
+/// True when `WAVES` asks for waves ([`requested_format`]).
+///
+/// # Panics
+/// When `WAVES` is not a waveform choice.
 pub fn waves_requested() -> bool {
     requested_format().is_some()
 }
@@ -49,19 +69,27 @@ impl WaveFormat {
     }
 }
 
-/// The format `WAVES` asks for: `None` when unset, empty or `0`; FST for `fst` (any case);
-/// VCD for anything else (`1`, `vcd`).
+/// The format `WAVES` asks for: `None` when unset, empty or `0`; VCD for `1` or `vcd`; FST for
+/// `fst` (letters in any case).
+///
+/// # Panics
+/// When `WAVES` is anything else (the message names `WAVES` and the accepted values).
 pub fn requested_format() -> Option<WaveFormat> {
-    format_of(&std::env::var("WAVES").ok()?)
+    try_requested_format().unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// [`requested_format`] of a `WAVES` value.
-fn format_of(v: &str) -> Option<WaveFormat> {
-    match v {
-        "" | "0" => None,
-        v if v.eq_ignore_ascii_case("fst") => Some(WaveFormat::Fst),
-        _ => Some(WaveFormat::Vcd),
+/// [`requested_format`], with an error for a `WAVES` value that is not a waveform choice.
+pub fn try_requested_format() -> Result<Option<WaveFormat>, String> {
+    match std::env::var("WAVES") {
+        Ok(v) => format_of(&v),
+        Err(std::env::VarError::NotPresent) => Ok(None),
+        Err(std::env::VarError::NotUnicode(v)) => format_of(&v.to_string_lossy()),
     }
+}
+
+/// The format a `WAVES` value asks for ([`requested_format`]).
+pub fn format_of(value: &str) -> Result<Option<WaveFormat>, String> {
+    Ok(waves_env::parse_waves(value)?.map(|f| if f == "fst" { WaveFormat::Fst } else { WaveFormat::Vcd }))
 }
 
 /// The `.gtkw` beside a waveform file (same stem).
@@ -109,31 +137,103 @@ pub fn gtkw_text_of<'a>(
     s
 }
 
-/// When `WAVES=1`, opens `target/waves/<test>.vcd` on `dut`, writes the `.gtkw` next to it and
-/// prints both paths; returns the VCD path. Otherwise does nothing.
-///
-/// # Panics
-/// When the files cannot be created.
-pub fn maybe_trace<D: Dut>(dut: &mut D, test: &str) -> Option<PathBuf> {
-    if !waves_requested() {
-        return None;
-    }
-    Some(trace_to(dut, &target_dir().join("waves"), test))
+/// A model that can write waves: the statically linked ones ([`Dut`]) and the ones built at run
+/// time ([`DynModel`]).
+pub trait Traceable {
+    /// The top module's name.
+    fn top(&self) -> &str;
+    /// The ports (name, width), for the GTKWave save file.
+    fn wave_ports(&self) -> Vec<(&str, u32)>;
+    /// The format the model was built to trace in (`None`: untraced).
+    fn traces(&self) -> Option<WaveFormat>;
+    /// Starts a trace at `path`.
+    fn open_trace(&mut self, path: &Path) -> std::io::Result<()>;
 }
 
-/// Opens `<dir>/<test>.vcd` on `dut` and writes `<dir>/<test>.gtkw`; prints both paths.
+impl<D: Dut> Traceable for D {
+    fn top(&self) -> &str {
+        D::NAME
+    }
+
+    fn wave_ports(&self) -> Vec<(&str, u32)> {
+        D::PORTS.iter().map(|p| (p.name, p.width)).collect()
+    }
+
+    fn traces(&self) -> Option<WaveFormat> {
+        Some(MODEL_FORMAT)
+    }
+
+    fn open_trace(&mut self, path: &Path) -> std::io::Result<()> {
+        self.trace_open(path)
+    }
+}
+
+impl Traceable for DynModel {
+    fn top(&self) -> &str {
+        &self.interface().name
+    }
+
+    fn wave_ports(&self) -> Vec<(&str, u32)> {
+        self.interface().ports.iter().map(|p| (p.name.as_str(), p.width)).collect()
+    }
+
+    fn traces(&self) -> Option<WaveFormat> {
+        self.wave_format()
+    }
+
+    fn open_trace(&mut self, path: &Path) -> std::io::Result<()> {
+        self.trace_open(path)
+    }
+}
+
+/// When `WAVES` asks for waves, opens `target/waves/<test>.vcd` (`WAVES=1`, `vcd`) or
+/// `target/waves/<test>.fst` (`WAVES=fst`) on `dut`, writes the `.gtkw` next to it and prints
+/// both paths; returns the waves path. Otherwise does nothing.
 ///
 /// # Panics
-/// When the files cannot be created.
-pub fn trace_to<D: Dut>(dut: &mut D, dir: &Path, test: &str) -> PathBuf {
-    std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("cannot create {}: {e}", dir.display()));
-    let vcd = dir.join(format!("{test}.vcd"));
-    let gtkw = dir.join(format!("{test}.gtkw"));
-    dut.trace_open(&vcd).unwrap_or_else(|e| panic!("{e}"));
-    std::fs::write(&gtkw, gtkw_text(&vcd, &gtkw, D::NAME, D::PORTS))
-        .unwrap_or_else(|e| panic!("cannot write {}: {e}", gtkw.display()));
-    println!("waves: {}\nwaves: gtkwave {}", vcd.display(), gtkw.display());
-    vcd
+/// When `WAVES` is not a waveform choice, when the model does not trace in the requested format
+/// (a crate built without `WAVES=fst` runs with it: the message says to rebuild), or when the
+/// files cannot be created.
+pub fn maybe_trace<T: Traceable>(dut: &mut T, test: &str) -> Option<PathBuf> {
+    let format = requested_format()?;
+    Some(trace_to(dut, &target_dir().join("waves"), test, format))
+}
+
+/// [`try_trace_to`], panicking on its error.
+///
+/// # Panics
+/// When [`try_trace_to`] fails.
+pub fn trace_to<T: Traceable>(dut: &mut T, dir: &Path, test: &str, format: WaveFormat) -> PathBuf {
+    try_trace_to(dut, dir, test, format).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Opens `<dir>/<test>.<vcd|fst>` (`format`) on `dut` and writes `<dir>/<test>.gtkw` naming it;
+/// prints both paths and returns the waves path. Fails when `dut` does not trace in `format`
+/// or a file cannot be created.
+pub fn try_trace_to<T: Traceable>(
+    dut: &mut T,
+    dir: &Path,
+    test: &str,
+    format: WaveFormat,
+) -> Result<PathBuf, String> {
+    let ext = format.extension();
+    if dut.traces() != Some(format) {
+        let built = dut.traces().map_or("nothing".to_string(), |f| f.extension().to_uppercase());
+        return Err(format!(
+            "WAVES={ext}: the {} model of this build traces {built}; the statically linked models \
+             trace FST only when the crate is built with WAVES=fst in cargo's environment \
+             (`WAVES=fst cargo test -p neo-tb ...` rebuilds them; without it they trace VCD)",
+            dut.top()
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let waves = dir.join(format!("{test}.{ext}"));
+    dut.open_trace(&waves).map_err(|e| format!("{}: {e}", waves.display()))?;
+    let gtkw = gtkw_path(&waves);
+    let text = gtkw_text_of(&waves, &gtkw, dut.top(), dut.wave_ports());
+    std::fs::write(&gtkw, text).map_err(|e| format!("cannot write {}: {e}", gtkw.display()))?;
+    println!("waves: {}\nwaves: gtkwave {}", waves.display(), gtkw.display());
+    Ok(waves)
 }
 
 #[cfg(test)]
@@ -158,10 +258,23 @@ mod tests {
         assert_eq!(WaveFormat::of_path(Path::new("/w/a.FST")), WaveFormat::Fst);
         assert_eq!(WaveFormat::of_path(Path::new("/w/a.vcd")), WaveFormat::Vcd);
         assert_eq!(WaveFormat::of_path(Path::new("/w/a")), WaveFormat::Vcd);
-        assert_eq!(format_of("fst"), Some(WaveFormat::Fst));
-        assert_eq!(format_of("1"), Some(WaveFormat::Vcd));
-        assert_eq!(format_of("0"), None);
-        assert_eq!(format_of(""), None);
+        assert_eq!(format_of("fst"), Ok(Some(WaveFormat::Fst)));
+        assert_eq!(format_of("FST"), Ok(Some(WaveFormat::Fst)));
+        assert_eq!(format_of("1"), Ok(Some(WaveFormat::Vcd)));
+        assert_eq!(format_of("vcd"), Ok(Some(WaveFormat::Vcd)));
+        assert_eq!(format_of("0"), Ok(None));
+        assert_eq!(format_of(""), Ok(None));
         assert_eq!(gtkw_path(Path::new("/w/e.fst")), Path::new("/w/e.gtkw"));
+    }
+
+    #[test]
+    fn a_bad_waves_value_names_waves_and_the_accepted_values() {
+        for bad in ["foo", "2", "yes", "fsdb"] {
+            let e = format_of(bad).expect_err(bad);
+            assert!(e.contains(&format!("WAVES={bad}")), "{e}");
+            for accepted in ["0", "1", "vcd", "fst"] {
+                assert!(e.contains(accepted), "{e} lacks {accepted}");
+            }
+        }
     }
 }

@@ -1,6 +1,8 @@
 //! A model built and loaded at run time (`neo_tb::dynmodel`) behaves as the statically linked
 //! one: the harness's adder fixture, built both ways, gives the same outputs cycle by cycle. Its
-//! FST-traced build (`WAVES=fst`, `neo cosim --waves F.fst`) writes an FST file. Its
+//! FST-traced build (`WAVES=fst`, `neo cosim --waves F.fst`) writes an FST file, also as a
+//! bench does under `WAVES=fst` (`neo_tb::waves::trace_to`: `<test>.fst` and a `.gtkw` naming
+//! it; the same cached model, so no extra build). Its
 //! two-thread build (Verilator `--threads 2`, `neo bench engine --threads 2`) is a cache entry
 //! of its own and gives the same outputs.
 
@@ -142,5 +144,48 @@ neo_tb::with_models! {
         let (mut v, _) = DynModel::build(&iface, &files, None).expect("the VCD build");
         let e = v.trace_open(&fst).expect_err("a VCD model refuses an .fst path");
         assert!(e.to_string().contains("built to trace VCD"), "{e}");
+    }
+
+    #[test]
+    fn waves_fst_writes_an_fst_and_a_save_file_naming_it() {
+        let format = neo_tb::waves::format_of("fst").expect("WAVES=fst").expect("waves");
+        assert_eq!(format, WaveFormat::Fst);
+        let (iface, files) = fixture();
+        let (mut m, info) = DynModel::build_traced(&iface, &files, None, Some(format)).expect("build");
+        println!("library {} (cached {}, {:.1} s) {}", info.library.display(), info.cached, info.seconds, info.log);
+        let dir = tempfile::tempdir().expect("tempdir");
+
+        // A model that traces VCD refuses WAVES=fst, naming the fix.
+        let mut stat = NeoTbAdder::new();
+        if neo_tb::waves::MODEL_FORMAT == WaveFormat::Vcd {
+            let e = neo_tb::waves::try_trace_to(&mut stat, dir.path(), "static", format).expect_err("VCD model");
+            assert!(e.contains("WAVES=fst") && e.contains("traces VCD"), "{e}");
+            assert!(!dir.path().join("static.fst").exists());
+        }
+
+        let fst = neo_tb::waves::trace_to(&mut m, dir.path(), "adder_bench", format);
+        assert_eq!(fst, dir.path().join("adder_bench.fst"));
+        m.reset();
+        let mut rng = Rng::new(neo_tb::rng::test_seed("waves_fst"));
+        for _ in 0..100 {
+            for (i, p) in iface.ports.iter().enumerate() {
+                if p.dir == neo_gen::interface::Dir::In && p.name != "clk_i" && p.name != "rst_ni" {
+                    let words: Vec<u32> = (0..p.width.div_ceil(32)).map(|_| rng.next_u64() as u32).collect();
+                    m.set_words(i, &words);
+                }
+            }
+            m.tick();
+        }
+        m.trace_close();
+        let b = std::fs::read(&fst).expect("the .fst exists");
+        assert!(!b.is_empty(), "{} is empty", fst.display());
+        // An FST file opens with its header block: block type FST_BL_HDR (0), then the section
+        // length (329, big-endian).
+        assert_eq!(b[0], 0, "FST_BL_HDR first");
+        assert_eq!(be64(&b, 1), 329, "header section length");
+        assert!(be64(&b, 17) >= 10 * 100, "end time {} covers the run", be64(&b, 17));
+        let gtkw = std::fs::read_to_string(dir.path().join("adder_bench.gtkw")).expect("the .gtkw exists");
+        assert!(gtkw.starts_with(&format!("[dumpfile] \"{}\"\n", fst.display())), "{gtkw}");
+        assert!(gtkw.contains("TOP.neo_tb_adder.out_sum_o[99:0]"), "{gtkw}");
     }
 }
