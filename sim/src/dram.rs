@@ -380,14 +380,7 @@ impl Dram {
     /// submission). With `read_queue = 0` or the ideal memory it is timed at once.
     pub fn submit_read(&mut self, t: Ps, addr: u64) -> Ticket {
         self.stats.reads += 1;
-        let ticket = match self.free_tickets.pop() {
-            Some(k) => k,
-            None => {
-                self.arrivals.push(PENDING);
-                self.ticket_channel.push(0);
-                (self.arrivals.len() - 1) as u32
-            }
-        };
+        let ticket = self.new_ticket();
         if let Some(l) = self.ideal {
             self.stats.read_latency_ps += l;
             self.arrivals[ticket as usize] = t + l;
@@ -412,18 +405,20 @@ impl Dram {
         Ticket(ticket)
     }
 
+    /// A free ticket (a returned one, or a new slot).
+    fn new_ticket(&mut self) -> u32 {
+        self.free_tickets.pop().unwrap_or_else(|| {
+            self.arrivals.push(PENDING);
+            self.ticket_channel.push(0);
+            (self.arrivals.len() - 1) as u32
+        })
+    }
+
     /// A read answered at `done` without a DRAM access (the line is in a queued write).
     pub fn forwarded_read(&mut self, done: Ps) -> Ticket {
         self.stats.reads += 1;
         self.stats.forwarded += 1;
-        let ticket = match self.free_tickets.pop() {
-            Some(k) => k,
-            None => {
-                self.arrivals.push(PENDING);
-                self.ticket_channel.push(0);
-                (self.arrivals.len() - 1) as u32
-            }
-        };
+        let ticket = self.new_ticket();
         self.arrivals[ticket as usize] = done;
         Ticket(ticket)
     }
