@@ -146,6 +146,53 @@ pub fn frame_table(a: &ArchResult) -> String {
     s
 }
 
+/// FPS and quality against camera speed (the paper's Fig. 17(b), which shows FPS only), per
+/// strategy at the sweep's default chunk and one DPS pass: FPS, worst-frame and mean PSNR
+/// against the exact order ("exact" for exact strategies; "-" when every frame matched it).
+fn speed_table(md: &mut String, sweep: &[PointResult], speeds: &[f64]) {
+    let chunk = sweep.iter().map(|r| r.point.chunk).find(|&c| c == 256).unwrap_or(sweep[0].point.chunk);
+    let mut strategies: Vec<&str> = Vec::new();
+    for r in sweep {
+        if !strategies.contains(&r.point.strategy.as_str()) {
+            strategies.push(&r.point.strategy);
+        }
+    }
+    let _ = writeln!(
+        md,
+        "FPS and quality against camera speed (Fig. 17(b) with the quality it does not show), chunk {chunk}, one DPS pass; each cell: FPS / worst-frame PSNR / mean PSNR (dB vs the exact order):\n"
+    );
+    let _ = write!(md, "| strategy |");
+    for sp in speeds {
+        let _ = write!(md, " {sp}x |");
+    }
+    let _ = write!(md, "\n| --- |");
+    for _ in speeds {
+        md.push_str(" --- |");
+    }
+    md.push('\n');
+    for st in strategies {
+        let _ = write!(md, "| {st} |");
+        for &sp in speeds {
+            let r = sweep.iter().find(|r| {
+                r.point.strategy == st && r.point.speed == sp && r.point.chunk == chunk && r.point.passes == 1
+            });
+            let cell = match r.and_then(|r| r.arch("neo").map(|a| (r, a))) {
+                None => "".to_string(),
+                Some((r, a)) if r.quality.is_exact() => format!("{} / exact", f1(a.fps)),
+                Some((r, a)) => format!(
+                    "{} / {} / {}",
+                    f1(a.fps),
+                    r.quality.psnr_vs_exact_min.map_or("-".into(), f2),
+                    r.quality.psnr_vs_exact_mean.map_or("-".into(), f2)
+                ),
+            };
+            let _ = write!(md, " {cell} |");
+        }
+        md.push('\n');
+    }
+    md.push('\n');
+}
+
 /// The text table `neo simulate` prints for one point.
 pub fn point_table(r: &PointResult) -> String {
     let mut s = String::new();
@@ -549,6 +596,7 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
             ));
             let _ = writeln!(md, "![sorting traffic against the worst frame at {speed}x]({file})\n");
         }
+        speed_table(&mut md, &d.sweep, &speeds);
         let _ = writeln!(md, "| strategy | chunk | passes | speed | FPS | p99 frame (ms) | DRAM GB / 60 | PSNR vs exact (dB) | frames identical to exact | Pareto |");
         let _ = writeln!(md, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |");
         for r in &d.sweep {

@@ -49,3 +49,46 @@ fn published_constants_are_labelled_and_kept_apart() {
     );
     assert!(md.contains("GSCore 104.6 GB as a published constant (Fig. 5's constant says 79.9 GB)"), "{md}");
 }
+
+#[test]
+fn the_speed_table_gives_fps_and_quality_per_camera_speed() {
+    let lat = Latency::from_file(&shared::workspace_root().join("reports/latency.json")).unwrap();
+    let cfg = SimConfig::default();
+    let scene_spec = "synthetic:outdoor?gaussians=3000&seed=2";
+    let (scene, _) = source::load_scene(scene_spec, false).unwrap();
+    let mut sweep = Vec::new();
+    for strategy in ["neo", "hierarchical"] {
+        for speed in [1.0, 16.0] {
+            let point = Point {
+                scene: scene_spec.into(),
+                trajectory: "orbit".into(),
+                speed,
+                frames: 3,
+                res: "128x64".into(),
+                width: 128,
+                height: 64,
+                strategy: strategy.into(),
+                chunk: 256,
+                passes: 1,
+            };
+            let wl =
+                workload(&scene, &point, &cfg, neo_sim::driver::GoldenRaster::Exact, 16, |_| {}).unwrap();
+            sweep.push(evaluate(&point, &wl, &cfg, &lat, &[Arch::Neo]).unwrap());
+        }
+    }
+    let data = ReportData { sweep, ..ReportData::default() };
+    let (md, _) = render(&data).unwrap();
+    let lines: Vec<&str> = md.lines().collect();
+    let at = lines.iter().position(|l| *l == "| strategy | 1x | 16x |").expect("the speed table");
+    let neo: Vec<&str> = lines[at + 2].split('|').map(str::trim).collect();
+    assert_eq!(neo[1], "neo", "{}", lines[at + 2]);
+    for cell in &neo[2..4] {
+        // FPS / worst frame / mean: three fields, the FPS a number.
+        let f: Vec<&str> = cell.split(" / ").collect();
+        assert_eq!(f.len(), 3, "{cell}");
+        assert!(f[0].parse::<f64>().unwrap() > 0.0, "{cell}");
+    }
+    let hier: Vec<&str> = lines[at + 3].split('|').map(str::trim).collect();
+    assert_eq!(hier[1], "hierarchical");
+    assert!(hier[2].ends_with(" / exact") && hier[3].ends_with(" / exact"), "{}", lines[at + 3]);
+}
