@@ -140,8 +140,7 @@ impl Wrapper {
                     l.tickets.drain(..).map(|k| f.dram.arrival(k)).max().unwrap_or(t)
                 };
                 l.done_at = Some(done);
-                self.active.swap_remove(i);
-                self.active[i..].sort_unstable();
+                self.active.remove(i);
             } else {
                 i += 1;
             }
