@@ -17,7 +17,7 @@ use crate::stream::{Beat, Sink, Source};
 use neo_gen::EngineConfig;
 use neo_golden::formats::feature::{quantize, FeatureEntry, FeatureFormat};
 use neo_golden::raster::synth::{cov_from_axes, projected_from_cov};
-use neo_golden::raster::{shade_pixel, RasterConfig, RGB_BITS};
+use neo_golden::raster::{pixel_alpha, shade_pixel, ExpTable, RasterConfig, RGB_BITS};
 use neo_golden::sort::DepthKeyCodec;
 use std::collections::VecDeque;
 
@@ -308,6 +308,30 @@ pub fn gaussian(mean: [f64; 2], su: f64, sv: f64, th: f64, opacity: f64, rgb: [f
         1.0,
     );
     quantize(&p, &FeatureFormat::default(), &DepthKeyCodec::Fp16)
+}
+
+/// The first Gaussian whose alpha at pixel `(px, py)` is exactly `alpha` (golden
+/// `pixel_alpha`, raw), searching opacities upwards and, for each, means 0..400 pixels to the
+/// right of the pixel; `None` when none has it. The directed cases at the 1/255 threshold.
+pub fn gaussian_with_alpha(
+    fmt: &FeatureFormat,
+    rc: &RasterConfig,
+    px: i64,
+    py: i64,
+    alpha: i64,
+) -> Option<FeatureEntry> {
+    let exp = ExpTable::new(&rc.blend.exp, rc.blend.power_frac);
+    for op in 1..(1i32 << fmt.opacity.bits) {
+        for off in 0..400 {
+            let mut e = gaussian([px as f64 + 1.0, py as f64], 1.5, 1.5, 0.0, 0.5, [1.0, 0.25, 0.5]);
+            e.opacity = op;
+            e.mean[0] += off;
+            if pixel_alpha(&e, fmt, rc, &exp, px, py) == Some(alpha) {
+                return Some(e);
+            }
+        }
+    }
+    None
 }
 
 /// A random Gaussian for a subtile at `origin`: mostly real (quantised) Gaussians near the

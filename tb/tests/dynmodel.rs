@@ -74,11 +74,7 @@ neo_tb::with_models! {
         let seed = neo_tb::rng::test_seed("dynmodel");
         let mut rng = Rng::new(seed);
         for cycle in 0..500u64 {
-            for (i, p) in iface.ports.iter().enumerate() {
-                if p.dir != neo_gen::interface::Dir::In || p.name == "clk_i" || p.name == "rst_ni" {
-                    continue;
-                }
-                let words: Vec<u32> = (0..p.width.div_ceil(32)).map(|_| rng.next_u64() as u32).collect();
+            for (i, words) in random_inputs(iface, &mut rng) {
                 dynm.set_words(i, &words);
                 stat.set_words(i, &words);
             }
@@ -94,6 +90,15 @@ neo_tb::with_models! {
         }
         assert_eq!(dynm.cycle(), 500);
         assert!(dynm.port("no_such_port").unwrap_err().contains("neo_tb_adder has no port no_such_port"));
+    }
+
+    /// Random words for every input port but the clock and reset: `(port index, words)`.
+    fn random_inputs(iface: &ModuleInterface, rng: &mut Rng) -> Vec<(usize, Vec<u32>)> {
+        let ports = iface.ports.iter().enumerate();
+        ports
+            .filter(|(_, p)| p.dir == neo_gen::interface::Dir::In && p.name != "clk_i" && p.name != "rst_ni")
+            .map(|(i, p)| (i, (0..p.width.div_ceil(32)).map(|_| rng.next_u64() as u32).collect()))
+            .collect()
     }
 
     /// Big-endian u64 at `at` (FST header fields).
@@ -119,11 +124,8 @@ neo_tb::with_models! {
         m.reset();
         let mut rng = Rng::new(7);
         for _ in 0..200 {
-            for (i, p) in iface.ports.iter().enumerate() {
-                if p.dir == neo_gen::interface::Dir::In && p.name != "clk_i" && p.name != "rst_ni" {
-                    let words: Vec<u32> = (0..p.width.div_ceil(32)).map(|_| rng.next_u64() as u32).collect();
-                    m.set_words(i, &words);
-                }
+            for (i, words) in random_inputs(&iface, &mut rng) {
+                m.set_words(i, &words);
             }
             m.tick();
         }
@@ -168,11 +170,8 @@ neo_tb::with_models! {
         m.reset();
         let mut rng = Rng::new(neo_tb::rng::test_seed("waves_fst"));
         for _ in 0..100 {
-            for (i, p) in iface.ports.iter().enumerate() {
-                if p.dir == neo_gen::interface::Dir::In && p.name != "clk_i" && p.name != "rst_ni" {
-                    let words: Vec<u32> = (0..p.width.div_ceil(32)).map(|_| rng.next_u64() as u32).collect();
-                    m.set_words(i, &words);
-                }
+            for (i, words) in random_inputs(&iface, &mut rng) {
+                m.set_words(i, &words);
             }
             m.tick();
         }

@@ -14,12 +14,13 @@ fn raster_core_skipped_without_verilator() {
 
 #[cfg(neo_has_verilator)]
 mod cosim {
-    use neo_golden::raster::{pixel_alpha, raster_tile, ExpTable};
+    use neo_golden::raster::raster_tile;
     use neo_golden::shared::shared_file_for_test;
     use neo_golden::{source, trajectory};
     use neo_tb::core::MemTiming;
     use neo_tb::raster::{at, case_of, g, golden, random_case, RasterCore, TileCase};
     use neo_tb::rng::{for_each_seed, seed_share, Rng, SeedSplit};
+    use neo_tb::scu::gaussian_with_alpha;
     use neo_tb::waves::maybe_trace;
 
     /// Random Gaussians (override with NEO_TB_VECTORS; the core test uses a fifth of the unit
@@ -117,21 +118,9 @@ mod cosim {
             cases
                 .push(("degenerate conics", case_of(t, size, &[d1, d2, g(c, 4.0, 4.0, 0.0, 0.7, [0.3; 3])])));
             // Alpha exactly 1/255 at a tile pixel (found with golden pixel_alpha).
-            let exp = ExpTable::new(&rc.blend.exp, rc.blend.power_frac);
             let (px, py) = ((t[0] * rc.tile) as i64 + 20, (t[1] * rc.tile) as i64 + 41);
-            let mut exact = None;
-            'search: for op in 1..(1i32 << fmt.opacity.bits) {
-                for off in 0..400 {
-                    let mut e = g([px as f64 + 1.0, py as f64], 1.5, 1.5, 0.0, 0.5, [1.0, 0.25, 0.5]);
-                    e.opacity = op;
-                    e.mean[0] += off;
-                    if pixel_alpha(&e, &fmt, &rc, &exp, px, py) == Some(rc.blend.min_alpha_raw()) {
-                        exact = Some(e);
-                        break 'search;
-                    }
-                }
-            }
-            let exact = exact.expect("a Gaussian with alpha exactly 1/255");
+            let exact = gaussian_with_alpha(&fmt, &rc, px, py, rc.blend.min_alpha_raw())
+                .expect("a Gaussian with alpha exactly 1/255");
             let one = case_of(t, size, &[exact]);
             let k = ((py - (t[1] * rc.tile) as i64) * rc.tile as i64 + px - (t[0] * rc.tile) as i64) as usize;
             assert_ne!(golden(&one, &fmt, &rc).pixels[k], [0; 3], "alpha 1/255 is blended");

@@ -11,10 +11,12 @@ fn scu_skipped_without_verilator() {
 #[cfg(neo_has_verilator)]
 mod cosim {
     use neo_golden::formats::feature::FeatureEntry;
-    use neo_golden::raster::{pixel_alpha, raster_tile, ExpTable};
+    use neo_golden::raster::raster_tile;
     use neo_tb::models::NeoScu;
     use neo_tb::rng::{for_each_seed, Rng};
-    use neo_tb::scu::{gaussian, lists_of, measure_timing, run_checked, run_pieces_checked, ScuList};
+    use neo_tb::scu::{
+        gaussian, gaussian_with_alpha, lists_of, measure_timing, run_checked, run_pieces_checked, ScuList,
+    };
     use neo_tb::waves::maybe_trace;
 
     /// Random Gaussians in CI: at least 10k (override with NEO_TB_VECTORS).
@@ -67,7 +69,6 @@ mod cosim {
             let cfg = scu_config();
             let fmt = cfg.feature_format();
             let rc = cfg.raster_config();
-            let exp = ExpTable::new(&rc.blend.exp, rc.blend.power_frac);
             let mut dut = NeoScu::new();
             maybe_trace(&mut dut, name);
             let o = [96u32, 40u32];
@@ -114,24 +115,9 @@ mod cosim {
             // the opacity and offset with golden pixel_alpha, then check the golden decision.
             let min_alpha = rc.blend.min_alpha_raw();
             let (px, py) = (o[0] as i64 + 2, o[1] as i64 + 5);
-            let mut at = None;
-            let mut below = None;
-            'search: for op_raw in 1..(1i32 << fmt.opacity.bits) {
-                for off in 0..400 {
-                    let mut e = gaussian([px as f64 + 1.0, py as f64], 1.5, 1.5, 0.0, 0.5, [1.0, 0.25, 0.5]);
-                    e.opacity = op_raw;
-                    e.mean[0] += off;
-                    match pixel_alpha(&e, &fmt, &rc, &exp, px, py) {
-                        Some(a) if a == min_alpha && at.is_none() => at = Some(e),
-                        Some(a) if a == min_alpha - 1 && below.is_none() => below = Some(e),
-                        _ => {}
-                    }
-                    if at.is_some() && below.is_some() {
-                        break 'search;
-                    }
-                }
-            }
-            let (at, below) = (at.expect("an entry at 1/255"), below.expect("an entry one LSB below"));
+            let at = gaussian_with_alpha(&fmt, &rc, px, py, min_alpha).expect("an entry at 1/255");
+            let below =
+                gaussian_with_alpha(&fmt, &rc, px, py, min_alpha - 1).expect("an entry one LSB below");
             let at_list = full(o, vec![at]);
             let below_list = full(o, vec![below]);
             let k = ((py - o[1] as i64) * 8 + (px - o[0] as i64)) as usize;
