@@ -43,10 +43,10 @@ pub fn require_for_test(tool: &str, test: &str) -> bool {
     if available(tool) {
         return true;
     }
-    if std::env::var_os("CI").is_some() {
-        panic!("{test}: {tool} is not on PATH (CI is set, so this is an error; run scripts/setup)");
-    }
-    eprintln!("SKIP {test}: {tool} is not on PATH (run scripts/setup to install it)");
+    neo_golden::shared::skip_or_fail(
+        test,
+        &format!("{tool} is not on PATH (run scripts/setup to install it)"),
+    );
     false
 }
 

@@ -28,12 +28,23 @@ pub fn shared_file_for_test(test: &str, rel: &str) -> Option<PathBuf> {
     if path.exists() {
         return Some(path);
     }
-    if std::env::var_os("CI").is_some() {
-        panic!("{test}: required shared file {} is missing (CI is set, so this is an error)", path.display());
-    }
-    eprintln!(
-        "SKIP {test}: {} not found (set NEO_SHARED or place shared/ beside the project)",
-        path.display()
+    skip_or_fail(
+        test,
+        &format!("{} not found (set NEO_SHARED or place shared/ beside the project)", path.display()),
     );
     None
+}
+
+/// Whether the `CI` environment variable is set: then every test must run, and one that cannot
+/// fails instead of skipping.
+pub fn ci() -> bool {
+    std::env::var_os("CI").is_some()
+}
+
+/// A test that cannot run here (a missing tool, file or hardware thread): prints
+/// `SKIP <test>: <reason>`, or panics with the reason when `CI` is set. The caller returns after
+/// it. Every skipping test in the workspace goes through this.
+pub fn skip_or_fail(test: &str, reason: &str) {
+    assert!(!ci(), "{test}: {reason} (CI is set, so this is an error)");
+    eprintln!("SKIP {test}: {reason}");
 }

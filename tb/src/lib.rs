@@ -65,25 +65,21 @@ macro_rules! with_models {
     ($($item:item)*) => {};
 }
 
-/// Whether the `CI` environment variable asks for every check to run (set, non-empty, not `0` or
-/// `false`): then a test that cannot run fails instead of skipping.
-pub fn ci() -> bool {
-    std::env::var_os("CI").is_some_and(|c| !c.is_empty() && c != "0" && c != "false")
-}
-
 /// For every cosimulation test (in neo-tb and in other packages, such as the root package's RTL
 /// validations): returns whether the Verilated models are present. Without them it prints
-/// `SKIP: <test>: <reason>` and returns false, or panics when `CI` is set (as `build.rs` refuses
+/// `SKIP <test>: <reason>` and returns false, or panics when `CI` is set (as `build.rs` refuses
 /// to build without Verilator there: CI runs every cosimulation). `test` names the test and what
 /// it checks.
 pub fn require_models(test: &str) -> bool {
-    if HAS_MODELS {
-        return true;
+    if !HAS_MODELS {
+        skip(test, "neo-tb was built without Verilator (install it: scripts/setup); not checked");
     }
-    assert!(!ci(), "{test}: neo-tb was built without Verilator, and CI is set (every cosimulation must run)");
-    println!("SKIP: {test}: neo-tb was built without Verilator (install it: scripts/setup); not checked");
-    false
+    HAS_MODELS
 }
+
+/// A test that cannot run here: [`neo_golden::shared::skip_or_fail`] (SKIP, or a failure when
+/// `CI` is set).
+pub use neo_golden::shared::skip_or_fail as skip;
 
 /// The engine configuration the models in [`models`] were built from: the default, or the file
 /// named by `NEO_CONFIG` when this crate was built (`NEO_CONFIG=cfg.json cargo test -p neo-tb`

@@ -82,7 +82,10 @@ mod cosim {
     fn bsu_vcd_shows_handshake_rules_and_every_transfer() {
         let name = "bsu_vcd_shows_handshake_rules_and_every_transfer";
         if neo_tb::waves::MODEL_FORMAT != WaveFormat::Vcd {
-            println!("SKIP: this build's models trace FST (built with WAVES=fst); the VCD read-back needs a VCD build");
+            neo_tb::skip(
+                name,
+                "this build's models trace FST (built with WAVES=fst); the VCD read-back needs a VCD build",
+            );
             return;
         }
         for_each_seed(name, |seed| {

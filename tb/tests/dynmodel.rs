@@ -57,7 +57,10 @@ neo_tb::with_models! {
         let e = DynModel::build_threaded(&iface, &files, None, None, 0).err().expect("0 threads refused");
         assert!(e.contains("at least 1"), "{e}");
         if std::thread::available_parallelism().map_or(1, |n| n.get()) < 2 {
-            println!("SKIP: Verilator --threads 2 needs two hardware threads");
+            neo_tb::skip(
+                "a_two_thread_run_time_model_matches_the_static_one",
+                "Verilator --threads 2 needs two hardware threads",
+            );
             return;
         }
         let (dynm, info) = DynModel::build_threaded(&iface, &files, None, None, 2).expect("build");

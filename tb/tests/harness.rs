@@ -159,7 +159,10 @@ mod cosim {
     #[test]
     fn vcd_read_back_shows_valid_ready_rules_and_all_transfers() {
         if neo_tb::waves::MODEL_FORMAT != WaveFormat::Vcd {
-            println!("SKIP: this build's models trace FST (built with WAVES=fst); the VCD read-back needs a VCD build");
+            neo_tb::skip(
+                "vcd_read_back_shows_valid_ready_rules_and_all_transfers",
+                "this build's models trace FST (built with WAVES=fst); the VCD read-back needs a VCD build",
+            );
             return;
         }
         for_each_seed("vcd_read_back_shows_valid_ready_rules_and_all_transfers", |seed| {
