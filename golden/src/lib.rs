@@ -9,6 +9,7 @@ pub mod cameras_json;
 pub mod engine;
 pub mod error;
 pub mod formats;
+pub mod hwarith;
 pub mod image;
 pub mod metrics;
 pub mod pipeline;

@@ -208,7 +208,7 @@ fn fitted_range(depths: impl Iterator<Item = f32>) -> (f32, f32) {
 
 /// IEEE binary16 bits of a positive finite `z`: round to nearest even, saturate to the largest
 /// finite half, flush to zero what rounds to zero. Integer-only on the f32 bits.
-fn f16_bits_saturating(z: f32) -> u32 {
+pub(crate) fn f16_bits_saturating(z: f32) -> u32 {
     let bits = z.to_bits();
     let exp_field = (bits >> 23) & 0xFF;
     let mant = bits & 0x7F_FFFF;
