@@ -96,7 +96,7 @@ pub trait Arith {
     /// gives 0.
     fn to_int(&mut self, a: Self::F, mode: Round) -> Self::I;
     /// `i` as binary32, RNE (Rust's `i as f32`).
-    fn from_int(&mut self, i: Self::I) -> Self::F;
+    fn int_to_float(&mut self, i: Self::I) -> Self::F;
     /// The biased exponent field of `a` (bits 30..23, 0 for zeros and subnormals).
     fn exp_field(&mut self, a: Self::F) -> Self::I;
     /// `2^(e - 127)` for the biased exponent `e` clamped to `[1, 254]` (a positive power of
@@ -107,7 +107,7 @@ pub trait Arith {
     fn f16_bits(&mut self, a: Self::F) -> Self::I;
     /// The binary16 value in the low 16 bits of `h` (upper bits ignored), widened exactly
     /// (subnormal halves included; a half NaN gives the canonical NaN).
-    fn from_f16_bits(&mut self, h: Self::I) -> Self::F;
+    fn widen_half(&mut self, h: Self::I) -> Self::F;
 
     /// `a + b`, wrapping.
     fn iadd(&mut self, a: Self::I, b: Self::I) -> Self::I;

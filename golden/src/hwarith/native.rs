@@ -114,7 +114,7 @@ impl Arith for Native {
     fn to_int(&mut self, a: f32, mode: Round) -> i32 {
         round_to_i32(a, mode)
     }
-    fn from_int(&mut self, i: i32) -> f32 {
+    fn int_to_float(&mut self, i: i32) -> f32 {
         i as f32
     }
     fn exp_field(&mut self, a: f32) -> i32 {
@@ -126,7 +126,7 @@ impl Arith for Native {
     fn f16_bits(&mut self, a: f32) -> i32 {
         crate::sort::depth_key::f16_bits_saturating(a.abs()) as i32
     }
-    fn from_f16_bits(&mut self, h: i32) -> f32 {
+    fn widen_half(&mut self, h: i32) -> f32 {
         canonical(half_to_f32(h as u32 & 0xFFFF))
     }
     fn iadd(&mut self, a: i32, b: i32) -> i32 {
@@ -212,8 +212,8 @@ mod tests {
         assert_eq!(a.pow2_field(0).to_bits(), 1 << 23);
         assert_eq!(a.f16_bits(-1.0), 0x3C00);
         assert_eq!(a.f16_bits(f32::INFINITY), 0x7BFF);
-        assert_eq!(a.from_f16_bits(0x3C00), 1.0);
-        assert_eq!(a.from_f16_bits(0x1_8001), -(2f32.powi(-24)));
-        assert_eq!(a.from_f16_bits(0x7E01).to_bits(), CANONICAL_NAN);
+        assert_eq!(a.widen_half(0x3C00), 1.0);
+        assert_eq!(a.widen_half(0x1_8001), -(2f32.powi(-24)));
+        assert_eq!(a.widen_half(0x7E01).to_bits(), CANONICAL_NAN);
     }
 }
