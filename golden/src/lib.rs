@@ -10,6 +10,7 @@ pub mod engine;
 pub mod error;
 pub mod formats;
 pub mod hwarith;
+pub mod hwpre;
 pub mod image;
 pub mod metrics;
 pub mod pipeline;

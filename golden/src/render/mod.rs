@@ -27,7 +27,7 @@
 mod binning;
 mod blend;
 mod preprocess;
-mod sh;
+pub mod sh;
 
 pub use binning::{bin, TileBins};
 pub use blend::{blend, blend_pixel, Splat, MAX_ALPHA, MIN_ALPHA, MIN_TRANSMITTANCE};
