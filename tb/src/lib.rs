@@ -15,6 +15,7 @@ pub mod bsu;
 pub mod check;
 #[cfg(neo_has_verilator)]
 pub mod core;
+pub mod datapath;
 pub mod dut;
 pub mod dynmodel;
 pub mod engine;

@@ -36,6 +36,7 @@ pub mod frame_ctrl;
 pub mod itu;
 pub mod msu;
 pub mod perf_counters;
+pub mod pre;
 pub mod raster_core;
 pub mod scu;
 pub mod sort_core;
