@@ -3,4 +3,5 @@
 //! dataflow graphs that gen emits as the units' Verilog.
 
 pub mod color;
+pub mod duplicate;
 pub mod quant;
