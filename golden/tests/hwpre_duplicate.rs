@@ -13,11 +13,15 @@ use neo_golden::{source, trajectory};
 use pipeline_common::{config, run_frames};
 use std::collections::BTreeSet;
 
+/// The previous frame as the unit sees it (feature entries by id) and as the pipeline keeps it
+/// (each tile's valid ids).
+type Previous = (Vec<Option<FeatureEntry>>, Vec<BTreeSet<u32>>);
+
 fn check_scene(n: usize, seed: u64, path: &str) {
     let (scene, _) =
         source::load_scene(&format!("synthetic:blobs?gaussians={n}&seed={seed}"), false).unwrap();
     let traj = trajectory::parse_trajectory(path, source::robust_bounds(&scene), 6).unwrap();
-    let mut prev: Option<(Vec<Option<FeatureEntry>>, Vec<BTreeSet<u32>>)> = None;
+    let mut prev: Option<Previous> = None;
     let (mut checked_tiles, mut retained, mut fresh_total) = (0, 0, 0);
     run_frames(&scene, &traj.frames, &[], config(Strategy::Neo), |p, o| {
         assert_eq!(o.stats.dropped_capacity, 0, "the test needs tables without capacity drops");
