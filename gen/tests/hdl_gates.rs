@@ -7,6 +7,7 @@ use neo_gen::output::check_dir;
 use neo_gen::tools::{
     coarse_glue_synth_stats, coarse_synth_stats, icarus_compile, require_for_test, verilator_lint,
 };
+use neo_gen::units::run_time_tops;
 use neo_gen::units::VerilogFile;
 use neo_gen::{files_for, generate, top_modules, EngineConfig, Topology};
 use std::path::PathBuf;
@@ -57,7 +58,7 @@ fn other_configs() -> Vec<(String, EngineConfig)> {
 
 fn for_every_top(cfg: &EngineConfig, what: &str, check: impl Fn(&[VerilogFile], &str) -> Result<(), String>) {
     let mut failures = Vec::new();
-    for top in top_modules() {
+    for top in top_modules().iter().chain(run_time_tops()) {
         if let Err(e) = check(&files_for(cfg, top), top) {
             failures.push(format!("{what}: {top}: {e}"));
         }

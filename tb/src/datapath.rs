@@ -13,8 +13,6 @@ use neo_gen::emit::Module;
 use neo_gen::units::VerilogFile;
 use neo_golden::hwarith::graph::{Graph, Ty};
 
-const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
-
 /// A Verilated datapath and the graph it was emitted from.
 pub struct DatapathBench {
     graph: Graph,
@@ -49,7 +47,7 @@ impl DatapathBench {
         files.retain(|f| f.name != top.name);
         files.push(VerilogFile { name: top.name.clone(), text: top.to_verilog() });
         let files: Vec<(String, String)> = files.iter().map(|f| (f.file_name(), f.text.clone())).collect();
-        let (model, _) = DynModel::build_traced(&iface, &files, Some(LINT_VLT), None)?;
+        let (model, _) = DynModel::build_traced(&iface, &files, Some(crate::dynmodel::LINT_VLT), None)?;
         let port = |name: String| model.port(&name);
         let inputs = graph
             .inputs

@@ -16,6 +16,7 @@ pub mod check;
 #[cfg(neo_has_verilator)]
 pub mod core;
 pub mod datapath;
+pub mod dup;
 pub mod dut;
 pub mod dynmodel;
 pub mod engine;

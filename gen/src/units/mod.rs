@@ -16,6 +16,7 @@
 //! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
+//! | `neo_pre_dup`   | Preprocessing: duplication unit (tiles entered, incoming flag) | run time |
 //! | `neo_perf_counter` | one 64-bit performance counter                       | no        |
 //! | `neo_perf_counters` | the engine's performance counters                   | yes       |
 //! | `neo_engine_regs` | engine control port: AXI4-Lite register map           | yes       |
@@ -81,6 +82,13 @@ pub fn top_modules() -> &'static [&'static str] {
     ]
 }
 
+/// Tops the benches verilate at run time (`neo_tb::dynmodel`) rather than with every build,
+/// and that no other top instantiates: the lint and latch gates check them like
+/// [`top_modules`]. (The engine, which has its own gates, is not listed.)
+pub fn run_time_tops() -> &'static [&'static str] {
+    &[pre::dup::NAME]
+}
+
 /// Every module of the configuration, leaves first.
 pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     cfg.validate()?;
@@ -100,6 +108,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         raster_core::loader::module(cfg),
         raster_core::feeder::module(cfg),
         raster_core::module(cfg),
+        pre::dup::module(cfg),
         perf_counters::counter_module(cfg),
         perf_counters::module(cfg),
         engine_regs::module(cfg),

@@ -3,6 +3,7 @@
 //! [`library`].
 
 pub mod datapath;
+pub mod dup;
 pub mod library;
 
 use crate::emit::Module;
