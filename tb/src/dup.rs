@@ -130,6 +130,8 @@ pub struct DupRun {
     pub cycles: u64,
     /// Cycles from the first Gaussian's acceptance to the last one's.
     pub accept_span: u64,
+    /// Edges from the first acceptance to the first hit offered (0 without hits).
+    pub first_latency: u64,
 }
 
 impl DupBench {
@@ -199,7 +201,7 @@ impl DupBench {
         self.model.set_u64(p.grid_y, frame.grid[1] as u64);
         self.model.set_u64(p.all_fresh, frame.all_fresh as u64);
         let (mut next, mut got, mut start) = (0usize, 0usize, None);
-        let (mut first_accept, mut last_accept) = (None, 0u64);
+        let (mut first_accept, mut last_accept, mut first_hit) = (None, 0u64, None);
         let tiles = (frame.grid[0] * frame.grid[1]) as u64;
         let limit =
             self.model.cycle() + (items.len() as u64 * (tiles + 8) + 100) * 100 / p_valid.min(p_ready) as u64;
@@ -217,6 +219,9 @@ impl DupBench {
             let (m, p) = (&mut self.model, &self.p);
             m.set_u64(p.out_ready, take as u64);
             m.eval();
+            if m.get_u64(p.out_valid) == 1 && first_hit.is_none() {
+                first_hit = Some(cycle);
+            }
             if m.get_u64(p.out_valid) == 1 && take {
                 check.protocol(cycle, got < want.len(), "a hit beyond the golden list");
                 let w = want[got];
@@ -248,6 +253,56 @@ impl DupBench {
             hits: want.len(),
             cycles: self.model.cycle() - 8 - start.unwrap_or(0),
             accept_span: last_accept - first_accept.unwrap_or(last_accept),
+            first_latency: first_hit.map_or(0, |h| h - first_accept.unwrap_or(h)),
         }
+    }
+}
+
+/// A Gaussian of one pixel's extent at pixel `(x, y)`, axis-aligned (for timing runs).
+pub fn point_gaussian(cfg: &EngineConfig, x: f64, y: f64) -> FeatureEntry {
+    let fmt = cfg.feature_format();
+    let one = 1 << fmt.extent.frac;
+    FeatureEntry {
+        mean: [fmt.mean.quantize(x) as i32, fmt.mean.quantize(y) as i32],
+        axis: [1 << fmt.axis.frac, 0],
+        extent_xy: [one, one],
+        extent_uv: [one, one],
+        ..Default::default()
+    }
+}
+
+/// The unit's timing for `reports/latency.json` (every hit checked against golden on the way):
+/// the latency of a Gaussian with one candidate tile, the walker's cycles per candidate tile
+/// over random Gaussians, and its cycles for Gaussians outside the image.
+pub fn measure_timing(bench: &mut DupBench, seed: u64) -> neo_golden::formats::latency::DupUnit {
+    let cfg = bench.cfg.clone();
+    let (fmt, r) = (cfg.feature_format(), cfg.raster_config());
+    let frame = DupFrame { grid: [20, 12], all_fresh: false };
+    let size = (frame.grid[0] * r.tile, frame.grid[1] * r.tile);
+    let check = Checker::new(NAME, seed);
+    let mut rng = Rng::new(seed);
+    let centre = r.tile as f64 / 2.0;
+    let one = DupItem { id: 1, key: 1, now: point_gaussian(&cfg, centre, centre), prev: None };
+    let latency = bench.run(frame, &[one], &mut rng, (100, 100), &check).first_latency;
+    let items: Vec<DupItem> = random_items(&cfg, &mut rng, 600)
+        .into_iter()
+        .filter(|it| neo_golden::hwpre::duplicate::candidate_count(&it.now, &fmt, &r, size) > 0)
+        .collect();
+    let candidates: u64 = items[..items.len() - 1]
+        .iter()
+        .map(|it| neo_golden::hwpre::duplicate::candidate_count(&it.now, &fmt, &r, size) as u64)
+        .sum();
+    let run = bench.run(frame, &items, &mut rng, (100, 100), &check);
+    let outside: Vec<DupItem> = (0..64)
+        .map(|k| DupItem { id: k, key: k, now: point_gaussian(&cfg, -1000.0, 10.0), prev: None })
+        .collect();
+    let empty = bench.run(frame, &outside, &mut rng, (100, 100), &check);
+    neo_golden::formats::latency::DupUnit {
+        latency,
+        cycles_per_candidate: run.accept_span.div_ceil(candidates),
+        min_cycles_per_gaussian: empty.accept_span.div_ceil(outside.len() as u64 - 1),
+        gaussians: items.len() as u64,
+        candidates,
+        cycles: run.accept_span,
     }
 }
