@@ -268,8 +268,8 @@ module neo_fp_add (
   assign fld = hid ? en_q3[7:0] : 8'd0;
   wire ovf;
   assign ovf = hid & (en_q3 >= 9'd255);
-  wire [24:0] top;
-  assign top = {nrm_q3[26:3], nrm_q3[2]};
+  wire [23:0] top;
+  assign top = nrm_q3[25:2];
   wire stk;
   assign stk = nrm_q3[1] | nrm_q3[0];
   wire rp_inc;
@@ -286,5 +286,7 @@ module neo_fp_add (
     end
   end
   assign y_o = y_q4;
+  wire unused_bits;
+  assign unused_bits = ^{lzin[0]};
 
 endmodule

@@ -353,14 +353,14 @@ module neo_fp_div (
   assign dn_out = |(qn & ~(26'h3ffffff << dn_rs));
   wire dn_stk;
   assign dn_stk = dn_out | |dn_sh[0:0] | rnz;
-  wire [24:0] dn_top;
-  assign dn_top = dn_sh[25:1];
+  wire [23:0] dn_top;
+  assign dn_top = dn_sh[24:1];
   wire [7:0] dn_fld;
   assign dn_fld = (dn_le0 | ~dn_sh[25]) ? 8'd0 : e1[7:0];
   wire dn_ovf;
   assign dn_ovf = ~e1[9] & (e1 >= 10'd255);
   // Stage 15: normalised quotient, subnormal shift
-  reg  [24:0] top_q2;
+  reg  [23:0] top_q2;
   reg  stk_q2;
   reg  [7:0] fld_q2;
   reg  ovf_q2;
@@ -390,5 +390,7 @@ module neo_fp_div (
     end
   end
   assign y_o = y_q3;
+  wire unused_bits;
+  assign unused_bits = ^{a_lzin[0], b_lzin[0], d_c[335:312]};
 
 endmodule

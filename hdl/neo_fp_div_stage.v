@@ -21,8 +21,6 @@ module neo_fp_div_stage (
   assign rn0 = ge0 ? t0[23:0] : r_i[23:0];
   wire [24:0] r0;
   assign r0 = {rn0, 1'b0};
-  wire [25:0] q0;
-  assign q0 = {q_i[24:0], ge0};
   wire [25:0] t1;
   assign t1 = {1'b0, r0} - {2'd0, d_i};
   wire ge1;
@@ -31,8 +29,8 @@ module neo_fp_div_stage (
   assign rn1 = ge1 ? t1[23:0] : r0[23:0];
   wire [24:0] r1;
   assign r1 = {rn1, 1'b0};
-  wire [25:0] q1;
-  assign q1 = {q0[24:0], ge1};
+  wire unused_bits;
+  assign unused_bits = ^{q_i[25:24], t0[24], t1[24]};
   reg  [24:0] r_q;
   reg  [23:0] d_q;
   reg  [25:0] q_q;
@@ -41,7 +39,7 @@ module neo_fp_div_stage (
     if (en_i) begin
       r_q <= r1;
       d_q <= d_i;
-      q_q <= q1;
+      q_q <= {q_i[23:0], ge0, ge1};
       tag_q <= tag_i;
     end
   end

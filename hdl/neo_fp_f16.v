@@ -56,5 +56,7 @@ module neo_fp_f16 (
     end
   end
   assign y_o = y_q2;
+  wire unused_bits;
+  assign unused_bits = ^{t[23:12], a_i[31]};
 
 endmodule

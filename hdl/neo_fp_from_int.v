@@ -156,8 +156,8 @@ module neo_fp_from_int (
       sg_q2 <= sg_q;
     end
   end
-  wire [24:0] top;
-  assign top = n_q2[31:7];
+  wire [23:0] top;
+  assign top = n_q2[30:7];
   wire stk;
   assign stk = |n_q2[6:0];
   wire rp_inc;
@@ -174,5 +174,7 @@ module neo_fp_from_int (
     end
   end
   assign y_o = y_q3;
+  wire unused_bits;
+  assign unused_bits = ^{n_q2[31]};
 
 endmodule

@@ -345,14 +345,14 @@ module neo_fp_mul (
   assign dn_out = |(pn_q2 & ~(48'hffffffffffff << dn_rs));
   wire dn_stk;
   assign dn_stk = dn_out | |dn_sh[22:0];
-  wire [24:0] dn_top;
-  assign dn_top = dn_sh[47:23];
+  wire [23:0] dn_top;
+  assign dn_top = dn_sh[46:23];
   wire [7:0] dn_fld;
   assign dn_fld = (dn_le0 | ~dn_sh[47]) ? 8'd0 : e1_q2[7:0];
   wire dn_ovf;
   assign dn_ovf = ~e1_q2[9] & (e1_q2 >= 10'd255);
   // Stage 3: subnormal shift
-  reg  [24:0] top_q3;
+  reg  [23:0] top_q3;
   reg  stk_q3;
   reg  [7:0] fld_q3;
   reg  ovf_q3;
@@ -386,5 +386,7 @@ module neo_fp_mul (
     end
   end
   assign y_o = y_q4;
+  wire unused_bits;
+  assign unused_bits = ^{lzin[0]};
 
 endmodule

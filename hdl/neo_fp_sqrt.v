@@ -202,8 +202,8 @@ module neo_fp_sqrt (
   assign stk = qf[0] | (|rf);
   wire [7:0] fld;
   assign fld = tf[11:4];
-  wire [24:0] top;
-  assign top = qf[25:1];
+  wire [23:0] top;
+  assign top = qf[24:1];
   wire rp_inc;
   assign rp_inc = top[0] & (stk | top[1]);
   wire [30:0] rp_mag;
@@ -218,5 +218,7 @@ module neo_fp_sqrt (
     end
   end
   assign y_o = y_q2;
+  wire unused_bits;
+  assign unused_bits = ^{lzin[0], qf[25], e[9:8], xe[0], n_c[363:338]};
 
 endmodule

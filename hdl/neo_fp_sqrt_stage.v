@@ -41,6 +41,8 @@ module neo_fp_sqrt_stage (
   assign n1 = {n0[23:0], 2'b00};
   wire [25:0] q1;
   assign q1 = {q0[24:0], ge1};
+  wire unused_bits;
+  assign unused_bits = ^{df0[29:28], df1[29:28]};
   reg  [27:0] r_q;
   reg  [25:0] n_q;
   reg  [25:0] q_q;

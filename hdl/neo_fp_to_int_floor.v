@@ -67,5 +67,7 @@ module neo_fp_to_int_floor (
     end
   end
   assign y_o = y_q2;
+  wire unused_bits;
+  assign unused_bits = ^{rsh[7:5]};
 
 endmodule

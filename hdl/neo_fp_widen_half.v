@@ -84,5 +84,7 @@ module neo_fp_widen_half (
     end
   end
   assign y_o = y_q;
+  wire unused_bits;
+  assign unused_bits = ^{a_i[31:16], lzin[0]};
 
 endmodule

@@ -88,7 +88,7 @@ pub fn add() -> Module {
     p.w("hid", 1, "nrm_q3[26]");
     p.w("fld", 8, "hid ? en_q3[7:0] : 8'd0");
     p.w("ovf", 1, "hid & (en_q3 >= 9'd255)");
-    p.w("top", 25, "{nrm_q3[26:3], nrm_q3[2]}");
+    p.w("top", 24, "nrm_q3[25:2]");
     p.w("stk", 1, "nrm_q3[1] | nrm_q3[0]");
     round_pack(&mut p, "rp", "fld", "top", "stk");
     p.w(
@@ -102,7 +102,7 @@ pub fn add() -> Module {
     p.stage("rounded result", &[r("y_q4", 32, "y")]);
     p.m.assign("y_o", "y_q4");
     assert_eq!(p.stages, latency(FpPrim::Add));
-    p.m
+    p.finish()
 }
 
 /// The subtractor: `neo_fp_add` with b's sign flipped (exact in IEEE: `a - b = a + (-b)`,

@@ -15,6 +15,9 @@ pub struct Pipe {
     pub m: Module,
     /// Register stages emitted.
     pub stages: u32,
+    /// Bits computed but not read (shifted-out halves, padding), collected into `unused_bits`
+    /// by [`Pipe::finish`] (Verilator's convention for intentionally unused bits).
+    pub unused: Vec<String>,
 }
 
 impl Pipe {
@@ -30,7 +33,20 @@ impl Pipe {
             m.input_c("b_i", 32, "operand b");
         }
         m.output_c("y_o", 32, "result of the operands presented LATENCY enabled cycles earlier");
-        Pipe { m, stages: 0 }
+        Pipe { m, stages: 0, unused: Vec::new() }
+    }
+
+    /// Records bits that are intentionally not read.
+    pub fn unused(&mut self, bits: impl Into<String>) {
+        self.unused.push(bits.into());
+    }
+
+    /// The finished module: the unused bits reduced into `unused_bits`.
+    pub fn finish(mut self) -> Module {
+        if !self.unused.is_empty() {
+            self.m.wire_assign("unused_bits", 1, format!("^{{{}}}", self.unused.join(", ")));
+        }
+        self.m
     }
 
     /// A wire `name` of `width` bits driven by `rhs`.
@@ -132,14 +148,18 @@ pub fn lzc(pp: &mut Pipe, p: &str, x: &str, width: u32, zero: bool) -> u32 {
         pp.w(&format!("{p}_c"), cw + 1, format!("{ph}_z ? {{1'b1, {pl}_c}} : {{1'b0, {ph}_c}}"));
         cw + 1
     }
-    node(pp, p, x, width - 1, width, zero)
+    let cw = node(pp, p, x, width - 1, width, zero);
+    if !zero {
+        pp.unused(format!("{x}[0]"));
+    }
+    cw
 }
 
 /// The subnormal right shift of a normalised significand: `sig` (wire of `width` >= 26 bits,
 /// its leading one at bit `width - 1` unless the value is subnormal after a limited left
 /// shift) with signed 10-bit biased exponent `e` (the exponent of bit `width - 1`). When
 /// `e <= 0` the significand is shifted right by `1 - e` (at most 31) and the exponent becomes
-/// 1. Wires: `{p}_top` (25 bits: hidden bit, 23 fraction bits, guard), `{p}_stk` (sticky: every
+/// 1. Wires: `{p}_top` (24 bits: 23 fraction bits, guard), `{p}_stk` (sticky: every
 /// lower bit, shifted out or not, ORed with `extra`), `{p}_fld` (the 8-bit exponent field
 /// before rounding: the exponent when the hidden bit is set, else 0) and `{p}_ovf` (`e >= 255`:
 /// the result overflows to infinity).
@@ -157,13 +177,13 @@ pub fn denorm(pp: &mut Pipe, p: &str, sig: &str, width: u32, e: &str, extra: Opt
         None => format!("{p}_out | {low}"),
     };
     pp.w(&format!("{p}_stk"), 1, stk);
-    pp.w(&format!("{p}_top"), 25, format!("{p}_sh[{}:{}]", width - 1, width - 25));
+    pp.w(&format!("{p}_top"), 24, format!("{p}_sh[{}:{}]", width - 2, width - 25));
     pp.w(&format!("{p}_fld"), 8, format!("({p}_le0 | ~{p}_sh[{}]) ? 8'd0 : {e}[7:0]", width - 1));
     pp.w(&format!("{p}_ovf"), 1, format!("~{e}[9] & ({e} >= 10'd255)"));
 }
 
-/// Round to nearest even and pack: `fld` (8-bit exponent field), `top` (25 bits: hidden bit,
-/// 23 fraction bits, guard), `stk` (sticky). Wire `{p}_mag` (31 bits: exponent and fraction
+/// Round to nearest even and pack: `fld` (8-bit exponent field), `top` (24 bits: 23 fraction
+/// bits, guard), `stk` (sticky). Wire `{p}_mag` (31 bits: exponent and fraction
 /// after rounding; a carry out of the fraction bumps the exponent, up to infinity).
 pub fn round_pack(pp: &mut Pipe, p: &str, fld: &str, top: &str, stk: &str) {
     pp.w(&format!("{p}_inc"), 1, format!("{top}[0] & ({stk} | {top}[1])"));

@@ -25,6 +25,7 @@ pub fn to_int(mode: Round) -> Module {
     // 31 integer bits, 26 fraction bits: a_m * 2^(e - 150) = {a_m, 33'b0} >> (157 - e).
     p.w("v", 57, "{a_m, 33'd0} >> rsh[4:0]");
     p.w("ip", 31, "tiny ? 31'd0 : v[56:26]");
+    p.unused("rsh[7:5]");
     let needs_frac = mode != Round::Trunc;
     let mut regs = vec![
         r(q("ip", 1), 31, "ip"),
@@ -37,6 +38,8 @@ pub fn to_int(mode: Round) -> Module {
         p.w("rest", 1, "tiny ? (|a_i[30:0]) : (|v[24:0])");
         regs.push(r(q("hb", 1), 1, "hb"));
         regs.push(r(q("rest", 1), 1, "rest"));
+    } else {
+        p.unused("v[25:0]");
     }
     p.stage("fixed-point magnitude", &regs);
     let inc = match mode {
@@ -52,7 +55,7 @@ pub fn to_int(mode: Round) -> Module {
     p.stage("rounded integer", &[r("y_q2", 32, "y")]);
     p.m.assign("y_o", "y_q2");
     assert_eq!(p.stages, latency(prim));
-    p.m
+    p.finish()
 }
 
 /// `i as f32`, RNE. Stage 1: the magnitude; stage 2: normalisation (leading zeros); stage 3:
@@ -74,14 +77,15 @@ pub fn from_int() -> Module {
             r(q("sg", 2), 1, "sg_q"),
         ],
     );
-    p.w("top", 25, "n_q2[31:7]");
+    p.w("top", 24, "n_q2[30:7]");
+    p.unused("n_q2[31]");
     p.w("stk", 1, "|n_q2[6:0]");
     round_pack(&mut p, "rp", "e_q2", "top", "stk");
     p.w("y", 32, "zero_q2 ? 32'd0 : {sg_q2, rp_mag}");
     p.stage("rounded result", &[r("y_q3", 32, "y")]);
     p.m.assign("y_o", "y_q3");
     assert_eq!(p.stages, latency(prim));
-    p.m
+    p.finish()
 }
 
 /// `f16_bits(|a|)`: stage 1 the shift to the half's grid (normal: 13 bits, subnormal: more)
@@ -102,6 +106,8 @@ pub fn f16() -> Module {
     p.w("sh1", 5, "sh - 5'd1");
     p.w("t", 24, "m >> sh1");
     p.w("stk", 1, "|(m & ~(24'hffffff << sh1))");
+    p.unused("t[23:12]");
+    p.unused("a_i[31]");
     p.stage(
         "shifted significand",
         &[
@@ -119,7 +125,7 @@ pub fn f16() -> Module {
     p.stage("rounded half", &[r("y_q2", 32, "y")]);
     p.m.assign("y_o", "y_q2");
     assert_eq!(p.stages, latency(prim));
-    p.m
+    p.finish()
 }
 
 /// `widen_half(a)`: the binary16 value in a's low 16 bits as binary32 (exact; subnormal halves
@@ -130,6 +136,7 @@ pub fn widen_half() -> Module {
     p.m.doc("binary16 (a_i[15:0]) -> binary32, exact; a half NaN gives the canonical NaN 0x7fc00000.");
     p.m.doc(format!("Latency {} enabled cycle, one operation per cycle.", latency(prim)));
     p.w("s", 1, "a_i[15]");
+    p.unused("a_i[31:16]");
     p.w("e", 5, "a_i[14:10]");
     p.w("f", 10, "a_i[9:0]");
     p.w("lzin", 16, "{f, 6'b111111}");
@@ -150,5 +157,5 @@ pub fn widen_half() -> Module {
     p.stage("widened value", &[r("y_q", 32, "y")]);
     p.m.assign("y_o", "y_q");
     assert_eq!(p.stages, latency(prim));
-    p.m
+    p.finish()
 }

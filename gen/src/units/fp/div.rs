@@ -39,25 +39,26 @@ pub fn stage_module() -> Module {
     m.output_c("q_o", DIV_BITS, "quotient with the new bits appended");
     m.output_c("tag_o", TAG, "side information");
     let mut rin = "r_i".to_string();
-    let mut qin = "q_i".to_string();
     for s in 0..STEPS {
         m.wire_assign(format!("t{s}"), 26, format!("{{1'b0, {rin}}} - {{2'd0, d_i}}"));
         m.wire_assign(format!("ge{s}"), 1, format!("~t{s}[25]"));
         m.wire_assign(format!("rn{s}"), 24, format!("ge{s} ? t{s}[23:0] : {rin}[23:0]"));
         m.wire_assign(format!("r{s}"), 25, format!("{{rn{s}, 1'b0}}"));
-        m.wire_assign(format!("q{s}"), DIV_BITS, format!("{{{qin}[{}:0], ge{s}}}", DIV_BITS - 2));
         rin = format!("r{s}");
-        qin = format!("q{s}");
     }
+    // The quotient's top bits shift out; t's bit 24 is 0 whenever r >= d.
+    let spent: Vec<String> = (0..STEPS).map(|s| format!("t{s}[24]")).collect();
+    m.wire_assign(
+        "unused_bits",
+        1,
+        format!("^{{q_i[{}:{}], {}}}", DIV_BITS - 1, DIV_BITS - STEPS, spent.join(", ")),
+    );
+    let ges: Vec<String> = (0..STEPS).map(|s| format!("ge{s}")).collect();
+    let qn = format!("{{q_i[{}:0], {}}}", DIV_BITS - 1 - STEPS, ges.join(", "));
     m.reg("r_q", 25).reg("d_q", 24).reg("q_q", DIV_BITS).reg("tag_q", TAG);
     m.seq_noreset(vec![if_(
         "en_i",
-        vec![
-            set("r_q", format!("r{}", STEPS - 1)),
-            set("d_q", "d_i"),
-            set("q_q", format!("q{}", STEPS - 1)),
-            set("tag_q", "tag_i"),
-        ],
+        vec![set("r_q", format!("r{}", STEPS - 1)), set("d_q", "d_i"), set("q_q", qn), set("tag_q", "tag_i")],
     )]);
     m.assign("r_o", "r_q");
     m.assign("d_o", "d_q");
@@ -132,11 +133,12 @@ pub fn module() -> Module {
     p.w("qn", DIV_BITS, format!("lead ? qf : {{qf[{}:0], 1'b0}}", DIV_BITS - 2));
     p.w("e1", 10, "lead ? tf[13:4] : tf[13:4] - 10'd1");
     p.w("rnz", 1, "|rf");
+    p.unused(format!("d_c[{}:{}]", 24 * n + 23, 24 * n));
     denorm(&mut p, "dn", "qn", DIV_BITS, "e1", Some("rnz"));
     p.stage(
         "normalised quotient, subnormal shift",
         &[
-            r(q("top", 2), 25, "dn_top"),
+            r(q("top", 2), 24, "dn_top"),
             r(q("stk", 2), 1, "dn_stk"),
             r(q("fld", 2), 8, "dn_fld"),
             r(q("ovf", 2), 1, "dn_ovf"),
@@ -156,5 +158,5 @@ pub fn module() -> Module {
     p.stage("rounded result", &[r("y_q3", 32, "y")]);
     p.m.assign("y_o", "y_q3");
     assert_eq!(p.stages, latency(FpPrim::Div));
-    p.m
+    p.finish()
 }

@@ -53,7 +53,7 @@ pub fn module() -> Module {
     p.stage(
         "subnormal shift",
         &[
-            r(q("top", 3), 25, "dn_top"),
+            r(q("top", 3), 24, "dn_top"),
             r(q("stk", 3), 1, "dn_stk"),
             r(q("fld", 3), 8, "dn_fld"),
             r(q("ovf", 3), 1, "dn_ovf"),
@@ -75,5 +75,5 @@ pub fn module() -> Module {
     p.stage("rounded result", &[r("y_q4", 32, "y")]);
     p.m.assign("y_o", "y_q4");
     assert_eq!(p.stages, latency(FpPrim::Mul));
-    p.m
+    p.finish()
 }

@@ -57,6 +57,9 @@ pub fn stage_module() -> Module {
         nin = format!("n{s}");
         qin = format!("q{s}");
     }
+    // The difference's top bits are 0 whenever it is kept.
+    let spent: Vec<String> = (0..STEPS).map(|s| format!("df{s}[{}:{RW}]", RW + 1)).collect();
+    m.wire_assign("unused_bits", 1, format!("^{{{}}}", spent.join(", ")));
     m.reg("r_q", RW).reg("n_q", SQRT_BITS).reg("q_q", SQRT_BITS).reg("tag_q", TAG);
     m.seq_noreset(vec![if_(
         "en_i",
@@ -130,7 +133,11 @@ pub fn module() -> Module {
     p.w("tf", TAG, format!("t_c[{}:{tl}]", tl + TAG - 1));
     p.w("stk", 1, "qf[0] | (|rf)");
     p.w("fld", 8, "tf[11:4]");
-    p.w("top", 25, "qf[25:1]");
+    p.w("top", 24, "qf[24:1]");
+    p.unused("qf[25]");
+    p.unused("e[9:8]");
+    p.unused("xe[0]");
+    p.unused(format!("n_c[{}:{ql}]", ql + SQRT_BITS - 1));
     round_pack(&mut p, "rp", "fld", "top", "stk");
     p.w(
         "y",
@@ -142,5 +149,5 @@ pub fn module() -> Module {
     p.stage("rounded result", &[r("y_q2", 32, "y")]);
     p.m.assign("y_o", "y_q2");
     assert_eq!(p.stages, latency(FpPrim::Sqrt));
-    p.m
+    p.finish()
 }
