@@ -120,3 +120,22 @@ mod cosim {
         });
     }
 }
+
+/// How often `Native` itself returns a NaN other than the canonical one from arithmetic (see
+/// `neo_tb::fp::canonical_nan`): printed for the integrator; not a failure of the RTL.
+#[test]
+fn native_nan_results_are_reported() {
+    use neo_gen::units::fp::FpPrim;
+    use neo_tb::fp::{canonical_nan, directed_vectors, native};
+    let mut odd = std::collections::BTreeMap::new();
+    for v in directed_vectors() {
+        for p in FpPrim::ALL {
+            let y = native(p, v.a, v.b);
+            if !matches!(p, FpPrim::ToInt(_) | FpPrim::F16 | FpPrim::FromInt) && canonical_nan(y) != y {
+                let e = odd.entry(format!("{p:?}")).or_insert((0u32, y));
+                e.0 += 1;
+            }
+        }
+    }
+    println!("Native NaN results that are not 0x7fc00000 on the directed vectors (count, first): {odd:x?}");
+}
