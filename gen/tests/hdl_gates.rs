@@ -212,7 +212,8 @@ fn fp_primitive_cells() {
     let cfg = EngineConfig::default();
     println!("| module | latency | cells | flip-flops |");
     println!("|---|---:|---:|---:|");
-    let mut rows: Vec<(&str, String)> = FpPrim::ALL.iter().map(|&p| (module_name(p), latency(p).to_string())).collect();
+    let mut rows: Vec<(&str, String)> =
+        FpPrim::ALL.iter().map(|&p| (module_name(p), latency(p).to_string())).collect();
     rows.push((cmp::NAME, "0 (combinational)".into()));
     for (top, lat) in rows {
         let s = synth_stats(&files_for(&cfg, top), top).unwrap_or_else(|e| panic!("{top}: {e}"));

@@ -159,7 +159,7 @@ pub fn lzc(pp: &mut Pipe, p: &str, x: &str, width: u32, zero: bool) -> u32 {
 /// its leading one at bit `width - 1` unless the value is subnormal after a limited left
 /// shift) with signed 10-bit biased exponent `e` (the exponent of bit `width - 1`). When
 /// `e <= 0` the significand is shifted right by `1 - e` (at most 31) and the exponent becomes
-/// 1. Wires: `{p}_top` (24 bits: 23 fraction bits, guard), `{p}_stk` (sticky: every
+/// one. Wires: `{p}_top` (24 bits: 23 fraction bits, guard), `{p}_stk` (sticky: every
 /// lower bit, shifted out or not, ORed with `extra`), `{p}_fld` (the 8-bit exponent field
 /// before rounding: the exponent when the hidden bit is set, else 0) and `{p}_ovf` (`e >= 255`:
 /// the result overflows to infinity).
