@@ -139,3 +139,30 @@ fn native_nan_results_are_reported() {
     }
     println!("Native NaN results that are not 0x7fc00000 on the directed vectors (count, first): {odd:x?}");
 }
+
+/// Every significand of selected binades (both signs) through every primitive: all subnormals,
+/// the smallest normal binade, [0.5, 2) (`to_int`'s .5 boundaries and sqrt's two exponent
+/// parities), [2^23, 2^24) and [2^30, 2^31) (the integer boundaries), b = 1.5 times the pattern's
+/// exponent neighbour. About 30 M operations: `cargo test -p neo-tb --release --test fp --
+/// --ignored fp_binade_sweeps`.
+#[cfg(neo_has_verilator)]
+#[test]
+#[ignore]
+fn fp_binade_sweeps() {
+    use neo_tb::fp::{FpBench, Vector};
+    let mut b = FpBench::build().unwrap_or_else(|e| panic!("neo_fp_bench: {e}"));
+    let seed = neo_tb::rng::test_seed("fp_binade_sweeps");
+    let mut total = 0u64;
+    for e in [0u32, 1, 126, 127, 150, 157] {
+        for sign in [0u32, 0x8000_0000] {
+            let v: Vec<Vector> = (0..1u32 << 23)
+                .map(|m| {
+                    let a = sign | e << 23 | m;
+                    Vector { a, b: (a ^ 0x0080_0000) | 0x0040_0000, class: "binade sweep" }
+                })
+                .collect();
+            total += b.run_checked(seed ^ (e as u64) ^ sign as u64, &v, 0).ops;
+        }
+        println!("fp_binade_sweeps: exponent field {e} done ({total} operations)");
+    }
+}
