@@ -196,6 +196,11 @@ fn fp_primitives_are_lint_clean_and_latch_free() {
             Err(e) => failures.push(format!("yosys: {top}: {e}")),
         }
     }
+    if require_for_test("iverilog", "fp_primitives_are_lint_clean_and_latch_free (icarus)") {
+        if let Err(e) = icarus_compile(&files_for(&cfg, bench::NAME), bench::NAME) {
+            failures.push(format!("iverilog: {}: {e}", bench::NAME));
+        }
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 

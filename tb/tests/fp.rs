@@ -143,7 +143,7 @@ fn native_nan_results_are_reported() {
 /// Every significand of selected binades (both signs) through every primitive: all subnormals,
 /// the smallest normal binade, [0.5, 2) (`to_int`'s .5 boundaries and sqrt's two exponent
 /// parities), [2^23, 2^24) and [2^30, 2^31) (the integer boundaries), b = 1.5 times the pattern's
-/// exponent neighbour. About 30 M operations: `cargo test -p neo-tb --release --test fp --
+/// exponent neighbour. About 100 M operations (8 minutes): `cargo test -p neo-tb --release --test fp --
 /// --ignored fp_binade_sweeps`.
 #[cfg(neo_has_verilator)]
 #[test]
