@@ -31,12 +31,8 @@ pub fn module() -> Module {
     m.output_c("max_o", 32, "neo_fp_cmp: max(a, b)");
     m.output_c("min_o", 32, "neo_fp_cmp: min(a, b)");
     for p in FpPrim::ALL {
-        let mut c = vec![("clk_i", "clk_i".to_string()), ("en_i", "en_i".into()), ("a_i", "a_i".into())];
-        if p.binary() {
-            c.push(("b_i", "b_i".into()));
-        }
-        c.push(("y_o", port(p)));
-        m.instance(module_name(p), format!("u_{}", p.short()), conns(&c));
+        let b = p.binary().then_some("b_i");
+        super::instantiate(&mut m, p, &format!("u_{}", p.short()), "en_i", "a_i", b, &port(p));
     }
     m.instance(
         cmp::NAME,

@@ -138,6 +138,21 @@ pub fn module(p: FpPrim) -> Module {
     }
 }
 
+/// Places an instance `inst` of primitive `p` in `m`: `clk_i` from `clk_i`, `en_i` from `en`,
+/// operands `a` (and `b`, required exactly when [`FpPrim::binary`]) and the result on `y`.
+///
+/// # Panics
+/// When `b` is given for a unary primitive or missing for a binary one.
+pub fn instantiate(m: &mut Module, p: FpPrim, inst: &str, en: &str, a: &str, b: Option<&str>, y: &str) {
+    assert_eq!(b.is_some(), p.binary(), "{}: operand b", module_name(p));
+    let mut c = vec![("clk_i", "clk_i".to_string()), ("en_i", en.to_string()), ("a_i", a.to_string())];
+    if let Some(b) = b {
+        c.push(("b_i", b.to_string()));
+    }
+    c.push(("y_o", y.to_string()));
+    m.instance(module_name(p), inst, crate::emit::conns(&c));
+}
+
 /// Every module of the primitives, leaves first: the recurrence stages, the primitives, the
 /// comparator and the bench top `neo_fp_bench`. They do not depend on the configuration.
 pub fn modules(_cfg: &EngineConfig) -> Vec<Module> {
@@ -169,6 +184,28 @@ mod tests {
             assert_eq!(ports, want, "{p:?}");
             assert!(latency(p) >= 1);
         }
+    }
+
+    #[test]
+    fn instantiate_connects_the_common_ports() {
+        let mut m = Module::new("t");
+        instantiate(&mut m, FpPrim::Mul, "u_mul", "adv", "x", Some("w"), "p");
+        instantiate(&mut m, FpPrim::Sqrt, "u_sqrt", "adv", "p", None, "r");
+        let v = m.to_verilog();
+        assert!(v.contains("neo_fp_mul u_mul (\n    .clk_i(clk_i),\n    .en_i(adv),\n    .a_i(x),\n    .b_i(w),\n    .y_o(p)\n  );"), "{v}");
+        assert!(
+            v.contains(
+                "neo_fp_sqrt u_sqrt (\n    .clk_i(clk_i),\n    .en_i(adv),\n    .a_i(p),\n    .y_o(r)\n  );"
+            ),
+            "{v}"
+        );
+        assert_eq!(m.instantiated(), ["neo_fp_mul", "neo_fp_sqrt"]);
+    }
+
+    #[test]
+    #[should_panic(expected = "operand b")]
+    fn instantiate_refuses_a_missing_operand() {
+        instantiate(&mut Module::new("t"), FpPrim::Add, "u", "en_i", "a", None, "y");
     }
 
     #[test]
