@@ -141,10 +141,11 @@ fn native_nan_results_are_reported() {
 }
 
 /// Every significand of selected binades (both signs) through every primitive: all subnormals,
-/// the smallest normal binade, [0.5, 2) (`to_int`'s .5 boundaries and sqrt's two exponent
-/// parities), [2^23, 2^24) and [2^30, 2^31) (the integer boundaries), b = 1.5 times the pattern's
-/// exponent neighbour. About 100 M operations (8 minutes): `cargo test -p neo-tb --release --test fp --
-/// --ignored fp_binade_sweeps`.
+/// the two smallest normal binades, f16's subnormal/normal boundary (exponent fields 102, 112,
+/// 113) and saturation (142, 143), [0.5, 2) (`to_int`'s .5 boundaries, sqrt's two exponent
+/// parities), [2^23, 2^24), [2^30, 2^32) (the integer boundaries) and the largest binade; b is
+/// the pattern with its exponent's lowest bit flipped and bit 22 set. About 235 M operations
+/// (6 minutes): `cargo test -p neo-tb --release --test fp -- --ignored fp_binade_sweeps`.
 #[cfg(neo_has_verilator)]
 #[test]
 #[ignore]
@@ -153,7 +154,7 @@ fn fp_binade_sweeps() {
     let mut b = FpBench::build().unwrap_or_else(|e| panic!("neo_fp_bench: {e}"));
     let seed = neo_tb::rng::test_seed("fp_binade_sweeps");
     let mut total = 0u64;
-    for e in [0u32, 1, 126, 127, 150, 157] {
+    for e in [0u32, 1, 2, 102, 112, 113, 126, 127, 142, 143, 150, 157, 158, 254] {
         for sign in [0u32, 0x8000_0000] {
             let v: Vec<Vector> = (0..1u32 << 23)
                 .map(|m| {

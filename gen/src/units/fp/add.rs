@@ -14,7 +14,10 @@ use crate::emit::{conns, Module};
 pub fn add() -> Module {
     let mut p = Pipe::new(super::module_name(FpPrim::Add), true);
     p.m.doc("binary32 a + b, round to nearest even, subnormals, canonical NaN 0x7fc00000.");
-    p.m.doc("Latency 4 enabled cycles, one operation per cycle (stages in gen/src/units/fp/add.rs).");
+    p.m.doc(format!(
+        "Latency {} enabled cycles, one operation per cycle (stages in gen/src/units/fp/add.rs).",
+        latency(FpPrim::Add)
+    ));
     let f = Fields { nan: true, inf: true, m: true, ee: true, ..Default::default() };
     unpack(&mut p, "a", "a_i", f);
     unpack(&mut p, "b", "b_i", f);

@@ -13,7 +13,10 @@ use crate::emit::Module;
 pub fn module() -> Module {
     let mut p = Pipe::new(super::module_name(FpPrim::Mul), true);
     p.m.doc("binary32 a * b, round to nearest even, subnormals, canonical NaN 0x7fc00000.");
-    p.m.doc("Latency 4 enabled cycles, one operation per cycle (stages in gen/src/units/fp/mul.rs).");
+    p.m.doc(format!(
+        "Latency {} enabled cycles, one operation per cycle (stages in gen/src/units/fp/mul.rs).",
+        latency(FpPrim::Mul)
+    ));
     let f = Fields { nan: true, inf: true, zero: true, m: true, ee: true };
     unpack(&mut p, "a", "a_i", f);
     unpack(&mut p, "b", "b_i", f);
