@@ -26,6 +26,8 @@
 //! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
 //! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (the engine's P, and P=3) | P=3 |
 //! | `neo_engine`    | the engine: control port, frame controller, cores, bridges, port muxes | run time |
+//! | `neo_fp_*`      | binary32 primitives of the Preprocessing Engine (`fp`)   | no        |
+//! | `neo_fp_bench`  | every `neo_fp_*` primitive side by side                 | run time  |
 
 pub mod axi;
 pub mod bsu;
@@ -33,6 +35,7 @@ pub mod chunk_ram;
 pub mod cmp_swap;
 pub mod engine;
 pub mod engine_regs;
+pub mod fp;
 pub mod frame_ctrl;
 pub mod itu;
 pub mod msu;
@@ -121,6 +124,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         all.push(axi::mux::module(cfg, p)?);
     }
     all.push(engine::module(cfg));
+    all.extend(fp::modules(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }
