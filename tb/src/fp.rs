@@ -8,7 +8,7 @@ use crate::check::Checker;
 use crate::dynmodel::DynModel;
 use crate::rng::Rng;
 use neo_gen::units::fp::{bench, latency, module_name, FpPrim};
-use neo_golden::hwarith::{Arith, Native, CANONICAL_NAN};
+use neo_golden::hwarith::{Arith, Native};
 
 /// The generated Verilog's lint waivers (passed to Verilator before the files).
 const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
@@ -27,32 +27,13 @@ pub struct Vector {
     pub class: &'static str,
 }
 
-/// Golden result of primitive `p` on operand bits `a`, `b` (`Native`), with a NaN result of
-/// the arithmetic made canonical ([`native`] and [`canonical_nan`]).
+/// Golden result of primitive `p` on operand bits `a`, `b`: `Native`'s (whose arithmetic
+/// returns the canonical NaN, checked on the bits).
 pub fn expected(p: FpPrim, a: u32, b: u32) -> u32 {
-    let y = native(p, a, b);
-    match p {
-        FpPrim::ToInt(_) | FpPrim::F16 | FpPrim::FromInt => y,
-        _ => canonical_nan(y),
-    }
+    native(p, a, b)
 }
 
-/// `y` with any NaN replaced by [`CANONICAL_NAN`], on the bits (integer operations, so the
-/// compiler cannot treat one NaN as another).
-///
-/// `Native` documents the canonical NaN for every arithmetic result, but in an optimised
-/// build `canonical(a.sqrt())` can return the hardware's NaN (`sqrt(-1e-45)` gave 0xffc00000
-/// here): LLVM may fold `is_nan(x) ? NaN : x` to `x`, any NaN being as good as another to it.
-/// The RTL always returns the canonical NaN; the bench compares with that.
-pub fn canonical_nan(y: u32) -> u32 {
-    if y & 0x7FFF_FFFF > 0x7F80_0000 {
-        CANONICAL_NAN
-    } else {
-        y
-    }
-}
-
-/// `Native`'s result of primitive `p` on operand bits `a`, `b`, as it comes.
+/// `Native`'s result of primitive `p` on operand bits `a`, `b`.
 pub fn native(p: FpPrim, a: u32, b: u32) -> u32 {
     let mut n = Native;
     let (fa, fb) = (f32::from_bits(a), f32::from_bits(b));
