@@ -39,15 +39,36 @@ pub struct RunStats {
 }
 
 impl DatapathBench {
-    /// Verilates `top` from `files` (every module it instantiates; `top` itself is added).
-    /// `graph` is the graph the top was emitted from.
+    /// Verilates `top`, a module outside the configuration's set, from `files` (every module it
+    /// instantiates; `top` itself is added). `graph` is the graph the top was emitted from.
     pub fn build(graph: Graph, top: &Module, files: &[VerilogFile]) -> Result<Self, String> {
-        let iface = top.interface();
         let mut files = files.to_vec();
         files.retain(|f| f.name != top.name);
         files.push(VerilogFile { name: top.name.clone(), text: top.to_verilog() });
         let files: Vec<(String, String)> = files.iter().map(|f| (f.file_name(), f.text.clone())).collect();
-        let (model, _) = DynModel::build_traced(&iface, &files, Some(crate::dynmodel::LINT_VLT), None)?;
+        Self::build_from(graph, &top.interface(), &files, crate::dynmodel::LINT_VLT)
+    }
+
+    /// Verilates `top`, a generated module of `cfg` emitted from `graph`, from the generated
+    /// files (or `$NEO_HDL_DIR`'s copy of `top.v`: [`crate::dynmodel::generated_files`]).
+    pub fn build_generated(graph: Graph, cfg: &neo_gen::EngineConfig, top: &str) -> Result<Self, String> {
+        let (files, vlt) = crate::dynmodel::generated_files(cfg, top)?;
+        let iface = neo_gen::units::modules(cfg)
+            .map_err(|e| e.to_string())?
+            .into_iter()
+            .find(|m| m.name == top)
+            .ok_or(format!("the generator emits no {top}"))?
+            .interface();
+        Self::build_from(graph, &iface, &files, &vlt)
+    }
+
+    fn build_from(
+        graph: Graph,
+        iface: &neo_gen::interface::ModuleInterface,
+        files: &[(String, String)],
+        vlt: &str,
+    ) -> Result<Self, String> {
+        let (model, _) = DynModel::build_traced(iface, files, Some(vlt), None)?;
         let port = |name: String| model.port(&name);
         let inputs = graph
             .inputs
@@ -66,6 +87,11 @@ impl DatapathBench {
             inputs,
             outputs,
         })
+    }
+
+    /// The model, for waves.
+    pub fn model_mut(&mut self) -> &mut DynModel {
+        &mut self.model
     }
 
     /// The graph under test.

@@ -75,7 +75,8 @@ neo_tb::with_models! {
         let name = "inline_logic_on_edge_and_random_values";
         let g = inline_graph();
         let top = Datapath::new(&g, &PreLibrary).module("neo_pre_inline_bench", &[]);
-        let mut bench = DatapathBench::build(g, &top, &[]).expect("build");
+        let files = neo_gen::units::files_for_module(&neo_tb::config(), &top);
+        let mut bench = DatapathBench::build(g, &top, &files).expect("build");
         for_each_seed(name, |seed| {
             let mut rng = Rng::new(seed);
             let mut items = Vec::new();
@@ -183,5 +184,97 @@ neo_tb::with_models! {
             .sum();
         let run = bench.run(frame, &items, &mut rng, (100, 100), &Checker::new("neo_pre_dup", 7));
         assert_eq!(run.accept_span, walker, "{} hits over {walker} walker cycles", run.hits);
+    }
+
+    use neo_gen::units::pre::COLOR_NAME;
+    use neo_golden::hwpre::color::color_graph;
+
+    fn color_bench() -> (DatapathBench, u32) {
+        let cfg = neo_tb::config();
+        let g = color_graph(&cfg.feature_format().color);
+        let settle = Datapath::new(&g, &PreLibrary).settle_cycles();
+        (DatapathBench::build_generated(g, &cfg, COLOR_NAME).expect("build neo_pre_color"), settle)
+    }
+
+    /// One colour-unit item: mean, 16 x 3 SH coefficients, camera, degree (graph input order).
+    fn color_item(mean: [f32; 3], sh: &[f32], cam: [f32; 3], degree: u32) -> Vec<u32> {
+        let mut v: Vec<u32> = mean.iter().chain(sh).map(|x| x.to_bits()).collect();
+        v.extend(cam.map(f32::to_bits));
+        v.push(degree);
+        v
+    }
+
+    fn random_color_items(rng: &mut Rng, n: usize, cam: [f32; 3], degree: u32) -> Vec<Vec<u32>> {
+        let f = |rng: &mut Rng, scale: f64| ((rng.below(2_000_001) as f64 / 1e6 - 1.0) * scale) as f32;
+        (0..n)
+            .map(|_| {
+                let mean = [f(rng, 50.0), f(rng, 50.0), f(rng, 50.0)];
+                let sh: Vec<f32> = (0..48).map(|k| if k < 3 { f(rng, 4.0) } else { f(rng, 1.0) }).collect();
+                color_item(mean, &sh, cam, degree)
+            })
+            .collect()
+    }
+
+    /// At least 10k random Gaussians per seed share over the four SH degrees and backpressure mixes.
+    #[test]
+    fn color_random_gaussians_every_degree() {
+        let name = "color_random_gaussians_every_degree";
+        let (mut bench, settle) = color_bench();
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            let check = Checker::new(COLOR_NAME, seed);
+            let per_degree = neo_tb::rng::seed_share(dup_vectors().max(10_000) * neo_tb::rng::SEED_RUNS) / 4;
+            for degree in 0..4u32 {
+                let cam = [0.5, -1.0, -3.0];
+                let items = random_color_items(&mut rng, per_degree, cam, degree);
+                let mix = [(100, 100), (70, 50), (40, 90), (90, 30)][degree as usize];
+                bench.run(&items, settle, &mut rng, mix, &check);
+            }
+        });
+    }
+
+    /// Named hard cases: the Gaussian at the camera (no view direction), far away, huge and NaN
+    /// coefficients, colours clamped at 0, each degree.
+    #[test]
+    fn color_directed_cases() {
+        let name = "color_directed_cases";
+        let (mut bench, settle) = color_bench();
+        let cam = [1.0f32, 2.0, 3.0];
+        let mut ramp: Vec<f32> = (0..48).map(|k| (k as f32 - 24.0) / 10.0).collect();
+        let cases: Vec<(&str, Vec<f32>, [f32; 3])> = vec![
+            ("at the camera", ramp.clone(), cam),
+            ("far away", ramp.clone(), [1e20, -3e19, 7e18]),
+            ("huge coefficients", vec![3e38; 48], [4.0, 5.0, 6.0]),
+            ("NaN coefficient", { let mut v = ramp.clone(); v[7] = f32::NAN; v }, [0.0, 0.0, 0.0]),
+            ("negative colour", vec![-5.0; 48], [2.0, 2.0, 9.0]),
+            ("subnormal coefficients", vec![1e-40; 48], [1.5, 2.5, 3.5]),
+        ];
+        ramp[0] = 1.0;
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            let check = Checker::new(COLOR_NAME, seed);
+            for degree in 0..4u32 {
+                let items: Vec<Vec<u32>> = cases.iter().map(|(_, sh, mean)| color_item(*mean, sh, cam, degree)).collect();
+                for (case, item) in cases.iter().map(|c| c.0).zip(&items) {
+                    println!("{name}: degree {degree}: {case}");
+                    bench.run(std::slice::from_ref(item), settle, &mut rng, (100, 100), &check);
+                }
+                bench.run(&items, settle, &mut rng, (60, 60), &check);
+            }
+        });
+    }
+
+    /// The colour unit takes one Gaussian per cycle, and its latency is the emitted depth.
+    #[test]
+    fn color_one_gaussian_per_cycle() {
+        let cfg = neo_tb::config();
+        let depth = Datapath::new(&color_graph(&cfg.feature_format().color), &PreLibrary).depth() as u64;
+        let (mut bench, settle) = color_bench();
+        let mut rng = Rng::new(3);
+        let items = random_color_items(&mut rng, 500, [0.0; 3], 3);
+        let run = bench.run(&items, settle, &mut rng, (100, 100), &Checker::new(COLOR_NAME, 3));
+        assert_eq!(run.first_latency, depth);
+        assert_eq!(run.cycles, items.len() as u64 + depth, "one item per cycle plus the fill");
     }
 }

@@ -16,6 +16,7 @@
 //! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
+//! | `neo_pre_color` | Preprocessing: colour unit (SH degree 0-3, from golden's graph) | run time |
 //! | `neo_pre_dup`   | Preprocessing: duplication unit (tiles entered, incoming flag) | run time |
 //! | `neo_perf_counter` | one 64-bit performance counter                       | no        |
 //! | `neo_perf_counters` | the engine's performance counters                   | yes       |
@@ -89,7 +90,7 @@ pub fn top_modules() -> &'static [&'static str] {
 /// and that no other top instantiates: the lint and latch gates check them like
 /// [`top_modules`]. (The engine, which has its own gates, is not listed.)
 pub fn run_time_tops() -> &'static [&'static str] {
-    &[pre::dup::NAME]
+    &[pre::dup::NAME, pre::COLOR_NAME]
 }
 
 /// Every module of the configuration, leaves first.
@@ -111,7 +112,6 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         raster_core::loader::module(cfg),
         raster_core::feeder::module(cfg),
         raster_core::module(cfg),
-        pre::dup::module(cfg),
         perf_counters::counter_module(cfg),
         perf_counters::module(cfg),
         engine_regs::module(cfg),
@@ -125,6 +125,8 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     }
     all.push(engine::module(cfg));
     all.extend(fp::modules(cfg));
+    all.push(pre::dup::module(cfg));
+    all.push(pre::color_module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }
@@ -163,26 +165,38 @@ pub fn tops(cfg: &EngineConfig) -> Vec<ModuleInterface> {
 /// When `cfg` is invalid.
 pub fn files_for(cfg: &EngineConfig, top: &str) -> Vec<VerilogFile> {
     let all = modules(cfg).unwrap_or_else(|e| panic!("{e}"));
-    let mut order: Vec<String> = Vec::new();
-    fn visit(all: &[Module], name: &str, order: &mut Vec<String>) {
-        if order.iter().any(|n| n == name) {
+    match all.iter().find(|m| m.name == top) {
+        Some(m) => files_with(&all, m),
+        None => Vec::new(),
+    }
+}
+
+/// The files of `top`, a module built outside the configuration's set (a bench's own top), and
+/// of every generated module it instantiates, transitively (dependencies first, `top` last).
+///
+/// # Panics
+/// When `cfg` is invalid.
+pub fn files_for_module(cfg: &EngineConfig, top: &Module) -> Vec<VerilogFile> {
+    let all = modules(cfg).unwrap_or_else(|e| panic!("{e}"));
+    files_with(&all, top)
+}
+
+/// `top` and the modules of `all` it instantiates, transitively, dependencies first.
+fn files_with(all: &[Module], top: &Module) -> Vec<VerilogFile> {
+    fn visit<'a>(all: &'a [Module], m: &'a Module, order: &mut Vec<&'a Module>) {
+        if order.iter().any(|o| o.name == m.name) {
             return;
         }
-        if let Some(m) = all.iter().find(|m| m.name == name) {
-            for dep in m.instantiated() {
-                visit(all, &dep, order);
+        for dep in m.instantiated() {
+            if let Some(d) = all.iter().find(|x| x.name == dep) {
+                visit(all, d, order);
             }
-            order.push(name.to_string());
         }
+        order.push(m);
     }
-    visit(&all, top, &mut order);
-    order
-        .iter()
-        .map(|n| {
-            let m = all.iter().find(|m| &m.name == n).expect("visited modules exist");
-            VerilogFile { name: m.name.clone(), text: m.to_verilog() }
-        })
-        .collect()
+    let mut order = Vec::new();
+    visit(all, top, &mut order);
+    order.iter().map(|m| VerilogFile { name: m.name.clone(), text: m.to_verilog() }).collect()
 }
 
 #[cfg(test)]

@@ -21,6 +21,10 @@ use crate::emit::expr::hex;
 use crate::emit::{conns, if_, set, Instance, Item, Module};
 use neo_golden::hwarith::graph::{Graph, NodeId, Op, Ty};
 
+/// The combinational comparator and its outputs.
+const COMPARE_MODULE: &str = crate::units::fp::cmp::NAME;
+const COMPARE_OUTPUTS: [&str; 5] = ["lt_o", "le_o", "eq_o", "max_o", "min_o"];
+
 /// A pipelined primitive module: `module(clk_i, en_i, a_i[, b_i], y_o)`, result `latency`
 /// enabled cycles after its operands.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -38,6 +42,12 @@ pub struct Primitive {
 pub enum Lowering {
     /// An instance of a pipelined primitive.
     Primitive(Primitive),
+    /// One output of the combinational comparator `neo_fp_cmp` (operands `a_i`, `b_i`),
+    /// registered (latency 1).
+    Compare {
+        /// The output port used (`lt_o`, `le_o`, `eq_o`, `max_o`, `min_o`).
+        output: &'static str,
+    },
     /// A combinational expression of the operand wires `$0`, `$1`, `$2`; `registered`
     /// puts one register behind it (latency 1), else it is wiring (latency 0).
     Inline {
@@ -54,6 +64,7 @@ impl Lowering {
         match self {
             Lowering::Primitive(p) => p.latency,
             Lowering::Inline { registered, .. } => *registered as u32,
+            Lowering::Compare { .. } => 1,
         }
     }
 }
@@ -147,8 +158,9 @@ impl<'a> Datapath<'a> {
     fn name(&self, id: NodeId) -> String {
         let op = format!("{:?}", self.graph.nodes[id].op);
         let tag = op.split('(').next().unwrap_or("").to_lowercase();
-        let registered = matches!(self.lowering[id], Lowering::Inline { registered: true, .. })
-            && !matches!(self.graph.nodes[id].op, Op::Input(_) | Op::Lit(_));
+        let registered =
+            matches!(self.lowering[id], Lowering::Inline { registered: true, .. } | Lowering::Compare { .. })
+                && !matches!(self.graph.nodes[id].op, Op::Input(_) | Op::Lit(_));
         if registered {
             format!("n{id}_{tag}_q")
         } else {
@@ -187,6 +199,24 @@ impl<'a> Datapath<'a> {
         for (name, id) in &self.graph.outputs {
             let v = self.value_at(*id, self.depth);
             m.assign(format!("out_{name}_o"), v);
+        }
+        let unused: Vec<String> = self
+            .lowering
+            .iter()
+            .enumerate()
+            .filter_map(|(id, l)| match l {
+                Lowering::Compare { output } => Some(
+                    COMPARE_OUTPUTS
+                        .iter()
+                        .filter(move |o| *o != output)
+                        .map(move |o| format!("n{id}_cmp_{}", o.trim_end_matches("_o"))),
+                ),
+                _ => None,
+            })
+            .flatten()
+            .collect();
+        if !unused.is_empty() {
+            m.wire_assign("unused_cmp", 1, format!("^{{{}}}", unused.join(", ")));
         }
         m
     }
@@ -254,6 +284,27 @@ impl<'a> Datapath<'a> {
                 } else {
                     m.wire_assign(out, w, e);
                 }
+            }
+            (_, Lowering::Compare { output }) => {
+                let mut c: Vec<(&str, String)> = vec![("a_i", args[0].clone()), ("b_i", args[1].clone())];
+                for o in COMPARE_OUTPUTS {
+                    let wire = format!("n{id}_cmp_{}", o.trim_end_matches("_o"));
+                    m.wire(&wire, if o.starts_with("m") { 32 } else { 1 });
+                    c.push((o, wire));
+                }
+                m.item(Item::Instance(Instance {
+                    module: COMPARE_MODULE.into(),
+                    name: format!("u_n{id}"),
+                    params: Vec::new(),
+                    conns: conns(&c),
+                }));
+                m.reg(&out, w);
+                let update = set(&out, format!("n{id}_cmp_{}", output.trim_end_matches("_o")));
+                m.seq_noreset(if self.ready[id].is_some() {
+                    vec![if_("en", vec![update])]
+                } else {
+                    vec![update]
+                });
             }
             (_, Lowering::Primitive(p)) => {
                 m.wire(&out, w);

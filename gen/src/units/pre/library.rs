@@ -1,47 +1,27 @@
 //! The lowering of every [`Op`] for the Preprocessing Engine's datapaths: the binary32
-//! arithmetic as pipelined primitives (`gen/src/units/fp`), everything else as inline logic
-//! (sign and exponent wiring unregistered; compares, selects, integer and boolean operations
-//! behind one register).
+//! arithmetic as pipelined primitives (`gen/src/units/fp`), compares as `neo_fp_cmp` behind
+//! one register, everything else as inline logic (sign and exponent wiring unregistered;
+//! selects, integer and boolean operations behind one register).
 
 use super::datapath::{Library, Lowering, Primitive};
+use crate::units::fp::{latency, module_name, FpPrim};
 use neo_golden::hwarith::graph::{Op, Ty};
 
 /// The Preprocessing Engine's library.
 pub struct PreLibrary;
 
-/// `x` as an order-preserving unsigned key (non-NaN values; `-0` below `+0`).
-fn ord(x: &str) -> String {
-    format!("({x}[31] ? ~{x} : {{1'b1, {x}[30:0]}})")
-}
-
-/// `x` is a NaN.
-fn nan(x: &str) -> String {
-    format!("(&{x}[30:23] & |{x}[22:0])")
-}
-
-/// `a < b` for binary32 (IEEE: NaN unordered, `-0 == +0`).
-fn less(a: &str, b: &str) -> String {
-    format!(
-        "(~{na} & ~{nb} & ~(~|{a}[30:0] & ~|{b}[30:0]) & ({oa} < {ob}))",
-        na = nan(a),
-        nb = nan(b),
-        oa = ord(a),
-        ob = ord(b)
-    )
-}
-
 fn inline(expr: String, registered: bool) -> Lowering {
     Lowering::Inline { expr, registered }
 }
 
-fn prim(module: &str, latency: u32, ports: &[&'static str]) -> Lowering {
-    Lowering::Primitive(Primitive { module: module.into(), latency, ports: ports.to_vec() })
+fn prim(p: FpPrim) -> Lowering {
+    let ports = if p.binary() { vec!["a_i", "b_i"] } else { vec!["a_i"] };
+    Lowering::Primitive(Primitive { module: module_name(p).into(), latency: latency(p), ports })
 }
 
 impl Library for PreLibrary {
     fn lower(&self, op: &Op, _ty: Ty) -> Lowering {
         use Op::*;
-        let both_zero = "(~|$0[30:0] & ~|$1[30:0])";
         match *op {
             Input(_) | Lit(_) => inline(String::new(), false),
             Neg(_) => inline("{~$0[31], $0[30:0]}".into(), false),
@@ -52,13 +32,14 @@ impl Library for PreLibrary {
                     .into(),
                 true,
             ),
-            IsNan(_) => inline(nan("$0"), true),
+            IsNan(_) => inline("(&$0[30:23] & |$0[22:0])".into(), true),
             IsFinite(_) => inline("~&$0[30:23]".into(), true),
-            Lt(..) => inline(less("$0", "$1"), true),
-            Le(..) => inline(format!("(~{} & ~{} & ({both_zero} | ({} <= {})))", nan("$0"), nan("$1"), ord("$0"), ord("$1")), true),
-            Eq(..) => inline(format!("(~{} & ~{} & ({both_zero} | ($0 == $1)))", nan("$0"), nan("$1")), true),
-            Max(..) => inline(format!("(({} | {}) ? $1 : $0)", less("$0", "$1"), nan("$0")), true),
-            Min(..) => inline(format!("(({} | {}) ? $1 : $0)", less("$1", "$0"), nan("$0")), true),
+            // Compares: neo_fp_cmp (combinational), the output registered.
+            Lt(..) => Lowering::Compare { output: "lt_o" },
+            Le(..) => Lowering::Compare { output: "le_o" },
+            Eq(..) => Lowering::Compare { output: "eq_o" },
+            Max(..) => Lowering::Compare { output: "max_o" },
+            Min(..) => Lowering::Compare { output: "min_o" },
             IAdd(..) => inline("$0 + $1".into(), true),
             ISub(..) => inline("$0 - $1".into(), true),
             IMin(..) => inline("(($signed($1) < $signed($0)) ? $1 : $0)".into(), true),
@@ -70,15 +51,15 @@ impl Library for PreLibrary {
             Not(_) => inline("~$0".into(), true),
             Select(..) | ISelect(..) => inline("($0 ? $1 : $2)".into(), true),
             // The binary32 arithmetic: pipelined primitives.
-            Add(..) => prim("neo_fp_add", 4, &["a_i", "b_i"]),
-            Sub(..) => prim("neo_fp_sub", 4, &["a_i", "b_i"]),
-            Mul(..) => prim("neo_fp_mul", 3, &["a_i", "b_i"]),
-            Div(..) => prim("neo_fp_div", 28, &["a_i", "b_i"]),
-            Sqrt(_) => prim("neo_fp_sqrt", 28, &["a_i"]),
-            ToInt(_, r) => prim(&format!("neo_fp_to_int_{}", format!("{r:?}").to_lowercase()), 2, &["a_i"]),
-            IntToFloat(_) => prim("neo_fp_from_int", 3, &["a_i"]),
-            F16Bits(_) => prim("neo_fp_f16", 2, &["a_i"]),
-            WidenHalf(_) => prim("neo_fp_widen_half", 2, &["a_i"]),
+            Add(..) => prim(FpPrim::Add),
+            Sub(..) => prim(FpPrim::Sub),
+            Mul(..) => prim(FpPrim::Mul),
+            Div(..) => prim(FpPrim::Div),
+            Sqrt(_) => prim(FpPrim::Sqrt),
+            ToInt(_, r) => prim(FpPrim::ToInt(r)),
+            IntToFloat(_) => prim(FpPrim::FromInt),
+            F16Bits(_) => prim(FpPrim::F16),
+            WidenHalf(_) => prim(FpPrim::WidenHalf),
         }
     }
 }

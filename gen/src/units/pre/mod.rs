@@ -70,8 +70,8 @@ mod tests {
         let g = small_graph();
         let mut m = Datapath::new(&g, &PreLibrary).module("neo_pre_small", &[]);
         m.config_hash = Some(0);
-        let f = crate::units::VerilogFile { name: m.name.clone(), text: m.to_verilog() };
+        let files = crate::units::files_for_module(&EngineConfig::default(), &m);
         let vlt = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../hdl/lint.vlt");
-        crate::tools::verilator_lint(&[f], "neo_pre_small", Some(&vlt)).unwrap();
+        crate::tools::verilator_lint(&files, "neo_pre_small", Some(&vlt)).unwrap();
     }
 }
