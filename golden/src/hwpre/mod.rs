@@ -118,12 +118,12 @@ pub fn preprocess_one(
     Some(HwProjected { projected, entry })
 }
 
-/// Preprocesses every Gaussian of `baked` for `cam` (tiles of `tile` pixels, a power of two)
-/// in the hardware's arithmetic, in parallel; the survivors in Gaussian order.
+/// Preprocesses every Gaussian of `baked` for `cam` (tiles of `tile` pixels) in the hardware's
+/// arithmetic, in parallel; the survivors in Gaussian order.
 ///
 /// # Panics
-/// When `key`'s width differs from `fmt.depth_key_bits`, `tile` is not a power of two, or the
-/// baked `k2` was made for another cutoff or opacity format (configuration errors).
+/// When `key`'s width differs from `fmt.depth_key_bits` or the baked `k2` was made for another
+/// cutoff or opacity format (configuration errors).
 pub fn preprocess_hw(
     baked: &Baked,
     cam: &Camera,

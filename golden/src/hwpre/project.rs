@@ -71,7 +71,7 @@ pub struct CameraIn<F, I> {
 pub struct ProjectParams {
     /// Feature-table widths.
     pub feature: FeatureFormat,
-    /// Tile side (a power of two).
+    /// Tile side (a power of two in the hardware: `/ B` is then a multiply).
     pub tile: u32,
 }
 
@@ -286,20 +286,23 @@ fn extent_ceil<A: Arith>(a: &mut A, v: A::F, f: &FeatureFormat) -> A::I {
 }
 
 /// The reference's `getRect` along one axis: `[lo, hi)` tiles, clamped to `[0, grid]`.
+/// `/ B` is a multiply by the exact `1 / B` for a power-of-two tile (the same IEEE result),
+/// a division otherwise.
 fn rect_axis<A: Arith>(a: &mut A, p: A::F, r: A::F, grid: A::I, tile: u32) -> (A::I, A::I) {
-    let inv_b = a.lit(1.0 / tile as f32);
     let b = a.lit(tile as f32);
+    let inv_b = a.lit(1.0 / tile as f32);
+    let per_tile = |a: &mut A, v: A::F| if tile.is_power_of_two() { a.mul(v, inv_b) } else { a.div(v, b) };
     let one = a.lit(1.0);
     let zero = a.ilit(0);
     let pr = a.sub(p, r);
-    let lo = a.mul(pr, inv_b);
+    let lo = per_tile(a, pr);
     let lo = a.to_int(lo, Round::Trunc);
     let lo = a.imax(lo, zero);
     let lo = a.imin(lo, grid);
     let hi = a.add(p, r);
     let hi = a.add(hi, b);
     let hi = a.sub(hi, one);
-    let hi = a.mul(hi, inv_b);
+    let hi = per_tile(a, hi);
     let hi = a.to_int(hi, Round::Trunc);
     let hi = a.imax(hi, zero);
     let hi = a.imin(hi, grid);
@@ -307,16 +310,12 @@ fn rect_axis<A: Arith>(a: &mut A, p: A::F, r: A::F, grid: A::I, tile: u32) -> (A
 }
 
 /// The projection unit for one Gaussian (see the module doc).
-///
-/// # Panics
-/// When `params.tile` is not a power of two (a configuration error).
 pub fn project<A: Arith>(
     a: &mut A,
     g: &GaussianIn<A::F>,
     cam: &CameraIn<A::F, A::I>,
     params: &ProjectParams,
 ) -> Projection<A::F, A::I, A::B> {
-    assert!(params.tile.is_power_of_two(), "tile size {} is not a power of two", params.tile);
     let fmt = &params.feature;
     // View transform: R p + t.
     let t = [0, 1, 2].map(|r| {
