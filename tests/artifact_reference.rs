@@ -13,6 +13,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use neo_golden::hwpre::ShPrecision;
 use neo_golden::shared::{shared_dir_path, shared_file_for_test};
 use neo_sim::artifact::poc::{read_poc_trace, PocStats};
 use neo_sim::artifact::timing::{artifact_timing, artifact_timing_with};
@@ -190,8 +191,8 @@ fn waterfall_reaches_neos_own_bytes() {
     assert_eq!(
         (neo_sizes.geometry, neo_sizes.sh, neo_sizes.pixel),
         (
-            cfg.sizes.gaussian_geometry_bytes as u64,
-            cfg.sizes.gaussian_sh_bytes as u64,
+            cfg.sizes.gaussian_geometry_bytes.unwrap_or(neo_golden::hwpre::bake::geometry_bytes()) as u64,
+            cfg.sizes.gaussian_sh_bytes.unwrap_or(neo_golden::hwpre::bake::sh_bytes(3, ShPrecision::F32)) as u64,
             cfg.sizes.pixel_bytes as u64
         ),
         "neo's default sizes"

@@ -19,7 +19,7 @@
 
 use crate::config::{GpuArch, SimConfig};
 use crate::traffic::{Dir, Stage, Traffic};
-use crate::workload::FrameWork;
+use crate::workload::{FrameWork, WorkloadInfo};
 
 /// Time and traffic of one GPU frame.
 #[derive(Clone, Debug, PartialEq)]
@@ -48,8 +48,11 @@ pub fn radix_passes(g: &GpuArch, width: u32, height: u32) -> u32 {
     (32 + tile_bits).div_ceil(g.radix_bits)
 }
 
-/// One frame of the GPU model.
-pub fn frame(cfg: &SimConfig, fw: &FrameWork, width: u32, height: u32) -> GpuFrame {
+/// One frame of the GPU model (the workload `info` gives the image size and the parameter
+/// bytes: the reference reads 11 FP32 of geometry and the FP32 SH of the scene's degree, the
+/// same bytes as the baked format's default).
+pub fn frame(cfg: &SimConfig, info: &WorkloadInfo, fw: &FrameWork) -> GpuFrame {
+    let (width, height) = (info.width, info.height);
     let g = &cfg.gpu;
     let s = &cfg.sizes;
     let line = cfg.dram.line_bytes as u64;
@@ -62,8 +65,7 @@ pub fn frame(cfg: &SimConfig, fw: &FrameWork, width: u32, height: u32) -> GpuFra
     let vis = fw.visible;
 
     // 1. Preprocess.
-    let r = lines(fw.gaussians * s.gaussian_geometry_bytes as u64, line)
-        + lines(vis * s.gaussian_sh_bytes as u64, line);
+    let r = lines(fw.gaussians * s.geometry_bytes(info), line) + lines(vis * s.sh_bytes(info), line);
     let w = lines(vis * g.record_bytes as u64, line);
     tr.add(Stage::Preprocess, Dir::Read, r);
     tr.add(Stage::FeatureTable, Dir::Write, w);

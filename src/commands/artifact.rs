@@ -4,7 +4,8 @@
 
 use anyhow::Result;
 use clap::Args;
-use neo_golden::pipeline::Formats;
+use neo_golden::hwpre::bake;
+use neo_golden::pipeline::{Formats, Preprocessing};
 use neo_sim::artifact::poc::read_poc_trace;
 use neo_sim::artifact::timing::artifact_timing_with;
 use neo_sim::artifact::waterfall::{waterfall, NeoSizes};
@@ -37,8 +38,9 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
     };
     let sizes = ArtifactSizes::default();
     let neo = NeoSizes {
-        geometry: cfg.sizes.gaussian_geometry_bytes as u64,
-        sh: cfg.sizes.gaussian_sh_bytes as u64,
+        // The artifact's traces are of degree-3 scenes (biker): the baked format's sizes.
+        geometry: cfg.sizes.gaussian_geometry_bytes.unwrap_or(bake::geometry_bytes()) as u64,
+        sh: cfg.sizes.gaussian_sh_bytes.unwrap_or(bake::sh_bytes(3, Preprocessing::DEFAULT_SH)) as u64,
         feature: Formats::artifact(sizes.global_chunk as usize)?.feature.bytes_per_entry() as u64,
         pixel: cfg.sizes.pixel_bytes as u64,
     };
