@@ -120,14 +120,35 @@ mod tests {
             processed_ratio: 0.5,
             ..FrameWork::default()
         };
-        let a = frame(&cfg, &fw, 2560, 1440);
+        let info = WorkloadInfo { width: 2560, height: 1440, ..WorkloadInfo::default() };
+        let a = frame(&cfg, &info, &fw);
         // QHD, 16-pixel tiles: 160 x 90 = 14400 tiles, 14 bits: (32 + 14) / 8 -> 6 passes.
         assert_eq!(radix_passes(&cfg.gpu, 2560, 1440), 6);
         let sort = a.traffic.stage_bytes(Stage::SortTable);
         assert_eq!(sort, (1 << 20) * 8 + 6 * 2 * (1 << 20) * 12 + (1 << 20) * 8);
         fw.gpu_pairs *= 2;
-        let b = frame(&cfg, &fw, 2560, 1440);
+        let b = frame(&cfg, &info, &fw);
         assert_eq!(b.traffic.stage_bytes(Stage::SortTable), 2 * sort);
         assert!(b.total_s() > a.total_s());
+    }
+
+    #[test]
+    fn parameter_bytes_follow_the_sh_degree() {
+        let cfg = SimConfig::default();
+        let fw = FrameWork { gaussians: 1000, visible: 1000, ..FrameWork::default() };
+        let read = |degree: u8| {
+            let info = WorkloadInfo {
+                width: 640,
+                height: 480,
+                sh_degree: degree,
+                gaussian_geometry_bytes: neo_golden::hwpre::bake::geometry_bytes(),
+                gaussian_sh_bytes: neo_golden::hwpre::bake::sh_bytes(degree, neo_golden::hwpre::ShPrecision::F32),
+                ..WorkloadInfo::default()
+            };
+            frame(&cfg, &info, &fw).traffic.stage_bytes(Stage::Preprocess)
+        };
+        // 1000 x (44 + 12) bytes at degree 0, 1000 x (44 + 192) at degree 3, in 64-byte lines.
+        assert_eq!(read(0), (44_000u64.div_ceil(64) + 12_000u64.div_ceil(64)) * 64);
+        assert_eq!(read(3), (44_000u64.div_ceil(64) + 192_000u64.div_ceil(64)) * 64);
     }
 }
