@@ -90,14 +90,22 @@ fn compare(s: &Scene, cam: &Camera, sh: ShPrecision) -> Result<usize, TestCaseEr
         let (Some(HwProjected { projected: h, entry: e }), Some(f)) = (hw, fl) else { continue };
         visible += 1;
         prop_assert!(h.mean2d == f.mean2d && h.conic == f.conic && h.cov2d == f.cov2d, "{:?} {:?}", h, f);
-        prop_assert_eq!((h.depth, h.radius, h.tile_min, h.tile_max), (f.depth, f.radius, f.tile_min, f.tile_max));
+        prop_assert_eq!(
+            (h.depth, h.radius, h.tile_min, h.tile_max),
+            (f.depth, f.radius, f.tile_min, f.tile_max)
+        );
         let q = quantize(&f, &fmt, &key);
         prop_assert_eq!((e.mean, e.conic, e.opacity, e.depth_key), (q.mean, q.conic, q.opacity, q.depth_key));
         match sh {
             ShPrecision::F32 => prop_assert_eq!(e.rgb, q.rgb),
             ShPrecision::F16 => {
                 for c in 0..3 {
-                    prop_assert!((e.rgb[c] - q.rgb[c]).abs() <= 1 + q.rgb[c] / 256, "{:?} {:?}", e.rgb, q.rgb);
+                    prop_assert!(
+                        (e.rgb[c] - q.rgb[c]).abs() <= 1 + q.rgb[c] / 256,
+                        "{:?} {:?}",
+                        e.rgb,
+                        q.rgb
+                    );
                 }
             }
         }
@@ -246,6 +254,7 @@ fn zero_opacity_and_every_sh_degree() {
 #[test]
 fn largest_coordinates_do_not_panic() {
     let m = f32::MAX;
-    let gs = [one([m, m, m], [1.0; 3], 0.5), one([0.0, 0.0, m], [m; 3], 0.5), one([-m, 0.0, 1.0], [1.0; 3], 1.0)];
+    let gs =
+        [one([m, m, m], [1.0; 3], 0.5), one([0.0, 0.0, m], [m; 3], 0.5), one([-m, 0.0, 1.0], [1.0; 3], 1.0)];
     check(&gs, 3);
 }

@@ -337,7 +337,10 @@ impl Baked {
             if !g.position.iter().all(|x| x.is_finite()) {
                 return Err(bad("position", format!("{:?} is not finite", g.position)));
             }
-            if !g.cov3d.iter().all(|x| x.is_finite()) || g.cov3d[0] < 0.0 || g.cov3d[3] < 0.0 || g.cov3d[5] < 0.0
+            if !g.cov3d.iter().all(|x| x.is_finite())
+                || g.cov3d[0] < 0.0
+                || g.cov3d[3] < 0.0
+                || g.cov3d[5] < 0.0
             {
                 return Err(bad("cov3d", format!("{:?} is not a finite covariance", g.cov3d)));
             }
