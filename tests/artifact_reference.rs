@@ -192,7 +192,8 @@ fn waterfall_reaches_neos_own_bytes() {
         (neo_sizes.geometry, neo_sizes.sh, neo_sizes.pixel),
         (
             cfg.sizes.gaussian_geometry_bytes.unwrap_or(neo_golden::hwpre::bake::geometry_bytes()) as u64,
-            cfg.sizes.gaussian_sh_bytes.unwrap_or(neo_golden::hwpre::bake::sh_bytes(3, ShPrecision::F32)) as u64,
+            cfg.sizes.gaussian_sh_bytes.unwrap_or(neo_golden::hwpre::bake::sh_bytes(3, ShPrecision::F32))
+                as u64,
             cfg.sizes.pixel_bytes as u64
         ),
         "neo's default sizes"

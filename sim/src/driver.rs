@@ -16,12 +16,12 @@
 use std::path::PathBuf;
 
 use neo_golden::camera::Camera;
+use neo_golden::hwpre::bake;
 use neo_golden::pipeline::hierarchical::HierWork;
+use neo_golden::pipeline::Preprocessing;
 use neo_golden::pipeline::{
     self as golden, Formats, Pipeline, PipelineConfig, PipelineError, StageWork, Strategy, WorkOptions,
 };
-use neo_golden::hwpre::bake;
-use neo_golden::pipeline::Preprocessing;
 use neo_golden::scene::Scene;
 use neo_golden::sort::SortEntry;
 

@@ -142,7 +142,10 @@ mod tests {
                 height: 480,
                 sh_degree: degree,
                 gaussian_geometry_bytes: neo_golden::hwpre::bake::geometry_bytes(),
-                gaussian_sh_bytes: neo_golden::hwpre::bake::sh_bytes(degree, neo_golden::hwpre::ShPrecision::F32),
+                gaussian_sh_bytes: neo_golden::hwpre::bake::sh_bytes(
+                    degree,
+                    neo_golden::hwpre::ShPrecision::F32,
+                ),
                 ..WorkloadInfo::default()
             };
             frame(&cfg, &info, &fw).traffic.stage_bytes(Stage::Preprocess)
