@@ -7,6 +7,7 @@ use neo_gen::output::check_dir;
 use neo_gen::tools::{
     coarse_glue_synth_stats, coarse_synth_stats, icarus_compile, require_for_test, verilator_lint,
 };
+use neo_gen::units::run_time_tops;
 use neo_gen::units::VerilogFile;
 use neo_gen::{files_for, generate, top_modules, EngineConfig, Topology};
 use std::path::PathBuf;
@@ -57,7 +58,7 @@ fn other_configs() -> Vec<(String, EngineConfig)> {
 
 fn for_every_top(cfg: &EngineConfig, what: &str, check: impl Fn(&[VerilogFile], &str) -> Result<(), String>) {
     let mut failures = Vec::new();
-    for top in top_modules() {
+    for top in top_modules().iter().chain(run_time_tops()) {
         if let Err(e) = check(&files_for(cfg, top), top) {
             failures.push(format!("{what}: {top}: {e}"));
         }
@@ -166,4 +167,62 @@ fn icarus_compiles_every_top() {
     for_every_top(&EngineConfig::default(), "default", |files, top| {
         icarus_compile(files, top).map_err(|e| e.to_string())
     });
+}
+
+/// The binary32 primitives (`neo_fp_*`, not cosimulation tops of their own: tb builds them
+/// together in `neo_fp_bench`): each lint-clean and latch-free, every pipelined one with flip-flops.
+#[test]
+fn fp_primitives_are_lint_clean_and_latch_free() {
+    use neo_gen::units::fp::{bench, cmp, module_name, FpPrim};
+    if !require_for_test("verilator", "fp_primitives_are_lint_clean_and_latch_free")
+        || !require_for_test("yosys", "fp_primitives_are_lint_clean_and_latch_free")
+    {
+        return;
+    }
+    let cfg = EngineConfig::default();
+    let vlt = hdl_dir().join("lint.vlt");
+    let mut tops: Vec<&str> = FpPrim::ALL.iter().map(|&p| module_name(p)).collect();
+    tops.extend([cmp::NAME, bench::NAME]);
+    let mut failures = Vec::new();
+    for top in tops {
+        let files = files_for(&cfg, top);
+        assert!(!files.is_empty(), "{top} is not generated");
+        if let Err(e) = verilator_lint(&files, top, Some(&vlt)) {
+            failures.push(format!("lint: {top}: {e}"));
+        }
+        match coarse_synth_stats(&files, top) {
+            Ok(s) if s.latches != 0 => failures.push(format!("{top}: {} latch cells", s.latches)),
+            Ok(s) if s.flip_flops == 0 && top != cmp::NAME => failures.push(format!("{top}: no flip-flops")),
+            Ok(_) => {}
+            Err(e) => failures.push(format!("yosys: {top}: {e}")),
+        }
+    }
+    if require_for_test("iverilog", "fp_primitives_are_lint_clean_and_latch_free (icarus)") {
+        if let Err(e) = icarus_compile(&files_for(&cfg, bench::NAME), bench::NAME) {
+            failures.push(format!("iverilog: {}: {e}", bench::NAME));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Yosys cells (generic gates, `synth -flatten`) and latency of each binary32 primitive, the
+/// table of docs/rtl.md "Preprocessing arithmetic" (slow: run with `--ignored --nocapture`).
+#[test]
+#[ignore]
+fn fp_primitive_cells() {
+    use neo_gen::tools::synth_stats;
+    use neo_gen::units::fp::{cmp, latency, module_name, FpPrim};
+    if !require_for_test("yosys", "fp_primitive_cells") {
+        return;
+    }
+    let cfg = EngineConfig::default();
+    println!("| module | latency | cells | flip-flops |");
+    println!("|---|---:|---:|---:|");
+    let mut rows: Vec<(&str, String)> =
+        FpPrim::ALL.iter().map(|&p| (module_name(p), latency(p).to_string())).collect();
+    rows.push((cmp::NAME, "0 (combinational)".into()));
+    for (top, lat) in rows {
+        let s = synth_stats(&files_for(&cfg, top), top).unwrap_or_else(|e| panic!("{top}: {e}"));
+        println!("| `{top}` | {lat} | {} | {} |", s.cells, s.flip_flops);
+    }
 }

@@ -101,6 +101,84 @@ impl RasterSource {
     }
 }
 
+/// The Preprocessing Engine's timing measured on the RTL (`preprocess` of the file); each
+/// `None` was not measured and stays assumed (config `preprocess.*`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct PreprocessMeasured {
+    /// Projection unit: cycles per Gaussian and pipeline latency.
+    pub projection: Option<(f64, u64)>,
+    /// Colour unit: cycles per visible Gaussian and pipeline latency.
+    pub color: Option<(f64, u64)>,
+    /// Duplication unit: walker cycles per candidate tile and latency.
+    pub duplication: Option<(f64, u64)>,
+}
+
+impl PreprocessMeasured {
+    fn from_report(r: &LatencyReport) -> Result<Self, String> {
+        let Some(p) = &r.preprocess else { return Ok(Self::default()) };
+        let unit =
+            |u: Option<latency_file::DatapathUnit>, name: &str| -> Result<Option<(f64, u64)>, String> {
+                match u {
+                    Some(u) if u.ii == 0 => Err(format!("`preprocess.{name}.ii` must be positive")),
+                    Some(u) => Ok(Some((u.ii as f64, u.latency))),
+                    None => Ok(None),
+                }
+            };
+        let duplication = match p.duplication {
+            Some(d) if d.cycles_per_candidate == 0 => {
+                return Err("`preprocess.duplication.cycles_per_candidate` must be positive".into())
+            }
+            Some(d) => Some((d.cycles_per_candidate as f64, d.latency)),
+            None => None,
+        };
+        Ok(PreprocessMeasured {
+            projection: unit(p.projection, "projection")?,
+            color: unit(p.color, "color")?,
+            duplication,
+        })
+    }
+
+    /// `assumed` with every measured field replaced. The pipeline fill is the projection's
+    /// latency plus the longer of the colour's and the duplication's (they follow it side by
+    /// side) once all three are measured.
+    pub fn over(&self, assumed: &crate::config::PreprocessTiming) -> crate::config::PreprocessTiming {
+        let mut t = assumed.clone();
+        if let Some((ii, _)) = self.projection {
+            t.projection_ii = ii;
+        }
+        if let Some((ii, _)) = self.color {
+            t.color_ii = ii;
+        }
+        if let Some((ii, _)) = self.duplication {
+            t.duplication_ii = ii;
+        }
+        if let (Some(p), Some(c), Some(d)) = (self.projection, self.color, self.duplication) {
+            t.latency = p.1 + c.1.max(d.1);
+        }
+        t
+    }
+
+    /// A one-line label for reports: what is measured, what is still assumed.
+    pub fn label(&self) -> String {
+        let units =
+            [("projection", self.projection), ("colour", self.color), ("duplication", self.duplication)];
+        let measured: Vec<&str> = units.iter().filter(|u| u.1.is_some()).map(|u| u.0).collect();
+        let assumed: Vec<&str> = units.iter().filter(|u| u.1.is_none()).map(|u| u.0).collect();
+        match (measured.is_empty(), assumed.is_empty()) {
+            (true, _) => "preprocessing-engine timing ASSUMED, not measured (config preprocess.*)".into(),
+            (false, true) => format!(
+                "preprocessing-engine timing measured on the RTL ({}; latency.json preprocess); its outstanding-read window is assumed (config neo.preprocess_read_window)",
+                measured.join(", ")
+            ),
+            (false, false) => format!(
+                "preprocessing-engine timing measured for {} (latency.json preprocess); ASSUMED, not measured: {} (config preprocess.*)",
+                measured.join(", "),
+                assumed.join(", ")
+            ),
+        }
+    }
+}
+
 /// Chunk command kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ChunkMode {
@@ -135,6 +213,8 @@ pub struct Latency {
     pub raster: RasterTiming,
     /// Where the raster timing came from.
     pub raster_source: RasterSource,
+    /// The preprocessing units measured so far.
+    pub preprocess: PreprocessMeasured,
 }
 
 fn chunk_points(points: &[latency_file::ChunkPoint], key: &str) -> Result<Vec<ChunkPoint>, String> {
@@ -212,6 +292,7 @@ impl Latency {
             merge_delete: merge_points(sc.merge_delete.iter().map(|p| &p.merge), "merge_delete")?,
             raster,
             raster_source,
+            preprocess: PreprocessMeasured::from_report(r)?,
         })
     }
 

@@ -272,6 +272,7 @@ impl ReportPlan {
             settings: ReportSettings {
                 command: "neo report".into(),
                 raster_timing: lat.raster_source.label(),
+                preprocess_timing: lat.preprocess.label(),
                 latency_file: latency::DEFAULT_PATH.into(),
                 notes: self.notes(&sweep),
             },

@@ -175,6 +175,8 @@ pub struct ArchResult {
     pub utilisation: Option<Utilisation>,
     /// Where the raster timing came from.
     pub raster_timing: String,
+    /// What of the preprocessing timing was measured (accelerators; empty for the GPU).
+    pub preprocess_timing: String,
     /// Wall-clock seconds of the model.
     pub model_s: f64,
 }
@@ -288,6 +290,7 @@ pub fn simulate(
                 dram: None,
                 utilisation: None,
                 raster_timing: "GPU rates ASSUMED (config gpu.*)".into(),
+                preprocess_timing: String::new(),
                 model_s: t0.elapsed().as_secs_f64(),
             })
         }
@@ -368,6 +371,7 @@ pub fn simulate(
                     dram: dram_util,
                 }),
                 raster_timing: lat.raster_source.label(),
+                preprocess_timing: lat.preprocess.label(),
                 model_s: t0.elapsed().as_secs_f64(),
             })
         }

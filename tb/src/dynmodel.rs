@@ -89,6 +89,40 @@ pub struct DynModel {
 // serialises every call (as for the static models).
 unsafe impl Send for DynModel {}
 
+/// The lint waivers every generated model is verilated with.
+pub const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
+
+/// The files of generated top `top` for `cfg` (itself and every module it instantiates) and
+/// the lint waivers, for [`DynModel::build`]. With `$NEO_HDL_DIR` holding a `top.v` generated
+/// from `cfg` (its header names the configuration's hash), that file and `DIR/lint.vlt` replace
+/// the generated ones (`scripts/mutate-check` runs the benches on mutated copies of `hdl/`).
+pub fn generated_files(
+    cfg: &neo_gen::EngineConfig,
+    top: &str,
+) -> Result<(Vec<(String, String)>, String), String> {
+    cfg.validate().map_err(|e| e.to_string())?;
+    let mut files: Vec<(String, String)> =
+        neo_gen::files_for(cfg, top).into_iter().map(|f| (f.file_name(), f.text)).collect();
+    let mut vlt = LINT_VLT.to_string();
+    let dir = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()).map(std::path::PathBuf::from);
+    if let Some(dir) = dir {
+        let name = format!("{top}.v");
+        let p = dir.join(&name);
+        let text = std::fs::read_to_string(&p).ok();
+        let ours = text
+            .as_deref()
+            .and_then(|t| t.lines().next())
+            .is_some_and(|h| h.contains(&format!("config 0x{:016x}", cfg.hash())));
+        if let (true, Some(text)) = (ours, text) {
+            if let Some(f) = files.iter_mut().find(|(n, _)| *n == name) {
+                f.1 = text;
+            }
+            vlt = std::fs::read_to_string(dir.join("lint.vlt")).unwrap_or(vlt);
+        }
+    }
+    Ok((files, vlt))
+}
+
 impl DynModel {
     /// Builds (or finds in the cache) and loads the model of `iface.name` from `files` (file
     /// name, Verilog text) and the optional lint waivers `vlt`.
@@ -434,6 +468,10 @@ fn build_library(
     key.add("shim.cpp", cpp.as_bytes());
     let lib_name = format!("libneo_{top}.so");
     let mut log = String::new();
+    // One build at a time in a process: test threads building the same model would race on its
+    // cache entry (the second finds the first's half-written directory).
+    static BUILDING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _building = BUILDING.lock().unwrap_or_else(|e| e.into_inner());
     let name = format!("dyn-{top}{}{}", flavour.suffix, thread_suffix(threads));
     let (dir, cached) = cache::get_or_build(&cache_root(), &name, &key, &lib_name, |d| {
         let mut flags: Vec<&str> = flavour.flags.to_vec();

@@ -25,9 +25,6 @@ use neo_golden::engine::regs::{Counter, Counters, Reg, CTRL_START};
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-/// The generated Verilog's lint waivers (passed to Verilator before the files).
-const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
-
 /// The engine's top module.
 pub const TOP: &str = "neo_engine";
 
@@ -75,19 +72,7 @@ impl EngineModel {
         threads: usize,
     ) -> Result<EngineModel, String> {
         cfg.validate().map_err(|e| e.to_string())?;
-        let mut files: Vec<(String, String)> =
-            neo_gen::files_for(cfg, TOP).into_iter().map(|f| (f.file_name(), f.text)).collect();
-        let mut vlt = LINT_VLT.to_string();
-        if let Some(dir) = hdl_dir_for(cfg) {
-            let top = format!("{TOP}.v");
-            let p = dir.join(&top);
-            let text =
-                std::fs::read_to_string(&p).map_err(|e| format!("NEO_HDL_DIR: {}: {e}", p.display()))?;
-            if let Some(f) = files.iter_mut().find(|(name, _)| *name == top) {
-                f.1 = text;
-            }
-            vlt = std::fs::read_to_string(dir.join("lint.vlt")).unwrap_or(vlt);
-        }
+        let (files, vlt) = crate::dynmodel::generated_files(cfg, TOP)?;
         let iface = neo_gen::units::modules(cfg)
             .map_err(|e| e.to_string())?
             .into_iter()
@@ -97,14 +82,6 @@ impl EngineModel {
         let (model, build) = DynModel::build_threaded(&iface, &files, Some(&vlt), format, threads)?;
         Ok(EngineModel { cfg: cfg.clone(), model, build })
     }
-}
-
-/// `$NEO_HDL_DIR` when its `neo_engine.v` was generated from `cfg`.
-fn hdl_dir_for(cfg: &EngineConfig) -> Option<PathBuf> {
-    let dir = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()).map(PathBuf::from)?;
-    let text = std::fs::read_to_string(dir.join(format!("{TOP}.v"))).ok()?;
-    let header = text.lines().next()?;
-    header.contains(&format!("config 0x{:016x}", cfg.hash())).then_some(dir)
 }
 
 /// Memory timing and stimulus of a run.

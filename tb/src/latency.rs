@@ -201,6 +201,18 @@ pub fn report(cfg: &EngineConfig) -> LatencyReport {
         },
         sort_core,
         raster: Some(raster_section(cfg)),
+        preprocess: Some(preprocess_section(cfg)),
+    }
+}
+
+/// The `preprocess` section: the Preprocessing Engine's units measured on the RTL (outputs
+/// checked against golden on the way).
+pub fn preprocess_section(cfg: &EngineConfig) -> neo_golden::formats::latency::Preprocess {
+    let mut dup = crate::dup::DupBench::build(cfg).unwrap_or_else(|e| panic!("neo_pre_dup: {e}"));
+    neo_golden::formats::latency::Preprocess {
+        projection: None,
+        color: None,
+        duplication: Some(crate::dup::measure_timing(&mut dup, SEED ^ 11)),
     }
 }
 
@@ -269,6 +281,7 @@ fn doc() -> BTreeMap<String, String> {
         ("units.neo_msu.entries", "output entries of the measurement: two back-to-back merges of two 64-entry streams"),
         ("units.neo_scu", "neo_scu (one subtile's blending): latency = rising edges from the edge that accepts a list's last Gaussian to the first cycle its 64 pixels are offered (pipeline otherwise empty); ii = cycles per Gaussian in a list that does not terminate (64 / scu_lanes passes); drain_ii = cycles per Gaussian once every pixel is done (the rest of the list is drained); lanes = scu_lanes"),
         ("units.neo_sort_core.command_overhead", "cycles from accepting a zero-length SORT to its done_o pulse"),
+        ("preprocess.duplication", "neo_pre_dup: latency = edges from accepting a Gaussian with one candidate tile, which it enters, to that tile offered; cycles_per_candidate = walker cycles per candidate tile over `gaussians` random Gaussians with `candidates` candidate tiles (all but the last) taking `cycles` from the first acceptance to the last; min_cycles_per_gaussian = walker cycles of a Gaussian outside the image"),
         ("raster.itu.latency", "neo_itu: rising edges from the edge that accepts a (Gaussian, tile) job to the first cycle its subtile bitmap is offered"),
         ("raster.itu.ii", "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once"),
         ("raster.itu.jobs", "random jobs of the II measurement (every bitmap checked against golden subtile_bitmap)"),

@@ -15,10 +15,13 @@ pub mod bsu;
 pub mod check;
 #[cfg(neo_has_verilator)]
 pub mod core;
+pub mod datapath;
+pub mod dup;
 pub mod dut;
 pub mod dynmodel;
 pub mod engine;
 pub mod engine_regs;
+pub mod fp;
 #[cfg(neo_has_verilator)]
 pub mod frame;
 #[cfg(neo_has_verilator)]

@@ -16,6 +16,7 @@
 //! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
+//! | `neo_pre_dup`   | Preprocessing: duplication unit (tiles entered, incoming flag) | run time |
 //! | `neo_perf_counter` | one 64-bit performance counter                       | no        |
 //! | `neo_perf_counters` | the engine's performance counters                   | yes       |
 //! | `neo_engine_regs` | engine control port: AXI4-Lite register map           | yes       |
@@ -25,6 +26,8 @@
 //! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
 //! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (the engine's P, and P=3) | P=3 |
 //! | `neo_engine`    | the engine: control port, frame controller, cores, bridges, port muxes | run time |
+//! | `neo_fp_*`      | binary32 primitives of the Preprocessing Engine (`fp`)   | no        |
+//! | `neo_fp_bench`  | every `neo_fp_*` primitive side by side                 | run time  |
 
 pub mod axi;
 pub mod bsu;
@@ -32,10 +35,12 @@ pub mod chunk_ram;
 pub mod cmp_swap;
 pub mod engine;
 pub mod engine_regs;
+pub mod fp;
 pub mod frame_ctrl;
 pub mod itu;
 pub mod msu;
 pub mod perf_counters;
+pub mod pre;
 pub mod raster_core;
 pub mod scu;
 pub mod sort_core;
@@ -80,6 +85,13 @@ pub fn top_modules() -> &'static [&'static str] {
     ]
 }
 
+/// Tops the benches verilate at run time (`neo_tb::dynmodel`) rather than with every build,
+/// and that no other top instantiates: the lint and latch gates check them like
+/// [`top_modules`]. (The engine, which has its own gates, is not listed.)
+pub fn run_time_tops() -> &'static [&'static str] {
+    &[pre::dup::NAME]
+}
+
 /// Every module of the configuration, leaves first.
 pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     cfg.validate()?;
@@ -99,6 +111,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         raster_core::loader::module(cfg),
         raster_core::feeder::module(cfg),
         raster_core::module(cfg),
+        pre::dup::module(cfg),
         perf_counters::counter_module(cfg),
         perf_counters::module(cfg),
         engine_regs::module(cfg),
@@ -111,6 +124,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         all.push(axi::mux::module(cfg, p)?);
     }
     all.push(engine::module(cfg));
+    all.extend(fp::modules(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }

@@ -49,7 +49,7 @@ use crate::engine::EngineConfig;
 use crate::error::{InputError, InputResult};
 
 /// The schema identifier (and version) this crate writes and reads.
-pub const SCHEMA: &str = "neo-latency/4";
+pub const SCHEMA: &str = "neo-latency/5";
 
 /// The whole of `reports/latency.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -69,6 +69,10 @@ pub struct LatencyReport {
     /// The Rasterization Engine's measurements (absent: assumed by the reader).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub raster: Option<Raster>,
+    /// The Preprocessing Engine's measurements (absent, or a unit absent: assumed by the
+    /// reader).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preprocess: Option<Preprocess>,
 }
 
 /// The memory model the sorting core was measured with.
@@ -206,6 +210,56 @@ pub struct Raster {
     /// The raster core's cycles per tile.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub core: Option<RasterCore>,
+}
+
+/// The Preprocessing Engine's units.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Preprocess {
+    /// The projection unit (`neo_pre_project`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub projection: Option<DatapathUnit>,
+    /// The colour unit (`neo_pre_color`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<DatapathUnit>,
+    /// The duplication unit (`neo_pre_dup`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duplication: Option<DupUnit>,
+}
+
+/// A pipelined datapath's latency and rate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatapathUnit {
+    /// Edges from accepting an item to its result on the outputs.
+    pub latency: u64,
+    /// Cycles between accepted items at full rate.
+    pub ii: u64,
+    /// Items of the measurement.
+    pub items: u64,
+    /// Cycles of the measurement (first item offered to last result taken).
+    pub cycles: u64,
+    /// Cycles the per-frame inputs need to settle before the first item.
+    pub settle: u64,
+}
+
+/// The duplication unit's latency and rates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DupUnit {
+    /// Edges from accepting a Gaussian with one candidate tile, which it enters, to that
+    /// tile on the output.
+    pub latency: u64,
+    /// Walker cycles per candidate tile at full rate.
+    pub cycles_per_candidate: u64,
+    /// Walker cycles of a Gaussian without candidate tiles.
+    pub min_cycles_per_gaussian: u64,
+    /// Gaussians of the rate measurement.
+    pub gaussians: u64,
+    /// Their candidate tiles.
+    pub candidates: u64,
+    /// Cycles from the first acceptance to the last.
+    pub cycles: u64,
 }
 
 /// ITU latency and rate.

@@ -18,6 +18,7 @@
 //! Every other operation is defined below by its `Native` implementation, which is the
 //! specification the RTL primitive must meet for every input bit pattern.
 
+pub mod graph;
 mod native;
 
 pub use native::Native;

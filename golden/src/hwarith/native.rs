@@ -7,9 +7,11 @@ use super::{Arith, Round, CANONICAL_NAN};
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Native;
 
-/// `v`, with any NaN replaced by the canonical one.
+/// `v`, with any NaN replaced by the canonical one. Tested on the bits: Rust leaves the payload
+/// of an operation's NaN unspecified, and an optimiser may fold a float-level `is_nan` select
+/// into the operation's own NaN.
 fn canonical(v: f32) -> f32 {
-    if v.is_nan() {
+    if v.to_bits() & 0x7FFF_FFFF > 0x7F80_0000 {
         f32::from_bits(CANONICAL_NAN)
     } else {
         v
@@ -187,6 +189,20 @@ mod tests {
         assert_eq!(a.max(2.0, nan), 2.0);
         assert_eq!(a.max(-0.0, 0.0).to_bits(), 0x8000_0000);
         assert_eq!(a.min(3.0, -1.0), -1.0);
+    }
+
+    #[test]
+    fn nan_results_of_run_time_operands_are_canonical() {
+        let mut a = Native;
+        for bits in [0xBF80_0000u32, 0xC2F6_E979, 0xFF80_0000, 0x7FC1_2345, 0xFFC0_0001] {
+            let x = std::hint::black_box(f32::from_bits(bits));
+            assert_eq!(a.sqrt(x).to_bits(), CANONICAL_NAN, "sqrt {bits:#x}");
+            let y = std::hint::black_box(f32::INFINITY);
+            let nan = a.sub(y, y);
+            assert_eq!(nan.to_bits(), CANONICAL_NAN);
+            assert_eq!(a.mul(nan, x).to_bits(), CANONICAL_NAN, "NaN times {bits:#x}");
+            assert_eq!(a.div(x, nan).to_bits(), CANONICAL_NAN);
+        }
     }
 
     #[test]

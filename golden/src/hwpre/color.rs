@@ -7,6 +7,9 @@
 //! missing coefficients (they are not read) and the bands above `d` cannot disturb the result
 //! (not even when the view direction is NaN, for a Gaussian at the camera centre).
 
+use super::quant::to_fixed;
+use crate::formats::fixed::QFormat;
+use crate::hwarith::graph::{FNode, Graph, Trace};
 use crate::hwarith::Arith;
 use crate::render::sh::{SH_C0, SH_C1, SH_C2, SH_C3};
 
@@ -183,6 +186,28 @@ pub fn color<A: Arith>(a: &mut A, g: &ColorInputs<A::F>, view: &ColorView<A::F, 
     out
 }
 
+/// Names of the colour channels, in order (port names).
+pub const CHANNELS: [&str; 3] = ["red", "green", "blue"];
+
+/// The colour unit as a dataflow graph: per-Gaussian inputs `mean_{x,y,z}` and
+/// `sh{k}_{red,green,blue}`, per-frame inputs `cam_{x,y,z}` and `degree`; outputs the
+/// colour channels quantised to `format` (`red`, `green`, `blue`, raw fixed point).
+pub fn color_graph(format: &QFormat) -> Graph {
+    let mut t = Trace::new();
+    let axes = ["x", "y", "z"];
+    let mean = axes.map(|x| t.input_f(&format!("mean_{x}"), false));
+    let sh: [[FNode; 3]; COEFFS] =
+        std::array::from_fn(|k| CHANNELS.map(|c| t.input_f(&format!("sh{k}_{c}"), false)));
+    let cam_pos = axes.map(|x| t.input_f(&format!("cam_{x}"), true));
+    let degree = t.input_i("degree", true);
+    let rgb = color(&mut t, &ColorInputs { mean, sh }, &ColorView { cam_pos, degree });
+    for (c, v) in CHANNELS.iter().zip(rgb) {
+        let q = to_fixed(&mut t, v, format);
+        t.output_i(c, q);
+    }
+    t.finish()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -207,6 +232,25 @@ mod tests {
             let got = color(&mut Native, &g, &view);
             let want = eval_sh(degree, &coeffs, float_direction(mean, cam));
             prop_assert_eq!(got.map(f32::to_bits), want.map(f32::to_bits));
+        }
+    }
+
+    #[test]
+    fn the_graph_computes_the_quantised_colour() {
+        let fmt = crate::formats::feature::FeatureFormat::default().color;
+        let g = color_graph(&fmt);
+        assert_eq!(g.inputs.len(), 3 + 48 + 4);
+        let mut rng = crate::synthetic::rng::HashRng::new(5, 0, 0);
+        for _ in 0..200 {
+            let vals: Vec<f32> = (0..51).map(|_| rng.range(-2.0, 2.0) as f32).collect();
+            let cam = [0.1, -0.2, 0.3];
+            let degree = rng.below(4) as i32;
+            let mut inputs: Vec<u32> = vals.iter().map(|v| v.to_bits()).collect();
+            inputs.extend(cam.map(f32::to_bits));
+            inputs.push(degree as u32);
+            let want = eval_sh(degree as u8, &vals[3..], float_direction([vals[0], vals[1], vals[2]], cam));
+            let want: Vec<u32> = want.iter().map(|&v| fmt.quantize(v as f64) as u32).collect();
+            assert_eq!(g.eval(&inputs), want);
         }
     }
 

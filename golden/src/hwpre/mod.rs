@@ -6,11 +6,13 @@
 //! - [`project`]: the projection unit (culling, 2D covariance, conic, radius, tile rectangle,
 //!   depth key, the feature entry's geometric fields);
 //! - [`color`]: the colour unit (SH of degree 0 to 3);
+//! - [`duplicate`]: the duplication unit's tile walk;
 //! - [`preprocess_hw`]: both evaluated with [`Native`] for every Gaussian of a baked scene, in
 //!   parallel: what golden's bit-exact pipeline uses.
 
 pub mod bake;
 pub mod color;
+pub mod duplicate;
 pub mod project;
 pub mod quant;
 

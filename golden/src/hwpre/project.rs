@@ -471,6 +471,53 @@ pub fn project<A: Arith>(
     }
 }
 
+/// The projection unit as a dataflow graph. Per-Gaussian inputs: `pos_{x,y,z}`,
+/// `cov_{xx,xy,xz,yy,yz,zz}`, `opacity`, `k2`; per-frame inputs: `w2v_{r}{c}` (row `r`,
+/// column `c`), `t_{x,y,z}`, `focal_{x,y}`, `lim_{x,y}`, `principal_{x,y}`, `grid_{x,y}`.
+/// Outputs: `visible`, `tile_min_{x,y}`, `tile_max_{x,y}`, `depth_key`, `mean_{x,y}`,
+/// `conic_{a,b,c}`, `conic_exp`, `opacity`, `axis_{c,s}`, `extent_{u,v}`, `extent_{x,y}`
+/// (raw integers as [`Projection`] holds them).
+pub fn project_graph(params: &ProjectParams) -> crate::hwarith::graph::Graph {
+    use crate::hwarith::graph::Trace;
+    let mut t = Trace::new();
+    let xyz = ["x", "y", "z"];
+    let xy = ["x", "y"];
+    let position = xyz.map(|k| t.input_f(&format!("pos_{k}"), false));
+    let cov3d = ["xx", "xy", "xz", "yy", "yz", "zz"].map(|k| t.input_f(&format!("cov_{k}"), false));
+    let opacity = t.input_f("opacity", false);
+    let k2 = t.input_f("k2", false);
+    let w2v = [0, 1, 2].map(|r| [0, 1, 2].map(|c| t.input_f(&format!("w2v_{r}{c}"), true)));
+    let translation = xyz.map(|k| t.input_f(&format!("t_{k}"), true));
+    let focal = xy.map(|k| t.input_f(&format!("focal_{k}"), true));
+    let lim = xy.map(|k| t.input_f(&format!("lim_{k}"), true));
+    let principal = xy.map(|k| t.input_f(&format!("principal_{k}"), true));
+    let grid = xy.map(|k| t.input_i(&format!("grid_{k}"), true));
+    let g = GaussianIn { position, cov3d, opacity, k2 };
+    let cam = CameraIn { w2v, translation, focal, lim, principal, grid };
+    let p = project(&mut t, &g, &cam, params);
+    t.output_b("visible", p.visible);
+    for (k, n) in xy.iter().enumerate() {
+        t.output_i(&format!("tile_min_{n}"), p.tile_min[k]);
+        t.output_i(&format!("tile_max_{n}"), p.tile_max[k]);
+    }
+    t.output_i("depth_key", p.depth_key);
+    for (k, n) in xy.iter().enumerate() {
+        t.output_i(&format!("mean_{n}"), p.mean[k]);
+    }
+    for (k, n) in ["a", "b", "c"].iter().enumerate() {
+        t.output_i(&format!("conic_{n}"), p.conic[k]);
+    }
+    t.output_i("conic_exp", p.conic_exp);
+    t.output_i("opacity", p.opacity);
+    t.output_i("axis_c", p.axis[0]);
+    t.output_i("axis_s", p.axis[1]);
+    t.output_i("extent_u", p.extent_uv[0]);
+    t.output_i("extent_v", p.extent_uv[1]);
+    t.output_i("extent_x", p.extent_xy[0]);
+    t.output_i("extent_y", p.extent_xy[1]);
+    t.finish()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -512,6 +559,61 @@ mod tests {
             let aniso = ((sxx - syy) as f64).hypot(2.0 * sxy as f64) / (sxx + syy) as f64;
             prop_assert!(cross < 1e-5 / aniso.max(1e-3), "{} {} vs {} {}", c, s, ct, st);
         }
+    }
+
+    #[test]
+    fn the_graph_computes_the_projection() {
+        let params = ProjectParams { feature: FeatureFormat::default(), tile: 64 };
+        let g = project_graph(&params);
+        assert_eq!(g.inputs.len(), 11 + 9 + 3 + 2 + 2 + 2 + 2);
+        let mut rng = crate::synthetic::rng::HashRng::new(11, 0, 0);
+        let mut visible = 0;
+        for _ in 0..500 {
+            let f: Vec<f32> = (0..28).map(|_| rng.range(-3.0, 3.0) as f32).collect();
+            let cov =
+                [f[3].abs() + 0.01, f[4] * 0.1, f[5] * 0.1, f[6].abs() + 0.01, f[7] * 0.1, f[8].abs() + 0.01];
+            let position = [f[0], f[1], f[2].abs() * 3.0];
+            let (opacity, k2) = (f[9].abs() / 3.0, f[10].abs() * 4.0);
+            // An upright camera: identity rotation, a small translation.
+            let w2v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            let translation = [f[11] * 0.1, f[12] * 0.1, f[13] * 0.1];
+            let cam = CameraIn {
+                w2v,
+                translation,
+                focal: [500.0, 500.0],
+                lim: [0.83, 0.62],
+                principal: [319.5, 239.5],
+                grid: [10, 8],
+            };
+            let gin = GaussianIn { position, cov3d: cov, opacity, k2 };
+            let p = project(&mut Native, &gin, &cam, &params);
+            visible += p.visible as usize;
+            let mut inputs: Vec<u32> =
+                position.iter().chain(&cov).chain([&opacity, &k2]).map(|v| v.to_bits()).collect();
+            inputs.extend(
+                w2v.iter()
+                    .flatten()
+                    .chain(&translation)
+                    .chain(&cam.focal)
+                    .chain(&cam.lim)
+                    .chain(&cam.principal)
+                    .map(|v| v.to_bits()),
+            );
+            inputs.extend(cam.grid.map(|v| v as u32));
+            let want: Vec<u32> =
+                [p.visible as i32, p.tile_min[0], p.tile_max[0], p.tile_min[1], p.tile_max[1], p.depth_key]
+                    .into_iter()
+                    .chain(p.mean)
+                    .chain(p.conic)
+                    .chain([p.conic_exp, p.opacity])
+                    .chain(p.axis)
+                    .chain(p.extent_uv)
+                    .chain(p.extent_xy)
+                    .map(|v| v as u32)
+                    .collect();
+            assert_eq!(g.eval(&inputs), want);
+        }
+        assert!(visible > 100, "{visible} visible");
     }
 
     #[test]

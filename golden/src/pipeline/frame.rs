@@ -209,6 +209,11 @@ impl<'s> Pipeline<'s> {
         })
     }
 
+    /// The image size `(width, height)` in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
     /// The configuration.
     pub fn config(&self) -> &PipelineConfig {
         &self.cfg

@@ -31,7 +31,7 @@ impl Model<'_> {
 
     pub(super) fn preprocess_job(&self, f: usize) -> Job {
         let fw = &self.wl.frames[f];
-        let p = &self.cfg.preprocess;
+        let p = &self.lat.preprocess.over(&self.cfg.preprocess);
         let n = &self.cfg.neo;
         let cyc = (fw.gaussians as f64 / n.projection_units as f64).ceil() * p.projection_ii;
         let cyc = cyc.max((fw.visible as f64 / n.color_units as f64).ceil() * p.color_ii);

@@ -1,0 +1,299 @@
+//! The datapath emitter: a golden dataflow [`Graph`] (an [`neo_golden::hwarith::Arith`]
+//! program traced by [`neo_golden::hwarith::graph::Trace`]) as one pipelined Verilog module.
+//!
+//! # Schedule
+//! Every node gets the cycle at which its value is ready (ASAP): a per-item input at 0, an
+//! operation at the latest of its operands plus its latency ([`Lowering::latency`]). Operands
+//! that are ready earlier wait in a per-node shift register (`n<id>_dly_q`, tapped at every
+//! depth a user needs). The outputs are aligned to the pipeline's depth, and a valid bit runs
+//! alongside (`valid_q`).
+//!
+//! Nodes that depend only on per-frame inputs and constants are *static*: they run with their
+//! enable tied high and feed every user directly, so they settle [`Datapath::settle_cycles`]
+//! cycles after a per-frame input changes. Per-frame inputs may change only while the unit is
+//! empty, that many cycles before the next item.
+//!
+//! # Flow control
+//! One enable stalls the whole pipeline: `en = out_ready_i | ~out_valid_o`, and
+//! `in_ready_o = en`. So the unit accepts one item per cycle while its output is taken.
+
+use crate::emit::expr::hex;
+use crate::emit::{conns, if_, set, Instance, Item, Module};
+use neo_golden::hwarith::graph::{Graph, NodeId, Op, Ty};
+
+/// A pipelined primitive module: `module(clk_i, en_i, a_i[, b_i], y_o)`, result `latency`
+/// enabled cycles after its operands.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Primitive {
+    /// Module name.
+    pub module: String,
+    /// Enabled cycles from operands to result (at least 1).
+    pub latency: u32,
+    /// Operand port names, in the operation's operand order.
+    pub ports: Vec<&'static str>,
+}
+
+/// How the datapath realises one operation.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Lowering {
+    /// An instance of a pipelined primitive.
+    Primitive(Primitive),
+    /// A combinational expression of the operand wires `$0`, `$1`, `$2`; `registered`
+    /// puts one register behind it (latency 1), else it is wiring (latency 0).
+    Inline {
+        /// The expression template.
+        expr: String,
+        /// Whether the result is registered.
+        registered: bool,
+    },
+}
+
+impl Lowering {
+    /// Cycles from operands to result.
+    pub fn latency(&self) -> u32 {
+        match self {
+            Lowering::Primitive(p) => p.latency,
+            Lowering::Inline { registered, .. } => *registered as u32,
+        }
+    }
+}
+
+/// The library the emitter lowers operations with: pipelined primitives for the arithmetic,
+/// inline logic for the rest.
+pub trait Library {
+    /// The lowering of `op` (operands are node ids; the lowering refers to them by position).
+    fn lower(&self, op: &Op, ty: Ty) -> Lowering;
+}
+
+/// A scheduled graph, ready to print.
+pub struct Datapath<'a> {
+    graph: &'a Graph,
+    lowering: Vec<Lowering>,
+    /// Cycle at which each node is ready (`None`: static).
+    ready: Vec<Option<u32>>,
+    /// Pipeline depth: the cycle at which every output is ready.
+    depth: u32,
+}
+
+impl<'a> Datapath<'a> {
+    /// Schedules `graph` with `lib`.
+    ///
+    /// # Panics
+    /// When the graph has no per-item output (a depth of 0 is not a pipeline).
+    pub fn new(graph: &'a Graph, lib: &dyn Library) -> Self {
+        let lowering: Vec<Lowering> = graph.nodes.iter().map(|n| lib.lower(&n.op, n.ty)).collect();
+        let mut ready: Vec<Option<u32>> = Vec::with_capacity(graph.nodes.len());
+        for (id, n) in graph.nodes.iter().enumerate() {
+            let r = match n.op {
+                Op::Input(k) => (!graph.inputs[k].uniform).then_some(0),
+                Op::Lit(_) => None,
+                op => op.args().iter().filter_map(|&a| ready[a]).max().map(|s| s + lowering[id].latency()),
+            };
+            ready.push(r);
+        }
+        let depth = graph.outputs.iter().filter_map(|&(_, id)| ready[id]).max().unwrap_or(0).max(1);
+        Datapath { graph, lowering, ready, depth }
+    }
+
+    /// Cycles from an item's acceptance to its result on the outputs (with the output taken).
+    pub fn depth(&self) -> u32 {
+        self.depth
+    }
+
+    /// Cycles static nodes need to settle after a per-frame input changes.
+    pub fn settle_cycles(&self) -> u32 {
+        let mut settle = vec![0u32; self.graph.nodes.len()];
+        for (id, n) in self.graph.nodes.iter().enumerate() {
+            if self.ready[id].is_none() {
+                let s = n.op.args().iter().map(|&a| settle[a]).max().unwrap_or(0);
+                settle[id] = s + self.lowering[id].latency();
+            }
+        }
+        settle.into_iter().max().unwrap_or(0)
+    }
+
+    /// The cycle at which operation `id` starts (its operands are needed).
+    fn start(&self, id: NodeId) -> Option<u32> {
+        self.ready[id].map(|r| r - self.lowering[id].latency())
+    }
+
+    /// The delays at which each node's value is needed beyond its ready cycle.
+    fn taps(&self) -> Vec<Vec<u32>> {
+        let mut taps = vec![Vec::new(); self.graph.nodes.len()];
+        let need = |node: NodeId, at: u32, taps: &mut Vec<Vec<u32>>| {
+            if let Some(r) = self.ready[node] {
+                if at > r && !taps[node].contains(&(at - r)) {
+                    taps[node].push(at - r);
+                }
+            }
+        };
+        for id in 0..self.graph.nodes.len() {
+            if let Some(s) = self.start(id) {
+                for a in self.graph.nodes[id].op.args() {
+                    need(a, s, &mut taps);
+                }
+            }
+        }
+        for &(_, id) in &self.graph.outputs {
+            need(id, self.depth, &mut taps);
+        }
+        for t in &mut taps {
+            t.sort_unstable();
+        }
+        taps
+    }
+
+    /// The net holding node `id`'s value: `n<id>_<op>`, with `_q` when it is a register.
+    fn name(&self, id: NodeId) -> String {
+        let op = format!("{:?}", self.graph.nodes[id].op);
+        let tag = op.split('(').next().unwrap_or("").to_lowercase();
+        let registered = matches!(self.lowering[id], Lowering::Inline { registered: true, .. })
+            && !matches!(self.graph.nodes[id].op, Op::Input(_) | Op::Lit(_));
+        if registered {
+            format!("n{id}_{tag}_q")
+        } else {
+            format!("n{id}_{tag}")
+        }
+    }
+
+    /// The net carrying node `node`'s value as seen at cycle `at`.
+    fn value_at(&self, node: NodeId, at: u32) -> String {
+        match self.ready[node] {
+            Some(r) if at > r => format!("n{node}_d{}", at - r),
+            _ => self.name(node),
+        }
+    }
+
+    /// Prints the datapath as module `name` with the doc lines `doc`.
+    #[track_caller]
+    pub fn module(&self, name: &str, doc: &[String]) -> Module {
+        let mut m = Module::new(name);
+        for d in doc {
+            m.doc(d);
+        }
+        m.doc(format!(
+            "Pipelined datapath (gen/src/units/pre/datapath.rs): depth {} cycles, one item per cycle; \
+             per-frame inputs settle in {} cycles.",
+            self.depth,
+            self.settle_cycles()
+        ));
+        self.ports(&mut m);
+        self.control(&mut m);
+        let taps = self.taps();
+        for (id, node_taps) in taps.iter().enumerate() {
+            self.node(&mut m, id);
+            self.delay_line(&mut m, id, node_taps);
+        }
+        for (name, id) in &self.graph.outputs {
+            let v = self.value_at(*id, self.depth);
+            m.assign(format!("out_{name}_o"), v);
+        }
+        m
+    }
+
+    fn ports(&self, m: &mut Module) {
+        m.clock_reset();
+        for i in self.graph.inputs.iter().filter(|i| i.uniform) {
+            m.input_c(format!("{}_i", i.name), i.ty.bits(), "per frame");
+        }
+        m.input_c("in_valid_i", 1, "an item is offered");
+        m.output_c("in_ready_o", 1, "the item is taken");
+        for i in self.graph.inputs.iter().filter(|i| !i.uniform) {
+            m.input(format!("in_{}_i", i.name), i.ty.bits());
+        }
+        m.output_c("out_valid_o", 1, "a result is offered");
+        m.input_c("out_ready_i", 1, "the result is taken");
+        for (name, id) in &self.graph.outputs {
+            m.output(format!("out_{name}_o"), self.graph.nodes[*id].ty.bits());
+        }
+    }
+
+    fn control(&self, m: &mut Module) {
+        let d = self.depth;
+        m.reg("valid_q", d);
+        m.wire_assign("en", 1, "out_ready_i | ~out_valid_o");
+        m.assign("in_ready_o", "en");
+        let shifted =
+            if d == 1 { "in_valid_i".to_string() } else { format!("{{valid_q[{}:0], in_valid_i}}", d - 2) };
+        let reset = m.q_resets(&[]);
+        m.seq(reset, vec![if_("en", vec![set("valid_q", shifted)])]);
+        m.assign("out_valid_o", format!("valid_q[{}]", d - 1));
+    }
+
+    /// Declares and drives `n<id>`.
+    fn node(&self, m: &mut Module, id: NodeId) {
+        let n = &self.graph.nodes[id];
+        let w = n.ty.bits();
+        let start = self.start(id);
+        let operand = |a: NodeId| match start {
+            Some(s) => self.value_at(a, s),
+            None => self.name(a),
+        };
+        let args: Vec<String> = n.op.args().into_iter().map(operand).collect();
+        let en = if self.ready[id].is_some() { "en" } else { "1'b1" };
+        let out = self.name(id);
+        match (&n.op, &self.lowering[id]) {
+            (Op::Input(k), _) => {
+                let i = &self.graph.inputs[*k];
+                let port = if i.uniform { format!("{}_i", i.name) } else { format!("in_{}_i", i.name) };
+                m.wire_assign(out, w, port);
+            }
+            (Op::Lit(v), _) => {
+                m.wire_assign(out, w, hex(w, *v as u64));
+            }
+            (_, Lowering::Inline { expr, registered }) => {
+                let e = fill(expr, &args);
+                if *registered {
+                    m.reg(&out, w);
+                    let update = set(&out, e);
+                    m.seq_noreset(if self.ready[id].is_some() {
+                        vec![if_("en", vec![update])]
+                    } else {
+                        vec![update]
+                    });
+                } else {
+                    m.wire_assign(out, w, e);
+                }
+            }
+            (_, Lowering::Primitive(p)) => {
+                m.wire(&out, w);
+                let mut c: Vec<(&str, String)> = vec![("clk_i", "clk_i".into()), ("en_i", en.into())];
+                for (port, a) in p.ports.iter().zip(&args) {
+                    c.push((port, a.clone()));
+                }
+                c.push(("y_o", out));
+                m.item(Item::Instance(Instance {
+                    module: p.module.clone(),
+                    name: format!("u_n{id}"),
+                    params: Vec::new(),
+                    conns: conns(&c),
+                }));
+            }
+        }
+    }
+
+    /// The shift register delaying node `id` by each of `taps` (ascending) cycles.
+    fn delay_line(&self, m: &mut Module, id: NodeId, taps: &[u32]) {
+        let Some(&longest) = taps.last() else { return };
+        let w = self.graph.nodes[id].ty.bits();
+        let src = self.name(id);
+        let reg = format!("n{id}_dly_q");
+        m.reg(&reg, w * longest);
+        let next = if longest == 1 { src } else { format!("{{{reg}[{}:0], {src}}}", w * (longest - 1) - 1) };
+        m.seq_noreset(vec![if_("en", vec![set(&reg, next)])]);
+        for &t in taps {
+            let tap =
+                if w * longest == 1 { reg.clone() } else { format!("{reg}[{}:{}]", w * t - 1, w * (t - 1)) };
+            m.wire_assign(format!("n{id}_d{t}"), w, tap);
+        }
+    }
+}
+
+/// `template` with `$k` replaced by `args[k]` (highest k first, so `$1` never eats `$10`).
+fn fill(template: &str, args: &[String]) -> String {
+    let mut s = template.to_string();
+    for (k, a) in args.iter().enumerate().rev() {
+        s = s.replace(&format!("${k}"), a);
+    }
+    s
+}

@@ -1,0 +1,77 @@
+//! The Preprocessing Engine's units, emitted from golden's dataflow graphs
+//! ([`neo_golden::hwpre`]) by the datapath emitter ([`datapath`]) with the primitives of
+//! [`library`].
+
+pub mod datapath;
+pub mod dup;
+pub mod library;
+
+use crate::emit::Module;
+use datapath::Datapath;
+use library::PreLibrary;
+use neo_golden::engine::EngineConfig;
+use neo_golden::hwpre::color::color_graph;
+
+/// Module name of the colour unit.
+pub const COLOR_NAME: &str = "neo_pre_color";
+
+/// The colour unit: SH colour of degree 0 to 3 (the degree a per-frame input), `+0.5`,
+/// clamped and quantised to the feature format's colour field (golden
+/// `hwpre::color::color_graph`).
+pub fn color_module(cfg: &EngineConfig) -> Module {
+    let graph = color_graph(&cfg.feature_format().color);
+    Datapath::new(&graph, &PreLibrary).module(
+        COLOR_NAME,
+        &["Colour unit (paper Section 5.2): view-dependent colour from spherical harmonics of degree 0 to 3,".into(),
+          "+0.5, clamped at 0 and quantised to the feature entry's colour format; golden hwpre::color.".into()],
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use neo_golden::hwarith::graph::Trace;
+    use neo_golden::hwarith::Arith;
+
+    /// A graph of inline operations only: `out = max(a, b) < c ? i + 1 : i`.
+    fn small_graph() -> neo_golden::hwarith::graph::Graph {
+        let mut t = Trace::new();
+        let a = t.input_f("a", false);
+        let b = t.input_f("b", false);
+        let c = t.input_f("c", true);
+        let i = t.input_i("i", false);
+        let m = t.max(a, b);
+        let lt = t.lt(m, c);
+        let one = t.ilit(1);
+        let inc = t.iadd(i, one);
+        let r = t.iselect(lt, inc, i);
+        t.output_i("r", r);
+        t.output_b("lt", lt);
+        t.finish()
+    }
+
+    #[test]
+    fn operands_are_delayed_to_their_users_and_outputs_aligned() {
+        let g = small_graph();
+        let d = Datapath::new(&g, &PreLibrary);
+        // max (1) -> lt (2) -> select (3); i + 1 is ready at 1 and waits 1 cycle.
+        assert_eq!(d.depth(), 3);
+        let v = d.module("t", &[]).to_verilog();
+        // The integer input waits two cycles for the select, the increment one.
+        assert!(v.contains("assign n3_d2 = n3_dly_q[63:32];"), "{v}");
+        assert!(v.contains("n7_iadd_q <= n3_input + n6_lit;"), "{v}");
+    }
+
+    #[test]
+    fn the_inline_logic_lints_clean() {
+        if !crate::tools::require_for_test("verilator", "the_inline_logic_lints_clean") {
+            return;
+        }
+        let g = small_graph();
+        let mut m = Datapath::new(&g, &PreLibrary).module("neo_pre_small", &[]);
+        m.config_hash = Some(0);
+        let f = crate::units::VerilogFile { name: m.name.clone(), text: m.to_verilog() };
+        let vlt = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../hdl/lint.vlt");
+        crate::tools::verilator_lint(&[f], "neo_pre_small", Some(&vlt)).unwrap();
+    }
+}
