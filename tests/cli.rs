@@ -114,6 +114,22 @@ fn synthetic_scene_survives_convert_and_reload() {
 }
 
 #[test]
+fn scene_bake_writes_the_baked_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = "synthetic:outdoor?gaussians=5k&seed=7&sh=1";
+    for (sh, per) in [("f32", 44 + 48), ("f16", 44 + 24)] {
+        let out = dir.path().join(format!("s_{sh}.bake"));
+        let text = ok(&["scene", "bake", spec, out.to_str().unwrap(), "--sh", sh]);
+        assert!(text.contains(&format!("{per} bytes each")), "{text}");
+        assert_eq!(std::fs::metadata(&out).unwrap().len(), 32 + 5000 * per as u64);
+        let b = neo_golden::hwpre::Baked::read(&out).unwrap();
+        assert_eq!((b.len(), b.sh_degree), (5000, 1));
+    }
+    let bad = dir.path().join("missing").join("s.bake");
+    fails_cleanly(&["scene", "bake", spec, bad.to_str().unwrap()], &bad, "cannot write");
+}
+
+#[test]
 fn bad_scene_files_give_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let spec = "synthetic:blobs?gaussians=100&seed=1";

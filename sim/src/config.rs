@@ -322,17 +322,21 @@ impl Default for RasterTiming {
     }
 }
 
-/// Sizes of the data in DRAM. Sort entries and feature entries come from the golden formats of
-/// the workload (`sort_entry_bytes`, `feature_entry_bytes`) unless `feature_entry_bytes` is set
-/// here (a byte-size preset such as [`DataSizes::artifact`]).
+/// Sizes of the data in DRAM. Sort entries, feature entries and the per-Gaussian parameters
+/// come from the golden formats of the workload (`sort_entry_bytes`, `feature_entry_bytes`, and
+/// the baked parameter format's `gaussian_geometry_bytes`, `gaussian_sh_bytes` by the scene's SH
+/// degree) unless set here (a byte-size preset such as [`DataSizes::artifact`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DataSizes {
-    /// Per-Gaussian geometry read for every Gaussian: position, scale, rotation, opacity as
-    /// FP32 (11 floats).
-    pub gaussian_geometry_bytes: u32,
-    /// Per-Gaussian SH coefficients read for Gaussians that survive culling (48 FP32).
-    pub gaussian_sh_bytes: u32,
+    /// Per-Gaussian geometry read for every Gaussian (`None`: the baked format's geometry
+    /// record, `neo_golden::hwpre::bake::geometry_bytes`: position, 3D covariance, opacity and
+    /// cutoff as FP32, 44 bytes).
+    pub gaussian_geometry_bytes: Option<u32>,
+    /// Per-Gaussian SH coefficients read for Gaussians that survive culling (`None`: the baked
+    /// format's SH record at the scene's SH degree, `neo_golden::hwpre::bake::sh_bytes`: 192
+    /// bytes at degree 3, 12 at degree 0).
+    pub gaussian_sh_bytes: Option<u32>,
     /// Frame-buffer bytes per pixel (RGB8, the golden frame).
     pub pixel_bytes: u32,
     /// Feature-entry bytes in place of the golden format's (`None`: the format's).
@@ -342,8 +346,8 @@ pub struct DataSizes {
 impl Default for DataSizes {
     fn default() -> Self {
         DataSizes {
-            gaussian_geometry_bytes: 44,
-            gaussian_sh_bytes: 192,
+            gaussian_geometry_bytes: None,
+            gaussian_sh_bytes: None,
             pixel_bytes: 3,
             feature_entry_bytes: None,
         }
@@ -356,11 +360,21 @@ impl DataSizes {
     /// for each non-culled one, 22-byte feature entries. Its 6-byte sort entries are golden's.
     pub fn artifact() -> Self {
         DataSizes {
-            gaussian_geometry_bytes: 6,
-            gaussian_sh_bytes: 112,
+            gaussian_geometry_bytes: Some(6),
+            gaussian_sh_bytes: Some(112),
             pixel_bytes: 3,
             feature_entry_bytes: Some(22),
         }
+    }
+
+    /// Geometry bytes per Gaussian for a workload.
+    pub fn geometry_bytes(&self, info: &crate::workload::WorkloadInfo) -> u64 {
+        self.gaussian_geometry_bytes.unwrap_or(info.gaussian_geometry_bytes) as u64
+    }
+
+    /// SH bytes per visible Gaussian for a workload.
+    pub fn sh_bytes(&self, info: &crate::workload::WorkloadInfo) -> u64 {
+        self.gaussian_sh_bytes.unwrap_or(info.gaussian_sh_bytes) as u64
     }
 
     /// The named preset: `neo` (the default) or `artifact`.
@@ -625,6 +639,9 @@ impl SimConfig {
         let pp = &self.preprocess;
         if !(pp.projection_ii > 0.0 && pp.color_ii > 0.0 && pp.duplication_ii > 0.0) {
             return Err("preprocess.*_ii must be positive".into());
+        }
+        if self.sizes.gaussian_geometry_bytes == Some(0) || self.sizes.gaussian_sh_bytes == Some(0) {
+            return Err("sizes.gaussian_*_bytes = 0: must be positive (or absent: the baked format's)".into());
         }
         if self.sizes.feature_entry_bytes == Some(0) {
             return Err("sizes.feature_entry_bytes = 0: must be positive (or absent: golden's format)".into());

@@ -16,7 +16,9 @@
 use std::path::PathBuf;
 
 use neo_golden::camera::Camera;
+use neo_golden::hwpre::bake;
 use neo_golden::pipeline::hierarchical::HierWork;
+use neo_golden::pipeline::Preprocessing;
 use neo_golden::pipeline::{
     self as golden, Formats, Pipeline, PipelineConfig, PipelineError, StageWork, Strategy, WorkOptions,
 };
@@ -329,6 +331,9 @@ pub fn generate(
         capacity: spec.params.capacity,
         sort_entry_bytes: f.sort.format().bytes_per_entry() as u32,
         feature_entry_bytes: f.feature.bytes_per_entry(),
+        sh_degree: scene.sh_degree,
+        gaussian_geometry_bytes: bake::geometry_bytes(),
+        gaussian_sh_bytes: bake::sh_bytes(scene.sh_degree, Preprocessing::DEFAULT_SH),
         gaussians: scene.len() as u64,
         golden_raster: golden.is_some(),
     };

@@ -19,7 +19,7 @@
 
 use crate::config::{GpuArch, SimConfig};
 use crate::traffic::{Dir, Stage, Traffic};
-use crate::workload::FrameWork;
+use crate::workload::{FrameWork, WorkloadInfo};
 
 /// Time and traffic of one GPU frame.
 #[derive(Clone, Debug, PartialEq)]
@@ -48,8 +48,11 @@ pub fn radix_passes(g: &GpuArch, width: u32, height: u32) -> u32 {
     (32 + tile_bits).div_ceil(g.radix_bits)
 }
 
-/// One frame of the GPU model.
-pub fn frame(cfg: &SimConfig, fw: &FrameWork, width: u32, height: u32) -> GpuFrame {
+/// One frame of the GPU model (the workload `info` gives the image size and the parameter
+/// bytes: the reference reads 11 FP32 of geometry and the FP32 SH of the scene's degree, the
+/// same bytes as the baked format's default).
+pub fn frame(cfg: &SimConfig, info: &WorkloadInfo, fw: &FrameWork) -> GpuFrame {
+    let (width, height) = (info.width, info.height);
     let g = &cfg.gpu;
     let s = &cfg.sizes;
     let line = cfg.dram.line_bytes as u64;
@@ -62,8 +65,7 @@ pub fn frame(cfg: &SimConfig, fw: &FrameWork, width: u32, height: u32) -> GpuFra
     let vis = fw.visible;
 
     // 1. Preprocess.
-    let r = lines(fw.gaussians * s.gaussian_geometry_bytes as u64, line)
-        + lines(vis * s.gaussian_sh_bytes as u64, line);
+    let r = lines(fw.gaussians * s.geometry_bytes(info), line) + lines(vis * s.sh_bytes(info), line);
     let w = lines(vis * g.record_bytes as u64, line);
     tr.add(Stage::Preprocess, Dir::Read, r);
     tr.add(Stage::FeatureTable, Dir::Write, w);
@@ -118,14 +120,38 @@ mod tests {
             processed_ratio: 0.5,
             ..FrameWork::default()
         };
-        let a = frame(&cfg, &fw, 2560, 1440);
+        let info = WorkloadInfo { width: 2560, height: 1440, ..WorkloadInfo::default() };
+        let a = frame(&cfg, &info, &fw);
         // QHD, 16-pixel tiles: 160 x 90 = 14400 tiles, 14 bits: (32 + 14) / 8 -> 6 passes.
         assert_eq!(radix_passes(&cfg.gpu, 2560, 1440), 6);
         let sort = a.traffic.stage_bytes(Stage::SortTable);
         assert_eq!(sort, (1 << 20) * 8 + 6 * 2 * (1 << 20) * 12 + (1 << 20) * 8);
         fw.gpu_pairs *= 2;
-        let b = frame(&cfg, &fw, 2560, 1440);
+        let b = frame(&cfg, &info, &fw);
         assert_eq!(b.traffic.stage_bytes(Stage::SortTable), 2 * sort);
         assert!(b.total_s() > a.total_s());
+    }
+
+    #[test]
+    fn parameter_bytes_follow_the_sh_degree() {
+        let cfg = SimConfig::default();
+        let fw = FrameWork { gaussians: 1000, visible: 1000, ..FrameWork::default() };
+        let read = |degree: u8| {
+            let info = WorkloadInfo {
+                width: 640,
+                height: 480,
+                sh_degree: degree,
+                gaussian_geometry_bytes: neo_golden::hwpre::bake::geometry_bytes(),
+                gaussian_sh_bytes: neo_golden::hwpre::bake::sh_bytes(
+                    degree,
+                    neo_golden::hwpre::ShPrecision::F32,
+                ),
+                ..WorkloadInfo::default()
+            };
+            frame(&cfg, &info, &fw).traffic.stage_bytes(Stage::Preprocess)
+        };
+        // 1000 x (44 + 12) bytes at degree 0, 1000 x (44 + 192) at degree 3, in 64-byte lines.
+        assert_eq!(read(0), (44_000u64.div_ceil(64) + 12_000u64.div_ceil(64)) * 64);
+        assert_eq!(read(3), (44_000u64.div_ceil(64) + 192_000u64.div_ceil(64)) * 64);
     }
 }

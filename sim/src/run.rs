@@ -251,14 +251,13 @@ pub fn simulate(
         return Err("the workload has no frames".into());
     }
     let t0 = Instant::now();
-    let (w, h) = (wl.info.width, wl.info.height);
     match arch {
         Arch::Gpu => {
             let mut traffic = Traffic::new(cfg.dram.line_bytes as u64);
             let mut frames = Vec::with_capacity(wl.frames.len());
             let mut t = 0.0;
             for fw in &wl.frames {
-                let g = gpu::frame(cfg, fw, w, h);
+                let g = gpu::frame(cfg, &wl.info, fw);
                 let ms = g.total_s() * 1e3;
                 frames.push(FrameResult {
                     frame: fw.frame,

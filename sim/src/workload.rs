@@ -164,6 +164,12 @@ pub struct WorkloadInfo {
     pub sort_entry_bytes: u32,
     /// Bytes per feature entry.
     pub feature_entry_bytes: u32,
+    /// The scene's SH degree.
+    pub sh_degree: u8,
+    /// Bytes of a Gaussian's geometry record in the baked parameter format.
+    pub gaussian_geometry_bytes: u32,
+    /// Bytes of a Gaussian's SH record in the baked parameter format (by the SH degree).
+    pub gaussian_sh_bytes: u32,
     /// Gaussians in the scene.
     pub gaussians: u64,
     /// True when the golden raster ran on every frame (quality and exact termination ratios).

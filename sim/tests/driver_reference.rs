@@ -1,15 +1,14 @@
 //! The work-only driver's table pass (prefetched gathers, binary searches, routed counts) must
 //! equal a straightforward recomputation from the golden functions: for every tile and every
 //! entry of its table after the write-back, the feature entry by a hash map of the frame's
-//! quantised Gaussians, membership in the current list by a linear search, and the subtile
+//! Gaussians preprocessed in the hardware's arithmetic (golden's default), membership in the current list by a linear search, and the subtile
 //! routing by the golden `subtile_bitmap`.
 
 use std::collections::HashMap;
 
-use neo_golden::formats::quantize;
-use neo_golden::pipeline::Strategy;
+use neo_golden::hwpre::{preprocess_hw, Baked};
+use neo_golden::pipeline::{Preprocessing, Strategy};
 use neo_golden::raster::subtile_bitmap;
-use neo_golden::render::preprocess;
 use neo_golden::{source, trajectory};
 use neo_sim::config::PipelineParams;
 use neo_sim::driver::{pipeline_config, GoldenRaster, WorkDriver};
@@ -32,8 +31,11 @@ fn table_pass_equals_a_straightforward_recomputation() {
             let fw = drv.step(cam, f, false);
             let fmt = &drv.formats().feature;
             let key = &drv.formats().key;
-            let feats: HashMap<u32, _> =
-                preprocess(&scene, cam, rcfg.tile).iter().map(|p| (p.index, quantize(p, fmt, key))).collect();
+            let baked = Baked::from_scene(&scene, fmt, Preprocessing::DEFAULT_SH);
+            let feats: HashMap<u32, _> = preprocess_hw(&baked, cam, fmt, key, rcfg.tile)
+                .iter()
+                .map(|p| (p.projected.index, p.entry))
+                .collect();
             let lists: Vec<Vec<u32>> =
                 drv.current_lists().map(|l| l.iter().map(|e| e.id).collect()).collect();
             for (ti, (table, tw)) in drv.tables().zip(&fw.tiles).enumerate() {

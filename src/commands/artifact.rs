@@ -4,7 +4,8 @@
 
 use anyhow::Result;
 use clap::Args;
-use neo_golden::pipeline::Formats;
+use neo_golden::hwpre::bake;
+use neo_golden::pipeline::{Formats, Preprocessing};
 use neo_sim::artifact::poc::read_poc_trace;
 use neo_sim::artifact::timing::artifact_timing_with;
 use neo_sim::artifact::waterfall::{waterfall, NeoSizes};
@@ -27,6 +28,10 @@ pub struct ArtifactArgs {
     /// Model configuration (JSON; its `dram` section and frame-buffer pixel size are used).
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// SH degree of the traced scene: neo's SH bytes per Gaussian follow it (the baked
+    /// format's), unless the configuration's `sizes` sets them.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(0..=3))]
+    pub sh_degree: u8,
 }
 
 /// Runs `neo artifact`.
@@ -37,8 +42,9 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
     };
     let sizes = ArtifactSizes::default();
     let neo = NeoSizes {
-        geometry: cfg.sizes.gaussian_geometry_bytes as u64,
-        sh: cfg.sizes.gaussian_sh_bytes as u64,
+        geometry: cfg.sizes.gaussian_geometry_bytes.unwrap_or(bake::geometry_bytes()) as u64,
+        sh: cfg.sizes.gaussian_sh_bytes.unwrap_or(bake::sh_bytes(a.sh_degree, Preprocessing::DEFAULT_SH))
+            as u64,
         feature: Formats::artifact(sizes.global_chunk as usize)?.feature.bytes_per_entry() as u64,
         pixel: cfg.sizes.pixel_bytes as u64,
     };

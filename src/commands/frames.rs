@@ -7,8 +7,8 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use neo_golden::pipeline::{
-    formats_for, run_trajectory, ConfigRecord, FrameOutput, Pipeline, PipelineConfig, RunInfo, StatsFile,
-    Strategy,
+    formats_for, run_trajectory, ConfigRecord, FrameOutput, Pipeline, PipelineConfig, Preprocessing, RunInfo,
+    StatsFile, Strategy,
 };
 use neo_golden::trajectory::parse_resolution;
 use neo_golden::{source, trajectory};
@@ -76,6 +76,10 @@ pub struct FramesArgs {
     /// Skip SSIM.
     #[arg(long)]
     pub no_ssim: bool,
+    /// Preprocessing: `hw` (the RTL's arithmetic on the baked scene, SH f32; `hw:f16` with
+    /// half SH) or `float` (the float preprocess quantised in f64, for comparison).
+    #[arg(long, default_value = "hw", value_parser = Preprocessing::parse)]
+    pub preprocess: Preprocessing,
     #[command(flatten)]
     pub strict: StrictArg,
 }
@@ -111,6 +115,7 @@ pub fn run(a: FramesArgs) -> Result<()> {
         compare_exact: !a.no_exact,
         compare_float: !a.no_float,
         ssim: !a.no_ssim,
+        preprocess: a.preprocess,
         ..PipelineConfig::default()
     };
     cfg.raster.tile = a.tile;

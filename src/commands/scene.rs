@@ -1,8 +1,11 @@
-//! `neo scene info` and `neo scene convert`.
+//! `neo scene info`, `neo scene convert` and `neo scene bake`.
 
 use crate::progress::spin;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
+use neo_golden::formats::FeatureFormat;
+use neo_golden::hwpre::bake::{geometry_bytes, sh_bytes, Baked};
+use neo_golden::hwpre::ShPrecision;
 use neo_golden::{ply, scene_stats::SceneStats, source};
 use std::path::PathBuf;
 
@@ -13,6 +16,31 @@ pub enum SceneCommand {
     Info(InfoArgs),
     /// Write a scene (any readable form) as a standard binary 3DGS .ply.
     Convert(ConvertArgs),
+    /// Bake a scene for the Preprocessing Engine (docs/formats.md, "Baked parameters").
+    Bake(BakeArgs),
+}
+
+/// Arguments of `neo scene bake`.
+#[derive(Args)]
+pub struct BakeArgs {
+    /// The input scene (file or synthetic spec).
+    pub input: String,
+    /// The baked file to write.
+    pub output: PathBuf,
+    /// SH storage: `f32` or `f16`.
+    #[arg(long, default_value = "f32", value_parser = parse_sh)]
+    pub sh: ShPrecision,
+    /// Treat Gaussians with NaN values as an error instead of dropping them.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+fn parse_sh(s: &str) -> Result<ShPrecision, String> {
+    match s {
+        "f32" => Ok(ShPrecision::F32),
+        "f16" => Ok(ShPrecision::F16),
+        _ => Err(format!("unknown SH precision {s:?}: expected f32 or f16")),
+    }
 }
 
 /// Arguments of `neo scene info`.
@@ -70,6 +98,26 @@ pub fn run(cmd: SceneCommand) -> Result<()> {
                 scene.len(),
                 scene.sh_degree,
                 a.output.display()
+            );
+            Ok(())
+        }
+        SceneCommand::Bake(a) => {
+            let (loaded, _) =
+                spin(&format!("loading {}", a.input), || source::load_scene(&a.input, a.strict));
+            let (scene, report) = loaded?;
+            if report.dropped_non_finite > 0 {
+                eprintln!("warning: dropped {} Gaussians with NaN values", report.dropped_non_finite);
+            }
+            let baked = Baked::from_scene(&scene, &FeatureFormat::default(), a.sh);
+            baked.write(&a.output)?;
+            println!(
+                "wrote {} Gaussians (SH degree {}) to {}: {} bytes each ({} geometry + {} SH)",
+                baked.len(),
+                baked.sh_degree,
+                a.output.display(),
+                baked.bytes_per_gaussian(),
+                geometry_bytes(),
+                sh_bytes(baked.sh_degree, baked.sh_precision)
             );
             Ok(())
         }

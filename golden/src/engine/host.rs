@@ -44,7 +44,7 @@ use super::memory::{
 use super::reference::{add_raster_traffic, sort_traffic, FrameOutcome};
 use super::regs::{Counter, FrameRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
-use crate::pipeline::{Formats, FrameOutput, Pipeline, PipelineConfig, Strategy};
+use crate::pipeline::{Formats, FrameOutput, Pipeline, PipelineConfig, Preprocessing, Strategy};
 use crate::scene::Scene;
 use crate::sort::{DepthKeyCodec, SortEntry};
 use crate::trajectory::Trajectory;
@@ -410,6 +410,7 @@ pub(crate) fn pipeline_for<'s>(
         compare_float: false,
         ssim: false,
         exact_shortcut: true,
+        preprocess: Preprocessing::Hardware(Preprocessing::DEFAULT_SH),
     };
     let formats =
         Formats { feature: cfg.feature_format(), key: DepthKeyCodec::Fp16, sort: cfg.sort_config() };

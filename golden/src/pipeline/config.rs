@@ -5,6 +5,7 @@ use serde::Serialize;
 use super::strategy::Strategy;
 use crate::camera::Camera;
 use crate::formats::{FeatureFormat, FeatureStats, FormatError};
+use crate::hwpre::ShPrecision;
 use crate::raster::RasterConfig;
 use crate::render::preprocess;
 use crate::scene::Scene;
@@ -33,6 +34,37 @@ pub struct PipelineConfig {
     /// it, is already in the exact order (its pixels are then the same: entries that do not
     /// touch a tile have empty subtile bitmaps and are never blended). Only saves time.
     pub exact_shortcut: bool,
+    /// How Gaussians are preprocessed into feature entries.
+    pub preprocess: Preprocessing,
+}
+
+/// How the pipeline preprocesses Gaussians into feature entries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Preprocessing {
+    /// The Preprocessing Engine's arithmetic ([`crate::hwpre::preprocess_hw`]) on the scene
+    /// baked with SH in the given precision: exactly what the RTL computes. The default, with
+    /// [`Preprocessing::DEFAULT_SH`].
+    Hardware(ShPrecision),
+    /// The float reference's preprocessing, quantised in f64 ([`crate::formats::quantize`],
+    /// with `atan2`/`cos`/`sin`/`ln`): the model before the hardware's arithmetic was defined,
+    /// kept for the error comparison.
+    Float,
+}
+
+impl Preprocessing {
+    /// The SH precision of the default baked format.
+    pub const DEFAULT_SH: ShPrecision = ShPrecision::F32;
+
+    /// Parses `hw` (the default SH precision), `hw:f32`, `hw:f16` or `float`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s {
+            "hw" => Ok(Preprocessing::Hardware(Self::DEFAULT_SH)),
+            "hw:f32" => Ok(Preprocessing::Hardware(ShPrecision::F32)),
+            "hw:f16" => Ok(Preprocessing::Hardware(ShPrecision::F16)),
+            "float" => Ok(Preprocessing::Float),
+            _ => Err(format!("unknown preprocessing {s:?}: expected hw, hw:f32, hw:f16 or float")),
+        }
+    }
 }
 
 impl Default for PipelineConfig {
@@ -47,6 +79,7 @@ impl Default for PipelineConfig {
             compare_float: true,
             ssim: true,
             exact_shortcut: true,
+            preprocess: Preprocessing::Hardware(Preprocessing::DEFAULT_SH),
         }
     }
 }
@@ -193,6 +226,8 @@ pub struct ConfigRecord {
     pub ssim: bool,
     /// Rayon threads.
     pub threads: usize,
+    /// Preprocessing (`Hardware(F32)`: the RTL's arithmetic, SH as f32; `Float`).
+    pub preprocess: Preprocessing,
 }
 
 /// What a run is besides its configuration and formats (for [`ConfigRecord::new`]).
@@ -242,6 +277,7 @@ impl ConfigRecord {
             compare_float: cfg.compare_float,
             ssim: cfg.ssim,
             threads: rayon::current_num_threads(),
+            preprocess: cfg.preprocess,
         }
     }
 }

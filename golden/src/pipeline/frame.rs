@@ -1,4 +1,5 @@
-//! The per-frame driver: float preprocess, quantisation into the feature table, binning with
+//! The per-frame driver: preprocessing into the feature table (the hardware's arithmetic on
+//! the baked scene, or the float preprocess quantised in f64, [`super::Preprocessing`]), binning with
 //! the ITU, per-tile sorting (the strategy's), fixed-point raster with the write-back of depth
 //! keys and valid bits, and the references and statistics.
 //!
@@ -15,7 +16,7 @@ use rayon::prelude::*;
 
 use super::adaptive::{self, angle_deg, writeback_signals, CameraMotion, TilePlan};
 use super::binning::Binning;
-use super::config::{Formats, PipelineConfig, PipelineError};
+use super::config::{Formats, PipelineConfig, PipelineError, Preprocessing};
 use super::order::{compare_orders, TileOrder};
 use super::stats::{
     finite, FrameStats, GaussianCounts, OrderStats, RasterWork, Retention, TileAggregates, TileColumns,
@@ -26,6 +27,7 @@ use super::tile::{exact_table, sort_tile, FramePos, TileCtx, TileSortOutput, Til
 use super::trace::write_trace;
 use crate::camera::Camera;
 use crate::formats::{quantize, FeatureEntry};
+use crate::hwpre::{preprocess_hw, Baked};
 use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
 use crate::raster::{raster_tile_into, TileRaster};
@@ -124,6 +126,8 @@ pub struct FrameOutput {
 /// The golden pipeline over a sequence of frames of one scene at one resolution.
 pub struct Pipeline<'s> {
     scene: &'s Scene,
+    /// The scene baked for the hardware preprocessing (`None`: float preprocessing).
+    baked: Option<Baked>,
     cfg: PipelineConfig,
     formats: Formats,
     width: u32,
@@ -178,8 +182,13 @@ impl<'s> Pipeline<'s> {
         let grid = [width.div_ceil(cfg.raster.tile), height.div_ceil(cfg.raster.tile)];
         let tiles = grid[0] as usize * grid[1] as usize;
         let proto = TileCtx::new(cfg.strategy, &formats.sort, cfg.dps_passes, cfg.capacity_or_max());
+        let baked = match cfg.preprocess {
+            Preprocessing::Hardware(sh) => Some(Baked::from_scene(scene, &formats.feature, sh)),
+            Preprocessing::Float => None,
+        };
         Ok(Pipeline {
             scene,
+            baked,
             formats,
             width,
             height,
@@ -368,16 +377,32 @@ impl<'s> Pipeline<'s> {
         }
     }
 
-    /// Float preprocess (`inspect` sees the projected Gaussians) and quantisation into the
-    /// feature table. Returns the seconds of the two.
+    /// Preprocessing (`inspect` sees the projected Gaussians) into the feature table: the
+    /// hardware's arithmetic on the baked scene, or the float preprocess and its quantisation.
+    /// Returns the seconds of the two (the hardware's are one: all in the first).
     fn feature_phase(&mut self, cam: &Camera, inspect: impl FnOnce(&[Projected])) -> (f64, f64) {
         let t = Instant::now();
-        let projected = preprocess(self.scene, cam, self.cfg.raster.tile);
-        let preprocess_s = t.elapsed().as_secs_f64();
-        inspect(&projected);
-        let t = Instant::now();
-        let (fmt, key) = (&self.formats.feature, &self.formats.key);
-        projected.par_iter().map(|p| quantize(p, fmt, key)).collect_into_vec(&mut self.features);
+        let (fmt, key, tile) = (&self.formats.feature, &self.formats.key, self.cfg.raster.tile);
+        let (projected, preprocess_s, t) = match &self.baked {
+            Some(baked) => {
+                let hw = preprocess_hw(baked, cam, fmt, key, tile);
+                let preprocess_s = t.elapsed().as_secs_f64();
+                let projected: Vec<Projected> = hw.iter().map(|h| h.projected).collect();
+                inspect(&projected);
+                let t = Instant::now();
+                self.features.clear();
+                self.features.extend(hw.iter().map(|h| h.entry));
+                (projected, preprocess_s, t)
+            }
+            None => {
+                let projected = preprocess(self.scene, cam, tile);
+                let preprocess_s = t.elapsed().as_secs_f64();
+                inspect(&projected);
+                let t = Instant::now();
+                projected.par_iter().map(|p| quantize(p, fmt, key)).collect_into_vec(&mut self.features);
+                (projected, preprocess_s, t)
+            }
+        };
         self.feature_ids.clear();
         self.feature_ids.extend(projected.iter().map(|p| p.index));
         self.feature_of.par_iter_mut().for_each(|v| *v = CULLED);

@@ -40,8 +40,8 @@ impl Model<'_> {
         let s = &self.cfg.sizes;
         let l = &self.layout;
         let reads = vec![
-            Access::seq(Stage::Preprocess, l.geometry, fw.gaussians * s.gaussian_geometry_bytes as u64),
-            Access::seq(Stage::Preprocess, l.sh, fw.visible * s.gaussian_sh_bytes as u64),
+            Access::seq(Stage::Preprocess, l.geometry, fw.gaussians * s.geometry_bytes(&self.wl.info)),
+            Access::seq(Stage::Preprocess, l.sh, fw.visible * s.sh_bytes(&self.wl.info)),
         ];
         let lists: u64 = fw.tiles.iter().map(|t| self.list_len(t)).sum();
         let mut writes = vec![

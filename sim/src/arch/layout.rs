@@ -48,8 +48,8 @@ impl Layout {
         let g = wl.info.gaussians;
         let mut next = 0;
         Layout {
-            geometry: region(&mut next, g * cfg.sizes.gaussian_geometry_bytes as u64),
-            sh: region(&mut next, g * cfg.sizes.gaussian_sh_bytes as u64),
+            geometry: region(&mut next, g * cfg.sizes.geometry_bytes(&wl.info)),
+            sh: region(&mut next, g * cfg.sizes.sh_bytes(&wl.info)),
             features: [region(&mut next, max_visible * fb), region(&mut next, max_visible * fb)],
             lists: [region(&mut next, max_lists * eb), region(&mut next, max_lists * eb)],
             bg_lists: [region(&mut next, max_lists * eb), region(&mut next, max_lists * eb)],

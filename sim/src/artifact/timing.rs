@@ -279,15 +279,10 @@ impl Frame<'_> {
         let geometry = self.r.neo_sizes.map_or(s.position, |n| n.geometry);
         let cull = self.lines(l.positions, f.culled.len() as u64 * geometry);
         let load = match self.r.neo_sizes {
-            // neo's parameters: every line each record touches.
-            Some(n) => visible
-                .iter()
-                .flat_map(|&i| {
-                    let at = l.others + i as u64 * n.sh;
-                    let first = align(at, s);
-                    (0..(align(at + n.sh - 1, s) - first) / s.line + 1).map(move |j| first + j * s.line)
-                })
-                .collect(),
+            // neo's parameters: the SH records of the visible Gaussians as one stream, as neo's
+            // model and the waterfall charge them (for whole-line records such as 192 bytes this
+            // is every line each record touches; the SH bytes follow the scene's degree).
+            Some(n) => self.lines(l.others, visible.len() as u64 * n.sh),
             None => {
                 let per = s.others.div_ceil(s.line);
                 visible
