@@ -208,10 +208,17 @@ pub fn report(cfg: &EngineConfig) -> LatencyReport {
 /// The `preprocess` section: the Preprocessing Engine's units measured on the RTL (outputs
 /// checked against golden on the way).
 pub fn preprocess_section(cfg: &EngineConfig) -> neo_golden::formats::latency::Preprocess {
+    use crate::check::Checker;
+    use crate::pre::{color_bench, measure, project_bench, random_color_items, scene_project_items};
+    use neo_gen::units::pre::{COLOR_NAME, PROJECT_NAME};
     let mut dup = crate::dup::DupBench::build(cfg).unwrap_or_else(|e| panic!("neo_pre_dup: {e}"));
+    let mut color = color_bench(cfg);
+    let color_items = random_color_items(&mut Rng::new(SEED ^ 12), 512, [0.5, -1.0, -3.0], 3);
+    let mut project = project_bench(cfg);
+    let project_items = &scene_project_items(cfg, 1, 512, 1)[0];
     neo_golden::formats::latency::Preprocess {
-        projection: None,
-        color: None,
+        projection: Some(measure(&mut project, project_items, &Checker::new(PROJECT_NAME, SEED ^ 13))),
+        color: Some(measure(&mut color, &color_items, &Checker::new(COLOR_NAME, SEED ^ 12))),
         duplication: Some(crate::dup::measure_timing(&mut dup, SEED ^ 11)),
     }
 }
@@ -281,6 +288,8 @@ fn doc() -> BTreeMap<String, String> {
         ("units.neo_msu.entries", "output entries of the measurement: two back-to-back merges of two 64-entry streams"),
         ("units.neo_scu", "neo_scu (one subtile's blending): latency = rising edges from the edge that accepts a list's last Gaussian to the first cycle its 64 pixels are offered (pipeline otherwise empty); ii = cycles per Gaussian in a list that does not terminate (64 / scu_lanes passes); drain_ii = cycles per Gaussian once every pixel is done (the rest of the list is drained); lanes = scu_lanes"),
         ("units.neo_sort_core.command_overhead", "cycles from accepting a zero-length SORT to its done_o pulse"),
+        ("preprocess.projection", "neo_pre_project on `items` Gaussians of a synthetic scene at full rate: latency = edges from accepting a Gaussian to its result offered; ii = cycles per Gaussian; cycles = first offer to last result; settle = cycles the camera registers need before the first Gaussian (every output checked against golden)"),
+        ("preprocess.color", "neo_pre_color on `items` random Gaussians of SH degree 3 at full rate: fields as preprocess.projection"),
         ("preprocess.duplication", "neo_pre_dup: latency = edges from accepting a Gaussian with one candidate tile, which it enters, to that tile offered; cycles_per_candidate = walker cycles per candidate tile over `gaussians` random Gaussians with `candidates` candidate tiles (all but the last) taking `cycles` from the first acceptance to the last; min_cycles_per_gaussian = walker cycles of a Gaussian outside the image"),
         ("raster.itu.latency", "neo_itu: rising edges from the edge that accepts a (Gaussian, tile) job to the first cycle its subtile bitmap is offered"),
         ("raster.itu.ii", "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once"),

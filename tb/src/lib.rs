@@ -31,6 +31,7 @@ pub mod lanes;
 pub mod latency;
 #[cfg(neo_has_verilator)]
 pub mod msu;
+pub mod pre;
 #[cfg(neo_has_verilator)]
 pub mod raster;
 pub mod rng;

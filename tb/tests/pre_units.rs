@@ -186,40 +186,16 @@ neo_tb::with_models! {
         assert_eq!(run.accept_span, walker, "{} hits over {walker} walker cycles", run.hits);
     }
 
-    use neo_gen::units::pre::COLOR_NAME;
-    use neo_golden::hwpre::color::color_graph;
-
-    fn color_bench() -> (DatapathBench, u32) {
-        let cfg = neo_tb::config();
-        let g = color_graph(&cfg.feature_format().color);
-        let settle = Datapath::new(&g, &PreLibrary).settle_cycles();
-        (DatapathBench::build_generated(g, &cfg, COLOR_NAME).expect("build neo_pre_color"), settle)
-    }
-
-    /// One colour-unit item: mean, 16 x 3 SH coefficients, camera, degree (graph input order).
-    fn color_item(mean: [f32; 3], sh: &[f32], cam: [f32; 3], degree: u32) -> Vec<u32> {
-        let mut v: Vec<u32> = mean.iter().chain(sh).map(|x| x.to_bits()).collect();
-        v.extend(cam.map(f32::to_bits));
-        v.push(degree);
-        v
-    }
-
-    fn random_color_items(rng: &mut Rng, n: usize, cam: [f32; 3], degree: u32) -> Vec<Vec<u32>> {
-        let f = |rng: &mut Rng, scale: f64| ((rng.below(2_000_001) as f64 / 1e6 - 1.0) * scale) as f32;
-        (0..n)
-            .map(|_| {
-                let mean = [f(rng, 50.0), f(rng, 50.0), f(rng, 50.0)];
-                let sh: Vec<f32> = (0..48).map(|k| if k < 3 { f(rng, 4.0) } else { f(rng, 1.0) }).collect();
-                color_item(mean, &sh, cam, degree)
-            })
-            .collect()
-    }
+    use neo_gen::units::pre::{COLOR_NAME, PROJECT_NAME};
+    use neo_golden::hwpre::bake::BakedGeometry;
+    use neo_golden::hwpre::project::CameraIn;
+    use neo_tb::pre::{color_bench, color_item, project_bench, project_item, random_color_items, scene_project_items, UnitBench};
 
     /// At least 10k random Gaussians per seed share over the four SH degrees and backpressure mixes.
     #[test]
     fn color_random_gaussians_every_degree() {
         let name = "color_random_gaussians_every_degree";
-        let (mut bench, settle) = color_bench();
+        let UnitBench { mut bench, settle, .. } = color_bench(&neo_tb::config());
         neo_tb::waves::maybe_trace(bench.model_mut(), name);
         for_each_seed(name, |seed| {
             let mut rng = Rng::new(seed);
@@ -239,7 +215,7 @@ neo_tb::with_models! {
     #[test]
     fn color_directed_cases() {
         let name = "color_directed_cases";
-        let (mut bench, settle) = color_bench();
+        let UnitBench { mut bench, settle, .. } = color_bench(&neo_tb::config());
         let cam = [1.0f32, 2.0, 3.0];
         let mut ramp: Vec<f32> = (0..48).map(|k| (k as f32 - 24.0) / 10.0).collect();
         let cases: Vec<(&str, Vec<f32>, [f32; 3])> = vec![
@@ -268,13 +244,87 @@ neo_tb::with_models! {
     /// The colour unit takes one Gaussian per cycle, and its latency is the emitted depth.
     #[test]
     fn color_one_gaussian_per_cycle() {
+        let mut unit = color_bench(&neo_tb::config());
+        let items = random_color_items(&mut Rng::new(3), 500, [0.0; 3], 3);
+        let t = neo_tb::pre::measure(&mut unit, &items, &Checker::new(COLOR_NAME, 3));
+        assert_eq!((t.latency, t.ii), (unit.depth as u64, 1));
+        assert_eq!(t.cycles, items.len() as u64 + unit.depth as u64, "one item per cycle plus the fill");
+    }
+
+    #[test]
+    fn project_scene_gaussians_under_backpressure() {
+        let name = "project_scene_gaussians_under_backpressure";
+        let UnitBench { mut bench, settle, .. } = project_bench(&neo_tb::config());
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            let check = Checker::new(PROJECT_NAME, seed);
+            let n = neo_tb::rng::seed_share(dup_vectors().max(10_000) * neo_tb::rng::SEED_RUNS) / 3;
+            for (k, items) in scene_project_items(&neo_tb::config(), seed % 1000 + 1, n, 3).iter().enumerate() {
+                bench.run(items, settle, &mut rng, [(100, 100), (60, 80), (90, 40)][k], &check);
+            }
+        });
+    }
+
+    /// A camera at the origin looking down +z (world = view coordinates), f = 500 px, 640x480.
+    fn axis_camera() -> CameraIn<f32, i32> {
+        let (w, h, f) = (640.0f32, 480.0f32, 500.0f32);
+        CameraIn {
+            w2v: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            translation: [0.0; 3],
+            focal: [f, f],
+            lim: [1.3 * w / (2.0 * f), 1.3 * h / (2.0 * f)],
+            principal: [(w - 1.0) / 2.0, (h - 1.0) / 2.0],
+            grid: [10, 8],
+        }
+    }
+
+    /// Named hard cases (golden `hwpre_project`'s classes, at the unit).
+    #[test]
+    fn project_directed_cases() {
+        let name = "project_directed_cases";
+        let UnitBench { mut bench, settle, .. } = project_bench(&neo_tb::config());
+        let cam = axis_camera();
+        let iso = |s: f32| [s, 0.0, 0.0, s, 0.0, s];
+        let g = |position: [f32; 3], cov3d: [f32; 6], opacity: f32, k2: f32| BakedGeometry { position, cov3d, opacity, k2 };
+        // Pixel x of a point at depth 1: 500 x + 319.5; x = 0.3 lands the mean 30.5 px into tile 7.
+        let cases: Vec<(&str, BakedGeometry)> = vec![
+            ("ordinary", g([0.1, -0.05, 2.0], iso(1e-4), 0.8, 11.0)),
+            ("behind the camera", g([0.0, 0.0, -2.0], iso(1e-4), 0.8, 11.0)),
+            ("on the near plane", g([0.0, 0.0, 0.2], iso(1e-4), 0.8, 11.0)),
+            ("just past the near plane", g([0.0, 0.0, 0.200_000_02], iso(1e-4), 0.8, 11.0)),
+            ("on a tile border", g([(64.0 - 319.5) / 500.0, 0.0, 1.0], iso(1e-6), 0.8, 11.0)),
+            ("huge scale", g([0.0, 0.0, 3.0], iso(1e6), 0.8, 11.0)),
+            ("tiny scale", g([0.0, 0.0, 3.0], iso(1e-14), 0.8, 11.0)),
+            ("degenerate covariance", g([0.05, 0.0, 2.0], [1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3], 0.8, 11.0)),
+            ("needle", g([0.0, 0.1, 2.0], [1e-2, 0.0, 0.0, 1e-9, 0.0, 1e-9], 0.8, 11.0)),
+            ("zero opacity", g([0.0, 0.0, 2.0], iso(1e-4), 0.0, 0.0)),
+            ("unbounded cutoff", g([0.0, 0.0, 2.0], iso(1e-4), 0.8, f32::INFINITY)),
+            ("largest coordinates", g([f32::MAX, -f32::MAX, f32::MAX], iso(1e-4), 0.8, 11.0)),
+            ("far off screen", g([1e4, -1e4, 1.0], iso(1e-2), 0.8, 11.0)),
+            ("NaN position", g([f32::NAN, 0.0, 2.0], iso(1e-4), 0.8, 11.0)),
+            ("subnormal covariance", g([0.0, 0.0, 2.0], iso(1e-40), 0.8, 11.0)),
+        ];
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            let check = Checker::new(PROJECT_NAME, seed);
+            let items: Vec<Vec<u32>> = cases.iter().map(|(_, g)| project_item(g, &cam)).collect();
+            for ((case, _), item) in cases.iter().zip(&items) {
+                println!("{name}: {case}");
+                bench.run(std::slice::from_ref(item), settle, &mut rng, (100, 100), &check);
+            }
+            bench.run(&items, settle, &mut rng, (50, 50), &check);
+        });
+    }
+
+    /// The projection unit takes one Gaussian per cycle at the emitted depth.
+    #[test]
+    fn project_one_gaussian_per_cycle() {
         let cfg = neo_tb::config();
-        let depth = Datapath::new(&color_graph(&cfg.feature_format().color), &PreLibrary).depth() as u64;
-        let (mut bench, settle) = color_bench();
-        let mut rng = Rng::new(3);
-        let items = random_color_items(&mut rng, 500, [0.0; 3], 3);
-        let run = bench.run(&items, settle, &mut rng, (100, 100), &Checker::new(COLOR_NAME, 3));
-        assert_eq!(run.first_latency, depth);
-        assert_eq!(run.cycles, items.len() as u64 + depth, "one item per cycle plus the fill");
+        let mut unit = project_bench(&cfg);
+        let items = &scene_project_items(&cfg, 5, 600, 1)[0];
+        let t = neo_tb::pre::measure(&mut unit, items, &Checker::new(PROJECT_NAME, 5));
+        assert_eq!((t.latency, t.ii), (unit.depth as u64, 1));
+        assert_eq!(t.cycles, items.len() as u64 + unit.depth as u64, "one item per cycle plus the fill");
     }
 }

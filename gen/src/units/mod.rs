@@ -17,6 +17,7 @@
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
 //! | `neo_pre_color` | Preprocessing: colour unit (SH degree 0-3, from golden's graph) | run time |
+//! | `neo_pre_project` | Preprocessing: projection unit (from golden's graph) | run time |
 //! | `neo_pre_dup`   | Preprocessing: duplication unit (tiles entered, incoming flag) | run time |
 //! | `neo_perf_counter` | one 64-bit performance counter                       | no        |
 //! | `neo_perf_counters` | the engine's performance counters                   | yes       |
@@ -90,7 +91,7 @@ pub fn top_modules() -> &'static [&'static str] {
 /// and that no other top instantiates: the lint and latch gates check them like
 /// [`top_modules`]. (The engine, which has its own gates, is not listed.)
 pub fn run_time_tops() -> &'static [&'static str] {
-    &[pre::dup::NAME, pre::COLOR_NAME]
+    &[pre::dup::NAME, pre::COLOR_NAME, pre::PROJECT_NAME]
 }
 
 /// Every module of the configuration, leaves first.
@@ -127,6 +128,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.extend(fp::modules(cfg));
     all.push(pre::dup::module(cfg));
     all.push(pre::color_module(cfg));
+    all.push(pre::project_module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }

@@ -218,7 +218,30 @@ impl<'a> Datapath<'a> {
         if !unused.is_empty() {
             m.wire_assign("unused_cmp", 1, format!("^{{{}}}", unused.join(", ")));
         }
+        let partial = self.partially_read();
+        if !partial.is_empty() {
+            m.wire_assign("unused_bits", 1, format!("^{{{}}}", partial.join(", ")));
+        }
         m
+    }
+
+    /// The operand nets of operations that read only some of their bits (`abs` and `is_nan`
+    /// drop the sign, `exp_field` and `is_finite` read the exponent): reduced into
+    /// `unused_bits`, Verilator's convention for bits left unread by design.
+    fn partially_read(&self) -> Vec<String> {
+        let mut nets: Vec<String> = Vec::new();
+        for (id, n) in self.graph.nodes.iter().enumerate() {
+            if let Op::Abs(a) | Op::IsNan(a) | Op::ExpField(a) | Op::IsFinite(a) = n.op {
+                let net = match self.start(id) {
+                    Some(s) => self.value_at(a, s),
+                    None => self.name(a),
+                };
+                if !nets.contains(&net) {
+                    nets.push(net);
+                }
+            }
+        }
+        nets
     }
 
     fn ports(&self, m: &mut Module) {

@@ -11,6 +11,7 @@ use datapath::Datapath;
 use library::PreLibrary;
 use neo_golden::engine::EngineConfig;
 use neo_golden::hwpre::color::color_graph;
+use neo_golden::hwpre::project::{project_graph, ProjectParams};
 
 /// Module name of the colour unit.
 pub const COLOR_NAME: &str = "neo_pre_color";
@@ -24,6 +25,31 @@ pub fn color_module(cfg: &EngineConfig) -> Module {
         COLOR_NAME,
         &["Colour unit (paper Section 5.2): view-dependent colour from spherical harmonics of degree 0 to 3,".into(),
           "+0.5, clamped at 0 and quantised to the feature entry's colour format; golden hwpre::color.".into()],
+    )
+}
+
+/// Module name of the projection unit.
+pub const PROJECT_NAME: &str = "neo_pre_project";
+
+/// The projection unit's parameters for `cfg`: the feature format and the tile size.
+pub fn project_params(cfg: &EngineConfig) -> ProjectParams {
+    ProjectParams { feature: cfg.feature_format(), tile: cfg.tile }
+}
+
+/// The projection unit: view transform, culling, EWA 2D covariance, conic, radius, tile
+/// rectangle, depth key and the feature entry's geometry fields (golden
+/// `hwpre::project::project_graph`).
+pub fn project_module(cfg: &EngineConfig) -> Module {
+    let graph = project_graph(&project_params(cfg));
+    Datapath::new(&graph, &PreLibrary).module(
+        PROJECT_NAME,
+        &[
+            "Projection unit (paper Section 5.2): view transform, near-plane and frustum culling, EWA 2D covariance"
+                .into(),
+            "with the +0.3 dilation, conic, radius, tile rectangle, FP16 depth key and the feature entry's mean,"
+                .into(),
+            "conic, opacity, ITU axis and extents; golden hwpre::project.".into(),
+        ],
     )
 }
 
