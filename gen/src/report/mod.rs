@@ -153,9 +153,21 @@ pub fn engine_mux(cfg: &EngineConfig) -> String {
     crate::units::axi::mux::name(engine::Clients::of(cfg).slots())
 }
 
-/// The black boxes of `top` when it is synthesized hierarchically: the raster core's units, or
-/// every module the engine instantiates; `None` for the tops synthesized flat.
+/// The black boxes of `top` when it is synthesized hierarchically: the raster core's units,
+/// the preprocessing datapaths' binary32 primitives (each checked as its own top), the
+/// duplication unit's ITUs, or every module the engine instantiates; `None` for the tops
+/// synthesized flat.
 pub fn hierarchical_boxes(cfg: &EngineConfig, top: &str) -> Option<Vec<String>> {
+    use crate::units::{fp, itu, pre};
+    if top == pre::COLOR_NAME || top == pre::PROJECT_NAME {
+        let mut boxes: Vec<String> =
+            fp::FpPrim::ALL.iter().map(|&p| fp::module_name(p).to_string()).collect();
+        boxes.push(fp::cmp::NAME.to_string());
+        return Some(boxes);
+    }
+    if top == pre::dup::NAME {
+        return Some(vec![itu::NAME.to_string()]);
+    }
     if top == engine::NAME {
         let mut boxes: Vec<String> = engine::SUBMODULES.iter().map(|s| s.to_string()).collect();
         boxes.push(engine_mux(cfg));
