@@ -206,10 +206,7 @@ impl<'a> Datapath<'a> {
             .enumerate()
             .filter_map(|(id, l)| match l {
                 Lowering::Compare { output } => Some(
-                    COMPARE_OUTPUTS
-                        .iter()
-                        .filter(move |o| *o != output)
-                        .map(move |o| format!("n{id}_cmp_{}", o.trim_end_matches("_o"))),
+                    COMPARE_OUTPUTS.iter().filter(move |o| *o != output).map(move |o| compare_net(id, o)),
                 ),
                 _ => None,
             })
@@ -232,10 +229,7 @@ impl<'a> Datapath<'a> {
         let mut nets: Vec<String> = Vec::new();
         for (id, n) in self.graph.nodes.iter().enumerate() {
             if let Op::Abs(a) | Op::IsNan(a) | Op::ExpField(a) | Op::IsFinite(a) = n.op {
-                let net = match self.start(id) {
-                    Some(s) => self.value_at(a, s),
-                    None => self.name(a),
-                };
+                let net = self.operand(id, a);
                 if !nets.contains(&net) {
                     nets.push(net);
                 }
@@ -273,16 +267,20 @@ impl<'a> Datapath<'a> {
         m.assign("out_valid_o", format!("valid_q[{}]", d - 1));
     }
 
+    /// The net through which node `id` reads its operand `a`: `a` delayed to the cycle `id`
+    /// starts, or `a` itself when `id` is static.
+    fn operand(&self, id: NodeId, a: NodeId) -> String {
+        match self.start(id) {
+            Some(s) => self.value_at(a, s),
+            None => self.name(a),
+        }
+    }
+
     /// Declares and drives `n<id>`.
     fn node(&self, m: &mut Module, id: NodeId) {
         let n = &self.graph.nodes[id];
         let w = n.ty.bits();
-        let start = self.start(id);
-        let operand = |a: NodeId| match start {
-            Some(s) => self.value_at(a, s),
-            None => self.name(a),
-        };
-        let args: Vec<String> = n.op.args().into_iter().map(operand).collect();
+        let args: Vec<String> = n.op.args().into_iter().map(|a| self.operand(id, a)).collect();
         let en = if self.ready[id].is_some() { "en" } else { "1'b1" };
         let out = self.name(id);
         match (&n.op, &self.lowering[id]) {
@@ -311,7 +309,7 @@ impl<'a> Datapath<'a> {
             (_, Lowering::Compare { output }) => {
                 let mut c: Vec<(&str, String)> = vec![("a_i", args[0].clone()), ("b_i", args[1].clone())];
                 for o in COMPARE_OUTPUTS {
-                    let wire = format!("n{id}_cmp_{}", o.trim_end_matches("_o"));
+                    let wire = compare_net(id, o);
                     m.wire(&wire, if o.starts_with("m") { 32 } else { 1 });
                     c.push((o, wire));
                 }
@@ -322,7 +320,7 @@ impl<'a> Datapath<'a> {
                     conns: conns(&c),
                 }));
                 m.reg(&out, w);
-                let update = set(&out, format!("n{id}_cmp_{}", output.trim_end_matches("_o")));
+                let update = set(&out, compare_net(id, output));
                 m.seq_noreset(if self.ready[id].is_some() {
                     vec![if_("en", vec![update])]
                 } else {
@@ -361,6 +359,11 @@ impl<'a> Datapath<'a> {
             m.wire_assign(format!("n{id}_d{t}"), w, tap);
         }
     }
+}
+
+/// The wire of node `id`'s comparator output `port` (`lt_o` -> `n<id>_cmp_lt`).
+fn compare_net(id: NodeId, port: &str) -> String {
+    format!("n{id}_cmp_{}", port.trim_end_matches("_o"))
 }
 
 /// `template` with `$k` replaced by `args[k]` (highest k first, so `$1` never eats `$10`).
