@@ -100,9 +100,10 @@ impl DatapathBench {
     }
 
     /// Runs `items` (each one raw value per graph input, in [`Graph::inputs`] order; per-frame
-    /// inputs must agree across items) through the unit: items offered in `p_valid`% of cycles,
-    /// results taken in `p_ready`%; every output checked against [`Graph::eval`]. `settle` idle
-    /// cycles follow the per-frame inputs. Panics at the first mismatch (see [`Checker`]).
+    /// inputs must agree across items) through the unit: an item is offered in `p_valid`% of
+    /// cycles and stays offered until taken, results are taken in `p_ready`%; every output is
+    /// checked against [`Graph::eval`]. `settle` idle cycles follow the per-frame inputs.
+    /// Panics at the first mismatch (see [`Checker`]).
     pub fn run(
         &mut self,
         items: &[Vec<u32>],
@@ -128,10 +129,12 @@ impl DatapathBench {
         let (mut next, mut done) = (0usize, 0usize);
         let (mut start, mut first_accept, mut first_latency) = (None, None, 0u64);
         let limit = m.cycle() + 64 * (items.len() as u64 + 1000) * 100 / p_valid.min(p_ready).max(1) as u64;
+        let mut held = false;
         while done < items.len() {
             let cycle = m.cycle();
             check.protocol(cycle, cycle < limit, "no progress: the unit stopped producing results");
-            let offer = next < items.len() && rng.percent(p_valid);
+            // An offered item stays offered until taken (valid is never withdrawn).
+            let offer = next < items.len() && (held || rng.percent(p_valid));
             m.set_u64(self.in_valid, offer as u64);
             if offer {
                 start.get_or_insert(cycle);
@@ -153,7 +156,9 @@ impl DatapathBench {
                 }
                 done += 1;
             }
-            if offer && m.get_u64(self.in_ready) == 1 {
+            let taken = offer && m.get_u64(self.in_ready) == 1;
+            held = offer && !taken;
+            if taken {
                 first_accept.get_or_insert(cycle);
                 next += 1;
             }

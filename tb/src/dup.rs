@@ -184,8 +184,9 @@ impl DupBench {
         m.set_words(p.prev_geom, &prev[1]);
     }
 
-    /// Runs `items` with items offered in `p_valid`% and hits taken in `p_ready`% of cycles;
-    /// checks every hit against [`expected`]. Panics at the first mismatch.
+    /// Runs `items`: a Gaussian is offered in `p_valid`% of cycles and stays offered until
+    /// taken, hits are taken in `p_ready`% of cycles; checks every hit against [`expected`].
+    /// Panics at the first mismatch.
     pub fn run(
         &mut self,
         frame: DupFrame,
@@ -205,10 +206,12 @@ impl DupBench {
         let tiles = (frame.grid[0] * frame.grid[1]) as u64;
         let limit =
             self.model.cycle() + (items.len() as u64 * (tiles + 8) + 100) * 100 / p_valid.min(p_ready) as u64;
+        let mut held = false;
         while next < items.len() || got < want.len() {
             let cycle = self.model.cycle();
             check.protocol(cycle, cycle < limit, "no progress");
-            let offer = next < items.len() && rng.percent(p_valid);
+            // An offered item stays offered until taken (valid is never withdrawn).
+            let offer = next < items.len() && (held || rng.percent(p_valid));
             self.model.set_u64(self.p.in_valid, offer as u64);
             if offer {
                 start.get_or_insert(cycle);
@@ -233,7 +236,9 @@ impl DupBench {
                 check.value(cycle, &f("incoming"), w.incoming as u64, m.get_u64(p.out_incoming));
                 got += 1;
             }
-            if offer && m.get_u64(p.in_ready) == 1 {
+            let taken = offer && m.get_u64(p.in_ready) == 1;
+            held = offer && !taken;
+            if taken {
                 first_accept.get_or_insert(cycle);
                 last_accept = cycle;
                 next += 1;
@@ -258,17 +263,22 @@ impl DupBench {
     }
 }
 
-/// A Gaussian of one pixel's extent at pixel `(x, y)`, axis-aligned (for timing runs).
-pub fn point_gaussian(cfg: &EngineConfig, x: f64, y: f64) -> FeatureEntry {
+/// An axis-aligned entry at pixel `(x, y)` whose four extents are the raw value `extent`
+/// (`1 << extent.frac` is one pixel; the format's unbounded value never separates).
+pub fn square_gaussian(cfg: &EngineConfig, x: f64, y: f64, extent: i32) -> FeatureEntry {
     let fmt = cfg.feature_format();
-    let one = 1 << fmt.extent.frac;
     FeatureEntry {
         mean: [fmt.mean.quantize(x) as i32, fmt.mean.quantize(y) as i32],
         axis: [1 << fmt.axis.frac, 0],
-        extent_xy: [one, one],
-        extent_uv: [one, one],
+        extent_xy: [extent, extent],
+        extent_uv: [extent, extent],
         ..Default::default()
     }
+}
+
+/// A Gaussian of one pixel's extent at pixel `(x, y)` (for timing runs).
+pub fn point_gaussian(cfg: &EngineConfig, x: f64, y: f64) -> FeatureEntry {
+    square_gaussian(cfg, x, y, 1 << cfg.feature_format().extent.frac)
 }
 
 /// The unit's timing for `reports/latency.json` (every hit checked against golden on the way):

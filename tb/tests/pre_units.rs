@@ -135,14 +135,7 @@ neo_tb::with_models! {
         let cfg = neo_tb::config();
         let fmt = cfg.feature_format();
         let mut bench = DupBench::build(&cfg).expect("build neo_pre_dup");
-        let px = |v: f64| fmt.mean.quantize(v) as i32;
-        let base = |x: f64, y: f64, r: i32| neo_golden::formats::FeatureEntry {
-            mean: [px(x), px(y)],
-            axis: [1 << fmt.axis.frac, 0],
-            extent_xy: [r, r],
-            extent_uv: [r, r],
-            ..Default::default()
-        };
+        let base = |x: f64, y: f64, r: i32| neo_tb::dup::square_gaussian(&cfg, x, y, r);
         let unb = fmt.unbounded_extent();
         let one = 1 << fmt.extent.frac;
         let cases: Vec<(&str, DupItem)> = vec![
