@@ -111,6 +111,8 @@ pub struct PreprocessMeasured {
     pub color: Option<(f64, u64)>,
     /// Duplication unit: walker cycles per candidate tile and latency.
     pub duplication: Option<(f64, u64)>,
+    /// The fetch units' outstanding-read window, in 64-byte lines (all units together).
+    pub read_window: Option<u32>,
 }
 
 impl PreprocessMeasured {
@@ -131,10 +133,18 @@ impl PreprocessMeasured {
             Some(d) => Some((d.cycles_per_candidate as f64, d.latency)),
             None => None,
         };
+        let read_window = match p.fetch {
+            Some(f) if f.window_lines() == 0 || f.window_lines() > u64::from(u32::MAX) => {
+                return Err(format!("`preprocess.fetch` gives a window of {} lines", f.window_lines()))
+            }
+            Some(f) => Some(f.window_lines() as u32),
+            None => None,
+        };
         Ok(PreprocessMeasured {
             projection: unit(p.projection, "projection")?,
             color: unit(p.color, "color")?,
             duplication,
+            read_window,
         })
     }
 
@@ -158,6 +168,12 @@ impl PreprocessMeasured {
         t
     }
 
+    /// The preprocessing engine's outstanding-read window in lines: the measured one, else
+    /// `assumed` (config `neo.preprocess_read_window`).
+    pub fn window(&self, assumed: u32) -> u32 {
+        self.read_window.unwrap_or(assumed)
+    }
+
     /// A one-line label for reports: what is measured, what is still assumed.
     pub fn label(&self) -> String {
         let units =
@@ -166,10 +182,16 @@ impl PreprocessMeasured {
         let assumed: Vec<&str> = units.iter().filter(|u| u.1.is_none()).map(|u| u.0).collect();
         match (measured.is_empty(), assumed.is_empty()) {
             (true, _) => "preprocessing-engine timing ASSUMED, not measured (config preprocess.*)".into(),
-            (false, true) => format!(
-                "preprocessing-engine timing measured on the RTL ({}; latency.json preprocess); its outstanding-read window is assumed (config neo.preprocess_read_window)",
-                measured.join(", ")
-            ),
+            (false, true) => match self.read_window {
+                Some(w) => format!(
+                    "preprocessing-engine timing measured on the RTL ({}, and the fetch units' read window of {w} lines; latency.json preprocess)",
+                    measured.join(", ")
+                ),
+                None => format!(
+                    "preprocessing-engine timing measured on the RTL ({}; latency.json preprocess); its outstanding-read window is assumed (config neo.preprocess_read_window)",
+                    measured.join(", ")
+                ),
+            },
             (false, false) => format!(
                 "preprocessing-engine timing measured for {} (latency.json preprocess); ASSUMED, not measured: {} (config preprocess.*)",
                 measured.join(", "),

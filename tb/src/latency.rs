@@ -220,6 +220,7 @@ pub fn preprocess_section(cfg: &EngineConfig) -> neo_golden::formats::latency::P
         projection: Some(measure(&mut project, project_items, &Checker::new(PROJECT_NAME, SEED ^ 13))),
         color: Some(measure(&mut color, &color_items, &Checker::new(COLOR_NAME, SEED ^ 12))),
         duplication: Some(crate::dup::measure_timing(&mut dup, SEED ^ 11)),
+        fetch: Some(crate::fetch::measure_window(cfg, SEED ^ 14)),
     }
 }
 
@@ -290,6 +291,7 @@ fn doc() -> BTreeMap<String, String> {
         ("units.neo_sort_core.command_overhead", "cycles from accepting a zero-length SORT to its done_o pulse"),
         ("preprocess.projection", "neo_pre_project on `items` Gaussians of a synthetic scene at full rate: latency = edges from accepting a Gaussian to its result offered; ii = cycles per Gaussian; cycles = first offer to last result; settle = cycles the camera registers need before the first Gaussian (every output checked against golden)"),
         ("preprocess.color", "neo_pre_color on `items` random Gaussians of SH degree 3 at full rate: fields as preprocess.projection"),
+        ("preprocess.fetch", "neo_pre_fetch streaming `beats` beats of geometry records through a memory answering `read_latency` cycles after each request at one beat per cycle, records always taken (each checked against memory): lines_in_flight = most 64-byte lines requested and not yet received (the unit's read window, EngineConfig pre_read_lines); cycles = start to last record; the engine's window is units x lines_in_flight"),
         ("preprocess.duplication", "neo_pre_dup: latency = edges from accepting a Gaussian with one candidate tile, which it enters, to that tile offered; cycles_per_candidate = walker cycles per candidate tile over `gaussians` random Gaussians with `candidates` candidate tiles (all but the last) taking `cycles` from the first acceptance to the last; min_cycles_per_gaussian = walker cycles of a Gaussian outside the image"),
         ("raster.itu.latency", "neo_itu: rising edges from the edge that accepts a (Gaussian, tile) job to the first cycle its subtile bitmap is offered"),
         ("raster.itu.ii", "neo_itu: cycles per (Gaussian, tile) job back to back with the output always ready; each job tests every subtile of the tile at once"),

@@ -21,6 +21,7 @@ pub mod dut;
 pub mod dynmodel;
 pub mod engine;
 pub mod engine_regs;
+pub mod fetch;
 pub mod fp;
 #[cfg(neo_has_verilator)]
 pub mod frame;

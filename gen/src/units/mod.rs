@@ -91,7 +91,7 @@ pub fn top_modules() -> &'static [&'static str] {
 /// and that no other top instantiates: the lint and latch gates check them like
 /// [`top_modules`]. (The engine, which has its own gates, is not listed.)
 pub fn run_time_tops() -> &'static [&'static str] {
-    &[pre::dup::NAME, pre::COLOR_NAME, pre::PROJECT_NAME]
+    &[pre::dup::NAME, pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME]
 }
 
 /// Every module of the configuration, leaves first.
@@ -127,6 +127,8 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(engine::module(cfg));
     all.extend(fp::modules(cfg));
     all.push(pre::dup::module(cfg));
+    all.push(pre::fetch::ram_module(cfg));
+    all.push(pre::fetch::module(cfg));
     all.push(pre::color_module(cfg));
     all.push(pre::project_module(cfg));
     for m in &mut all {

@@ -139,6 +139,13 @@ pub struct EngineConfig {
     pub axi_id_bits: u32,
     /// Engine: AXI4 transactions a requester may have in flight (reads and writes each).
     pub axi_outstanding: usize,
+    /// Preprocessing Engine: projection, colour, duplication and fetch units, one of each per
+    /// lane (Table 1: 4).
+    pub pre_units: usize,
+    /// Preprocessing Engine: 64-byte lines each fetch unit (`neo_pre_fetch`) keeps in flight,
+    /// its read window and the size of its beat buffer (a power of two). Little's law: one unit
+    /// streaming a quarter of 51.2 GB/s through about 400 ns of read latency needs 80.
+    pub pre_read_lines: usize,
 }
 
 impl Default for EngineConfig {
@@ -173,6 +180,8 @@ impl Default for EngineConfig {
             axi_addr_bits: 32,
             axi_id_bits: 4,
             axi_outstanding: 8,
+            pre_units: 4,
+            pre_read_lines: 128,
         }
     }
 }
@@ -339,7 +348,43 @@ impl EngineConfig {
         if !o.is_power_of_two() || !(1..=64).contains(&o) {
             return err(format!("axi_outstanding {o} is not a power of two in 1..=64"));
         }
+        self.validate_preprocessing()
+    }
+
+    /// The Preprocessing Engine's constraints: its unit count and the fetch units' window, which
+    /// `axi_outstanding` bursts of at most 256 beats and 4 KiB must cover.
+    fn validate_preprocessing(&self) -> Result<(), ConfigError> {
+        let err = |s: String| Err(ConfigError(s));
+        if !(1..=16).contains(&self.pre_units) {
+            return err(format!("pre_units {} is outside 1..=16", self.pre_units));
+        }
+        let l = self.pre_read_lines;
+        let beat = self.axi_data_bits as usize / 8;
+        if !l.is_power_of_two() || !(1..=1024).contains(&l) || l * 64 < beat * self.axi_outstanding {
+            return err(format!(
+                "pre_read_lines {l} is not a power of two in 1..=1024 holding axi_outstanding {} beats of {beat} bytes",
+                self.axi_outstanding
+            ));
+        }
+        if self.pre_burst_beats() > 256 || self.pre_burst_beats() * beat > 4096 {
+            return err(format!(
+                "pre_read_lines {l}: bursts of {} beats (the window over axi_outstanding {}) exceed 256 beats or 4 KiB",
+                self.pre_burst_beats(),
+                self.axi_outstanding
+            ));
+        }
         Ok(())
+    }
+
+    /// Beats of a fetch unit's window (`pre_read_lines` lines of 64 bytes).
+    pub fn pre_window_beats(&self) -> usize {
+        self.pre_read_lines * 64 / (self.axi_data_bits as usize / 8)
+    }
+
+    /// Beats of a fetch unit's full burst: its window over `axi_outstanding`, so that the
+    /// bursts in flight fill the window.
+    pub fn pre_burst_beats(&self) -> usize {
+        self.pre_window_beats() / self.axi_outstanding
     }
 
     /// The raster core's constraints (see the fields' docs).
@@ -418,6 +463,8 @@ mod tests {
             EngineConfig { topology: Topology::OddEvenMerge, ..base.clone() },
             EngineConfig { sort_cores: 8, ..base.clone() },
             EngineConfig { mem_channels: 2, ..base.clone() },
+            EngineConfig { pre_units: 2, ..base.clone() },
+            EngineConfig { pre_read_lines: 64, ..base.clone() },
         ];
         for v in &variants {
             assert_ne!(v.hash(), base.hash(), "{v:?}");
@@ -479,6 +526,12 @@ mod tests {
             EngineConfig { axi_data_bits: 48, ..EngineConfig::default() },
             EngineConfig { axi_outstanding: 3, ..EngineConfig::default() },
             EngineConfig { axi_id_bits: 2, ..EngineConfig::default() },
+            EngineConfig { pre_units: 0, ..EngineConfig::default() },
+            EngineConfig { pre_read_lines: 96, ..EngineConfig::default() },
+            // 8 outstanding bursts of 8 beats do not fit a window of 1 line (8 beats).
+            EngineConfig { pre_read_lines: 1, ..EngineConfig::default() },
+            // 8 bursts of 512 beats: above 256 beats.
+            EngineConfig { pre_read_lines: 512, ..EngineConfig::default() },
         ];
         for c in bad {
             assert!(c.validate().is_err(), "{c:?}");
@@ -510,16 +563,19 @@ mod tests {
             bsu in 0usize..80, chunk in 0usize..5000, burst in 0usize..300, tile in 0u32..300,
             subtile in 0u32..40, lanes in 0usize..80, scus in 0usize..40, itus in 0usize..20,
             fbuf in 0usize..5000, cores in 0usize..70, cap in 0usize..70000, data in 0u32..2000,
-            key in 0u8..40, id in 0u8..40, topo in 0usize..3,
+            key in 0u8..40, id in 0u8..40, topo in 0usize..3, lines in 0usize..3000,
+            outstanding in 0usize..70,
         ) {
             let c = EngineConfig {
                 topology: Topology::ALL[topo], bsu_width: bsu, chunk, burst, tile, subtile,
                 scu_lanes: lanes, raster_scus: scus, raster_itus: itus, raster_feature_buffer: fbuf,
                 sort_cores: cores, table_capacity: cap, axi_data_bits: data, key_bits: key,
-                id_bits: id, ..EngineConfig::default()
+                id_bits: id, pre_read_lines: lines, axi_outstanding: outstanding, ..EngineConfig::default()
             };
             if c.validate().is_ok() {
                 let _ = (c.format(), c.network(), c.sort_config(), c.raster_config(), c.bsu_latency());
+                let (window, burst) = (c.pre_window_beats(), c.pre_burst_beats());
+                proptest::prop_assert!(burst >= 1 && burst <= 256 && burst * c.axi_outstanding == window);
                 proptest::prop_assert!(c.raster_config().subtiles_per_tile() <= 64);
             }
         }

@@ -9,10 +9,10 @@
 //! another version with an error naming the file and the version, and a malformed one with an
 //! error naming the file and the field (`sort_core.merge[1].interval: missing field ...`).
 //!
-//! # Schema `neo-latency/4`
+//! # Schema `neo-latency/6`
 //! ```text
 //! {
-//!   "schema": "neo-latency/4",
+//!   "schema": "neo-latency/6",
 //!   "doc": { field: explanation, ... },
 //!   "config": { every field of the EngineConfig the RTL was generated from },
 //!   "memory": { "read_latency": 1, "req_ready": "always", "rsp_gaps": "none" },
@@ -32,12 +32,18 @@
 //!     "core": { "itus", "scus", "feature_buffer", "pixel_writes", "memory",
 //!               "grid": [ { "entries", "bits_per_gaussian", "set_bits", "group_max_routed",
 //!                           "cycles", "load_cycles" }, ... ] }
+//!   },
+//!   "preprocess": {
+//!     "projection" | "color": { "latency", "ii", "items", "cycles", "settle" },
+//!     "duplication": { "latency", "cycles_per_candidate", "min_cycles_per_gaussian",
+//!                      "gaussians", "candidates", "cycles" },
+//!     "fetch": { "units", "lines_in_flight", "read_latency", "beats", "cycles" }
 //!   }
 //! }
 //! ```
 //! Keys are written sorted (the document goes through a `serde_json::Value`), so the file is
-//! reproducible bit for bit. `units.neo_scu` and `raster` (and its `itu` and `core`) are
-//! optional: a reader assumes what is absent.
+//! reproducible bit for bit. `units.neo_scu`, `raster` (and its `itu` and `core`) and
+//! `preprocess` (and each of its units) are optional: a reader assumes what is absent.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -49,7 +55,7 @@ use crate::engine::EngineConfig;
 use crate::error::{InputError, InputResult};
 
 /// The schema identifier (and version) this crate writes and reads.
-pub const SCHEMA: &str = "neo-latency/5";
+pub const SCHEMA: &str = "neo-latency/6";
 
 /// The whole of `reports/latency.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -225,6 +231,32 @@ pub struct Preprocess {
     /// The duplication unit (`neo_pre_dup`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub duplication: Option<DupUnit>,
+    /// The fetch units (`neo_pre_fetch`): the engine's outstanding-read window.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fetch: Option<FetchUnit>,
+}
+
+/// The fetch units' read window, measured on one unit streaming through a long read latency.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FetchUnit {
+    /// Fetch units of the engine (`pre_units`, one per lane).
+    pub units: u64,
+    /// 64-byte lines one unit had in flight at most (its window, as the RTL keeps it).
+    pub lines_in_flight: u64,
+    /// Cycles from a read request to its first data beat in the measurement.
+    pub read_latency: u64,
+    /// Data beats the unit received, and the cycles from its start to its last record taken.
+    pub beats: u64,
+    /// Cycles of the measurement.
+    pub cycles: u64,
+}
+
+impl FetchUnit {
+    /// Lines the engine's fetch units keep in flight together.
+    pub fn window_lines(&self) -> u64 {
+        self.units * self.lines_in_flight
+    }
 }
 
 /// A pipelined datapath's latency and rate.

@@ -169,7 +169,8 @@ impl<'a> Model<'a> {
     /// The agents: preprocessing, sorting cores, raster cores.
     pub fn agents(&self) -> Vec<AgentSpec> {
         let n = &self.cfg.neo;
-        let mut v = vec![AgentSpec { class: CLASS_PRE, window: n.preprocess_read_window, overlap: false }];
+        let pre_window = self.lat.preprocess.window(n.preprocess_read_window);
+        let mut v = vec![AgentSpec { class: CLASS_PRE, window: pre_window, overlap: false }];
         for _ in 0..self.sort_cores {
             v.push(AgentSpec {
                 class: CLASS_SORT,

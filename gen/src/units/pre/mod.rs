@@ -4,6 +4,7 @@
 
 pub mod datapath;
 pub mod dup;
+pub mod fetch;
 pub mod library;
 
 use crate::emit::Module;
