@@ -1,8 +1,9 @@
 //! The bench of every pipelined datapath emitted from a golden dataflow graph (the
-//! Preprocessing Engine's units, `gen/src/units/pre`): the stream agents ([`Source`], [`Sink`])
-//! offer items and take results under random valid/ready backpressure, the golden model is [`Graph::eval`] (the graph's [`Native`]
-//! evaluation, the same program golden's pipeline runs), and the checker compares every output
-//! field of every item in order, stopping at the first mismatch.
+//! Preprocessing Engine's units, `gen/src/units/pre`): the stream agents ([`Source`],
+//! [`Sink`]) offer items and take results under random valid/ready backpressure, the golden
+//! model is [`Graph::eval`] (the graph's [`Native`] evaluation, the same program golden's
+//! pipeline runs), and the checker compares every output field of every item in order,
+//! stopping at the first mismatch.
 //!
 //! [`Native`]: neo_golden::hwarith::Native
 
@@ -79,7 +80,16 @@ impl DatapathBench {
             }
         }
         let outputs = graph.outputs.iter().map(|(n, _)| format!("out_{n}_o")).collect();
-        Ok(DatapathBench { out_ready: model.port("out_ready_i")?, graph, model, uniform, items_in, outputs })
+        let bench =
+            DatapathBench { out_ready: model.port("out_ready_i")?, graph, model, uniform, items_in, outputs };
+        bench.agents(&mut Rng::new(0), (100, 100))?;
+        Ok(bench)
+    }
+
+    /// The stream agents of a run ([`crate::stream::unit_agents`]).
+    fn agents(&self, rng: &mut Rng, mix: (u32, u32)) -> Result<(Source, Sink), String> {
+        let (ins, outs) = (strs(&self.items_in), strs(&self.outputs));
+        crate::stream::unit_agents(&self.model, &ins, &outs, rng, mix)
     }
 
     /// The model, for waves.
@@ -107,12 +117,7 @@ impl DatapathBench {
         check: &Checker,
     ) -> RunStats {
         let expected: Vec<Vec<u32>> = items.iter().map(|i| self.graph.eval(i)).collect();
-        let m = &self.model;
-        let (ins, outs) = (strs(&self.items_in), strs(&self.outputs));
-        let src =
-            Source::bind(m, "in_valid_i", "in_ready_o", &ins, rng.fork(1), 100u32.saturating_sub(p_valid));
-        let sink = Sink::bind(m, "out_valid_o", "out_ready_i", &outs, rng.fork(2), p_ready);
-        let (mut src, mut sink) = src.and_then(|s| Ok((s, sink?))).unwrap_or_else(|e| panic!("{e}"));
+        let (mut src, mut sink) = self.agents(rng, (p_valid, p_ready)).unwrap_or_else(|e| panic!("{e}"));
         let m = &mut self.model;
         m.reset();
         if let Some(first) = items.first() {

@@ -1,8 +1,9 @@
 //! The duplication unit's bench (`neo_pre_dup` against golden `hwpre::duplicate::incoming`):
-//! a [`Source`] offers Gaussians (this frame's and the previous frame's ITU fields, a visibility
-//! bit, id and key) and a [`Sink`] takes the hits, under random valid/ready backpressure; the golden model lists every tile
-//! each Gaussian enters with its incoming flag; the checker compares the unit's stream of tiles
-//! with it in order and stops at the first mismatch.
+//! a [`Source`] offers Gaussians (this frame's and the previous frame's ITU fields, a
+//! visibility bit, id and key) and a [`Sink`] takes the hits, under random valid/ready
+//! backpressure; the golden model lists every tile each Gaussian enters with its incoming flag;
+//! the checker compares the unit's stream of tiles with it in order and stops at the first
+//! mismatch.
 
 use crate::check::Checker;
 use crate::dynmodel::DynModel;
@@ -122,6 +123,12 @@ const OUT_PORTS: [(&str, &str); 5] = [
     ("out_incoming_o", "incoming"),
 ];
 
+/// The stream agents of a run ([`crate::stream::unit_agents`] on [`IN_PORTS`], [`OUT_PORTS`]).
+fn agents(m: &DynModel, rng: &mut Rng, mix: (u32, u32)) -> Result<(Source, Sink), String> {
+    let outs: Vec<&str> = OUT_PORTS.iter().map(|p| p.0).collect();
+    crate::stream::unit_agents(m, &IN_PORTS, &outs, rng, mix)
+}
+
 /// The input beat of `it` on [`IN_PORTS`] (the previous-frame fields repeat this frame's when
 /// the Gaussian was not visible).
 fn item_beat(cfg: &EngineConfig, it: &DupItem) -> Beat {
@@ -159,6 +166,7 @@ impl DupBench {
         let (model, _) = DynModel::build_traced(&iface, &files, Some(&vlt), None)?;
         let (grid_x, grid_y, all_fresh) =
             (model.port("grid_x_i")?, model.port("grid_y_i")?, model.port("all_fresh_i")?);
+        agents(&model, &mut Rng::new(0), (100, 100))?;
         Ok(DupBench { cfg: cfg.clone(), model, grid_x, grid_y, all_fresh })
     }
 
@@ -181,17 +189,7 @@ impl DupBench {
     ) -> DupRun {
         let want = expected(&self.cfg, frame, items);
         let m = &mut self.model;
-        let outs: Vec<&str> = OUT_PORTS.iter().map(|p| p.0).collect();
-        let src = Source::bind(
-            m,
-            "in_valid_i",
-            "in_ready_o",
-            &IN_PORTS,
-            rng.fork(1),
-            100u32.saturating_sub(p_valid),
-        );
-        let sink = Sink::bind(m, "out_valid_o", "out_ready_i", &outs, rng.fork(2), p_ready);
-        let (mut src, mut sink) = src.and_then(|s| Ok((s, sink?))).unwrap_or_else(|e| panic!("{e}"));
+        let (mut src, mut sink) = agents(m, rng, (p_valid, p_ready)).unwrap_or_else(|e| panic!("{e}"));
         for it in items {
             src.push(item_beat(&self.cfg, it));
         }

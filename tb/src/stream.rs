@@ -423,6 +423,21 @@ impl Sink {
     }
 }
 
+/// The agents of a unit with one input stream `in_valid_i` / `in_ready_o` (data ports `ins`)
+/// and one output stream `out_valid_o` / `out_ready_i` (data ports `outs`): a [`Source`] that
+/// offers a beat in `p_valid`% of cycles and a [`Sink`] ready in `p_ready`%, their random
+/// streams forked from `rng` (1 and 2). An error names a missing port.
+pub fn unit_agents<P: PortIo + ?Sized>(
+    io: &P,
+    ins: &[&str],
+    outs: &[&str],
+    rng: &mut Rng,
+    (p_valid, p_ready): (u32, u32),
+) -> Result<(Source, Sink), String> {
+    let src = Source::bind(io, "in_valid_i", "in_ready_o", ins, rng.fork(1), 100u32.saturating_sub(p_valid))?;
+    Ok((src, Sink::bind(io, "out_valid_o", "out_ready_i", outs, rng.fork(2), p_ready)?))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
