@@ -56,6 +56,18 @@ impl Checker {
             );
         }
     }
+
+    /// Panics with a protocol violation on one field: the value the rule `rule` required
+    /// (`expected`) and the one seen (`actual`), both already formatted (hex).
+    #[track_caller]
+    pub fn protocol_field(&self, cycle: u64, field: &str, expected: &str, actual: &str, rule: &str) -> ! {
+        panic!(
+            "PROTOCOL VIOLATION at cycle {cycle}: unit {unit}, field {field}: expected {expected}, actual \
+             {actual} ({rule}) (seed = 0x{seed:016x}; reproduce with NEO_SEED=0x{seed:016x})",
+            unit = self.unit,
+            seed = self.seed
+        );
+    }
 }
 
 /// The memory-port rule "no write is duplicated": every address a run (a command, a tile) writes,

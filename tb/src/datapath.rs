@@ -1,14 +1,16 @@
 //! The bench of every pipelined datapath emitted from a golden dataflow graph (the
-//! Preprocessing Engine's units, `gen/src/units/pre`): the driver offers items under random
-//! valid/ready backpressure, the golden model is [`Graph::eval`] (the graph's [`Native`]
-//! evaluation, the same program golden's pipeline runs), and the checker compares every output
-//! field of every item in order, stopping at the first mismatch.
+//! Preprocessing Engine's units, `gen/src/units/pre`): the stream agents ([`Source`],
+//! [`Sink`]) offer items and take results under random valid/ready backpressure, the golden
+//! model is [`Graph::eval`] (the graph's [`Native`] evaluation, the same program golden's
+//! pipeline runs), and the checker compares every output field of every item in order,
+//! stopping at the first mismatch.
 //!
 //! [`Native`]: neo_golden::hwarith::Native
 
 use crate::check::Checker;
 use crate::dynmodel::DynModel;
 use crate::rng::Rng;
+use crate::stream::{Sink, Source};
 use neo_gen::emit::Module;
 use neo_gen::units::VerilogFile;
 use neo_golden::hwarith::graph::{Graph, Ty};
@@ -17,13 +19,12 @@ use neo_golden::hwarith::graph::{Graph, Ty};
 pub struct DatapathBench {
     graph: Graph,
     model: DynModel,
-    /// Port index of each graph input.
-    inputs: Vec<usize>,
-    /// Port index of each graph output.
-    outputs: Vec<usize>,
-    in_valid: usize,
-    in_ready: usize,
-    out_valid: usize,
+    /// Port index of each per-frame graph input.
+    uniform: Vec<(usize, usize)>,
+    /// Port name of each per-item graph input (the source's data, in graph order).
+    items_in: Vec<String>,
+    /// Port name of each graph output (the sink's data, in graph order).
+    outputs: Vec<String>,
     out_ready: usize,
 }
 
@@ -69,24 +70,26 @@ impl DatapathBench {
         vlt: &str,
     ) -> Result<Self, String> {
         let (model, _) = DynModel::build_traced(iface, files, Some(vlt), None)?;
-        let port = |name: String| model.port(&name);
-        let inputs = graph
-            .inputs
-            .iter()
-            .map(|i| port(if i.uniform { format!("{}_i", i.name) } else { format!("in_{}_i", i.name) }))
-            .collect::<Result<Vec<_>, _>>()?;
-        let outputs =
-            graph.outputs.iter().map(|(n, _)| port(format!("out_{n}_o"))).collect::<Result<Vec<_>, _>>()?;
-        Ok(DatapathBench {
-            in_valid: port("in_valid_i".into())?,
-            in_ready: port("in_ready_o".into())?,
-            out_valid: port("out_valid_o".into())?,
-            out_ready: port("out_ready_i".into())?,
-            graph,
-            model,
-            inputs,
-            outputs,
-        })
+        let mut uniform = Vec::new();
+        let mut items_in = Vec::new();
+        for (k, i) in graph.inputs.iter().enumerate() {
+            if i.uniform {
+                uniform.push((k, model.port(&format!("{}_i", i.name))?));
+            } else {
+                items_in.push(format!("in_{}_i", i.name));
+            }
+        }
+        let outputs = graph.outputs.iter().map(|(n, _)| format!("out_{n}_o")).collect();
+        let bench =
+            DatapathBench { out_ready: model.port("out_ready_i")?, graph, model, uniform, items_in, outputs };
+        bench.agents(&mut Rng::new(0), (100, 100))?;
+        Ok(bench)
+    }
+
+    /// The stream agents of a run ([`crate::stream::unit_agents`]).
+    fn agents(&self, rng: &mut Rng, mix: (u32, u32)) -> Result<(Source, Sink), String> {
+        let (ins, outs) = (strs(&self.items_in), strs(&self.outputs));
+        crate::stream::unit_agents(&self.model, &ins, &outs, rng, mix)
     }
 
     /// The model, for waves.
@@ -100,10 +103,11 @@ impl DatapathBench {
     }
 
     /// Runs `items` (each one raw value per graph input, in [`Graph::inputs`] order; per-frame
-    /// inputs must agree across items) through the unit: an item is offered in `p_valid`% of
-    /// cycles and stays offered until taken, results are taken in `p_ready`%; every output is
-    /// checked against [`Graph::eval`]. `settle` idle cycles follow the per-frame inputs.
-    /// Panics at the first mismatch (see [`Checker`]).
+    /// inputs must agree across items) through the unit: a [`Source`] offers an item in
+    /// `p_valid`% of cycles and holds it until taken, a [`Sink`] takes results in `p_ready`%
+    /// (both forked from `rng`) and checks the output handshake; every output is checked
+    /// against [`Graph::eval`]. `settle` idle cycles follow the per-frame inputs. Panics at the
+    /// first mismatch (see [`Checker`]).
     pub fn run(
         &mut self,
         items: &[Vec<u32>],
@@ -113,57 +117,58 @@ impl DatapathBench {
         check: &Checker,
     ) -> RunStats {
         let expected: Vec<Vec<u32>> = items.iter().map(|i| self.graph.eval(i)).collect();
+        let (mut src, mut sink) = self.agents(rng, (p_valid, p_ready)).unwrap_or_else(|e| panic!("{e}"));
         let m = &mut self.model;
         m.reset();
         if let Some(first) = items.first() {
-            for (k, inp) in self.graph.inputs.iter().enumerate().filter(|(_, i)| i.uniform) {
-                assert!(items.iter().all(|i| i[k] == first[k]), "per-frame input {} varies", inp.name);
-                m.set_u64(self.inputs[k], first[k] as u64);
+            for &(k, port) in &self.uniform {
+                let name = &self.graph.inputs[k].name;
+                assert!(items.iter().all(|i| i[k] == first[k]), "per-frame input {name} varies");
+                m.set_u64(port, first[k] as u64);
             }
         }
-        m.set_u64(self.in_valid, 0);
+        // Idle during the settle cycles: valid low, random data.
+        src.drive(m);
         m.set_u64(self.out_ready, 1);
         for _ in 0..settle {
             m.tick();
         }
-        let (mut next, mut done) = (0usize, 0usize);
+        for item in items {
+            let per_item = self.graph.inputs.iter().zip(item).filter(|(i, _)| !i.uniform);
+            src.push(per_item.map(|(_, &v)| vec![v]).collect());
+        }
+        let mut done = 0usize;
         let (mut start, mut first_accept, mut first_latency) = (None, None, 0u64);
         let limit = m.cycle() + 64 * (items.len() as u64 + 1000) * 100 / p_valid.min(p_ready).max(1) as u64;
-        let mut held = false;
         while done < items.len() {
             let cycle = m.cycle();
             check.protocol(cycle, cycle < limit, "no progress: the unit stopped producing results");
-            // An offered item stays offered until taken (valid is never withdrawn).
-            let offer = next < items.len() && (held || rng.percent(p_valid));
-            m.set_u64(self.in_valid, offer as u64);
-            if offer {
+            src.drive(m);
+            if src.offering() {
                 start.get_or_insert(cycle);
-                for (k, _) in self.graph.inputs.iter().enumerate().filter(|(_, i)| !i.uniform) {
-                    m.set_u64(self.inputs[k], items[next][k] as u64);
-                }
             }
-            let take = rng.percent(p_ready);
-            m.set_u64(self.out_ready, take as u64);
+            sink.drive(m);
             m.eval();
-            if m.get_u64(self.out_valid) == 1 && take {
+            if src.sample(m) {
+                first_accept.get_or_insert(cycle);
+            }
+            if let Some(beat) = sink.sample(m, check) {
                 if done == 0 {
                     first_latency = cycle - first_accept.unwrap_or(cycle);
                 }
-                for (o, ((name, id), port)) in self.graph.outputs.iter().zip(&self.outputs).enumerate() {
+                for (o, ((name, id), got)) in self.graph.outputs.iter().zip(&beat).enumerate() {
                     let mask = if self.graph.nodes[*id].ty == Ty::B { 1 } else { u32::MAX };
                     let field = format!("item {done} {name}");
-                    check.value(cycle, &field, expected[done][o] as u64, m.get_u64(*port) & mask as u64);
+                    check.value(cycle, &field, expected[done][o] as u64, (got[0] & mask) as u64);
                 }
                 done += 1;
-            }
-            let taken = offer && m.get_u64(self.in_ready) == 1;
-            held = offer && !taken;
-            if taken {
-                first_accept.get_or_insert(cycle);
-                next += 1;
             }
             m.tick();
         }
         RunStats { items: items.len(), cycles: m.cycle() - start.unwrap_or(0), first_latency }
     }
+}
+
+fn strs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
 }

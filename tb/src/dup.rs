@@ -1,13 +1,15 @@
 //! The duplication unit's bench (`neo_pre_dup` against golden `hwpre::duplicate::incoming`):
-//! the driver offers Gaussians (this frame's and the previous frame's ITU fields, a visibility
-//! bit, id and key) under random valid/ready backpressure; the golden model lists every tile
-//! each Gaussian enters with its incoming flag; the checker compares the unit's stream of tiles
-//! with it in order and stops at the first mismatch.
+//! a [`Source`] offers Gaussians (this frame's and the previous frame's ITU fields, a
+//! visibility bit, id and key) and a [`Sink`] takes the hits, under random valid/ready
+//! backpressure; the golden model lists every tile each Gaussian enters with its incoming flag;
+//! the checker compares the unit's stream of tiles with it in order and stops at the first
+//! mismatch.
 
 use crate::check::Checker;
 use crate::dynmodel::DynModel;
 use crate::itu::{job_beat, random_jobs, ItuJob};
 use crate::rng::Rng;
+use crate::stream::{Beat, Sink, Source};
 use neo_gen::units::pre::dup::NAME;
 use neo_gen::EngineConfig;
 use neo_golden::formats::FeatureEntry;
@@ -92,33 +94,55 @@ pub fn random_items(cfg: &EngineConfig, rng: &mut Rng, count: usize) -> Vec<DupI
         .collect()
 }
 
-/// A Verilated `neo_pre_dup` and its ports.
+/// A Verilated `neo_pre_dup` and its per-frame ports.
 pub struct DupBench {
     cfg: EngineConfig,
     model: DynModel,
-    p: Ports,
-}
-
-struct Ports {
     grid_x: usize,
     grid_y: usize,
     all_fresh: usize,
-    in_valid: usize,
-    in_ready: usize,
-    id: usize,
-    key: usize,
-    mean: usize,
-    geom: usize,
-    prev_visible: usize,
-    prev_mean: usize,
-    prev_geom: usize,
-    out_valid: usize,
-    out_ready: usize,
-    out_tile_x: usize,
-    out_tile_y: usize,
-    out_id: usize,
-    out_key: usize,
-    out_incoming: usize,
+}
+
+/// The source's data ports (one [`DupItem`] a beat, see [`item_beat`]).
+const IN_PORTS: [&str; 7] = [
+    "in_id_i",
+    "in_key_i",
+    "in_mean_i",
+    "in_geom_i",
+    "in_prev_visible_i",
+    "in_prev_mean_i",
+    "in_prev_geom_i",
+];
+
+/// The sink's data ports (one [`DupHit`] a beat) and the fields they are checked as.
+const OUT_PORTS: [(&str, &str); 5] = [
+    ("out_tile_x_o", "tile_x"),
+    ("out_tile_y_o", "tile_y"),
+    ("out_id_o", "id"),
+    ("out_key_o", "key"),
+    ("out_incoming_o", "incoming"),
+];
+
+/// The stream agents of a run ([`crate::stream::unit_agents`] on [`IN_PORTS`], [`OUT_PORTS`]).
+fn agents(m: &DynModel, rng: &mut Rng, mix: (u32, u32)) -> Result<(Source, Sink), String> {
+    let outs: Vec<&str> = OUT_PORTS.iter().map(|p| p.0).collect();
+    crate::stream::unit_agents(m, &IN_PORTS, &outs, rng, mix)
+}
+
+/// The input beat of `it` on [`IN_PORTS`] (the previous-frame fields repeat this frame's when
+/// the Gaussian was not visible).
+fn item_beat(cfg: &EngineConfig, it: &DupItem) -> Beat {
+    let entry = |e: &FeatureEntry| job_beat(cfg, &ItuJob { entry: *e, tile: [0, 0] }, 0);
+    let (now, prev) = (entry(&it.now), entry(&it.prev.unwrap_or(it.now)));
+    vec![
+        vec![it.id],
+        vec![it.key],
+        now[0].clone(),
+        now[1].clone(),
+        vec![it.prev.is_some() as u32],
+        prev[0].clone(),
+        prev[1].clone(),
+    ]
 }
 
 /// What a run measured.
@@ -140,29 +164,10 @@ impl DupBench {
         let (files, vlt) = crate::dynmodel::generated_files(cfg, NAME)?;
         let iface = neo_gen::units::pre::dup::module(cfg).interface();
         let (model, _) = DynModel::build_traced(&iface, &files, Some(&vlt), None)?;
-        let q = |n: &str| model.port(n);
-        let p = Ports {
-            grid_x: q("grid_x_i")?,
-            grid_y: q("grid_y_i")?,
-            all_fresh: q("all_fresh_i")?,
-            in_valid: q("in_valid_i")?,
-            in_ready: q("in_ready_o")?,
-            id: q("in_id_i")?,
-            key: q("in_key_i")?,
-            mean: q("in_mean_i")?,
-            geom: q("in_geom_i")?,
-            prev_visible: q("in_prev_visible_i")?,
-            prev_mean: q("in_prev_mean_i")?,
-            prev_geom: q("in_prev_geom_i")?,
-            out_valid: q("out_valid_o")?,
-            out_ready: q("out_ready_i")?,
-            out_tile_x: q("out_tile_x_o")?,
-            out_tile_y: q("out_tile_y_o")?,
-            out_id: q("out_id_o")?,
-            out_key: q("out_key_o")?,
-            out_incoming: q("out_incoming_o")?,
-        };
-        Ok(DupBench { cfg: cfg.clone(), model, p })
+        let (grid_x, grid_y, all_fresh) =
+            (model.port("grid_x_i")?, model.port("grid_y_i")?, model.port("all_fresh_i")?);
+        agents(&model, &mut Rng::new(0), (100, 100))?;
+        Ok(DupBench { cfg: cfg.clone(), model, grid_x, grid_y, all_fresh })
     }
 
     /// The model, for waves.
@@ -170,23 +175,10 @@ impl DupBench {
         &mut self.model
     }
 
-    fn drive(&mut self, it: &DupItem) {
-        let (m, p) = (&mut self.model, &self.p);
-        let beat = |e: &FeatureEntry| job_beat(&self.cfg, &ItuJob { entry: *e, tile: [0, 0] }, 0);
-        let now = beat(&it.now);
-        m.set_u64(p.id, it.id as u64);
-        m.set_u64(p.key, it.key as u64);
-        m.set_words(p.mean, &now[0]);
-        m.set_words(p.geom, &now[1]);
-        m.set_u64(p.prev_visible, it.prev.is_some() as u64);
-        let prev = beat(&it.prev.unwrap_or(it.now));
-        m.set_words(p.prev_mean, &prev[0]);
-        m.set_words(p.prev_geom, &prev[1]);
-    }
-
-    /// Runs `items`: a Gaussian is offered in `p_valid`% of cycles and stays offered until
-    /// taken, hits are taken in `p_ready`% of cycles; checks every hit against [`expected`].
-    /// Panics at the first mismatch.
+    /// Runs `items`: a [`Source`] offers a Gaussian in `p_valid`% of cycles and holds it until
+    /// taken, a [`Sink`] takes hits in `p_ready`% of cycles (both forked from `rng`) and checks
+    /// the output handshake; every hit is checked against [`expected`]. Panics at the first
+    /// mismatch.
     pub fn run(
         &mut self,
         frame: DupFrame,
@@ -196,67 +188,60 @@ impl DupBench {
         check: &Checker,
     ) -> DupRun {
         let want = expected(&self.cfg, frame, items);
-        self.model.reset();
-        let p = &self.p;
-        self.model.set_u64(p.grid_x, frame.grid[0] as u64);
-        self.model.set_u64(p.grid_y, frame.grid[1] as u64);
-        self.model.set_u64(p.all_fresh, frame.all_fresh as u64);
-        let (mut next, mut got, mut start) = (0usize, 0usize, None);
+        let m = &mut self.model;
+        let (mut src, mut sink) = agents(m, rng, (p_valid, p_ready)).unwrap_or_else(|e| panic!("{e}"));
+        for it in items {
+            src.push(item_beat(&self.cfg, it));
+        }
+        m.reset();
+        m.set_u64(self.grid_x, frame.grid[0] as u64);
+        m.set_u64(self.grid_y, frame.grid[1] as u64);
+        m.set_u64(self.all_fresh, frame.all_fresh as u64);
+        let (mut got, mut start) = (0usize, None);
         let (mut first_accept, mut last_accept, mut first_hit) = (None, 0u64, None);
         let tiles = (frame.grid[0] * frame.grid[1]) as u64;
-        let limit =
-            self.model.cycle() + (items.len() as u64 * (tiles + 8) + 100) * 100 / p_valid.min(p_ready) as u64;
-        let mut held = false;
-        while next < items.len() || got < want.len() {
-            let cycle = self.model.cycle();
+        let limit = m.cycle() + (items.len() as u64 * (tiles + 8) + 100) * 100 / p_valid.min(p_ready) as u64;
+        while !src.is_idle() || got < want.len() {
+            let cycle = m.cycle();
             check.protocol(cycle, cycle < limit, "no progress");
-            // An offered item stays offered until taken (valid is never withdrawn).
-            let offer = next < items.len() && (held || rng.percent(p_valid));
-            self.model.set_u64(self.p.in_valid, offer as u64);
-            if offer {
+            src.drive(m);
+            if src.offering() {
                 start.get_or_insert(cycle);
-                let it = items[next];
-                self.drive(&it);
             }
-            let take = rng.percent(p_ready);
-            let (m, p) = (&mut self.model, &self.p);
-            m.set_u64(p.out_ready, take as u64);
+            sink.drive(m);
             m.eval();
-            if m.get_u64(p.out_valid) == 1 && first_hit.is_none() {
-                first_hit = Some(cycle);
-            }
-            if m.get_u64(p.out_valid) == 1 && take {
-                check.protocol(cycle, got < want.len(), "a hit beyond the golden list");
-                let w = want[got];
-                let f = |n: &str| format!("hit {got} {n}");
-                check.value(cycle, &f("tile_x"), w.tile[0] as u64, m.get_u64(p.out_tile_x));
-                check.value(cycle, &f("tile_y"), w.tile[1] as u64, m.get_u64(p.out_tile_y));
-                check.value(cycle, &f("id"), w.id as u64, m.get_u64(p.out_id));
-                check.value(cycle, &f("key"), w.key as u64, m.get_u64(p.out_key));
-                check.value(cycle, &f("incoming"), w.incoming as u64, m.get_u64(p.out_incoming));
-                got += 1;
-            }
-            let taken = offer && m.get_u64(p.in_ready) == 1;
-            held = offer && !taken;
-            if taken {
+            if src.sample(m) {
                 first_accept.get_or_insert(cycle);
                 last_accept = cycle;
-                next += 1;
+            }
+            let hit = sink.sample(m, check);
+            if sink.valid() && first_hit.is_none() {
+                first_hit = Some(cycle);
+            }
+            if let Some(beat) = hit {
+                check.protocol(cycle, got < want.len(), "a hit beyond the golden list");
+                let w = want[got];
+                let fields = [w.tile[0], w.tile[1], w.id, w.key, w.incoming as u32];
+                for ((_, name), (&e, a)) in OUT_PORTS.iter().zip(fields.iter().zip(&beat)) {
+                    check.value(cycle, &format!("hit {got} {name}"), e as u64, a[0] as u64);
+                }
+                got += 1;
             }
             m.tick();
         }
         // Drain: nothing more may come out.
+        sink.ready_pct = 100;
         for _ in 0..8 {
-            let (m, p) = (&mut self.model, &self.p);
-            m.set_u64(p.in_valid, 0);
-            m.set_u64(p.out_ready, 1);
+            src.drive(m);
+            sink.drive(m);
             m.eval();
-            check.protocol(m.cycle(), m.get_u64(p.out_valid) == 0, "a hit beyond the golden list");
+            let hit = sink.sample(m, check);
+            check.protocol(m.cycle(), hit.is_none(), "a hit beyond the golden list");
             m.tick();
         }
         DupRun {
             hits: want.len(),
-            cycles: self.model.cycle() - 8 - start.unwrap_or(0),
+            cycles: m.cycle() - 8 - start.unwrap_or(0),
             accept_span: last_accept - first_accept.unwrap_or(last_accept),
             first_latency: first_hit.map_or(0, |h| h - first_accept.unwrap_or(h)),
         }

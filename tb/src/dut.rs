@@ -85,6 +85,14 @@ pub trait PortIo {
     fn io_get(&self, port: usize) -> u64;
     /// Rising edges since the last reset.
     fn io_cycle(&self) -> u64;
+    /// Width of `port` in bits.
+    fn io_width(&self, port: usize) -> u32;
+    /// Drives input `port` with little-endian words (missing words are zero, extra bits ignored).
+    fn io_set_words(&mut self, port: usize, words: &[u32]);
+    /// Reads `port` into `out` (words beyond the port are zeroed).
+    fn io_get_words(&self, port: usize, out: &mut [u32]);
+    /// Settles combinational logic.
+    fn io_eval(&mut self);
 }
 
 impl<D: Dut> PortIo for D {
@@ -103,6 +111,22 @@ impl<D: Dut> PortIo for D {
     fn io_cycle(&self) -> u64 {
         self.cycle()
     }
+
+    fn io_width(&self, port: usize) -> u32 {
+        D::PORTS[port].width
+    }
+
+    fn io_set_words(&mut self, port: usize, words: &[u32]) {
+        self.set_words(port, words);
+    }
+
+    fn io_get_words(&self, port: usize, out: &mut [u32]) {
+        self.get_words(port, out);
+    }
+
+    fn io_eval(&mut self) {
+        self.eval();
+    }
 }
 
 impl PortIo for crate::dynmodel::DynModel {
@@ -120,5 +144,21 @@ impl PortIo for crate::dynmodel::DynModel {
 
     fn io_cycle(&self) -> u64 {
         self.cycle()
+    }
+
+    fn io_width(&self, port: usize) -> u32 {
+        self.interface().ports[port].width
+    }
+
+    fn io_set_words(&mut self, port: usize, words: &[u32]) {
+        self.set_words(port, words);
+    }
+
+    fn io_get_words(&self, port: usize, out: &mut [u32]) {
+        self.get_words(port, out);
+    }
+
+    fn io_eval(&mut self) {
+        self.eval();
     }
 }

@@ -8,7 +8,7 @@ use crate::check::Checker;
 use crate::dynmodel::DynModel;
 use crate::rng::Rng;
 use neo_gen::units::fp::{bench, latency, module_name, FpPrim};
-use neo_golden::hwarith::{Arith, Native};
+use neo_golden::hwarith::graph::{eval_op, Op, Ty};
 
 /// The generated Verilog's lint waivers (passed to Verilator before the files).
 const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
@@ -33,28 +33,44 @@ pub fn expected(p: FpPrim, a: u32, b: u32) -> u32 {
     native(p, a, b)
 }
 
-/// `Native`'s result of primitive `p` on operand bits `a`, `b`.
-pub fn native(p: FpPrim, a: u32, b: u32) -> u32 {
-    let mut n = Native;
-    let (fa, fb) = (f32::from_bits(a), f32::from_bits(b));
+/// The graph operation primitive `p` implements, on operands `a` (node 0) and `b` (node 1),
+/// and its result type: the inverse of the datapath library's lowering of an [`Op`] to a
+/// primitive (`gen/src/units/pre/library.rs`; the `fp` tests check the round trip).
+pub fn op(p: FpPrim) -> (Op, Ty) {
     match p {
-        FpPrim::Add => n.add(fa, fb).to_bits(),
-        FpPrim::Sub => n.sub(fa, fb).to_bits(),
-        FpPrim::Mul => n.mul(fa, fb).to_bits(),
-        FpPrim::Div => n.div(fa, fb).to_bits(),
-        FpPrim::Sqrt => n.sqrt(fa).to_bits(),
-        FpPrim::ToInt(mode) => n.to_int(fa, mode) as u32,
-        FpPrim::FromInt => n.int_to_float(a as i32).to_bits(),
-        FpPrim::F16 => n.f16_bits(fa) as u32,
-        FpPrim::WidenHalf => n.widen_half(a as i32).to_bits(),
+        FpPrim::Add => (Op::Add(0, 1), Ty::F),
+        FpPrim::Sub => (Op::Sub(0, 1), Ty::F),
+        FpPrim::Mul => (Op::Mul(0, 1), Ty::F),
+        FpPrim::Div => (Op::Div(0, 1), Ty::F),
+        FpPrim::Sqrt => (Op::Sqrt(0), Ty::F),
+        FpPrim::ToInt(mode) => (Op::ToInt(0, mode), Ty::I),
+        FpPrim::FromInt => (Op::IntToFloat(0), Ty::F),
+        FpPrim::F16 => (Op::F16Bits(0), Ty::I),
+        FpPrim::WidenHalf => (Op::WidenHalf(0), Ty::F),
     }
 }
 
-/// Golden `(lt, le, eq, max, min)` of `a`, `b`.
+/// `Native`'s result of primitive `p` on operand bits `a`, `b`: golden's evaluation of the
+/// graph operation ([`eval_op`]), the same code [`neo_golden::hwarith::graph::Graph::eval`] runs.
+pub fn native(p: FpPrim, a: u32, b: u32) -> u32 {
+    let (op, ty) = op(p);
+    eval_op(&op, ty, &[a, b], &[])
+}
+
+/// The outputs of `neo_fp_cmp` (`lt_o`, `le_o`, `eq_o`, `max_o`, `min_o`) as graph operations on
+/// `a` (node 0) and `b` (node 1), with their result types.
+pub const CMP_OPS: [(Op, Ty); 5] = [
+    (Op::Lt(0, 1), Ty::B),
+    (Op::Le(0, 1), Ty::B),
+    (Op::Eq(0, 1), Ty::B),
+    (Op::Max(0, 1), Ty::F),
+    (Op::Min(0, 1), Ty::F),
+];
+
+/// Golden `(lt, le, eq, max, min)` of `a`, `b` ([`CMP_OPS`] through [`eval_op`]).
 pub fn expected_cmp(a: u32, b: u32) -> (bool, bool, bool, u32, u32) {
-    let mut n = Native;
-    let (fa, fb) = (f32::from_bits(a), f32::from_bits(b));
-    (n.lt(fa, fb), n.le(fa, fb), n.eq(fa, fb), n.max(fa, fb).to_bits(), n.min(fa, fb).to_bits())
+    let [lt, le, eq, max, min] = CMP_OPS.map(|(op, ty)| eval_op(&op, ty, &[a, b], &[]));
+    (lt != 0, le != 0, eq != 0, max, min)
 }
 
 /// The verilated `neo_fp_bench` and its port indices.

@@ -140,6 +140,30 @@ fn native_nan_results_are_canonical() {
     }
 }
 
+/// The bench's golden operations (`neo_tb::fp::op`, `CMP_OPS`, evaluated by golden's
+/// `graph::eval_op`) are the ones the datapath library lowers to the same primitive or
+/// comparator output: the primitive bench and the datapath benches check the same mapping.
+#[test]
+fn golden_ops_round_trip_through_the_datapath_library() {
+    use neo_gen::units::fp::{module_name, FpPrim};
+    use neo_gen::units::pre::datapath::{Library, Lowering};
+    use neo_gen::units::pre::library::PreLibrary;
+    use neo_tb::fp::{op, CMP_OPS};
+    for p in FpPrim::ALL {
+        let (o, ty) = op(p);
+        match PreLibrary.lower(&o, ty) {
+            Lowering::Primitive(prim) => {
+                assert_eq!(prim.module, module_name(p), "{p:?} as {o:?}");
+                assert_eq!(prim.ports.len(), o.args().len(), "{p:?}: operands");
+            }
+            other => panic!("{p:?} as {o:?} lowers to {other:?}, not a primitive"),
+        }
+    }
+    for ((o, ty), port) in CMP_OPS.iter().zip(["lt_o", "le_o", "eq_o", "max_o", "min_o"]) {
+        assert_eq!(PreLibrary.lower(o, *ty), Lowering::Compare { output: port }, "{o:?}");
+    }
+}
+
 /// Every significand of selected binades (both signs) through every primitive: all subnormals,
 /// the two smallest normal binades, f16's subnormal/normal boundary (exponent fields 102, 112,
 /// 113) and saturation (142, 143), [0.5, 2) (`to_int`'s .5 boundaries, sqrt's two exponent

@@ -356,8 +356,15 @@ impl Graph {
     }
 }
 
-/// The raw bits of one node's value, from the values `v` of the nodes before it.
-fn eval_op(op: &Op, ty: Ty, v: &[u32], inputs: &[u32]) -> u32 {
+/// The raw bits of one node's value: operation `op` of result type `ty` evaluated with
+/// [`Native`] on the raw bits `v` of the nodes before it (an operand id indexes `v`) and the
+/// item's `inputs` (for [`Op::Input`]). The one mapping from an operation to its [`Native`]
+/// arithmetic: [`Graph::eval`] runs it node by node, and the benches of single primitives
+/// (`tb/src/fp.rs`) run it on their operands as nodes 0 and 1.
+///
+/// # Panics
+/// When an operand id or input index is out of range.
+pub fn eval_op(op: &Op, ty: Ty, v: &[u32], inputs: &[u32]) -> u32 {
     use Op::*;
     let a = &mut Native;
     let f = |id: NodeId| f32::from_bits(v[id]);
