@@ -1,8 +1,9 @@
-//! The fetch unit's bench (`neo_pre_fetch` against the bytes of memory): the driver starts a
-//! stream of records, an [`AxiMemory`] port serves its reads with the chosen timing, an
-//! [`AxiChecker`] watches the AXI side, and the checker compares every record (its index, then
-//! each word) with the memory's bytes, stopping at the first mismatch. The run reports the
-//! beats in flight (the read window the unit really keeps) and the cycles the stream took.
+//! The fetch unit's bench (`neo_pre_fetch` against the bytes of memory): the driver offers a
+//! list of commands (streams of records) under random valid gaps, an [`AxiMemory`] port serves
+//! the reads with the chosen timing, an [`AxiChecker`] watches the AXI side, and the checker
+//! compares every record (its command, its index, then each word) with the memory's bytes,
+//! stopping at the first mismatch. The run reports the beats in flight (the read window the
+//! unit really keeps) and the cycles the commands took.
 
 use crate::axi::{AxiBinding, AxiChecker, AxiMemory, ManagerSignals, SubordinateSignals};
 use crate::check::Checker;
@@ -11,7 +12,7 @@ use crate::rng::Rng;
 use neo_gen::units::pre::fetch::{max_record_words, NAME};
 use neo_gen::EngineConfig;
 
-/// One stream the unit fetches.
+/// One command: a stream of records the unit fetches.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Stream {
     /// Byte address of record 0 (4-byte aligned).
@@ -51,7 +52,8 @@ pub struct FetchBench {
 }
 
 struct Ports {
-    start: usize,
+    cmd_valid: usize,
+    cmd_ready: usize,
     base: usize,
     words: usize,
     count: usize,
@@ -70,10 +72,11 @@ impl FetchBench {
         let (model, _) = DynModel::build_traced(&iface, &files, Some(&vlt), None)?;
         let q = |n: &str| model.port(n);
         let p = Ports {
-            start: q("start_i")?,
-            base: q("base_i")?,
-            words: q("words_i")?,
-            count: q("count_i")?,
+            cmd_valid: q("cmd_valid_i")?,
+            cmd_ready: q("cmd_ready_o")?,
+            base: q("cmd_base_i")?,
+            words: q("cmd_words_i")?,
+            count: q("cmd_count_i")?,
             busy: q("busy_o")?,
             rec_valid: q("rec_valid_o")?,
             rec_ready: q("rec_ready_i")?,
@@ -92,30 +95,36 @@ impl FetchBench {
     /// Resets the unit.
     pub fn reset(&mut self) {
         self.axi.set_subordinate(&mut self.model, &SubordinateSignals::default());
-        self.model.set_u64(self.p.start, 0);
+        self.model.set_u64(self.p.cmd_valid, 0);
         self.model.set_u64(self.p.rec_ready, 0);
         self.model.reset();
     }
 
-    /// Runs stream `s` against port 0 of `mem`, taking records `ready_percent` of the cycles;
-    /// checks every record and the AXI protocol. Stops the test at the first mismatch.
+    /// Runs `cmds` against port 0 of `mem`, offering a command `offer_percent` of the cycles
+    /// and taking records `ready_percent` of them; checks every record and the AXI protocol.
+    /// Stops the test at the first mismatch.
     pub fn run(
         &mut self,
         mem: &mut AxiMemory,
-        s: Stream,
-        ready_percent: u32,
+        cmds: &[Stream],
+        (offer_percent, ready_percent): (u32, u32),
         rng: &mut Rng,
         check: &Checker,
     ) -> FetchRun {
-        let o = self.cfg.axi_outstanding;
+        let o = self.cfg.pre_outstanding;
         let mut axi_chk = AxiChecker::new(0, "m_axi", o, o);
         let start = self.model.cycle();
-        let limit = 64 * (s.bytes() / 8 + 1) + 20_000;
-        let (mut run, mut in_flight, mut started) = (FetchRun::default(), 0u64, false);
+        let bytes: u64 = cmds.iter().map(|s| s.bytes() + 64).sum();
+        let limit = 64 * (bytes / 8 + 1) + 20_000;
+        let mut owed: std::collections::VecDeque<(usize, u32)> =
+            cmds.iter().enumerate().flat_map(|(c, s)| (0..s.count).map(move |i| (c, i))).collect();
+        let (mut run, mut in_flight, mut next, mut held) = (FetchRun::default(), 0u64, 0usize, false);
         let mut words = vec![0u32; max_record_words() as usize];
         loop {
             let (m, p) = (&mut self.model, &self.p);
-            m.set_u64(p.start, u64::from(!started));
+            let offer = next < cmds.len() && (held || rng.percent(offer_percent));
+            let s = cmds.get(next).copied().unwrap_or(Stream { base: 0, words: 0, count: 0 });
+            m.set_u64(p.cmd_valid, u64::from(offer));
             m.set_u64(p.base, s.base);
             m.set_u64(p.words, u64::from(s.words));
             m.set_u64(p.count, u64::from(s.count));
@@ -130,22 +139,27 @@ impl FetchBench {
                 check.fail(cyc, "AXI protocol", "no violation", &v.to_string());
             }
             in_flight = track_in_flight(in_flight, &man, &sub, &mut run);
+            let taken = offer && m.get_u64(p.cmd_ready) == 1;
+            held = offer && !taken;
+            let done = next == cmds.len() && m.get_u64(p.busy) == 0;
+            next += usize::from(taken);
             if m.get_u64(p.rec_valid) == 1 && ready {
+                let Some((c, i)) = owed.pop_front() else {
+                    check.fail(cyc, "rec_valid_o", "no record owed", "1")
+                };
                 m.get_words(p.rec_data, &mut words);
-                check_record(check, cyc, mem, s, m.get_u64(p.rec_index), &words, run.records);
+                check_record(check, cyc, mem, cmds[c], (i, m.get_u64(p.rec_index)), &words);
                 run.records += 1;
                 run.cycles = cyc + 1 - start;
             }
-            let done = started && m.get_u64(p.busy) == 0;
-            started = true;
             mem.tick(0, &man);
             m.tick();
             if done {
                 break;
             }
-            check.protocol(cyc, cyc - start < limit, "the stream finishes within its cycle budget");
+            check.protocol(cyc, cyc - start < limit, "the commands finish within their cycle budget");
         }
-        check.value(self.model.cycle(), "records delivered", u64::from(s.count), run.records);
+        check.value(self.model.cycle(), "records owed after busy_o fell", 0, owed.len() as u64);
         check.value(self.model.cycle(), "AXI reads open after busy_o fell", 0, axi_chk.in_flight().0 as u64);
         run
     }
@@ -164,9 +178,17 @@ fn track_in_flight(mut n: u64, man: &ManagerSignals, sub: &SubordinateSignals, r
     n
 }
 
-/// Checks record `index` (the `seen`-th taken) of stream `s` against the memory's bytes.
-fn check_record(check: &Checker, cyc: u64, mem: &AxiMemory, s: Stream, index: u64, words: &[u32], seen: u64) {
-    check.value(cyc, "rec_index_o", seen, index);
+/// Checks record `want` of command `s` (the unit says `index`) against the memory's bytes.
+fn check_record(
+    check: &Checker,
+    cyc: u64,
+    mem: &AxiMemory,
+    s: Stream,
+    (want, index): (u32, u64),
+    words: &[u32],
+) {
+    check.value(cyc, "rec_index_o", u64::from(want), index);
+    let index = u64::from(want);
     for (k, &w) in words.iter().enumerate() {
         let want = if (k as u32) < s.words {
             mem.memory().read_u32(s.base + 4 * (index * u64::from(s.words) + k as u64))
@@ -177,14 +199,16 @@ fn check_record(check: &Checker, cyc: u64, mem: &AxiMemory, s: Stream, index: u6
     }
 }
 
-/// A memory holding random words over `s`'s bytes (and one beat either side).
-pub fn random_memory(s: Stream, rng: &mut Rng) -> neo_golden::engine::memory::Memory {
+/// A memory holding random words over the bytes of `cmds` (and one beat either side).
+pub fn random_memory(cmds: &[Stream], rng: &mut Rng) -> neo_golden::engine::memory::Memory {
     let mut mem = neo_golden::engine::memory::Memory::new();
-    let (lo, hi) = ((s.base & !7).saturating_sub(8), s.base + s.bytes() + 16);
-    let mut a = lo;
-    while a < hi {
-        mem.write_u64(a, rng.next_u64());
-        a += 8;
+    for s in cmds {
+        let (lo, hi) = ((s.base & !7).saturating_sub(8), s.base + s.bytes() + 16);
+        let mut a = lo;
+        while a < hi {
+            mem.write_u64(a, rng.next_u64());
+            a += 8;
+        }
     }
     mem
 }
@@ -201,8 +225,8 @@ pub fn stream_through(cfg: &EngineConfig, latency: u32, count: u32, seed: u64) -
     let mut rng = Rng::new(seed);
     let s = Stream { base: 0x20_0000, words: neo_golden::hwpre::bake::geometry_bytes() / 4, count };
     let timing = crate::axi::AxiTiming { latency, ..crate::axi::AxiTiming::IDEAL };
-    let mut mem = AxiMemory::new(1, random_memory(s, &mut rng), timing, seed);
-    Ok(bench.run(&mut mem, s, 100, &mut rng, &check))
+    let mut mem = AxiMemory::new(1, random_memory(&[s], &mut rng), timing, seed);
+    Ok(bench.run(&mut mem, &[s], (100, 100), &mut rng, &check))
 }
 
 /// The fetch units' window for `reports/latency.json`: the lines one unit keeps in flight

@@ -60,11 +60,16 @@ neo_tb::with_models! {
             let mut rng = Rng::new(seed);
             bench.reset();
             let mut records = 0;
-            for _ in 0..12 {
-                let s = random_stream(&cfg, &mut rng);
-                let mut mem = AxiMemory::new(1, random_memory(s, &mut rng), AxiTiming::RANDOM, rng.next_u64());
-                let ready = [100, 70, 30][rng.below(3) as usize];
-                records += bench.run(&mut mem, s, ready, &mut rng, &check).records;
+            for _ in 0..6 {
+                // A few long streams, or many one-record gathers (as the SH fetch issues them).
+                let cmds: Vec<Stream> = if rng.percent(50) {
+                    (0..3).map(|_| random_stream(&cfg, &mut rng)).collect()
+                } else {
+                    (0..rng.range(1, 120)).map(|_| Stream { count: 1, ..random_stream(&cfg, &mut rng) }).collect()
+                };
+                let mut mem = AxiMemory::new(1, random_memory(&cmds, &mut rng), AxiTiming::RANDOM, rng.next_u64());
+                let pace = [(100, 100), (60, 70), (30, 30)][rng.below(3) as usize];
+                records += bench.run(&mut mem, &cmds, pace, &mut rng, &check).records;
             }
             assert!(records > 0, "seed {seed:#x}: no record was fetched");
         });
@@ -96,5 +101,25 @@ neo_tb::with_models! {
         eprintln!("window {window} beats: {rate:.3} beats/cycle, Little's law {little:.3}");
         assert!(in_flight <= window, "{in_flight} beats in flight above the window of {window}");
         assert!((rate - little).abs() < 0.15 * little, "{rate:.3} beats/cycle, Little's law gives {little:.3}");
+    }
+
+    #[test]
+    fn one_record_gathers_keep_the_window_full() {
+        // SH records of degree 3 (48 words, 24 beats) gathered one command each, scattered.
+        let cfg = neo_tb::config();
+        let mut bench = FetchBench::build(&cfg).unwrap();
+        bench.reset();
+        let check = Checker::new("neo_pre_fetch", 2);
+        let mut rng = Rng::new(2);
+        let words = sh_bytes(3, ShPrecision::F32) / 4;
+        let cmds: Vec<Stream> = (0..300)
+            .map(|_| Stream { base: 0x40_0000 + 4 * u64::from(words) * rng.below(20_000), words, count: 1 })
+            .collect();
+        let timing = AxiTiming { latency: 400, ..AxiTiming::IDEAL };
+        let mut mem = AxiMemory::new(1, random_memory(&cmds, &mut rng), timing, 2);
+        let run = bench.run(&mut mem, &cmds, (100, 100), &mut rng, &check);
+        let rate = run.beats as f64 / run.cycles as f64;
+        eprintln!("gathers: {rate:.3} beats/cycle, {} beats in flight at most", run.max_beats_in_flight);
+        assert!(rate > 0.85, "{rate:.3} beats/cycle for one-record gathers through 400 cycles");
     }
 }

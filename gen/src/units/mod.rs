@@ -127,6 +127,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(engine::module(cfg));
     all.extend(fp::modules(cfg));
     all.push(pre::dup::module(cfg));
+    all.push(pre::fifo::module(pre::fetch::cmd_queue_width(cfg), pre::fetch::CMD_QUEUE));
     all.push(pre::fetch::ram_module(cfg));
     all.push(pre::fetch::module(cfg));
     all.push(pre::color_module(cfg));

@@ -146,6 +146,10 @@ pub struct EngineConfig {
     /// its read window and the size of its beat buffer (a power of two). Little's law: one unit
     /// streaming a quarter of 51.2 GB/s through about 400 ns of read latency needs 80.
     pub pre_read_lines: usize,
+    /// Preprocessing Engine: read bursts each fetch unit keeps in flight (a power of two). Its
+    /// full bursts are the window over this, so streams fill the window; gathers of one SH
+    /// record each (24 beats at degree 3) need `window / 24` of them.
+    pub pre_outstanding: usize,
 }
 
 impl Default for EngineConfig {
@@ -182,6 +186,7 @@ impl Default for EngineConfig {
             axi_outstanding: 8,
             pre_units: 4,
             pre_read_lines: 128,
+            pre_outstanding: 64,
         }
     }
 }
@@ -352,25 +357,26 @@ impl EngineConfig {
     }
 
     /// The Preprocessing Engine's constraints: its unit count and the fetch units' window, which
-    /// `axi_outstanding` bursts of at most 256 beats and 4 KiB must cover.
+    /// `pre_outstanding` bursts of at most 256 beats and 4 KiB must cover.
     fn validate_preprocessing(&self) -> Result<(), ConfigError> {
         let err = |s: String| Err(ConfigError(s));
         if !(1..=16).contains(&self.pre_units) {
             return err(format!("pre_units {} is outside 1..=16", self.pre_units));
         }
-        let l = self.pre_read_lines;
+        let (l, o) = (self.pre_read_lines, self.pre_outstanding);
+        if !o.is_power_of_two() || !(1..=256).contains(&o) {
+            return err(format!("pre_outstanding {o} is not a power of two in 1..=256"));
+        }
         let beat = self.axi_data_bits as usize / 8;
-        if !l.is_power_of_two() || !(1..=1024).contains(&l) || l * 64 < beat * self.axi_outstanding {
+        if !l.is_power_of_two() || !(1..=1024).contains(&l) || l * 64 < beat * o {
             return err(format!(
-                "pre_read_lines {l} is not a power of two in 1..=1024 holding axi_outstanding {} beats of {beat} bytes",
-                self.axi_outstanding
+                "pre_read_lines {l} is not a power of two in 1..=1024 holding pre_outstanding {o} beats of {beat} bytes"
             ));
         }
         if self.pre_burst_beats() > 256 || self.pre_burst_beats() * beat > 4096 {
             return err(format!(
-                "pre_read_lines {l}: bursts of {} beats (the window over axi_outstanding {}) exceed 256 beats or 4 KiB",
-                self.pre_burst_beats(),
-                self.axi_outstanding
+                "pre_read_lines {l}: bursts of {} beats (the window over pre_outstanding {o}) exceed 256 beats or 4 KiB",
+                self.pre_burst_beats()
             ));
         }
         Ok(())
@@ -381,10 +387,10 @@ impl EngineConfig {
         self.pre_read_lines * 64 / (self.axi_data_bits as usize / 8)
     }
 
-    /// Beats of a fetch unit's full burst: its window over `axi_outstanding`, so that the
+    /// Beats of a fetch unit's full burst: its window over `pre_outstanding`, so that the
     /// bursts in flight fill the window.
     pub fn pre_burst_beats(&self) -> usize {
-        self.pre_window_beats() / self.axi_outstanding
+        self.pre_window_beats() / self.pre_outstanding
     }
 
     /// The raster core's constraints (see the fields' docs).
@@ -465,6 +471,7 @@ mod tests {
             EngineConfig { mem_channels: 2, ..base.clone() },
             EngineConfig { pre_units: 2, ..base.clone() },
             EngineConfig { pre_read_lines: 64, ..base.clone() },
+            EngineConfig { pre_outstanding: 32, ..base.clone() },
         ];
         for v in &variants {
             assert_ne!(v.hash(), base.hash(), "{v:?}");
@@ -528,10 +535,11 @@ mod tests {
             EngineConfig { axi_id_bits: 2, ..EngineConfig::default() },
             EngineConfig { pre_units: 0, ..EngineConfig::default() },
             EngineConfig { pre_read_lines: 96, ..EngineConfig::default() },
-            // 8 outstanding bursts of 8 beats do not fit a window of 1 line (8 beats).
+            // 64 outstanding bursts do not fit a window of 1 line (8 beats).
             EngineConfig { pre_read_lines: 1, ..EngineConfig::default() },
-            // 8 bursts of 512 beats: above 256 beats.
-            EngineConfig { pre_read_lines: 512, ..EngineConfig::default() },
+            // 1 burst of 512 beats: above 256 beats.
+            EngineConfig { pre_read_lines: 64, pre_outstanding: 1, ..EngineConfig::default() },
+            EngineConfig { pre_outstanding: 48, ..EngineConfig::default() },
         ];
         for c in bad {
             assert!(c.validate().is_err(), "{c:?}");
@@ -564,18 +572,18 @@ mod tests {
             subtile in 0u32..40, lanes in 0usize..80, scus in 0usize..40, itus in 0usize..20,
             fbuf in 0usize..5000, cores in 0usize..70, cap in 0usize..70000, data in 0u32..2000,
             key in 0u8..40, id in 0u8..40, topo in 0usize..3, lines in 0usize..3000,
-            outstanding in 0usize..70,
+            outstanding in 0usize..300,
         ) {
             let c = EngineConfig {
                 topology: Topology::ALL[topo], bsu_width: bsu, chunk, burst, tile, subtile,
                 scu_lanes: lanes, raster_scus: scus, raster_itus: itus, raster_feature_buffer: fbuf,
                 sort_cores: cores, table_capacity: cap, axi_data_bits: data, key_bits: key,
-                id_bits: id, pre_read_lines: lines, axi_outstanding: outstanding, ..EngineConfig::default()
+                id_bits: id, pre_read_lines: lines, pre_outstanding: outstanding, ..EngineConfig::default()
             };
             if c.validate().is_ok() {
                 let _ = (c.format(), c.network(), c.sort_config(), c.raster_config(), c.bsu_latency());
                 let (window, burst) = (c.pre_window_beats(), c.pre_burst_beats());
-                proptest::prop_assert!(burst >= 1 && burst <= 256 && burst * c.axi_outstanding == window);
+                proptest::prop_assert!(burst >= 1 && burst <= 256 && burst * c.pre_outstanding == window);
                 proptest::prop_assert!(c.raster_config().subtiles_per_tile() <= 64);
             }
         }

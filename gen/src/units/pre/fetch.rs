@@ -1,24 +1,33 @@
-//! `neo_pre_fetch`: a Preprocessing Engine fetch unit. It streams `count_i` records of
-//! `words_i` 32-bit words from the byte address `base_i` (4-byte aligned; records back to back,
-//! as the baked geometry and SH arrays are) over one AXI4 manager port, and hands them out one
-//! record per handshake with the record's index.
+//! `neo_pre_fetch`: a Preprocessing Engine fetch unit. Each command asks for `cmd_count_i`
+//! records of `cmd_words_i` 32-bit words from the byte address `cmd_base_i` (4-byte aligned;
+//! records back to back, as the baked geometry and SH arrays are); the unit reads them over one
+//! AXI4 manager port and hands them out one record per handshake, in command order, with the
+//! record's index in its command. A lane streams its geometry with one command and gathers the
+//! SH record of each visible Gaussian with one command each.
+//!
+//! # Commands
+//! The issue side takes a command once the previous one's bursts are all issued, and queues its
+//! `{skip, words, count}` for the assembly (`u_cmdq`, [`CMD_QUEUE`] commands), so the reads of
+//! several commands are in flight at once. A command of 0 records is taken and dropped.
 //!
 //! # Read window
 //! The unit keeps up to [`EngineConfig::pre_read_lines`] 64-byte lines in flight: its beat
 //! buffer (`u_buf`, `neo_pre_fetch_ram`) holds `pre_window_beats` beats, and a burst is issued
 //! only when the buffer has room for it net of the beats already requested (`space_q`), so
-//! `rready` is always 1. Full bursts are `pre_burst_beats` beats (the window over
-//! `axi_outstanding`, so the bursts allowed in flight fill the window), aligned to their own size
-//! (so none crosses 4 KiB); the first and the last may be shorter.
+//! `rready` is always 1. At most [`EngineConfig::pre_outstanding`] bursts are in flight; full
+//! bursts are `pre_burst_beats` beats (the window over `pre_outstanding`, so a stream's bursts
+//! fill the window), aligned to their own size (so none crosses 4 KiB); a command's first and
+//! last may be shorter.
 //!
 //! # Record assembly
 //! The head beat's `W = axi_data_bits / 32` words enter the record register `rec_q` at its fill
 //! level `fill_q` (slot `j` of generate block `g_slot[j]` takes the beat word whose position is
 //! `j`); the words past the record's end start the next record. A beat that completes a record
 //! moves it to the output register in the same cycle, so the unit takes one beat per cycle as
-//! long as its output is taken. Words of the first beat before `base_i`, and of the last beat
-//! after the last record, are dropped. `words_i` must be at least `W` (a beat completes at most
-//! one record) and at most [`max_record_words`]; slots at and above `words_i` read 0.
+//! long as its output is taken (and one cycle per command to load it). Words of a command's first
+//! beat before its base, and of its last beat after its last record, are dropped. `cmd_words_i`
+//! must be at least `W` (a beat completes at most one record) and at most [`max_record_words`];
+//! slots at and above it read 0.
 
 use crate::emit::expr::{bits_for, lit, resize, zext};
 use crate::emit::{if_, if_else, set, Item, Module};
@@ -32,8 +41,11 @@ pub const NAME: &str = "neo_pre_fetch";
 /// Module name of the beat buffer.
 pub const RAM_NAME: &str = "neo_pre_fetch_ram";
 
-/// Width of `count_i` and `rec_index_o`.
+/// Width of `cmd_count_i` and `rec_index_o`.
 pub const COUNT_BITS: u32 = 32;
+
+/// Commands queued between the issue side and the assembly.
+pub const CMD_QUEUE: u32 = 64;
 
 /// Words of the longest record a fetch unit assembles: the larger of the geometry record and the
 /// degree-3 f32 SH record.
@@ -83,7 +95,7 @@ impl Dims {
             burst_shift: burst.trailing_zeros(),
             lb: COUNT_BITS + bits_for(u64::from(maxw)) + 1,
             bi: cfg.axi_addr_bits - beat_shift,
-            cb: bits_for(cfg.axi_outstanding as u64),
+            cb: bits_for(cfg.pre_outstanding as u64),
         }
     }
 
@@ -115,25 +127,26 @@ pub fn ram_module(cfg: &EngineConfig) -> Module {
 pub fn module(cfg: &EngineConfig) -> Module {
     let d = Dims::new(cfg);
     let mut m = Module::new(NAME);
-    m.doc("Preprocessing fetch unit: streams count_i records of words_i 32-bit words from byte base_i over");
+    m.doc("Preprocessing fetch unit: per command, cmd_count_i records of cmd_words_i 32-bit words from cmd_base_i over");
     m.doc(format!(
         "m_axi_* (reads only; ID 0), at most {} lines of 64 bytes in flight ({} beats, bursts of {}).",
         cfg.pre_read_lines, d.depth, d.burst
     ));
     m.doc(format!(
-        "Records leave on rec_* one per handshake, slots from words_i up read 0; words_i in {}..={}.",
+        "Records leave on rec_* one per handshake, slots from cmd_words_i up read 0; cmd_words_i in {}..={}.",
         d.w, d.maxw
     ));
     m.clock_reset();
-    m.input_c("start_i", 1, "pulse: start a stream (ignored while busy_o)");
-    m.input_c("base_i", d.ab, "byte address of record 0 (4-byte aligned)");
-    m.input_c("words_i", d.wb, "words per record");
-    m.input_c("count_i", COUNT_BITS, "records of the stream");
-    m.output_c("busy_o", 1, "a stream is running (from start_i to its last record taken)");
+    m.input_c("cmd_valid_i", 1, "a command is offered");
+    m.output_c("cmd_ready_o", 1, "the unit takes it");
+    m.input_c("cmd_base_i", d.ab, "byte address of the command's record 0 (4-byte aligned)");
+    m.input_c("cmd_words_i", d.wb, "words per record");
+    m.input_c("cmd_count_i", COUNT_BITS, "records of the command");
+    m.output_c("busy_o", 1, "a command is not finished (its last record not taken)");
     m.output_c("rec_valid_o", 1, "a record is offered");
     m.input_c("rec_ready_i", 1, "the record is taken");
     m.output_c("rec_data_o", d.maxw * 32, "the record, word k at [32k +: 32]");
-    m.output_c("rec_index_o", COUNT_BITS, "the record's index in the stream");
+    m.output_c("rec_index_o", COUNT_BITS, "the record's index in its command");
     axi::ports(&mut m, cfg, "m_axi_", true);
     start(&mut m, &d);
     issue(&mut m, cfg, &d);
@@ -144,33 +157,52 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m
 }
 
-/// The stream's registers on `start_i`: the first beat, the beats to request, the words of the
-/// first beat to skip, the records to assemble.
+/// A command's beats, and its entry in the command queue `{skip, words, count}`.
 fn start(m: &mut Module, d: &Dims) {
-    let ws = d.w.trailing_zeros();
+    let (ws, kb) = (d.w.trailing_zeros(), bits_for(u64::from(d.w)));
     m.blank();
-    m.comment("Start: the stream covers the beats from base_i's to its last word's.");
-    m.wire_assign("take_start", 1, "start_i & ~busy_o");
+    m.comment("Command: it covers the beats from its base's to its last word's; the assembly gets");
+    m.comment("{skip (words of the first beat before the base), words, count} through u_cmdq.");
+    m.wire_assign("cmd_take", 1, "cmd_valid_i & cmd_ready_o");
     m.wire_assign(
         "words_total",
         d.lb,
-        format!("{} * {}", zext("words_i", d.wb, d.lb), zext("count_i", COUNT_BITS, d.lb)),
+        format!("{} * {}", zext("cmd_words_i", d.wb, d.lb), zext("cmd_count_i", COUNT_BITS, d.lb)),
     );
-    if ws > 0 {
-        m.wire_assign("start_skip", ws, format!("base_i[{}:2]", d.beat_shift - 1));
-        m.wire_assign("words_end", d.lb, format!("words_total + {}", zext("start_skip", ws, d.lb)));
-    } else {
-        m.wire_assign("words_end", d.lb, "words_total");
-    }
+    m.wire_assign("cmd_skip", kb, zext(&format!("cmd_base_i[{}:2]", d.beat_shift - 1), ws, kb));
+    m.wire_assign("words_end", d.lb, format!("words_total + {}", zext("cmd_skip", kb, d.lb)));
     let round = lit(d.lb, u64::from(d.w - 1));
-    m.wire_assign(
-        "start_beats",
-        d.lb,
-        format!("(count_i == {}) ? {} : ((words_end + {round}) >> {ws})", lit(COUNT_BITS, 0), lit(d.lb, 0)),
+    m.wire_assign("cmd_empty", 1, format!("cmd_count_i == {}", lit(COUNT_BITS, 0)));
+    m.wire_assign("cmd_beats", d.lb, format!("(words_end + {round}) >> {ws}"));
+    let qw = kb + d.wb + COUNT_BITS;
+    m.wire("q_ready", 1).wire("q_valid", 1).wire("q_pop", 1).wire("q_data", qw);
+    m.assign("cmd_ready_o", format!("(ar_left_q == {}) & q_ready", lit(d.lb, 0)));
+    m.instance(
+        super::fifo::name(qw, CMD_QUEUE),
+        "u_cmdq",
+        vec![
+            ("clk_i".into(), "clk_i".into()),
+            ("rst_ni".into(), "rst_ni".into()),
+            ("push_valid_i".into(), "cmd_take & ~cmd_empty".into()),
+            ("push_ready_o".into(), "q_ready".into()),
+            ("push_data_i".into(), "{cmd_skip, cmd_words_i, cmd_count_i}".into()),
+            ("pop_valid_o".into(), "q_valid".into()),
+            ("pop_ready_i".into(), "q_pop".into()),
+            ("pop_data_o".into(), "q_data".into()),
+        ],
     );
+    m.wire_assign("q_skip", kb, format!("q_data[{}:{}]", qw - 1, d.wb + COUNT_BITS));
+    m.wire_assign("q_words", d.wb, format!("q_data[{}:{COUNT_BITS}]", d.wb + COUNT_BITS - 1));
+    m.wire_assign("q_count", COUNT_BITS, format!("q_data[{}:0]", COUNT_BITS - 1));
 }
 
-/// AR: bursts over the stream's beats, each issued when the buffer has room for it.
+/// Width of a command-queue entry.
+pub fn cmd_queue_width(cfg: &EngineConfig) -> u32 {
+    let d = Dims::new(cfg);
+    bits_for(u64::from(d.w)) + d.wb + COUNT_BITS
+}
+
+/// AR: bursts over the command's beats, each issued when the buffer has room for it.
 fn issue(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (sb, bs) = (d.sb(), d.burst_shift);
     m.blank();
@@ -180,7 +212,7 @@ fn issue(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     ));
     m.comment(format!(
         "holding or awaiting a beat) covers it, with at most {} bursts in flight.",
-        cfg.axi_outstanding
+        cfg.pre_outstanding
     ));
     m.reg("ar_beat_q", d.bi).reg("ar_left_q", d.lb).reg("space_q", sb).reg("rd_cnt_q", d.cb);
     let room = if bs == 0 {
@@ -194,7 +226,7 @@ fn issue(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         sb,
         format!("(ar_left_q < {}) ? ar_left_q[{}:0] : ar_room", zext("ar_room", sb, d.lb), sb - 1),
     );
-    let o = cfg.axi_outstanding as u64;
+    let o = cfg.pre_outstanding as u64;
     m.assign(
         "m_axi_arvalid_o",
         format!("(ar_left_q != {}) & (rd_cnt_q != {}) & (space_q >= ar_chunk)", lit(d.lb, 0), lit(d.cb, o)),
@@ -219,10 +251,10 @@ fn issue(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         ],
         vec![
             if_else(
-                "take_start",
+                "cmd_take",
                 vec![
-                    set("ar_beat_q", format!("base_i[{}:{}]", d.ab - 1, d.beat_shift)),
-                    set("ar_left_q", "start_beats"),
+                    set("ar_beat_q", format!("cmd_base_i[{}:{}]", d.ab - 1, d.beat_shift)),
+                    set("ar_left_q", format!("cmd_empty ? {} : cmd_beats", lit(d.lb, 0))),
                 ],
                 vec![if_(
                     "ar_fire",
@@ -282,13 +314,17 @@ fn assemble(m: &mut Module, d: &Dims) {
     let pw = wb + 1;
     m.blank();
     m.comment("Assembly: beat word k (k >= skip_q) lands at record position pos_k = fill_q + k - skip_q;");
-    m.comment("positions at or past words_i belong to the next record (slot pos_k - words_i).");
+    m.comment("positions at or past words_q belong to the next record (slot pos_k - words_q).");
     m.reg("rec_q", d.maxw * 32).reg("fill_q", wb).reg("skip_q", kb).reg("rec_left_q", COUNT_BITS);
+    m.reg("words_q", wb);
+    m.wire_assign("idle_asm", 1, format!("rec_left_q == {}", lit(COUNT_BITS, 0)));
+    m.assign("q_pop", "idle_asm");
+    m.wire_assign("q_load", 1, "idle_asm & q_valid");
     m.wire_assign("n_new", pw, format!("{} - {}", lit(pw, u64::from(w)), zext("skip_q", kb, pw)));
     m.wire_assign("rec_end", pw, format!("{} + n_new", zext("fill_q", wb, pw)));
-    m.wire_assign("words_x", pw, zext("words_i", wb, pw));
+    m.wire_assign("words_x", pw, zext("words_q", wb, pw));
     m.wire_assign("completes", 1, "rec_end >= words_x");
-    m.wire_assign("rec_rest", wb, format!("{} - words_i", resize("rec_end", pw, wb)));
+    m.wire_assign("rec_rest", wb, format!("{} - words_q", resize("rec_end", pw, wb)));
     m.wire_assign(
         "beat_take",
         1,
@@ -311,13 +347,19 @@ fn assemble(m: &mut Module, d: &Dims) {
     m.wire("merged", d.maxw * 32).wire("carried", d.maxw * 32).wire("out_next", d.maxw * 32);
     m.gen_for("j", d.maxw, "g_slot", slot_items(d, pw));
     m.seq(
-        vec![set("fill_q", lit(wb, 0)), set("skip_q", lit(kb, 0)), set("rec_left_q", lit(COUNT_BITS, 0))],
+        vec![
+            set("fill_q", lit(wb, 0)),
+            set("skip_q", lit(kb, 0)),
+            set("rec_left_q", lit(COUNT_BITS, 0)),
+            set("words_q", lit(wb, 0)),
+        ],
         vec![if_else(
-            "take_start",
+            "q_load",
             vec![
                 set("fill_q", lit(wb, 0)),
-                set("skip_q", if w > 1 { zext("start_skip", d.w.trailing_zeros(), kb) } else { lit(kb, 0) }),
-                set("rec_left_q", "count_i"),
+                set("skip_q", "q_skip"),
+                set("rec_left_q", "q_count"),
+                set("words_q", "q_words"),
             ],
             vec![if_(
                 "beat_take",
@@ -333,7 +375,7 @@ fn assemble(m: &mut Module, d: &Dims) {
 }
 
 /// Generate-block items of record slot `j`: `merged` (the record with this beat's words),
-/// `carried` (the next record's first words) and `out_next` (the output record, 0 past `words_i`).
+/// `carried` (the next record's first words) and `out_next` (the output record, 0 past `words_q`).
 fn slot_items(d: &Dims, pw: u32) -> Vec<Item> {
     let jx = format!("j[{}:0]", pw - 1);
     let mut merged = "rec_q[32*j +: 32]".to_string();
@@ -365,7 +407,7 @@ fn output(m: &mut Module, d: &Dims) {
                 vec![if_("rec_ready_i", vec![set("out_v_q", lit(1, 0))])],
             ),
             if_else(
-                "take_start",
+                "q_load",
                 vec![set("next_idx_q", lit(COUNT_BITS, 0))],
                 vec![if_(
                     "rec_done",
@@ -381,8 +423,7 @@ fn output(m: &mut Module, d: &Dims) {
     m.assign(
         "busy_o",
         format!(
-            "(rec_left_q != {}) | out_v_q | (ar_left_q != {}) | (rd_cnt_q != {}) | (space_q != {})",
-            lit(COUNT_BITS, 0),
+            "~idle_asm | q_valid | out_v_q | (ar_left_q != {}) | (rd_cnt_q != {}) | (space_q != {})",
             lit(d.lb, 0),
             lit(d.cb, 0),
             lit(sb, u64::from(d.depth))
@@ -409,7 +450,7 @@ fn tie_offs(m: &mut Module, cfg: &EngineConfig) {
         "m_axi_bvalid_i",
         "m_axi_bid_i",
         "m_axi_bresp_i",
-        "base_i[1:0]",
+        "cmd_base_i[1:0]",
     ];
     m.wire_assign("unused_in", 1, format!("^{{{}}}", unused.join(", ")));
 }

@@ -5,6 +5,7 @@
 pub mod datapath;
 pub mod dup;
 pub mod fetch;
+pub mod fifo;
 pub mod library;
 
 use crate::emit::Module;
