@@ -99,7 +99,7 @@ fn waterfall_table(
         let _ = write!(s, " {:>10}", "Mcycles");
     }
     for st in Stage::ALL {
-        let _ = write!(s, " {:>10}", st.name().split(' ').next().unwrap_or(""));
+        let _ = write!(s, " {:>10}", st.short_name());
     }
     s.push('\n');
     let mb = |b: u64| b as f64 / 1e6;
