@@ -208,7 +208,13 @@ fn waterfall_reaches_neos_own_bytes() {
     for run in runs.iter().filter(|r| r["neo_command"] == cmd) {
         let k = run["frame"].as_u64().expect("frame") as usize;
         let trace = tmp.path().join(run["trace_file"].as_str().expect("trace_file"));
-        let frame = read_poc_trace(&trace).unwrap_or_else(|e| panic!("{e}"));
+        let mut frame = read_poc_trace(&trace).unwrap_or_else(|e| panic!("{e}"));
+        if k > 0 {
+            // The previous frame of the same run (neo's traces are named by frame).
+            let prev = trace.with_file_name(format!("frame_{:05}.poc.trace", k - 1));
+            frame.follow(&read_poc_trace(&prev).unwrap_or_else(|e| panic!("{e}")));
+            assert!(frame.previous_visible.is_some(), "frame {k} of `--sort neo` reuses its tables");
+        }
         let steps = waterfall(&frame, &ArtifactSizes::default(), &neo_sizes);
         if k == 1 {
             // The timing restatement issues exactly each step's bytes (same rules, same frame).

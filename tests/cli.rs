@@ -270,7 +270,12 @@ fn simulate_reports_every_frame_by_stage_and_engine() {
     for arch in v[0]["archs"].as_array().expect("archs") {
         for f in arch["frames"].as_array().expect("frames") {
             let stages = f["stages"].as_array().expect("stages");
-            assert_eq!(stages.len(), 8, "{}: every stage named", arch["arch"]);
+            assert_eq!(
+                stages.len(),
+                neo_sim::traffic::Stage::ALL.len(),
+                "{}: every stage named",
+                arch["arch"]
+            );
             let sum: u64 = stages
                 .iter()
                 .map(|s| s["read_bytes"].as_u64().unwrap() + s["write_bytes"].as_u64().unwrap())
@@ -286,6 +291,7 @@ fn simulate_reports_every_frame_by_stage_and_engine() {
     let text = ok(&[&args[..], &["--per-frame"]].concat());
     assert!(text.contains("frame  interval   pre ms  sort ms  rast ms"), "{text}");
     assert!(text.contains("preprocess R/W MB"), "{text}");
+    assert!(text.contains("incoming detection R/W MB"), "frame 1 reuses its tables: {text}");
 }
 
 #[test]

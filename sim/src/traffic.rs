@@ -10,6 +10,10 @@ use std::fmt;
 pub enum Stage {
     /// Gaussian parameters read by preprocessing.
     Preprocess,
+    /// Preprocessing's incoming detection (the duplication unit, paper Section 5.2): the
+    /// previous frame's feature entries and visibility bitmap read, this frame's bitmap
+    /// written (`neo_golden::hwpre::duplicate`).
+    IncomingDetection,
     /// The feature table: written by preprocessing, read (gathered) by the raster.
     FeatureTable,
     /// Incoming (or, from scratch, all binned) lists: written by duplication, read by sorting.
@@ -28,9 +32,13 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// Number of stages.
+    pub const COUNT: usize = 9;
+
     /// All stages in report order.
-    pub const ALL: [Stage; 8] = [
+    pub const ALL: [Stage; Stage::COUNT] = [
         Stage::Preprocess,
+        Stage::IncomingDetection,
         Stage::FeatureTable,
         Stage::IncomingList,
         Stage::SortTable,
@@ -44,6 +52,7 @@ impl Stage {
     pub fn name(self) -> &'static str {
         match self {
             Stage::Preprocess => "preprocess",
+            Stage::IncomingDetection => "incoming detection",
             Stage::FeatureTable => "feature table",
             Stage::IncomingList => "incoming lists",
             Stage::SortTable => "sort tables",
@@ -51,6 +60,21 @@ impl Stage {
             Stage::DepthWriteback => "depth write-back",
             Stage::FrameBuffer => "frame buffer",
             Stage::BackgroundSort => "background sort",
+        }
+    }
+
+    /// One word for narrow column headers.
+    pub fn short_name(self) -> &'static str {
+        match self {
+            Stage::Preprocess => "preprocess",
+            Stage::IncomingDetection => "detection",
+            Stage::FeatureTable => "feature",
+            Stage::IncomingList => "incoming",
+            Stage::SortTable => "sort",
+            Stage::RasterTable => "raster",
+            Stage::DepthWriteback => "depth",
+            Stage::FrameBuffer => "frame",
+            Stage::BackgroundSort => "background",
         }
     }
 
@@ -85,13 +109,13 @@ pub struct Traffic {
     /// Line size the bytes were counted with.
     pub line_bytes: u64,
     /// `[stage][0 = read, 1 = write]` requests.
-    pub requests: [[u64; 2]; 8],
+    pub requests: [[u64; 2]; Stage::COUNT],
 }
 
 impl Traffic {
     /// Empty accounting for `line_bytes` lines.
     pub fn new(line_bytes: u64) -> Self {
-        Traffic { line_bytes, requests: [[0; 2]; 8] }
+        Traffic { line_bytes, requests: [[0; 2]; Stage::COUNT] }
     }
 
     /// Counts `n` requests.
@@ -106,7 +130,7 @@ impl Traffic {
             self.line_bytes = o.line_bytes;
         }
         debug_assert!(o.line_bytes == self.line_bytes || o.total_requests() == 0);
-        for s in 0..8 {
+        for s in 0..Stage::COUNT {
             for d in 0..2 {
                 self.requests[s][d] += o.requests[s][d];
             }

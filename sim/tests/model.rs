@@ -290,3 +290,48 @@ fn neo_moves_less_dram_than_gscore_and_periodic_spikes_at_refreshes() {
         "latency spikes at refresh frames: {lat_refresh:?} vs {lat_between}"
     );
 }
+
+/// The duplication unit's incoming detection (golden `hwpre::duplicate`), charged to its own
+/// stage: on Neo, every frame writes its visibility bitmap (`ceil(N / 8)` bytes) and a frame
+/// that reuses its tables also reads the previous bitmap and the previous feature entries of
+/// the `P` Gaussians visible then (`P x` golden's feature-entry bytes), each one stream, so
+/// each costs its bytes rounded up to whole 64-byte lines. A frame sorted from scratch (frame
+/// 0, the cut) reads nothing. The same work labelled `full` (no table reuse) or run on GSCore
+/// charges nothing, and every other stage of every frame moves exactly the same bytes.
+#[test]
+fn incoming_detection_charges_the_previous_entries_and_the_bitmaps() {
+    let lat = latency();
+    let (scene, _) = source::load_scene("synthetic:outdoor?gaussians=20k&seed=2", false).unwrap();
+    let traj = trajectory::parse_trajectory("orbit:speed=4,cut=2", source::robust_bounds(&scene), 4)
+        .unwrap()
+        .with_resolution(256, 192);
+    let wl =
+        generate(&scene, &traj.frames, &traj.cuts, &WorkloadSpec::new("s", "orbit", Strategy::Neo), |_| {})
+            .unwrap();
+    let scratch: Vec<bool> = wl.frames.iter().map(|f| f.from_scratch).collect();
+    assert_eq!(scratch, [true, false, true, false], "frame 0 and the cut at 2 from scratch");
+    let mut unlabelled = wl.clone();
+    unlabelled.info.strategy = "full".into();
+    let cfg = SimConfig::default();
+    let run = |arch, w: &Workload| simulate(arch, &cfg, &lat, w, RunOptions::default()).unwrap();
+    let (neo, full, gscore) = (run(Arch::Neo, &wl), run(Arch::Neo, &unlabelled), run(Arch::Gscore(4), &wl));
+    let det = Stage::ALL.iter().position(|&s| s == Stage::IncomingDetection).unwrap();
+    let lines = |bytes: u64| bytes.div_ceil(64) * 64;
+    let bitmap = lines(wl.info.gaussians.div_ceil(8));
+    let fb = wl.info.feature_entry_bytes as u64;
+    for (k, fw) in wl.frames.iter().enumerate() {
+        let reads = if fw.from_scratch { 0 } else { lines(wl.frames[k - 1].visible * fb) + bitmap };
+        let st = &neo.frames[k].stages[det];
+        assert_eq!((st.read_bytes, st.write_bytes), (reads, bitmap), "frame {k}");
+        for other in [&full, &gscore] {
+            let st = &other.frames[k].stages[det];
+            assert_eq!((st.read_bytes, st.write_bytes), (0, 0), "{} frame {k}", other.arch);
+        }
+        for (s, (a, b)) in neo.frames[k].stages.iter().zip(&full.frames[k].stages).enumerate() {
+            if s != det {
+                assert_eq!(a, b, "frame {k}: only the incoming detection moves");
+            }
+        }
+        assert_eq!(neo.frames[k].dram_bytes - full.frames[k].dram_bytes, reads + bitmap, "frame {k}");
+    }
+}

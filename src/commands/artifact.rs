@@ -6,7 +6,7 @@ use anyhow::Result;
 use clap::Args;
 use neo_golden::hwpre::bake;
 use neo_golden::pipeline::{Formats, Preprocessing};
-use neo_sim::artifact::poc::read_poc_trace;
+use neo_sim::artifact::poc::{read_poc_trace, PocFrame};
 use neo_sim::artifact::timing::artifact_timing_with;
 use neo_sim::artifact::waterfall::{waterfall, NeoSizes};
 use neo_sim::artifact::{artifact_lines, ArtifactSizes, Request, Rules};
@@ -18,7 +18,10 @@ use std::path::PathBuf;
 /// Arguments of `neo artifact`.
 #[derive(Args)]
 pub struct ArtifactArgs {
-    /// `poc.trace` files (`neo frames --trace` or `neo simulate --trace` write them).
+    /// `poc.trace` files (`neo frames --trace` or `neo simulate --trace` write them). A trace
+    /// that reuses tables is taken to follow the one before it on the command line (the
+    /// waterfall's incoming-detection step reads that frame's visible Gaussians), so give the
+    /// frames of a run in order.
     #[arg(required = true)]
     pub traces: Vec<PathBuf>,
     /// Also time each frame, and each step of the waterfall, with the artifact's structure on
@@ -48,8 +51,12 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
         feature: Formats::artifact(sizes.global_chunk as usize)?.feature.bytes_per_entry() as u64,
         pixel: cfg.sizes.pixel_bytes as u64,
     };
+    let mut prev: Option<PocFrame> = None;
     for path in &a.traces {
-        let f = read_poc_trace(path)?;
+        let mut f = read_poc_trace(path)?;
+        if let Some(p) = &prev {
+            f.follow(p);
+        }
         let lines = artifact_lines(&f, &sizes);
         println!(
             "{} ({}x{}, {} Gaussians, {} tiles)",
@@ -72,6 +79,9 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
             Vec::new()
         };
         println!("{}", waterfall_table(&f, &sizes, &neo, &cycles));
+        if f.reuses_tables() && f.previous_visible.is_none() {
+            println!("(no previous trace given: the incoming detection's reads are not charged)\n");
+        }
         if let Some(c) = cycles.first() {
             println!(
                 "the artifact's timing on neo's DRAM model ({}): {c} core cycles at 1 GHz ({:.1} FPS)\n",
@@ -79,18 +89,14 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
                 1e9 / *c as f64
             );
         }
+        prev = Some(f);
     }
     Ok(())
 }
 
 /// The waterfall as a text table, MB (1e6 bytes) by neo stage, read + written.
 /// The waterfall as a text table; `cycles` (one per step, or empty) adds the timing column.
-fn waterfall_table(
-    f: &neo_sim::artifact::poc::PocFrame,
-    sizes: &ArtifactSizes,
-    neo: &NeoSizes,
-    cycles: &[u64],
-) -> String {
+fn waterfall_table(f: &PocFrame, sizes: &ArtifactSizes, neo: &NeoSizes, cycles: &[u64]) -> String {
     let steps = waterfall(f, sizes, neo);
     let mut s =
         String::from("from the artifact's bytes to neo's charging (MB read + written, cumulative):\n");
@@ -99,7 +105,7 @@ fn waterfall_table(
         let _ = write!(s, " {:>10}", "Mcycles");
     }
     for st in Stage::ALL {
-        let _ = write!(s, " {:>10}", st.name().split(' ').next().unwrap_or(""));
+        let _ = write!(s, " {:>10}", st.short_name());
     }
     s.push('\n');
     let mb = |b: u64| b as f64 / 1e6;

@@ -39,7 +39,7 @@ impl Model<'_> {
         let compute = self.ps(cyc + p.latency as f64);
         let s = &self.cfg.sizes;
         let l = &self.layout;
-        let reads = vec![
+        let mut reads = vec![
             Access::seq(Stage::Preprocess, l.geometry, fw.gaussians * s.geometry_bytes(&self.wl.info)),
             Access::seq(Stage::Preprocess, l.sh, fw.visible * s.sh_bytes(&self.wl.info)),
         ];
@@ -48,6 +48,9 @@ impl Model<'_> {
             Access::seq(Stage::FeatureTable, l.features[f % 2], fw.visible * self.fb),
             Access::seq(Stage::IncomingList, l.lists[f % 2], lists * self.eb),
         ];
+        let (det_reads, det_writes) = self.incoming_detection(f);
+        reads.extend(det_reads);
+        writes.extend(det_writes);
         if self.accel == Accel::Neo && matches!(self.strategy, Strategy::Background(_)) {
             let all: u64 = fw.tiles.iter().map(|t| t.background_n as u64).sum();
             writes.push(Access::seq(Stage::BackgroundSort, l.bg_lists[f % 2], all * self.eb));
@@ -65,6 +68,37 @@ impl Model<'_> {
                 spread_reads: true,
             }],
         }
+    }
+
+    /// The duplication unit's incoming detection in frame `f` (`neo_golden::hwpre::duplicate`),
+    /// as (reads, writes). On Neo's hardware with a strategy that reuses tables, every frame
+    /// writes its visibility bitmap (`ceil(N / 8)` bytes, one bit per Gaussian by id) for the
+    /// next frame; a frame that reuses tables also reads the previous frame's bitmap and the
+    /// previous feature entries of the `P` Gaussians visible then (`P x` feature-entry bytes).
+    /// Both tables are walked in Gaussian-id order (the feature table is written as one stream
+    /// of the visible Gaussians in id order, and the bitmap's running count gives a Gaussian's
+    /// place in it), so each is one sequential access. A frame sorted from scratch (frame 0, a
+    /// cut, a refresh) needs no previous entry: every Gaussian is incoming (`all_fresh`).
+    fn incoming_detection(&self, f: usize) -> (Vec<Access>, Vec<Access>) {
+        if !self.detects_incoming() {
+            return (Vec::new(), Vec::new());
+        }
+        let (fw, l) = (&self.wl.frames[f], &self.layout);
+        let bitmap = fw.gaussians.div_ceil(8);
+        let writes = vec![Access::seq(Stage::IncomingDetection, l.visibility[f % 2], bitmap)];
+        let prev = match f.checked_sub(1) {
+            Some(p) if !fw.from_scratch => p,
+            _ => return (Vec::new(), writes),
+        };
+        let reads = vec![
+            Access::seq(
+                Stage::IncomingDetection,
+                l.features[prev % 2],
+                self.wl.frames[prev].visible * self.fb,
+            ),
+            Access::seq(Stage::IncomingDetection, l.visibility[prev % 2], bitmap),
+        ];
+        (reads, writes)
     }
 
     /// A sorting-core command. Chunk commands (serial segments) take their single latency `T`

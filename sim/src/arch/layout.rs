@@ -19,6 +19,9 @@ pub(super) struct Layout {
     pub(super) geometry: u64,
     pub(super) sh: u64,
     pub(super) features: [u64; 2],
+    /// The visibility bitmaps (one bit per Gaussian, by id) of the duplication unit's incoming
+    /// detection, double-buffered like the feature tables.
+    pub(super) visibility: [u64; 2],
     pub(super) lists: [u64; 2],
     pub(super) bg_lists: [u64; 2],
     pub(super) tables: [u64; 2],
@@ -62,6 +65,8 @@ impl Layout {
                 &mut next,
                 wl.info.width as u64 * wl.info.height as u64 * cfg.sizes.pixel_bytes as u64,
             ),
+            // Last, so that adding it moved no other region.
+            visibility: [region(&mut next, g.div_ceil(8)), region(&mut next, g.div_ceil(8))],
         }
     }
 

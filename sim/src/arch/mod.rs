@@ -5,8 +5,9 @@
 //! # Engines and jobs
 //! - **Preprocessing** (one agent): per frame, reads every Gaussian's geometry and the SH of the
 //!   visible ones, writes the feature table and the per-tile lists (Neo: incoming lists; GSCore:
-//!   every pair, with its subtile bitmap). Compute: the slowest of projection, colour and
-//!   duplication units (assumed timing).
+//!   every pair, with its subtile bitmap); Neo's incoming detection reads the previous frame's
+//!   feature entries and visibility bitmap and writes this frame's bitmap. Compute: the slowest
+//!   of projection, colour and duplication units (assumed timing).
 //! - **Sorting** (`sort_cores` agents): per tile, the sorting-core commands of the strategy
 //!   ([`crate::sortcmd`]), each a segment timed by `latency.json`: Neo's DPS (the last pass
 //!   fused with the MSU+ insert/delete merge when `fused_dps_merge`), conventional sorts of the
@@ -188,6 +189,15 @@ impl<'a> Model<'a> {
     /// The scheduler for this model.
     pub fn scheduler(&self) -> Sched<'_, 'a> {
         Sched::new(self)
+    }
+
+    /// True when the duplication unit detects incoming Gaussians: Neo's hardware running a
+    /// strategy that reuses tables (`background:K` included, charged one frame back like the
+    /// others although its reused table is frame `f - K`'s); not GSCore (no incoming step), not
+    /// `full` or `hierarchical` (every frame from scratch).
+    fn detects_incoming(&self) -> bool {
+        self.accel == Accel::Neo
+            && (self.strategy.reuses_tables() || matches!(self.strategy, Strategy::Background(_)))
     }
 
     fn ps(&self, cycles: f64) -> Ps {

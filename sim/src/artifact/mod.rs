@@ -87,11 +87,16 @@ pub struct Rules {
     pub frame_buffer: Option<u64>,
     /// neo's parameter and feature-entry sizes replace the artifact's.
     pub neo_sizes: Option<waterfall::NeoSizes>,
+    /// The duplication unit's incoming detection is charged (neither the artifact nor its
+    /// trace has it): this frame's visibility bitmap written and, when the frame reuses its
+    /// tables ([`poc::PocFrame::previous_visible`]), the previous frame's bitmap and feature
+    /// entries read, each as one stream ([`waterfall::detection_bytes`]).
+    pub incoming_detection: bool,
 }
 
 impl Rules {
     /// The names of the steps, in order (step 0: the artifact).
-    pub const STEPS: [&'static str; 9] = [
+    pub const STEPS: [&'static str; 10] = [
         "the artifact",
         "+ the precise sort's store is written (not size 0)",
         "+ partial lines are moved (lists round up, not down)",
@@ -101,6 +106,7 @@ impl Rules {
         "+ the feature table is written as one stream",
         "+ the frame buffer is written",
         "+ neo's byte sizes (parameters, feature entries)",
+        "+ incoming detection (previous entries + visibility bitmap)",
     ];
 
     /// The rules after the first `k` steps of the waterfall, with neo's sizes `neo`.
@@ -114,6 +120,7 @@ impl Rules {
             feature_stream: k >= 6,
             frame_buffer: (k >= 7).then_some(neo.pixel),
             neo_sizes: (k >= 8).then_some(*neo),
+            incoming_detection: k >= 9,
         }
     }
 }
@@ -256,7 +263,7 @@ fn chunked_lines(entries: u64, chunk: u64, s: &ArtifactSizes) -> u64 {
 /// The artifact's lines per request name for one frame.
 pub fn artifact_lines(f: &PocFrame, s: &ArtifactSizes) -> ArtifactLines {
     let mut l = ArtifactLines::default();
-    let visible = f.culled.iter().filter(|&&c| !c).count() as u64;
+    let visible = f.visible();
     l.add(Request::FrustumCulling, f.culled.len() as u64 * s.position / s.line);
     l.add(Request::ProjectionLoad, visible * s.others.div_ceil(s.line));
     l.add(Request::ProjectionStore, visible);

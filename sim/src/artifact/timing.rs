@@ -47,6 +47,11 @@ pub struct ArtifactLayout {
     pub tile_entries: u64,
     /// The frame buffer (not in the artifact; for the waterfall's frame-buffer step).
     pub frame_buffer: u64,
+    /// The previous frame's feature entries (not in the artifact; for the waterfall's
+    /// incoming-detection step).
+    pub previous_features: u64,
+    /// The previous frame's and this frame's visibility bitmaps (idem).
+    pub visibility: [u64; 2],
 }
 
 impl Default for ArtifactLayout {
@@ -59,6 +64,8 @@ impl Default for ArtifactLayout {
             new: 251_658_240,
             tile_entries: 8198,
             frame_buffer: 0x4000_0000,
+            previous_features: 0x5000_0000,
+            visibility: [0x6000_0000, 0x6100_0000],
         }
     }
 }
@@ -302,7 +309,26 @@ impl Frame<'_> {
             }
             v
         };
-        vec![(cull, false), (load, false), (store, true), (self.duplication(), true)]
+        let mut lists = vec![(cull, false), (load, false), (store, true)];
+        if self.r.incoming_detection {
+            lists.extend(self.incoming_detection());
+        }
+        lists.push((self.duplication(), true));
+        lists
+    }
+
+    /// The duplication unit's incoming detection, before its writes: the previous frame's
+    /// feature entries and bitmap read as streams (a frame that reuses its tables), this
+    /// frame's bitmap written (as [`super::waterfall::detection_bytes`] charges them).
+    fn incoming_detection(&self) -> Vec<ReqList> {
+        let (f, l) = (self.f, &self.l);
+        let bitmap = (f.culled.len() as u64).div_ceil(8);
+        let mut read = Vec::new();
+        if let Some(p) = f.previous_visible {
+            read = self.lines(l.previous_features, p * self.feature_bytes());
+            read.extend(self.lines(l.visibility[0], bitmap));
+        }
+        vec![(read, false), (self.lines(l.visibility[1], bitmap), true)]
     }
 
     /// The duplication writes: three lines per incoming pair (the artifact), or each tile's
@@ -493,7 +519,7 @@ pub fn artifact_timing_with(
     let order = morton_tiles(f);
     let mut w = Wrapper { feeder: QueueFeeder::new(cfg), lists: Vec::new(), active: Vec::new() };
     let mut pre: VecDeque<ReqList> = fr.preprocess_lists().into();
-    let (a, wr) = pre.pop_front().expect("four preprocessing lists");
+    let (a, wr) = pre.pop_front().expect("the preprocessing lists");
     let mut pre_cur = Some(w.open(a, wr));
     let mut global: Vec<Option<Global>> = (0..SORTERS).map(|_| None).collect();
     let mut adaptive: Vec<Option<(usize, Pipeline)>> = (0..SORTERS).map(|_| None).collect();
@@ -614,14 +640,17 @@ mod tests {
     #[test]
     fn each_waterfall_step_times_the_bytes_it_charges() {
         use crate::artifact::waterfall::{test_frame, waterfall, NeoSizes};
-        let f = test_frame();
         let s = ArtifactSizes::default();
         let neo = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3 };
-        let steps = waterfall(&f, &s, &neo);
-        for (k, step) in steps.iter().enumerate() {
-            let t = artifact_timing_with(&f, &s, &Rules::step(k, &neo), &DramConfig::default());
-            assert_eq!((t.reads + t.writes) * s.line, step.bytes.total(), "step {k}: {}", step.name);
-            assert!(t.core_cycles > 0);
+        // Read alone, and following a frame with 3 visible Gaussians (incoming detection reads).
+        for previous_visible in [None, Some(3)] {
+            let f = PocFrame { previous_visible, ..test_frame() };
+            let steps = waterfall(&f, &s, &neo);
+            for (k, step) in steps.iter().enumerate() {
+                let t = artifact_timing_with(&f, &s, &Rules::step(k, &neo), &DramConfig::default());
+                assert_eq!((t.reads + t.writes) * s.line, step.bytes.total(), "step {k}: {}", step.name);
+                assert!(t.core_cycles > 0);
+            }
         }
     }
 

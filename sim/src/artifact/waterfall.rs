@@ -13,7 +13,7 @@ use crate::traffic::{Dir, Stage};
 
 /// Bytes by neo stage and direction ([`Stage::ALL`] order; read, write).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct StageBytes(pub [[u64; 2]; 8]);
+pub struct StageBytes(pub [[u64; 2]; Stage::COUNT]);
 
 impl StageBytes {
     fn add(&mut self, stage: Stage, dir: Dir, bytes: u64) {
@@ -91,6 +91,18 @@ pub struct NeoSizes {
     pub feature: u64,
     /// Frame-buffer bytes per pixel.
     pub pixel: u64,
+}
+
+/// The incoming detection's bytes in frame `f` with `feature`-byte entries and `line`-byte
+/// lines, as neo's model charges them (`neo_sim::arch`, the preprocessing job): (read,
+/// written). The bitmap (`ceil(N / 8)` bytes) is written every frame; a frame that reuses
+/// its tables also reads the previous one and the previous frame's `P` feature entries. Each
+/// is one stream from a line-aligned base, so it costs its bytes rounded up to whole lines.
+pub fn detection_bytes(f: &PocFrame, feature: u64, line: u64) -> (u64, u64) {
+    let stream = |bytes: u64| bytes.div_ceil(line) * line;
+    let bitmap = stream((f.culled.len() as u64).div_ceil(8));
+    let read = f.previous_visible.map_or(0, |p| stream(p * feature) + bitmap);
+    (read, bitmap)
 }
 
 /// The waterfall of one frame, ending with neo's byte sizes `neo`.
@@ -178,7 +190,7 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
     }
     push(Rules::STEPS[5], &b);
     // 6. Preprocessing writes the feature table as one stream (not a line per Gaussian).
-    let visible = f.culled.iter().filter(|&&c| !c).count() as u64;
+    let visible = f.visible();
     let stream = (visible * s.feature).div_ceil(line);
     let per_gaussian = lines.get(Request::ProjectionStore) + stores;
     let w = &mut b.0[Stage::FeatureTable as usize][Dir::Write as usize];
@@ -199,6 +211,10 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
         .sum();
     b.0[Stage::FeatureTable as usize] = [gathers * line, (visible * neo.feature).div_ceil(line) * line];
     push(Rules::STEPS[8], &b);
+    // 9. The duplication unit's incoming detection.
+    let (read, written) = detection_bytes(f, neo.feature, line);
+    b.0[Stage::IncomingDetection as usize] = [read, written];
+    push(Rules::STEPS[9], &b);
     steps
 }
 
@@ -222,6 +238,7 @@ pub(crate) fn test_frame() -> PocFrame {
         incoming_tiles: vec![2, 1, 1, 0],
         incoming_list: vec![0, 1, 0, 1],
         tiles: vec![tile(2, 0, vec![0, 1]), tile(1, 2, vec![3, 0, 1])],
+        previous_visible: None,
     }
 }
 
@@ -238,7 +255,7 @@ mod tests {
         let steps = waterfall(&f, &s, &NEO);
         let lines = artifact_lines(&f, &s);
         assert_eq!(steps[0].bytes.total(), (lines.reads() + lines.writes()) * 64);
-        assert_eq!(steps.len(), 9);
+        assert_eq!(steps.len(), Rules::STEPS.len());
     }
 
     #[test]
@@ -275,5 +292,30 @@ mod tests {
         assert_eq!(steps[8].bytes.get(Stage::Preprocess, Dir::Read), 12 * 64);
         assert_eq!(steps[8].bytes.get(Stage::FeatureTable, Dir::Write), 2 * 64);
         assert_eq!(steps[8].bytes.get(Stage::FeatureTable, Dir::Read), 5 * 64);
+        // Read alone (no previous frame): only this frame's bitmap (4 bits: a line) is written.
+        assert_eq!(d(9, Stage::IncomingDetection, Dir::Write), 64);
+        assert_eq!(d(9, Stage::IncomingDetection, Dir::Read), 0);
+        assert_eq!(steps[9].bytes.total() - steps[8].bytes.total(), 64, "nothing else moves");
+    }
+
+    #[test]
+    fn incoming_detection_reads_the_previous_entries_and_bitmap_of_a_reuse_frame() {
+        let prev = test_frame();
+        let mut f = test_frame();
+        f.follow(&prev);
+        assert!(f.reuses_tables(), "tile 1 reuses 2 entries");
+        assert_eq!(f.previous_visible, Some(3), "the previous frame culled 1 of 4");
+        let steps = waterfall(&f, &ArtifactSizes::default(), &NEO);
+        let (last, before) = (&steps[9].bytes, &steps[8].bytes);
+        // 3 previous entries of 31 B (93 B: 2 lines) and the 1-byte bitmap (1 line) read; the
+        // bitmap written (1 line).
+        assert_eq!(last.get(Stage::IncomingDetection, Dir::Read), (2 + 1) * 64);
+        assert_eq!(last.get(Stage::IncomingDetection, Dir::Write), 64);
+        assert_eq!(last.total() - before.total(), 4 * 64);
+        // A frame sorted from scratch reads nothing, whatever came before.
+        let mut scratch = PocFrame { tiles: vec![prev.tiles[0].clone(); 2], ..test_frame() };
+        scratch.follow(&prev);
+        assert_eq!(scratch.previous_visible, None);
+        assert_eq!(detection_bytes(&scratch, 31, 64), (0, 64));
     }
 }
