@@ -27,6 +27,7 @@ pub mod fp;
 pub mod frame;
 #[cfg(neo_has_verilator)]
 pub mod itu;
+pub mod lane;
 pub mod lanes;
 #[cfg(neo_has_verilator)]
 pub mod latency;

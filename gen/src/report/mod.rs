@@ -168,6 +168,11 @@ pub fn hierarchical_boxes(cfg: &EngineConfig, top: &str) -> Option<Vec<String>> 
     if top == pre::dup::NAME {
         return Some(vec![itu::NAME.to_string()]);
     }
+    if top == pre::lane::NAME {
+        return Some(
+            [pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME].iter().map(|s| s.to_string()).collect(),
+        );
+    }
     if top == engine::NAME {
         let mut boxes: Vec<String> = engine::SUBMODULES.iter().map(|s| s.to_string()).collect();
         boxes.push(engine_mux(cfg));

@@ -87,11 +87,12 @@ pub fn top_modules() -> &'static [&'static str] {
     ]
 }
 
-/// Tops the benches verilate at run time (`neo_tb::dynmodel`) rather than with every build,
-/// and that no other top instantiates: the lint and latch gates check them like
-/// [`top_modules`]. (The engine, which has its own gates, is not listed.)
+/// Tops the benches verilate at run time (`neo_tb::dynmodel`) rather than with every build:
+/// the lint and latch gates check them like [`top_modules`] (the lane with the units it
+/// instantiates as black boxes, each checked as its own top). (The engine, which has its own
+/// gates, is not listed.)
 pub fn run_time_tops() -> &'static [&'static str] {
-    &[pre::dup::NAME, pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME]
+    &[pre::dup::NAME, pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME, pre::lane::NAME]
 }
 
 /// Every module of the configuration, leaves first.
@@ -127,11 +128,16 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(engine::module(cfg));
     all.extend(fp::modules(cfg));
     all.push(pre::dup::module(cfg));
-    all.push(pre::fifo::module(pre::fetch::cmd_queue_width(cfg), pre::fetch::CMD_QUEUE));
+    let mut queues = vec![(pre::fetch::cmd_queue_width(cfg), pre::fetch::CMD_QUEUE)];
+    queues.extend(pre::lane::queues(cfg));
+    queues.sort_unstable();
+    queues.dedup();
+    all.extend(queues.into_iter().map(|(w, d)| pre::fifo::module(w, d)));
     all.push(pre::fetch::ram_module(cfg));
     all.push(pre::fetch::module(cfg));
     all.push(pre::color_module(cfg));
     all.push(pre::project_module(cfg));
+    all.push(pre::lane::module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }

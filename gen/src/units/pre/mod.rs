@@ -6,6 +6,7 @@ pub mod datapath;
 pub mod dup;
 pub mod fetch;
 pub mod fifo;
+pub mod lane;
 pub mod library;
 
 use crate::emit::Module;
