@@ -23,7 +23,8 @@ module neo_pre_dup (
   output wire [9:0]  out_tile_y_o,
   output wire [30:0] out_id_o,
   output wire [15:0] out_key_o,
-  output wire        out_incoming_o      // not in the tile's previous table
+  output wire        out_incoming_o,     // not in the tile's previous table
+  output wire        idle_o              // no Gaussian being walked, no test in the ITUs
 );
 
   // Candidate tiles along x: [x0, x1).
@@ -217,6 +218,18 @@ module neo_pre_dup (
       sb_q3 <= sb_q2;
     end
   end
+  // A valid bit per sideband stage (a test issued), for idle_o.
+  reg  [2:0] sbv_q;
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      sbv_q <= 3'd0;
+    end else begin
+      if (itu_adv) begin
+        sbv_q <= {sbv_q[1:0], busy_q};
+      end
+    end
+  end
+  assign idle_o = ~busy_q & (sbv_q == 3'd0);
   wire out_prev_visible;
   assign out_prev_visible = sb_q3[0];
   assign out_id_o = sb_q3[31:1];

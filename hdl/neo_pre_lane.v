@@ -35,8 +35,16 @@ module neo_pre_lane (
   input  wire [31:0] sh_base_i,      // byte address of Gaussian 0's SH record
   input  wire [5:0]  sh_words_i,     // words of an SH record (the scene's degree, f32)
   input  wire [31:0] feat_base_i,    // byte address of Gaussian 0's feature word (32-byte aligned)
+  input  wire [31:0] prev_base_i,    // byte address of Gaussian 0's previous feature word
+  input  wire        all_fresh_i,    // no table is reused: every Gaussian is incoming, no previous word read
   input  wire [31:0] first_i,        // the lane's first Gaussian
   input  wire [31:0] count_i,        // the lane's Gaussians
+  output wire        hit_valid_o,    // an incoming (Gaussian, tile) is offered
+  input  wire        hit_ready_i,    // it is taken
+  output wire [9:0]  hit_tile_x_o,   // tile column
+  output wire [9:0]  hit_tile_y_o,   // tile row
+  output wire [30:0] hit_id_o,       // Gaussian id
+  output wire [15:0] hit_key_o,      // depth key
   output wire        ma_axi_arvalid_o,
   input  wire        ma_axi_arready_i,
   output wire [3:0]  ma_axi_arid_o,
@@ -105,6 +113,7 @@ module neo_pre_lane (
   reg  [31:0] proj_idx_q;
   reg  [31:0] wr_idx_q;
   reg  [31:0] done_idx_q;
+  reg  [31:0] join_idx_q;
   wire take_start;
   assign take_start = start_i & ~run_q;
   wire settled;
@@ -117,6 +126,7 @@ module neo_pre_lane (
       proj_idx_q <= 32'd0;
       wr_idx_q <= 32'd0;
       done_idx_q <= 32'd0;
+      join_idx_q <= 32'd0;
     end else begin
       if (take_start) begin
         run_q <= 1'b1;
@@ -125,6 +135,7 @@ module neo_pre_lane (
         proj_idx_q <= 32'd0;
         wr_idx_q <= 32'd0;
         done_idx_q <= 32'd0;
+        join_idx_q <= 32'd0;
       end else begin
         if (~settled) begin
           settle_q <= settle_q - 4'd1;
@@ -141,7 +152,10 @@ module neo_pre_lane (
         if (b_fire) begin
           done_idx_q <= done_idx_q + 32'd1;
         end
-        if (run_q & ~geo_cmd_q & (done_idx_q == count_i)) begin
+        if (c_take) begin
+          join_idx_q <= join_idx_q + 32'd1;
+        end
+        if (run_q & ~geo_cmd_q & (done_idx_q == count_i) & d_idle) begin
           run_q <= 1'b0;
         end
       end
@@ -321,19 +335,62 @@ module neo_pre_lane (
   assign unused_p = ^{p_mean_x[31:24], p_mean_y[31:24], p_conic_a[31:18], p_conic_b[31:19], p_conic_c[31:18], p_conic_exp[31:6], p_opacity[31:8], p_extent_x[31:15], p_extent_y[31:15], p_axis_c[31:10], p_axis_s[31:10], p_extent_u[31:15], p_extent_v[31:15], p_depth_key[31:16], p_tile_min_x, p_tile_max_x, p_tile_min_y, p_tile_max_y};
   wire pend_ready;
   wire sh_cmd_ready;
+  // A visible Gaussian asks u_sh for its previous feature word (unless all_fresh_i), then,
+  // the next cycle (shc_q), for its SH record: the records come back in that order.
+  reg  shc_q;
+  reg  [31:0] shc_addr_q;
   wire sh_cmd_valid;
-  assign sh_cmd_valid = p_valid & p_visible & pend_ready;
-  assign p_out_ready = pend_ready & (~p_visible | sh_cmd_ready);
+  assign sh_cmd_valid = shc_q | (p_valid & p_visible & pend_ready);
+  assign p_out_ready = ~shc_q & pend_ready & (~p_visible | sh_cmd_ready);
   wire proj_take;
   assign proj_take = p_valid & p_out_ready;
   wire [31:0] proj_id;
   assign proj_id = first_i + proj_idx_q;
+  wire [36:0] prev_off;
+  assign prev_off = {proj_id, 5'd0};
+  wire [31:0] prev_addr;
+  assign prev_addr = prev_base_i + prev_off[31:0];
+  wire unused_prev_off;
+  assign unused_prev_off = ^prev_off[36:32];
+  wire [31:0] sh_cmd_base;
+  assign sh_cmd_base = shc_q ? shc_addr_q : (all_fresh_i ? sh_addr : prev_addr);
+  wire [5:0] sh_cmd_words;
+  assign sh_cmd_words = (shc_q | all_fresh_i) ? sh_words_i : 6'd8;
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      shc_q <= 1'b0;
+      shc_addr_q <= 32'd0;
+    end else begin
+      if (proj_take & p_visible & ~all_fresh_i) begin
+        shc_q <= 1'b1;
+        shc_addr_q <= sh_addr;
+      end else if (sh_cmd_ready) begin
+        shc_q <= 1'b0;
+      end
+    end
+  end
   wire [39:0] sh_off;
   assign sh_off = {8'd0, proj_id} * {34'd0, sh_words_i} * 40'd4;
   wire [31:0] sh_addr;
   assign sh_addr = sh_base_i + sh_off[31:0];
   wire unused_sh_off;
   assign unused_sh_off = ^sh_off[39:32];
+  // u_pendq's word: the position, the projection's feature fields, the visibility bit.
+  localparam PEND_POS_X = 0;
+  localparam PEND_POS_X_W = 32;
+  localparam PEND_POS_Y = 32;
+  localparam PEND_POS_Y_W = 32;
+  localparam PEND_POS_Z = 64;
+  localparam PEND_POS_Z_W = 32;
+  localparam PEND_VISIBLE = 309;
+  localparam PEND_ENTRY = 96;
+  localparam PEND_ENTRY_W = 214;
+  localparam PEND_ITU_MEAN = 96;
+  localparam PEND_ITU_MEAN_W = 48;
+  localparam PEND_ITU_GEOM = 213;
+  localparam PEND_ITU_GEOM_W = 80;
+  localparam PEND_DEPTH_KEY = 293;
+  localparam PEND_DEPTH_KEY_W = 16;
   wire pend_valid;
   wire [309:0] pend_data;
   wire pend_pop;
@@ -370,8 +427,8 @@ module neo_pre_lane (
     .rst_ni(rst_ni),
     .cmd_valid_i(sh_cmd_valid),
     .cmd_ready_o(sh_cmd_ready),
-    .cmd_base_i(sh_addr),
-    .cmd_words_i(sh_words_i),
+    .cmd_base_i(sh_cmd_base),
+    .cmd_words_i(sh_cmd_words),
     .cmd_count_i(32'd1),
     .busy_o(sh_busy),
     .rec_valid_o(sh_valid),
@@ -427,15 +484,42 @@ module neo_pre_lane (
 
   // Colour: the pending head (with its SH record when visible) enters u_color, its fields u_colq.
   wire pend_visible;
-  assign pend_visible = pend_data[309];
+  assign pend_visible = pend_data[PEND_VISIBLE];
   wire colq_ready;
   wire c_in_ready;
+  wire d_in_ready;
+  // A visible head first takes its previous feature word into prev_q (unless all_fresh_i),
+  // then enters u_color and u_dup together with its SH record.
+  reg  prev_have_q;
+  reg  [255:0] prev_q;
+  wire prev_cap;
+  assign prev_cap = pend_valid & pend_visible & ~all_fresh_i & ~prev_have_q & sh_valid;
+  wire join_ok;
+  assign join_ok = pend_valid & (~pend_visible | (sh_valid & (all_fresh_i | prev_have_q))) & colq_ready;
   wire c_in_valid;
-  assign c_in_valid = pend_valid & (~pend_visible | sh_valid) & colq_ready;
+  assign c_in_valid = join_ok & (~pend_visible | d_in_ready);
+  wire d_in_valid;
+  assign d_in_valid = join_ok & pend_visible & c_in_ready;
   wire c_take;
   assign c_take = c_in_valid & c_in_ready;
   assign pend_pop = c_take;
-  assign sh_ready = c_take & pend_visible;
+  assign sh_ready = (c_take & pend_visible) | prev_cap;
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      prev_have_q <= 1'b0;
+    end else begin
+      if (prev_cap) begin
+        prev_have_q <= 1'b1;
+      end else if (c_take) begin
+        prev_have_q <= 1'b0;
+      end
+    end
+  end
+  always @(posedge clk_i) begin
+    if (prev_cap) begin
+      prev_q <= sh_rec[255:0];
+    end
+  end
   wire [1535:0] c_sh;
   assign c_sh = pend_visible ? sh_rec : 1536'd0;
   wire c_out_ready;
@@ -451,9 +535,9 @@ module neo_pre_lane (
     .cam_z_i(cam_z_i),
     .degree_i(degree_i),
     .in_valid_i(c_in_valid),
-    .in_mean_x_i(pend_data[31:0]),
-    .in_mean_y_i(pend_data[63:32]),
-    .in_mean_z_i(pend_data[95:64]),
+    .in_mean_x_i(pend_data[PEND_POS_X +: PEND_POS_X_W]),
+    .in_mean_y_i(pend_data[PEND_POS_Y +: PEND_POS_Y_W]),
+    .in_mean_z_i(pend_data[PEND_POS_Z +: PEND_POS_Z_W]),
     .in_sh0_red_i(c_sh[31:0]),
     .in_sh0_green_i(c_sh[63:32]),
     .in_sh0_blue_i(c_sh[95:64]),
@@ -509,6 +593,36 @@ module neo_pre_lane (
     .out_green_o(c_green),
     .out_blue_o(c_blue)
   );
+  // u_colq's word: the feature fields and the visibility bit.
+  localparam COLQ_MEAN_X = 0;
+  localparam COLQ_MEAN_X_W = 24;
+  localparam COLQ_MEAN_Y = 24;
+  localparam COLQ_MEAN_Y_W = 24;
+  localparam COLQ_CONIC_A = 48;
+  localparam COLQ_CONIC_A_W = 18;
+  localparam COLQ_CONIC_B = 66;
+  localparam COLQ_CONIC_B_W = 19;
+  localparam COLQ_CONIC_C = 85;
+  localparam COLQ_CONIC_C_W = 18;
+  localparam COLQ_CONIC_EXP = 103;
+  localparam COLQ_CONIC_EXP_W = 6;
+  localparam COLQ_OPACITY = 109;
+  localparam COLQ_OPACITY_W = 8;
+  localparam COLQ_EXTENT_X = 117;
+  localparam COLQ_EXTENT_X_W = 15;
+  localparam COLQ_EXTENT_Y = 132;
+  localparam COLQ_EXTENT_Y_W = 15;
+  localparam COLQ_AXIS_C = 147;
+  localparam COLQ_AXIS_C_W = 10;
+  localparam COLQ_AXIS_S = 157;
+  localparam COLQ_AXIS_S_W = 10;
+  localparam COLQ_EXTENT_U = 167;
+  localparam COLQ_EXTENT_U_W = 15;
+  localparam COLQ_EXTENT_V = 182;
+  localparam COLQ_EXTENT_V_W = 15;
+  localparam COLQ_DEPTH_KEY = 197;
+  localparam COLQ_DEPTH_KEY_W = 16;
+  localparam COLQ_VISIBLE = 213;
   wire colq_valid;
   wire [213:0] colq_data;
   neo_pre_fifo_w214_d256 u_colq (
@@ -516,17 +630,59 @@ module neo_pre_lane (
     .rst_ni(rst_ni),
     .push_valid_i(c_take),
     .push_ready_o(colq_ready),
-    .push_data_i(pend_data[309:96]),
+    .push_data_i(pend_data[PEND_ENTRY +: PEND_ENTRY_W]),
     .pop_valid_o(colq_valid),
     .pop_ready_i(word_take),
     .pop_data_o(colq_data)
   );
 
+  // Duplication: the joined Gaussian's tiles; the incoming ones go out on hit_*.
+  // The previous feature word as the unit reads it: present bit, ITU runs.
+  localparam PREVW_PRESENT = 246;
+  localparam PREVW_ITU_MEAN = 0;
+  localparam PREVW_ITU_MEAN_W = 48;
+  localparam PREVW_ITU_GEOM = 150;
+  localparam PREVW_ITU_GEOM_W = 80;
+  wire [31:0] join_id;
+  assign join_id = first_i + join_idx_q;
+  wire d_out_valid;
+  wire d_out_incoming;
+  wire d_idle;
+  wire [15:0] join_key_field;
+  assign join_key_field = pend_data[PEND_DEPTH_KEY +: PEND_DEPTH_KEY_W];
+  neo_pre_dup u_dup (
+    .clk_i(clk_i),
+    .rst_ni(rst_ni),
+    .grid_x_i(grid_x_i[9:0]),
+    .grid_y_i(grid_y_i[9:0]),
+    .all_fresh_i(all_fresh_i),
+    .in_valid_i(d_in_valid),
+    .in_ready_o(d_in_ready),
+    .in_id_i(join_id[30:0]),
+    .in_key_i(join_key_field[15:0]),
+    .in_mean_i(pend_data[PEND_ITU_MEAN +: PEND_ITU_MEAN_W]),
+    .in_geom_i(pend_data[PEND_ITU_GEOM +: PEND_ITU_GEOM_W]),
+    .in_prev_visible_i(prev_q[PREVW_PRESENT]),
+    .in_prev_mean_i(prev_q[PREVW_ITU_MEAN +: PREVW_ITU_MEAN_W]),
+    .in_prev_geom_i(prev_q[PREVW_ITU_GEOM +: PREVW_ITU_GEOM_W]),
+    .out_valid_o(d_out_valid),
+    .out_ready_i(hit_ready_i | ~d_out_incoming),
+    .out_tile_x_o(hit_tile_x_o),
+    .out_tile_y_o(hit_tile_y_o),
+    .out_id_o(hit_id_o),
+    .out_key_o(hit_key_o),
+    .out_incoming_o(d_out_incoming),
+    .idle_o(d_idle)
+  );
+  assign hit_valid_o = d_out_valid & d_out_incoming;
+  wire unused_dup;
+  assign unused_dup = ^{grid_x_i[31:10], grid_y_i[31:10], prev_q, join_id[31:31]};
+
   // Feature word: the layout's fields (golden FeatureFormat::layout), present on top; 0 when culled.
   wire [245:0] entry_bits;
-  assign entry_bits = {colq_data[212:197], colq_data[196:182], colq_data[181:167], colq_data[166:157], colq_data[156:147], colq_data[146:132], colq_data[131:117], c_blue[10:0], c_green[10:0], c_red[10:0], colq_data[116:109], colq_data[108:103], colq_data[102:85], colq_data[84:66], colq_data[65:48], colq_data[47:24], colq_data[23:0]};
+  assign entry_bits = {colq_data[COLQ_DEPTH_KEY +: COLQ_DEPTH_KEY_W], colq_data[COLQ_EXTENT_V +: COLQ_EXTENT_V_W], colq_data[COLQ_EXTENT_U +: COLQ_EXTENT_U_W], colq_data[COLQ_AXIS_S +: COLQ_AXIS_S_W], colq_data[COLQ_AXIS_C +: COLQ_AXIS_C_W], colq_data[COLQ_EXTENT_Y +: COLQ_EXTENT_Y_W], colq_data[COLQ_EXTENT_X +: COLQ_EXTENT_X_W], c_blue[10:0], c_green[10:0], c_red[10:0], colq_data[COLQ_OPACITY +: COLQ_OPACITY_W], colq_data[COLQ_CONIC_EXP +: COLQ_CONIC_EXP_W], colq_data[COLQ_CONIC_C +: COLQ_CONIC_C_W], colq_data[COLQ_CONIC_B +: COLQ_CONIC_B_W], colq_data[COLQ_CONIC_A +: COLQ_CONIC_A_W], colq_data[COLQ_MEAN_Y +: COLQ_MEAN_Y_W], colq_data[COLQ_MEAN_X +: COLQ_MEAN_X_W]};
   wire word_visible;
-  assign word_visible = colq_data[213];
+  assign word_visible = colq_data[COLQ_VISIBLE];
   wire [255:0] word;
   assign word = word_visible ? {9'd0, 1'b1, entry_bits} : 256'd0;
   wire unused_c;

@@ -1,7 +1,7 @@
 //! The Preprocessing Engine's fetch unit (`neo_pre_fetch`) against the bytes of memory: random
 //! streams of every record size the baked format has under a hostile memory and output
 //! backpressure, then the read window: through a long read latency the default window streams
-//! at the port's full bandwidth, and a small one at the rate Little's law gives it.
+//! at the port's full bandwidth, and through a longer one at the rate Little's law gives it.
 
 #[test]
 fn models_present() {
@@ -26,7 +26,7 @@ neo_tb::with_models! {
         for p in [ShPrecision::F32, ShPrecision::F16] {
             for d in 0..=3u8 {
                 let b = sh_bytes(d, p);
-                if b % 4 == 0 && b / 4 >= beat_words {
+                if b.is_multiple_of(4) && b / 4 >= beat_words {
                     v.push(b / 4);
                 }
             }
@@ -93,12 +93,13 @@ neo_tb::with_models! {
     }
 
     #[test]
-    fn a_small_window_streams_at_the_rate_littles_law_gives_it() {
-        let cfg = EngineConfig { pre_read_lines: 16, ..neo_tb::config() };
+    fn through_a_longer_latency_the_window_sets_the_rate_littles_law_gives() {
+        // The same unit with the memory 2000 cycles away: 1024 beats in flight give 0.51.
+        let cfg = neo_tb::config();
         let window = cfg.pre_window_beats() as u64;
-        let (rate, in_flight, _) = stream_rate(&cfg, 400, 1000);
-        let little = window as f64 / 400.0;
-        eprintln!("window {window} beats: {rate:.3} beats/cycle, Little's law {little:.3}");
+        let (rate, in_flight, _) = stream_rate(&cfg, 2000, 2000);
+        let little = window as f64 / 2000.0;
+        eprintln!("window {window} beats, latency 2000: {rate:.3} beats/cycle, Little's law {little:.3}");
         assert!(in_flight <= window, "{in_flight} beats in flight above the window of {window}");
         assert!((rate - little).abs() < 0.15 * little, "{rate:.3} beats/cycle, Little's law gives {little:.3}");
     }
@@ -121,5 +122,21 @@ neo_tb::with_models! {
         let rate = run.beats as f64 / run.cycles as f64;
         eprintln!("gathers: {rate:.3} beats/cycle, {} beats in flight at most", run.max_beats_in_flight);
         assert!(rate > 0.85, "{rate:.3} beats/cycle for one-record gathers through 400 cycles");
+    }
+
+    #[test]
+    fn a_slow_consumer_fills_the_buffer_and_loses_nothing() {
+        // 200 SH records (4800 beats, above the 1024-beat window) taken 3% of the cycles: the
+        // buffer fills, and reads must wait for room instead of overwriting it.
+        let cfg = neo_tb::config();
+        let mut bench = FetchBench::build(&cfg).unwrap();
+        bench.reset();
+        let check = Checker::new("neo_pre_fetch", 3);
+        let mut rng = Rng::new(3);
+        let words = sh_bytes(3, ShPrecision::F32) / 4;
+        let cmds = [Stream { base: 0x50_0004, words, count: 200 }];
+        let mut mem = AxiMemory::new(1, random_memory(&cmds, &mut rng), AxiTiming::RANDOM, 3);
+        let run = bench.run(&mut mem, &cmds, (100, 3), &mut rng, &check);
+        assert!(run.max_beats_in_flight <= cfg.pre_window_beats() as u64, "{run:?}");
     }
 }

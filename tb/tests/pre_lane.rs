@@ -11,7 +11,7 @@ neo_tb::with_models! {
     use neo_golden::hwpre::bake::{Baked, ShPrecision};
     use neo_tb::axi::AxiTiming;
     use neo_tb::check::Checker;
-    use neo_tb::lane::{LaneBench, LaneRange};
+    use neo_tb::lane::{LaneBench, LaneFrame, LaneRange};
     use neo_tb::rng::for_each_seed;
 
     /// The baked synthetic scene (`gaussians`, `seed`) and `frames` cameras of a fast walk through it
@@ -28,22 +28,30 @@ neo_tb::with_models! {
     }
 
     #[test]
-    fn lane_writes_golden_feature_words_for_a_scene() {
-        let name = "lane_writes_golden_feature_words_for_a_scene";
+    fn lane_writes_golden_feature_words_and_incoming_hits() {
+        let name = "lane_writes_golden_feature_words_and_incoming_hits";
         let cfg = neo_tb::config();
         let mut bench = LaneBench::build(&cfg).unwrap();
         neo_tb::waves::maybe_trace(bench.model_mut(), name);
         for_each_seed(name, |seed| {
-            let (baked, cams) = scene(800, seed % 1000, 2);
+            let (baked, cams) = scene(800, seed % 1000, 3);
             let n = baked.len() as u32;
+            let first = (seed % 97) as u32;
+            let range = LaneRange { first, count: n - first - (seed % 13) as u32 };
+            let mut prev: Vec<[u8; 32]> = Vec::new();
             for (f, cam) in cams.iter().enumerate() {
                 let check = Checker::new("neo_pre_lane", seed ^ f as u64);
-                let first = (seed % 97) as u32;
-                let range = LaneRange { first, count: n - first - (seed % 13) as u32 };
-                let timing = if f % 2 == 0 { AxiTiming::RANDOM } else { AxiTiming::IDEAL };
-                let run = bench.run(&baked, cam, range, timing, &check);
-                eprintln!("{name}: frame {f}: {} Gaussians, {} visible, {} cycles", run.gaussians, run.visible, run.cycles);
+                // Frame 0 from scratch; then reuse, on a hostile and on an ideal memory.
+                let frame = LaneFrame { cam, all_fresh: f == 0, prev: &prev };
+                let pace = if f % 2 == 0 { (AxiTiming::RANDOM, 60) } else { (AxiTiming::IDEAL, 100) };
+                let run = bench.run(&baked, &frame, range, pace, &check);
+                eprintln!(
+                    "{name}: frame {f}: {} Gaussians, {} visible, {} incoming hits, {} cycles",
+                    run.gaussians, run.visible, run.hits, run.cycles
+                );
                 assert!(run.visible > 0 && run.visible < run.gaussians, "the camera must cull some Gaussians and keep some");
+                assert!(run.hits > 0, "frame {f}: no incoming hit");
+                prev = run.table;
             }
         });
     }

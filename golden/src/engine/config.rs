@@ -583,7 +583,7 @@ mod tests {
             if c.validate().is_ok() {
                 let _ = (c.format(), c.network(), c.sort_config(), c.raster_config(), c.bsu_latency());
                 let (window, burst) = (c.pre_window_beats(), c.pre_burst_beats());
-                proptest::prop_assert!(burst >= 1 && burst <= 256 && burst * c.pre_outstanding == window);
+                proptest::prop_assert!((1..=256).contains(&burst) && burst * c.pre_outstanding == window);
                 proptest::prop_assert!(c.raster_config().subtiles_per_tile() <= 64);
             }
         }

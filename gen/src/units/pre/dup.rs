@@ -22,7 +22,8 @@
 //!    ~(prev_visible & hit_prev)`.
 //!
 //! A Gaussian with `k` candidate tiles occupies the walker `max(k, 1)` cycles: the next one is
-//! accepted in the cycle its last tile is offered.
+//! accepted in the cycle its last tile is offered. `idle_o`: the walker is free and no test is in
+//! the ITUs (every hit of the Gaussians taken so far has left).
 
 use super::super::itu::{self, geom_bits_lsb, mean_bits};
 use crate::emit::expr::lit;
@@ -125,6 +126,7 @@ fn ports(m: &mut Module, d: &Dims) {
     m.output("out_id_o", d.ib);
     m.output("out_key_o", d.kb);
     m.output_c("out_incoming_o", 1, "not in the tile's previous table");
+    m.output_c("idle_o", 1, "no Gaussian being walked, no test in the ITUs");
 }
 
 /// The candidate range of axis `a` (`x`: 0, `y`: 1) of the offered Gaussian: `{a}0`, `{a}1`
@@ -282,6 +284,15 @@ fn sideband(m: &mut Module, d: &Dims) {
         body.push(set(n, if k == 0 { "sb_in".to_string() } else { names[k - 1].clone() }));
     }
     m.seq_noreset(vec![if_("itu_adv", body)]);
+    m.comment("A valid bit per sideband stage (a test issued), for idle_o.");
+    m.reg("sbv_q", itu::LATENCY);
+    let shift = if itu::LATENCY == 1 {
+        "busy_q".to_string()
+    } else {
+        format!("{{sbv_q[{}:0], busy_q}}", itu::LATENCY - 2)
+    };
+    m.seq(vec![set("sbv_q", lit(itu::LATENCY, 0))], vec![if_("itu_adv", vec![set("sbv_q", shift)])]);
+    m.assign("idle_o", format!("~busy_q & (sbv_q == {})", lit(itu::LATENCY, 0)));
     let out = names.last().expect("the ITU has stages");
     m.wire_assign("out_prev_visible", 1, format!("{out}[0]"));
     m.assign("out_id_o", format!("{out}[{}:1]", ib));

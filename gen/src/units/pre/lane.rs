@@ -23,6 +23,7 @@ use super::datapath::Datapath;
 use super::fetch::{self, max_record_words, COUNT_BITS};
 use super::library::PreLibrary;
 use super::{fifo, COLOR_NAME, PROJECT_NAME};
+use crate::emit::bundle::{Bundle, Field};
 use crate::emit::expr::{bits_for, lit, zext};
 use crate::emit::{if_, if_else, set, Module};
 use crate::interface::Dir;
@@ -89,6 +90,61 @@ impl LaneDims {
     }
 }
 
+/// Runs of feature fields the duplication unit takes whole: (name, first field, last field).
+const ITU_RUNS: [(&str, &str, &str); 2] =
+    [("itu_mean", "mean_x", "mean_y"), ("itu_geom", "extent_x", "extent_v")];
+
+impl LaneDims {
+    /// The fields' own layout from `base` up, then the `visible` bit, and the runs over them.
+    fn entry_fields(&self, base: u32) -> Vec<Field> {
+        let mut out = Vec::new();
+        let mut lsb = base;
+        for (n, w) in &self.fields {
+            out.push(Field { name: n.clone(), lsb, width: *w });
+            lsb += w;
+        }
+        out.push(Field { name: "visible".into(), lsb, width: 1 });
+        out.push(Field { name: "fields".into(), lsb: base, width: lsb - base });
+        out.push(Field { name: "entry".into(), lsb: base, width: lsb + 1 - base });
+        for (run, a, b) in ITU_RUNS {
+            let (lo, hi) = (out.iter().find(|f| f.name == a), out.iter().find(|f| f.name == b));
+            let (lo, hi) = (lo.expect("run start").lsb, hi.map(|f| f.lsb + f.width).expect("run end"));
+            out.push(Field { name: run.into(), lsb: lo, width: hi - lo });
+        }
+        out
+    }
+
+    /// `u_pendq`'s word: the position (`pos_x`, `pos_y`, `pos_z`), the fields, `visible`.
+    fn pend(&self) -> Bundle {
+        let mut f: Vec<Field> = ["pos_x", "pos_y", "pos_z"]
+            .iter()
+            .enumerate()
+            .map(|(k, n)| Field { name: n.to_string(), lsb: 32 * k as u32, width: 32 })
+            .collect();
+        f.extend(self.entry_fields(96));
+        Bundle::placed("PEND", f)
+    }
+
+    /// `u_colq`'s word: the fields and `visible`.
+    fn colq(&self) -> Bundle {
+        Bundle::placed("COLQ", self.entry_fields(0))
+    }
+}
+
+/// The feature word in memory (golden's layout, `present` on top) as the duplication unit reads
+/// the previous one: `present` and the ITU runs.
+fn prev_word(cfg: &EngineConfig) -> Bundle {
+    let fmt = cfg.feature_format();
+    let lay = fmt.layout();
+    let at = |n: &str| lay.iter().find(|f| f.name == n).unwrap_or_else(|| panic!("no feature field {n}"));
+    let mut f = vec![Field { name: "present".into(), lsb: fmt.bits_per_entry(), width: 1 }];
+    for (run, a, b) in ITU_RUNS {
+        let (lo, hi) = (at(a).lsb, at(b).lsb + at(b).width);
+        f.push(Field { name: run.into(), lsb: lo, width: hi - lo });
+    }
+    Bundle::placed("PREVW", f)
+}
+
 /// The feature fields the colour unit makes (its outputs `out_<name>_o`).
 const COLOR_FIELDS: [&str; 3] = ["red", "green", "blue"];
 
@@ -134,14 +190,23 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.input_c("sh_base_i", ab, "byte address of Gaussian 0's SH record");
     m.input_c("sh_words_i", wb, "words of an SH record (the scene's degree, f32)");
     m.input_c("feat_base_i", ab, "byte address of Gaussian 0's feature word (32-byte aligned)");
+    m.input_c("prev_base_i", ab, "byte address of Gaussian 0's previous feature word");
+    m.input_c("all_fresh_i", 1, "no table is reused: every Gaussian is incoming, no previous word read");
     m.input_c("first_i", COUNT_BITS, "the lane's first Gaussian");
     m.input_c("count_i", COUNT_BITS, "the lane's Gaussians");
+    m.output_c("hit_valid_o", 1, "an incoming (Gaussian, tile) is offered");
+    m.input_c("hit_ready_i", 1, "it is taken");
+    m.output_c("hit_tile_x_o", cfg.tile_bits, "tile column");
+    m.output_c("hit_tile_y_o", cfg.tile_bits, "tile row");
+    m.output_c("hit_id_o", u32::from(cfg.id_bits), "Gaussian id");
+    m.output_c("hit_key_o", u32::from(cfg.key_bits), "depth key");
     axi::ports(&mut m, cfg, "ma_axi_", true);
     axi::ports(&mut m, cfg, "mb_axi_", true);
     control(&mut m, &d);
     geometry(&mut m, cfg, &project, &d);
     projected(&mut m, cfg, &project, &d);
     colour(&mut m, &color, &d);
+    duplicate(&mut m, cfg, &d);
     writer(&mut m, cfg, &d);
     m
 }
@@ -153,6 +218,7 @@ fn control(m: &mut Module, d: &LaneDims) {
     m.comment(format!("Control: after start_i, {} settle cycles, then the geometry command.", d.settle));
     m.reg("run_q", 1).reg("settle_q", sb).reg("geo_cmd_q", 1);
     m.reg("proj_idx_q", COUNT_BITS).reg("wr_idx_q", COUNT_BITS).reg("done_idx_q", COUNT_BITS);
+    m.reg("join_idx_q", COUNT_BITS);
     m.wire_assign("take_start", 1, "start_i & ~run_q");
     m.wire_assign("settled", 1, format!("settle_q == {}", lit(sb, 0)));
     m.seq(
@@ -163,6 +229,7 @@ fn control(m: &mut Module, d: &LaneDims) {
             set("proj_idx_q", lit(COUNT_BITS, 0)),
             set("wr_idx_q", lit(COUNT_BITS, 0)),
             set("done_idx_q", lit(COUNT_BITS, 0)),
+            set("join_idx_q", lit(COUNT_BITS, 0)),
         ],
         vec![if_else(
             "take_start",
@@ -173,6 +240,7 @@ fn control(m: &mut Module, d: &LaneDims) {
                 set("proj_idx_q", lit(COUNT_BITS, 0)),
                 set("wr_idx_q", lit(COUNT_BITS, 0)),
                 set("done_idx_q", lit(COUNT_BITS, 0)),
+                set("join_idx_q", lit(COUNT_BITS, 0)),
             ],
             vec![
                 if_("~settled", vec![set("settle_q", format!("settle_q - {}", lit(sb, 1)))]),
@@ -180,7 +248,8 @@ fn control(m: &mut Module, d: &LaneDims) {
                 if_("proj_take", vec![set("proj_idx_q", format!("proj_idx_q + {}", lit(COUNT_BITS, 1)))]),
                 if_("word_take", vec![set("wr_idx_q", format!("wr_idx_q + {}", lit(COUNT_BITS, 1)))]),
                 if_("b_fire", vec![set("done_idx_q", format!("done_idx_q + {}", lit(COUNT_BITS, 1)))]),
-                if_("run_q & ~geo_cmd_q & (done_idx_q == count_i)", vec![set("run_q", lit(1, 0))]),
+                if_("c_take", vec![set("join_idx_q", format!("join_idx_q + {}", lit(COUNT_BITS, 1)))]),
+                if_("run_q & ~geo_cmd_q & (done_idx_q == count_i) & d_idle", vec![set("run_q", lit(1, 0))]),
             ],
         )],
     );
@@ -309,10 +378,32 @@ fn projected(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims)
         .collect();
     m.wire_assign("unused_p", 1, format!("^{{{}}}", used.join(", ")));
     m.wire("pend_ready", 1).wire("sh_cmd_ready", 1);
-    m.wire_assign("sh_cmd_valid", 1, "p_valid & p_visible & pend_ready");
-    m.assign("p_out_ready", "pend_ready & (~p_visible | sh_cmd_ready)");
+    m.comment("A visible Gaussian asks u_sh for its previous feature word (unless all_fresh_i), then,");
+    m.comment("the next cycle (shc_q), for its SH record: the records come back in that order.");
+    m.reg("shc_q", 1).reg("shc_addr_q", ab);
+    m.wire_assign("sh_cmd_valid", 1, "shc_q | (p_valid & p_visible & pend_ready)");
+    m.assign("p_out_ready", "~shc_q & pend_ready & (~p_visible | sh_cmd_ready)");
     m.wire_assign("proj_take", 1, "p_valid & p_out_ready");
     m.wire_assign("proj_id", COUNT_BITS, "first_i + proj_idx_q");
+    let fs = FEATURE_BYTES.trailing_zeros();
+    m.wire_assign("prev_off", COUNT_BITS + fs, format!("{{proj_id, {}}}", lit(fs, 0)));
+    m.wire_assign("prev_addr", ab, format!("prev_base_i + prev_off[{}:0]", ab - 1));
+    m.wire_assign("unused_prev_off", 1, format!("^prev_off[{}:{ab}]", COUNT_BITS + fs - 1));
+    let fw = FEATURE_BYTES / 4;
+    m.wire_assign("sh_cmd_base", ab, "shc_q ? shc_addr_q : (all_fresh_i ? sh_addr : prev_addr)");
+    m.wire_assign(
+        "sh_cmd_words",
+        bits_for(u64::from(max_record_words())),
+        format!("(shc_q | all_fresh_i) ? sh_words_i : {}", lit(bits_for(u64::from(max_record_words())), fw)),
+    );
+    m.seq(
+        vec![set("shc_q", lit(1, 0)), set("shc_addr_q", lit(ab, 0))],
+        vec![if_else(
+            "proj_take & p_visible & ~all_fresh_i",
+            vec![set("shc_q", lit(1, 1)), set("shc_addr_q", "sh_addr")],
+            vec![if_("sh_cmd_ready", vec![set("shc_q", lit(1, 0))])],
+        )],
+    );
     let lb = COUNT_BITS + 8;
     let wb = bits_for(u64::from(max_record_words()));
     m.wire_assign(
@@ -322,6 +413,12 @@ fn projected(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims)
     );
     m.wire_assign("sh_addr", ab, format!("sh_base_i + sh_off[{}:0]", ab - 1));
     m.wire_assign("unused_sh_off", 1, format!("^sh_off[{}:{ab}]", lb - 1));
+    let pend = d.pend();
+    m.comment("u_pendq's word: the position, the projection's feature fields, the visibility bit.");
+    for f in ["pos_x", "pos_y", "pos_z", "visible", "entry", "itu_mean", "itu_geom", "depth_key"] {
+        pend.declare_field(m, f);
+    }
+    debug_assert_eq!(pend.width(), pw);
     m.wire("pend_valid", 1).wire("pend_data", pw).wire("pend_pop", 1);
     m.instance(
         fifo::name(pw, PEND_DEPTH),
@@ -345,7 +442,7 @@ fn projected(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims)
         .wire("sh_index", COUNT_BITS);
     let mut c = vec![conn("clk_i", "clk_i"), conn("rst_ni", "rst_ni")];
     c.extend([conn("cmd_valid_i", "sh_cmd_valid"), conn("cmd_ready_o", "sh_cmd_ready")]);
-    c.extend([conn("cmd_base_i", "sh_addr"), conn("cmd_words_i", "sh_words_i")]);
+    c.extend([conn("cmd_base_i", "sh_cmd_base"), conn("cmd_words_i", "sh_cmd_words")]);
     c.push(conn("cmd_count_i", lit(COUNT_BITS, 1)));
     c.extend([conn("busy_o", "sh_busy"), conn("rec_valid_o", "sh_valid"), conn("rec_ready_i", "sh_ready")]);
     c.extend([conn("rec_data_o", "sh_rec"), conn("rec_index_o", "sh_index")]);
@@ -361,7 +458,7 @@ fn projected(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims)
     }
     let ins: Vec<String> = axi::signals(cfg)
         .iter()
-        .filter(|s| !s.from_manager && !(s.name.starts_with("ar") || s.name.starts_with('r')))
+        .filter(|s| !(s.from_manager || s.name.starts_with("ar") || s.name.starts_with('r')))
         .map(|s| axi::port_name("mb_axi_", s, true))
         .collect();
     m.wire_assign("unused_mb_w", 1, format!("^{{{}}}", ins.join(", ")));
@@ -389,12 +486,32 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
     m.comment(
         "Colour: the pending head (with its SH record when visible) enters u_color, its fields u_colq.",
     );
-    m.wire_assign("pend_visible", 1, format!("pend_data[{}]", fb + 96));
-    m.wire("colq_ready", 1).wire("c_in_ready", 1);
-    m.wire_assign("c_in_valid", 1, "pend_valid & (~pend_visible | sh_valid) & colq_ready");
+    let (pend, colq) = (d.pend(), d.colq());
+    m.wire_assign("pend_visible", 1, pend.get("pend_data", "visible"));
+    m.wire("colq_ready", 1).wire("c_in_ready", 1).wire("d_in_ready", 1);
+    m.comment("A visible head first takes its previous feature word into prev_q (unless all_fresh_i),");
+    m.comment("then enters u_color and u_dup together with its SH record.");
+    m.reg("prev_have_q", 1).reg("prev_q", (FEATURE_BYTES * 8) as u32);
+    m.wire_assign("prev_cap", 1, "pend_valid & pend_visible & ~all_fresh_i & ~prev_have_q & sh_valid");
+    m.wire_assign(
+        "join_ok",
+        1,
+        "pend_valid & (~pend_visible | (sh_valid & (all_fresh_i | prev_have_q))) & colq_ready",
+    );
+    m.wire_assign("c_in_valid", 1, "join_ok & (~pend_visible | d_in_ready)");
+    m.wire_assign("d_in_valid", 1, "join_ok & pend_visible & c_in_ready");
     m.wire_assign("c_take", 1, "c_in_valid & c_in_ready");
     m.assign("pend_pop", "c_take");
-    m.assign("sh_ready", "c_take & pend_visible");
+    m.assign("sh_ready", "(c_take & pend_visible) | prev_cap");
+    m.seq(
+        vec![set("prev_have_q", lit(1, 0))],
+        vec![if_else(
+            "prev_cap",
+            vec![set("prev_have_q", lit(1, 1))],
+            vec![if_("c_take", vec![set("prev_have_q", lit(1, 0))])],
+        )],
+    );
+    m.seq_noreset(vec![if_("prev_cap", vec![set("prev_q", format!("sh_rec[{}:0]", FEATURE_BYTES * 8 - 1))])]);
     m.wire_assign(
         "c_sh",
         max_record_words() * 32,
@@ -408,9 +525,9 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
             "clk_i" | "rst_ni" => continue,
             "in_valid_i" => "c_in_valid".to_string(),
             "out_ready_i" => "c_out_ready".to_string(),
-            "in_mean_x_i" => "pend_data[31:0]".into(),
-            "in_mean_y_i" => "pend_data[63:32]".into(),
-            "in_mean_z_i" => "pend_data[95:64]".into(),
+            "in_mean_x_i" => pend.get("pend_data", "pos_x"),
+            "in_mean_y_i" => pend.get("pend_data", "pos_y"),
+            "in_mean_z_i" => pend.get("pend_data", "pos_z"),
             _ if n.starts_with("in_sh") => {
                 let e = format!("c_sh[{}:{}]", 32 * sh_k + 31, 32 * sh_k);
                 sh_k += 1;
@@ -429,6 +546,12 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
         c.push((p.name.clone(), w));
     }
     m.instance(COLOR_NAME, "u_color", c);
+    m.comment("u_colq's word: the feature fields and the visibility bit.");
+    let used: Vec<&str> = d.fields.iter().map(|f| f.0.as_str()).chain(["visible"]).collect();
+    for f in used {
+        colq.declare_field(m, f);
+    }
+    debug_assert_eq!(colq.width(), cw);
     m.wire("colq_valid", 1).wire("colq_data", cw);
     m.instance(
         fifo::name(cw, colq_depth(d.color_depth)),
@@ -438,7 +561,7 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
             conn("rst_ni", "rst_ni"),
             conn("push_valid_i", "c_take"),
             conn("push_ready_o", "colq_ready"),
-            conn("push_data_i", format!("pend_data[{}:96]", fb + 96)),
+            conn("push_data_i", pend.get("pend_data", "entry")),
             conn("pop_valid_o", "colq_valid"),
             conn("pop_ready_i", "word_take"),
             conn("pop_data_o", "colq_data"),
@@ -449,7 +572,7 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
 /// The feature word of the colour unit's output and the head of `u_colq`, and its write.
 fn writer(m: &mut Module, cfg: &EngineConfig, d: &LaneDims) {
     let fmt = cfg.feature_format();
-    let (ab, db, fb) = (cfg.axi_addr_bits, cfg.axi_data_bits, d.fields_bits());
+    let (ab, db) = (cfg.axi_addr_bits, cfg.axi_data_bits);
     let beats = (FEATURE_BYTES * 8) as u32 / db;
     let bb = bits_for(u64::from(beats));
     let ob = bits_for(cfg.axi_outstanding as u64);
@@ -463,15 +586,14 @@ fn writer(m: &mut Module, cfg: &EngineConfig, d: &LaneDims) {
         let src = if COLOR_FIELDS.contains(&f.name) {
             format!("c_{}[{}:0]", f.name, f.width - 1)
         } else {
-            let pos = d.fields.iter().take_while(|x| x.0 != f.name).map(|x| x.1).sum::<u32>();
-            format!("colq_data[{}:{}]", pos + f.width - 1, pos)
+            d.colq().get("colq_data", f.name)
         };
         parts.push(src);
     }
     parts.reverse();
     let eb = fmt.bits_per_entry();
     m.wire_assign("entry_bits", eb, format!("{{{}}}", parts.join(", ")));
-    m.wire_assign("word_visible", 1, format!("colq_data[{fb}]"));
+    m.wire_assign("word_visible", 1, d.colq().get("colq_data", "visible"));
     m.wire_assign(
         "word",
         ww,
@@ -553,4 +675,53 @@ fn writer(m: &mut Module, cfg: &EngineConfig, d: &LaneDims) {
     m.assign("ma_axi_wstrb_o", crate::emit::expr::hex(sb, (1u64 << sb) - 1));
     m.assign("ma_axi_bready_o", lit(1, 1));
     m.wire_assign("unused_ma_b", 1, "^{ma_axi_bid_i, ma_axi_bresp_i}");
+}
+
+/// `u_dup`: the tiles a joined Gaussian enters; the incoming ones leave on `hit_*`.
+fn duplicate(m: &mut Module, cfg: &EngineConfig, d: &LaneDims) {
+    let (tb, ib, kb) = (cfg.tile_bits, u32::from(cfg.id_bits), u32::from(cfg.key_bits));
+    let (pend, prev) = (d.pend(), prev_word(cfg));
+    m.blank();
+    m.comment("Duplication: the joined Gaussian's tiles; the incoming ones go out on hit_*.");
+    m.comment("The previous feature word as the unit reads it: present bit, ITU runs.");
+    prev.declare(m);
+    m.wire_assign("join_id", COUNT_BITS, "first_i + join_idx_q");
+    m.wire("d_out_valid", 1).wire("d_out_incoming", 1).wire("d_idle", 1);
+    let kw = pend.width_of("depth_key");
+    m.wire_assign("join_key_field", kw, pend.get("pend_data", "depth_key"));
+    let key = if kw >= kb { format!("join_key_field[{}:0]", kb - 1) } else { zext("join_key_field", kw, kb) };
+    let c = vec![
+        conn("clk_i", "clk_i"),
+        conn("rst_ni", "rst_ni"),
+        conn("grid_x_i", format!("grid_x_i[{}:0]", tb - 1)),
+        conn("grid_y_i", format!("grid_y_i[{}:0]", tb - 1)),
+        conn("all_fresh_i", "all_fresh_i"),
+        conn("in_valid_i", "d_in_valid"),
+        conn("in_ready_o", "d_in_ready"),
+        conn("in_id_i", format!("join_id[{}:0]", ib - 1)),
+        conn("in_key_i", key),
+        conn("in_mean_i", pend.get("pend_data", "itu_mean")),
+        conn("in_geom_i", pend.get("pend_data", "itu_geom")),
+        conn("in_prev_visible_i", prev.get("prev_q", "present")),
+        conn("in_prev_mean_i", prev.get("prev_q", "itu_mean")),
+        conn("in_prev_geom_i", prev.get("prev_q", "itu_geom")),
+        conn("out_valid_o", "d_out_valid"),
+        conn("out_ready_i", "hit_ready_i | ~d_out_incoming"),
+        conn("out_tile_x_o", "hit_tile_x_o"),
+        conn("out_tile_y_o", "hit_tile_y_o"),
+        conn("out_id_o", "hit_id_o"),
+        conn("out_key_o", "hit_key_o"),
+        conn("out_incoming_o", "d_out_incoming"),
+        conn("idle_o", "d_idle"),
+    ];
+    m.instance(super::dup::NAME, "u_dup", c);
+    m.assign("hit_valid_o", "d_out_valid & d_out_incoming");
+    let mut unused = vec![format!("grid_x_i[31:{tb}]"), format!("grid_y_i[31:{tb}]"), "prev_q".to_string()];
+    if ib < COUNT_BITS {
+        unused.push(format!("join_id[{}:{ib}]", COUNT_BITS - 1));
+    }
+    if kw > kb {
+        unused.push(format!("join_key_field[{}:{kb}]", kw - 1));
+    }
+    m.wire_assign("unused_dup", 1, format!("^{{{}}}", unused.join(", ")));
 }
