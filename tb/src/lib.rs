@@ -31,6 +31,7 @@ pub mod lane;
 pub mod lanes;
 #[cfg(neo_has_verilator)]
 pub mod latency;
+pub mod lists;
 #[cfg(neo_has_verilator)]
 pub mod msu;
 pub mod pre;

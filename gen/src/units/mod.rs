@@ -92,7 +92,7 @@ pub fn top_modules() -> &'static [&'static str] {
 /// instantiates as black boxes, each checked as its own top). (The engine, which has its own
 /// gates, is not listed.)
 pub fn run_time_tops() -> &'static [&'static str] {
-    &[pre::dup::NAME, pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME, pre::lane::NAME]
+    &[pre::dup::NAME, pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME, pre::lane::NAME, pre::lists::NAME]
 }
 
 /// Every module of the configuration, leaves first.
@@ -130,6 +130,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(pre::dup::module(cfg));
     let mut queues = vec![(pre::fetch::cmd_queue_width(cfg), pre::fetch::CMD_QUEUE)];
     queues.extend(pre::lane::queues(cfg));
+    queues.push(pre::lists::queue(cfg));
     queues.sort_unstable();
     queues.dedup();
     all.extend(queues.into_iter().map(|(w, d)| pre::fifo::module(w, d)));
@@ -138,6 +139,10 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(pre::color_module(cfg));
     all.push(pre::project_module(cfg));
     all.push(pre::lane::module(cfg));
+    let mut memories = pre::lists::memories(cfg);
+    memories.dedup();
+    all.extend(memories.into_iter().map(|(w, d)| pre::ram::module(w, d)));
+    all.push(pre::lists::module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }

@@ -150,6 +150,9 @@ pub struct EngineConfig {
     /// full bursts are the window over this, so streams fill the window; gathers of one SH
     /// record each (24 beats at degree 3) need `window / 24` of them.
     pub pre_outstanding: usize,
+    /// Preprocessing Engine: tiles the list writer (`neo_pre_lists`) keeps a counter and a
+    /// 64-byte line of incoming entries for (a power of two; QHD has 920 tiles of 64 pixels).
+    pub pre_max_tiles: usize,
 }
 
 impl Default for EngineConfig {
@@ -187,6 +190,7 @@ impl Default for EngineConfig {
             pre_units: 4,
             pre_read_lines: 128,
             pre_outstanding: 64,
+            pre_max_tiles: 2048,
         }
     }
 }
@@ -373,6 +377,13 @@ impl EngineConfig {
                 "pre_read_lines {l} is not a power of two in 1..=1024 holding pre_outstanding {o} beats of {beat} bytes"
             ));
         }
+        let t = self.pre_max_tiles;
+        if !t.is_power_of_two() || !(2..=65536).contains(&t) || !self.table_capacity.is_multiple_of(8) {
+            return err(format!(
+                "pre_max_tiles {t} is not a power of two in 2..=65536, or table_capacity {} is not a whole number of 8-entry lines",
+                self.table_capacity
+            ));
+        }
         if self.pre_burst_beats() > 256 || self.pre_burst_beats() * beat > 4096 {
             return err(format!(
                 "pre_read_lines {l}: bursts of {} beats (the window over pre_outstanding {o}) exceed 256 beats or 4 KiB",
@@ -472,6 +483,7 @@ mod tests {
             EngineConfig { pre_units: 2, ..base.clone() },
             EngineConfig { pre_read_lines: 64, ..base.clone() },
             EngineConfig { pre_outstanding: 32, ..base.clone() },
+            EngineConfig { pre_max_tiles: 1024, ..base.clone() },
         ];
         for v in &variants {
             assert_ne!(v.hash(), base.hash(), "{v:?}");
@@ -540,6 +552,7 @@ mod tests {
             // 1 burst of 512 beats: above 256 beats.
             EngineConfig { pre_read_lines: 64, pre_outstanding: 1, ..EngineConfig::default() },
             EngineConfig { pre_outstanding: 48, ..EngineConfig::default() },
+            EngineConfig { pre_max_tiles: 1000, ..EngineConfig::default() },
         ];
         for c in bad {
             assert!(c.validate().is_err(), "{c:?}");

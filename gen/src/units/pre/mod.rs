@@ -8,6 +8,8 @@ pub mod fetch;
 pub mod fifo;
 pub mod lane;
 pub mod library;
+pub mod lists;
+pub mod ram;
 
 use crate::emit::Module;
 use datapath::Datapath;

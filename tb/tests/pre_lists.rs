@@ -1,0 +1,48 @@
+//! The incoming-list writer (`neo_pre_lists`) against the lists its hits define: random hits on
+//! grids of several shapes under a hostile memory, tiles with no hit, a flush with no hit at all,
+//! and one tile receiving more than `table_capacity` entries (its list stops at the capacity, its
+//! length keeps counting).
+
+#[test]
+fn models_present() {
+    assert_eq!(neo_tb::require_models("pre_lists: list-writer cosimulation"), neo_tb::HAS_MODELS);
+}
+
+neo_tb::with_models! {
+    use neo_tb::axi::AxiTiming;
+    use neo_tb::check::Checker;
+    use neo_tb::lists::{random_hits, Hit, ListsBench};
+    use neo_tb::rng::{for_each_seed, Rng};
+
+    #[test]
+    fn lists_of_random_hits_and_their_lengths() {
+        let name = "lists_of_random_hits_and_their_lengths";
+        let cfg = neo_tb::config();
+        let mut bench = ListsBench::build(&cfg).unwrap();
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            for (k, grid) in [[7u32, 5u32], [1, 1], [40, 23], [3, 9]].into_iter().enumerate() {
+                let check = Checker::new("neo_pre_lists", seed ^ k as u64);
+                let n = [3000, 13, 5000, 0][k];
+                let hits = random_hits(&cfg, &mut rng, grid, n);
+                let timing = if k % 2 == 0 { AxiTiming::RANDOM } else { AxiTiming::IDEAL };
+                let run = bench.run(grid, &hits, [100, 50, 80, 100][k], timing, &check);
+                assert_eq!(run.hits, n as u64);
+            }
+        });
+    }
+
+    #[test]
+    fn a_list_longer_than_the_capacity_stops_there_and_counts_on() {
+        let cfg = neo_tb::config();
+        let mut bench = ListsBench::build(&cfg).unwrap();
+        let check = Checker::new("neo_pre_lists", 7);
+        let n = cfg.table_capacity + 11;
+        let mut hits: Vec<Hit> = (0..n).map(|k| Hit { tile: [1, 0], id: k as u32, key: (k * 7 % 65536) as u32 }).collect();
+        hits.push(Hit { tile: [0, 1], id: 5, key: 9 });
+        let run = bench.run([2, 2], &hits, 100, AxiTiming::IDEAL, &check);
+        eprintln!("{} hits in {} cycles", run.hits, run.cycles);
+        assert!(run.cycles < 2 * n as u64, "one hit per cycle: {} cycles for {} hits", run.cycles, n);
+    }
+}
