@@ -69,7 +69,7 @@ impl DatapathBench {
         files: &[(String, String)],
         vlt: &str,
     ) -> Result<Self, String> {
-        let (model, _) = DynModel::build_traced(iface, files, Some(vlt), None)?;
+        let (model, _) = DynModel::build_for_short_runs(iface, files, Some(vlt), None)?;
         let mut uniform = Vec::new();
         let mut items_in = Vec::new();
         for (k, i) in graph.inputs.iter().enumerate() {

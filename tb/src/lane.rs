@@ -91,7 +91,7 @@ impl LaneBench {
     pub fn build(cfg: &EngineConfig) -> Result<Self, String> {
         let (files, vlt) = crate::dynmodel::generated_files(cfg, NAME)?;
         let iface = neo_gen::units::pre::lane::module(cfg).interface();
-        let (model, _) = DynModel::build_traced(&iface, &files, Some(&vlt), None)?;
+        let (model, _) = DynModel::build_for_short_runs(&iface, &files, Some(&vlt), None)?;
         let ports = [AxiBinding::bind(&model, "ma_axi_", true)?, AxiBinding::bind(&model, "mb_axi_", true)?];
         let (start, busy) = (model.port("start_i")?, model.port("busy_o")?);
         let q = |n: &str| model.port(&format!("hit_{n}"));
