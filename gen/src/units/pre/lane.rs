@@ -308,7 +308,7 @@ fn geometry(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims) 
     m.instance(fetch::NAME, "u_geo", c);
     m.wire_assign("unused_geo", 1, format!("^{{geo_busy, geo_index, geo_rec[{}:{}]}}", rw - 1, 32 * gw));
 
-    m.wire("posq_ready", 1).wire("p_in_ready", 1);
+    m.wire("posq_ready", 1).wire("p_in_ready", 1).wire("proj_take", 1);
     m.assign("geo_ready", "p_in_ready & posq_ready");
     let pq = posq_depth(d.project_depth);
     m.wire("posq_valid", 1).wire("posq_data", 96);
@@ -383,7 +383,7 @@ fn projected(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims)
     m.reg("shc_q", 1).reg("shc_addr_q", ab);
     m.wire_assign("sh_cmd_valid", 1, "shc_q | (p_valid & p_visible & pend_ready)");
     m.assign("p_out_ready", "~shc_q & pend_ready & (~p_visible | sh_cmd_ready)");
-    m.wire_assign("proj_take", 1, "p_valid & p_out_ready");
+    m.assign("proj_take", "p_valid & p_out_ready");
     m.wire_assign("proj_id", COUNT_BITS, "first_i + proj_idx_q");
     let fs = FEATURE_BYTES.trailing_zeros();
     m.wire_assign("prev_off", COUNT_BITS + fs, format!("{{proj_id, {}}}", lit(fs, 0)));
@@ -552,7 +552,7 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
         colq.declare_field(m, f);
     }
     debug_assert_eq!(colq.width(), cw);
-    m.wire("colq_valid", 1).wire("colq_data", cw);
+    m.wire("colq_valid", 1).wire("colq_data", cw).wire("word_take", 1);
     m.instance(
         fifo::name(cw, colq_depth(d.color_depth)),
         "u_colq",
@@ -615,11 +615,7 @@ fn writer(m: &mut Module, cfg: &EngineConfig, d: &LaneDims) {
     ));
     m.reg("aw_v_q", 1).reg("aw_addr_q", ab).reg("w_left_q", bb).reg("w_q", ww).reg("wr_cnt_q", ob);
     m.wire_assign("wr_room", 1, format!("wr_cnt_q != {}", lit(ob, cfg.axi_outstanding as u64)));
-    m.wire_assign(
-        "word_take",
-        1,
-        format!("colq_valid & c_valid & ~aw_v_q & (w_left_q == {}) & wr_room", lit(bb, 0)),
-    );
+    m.assign("word_take", format!("colq_valid & c_valid & ~aw_v_q & (w_left_q == {}) & wr_room", lit(bb, 0)));
     m.assign("c_out_ready", "word_take");
     m.wire_assign("wr_id", COUNT_BITS, "first_i + wr_idx_q");
     let shift = FEATURE_BYTES.trailing_zeros();
