@@ -22,6 +22,7 @@
 use super::datapath::Datapath;
 use super::fetch::{self, max_record_words, COUNT_BITS};
 use super::library::PreLibrary;
+use super::writer::{self, Writes};
 use super::{fifo, COLOR_NAME, PROJECT_NAME};
 use crate::emit::bundle::{Bundle, Field};
 use crate::emit::expr::{bits_for, lit, zext};
@@ -249,7 +250,10 @@ fn control(m: &mut Module, d: &LaneDims) {
                 if_("word_take", vec![set("wr_idx_q", format!("wr_idx_q + {}", lit(COUNT_BITS, 1)))]),
                 if_("b_fire", vec![set("done_idx_q", format!("done_idx_q + {}", lit(COUNT_BITS, 1)))]),
                 if_("c_take", vec![set("join_idx_q", format!("join_idx_q + {}", lit(COUNT_BITS, 1)))]),
-                if_("run_q & ~geo_cmd_q & (done_idx_q == count_i) & d_idle", vec![set("run_q", lit(1, 0))]),
+                if_(
+                    "run_q & ~geo_cmd_q & (done_idx_q == count_i) & d_idle & wr_idle",
+                    vec![set("run_q", lit(1, 0))],
+                ),
             ],
         )],
     );
@@ -574,8 +578,6 @@ fn writer(m: &mut Module, cfg: &EngineConfig, d: &LaneDims) {
     let fmt = cfg.feature_format();
     let (ab, db) = (cfg.axi_addr_bits, cfg.axi_data_bits);
     let beats = (FEATURE_BYTES * 8) as u32 / db;
-    let bb = bits_for(u64::from(beats));
-    let ob = bits_for(cfg.axi_outstanding as u64);
     let ww = (FEATURE_BYTES * 8) as u32;
     m.blank();
     m.comment(
@@ -613,64 +615,26 @@ fn writer(m: &mut Module, cfg: &EngineConfig, d: &LaneDims) {
         "Write: AW then {beats} W beats per word; at most {} words without their B.",
         cfg.axi_outstanding
     ));
-    m.reg("aw_v_q", 1).reg("aw_addr_q", ab).reg("w_left_q", bb).reg("w_q", ww).reg("wr_cnt_q", ob);
-    m.wire_assign("wr_room", 1, format!("wr_cnt_q != {}", lit(ob, cfg.axi_outstanding as u64)));
-    m.assign("word_take", format!("colq_valid & c_valid & ~aw_v_q & (w_left_q == {}) & wr_room", lit(bb, 0)));
+    m.assign("word_take", "colq_valid & c_valid & wr_free");
     m.assign("c_out_ready", "word_take");
     m.wire_assign("wr_id", COUNT_BITS, "first_i + wr_idx_q");
     let shift = FEATURE_BYTES.trailing_zeros();
     let lb = COUNT_BITS + shift;
     m.wire_assign("wr_off", lb, format!("{{wr_id, {}}}", lit(shift, 0)));
-    m.wire_assign("aw_fire", 1, "ma_axi_awvalid_o & ma_axi_awready_i");
-    m.wire_assign("w_fire", 1, "ma_axi_wvalid_o & ma_axi_wready_i");
-    m.wire_assign("b_fire", 1, "ma_axi_bvalid_i");
-    m.seq(
-        vec![
-            set("aw_v_q", lit(1, 0)),
-            set("w_left_q", lit(bb, 0)),
-            set("wr_cnt_q", lit(ob, 0)),
-            set("aw_addr_q", lit(ab, 0)),
-        ],
-        vec![
-            if_else(
-                "word_take",
-                vec![
-                    set("aw_v_q", lit(1, 1)),
-                    set("w_left_q", lit(bb, u64::from(beats))),
-                    set("aw_addr_q", format!("feat_base_i + wr_off[{}:0]", ab - 1)),
-                ],
-                vec![
-                    if_("aw_fire", vec![set("aw_v_q", lit(1, 0))]),
-                    if_("w_fire", vec![set("w_left_q", format!("w_left_q - {}", lit(bb, 1)))]),
-                ],
-            ),
-            if_else(
-                "word_take & ~b_fire",
-                vec![set("wr_cnt_q", format!("wr_cnt_q + {}", lit(ob, 1)))],
-                vec![if_("b_fire & ~word_take", vec![set("wr_cnt_q", format!("wr_cnt_q - {}", lit(ob, 1)))])],
-            ),
-        ],
-    );
-    m.seq_noreset(vec![if_else(
-        "word_take",
-        vec![set("w_q", "word")],
-        vec![if_("w_fire", vec![set("w_q", format!("w_q >> {db}"))])],
-    )]);
     m.wire_assign("unused_wr_off", 1, format!("^wr_off[{}:{ab}]", lb - 1));
-    m.assign("ma_axi_awvalid_o", "aw_v_q");
-    m.assign("ma_axi_awaddr_o", "aw_addr_q");
-    m.assign("ma_axi_awlen_o", lit(8, u64::from(beats - 1)));
-    m.assign("ma_axi_awid_o", lit(cfg.axi_id_bits, 0));
-    m.assign("ma_axi_awsize_o", lit(3, u64::from((db / 8).trailing_zeros())));
-    m.assign("ma_axi_awburst_o", lit(2, 1));
-    m.comment("W may run ahead of its AW (AXI4 allows it); the subordinate holds it.");
-    m.assign("ma_axi_wvalid_o", format!("w_left_q != {}", lit(bb, 0)));
-    m.assign("ma_axi_wdata_o", format!("w_q[{}:0]", db - 1));
-    m.assign("ma_axi_wlast_o", format!("w_left_q == {}", lit(bb, 1)));
-    let sb = db / 8;
-    m.assign("ma_axi_wstrb_o", crate::emit::expr::hex(sb, (1u64 << sb) - 1));
-    m.assign("ma_axi_bready_o", lit(1, 1));
-    m.wire_assign("unused_ma_b", 1, "^{ma_axi_bid_i, ma_axi_bresp_i}");
+    let w = Writes {
+        port: "ma_axi_",
+        take: "word_take",
+        addr: format!("feat_base_i + wr_off[{}:0]", ab - 1),
+        data: "word".into(),
+        width: ww,
+        beats: lit(writer::beat_bits(beats), u64::from(beats)),
+        max_beats: beats,
+        awlen: lit(8, u64::from(beats - 1)),
+        strb: writer::all_bytes(cfg),
+        outstanding: cfg.axi_outstanding,
+    };
+    writer::writes(m, cfg, &w);
 }
 
 /// `u_dup`: the tiles a joined Gaussian enters; the incoming ones leave on `hit_*`.

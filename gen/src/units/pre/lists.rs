@@ -19,10 +19,11 @@
 //! - **Writes**: the queue's head is one AW and its beats (a line: 8 beats; a length: 1 beat);
 //!   at most `pre_outstanding` writes without their B. Reads are idle.
 
+use super::writer::{self, Writes};
 use super::{fifo, ram};
 use crate::emit::bundle::Bundle;
-use crate::emit::expr::{bits_for, lit, zext};
-use crate::emit::{if_, if_else, set, Instance, Item, Module};
+use crate::emit::expr::{lit, zext};
+use crate::emit::{if_, set, Instance, Item, Module};
 use crate::units::axi;
 use neo_golden::engine::memory::{DESCRIPTOR_BYTES, ENTRY_BYTES};
 use neo_golden::engine::EngineConfig;
@@ -292,75 +293,33 @@ fn pushes(m: &mut Module, cfg: &EngineConfig) {
 
 /// The AXI4 writes of the queue's head; reads idle; `busy_o`.
 fn writer(m: &mut Module, cfg: &EngineConfig) {
-    let (ab, db) = (cfg.axi_addr_bits, cfg.axi_data_bits);
+    let db = cfg.axi_data_bits;
     let wq = wq_bundle(cfg);
     let lw = wq.width_of("data");
     let beats = lw / db;
-    let bb = bits_for(u64::from(beats));
-    let ob = bits_for(cfg.pre_outstanding as u64);
     let sb = db / 8;
     m.blank();
     m.comment(format!("Writes: the head as AW + {beats} beats (a line) or 1 beat (a length, high 4 bytes); at most {} without B.", cfg.pre_outstanding));
-    m.reg("aw_v_q", 1)
-        .reg("aw_addr_q", ab)
-        .reg("aw_len_q", 1)
-        .reg("w_left_q", bb)
-        .reg("w_q", lw)
-        .reg("wr_cnt_q", ob);
-    m.wire_assign("wr_room", 1, format!("wr_cnt_q != {}", lit(ob, cfg.pre_outstanding as u64)));
-    m.assign("wq_pop", format!("wq_valid & ~aw_v_q & (w_left_q == {}) & wr_room", lit(bb, 0)));
-    m.wire_assign("aw_fire", 1, "m_axi_awvalid_o & m_axi_awready_i");
-    m.wire_assign("w_fire", 1, "m_axi_wvalid_o & m_axi_wready_i");
-    m.wire_assign("b_fire", 1, "m_axi_bvalid_i");
+    m.reg("aw_len_q", 1);
+    m.assign("wq_pop", "wq_valid & wr_free");
     m.wire_assign("head_len", 1, wq.get("wq_data", "len_write"));
-    m.seq(
-        vec![
-            set("aw_v_q", lit(1, 0)),
-            set("aw_addr_q", lit(ab, 0)),
-            set("aw_len_q", lit(1, 0)),
-            set("w_left_q", lit(bb, 0)),
-            set("wr_cnt_q", lit(ob, 0)),
-        ],
-        vec![
-            if_else(
-                "wq_pop",
-                vec![
-                    set("aw_v_q", lit(1, 1)),
-                    set("aw_addr_q", wq.get("wq_data", "addr")),
-                    set("aw_len_q", "head_len"),
-                    set("w_left_q", format!("head_len ? {} : {}", lit(bb, 1), lit(bb, u64::from(beats)))),
-                ],
-                vec![
-                    if_("aw_fire", vec![set("aw_v_q", lit(1, 0))]),
-                    if_("w_fire", vec![set("w_left_q", format!("w_left_q - {}", lit(bb, 1)))]),
-                ],
-            ),
-            if_else(
-                "wq_pop & ~b_fire",
-                vec![set("wr_cnt_q", format!("wr_cnt_q + {}", lit(ob, 1)))],
-                vec![if_("b_fire & ~wq_pop", vec![set("wr_cnt_q", format!("wr_cnt_q - {}", lit(ob, 1)))])],
-            ),
-        ],
-    );
-    m.seq_noreset(vec![if_else(
-        "wq_pop",
-        vec![set("w_q", wq.get("wq_data", "data"))],
-        vec![if_("w_fire", vec![set("w_q", format!("w_q >> {db}"))])],
-    )]);
-    m.assign("m_axi_awvalid_o", "aw_v_q");
-    m.assign("m_axi_awaddr_o", "aw_addr_q");
-    m.assign("m_axi_awlen_o", format!("aw_len_q ? {} : {}", lit(8, 0), lit(8, u64::from(beats - 1))));
-    m.assign("m_axi_awid_o", lit(cfg.axi_id_bits, 0));
-    m.assign("m_axi_awsize_o", lit(3, u64::from(sb.trailing_zeros())));
-    m.assign("m_axi_awburst_o", lit(2, 1));
-    m.comment("W may run ahead of its AW (AXI4 allows it).");
-    m.assign("m_axi_wvalid_o", format!("w_left_q != {}", lit(bb, 0)));
-    m.assign("m_axi_wdata_o", format!("w_q[{}:0]", db - 1));
-    m.assign("m_axi_wlast_o", format!("w_left_q == {}", lit(bb, 1)));
-    let all = crate::emit::expr::hex(sb, (1u64 << sb) - 1);
+    m.seq(vec![set("aw_len_q", lit(1, 0))], vec![if_("wq_pop", vec![set("aw_len_q", "head_len")])]);
+    let all = writer::all_bytes(cfg);
     let high = crate::emit::expr::hex(sb, ((1u64 << sb) - 1) & !0xf);
-    m.assign("m_axi_wstrb_o", format!("aw_len_q ? {high} : {all}"));
-    m.assign("m_axi_bready_o", lit(1, 1));
+    let bb = writer::beat_bits(beats);
+    let w = Writes {
+        port: "m_axi_",
+        take: "wq_pop",
+        addr: wq.get("wq_data", "addr"),
+        data: wq.get("wq_data", "data"),
+        width: lw,
+        beats: format!("head_len ? {} : {}", lit(bb, 1), lit(bb, u64::from(beats))),
+        max_beats: beats,
+        awlen: format!("aw_len_q ? {} : {}", lit(8, 0), lit(8, u64::from(beats - 1))),
+        strb: format!("aw_len_q ? {high} : {all}"),
+        outstanding: cfg.pre_outstanding,
+    };
+    writer::writes(m, cfg, &w);
     for s in axi::signals(cfg).iter().filter(|s| s.from_manager && s.name.starts_with("ar")) {
         m.assign(axi::port_name("m_axi_", s, true), lit(s.width, 0));
     }
@@ -368,10 +327,7 @@ fn writer(m: &mut Module, cfg: &EngineConfig) {
     m.wire_assign(
         "unused_rsp",
         1,
-        "^{m_axi_arready_i, m_axi_rvalid_i, m_axi_rid_i, m_axi_rdata_i, m_axi_rresp_i, m_axi_rlast_i, m_axi_bid_i, m_axi_bresp_i}",
+        "^{m_axi_arready_i, m_axi_rvalid_i, m_axi_rid_i, m_axi_rdata_i, m_axi_rresp_i, m_axi_rlast_i}",
     );
-    m.assign(
-        "busy_o",
-        format!("~in_idle | wq_valid | aw_v_q | (w_left_q != {}) | (wr_cnt_q != {})", lit(bb, 0), lit(ob, 0)),
-    );
+    m.assign("busy_o", "~in_idle | wq_valid | ~wr_idle");
 }

@@ -10,6 +10,7 @@ pub mod lane;
 pub mod library;
 pub mod lists;
 pub mod ram;
+pub mod writer;
 
 use crate::emit::Module;
 use datapath::Datapath;
