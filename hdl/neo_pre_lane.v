@@ -155,7 +155,7 @@ module neo_pre_lane (
         if (c_take) begin
           join_idx_q <= join_idx_q + 32'd1;
         end
-        if (run_q & ~geo_cmd_q & (done_idx_q == count_i) & d_idle) begin
+        if (run_q & ~geo_cmd_q & (done_idx_q == count_i) & d_idle & wr_idle) begin
           run_q <= 1'b0;
         end
       end
@@ -232,6 +232,7 @@ module neo_pre_lane (
   assign unused_geo = ^{geo_busy, geo_index, geo_rec[1535:352]};
   wire posq_ready;
   wire p_in_ready;
+  wire proj_take;
   assign geo_ready = p_in_ready & posq_ready;
   wire posq_valid;
   wire [95:0] posq_data;
@@ -342,7 +343,6 @@ module neo_pre_lane (
   wire sh_cmd_valid;
   assign sh_cmd_valid = shc_q | (p_valid & p_visible & pend_ready);
   assign p_out_ready = ~shc_q & pend_ready & (~p_visible | sh_cmd_ready);
-  wire proj_take;
   assign proj_take = p_valid & p_out_ready;
   wire [31:0] proj_id;
   assign proj_id = first_i + proj_idx_q;
@@ -625,6 +625,7 @@ module neo_pre_lane (
   localparam COLQ_VISIBLE = 213;
   wire colq_valid;
   wire [213:0] colq_data;
+  wire word_take;
   neo_pre_fifo_w214_d256 u_colq (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
@@ -689,20 +690,23 @@ module neo_pre_lane (
   assign unused_c = ^{c_red[31:11], c_green[31:11], c_blue[31:11]};
 
   // Write: AW then 4 W beats per word; at most 8 words without their B.
-  reg  aw_v_q;
-  reg  [31:0] aw_addr_q;
-  reg  [2:0] w_left_q;
-  reg  [255:0] w_q;
-  reg  [3:0] wr_cnt_q;
-  wire wr_room;
-  assign wr_room = wr_cnt_q != 4'd8;
-  wire word_take;
-  assign word_take = colq_valid & c_valid & ~aw_v_q & (w_left_q == 3'd0) & wr_room;
+  assign word_take = colq_valid & c_valid & wr_free;
   assign c_out_ready = word_take;
   wire [31:0] wr_id;
   assign wr_id = first_i + wr_idx_q;
   wire [36:0] wr_off;
   assign wr_off = {wr_id, 5'd0};
+  wire unused_wr_off;
+  assign unused_wr_off = ^wr_off[36:32];
+  reg  aw_v_q;
+  reg  [31:0] aw_addr_q;
+  reg  [2:0] w_left_q;
+  reg  [255:0] w_q;
+  reg  [3:0] wr_cnt_q;
+  wire wr_free;
+  assign wr_free = ~aw_v_q & (w_left_q == 3'd0) & (wr_cnt_q != 4'd8);
+  wire wr_idle;
+  assign wr_idle = ~aw_v_q & (w_left_q == 3'd0) & (wr_cnt_q == 4'd0);
   wire aw_fire;
   assign aw_fire = ma_axi_awvalid_o & ma_axi_awready_i;
   wire w_fire;
@@ -712,14 +716,14 @@ module neo_pre_lane (
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       aw_v_q <= 1'b0;
+      aw_addr_q <= 32'd0;
       w_left_q <= 3'd0;
       wr_cnt_q <= 4'd0;
-      aw_addr_q <= 32'd0;
     end else begin
       if (word_take) begin
         aw_v_q <= 1'b1;
-        w_left_q <= 3'd4;
         aw_addr_q <= feat_base_i + wr_off[31:0];
+        w_left_q <= 3'd4;
       end else begin
         if (aw_fire) begin
           aw_v_q <= 1'b0;
@@ -730,7 +734,7 @@ module neo_pre_lane (
       end
       if (word_take & ~b_fire) begin
         wr_cnt_q <= wr_cnt_q + 4'd1;
-      end else if (b_fire & ~word_take) begin
+      end else if (b_fire & ~(word_take)) begin
         wr_cnt_q <= wr_cnt_q - 4'd1;
       end
     end
@@ -742,21 +746,19 @@ module neo_pre_lane (
       w_q <= w_q >> 64;
     end
   end
-  wire unused_wr_off;
-  assign unused_wr_off = ^wr_off[36:32];
   assign ma_axi_awvalid_o = aw_v_q;
   assign ma_axi_awaddr_o = aw_addr_q;
   assign ma_axi_awlen_o = 8'd3;
   assign ma_axi_awid_o = 4'd0;
   assign ma_axi_awsize_o = 3'd3;
   assign ma_axi_awburst_o = 2'd1;
-  // W may run ahead of its AW (AXI4 allows it); the subordinate holds it.
+  // W may run ahead of its AW (AXI4 allows it).
   assign ma_axi_wvalid_o = w_left_q != 3'd0;
   assign ma_axi_wdata_o = w_q[63:0];
   assign ma_axi_wlast_o = w_left_q == 3'd1;
   assign ma_axi_wstrb_o = 8'hff;
   assign ma_axi_bready_o = 1'b1;
-  wire unused_ma_b;
-  assign unused_ma_b = ^{ma_axi_bid_i, ma_axi_bresp_i};
+  wire unused_ma_axi_b;
+  assign unused_ma_axi_b = ^{ma_axi_bid_i, ma_axi_bresp_i};
 
 endmodule

@@ -199,35 +199,44 @@ module neo_pre_lists (
   );
 
   // Writes: the head as AW + 8 beats (a line) or 1 beat (a length, high 4 bytes); at most 64 without B.
+  reg  aw_len_q;
+  assign wq_pop = wq_valid & wr_free;
+  wire head_len;
+  assign head_len = wq_data[WQ_LEN_WRITE];
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      aw_len_q <= 1'b0;
+    end else begin
+      if (wq_pop) begin
+        aw_len_q <= head_len;
+      end
+    end
+  end
   reg  aw_v_q;
   reg  [31:0] aw_addr_q;
-  reg  aw_len_q;
   reg  [3:0] w_left_q;
   reg  [511:0] w_q;
   reg  [6:0] wr_cnt_q;
-  wire wr_room;
-  assign wr_room = wr_cnt_q != 7'd64;
-  assign wq_pop = wq_valid & ~aw_v_q & (w_left_q == 4'd0) & wr_room;
+  wire wr_free;
+  assign wr_free = ~aw_v_q & (w_left_q == 4'd0) & (wr_cnt_q != 7'd64);
+  wire wr_idle;
+  assign wr_idle = ~aw_v_q & (w_left_q == 4'd0) & (wr_cnt_q == 7'd0);
   wire aw_fire;
   assign aw_fire = m_axi_awvalid_o & m_axi_awready_i;
   wire w_fire;
   assign w_fire = m_axi_wvalid_o & m_axi_wready_i;
   wire b_fire;
   assign b_fire = m_axi_bvalid_i;
-  wire head_len;
-  assign head_len = wq_data[WQ_LEN_WRITE];
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       aw_v_q <= 1'b0;
       aw_addr_q <= 32'd0;
-      aw_len_q <= 1'b0;
       w_left_q <= 4'd0;
       wr_cnt_q <= 7'd0;
     end else begin
       if (wq_pop) begin
         aw_v_q <= 1'b1;
         aw_addr_q <= wq_data[WQ_ADDR +: WQ_ADDR_W];
-        aw_len_q <= head_len;
         w_left_q <= head_len ? 4'd1 : 4'd8;
       end else begin
         if (aw_fire) begin
@@ -239,7 +248,7 @@ module neo_pre_lists (
       end
       if (wq_pop & ~b_fire) begin
         wr_cnt_q <= wr_cnt_q + 7'd1;
-      end else if (b_fire & ~wq_pop) begin
+      end else if (b_fire & ~(wq_pop)) begin
         wr_cnt_q <= wr_cnt_q - 7'd1;
       end
     end
@@ -263,6 +272,8 @@ module neo_pre_lists (
   assign m_axi_wlast_o = w_left_q == 4'd1;
   assign m_axi_wstrb_o = aw_len_q ? 8'hf0 : 8'hff;
   assign m_axi_bready_o = 1'b1;
+  wire unused_m_axi_b;
+  assign unused_m_axi_b = ^{m_axi_bid_i, m_axi_bresp_i};
   assign m_axi_arvalid_o = 1'b0;
   assign m_axi_arid_o = 4'd0;
   assign m_axi_araddr_o = 32'd0;
@@ -271,7 +282,7 @@ module neo_pre_lists (
   assign m_axi_arburst_o = 2'd0;
   assign m_axi_rready_o = 1'b1;
   wire unused_rsp;
-  assign unused_rsp = ^{m_axi_arready_i, m_axi_rvalid_i, m_axi_rid_i, m_axi_rdata_i, m_axi_rresp_i, m_axi_rlast_i, m_axi_bid_i, m_axi_bresp_i};
-  assign busy_o = ~in_idle | wq_valid | aw_v_q | (w_left_q != 4'd0) | (wr_cnt_q != 7'd0);
+  assign unused_rsp = ^{m_axi_arready_i, m_axi_rvalid_i, m_axi_rid_i, m_axi_rdata_i, m_axi_rresp_i, m_axi_rlast_i};
+  assign busy_o = ~in_idle | wq_valid | ~wr_idle;
 
 endmodule

@@ -170,7 +170,10 @@ pub fn hierarchical_boxes(cfg: &EngineConfig, top: &str) -> Option<Vec<String>> 
     }
     if top == pre::lane::NAME {
         return Some(
-            [pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME, pre::dup::NAME].iter().map(|s| s.to_string()).collect(),
+            [pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME, pre::dup::NAME]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
         );
     }
     if top == engine::NAME {
