@@ -152,6 +152,8 @@ pub struct EngineConfig {
     pub pre_outstanding: usize,
     /// Preprocessing Engine: tiles the list writer (`neo_pre_lists`) keeps a counter and a
     /// 64-byte line of incoming entries for (a power of two; QHD has 920 tiles of 64 pixels).
+    /// Each tile's list region is `table_capacity` rounded up to whole 8-entry lines
+    /// ([`EngineConfig::list_stride`]).
     pub pre_max_tiles: usize,
 }
 
@@ -378,11 +380,8 @@ impl EngineConfig {
             ));
         }
         let t = self.pre_max_tiles;
-        if !t.is_power_of_two() || !(2..=65536).contains(&t) || !self.table_capacity.is_multiple_of(8) {
-            return err(format!(
-                "pre_max_tiles {t} is not a power of two in 2..=65536, or table_capacity {} is not a whole number of 8-entry lines",
-                self.table_capacity
-            ));
+        if !t.is_power_of_two() || !(2..=65536).contains(&t) {
+            return err(format!("pre_max_tiles {t} is not a power of two in 2..=65536"));
         }
         if self.pre_burst_beats() > 256 || self.pre_burst_beats() * beat > 4096 {
             return err(format!(
@@ -391,6 +390,12 @@ impl EngineConfig {
             ));
         }
         Ok(())
+    }
+
+    /// Entries between two tiles' incoming lists as the list writer lays them out:
+    /// `table_capacity` rounded up to a whole number of 8-entry (64-byte) lines.
+    pub fn list_stride(&self) -> usize {
+        self.table_capacity.next_multiple_of(8)
     }
 
     /// Beats of a fetch unit's window (`pre_read_lines` lines of 64 bytes).

@@ -4,7 +4,8 @@
 //! its descriptor.
 //!
 //! - **Layout** (golden `engine::memory`): tile `t`'s list holds up to `table_capacity` entries
-//!   from byte `list_base_i + 8 t table_capacity`; a longer list keeps counting (its length goes
+//!   from byte `list_base_i + 8 t S`, `S` = [`EngineConfig::list_stride`] (the capacity rounded
+//!   up to whole lines); a longer list keeps counting (its length goes
 //!   to the descriptor, so the frame controller reports the overflow) but writes nothing more.
 //!   The length is the high half of descriptor word 2 (byte `desc_base_i + 32 t + 20`), written
 //!   with WSTRB on its 8-byte beat; the host writes the rest of the descriptor.
@@ -73,7 +74,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.doc("Incoming-list writer: hits -> list entries {valid, key, id} written a 64-byte line at a time at");
     m.doc(format!(
         "list_base_i + 8 (t {} + k); on flush, partial lines and each tile's length (descriptor word 2, high half).",
-        cfg.table_capacity
+        cfg.list_stride()
     ));
     m.clock_reset();
     m.input_c("start_i", 1, "pulse: clear the counters of tiles 0 .. tiles_i, then take hits");
