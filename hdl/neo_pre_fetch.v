@@ -140,7 +140,7 @@ module neo_pre_fetch (
   wire [63:0] head;
   wire head_valid;
   assign head_valid = buf_cnt_q != 11'd0;
-  neo_pre_fetch_ram u_buf (
+  neo_pre_ram_w64_d1024 u_buf (
     .clk_i(clk_i),
     .we_i(r_fire),
     .waddr_i(wr_ptr_q),

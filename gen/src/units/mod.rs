@@ -134,14 +134,15 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     queues.sort_unstable();
     queues.dedup();
     all.extend(queues.into_iter().map(|(w, d)| pre::fifo::module(w, d)));
-    all.push(pre::fetch::ram_module(cfg));
+    let mut memories = pre::lists::memories(cfg);
+    memories.push(pre::fetch::buffer_memory(cfg));
+    memories.sort_unstable();
+    memories.dedup();
+    all.extend(memories.into_iter().map(|(w, d)| pre::ram::module(w, d)));
     all.push(pre::fetch::module(cfg));
     all.push(pre::color_module(cfg));
     all.push(pre::project_module(cfg));
     all.push(pre::lane::module(cfg));
-    let mut memories = pre::lists::memories(cfg);
-    memories.dedup();
-    all.extend(memories.into_iter().map(|(w, d)| pre::ram::module(w, d)));
     all.push(pre::lists::module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);

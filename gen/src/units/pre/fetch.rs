@@ -12,7 +12,7 @@
 //!
 //! # Read window
 //! The unit keeps up to [`EngineConfig::pre_read_lines`] 64-byte lines in flight: its beat
-//! buffer (`u_buf`, `neo_pre_fetch_ram`) holds `pre_window_beats` beats, and a burst is issued
+//! buffer (`u_buf`, a `neo_pre_ram`) holds `pre_window_beats` beats, and a burst is issued
 //! only when the buffer has room for it net of the beats already requested (`space_q`), so
 //! `rready` is always 1. At most [`EngineConfig::pre_outstanding`] bursts are in flight; full
 //! bursts are `pre_burst_beats` beats (the window over `pre_outstanding`, so a stream's bursts
@@ -37,9 +37,6 @@ use neo_golden::hwpre::bake::{geometry_bytes, sh_bytes, ShPrecision};
 
 /// Module name.
 pub const NAME: &str = "neo_pre_fetch";
-
-/// Module name of the beat buffer.
-pub const RAM_NAME: &str = "neo_pre_fetch_ram";
 
 /// Width of `cmd_count_i` and `rec_index_o`.
 pub const COUNT_BITS: u32 = 32;
@@ -105,22 +102,10 @@ impl Dims {
     }
 }
 
-/// The beat buffer: `pre_window_beats` beats, one synchronous write port, one combinational read
-/// port (register-file style, as `neo_chunk_ram`).
-pub fn ram_module(cfg: &EngineConfig) -> Module {
+/// The beat buffer's memory: (width, depth), a `neo_pre_ram`.
+pub fn buffer_memory(cfg: &EngineConfig) -> (u32, u32) {
     let d = Dims::new(cfg);
-    let mut m = Module::new(RAM_NAME);
-    m.doc(format!(
-        "Fetch-unit beat buffer: {} beats of {} bits, 1 write port, 1 combinational read port.",
-        d.depth, d.db
-    ));
-    m.input_c("clk_i", 1, "clock");
-    m.input("we_i", 1).input("waddr_i", d.pb).input("wdata_i", d.db);
-    m.input("raddr_i", d.pb).output("rdata_o", d.db);
-    m.mem("mem", d.db, d.depth);
-    m.seq_noreset(vec![if_("we_i", vec![set("mem[waddr_i]", "wdata_i")])]);
-    m.assign("rdata_o", "mem[raddr_i]");
-    m
+    (d.db, d.depth)
 }
 
 /// The fetch unit for `cfg`.
@@ -285,7 +270,7 @@ fn buffer(m: &mut Module, d: &Dims) {
     m.wire("head", d.db);
     m.wire_assign("head_valid", 1, format!("buf_cnt_q != {}", lit(sb, 0)));
     m.instance(
-        RAM_NAME,
+        super::ram::name(d.db, d.depth),
         "u_buf",
         vec![
             ("clk_i".into(), "clk_i".into()),
