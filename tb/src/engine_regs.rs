@@ -30,10 +30,10 @@ pub struct RegInputs {
 }
 
 /// The register file as the host sees it.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RegModel {
-    /// The read/write registers' contents, indexed by `Reg as usize`.
-    rw: [u32; Reg::ALL.len()],
+    /// The read/write registers' contents, indexed by [`Reg::index`].
+    rw: Vec<u32>,
 }
 
 /// The word offset (`addr` within the 12-bit space, low two bits cleared).
@@ -50,15 +50,21 @@ pub fn counter_at(off: u32) -> Option<(Counter, u32)> {
     })
 }
 
+impl Default for RegModel {
+    fn default() -> Self {
+        RegModel::new()
+    }
+}
+
 impl RegModel {
     /// The reset state (every register 0).
     pub fn new() -> Self {
-        Self::default()
+        RegModel { rw: vec![0; Reg::ALL.len()] }
     }
 
     /// The value of read/write register `r`.
     pub fn get(&self, r: Reg) -> u32 {
-        self.rw[r as usize]
+        self.rw[r.index()]
     }
 
     /// What a read of `addr` returns with inputs `inp`.
@@ -67,7 +73,7 @@ impl RegModel {
         if let Some(r) = Reg::at(off) {
             return match r.access() {
                 Access::W => 0,
-                Access::RW => self.rw[r as usize],
+                Access::RW => self.rw[r.index()],
                 Access::R => match r {
                     Reg::Status => {
                         (if inp.busy { STATUS_BUSY } else { 0 })
@@ -93,7 +99,7 @@ impl RegModel {
         let mask = (0..4).filter(|b| strb >> b & 1 != 0).fold(0u32, |m, b| m | 0xff << (8 * b));
         match r.access() {
             Access::RW => {
-                let v = &mut self.rw[r as usize];
+                let v = &mut self.rw[r.index()];
                 *v = (*v & !mask) | (data & mask);
                 false
             }
@@ -102,20 +108,9 @@ impl RegModel {
         }
     }
 
-    /// The frame registers as programmed (bases from their LO/HI pairs).
+    /// The frame registers as programmed (golden [`FrameRegs::from_registers`]).
     pub fn frame_regs(&self) -> FrameRegs {
-        let pair = |lo: Reg, hi: Reg| self.get(lo) as u64 | (self.get(hi) as u64) << 32;
-        FrameRegs {
-            frame: self.get(Reg::Frame),
-            tiles: self.get(Reg::Tiles),
-            width: self.get(Reg::Width),
-            height: self.get(Reg::Height),
-            desc_base: pair(Reg::DescBaseLo, Reg::DescBaseHi),
-            result_base: pair(Reg::ResultBaseLo, Reg::ResultBaseHi),
-            feat_base: pair(Reg::FeatBaseLo, Reg::FeatBaseHi),
-            fb_base: pair(Reg::FbBaseLo, Reg::FbBaseHi),
-            scratch_base: pair(Reg::ScratchBaseLo, Reg::ScratchBaseHi),
-        }
+        FrameRegs::from_registers(|r| self.get(r))
     }
 }
 

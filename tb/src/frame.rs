@@ -80,6 +80,7 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize) -> FrameCase
         feat_base: 0x40_0000 + 32 * rng.below(100),
         fb_base: 0x80_0000 + 4 * rng.below(100),
         scratch_base: 0x1000_0000 + 8 * rng.below(100),
+        pre: Default::default(),
     };
     FrameCase { regs, descs }
 }

@@ -431,6 +431,7 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
             Counter::WrTable => bytes("ras_wr_table", mm, ENTRY_BYTES),
             Counter::WrPixel => bytes("ras_wr_pixels", mm, pixels),
             Counter::WrResult => bytes(&ev("result_written"), 1, RESULT_BYTES),
+            Counter::PreBusy | Counter::RdPre | Counter::WrPre => lit(iw, 0),
         };
         m.assign(format!("inc[{}*{iw} +: {iw}]", c.index()), rhs);
     }

@@ -346,7 +346,7 @@ impl EngineConfig {
             return err(format!("axi_id_bits {} is outside 1..=16", self.axi_id_bits));
         }
         // Each port's mux prefixes the ID with the client's slot: ceil(clients / ports) slots.
-        let clients = 1 + self.sort_cores + self.raster_cores;
+        let clients = self.memory_clients();
         let slots = clients.div_ceil(self.mem_channels);
         let slot_bits = usize::BITS - (slots - 1).leading_zeros();
         if slot_bits > self.axi_id_bits {
@@ -366,8 +366,11 @@ impl EngineConfig {
     /// `pre_outstanding` bursts of at most 256 beats and 4 KiB must cover.
     fn validate_preprocessing(&self) -> Result<(), ConfigError> {
         let err = |s: String| Err(ConfigError(s));
-        if !(1..=16).contains(&self.pre_units) {
-            return err(format!("pre_units {} is outside 1..=16", self.pre_units));
+        if !self.pre_units.is_power_of_two() || !(1..=16).contains(&self.pre_units) {
+            return err(format!(
+                "pre_units {} is not a power of two in 1..=16 (the lanes split the Gaussians by a shift)",
+                self.pre_units
+            ));
         }
         let (l, o) = (self.pre_read_lines, self.pre_outstanding);
         if !o.is_power_of_two() || !(1..=256).contains(&o) {
@@ -390,6 +393,22 @@ impl EngineConfig {
             ));
         }
         Ok(())
+    }
+
+    /// The engine's AXI4 memory clients: the frame controller, the sorting and raster cores'
+    /// bridges, and the Preprocessing Engine's (two ports per lane, one list writer).
+    pub fn memory_clients(&self) -> usize {
+        1 + self.sort_cores + self.raster_cores + 2 * self.pre_units + 1
+    }
+
+    /// The Gaussians lane `lane` of the Preprocessing Engine takes out of `gaussians`:
+    /// `(first, count)`, consecutive ranges of `ceil(gaussians / pre_units)` (the last ones
+    /// shorter or empty).
+    pub fn pre_lane_range(&self, gaussians: u32, lane: usize) -> (u32, u32) {
+        let share = (gaussians as u64).div_ceil(self.pre_units as u64);
+        let first = (share * lane as u64).min(gaussians as u64);
+        let end = (first + share).min(gaussians as u64);
+        (first as u32, (end - first) as u32)
     }
 
     /// Entries between two tiles' incoming lists as the list writer lays them out:
@@ -551,6 +570,9 @@ mod tests {
             EngineConfig { axi_outstanding: 3, ..EngineConfig::default() },
             EngineConfig { axi_id_bits: 2, ..EngineConfig::default() },
             EngineConfig { pre_units: 0, ..EngineConfig::default() },
+            EngineConfig { pre_units: 3, ..EngineConfig::default() },
+            // 1 + 16 + 4 + 2 x 16 + 1 = 54 clients on 2 ports: 27 slots need 5 ID bits.
+            EngineConfig { pre_units: 16, mem_channels: 2, ..EngineConfig::default() },
             EngineConfig { pre_read_lines: 96, ..EngineConfig::default() },
             // 64 outstanding bursts do not fit a window of 1 line (8 beats).
             EngineConfig { pre_read_lines: 1, ..EngineConfig::default() },
@@ -581,6 +603,20 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// The lanes' ranges cover the Gaussians in order, each one once.
+        #[test]
+        fn lane_ranges_partition_the_gaussians(gaussians in 0u32..3_000_000, log_units in 0u32..5) {
+            let c = EngineConfig { pre_units: 1 << log_units, ..EngineConfig::default() };
+            let mut next = 0;
+            for lane in 0..c.pre_units {
+                let (first, count) = c.pre_lane_range(gaussians, lane);
+                proptest::prop_assert_eq!(first, next);
+                proptest::prop_assert!(count as u64 <= (gaussians as u64).div_ceil(c.pre_units as u64));
+                next = first + count;
+            }
+            proptest::prop_assert_eq!(next, gaussians);
+        }
+
         /// Any values of the fields: validation answers without panicking, and a configuration it
         /// accepts gives its derived values (format, network, sort and raster configs) without
         /// panicking either.

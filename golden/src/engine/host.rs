@@ -42,7 +42,7 @@ use super::memory::{
     PIXEL_BYTES, RESULT_BYTES,
 };
 use super::reference::{add_raster_traffic, sort_traffic, FrameOutcome};
-use super::regs::{Counter, FrameRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
+use super::regs::{Counter, FrameRegs, PreRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
 use crate::pipeline::{Formats, FrameOutput, Pipeline, PipelineConfig, Preprocessing, Strategy};
 use crate::scene::Scene;
@@ -257,6 +257,7 @@ impl<'s> EngineSession<'s> {
             feat_base: l.feat_base,
             fb_base: l.fb_base,
             scratch_base: l.scratch_base,
+            pre: PreRegs::default(),
         }
     }
 

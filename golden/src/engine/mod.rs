@@ -10,6 +10,7 @@ pub mod expected;
 pub mod host;
 pub mod memory;
 pub mod plan;
+mod pre_regs;
 pub mod reference;
 pub mod regs;
 
@@ -25,4 +26,7 @@ pub use reference::{
     execute_frame, execute_frame_traced, segment_work, FrameError, FrameOutcome, FrameTrace, RasterTrace,
     SegmentWork, TileTrace,
 };
-pub use regs::{fb_base_alignment, Counter, Counters, FrameRegs, MisalignedBase, Reg};
+pub use regs::{
+    fb_base_alignment, CameraWord, Counter, Counters, FrameRegs, MisalignedBase, PreRegs, Reg, CAMERA_WORDS,
+    PRE_ENABLE, PRE_FRESH,
+};

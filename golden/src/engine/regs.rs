@@ -14,6 +14,7 @@
 
 use super::config::EngineConfig;
 use super::memory::PIXEL_BYTES;
+pub use super::pre_regs::{CameraWord, PreRegs, CAMERA_WORDS, PRE_ENABLE, PRE_FRESH};
 use serde::{Deserialize, Serialize};
 
 /// Width of the control port's byte addresses (a 4 KiB register space).
@@ -86,11 +87,35 @@ pub enum Reg {
     FirstOverflow,
     /// 0x044: tiles of the last frame that overflowed.
     Overflows,
+    /// 0x048: [`PRE_ENABLE`], [`PRE_FRESH`] (the Preprocessing Engine's frame; [`PreRegs`]).
+    PreCtrl,
+    /// 0x04C: Gaussians of the baked scene.
+    Gaussians,
+    /// 0x050: the scene's SH degree (0 to 3; SH records are f32).
+    ShDegree,
+    /// 0x054: geometry array base (bytes, 8-byte aligned), low word.
+    GeoBaseLo,
+    /// 0x058: geometry array base, high word.
+    GeoBaseHi,
+    /// 0x05C: SH array base (bytes, 8-byte aligned), low word.
+    ShBaseLo,
+    /// 0x060: SH array base, high word.
+    ShBaseHi,
+    /// 0x064: the previous frame's feature-table base (bytes, 32-byte aligned), low word.
+    PrevFeatBaseLo,
+    /// 0x068: the previous frame's feature-table base, high word.
+    PrevFeatBaseHi,
+    /// 0x06C: incoming-list base (bytes, 64-byte aligned), low word.
+    ListBaseLo,
+    /// 0x070: incoming-list base, high word.
+    ListBaseHi,
+    /// 0x074 + 4 k: camera word `k` ([`CameraWord`]).
+    Camera(CameraWord),
 }
 
 impl Reg {
     /// Every register, in address order.
-    pub const ALL: [Reg; 18] = [
+    pub const ALL: [Reg; 18 + 11 + CAMERA_WORDS] = [
         Reg::Ctrl,
         Reg::Status,
         Reg::Frame,
@@ -109,11 +134,86 @@ impl Reg {
         Reg::ScratchBaseHi,
         Reg::FirstOverflow,
         Reg::Overflows,
+        Reg::PreCtrl,
+        Reg::Gaussians,
+        Reg::ShDegree,
+        Reg::GeoBaseLo,
+        Reg::GeoBaseHi,
+        Reg::ShBaseLo,
+        Reg::ShBaseHi,
+        Reg::PrevFeatBaseLo,
+        Reg::PrevFeatBaseHi,
+        Reg::ListBaseLo,
+        Reg::ListBaseHi,
+        Reg::Camera(CameraWord(0)),
+        Reg::Camera(CameraWord(1)),
+        Reg::Camera(CameraWord(2)),
+        Reg::Camera(CameraWord(3)),
+        Reg::Camera(CameraWord(4)),
+        Reg::Camera(CameraWord(5)),
+        Reg::Camera(CameraWord(6)),
+        Reg::Camera(CameraWord(7)),
+        Reg::Camera(CameraWord(8)),
+        Reg::Camera(CameraWord(9)),
+        Reg::Camera(CameraWord(10)),
+        Reg::Camera(CameraWord(11)),
+        Reg::Camera(CameraWord(12)),
+        Reg::Camera(CameraWord(13)),
+        Reg::Camera(CameraWord(14)),
+        Reg::Camera(CameraWord(15)),
+        Reg::Camera(CameraWord(16)),
+        Reg::Camera(CameraWord(17)),
+        Reg::Camera(CameraWord(18)),
+        Reg::Camera(CameraWord(19)),
+        Reg::Camera(CameraWord(20)),
+        Reg::Camera(CameraWord(21)),
+        Reg::Camera(CameraWord(22)),
     ];
 
     /// Byte address on the control port.
     pub const fn offset(self) -> u32 {
-        4 * self as u32
+        4 * self.word()
+    }
+
+    /// The register's word index (its byte address over 4): 0 to `Reg::ALL.len() - 1`.
+    pub const fn index(self) -> usize {
+        self.word() as usize
+    }
+
+    /// Word address on the control port.
+    const fn word(self) -> u32 {
+        match self {
+            Reg::Ctrl => 0,
+            Reg::Status => 1,
+            Reg::Frame => 2,
+            Reg::Tiles => 3,
+            Reg::Width => 4,
+            Reg::Height => 5,
+            Reg::DescBaseLo => 6,
+            Reg::DescBaseHi => 7,
+            Reg::ResultBaseLo => 8,
+            Reg::ResultBaseHi => 9,
+            Reg::FeatBaseLo => 10,
+            Reg::FeatBaseHi => 11,
+            Reg::FbBaseLo => 12,
+            Reg::FbBaseHi => 13,
+            Reg::ScratchBaseLo => 14,
+            Reg::ScratchBaseHi => 15,
+            Reg::FirstOverflow => 16,
+            Reg::Overflows => 17,
+            Reg::PreCtrl => 18,
+            Reg::Gaussians => 19,
+            Reg::ShDegree => 20,
+            Reg::GeoBaseLo => 21,
+            Reg::GeoBaseHi => 22,
+            Reg::ShBaseLo => 23,
+            Reg::ShBaseHi => 24,
+            Reg::PrevFeatBaseLo => 25,
+            Reg::PrevFeatBaseHi => 26,
+            Reg::ListBaseLo => 27,
+            Reg::ListBaseHi => 28,
+            Reg::Camera(CameraWord(k)) => 29 + k as u32,
+        }
     }
 
     /// The register's name (as in docs and the RTL).
@@ -137,6 +237,18 @@ impl Reg {
             Reg::ScratchBaseHi => "SCRATCH_BASE_HI",
             Reg::FirstOverflow => "FIRST_OVERFLOW",
             Reg::Overflows => "OVERFLOWS",
+            Reg::PreCtrl => "PRE_CTRL",
+            Reg::Gaussians => "GAUSSIANS",
+            Reg::ShDegree => "SH_DEGREE",
+            Reg::GeoBaseLo => "GEO_BASE_LO",
+            Reg::GeoBaseHi => "GEO_BASE_HI",
+            Reg::ShBaseLo => "SH_BASE_LO",
+            Reg::ShBaseHi => "SH_BASE_HI",
+            Reg::PrevFeatBaseLo => "PREV_FEAT_BASE_LO",
+            Reg::PrevFeatBaseHi => "PREV_FEAT_BASE_HI",
+            Reg::ListBaseLo => "LIST_BASE_LO",
+            Reg::ListBaseHi => "LIST_BASE_HI",
+            Reg::Camera(w) => w.name(),
         }
     }
 
@@ -156,7 +268,7 @@ impl Reg {
 }
 
 /// A 64-bit performance counter, read as two words at [`Counter::offset`] (low) and `+ 4`
-/// (high). Every counter is reset by a start; the byte counters count the bytes of the elements
+/// (high). Every counter is reset by a start; the byte counters up to `WR_RESULT` count the bytes of the elements
 /// the cores' bridges deliver or accept (entries 8, feature words 32, pixels 4, descriptors 32,
 /// results 8).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -191,10 +303,18 @@ pub enum Counter {
     WrPixel,
     /// 14: bytes of tile results written.
     WrResult,
+    /// 15: cycles the Preprocessing Engine is busy (from start to its last list write's B).
+    PreBusy,
+    /// 16: bytes the Preprocessing Engine read (read beats times the beat bytes: geometry and
+    /// SH records, previous feature words).
+    RdPre,
+    /// 17: bytes the Preprocessing Engine wrote (write beats times the beat bytes: feature
+    /// words, list lines, list lengths).
+    WrPre,
 }
 
 /// Number of performance counters.
-pub const COUNTERS: usize = 15;
+pub const COUNTERS: usize = 18;
 
 /// Byte address of counter 0's low word.
 pub const COUNTER_BASE: u32 = 0x100;
@@ -217,6 +337,9 @@ impl Counter {
         Counter::WrTable,
         Counter::WrPixel,
         Counter::WrResult,
+        Counter::PreBusy,
+        Counter::RdPre,
+        Counter::WrPre,
     ];
 
     /// The counter's index `k`.
@@ -247,13 +370,16 @@ impl Counter {
             Counter::WrTable => "WR_TABLE",
             Counter::WrPixel => "WR_PIXEL",
             Counter::WrResult => "WR_RESULT",
+            Counter::PreBusy => "PRE_BUSY",
+            Counter::RdPre => "RD_PRE",
+            Counter::WrPre => "WR_PRE",
         }
     }
 
     /// Whether golden knows the counter exactly (every counter but the cycle counts, which
     /// depend on the RTL's timing).
     pub const fn is_golden(self) -> bool {
-        !matches!(self, Counter::Cycles | Counter::SortBusy | Counter::RasterBusy)
+        !matches!(self, Counter::Cycles | Counter::SortBusy | Counter::RasterBusy | Counter::PreBusy)
     }
 }
 
@@ -305,6 +431,8 @@ pub struct FrameRegs {
     pub fb_base: u64,
     /// Sort scratch base (bytes, 8-byte aligned).
     pub scratch_base: u64,
+    /// The Preprocessing Engine's registers (disabled by default).
+    pub pre: PreRegs,
 }
 
 /// A base register the engine cannot use: not a multiple of the alignment its data needs.
@@ -330,9 +458,10 @@ pub fn fb_base_alignment(cfg: &EngineConfig) -> u64 {
 
 impl FrameRegs {
     /// Every base register with the alignment the engine needs (the RTL ignores the low bits of
-    /// each, so a misaligned base would silently read or write elsewhere).
-    pub fn base_alignments(&self, cfg: &EngineConfig) -> [(&'static str, u64, u64, &'static str); 5] {
-        [
+    /// each, so a misaligned base would silently read or write elsewhere); the preprocessing
+    /// bases only when [`PreRegs::enabled`].
+    pub fn base_alignments(&self, cfg: &EngineConfig) -> Vec<(&'static str, u64, u64, &'static str)> {
+        let mut v = vec![
             ("DESC_BASE", self.desc_base, 32, "a descriptor is one 32-byte burst"),
             ("RESULT_BASE", self.result_base, 8, "a result is one 8-byte beat"),
             ("FEAT_BASE", self.feat_base, 32, "a feature word is 32 bytes"),
@@ -343,7 +472,11 @@ impl FrameRegs {
                 "4 x subtile: a subtile's pixel row must not cross a 4 KiB page",
             ),
             ("SCRATCH_BASE", self.scratch_base, 8, "an entry is 8 bytes"),
-        ]
+        ];
+        if self.pre.enabled() {
+            v.extend(self.pre.base_alignments());
+        }
+        v
     }
 
     /// Refuses a base register the engine `cfg` cannot use, naming the field and the
@@ -357,7 +490,41 @@ impl FrameRegs {
         Ok(())
     }
 
+    /// The frame registers as programmed, from the read/write registers' values `get` (bases
+    /// from their LO/HI pairs): the inverse of [`FrameRegs::writes`] (the preprocessing
+    /// registers but `PRE_CTRL` read as they are, enabled or not).
+    pub fn from_registers(get: impl Fn(Reg) -> u32) -> FrameRegs {
+        let pair = |lo: Reg, hi: Reg| get(lo) as u64 | (get(hi) as u64) << 32;
+        let mut camera = [0u32; CAMERA_WORDS];
+        for c in CameraWord::all() {
+            camera[c.0 as usize] = get(Reg::Camera(c));
+        }
+        FrameRegs {
+            frame: get(Reg::Frame),
+            tiles: get(Reg::Tiles),
+            width: get(Reg::Width),
+            height: get(Reg::Height),
+            desc_base: pair(Reg::DescBaseLo, Reg::DescBaseHi),
+            result_base: pair(Reg::ResultBaseLo, Reg::ResultBaseHi),
+            feat_base: pair(Reg::FeatBaseLo, Reg::FeatBaseHi),
+            fb_base: pair(Reg::FbBaseLo, Reg::FbBaseHi),
+            scratch_base: pair(Reg::ScratchBaseLo, Reg::ScratchBaseHi),
+            pre: PreRegs {
+                ctrl: get(Reg::PreCtrl),
+                gaussians: get(Reg::Gaussians),
+                sh_degree: get(Reg::ShDegree),
+                geo_base: pair(Reg::GeoBaseLo, Reg::GeoBaseHi),
+                sh_base: pair(Reg::ShBaseLo, Reg::ShBaseHi),
+                prev_feat_base: pair(Reg::PrevFeatBaseLo, Reg::PrevFeatBaseHi),
+                list_base: pair(Reg::ListBaseLo, Reg::ListBaseHi),
+                camera,
+            },
+        }
+    }
+
     /// The register writes that program this frame, in address order (`CTRL` not included).
+    /// `PRE_CTRL` is always written; the other preprocessing registers only when it enables
+    /// the Preprocessing Engine.
     pub fn writes(&self) -> Vec<(Reg, u32)> {
         let split = |lo: Reg, hi: Reg, v: u64| [(lo, v as u32), (hi, (v >> 32) as u32)];
         let mut w = vec![
@@ -371,6 +538,17 @@ impl FrameRegs {
         w.extend(split(Reg::FeatBaseLo, Reg::FeatBaseHi, self.feat_base));
         w.extend(split(Reg::FbBaseLo, Reg::FbBaseHi, self.fb_base));
         w.extend(split(Reg::ScratchBaseLo, Reg::ScratchBaseHi, self.scratch_base));
+        let p = &self.pre;
+        w.push((Reg::PreCtrl, p.ctrl));
+        if p.enabled() {
+            w.push((Reg::Gaussians, p.gaussians));
+            w.push((Reg::ShDegree, p.sh_degree));
+            w.extend(split(Reg::GeoBaseLo, Reg::GeoBaseHi, p.geo_base));
+            w.extend(split(Reg::ShBaseLo, Reg::ShBaseHi, p.sh_base));
+            w.extend(split(Reg::PrevFeatBaseLo, Reg::PrevFeatBaseHi, p.prev_feat_base));
+            w.extend(split(Reg::ListBaseLo, Reg::ListBaseHi, p.list_base));
+            w.extend(CameraWord::all().map(|c| (Reg::Camera(c), p.camera[c.0 as usize])));
+        }
         w
     }
 }
@@ -392,7 +570,14 @@ mod tests {
             assert_eq!(Reg::at(r.offset()), Some(r));
             assert!(r.offset() < 1 << ADDR_BITS);
         }
-        assert_eq!(Reg::at(0x048), None);
+        assert_eq!(Reg::at(0x048), Some(Reg::PreCtrl));
+        assert_eq!(Reg::at(0x070), Some(Reg::ListBaseHi));
+        assert_eq!(Reg::at(0x074), Some(Reg::Camera(CameraWord(0))));
+        assert_eq!(Reg::at(0x074 + 4 * 22), Some(Reg::Camera(CameraWord(22))));
+        assert_eq!(Reg::at(0x074 + 4 * 23), None);
+        assert_eq!(Reg::Camera(CameraWord(21)).name(), "GRID_X");
+        let offsets: Vec<u32> = Reg::ALL.iter().map(|r| r.offset()).collect();
+        assert!(offsets.windows(2).all(|w| w[1] == w[0] + 4), "dense, in address order");
         assert_eq!(Reg::Ctrl.access(), Access::W);
         assert_eq!(Reg::Overflows.access(), Access::R);
         assert_eq!(Reg::FbBaseHi.access(), Access::RW);
@@ -408,7 +593,7 @@ mod tests {
             assert!(c.offset() + 4 < 1 << ADDR_BITS);
             assert!(Reg::at(c.offset()).is_none());
         }
-        assert_eq!(Counter::ALL.iter().filter(|c| !c.is_golden()).count(), 3);
+        assert_eq!(Counter::ALL.iter().filter(|c| !c.is_golden()).count(), 4);
     }
 
     #[test]
@@ -457,10 +642,42 @@ mod tests {
     fn frame_writes_split_the_bases() {
         let r = FrameRegs { frame: 3, fb_base: 0x1_2345_6780, ..FrameRegs::default() };
         let w = r.writes();
-        assert_eq!(w.len(), 14);
+        assert_eq!(w.len(), 15);
+        assert_eq!(w[14], (Reg::PreCtrl, 0), "a disabled Preprocessing Engine is written as such");
         assert_eq!(w[0], (Reg::Frame, 3));
         assert!(w.contains(&(Reg::FbBaseLo, 0x2345_6780)));
         assert!(w.contains(&(Reg::FbBaseHi, 1)));
         assert!(w.iter().all(|(r, _)| r.access() == Access::RW));
+        let pre = PreRegs { ctrl: PRE_ENABLE, list_base: 0x7_0000_0040, ..PreRegs::default() };
+        let w = FrameRegs { pre, ..r }.writes();
+        assert_eq!(w.len(), 15 + 10 + CAMERA_WORDS);
+        assert!(w.contains(&(Reg::ListBaseHi, 7)) && w.contains(&(Reg::ListBaseLo, 0x40)));
+        let regs: Vec<Reg> = w.iter().map(|(r, _)| *r).collect();
+        let mut sorted = regs.clone();
+        sorted.sort_by_key(|r| r.offset());
+        assert_eq!(regs, sorted, "in address order");
+        let mut pre = pre;
+        pre.camera[3] = 0xdead_beef;
+        let on = FrameRegs { pre, ..r };
+        let mut file = [0u32; Reg::ALL.len()];
+        for (reg, v) in on.writes() {
+            file[reg.index()] = v;
+        }
+        assert_eq!(
+            FrameRegs::from_registers(|reg| file[reg.index()]),
+            on,
+            "writes and from_registers invert"
+        );
+    }
+
+    #[test]
+    fn preprocessing_bases_are_checked_only_when_enabled() {
+        let cfg = EngineConfig::default();
+        let pre = PreRegs { list_base: 0x1020, ..PreRegs::default() };
+        let off = FrameRegs { pre, ..FrameRegs::default() };
+        assert_eq!(off.check(&cfg), Ok(()));
+        let on = FrameRegs { pre: PreRegs { ctrl: PRE_ENABLE, ..pre }, ..off };
+        let e = on.check(&cfg).unwrap_err();
+        assert_eq!((e.field, e.align), ("LIST_BASE", 64));
     }
 }

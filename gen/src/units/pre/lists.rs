@@ -203,7 +203,7 @@ fn storage(m: &mut Module, cfg: &EngineConfig) {
 /// What enters the write queue: a full line (run), a partial line and a length (flush).
 fn pushes(m: &mut Module, cfg: &EngineConfig) {
     let (t, eb, ab) = (ta(cfg), entry_bits(cfg), cfg.axi_addr_bits);
-    let cap = cfg.table_capacity as u64;
+    let (cap, stride) = (cfg.table_capacity as u64, cfg.list_stride() as u64);
     let wq = wq_bundle(cfg);
     let lw = wq.width_of("data");
     m.blank();
@@ -252,7 +252,7 @@ fn pushes(m: &mut Module, cfg: &EngineConfig) {
         format!(
             "({} * {} + {}) << 3",
             zext("at_t", t, wide),
-            lit(wide, cap),
+            lit(wide, stride),
             zext("line_first", CNT_BITS, wide)
         ),
     );
