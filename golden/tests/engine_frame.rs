@@ -3,7 +3,8 @@
 //! pixels, the registers and the golden counters, for every whole-frame case.
 
 use neo_golden::engine::{
-    execute_frame, CaseScene, EngineCase, EngineConfig, EngineSession, Memory, Place, TileDescriptor,
+    execute_frame, CaseScene, Counter, EngineCase, EngineConfig, EngineSession, HostMode, Memory, Place,
+    TileDescriptor,
 };
 use neo_golden::scene::Scene;
 use neo_golden::shared::shared_file_for_test;
@@ -19,6 +20,9 @@ struct Seen {
     empty_tiles: usize,
     partial_tiles: usize,
     reused_entries: u64,
+    /// Scene mode: incoming entries the engine listed, and its preprocessing reads.
+    incoming: u64,
+    pre_read: u64,
 }
 
 /// Runs every frame of `session` through `execute_frame` and checks it against the plan.
@@ -34,6 +38,11 @@ fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
             panic!("frame {}: {m}", plan.frame);
         }
         assert_eq!(out.results, plan.expected.outcome.results, "frame {}", plan.frame);
+        if let Some(pre) = &plan.expected.pre {
+            seen.incoming += pre.lists.iter().map(|l| l.len() as u64).sum::<u64>();
+            seen.pre_read += out.counters.get(Counter::RdPre);
+            assert!(out.counters.get(Counter::WrPre) > 0, "frame {}: the engine wrote", plan.frame);
+        }
         let (w, h, tile) = (plan.regs.width, plan.regs.height, cfg.raster_config().tile);
         for d in &plan.expected.descriptors {
             let TileDescriptor { tile_x, tile_y, .. } = *d;
@@ -60,11 +69,15 @@ fn case(
     frames: usize,
     res: [u32; 2],
     base: &EngineConfig,
+    mode: HostMode,
 ) -> Seen {
     let (traj, cfg) = c.setup(scene, how, frames, res, base).expect("case setup");
-    let mut s = EngineSession::new(scene, traj, &cfg).expect("session");
+    let mut s = EngineSession::with_mode(scene, traj, &cfg, mode).expect("session");
     let seen = run(&mut s, &cfg);
-    assert_eq!(seen.frames, frames, "{}", c.name());
+    assert_eq!(seen.frames, frames, "{} ({mode:?})", c.name());
+    if mode == HostMode::Scene {
+        assert!(seen.incoming > 0 && seen.pre_read > 0, "{}: the engine preprocessed: {seen:?}", c.name());
+    }
     check_case(c, &seen, &cfg);
     seen
 }
@@ -104,7 +117,20 @@ fn reference_matches_pipeline_on_every_case_synthetic() {
     let how = CaseScene::synthetic();
     let base = small_config();
     for c in EngineCase::ALL {
-        case(&scene, &how, c, 3, [128, 128], &base);
+        case(&scene, &how, c, 3, [128, 128], &base, HostMode::Lists);
+    }
+}
+
+/// Scene mode: the reference preprocesses the baked scene from memory (feature words, incoming
+/// lists and their lengths, `RD_PRE` / `WR_PRE`) and must leave what the pipeline computed, on
+/// every case (reuse frames, a cut, an overflow, partial tiles) and with 1, 2 and 4 lanes.
+#[test]
+fn reference_preprocessing_matches_pipeline_on_every_case_synthetic() {
+    let (scene, _) = load_scene(CaseScene::SYNTHETIC, false).expect("synthetic scene");
+    let how = CaseScene::synthetic();
+    for (k, c) in EngineCase::ALL.into_iter().enumerate() {
+        let base = EngineConfig { pre_units: [1, 2, 4][k % 3], ..small_config() };
+        case(&scene, &how, c, 3, [128, 128], &base, HostMode::Scene);
     }
 }
 
@@ -116,7 +142,8 @@ fn reference_matches_pipeline_on_biker() {
     let (scene, _) = load_scene(path.to_str().expect("utf-8 path"), false).expect("biker");
     let how = CaseScene::biker();
     for c in EngineCase::ALL {
-        case(&scene, &how, c, 3, [256, 256], &small_config());
+        case(&scene, &how, c, 3, [256, 256], &small_config(), HostMode::Lists);
+        case(&scene, &how, c, 3, [256, 256], &small_config(), HostMode::Scene);
     }
 }
 

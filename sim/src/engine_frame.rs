@@ -545,7 +545,7 @@ mod tests {
         let lat = latency();
         let one = EngineConfig { sort_cores: 1, raster_cores: 1, ..lat.config.clone() };
         let two = EngineConfig { sort_cores: 2, ..one.clone() };
-        let trace = FrameTrace { tiles: vec![sort_tile(2048), sort_tile(2048)] };
+        let trace = FrameTrace { tiles: vec![sort_tile(2048), sort_tile(2048)], ..FrameTrace::default() };
         let p1 = EngineFrameModel::new(&one, &lat, PortTiming::IDEAL).unwrap().predict(&trace);
         let p2 = EngineFrameModel::new(&two, &lat, PortTiming::IDEAL).unwrap().predict(&trace);
         // Both sorts at once on two cores; the rasters share one core either way.

@@ -29,6 +29,18 @@
 //! longer tile overflows and writes nothing). The previous table of a tile is the engine's own
 //! write-back of the previous frame (nothing is copied).
 //!
+//! # Scene mode ([`HostMode::Scene`], [`EngineSession::from_scene`])
+//! The engine preprocesses the scene itself ([`super::PreRegs`]): the host writes the baked
+//! scene once (geometry records and f32 SH records, [`SceneLayout`]) and, each frame, only the
+//! descriptors (their `list_len` a canary the engine overwrites), and programs the camera.
+//! Frame `f` writes its feature words into feature arena `f % 2` (`FEAT_BASE`) and reads the
+//! previous frame's from the other (`PREV_FEAT_BASE`); tile `t`'s incoming list is at
+//! `LIST_BASE / 8 + t list_stride` and its next table at `table_bases[f % 2] / 8 + t
+//! table_capacity` (nothing depends on list lengths the host cannot know before the frame).
+//! `PRE_FRESH` is set exactly on the frames sorted from scratch. [`Expected`] then also holds
+//! the feature words, the lists and their lengths ([`super::expected::PreExpected`]) and the
+//! counters `RD_PRE` / `WR_PRE`.
+//!
 //! # Cuts and overflow
 //! Frame 0 and the trajectory's cuts are sorted from scratch (every tile's list is its current
 //! list). A tile that overflows has no next table, so the frame after a frame with an overflow
@@ -48,6 +60,8 @@ use crate::pipeline::{Formats, FrameOutput, Pipeline, PipelineConfig, Preprocess
 use crate::scene::Scene;
 use crate::sort::{DepthKeyCodec, SortEntry};
 use crate::trajectory::Trajectory;
+
+mod scene;
 
 /// A session the host cannot set up or continue.
 #[derive(Debug, thiserror::Error)]
@@ -72,6 +86,29 @@ pub enum SessionError {
     NoFrames,
 }
 
+/// How the host feeds the engine (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum HostMode {
+    /// The host writes every frame's incoming lists and feature words (golden's preprocessing);
+    /// the Preprocessing Engine is off.
+    #[default]
+    Lists,
+    /// The host writes the baked scene once; the engine preprocesses every frame.
+    Scene,
+}
+
+/// The regions of scene mode (byte addresses, 4 KiB aligned).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SceneLayout {
+    /// Geometry records (`GEO_BASE`).
+    pub geo_base: u64,
+    /// f32 SH records (`SH_BASE`).
+    pub sh_base: u64,
+    /// The two feature arenas: frame `f` writes `feat_bases[f % 2]` and reads the other
+    /// (`feat_bases[0]` is [`MemoryLayout::feat_base`]).
+    pub feat_bases: [u64; 2],
+}
+
 /// Where the host puts everything (byte addresses; see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemoryLayout {
@@ -91,6 +128,8 @@ pub struct MemoryLayout {
     pub list_base: u64,
     /// Bytes available for the incoming lists of one frame.
     pub list_bytes: u64,
+    /// Scene mode's regions (`None` in lists mode).
+    pub scene: Option<SceneLayout>,
 }
 
 const PAGE: u64 = 4096;
@@ -114,7 +153,7 @@ impl MemoryLayout {
         let scratch_base = region(cfg.sort_cores as u64 * 2 * cap * ENTRY_BYTES);
         let table_bases = [region(tiles * cap * ENTRY_BYTES), region(tiles * cap * ENTRY_BYTES)];
         let list_base = region(0);
-        let top = (1u64 << cfg.axi_addr_bits.min(64 - 1)).min(ENTRY_BYTES << cfg.addr_bits.min(32));
+        let top = address_top(cfg);
         if list_base >= top {
             return Err(SessionError::Layout(format!(
                 "{tiles} tiles, {gaussians} Gaussians and table_capacity {cap} need 0x{list_base:x} bytes before \
@@ -130,8 +169,15 @@ impl MemoryLayout {
             table_bases,
             list_base,
             list_bytes: top - list_base,
+            scene: None,
         })
     }
+}
+
+/// The first byte address the engine cannot reach (AXI address width; entry addresses are
+/// 32-bit descriptor fields of `addr_bits`).
+fn address_top(cfg: &EngineConfig) -> u64 {
+    (1u64 << cfg.axi_addr_bits.min(64 - 1)).min(ENTRY_BYTES << cfg.addr_bits.min(32))
 }
 
 /// One frame for the engine: the host's writes are already in the memory passed to
@@ -166,17 +212,39 @@ pub struct EngineSession<'s> {
     prev: Vec<Placed>,
     present: Vec<bool>,
     force_cut: bool,
+    mode: HostMode,
+    scene_written: bool,
 }
 
 impl<'s> EngineSession<'s> {
-    /// A session rendering `traj` (its cameras' resolution) of `scene` for engine `cfg`.
+    /// A session rendering `traj` (its cameras' resolution) of `scene` for engine `cfg`, the
+    /// host writing the lists and feature words ([`HostMode::Lists`]).
     pub fn new(scene: &'s Scene, traj: Trajectory, cfg: &EngineConfig) -> Result<Self, SessionError> {
+        Self::with_mode(scene, traj, cfg, HostMode::Lists)
+    }
+
+    /// [`EngineSession::new`] in scene mode: the engine preprocesses the baked scene
+    /// ([`HostMode::Scene`]).
+    pub fn from_scene(scene: &'s Scene, traj: Trajectory, cfg: &EngineConfig) -> Result<Self, SessionError> {
+        Self::with_mode(scene, traj, cfg, HostMode::Scene)
+    }
+
+    /// A session in `mode` (see the module docs).
+    pub fn with_mode(
+        scene: &'s Scene,
+        traj: Trajectory,
+        cfg: &EngineConfig,
+        mode: HostMode,
+    ) -> Result<Self, SessionError> {
         cfg.validate()?;
         let first = traj.frames.first().ok_or(SessionError::NoFrames)?;
         let pipeline = pipeline_for(scene, cfg, first.width, first.height)?;
         let [gx, gy] = pipeline.grid();
         let tiles = gx as u64 * gy as u64;
-        let layout = MemoryLayout::new(cfg, tiles, scene.len() as u64)?;
+        let layout = match mode {
+            HostMode::Lists => MemoryLayout::new(cfg, tiles, scene.len() as u64)?,
+            HostMode::Scene => MemoryLayout::for_scene(cfg, tiles, scene.len() as u64, scene.sh_degree)?,
+        };
         let session = EngineSession {
             cfg: cfg.clone(),
             traj,
@@ -187,10 +255,12 @@ impl<'s> EngineSession<'s> {
             prev: vec![Placed::default(); tiles as usize],
             present: vec![false; scene.len()],
             force_cut: false,
+            mode,
+            scene_written: false,
         };
         // The bases are the same every frame: refuse a map the engine cannot use up front.
         let cam = session.traj.frames[0].clone();
-        session.regs(0, &cam).check(cfg).map_err(|e| SessionError::Layout(e.to_string()))?;
+        session.regs(0, &cam, true).check(cfg).map_err(|e| SessionError::Layout(e.to_string()))?;
         Ok(session)
     }
 
@@ -214,6 +284,11 @@ impl<'s> EngineSession<'s> {
         self.prev.len()
     }
 
+    /// How the host feeds the engine.
+    pub fn mode(&self) -> HostMode {
+        self.mode
+    }
+
     /// Renders the next frame with the golden pipeline, writes the host's inputs for it into
     /// `mem` (which holds the engine's previous frame) and returns the plan; `None` after the
     /// last frame.
@@ -230,14 +305,20 @@ impl<'s> EngineSession<'s> {
                 out.stats.from_scratch
             )));
         }
-        let regs = self.regs(f, &cam);
+        let regs = self.regs(f, &cam, cut);
         regs.check(&self.cfg).map_err(|e| SessionError::Layout(e.to_string()))?;
-        let descriptors = self.write_lists(mem, f, cut, &prev_tables)?;
-        for (t, d) in descriptors.iter().enumerate() {
-            mem.write_descriptor(regs.desc_base, t as u64, d);
-        }
-        self.write_features(mem);
-        let expected = self.expected(mem, regs, descriptors, &prev_tables, &out);
+        let lists = self.incoming_lists(cut, &prev_tables);
+        let expected = match self.mode {
+            HostMode::Lists => {
+                let descriptors = self.write_lists(mem, f, cut, &lists)?;
+                for (t, d) in descriptors.iter().enumerate() {
+                    mem.write_descriptor(regs.desc_base, t as u64, d);
+                }
+                self.write_features(mem);
+                self.expected(mem, regs, descriptors, &prev_tables, &out)
+            }
+            HostMode::Scene => self.scene_frame(mem, regs, f, cut, lists, &prev_tables, &out)?,
+        };
         self.force_cut = expected.outcome.overflows > 0;
         for (t, d) in expected.descriptors.iter().enumerate() {
             self.prev[t] = Placed { addr: d.next as u64, len: expected.outcome.results[t].next_len };
@@ -245,8 +326,11 @@ impl<'s> EngineSession<'s> {
         Ok(Some(FramePlan { frame: f, from_scratch: cut, regs, expected }))
     }
 
-    fn regs(&self, f: usize, cam: &crate::camera::Camera) -> FrameRegs {
+    fn regs(&self, f: usize, cam: &crate::camera::Camera, cut: bool) -> FrameRegs {
         let l = &self.layout;
+        if let Some(s) = &l.scene {
+            return self.scene_regs(s, f, cam, cut);
+        }
         FrameRegs {
             frame: f as u32,
             tiles: self.prev.len() as u32,
@@ -261,13 +345,31 @@ impl<'s> EngineSession<'s> {
         }
     }
 
+    /// Every tile's incoming list of the frame the pipeline just rendered: its current list
+    /// (`cut`), or the entries of it not valid in the tile's previous table.
+    fn incoming_lists(&self, cut: bool, prev_tables: &[Vec<SortEntry>]) -> Vec<Vec<SortEntry>> {
+        self.pipeline
+            .current_lists()
+            .enumerate()
+            .map(|(t, current)| {
+                if cut {
+                    current.to_vec()
+                } else {
+                    let valid: std::collections::HashSet<u32> =
+                        prev_tables[t].iter().filter(|e| e.valid).map(|e| e.id).collect();
+                    current.iter().filter(|e| !valid.contains(&e.id)).copied().collect()
+                }
+            })
+            .collect()
+    }
+
     /// Writes every tile's incoming list (compact) and returns the descriptors.
     fn write_lists(
         &self,
         mem: &mut Memory,
         f: usize,
         cut: bool,
-        prev_tables: &[Vec<SortEntry>],
+        lists: &[Vec<SortEntry>],
     ) -> Result<Vec<TileDescriptor>, SessionError> {
         let fmt = self.cfg.format();
         let cap = self.cfg.table_capacity as u64;
@@ -276,20 +378,13 @@ impl<'s> EngineSession<'s> {
         let list_end = list_at + self.layout.list_bytes / ENTRY_BYTES;
         let mut next_at = self.layout.table_bases[f % 2] / ENTRY_BYTES;
         let mut out = Vec::with_capacity(self.prev.len());
-        for (t, current) in self.pipeline.current_lists().enumerate() {
-            let list: Vec<SortEntry> = if cut {
-                current.to_vec()
-            } else {
-                let valid: std::collections::HashSet<u32> =
-                    prev_tables[t].iter().filter(|e| e.valid).map(|e| e.id).collect();
-                current.iter().filter(|e| !valid.contains(&e.id)).copied().collect()
-            };
+        for (t, list) in lists.iter().enumerate() {
             if list_at + list.len() as u64 > list_end {
                 return Err(SessionError::Layout(format!(
                     "frame {f}: the incoming lists exceed the address space"
                 )));
             }
-            mem.write_entries(&fmt, list_at, &list);
+            mem.write_entries(&fmt, list_at, list);
             let prev = if cut { Placed::default() } else { self.prev[t] };
             let d = TileDescriptor {
                 tile_x: (t % gx) as u16,
@@ -367,7 +462,7 @@ impl<'s> EngineSession<'s> {
         let tiles = descriptors.len() as u64;
         o.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES * tiles);
         o.counters.add(Counter::WrResult, RESULT_BYTES * tiles);
-        Expected { regs, descriptors, tables, untouched, pixels, outcome: o, format: fmt, tile: rc.tile }
+        Expected { regs, descriptors, tables, untouched, pixels, outcome: o, format: fmt, tile: rc.tile, pre: None }
     }
 
     /// An overflowing tile's next region (filled with a canary now) and previous table.

@@ -10,6 +10,7 @@ pub mod expected;
 pub mod host;
 pub mod memory;
 pub mod plan;
+pub mod pre;
 mod pre_regs;
 pub mod reference;
 pub mod regs;
@@ -18,10 +19,11 @@ pub use cases::{CaseScene, EngineCase};
 pub use config::{
     ConfigError, EngineConfig, SchedulerPolicy, Topology, COMPLETION_QUEUE_DEPTH, ROUTING_FIFO_DEPTH,
 };
-pub use expected::{Expected, Mismatch, Place};
-pub use host::{EngineSession, FramePlan, MemoryLayout, SessionError};
+pub use expected::{Expected, Mismatch, Place, PreExpected};
+pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError};
 pub use memory::{Memory, TileDescriptor, TileResult};
 pub use plan::{run_command, tile_plan, TileCmd, TilePlan};
+pub use pre::{beats_spanned, preprocess_frame, PreWork};
 pub use reference::{
     execute_frame, execute_frame_traced, segment_work, FrameError, FrameOutcome, FrameTrace, RasterTrace,
     SegmentWork, TileTrace,

@@ -12,6 +12,7 @@
 
 use crate::camera::Camera;
 use crate::hwpre::camera_registers;
+use crate::hwpre::project::CameraIn;
 use serde::{Deserialize, Serialize};
 
 /// `PRE_CTRL` bit 0: preprocess the scene before the tile walk.
@@ -95,6 +96,21 @@ impl CameraWord {
         v[CAMERA_WORDS - 1] = r.grid[1] as u32;
         v
     }
+
+    /// The projection unit's camera inputs and the camera centre (the colour unit's) that the
+    /// words `v` program: the inverse of [`CameraWord::values`].
+    pub fn decode(v: &[u32; CAMERA_WORDS]) -> (CameraIn<f32, i32>, [f32; 3]) {
+        let f = |k: usize| f32::from_bits(v[k]);
+        let regs = CameraIn {
+            w2v: [[f(0), f(1), f(2)], [f(3), f(4), f(5)], [f(6), f(7), f(8)]],
+            translation: [f(9), f(10), f(11)],
+            focal: [f(15), f(16)],
+            lim: [f(17), f(18)],
+            principal: [f(19), f(20)],
+            grid: [v[CAMERA_WORDS - 2] as i32, v[CAMERA_WORDS - 1] as i32],
+        };
+        (regs, [f(12), f(13), f(14)])
+    }
 }
 
 /// The Preprocessing Engine's registers of one frame ([`super::FrameRegs::pre`]); the default
@@ -173,5 +189,9 @@ mod tests {
         assert_eq!(CameraWord(19).port(), "principal_x_i");
         assert!(CameraWord(21).is_integer() && !CameraWord(20).is_integer());
         assert_eq!(CameraWord::all().count(), CAMERA_WORDS);
+        let (back, back_pos) = CameraWord::decode(&v);
+        assert_eq!(back_pos, pos);
+        assert_eq!((back.w2v, back.translation, back.focal), (r.w2v, r.translation, r.focal));
+        assert_eq!((back.lim, back.principal, back.grid), (r.lim, r.principal, r.grid));
     }
 }

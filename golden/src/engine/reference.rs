@@ -16,6 +16,10 @@
 //!   and pixels outside the image (black) included;
 //! - a descriptor read (32 bytes) and a result write (8 bytes) per tile.
 //!
+//! With [`PRE_ENABLE`](super::PRE_ENABLE) the frame first runs the Preprocessing Engine
+//! ([`super::pre::preprocess_frame`]: feature words, incoming lists and their lengths, the
+//! counters `RD_PRE` and `WR_PRE`), then the tile walk as above.
+//!
 //! Which core runs a tile only moves its scratch buffers: the reference uses sorting core
 //! `t mod N` (the round-robin schedule) for tile `t`; the scratch contents are not part of the
 //! outcome.
@@ -25,6 +29,7 @@ use super::memory::{
     RESULT_BYTES,
 };
 use super::plan::{run_command, tile_plan, TilePlan};
+use super::pre::{preprocess_frame, PreWork};
 use super::regs::{Counter, Counters, FrameRegs, Reg, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
 use crate::raster::{raster_tile, SubtileWork};
@@ -119,6 +124,9 @@ pub fn execute_frame_traced(
 ) -> Result<(FrameOutcome, FrameTrace), FrameError> {
     let mut run = FrameRun::new(cfg, regs);
     let mut trace = FrameTrace::default();
+    if regs.pre.enabled() {
+        trace.pre = Some(preprocess_frame(cfg, regs, mem, &mut run.out.counters)?);
+    }
     for t in 0..regs.tiles as u64 {
         let d = mem.read_descriptor(regs.desc_base, t);
         run.out.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES);
@@ -137,6 +145,8 @@ pub fn execute_frame_traced(
 /// The work of one frame, tile by tile in descriptor order ([`execute_frame_traced`]).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct FrameTrace {
+    /// The Preprocessing Engine's work, when it ran ([`super::PreRegs::enabled`]).
+    pub pre: Option<PreWork>,
     /// One record per tile.
     pub tiles: Vec<TileTrace>,
 }

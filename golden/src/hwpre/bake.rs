@@ -112,6 +112,32 @@ pub struct BakedGeometry {
     pub k2: f32,
 }
 
+impl BakedGeometry {
+    /// The record as DRAM holds it ([`geometry_bytes`] bytes): the fields of
+    /// [`GEOMETRY_FIELDS`] in order, each f32 little-endian.
+    pub fn to_le_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(geometry_bytes() as usize);
+        for v in self.position.iter().chain(&self.cov3d).chain([&self.opacity, &self.k2]) {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out
+    }
+
+    /// The record of [`geometry_bytes`] bytes `b` ([`BakedGeometry::to_le_bytes`]).
+    ///
+    /// # Panics
+    /// When `b` is shorter than [`geometry_bytes`].
+    pub fn from_le_bytes(b: &[u8]) -> BakedGeometry {
+        let f = |k: usize| f32::from_le_bytes(b[4 * k..4 * k + 4].try_into().expect("4 bytes"));
+        BakedGeometry {
+            position: [f(0), f(1), f(2)],
+            cov3d: [f(3), f(4), f(5), f(6), f(7), f(8)],
+            opacity: f(9),
+            k2: f(10),
+        }
+    }
+}
+
 /// A baked scene (see the module doc).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Baked {

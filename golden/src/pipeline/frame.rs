@@ -229,6 +229,12 @@ impl<'s> Pipeline<'s> {
         self.grid
     }
 
+    /// The baked scene the hardware preprocessing runs on (`None` with
+    /// [`Preprocessing::Float`]).
+    pub fn baked(&self) -> Option<&Baked> {
+        self.baked.as_ref()
+    }
+
     /// The tables after the last frame's write-back (row-major tiles): the next frame's reused
     /// tables.
     pub fn tables(&self) -> impl Iterator<Item = &[SortEntry]> {

@@ -1,0 +1,218 @@
+//! Scene mode of the host session ([`HostMode::Scene`]): the memory map with the baked scene,
+//! two feature arenas and fixed-stride lists and tables, the Preprocessing Engine's registers,
+//! and what the frame must leave besides the tile walk's outputs (from the PIPELINE: its
+//! feature words, its incoming lists).
+
+use super::{
+    address_top, EngineSession, Expected, HostMode, MemoryLayout, SceneLayout, SessionError, PAGE,
+};
+use crate::camera::Camera;
+use crate::engine::expected::PreExpected;
+use crate::engine::memory::{
+    feature_to_bytes, feature_word_bits, Memory, TileDescriptor, DESCRIPTOR_BYTES, ENTRY_BYTES,
+    FEATURE_BYTES, PIXEL_BYTES, RESULT_BYTES,
+};
+use crate::engine::pre::{beats_spanned, LIST_LEN_OFFSET, LIST_LINE_BYTES};
+use crate::engine::regs::{CameraWord, Counter, FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
+use crate::engine::EngineConfig;
+use crate::hwpre::bake::{geometry_bytes, sh_bytes, Baked, ShPrecision};
+use crate::pipeline::FrameOutput;
+use crate::sort::SortEntry;
+
+/// What the host leaves in a descriptor's `list_len` (the engine must overwrite it).
+pub const LIST_LEN_CANARY: u32 = 0xA5A5_A5A5;
+
+impl MemoryLayout {
+    /// The scene-mode map (4 KiB-aligned regions, in this order): descriptors, results, frame
+    /// buffer, the two feature arenas, sort scratch, the two table arenas (`table_capacity`
+    /// entries per tile), geometry records, f32 SH records of degree `sh_degree`, incoming
+    /// lists (`list_stride` entries per tile). Refuses more tiles than `pre_max_tiles`.
+    pub fn for_scene(
+        cfg: &EngineConfig,
+        tiles: u64,
+        gaussians: u64,
+        sh_degree: u8,
+    ) -> Result<MemoryLayout, SessionError> {
+        if tiles > cfg.pre_max_tiles as u64 {
+            return Err(SessionError::Layout(format!(
+                "{tiles} tiles exceed pre_max_tiles {} (the list writer's tile count)",
+                cfg.pre_max_tiles
+            )));
+        }
+        let rc = cfg.raster_config();
+        let cap = cfg.table_capacity as u64;
+        let mut at = PAGE;
+        let mut region = |bytes: u64| {
+            let base = at;
+            at = (at + bytes).div_ceil(PAGE) * PAGE;
+            base
+        };
+        let desc_base = region(tiles * DESCRIPTOR_BYTES);
+        let result_base = region(tiles * RESULT_BYTES);
+        let fb_base = region(tiles * (rc.tile * rc.tile) as u64 * PIXEL_BYTES);
+        let feat_bases = [region(gaussians * FEATURE_BYTES), region(gaussians * FEATURE_BYTES)];
+        let scratch_base = region(cfg.sort_cores as u64 * 2 * cap * ENTRY_BYTES);
+        let table_bases = [region(tiles * cap * ENTRY_BYTES), region(tiles * cap * ENTRY_BYTES)];
+        let geo_base = region(gaussians * geometry_bytes() as u64);
+        let sh_base = region(gaussians * sh_bytes(sh_degree, ShPrecision::F32) as u64);
+        let list_bytes = tiles * cfg.list_stride() as u64 * ENTRY_BYTES;
+        let list_base = region(list_bytes);
+        let top = address_top(cfg);
+        if list_base + list_bytes > top {
+            return Err(SessionError::Layout(format!(
+                "{tiles} tiles, {gaussians} Gaussians and table_capacity {cap} need 0x{:x} bytes, above \
+                 the 0x{top:x} the address widths reach",
+                list_base + list_bytes
+            )));
+        }
+        Ok(MemoryLayout {
+            desc_base,
+            result_base,
+            fb_base,
+            feat_base: feat_bases[0],
+            scratch_base,
+            table_bases,
+            list_base,
+            list_bytes,
+            scene: Some(SceneLayout { geo_base, sh_base, feat_bases }),
+        })
+    }
+}
+
+impl EngineSession<'_> {
+    /// The baked scene (f32 SH: what the engine reads).
+    fn baked(&self) -> Result<&Baked, SessionError> {
+        let b = self.pipeline.baked().ok_or_else(|| {
+            SessionError::Inconsistent("scene mode needs the pipeline's hardware preprocessing".into())
+        })?;
+        if b.sh_precision != ShPrecision::F32 {
+            return Err(SessionError::Inconsistent("the engine reads f32 SH records".into()));
+        }
+        Ok(b)
+    }
+
+    /// Frame `f`'s registers in scene mode (`cut`: from scratch, [`PRE_FRESH`]).
+    pub(super) fn scene_regs(&self, s: &SceneLayout, f: usize, cam: &Camera, cut: bool) -> FrameRegs {
+        let l = &self.layout;
+        let sh_degree = self.pipeline.baked().map_or(0, |b| b.sh_degree as u32);
+        FrameRegs {
+            frame: f as u32,
+            tiles: self.prev.len() as u32,
+            width: cam.width,
+            height: cam.height,
+            desc_base: l.desc_base,
+            result_base: l.result_base,
+            feat_base: s.feat_bases[f % 2],
+            fb_base: l.fb_base,
+            scratch_base: l.scratch_base,
+            pre: PreRegs {
+                ctrl: PRE_ENABLE | if cut { PRE_FRESH } else { 0 },
+                gaussians: self.gaussians as u32,
+                sh_degree,
+                geo_base: s.geo_base,
+                sh_base: s.sh_base,
+                prev_feat_base: s.feat_bases[(f + 1) % 2],
+                list_base: l.list_base,
+                camera: CameraWord::values(cam, self.cfg.tile),
+            },
+        }
+    }
+
+    /// Writes the baked scene (once) and frame `f`'s descriptors (`list_len` a canary), and
+    /// returns what the frame must leave; `lists` are the tiles' incoming lists.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn scene_frame(
+        &mut self,
+        mem: &mut Memory,
+        regs: FrameRegs,
+        f: usize,
+        cut: bool,
+        lists: Vec<Vec<SortEntry>>,
+        prev_tables: &[Vec<SortEntry>],
+        out: &FrameOutput,
+    ) -> Result<Expected, SessionError> {
+        debug_assert_eq!(self.mode, HostMode::Scene);
+        if !self.scene_written {
+            let b = self.baked()?;
+            let geo: Vec<u8> = b.geometry.iter().flat_map(|g| g.to_le_bytes()).collect();
+            mem.write(regs.pre.geo_base, &geo);
+            let sh: Vec<u8> = b.sh.iter().flat_map(|w| w.to_le_bytes()).collect();
+            mem.write(regs.pre.sh_base, &sh);
+            self.scene_written = true;
+        }
+        let cap = self.cfg.table_capacity as u64;
+        let stride = self.cfg.list_stride() as u64;
+        let gx = self.pipeline.grid()[0] as usize;
+        let next_base = self.layout.table_bases[f % 2] / ENTRY_BYTES;
+        let descriptors: Vec<TileDescriptor> = lists
+            .iter()
+            .enumerate()
+            .map(|(t, list)| {
+                let prev = if cut { Default::default() } else { self.prev[t] };
+                TileDescriptor {
+                    tile_x: (t % gx) as u16,
+                    tile_y: (t / gx) as u16,
+                    from_scratch: cut,
+                    prev: prev.addr as u32,
+                    prev_len: prev.len,
+                    list: (regs.pre.list_base / ENTRY_BYTES + t as u64 * stride) as u32,
+                    list_len: list.len() as u32,
+                    next: (next_base + t as u64 * cap) as u32,
+                }
+            })
+            .collect();
+        for (t, d) in descriptors.iter().enumerate() {
+            mem.write_descriptor(regs.desc_base, t as u64, &TileDescriptor { list_len: LIST_LEN_CANARY, ..*d });
+        }
+        let mut e = self.expected(mem, regs, descriptors, prev_tables, out);
+        let ffmt = self.cfg.feature_format();
+        let features: Vec<[u8; 32]> =
+            (0..self.gaussians as u32).map(|i| feature_to_bytes(&ffmt, self.pipeline.feature(i))).collect();
+        let visible: Vec<u64> = (0..self.gaussians as u64).filter(|&i| self.pipeline.feature(i as u32).is_some()).collect();
+        let (rd, wr) = self.pre_traffic(&regs, &visible, &lists);
+        e.outcome.counters.add(Counter::RdPre, rd);
+        e.outcome.counters.add(Counter::WrPre, wr);
+        e.pre = Some(PreExpected {
+            features,
+            lists,
+            list_base: regs.pre.list_base,
+            list_stride: stride,
+            capacity: cap,
+            present_bit: feature_word_bits(&ffmt) - 1,
+        });
+        Ok(e)
+    }
+
+    /// The Preprocessing Engine's `(RD_PRE, WR_PRE)` bytes: the beats its transfers span
+    /// ([`beats_spanned`]) times the beat bytes. Reads: each lane's geometry stream, each
+    /// `visible` Gaussian's SH record and (unless fresh) previous feature word; writes: every
+    /// feature word, each tile's list lines (the first `table_capacity` entries) and length.
+    fn pre_traffic(&self, regs: &FrameRegs, visible: &[u64], lists: &[Vec<SortEntry>]) -> (u64, u64) {
+        let p = &regs.pre;
+        let beat = self.cfg.axi_data_bits as u64 / 8;
+        let span = |addr: u64, bytes: u64| beat * beats_spanned(addr, bytes, beat);
+        let gb = geometry_bytes() as u64;
+        let sh = sh_bytes(p.sh_degree as u8, ShPrecision::F32) as u64;
+        let mut rd = 0;
+        for lane in 0..self.cfg.pre_units {
+            let (first, count) = self.cfg.pre_lane_range(p.gaussians, lane);
+            rd += span(p.geo_base + gb * first as u64, gb * count as u64);
+        }
+        for &i in visible {
+            rd += span(p.sh_base + sh * i, sh);
+            if !p.fresh() {
+                rd += span(p.prev_feat_base + FEATURE_BYTES * i, FEATURE_BYTES);
+            }
+        }
+        let mut wr: u64 = (0..p.gaussians as u64).map(|i| span(regs.feat_base + FEATURE_BYTES * i, FEATURE_BYTES)).sum();
+        let stride = self.cfg.list_stride() as u64;
+        let per_line = LIST_LINE_BYTES / ENTRY_BYTES;
+        for (t, list) in lists.iter().enumerate() {
+            let base = p.list_base + ENTRY_BYTES * stride * t as u64;
+            let lines = (list.len() as u64).min(self.cfg.table_capacity as u64).div_ceil(per_line);
+            wr += (0..lines).map(|k| span(base + LIST_LINE_BYTES * k, LIST_LINE_BYTES)).sum::<u64>();
+            wr += span(regs.desc_base + DESCRIPTOR_BYTES * t as u64 + LIST_LEN_OFFSET, 4);
+        }
+        (rd, wr)
+    }
+}

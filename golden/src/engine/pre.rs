@@ -1,0 +1,202 @@
+//! The memory-level reference of the Preprocessing Engine ([`preprocess_frame`]): what a start
+//! with [`PRE_ENABLE`](super::PRE_ENABLE) does before the tile walk, from memory and the
+//! registers only ([`PreRegs`]).
+//!
+//! - Lane `p` takes Gaussians [`EngineConfig::pre_lane_range`] and reads their geometry
+//!   records ([`geometry_bytes`] each, Gaussian `i` at `GEO_BASE + geometry_bytes() i`) as one
+//!   stream; an empty lane reads nothing.
+//! - Each visible (not culled) Gaussian's f32 SH record (`sh_words = sh_bytes(degree, F32) / 4`
+//!   words at `SH_BASE + 4 sh_words i`) is read, one read per Gaussian; unless
+//!   [`PRE_FRESH`](super::PRE_FRESH), so is its previous feature word (`PREV_FEAT_BASE + 32 i`).
+//! - Every Gaussian's feature word is written at `FEAT_BASE + 32 i` (all zero when culled).
+//! - A visible Gaussian is appended to the incoming list of every tile where golden
+//!   [`incoming`] says it is incoming (every tile it enters when fresh). Tile `t`'s list is at
+//!   entry address `LIST_BASE / 8 + t list_stride`; only its first `table_capacity` entries
+//!   are written, as whole 64-byte lines (the slots of the last line past the length are 0); the
+//!   length (which keeps counting) goes into the descriptor's `list_len` (bytes 20..24 of
+//!   descriptor `t`), for every tile of the frame. The reference appends in Gaussian order (the
+//!   RTL's lanes interleave: the order within a list is free, the sort does not depend on it).
+//!
+//! Counters ([`Counter::RdPre`], [`Counter::WrPre`]): the AXI beats of `axi_data_bits / 8`
+//! bytes each transfer spans ([`beats_spanned`]) times the beat bytes: reads of the geometry
+//! streams, SH records and previous words; writes of the feature words, the list lines and one
+//! beat per length.
+
+use super::memory::{
+    feature_from_bytes, feature_to_bytes, Memory, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
+};
+use super::reference::FrameError;
+use super::regs::{CameraWord, Counter, Counters, FrameRegs, PreRegs};
+use super::EngineConfig;
+use crate::hwpre::bake::{geometry_bytes, sh_bytes, Baked, BakedGeometry, ShPrecision};
+use crate::hwpre::duplicate::{incoming, TouchRecord};
+use crate::hwpre::preprocess_one;
+use crate::hwpre::project::ProjectParams;
+use crate::sort::{DepthKeyCodec, SortEntry};
+use rayon::prelude::*;
+
+/// Bytes of a list line (the list writer's write unit).
+pub const LIST_LINE_BYTES: u64 = 64;
+
+/// Byte offset of `list_len` in a tile descriptor (the high half of word 2).
+pub const LIST_LEN_OFFSET: u64 = 20;
+
+/// Beats of `beat` bytes (aligned to `beat`) that the `bytes` bytes from byte address `addr`
+/// touch: an AXI transfer of them spans this many beats (0 for no byte).
+pub fn beats_spanned(addr: u64, bytes: u64, beat: u64) -> u64 {
+    if bytes == 0 {
+        return 0;
+    }
+    (addr + bytes - 1) / beat - addr / beat + 1
+}
+
+/// What the Preprocessing Engine did in one frame.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PreWork {
+    /// Gaussians not culled.
+    pub visible: u64,
+    /// Every tile's incoming list (in the reference's order: Gaussian, then tile row-major), at
+    /// its full length (the memory holds the first `table_capacity` entries).
+    pub lists: Vec<Vec<SortEntry>>,
+}
+
+/// The baked scene `regs` point at, decoded from `mem`: every geometry record and f32 SH
+/// record (the engine reads the SH records of visible Gaussians only; decoding them all here
+/// changes nothing).
+fn baked_from_memory(cfg: &EngineConfig, p: &PreRegs, mem: &Memory) -> Result<Baked, String> {
+    let degree = u8::try_from(p.sh_degree).ok().filter(|d| *d <= 3).ok_or_else(|| {
+        format!("SH_DEGREE {} is not 0 to 3", p.sh_degree)
+    })?;
+    let n = p.gaussians as u64;
+    let gb = geometry_bytes() as u64;
+    let mut geo = vec![0u8; (n * gb) as usize];
+    mem.read(p.geo_base, &mut geo);
+    let geometry = geo.chunks_exact(gb as usize).map(BakedGeometry::from_le_bytes).collect();
+    let shb = sh_bytes(degree, ShPrecision::F32) as u64;
+    let mut sh = vec![0u8; (n * shb) as usize];
+    mem.read(p.sh_base, &mut sh);
+    let sh = sh.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes"))).collect();
+    let fmt = cfg.feature_format();
+    Ok(Baked {
+        sh_degree: degree,
+        sh_precision: ShPrecision::F32,
+        cutoff: fmt.cutoff,
+        opacity_format: fmt.opacity,
+        geometry,
+        sh,
+    })
+}
+
+/// Runs the Preprocessing Engine of `cfg` for `regs` on `mem` (see the module docs), adding
+/// its golden counters to `counters`.
+pub fn preprocess_frame(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    mem: &mut Memory,
+    counters: &mut Counters,
+) -> Result<PreWork, FrameError> {
+    let p = &regs.pre;
+    let err = |problem: String| FrameError { tile: 0, problem: format!("preprocessing: {problem}") };
+    if regs.tiles as usize > cfg.pre_max_tiles {
+        return Err(err(format!("{} tiles exceed pre_max_tiles {}", regs.tiles, cfg.pre_max_tiles)));
+    }
+    let baked = baked_from_memory(cfg, p, mem).map_err(err)?;
+    let (cam, cam_pos) = CameraWord::decode(&p.camera);
+    let grid = cam.grid.map(|g| g.max(0) as u32);
+    if grid[0] as u64 * grid[1] as u64 > regs.tiles as u64 {
+        return Err(err(format!("the camera's tile grid {grid:?} has more tiles than TILES {}", regs.tiles)));
+    }
+    let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
+    let params = ProjectParams { feature: fmt, tile: cfg.tile };
+    let size = (grid[0] * cfg.tile, grid[1] * cfg.tile);
+    let beat = cfg.axi_data_bits as u64 / 8;
+    let fresh = p.fresh();
+    let n = p.gaussians as usize;
+    let feat_word = regs.feat_base / FEATURE_BYTES;
+    let prev_word = p.prev_feat_base / FEATURE_BYTES;
+    let sh_rec = baked.sh_per_gaussian() as u64 * 4;
+    let gb = geometry_bytes() as u64;
+    for lane in 0..cfg.pre_units {
+        let (first, count) = cfg.pre_lane_range(p.gaussians, lane);
+        let at = p.geo_base + gb * first as u64;
+        counters.add(Counter::RdPre, beat * beats_spanned(at, gb * count as u64, beat));
+    }
+    let now: Vec<_> = (0..n)
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|i| preprocess_one(&baked, &cam, cam_pos, &params, &DepthKeyCodec::Fp16, i))
+        .collect();
+    let mut lists = vec![Vec::new(); regs.tiles as usize];
+    let mut visible = 0;
+    for (i, h) in now.iter().enumerate() {
+        let w = feat_word + i as u64;
+        let word = feature_to_bytes(&fmt, h.as_ref().map(|h| &h.entry));
+        mem.write(FEATURE_BYTES * w, &word);
+        counters.add(Counter::WrPre, beat * beats_spanned(FEATURE_BYTES * w, FEATURE_BYTES, beat));
+        let Some(h) = h else { continue };
+        visible += 1;
+        let sh_at = p.sh_base + sh_rec * i as u64;
+        counters.add(Counter::RdPre, beat * beats_spanned(sh_at, sh_rec, beat));
+        let prev = if fresh {
+            None
+        } else {
+            let at = FEATURE_BYTES * (prev_word + i as u64);
+            counters.add(Counter::RdPre, beat * beats_spanned(at, FEATURE_BYTES, beat));
+            let mut b = [0u8; FEATURE_BYTES as usize];
+            mem.read(at, &mut b);
+            feature_from_bytes(&fmt, &b)
+        };
+        let record = TouchRecord { entry: prev.as_ref() };
+        for hit in incoming(&h.entry, record, &fmt, &rc, size, |_, _| fresh).into_iter().filter(|t| t.incoming) {
+            let t = (hit.tile_y * grid[0] + hit.tile_x) as usize;
+            lists[t].push(SortEntry::new(h.entry.depth_key, i as u32));
+        }
+    }
+    write_lists(cfg, regs, mem, &lists, counters);
+    Ok(PreWork { visible, lists })
+}
+
+/// Writes every tile's list (its first `table_capacity` entries, whole lines) and its length.
+fn write_lists(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    mem: &mut Memory,
+    lists: &[Vec<SortEntry>],
+    counters: &mut Counters,
+) {
+    let sfmt = cfg.format();
+    let beat = cfg.axi_data_bits as u64 / 8;
+    let per_line = (LIST_LINE_BYTES / ENTRY_BYTES) as usize;
+    for (t, list) in lists.iter().enumerate() {
+        let base = regs.pre.list_base + ENTRY_BYTES * (t * cfg.list_stride()) as u64;
+        let kept = &list[..list.len().min(cfg.table_capacity)];
+        for (k, line) in kept.chunks(per_line).enumerate() {
+            let mut bytes = [0u8; LIST_LINE_BYTES as usize];
+            for (slot, e) in bytes.chunks_exact_mut(ENTRY_BYTES as usize).zip(line) {
+                slot.copy_from_slice(&sfmt.pack(e).to_le_bytes());
+            }
+            let at = base + LIST_LINE_BYTES * k as u64;
+            mem.write(at, &bytes);
+            counters.add(Counter::WrPre, beat * beats_spanned(at, LIST_LINE_BYTES, beat));
+        }
+        let at = regs.desc_base + DESCRIPTOR_BYTES * t as u64 + LIST_LEN_OFFSET;
+        mem.write(at, &(list.len() as u32).to_le_bytes());
+        counters.add(Counter::WrPre, beat * beats_spanned(at, 4, beat));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn beats_spanned_counts_every_beat_touched() {
+        assert_eq!(beats_spanned(0, 0, 8), 0);
+        assert_eq!(beats_spanned(0, 8, 8), 1);
+        assert_eq!(beats_spanned(4, 8, 8), 2);
+        assert_eq!(beats_spanned(20, 4, 8), 1);
+        assert_eq!(beats_spanned(44, 44, 8), 6, "bytes 44..88: beats 5 to 10");
+        assert_eq!(beats_spanned(32, 32, 64), 1);
+        assert_eq!(beats_spanned(48, 32, 64), 2);
+    }
+}
