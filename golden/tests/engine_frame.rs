@@ -176,3 +176,59 @@ fn compare_names_the_first_corruption() {
     let m = plan.expected.compare_outcome(&wrong).expect("a counter mismatch");
     assert_eq!(m.field, "RD_FEAT");
 }
+
+/// Scene mode: the checker accepts a list in another order and names a corrupted feature word,
+/// list entry, zero slot, `list_len` and preprocessing counter.
+#[test]
+fn compare_names_preprocessing_corruption() {
+    let (scene, _) = load_scene("synthetic:outdoor?gaussians=5000&seed=3", false).expect("synthetic scene");
+    let cfg = small_config();
+    let (traj, cfg) =
+        EngineCase::Orbit.setup(&scene, &CaseScene::synthetic(), 2, [128, 64], &cfg).expect("case setup");
+    let mut s = EngineSession::from_scene(&scene, traj, &cfg).expect("session");
+    let mut mem = Memory::new();
+    let mut last = None;
+    while let Some(plan) = s.next_frame(&mut mem).expect("frame") {
+        let out = execute_frame(&cfg, &plan.regs, &mut mem).expect("frame");
+        assert_eq!(plan.expected.compare(&mem), None, "frame {}", plan.frame);
+        last = Some((plan, out));
+    }
+    let (plan, out) = last.expect("two frames");
+    assert!(!plan.from_scratch, "frame 1 reuses the tables");
+    let pre = plan.expected.pre.as_ref().expect("scene mode");
+    let fmt = cfg.format();
+    // A list of at least 3 entries, not a multiple of 8 (its last line has zero slots).
+    let (t, list) =
+        pre.lists.iter().enumerate().find(|(_, l)| l.len() > 2 && l.len() % 8 != 0).expect("a list");
+    let base = 8 * (pre.list_base / 8 + t as u64 * pre.list_stride);
+    let mut swapped = mem.clone();
+    let (a, b) = (swapped.read_u64(base), swapped.read_u64(base + 16));
+    swapped.write_u64(base, b);
+    swapped.write_u64(base + 16, a);
+    assert_eq!(plan.expected.compare(&swapped), None, "the order within a list is free");
+    let mut bad = mem.clone();
+    let e = list[0];
+    bad.write_u64(base, fmt.pack(&neo_golden::sort::SortEntry::new(e.key, e.id ^ 1)));
+    let m = plan.expected.compare(&bad).expect("a wrong list entry");
+    assert_eq!((m.tile, matches!(m.place, Place::List(_)), m.field), (Some(t as u64), true, "entry"), "{m}");
+    let mut bad = mem.clone();
+    let slot = base + 8 * list.len() as u64;
+    bad.write_u64(slot, 1);
+    let m = plan.expected.compare(&bad).expect("a non-zero slot");
+    assert_eq!((m.place, m.addr), (Place::List(list.len() as u64), slot), "{m}");
+    let mut bad = mem.clone();
+    let len_at = plan.regs.desc_base + 32 * t as u64 + 20;
+    bad.write_u32(len_at, bad.read_u32(len_at) + 1);
+    let m = plan.expected.compare(&bad).expect("a wrong list_len");
+    assert_eq!((m.place, m.field), (Place::Descriptor(2), "list_len"), "{m}");
+    let i = (0..pre.features.len()).find(|&i| pre.features[i] != [0; 32]).expect("a visible Gaussian");
+    let mut bad = mem.clone();
+    let at = plan.regs.feat_base + 32 * i as u64 + 8;
+    bad.write_u64(at, bad.read_u64(at) ^ 4);
+    let m = plan.expected.compare(&bad).expect("a wrong feature word");
+    assert_eq!((m.tile, m.place, m.field, m.addr), (None, Place::Feature(i as u32), "bits", at), "{m}");
+    let mut wrong = out.clone();
+    wrong.counters.add(Counter::RdPre, 8);
+    let m = plan.expected.compare_outcome(&wrong).expect("a counter mismatch");
+    assert_eq!(m.field, "RD_PRE");
+}

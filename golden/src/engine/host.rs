@@ -462,7 +462,17 @@ impl<'s> EngineSession<'s> {
         let tiles = descriptors.len() as u64;
         o.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES * tiles);
         o.counters.add(Counter::WrResult, RESULT_BYTES * tiles);
-        Expected { regs, descriptors, tables, untouched, pixels, outcome: o, format: fmt, tile: rc.tile, pre: None }
+        Expected {
+            regs,
+            descriptors,
+            tables,
+            untouched,
+            pixels,
+            outcome: o,
+            format: fmt,
+            tile: rc.tile,
+            pre: None,
+        }
     }
 
     /// An overflowing tile's next region (filled with a canary now) and previous table.
@@ -545,6 +555,32 @@ mod tests {
         assert_eq!(l.fb_base - l.result_base, PAGE, "80 results fit a page");
         assert_eq!(l.table_bases[1] - l.table_bases[0], 80 * 65536 * 8);
         assert_eq!(l.list_base + l.list_bytes, 1 << 32);
+    }
+
+    #[test]
+    fn scene_layout_adds_aligned_disjoint_scene_regions() {
+        let cfg = EngineConfig { table_capacity: 61, ..EngineConfig::default() };
+        let l = MemoryLayout::for_scene(&cfg, 80, 150_000, 3).expect("fits 4 GiB");
+        let s = l.scene.expect("scene regions");
+        assert_eq!(s.feat_bases[0], l.feat_base);
+        let bases = [
+            l.desc_base,
+            l.fb_base,
+            s.feat_bases[0],
+            s.feat_bases[1],
+            l.scratch_base,
+            l.table_bases[0],
+            l.table_bases[1],
+            s.geo_base,
+            s.sh_base,
+            l.list_base,
+        ];
+        assert!(bases.windows(2).all(|w| w[0] < w[1]) && bases.iter().all(|b| b % PAGE == 0));
+        assert!(s.feat_bases[1] - s.feat_bases[0] >= 150_000 * 32);
+        assert!(s.sh_base - s.geo_base >= 150_000 * 44 && l.list_base - s.sh_base >= 150_000 * 48 * 4);
+        assert_eq!(l.list_bytes, 80 * 64 * 8, "61 entries round up to 8 lines of 8");
+        let e = MemoryLayout::for_scene(&cfg, 4096, 10, 0).expect_err("too many tiles");
+        assert!(e.to_string().contains("pre_max_tiles 2048"), "{e}");
     }
 
     #[test]

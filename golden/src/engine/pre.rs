@@ -64,9 +64,10 @@ pub struct PreWork {
 /// record (the engine reads the SH records of visible Gaussians only; decoding them all here
 /// changes nothing).
 fn baked_from_memory(cfg: &EngineConfig, p: &PreRegs, mem: &Memory) -> Result<Baked, String> {
-    let degree = u8::try_from(p.sh_degree).ok().filter(|d| *d <= 3).ok_or_else(|| {
-        format!("SH_DEGREE {} is not 0 to 3", p.sh_degree)
-    })?;
+    let degree = u8::try_from(p.sh_degree)
+        .ok()
+        .filter(|d| *d <= 3)
+        .ok_or_else(|| format!("SH_DEGREE {} is not 0 to 3", p.sh_degree))?;
     let n = p.gaussians as u64;
     let gb = geometry_bytes() as u64;
     let mut geo = vec![0u8; (n * gb) as usize];
@@ -147,7 +148,9 @@ pub fn preprocess_frame(
             feature_from_bytes(&fmt, &b)
         };
         let record = TouchRecord { entry: prev.as_ref() };
-        for hit in incoming(&h.entry, record, &fmt, &rc, size, |_, _| fresh).into_iter().filter(|t| t.incoming) {
+        for hit in
+            incoming(&h.entry, record, &fmt, &rc, size, |_, _| fresh).into_iter().filter(|t| t.incoming)
+        {
             let t = (hit.tile_y * grid[0] + hit.tile_x) as usize;
             lists[t].push(SortEntry::new(h.entry.depth_key, i as u32));
         }

@@ -418,6 +418,17 @@ mod tests {
     #[test]
     fn bytes_follow_the_format() {
         assert_eq!(geometry_bytes(), 44);
+        let g = BakedGeometry {
+            position: [1.0, -2.0, 3.5],
+            cov3d: [0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
+            opacity: 0.75,
+            k2: f32::INFINITY,
+        };
+        let b = g.to_le_bytes();
+        assert_eq!(b.len(), geometry_bytes() as usize);
+        assert_eq!(b[4..8], (-2.0f32).to_le_bytes(), "position[1] is the record's second f32");
+        assert_eq!(b[36..40], 0.75f32.to_le_bytes(), "opacity after the 9 f32 of position and cov3d");
+        assert_eq!(BakedGeometry::from_le_bytes(&b), g);
         assert_eq!(sh_bytes(3, ShPrecision::F32), 192);
         assert_eq!(sh_bytes(0, ShPrecision::F16), 6);
         assert_eq!(bytes_per_gaussian(1, ShPrecision::F16), 44 + 24);

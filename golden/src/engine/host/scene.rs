@@ -3,9 +3,7 @@
 //! and what the frame must leave besides the tile walk's outputs (from the PIPELINE: its
 //! feature words, its incoming lists).
 
-use super::{
-    address_top, EngineSession, Expected, HostMode, MemoryLayout, SceneLayout, SessionError, PAGE,
-};
+use super::{address_top, EngineSession, Expected, HostMode, MemoryLayout, SceneLayout, SessionError, PAGE};
 use crate::camera::Camera;
 use crate::engine::expected::PreExpected;
 use crate::engine::memory::{
@@ -162,13 +160,18 @@ impl EngineSession<'_> {
             })
             .collect();
         for (t, d) in descriptors.iter().enumerate() {
-            mem.write_descriptor(regs.desc_base, t as u64, &TileDescriptor { list_len: LIST_LEN_CANARY, ..*d });
+            mem.write_descriptor(
+                regs.desc_base,
+                t as u64,
+                &TileDescriptor { list_len: LIST_LEN_CANARY, ..*d },
+            );
         }
         let mut e = self.expected(mem, regs, descriptors, prev_tables, out);
         let ffmt = self.cfg.feature_format();
         let features: Vec<[u8; 32]> =
             (0..self.gaussians as u32).map(|i| feature_to_bytes(&ffmt, self.pipeline.feature(i))).collect();
-        let visible: Vec<u64> = (0..self.gaussians as u64).filter(|&i| self.pipeline.feature(i as u32).is_some()).collect();
+        let visible: Vec<u64> =
+            (0..self.gaussians as u64).filter(|&i| self.pipeline.feature(i as u32).is_some()).collect();
         let (rd, wr) = self.pre_traffic(&regs, &visible, &lists);
         e.outcome.counters.add(Counter::RdPre, rd);
         e.outcome.counters.add(Counter::WrPre, wr);
@@ -204,7 +207,8 @@ impl EngineSession<'_> {
                 rd += span(p.prev_feat_base + FEATURE_BYTES * i, FEATURE_BYTES);
             }
         }
-        let mut wr: u64 = (0..p.gaussians as u64).map(|i| span(regs.feat_base + FEATURE_BYTES * i, FEATURE_BYTES)).sum();
+        let mut wr: u64 =
+            (0..p.gaussians as u64).map(|i| span(regs.feat_base + FEATURE_BYTES * i, FEATURE_BYTES)).sum();
         let stride = self.cfg.list_stride() as u64;
         let per_line = LIST_LINE_BYTES / ENTRY_BYTES;
         for (t, list) in lists.iter().enumerate() {
