@@ -13,6 +13,7 @@ use neo_gen::units::pre::lane::NAME;
 use neo_gen::EngineConfig;
 use neo_golden::camera::Camera;
 use neo_golden::engine::memory::{feature_from_bytes, feature_to_bytes, Memory, FEATURE_BYTES};
+use neo_golden::engine::CameraWord;
 use neo_golden::hwpre::bake::{geometry_bytes, sh_bytes, Baked, ShPrecision};
 use neo_golden::hwpre::duplicate::{incoming, TouchRecord};
 use neo_golden::hwpre::project::ProjectParams;
@@ -112,27 +113,9 @@ impl LaneBench {
         all_fresh: bool,
         range: LaneRange,
     ) -> Result<(), String> {
-        let (regs, cam_pos) = camera_registers(cam, self.cfg.tile);
-        let w2v = regs.w2v.iter().flatten().map(|v| v.to_bits());
-        let named: Vec<(String, u64)> = ["00", "01", "02", "10", "11", "12", "20", "21", "22"]
-            .iter()
-            .map(|s| format!("w2v_{s}_i"))
-            .zip(w2v)
-            .map(|(n, v)| (n, u64::from(v)))
-            .collect();
-        let xy = |p: &str, v: [f32; 2]| {
-            [(format!("{p}_x_i"), u64::from(v[0].to_bits())), (format!("{p}_y_i"), u64::from(v[1].to_bits()))]
-        };
-        let mut all = named;
-        for (k, c) in ["x", "y", "z"].iter().enumerate() {
-            all.push((format!("t_{c}_i"), u64::from(regs.translation[k].to_bits())));
-            all.push((format!("cam_{c}_i"), u64::from(cam_pos[k].to_bits())));
-        }
-        all.extend(xy("focal", regs.focal));
-        all.extend(xy("lim", regs.lim));
-        all.extend(xy("principal", regs.principal));
-        all.push(("grid_x_i".into(), regs.grid[0] as u32 as u64));
-        all.push(("grid_y_i".into(), regs.grid[1] as u32 as u64));
+        let words = CameraWord::values(cam, self.cfg.tile);
+        let mut all: Vec<(String, u64)> =
+            CameraWord::all().map(|c| (c.port(), u64::from(words[c.0 as usize]))).collect();
         all.push(("degree_i".into(), u64::from(baked.sh_degree)));
         let gb = u64::from(geometry_bytes());
         all.push(("geo_base_i".into(), GEO_BASE + gb * u64::from(range.first)));
@@ -277,13 +260,7 @@ fn word_at(mem: &Memory, base: u64, i: u32) -> [u8; 32] {
 pub fn scene_memory(baked: &Baked, range: LaneRange, prev: &[[u8; 32]]) -> Memory {
     assert_eq!(baked.sh_precision, ShPrecision::F32, "the lane reads f32 SH");
     let mut mem = Memory::new();
-    let words = |v: &mut Vec<u8>, w: &[f32]| v.extend(w.iter().flat_map(|x| x.to_le_bytes()));
-    let mut geo = Vec::with_capacity(baked.len() * geometry_bytes() as usize);
-    for g in &baked.geometry {
-        words(&mut geo, &g.position);
-        words(&mut geo, &g.cov3d);
-        words(&mut geo, &[g.opacity, g.k2]);
-    }
+    let geo: Vec<u8> = baked.geometry.iter().flat_map(|g| g.to_le_bytes()).collect();
     mem.write(GEO_BASE, &geo);
     let sh: Vec<u8> = baked.sh.iter().flat_map(|w| w.to_le_bytes()).collect();
     mem.write(SH_BASE, &sh);
