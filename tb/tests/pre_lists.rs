@@ -33,6 +33,30 @@ neo_tb::with_models! {
         });
     }
 
+    /// A capacity that is not a multiple of 8 entries: each tile's region is `list_stride` (the
+    /// capacity rounded up to whole lines), not `table_capacity`, so the lines of tile `t > 0`
+    /// start at `t * list_stride` (the writer used the capacity until e730618 and no bench saw
+    /// it); full tiles stop at 261 entries with 3 zero slots in their last line (the smallest
+    /// capacity is the chunk, 256).
+    #[test]
+    fn a_capacity_off_the_line_size_strides_by_whole_lines() {
+        let name = "a_capacity_off_the_line_size_strides_by_whole_lines";
+        let cfg = neo_gen::EngineConfig { table_capacity: 261, ..neo_tb::config() };
+        assert_ne!(cfg.list_stride(), cfg.table_capacity);
+        let mut bench = ListsBench::build(&cfg).unwrap();
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            // About 330 hits per tile (past the capacity), then about 6 (below it).
+            for (k, (grid, n)) in [([3u32, 2u32], 2000), ([7, 5], 200)].into_iter().enumerate() {
+                let check = Checker::new("neo_pre_lists", seed ^ k as u64);
+                let hits = random_hits(&cfg, &mut rng, grid, n);
+                let run = bench.run(grid, &hits, 90, AxiTiming::RANDOM, &check);
+                assert_eq!(run.hits, n as u64);
+            }
+        });
+    }
+
     #[test]
     fn a_list_longer_than_the_capacity_stops_there_and_counts_on() {
         let cfg = neo_tb::config();
