@@ -3,41 +3,72 @@
 // register map of golden engine::regs; unmapped words read 0 and ignore writes, responses always
 // OKAY. AW and W are buffered independently (either order); WSTRB selects bytes. See docs/rtl.md.
 module neo_engine_regs (
-  input  wire         clk_i,             // clock
-  input  wire         rst_ni,            // asynchronous reset, active low
-  input  wire         s_axil_awvalid_i,
-  output wire         s_axil_awready_o,
-  input  wire [11:0]  s_axil_awaddr_i,   // byte address (bits [1:0] ignored)
-  input  wire         s_axil_wvalid_i,
-  output wire         s_axil_wready_o,
-  input  wire [31:0]  s_axil_wdata_i,
-  input  wire [3:0]   s_axil_wstrb_i,    // byte enables
-  output wire         s_axil_bvalid_o,
-  input  wire         s_axil_bready_i,
-  output wire [1:0]   s_axil_bresp_o,    // always OKAY
-  input  wire         s_axil_arvalid_i,
-  output wire         s_axil_arready_o,
-  input  wire [11:0]  s_axil_araddr_i,   // byte address (bits [1:0] ignored)
-  output wire         s_axil_rvalid_o,
-  input  wire         s_axil_rready_i,
-  output wire [31:0]  s_axil_rdata_o,
-  output wire [1:0]   s_axil_rresp_o,    // always OKAY
-  output wire         start_o,           // one-cycle pulse: CTRL.start written while not busy
-  output wire [31:0]  frame_o,
-  output wire [31:0]  tiles_o,
-  output wire [15:0]  width_o,
-  output wire [15:0]  height_o,
-  output wire [31:0]  desc_base_o,
-  output wire [31:0]  result_base_o,
-  output wire [31:0]  feat_base_o,
-  output wire [31:0]  fb_base_o,
-  output wire [31:0]  scratch_base_o,
-  input  wire         busy_i,            // STATUS.busy
-  input  wire         done_i,            // STATUS.done
-  input  wire         overflow_i,        // STATUS.overflow
-  input  wire [31:0]  first_overflow_i,  // FIRST_OVERFLOW
-  input  wire [31:0]  overflows_i,       // OVERFLOWS
-  input  wire [959:0] counters_i         // counter k at [64k +: 64] (golden Counter::index)
+  input  wire          clk_i,             // clock
+  input  wire          rst_ni,            // asynchronous reset, active low
+  input  wire          s_axil_awvalid_i,
+  output wire          s_axil_awready_o,
+  input  wire [11:0]   s_axil_awaddr_i,   // byte address (bits [1:0] ignored)
+  input  wire          s_axil_wvalid_i,
+  output wire          s_axil_wready_o,
+  input  wire [31:0]   s_axil_wdata_i,
+  input  wire [3:0]    s_axil_wstrb_i,    // byte enables
+  output wire          s_axil_bvalid_o,
+  input  wire          s_axil_bready_i,
+  output wire [1:0]    s_axil_bresp_o,    // always OKAY
+  input  wire          s_axil_arvalid_i,
+  output wire          s_axil_arready_o,
+  input  wire [11:0]   s_axil_araddr_i,   // byte address (bits [1:0] ignored)
+  output wire          s_axil_rvalid_o,
+  input  wire          s_axil_rready_i,
+  output wire [31:0]   s_axil_rdata_o,
+  output wire [1:0]    s_axil_rresp_o,    // always OKAY
+  output wire          start_o,           // one-cycle pulse: CTRL.start written while not busy
+  output wire [31:0]   frame_o,
+  output wire [31:0]   tiles_o,
+  output wire [15:0]   width_o,
+  output wire [15:0]   height_o,
+  output wire [31:0]   desc_base_o,
+  output wire [31:0]   result_base_o,
+  output wire [31:0]   feat_base_o,
+  output wire [31:0]   fb_base_o,
+  output wire [31:0]   scratch_base_o,
+  output wire          pre_enable_o,
+  output wire          pre_fresh_o,
+  output wire [31:0]   gaussians_o,
+  output wire [31:0]   sh_degree_o,
+  output wire [31:0]   geo_base_o,
+  output wire [31:0]   sh_base_o,
+  output wire [31:0]   prev_feat_base_o,
+  output wire [31:0]   list_base_o,
+  output wire [31:0]   w2v_00_o,
+  output wire [31:0]   w2v_01_o,
+  output wire [31:0]   w2v_02_o,
+  output wire [31:0]   w2v_10_o,
+  output wire [31:0]   w2v_11_o,
+  output wire [31:0]   w2v_12_o,
+  output wire [31:0]   w2v_20_o,
+  output wire [31:0]   w2v_21_o,
+  output wire [31:0]   w2v_22_o,
+  output wire [31:0]   t_x_o,
+  output wire [31:0]   t_y_o,
+  output wire [31:0]   t_z_o,
+  output wire [31:0]   cam_x_o,
+  output wire [31:0]   cam_y_o,
+  output wire [31:0]   cam_z_o,
+  output wire [31:0]   focal_x_o,
+  output wire [31:0]   focal_y_o,
+  output wire [31:0]   lim_x_o,
+  output wire [31:0]   lim_y_o,
+  output wire [31:0]   principal_x_o,
+  output wire [31:0]   principal_y_o,
+  output wire [31:0]   grid_x_o,
+  output wire [31:0]   grid_y_o,
+  input  wire          busy_i,            // STATUS.busy
+  input  wire          done_i,            // STATUS.done
+  input  wire          overflow_i,        // STATUS.overflow
+  input  wire [31:0]   first_overflow_i,  // FIRST_OVERFLOW
+  input  wire [31:0]   overflows_i,       // OVERFLOWS
+  input  wire [1151:0] counters_i         // counter k at [64k +: 64] (golden Counter::index)
 );
 
   // Write channel: one-entry AW and W buffers, the B slot.
@@ -66,6 +97,40 @@ module neo_engine_regs (
   reg  [31:0] fb_base_hi_q;
   reg  [31:0] scratch_base_lo_q;
   reg  [31:0] scratch_base_hi_q;
+  reg  [31:0] pre_ctrl_q;
+  reg  [31:0] gaussians_q;
+  reg  [31:0] sh_degree_q;
+  reg  [31:0] geo_base_lo_q;
+  reg  [31:0] geo_base_hi_q;
+  reg  [31:0] sh_base_lo_q;
+  reg  [31:0] sh_base_hi_q;
+  reg  [31:0] prev_feat_base_lo_q;
+  reg  [31:0] prev_feat_base_hi_q;
+  reg  [31:0] list_base_lo_q;
+  reg  [31:0] list_base_hi_q;
+  reg  [31:0] w2v_00_q;
+  reg  [31:0] w2v_01_q;
+  reg  [31:0] w2v_02_q;
+  reg  [31:0] w2v_10_q;
+  reg  [31:0] w2v_11_q;
+  reg  [31:0] w2v_12_q;
+  reg  [31:0] w2v_20_q;
+  reg  [31:0] w2v_21_q;
+  reg  [31:0] w2v_22_q;
+  reg  [31:0] t_x_q;
+  reg  [31:0] t_y_q;
+  reg  [31:0] t_z_q;
+  reg  [31:0] cam_x_q;
+  reg  [31:0] cam_y_q;
+  reg  [31:0] cam_z_q;
+  reg  [31:0] focal_x_q;
+  reg  [31:0] focal_y_q;
+  reg  [31:0] lim_x_q;
+  reg  [31:0] lim_y_q;
+  reg  [31:0] principal_x_q;
+  reg  [31:0] principal_y_q;
+  reg  [31:0] grid_x_q;
+  reg  [31:0] grid_y_q;
 
   wire aw_take;
   assign aw_take = s_axil_awvalid_i & ~aw_full_q;
@@ -108,6 +173,74 @@ module neo_engine_regs (
   assign we_scratch_base_lo = wr_fire & (aw_addr_q == 10'd14);
   wire we_scratch_base_hi;
   assign we_scratch_base_hi = wr_fire & (aw_addr_q == 10'd15);
+  wire we_pre_ctrl;
+  assign we_pre_ctrl = wr_fire & (aw_addr_q == 10'd18);
+  wire we_gaussians;
+  assign we_gaussians = wr_fire & (aw_addr_q == 10'd19);
+  wire we_sh_degree;
+  assign we_sh_degree = wr_fire & (aw_addr_q == 10'd20);
+  wire we_geo_base_lo;
+  assign we_geo_base_lo = wr_fire & (aw_addr_q == 10'd21);
+  wire we_geo_base_hi;
+  assign we_geo_base_hi = wr_fire & (aw_addr_q == 10'd22);
+  wire we_sh_base_lo;
+  assign we_sh_base_lo = wr_fire & (aw_addr_q == 10'd23);
+  wire we_sh_base_hi;
+  assign we_sh_base_hi = wr_fire & (aw_addr_q == 10'd24);
+  wire we_prev_feat_base_lo;
+  assign we_prev_feat_base_lo = wr_fire & (aw_addr_q == 10'd25);
+  wire we_prev_feat_base_hi;
+  assign we_prev_feat_base_hi = wr_fire & (aw_addr_q == 10'd26);
+  wire we_list_base_lo;
+  assign we_list_base_lo = wr_fire & (aw_addr_q == 10'd27);
+  wire we_list_base_hi;
+  assign we_list_base_hi = wr_fire & (aw_addr_q == 10'd28);
+  wire we_w2v_00;
+  assign we_w2v_00 = wr_fire & (aw_addr_q == 10'd29);
+  wire we_w2v_01;
+  assign we_w2v_01 = wr_fire & (aw_addr_q == 10'd30);
+  wire we_w2v_02;
+  assign we_w2v_02 = wr_fire & (aw_addr_q == 10'd31);
+  wire we_w2v_10;
+  assign we_w2v_10 = wr_fire & (aw_addr_q == 10'd32);
+  wire we_w2v_11;
+  assign we_w2v_11 = wr_fire & (aw_addr_q == 10'd33);
+  wire we_w2v_12;
+  assign we_w2v_12 = wr_fire & (aw_addr_q == 10'd34);
+  wire we_w2v_20;
+  assign we_w2v_20 = wr_fire & (aw_addr_q == 10'd35);
+  wire we_w2v_21;
+  assign we_w2v_21 = wr_fire & (aw_addr_q == 10'd36);
+  wire we_w2v_22;
+  assign we_w2v_22 = wr_fire & (aw_addr_q == 10'd37);
+  wire we_t_x;
+  assign we_t_x = wr_fire & (aw_addr_q == 10'd38);
+  wire we_t_y;
+  assign we_t_y = wr_fire & (aw_addr_q == 10'd39);
+  wire we_t_z;
+  assign we_t_z = wr_fire & (aw_addr_q == 10'd40);
+  wire we_cam_x;
+  assign we_cam_x = wr_fire & (aw_addr_q == 10'd41);
+  wire we_cam_y;
+  assign we_cam_y = wr_fire & (aw_addr_q == 10'd42);
+  wire we_cam_z;
+  assign we_cam_z = wr_fire & (aw_addr_q == 10'd43);
+  wire we_focal_x;
+  assign we_focal_x = wr_fire & (aw_addr_q == 10'd44);
+  wire we_focal_y;
+  assign we_focal_y = wr_fire & (aw_addr_q == 10'd45);
+  wire we_lim_x;
+  assign we_lim_x = wr_fire & (aw_addr_q == 10'd46);
+  wire we_lim_y;
+  assign we_lim_y = wr_fire & (aw_addr_q == 10'd47);
+  wire we_principal_x;
+  assign we_principal_x = wr_fire & (aw_addr_q == 10'd48);
+  wire we_principal_y;
+  assign we_principal_y = wr_fire & (aw_addr_q == 10'd49);
+  wire we_grid_x;
+  assign we_grid_x = wr_fire & (aw_addr_q == 10'd50);
+  wire we_grid_y;
+  assign we_grid_y = wr_fire & (aw_addr_q == 10'd51);
 
   // Read decode (golden Reg::offset / Counter::offset): unmapped and write-only words read 0.
   reg  [31:0] r_data_d;
@@ -164,6 +297,108 @@ module neo_engine_regs (
       end
       10'd17: begin
         r_data_d = overflows_i;
+      end
+      10'd18: begin
+        r_data_d = pre_ctrl_q;
+      end
+      10'd19: begin
+        r_data_d = gaussians_q;
+      end
+      10'd20: begin
+        r_data_d = sh_degree_q;
+      end
+      10'd21: begin
+        r_data_d = geo_base_lo_q;
+      end
+      10'd22: begin
+        r_data_d = geo_base_hi_q;
+      end
+      10'd23: begin
+        r_data_d = sh_base_lo_q;
+      end
+      10'd24: begin
+        r_data_d = sh_base_hi_q;
+      end
+      10'd25: begin
+        r_data_d = prev_feat_base_lo_q;
+      end
+      10'd26: begin
+        r_data_d = prev_feat_base_hi_q;
+      end
+      10'd27: begin
+        r_data_d = list_base_lo_q;
+      end
+      10'd28: begin
+        r_data_d = list_base_hi_q;
+      end
+      10'd29: begin
+        r_data_d = w2v_00_q;
+      end
+      10'd30: begin
+        r_data_d = w2v_01_q;
+      end
+      10'd31: begin
+        r_data_d = w2v_02_q;
+      end
+      10'd32: begin
+        r_data_d = w2v_10_q;
+      end
+      10'd33: begin
+        r_data_d = w2v_11_q;
+      end
+      10'd34: begin
+        r_data_d = w2v_12_q;
+      end
+      10'd35: begin
+        r_data_d = w2v_20_q;
+      end
+      10'd36: begin
+        r_data_d = w2v_21_q;
+      end
+      10'd37: begin
+        r_data_d = w2v_22_q;
+      end
+      10'd38: begin
+        r_data_d = t_x_q;
+      end
+      10'd39: begin
+        r_data_d = t_y_q;
+      end
+      10'd40: begin
+        r_data_d = t_z_q;
+      end
+      10'd41: begin
+        r_data_d = cam_x_q;
+      end
+      10'd42: begin
+        r_data_d = cam_y_q;
+      end
+      10'd43: begin
+        r_data_d = cam_z_q;
+      end
+      10'd44: begin
+        r_data_d = focal_x_q;
+      end
+      10'd45: begin
+        r_data_d = focal_y_q;
+      end
+      10'd46: begin
+        r_data_d = lim_x_q;
+      end
+      10'd47: begin
+        r_data_d = lim_y_q;
+      end
+      10'd48: begin
+        r_data_d = principal_x_q;
+      end
+      10'd49: begin
+        r_data_d = principal_y_q;
+      end
+      10'd50: begin
+        r_data_d = grid_x_q;
+      end
+      10'd51: begin
+        r_data_d = grid_y_q;
       end
       10'd64: begin
         r_data_d = counters_i[0 +: 32];
@@ -255,6 +490,24 @@ module neo_engine_regs (
       10'd93: begin
         r_data_d = counters_i[928 +: 32];
       end
+      10'd94: begin
+        r_data_d = counters_i[960 +: 32];
+      end
+      10'd95: begin
+        r_data_d = counters_i[992 +: 32];
+      end
+      10'd96: begin
+        r_data_d = counters_i[1024 +: 32];
+      end
+      10'd97: begin
+        r_data_d = counters_i[1056 +: 32];
+      end
+      10'd98: begin
+        r_data_d = counters_i[1088 +: 32];
+      end
+      10'd99: begin
+        r_data_d = counters_i[1120 +: 32];
+      end
       default: begin
       end
     endcase
@@ -285,6 +538,40 @@ module neo_engine_regs (
       fb_base_hi_q <= 32'd0;
       scratch_base_lo_q <= 32'd0;
       scratch_base_hi_q <= 32'd0;
+      pre_ctrl_q <= 32'd0;
+      gaussians_q <= 32'd0;
+      sh_degree_q <= 32'd0;
+      geo_base_lo_q <= 32'd0;
+      geo_base_hi_q <= 32'd0;
+      sh_base_lo_q <= 32'd0;
+      sh_base_hi_q <= 32'd0;
+      prev_feat_base_lo_q <= 32'd0;
+      prev_feat_base_hi_q <= 32'd0;
+      list_base_lo_q <= 32'd0;
+      list_base_hi_q <= 32'd0;
+      w2v_00_q <= 32'd0;
+      w2v_01_q <= 32'd0;
+      w2v_02_q <= 32'd0;
+      w2v_10_q <= 32'd0;
+      w2v_11_q <= 32'd0;
+      w2v_12_q <= 32'd0;
+      w2v_20_q <= 32'd0;
+      w2v_21_q <= 32'd0;
+      w2v_22_q <= 32'd0;
+      t_x_q <= 32'd0;
+      t_y_q <= 32'd0;
+      t_z_q <= 32'd0;
+      cam_x_q <= 32'd0;
+      cam_y_q <= 32'd0;
+      cam_z_q <= 32'd0;
+      focal_x_q <= 32'd0;
+      focal_y_q <= 32'd0;
+      lim_x_q <= 32'd0;
+      lim_y_q <= 32'd0;
+      principal_x_q <= 32'd0;
+      principal_y_q <= 32'd0;
+      grid_x_q <= 32'd0;
+      grid_y_q <= 32'd0;
     end else begin
       if (aw_take) begin
         aw_full_q <= 1'b1;
@@ -351,6 +638,108 @@ module neo_engine_regs (
       if (we_scratch_base_hi) begin
         scratch_base_hi_q <= (scratch_base_hi_q & ~w_mask) | (w_data_q & w_mask);
       end
+      if (we_pre_ctrl) begin
+        pre_ctrl_q <= (pre_ctrl_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_gaussians) begin
+        gaussians_q <= (gaussians_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_sh_degree) begin
+        sh_degree_q <= (sh_degree_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_geo_base_lo) begin
+        geo_base_lo_q <= (geo_base_lo_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_geo_base_hi) begin
+        geo_base_hi_q <= (geo_base_hi_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_sh_base_lo) begin
+        sh_base_lo_q <= (sh_base_lo_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_sh_base_hi) begin
+        sh_base_hi_q <= (sh_base_hi_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_prev_feat_base_lo) begin
+        prev_feat_base_lo_q <= (prev_feat_base_lo_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_prev_feat_base_hi) begin
+        prev_feat_base_hi_q <= (prev_feat_base_hi_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_list_base_lo) begin
+        list_base_lo_q <= (list_base_lo_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_list_base_hi) begin
+        list_base_hi_q <= (list_base_hi_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_00) begin
+        w2v_00_q <= (w2v_00_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_01) begin
+        w2v_01_q <= (w2v_01_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_02) begin
+        w2v_02_q <= (w2v_02_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_10) begin
+        w2v_10_q <= (w2v_10_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_11) begin
+        w2v_11_q <= (w2v_11_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_12) begin
+        w2v_12_q <= (w2v_12_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_20) begin
+        w2v_20_q <= (w2v_20_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_21) begin
+        w2v_21_q <= (w2v_21_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_w2v_22) begin
+        w2v_22_q <= (w2v_22_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_t_x) begin
+        t_x_q <= (t_x_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_t_y) begin
+        t_y_q <= (t_y_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_t_z) begin
+        t_z_q <= (t_z_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_cam_x) begin
+        cam_x_q <= (cam_x_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_cam_y) begin
+        cam_y_q <= (cam_y_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_cam_z) begin
+        cam_z_q <= (cam_z_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_focal_x) begin
+        focal_x_q <= (focal_x_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_focal_y) begin
+        focal_y_q <= (focal_y_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_lim_x) begin
+        lim_x_q <= (lim_x_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_lim_y) begin
+        lim_y_q <= (lim_y_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_principal_x) begin
+        principal_x_q <= (principal_x_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_principal_y) begin
+        principal_y_q <= (principal_y_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_grid_x) begin
+        grid_x_q <= (grid_x_q & ~w_mask) | (w_data_q & w_mask);
+      end
+      if (we_grid_y) begin
+        grid_y_q <= (grid_y_q & ~w_mask) | (w_data_q & w_mask);
+      end
     end
   end
 
@@ -372,6 +761,37 @@ module neo_engine_regs (
   assign feat_base_o = feat_base_lo_q;
   assign fb_base_o = fb_base_lo_q;
   assign scratch_base_o = scratch_base_lo_q;
+  assign pre_enable_o = pre_ctrl_q[0];
+  assign pre_fresh_o = pre_ctrl_q[1];
+  assign gaussians_o = gaussians_q;
+  assign sh_degree_o = sh_degree_q[31:0];
+  assign geo_base_o = geo_base_lo_q;
+  assign sh_base_o = sh_base_lo_q;
+  assign prev_feat_base_o = prev_feat_base_lo_q;
+  assign list_base_o = list_base_lo_q;
+  assign w2v_00_o = w2v_00_q;
+  assign w2v_01_o = w2v_01_q;
+  assign w2v_02_o = w2v_02_q;
+  assign w2v_10_o = w2v_10_q;
+  assign w2v_11_o = w2v_11_q;
+  assign w2v_12_o = w2v_12_q;
+  assign w2v_20_o = w2v_20_q;
+  assign w2v_21_o = w2v_21_q;
+  assign w2v_22_o = w2v_22_q;
+  assign t_x_o = t_x_q;
+  assign t_y_o = t_y_q;
+  assign t_z_o = t_z_q;
+  assign cam_x_o = cam_x_q;
+  assign cam_y_o = cam_y_q;
+  assign cam_z_o = cam_z_q;
+  assign focal_x_o = focal_x_q;
+  assign focal_y_o = focal_y_q;
+  assign lim_x_o = lim_x_q;
+  assign lim_y_o = lim_y_q;
+  assign principal_x_o = principal_x_q;
+  assign principal_y_o = principal_y_q;
+  assign grid_x_o = grid_x_q;
+  assign grid_y_o = grid_y_q;
   // Word addressed: the byte lanes of the addresses are not decoded.
   wire unused_addr_lsbs;
   assign unused_addr_lsbs = ^{s_axil_awaddr_i[1:0], s_axil_araddr_i[1:0]};

@@ -7,6 +7,7 @@ module neo_pre_lists (
   input  wire        start_i,       // pulse: clear the counters of tiles 0 .. tiles_i, then take hits
   input  wire        flush_i,       // pulse: no more hits; write the partial lines and the lengths
   output wire        busy_o,        // from start_i to the last write's B after flush_i
+  output wire        run_o,         // taking hits: a flush_i now is taken (not while clearing)
   input  wire [31:0] tiles_i,       // tiles of the frame (at most pre_max_tiles)
   input  wire [9:0]  grid_x_i,      // tile columns
   input  wire [31:0] list_base_i,   // byte address of tile 0's list (64-byte aligned)
@@ -284,5 +285,6 @@ module neo_pre_lists (
   wire unused_rsp;
   assign unused_rsp = ^{m_axi_arready_i, m_axi_rvalid_i, m_axi_rid_i, m_axi_rdata_i, m_axi_rresp_i, m_axi_rlast_i};
   assign busy_o = ~in_idle | wq_valid | ~wr_idle;
+  assign run_o = in_run;
 
 endmodule

@@ -13,7 +13,14 @@ fn configs() -> Vec<(&'static str, EngineConfig)> {
     let base = EngineConfig::default();
     vec![
         ("default 16 + 4, 4 ports", base.clone()),
-        ("2 + 1, 2 ports", EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..base.clone() }),
+        (
+            "2 + 1, 2 ports, 1 preprocessing lane (the CI engine)",
+            EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, pre_units: 1, ..base.clone() },
+        ),
+        (
+            "2 + 1, 2 ports, 2 preprocessing lanes",
+            EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, pre_units: 2, ..base.clone() },
+        ),
         ("1 + 1, 1 port", EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 1, ..base.clone() }),
         (
             "2 + 1, 4 ports (one client a port)",
@@ -60,7 +67,19 @@ fn the_engine_glue_is_latch_free() {
         assert_eq!(n(neo_gen::units::sort_core::NAME), cfg.sort_cores as u64, "{what}");
         assert_eq!(n(neo_gen::units::raster_core::NAME), cfg.raster_cores as u64, "{what}");
         assert_eq!(n(&mux), cfg.mem_channels as u64, "{what}");
+        assert_eq!(n(neo_gen::units::pre::engine::NAME), 1, "{what}");
         let m = coarse_synth_stats(&files_for(&cfg, &mux), &mux).unwrap_or_else(|e| panic!("{what}: {e}"));
         assert_eq!(m.latches, 0, "{what}: {mux}: {:?}", m.cells_by_type);
+        // The Preprocessing Engine's own logic: the lanes and the list writer as black boxes.
+        let pre = neo_gen::units::pre::engine::NAME;
+        let boxes = neo_gen::units::pre::engine::SUBMODULES;
+        let p = coarse_glue_synth_stats(&files_for(&cfg, pre), pre, boxes)
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert_eq!(p.latches, 0, "{what}: {pre}: {:?}", p.cells_by_type);
+        assert_eq!(
+            p.cells_by_type.get(neo_gen::units::pre::lane::NAME).copied(),
+            Some(cfg.pre_units as u64),
+            "{what}"
+        );
     }
 }

@@ -176,6 +176,9 @@ pub fn hierarchical_boxes(cfg: &EngineConfig, top: &str) -> Option<Vec<String>> 
                 .collect(),
         );
     }
+    if top == pre::engine::NAME {
+        return Some(pre::engine::SUBMODULES.iter().map(|s| s.to_string()).collect());
+    }
     if top == engine::NAME {
         let mut boxes: Vec<String> = engine::SUBMODULES.iter().map(|s| s.to_string()).collect();
         boxes.push(engine_mux(cfg));

@@ -8,6 +8,9 @@
 //!   `u_bridge`; memory client `1 + i`;
 //! - `g_raster[j]`: Rasterization Core `u_core` and its AXI4 bridge `u_bridge`; memory client
 //!   `1 + N + j`;
+//! - `u_pre` (`neo_pre_engine`): the Preprocessing Engine, run before the frame controller when
+//!   `PRE_CTRL.enable` is set (its `done_o` starts `u_ctrl`); its managers `q` are memory clients
+//!   `1 + N + M + q` (`g_pre_client[q]` moves them between its packed buses and the client buses);
 //! - `g_port[k]`: the port mux `u_mux` of AXI4 manager port `m{k}_axi_*`.
 //!
 //! Client `c` is served by port `c mod K` in slot `c div K`; every port's mux has
@@ -15,12 +18,12 @@
 //! The client buses `cl_<signal>` hold slot `s` of port `k` at index `k P + s`.
 
 use super::axi;
-use super::{engine_regs, frame_ctrl, perf_counters, raster_core, sort_core, sort_seq};
+use super::{engine_regs, frame_ctrl, perf_counters, pre, raster_core, sort_core, sort_seq};
 use crate::emit::expr::lit;
 use crate::emit::{Instance, Item, Module};
 use crate::interface::Dir;
 use neo_golden::engine::memory::{DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES, RESULT_BYTES};
-use neo_golden::engine::regs::{Counter, COUNTERS};
+use neo_golden::engine::regs::{CameraWord, Counter, COUNTERS};
 use neo_golden::engine::EngineConfig;
 
 /// Module name.
@@ -36,6 +39,7 @@ pub const SUBMODULES: &[&str] = &[
     axi::sort_bridge::NAME,
     raster_core::NAME,
     axi::raster_bridge::NAME,
+    pre::engine::NAME,
 ];
 
 /// The engine's memory clients and ports.
@@ -45,6 +49,8 @@ pub struct Clients {
     pub sort: usize,
     /// Raster cores `M`.
     pub raster: usize,
+    /// The Preprocessing Engine's managers `Q` (`2 pre_units + 1`).
+    pub pre: usize,
     /// AXI4 ports `K`.
     pub ports: usize,
 }
@@ -52,11 +58,24 @@ pub struct Clients {
 impl Clients {
     /// The clients of `cfg`'s engine.
     pub fn of(cfg: &EngineConfig) -> Clients {
-        Clients { sort: cfg.sort_cores, raster: cfg.raster_cores, ports: cfg.mem_channels }
+        let c = Clients {
+            sort: cfg.sort_cores,
+            raster: cfg.raster_cores,
+            pre: pre::engine::managers(cfg),
+            ports: cfg.mem_channels,
+        };
+        debug_assert_eq!(c.count(), cfg.memory_clients());
+        c
     }
 
-    /// Clients `C = 1 + N + M` (the frame controller, the sort bridges, the raster bridges).
+    /// Clients `C = 1 + N + M + Q` (the frame controller, the sort bridges, the raster bridges,
+    /// the Preprocessing Engine's managers).
     pub fn count(&self) -> usize {
+        1 + self.sort + self.raster + self.pre
+    }
+
+    /// The first client of the Preprocessing Engine, `1 + N + M`.
+    pub fn first_pre(&self) -> usize {
         1 + self.sort + self.raster
     }
 
@@ -104,8 +123,11 @@ pub fn module(cfg: &EngineConfig) -> Module {
         "Neo engine: {} Sorting Cores, {} Rasterization Cores, {} AXI4 manager ports (m<k>_axi_*), an",
         cl.sort, cl.raster, cl.ports
     ));
-    m.doc("AXI4-Lite control port (s_axil_*). Per tile: conventional sort of the incoming list, DPS of the");
-    m.doc("previous table, merge-with-delete, rasterisation with the table write-back. See docs/rtl.md.");
+    m.doc("AXI4-Lite control port (s_axil_*). A frame: preprocessing (when PRE_CTRL.enable), then per tile:");
+    m.doc(
+        "conventional sort of the incoming list, DPS of the previous table, merge-with-delete, rasterisation",
+    );
+    m.doc("with the table write-back. See docs/rtl.md.");
     m.clock_reset();
     control_ports(&mut m, cfg);
     for k in 0..cl.ports {
@@ -117,6 +139,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     control(&mut m, cfg, &cl);
     sort_cores(&mut m, cfg, &cl);
     raster_cores(&mut m, cfg, &cl);
+    preprocessing(&mut m, cfg, &cl);
     ports(&mut m, cfg, &cl);
     counters(&mut m, cfg, &cl);
     m
@@ -191,6 +214,7 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         c.push((format!("{r}_o"), r.to_string()));
     }
     c.extend(BASES.iter().map(|b| (format!("{b}_base_o"), format!("{b}_base"))));
+    c.extend(pre_registers(m, cfg));
     for s in ["busy", "done", "overflow"] {
         c.push((format!("{s}_i"), format!("frame_{s}")));
     }
@@ -198,6 +222,14 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         c.push((format!("{s}_i"), s.to_string()));
     }
     m.instance(engine_regs::NAME, "u_regs", c);
+    m.blank();
+    m.comment("A start goes to the Preprocessing Engine when PRE_CTRL.enable, and its done starts the walk.");
+    m.comment("STATUS: busy from the start to the walk's end; the walk's done (held) hidden until then.");
+    m.wire("pre_busy", 1).wire("pre_done", 1).wire("ctrl_busy", 1).wire("ctrl_done", 1);
+    m.wire_assign("pre_start", 1, "start & pre_enable");
+    m.wire_assign("ctrl_start", 1, "pre_enable ? pre_done : start");
+    m.assign("frame_busy", "pre_busy | ctrl_busy");
+    m.assign("frame_done", "ctrl_done & ~pre_busy & ~start");
     m.assign("busy_o", "frame_busy");
     m.assign("done_o", "frame_done");
 
@@ -220,14 +252,14 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         m.wire(wire_of(e), *w);
     }
     let mut c: Vec<(String, String)> = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
-    c.push(pair("start_i", "start"));
+    c.push(pair("start_i", "ctrl_start"));
     for r in ["frame", "tiles", "width", "height"] {
         c.push((format!("{r}_i"), r.to_string()));
     }
     c.extend(BASES.iter().map(|b| (format!("{b}_base_i"), format!("{b}_base"))));
-    for s in ["busy", "done", "overflow"] {
-        c.push((format!("{s}_o"), format!("frame_{s}")));
-    }
+    c.push(pair("busy_o", "ctrl_busy"));
+    c.push(pair("done_o", "ctrl_done"));
+    c.push(pair("overflow_o", "frame_overflow"));
     for s in ["first_overflow", "overflows"] {
         c.push((format!("{s}_o"), s.to_string()));
     }
@@ -246,6 +278,97 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     }
     c.extend(events.iter().map(|(e, _, _)| (e.clone(), wire_of(e).to_string())));
     m.instance(frame_ctrl::NAME, "u_ctrl", c);
+}
+
+/// The Preprocessing Engine's register wires (`pre_<output>`), declared; the connections of
+/// `u_regs`'s outputs to them.
+fn pre_registers(m: &mut Module, cfg: &EngineConfig) -> Vec<(String, String)> {
+    let regs = engine_regs::module(cfg);
+    let mut c = Vec::new();
+    for (port, _, w) in pre_register_ports(&regs) {
+        let net = pre_register_net(&port);
+        m.wire(net.clone(), w);
+        c.push((port, net));
+    }
+    c
+}
+
+/// `u_regs`'s outputs for the Preprocessing Engine: the PRE_CTRL bits, GAUSSIANS, SH_DEGREE, the
+/// four bases and the camera words.
+fn pre_register_ports(regs: &Module) -> Vec<(String, bool, u32)> {
+    let mut v: Vec<(String, bool, u32)> = Vec::new();
+    for p in ["pre_enable_o", "pre_fresh_o", "gaussians_o", "sh_degree_o", "geo_base_o", "sh_base_o"] {
+        v.extend(ports_of(regs, p));
+    }
+    v.extend(ports_of(regs, "prev_feat_base_o"));
+    v.extend(ports_of(regs, "list_base_o"));
+    for c in CameraWord::all() {
+        v.extend(ports_of(regs, &engine_regs::camera_port(c)));
+    }
+    v
+}
+
+/// The engine's wire of `u_regs` output `port`: `pre_enable`, `pre_gaussians`, `pre_w2v_00`, ...
+fn pre_register_net(port: &str) -> String {
+    let base = wire_of(port);
+    if base.starts_with("pre_") {
+        base.to_string()
+    } else {
+        format!("pre_{base}")
+    }
+}
+
+/// `u_pre`, the Preprocessing Engine, and `g_pre_client[q]`: its managers on the client buses.
+fn preprocessing(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
+    let (q, k, p) = (cl.pre as u32, cl.ports, cl.slots());
+    let sigs = axi::signals(cfg);
+    m.blank();
+    m.comment(format!(
+        "Preprocessing Engine: its {q} managers on packed buses pre_<signal> (manager q at [q*W +: W])."
+    ));
+    for s in &sigs {
+        m.wire(format!("pre_{}", s.name), q * s.width).vector(format!("pre_{}", s.name));
+    }
+    let mut c: Vec<(String, String)> = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    c.push(pair("start_i", "pre_start"));
+    c.push(pair("busy_o", "pre_busy"));
+    c.push(pair("done_o", "pre_done"));
+    for (name, _) in pre::engine::camera_inputs(cfg) {
+        let reg_port =
+            if name == "degree_i" { "sh_degree_o".to_string() } else { format!("{}_o", wire_of(&name)) };
+        c.push((name, pre_register_net(&reg_port)));
+    }
+    for (port, net) in [
+        ("fresh_i", "pre_fresh"),
+        ("gaussians_i", "pre_gaussians"),
+        ("geo_base_i", "pre_geo_base"),
+        ("sh_base_i", "pre_sh_base"),
+        ("feat_base_i", "feat_base"),
+        ("prev_base_i", "pre_prev_feat_base"),
+        ("list_base_i", "pre_list_base"),
+        ("desc_base_i", "desc_base"),
+        ("tiles_i", "tiles"),
+    ] {
+        c.push(pair(port, net));
+    }
+    for s in &sigs {
+        c.push((axi::port_name("m_axi_", s, true), format!("pre_{}", s.name)));
+    }
+    m.instance(pre::engine::NAME, "u_pre", c);
+    let c0 = cl.first_pre();
+    let pos = format!("((q + {c0}) % {k}) * {p} + (q + {c0}) / {k}");
+    let items = sigs
+        .iter()
+        .map(|s| {
+            let (cl_bus, pre_bus) = (
+                format!("cl_{}[({pos})*{w} +: {w}]", s.name, w = s.width),
+                format!("pre_{}[q*{w} +: {w}]", s.name, w = s.width),
+            );
+            let (lhs, rhs) = if s.from_manager { (cl_bus, pre_bus) } else { (pre_bus, cl_bus) };
+            Item::Assign { lhs, rhs }
+        })
+        .collect();
+    m.gen_for("q", q, "g_pre_client", items);
 }
 
 /// The register pairs holding byte addresses.
@@ -403,6 +526,9 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.comment("Performance counters: each one's increment this cycle (golden engine::regs::Counter).");
     m.wire("inc", iw * COUNTERS as u32);
     let pixels = u64::from(cfg.subtile) * PIXEL_BYTES;
+    let (q, beat) = (cl.pre as u32, u64::from(cfg.axi_data_bits / 8));
+    m.wire_assign("pre_r_beat", q, "pre_rvalid & pre_rready");
+    m.wire_assign("pre_w_beat", q, "pre_wvalid & pre_wready");
     let bytes = |v: &str, count: u32, b: u64| format!("({}) * {}", popcount(v, count, iw), lit(iw, b));
     let ev = |e: &str| format!("ev_{e}");
     let events = ports_of(&frame_ctrl::module(cfg), "ev_");
@@ -431,7 +557,9 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
             Counter::WrTable => bytes("ras_wr_table", mm, ENTRY_BYTES),
             Counter::WrPixel => bytes("ras_wr_pixels", mm, pixels),
             Counter::WrResult => bytes(&ev("result_written"), 1, RESULT_BYTES),
-            Counter::PreBusy | Counter::RdPre | Counter::WrPre => lit(iw, 0),
+            Counter::PreBusy => format!("{{{}, pre_busy}}", lit(iw - 1, 0)),
+            Counter::RdPre => bytes("pre_r_beat", q, beat),
+            Counter::WrPre => bytes("pre_w_beat", q, beat),
         };
         m.assign(format!("inc[{}*{iw} +: {iw}]", c.index()), rhs);
     }

@@ -31,6 +31,7 @@ use neo_golden::engine::regs::{
     Access, Counter, Reg, ADDR_BITS, COUNTERS, COUNTER_BASE, CTRL_START, DATA_BITS, STATUS_BUSY, STATUS_DONE,
     STATUS_OVERFLOW,
 };
+use neo_golden::engine::regs::{CameraWord, PRE_ENABLE, PRE_FRESH};
 use neo_golden::engine::EngineConfig;
 
 /// Module name.
@@ -111,7 +112,29 @@ fn outputs(cfg: &EngineConfig) -> Vec<(String, u32, String)> {
     ] {
         out.push((name.to_string(), a, base(lo, hi)));
     }
+    let ctrl = storage(Reg::PreCtrl);
+    out.push(("pre_enable_o".into(), 1, format!("{ctrl}[{}]", PRE_ENABLE.trailing_zeros())));
+    out.push(("pre_fresh_o".into(), 1, format!("{ctrl}[{}]", PRE_FRESH.trailing_zeros())));
+    out.push(("gaussians_o".into(), DATA_BITS, storage(Reg::Gaussians)));
+    let db = crate::units::pre::engine::degree_bits(cfg);
+    out.push(("sh_degree_o".into(), db, slice(&storage(Reg::ShDegree), db - 1, 0)));
+    for (name, lo, hi) in [
+        ("geo_base_o", Reg::GeoBaseLo, Reg::GeoBaseHi),
+        ("sh_base_o", Reg::ShBaseLo, Reg::ShBaseHi),
+        ("prev_feat_base_o", Reg::PrevFeatBaseLo, Reg::PrevFeatBaseHi),
+        ("list_base_o", Reg::ListBaseLo, Reg::ListBaseHi),
+    ] {
+        out.push((name.to_string(), a, base(lo, hi)));
+    }
+    for c in CameraWord::all() {
+        out.push((camera_port(c), DATA_BITS, storage(Reg::Camera(c))));
+    }
     out
+}
+
+/// The output carrying camera word `c`: its name in lower case, `_o`.
+pub fn camera_port(c: CameraWord) -> String {
+    format!("{}_o", c.name().to_ascii_lowercase())
 }
 
 /// The control port for `cfg`.

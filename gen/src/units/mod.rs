@@ -19,6 +19,10 @@
 //! | `neo_pre_color` | Preprocessing: colour unit (SH degree 0-3, from golden's graph) | run time |
 //! | `neo_pre_project` | Preprocessing: projection unit (from golden's graph) | run time |
 //! | `neo_pre_dup`   | Preprocessing: duplication unit (tiles entered, incoming flag) | run time |
+//! | `neo_pre_fetch` | Preprocessing: record fetch unit (streams, gathers; the read window) | run time |
+//! | `neo_pre_lane`  | Preprocessing: one lane (fetch, projection, colour, duplication, feature words) | run time |
+//! | `neo_pre_lists` | Preprocessing: the incoming-list writer                  | run time |
+//! | `neo_pre_engine` | the Preprocessing Engine: lanes, hit arbiter, list writer | in `neo_engine` |
 //! | `neo_perf_counter` | one 64-bit performance counter                       | no        |
 //! | `neo_perf_counters` | the engine's performance counters                   | yes       |
 //! | `neo_engine_regs` | engine control port: AXI4-Lite register map           | yes       |
@@ -92,7 +96,15 @@ pub fn top_modules() -> &'static [&'static str] {
 /// instantiates as black boxes, each checked as its own top). (The engine, which has its own
 /// gates, is not listed.)
 pub fn run_time_tops() -> &'static [&'static str] {
-    &[pre::dup::NAME, pre::COLOR_NAME, pre::PROJECT_NAME, pre::fetch::NAME, pre::lane::NAME, pre::lists::NAME]
+    &[
+        pre::dup::NAME,
+        pre::COLOR_NAME,
+        pre::PROJECT_NAME,
+        pre::fetch::NAME,
+        pre::lane::NAME,
+        pre::lists::NAME,
+        pre::engine::NAME,
+    ]
 }
 
 /// Every module of the configuration, leaves first.
@@ -144,6 +156,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(pre::project_module(cfg));
     all.push(pre::lane::module(cfg));
     all.push(pre::lists::module(cfg));
+    all.push(pre::engine::module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }

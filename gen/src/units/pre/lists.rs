@@ -12,7 +12,7 @@
 //! - **Phases** (`phase_q`): `start_i` clears the counters of tiles `0 .. tiles_i` (one a cycle);
 //!   then hits are taken; `flush_i` (no more hits) walks the tiles again, writing each partial
 //!   line (entries past the length read 0) and each length; `busy_o` falls when every write's B
-//!   is back.
+//!   is back. `run_o` says hits are taken (and a `flush_i` would be).
 //! - **Storage**: per tile a 32-bit counter (`u_cnt`) and the line being filled, one memory per
 //!   entry slot (`g_slot[s].u_line`: entry `s` of each tile's line, slots 0 to 6);
 //!   `pre_max_tiles` tiles. A hit for slot 7 sends the line (with the new entry) to the write
@@ -80,6 +80,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.input_c("start_i", 1, "pulse: clear the counters of tiles 0 .. tiles_i, then take hits");
     m.input_c("flush_i", 1, "pulse: no more hits; write the partial lines and the lengths");
     m.output_c("busy_o", 1, "from start_i to the last write's B after flush_i");
+    m.output_c("run_o", 1, "taking hits: a flush_i now is taken (not while clearing)");
     m.input_c("tiles_i", 32, "tiles of the frame (at most pre_max_tiles)");
     m.input_c("grid_x_i", tb, "tile columns");
     m.input_c("list_base_i", ab, "byte address of tile 0's list (64-byte aligned)");
@@ -331,4 +332,5 @@ fn writer(m: &mut Module, cfg: &EngineConfig) {
         "^{m_axi_arready_i, m_axi_rvalid_i, m_axi_rid_i, m_axi_rdata_i, m_axi_rresp_i, m_axi_rlast_i}",
     );
     m.assign("busy_o", "~in_idle | wq_valid | ~wr_idle");
+    m.assign("run_o", "in_run");
 }

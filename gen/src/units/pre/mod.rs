@@ -4,6 +4,7 @@
 
 pub mod datapath;
 pub mod dup;
+pub mod engine;
 pub mod fetch;
 pub mod fifo;
 pub mod lane;
