@@ -84,6 +84,32 @@ impl EngineModel {
     }
 }
 
+/// The transactions each memory client may have in flight, `(reads, writes)`, in client order
+/// (`EngineConfig::memory_clients`): the frame controller and the bridges `axi_outstanding`
+/// each; the Preprocessing Engine's managers (client `1 + N + M + q`): lane `p`'s two ports
+/// (`q = 2 p`, `2 p + 1`) read `pre_outstanding` bursts and write `axi_outstanding`, the list
+/// writer (`q = 2 P`) `pre_outstanding` each.
+pub fn client_limits(cfg: &EngineConfig) -> Vec<(usize, usize)> {
+    let (a, p) = (cfg.axi_outstanding, cfg.pre_outstanding);
+    let mut v = vec![(a, a); 1 + cfg.sort_cores + cfg.raster_cores];
+    v.extend((0..2 * cfg.pre_units).map(|_| (p, a)));
+    v.push((p, p));
+    debug_assert_eq!(v.len(), cfg.memory_clients());
+    v
+}
+
+/// The transactions in flight each AXI port may carry, `(reads, writes)`: the sums of its
+/// clients' limits ([`client_limits`]; client `c` on port `c mod mem_channels`).
+pub fn port_limits(cfg: &EngineConfig) -> Vec<(usize, usize)> {
+    let k = cfg.mem_channels;
+    let mut ports = vec![(0, 0); k];
+    for (c, (r, w)) in client_limits(cfg).into_iter().enumerate() {
+        ports[c % k].0 += r;
+        ports[c % k].1 += w;
+    }
+    ports
+}
+
 /// Memory timing and stimulus of a run.
 #[derive(Clone, Copy, Debug)]
 pub struct RunOptions {
@@ -145,11 +171,11 @@ impl EngineRig {
         let m = &engine.model;
         let axi: Vec<AxiBinding> =
             (0..k).map(|p| AxiBinding::bind(m, &format!("m{p}_axi_"), true)).collect::<Result<_, _>>()?;
-        let out = engine.cfg.axi_outstanding;
-        let clients = 1 + engine.cfg.sort_cores + engine.cfg.raster_cores;
-        let per_port = clients.div_ceil(k);
-        let checkers = (0..k)
-            .map(|p| AxiChecker::new(p, &format!("m{p}_axi"), out * per_port, out * per_port))
+        let limits = port_limits(&engine.cfg);
+        let checkers = limits
+            .iter()
+            .enumerate()
+            .map(|(p, &(reads, writes))| AxiChecker::new(p, &format!("m{p}_axi"), reads, writes))
             .collect();
         let mut rng = Rng::new(seed);
         let lite = AxilManager::bind(m, "s_axil_", rng.fork(1))?;

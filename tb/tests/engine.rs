@@ -19,7 +19,7 @@ fn models_present() {
 }
 
 neo_tb::with_models! {
-use neo_golden::engine::{CaseScene, Counter, EngineCase, EngineConfig, EngineSession};
+use neo_golden::engine::{CaseScene, Counter, EngineCase, EngineConfig, EngineSession, HostMode};
 use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
 use neo_sim::latency::Latency;
 use neo_golden::scene::Scene;
@@ -80,6 +80,19 @@ fn run_case(scene: &Scene, how: &CaseScene, c: EngineCase, frames: usize, res: [
     run_case_with(scene, how, c, frames, res, RunOptions::default(), seed).iter().map(|f| f.rtl_cycles).collect()
 }
 
+/// Runs every frame of `case` behind the hostile memory on an engine derived from `base`, the
+/// host in `mode`; panics at the first mismatch.
+fn run_case_in(
+    scene: &Scene,
+    how: &CaseScene,
+    c: EngineCase,
+    (frames, res): (usize, [u32; 2]),
+    (base, mode): (&EngineConfig, HostMode),
+    seed: u64,
+) -> Vec<FrameCheck> {
+    run_case_full(scene, how, c, (frames, res), (base, mode), RunOptions::default(), seed)
+}
+
 /// Runs every frame of `case` behind a memory of `opts.timing` and returns each frame's check;
 /// panics at the first mismatch.
 fn run_case_with(
@@ -91,8 +104,21 @@ fn run_case_with(
     opts: RunOptions,
     seed: u64,
 ) -> Vec<FrameCheck> {
-    let (traj, cfg) = c.setup(scene, how, frames, res, &ci_config()).expect("case setup");
-    let mut session = EngineSession::new(scene, traj, &cfg).expect("session");
+    run_case_full(scene, how, c, (frames, res), (&ci_config(), HostMode::Lists), opts, seed)
+}
+
+/// [`run_case_with`] on an engine derived from `base`, the host in `mode`.
+fn run_case_full(
+    scene: &Scene,
+    how: &CaseScene,
+    c: EngineCase,
+    (frames, res): (usize, [u32; 2]),
+    (base, mode): (&EngineConfig, HostMode),
+    opts: RunOptions,
+    seed: u64,
+) -> Vec<FrameCheck> {
+    let (traj, cfg) = c.setup(scene, how, frames, res, base).expect("case setup");
+    let mut session = EngineSession::with_mode(scene, traj, &cfg, mode).expect("session");
     let format = neo_tb::waves::requested_format();
     let waves = format.map(|f| {
         neo_tb::waves::target_dir().join("waves").join(format!("engine_{}.{}", c.name(), f.extension()))
@@ -126,6 +152,16 @@ fn run_case_with(
             error_pct(p.sort_busy, r.counters.get(Counter::SortBusy)),
             error_pct(p.raster_busy, r.counters.get(Counter::RasterBusy)),
         );
+        if mode == HostMode::Scene {
+            println!(
+                "case {} frame {}: preprocessing busy {} cycles, read {} B, wrote {} B",
+                c.name(),
+                r.frame,
+                r.counters.get(Counter::PreBusy),
+                r.counters.get(Counter::RdPre),
+                r.counters.get(Counter::WrPre),
+            );
+        }
         let check = FrameCheck {
             from_scratch: r.from_scratch,
             rtl_cycles: r.rtl_cycles,
@@ -172,6 +208,35 @@ fn synthetic_overflow_and_core_counts_are_bit_exact() {
     for (k, c) in [EngineCase::Overflow, EngineCase::OneCore, EngineCase::ManyCores].into_iter().enumerate() {
         run_case(&scene, &how, c, 2, [128, 128], case_seed(&seeds, k, c));
     }
+}
+
+/// Scene mode (issue 12): the engine preprocesses the baked scene (its lane reads geometry, SH
+/// and previous feature words, writes the feature words, incoming lists and lengths), then walks
+/// the tiles: feature words, lists (as multisets), lengths, the tile walk's outputs and every
+/// golden counter (`RD_PRE`, `WR_PRE` included) bit-exact over reuse frames, a cut and an
+/// overflow, on the CI engine (one lane).
+#[test]
+fn engine_scene_orbit_cut_and_overflow_are_bit_exact() {
+    let scene = synthetic();
+    let how = CaseScene::synthetic();
+    let seeds = SeedSplit::new("engine_scene_orbit_cut_and_overflow_are_bit_exact");
+    let base = ci_config();
+    assert_eq!(base.pre_units, 1, "the CI engine has one lane");
+    for (k, (c, frames)) in [(EngineCase::Orbit, 3), (EngineCase::Cut, 3), (EngineCase::Overflow, 2)].into_iter().enumerate() {
+        let f = run_case_in(&scene, &how, c, (frames, [128, 128]), (&base, HostMode::Scene), case_seed(&seeds, k, c));
+        assert!(f.iter().all(|f| f.rtl_cycles > 0));
+    }
+}
+
+/// Scene mode with two lanes (their hits interleave in the lists): reuse frames of the orbit.
+#[test]
+fn engine_scene_two_lanes_are_bit_exact() {
+    let scene = synthetic();
+    let how = CaseScene::synthetic();
+    let seeds = SeedSplit::new("engine_scene_two_lanes_are_bit_exact");
+    let base = EngineConfig { pre_units: 2, ..ci_config() };
+    let c = EngineCase::Orbit;
+    run_case_in(&scene, &how, c, (3, [128, 128]), (&base, HostMode::Scene), case_seed(&seeds, 0, c));
 }
 
 #[test]
