@@ -82,8 +82,8 @@ pub struct EngineFrameModel<'a> {
 
 impl<'a> EngineFrameModel<'a> {
     /// The model of `cfg` with the unit timing `lat`, over ports of timing `mem`. Refuses unit
-    /// timing measured on cores of another configuration (the engine's counts may differ: they
-    /// do not change a core's timing).
+    /// timing measured on cores of another configuration (the engine's counts, the
+    /// Preprocessing Engine's lanes included, may differ: they do not change a core's timing).
     pub fn new(cfg: &'a EngineConfig, lat: &'a Latency, mem: PortTiming) -> Result<Self, String> {
         let same_cores = EngineConfig {
             sort_cores: lat.config.sort_cores,
@@ -92,6 +92,7 @@ impl<'a> EngineFrameModel<'a> {
             scheduler: lat.config.scheduler,
             table_capacity: lat.config.table_capacity,
             axi_id_bits: lat.config.axi_id_bits,
+            pre_units: lat.config.pre_units,
             ..cfg.clone()
         };
         if let Some((field, ours, measured)) = same_cores.first_difference(&lat.config) {
