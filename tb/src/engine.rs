@@ -323,3 +323,21 @@ impl EngineRig {
         self.engine.model.trace_close();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn port_limits_sum_each_ports_clients() {
+        let cfg = EngineConfig { pre_units: 2, pre_outstanding: 64, ..ci_config() };
+        let c = client_limits(&cfg);
+        assert_eq!(c.len(), cfg.memory_clients(), "1 + 2 + 1 + 2 * 2 + 1");
+        assert_eq!((c[0], c[3], c[4], c[5], c[8]), ((8, 8), (8, 8), (64, 8), (64, 8), (64, 64)));
+        // Port 0: clients 0, 2, 4, 6, 8; port 1: clients 1, 3, 5, 7.
+        assert_eq!(
+            port_limits(&cfg),
+            vec![(8 + 8 + 64 + 64 + 64, 8 + 8 + 8 + 8 + 64), (8 + 8 + 64 + 64, 32)]
+        );
+    }
+}
