@@ -83,7 +83,8 @@ pub struct EngineFrameModel<'a> {
 impl<'a> EngineFrameModel<'a> {
     /// The model of `cfg` with the unit timing `lat`, over ports of timing `mem`. Refuses unit
     /// timing measured on cores of another configuration (the engine's counts may differ: they
-    /// do not change a core's timing).
+    /// do not change a core's timing; the Preprocessing Engine's lane count is one of them, the
+    /// frame model covers the tile walk).
     pub fn new(cfg: &'a EngineConfig, lat: &'a Latency, mem: PortTiming) -> Result<Self, String> {
         let same_cores = EngineConfig {
             sort_cores: lat.config.sort_cores,
@@ -92,6 +93,7 @@ impl<'a> EngineFrameModel<'a> {
             scheduler: lat.config.scheduler,
             table_capacity: lat.config.table_capacity,
             axi_id_bits: lat.config.axi_id_bits,
+            pre_units: lat.config.pre_units,
             ..cfg.clone()
         };
         if let Some((field, ours, measured)) = same_cores.first_difference(&lat.config) {
