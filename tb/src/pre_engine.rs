@@ -30,6 +30,12 @@ use neo_golden::hwpre::camera_registers;
 use neo_golden::sort::SortEntry;
 use std::collections::BTreeMap;
 
+/// The configuration the bench runs (`tb/pre_engine.json`: two lanes).
+pub fn bench_config() -> EngineConfig {
+    serde_json::from_str(include_str!("../pre_engine.json"))
+        .expect("tb/pre_engine.json is an engine configuration")
+}
+
 /// Name of the bench wrapper.
 const WRAPPER: &str = "neo_pre_engine_tb";
 /// Byte address of the incoming lists.

@@ -15,10 +15,11 @@ neo_tb::with_models! {
     use neo_tb::pre_engine::PreEngineBench;
     use neo_tb::rng::for_each_seed;
 
-    /// The default configuration: four lanes (the engine's split and arbiter at work), and the
-    /// Verilog of `hdl/` (so `scripts/mutate-check` can mutate it).
+    /// `tb/pre_engine.json`: two lanes (the split and the arbiter at work; a lane's C++ is
+    /// compiled per instance, so the default four cost twice the build; `scripts/mutate-check`
+    /// mutates this configuration's Verilog, its `pre:` files).
     fn config() -> neo_gen::EngineConfig {
-        neo_tb::config()
+        neo_tb::pre_engine::bench_config()
     }
 
     /// The baked synthetic scene and `frames` cameras of a fast walk through it.
@@ -38,7 +39,7 @@ neo_tb::with_models! {
         let mut bench = PreEngineBench::build(&config()).unwrap();
         neo_tb::waves::maybe_trace(bench.model_mut(), name);
         for_each_seed(name, |seed| {
-            // Counts that are not a multiple of the lanes: the last lane's share is shorter.
+            // Odd counts: the last lane's share is one shorter.
             let n = 601 + 2 * (seed % 200) as usize;
             // SH degrees 0, 2 and 3 on the fixed seeds (1 in the one-Gaussian test).
             let (baked, cams) = scene(n, seed % 1000, 3, ((seed >> 1) % 4) as u8);
