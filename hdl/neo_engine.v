@@ -714,8 +714,16 @@ module neo_engine (
   wire [8:0] pre_bready;
   wire [35:0] pre_bid;
   wire [17:0] pre_bresp;
-  neo_pre_engine u_pre (
+  // Its clock runs from its start to its done only (u_pre_gate).
+  wire pre_clk;
+  neo_clock_gate u_pre_gate (
     .clk_i(clk_i),
+    .rst_ni(rst_ni),
+    .en_i(pre_start | pre_busy),
+    .clk_o(pre_clk)
+  );
+  neo_pre_engine u_pre (
+    .clk_i(pre_clk),
     .rst_ni(rst_ni),
     .start_i(pre_start),
     .busy_o(pre_busy),

@@ -81,5 +81,11 @@ fn the_engine_glue_is_latch_free() {
             Some(cfg.pre_units as u64),
             "{what}"
         );
+        assert_eq!(n(neo_gen::units::clock_gate::NAME), 1, "{what}");
     }
+    // The clock gate: one falling-edge flop and an AND, no latch.
+    let gate = neo_gen::units::clock_gate::NAME;
+    let g =
+        coarse_synth_stats(&files_for(&EngineConfig::default(), gate), gate).expect("clock gate synthesis");
+    assert_eq!((g.latches, g.flip_flops), (0, 1), "{gate}: {:?}", g.cells_by_type);
 }

@@ -82,8 +82,9 @@ pub struct EngineFrameModel<'a> {
 
 impl<'a> EngineFrameModel<'a> {
     /// The model of `cfg` with the unit timing `lat`, over ports of timing `mem`. Refuses unit
-    /// timing measured on cores of another configuration (the engine's counts, the
-    /// Preprocessing Engine's lanes included, may differ: they do not change a core's timing).
+    /// timing measured on cores of another configuration (the engine's counts may differ: they
+    /// do not change a core's timing; the Preprocessing Engine's lane count is one of them, the
+    /// frame model covers the tile walk).
     pub fn new(cfg: &'a EngineConfig, lat: &'a Latency, mem: PortTiming) -> Result<Self, String> {
         let same_cores = EngineConfig {
             sort_cores: lat.config.sort_cores,

@@ -198,7 +198,7 @@ impl LaneBench {
                 (r + w) as u64,
             );
         }
-        let visible = check_table(&self.cfg, baked, frame.cam, range, mem.memory(), check, cycles);
+        let visible = check_feature_words(&self.cfg, baked, frame.cam, range, mem.memory(), check, cycles);
         let table =
             (range.first..range.first + range.count).map(|i| word_at(mem.memory(), FEAT_BASE, i)).collect();
         LaneRun { gaussians: u64::from(range.count), visible, hits: hits as u64, cycles, table }
@@ -275,8 +275,9 @@ pub fn scene_memory(baked: &Baked, range: LaneRange, prev: &[[u8; 32]]) -> Memor
     mem
 }
 
-/// Checks the feature words of `range` (and the canaries around it); returns the visible count.
-fn check_table(
+/// Checks the feature words of `range` at [`FEAT_BASE`] (and the canaries around it); returns
+/// the visible count.
+pub fn check_feature_words(
     cfg: &EngineConfig,
     baked: &Baked,
     cam: &Camera,

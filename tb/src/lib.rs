@@ -35,6 +35,7 @@ pub mod lists;
 #[cfg(neo_has_verilator)]
 pub mod msu;
 pub mod pre;
+pub mod pre_engine;
 #[cfg(neo_has_verilator)]
 pub mod raster;
 pub mod rng;

@@ -131,6 +131,14 @@ pub enum Item {
         /// Statements applied on each clock edge out of reset.
         body: Vec<Stmt>,
     },
+    /// `always @(negedge clk_i or negedge rst_ni)`: a falling-edge register with asynchronous
+    /// active-low reset (the clock gate's enable, [`crate::units::clock_gate`]).
+    SeqFalling {
+        /// Statements applied while `rst_ni` is low.
+        reset: Vec<Stmt>,
+        /// Statements applied on each falling clock edge out of reset.
+        body: Vec<Stmt>,
+    },
     /// `always @*` with blocking assignments (`=`). Every target must get a default first so
     /// no latch is inferred.
     Comb(Vec<Stmt>),

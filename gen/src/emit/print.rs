@@ -125,6 +125,15 @@ fn items(s: &mut String, level: usize, list: &[Item], vectors: &std::collections
                 stmts(s, level + 1, body, "<=");
                 writeln!(s, "{ind}end").unwrap();
             }
+            Item::SeqFalling { reset, body } => {
+                writeln!(s, "{ind}always @(negedge clk_i or negedge rst_ni) begin").unwrap();
+                writeln!(s, "{ind}{IND}if (!rst_ni) begin").unwrap();
+                stmts(s, level + 2, reset, "<=");
+                writeln!(s, "{ind}{IND}end else begin").unwrap();
+                stmts(s, level + 2, body, "<=");
+                writeln!(s, "{ind}{IND}end").unwrap();
+                writeln!(s, "{ind}end").unwrap();
+            }
             Item::Comb(body) => {
                 writeln!(s, "{ind}always @* begin").unwrap();
                 stmts(s, level + 1, body, "=");

@@ -9,7 +9,8 @@
 //! - `g_raster[j]`: Rasterization Core `u_core` and its AXI4 bridge `u_bridge`; memory client
 //!   `1 + N + j`;
 //! - `u_pre` (`neo_pre_engine`): the Preprocessing Engine, run before the frame controller when
-//!   `PRE_CTRL.enable` is set (its `done_o` starts `u_ctrl`); its managers `q` are memory clients
+//!   `PRE_CTRL.enable` is set (its `done_o` starts `u_ctrl`), on a clock gated by `u_pre_gate`
+//!   (`neo_clock_gate`) from its start to its done; its managers `q` are memory clients
 //!   `1 + N + M + q` (`g_pre_client[q]` moves them between its packed buses and the client buses);
 //! - `g_port[k]`: the port mux `u_mux` of AXI4 manager port `m{k}_axi_*`.
 //!
@@ -18,7 +19,7 @@
 //! The client buses `cl_<signal>` hold slot `s` of port `k` at index `k P + s`.
 
 use super::axi;
-use super::{engine_regs, frame_ctrl, perf_counters, pre, raster_core, sort_core, sort_seq};
+use super::{clock_gate, engine_regs, frame_ctrl, perf_counters, pre, raster_core, sort_core, sort_seq};
 use crate::emit::expr::lit;
 use crate::emit::{Instance, Item, Module};
 use crate::interface::Dir;
@@ -40,6 +41,7 @@ pub const SUBMODULES: &[&str] = &[
     raster_core::NAME,
     axi::raster_bridge::NAME,
     pre::engine::NAME,
+    clock_gate::NAME,
 ];
 
 /// The engine's memory clients and ports.
@@ -329,7 +331,19 @@ fn preprocessing(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     for s in &sigs {
         m.wire(format!("pre_{}", s.name), q * s.width).vector(format!("pre_{}", s.name));
     }
-    let mut c: Vec<(String, String)> = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    m.comment("Its clock runs from its start to its done only (u_pre_gate).");
+    m.wire("pre_clk", 1);
+    m.instance(
+        clock_gate::NAME,
+        "u_pre_gate",
+        vec![
+            pair("clk_i", "clk_i"),
+            pair("rst_ni", "rst_ni"),
+            pair("en_i", "pre_start | pre_busy"),
+            pair("clk_o", "pre_clk"),
+        ],
+    );
+    let mut c: Vec<(String, String)> = vec![pair("clk_i", "pre_clk"), pair("rst_ni", "rst_ni")];
     c.push(pair("start_i", "pre_start"));
     c.push(pair("busy_o", "pre_busy"));
     c.push(pair("done_o", "pre_done"));

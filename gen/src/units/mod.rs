@@ -31,6 +31,7 @@
 //! | `neo_axi_sort_bridge` | sorting core memory port -> AXI4 manager          | yes       |
 //! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
 //! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (the engine's P, and P=3) | P=3 |
+//! | `neo_clock_gate` | a falling-edge-enabled clock gate (the idle Preprocessing Engine) | no |
 //! | `neo_engine`    | the engine: control port, frame controller, cores, bridges, port muxes | run time |
 //! | `neo_fp_*`      | binary32 primitives of the Preprocessing Engine (`fp`)   | no        |
 //! | `neo_fp_bench`  | every `neo_fp_*` primitive side by side                 | run time  |
@@ -38,6 +39,7 @@
 pub mod axi;
 pub mod bsu;
 pub mod chunk_ram;
+pub mod clock_gate;
 pub mod cmp_swap;
 pub mod engine;
 pub mod engine_regs;
@@ -157,6 +159,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(pre::lane::module(cfg));
     all.push(pre::lists::module(cfg));
     all.push(pre::engine::module(cfg));
+    all.push(clock_gate::module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);
     }
