@@ -7,7 +7,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use neo_golden::engine::host::FramePlan;
 use neo_golden::engine::memory::Memory;
-use neo_golden::engine::{EngineConfig, EngineSession};
+use neo_golden::engine::{EngineConfig, EngineSession, HostMode};
 use neo_golden::scene::Scene;
 use neo_golden::source;
 use neo_golden::trajectory::{parse_trajectory, Trajectory};
@@ -41,9 +41,26 @@ pub fn trajectory_at(spec: &str, scene: &Scene, frames: usize, res: (u32, u32)) 
     Ok(traj)
 }
 
-/// The golden host session of `traj` on `scene` for engine `cfg`.
-pub fn session<'s>(scene: &'s Scene, traj: Trajectory, cfg: &EngineConfig) -> Result<EngineSession<'s>> {
-    EngineSession::new(scene, traj, cfg).context("engine session")
+/// The golden host session of `traj` on `scene` for engine `cfg`, feeding the engine as `mode`
+/// says.
+pub fn session<'s>(
+    scene: &'s Scene,
+    traj: Trajectory,
+    cfg: &EngineConfig,
+    mode: HostMode,
+) -> Result<EngineSession<'s>> {
+    EngineSession::with_mode(scene, traj, cfg, mode).context("engine session")
+}
+
+/// The host mode named by `--input`: `scene` or `lists`.
+pub fn host_mode(input: &str) -> Result<HostMode> {
+    match input {
+        "scene" => Ok(HostMode::Scene),
+        "lists" => Ok(HostMode::Lists),
+        other => Err(anyhow!(
+            "--input {other:?}: expected `scene` (the engine preprocesses the baked scene) or `lists` (the host writes the lists and feature words)"
+        )),
+    }
 }
 
 /// Builds (or finds in the cache) the verilated engine of `cfg`, traced in `format` (`None`:

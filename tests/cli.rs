@@ -316,3 +316,15 @@ fn simulate_takes_the_artifacts_byte_sizes() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--sizes: unknown byte-size preset \"fp8\""), "{}", stderr(&o));
 }
+
+#[test]
+fn cosim_refuses_an_unknown_input_mode_before_any_work() {
+    let o = neo(&["cosim", "--input", "pixels", "--frames", "1"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "stderr:\n{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("--input \"pixels\"") && err.contains("`scene`") && err.contains("`lists`"),
+        "{err}"
+    );
+}

@@ -50,6 +50,12 @@ pub struct CosimArgs {
     /// is written beside it.
     #[arg(long)]
     pub waves: Option<PathBuf>,
+    /// Where the engine's inputs come from: `scene` (the host writes the baked scene once and
+    /// programs the camera; the engine's Preprocessing Engine makes every frame's feature words,
+    /// incoming lists and their lengths) or `lists` (the host writes golden's incoming lists and
+    /// feature words; the Preprocessing Engine is off).
+    #[arg(long, default_value = "scene")]
+    pub input: String,
     /// Print one JSON record per frame instead of text.
     #[arg(long)]
     pub json: bool,
@@ -62,6 +68,7 @@ pub struct CosimArgs {
 
 /// Runs `neo cosim`.
 pub fn run(a: CosimArgs) -> Result<()> {
+    let mode = engine_run::host_mode(&a.input)?;
     let cfg = engine_run::engine_config(a.config.as_deref())?;
     let timing = match a.memory.as_str() {
         "random" => AxiTiming::RANDOM,
@@ -74,7 +81,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
     };
     let (scene, _) = source::load_scene(&a.scene.scene, a.strict.strict)?;
     let traj = engine_run::trajectory_at(&a.trajectory.trajectory, &scene, a.frames, a.res)?;
-    let mut session = engine_run::session(&scene, traj, &cfg)?;
+    let mut session = engine_run::session(&scene, traj, &cfg, mode)?;
     eprintln!(
         "neo cosim: {} Gaussians, {} tiles, {} frames, engine {} + {} cores, {} ports, seed 0x{seed:016x}",
         scene.len(),
@@ -129,7 +136,10 @@ fn print_frame(
     bar: &ProgressBar,
 ) {
     let mismatch = r.mismatch.as_ref().map(|m| m.to_string());
-    let model_error = error_pct(p.cycles, r.rtl_cycles);
+    // The frame model times the tile walk: the Preprocessing Engine's cycles come before it.
+    let pre = r.counters.get(Counter::PreBusy);
+    let walk = r.rtl_cycles.saturating_sub(pre);
+    let model_error = error_pct(p.cycles, walk);
     let sort_busy = r.counters.get(Counter::SortBusy);
     let raster_busy = r.counters.get(Counter::RasterBusy);
     if a.json {
@@ -138,7 +148,11 @@ fn print_frame(
             "from_scratch": r.from_scratch,
             "bit_exact": r.mismatch.is_none(),
             "rtl_cycles": r.rtl_cycles,
-            "model_cycles": p.cycles.round(),
+            "rtl_preprocess_cycles": pre,
+            "rtl_walk_cycles": walk,
+            "rtl_preprocess_read_bytes": r.counters.get(Counter::RdPre),
+            "rtl_preprocess_write_bytes": r.counters.get(Counter::WrPre),
+            "model_walk_cycles": p.cycles.round(),
             "model_error_pct": model_error,
             "rtl_sort_busy": sort_busy,
             "model_sort_busy": p.sort_busy.round(),
@@ -155,8 +169,17 @@ fn print_frame(
     }
     let status = crate::engine_run::frame_status(r);
     let cps = r.harness_cycles as f64 / took.as_secs_f64().max(1e-9);
+    let pre_text = if pre > 0 {
+        format!(
+            " ({pre} preprocessing, {} B read, {} B written; {walk} tile walk)",
+            r.counters.get(Counter::RdPre),
+            r.counters.get(Counter::WrPre)
+        )
+    } else {
+        String::new()
+    };
     let line = format!(
-        "frame {:3}{}: {status}, {} RTL cycles, model {:.0} ({:+.1}%; busy sort {:+.1}%, raster {:+.1}%), {:.1} s ({:.0} cycles/s)",
+        "frame {:3}{}: {status}, {} RTL cycles{pre_text}, model of the walk {:.0} ({:+.1}%; busy sort {:+.1}%, raster {:+.1}%), {:.1} s ({:.0} cycles/s)",
         r.frame,
         if r.from_scratch { " (from scratch)" } else { "" },
         r.rtl_cycles,
