@@ -38,17 +38,24 @@ pub enum Part {
     Interconnect,
     /// Frame controller, control port, performance counters and the engine's own glue.
     Control,
+    /// The Preprocessing Engine and its clock gate (not yet synthesized by `neo gen --stats`:
+    /// its cells are unknown).
+    Preprocessing,
 }
 
 impl Part {
     /// Every part, in report order.
-    pub const ALL: [Part; 4] = [Part::Sorting, Part::Rasterization, Part::Interconnect, Part::Control];
+    pub const ALL: [Part; 5] =
+        [Part::Sorting, Part::Rasterization, Part::Interconnect, Part::Control, Part::Preprocessing];
 
     /// The part a module instantiated by `neo_engine` belongs to.
     pub fn of(module: &str) -> Part {
         match module {
             m if m == sort_seq::NAME || m == sort_core::NAME => Part::Sorting,
             m if m == raster_core::NAME => Part::Rasterization,
+            m if m == crate::units::pre::engine::NAME || m == crate::units::clock_gate::NAME => {
+                Part::Preprocessing
+            }
             m if m == axi::sort_bridge::NAME
                 || m == axi::raster_bridge::NAME
                 || m.starts_with("neo_axi_mux") =>
@@ -67,6 +74,7 @@ impl Part {
             Part::Rasterization => "rasterization",
             Part::Interconnect => "interconnect",
             Part::Control => "control",
+            Part::Preprocessing => "preprocessing",
         }
     }
 }
@@ -188,10 +196,11 @@ impl Node {
             t.cells = start(t.cells).zip(cells).map(|(a, b)| a + b);
             t.flip_flops = start(t.flip_flops).zip(ffs).map(|(a, b)| a + b);
         };
-        let mut seen = [false; 4];
+        let control = Part::ALL.iter().position(|&p| p == Part::Control).expect("control");
+        let mut seen = [false; Part::ALL.len()];
         for n in self.instances() {
             let module = n.module.as_deref().unwrap_or_default();
-            let i = Part::ALL.iter().position(|&p| p == Part::of(module)).unwrap_or(3);
+            let i = Part::ALL.iter().position(|&p| p == Part::of(module)).unwrap_or(control);
             let (t, first) = (&mut totals[i].1, !seen[i]);
             seen[i] = true;
             t.modules.insert(module.to_string());
@@ -204,7 +213,6 @@ impl Node {
             );
             n.modules(&mut lines[i]);
         }
-        let control = 3;
         if let (Some(m), Some(l)) = (&self.module, self.lines) {
             lines[control].insert(m.clone(), l);
         }

@@ -612,8 +612,10 @@ mod tests {
 
     #[test]
     fn every_client_has_its_own_slot_and_ports_share_the_load() {
-        for (sort, raster, ports) in [(16, 4, 4), (2, 1, 2), (1, 1, 1), (3, 2, 4), (16, 4, 1)] {
-            let cl = Clients { sort, raster, ports };
+        for (sort, raster, pre, ports) in
+            [(16, 4, 9, 4), (2, 1, 3, 2), (1, 1, 3, 1), (3, 2, 5, 4), (16, 4, 33, 1)]
+        {
+            let cl = Clients { sort, raster, pre, ports };
             let mut seen: Vec<usize> = (0..cl.count()).map(|c| cl.position(c)).collect();
             seen.sort_unstable();
             seen.dedup();

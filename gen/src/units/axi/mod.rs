@@ -286,13 +286,15 @@ mod tests {
 
     #[test]
     fn mux_sizes_follow_the_client_to_port_mapping() {
-        // 1 + 16 + 4 clients on 4 ports of ceil(21 / 4) = 6 slots; plus the cosimulated P = 3.
+        // 1 + 16 + 4 + (2 x 4 + 1) clients on 4 ports of ceil(31 / 4) = 8 slots; plus the
+        // cosimulated P = 3.
         let cfg = EngineConfig::default();
-        assert_eq!(mux_sizes(&cfg), vec![3, 6]);
-        let small = EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, ..cfg.clone() };
-        assert_eq!(mux_sizes(&small), vec![2, 3]);
-        let one = EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 4, ..cfg };
-        assert_eq!(mux_sizes(&one), vec![1, 3]);
+        assert_eq!(mux_sizes(&cfg), vec![3, 8]);
+        let small =
+            EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, pre_units: 1, ..cfg.clone() };
+        assert_eq!(mux_sizes(&small), vec![3, 4], "1 + 2 + 1 + 3 clients on 2 ports of 4 slots");
+        let one = EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 4, pre_units: 1, ..cfg };
+        assert_eq!(mux_sizes(&one), vec![2, 3]);
     }
 
     #[test]
