@@ -111,29 +111,13 @@ fn items(s: &mut String, level: usize, list: &[Item], vectors: &std::collections
                 writeln!(s, "{ind}{} [0:{}];", decl("reg", *width, name), depth - 1).unwrap()
             }
             Item::Assign { lhs, rhs } => writeln!(s, "{ind}assign {lhs} = {rhs};").unwrap(),
-            Item::Seq { reset: Some(reset), body } => {
-                writeln!(s, "{ind}always @(posedge clk_i or negedge rst_ni) begin").unwrap();
-                writeln!(s, "{ind}{IND}if (!rst_ni) begin").unwrap();
-                stmts(s, level + 2, reset, "<=");
-                writeln!(s, "{ind}{IND}end else begin").unwrap();
-                stmts(s, level + 2, body, "<=");
-                writeln!(s, "{ind}{IND}end").unwrap();
-                writeln!(s, "{ind}end").unwrap();
-            }
+            Item::Seq { reset: Some(reset), body } => with_reset(s, level, "posedge", reset, body),
             Item::Seq { reset: None, body } => {
                 writeln!(s, "{ind}always @(posedge clk_i) begin").unwrap();
                 stmts(s, level + 1, body, "<=");
                 writeln!(s, "{ind}end").unwrap();
             }
-            Item::SeqFalling { reset, body } => {
-                writeln!(s, "{ind}always @(negedge clk_i or negedge rst_ni) begin").unwrap();
-                writeln!(s, "{ind}{IND}if (!rst_ni) begin").unwrap();
-                stmts(s, level + 2, reset, "<=");
-                writeln!(s, "{ind}{IND}end else begin").unwrap();
-                stmts(s, level + 2, body, "<=");
-                writeln!(s, "{ind}{IND}end").unwrap();
-                writeln!(s, "{ind}end").unwrap();
-            }
+            Item::SeqFalling { reset, body } => with_reset(s, level, "negedge", reset, body),
             Item::Comb(body) => {
                 writeln!(s, "{ind}always @* begin").unwrap();
                 stmts(s, level + 1, body, "=");
@@ -170,6 +154,18 @@ fn instance(s: &mut String, level: usize, i: &Instance) {
         writeln!(s, "{ind}{IND}.{p}({e}){sep}").unwrap();
     }
     writeln!(s, "{ind});").unwrap();
+}
+
+/// `always @(EDGE clk_i or negedge rst_ni)` with `reset` while `rst_ni` is low, else `body`.
+fn with_reset(s: &mut String, level: usize, edge: &str, reset: &[Stmt], body: &[Stmt]) {
+    let ind = indent(level);
+    writeln!(s, "{ind}always @({edge} clk_i or negedge rst_ni) begin").unwrap();
+    writeln!(s, "{ind}{IND}if (!rst_ni) begin").unwrap();
+    stmts(s, level + 2, reset, "<=");
+    writeln!(s, "{ind}{IND}end else begin").unwrap();
+    stmts(s, level + 2, body, "<=");
+    writeln!(s, "{ind}{IND}end").unwrap();
+    writeln!(s, "{ind}end").unwrap();
 }
 
 fn stmts(s: &mut String, level: usize, list: &[Stmt], op: &str) {

@@ -138,21 +138,13 @@ impl MemoryLayout {
     /// The map for `tiles` tiles and `gaussians` feature words; lists get the rest of the
     /// address space (at most 4 GiB: entry addresses are 32-bit descriptor fields).
     pub fn new(cfg: &EngineConfig, tiles: u64, gaussians: u64) -> Result<MemoryLayout, SessionError> {
-        let rc = cfg.raster_config();
         let cap = cfg.table_capacity as u64;
-        let mut at = PAGE;
-        let mut region = |bytes: u64| {
-            let base = at;
-            at = (at + bytes).div_ceil(PAGE) * PAGE;
-            base
-        };
-        let desc_base = region(tiles * DESCRIPTOR_BYTES);
-        let result_base = region(tiles * RESULT_BYTES);
-        let fb_base = region(tiles * (rc.tile * rc.tile) as u64 * PIXEL_BYTES);
-        let feat_base = region(gaussians * FEATURE_BYTES);
-        let scratch_base = region(cfg.sort_cores as u64 * 2 * cap * ENTRY_BYTES);
-        let table_bases = [region(tiles * cap * ENTRY_BYTES), region(tiles * cap * ENTRY_BYTES)];
-        let list_base = region(0);
+        let mut regions = Regions::new();
+        let f = regions.frame(cfg, tiles, gaussians, 1);
+        let (desc_base, result_base, fb_base, scratch_base, table_bases) =
+            (f.desc_base, f.result_base, f.fb_base, f.scratch_base, f.table_bases);
+        let feat_base = f.feat_bases[0];
+        let list_base = regions.take(0);
         let top = address_top(cfg);
         if list_base >= top {
             return Err(SessionError::Layout(format!(
@@ -171,6 +163,55 @@ impl MemoryLayout {
             list_bytes: top - list_base,
             scene: None,
         })
+    }
+}
+
+/// Page-aligned regions handed out in order from the first page.
+struct Regions {
+    at: u64,
+}
+
+/// The regions both memory maps start with.
+struct FrameRegions {
+    desc_base: u64,
+    result_base: u64,
+    fb_base: u64,
+    feat_bases: Vec<u64>,
+    scratch_base: u64,
+    table_bases: [u64; 2],
+}
+
+impl Regions {
+    fn new() -> Regions {
+        Regions { at: PAGE }
+    }
+
+    /// The next region of `bytes` bytes.
+    fn take(&mut self, bytes: u64) -> u64 {
+        let base = self.at;
+        self.at = (self.at + bytes).div_ceil(PAGE) * PAGE;
+        base
+    }
+
+    /// Descriptors, results, frame buffer (tile-major), `feature_arenas` feature tables, sort
+    /// scratch (`2 table_capacity` entries per sorting core), two table arenas (`table_capacity`
+    /// entries per tile).
+    fn frame(
+        &mut self,
+        cfg: &EngineConfig,
+        tiles: u64,
+        gaussians: u64,
+        feature_arenas: usize,
+    ) -> FrameRegions {
+        let rc = cfg.raster_config();
+        let cap = cfg.table_capacity as u64;
+        let desc_base = self.take(tiles * DESCRIPTOR_BYTES);
+        let result_base = self.take(tiles * RESULT_BYTES);
+        let fb_base = self.take(tiles * (rc.tile * rc.tile) as u64 * PIXEL_BYTES);
+        let feat_bases = (0..feature_arenas).map(|_| self.take(gaussians * FEATURE_BYTES)).collect();
+        let scratch_base = self.take(cfg.sort_cores as u64 * 2 * cap * ENTRY_BYTES);
+        let table_bases = [self.take(tiles * cap * ENTRY_BYTES), self.take(tiles * cap * ENTRY_BYTES)];
+        FrameRegions { desc_base, result_base, fb_base, feat_bases, scratch_base, table_bases }
     }
 }
 

@@ -3,12 +3,13 @@
 //! and what the frame must leave besides the tile walk's outputs (from the PIPELINE: its
 //! feature words, its incoming lists).
 
-use super::{address_top, EngineSession, Expected, HostMode, MemoryLayout, SceneLayout, SessionError, PAGE};
+use super::{
+    address_top, EngineSession, Expected, HostMode, MemoryLayout, Regions, SceneLayout, SessionError,
+};
 use crate::camera::Camera;
 use crate::engine::expected::PreExpected;
 use crate::engine::memory::{
-    feature_to_bytes, feature_word_bits, Memory, TileDescriptor, DESCRIPTOR_BYTES, ENTRY_BYTES,
-    FEATURE_BYTES, PIXEL_BYTES, RESULT_BYTES,
+    feature_to_bytes, feature_word_bits, Memory, TileDescriptor, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
 };
 use crate::engine::pre::{beats_spanned, LIST_LEN_OFFSET, LIST_LINE_BYTES};
 use crate::engine::regs::{CameraWord, Counter, FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
@@ -37,24 +38,16 @@ impl MemoryLayout {
                 cfg.pre_max_tiles
             )));
         }
-        let rc = cfg.raster_config();
         let cap = cfg.table_capacity as u64;
-        let mut at = PAGE;
-        let mut region = |bytes: u64| {
-            let base = at;
-            at = (at + bytes).div_ceil(PAGE) * PAGE;
-            base
-        };
-        let desc_base = region(tiles * DESCRIPTOR_BYTES);
-        let result_base = region(tiles * RESULT_BYTES);
-        let fb_base = region(tiles * (rc.tile * rc.tile) as u64 * PIXEL_BYTES);
-        let feat_bases = [region(gaussians * FEATURE_BYTES), region(gaussians * FEATURE_BYTES)];
-        let scratch_base = region(cfg.sort_cores as u64 * 2 * cap * ENTRY_BYTES);
-        let table_bases = [region(tiles * cap * ENTRY_BYTES), region(tiles * cap * ENTRY_BYTES)];
-        let geo_base = region(gaussians * geometry_bytes() as u64);
-        let sh_base = region(gaussians * sh_bytes(sh_degree, ShPrecision::F32) as u64);
+        let mut regions = Regions::new();
+        let f = regions.frame(cfg, tiles, gaussians, 2);
+        let (desc_base, result_base, fb_base, scratch_base, table_bases) =
+            (f.desc_base, f.result_base, f.fb_base, f.scratch_base, f.table_bases);
+        let feat_bases = [f.feat_bases[0], f.feat_bases[1]];
+        let geo_base = regions.take(gaussians * geometry_bytes() as u64);
+        let sh_base = regions.take(gaussians * sh_bytes(sh_degree, ShPrecision::F32) as u64);
         let list_bytes = tiles * cfg.list_stride() as u64 * ENTRY_BYTES;
-        let list_base = region(list_bytes);
+        let list_base = regions.take(list_bytes);
         let top = address_top(cfg);
         if list_base + list_bytes > top {
             return Err(SessionError::Layout(format!(
