@@ -110,39 +110,27 @@ pub fn preprocess_frame(
     let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
     let params = ProjectParams { feature: fmt, tile: cfg.tile };
     let size = (grid[0] * cfg.tile, grid[1] * cfg.tile);
-    let beat = cfg.axi_data_bits as u64 / 8;
     let fresh = p.fresh();
     let n = p.gaussians as usize;
     let feat_word = regs.feat_base / FEATURE_BYTES;
     let prev_word = p.prev_feat_base / FEATURE_BYTES;
-    let sh_rec = baked.sh_per_gaussian() as u64 * 4;
-    let gb = geometry_bytes() as u64;
-    for lane in 0..cfg.pre_units {
-        let (first, count) = cfg.pre_lane_range(p.gaussians, lane);
-        let at = p.geo_base + gb * first as u64;
-        counters.add(Counter::RdPre, beat * beats_spanned(at, gb * count as u64, beat));
-    }
     let now: Vec<_> = (0..n)
         .into_par_iter()
         .with_min_len(1024)
         .map(|i| preprocess_one(&baked, &cam, cam_pos, &params, &DepthKeyCodec::Fp16, i))
         .collect();
     let mut lists = vec![Vec::new(); regs.tiles as usize];
-    let mut visible = 0;
+    let mut visible = Vec::new();
     for (i, h) in now.iter().enumerate() {
         let w = feat_word + i as u64;
         let word = feature_to_bytes(&fmt, h.as_ref().map(|h| &h.entry));
         mem.write(FEATURE_BYTES * w, &word);
-        counters.add(Counter::WrPre, beat * beats_spanned(FEATURE_BYTES * w, FEATURE_BYTES, beat));
         let Some(h) = h else { continue };
-        visible += 1;
-        let sh_at = p.sh_base + sh_rec * i as u64;
-        counters.add(Counter::RdPre, beat * beats_spanned(sh_at, sh_rec, beat));
+        visible.push(i as u64);
         let prev = if fresh {
             None
         } else {
             let at = FEATURE_BYTES * (prev_word + i as u64);
-            counters.add(Counter::RdPre, beat * beats_spanned(at, FEATURE_BYTES, beat));
             let mut b = [0u8; FEATURE_BYTES as usize];
             mem.read(at, &mut b);
             feature_from_bytes(&fmt, &b)
@@ -155,20 +143,56 @@ pub fn preprocess_frame(
             lists[t].push(SortEntry::new(h.entry.depth_key, i as u32));
         }
     }
-    write_lists(cfg, regs, mem, &lists, counters);
-    Ok(PreWork { visible, lists })
+    write_lists(cfg, regs, mem, &lists);
+    let (rd, wr) = pre_traffic(cfg, regs, &visible, lists.iter().map(Vec::len));
+    counters.add(Counter::RdPre, rd);
+    counters.add(Counter::WrPre, wr);
+    Ok(PreWork { visible: visible.len() as u64, lists })
+}
+
+/// The Preprocessing Engine's `(RD_PRE, WR_PRE)` bytes for `regs`: the beats its transfers span
+/// ([`beats_spanned`]) times the beat bytes. Reads: each lane's geometry stream, each `visible`
+/// Gaussian's SH record and (unless fresh) previous feature word; writes: every feature word,
+/// each tile's list lines (the first `table_capacity` entries of a list of `list_lens[t]`) and
+/// length.
+pub fn pre_traffic(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    visible: &[u64],
+    list_lens: impl IntoIterator<Item = usize>,
+) -> (u64, u64) {
+    let p = &regs.pre;
+    let beat = cfg.axi_data_bits as u64 / 8;
+    let span = |addr: u64, bytes: u64| beat * beats_spanned(addr, bytes, beat);
+    let gb = geometry_bytes() as u64;
+    let sh = sh_bytes(p.sh_degree as u8, ShPrecision::F32) as u64;
+    let mut rd = 0;
+    for lane in 0..cfg.pre_units {
+        let (first, count) = cfg.pre_lane_range(p.gaussians, lane);
+        rd += span(p.geo_base + gb * first as u64, gb * count as u64);
+    }
+    for &i in visible {
+        rd += span(p.sh_base + sh * i, sh);
+        if !p.fresh() {
+            rd += span(p.prev_feat_base + FEATURE_BYTES * i, FEATURE_BYTES);
+        }
+    }
+    let mut wr: u64 =
+        (0..p.gaussians as u64).map(|i| span(regs.feat_base + FEATURE_BYTES * i, FEATURE_BYTES)).sum();
+    let stride = cfg.list_stride() as u64;
+    let per_line = LIST_LINE_BYTES / ENTRY_BYTES;
+    for (t, len) in list_lens.into_iter().enumerate() {
+        let base = p.list_base + ENTRY_BYTES * stride * t as u64;
+        let lines = (len as u64).min(cfg.table_capacity as u64).div_ceil(per_line);
+        wr += (0..lines).map(|k| span(base + LIST_LINE_BYTES * k, LIST_LINE_BYTES)).sum::<u64>();
+        wr += span(regs.desc_base + DESCRIPTOR_BYTES * t as u64 + LIST_LEN_OFFSET, 4);
+    }
+    (rd, wr)
 }
 
 /// Writes every tile's list (its first `table_capacity` entries, whole lines) and its length.
-fn write_lists(
-    cfg: &EngineConfig,
-    regs: &FrameRegs,
-    mem: &mut Memory,
-    lists: &[Vec<SortEntry>],
-    counters: &mut Counters,
-) {
+fn write_lists(cfg: &EngineConfig, regs: &FrameRegs, mem: &mut Memory, lists: &[Vec<SortEntry>]) {
     let sfmt = cfg.format();
-    let beat = cfg.axi_data_bits as u64 / 8;
     let per_line = (LIST_LINE_BYTES / ENTRY_BYTES) as usize;
     for (t, list) in lists.iter().enumerate() {
         let base = regs.pre.list_base + ENTRY_BYTES * (t * cfg.list_stride()) as u64;
@@ -180,11 +204,9 @@ fn write_lists(
             }
             let at = base + LIST_LINE_BYTES * k as u64;
             mem.write(at, &bytes);
-            counters.add(Counter::WrPre, beat * beats_spanned(at, LIST_LINE_BYTES, beat));
         }
         let at = regs.desc_base + DESCRIPTOR_BYTES * t as u64 + LIST_LEN_OFFSET;
         mem.write(at, &(list.len() as u32).to_le_bytes());
-        counters.add(Counter::WrPre, beat * beats_spanned(at, 4, beat));
     }
 }
 

@@ -8,10 +8,8 @@ use super::{
 };
 use crate::camera::Camera;
 use crate::engine::expected::PreExpected;
-use crate::engine::memory::{
-    feature_to_bytes, feature_word_bits, Memory, TileDescriptor, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
-};
-use crate::engine::pre::{beats_spanned, LIST_LEN_OFFSET, LIST_LINE_BYTES};
+use crate::engine::memory::{feature_to_bytes, feature_word_bits, Memory, TileDescriptor, ENTRY_BYTES};
+use crate::engine::pre::pre_traffic;
 use crate::engine::regs::{CameraWord, Counter, FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
 use crate::engine::EngineConfig;
 use crate::hwpre::bake::{geometry_bytes, sh_bytes, Baked, ShPrecision};
@@ -165,7 +163,7 @@ impl EngineSession<'_> {
             (0..self.gaussians as u32).map(|i| feature_to_bytes(&ffmt, self.pipeline.feature(i))).collect();
         let visible: Vec<u64> =
             (0..self.gaussians as u64).filter(|&i| self.pipeline.feature(i as u32).is_some()).collect();
-        let (rd, wr) = self.pre_traffic(&regs, &visible, &lists);
+        let (rd, wr) = pre_traffic(&self.cfg, &regs, &visible, lists.iter().map(Vec::len));
         e.outcome.counters.add(Counter::RdPre, rd);
         e.outcome.counters.add(Counter::WrPre, wr);
         e.pre = Some(PreExpected {
@@ -177,39 +175,5 @@ impl EngineSession<'_> {
             present_bit: feature_word_bits(&ffmt) - 1,
         });
         Ok(e)
-    }
-
-    /// The Preprocessing Engine's `(RD_PRE, WR_PRE)` bytes: the beats its transfers span
-    /// ([`beats_spanned`]) times the beat bytes. Reads: each lane's geometry stream, each
-    /// `visible` Gaussian's SH record and (unless fresh) previous feature word; writes: every
-    /// feature word, each tile's list lines (the first `table_capacity` entries) and length.
-    fn pre_traffic(&self, regs: &FrameRegs, visible: &[u64], lists: &[Vec<SortEntry>]) -> (u64, u64) {
-        let p = &regs.pre;
-        let beat = self.cfg.axi_data_bits as u64 / 8;
-        let span = |addr: u64, bytes: u64| beat * beats_spanned(addr, bytes, beat);
-        let gb = geometry_bytes() as u64;
-        let sh = sh_bytes(p.sh_degree as u8, ShPrecision::F32) as u64;
-        let mut rd = 0;
-        for lane in 0..self.cfg.pre_units {
-            let (first, count) = self.cfg.pre_lane_range(p.gaussians, lane);
-            rd += span(p.geo_base + gb * first as u64, gb * count as u64);
-        }
-        for &i in visible {
-            rd += span(p.sh_base + sh * i, sh);
-            if !p.fresh() {
-                rd += span(p.prev_feat_base + FEATURE_BYTES * i, FEATURE_BYTES);
-            }
-        }
-        let mut wr: u64 =
-            (0..p.gaussians as u64).map(|i| span(regs.feat_base + FEATURE_BYTES * i, FEATURE_BYTES)).sum();
-        let stride = self.cfg.list_stride() as u64;
-        let per_line = LIST_LINE_BYTES / ENTRY_BYTES;
-        for (t, list) in lists.iter().enumerate() {
-            let base = p.list_base + ENTRY_BYTES * stride * t as u64;
-            let lines = (list.len() as u64).min(self.cfg.table_capacity as u64).div_ceil(per_line);
-            wr += (0..lines).map(|k| span(base + LIST_LINE_BYTES * k, LIST_LINE_BYTES)).sum::<u64>();
-            wr += span(regs.desc_base + DESCRIPTOR_BYTES * t as u64 + LIST_LEN_OFFSET, 4);
-        }
-        (rd, wr)
     }
 }
