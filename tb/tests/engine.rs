@@ -240,7 +240,7 @@ fn engine_scene_orbit_and_cut_are_bit_exact() {
 /// writing, the length keeps counting, the next frame is from scratch). Its own engine
 /// configuration (the capacity): `cargo test -p neo-tb --release --test engine -- --ignored`.
 #[test]
-#[ignore]
+#[ignore = "builds its own engine configuration (about 12 minutes); run with --ignored"]
 fn engine_scene_overflow_is_bit_exact() {
     let scene = synthetic();
     let how = CaseScene::synthetic();
@@ -253,7 +253,7 @@ fn engine_scene_overflow_is_bit_exact() {
 /// Scene mode with two lanes (their hits interleave in the lists): reuse frames of the orbit.
 /// A 2-lane engine build (about 20 minutes): `--ignored`.
 #[test]
-#[ignore]
+#[ignore = "builds a two-lane engine (about 24 minutes); run with --ignored"]
 fn engine_scene_two_lanes_are_bit_exact() {
     let scene = small_synthetic();
     let how = CaseScene::synthetic();
