@@ -333,16 +333,16 @@ module neo_engine (
     .counters_i(counters)
   );
 
-  // A start goes to the Preprocessing Engine when PRE_CTRL.enable, and its done starts the walk.
-  // STATUS: busy from the start to the walk's end; the walk's done (held) hidden until then.
-  wire pre_busy;
-  wire pre_done;
   wire ctrl_busy;
   wire ctrl_done;
+  // A start goes to the Preprocessing Engine when PRE_CTRL.enable, and its done starts the walk.
+  wire pre_busy;
+  wire pre_done;
   wire pre_start;
   assign pre_start = start & pre_enable;
   wire ctrl_start;
   assign ctrl_start = pre_enable ? pre_done : start;
+  // STATUS: busy from the start to the walk's end; the walk's done (held) hidden until then.
   assign frame_busy = pre_busy | ctrl_busy;
   assign frame_done = ctrl_done & ~pre_busy & ~start;
   assign busy_o = frame_busy;

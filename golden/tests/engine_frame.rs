@@ -134,6 +134,30 @@ fn reference_preprocessing_matches_pipeline_on_every_case_synthetic() {
     }
 }
 
+/// An engine without a Preprocessing Engine (`pre_units` 0): lists mode runs as on any engine,
+/// with `PRE_CTRL.enable` set (ignored: no preprocessing traffic); scene mode is refused.
+#[test]
+fn an_engine_without_preprocessing_ignores_pre_ctrl_and_refuses_scene_mode() {
+    let (scene, _) = load_scene(CaseScene::SYNTHETIC, false).expect("synthetic scene");
+    let how = CaseScene::synthetic();
+    let base = EngineConfig { pre_units: 0, ..small_config() };
+    assert_eq!(base.memory_clients(), 1 + 2 + 2, "no preprocessing managers");
+    let (traj, cfg) = EngineCase::Orbit.setup(&scene, &how, 2, [128, 128], &base).expect("case setup");
+    let mut s = EngineSession::with_mode(&scene, traj.clone(), &cfg, HostMode::Lists).expect("session");
+    let mut mem = Memory::new();
+    while let Some(mut plan) = s.next_frame(&mut mem).expect("host frame") {
+        plan.regs.pre.ctrl = neo_golden::engine::PRE_ENABLE;
+        let out = execute_frame(&cfg, &plan.regs, &mut mem).expect("reference frame");
+        if let Some(m) = plan.expected.compare(&mem) {
+            panic!("frame {}: {m}", plan.frame);
+        }
+        assert_eq!(out.counters.get(Counter::RdPre) + out.counters.get(Counter::WrPre), 0);
+        assert_eq!(out.results, plan.expected.outcome.results, "frame {}", plan.frame);
+    }
+    let e = EngineSession::with_mode(&scene, traj, &cfg, HostMode::Scene).err().expect("scene mode refused");
+    assert!(e.to_string().contains("pre_units 0"), "{e}");
+}
+
 #[test]
 fn reference_matches_pipeline_on_biker() {
     let Some(path) = shared_file_for_test("reference_matches_pipeline_on_biker", "scenes/biker.ply") else {
@@ -190,7 +214,9 @@ fn compare_names_preprocessing_corruption() {
     let mut last = None;
     while let Some(plan) = s.next_frame(&mut mem).expect("frame") {
         let out = execute_frame(&cfg, &plan.regs, &mut mem).expect("frame");
-        assert_eq!(plan.expected.compare(&mem), None, "frame {}", plan.frame);
+        if let Some(m) = plan.expected.compare(&mem) {
+            panic!("frame {}: {m}", plan.frame);
+        }
         last = Some((plan, out));
     }
     let (plan, out) = last.expect("two frames");

@@ -86,14 +86,16 @@ impl EngineModel {
 
 /// The transactions each memory client may have in flight, `(reads, writes)`, in client order
 /// (`EngineConfig::memory_clients`): the frame controller and the bridges `axi_outstanding`
-/// each; the Preprocessing Engine's managers (client `1 + N + M + q`): lane `p`'s two ports
-/// (`q = 2 p`, `2 p + 1`) read `pre_outstanding` bursts and write `axi_outstanding`, the list
+/// each; the Preprocessing Engine's managers (client `1 + N + M + q`, when it has one): the
+/// lanes' ports (`q < 2 P`) read `pre_outstanding` bursts and write `axi_outstanding`, the list
 /// writer (`q = 2 P`) `pre_outstanding` each.
 pub fn client_limits(cfg: &EngineConfig) -> Vec<(usize, usize)> {
     let (a, p) = (cfg.axi_outstanding, cfg.pre_outstanding);
     let mut v = vec![(a, a); 1 + cfg.sort_cores + cfg.raster_cores];
-    v.extend((0..2 * cfg.pre_units).map(|_| (p, a)));
-    v.push((p, p));
+    if cfg.has_preprocessing() {
+        v.extend((0..2 * cfg.pre_units).map(|_| (p, a)));
+        v.push((p, p));
+    }
     debug_assert_eq!(v.len(), cfg.memory_clients());
     v
 }

@@ -12,6 +12,7 @@
 //!   `PRE_CTRL.enable` is set (its `done_o` starts `u_ctrl`), on a clock gated by `u_pre_gate`
 //!   (`neo_clock_gate`) from its start to its done; its managers `q` are memory clients
 //!   `1 + N + M + q` (`g_pre_client[q]` moves them between its packed buses and the client buses);
+//!   absent with `pre_units` 0 (the host writes the lists; a start starts `u_ctrl`);
 //! - `g_port[k]`: the port mux `u_mux` of AXI4 manager port `m{k}_axi_*`.
 //!
 //! Client `c` is served by port `c mod K` in slot `c div K`; every port's mux has
@@ -125,7 +126,11 @@ pub fn module(cfg: &EngineConfig) -> Module {
         "Neo engine: {} Sorting Cores, {} Rasterization Cores, {} AXI4 manager ports (m<k>_axi_*), an",
         cl.sort, cl.raster, cl.ports
     ));
-    m.doc("AXI4-Lite control port (s_axil_*). A frame: preprocessing (when PRE_CTRL.enable), then per tile:");
+    m.doc(if cfg.has_preprocessing() {
+        "AXI4-Lite control port (s_axil_*). A frame: preprocessing (when PRE_CTRL.enable), then per tile:"
+    } else {
+        "AXI4-Lite control port (s_axil_*), no Preprocessing Engine (pre_units 0). A frame, per tile:"
+    });
     m.doc(
         "conventional sort of the incoming list, DPS of the previous table, merge-with-delete, rasterisation",
     );
@@ -225,11 +230,18 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     }
     m.instance(engine_regs::NAME, "u_regs", c);
     m.blank();
-    m.comment("A start goes to the Preprocessing Engine when PRE_CTRL.enable, and its done starts the walk.");
+    m.wire("ctrl_busy", 1).wire("ctrl_done", 1);
+    if cfg.has_preprocessing() {
+        m.comment("A start goes to the Preprocessing Engine when PRE_CTRL.enable, and its done starts the walk.");
+        m.wire("pre_busy", 1).wire("pre_done", 1);
+        m.wire_assign("pre_start", 1, "start & pre_enable");
+        m.wire_assign("ctrl_start", 1, "pre_enable ? pre_done : start");
+    } else {
+        m.comment("No Preprocessing Engine (pre_units 0): a start starts the walk; PRE_CTRL is ignored.");
+        m.wire_assign("pre_busy", 1, "1'b0");
+        m.wire_assign("ctrl_start", 1, "start");
+    }
     m.comment("STATUS: busy from the start to the walk's end; the walk's done (held) hidden until then.");
-    m.wire("pre_busy", 1).wire("pre_done", 1).wire("ctrl_busy", 1).wire("ctrl_done", 1);
-    m.wire_assign("pre_start", 1, "start & pre_enable");
-    m.wire_assign("ctrl_start", 1, "pre_enable ? pre_done : start");
     m.assign("frame_busy", "pre_busy | ctrl_busy");
     m.assign("frame_done", "ctrl_done & ~pre_busy & ~start");
     m.assign("busy_o", "frame_busy");
@@ -321,7 +333,18 @@ fn pre_register_net(port: &str) -> String {
 }
 
 /// `u_pre`, the Preprocessing Engine, and `g_pre_client[q]`: its managers on the client buses.
+/// Without one (`pre_units` 0), only a lint sink of its register wires.
 fn preprocessing(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
+    if !cfg.has_preprocessing() {
+        let nets: Vec<String> = pre_register_ports(&engine_regs::module(cfg))
+            .into_iter()
+            .map(|(port, _, _)| pre_register_net(&port))
+            .collect();
+        m.blank();
+        m.comment("No Preprocessing Engine: its registers are stored and read back, and unused here.");
+        m.wire_assign("unused_pre_regs", 1, format!("^{{{}}}", nets.join(", ")));
+        return;
+    }
     let (q, k, p) = (cl.pre as u32, cl.ports, cl.slots());
     let sigs = axi::signals(cfg);
     m.blank();
@@ -541,9 +564,17 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.wire("inc", iw * COUNTERS as u32);
     let pixels = u64::from(cfg.subtile) * PIXEL_BYTES;
     let (q, beat) = (cl.pre as u32, u64::from(cfg.axi_data_bits / 8));
-    m.wire_assign("pre_r_beat", q, "pre_rvalid & pre_rready");
-    m.wire_assign("pre_w_beat", q, "pre_wvalid & pre_wready");
-    let bytes = |v: &str, count: u32, b: u64| format!("({}) * {}", popcount(v, count, iw), lit(iw, b));
+    if q > 0 {
+        m.wire_assign("pre_r_beat", q, "pre_rvalid & pre_rready");
+        m.wire_assign("pre_w_beat", q, "pre_wvalid & pre_wready");
+    }
+    let bytes = |v: &str, count: u32, b: u64| {
+        if count == 0 {
+            lit(iw, 0)
+        } else {
+            format!("({}) * {}", popcount(v, count, iw), lit(iw, b))
+        }
+    };
     let ev = |e: &str| format!("ev_{e}");
     let events = ports_of(&frame_ctrl::module(cfg), "ev_");
     let ew = |e: &str| {
@@ -613,7 +644,7 @@ mod tests {
     #[test]
     fn every_client_has_its_own_slot_and_ports_share_the_load() {
         for (sort, raster, pre, ports) in
-            [(16, 4, 9, 4), (2, 1, 3, 2), (1, 1, 3, 1), (3, 2, 5, 4), (16, 4, 33, 1)]
+            [(16, 4, 9, 4), (2, 1, 3, 2), (1, 1, 3, 1), (3, 2, 5, 4), (16, 4, 33, 1), (2, 1, 0, 2)]
         {
             let cl = Clients { sort, raster, pre, ports };
             let mut seen: Vec<usize> = (0..cl.count()).map(|c| cl.position(c)).collect();

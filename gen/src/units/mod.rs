@@ -158,7 +158,9 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(pre::project_module(cfg));
     all.push(pre::lane::module(cfg));
     all.push(pre::lists::module(cfg));
-    all.push(pre::engine::module(cfg));
+    if cfg.has_preprocessing() {
+        all.push(pre::engine::module(cfg));
+    }
     all.push(clock_gate::module(cfg));
     for m in &mut all {
         m.config_hash = Some(hash);

@@ -100,7 +100,7 @@ pub struct EngineConfig {
     /// in the paper).
     pub subtile: u32,
     /// ITU: width of the tile indices `tile_x_i` / `tile_y_i` (unsigned; the tile origin is
-    /// `tile_x * tile` pixels). 10 bits cover +-32768 px of the default mean format.
+    /// `tile_x * tile` pixels). 10 bits cover images up to 65536 px wide at 64-pixel tiles.
     pub tile_bits: u32,
     /// ITU: width of the sideband tag carried from `tag_i` to `tag_o` unchanged.
     pub itu_tag_bits: u32,
@@ -140,7 +140,8 @@ pub struct EngineConfig {
     /// Engine: AXI4 transactions a requester may have in flight (reads and writes each).
     pub axi_outstanding: usize,
     /// Preprocessing Engine: projection, colour, duplication and fetch units, one of each per
-    /// lane (Table 1: 4).
+    /// lane (Table 1: 4). 0: an engine without a Preprocessing Engine (the host writes every
+    /// frame's features and incoming lists; `PRE_CTRL` is stored and ignored).
     pub pre_units: usize,
     /// Preprocessing Engine: 64-byte lines each fetch unit (`neo_pre_fetch`) keeps in flight,
     /// its read window and the size of its beat buffer (a power of two). Little's law: one unit
@@ -366,9 +367,9 @@ impl EngineConfig {
     /// `pre_outstanding` bursts of at most 256 beats and 4 KiB must cover.
     fn validate_preprocessing(&self) -> Result<(), ConfigError> {
         let err = |s: String| Err(ConfigError(s));
-        if !self.pre_units.is_power_of_two() || !(1..=16).contains(&self.pre_units) {
+        if self.pre_units != 0 && (!self.pre_units.is_power_of_two() || self.pre_units > 16) {
             return err(format!(
-                "pre_units {} is not a power of two in 1..=16 (the lanes split the Gaussians by a shift)",
+                "pre_units {} is neither 0 (no Preprocessing Engine) nor a power of two in 1..=16 (the lanes split the Gaussians by a shift)",
                 self.pre_units
             ));
         }
@@ -396,15 +397,34 @@ impl EngineConfig {
     }
 
     /// The engine's AXI4 memory clients: the frame controller, the sorting and raster cores'
-    /// bridges, and the Preprocessing Engine's (two ports per lane, one list writer).
+    /// bridges, and the Preprocessing Engine's ([`EngineConfig::pre_managers`]).
     pub fn memory_clients(&self) -> usize {
-        1 + self.sort_cores + self.raster_cores + 2 * self.pre_units + 1
+        1 + self.sort_cores + self.raster_cores + self.pre_managers()
+    }
+
+    /// Whether the engine has a Preprocessing Engine (`pre_units` > 0).
+    pub fn has_preprocessing(&self) -> bool {
+        self.pre_units > 0
+    }
+
+    /// The Preprocessing Engine's AXI4 managers: two per lane (lane `p`'s geometry and feature
+    /// port at `p`, its SH and previous-word port at `pre_units + p`) and the list writer at
+    /// `2 pre_units`; none without a Preprocessing Engine.
+    pub fn pre_managers(&self) -> usize {
+        if self.has_preprocessing() {
+            2 * self.pre_units + 1
+        } else {
+            0
+        }
     }
 
     /// The Gaussians lane `lane` of the Preprocessing Engine takes out of `gaussians`:
     /// `(first, count)`, consecutive ranges of `ceil(gaussians / pre_units)` (the last ones
-    /// shorter or empty).
+    /// shorter or empty); `(0, 0)` without a Preprocessing Engine.
     pub fn pre_lane_range(&self, gaussians: u32, lane: usize) -> (u32, u32) {
+        if !self.has_preprocessing() {
+            return (0, 0);
+        }
         let share = (gaussians as u64).div_ceil(self.pre_units as u64);
         let first = (share * lane as u64).min(gaussians as u64);
         let end = (first + share).min(gaussians as u64);
@@ -569,8 +589,8 @@ mod tests {
             EngineConfig { axi_data_bits: 48, ..EngineConfig::default() },
             EngineConfig { axi_outstanding: 3, ..EngineConfig::default() },
             EngineConfig { axi_id_bits: 2, ..EngineConfig::default() },
-            EngineConfig { pre_units: 0, ..EngineConfig::default() },
             EngineConfig { pre_units: 3, ..EngineConfig::default() },
+            EngineConfig { pre_units: 32, ..EngineConfig::default() },
             // 1 + 16 + 4 + 2 x 16 + 1 = 54 clients on 2 ports: 27 slots need 5 ID bits.
             EngineConfig { pre_units: 16, mem_channels: 2, ..EngineConfig::default() },
             EngineConfig { pre_read_lines: 96, ..EngineConfig::default() },

@@ -84,6 +84,9 @@ pub enum SessionError {
     /// The trajectory has no frame.
     #[error("the trajectory has no frame")]
     NoFrames,
+    /// Scene mode on an engine without a Preprocessing Engine.
+    #[error("scene mode needs a Preprocessing Engine: the configuration has pre_units 0 (use lists mode)")]
+    NoPreprocessing,
 }
 
 /// How the host feeds the engine (see the module docs).
@@ -278,6 +281,9 @@ impl<'s> EngineSession<'s> {
         mode: HostMode,
     ) -> Result<Self, SessionError> {
         cfg.validate()?;
+        if mode == HostMode::Scene && !cfg.has_preprocessing() {
+            return Err(SessionError::NoPreprocessing);
+        }
         let first = traj.frames.first().ok_or(SessionError::NoFrames)?;
         let pipeline = pipeline_for(scene, cfg, first.width, first.height)?;
         let [gx, gy] = pipeline.grid();

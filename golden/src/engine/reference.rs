@@ -18,7 +18,8 @@
 //!
 //! With [`PRE_ENABLE`](super::PRE_ENABLE) the frame first runs the Preprocessing Engine
 //! ([`super::pre::preprocess_frame`]: feature words, incoming lists and their lengths, the
-//! counters `RD_PRE` and `WR_PRE`), then the tile walk as above.
+//! counters `RD_PRE` and `WR_PRE`), then the tile walk as above. An engine without one
+//! (`pre_units` 0) ignores `PRE_CTRL`.
 //!
 //! Which core runs a tile only moves its scratch buffers: the reference uses sorting core
 //! `t mod N` (the round-robin schedule) for tile `t`; the scratch contents are not part of the
@@ -124,7 +125,7 @@ pub fn execute_frame_traced(
 ) -> Result<(FrameOutcome, FrameTrace), FrameError> {
     let mut run = FrameRun::new(cfg, regs);
     let mut trace = FrameTrace::default();
-    if regs.pre.enabled() {
+    if regs.pre.enabled() && cfg.has_preprocessing() {
         trace.pre = Some(preprocess_frame(cfg, regs, mem, &mut run.out.counters)?);
     }
     for t in 0..regs.tiles as u64 {

@@ -14,8 +14,10 @@
 //!   until `u_lists` takes it); drain (until `u_lists` is idle), then `done_o` pulses and
 //!   `busy_o` falls.
 //! - **Memory**: `2 P + 1` AXI4 managers on packed buses `m_axi_<signal>` (manager `q` at
-//!   `[q W +: W]`): `2 p` is lane `p`'s `ma_axi` (geometry reads, feature-word writes), `2 p + 1`
-//!   its `mb_axi` (SH and previous-word reads), `2 P` the list writer.
+//!   `[q W +: W]`): `p` is lane `p`'s `ma_axi` (geometry reads, feature-word writes), `P + p`
+//!   its `mb_axi` (SH and previous-word reads), `2 P` the list writer (golden
+//!   `EngineConfig::pre_managers`). The lanes' SH ports are consecutive managers, so the engine's
+//!   client interleave spreads their gathers over its memory ports.
 //!
 //! The per-frame inputs (camera words, degree, bases, `fresh_i`, `gaussians_i`, `tiles_i`) must
 //! be stable from `start_i` to `done_o`.
@@ -41,9 +43,10 @@ const RUN: u64 = 2;
 const FLUSH: u64 = 3;
 const DRAIN: u64 = 4;
 
-/// The AXI4 managers of the engine for `cfg`: two per lane and the list writer.
+/// The AXI4 managers of the engine for `cfg`: two per lane and the list writer (golden
+/// `EngineConfig::pre_managers`).
 pub fn managers(cfg: &EngineConfig) -> usize {
-    2 * cfg.pre_units + 1
+    cfg.pre_managers()
 }
 
 /// The lane's per-frame camera inputs (its `_i` ports named by a [`CameraWord`]) and the
@@ -91,7 +94,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     ));
     m.doc("baked scene and the camera to every feature word, the tiles' incoming lists and their lengths.");
     m.doc(
-        "AXI4 managers on m_axi_* (manager q at [q*W +: W]): lane p's ma at 2p, mb at 2p+1, the lists at 2P.",
+        "AXI4 managers on m_axi_* (manager q at [q*W +: W]): lane p's ma at p, mb at P+p, the lists at 2P.",
     );
     m.clock_reset();
     m.input_c("start_i", 1, "pulse: preprocess the frame (ignored while busy_o)");
@@ -260,8 +263,8 @@ fn lanes(m: &mut Module, cfg: &EngineConfig) {
     for (name, w) in [("tile_x", tb), ("tile_y", tb), ("id", ib), ("key", kb)] {
         c.push((format!("hit_{name}_o"), format!("lane_hit_{name}[p*{w} +: {w}]")));
     }
-    c.extend(manager_conns(cfg, "ma_axi_", "2*p"));
-    c.extend(manager_conns(cfg, "mb_axi_", "2*p + 1"));
+    c.extend(manager_conns(cfg, "ma_axi_", "p"));
+    c.extend(manager_conns(cfg, "mb_axi_", &format!("{} + p", cfg.pre_units)));
     items.push(Item::Instance(Instance {
         module: lane::NAME.into(),
         name: "u_lane".into(),
