@@ -15,7 +15,7 @@ module neo_axi_raster_bridge (
   input  wire [191:0] mem_wdata_i,      // table entry (low bits) or S pixels, pixel k at [24k +: 24] = {b, g, r}
   output wire         mem_rsp_valid_o,  // read response (table entry or whole feature word), in request order
   input  wire         mem_rsp_ready_i,  // the core takes the response (always 1 in neo_raster_core)
-  output wire [246:0] mem_rsp_data_o,   // table entry (low bits) or feature word {present, entry}
+  output wire [254:0] mem_rsp_data_o,   // table entry (low bits) or feature word {present, entry}
   output wire         idle_o,           // no request pending, no read or write in flight
   output wire         rd_table_o,       // pulse: a table entry delivered
   output wire         rd_feat_o,        // pulse: a feature word delivered
@@ -178,7 +178,7 @@ module neo_axi_raster_bridge (
   assign mem_rsp_valid_o = m_axi_rvalid_i & r_deliver;
   wire [255:0] feat_word;
   assign feat_word = {m_axi_rdata_i, fasm_q};
-  assign mem_rsp_data_o = r_feat ? feat_word[246:0] : {199'd0, m_axi_rdata_i[47:0]};
+  assign mem_rsp_data_o = r_feat ? feat_word[254:0] : {207'd0, m_axi_rdata_i[47:0]};
   always @(posedge clk_i) begin
     if (r_fire & r_feat & ~m_axi_rlast_i) begin
       fasm_q <= {m_axi_rdata_i, fasm_q[191:64]};
@@ -315,6 +315,6 @@ module neo_axi_raster_bridge (
   assign idle_o = ~ar_v_q & (rd_cnt_q == 4'd0) & (wr_cnt_q == 4'd0);
   // Response IDs and RESP fields are not used (one ID; errors are not reported).
   wire unused_rsp;
-  assign unused_rsp = ^{m_axi_rid_i, m_axi_rresp_i, m_axi_bid_i, m_axi_bresp_i, feat_word[255:247]};
+  assign unused_rsp = ^{m_axi_rid_i, m_axi_rresp_i, m_axi_bid_i, m_axi_bresp_i, feat_word[255:255]};
 
 endmodule

@@ -607,7 +607,7 @@ module neo_engine (
       wire [191:0] mem_wdata;
       wire mem_rsp_valid;
       wire mem_rsp_ready;
-      wire [246:0] mem_rsp_data;
+      wire [254:0] mem_rsp_data;
       neo_raster_core u_core (
         .clk_i(clk_i),
         .rst_ni(rst_ni),

@@ -12,10 +12,10 @@ module neo_pre_dup (
   output wire        in_ready_o,
   input  wire [30:0] in_id_i,            // Gaussian id
   input  wire [15:0] in_key_i,           // depth key
-  input  wire [47:0] in_mean_i,          // this frame's {mean_y, mean_x}
+  input  wire [55:0] in_mean_i,          // this frame's {mean_y, mean_x}
   input  wire [79:0] in_geom_i,          // this frame's ITU block of the feature entry
   input  wire        in_prev_visible_i,  // visible in the previous frame
-  input  wire [47:0] in_prev_mean_i,     // the previous frame's {mean_y, mean_x}
+  input  wire [55:0] in_prev_mean_i,     // the previous frame's {mean_y, mean_x}
   input  wire [79:0] in_prev_geom_i,     // the previous frame's ITU block
   output wire        out_valid_o,
   input  wire        out_ready_i,
@@ -28,67 +28,67 @@ module neo_pre_dup (
 );
 
   // Candidate tiles along x: [x0, x1).
-  wire [23:0] x_mean;
-  assign x_mean = in_mean_i[23:0];
+  wire [27:0] x_mean;
+  assign x_mean = in_mean_i[27:0];
   wire [14:0] x_ext;
   assign x_ext = in_geom_i[14:0];
-  wire [27:0] x_m;
-  assign x_m = {{3{x_mean[23]}}, x_mean, 1'b0};
-  wire [27:0] x_r;
-  assign x_r = {6'd0, {x_ext, 7'd0}};
+  wire [31:0] x_m;
+  assign x_m = {{3{x_mean[27]}}, x_mean, 1'b0};
+  wire [31:0] x_r;
+  assign x_r = {10'd0, {x_ext, 7'd0}};
   wire x_unbounded;
   assign x_unbounded = x_ext == 15'd32767;
-  wire [27:0] x_below;
+  wire [31:0] x_below;
   assign x_below = x_r - x_m;
-  wire [27:0] x_below_g;
+  wire [31:0] x_below_g;
   assign x_below_g = $signed(x_below) >>> 9;
-  wire [27:0] x_lo;
-  assign x_lo = 28'd0 - x_below_g;
-  wire [27:0] x_above;
+  wire [31:0] x_lo;
+  assign x_lo = 32'd0 - x_below_g;
+  wire [31:0] x_above;
   assign x_above = x_m + x_r;
-  wire [27:0] x_hi;
+  wire [31:0] x_hi;
   assign x_hi = $signed(x_above) >>> 9;
-  wire [27:0] x_first;
+  wire [31:0] x_first;
   assign x_first = $signed(x_lo) >>> 6;
-  wire [27:0] x_last;
+  wire [31:0] x_last;
   assign x_last = $signed(x_hi) >>> 6;
-  wire [27:0] x_end;
-  assign x_end = x_last + 28'd1;
+  wire [31:0] x_end;
+  assign x_end = x_last + 32'd1;
   wire [9:0] x0;
-  assign x0 = x_unbounded ? 10'd0 : (x_first[27] ? 10'd0 : ((x_first > {18'd0, grid_x_i}) ? grid_x_i : x_first[9:0]));
+  assign x0 = x_unbounded ? 10'd0 : (x_first[31] ? 10'd0 : ((x_first > {22'd0, grid_x_i}) ? grid_x_i : x_first[9:0]));
   wire [9:0] x1;
-  assign x1 = x_unbounded ? grid_x_i : (x_end[27] ? 10'd0 : ((x_end > {18'd0, grid_x_i}) ? grid_x_i : x_end[9:0]));
+  assign x1 = x_unbounded ? grid_x_i : (x_end[31] ? 10'd0 : ((x_end > {22'd0, grid_x_i}) ? grid_x_i : x_end[9:0]));
   // Candidate tiles along y: [y0, y1).
-  wire [23:0] y_mean;
-  assign y_mean = in_mean_i[47:24];
+  wire [27:0] y_mean;
+  assign y_mean = in_mean_i[55:28];
   wire [14:0] y_ext;
   assign y_ext = in_geom_i[29:15];
-  wire [27:0] y_m;
-  assign y_m = {{3{y_mean[23]}}, y_mean, 1'b0};
-  wire [27:0] y_r;
-  assign y_r = {6'd0, {y_ext, 7'd0}};
+  wire [31:0] y_m;
+  assign y_m = {{3{y_mean[27]}}, y_mean, 1'b0};
+  wire [31:0] y_r;
+  assign y_r = {10'd0, {y_ext, 7'd0}};
   wire y_unbounded;
   assign y_unbounded = y_ext == 15'd32767;
-  wire [27:0] y_below;
+  wire [31:0] y_below;
   assign y_below = y_r - y_m;
-  wire [27:0] y_below_g;
+  wire [31:0] y_below_g;
   assign y_below_g = $signed(y_below) >>> 9;
-  wire [27:0] y_lo;
-  assign y_lo = 28'd0 - y_below_g;
-  wire [27:0] y_above;
+  wire [31:0] y_lo;
+  assign y_lo = 32'd0 - y_below_g;
+  wire [31:0] y_above;
   assign y_above = y_m + y_r;
-  wire [27:0] y_hi;
+  wire [31:0] y_hi;
   assign y_hi = $signed(y_above) >>> 9;
-  wire [27:0] y_first;
+  wire [31:0] y_first;
   assign y_first = $signed(y_lo) >>> 6;
-  wire [27:0] y_last;
+  wire [31:0] y_last;
   assign y_last = $signed(y_hi) >>> 6;
-  wire [27:0] y_end;
-  assign y_end = y_last + 28'd1;
+  wire [31:0] y_end;
+  assign y_end = y_last + 32'd1;
   wire [9:0] y0;
-  assign y0 = y_unbounded ? 10'd0 : (y_first[27] ? 10'd0 : ((y_first > {18'd0, grid_y_i}) ? grid_y_i : y_first[9:0]));
+  assign y0 = y_unbounded ? 10'd0 : (y_first[31] ? 10'd0 : ((y_first > {22'd0, grid_y_i}) ? grid_y_i : y_first[9:0]));
   wire [9:0] y1;
-  assign y1 = y_unbounded ? grid_y_i : (y_end[27] ? 10'd0 : ((y_end > {18'd0, grid_y_i}) ? grid_y_i : y_end[9:0]));
+  assign y1 = y_unbounded ? grid_y_i : (y_end[31] ? 10'd0 : ((y_end > {22'd0, grid_y_i}) ? grid_y_i : y_end[9:0]));
   // Walker: one candidate tile per cycle, row-major.
   reg  busy_q;
   reg  [9:0] tx_q;
@@ -98,10 +98,10 @@ module neo_pre_dup (
   reg  [9:0] y1_q;
   reg  [30:0] id_q;
   reg  [15:0] key_q;
-  reg  [47:0] mean_q;
+  reg  [55:0] mean_q;
   reg  [79:0] geom_q;
   reg  prev_visible_q;
-  reg  [47:0] prev_mean_q;
+  reg  [55:0] prev_mean_q;
   reg  [79:0] prev_geom_q;
   wire itu_ready;
   wire issue;
@@ -125,10 +125,10 @@ module neo_pre_dup (
       y1_q <= 10'd0;
       id_q <= 31'd0;
       key_q <= 16'd0;
-      mean_q <= 48'd0;
+      mean_q <= 56'd0;
       geom_q <= 80'd0;
       prev_visible_q <= 1'b0;
-      prev_mean_q <= 48'd0;
+      prev_mean_q <= 56'd0;
       prev_geom_q <= 80'd0;
     end else begin
       if (accept) begin

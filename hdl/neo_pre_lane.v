@@ -330,10 +330,10 @@ module neo_pre_lane (
   );
 
   // Projected: into u_pendq {visible, fields, position}; a visible Gaussian's SH record gathered.
-  wire [212:0] p_fields;
-  assign p_fields = {p_depth_key[15:0], p_extent_v[14:0], p_extent_u[14:0], p_axis_s[9:0], p_axis_c[9:0], p_extent_y[14:0], p_extent_x[14:0], p_opacity[7:0], p_conic_exp[5:0], p_conic_c[17:0], p_conic_b[18:0], p_conic_a[17:0], p_mean_y[23:0], p_mean_x[23:0]};
+  wire [220:0] p_fields;
+  assign p_fields = {p_depth_key[15:0], p_extent_v[14:0], p_extent_u[14:0], p_axis_s[9:0], p_axis_c[9:0], p_extent_y[14:0], p_extent_x[14:0], p_opacity[7:0], p_conic_exp[5:0], p_conic_c[17:0], p_conic_b[18:0], p_conic_a[17:0], p_mean_y[27:0], p_mean_x[27:0]};
   wire unused_p;
-  assign unused_p = ^{p_mean_x[31:24], p_mean_y[31:24], p_conic_a[31:18], p_conic_b[31:19], p_conic_c[31:18], p_conic_exp[31:6], p_opacity[31:8], p_extent_x[31:15], p_extent_y[31:15], p_axis_c[31:10], p_axis_s[31:10], p_extent_u[31:15], p_extent_v[31:15], p_depth_key[31:16], p_tile_min_x, p_tile_max_x, p_tile_min_y, p_tile_max_y};
+  assign unused_p = ^{p_mean_x[31:28], p_mean_y[31:28], p_conic_a[31:18], p_conic_b[31:19], p_conic_c[31:18], p_conic_exp[31:6], p_opacity[31:8], p_extent_x[31:15], p_extent_y[31:15], p_axis_c[31:10], p_axis_s[31:10], p_extent_u[31:15], p_extent_v[31:15], p_depth_key[31:16], p_tile_min_x, p_tile_max_x, p_tile_min_y, p_tile_max_y};
   wire pend_ready;
   wire sh_cmd_ready;
   // A visible Gaussian asks u_sh for its previous feature word (unless all_fresh_i), then,
@@ -382,19 +382,19 @@ module neo_pre_lane (
   localparam PEND_POS_Y_W = 32;
   localparam PEND_POS_Z = 64;
   localparam PEND_POS_Z_W = 32;
-  localparam PEND_VISIBLE = 309;
+  localparam PEND_VISIBLE = 317;
   localparam PEND_ENTRY = 96;
-  localparam PEND_ENTRY_W = 214;
+  localparam PEND_ENTRY_W = 222;
   localparam PEND_ITU_MEAN = 96;
-  localparam PEND_ITU_MEAN_W = 48;
-  localparam PEND_ITU_GEOM = 213;
+  localparam PEND_ITU_MEAN_W = 56;
+  localparam PEND_ITU_GEOM = 221;
   localparam PEND_ITU_GEOM_W = 80;
-  localparam PEND_DEPTH_KEY = 293;
+  localparam PEND_DEPTH_KEY = 301;
   localparam PEND_DEPTH_KEY_W = 16;
   wire pend_valid;
-  wire [309:0] pend_data;
+  wire [317:0] pend_data;
   wire pend_pop;
-  neo_pre_fifo_w310_d64 u_pendq (
+  neo_pre_fifo_w318_d64 u_pendq (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
     .push_valid_i(proj_take),
@@ -595,38 +595,38 @@ module neo_pre_lane (
   );
   // u_colq's word: the feature fields and the visibility bit.
   localparam COLQ_MEAN_X = 0;
-  localparam COLQ_MEAN_X_W = 24;
-  localparam COLQ_MEAN_Y = 24;
-  localparam COLQ_MEAN_Y_W = 24;
-  localparam COLQ_CONIC_A = 48;
+  localparam COLQ_MEAN_X_W = 28;
+  localparam COLQ_MEAN_Y = 28;
+  localparam COLQ_MEAN_Y_W = 28;
+  localparam COLQ_CONIC_A = 56;
   localparam COLQ_CONIC_A_W = 18;
-  localparam COLQ_CONIC_B = 66;
+  localparam COLQ_CONIC_B = 74;
   localparam COLQ_CONIC_B_W = 19;
-  localparam COLQ_CONIC_C = 85;
+  localparam COLQ_CONIC_C = 93;
   localparam COLQ_CONIC_C_W = 18;
-  localparam COLQ_CONIC_EXP = 103;
+  localparam COLQ_CONIC_EXP = 111;
   localparam COLQ_CONIC_EXP_W = 6;
-  localparam COLQ_OPACITY = 109;
+  localparam COLQ_OPACITY = 117;
   localparam COLQ_OPACITY_W = 8;
-  localparam COLQ_EXTENT_X = 117;
+  localparam COLQ_EXTENT_X = 125;
   localparam COLQ_EXTENT_X_W = 15;
-  localparam COLQ_EXTENT_Y = 132;
+  localparam COLQ_EXTENT_Y = 140;
   localparam COLQ_EXTENT_Y_W = 15;
-  localparam COLQ_AXIS_C = 147;
+  localparam COLQ_AXIS_C = 155;
   localparam COLQ_AXIS_C_W = 10;
-  localparam COLQ_AXIS_S = 157;
+  localparam COLQ_AXIS_S = 165;
   localparam COLQ_AXIS_S_W = 10;
-  localparam COLQ_EXTENT_U = 167;
+  localparam COLQ_EXTENT_U = 175;
   localparam COLQ_EXTENT_U_W = 15;
-  localparam COLQ_EXTENT_V = 182;
+  localparam COLQ_EXTENT_V = 190;
   localparam COLQ_EXTENT_V_W = 15;
-  localparam COLQ_DEPTH_KEY = 197;
+  localparam COLQ_DEPTH_KEY = 205;
   localparam COLQ_DEPTH_KEY_W = 16;
-  localparam COLQ_VISIBLE = 213;
+  localparam COLQ_VISIBLE = 221;
   wire colq_valid;
-  wire [213:0] colq_data;
+  wire [221:0] colq_data;
   wire word_take;
-  neo_pre_fifo_w214_d256 u_colq (
+  neo_pre_fifo_w222_d256 u_colq (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
     .push_valid_i(c_take),
@@ -639,10 +639,10 @@ module neo_pre_lane (
 
   // Duplication: the joined Gaussian's tiles; the incoming ones go out on hit_*.
   // The previous feature word as the unit reads it: present bit, ITU runs.
-  localparam PREVW_PRESENT = 246;
+  localparam PREVW_PRESENT = 254;
   localparam PREVW_ITU_MEAN = 0;
-  localparam PREVW_ITU_MEAN_W = 48;
-  localparam PREVW_ITU_GEOM = 150;
+  localparam PREVW_ITU_MEAN_W = 56;
+  localparam PREVW_ITU_GEOM = 158;
   localparam PREVW_ITU_GEOM_W = 80;
   wire [31:0] join_id;
   assign join_id = first_i + join_idx_q;
@@ -680,12 +680,12 @@ module neo_pre_lane (
   assign unused_dup = ^{grid_x_i[31:10], grid_y_i[31:10], prev_q, join_id[31:31]};
 
   // Feature word: the layout's fields (golden FeatureFormat::layout), present on top; 0 when culled.
-  wire [245:0] entry_bits;
+  wire [253:0] entry_bits;
   assign entry_bits = {colq_data[COLQ_DEPTH_KEY +: COLQ_DEPTH_KEY_W], colq_data[COLQ_EXTENT_V +: COLQ_EXTENT_V_W], colq_data[COLQ_EXTENT_U +: COLQ_EXTENT_U_W], colq_data[COLQ_AXIS_S +: COLQ_AXIS_S_W], colq_data[COLQ_AXIS_C +: COLQ_AXIS_C_W], colq_data[COLQ_EXTENT_Y +: COLQ_EXTENT_Y_W], colq_data[COLQ_EXTENT_X +: COLQ_EXTENT_X_W], c_blue[10:0], c_green[10:0], c_red[10:0], colq_data[COLQ_OPACITY +: COLQ_OPACITY_W], colq_data[COLQ_CONIC_EXP +: COLQ_CONIC_EXP_W], colq_data[COLQ_CONIC_C +: COLQ_CONIC_C_W], colq_data[COLQ_CONIC_B +: COLQ_CONIC_B_W], colq_data[COLQ_CONIC_A +: COLQ_CONIC_A_W], colq_data[COLQ_MEAN_Y +: COLQ_MEAN_Y_W], colq_data[COLQ_MEAN_X +: COLQ_MEAN_X_W]};
   wire word_visible;
   assign word_visible = colq_data[COLQ_VISIBLE];
   wire [255:0] word;
-  assign word = word_visible ? {9'd0, 1'b1, entry_bits} : 256'd0;
+  assign word = word_visible ? {1'b0, 1'b1, entry_bits} : 256'd0;
   wire unused_c;
   assign unused_c = ^{c_red[31:11], c_green[31:11], c_blue[31:11]};
 

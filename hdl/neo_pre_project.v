@@ -2036,9 +2036,9 @@ module neo_pre_project (
     .y_o(n217_toint)
   );
   wire [31:0] n218_lit;
-  assign n218_lit = 32'hff800000;
+  assign n218_lit = 32'hf8000000;
   wire [31:0] n219_lit;
-  assign n219_lit = 32'h7fffff;
+  assign n219_lit = 32'h7ffffff;
   reg  [31:0] n220_imax_q;
   always @(posedge clk_i) begin
     if (en) begin

@@ -25,7 +25,7 @@ module neo_raster_core (
   output wire [191:0] mem_wdata_o,      // table entry (low bits) or S pixels, pixel k at [24k +: 24] = {b, g, r}
   input  wire         mem_rsp_valid_i,  // read response beat, in request order
   output wire         mem_rsp_ready_o,  // always 1: buffer space is reserved before a read is issued
-  input  wire [246:0] mem_rsp_data_i    // table entry (low bits) or feature word {present, entry}
+  input  wire [254:0] mem_rsp_data_i    // table entry (low bits) or feature word {present, entry}
 );
 
 
@@ -59,34 +59,34 @@ module neo_raster_core (
   localparam TW_KEY = 31;
   localparam TW_KEY_W = 16;
   localparam FEAT_MEAN_X = 0;
-  localparam FEAT_MEAN_X_W = 24;
-  localparam FEAT_MEAN_Y = 24;
-  localparam FEAT_MEAN_Y_W = 24;
-  localparam FEAT_CONIC_A = 48;
+  localparam FEAT_MEAN_X_W = 28;
+  localparam FEAT_MEAN_Y = 28;
+  localparam FEAT_MEAN_Y_W = 28;
+  localparam FEAT_CONIC_A = 56;
   localparam FEAT_CONIC_A_W = 18;
-  localparam FEAT_CONIC_B = 66;
+  localparam FEAT_CONIC_B = 74;
   localparam FEAT_CONIC_B_W = 19;
-  localparam FEAT_CONIC_C = 85;
+  localparam FEAT_CONIC_C = 93;
   localparam FEAT_CONIC_C_W = 18;
-  localparam FEAT_CONIC_EXP = 103;
+  localparam FEAT_CONIC_EXP = 111;
   localparam FEAT_CONIC_EXP_W = 6;
-  localparam FEAT_OPACITY = 109;
+  localparam FEAT_OPACITY = 117;
   localparam FEAT_OPACITY_W = 8;
-  localparam FEAT_RED = 117;
+  localparam FEAT_RED = 125;
   localparam FEAT_RED_W = 11;
-  localparam FEAT_GREEN = 128;
+  localparam FEAT_GREEN = 136;
   localparam FEAT_GREEN_W = 11;
-  localparam FEAT_BLUE = 139;
+  localparam FEAT_BLUE = 147;
   localparam FEAT_BLUE_W = 11;
-  localparam FEAT_DEPTH_KEY = 230;
+  localparam FEAT_DEPTH_KEY = 238;
   localparam FEAT_DEPTH_KEY_W = 16;
-  localparam FEAT_PRESENT = 246;
+  localparam FEAT_PRESENT = 254;
   localparam FEAT_ITU_MEAN = 0;
-  localparam FEAT_ITU_MEAN_W = 48;
-  localparam FEAT_ITU_GEOM = 150;
+  localparam FEAT_ITU_MEAN_W = 56;
+  localparam FEAT_ITU_GEOM = 158;
   localparam FEAT_ITU_GEOM_W = 80;
   reg  [46:0] tbuf [0:511];
-  reg  [246:0] fbuf [0:511];
+  reg  [254:0] fbuf [0:511];
   reg  hbuf [0:511];
   // Per bank: loaded, walked (every group), and its segment's length and first entry.
   reg  [1:0] bank_full_q;
@@ -243,7 +243,7 @@ module neo_raster_core (
       assign idx = {walk_bank_q, entry};
       wire present;
       assign present = fbuf[idx][FEAT_PRESENT];
-      wire [47:0] mean;
+      wire [55:0] mean;
       assign mean = fbuf[idx][FEAT_ITU_MEAN +: FEAT_ITU_MEAN_W];
       wire [79:0] geom;
       assign geom = fbuf[idx][FEAT_ITU_GEOM +: FEAT_ITU_GEOM_W];
@@ -413,15 +413,15 @@ module neo_raster_core (
       wire is_final;
       wire resume;
       wire [3:0] sub;
-      wire [15:0] origin_x;
-      wire [15:0] origin_y;
+      wire [19:0] origin_x;
+      wire [19:0] origin_y;
       wire [3:0] cols;
       wire [3:0] rows;
       wire [2:0] segs_done;
       // The beat's Gaussian: its feature-word fields.
-      wire [23:0] feat_mean_x;
+      wire [27:0] feat_mean_x;
       assign feat_mean_x = fbuf[feat_idx][FEAT_MEAN_X +: FEAT_MEAN_X_W];
-      wire [23:0] feat_mean_y;
+      wire [27:0] feat_mean_y;
       assign feat_mean_y = fbuf[feat_idx][FEAT_MEAN_Y +: FEAT_MEAN_Y_W];
       wire [17:0] feat_conic_a;
       assign feat_conic_a = fbuf[feat_idx][FEAT_CONIC_A +: FEAT_CONIC_A_W];

@@ -33,8 +33,8 @@ module neo_raster_feeder #(
   output wire         scu_final_o,      // neo_scu in_final_i
   output wire         scu_resume_o,     // neo_scu in_resume_i
   output wire [3:0]   scu_sub_o,        // neo_scu in_sub_i (the list's group)
-  output wire [15:0]  scu_origin_x_o,   // neo_scu in_origin_x_i
-  output wire [15:0]  scu_origin_y_o,   // neo_scu in_origin_y_i
+  output wire [19:0]  scu_origin_x_o,   // neo_scu in_origin_x_i
+  output wire [19:0]  scu_origin_y_o,   // neo_scu in_origin_y_i
   output wire [3:0]   scu_cols_o,       // neo_scu in_cols_i
   output wire [3:0]   scu_rows_o,       // neo_scu in_rows_i
   output wire         scu_out_ready_o   // neo_scu out_ready_i: the pixel writer took the subtile
@@ -261,8 +261,8 @@ module neo_raster_feeder #(
   assign left_y = {1'b0, height_i} - origin_y;
   wire [3:0] rows;
   assign rows = ({1'b0, height_i} <= origin_y) ? 4'd0 : ((left_y > 17'd8) ? 4'd8 : left_y[3:0]);
-  assign scu_origin_x_o = origin_x[15:0];
-  assign scu_origin_y_o = origin_y[15:0];
+  assign scu_origin_x_o = {3'd0, origin_x};
+  assign scu_origin_y_o = {3'd0, origin_y};
   assign scu_cols_o = cols;
   assign scu_rows_o = rows;
 

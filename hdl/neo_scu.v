@@ -10,8 +10,8 @@ module neo_scu (
   input  wire          rst_ni,          // asynchronous reset, active low
   input  wire          in_valid_i,      // a Gaussian beat is offered
   output wire          in_ready_o,      // taken when in_valid_i & in_ready_o
-  input  wire [23:0]   in_mean_x_i,     // mean x, signed, mean.frac fraction bits
-  input  wire [23:0]   in_mean_y_i,     // mean y
+  input  wire [27:0]   in_mean_x_i,     // mean x, signed, mean.frac fraction bits
+  input  wire [27:0]   in_mean_y_i,     // mean y
   input  wire [17:0]   in_conic_a_i,    // conic a mantissa, unsigned
   input  wire [18:0]   in_conic_b_i,    // conic b mantissa, signed
   input  wire [17:0]   in_conic_c_i,    // conic c mantissa, unsigned
@@ -22,8 +22,8 @@ module neo_scu (
   input  wire [10:0]   in_blue_i,       // 
   input  wire          in_empty_i,      // beat carries no Gaussian
   input  wire          in_last_i,       // final beat of the subtile's list
-  input  wire [15:0]   in_origin_x_i,   // subtile top-left pixel x (first beat of a list)
-  input  wire [15:0]   in_origin_y_i,   // subtile top-left pixel y (first beat of a list)
+  input  wire [19:0]   in_origin_x_i,   // subtile top-left pixel x (first beat of a list)
+  input  wire [19:0]   in_origin_y_i,   // subtile top-left pixel y (first beat of a list)
   input  wire [3:0]    in_cols_i,       // columns inside the image, 0..=S (first beat)
   input  wire [3:0]    in_rows_i,       // rows inside the image, 0..=S (first beat)
   input  wire          in_final_i,      // with in_last_i: the piece ends the subtile (output it); else save its state
@@ -35,88 +35,88 @@ module neo_scu (
   output wire [1535:0] out_rgb_o        // pixel k at [24k +: 24] = {blue, green, red}
 );
 
-  // Beat bundle (205 bits): field offsets BEAT_*, widths BEAT_*_W.
+  // Beat bundle (221 bits): field offsets BEAT_*, widths BEAT_*_W.
   // mean x
   localparam BEAT_MEAN_X = 0;
-  localparam BEAT_MEAN_X_W = 24;
+  localparam BEAT_MEAN_X_W = 28;
   // mean y
-  localparam BEAT_MEAN_Y = 24;
-  localparam BEAT_MEAN_Y_W = 24;
+  localparam BEAT_MEAN_Y = 28;
+  localparam BEAT_MEAN_Y_W = 28;
   // conic a mantissa
-  localparam BEAT_CONIC_A = 48;
+  localparam BEAT_CONIC_A = 56;
   localparam BEAT_CONIC_A_W = 18;
   // conic b mantissa (signed)
-  localparam BEAT_CONIC_B = 66;
+  localparam BEAT_CONIC_B = 74;
   localparam BEAT_CONIC_B_W = 19;
   // conic c mantissa
-  localparam BEAT_CONIC_C = 85;
+  localparam BEAT_CONIC_C = 93;
   localparam BEAT_CONIC_C_W = 18;
   // shared conic exponent
-  localparam BEAT_CONIC_EXP = 103;
+  localparam BEAT_CONIC_EXP = 111;
   localparam BEAT_CONIC_EXP_W = 6;
   // opacity
-  localparam BEAT_OPACITY = 109;
+  localparam BEAT_OPACITY = 117;
   localparam BEAT_OPACITY_W = 8;
   // colour
-  localparam BEAT_RED = 117;
+  localparam BEAT_RED = 125;
   localparam BEAT_RED_W = 11;
-  localparam BEAT_GREEN = 128;
+  localparam BEAT_GREEN = 136;
   localparam BEAT_GREEN_W = 11;
-  localparam BEAT_BLUE = 139;
+  localparam BEAT_BLUE = 147;
   localparam BEAT_BLUE_W = 11;
   // the list's subtile origin (pixels)
-  localparam BEAT_ORIGIN_X = 150;
-  localparam BEAT_ORIGIN_X_W = 16;
-  localparam BEAT_ORIGIN_Y = 166;
-  localparam BEAT_ORIGIN_Y_W = 16;
+  localparam BEAT_ORIGIN_X = 158;
+  localparam BEAT_ORIGIN_X_W = 20;
+  localparam BEAT_ORIGIN_Y = 178;
+  localparam BEAT_ORIGIN_Y_W = 20;
   // columns / rows inside the image
-  localparam BEAT_COLS = 182;
+  localparam BEAT_COLS = 198;
   localparam BEAT_COLS_W = 4;
-  localparam BEAT_ROWS = 186;
+  localparam BEAT_ROWS = 202;
   localparam BEAT_ROWS_W = 4;
   // the beat carries no Gaussian
-  localparam BEAT_EMPTY = 190;
+  localparam BEAT_EMPTY = 206;
   // the list's (piece's) last beat
-  localparam BEAT_LAST = 191;
+  localparam BEAT_LAST = 207;
   // the list's first beat
-  localparam BEAT_FIRST = 192;
+  localparam BEAT_FIRST = 208;
   // the piece ends the subtile
-  localparam BEAT_FINAL = 193;
+  localparam BEAT_FINAL = 209;
   // continue from the saved state
-  localparam BEAT_RESUME = 194;
+  localparam BEAT_RESUME = 210;
   // the subtile's state slot
-  localparam BEAT_SUB = 195;
+  localparam BEAT_SUB = 211;
   localparam BEAT_SUB_W = 4;
   // list id
-  localparam BEAT_LID = 199;
+  localparam BEAT_LID = 215;
   localparam BEAT_LID_W = 3;
   // the pass (set at issue)
-  localparam BEAT_PASS = 202;
+  localparam BEAT_PASS = 218;
   localparam BEAT_PASS_W = 2;
   // a skipped beat: no evaluation (set at issue)
-  localparam BEAT_NOP = 204;
+  localparam BEAT_NOP = 220;
 
   // List tracking: the next beat is a list's first; the list id; the list's origin and slot.
   reg  first_in_q;
   reg  [2:0] lid_in_q;
-  reg  [15:0] origin_x_in_q;
-  reg  [15:0] origin_y_in_q;
+  reg  [19:0] origin_x_in_q;
+  reg  [19:0] origin_y_in_q;
   reg  [3:0] sub_in_q;
   // S0 (issue): the beat, held for its passes; p0_q is the pass being issued.
   reg  v0_q;
-  reg  [204:0] b0_q;
+  reg  [220:0] b0_q;
   reg  [1:0] p0_q;
   // S1..S5: valid bit v<s>_q and beat d<s>_q of each stage.
   reg  v1_q;
-  reg  [204:0] d1_q;
+  reg  [220:0] d1_q;
   reg  v2_q;
-  reg  [204:0] d2_q;
+  reg  [220:0] d2_q;
   reg  v3_q;
-  reg  [204:0] d3_q;
+  reg  [220:0] d3_q;
   reg  v4_q;
-  reg  [204:0] d4_q;
+  reg  [220:0] d4_q;
   reg  v5_q;
-  reg  [204:0] d5_q;
+  reg  [220:0] d5_q;
   // Subtile termination: every pixel of list term_lid_q is done.
   reg  term_q;
   reg  [2:0] term_lid_q;
@@ -148,7 +148,7 @@ module neo_scu (
   assign in_ready_o = en & (~v0_q | end0);
   assign term_o = term_q & (term_lid_q == lid_in_q) & ~first_in_q;
   // b0_d: the accepted beat (S0's next beat).
-  wire [204:0] b0_d;
+  wire [220:0] b0_d;
   assign b0_d[BEAT_MEAN_X +: BEAT_MEAN_X_W] = in_mean_x_i;
   assign b0_d[BEAT_MEAN_Y +: BEAT_MEAN_Y_W] = in_mean_y_i;
   assign b0_d[BEAT_CONIC_A +: BEAT_CONIC_A_W] = in_conic_a_i;
@@ -173,7 +173,7 @@ module neo_scu (
   assign b0_d[BEAT_PASS +: BEAT_PASS_W] = 2'd0;
   assign b0_d[BEAT_NOP] = 1'b0;
   // d1_d: the issued pass, S0's beat with its pass number and skip flag (S1's next beat).
-  wire [204:0] d1_d;
+  wire [220:0] d1_d;
   assign d1_d = {skip0, p0_q, b0_q[BEAT_PASS - 1:0]};
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin

@@ -6,10 +6,10 @@ module neo_scu_lane (
   input  wire        clk_i,        // clock
   input  wire        en_i,         // the SCU pipeline advances
   input  wire [5:0]  pixel_i,      // S0: pixel {y, x} of the subtile this lane evaluates
-  input  wire [23:0] mean_x_i,     // S0: mean, signed, mean.frac fraction bits
-  input  wire [23:0] mean_y_i,     // 
-  input  wire [15:0] origin_x_i,   // S0: subtile origin (pixels)
-  input  wire [15:0] origin_y_i,   // 
+  input  wire [27:0] mean_x_i,     // S0: mean, signed, mean.frac fraction bits
+  input  wire [27:0] mean_y_i,     // 
+  input  wire [19:0] origin_x_i,   // S0: subtile origin (pixels)
+  input  wire [19:0] origin_y_i,   // 
   input  wire [17:0] conic_a_i,    // S1: conic a mantissa, unsigned
   input  wire [18:0] conic_b_i,    // S1: conic b mantissa, signed
   input  wire [17:0] conic_c_i,    // S1: conic c mantissa, unsigned
@@ -25,28 +25,28 @@ module neo_scu_lane (
   wire [2:0] pixel_x;
   wire [2:0] pixel_y;
   assign {pixel_y, pixel_x} = pixel_i;
-  wire [16:0] pos_x;
-  assign pos_x = {1'b0, origin_x_i} + {14'd0, pixel_x};
-  wire [26:0] dx;
-  assign dx = {{3{mean_x_i[23]}}, mean_x_i} - {2'd0, pos_x, 8'd0};
-  wire [25:0] ax;
-  assign ax = dx[26] ? (~dx[25:0] + 26'd1) : dx[25:0];
-  wire [16:0] pos_y;
-  assign pos_y = {1'b0, origin_y_i} + {14'd0, pixel_y};
-  wire [26:0] dy;
-  assign dy = {{3{mean_y_i[23]}}, mean_y_i} - {2'd0, pos_y, 8'd0};
-  wire [25:0] ay;
-  assign ay = dy[26] ? (~dy[25:0] + 26'd1) : dy[25:0];
-  reg  [51:0] sq_x_q;
-  reg  [51:0] sq_y_q;
-  reg  [51:0] sq_xy_q;
+  wire [20:0] pos_x;
+  assign pos_x = {1'b0, origin_x_i} + {18'd0, pixel_x};
+  wire [30:0] dx;
+  assign dx = {{3{mean_x_i[27]}}, mean_x_i} - {2'd0, pos_x, 8'd0};
+  wire [29:0] ax;
+  assign ax = dx[30] ? (~dx[29:0] + 30'd1) : dx[29:0];
+  wire [20:0] pos_y;
+  assign pos_y = {1'b0, origin_y_i} + {18'd0, pixel_y};
+  wire [30:0] dy;
+  assign dy = {{3{mean_y_i[27]}}, mean_y_i} - {2'd0, pos_y, 8'd0};
+  wire [29:0] ay;
+  assign ay = dy[30] ? (~dy[29:0] + 30'd1) : dy[29:0];
+  reg  [59:0] sq_x_q;
+  reg  [59:0] sq_y_q;
+  reg  [59:0] sq_xy_q;
   reg  neg_xy_q;
   always @(posedge clk_i) begin
     if (en_i) begin
-      sq_x_q <= {26'd0, ax} * {26'd0, ax};
-      sq_y_q <= {26'd0, ay} * {26'd0, ay};
-      sq_xy_q <= {26'd0, ax} * {26'd0, ay};
-      neg_xy_q <= dx[26] ^ dy[26];
+      sq_x_q <= {30'd0, ax} * {30'd0, ax};
+      sq_y_q <= {30'd0, ay} * {30'd0, ay};
+      sq_xy_q <= {30'd0, ax} * {30'd0, ay};
+      neg_xy_q <= dx[30] ^ dy[30];
     end
   end
 
@@ -55,18 +55,18 @@ module neo_scu_lane (
   assign b_neg = conic_b_i[18];
   wire [18:0] b_abs;
   assign b_abs = b_neg ? (~conic_b_i + 19'd1) : conic_b_i;
-  wire [70:0] ta;
-  assign ta = {53'd0, conic_a_i} * {19'd0, sq_x_q};
-  wire [70:0] tc;
-  assign tc = {53'd0, conic_c_i} * {19'd0, sq_y_q};
-  wire [71:0] tb;
-  assign tb = {53'd0, b_abs} * {20'd0, sq_xy_q};
+  wire [78:0] ta;
+  assign ta = {61'd0, conic_a_i} * {19'd0, sq_x_q};
+  wire [78:0] tc;
+  assign tc = {61'd0, conic_c_i} * {19'd0, sq_y_q};
+  wire [79:0] tb;
+  assign tb = {61'd0, b_abs} * {20'd0, sq_xy_q};
   // 2 |b| |dx dy| (the quadratic form's cross term is 2 b dx dy).
-  wire [72:0] tbx;
+  wire [80:0] tbx;
   assign tbx = {tb, 1'b0};
-  wire [72:0] q_d;
-  assign q_d = {2'd0, ta} + {2'd0, tc} + ((neg_xy_q ^ b_neg) ? (~tbx + 73'd1) : tbx);
-  reg  [72:0] q_q;
+  wire [80:0] q_d;
+  assign q_d = {2'd0, ta} + {2'd0, tc} + ((neg_xy_q ^ b_neg) ? (~tbx + 81'd1) : tbx);
+  reg  [80:0] q_q;
   always @(posedge clk_i) begin
     if (en_i) begin
       q_q <= q_d;
@@ -76,16 +76,16 @@ module neo_scu_lane (
   // S2 -> S3: np = shr_round(q, sh0 + exp), saturated; q < 0 (power > 0) or empty: skip.
   wire [6:0] shm1;
   assign shm1 = 7'd22 + {1'b0, conic_exp_i};
-  wire [72:0] qt;
+  wire [80:0] qt;
   assign qt = $signed(q_q) >>> shm1;
-  wire [72:0] qt1;
-  assign qt1 = qt + 73'd1;
-  wire [72:0] npf;
+  wire [80:0] qt1;
+  assign qt1 = qt + 81'd1;
+  wire [80:0] npf;
   assign npf = $signed(qt1) >>> 1;
   wire [12:0] np_d;
-  assign np_d = (|npf[71:13]) ? 13'd8191 : npf[12:0];
+  assign np_d = (|npf[79:13]) ? 13'd8191 : npf[12:0];
   wire pos_d;
-  assign pos_d = ~npf[72] & ~empty_i;
+  assign pos_d = ~npf[80] & ~empty_i;
   reg  [12:0] np_q;
   reg  pos_q;
   always @(posedge clk_i) begin

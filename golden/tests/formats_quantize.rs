@@ -146,8 +146,9 @@ fn layout_is_documented_order_and_byte_size() {
     let bits: u32 = fmt.layout().iter().map(|f| f.width).sum();
     assert_eq!(fmt.bits_per_entry(), bits);
     assert_eq!(fmt.bytes_per_entry(), bits.div_ceil(8));
-    // Default widths: 2x24 + (18 + 19 + 18 + 6) + 8 + 3x11 + 4x15 + 2x10 + 16.
-    assert_eq!(bits, 48 + 61 + 8 + 33 + 60 + 20 + 16);
+    // Default widths: 2x28 + (18 + 19 + 18 + 6) + 8 + 3x11 + 4x15 + 2x10 + 16: 254 bits, 32 bytes.
+    assert_eq!(bits, 56 + 61 + 8 + 33 + 60 + 20 + 16);
+    assert_eq!(fmt.bytes_per_entry(), 32);
     // A field of known value lands where the layout says.
     let e = FeatureEntry { opacity: 0xA5, ..FeatureEntry::default() };
     let w = e.pack(&fmt);

@@ -360,15 +360,15 @@ mod tests {
     #[test]
     fn feature_word_has_present_on_top() {
         let fmt = FeatureFormat::default();
-        assert_eq!(feature_word_bits(&fmt), 247);
+        assert_eq!(feature_word_bits(&fmt), 255);
         assert_eq!(feature_to_bytes(&fmt, None), [0; 32]);
         let f = FeatureEntry { opacity: 3, depth_key: 0x1234, ..FeatureEntry::default() };
         let b = feature_to_bytes(&fmt, Some(&f));
-        assert_eq!(b[246 / 8] >> (246 % 8) & 1, 1);
-        assert_eq!(b[31], 0, "nothing above bit 246");
+        assert_eq!(b[254 / 8] >> (254 % 8) & 1, 1);
+        assert_eq!(b[31] >> 7, 0, "nothing above bit 254");
         assert_eq!(feature_from_bytes(&fmt, &b), Some(f));
         let mut culled = b;
-        culled[246 / 8] &= !(1 << (246 % 8));
+        culled[254 / 8] &= !(1 << (254 % 8));
         assert_eq!(feature_from_bytes(&fmt, &culled), None);
     }
 

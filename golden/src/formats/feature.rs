@@ -91,12 +91,12 @@ pub struct FeatureFormat {
 }
 
 impl Default for FeatureFormat {
-    /// The defaults justified in docs/formats.md: mean signed Q15.8 (24 bits, +-32768 px), conic
+    /// The defaults justified in docs/formats.md: mean signed Q19.8 (28 bits, +-2^19 px), conic
     /// 18-bit mantissas with a 6-bit exponent, opacity 0.8, colour 1.10, FP16 depth key, axis
     /// with 8 fraction bits, extents 13.2 (15 bits), `Cutoff::Alpha { margin: 0.05 }`.
     fn default() -> Self {
         FeatureFormat {
-            mean: QFormat::signed(24, 8),
+            mean: QFormat::signed(28, 8),
             conic: ConicFormat::default(),
             opacity: QFormat::unsigned(8, 8),
             color: QFormat::unsigned(11, 10),
