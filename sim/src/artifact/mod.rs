@@ -108,7 +108,7 @@ impl Rules {
         "+ the feature table is written as one stream",
         "+ the frame buffer is written",
         "+ neo's byte sizes (parameters, feature entries)",
-        "+ the RTL Preprocessing Engine's transfers (feature word per Gaussian, previous words read)",
+        "+ the RTL's preprocessing transfers (golden pre_transfers)",
     ];
 
     /// The rules after the first `k` steps of the waterfall, with neo's sizes `neo`.
