@@ -374,7 +374,11 @@ mod tests {
         let l = ArtifactLayout::default();
         let reuse = pre_engine_lines(&f, &l, 3, 64);
         assert_eq!(reuse.previous.len(), 3, "the 3 visible Gaussians' previous words");
-        assert_eq!(reuse.previous[2], l.pre_features[1] + 32 * 3 / 64 * 64, "Gaussian 3's word");
+        assert_eq!(
+            reuse.previous[2],
+            l.pre_features[1] + 64,
+            "Gaussian 3's word: bytes 96..128, the second line"
+        );
         assert_eq!((reuse.params.len(), reuse.features.len(), reuse.lists.len()), (15, 4, 4));
         // A frame sorted from scratch reads no previous word; the rest is the same.
         let scratch = PocFrame { tiles: vec![f.tiles[0].clone(); 2], ..test_frame() };
