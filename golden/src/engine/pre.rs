@@ -196,6 +196,29 @@ pub struct PreTransfer {
     pub bytes: u64,
 }
 
+/// Bytes of the records the Preprocessing Engine's transfers move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PreRecords {
+    /// A Gaussian's geometry record.
+    pub geometry: u64,
+    /// A visible Gaussian's SH record.
+    pub sh: u64,
+    /// A feature word (written per Gaussian, read back as the previous word).
+    pub feature: u64,
+}
+
+impl PreRecords {
+    /// The engine's records for SH degree `sh_degree`: the baked geometry record, the f32 SH
+    /// record and the 32-byte feature word.
+    pub fn engine(sh_degree: u8) -> Self {
+        PreRecords {
+            geometry: geometry_bytes() as u64,
+            sh: sh_bytes(sh_degree, ShPrecision::F32) as u64,
+            feature: FEATURE_BYTES,
+        }
+    }
+}
+
 /// Every transfer the Preprocessing Engine makes for `regs`, part by part in [`PrePart::ALL`]'s
 /// order (the RTL's lanes interleave them; nothing counted depends on the order): each lane's
 /// geometry stream (one transfer, empty lanes none); per `visible` Gaussian (ascending ids) its
@@ -209,6 +232,23 @@ pub fn pre_transfers<V>(
     regs: &FrameRegs,
     visible: V,
     list_lens: impl IntoIterator<Item = usize>,
+    each: impl FnMut(PreTransfer),
+) where
+    V: IntoIterator<Item = u64>,
+    V::IntoIter: Clone,
+{
+    let records = PreRecords::engine(regs.pre.sh_degree as u8);
+    pre_transfers_of(cfg, regs, records, visible, list_lens, each)
+}
+
+/// [`pre_transfers`] with records of other sizes (a byte-size preset of the cycle model, such
+/// as the artifact's): the same transfers, record `i` of each array at `base + bytes i`.
+pub fn pre_transfers_of<V>(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    records: PreRecords,
+    visible: V,
+    list_lens: impl IntoIterator<Item = usize>,
     mut each: impl FnMut(PreTransfer),
 ) where
     V: IntoIterator<Item = u64>,
@@ -216,7 +256,7 @@ pub fn pre_transfers<V>(
 {
     let p = &regs.pre;
     let mut out = |part, addr, bytes| each(PreTransfer { part, addr, bytes });
-    let gb = geometry_bytes() as u64;
+    let PreRecords { geometry: gb, sh, feature } = records;
     for lane in 0..cfg.pre_units {
         let (first, count) = cfg.pre_lane_range(p.gaussians, lane);
         if count > 0 {
@@ -224,17 +264,16 @@ pub fn pre_transfers<V>(
         }
     }
     let visible = visible.into_iter();
-    let sh = sh_bytes(p.sh_degree as u8, ShPrecision::F32) as u64;
     for i in visible.clone() {
         out(PrePart::Sh, p.sh_base + sh * i, sh);
     }
     if !p.fresh() {
         for i in visible {
-            out(PrePart::PrevFeature, p.prev_feat_base + FEATURE_BYTES * i, FEATURE_BYTES);
+            out(PrePart::PrevFeature, p.prev_feat_base + feature * i, feature);
         }
     }
     for i in 0..p.gaussians as u64 {
-        out(PrePart::Feature, regs.feat_base + FEATURE_BYTES * i, FEATURE_BYTES);
+        out(PrePart::Feature, regs.feat_base + feature * i, feature);
     }
     let stride = cfg.list_stride() as u64;
     let per_line = LIST_LINE_BYTES / ENTRY_BYTES;

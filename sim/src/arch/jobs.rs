@@ -4,8 +4,7 @@
 
 use std::ops::Range;
 
-use neo_golden::engine::memory::FEATURE_BYTES;
-use neo_golden::engine::pre::{pre_transfers, PrePart};
+use neo_golden::engine::pre::{pre_transfers_of, PrePart, PreRecords};
 use neo_golden::engine::{FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
 use neo_golden::pipeline::Strategy;
 use neo_golden::sort::{conventional_sort_plan, merge_pass_count, Parity, SortBuffer};
@@ -108,8 +107,22 @@ impl Model<'_> {
         }
     }
 
+    /// The records Neo's Preprocessing Engine moves: the engine's (golden
+    /// [`PreRecords::engine`]: 44-byte geometry, f32 SH by the scene's degree, 32-byte feature
+    /// words), each replaced by the configuration's byte-size preset when it sets one
+    /// (`sizes.gaussian_geometry_bytes`, `gaussian_sh_bytes`, `feature_entry_bytes`).
+    pub(super) fn pre_records(&self) -> PreRecords {
+        let (s, e) = (&self.cfg.sizes, PreRecords::engine(self.wl.info.sh_degree));
+        PreRecords {
+            geometry: s.gaussian_geometry_bytes.map_or(e.geometry, u64::from),
+            sh: s.gaussian_sh_bytes.map_or(e.sh, u64::from),
+            feature: s.feature_entry_bytes.map_or(e.feature, u64::from),
+        }
+    }
+
     /// Neo's preprocessing traffic in frame `f` as (reads, writes): the RTL Preprocessing
-    /// Engine's transfers (golden [`pre_transfers`] for [`Model::pre_regs`], the frame's visible
+    /// Engine's transfers (golden `pre_transfers` for [`Model::pre_regs`], of
+    /// [`Model::pre_records`] (`pre_transfers_of`), the frame's visible
     /// Gaussians and list lengths), each moving the DRAM lines it touches; consecutive
     /// transfers of one kind are one [`Access::records`] run. Geometry and SH records are
     /// charged to [`Stage::Preprocess`], the previous feature words (incoming detection) to
@@ -119,7 +132,8 @@ impl Model<'_> {
         let fw = &self.wl.frames[f];
         let (mut reads, mut writes) = (Vec::new(), Vec::new());
         let lens = fw.tiles.iter().map(|t| self.list_len(t) as usize);
-        pre_transfers(&self.cfg.engine, &self.pre_regs(f), fw.visible_ids(), lens, |t| {
+        let (cfg, regs) = (&self.cfg.engine, self.pre_regs(f));
+        pre_transfers_of(cfg, &regs, self.pre_records(), fw.visible_ids(), lens, |t| {
             let stage = match t.part {
                 PrePart::Geometry | PrePart::Sh => Stage::Preprocess,
                 PrePart::PrevFeature => Stage::IncomingDetection,
@@ -438,7 +452,7 @@ impl Model<'_> {
         if entries > 0 {
             // Neo's feature table is a word per Gaussian id, GSCore's the compacted entries.
             let (record_bytes, records) =
-                if neo { (FEATURE_BYTES, fw.gaussians) } else { (self.fb, fw.visible) };
+                if neo { (self.pre_records().feature, fw.gaussians) } else { (self.fb, fw.visible) };
             reads.push(Access {
                 stage: Stage::FeatureTable,
                 base: self.layout.features[f % 2],

@@ -61,7 +61,7 @@ impl Layout {
         let g = wl.info.gaussians;
         let geometry = (geometry_bytes() as u64).max(cfg.sizes.geometry_bytes(&wl.info));
         let sh = (sh_bytes(wl.info.sh_degree, ShPrecision::F32) as u64).max(cfg.sizes.sh_bytes(&wl.info));
-        let features = (g * FEATURE_BYTES).max(max_visible * fb);
+        let features = (g * FEATURE_BYTES.max(fb)).max(max_visible * fb);
         let lists = (tiles * list_stride * ENTRY_BYTES).max(max_lists * eb);
         let mut next = 0;
         Layout {
