@@ -168,6 +168,7 @@ impl<'s> WorkDriver<'s> {
     /// Runs frame `frame` from `cam`.
     pub fn step(&mut self, cam: &Camera, frame: usize, cut: bool) -> FrameWork {
         let gw = self.pipeline.work_frame(cam, frame, cut, &self.options);
+        let visible_set = id_set(gw.gaussians, self.pipeline.visible_ids());
         let strategy = self.pipeline.config().strategy;
         let chunk = self.pipeline.config().chunk as u32;
         let mut sum = StageWork::default();
@@ -198,6 +199,7 @@ impl<'s> WorkDriver<'s> {
             from_scratch: tiles.iter().all(|t| t.from_scratch),
             gaussians: gw.gaussians,
             visible: gw.visible,
+            visible_set,
             binning_tests: gw.binning_tests,
             processed_ratio: if sampled_routed > 0 { processed as f64 / sampled_routed as f64 } else { 1.0 },
             raster_sampled: true,
@@ -208,6 +210,15 @@ impl<'s> WorkDriver<'s> {
             tiles,
         }
     }
+}
+
+/// The set of `ids` among `n` Gaussians as [`FrameWork::visible_set`] holds it.
+fn id_set(n: u64, ids: &[u32]) -> Vec<u64> {
+    let mut set = vec![0u64; n.div_ceil(64) as usize];
+    for &i in ids {
+        set[i as usize / 64] |= 1 << (i % 64);
+    }
+    set
 }
 
 /// The model's record of one tile from golden's work counters.

@@ -10,11 +10,12 @@ use std::fmt;
 pub enum Stage {
     /// Gaussian parameters read by preprocessing.
     Preprocess,
-    /// Preprocessing's incoming detection (the duplication unit, paper Section 5.2): the
-    /// previous frame's feature entries and visibility bitmap read, this frame's bitmap
-    /// written (`neo_golden::hwpre::duplicate`).
+    /// Preprocessing's incoming detection (the duplication unit, paper Section 5.2): on a frame
+    /// that reuses tables, the previous feature word of each visible Gaussian read
+    /// (`neo_golden::hwpre::duplicate`, `neo_golden::engine::pre::pre_transfers`).
     IncomingDetection,
-    /// The feature table: written by preprocessing, read (gathered) by the raster.
+    /// The feature table: written by preprocessing (Neo: every Gaussian's word), read
+    /// (gathered) by the raster.
     FeatureTable,
     /// Incoming (or, from scratch, all binned) lists: written by duplication, read by sorting.
     IncomingList,

@@ -115,6 +115,11 @@ pub struct FrameWork {
     pub gaussians: u64,
     /// Gaussians with a feature entry.
     pub visible: u64,
+    /// Which Gaussians have a feature entry: bit `i % 64` of word `i / 64` for Gaussian `i`.
+    /// Empty in a workload made by hand, which stands for ids `0 .. visible`
+    /// ([`FrameWork::visible_ids`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub visible_set: Vec<u64>,
     /// Candidate tile tests of the duplication (binning) stage.
     pub binning_tests: u64,
     /// Entry-subtile pairs the SCUs processed over pairs routed (early termination), from the
@@ -133,6 +138,24 @@ pub struct FrameWork {
     pub quality: Option<Quality>,
     /// Tiles, row-major.
     pub tiles: Vec<TileWork>,
+}
+
+impl FrameWork {
+    /// The ids of the Gaussians with a feature entry, ascending ([`FrameWork::visible_set`], or
+    /// `0 .. visible` when it is empty).
+    pub fn visible_ids(&self) -> impl Iterator<Item = u64> + Clone + '_ {
+        let by_hand = if self.visible_set.is_empty() { self.visible } else { 0 };
+        (0..by_hand).chain(self.visible_set.iter().enumerate().flat_map(|(w, &bits)| {
+            let mut rest = bits;
+            std::iter::from_fn(move || {
+                (rest != 0).then(|| {
+                    let b = rest.trailing_zeros() as u64;
+                    rest &= rest - 1;
+                    64 * w as u64 + b
+                })
+            })
+        }))
+    }
 }
 
 /// What the workload is.

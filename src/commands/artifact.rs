@@ -19,9 +19,8 @@ use std::path::PathBuf;
 #[derive(Args)]
 pub struct ArtifactArgs {
     /// `poc.trace` files (`neo frames --trace` or `neo simulate --trace` write them). A trace
-    /// that reuses tables is taken to follow the one before it on the command line (the
-    /// waterfall's incoming-detection step reads that frame's visible Gaussians), so give the
-    /// frames of a run in order.
+    /// that reuses tables reads its visible Gaussians' previous feature words in the
+    /// waterfall's last step (the RTL Preprocessing Engine's incoming detection).
     #[arg(required = true)]
     pub traces: Vec<PathBuf>,
     /// Also time each frame, and each step of the waterfall, with the artifact's structure on
@@ -50,13 +49,10 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
             as u64,
         feature: Formats::artifact(sizes.global_chunk as usize)?.feature.bytes_per_entry() as u64,
         pixel: cfg.sizes.pixel_bytes as u64,
+        sh_degree: a.sh_degree,
     };
-    let mut prev: Option<PocFrame> = None;
     for path in &a.traces {
-        let mut f = read_poc_trace(path)?;
-        if let Some(p) = &prev {
-            f.follow(p);
-        }
+        let f = read_poc_trace(path)?;
         let lines = artifact_lines(&f, &sizes);
         println!(
             "{} ({}x{}, {} Gaussians, {} tiles)",
@@ -79,9 +75,6 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
             Vec::new()
         };
         println!("{}", waterfall_table(&f, &sizes, &neo, &cycles));
-        if f.reuses_tables() && f.previous_visible.is_none() {
-            println!("(no previous trace given: the incoming detection's reads are not charged)\n");
-        }
         if let Some(c) = cycles.first() {
             println!(
                 "the artifact's timing on neo's DRAM model ({}): {c} core cycles at 1 GHz ({:.1} FPS)\n",
@@ -89,7 +82,6 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
                 1e9 / *c as f64
             );
         }
-        prev = Some(f);
     }
     Ok(())
 }

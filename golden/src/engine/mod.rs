@@ -23,7 +23,10 @@ pub use expected::{Expected, Mismatch, Place, PreExpected};
 pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError};
 pub use memory::{Memory, TileDescriptor, TileResult};
 pub use plan::{run_command, tile_plan, TileCmd, TilePlan};
-pub use pre::{beats_spanned, preprocess_frame, PreWork};
+pub use pre::{
+    beats_spanned, pre_traffic, pre_transfers, pre_transfers_of, preprocess_frame, PrePart, PreRecords,
+    PreTransfer, PreWork,
+};
 pub use reference::{
     execute_frame, execute_frame_traced, segment_work, FrameError, FrameOutcome, FrameTrace, RasterTrace,
     SegmentWork, TileTrace,

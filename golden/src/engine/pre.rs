@@ -20,7 +20,8 @@
 //! Counters ([`Counter::RdPre`], [`Counter::WrPre`]): the AXI beats of `axi_data_bits / 8`
 //! bytes each transfer spans ([`beats_spanned`]) times the beat bytes: reads of the geometry
 //! streams, SH records and previous words; writes of the feature words, the list lines and one
-//! beat per length.
+//! beat per length. The transfers are stated once, [`pre_transfers`]; [`pre_traffic`] counts
+//! their beats and the cycle model (`neo_sim`) the DRAM lines they touch.
 
 use super::memory::{
     feature_from_bytes, feature_to_bytes, Memory, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
@@ -150,43 +151,165 @@ pub fn preprocess_frame(
     Ok(PreWork { visible: visible.len() as u64, lists })
 }
 
-/// The Preprocessing Engine's `(RD_PRE, WR_PRE)` bytes for `regs`: the beats its transfers span
-/// ([`beats_spanned`]) times the beat bytes. Reads: each lane's geometry stream, each `visible`
-/// Gaussian's SH record and (unless fresh) previous feature word; writes: every feature word,
-/// each tile's list lines (the first `table_capacity` entries of a list of `list_lens[t]`) and
-/// length.
+/// What a Preprocessing Engine transfer moves ([`pre_transfers`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PrePart {
+    /// A lane's geometry stream (read): its Gaussians' geometry records back to back.
+    Geometry,
+    /// A visible Gaussian's f32 SH record (read).
+    Sh,
+    /// A visible Gaussian's previous feature word (read, unless fresh): the incoming detection.
+    PrevFeature,
+    /// A Gaussian's feature word (written for every Gaussian, zero when culled).
+    Feature,
+    /// A 64-byte line of a tile's incoming list (written).
+    ListLine,
+    /// A tile's `list_len` in its descriptor (written).
+    ListLen,
+}
+
+impl PrePart {
+    /// Every part, in the order [`pre_transfers`] yields them.
+    pub const ALL: [PrePart; 6] = [
+        PrePart::Geometry,
+        PrePart::Sh,
+        PrePart::PrevFeature,
+        PrePart::Feature,
+        PrePart::ListLine,
+        PrePart::ListLen,
+    ];
+
+    /// True for the parts the engine writes.
+    pub fn is_write(self) -> bool {
+        matches!(self, PrePart::Feature | PrePart::ListLine | PrePart::ListLen)
+    }
+}
+
+/// One AXI transfer of the Preprocessing Engine: `bytes` bytes from byte address `addr`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PreTransfer {
+    /// What it moves.
+    pub part: PrePart,
+    /// First byte.
+    pub addr: u64,
+    /// Bytes.
+    pub bytes: u64,
+}
+
+/// Bytes of the records the Preprocessing Engine's transfers move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PreRecords {
+    /// A Gaussian's geometry record.
+    pub geometry: u64,
+    /// A visible Gaussian's SH record.
+    pub sh: u64,
+    /// A feature word (written per Gaussian, read back as the previous word).
+    pub feature: u64,
+}
+
+impl PreRecords {
+    /// The engine's records for SH degree `sh_degree`: the baked geometry record, the f32 SH
+    /// record and the 32-byte feature word.
+    pub fn engine(sh_degree: u8) -> Self {
+        PreRecords {
+            geometry: geometry_bytes() as u64,
+            sh: sh_bytes(sh_degree, ShPrecision::F32) as u64,
+            feature: FEATURE_BYTES,
+        }
+    }
+}
+
+/// Every transfer the Preprocessing Engine makes for `regs`, part by part in [`PrePart::ALL`]'s
+/// order (the RTL's lanes interleave them; nothing counted depends on the order): each lane's
+/// geometry stream (one transfer, empty lanes none); per `visible` Gaussian (ascending ids) its
+/// SH record, then, unless fresh, per visible Gaussian its previous feature word; every
+/// Gaussian's feature word; per tile its list lines (the first `table_capacity` entries of a
+/// list of `list_lens[t]`, whole 64-byte lines) and its length. The one statement of the
+/// engine's traffic: [`pre_traffic`] counts its AXI beats, the cycle model
+/// (`neo_sim::arch`) the DRAM lines each transfer touches.
+pub fn pre_transfers<V>(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    visible: V,
+    list_lens: impl IntoIterator<Item = usize>,
+    each: impl FnMut(PreTransfer),
+) where
+    V: IntoIterator<Item = u64>,
+    V::IntoIter: Clone,
+{
+    let records = PreRecords::engine(regs.pre.sh_degree as u8);
+    pre_transfers_of(cfg, regs, records, visible, list_lens, each)
+}
+
+/// [`pre_transfers`] with records of other sizes (a byte-size preset of the cycle model, such
+/// as the artifact's): the same transfers, record `i` of each array at `base + bytes i`.
+pub fn pre_transfers_of<V>(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    records: PreRecords,
+    visible: V,
+    list_lens: impl IntoIterator<Item = usize>,
+    mut each: impl FnMut(PreTransfer),
+) where
+    V: IntoIterator<Item = u64>,
+    V::IntoIter: Clone,
+{
+    let p = &regs.pre;
+    let mut out = |part, addr, bytes| each(PreTransfer { part, addr, bytes });
+    let PreRecords { geometry: gb, sh, feature } = records;
+    for lane in 0..cfg.pre_units {
+        let (first, count) = cfg.pre_lane_range(p.gaussians, lane);
+        if count > 0 {
+            out(PrePart::Geometry, p.geo_base + gb * first as u64, gb * count as u64);
+        }
+    }
+    let visible = visible.into_iter();
+    for i in visible.clone() {
+        out(PrePart::Sh, p.sh_base + sh * i, sh);
+    }
+    if !p.fresh() {
+        for i in visible {
+            out(PrePart::PrevFeature, p.prev_feat_base + feature * i, feature);
+        }
+    }
+    for i in 0..p.gaussians as u64 {
+        out(PrePart::Feature, regs.feat_base + feature * i, feature);
+    }
+    let stride = cfg.list_stride() as u64;
+    let per_line = LIST_LINE_BYTES / ENTRY_BYTES;
+    let mut tiles = 0u64;
+    for (t, len) in list_lens.into_iter().enumerate() {
+        let base = p.list_base + ENTRY_BYTES * stride * t as u64;
+        let lines = (len as u64).min(cfg.table_capacity as u64).div_ceil(per_line);
+        for k in 0..lines {
+            out(PrePart::ListLine, base + LIST_LINE_BYTES * k, LIST_LINE_BYTES);
+        }
+        tiles += 1;
+    }
+    for t in 0..tiles {
+        out(PrePart::ListLen, regs.desc_base + DESCRIPTOR_BYTES * t + LIST_LEN_OFFSET, 4);
+    }
+}
+
+/// The Preprocessing Engine's `(RD_PRE, WR_PRE)` bytes for `regs`: the beats of
+/// `axi_data_bits / 8` bytes each of its transfers ([`pre_transfers`]) spans ([`beats_spanned`]),
+/// times the beat bytes.
 pub fn pre_traffic(
     cfg: &EngineConfig,
     regs: &FrameRegs,
     visible: &[u64],
     list_lens: impl IntoIterator<Item = usize>,
 ) -> (u64, u64) {
-    let p = &regs.pre;
     let beat = cfg.axi_data_bits as u64 / 8;
-    let span = |addr: u64, bytes: u64| beat * beats_spanned(addr, bytes, beat);
-    let gb = geometry_bytes() as u64;
-    let sh = sh_bytes(p.sh_degree as u8, ShPrecision::F32) as u64;
-    let mut rd = 0;
-    for lane in 0..cfg.pre_units {
-        let (first, count) = cfg.pre_lane_range(p.gaussians, lane);
-        rd += span(p.geo_base + gb * first as u64, gb * count as u64);
-    }
-    for &i in visible {
-        rd += span(p.sh_base + sh * i, sh);
-        if !p.fresh() {
-            rd += span(p.prev_feat_base + FEATURE_BYTES * i, FEATURE_BYTES);
+    let (mut rd, mut wr) = (0, 0);
+    pre_transfers(cfg, regs, visible.iter().copied(), list_lens, |t| {
+        let bytes = beat * beats_spanned(t.addr, t.bytes, beat);
+        if t.part.is_write() {
+            wr += bytes;
+        } else {
+            rd += bytes;
         }
-    }
-    let mut wr: u64 =
-        (0..p.gaussians as u64).map(|i| span(regs.feat_base + FEATURE_BYTES * i, FEATURE_BYTES)).sum();
-    let stride = cfg.list_stride() as u64;
-    let per_line = LIST_LINE_BYTES / ENTRY_BYTES;
-    for (t, len) in list_lens.into_iter().enumerate() {
-        let base = p.list_base + ENTRY_BYTES * stride * t as u64;
-        let lines = (len as u64).min(cfg.table_capacity as u64).div_ceil(per_line);
-        wr += (0..lines).map(|k| span(base + LIST_LINE_BYTES * k, LIST_LINE_BYTES)).sum::<u64>();
-        wr += span(regs.desc_base + DESCRIPTOR_BYTES * t as u64 + LIST_LEN_OFFSET, 4);
-    }
+    });
     (rd, wr)
 }
 
@@ -223,5 +346,46 @@ mod tests {
         assert_eq!(beats_spanned(44, 44, 8), 6, "bytes 44..88: beats 5 to 10");
         assert_eq!(beats_spanned(32, 32, 64), 1);
         assert_eq!(beats_spanned(48, 32, 64), 2);
+    }
+
+    /// The traffic of an aligned frame, counted by hand: a lane's stream, 192 bytes per visible
+    /// Gaussian at SH degree 3 (and 32 of previous word on a reuse frame); 32 bytes per Gaussian,
+    /// whole list lines up to the capacity and 8 bytes (a beat) per length.
+    #[test]
+    fn pre_traffic_counts_each_transfer_by_hand() {
+        let cfg = EngineConfig { pre_units: 3, table_capacity: 20, ..EngineConfig::default() };
+        let mut regs = FrameRegs { desc_base: 0x1000, feat_base: 0x2_0000, ..FrameRegs::default() };
+        regs.pre = PreRegs {
+            ctrl: super::super::PRE_ENABLE,
+            gaussians: 10,
+            sh_degree: 3,
+            geo_base: 0x10_0000,
+            sh_base: 0x20_0000,
+            prev_feat_base: 0x30_0000,
+            list_base: 0x40_0000,
+            ..PreRegs::default()
+        };
+        let visible = [1u64, 2, 7];
+        // Lists of 0, 9 and 30 entries: 0, 2 and (capacity 20) 3 lines.
+        let lens = [0usize, 9, 30];
+        // Lanes of 4, 4 and 2 Gaussians of 44 bytes from an aligned base: 22, 22 and 11 beats.
+        let geo = 8 * (22 + 22 + 11);
+        let (rd, wr) = pre_traffic(&cfg, &regs, &visible, lens);
+        assert_eq!(rd, geo + 3 * 192 + 3 * 32);
+        assert_eq!(wr, 10 * 32 + 5 * 64 + 3 * 8);
+        regs.pre.ctrl |= super::super::PRE_FRESH;
+        assert_eq!(pre_traffic(&cfg, &regs, &visible, lens).0, geo + 3 * 192, "fresh: no previous word");
+        let mut parts = Vec::new();
+        pre_transfers(&cfg, &regs, visible.iter().copied(), lens, |t| parts.push(t));
+        let count = |p: PrePart| parts.iter().filter(|t| t.part == p).count();
+        assert_eq!(
+            PrePart::ALL.map(count),
+            [3, 3, 0, 10, 5, 3],
+            "geometry, SH, previous, feature, list lines, lengths"
+        );
+        assert!(parts.windows(2).all(|w| PrePart::ALL.iter().position(|&p| p == w[0].part)
+            <= PrePart::ALL.iter().position(|&p| p == w[1].part)));
+        let line = parts.iter().filter(|t| t.part == PrePart::ListLine).nth(2).expect("a third line");
+        assert_eq!(line.addr, 0x40_0000 + 8 * 24 * 2, "tile 2's list, slot stride 24 entries");
     }
 }

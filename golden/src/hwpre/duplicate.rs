@@ -14,16 +14,21 @@
 //! touching the tile (its valid write-back), which is the set of Gaussians that entered the tile
 //! in the previous frame, unless the tile dropped entries for capacity. So the hardware keeps,
 //! per Gaussian, what it needs to repeat the previous frame's test ([`TouchRecord`]): the
-//! previous frame's feature entry (the feature table is double-buffered: frame `f` writes one
-//! buffer and the duplication unit reads the other) and one bit saying whether the Gaussian was
-//! visible then (a bitmap of `N` bits, also double-buffered). A Gaussian is incoming in tile `t`
-//! iff it enters `t` now and did not enter `t` in the previous frame (or was not visible, or
-//! the previous frame sorted `t` from scratch with drops: see [`incoming`]).
+//! previous frame's feature word. The feature table holds one 32-byte word per Gaussian id
+//! (`crate::engine::memory::feature_to_bytes`), all zero (not present) when the Gaussian was
+//! culled, so the word also says whether the Gaussian was visible then; the table is
+//! double-buffered: frame `f` writes one buffer and the duplication unit reads the other. A
+//! Gaussian is incoming in tile `t` iff it enters `t` now and did not enter `t` in the previous
+//! frame (or was not visible, or the previous frame sorted `t` from scratch with drops: see
+//! [`incoming`]).
 //!
-//! Memory per frame, for `N` Gaussians of which `P` were visible in the previous frame:
-//! `P x` [`crate::formats::FeatureFormat::bytes_per_entry`] bytes read (the previous entries,
-//! by id) plus `2 N / 8` bytes of visibility bitmap (read and written, sequentially); storage
-//! is a second feature table and two bitmaps.
+//! Memory per frame (the design the RTL's Preprocessing Engine implements, `neo_pre_lane`; its
+//! transfers are [`crate::engine::pre::pre_transfers`]), for `N` Gaussians of which `P` are
+//! visible now: every Gaussian's word written (`32 N` bytes; the feature table's writes), and on
+//! a frame that reuses tables the previous word of each of the `P` read (`32 P` bytes, one
+//! 32-byte read each, by id); a frame sorted from scratch reads none (`PRE_FRESH`). Storage:
+//! a second feature table of `N` words. (An earlier design, kept by no model, compacted the
+//! visible Gaussians' entries and kept a visibility bitmap of `N / 8` bytes per frame instead.)
 
 use crate::formats::{FeatureEntry, FeatureFormat};
 use crate::raster::{candidate_tiles, touches_tile, RasterConfig};
@@ -32,7 +37,7 @@ use crate::raster::{candidate_tiles, touches_tile, RasterConfig};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TouchRecord<'a> {
     /// The previous frame's feature entry; `None` when the Gaussian was culled then (its
-    /// visibility bit is 0).
+    /// previous feature word is zero: not present).
     pub entry: Option<&'a FeatureEntry>,
 }
 

@@ -246,6 +246,12 @@ impl<'s> Pipeline<'s> {
         (0..self.binning.tiles()).map(|t| self.binning.tile(t))
     }
 
+    /// The ids of the Gaussians with a feature entry (not culled) in the last frame, in feature
+    /// order (ascending ids).
+    pub fn visible_ids(&self) -> &[u32] {
+        &self.feature_ids
+    }
+
     /// The exact tables of the last frame (when the exact order was computed).
     pub fn exact_tables(&self) -> impl Iterator<Item = &[SortEntry]> {
         self.slots.iter().map(|s| s.exact.as_slice())

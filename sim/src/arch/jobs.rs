@@ -4,6 +4,8 @@
 
 use std::ops::Range;
 
+use neo_golden::engine::pre::{pre_transfers_of, PrePart, PreRecords};
+use neo_golden::engine::{FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
 use neo_golden::pipeline::Strategy;
 use neo_golden::sort::{conventional_sort_plan, merge_pass_count, Parity, SortBuffer};
 
@@ -37,20 +39,27 @@ impl Model<'_> {
         let cyc = cyc.max((fw.visible as f64 / n.color_units as f64).ceil() * p.color_ii);
         let cyc = cyc.max((fw.binning_tests as f64 / n.duplication_units as f64).ceil() * p.duplication_ii);
         let compute = self.ps(cyc + p.latency as f64);
-        let s = &self.cfg.sizes;
         let l = &self.layout;
-        let mut reads = vec![
-            Access::seq(Stage::Preprocess, l.geometry, fw.gaussians * s.geometry_bytes(&self.wl.info)),
-            Access::seq(Stage::Preprocess, l.sh, fw.visible * s.sh_bytes(&self.wl.info)),
-        ];
-        let lists: u64 = fw.tiles.iter().map(|t| self.list_len(t)).sum();
-        let mut writes = vec![
-            Access::seq(Stage::FeatureTable, l.features[f % 2], fw.visible * self.fb),
-            Access::seq(Stage::IncomingList, l.lists[f % 2], lists * self.eb),
-        ];
-        let (det_reads, det_writes) = self.incoming_detection(f);
-        reads.extend(det_reads);
-        writes.extend(det_writes);
+        let (reads, mut writes) = if self.accel == Accel::Neo {
+            self.pre_engine_accesses(f)
+        } else {
+            let s = &self.cfg.sizes;
+            let lists: u64 = fw.tiles.iter().map(|t| self.list_len(t)).sum();
+            (
+                vec![
+                    Access::seq(
+                        Stage::Preprocess,
+                        l.geometry,
+                        fw.gaussians * s.geometry_bytes(&self.wl.info),
+                    ),
+                    Access::seq(Stage::Preprocess, l.sh, fw.visible * s.sh_bytes(&self.wl.info)),
+                ],
+                vec![
+                    Access::seq(Stage::FeatureTable, l.features[f % 2], fw.visible * self.fb),
+                    Access::seq(Stage::IncomingList, l.lists[f % 2], lists * self.eb),
+                ],
+            )
+        };
         if self.accel == Accel::Neo && matches!(self.strategy, Strategy::Background(_)) {
             let all: u64 = fw.tiles.iter().map(|t| t.background_n as u64).sum();
             writes.push(Access::seq(Stage::BackgroundSort, l.bg_lists[f % 2], all * self.eb));
@@ -70,34 +79,70 @@ impl Model<'_> {
         }
     }
 
-    /// The duplication unit's incoming detection in frame `f` (`neo_golden::hwpre::duplicate`),
-    /// as (reads, writes). On Neo's hardware with a strategy that reuses tables, every frame
-    /// writes its visibility bitmap (`ceil(N / 8)` bytes, one bit per Gaussian by id) for the
-    /// next frame; a frame that reuses tables also reads the previous frame's bitmap and the
-    /// previous feature entries of the `P` Gaussians visible then (`P x` feature-entry bytes).
-    /// Both tables are walked in Gaussian-id order (the feature table is written as one stream
-    /// of the visible Gaussians in id order, and the bitmap's running count gives a Gaussian's
-    /// place in it), so each is one sequential access. A frame sorted from scratch (frame 0, a
-    /// cut, a refresh) needs no previous entry: every Gaussian is incoming (`all_fresh`).
-    fn incoming_detection(&self, f: usize) -> (Vec<Access>, Vec<Access>) {
-        if !self.detects_incoming() {
-            return (Vec::new(), Vec::new());
+    /// The Preprocessing Engine's registers for frame `f` in the model's memory map:
+    /// `PRE_FRESH` unless the frame reuses tables ([`Model::detects_incoming`] and not from
+    /// scratch), the feature words of frame `f` in buffer `f % 2` and the previous ones in the
+    /// other, the lists in their slots.
+    pub(super) fn pre_regs(&self, f: usize) -> FrameRegs {
+        let (fw, l, info) = (&self.wl.frames[f], &self.layout, &self.wl.info);
+        let fresh = !self.detects_incoming() || fw.from_scratch || f == 0;
+        FrameRegs {
+            frame: f as u32,
+            tiles: fw.tiles.len() as u32,
+            width: info.width,
+            height: info.height,
+            desc_base: l.descriptors,
+            feat_base: l.features[f % 2],
+            pre: PreRegs {
+                ctrl: PRE_ENABLE | if fresh { PRE_FRESH } else { 0 },
+                gaussians: fw.gaussians as u32,
+                sh_degree: info.sh_degree as u32,
+                geo_base: l.geometry,
+                sh_base: l.sh,
+                prev_feat_base: l.features[(f + 1) % 2],
+                list_base: l.lists[f % 2],
+                ..PreRegs::default()
+            },
+            ..FrameRegs::default()
         }
-        let (fw, l) = (&self.wl.frames[f], &self.layout);
-        let bitmap = fw.gaussians.div_ceil(8);
-        let writes = vec![Access::seq(Stage::IncomingDetection, l.visibility[f % 2], bitmap)];
-        let prev = match f.checked_sub(1) {
-            Some(p) if !fw.from_scratch => p,
-            _ => return (Vec::new(), writes),
-        };
-        let reads = vec![
-            Access::seq(
-                Stage::IncomingDetection,
-                l.features[prev % 2],
-                self.wl.frames[prev].visible * self.fb,
-            ),
-            Access::seq(Stage::IncomingDetection, l.visibility[prev % 2], bitmap),
-        ];
+    }
+
+    /// The records Neo's Preprocessing Engine moves: the engine's (golden
+    /// [`PreRecords::engine`]: 44-byte geometry, f32 SH by the scene's degree, 32-byte feature
+    /// words), each replaced by the configuration's byte-size preset when it sets one
+    /// (`sizes.gaussian_geometry_bytes`, `gaussian_sh_bytes`, `feature_entry_bytes`).
+    pub(super) fn pre_records(&self) -> PreRecords {
+        let (s, e) = (&self.cfg.sizes, PreRecords::engine(self.wl.info.sh_degree));
+        PreRecords {
+            geometry: s.gaussian_geometry_bytes.map_or(e.geometry, u64::from),
+            sh: s.gaussian_sh_bytes.map_or(e.sh, u64::from),
+            feature: s.feature_entry_bytes.map_or(e.feature, u64::from),
+        }
+    }
+
+    /// Neo's preprocessing traffic in frame `f` as (reads, writes): the RTL Preprocessing
+    /// Engine's transfers (golden `pre_transfers` for [`Model::pre_regs`], of
+    /// [`Model::pre_records`] (`pre_transfers_of`), the frame's visible
+    /// Gaussians and list lengths), each moving the DRAM lines it touches; consecutive
+    /// transfers of one kind are one [`Access::records`] run. Geometry and SH records are
+    /// charged to [`Stage::Preprocess`], the previous feature words (incoming detection) to
+    /// [`Stage::IncomingDetection`], the feature words to [`Stage::FeatureTable`], the list
+    /// lines and lengths to [`Stage::IncomingList`].
+    pub(super) fn pre_engine_accesses(&self, f: usize) -> (Vec<Access>, Vec<Access>) {
+        let fw = &self.wl.frames[f];
+        let (mut reads, mut writes) = (Vec::new(), Vec::new());
+        let lens = fw.tiles.iter().map(|t| self.list_len(t) as usize);
+        let (cfg, regs) = (&self.cfg.engine, self.pre_regs(f));
+        pre_transfers_of(cfg, &regs, self.pre_records(), fw.visible_ids(), lens, |t| {
+            let stage = match t.part {
+                PrePart::Geometry | PrePart::Sh => Stage::Preprocess,
+                PrePart::PrevFeature => Stage::IncomingDetection,
+                PrePart::Feature => Stage::FeatureTable,
+                PrePart::ListLine | PrePart::ListLen => Stage::IncomingList,
+            };
+            let v = if t.part.is_write() { &mut writes } else { &mut reads };
+            push_transfer(v, stage, t.addr, t.bytes);
+        });
         (reads, writes)
     }
 
@@ -208,7 +253,11 @@ impl Model<'_> {
         let tw = &self.wl.frames[f].tiles[t];
         let eb = self.eb;
         let sc = self.layout.scratch(agent);
-        let list = self.layout.lists[f % 2] + list_off * eb;
+        let list = if self.accel == Accel::Neo {
+            self.layout.list_slot(f, t)
+        } else {
+            self.layout.lists[f % 2] + list_off * eb
+        };
         let cur = self.layout.table(f, t);
         let mut segs = Vec::new();
         if self.hier {
@@ -401,13 +450,16 @@ impl Model<'_> {
         let cur = self.layout.table(f, t);
         let mut reads = vec![Access::seq(Stage::RasterTable, cur, table_entries * self.eb)];
         if entries > 0 {
+            // Neo's feature table is a word per Gaussian id, GSCore's the compacted entries.
+            let (record_bytes, records) =
+                if neo { (self.pre_records().feature, fw.gaussians) } else { (self.fb, fw.visible) };
             reads.push(Access {
                 stage: Stage::FeatureTable,
                 base: self.layout.features[f % 2],
                 kind: AccessKind::Gather {
                     count: entries as u64,
-                    record_bytes: self.fb as u32,
-                    records_in_region: fw.visible.max(1),
+                    record_bytes: record_bytes as u32,
+                    records_in_region: records.max(1),
                     seed: crate::engine::mix(((f as u64) << 32) ^ t as u64),
                 },
             });
@@ -444,4 +496,24 @@ impl Model<'_> {
             }],
         }
     }
+}
+
+/// Appends one transfer to `v`: it extends the last run when it has the same stage and size
+/// and continues its stride, else it starts a run.
+fn push_transfer(v: &mut Vec<Access>, stage: Stage, addr: u64, bytes: u64) {
+    if let Some(Access { stage: s, base, kind: AccessKind::Records { count, record_bytes, stride } }) =
+        v.last_mut()
+    {
+        if *s == stage && *record_bytes == bytes && addr > *base {
+            if *count == 1 {
+                (*stride, *count) = (addr - *base, 2);
+                return;
+            }
+            if addr == *base + *stride * *count {
+                *count += 1;
+                return;
+            }
+        }
+    }
+    v.push(Access::records(stage, addr, 1, bytes, bytes));
 }

@@ -3,11 +3,14 @@
 //! scheduler with the real dependencies between them ([`scheduler`]).
 //!
 //! # Engines and jobs
-//! - **Preprocessing** (one agent): per frame, reads every Gaussian's geometry and the SH of the
-//!   visible ones, writes the feature table and the per-tile lists (Neo: incoming lists; GSCore:
-//!   every pair, with its subtile bitmap); Neo's incoming detection reads the previous frame's
-//!   feature entries and visibility bitmap and writes this frame's bitmap. Compute: the slowest
-//!   of projection, colour and duplication units (assumed timing).
+//! - **Preprocessing** (one agent): per frame, Neo moves what the RTL Preprocessing Engine
+//!   moves (golden `engine::pre::pre_transfers`, each transfer the DRAM lines it touches): every
+//!   lane's geometry stream, each visible Gaussian's SH record and, on a frame that reuses
+//!   tables, its previous feature word (incoming detection); every Gaussian's 32-byte feature
+//!   word (zero when culled), the incoming lists in their per-tile slots and the lengths. GSCore
+//!   reads every geometry record and the visible Gaussians' SH and writes a compacted feature
+//!   table and every pair (with its subtile bitmap). Compute: the slowest of projection, colour
+//!   and duplication units (measured timing).
 //! - **Sorting** (`sort_cores` agents): per tile, the sorting-core commands of the strategy
 //!   ([`crate::sortcmd`]), each a segment timed by `latency.json`: Neo's DPS (the last pass
 //!   fused with the MSU+ insert/delete merge when `fused_dps_merge`), conventional sorts of the
@@ -191,10 +194,11 @@ impl<'a> Model<'a> {
         Sched::new(self)
     }
 
-    /// True when the duplication unit detects incoming Gaussians: Neo's hardware running a
-    /// strategy that reuses tables (`background:K` included, charged one frame back like the
-    /// others although its reused table is frame `f - K`'s); not GSCore (no incoming step), not
-    /// `full` or `hierarchical` (every frame from scratch).
+    /// True when the duplication unit detects incoming Gaussians (reads the previous feature
+    /// words unless the frame is from scratch): Neo's hardware running a strategy that reuses
+    /// tables (`background:K` included, charged one frame back like the others although its
+    /// reused table is frame `f - K`'s); not GSCore (no incoming step), not `full` or
+    /// `hierarchical` (every frame from scratch).
     fn detects_incoming(&self) -> bool {
         self.accel == Accel::Neo
             && (self.strategy.reuses_tables() || matches!(self.strategy, Strategy::Background(_)))

@@ -87,11 +87,13 @@ pub struct Rules {
     pub frame_buffer: Option<u64>,
     /// neo's parameter and feature-entry sizes replace the artifact's.
     pub neo_sizes: Option<waterfall::NeoSizes>,
-    /// The duplication unit's incoming detection is charged (neither the artifact nor its
-    /// trace has it): this frame's visibility bitmap written and, when the frame reuses its
-    /// tables ([`poc::PocFrame::previous_visible`]), the previous frame's bitmap and feature
-    /// entries read, each as one stream ([`waterfall::detection_bytes`]).
-    pub incoming_detection: bool,
+    /// Preprocessing moves what the RTL Preprocessing Engine moves (neither the artifact nor
+    /// its trace has it; [`waterfall::pre_engine_lines`], golden `engine::pre::pre_transfers`):
+    /// every lane's geometry stream and each visible Gaussian's SH record read, on a frame
+    /// that reuses tables each visible Gaussian's previous 32-byte feature word read (incoming
+    /// detection), every Gaussian's feature word written, the lists in 8-byte entries and
+    /// their lengths written; the raster gathers 32-byte words by id. Needs `neo_sizes`.
+    pub pre_engine: bool,
 }
 
 impl Rules {
@@ -106,7 +108,7 @@ impl Rules {
         "+ the feature table is written as one stream",
         "+ the frame buffer is written",
         "+ neo's byte sizes (parameters, feature entries)",
-        "+ incoming detection (previous entries + visibility bitmap)",
+        "+ the RTL's preprocessing transfers (golden pre_transfers)",
     ];
 
     /// The rules after the first `k` steps of the waterfall, with neo's sizes `neo`.
@@ -120,7 +122,7 @@ impl Rules {
             feature_stream: k >= 6,
             frame_buffer: (k >= 7).then_some(neo.pixel),
             neo_sizes: (k >= 8).then_some(*neo),
-            incoming_detection: k >= 9,
+            pre_engine: k >= 9,
         }
     }
 }

@@ -50,11 +50,6 @@ pub struct PocFrame {
     pub incoming_list: Vec<u32>,
     /// Per tile, row-major.
     pub tiles: Vec<PocTile>,
-    /// Gaussians visible in the previous frame when this frame reuses its tables (what the
-    /// duplication unit's incoming detection reads). Not in the trace format: [`Self::follow`]
-    /// sets it from the previous frame's trace; `None` for a frame sorted from scratch or
-    /// read alone.
-    pub previous_visible: Option<u64>,
 }
 
 /// Statistics of a trace, the fields of the artifact reference's `trace_stats`.
@@ -90,12 +85,6 @@ impl PocFrame {
     /// lists every entry as new).
     pub fn reuses_tables(&self) -> bool {
         self.tiles.iter().any(|t| t.reused > 0)
-    }
-
-    /// Takes `prev` as the frame before this one: when this frame reuses tables, records the
-    /// Gaussians visible in `prev` ([`Self::previous_visible`]).
-    pub fn follow(&mut self, prev: &PocFrame) {
-        self.previous_visible = self.reuses_tables().then(|| prev.visible());
     }
 
     /// The trace's statistics.
@@ -158,7 +147,6 @@ pub fn parse_poc_trace(text: &str, path: &Path) -> Result<PocFrame, PocError> {
         incoming_tiles: Vec::with_capacity(n),
         incoming_list: Vec::new(),
         tiles: Vec::with_capacity(tiles as usize),
-        previous_visible: None,
     };
     for _ in 0..n {
         let g = lines.numbers_at_least("a Gaussian line", 2)?;

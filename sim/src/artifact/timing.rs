@@ -21,10 +21,11 @@
 //! The frame ends when all three phases are done. Addresses follow the artifact's layout
 //! (`config.artifact_constants`), so row hits are comparable.
 
+use neo_golden::engine::memory::FEATURE_BYTES;
 use std::collections::VecDeque;
 
 use super::poc::PocFrame;
-use super::waterfall::tile_pixels;
+use super::waterfall::{pre_engine_lines, tile_pixels};
 use super::{approx_passes, ArtifactSizes, Rules};
 use crate::config::DramConfig;
 use crate::dram::{Ps, Ticket};
@@ -47,11 +48,13 @@ pub struct ArtifactLayout {
     pub tile_entries: u64,
     /// The frame buffer (not in the artifact; for the waterfall's frame-buffer step).
     pub frame_buffer: u64,
-    /// The previous frame's feature entries (not in the artifact; for the waterfall's
-    /// incoming-detection step).
-    pub previous_features: u64,
-    /// The previous frame's and this frame's visibility bitmaps (idem).
-    pub visibility: [u64; 2],
+    /// This frame's and the previous frame's feature words of the RTL Preprocessing Engine
+    /// (not in the artifact; for the waterfall's last step).
+    pub pre_features: [u64; 2],
+    /// The RTL Preprocessing Engine's incoming-list slots (idem).
+    pub pre_lists: u64,
+    /// The tile descriptors, where it writes the lists' lengths (idem).
+    pub pre_descriptors: u64,
 }
 
 impl Default for ArtifactLayout {
@@ -64,8 +67,9 @@ impl Default for ArtifactLayout {
             new: 251_658_240,
             tile_entries: 8198,
             frame_buffer: 0x4000_0000,
-            previous_features: 0x5000_0000,
-            visibility: [0x6000_0000, 0x6100_0000],
+            pre_features: [0x1_0000_0000, 0x1_4000_0000],
+            pre_lists: 0x1_8000_0000,
+            pre_descriptors: 0x5000_0000,
         }
     }
 }
@@ -272,6 +276,11 @@ impl Frame<'_> {
     /// The lines one feature entry of Gaussian `id` costs: its first, and its second when it
     /// straddles and straddles are charged.
     fn feature_lines(&self, id: u64, out: &mut Vec<u64>) {
+        if self.r.pre_engine {
+            // The RTL's 32-byte feature word of Gaussian `id`: within one line.
+            out.push(align(self.l.pre_features[0] + FEATURE_BYTES * id, &self.s));
+            return;
+        }
         let (s, fb) = (&self.s, self.feature_bytes());
         let at = self.l.features + id * fb;
         out.push(align(at, s));
@@ -282,6 +291,11 @@ impl Frame<'_> {
 
     fn preprocess_lists(&self) -> Vec<ReqList> {
         let (f, s, l) = (self.f, &self.s, &self.l);
+        if let (true, Some(n)) = (self.r.pre_engine, self.r.neo_sizes) {
+            // The RTL Preprocessing Engine's transfers (as the waterfall's last step charges them).
+            let pre = pre_engine_lines(f, l, n.sh_degree, s.line);
+            return vec![(pre.params, false), (pre.previous, false), (pre.features, true), (pre.lists, true)];
+        }
         let visible: Vec<usize> = (0..f.culled.len()).filter(|&i| !f.culled[i]).collect();
         let geometry = self.r.neo_sizes.map_or(s.position, |n| n.geometry);
         let cull = self.lines(l.positions, f.culled.len() as u64 * geometry);
@@ -309,26 +323,7 @@ impl Frame<'_> {
             }
             v
         };
-        let mut lists = vec![(cull, false), (load, false), (store, true)];
-        if self.r.incoming_detection {
-            lists.extend(self.incoming_detection());
-        }
-        lists.push((self.duplication(), true));
-        lists
-    }
-
-    /// The duplication unit's incoming detection, before its writes: the previous frame's
-    /// feature entries and bitmap read as streams (a frame that reuses its tables), this
-    /// frame's bitmap written (as [`super::waterfall::detection_bytes`] charges them).
-    fn incoming_detection(&self) -> Vec<ReqList> {
-        let (f, l) = (self.f, &self.l);
-        let bitmap = (f.culled.len() as u64).div_ceil(8);
-        let mut read = Vec::new();
-        if let Some(p) = f.previous_visible {
-            read = self.lines(l.previous_features, p * self.feature_bytes());
-            read.extend(self.lines(l.visibility[0], bitmap));
-        }
-        vec![(read, false), (self.lines(l.visibility[1], bitmap), true)]
+        vec![(cull, false), (load, false), (store, true), (self.duplication(), true)]
     }
 
     /// The duplication writes: three lines per incoming pair (the artifact), or each tile's
@@ -641,10 +636,10 @@ mod tests {
     fn each_waterfall_step_times_the_bytes_it_charges() {
         use crate::artifact::waterfall::{test_frame, waterfall, NeoSizes};
         let s = ArtifactSizes::default();
-        let neo = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3 };
-        // Read alone, and following a frame with 3 visible Gaussians (incoming detection reads).
-        for previous_visible in [None, Some(3)] {
-            let f = PocFrame { previous_visible, ..test_frame() };
+        let neo = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3, sh_degree: 3 };
+        // A frame that reuses tables (previous words read) and one sorted from scratch.
+        let scratch = PocFrame { tiles: vec![test_frame().tiles[0].clone(); 2], ..test_frame() };
+        for f in [test_frame(), scratch] {
             let steps = waterfall(&f, &s, &neo);
             for (k, step) in steps.iter().enumerate() {
                 let t = artifact_timing_with(&f, &s, &Rules::step(k, &neo), &DramConfig::default());

@@ -7,7 +7,11 @@
 //! the same frame: what is left between them is neo's byte sizes and neo's sorting work (its
 //! exact per-tile commands instead of the artifact's approximation passes).
 
+use neo_golden::engine::pre::{pre_transfers, PrePart};
+use neo_golden::engine::{beats_spanned, EngineConfig, FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
+
 use super::poc::PocFrame;
+use super::timing::ArtifactLayout;
 use super::{approx_passes, artifact_lines, ArtifactSizes, Request, Rules};
 use crate::traffic::{Dir, Stage};
 
@@ -91,18 +95,76 @@ pub struct NeoSizes {
     pub feature: u64,
     /// Frame-buffer bytes per pixel.
     pub pixel: u64,
+    /// The scene's SH degree (the Preprocessing Engine's f32 SH records, the last step).
+    pub sh_degree: u8,
 }
 
-/// The incoming detection's bytes in frame `f` with `feature`-byte entries and `line`-byte
-/// lines, as neo's model charges them (`neo_sim::arch`, the preprocessing job): (read,
-/// written). The bitmap (`ceil(N / 8)` bytes) is written every frame; a frame that reuses
-/// its tables also reads the previous one and the previous frame's `P` feature entries. Each
-/// is one stream from a line-aligned base, so it costs its bytes rounded up to whole lines.
-pub fn detection_bytes(f: &PocFrame, feature: u64, line: u64) -> (u64, u64) {
-    let stream = |bytes: u64| bytes.div_ceil(line) * line;
-    let bitmap = stream((f.culled.len() as u64).div_ceil(8));
-    let read = f.previous_visible.map_or(0, |p| stream(p * feature) + bitmap);
-    (read, bitmap)
+/// Per tile, the incoming pairs of visible Gaussians the trace's duplication lists (the
+/// length of the tile's incoming list).
+pub fn incoming_per_tile(f: &PocFrame) -> Vec<u64> {
+    let mut per_tile = vec![0u64; f.tiles.len()];
+    let mut at = 0;
+    for (g, &n) in f.incoming_tiles.iter().enumerate() {
+        for &t in &f.incoming_list[at..at + n as usize] {
+            per_tile[t as usize] += !f.culled[g] as u64;
+        }
+        at += n as usize;
+    }
+    per_tile
+}
+
+/// The DRAM lines (addresses) the RTL Preprocessing Engine's transfers touch in frame `f`, as
+/// neo's model charges them (`neo_sim::arch`): golden `engine::pre::pre_transfers` for the
+/// default engine, each transfer the `line`-byte lines it touches, by stage.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PreEngineLines {
+    /// Geometry streams and SH records (stage `preprocess`).
+    pub params: Vec<u64>,
+    /// The previous feature words of the visible Gaussians on a frame that reuses tables
+    /// (`incoming detection`).
+    pub previous: Vec<u64>,
+    /// Every Gaussian's feature word (`feature table`, written).
+    pub features: Vec<u64>,
+    /// The incoming lists' lines and lengths (`incoming lists`, written).
+    pub lists: Vec<u64>,
+}
+
+/// The RTL Preprocessing Engine's lines in frame `f` (see [`PreEngineLines`]) at the bases of
+/// `l`, for a scene of SH degree `sh_degree`. The frame is fresh (no previous word read) unless
+/// it reuses tables.
+pub fn pre_engine_lines(f: &PocFrame, l: &ArtifactLayout, sh_degree: u8, line: u64) -> PreEngineLines {
+    let cfg = EngineConfig::default();
+    let fresh = if f.reuses_tables() { 0 } else { PRE_FRESH };
+    let regs = FrameRegs {
+        tiles: f.tiles.len() as u32,
+        desc_base: l.pre_descriptors,
+        feat_base: l.pre_features[0],
+        pre: PreRegs {
+            ctrl: PRE_ENABLE | fresh,
+            gaussians: f.culled.len() as u32,
+            sh_degree: sh_degree as u32,
+            geo_base: l.positions,
+            sh_base: l.others,
+            prev_feat_base: l.pre_features[1],
+            list_base: l.pre_lists,
+            ..PreRegs::default()
+        },
+        ..FrameRegs::default()
+    };
+    let visible = (0..f.culled.len() as u64).filter(|&i| !f.culled[i as usize]);
+    let lens = incoming_per_tile(f).into_iter().map(|n| n as usize);
+    let mut out = PreEngineLines::default();
+    pre_transfers(&cfg, &regs, visible, lens, |t| {
+        let v = match t.part {
+            PrePart::Geometry | PrePart::Sh => &mut out.params,
+            PrePart::PrevFeature => &mut out.previous,
+            PrePart::Feature => &mut out.features,
+            PrePart::ListLine | PrePart::ListLen => &mut out.lists,
+        };
+        let first = t.addr / line;
+        v.extend((first..first + beats_spanned(t.addr, t.bytes, line)).map(|k| k * line));
+    });
+    out
 }
 
 /// The waterfall of one frame, ending with neo's byte sizes `neo`.
@@ -164,15 +226,7 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
     b.add(Stage::FeatureTable, Dir::Read, gathers * line);
     push(Rules::STEPS[3], &b);
     // 4. Duplication writes one entry per incoming pair, each tile's list contiguous.
-    let mut per_tile = vec![0u64; f.tiles.len()];
-    let mut at = 0;
-    for (g, &n) in f.incoming_tiles.iter().enumerate() {
-        for &t in &f.incoming_list[at..at + n as usize] {
-            per_tile[t as usize] += !f.culled[g] as u64;
-        }
-        at += n as usize;
-    }
-    let dup: u64 = per_tile.iter().map(|&n| ceil(n)).sum();
+    let dup: u64 = incoming_per_tile(f).iter().map(|&n| ceil(n)).sum();
     b.0[Stage::IncomingList as usize][Dir::Write as usize] = dup * line;
     push(Rules::STEPS[4], &b);
     // 5. The merge is charged the way neo's golden accounting fuses it with DPS: the last DPS
@@ -211,9 +265,16 @@ pub fn waterfall(f: &PocFrame, s: &ArtifactSizes, neo: &NeoSizes) -> Vec<Step> {
         .sum();
     b.0[Stage::FeatureTable as usize] = [gathers * line, (visible * neo.feature).div_ceil(line) * line];
     push(Rules::STEPS[8], &b);
-    // 9. The duplication unit's incoming detection.
-    let (read, written) = detection_bytes(f, neo.feature, line);
-    b.0[Stage::IncomingDetection as usize] = [read, written];
+    // 9. The RTL Preprocessing Engine's transfers: parameters, previous words (incoming
+    // detection), a feature word per Gaussian, the lists in 8-byte entries and their lengths;
+    // the raster gathers 32-byte words by id (each within one line).
+    let pre = pre_engine_lines(f, &ArtifactLayout::default(), neo.sh_degree, line);
+    let n = |v: &Vec<u64>| v.len() as u64 * line;
+    b.0[Stage::Preprocess as usize][Dir::Read as usize] = n(&pre.params);
+    b.0[Stage::IncomingDetection as usize] = [n(&pre.previous), 0];
+    let gathers: u64 = f.tiles.iter().map(|t| t.ids.len() as u64).sum();
+    b.0[Stage::FeatureTable as usize] = [gathers * line, n(&pre.features)];
+    b.0[Stage::IncomingList as usize][Dir::Write as usize] = n(&pre.lists);
     push(Rules::STEPS[9], &b);
     steps
 }
@@ -238,7 +299,6 @@ pub(crate) fn test_frame() -> PocFrame {
         incoming_tiles: vec![2, 1, 1, 0],
         incoming_list: vec![0, 1, 0, 1],
         tiles: vec![tile(2, 0, vec![0, 1]), tile(1, 2, vec![3, 0, 1])],
-        previous_visible: None,
     }
 }
 
@@ -246,7 +306,7 @@ pub(crate) fn test_frame() -> PocFrame {
 mod tests {
     use super::*;
 
-    const NEO: NeoSizes = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3 };
+    const NEO: NeoSizes = NeoSizes { geometry: 44, sh: 192, feature: 31, pixel: 3, sh_degree: 3 };
 
     #[test]
     fn the_first_row_is_the_artifacts_accounting() {
@@ -292,30 +352,41 @@ mod tests {
         assert_eq!(steps[8].bytes.get(Stage::Preprocess, Dir::Read), 12 * 64);
         assert_eq!(steps[8].bytes.get(Stage::FeatureTable, Dir::Write), 2 * 64);
         assert_eq!(steps[8].bytes.get(Stage::FeatureTable, Dir::Read), 5 * 64);
-        // Read alone (no previous frame): only this frame's bitmap (4 bits: a line) is written.
-        assert_eq!(d(9, Stage::IncomingDetection, Dir::Write), 64);
-        assert_eq!(d(9, Stage::IncomingDetection, Dir::Read), 0);
-        assert_eq!(steps[9].bytes.total() - steps[8].bytes.total(), 64, "nothing else moves");
+        // The RTL Preprocessing Engine (tile 1 reuses entries: not fresh). Four lanes of one
+        // 44-byte record each (bytes 0..44, 44..88, 88..132, 132..176: 1 + 2 + 2 + 1 lines) and
+        // 3 SH records of 192 B (9 lines): 3 lines more than one stream each; 3 previous words
+        // (a line each); 4 feature words (a line each, 2 more than 93 B as a stream); the lists
+        // of 2 and 1 entries (a line each, as before) and 2 lengths (a line each); the
+        // gathers of 32-byte words stay a line each.
+        assert_eq!(d(9, Stage::Preprocess, Dir::Read), 3 * 64);
+        assert_eq!(d(9, Stage::IncomingDetection, Dir::Read), 3 * 64);
+        assert_eq!(d(9, Stage::IncomingDetection, Dir::Write), 0, "no bitmap");
+        assert_eq!(d(9, Stage::FeatureTable, Dir::Write), 2 * 64);
+        assert_eq!(d(9, Stage::FeatureTable, Dir::Read), 0);
+        assert_eq!(d(9, Stage::IncomingList, Dir::Write), 2 * 64);
+        assert_eq!(steps[9].bytes.total() - steps[8].bytes.total(), 10 * 64, "nothing else moves");
     }
 
     #[test]
-    fn incoming_detection_reads_the_previous_entries_and_bitmap_of_a_reuse_frame() {
-        let prev = test_frame();
-        let mut f = test_frame();
-        f.follow(&prev);
+    fn the_pre_engine_reads_previous_words_only_when_tables_are_reused() {
+        let f = test_frame();
         assert!(f.reuses_tables(), "tile 1 reuses 2 entries");
-        assert_eq!(f.previous_visible, Some(3), "the previous frame culled 1 of 4");
-        let steps = waterfall(&f, &ArtifactSizes::default(), &NEO);
-        let (last, before) = (&steps[9].bytes, &steps[8].bytes);
-        // 3 previous entries of 31 B (93 B: 2 lines) and the 1-byte bitmap (1 line) read; the
-        // bitmap written (1 line).
-        assert_eq!(last.get(Stage::IncomingDetection, Dir::Read), (2 + 1) * 64);
-        assert_eq!(last.get(Stage::IncomingDetection, Dir::Write), 64);
-        assert_eq!(last.total() - before.total(), 4 * 64);
-        // A frame sorted from scratch reads nothing, whatever came before.
-        let mut scratch = PocFrame { tiles: vec![prev.tiles[0].clone(); 2], ..test_frame() };
-        scratch.follow(&prev);
-        assert_eq!(scratch.previous_visible, None);
-        assert_eq!(detection_bytes(&scratch, 31, 64), (0, 64));
+        let l = ArtifactLayout::default();
+        let reuse = pre_engine_lines(&f, &l, 3, 64);
+        assert_eq!(reuse.previous.len(), 3, "the 3 visible Gaussians' previous words");
+        assert_eq!(
+            reuse.previous[2],
+            l.pre_features[1] + 64,
+            "Gaussian 3's word: bytes 96..128, the second line"
+        );
+        assert_eq!((reuse.params.len(), reuse.features.len(), reuse.lists.len()), (15, 4, 4));
+        // A frame sorted from scratch reads no previous word; the rest is the same.
+        let scratch = PocFrame { tiles: vec![f.tiles[0].clone(); 2], ..test_frame() };
+        assert!(!scratch.reuses_tables());
+        let fresh = pre_engine_lines(&scratch, &l, 3, 64);
+        assert!(fresh.previous.is_empty());
+        assert_eq!(PreEngineLines { previous: Vec::new(), ..reuse }, fresh);
+        // SH degree 0: 12-byte records of ids 0, 1, 3 (bytes 0..12, 12..24, 36..48): a line each.
+        assert_eq!(pre_engine_lines(&f, &l, 0, 64).params.len(), 6 + 3);
     }
 }
