@@ -101,7 +101,11 @@ fn check(name: &str, scene: &Scene, cam: &Camera) {
                 own >= 45.0,
                 "{name}, {label}, wide key {wide}: {own:.2} dB against the float preprocessing"
             );
-            assert!(f[k].1 >= 45.0, "{name}, {label}, wide key {wide}: {:.2} dB against the float reference", f[k].1);
+            assert!(
+                f[k].1 >= 45.0,
+                "{name}, {label}, wide key {wide}: {:.2} dB against the float reference",
+                f[k].1
+            );
             assert!(
                 f[k].1 >= f[0].1 - 0.1,
                 "{name}, {label}, wide key {wide}: {:.2} dB vs {:.2} before",

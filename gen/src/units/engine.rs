@@ -232,7 +232,9 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.blank();
     m.wire("ctrl_busy", 1).wire("ctrl_done", 1);
     if cfg.has_preprocessing() {
-        m.comment("A start goes to the Preprocessing Engine when PRE_CTRL.enable, and its done starts the walk.");
+        m.comment(
+            "A start goes to the Preprocessing Engine when PRE_CTRL.enable, and its done starts the walk.",
+        );
         m.wire("pre_busy", 1).wire("pre_done", 1);
         m.wire_assign("pre_start", 1, "start & pre_enable");
         m.wire_assign("ctrl_start", 1, "pre_enable ? pre_done : start");
