@@ -568,7 +568,7 @@ fn library_key(k: LibraryKey<'_>, verilator: &str, cxx: &str) -> cache::Key {
         // Only for threaded models, so that single-threaded keys (and cache entries) stay as they were.
         key.add("threads", thread_flags(k.threads).join(" ").as_bytes());
     }
-    if f.suffix != "" {
+    if !f.suffix.is_empty() {
         // Only for FST, untraced and coverage, so that the VCD models' keys (and cache entries)
         // stay as they were.
         key.add("trace", format!("{:?} {:?} {:?}", f.defines, f.runtime, f.libs).as_bytes());
