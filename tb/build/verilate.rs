@@ -4,7 +4,7 @@ use crate::shim::ShimTrace;
 use crate::verilator::{
     verilate_with, Verilator, CPP_DEFINES, CPP_DEFINES_COVERAGE, CPP_DEFINES_FST, RUNTIME_SOURCES,
     RUNTIME_SOURCES_COVERAGE, RUNTIME_SOURCES_FST, VERILATOR_FLAGS, VERILATOR_FLAGS_COVERAGE,
-    VERILATOR_FLAGS_FST,
+    VERILATOR_FLAGS_COVERAGE_NO_TOGGLE, VERILATOR_FLAGS_FST,
 };
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -68,6 +68,10 @@ impl Trace {
         shim: ShimTrace::Off,
         coverage: true,
     };
+    /// [`Trace::COVERAGE`] without toggle coverage (line and user points only), for the tops of
+    /// `build.rs`'s `NO_TOGGLE_COVERAGE`; the same runtime.
+    pub const COVERAGE_NO_TOGGLE: Trace =
+        Trace { flags: VERILATOR_FLAGS_COVERAGE_NO_TOGGLE, ..Trace::COVERAGE };
 
     /// True for the FST flavour.
     pub fn is_fst(&self) -> bool {

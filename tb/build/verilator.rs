@@ -48,6 +48,12 @@ pub const RUNTIME_SOURCES_FST: &[&str] = &["verilated.cpp", "verilated_fst_c.cpp
 pub const VERILATOR_FLAGS_COVERAGE: &[&str] =
     &["--cc", "--coverage", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
 
+/// [`VERILATOR_FLAGS_COVERAGE`] without toggle coverage (`--coverage-line --coverage-user`):
+/// for tops whose toggle instrumentation is too large to build routinely (the raster core's
+/// C++ grows from 28 to over 300 files).
+pub const VERILATOR_FLAGS_COVERAGE_NO_TOGGLE: &[&str] =
+    &["--cc", "--coverage-line", "--coverage-user", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+
 /// [`CPP_DEFINES`] for a coverage model.
 pub const CPP_DEFINES_COVERAGE: &[(&str, &str)] =
     &[("VM_COVERAGE", "1"), ("VM_SC", "0"), ("VM_TRACE", "0"), ("VM_TRACE_VCD", "0"), ("VM_TRACE_FST", "0")];

@@ -29,7 +29,8 @@ fn run() -> Result<usize, String> {
     let waivers_path = rest.get(1).map_or("tb/coverage-waivers.txt", String::as_str);
     let read = |p: &str| std::fs::read_to_string(p).map_err(|e| format!("{p}: {e}"));
     let points = coverage::parse_dat(&read(dat)?).map_err(|e| format!("{dat}: {e}"))?;
-    let waivers = coverage::parse_waivers(&read(waivers_path)?).map_err(|e| format!("{waivers_path}: {e}"))?;
+    let waivers =
+        coverage::parse_waivers(&read(waivers_path)?).map_err(|e| format!("{waivers_path}: {e}"))?;
     let modules = coverage::summarise(&points);
     let mut sources = std::collections::HashMap::new();
     for p in modules.values().flatten() {
