@@ -270,8 +270,6 @@ module neo_raster_feeder #(
   // Named cover points (Verilator --coverage-user: scripts/coverage).
   // the routing FIFO is full: the ITU results are held
   cov_fifo_full: cover property (@(posedge clk_i) (fifo_full));
-  // a full FIFO pops and pushes in the same cycle
-  cov_full_push: cover property (@(posedge clk_i) (fifo_full & pop & push));
   // a piece's first beat resumes its subtile from the saved state
   cov_resumed_piece: cover property (@(posedge clk_i) (beat & piece_first_q & elem_resume_q & ~skip));
   // an empty resumed piece that does not end the subtile is skipped

@@ -38,7 +38,6 @@ pub fn module(cfg: &EngineConfig) -> Module {
     beats(&mut m, cfg, &d);
     m.covers(&[
         ("cov_fifo_full", "fifo_full".into(), "the routing FIFO is full: the ITU results are held"),
-        ("cov_full_push", "fifo_full & pop & push".into(), "a full FIFO pops and pushes in the same cycle"),
         (
             "cov_resumed_piece",
             "beat & piece_first_q & elem_resume_q & ~skip".into(),
