@@ -266,4 +266,16 @@ module neo_raster_feeder #(
   assign scu_cols_o = cols;
   assign scu_rows_o = rows;
 
+`ifdef VERILATOR
+  // Named cover points (Verilator --coverage-user: scripts/coverage).
+  // the routing FIFO is full: the ITU results are held
+  cov_fifo_full: cover property (@(posedge clk_i) (fifo_full));
+  // a piece's first beat resumes its subtile from the saved state
+  cov_resumed_piece: cover property (@(posedge clk_i) (beat & piece_first_q & elem_resume_q & ~skip));
+  // an empty resumed piece that does not end the subtile is skipped
+  cov_skipped_piece: cover property (@(posedge clk_i) (skip));
+  // an empty beat goes to the SCU
+  cov_empty_beat: cover property (@(posedge clk_i) (beat & empty_beat & ~skip));
+`endif
+
 endmodule

@@ -384,4 +384,18 @@ module neo_scu (
   assign out_valid_o = out_valid_q;
   assign out_rgb_o = out_rgb_q;
 
+`ifdef VERILATOR
+  // Named cover points (Verilator --coverage-user: scripts/coverage).
+  // a Gaussian is skipped: every pixel of its list is already done
+  cov_early_termination: cover property (@(posedge clk_i) (v0_q & term_match & ~b0_q[BEAT_FIRST] & ~b0_q[BEAT_EMPTY]));
+  // term_o while a beat of the finished list is offered
+  cov_term_offered: cover property (@(posedge clk_i) (term_o & in_valid_i));
+  // a list resumes its subtile from the saved state
+  cov_resumed_subtile: cover property (@(posedge clk_i) (in_fire & first_in_q & in_resume_i));
+  // a piece ends without finishing its subtile
+  cov_saved_piece: cover property (@(posedge clk_i) (fin_b & ~d5_q[BEAT_FINAL]));
+  // a finished subtile waits for the output register
+  cov_output_stall: cover property (@(posedge clk_i) (fin_out & out_valid_q & ~out_ready_i));
+`endif
+
 endmodule

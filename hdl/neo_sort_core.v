@@ -698,4 +698,36 @@ module neo_sort_core (
     end
   end
 
+`ifdef VERILATOR
+  // Named cover points (Verilator --coverage-user: scripts/coverage).
+  // a SORT command taken
+  cov_mode_sort: cover property (@(posedge clk_i) (take_chunk & (cmd_mode_i == 2'd0)));
+  // a DPS command taken
+  cov_mode_dps: cover property (@(posedge clk_i) (take_chunk & (cmd_mode_i == 2'd1)));
+  // a MERGE_DELETE command taken
+  cov_mode_merge_delete: cover property (@(posedge clk_i) (take_merge & (cmd_mode_i == 2'd2)));
+  // a MERGE command taken
+  cov_mode_merge: cover property (@(posedge clk_i) (take_merge & (cmd_mode_i == 2'd3)));
+  // a chunk command of no entries
+  cov_empty_chunk: cover property (@(posedge clk_i) (take_empty));
+  // a load overlaps the previous chunk's passes
+  cov_load_during_passes: cover property (@(posedge clk_i) (ld_act_q & st_pass));
+  // MERGE_DELETE drops an entry of stream A (valid bit, the entry's MSB, clear)
+  cov_merge_drop: cover property (@(posedge clk_i) (st_merge & drop_q & a_pop_ent & ~a_data[47]));
+  // merge FIFO A holds a whole chunk buffer
+  cov_fifo_a_full: cover property (@(posedge clk_i) (st_merge & (fa_cnt_q == 9'd256)));
+  // merge FIFO B holds a whole chunk buffer
+  cov_fifo_b_full: cover property (@(posedge clk_i) (st_merge & (fb_cnt_q == 9'd256)));
+  // FIFO A full and held back while stream B goes out
+  cov_fifo_a_full_b_drains: cover property (@(posedge clk_i) (st_merge & (fa_cnt_q == 9'd256) & b_pop_ent));
+  // FIFO B full and held back while stream A goes out
+  cov_fifo_b_full_a_drains: cover property (@(posedge clk_i) (st_merge & (fb_cnt_q == 9'd256) & a_pop_ent));
+  // the merge waits for stream A while B has an entry
+  cov_starved_a: cover property (@(posedge clk_i) (st_merge & sa_act_q & ~a_valid & b_valid & ~sb_none));
+  // the merge waits for stream B while A has an entry
+  cov_starved_b: cover property (@(posedge clk_i) (st_merge & sb_act_q & ~b_valid & a_valid & ~sa_none));
+  // a read waits for a free burst tag
+  cov_tags_full: cover property (@(posedge clk_i) ((req_a_ok | req_b_ok) & ~tag_free));
+`endif
+
 endmodule

@@ -11,11 +11,16 @@
 //!   (`<top>-fst-<hash>/`, `runtime-fst-<hash>/`), and `NEO_TB_MODEL_WAVES` (`vcd` or `fst`) tells
 //!   `neo_tb::waves` which the models write. A `WAVES` value that is not a waveform choice fails
 //!   the build, naming the accepted values.
+//! - With `NEO_COVERAGE=1` the models are built for Verilator coverage instead (`--coverage`,
+//!   untraced; cache entries `<top>-cov-<hash>/`, `runtime-cov-<hash>/`): dropping a model
+//!   writes its counts (`neo_tb::coverage`). `NEO_TB_COVERAGE` (`0` or `1`) tells the crate.
 //! - Without Verilator the crate builds without models (no `neo_has_verilator` cfg) and the
 //!   cosimulation tests skip; with `CI` set that is an error instead.
 
 #[path = "build/cache.rs"]
 mod cache;
+#[path = "build/coverage_env.rs"]
+mod coverage_env;
 #[path = "build/shim.rs"]
 mod shim;
 #[path = "build/verilate.rs"]
@@ -41,6 +46,11 @@ struct Unit {
 /// A cache entry (its directory, and whether it was already there) or the build error.
 type Built = Result<(PathBuf, bool), String>;
 
+/// Tops whose coverage model counts lines and cover points but not toggles: with toggle
+/// coverage the raster core's C++ is over ten times larger (316 files instead of 28; most of an
+/// hour to compile on two shared cores). Its SCU and ITU get toggle coverage in their own benches.
+const NO_TOGGLE_COVERAGE: &[&str] = &["neo_raster_core"];
+
 const FIXTURE_DIR: &str = "tests/fixtures";
 const FIXTURES: &[&str] = &["neo_tb_adder"];
 
@@ -49,7 +59,7 @@ fn main() {
     println!("cargo::rerun-if-changed=build.rs");
     println!("cargo::rerun-if-changed=build");
     println!("cargo::rerun-if-changed={FIXTURE_DIR}");
-    for var in ["NEO_HDL_DIR", "NEO_CACHE_DIR", "NEO_CONFIG", "CI", "VERILATOR", "WAVES"] {
+    for var in ["NEO_HDL_DIR", "NEO_CACHE_DIR", "NEO_CONFIG", "CI", "VERILATOR", "WAVES", "NEO_COVERAGE"] {
         println!("cargo::rerun-if-env-changed={var}");
     }
     let out_dir = PathBuf::from(std::env::var_os("OUT_DIR").expect("OUT_DIR"));
@@ -60,15 +70,24 @@ fn main() {
         Err(e) => panic!("neo-tb build failed:\n{e}"),
     };
     println!("cargo::rustc-env=NEO_TB_MODEL_WAVES={}", if trace.is_fst() { "fst" } else { "vcd" });
+    println!("cargo::rustc-env=NEO_TB_COVERAGE={}", u8::from(trace.coverage));
     if let Err(e) = run(&out_dir, &trace) {
         panic!("neo-tb build failed:\n{e}");
     }
 }
 
-/// The trace writer of the static models: FST when `WAVES=fst` at build time, else VCD.
+/// The flavour of the static models: coverage (untraced) when `NEO_COVERAGE=1` at build time,
+/// else the trace writer: FST when `WAVES=fst`, else VCD.
 fn trace_flavour() -> Result<verilate::Trace, String> {
     let waves = std::env::var("WAVES").unwrap_or_default();
-    Ok(match waves_env::parse_waves(&waves)? {
+    let wave = waves_env::parse_waves(&waves)?;
+    if coverage_env::parse_coverage(&std::env::var("NEO_COVERAGE").unwrap_or_default())? {
+        if wave.is_some() {
+            return Err(format!("NEO_COVERAGE=1 builds untraced models: unset WAVES (WAVES={waves})"));
+        }
+        return Ok(verilate::Trace::COVERAGE);
+    }
+    Ok(match wave {
         Some("fst") => verilate::Trace::FST,
         _ => verilate::Trace::VCD,
     })
@@ -129,7 +148,7 @@ fn run(out_dir: &Path, trace: &verilate::Trace) -> Result<(), String> {
             let log = fs::read_to_string(dir.join("build.log")).unwrap_or_default();
             println!("cargo::warning=neo-tb: built {}", log.trim());
         }
-        let wrapper = shim::rust(&u.iface);
+        let wrapper = shim::rust(&u.iface, trace.coverage);
         fs::write(dir.join("wrapper.rs"), &wrapper).map_err(|e| e.to_string())?;
         rust.push_str(&wrapper);
         names.push(top.clone());
@@ -192,7 +211,15 @@ fn build_unit(
 ) -> Result<(PathBuf, bool), String> {
     shim::validate(&u.iface)?;
     let top = &u.iface.name;
-    let cpp = shim::cpp_traced(&u.iface, trace.shim);
+    let trace = if trace.coverage && NO_TOGGLE_COVERAGE.contains(&top.as_str()) {
+        &verilate::Trace::COVERAGE_NO_TOGGLE
+    } else {
+        trace
+    };
+    let mut cpp = shim::cpp_traced(&u.iface, trace.shim);
+    if trace.coverage {
+        shim::cpp_coverage(&mut cpp, &u.iface);
+    }
     let mut key = cache::Key::new();
     key.add("top", top.as_bytes());
     for (name, text) in &u.files {
@@ -203,7 +230,7 @@ fn build_unit(
     }
     key.add("flags", trace.flags.join(" ").as_bytes());
     if let Some(k) = trace.key() {
-        // Only for FST, so that the VCD models' keys (and cache entries) stay as they were.
+        // Only for FST and coverage, so that the VCD models' keys (and cache entries) stay as they were.
         key.add("trace", k.as_bytes());
     }
     key.add("verilator", v.version.as_bytes());

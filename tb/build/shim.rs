@@ -171,6 +171,19 @@ fn cpp_trace_calls(s: &mut String, t: &str, writer: &str) {
     );
 }
 
+/// Appended to the shim of a coverage model (`--coverage`, `VM_COVERAGE=1`):
+/// `void neo_T_coverage_write(void*, const char* path)` writes the model's coverage counts
+/// (`VerilatedCovContext::write`, Verilator's `.dat` format) to `path`.
+pub fn cpp_coverage(s: &mut String, iface: &ModuleInterface) {
+    let t = &iface.name;
+    s.push_str("#include \"verilated_cov.h\"\n\nextern \"C\" {\n\n");
+    let _ = writeln!(
+        s,
+        "void neo_{t}_coverage_write(void* p, const char* path) {{ m(p)->ctx.coveragep()->write(path); }}\n"
+    );
+    s.push_str("}  // extern \"C\"\n");
+}
+
 /// Appended to [`cpp`] for models loaded at run time (a second `extern "C"` block):
 /// `neo_T_set_port(void*, size_t index, const uint32_t* words, size_t n)` and
 /// `neo_T_get_port(void*, size_t index, uint32_t* words, size_t n)`: every port by its index in
@@ -245,7 +258,9 @@ fn cpp_port(s: &mut String, t: &str, p: &Port) {
 }
 
 /// The Rust wrapper for one top (module-level items, to be `include!`d in `crate::models`).
-pub fn rust(iface: &ModuleInterface) -> String {
+/// With `coverage` (the shim has [`cpp_coverage`]), dropping a model writes its coverage data
+/// to `crate::coverage::next_path` first.
+pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
     let t = &iface.name;
     let sn = struct_name(t);
     let has = |name: &str| iface.ports.iter().any(|p| p.name == name && p.dir == Dir::In && p.width == 1);
@@ -278,6 +293,9 @@ pub fn rust(iface: &ModuleInterface) -> String {
     let _ = writeln!(s, "        pub fn neo_{t}_trace_open(p: *mut c_void, path: *const c_char) -> c_int;");
     let _ = writeln!(s, "        pub fn neo_{t}_trace_dump(p: *mut c_void, time: u64);");
     let _ = writeln!(s, "        pub fn neo_{t}_trace_close(p: *mut c_void);");
+    if coverage {
+        let _ = writeln!(s, "        pub fn neo_{t}_coverage_write(p: *mut c_void, path: *const c_char);");
+    }
     s.push_str("    }\n}\n\n");
 
     // The struct.
@@ -372,9 +390,16 @@ pub fn rust(iface: &ModuleInterface) -> String {
     }
     s.push_str("}\n\n");
 
+    let cov = if coverage {
+        format!(
+            "        crate::coverage::write_model(Self::NAME, |path| {{\n            // SAFETY: `raw` is live; `path` outlives the call.\n            unsafe {{ ffi_{t}::neo_{t}_coverage_write(self.raw.as_ptr(), path.as_ptr()) }}\n        }});\n"
+        )
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         s,
-        "impl Drop for {sn} {{\n    fn drop(&mut self) {{\n        // SAFETY: `raw` came from `neo_{t}_new` and is freed exactly once.\n        unsafe {{ ffi_{t}::neo_{t}_free(self.raw.as_ptr()) }}\n    }}\n}}\n"
+        "impl Drop for {sn} {{\n    fn drop(&mut self) {{\n{cov}        // SAFETY: `raw` came from `neo_{t}_new` and is freed exactly once.\n        unsafe {{ ffi_{t}::neo_{t}_free(self.raw.as_ptr()) }}\n    }}\n}}\n"
     );
 
     // The generic Dut implementation.

@@ -2,8 +2,9 @@
 
 use crate::shim::ShimTrace;
 use crate::verilator::{
-    verilate_with, Verilator, CPP_DEFINES, CPP_DEFINES_FST, RUNTIME_SOURCES, RUNTIME_SOURCES_FST,
-    VERILATOR_FLAGS, VERILATOR_FLAGS_FST,
+    verilate_with, Verilator, CPP_DEFINES, CPP_DEFINES_COVERAGE, CPP_DEFINES_FST, RUNTIME_SOURCES,
+    RUNTIME_SOURCES_COVERAGE, RUNTIME_SOURCES_FST, VERILATOR_FLAGS, VERILATOR_FLAGS_COVERAGE,
+    VERILATOR_FLAGS_COVERAGE_NO_TOGGLE, VERILATOR_FLAGS_FST,
 };
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -32,6 +33,8 @@ pub struct Trace {
     pub suffix: &'static str,
     /// The shim's trace writer.
     pub shim: ShimTrace,
+    /// Verilator coverage (`NEO_COVERAGE=1`): the shim writes the model's data when it is freed.
+    pub coverage: bool,
 }
 
 impl Trace {
@@ -43,6 +46,7 @@ impl Trace {
         libs: &[],
         suffix: "",
         shim: ShimTrace::Vcd,
+        coverage: false,
     };
     /// `--trace-fst`: `VerilatedFstC` (GTKWave's FST writer; links zlib).
     pub const FST: Trace = Trace {
@@ -52,7 +56,22 @@ impl Trace {
         libs: &["z"],
         suffix: "-fst",
         shim: ShimTrace::Fst,
+        coverage: false,
     };
+    /// `--coverage` without tracing (`NEO_COVERAGE=1`; cache entries `<top>-cov-<hash>/`).
+    pub const COVERAGE: Trace = Trace {
+        flags: VERILATOR_FLAGS_COVERAGE,
+        defines: CPP_DEFINES_COVERAGE,
+        runtime: RUNTIME_SOURCES_COVERAGE,
+        libs: &[],
+        suffix: "-cov",
+        shim: ShimTrace::Off,
+        coverage: true,
+    };
+    /// [`Trace::COVERAGE`] without toggle coverage (line and user points only), for the tops of
+    /// `build.rs`'s `NO_TOGGLE_COVERAGE`; the same runtime.
+    pub const COVERAGE_NO_TOGGLE: Trace =
+        Trace { flags: VERILATOR_FLAGS_COVERAGE_NO_TOGGLE, ..Trace::COVERAGE };
 
     /// True for the FST flavour.
     pub fn is_fst(&self) -> bool {
@@ -62,8 +81,12 @@ impl Trace {
     /// The cache key entry of a non-default flavour (`None` for VCD, so that its keys stay as
     /// they were).
     pub fn key(&self) -> Option<String> {
-        self.is_fst()
-            .then(|| format!("{:?} {:?} {:?} {:?}", self.flags, self.defines, self.runtime, self.libs))
+        let parts = format!("{:?} {:?} {:?} {:?}", self.flags, self.defines, self.runtime, self.libs);
+        if self.coverage {
+            Some(format!("{parts} coverage"))
+        } else {
+            self.is_fst().then_some(parts)
+        }
     }
 }
 

@@ -42,6 +42,26 @@ pub const CPP_DEFINES_FST: &[(&str, &str)] =
 /// LZ4 and FastLZ; the library links `-lz`).
 pub const RUNTIME_SOURCES_FST: &[&str] = &["verilated.cpp", "verilated_fst_c.cpp", "verilated_threads.cpp"];
 
+/// [`VERILATOR_FLAGS`] for a coverage model (`NEO_COVERAGE=1`): `--coverage` (line, toggle and
+/// the generator's named cover points) instead of `--trace` (coverage models write no waves: the
+/// C++ stays smaller).
+pub const VERILATOR_FLAGS_COVERAGE: &[&str] =
+    &["--cc", "--coverage", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+
+/// [`VERILATOR_FLAGS_COVERAGE`] without toggle coverage (`--coverage-line --coverage-user`):
+/// for tops whose toggle instrumentation is too large to build routinely (the raster core's
+/// C++ grows from 28 to over 300 files).
+pub const VERILATOR_FLAGS_COVERAGE_NO_TOGGLE: &[&str] =
+    &["--cc", "--coverage-line", "--coverage-user", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+
+/// [`CPP_DEFINES`] for a coverage model.
+pub const CPP_DEFINES_COVERAGE: &[(&str, &str)] =
+    &[("VM_COVERAGE", "1"), ("VM_SC", "0"), ("VM_TRACE", "0"), ("VM_TRACE_VCD", "0"), ("VM_TRACE_FST", "0")];
+
+/// [`RUNTIME_SOURCES`] for a coverage model (`verilated_cov.cpp` writes the data).
+pub const RUNTIME_SOURCES_COVERAGE: &[&str] =
+    &["verilated.cpp", "verilated_cov.cpp", "verilated_threads.cpp"];
+
 /// The Verilator installation.
 pub struct Verilator {
     /// The executable.

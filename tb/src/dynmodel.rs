@@ -11,6 +11,9 @@
 //! [`DynModel::build_traced`], as FST (`--trace-fst`, the FST writer and `-lz`) or not at all
 //! (no `--trace`: about half the C++ to compile, for runs that write no waves); each is its own
 //! cache entry (`dyn-<top>-<hash>`, `dyn-<top>-fst-<hash>`, `dyn-<top>-untraced-<hash>`).
+//! With `NEO_COVERAGE=1` in the process every model is built for Verilator coverage instead
+//! (`--coverage`, untraced: `dyn-<top>-cov-<hash>`) and writes its counts when it is dropped
+//! ([`crate::coverage`]).
 
 #[allow(dead_code)]
 #[path = "../build/cache.rs"]
@@ -60,6 +63,7 @@ type SetFn = unsafe extern "C" fn(*mut c_void, usize, *const u32, usize);
 type GetFn = unsafe extern "C" fn(*mut c_void, usize, *mut u32, usize);
 type OpenFn = unsafe extern "C" fn(*mut c_void, *const c_char) -> c_int;
 type DumpFn = unsafe extern "C" fn(*mut c_void, u64);
+type CoverageFn = unsafe extern "C" fn(*mut c_void, *const c_char);
 
 /// The entry points of a loaded library.
 struct Api {
@@ -71,6 +75,8 @@ struct Api {
     trace_open: OpenFn,
     trace_dump: DumpFn,
     trace_close: PtrFn,
+    /// Present in coverage models only.
+    coverage_write: Option<CoverageFn>,
 }
 
 /// A Verilated model loaded from a shared library; the same operations as [`crate::dut::Dut`],
@@ -166,6 +172,7 @@ impl DynModel {
         if threads == 0 {
             return Err(format!("{}: threads must be at least 1", iface.name));
         }
+        let format = effective_format(format);
         let info = build_library(iface, files, vlt, format, threads, OPT_FAST)?;
         let model = DynModel::load(iface, &info.library, format)?;
         Ok((model, info))
@@ -180,6 +187,7 @@ impl DynModel {
         vlt: Option<&str>,
         format: Option<WaveFormat>,
     ) -> Result<(DynModel, BuildInfo), String> {
+        let format = effective_format(format);
         let info = build_library(iface, files, vlt, format, 1, OPT_QUICK)?;
         let model = DynModel::load(iface, &info.library, format)?;
         Ok((model, info))
@@ -215,6 +223,11 @@ impl DynModel {
             trace_open: sym!("trace_open", OpenFn),
             trace_dump: sym!("trace_dump", DumpFn),
             trace_close: sym!("trace_close", PtrFn),
+            coverage_write: {
+                let name = format!("neo_{t}_coverage_write\0");
+                // SAFETY: when present, the symbol has this signature in the generated shim.
+                unsafe { lib.get::<CoverageFn>(name.as_bytes()) }.ok().map(|s| *s)
+            },
         };
         // SAFETY: plain constructor; a null return is checked.
         let raw = unsafe { (api.new)() };
@@ -373,6 +386,10 @@ impl DynModel {
 
 impl Drop for DynModel {
     fn drop(&mut self) {
+        if let Some(write) = self.api.coverage_write {
+            // SAFETY: `raw` is live; `path` outlives the call.
+            crate::coverage::write_model(&self.iface.name, |path| unsafe { write(self.raw, path.as_ptr()) });
+        }
         // SAFETY: `raw` came from `new` and is freed once, before the library is unloaded.
         unsafe { (self.api.free)(self.raw) }
     }
@@ -400,9 +417,20 @@ fn cxx_version(cxx: &str) -> String {
         .unwrap_or_default()
 }
 
+/// The trace format a build gets: none in coverage mode ([`crate::coverage::at_run_time`]:
+/// coverage models are untraced), else `format`.
+fn effective_format(format: Option<WaveFormat>) -> Option<WaveFormat> {
+    if crate::coverage::at_run_time() {
+        None
+    } else {
+        format
+    }
+}
+
 /// The trace-dependent parts of a build: the shim's trace writer, Verilator flags, C++ defines,
-/// runtime sources, extra link libraries, cache name suffix.
+/// runtime sources, extra link libraries, cache name suffix, coverage.
 struct Flavour {
+    coverage: bool,
     shim: shim::ShimTrace,
     flags: &'static [&'static str],
     defines: &'static [(&'static str, &'static str)],
@@ -412,9 +440,32 @@ struct Flavour {
 }
 
 impl Flavour {
+    /// The coverage model (`--coverage`, untraced).
+    fn coverage() -> Flavour {
+        Flavour {
+            coverage: true,
+            shim: shim::ShimTrace::Off,
+            flags: verilator::VERILATOR_FLAGS_COVERAGE,
+            defines: verilator::CPP_DEFINES_COVERAGE,
+            runtime: verilator::RUNTIME_SOURCES_COVERAGE,
+            libs: &[],
+            suffix: "-cov",
+        }
+    }
+
+    /// The coverage model in coverage mode, else the model traced as `format`.
+    fn for_run(format: Option<WaveFormat>) -> Flavour {
+        if crate::coverage::at_run_time() {
+            Flavour::coverage()
+        } else {
+            Flavour::of(format)
+        }
+    }
+
     fn of(format: Option<WaveFormat>) -> Flavour {
         match format {
             None => Flavour {
+                coverage: false,
                 shim: shim::ShimTrace::Off,
                 flags: verilator::VERILATOR_FLAGS_UNTRACED,
                 defines: verilator::CPP_DEFINES_UNTRACED,
@@ -423,6 +474,7 @@ impl Flavour {
                 suffix: "-untraced",
             },
             Some(WaveFormat::Vcd) => Flavour {
+                coverage: false,
                 shim: shim::ShimTrace::Vcd,
                 flags: verilator::VERILATOR_FLAGS,
                 defines: verilator::CPP_DEFINES,
@@ -431,6 +483,7 @@ impl Flavour {
                 suffix: "",
             },
             Some(WaveFormat::Fst) => Flavour {
+                coverage: false,
                 shim: shim::ShimTrace::Fst,
                 flags: verilator::VERILATOR_FLAGS_FST,
                 defines: verilator::CPP_DEFINES_FST,
@@ -456,35 +509,20 @@ fn build_library(
     let v = verilator::Verilator::find()
         .ok_or("verilator not found: install it (scripts/setup does) or set VERILATOR")?;
     let top = &iface.name;
-    let flavour = Flavour::of(format);
+    let flavour = Flavour::for_run(format);
     let mut cpp = shim::cpp_traced(iface, flavour.shim);
     shim::cpp_by_index(&mut cpp, iface);
+    if flavour.coverage {
+        shim::cpp_coverage(&mut cpp, iface);
+    }
     let cxx = cxx();
-    let mut key = cache::Key::new();
-    key.add("top", top.as_bytes());
-    for (name, text) in files {
-        key.add(&format!("file {name}"), text.as_bytes());
-    }
-    if let Some(vlt) = vlt {
-        key.add("lint.vlt", vlt.as_bytes());
-    }
-    key.add("flags", flavour.flags.join(" ").as_bytes());
+    let tools = format!("{cxx} {}", cxx_version(&cxx));
+    let key = library_key(
+        LibraryKey { iface, files, vlt, flavour: &flavour, threads, opt_fast, cpp: &cpp },
+        &v.version,
+        &tools,
+    );
     let thread_flags = thread_flags(threads);
-    if threads > 1 {
-        // Only for threaded models, so that single-threaded keys (and cache entries) stay as they were.
-        key.add("threads", thread_flags.join(" ").as_bytes());
-    }
-    if format != Some(WaveFormat::Vcd) {
-        // Only for FST and untraced, so that the VCD models' keys (and cache entries) stay as they were.
-        key.add(
-            "trace",
-            format!("{:?} {:?} {:?}", flavour.defines, flavour.runtime, flavour.libs).as_bytes(),
-        );
-    }
-    key.add("verilator", v.version.as_bytes());
-    key.add("compiler", format!("{cxx} {}", cxx_version(&cxx)).as_bytes());
-    key.add("dyn", format!("{DYN_VERSION} {opt_fast} {OPT_SLOW} {}", shim::SHIM_VERSION).as_bytes());
-    key.add("shim.cpp", cpp.as_bytes());
     let lib_name = format!("libneo_{top}.so");
     let mut log = String::new();
     // One build at a time in a process: test threads building the same model would race on its
@@ -500,6 +538,49 @@ fn build_library(
         fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
     })?;
     Ok(BuildInfo { library: dir.join(lib_name), cached, seconds: t0.elapsed().as_secs_f64(), log })
+}
+
+/// What a shared library's cache key covers besides the tool versions.
+struct LibraryKey<'a> {
+    iface: &'a ModuleInterface,
+    files: &'a [(String, String)],
+    vlt: Option<&'a str>,
+    flavour: &'a Flavour,
+    threads: usize,
+    opt_fast: &'static str,
+    cpp: &'a str,
+}
+
+/// The cache key of a shared library: the Verilog, waivers, flags, flavour, tool versions
+/// (`verilator`, the C++ compiler `cxx`), build options and the shim.
+fn library_key(k: LibraryKey<'_>, verilator: &str, cxx: &str) -> cache::Key {
+    let mut key = cache::Key::new();
+    key.add("top", k.iface.name.as_bytes());
+    for (name, text) in k.files {
+        key.add(&format!("file {name}"), text.as_bytes());
+    }
+    if let Some(vlt) = k.vlt {
+        key.add("lint.vlt", vlt.as_bytes());
+    }
+    let f = k.flavour;
+    key.add("flags", f.flags.join(" ").as_bytes());
+    if k.threads > 1 {
+        // Only for threaded models, so that single-threaded keys (and cache entries) stay as they were.
+        key.add("threads", thread_flags(k.threads).join(" ").as_bytes());
+    }
+    if !f.suffix.is_empty() {
+        // Only for FST, untraced and coverage, so that the VCD models' keys (and cache entries)
+        // stay as they were.
+        key.add("trace", format!("{:?} {:?} {:?}", f.defines, f.runtime, f.libs).as_bytes());
+    }
+    if f.coverage {
+        key.add("coverage", b"1");
+    }
+    key.add("verilator", verilator.as_bytes());
+    key.add("compiler", cxx.as_bytes());
+    key.add("dyn", format!("{DYN_VERSION} {} {OPT_SLOW} {}", k.opt_fast, shim::SHIM_VERSION).as_bytes());
+    key.add("shim.cpp", k.cpp.as_bytes());
+    key
 }
 
 /// The Verilator flags of a model evaluated on `threads` threads (none for 1, Verilator's default).
@@ -624,4 +705,60 @@ fn run(cmd: &mut Command, what: &str) -> Result<(), String> {
 fn write(path: &Path, text: &str) -> Result<PathBuf, String> {
     fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(path.to_path_buf())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use neo_gen::interface::Port;
+
+    fn key_of(flavour: &Flavour) -> String {
+        let iface = ModuleInterface {
+            name: "neo_x".into(),
+            ports: vec![Port { name: "clk_i".into(), dir: Dir::In, width: 1 }],
+        };
+        let files = [("neo_x.v".to_string(), "module neo_x (input clk_i); endmodule\n".to_string())];
+        let mut cpp = shim::cpp_traced(&iface, flavour.shim);
+        if flavour.coverage {
+            shim::cpp_coverage(&mut cpp, &iface);
+        }
+        let k = LibraryKey {
+            iface: &iface,
+            files: &files,
+            vlt: None,
+            flavour,
+            threads: 1,
+            opt_fast: OPT_FAST,
+            cpp: &cpp,
+        };
+        library_key(k, "Verilator 5.006", "c++ 12").hex()
+    }
+
+    /// The coverage flavour is a cache entry of its own: its key differs from every traced and
+    /// untraced model's, and so does its name.
+    #[test]
+    fn coverage_models_have_their_own_cache_key() {
+        let cov = key_of(&Flavour::coverage());
+        for format in [None, Some(WaveFormat::Vcd), Some(WaveFormat::Fst)] {
+            let other = Flavour::of(format);
+            assert_ne!(key_of(&other), cov, "{format:?}");
+            assert_ne!(other.suffix, Flavour::coverage().suffix, "{format:?}");
+        }
+        assert!(Flavour::coverage().flags.contains(&"--coverage"));
+        assert!(Flavour::coverage().defines.contains(&("VM_COVERAGE", "1")));
+        assert!(Flavour::coverage().runtime.contains(&"verilated_cov.cpp"));
+        // The same inputs give the same key.
+        assert_eq!(key_of(&Flavour::coverage()), cov);
+    }
+
+    /// Only the coverage shim has the entry point that writes the data.
+    #[test]
+    fn only_the_coverage_shim_writes_data() {
+        let iface = ModuleInterface { name: "neo_x".into(), ports: vec![] };
+        let mut cpp = shim::cpp_traced(&iface, shim::ShimTrace::Off);
+        assert!(!cpp.contains("neo_neo_x_coverage_write") && !cpp.contains("coverage_write"));
+        shim::cpp_coverage(&mut cpp, &iface);
+        assert!(cpp.contains("void neo_neo_x_coverage_write(void* p, const char* path)"));
+        assert!(cpp.contains("coveragep()->write(path)"));
+    }
 }

@@ -364,7 +364,10 @@ impl FrameBench {
                 );
                 sorted[t] = true;
                 jobs += 1;
-                let due = c + 1 + self.rng.below(40);
+                // Quick sorts and, half of the time, slow ones: then every sequencer gets busy (the
+                // high-index completions of the first-free scheduler are exercised too).
+                let slow = self.rng.percent(50);
+                let due = c + 1 + if slow { self.rng.below(1000) } else { self.rng.below(40) };
                 seqs[k] = Some(SeqModel { tile: t as u64, due, len: model_next_len(t as u64, d) });
             }
             // Completions.

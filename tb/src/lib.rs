@@ -15,6 +15,7 @@ pub mod bsu;
 pub mod check;
 #[cfg(neo_has_verilator)]
 pub mod core;
+pub mod coverage;
 pub mod datapath;
 pub mod dup;
 pub mod dut;

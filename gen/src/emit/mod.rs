@@ -155,6 +155,22 @@ pub enum Item {
         /// Body, where `var` is a constant.
         items: Vec<Item>,
     },
+    /// Named cover points, for Verilator's coverage build only: printed inside
+    /// `` `ifdef VERILATOR `` as `LABEL: cover property (@(posedge clk_i) (COND));`, so Yosys and
+    /// Icarus read the module unchanged. Verilator counts them only with `--coverage-user`
+    /// (`NEO_COVERAGE=1` builds of `neo-tb`, `scripts/coverage`).
+    Covers(Vec<Cover>),
+}
+
+/// A named cover point ([`Item::Covers`], [`Module::covers`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Cover {
+    /// The label (`cov_` prefix by convention): the point's name in the coverage report.
+    pub label: String,
+    /// The condition sampled at every rising clock edge.
+    pub cond: String,
+    /// What the scenario is (a comment above the point).
+    pub what: String,
 }
 
 /// A module instance: `MODULE #(.P(V)) NAME (.port(expr), ...);`
@@ -400,6 +416,32 @@ impl Module {
         }))
     }
 
+    /// Named cover points `(label, condition, what)`, sampled at every rising edge of `clk_i`
+    /// ([`Item::Covers`]: Verilator only, counted by coverage builds).
+    pub fn covers(&mut self, points: &[(&str, String, &str)]) -> &mut Self {
+        let points = points
+            .iter()
+            .map(|(label, cond, what)| Cover {
+                label: label.to_string(),
+                cond: cond.clone(),
+                what: what.to_string(),
+            })
+            .collect();
+        self.item(Item::Blank).item(Item::Covers(points))
+    }
+
+    /// The labels of the module's cover points, in order.
+    pub fn cover_labels(&self) -> Vec<String> {
+        self.items
+            .iter()
+            .filter_map(|i| match i {
+                Item::Covers(c) => Some(c.iter().map(|c| c.label.clone())),
+                _ => None,
+            })
+            .flatten()
+            .collect()
+    }
+
     /// A named `for`-generate block.
     pub fn gen_for(
         &mut self,
@@ -503,6 +545,23 @@ mod tests {
         m.reg("a_q", 3).reg("data", 8).reg("s_q", 2).wire("w_q", 1);
         let r = m.q_resets(&[("s_q", "S_IDLE")]);
         assert_eq!(r, vec![set("a_q", "3'd0"), set("s_q", "S_IDLE")]);
+    }
+
+    #[test]
+    fn covers_print_inside_ifdef_verilator_only() {
+        let mut m = Module::new("c");
+        m.clock_reset().input("a_i", 1);
+        m.covers(&[("cov_a", "a_i".into(), "a is high"), ("cov_not_a", "~a_i".into(), "a is low")]);
+        let v = m.to_verilog();
+        let start = v.find("`ifdef VERILATOR").expect("ifdef");
+        let end = v.find("`endif").expect("endif");
+        for label in ["cov_a", "cov_not_a"] {
+            let at = v.find(&format!("{label}: cover property (@(posedge clk_i) (")).expect(label);
+            assert!(start < at && at < end, "{label} outside the ifdef:\n{v}");
+        }
+        assert!(v[start..end].contains("// a is low"));
+        assert_eq!(m.cover_labels(), ["cov_a", "cov_not_a"]);
+        assert!(Module::new("none").cover_labels().is_empty());
     }
 
     #[test]

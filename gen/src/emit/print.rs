@@ -133,6 +133,15 @@ fn items(s: &mut String, level: usize, list: &[Item], vectors: &std::collections
                 writeln!(s, "{ind}{IND}end").unwrap();
                 writeln!(s, "{ind}endgenerate").unwrap();
             }
+            Item::Covers(points) => {
+                writeln!(s, "`ifdef VERILATOR").unwrap();
+                push_comment(s, level, "Named cover points (Verilator --coverage-user: scripts/coverage).");
+                for c in points {
+                    push_comment(s, level, &c.what);
+                    writeln!(s, "{ind}{}: cover property (@(posedge clk_i) ({}));", c.label, c.cond).unwrap();
+                }
+                writeln!(s, "`endif").unwrap();
+            }
         }
     }
 }

@@ -170,7 +170,55 @@ pub fn module(cfg: &EngineConfig) -> Module {
     output_side(&mut m, &k);
     pass_control(&mut m, &k);
     sequential(&mut m, &k);
+    covers(&mut m, &k);
     m
+}
+
+/// Named cover points (Verilator coverage builds only): every command mode taken, an empty
+/// chunk, a load overlapping merge passes, each merge FIFO full (and full while the other stream
+/// drains), each merge stream starved while the other has an entry waiting, and the read issuer
+/// at its outstanding-burst limit.
+fn covers(m: &mut Module, k: &Dims) {
+    let Dims { dc, d, w, .. } = *k;
+    let mode = |mo: SortMode| format!("cmd_mode_i == {}", lit(SortMode::BITS, mo.code()));
+    let full = |f: &str| format!("st_merge & ({f}_cnt_q == {})", lit(dc, d));
+    let starved = |s: &str, o: &str| format!("st_merge & s{s}_act_q & ~{s}_valid & {o}_valid & ~s{o}_none");
+    m.covers(&[
+        ("cov_mode_sort", format!("take_chunk & ({})", mode(SortMode::Sort)), "a SORT command taken"),
+        ("cov_mode_dps", format!("take_chunk & ({})", mode(SortMode::Dps)), "a DPS command taken"),
+        (
+            "cov_mode_merge_delete",
+            format!("take_merge & ({})", mode(SortMode::MergeDelete)),
+            "a MERGE_DELETE command taken",
+        ),
+        ("cov_mode_merge", format!("take_merge & ({})", mode(SortMode::Merge)), "a MERGE command taken"),
+        ("cov_empty_chunk", "take_empty".into(), "a chunk command of no entries"),
+        (
+            "cov_load_during_passes",
+            "ld_act_q & st_pass".into(),
+            "a load overlaps the previous chunk's passes",
+        ),
+        (
+            "cov_merge_drop",
+            format!("st_merge & drop_q & a_pop_ent & ~a_data[{}]", w - 1),
+            "MERGE_DELETE drops an entry of stream A (valid bit, the entry's MSB, clear)",
+        ),
+        ("cov_fifo_a_full", full("fa"), "merge FIFO A holds a whole chunk buffer"),
+        ("cov_fifo_b_full", full("fb"), "merge FIFO B holds a whole chunk buffer"),
+        (
+            "cov_fifo_a_full_b_drains",
+            format!("{} & b_pop_ent", full("fa")),
+            "FIFO A full and held back while stream B goes out",
+        ),
+        (
+            "cov_fifo_b_full_a_drains",
+            format!("{} & a_pop_ent", full("fb")),
+            "FIFO B full and held back while stream A goes out",
+        ),
+        ("cov_starved_a", starved("a", "b"), "the merge waits for stream A while B has an entry"),
+        ("cov_starved_b", starved("b", "a"), "the merge waits for stream B while A has an entry"),
+        ("cov_tags_full", "(req_a_ok | req_b_ok) & ~tag_free".into(), "a read waits for a free burst tag"),
+    ]);
 }
 
 /// Ports.
@@ -798,6 +846,25 @@ fn seq_streams(body: &mut Vec<Stmt>, k: &Dims) {
 mod tests {
     use super::*;
     use crate::interface::Dir;
+
+    /// Every command mode has its cover point, and so do both merge FIFOs and both streams.
+    #[test]
+    fn cover_points_name_every_mode_and_both_streams() {
+        let labels = module(&EngineConfig::default()).cover_labels();
+        let has = |l: &str| labels.iter().any(|x| x == l);
+        for mode in SortMode::ALL {
+            let name = match mode {
+                SortMode::Sort => "cov_mode_sort",
+                SortMode::Dps => "cov_mode_dps",
+                SortMode::MergeDelete => "cov_mode_merge_delete",
+                SortMode::Merge => "cov_mode_merge",
+            };
+            assert!(has(name), "{mode:?}: {labels:?}");
+        }
+        for l in ["cov_fifo_a_full", "cov_fifo_b_full", "cov_starved_a", "cov_starved_b"] {
+            assert!(has(l), "{l}: {labels:?}");
+        }
+    }
 
     #[test]
     fn interface_has_the_documented_ports_and_widths() {

@@ -36,6 +36,20 @@ pub fn module(cfg: &EngineConfig) -> Module {
     route(&mut m, &d);
     element(&mut m, &d);
     beats(&mut m, cfg, &d);
+    m.covers(&[
+        ("cov_fifo_full", "fifo_full".into(), "the routing FIFO is full: the ITU results are held"),
+        (
+            "cov_resumed_piece",
+            "beat & piece_first_q & elem_resume_q & ~skip".into(),
+            "a piece's first beat resumes its subtile from the saved state",
+        ),
+        (
+            "cov_skipped_piece",
+            "skip".into(),
+            "an empty resumed piece that does not end the subtile is skipped",
+        ),
+        ("cov_empty_beat", "beat & empty_beat & ~skip".into(), "an empty beat goes to the SCU"),
+    ]);
     m
 }
 

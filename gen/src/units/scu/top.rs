@@ -21,7 +21,42 @@ pub fn module(cfg: &EngineConfig) -> Module {
     lanes(&mut m, &w, &beat);
     pixels(&mut m, &w, &beat);
     termination_and_output(&mut m, &w, &beat);
+    covers(&mut m, &beat);
     m
+}
+
+/// Named cover points (Verilator coverage builds only): early termination, a resumed subtile,
+/// a saved piece, the output stall.
+fn covers(m: &mut Module, beat: &Beat) {
+    let f0 = |n: &str| beat.get("b0_q", n);
+    let f5 = |n: &str| beat.get("d5_q", n);
+    m.covers(&[
+        (
+            "cov_early_termination",
+            format!("v0_q & term_match & ~{} & ~{}", f0("first"), f0("empty")),
+            "a Gaussian is skipped: every pixel of its list is already done",
+        ),
+        (
+            "cov_term_offered",
+            "term_o & in_valid_i".into(),
+            "term_o while a beat of the finished list is offered",
+        ),
+        (
+            "cov_resumed_subtile",
+            "in_fire & first_in_q & in_resume_i".into(),
+            "a list resumes its subtile from the saved state",
+        ),
+        (
+            "cov_saved_piece",
+            format!("fin_b & ~{}", f5("final")),
+            "a piece ends without finishing its subtile",
+        ),
+        (
+            "cov_output_stall",
+            "fin_out & out_valid_q & ~out_ready_i".into(),
+            "a finished subtile waits for the output register",
+        ),
+    ]);
 }
 
 fn ports(m: &mut Module, w: &ScuWidths) {
