@@ -409,13 +409,13 @@ mod tests {
     #[test]
     fn widths_follow_the_formats() {
         let cfg = EngineConfig::default();
-        assert_eq!(mean_bits(&cfg), 48);
+        assert_eq!(mean_bits(&cfg), 56, "2 x 28");
         let (gb, lsb) = geom_bits_lsb(&cfg);
         assert_eq!(gb, 4 * 15 + 2 * 10);
         let fmt = cfg.feature_format();
         let dk = fmt.layout().into_iter().find(|f| f.name == "depth_key").unwrap();
         assert_eq!(lsb + gb, dk.lsb, "the ITU block ends where the depth key starts");
-        assert_eq!(lsb, 150, "after mean (48), conic (61), opacity (8) and colour (33)");
+        assert_eq!(lsb, 158, "after mean (56), conic (61), opacity (8) and colour (33)");
         let w = datapath_bits(&cfg);
         assert!((36..=44).contains(&w), "{w}");
         let narrow = EngineConfig { tile_bits: 4, ..cfg };

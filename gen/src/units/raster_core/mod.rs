@@ -576,7 +576,7 @@ mod tests {
             "neo_scu u_scu (",
             "neo_raster_feeder #(",
             "neo_raster_loader u_loader (",
-            "reg  [246:0] fbuf [0:511];",
+            "reg  [254:0] fbuf [0:511];",
             "reg  [15:0] quad_hit [0:127];",
         ] {
             assert!(v.contains(i), "{i} missing");
