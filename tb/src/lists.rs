@@ -178,7 +178,7 @@ fn check_lists(cfg: &EngineConfig, grid: [u32; 2], hits: &[Hit], mem: &Memory, c
         lists[(h.tile[1] * grid[0] + h.tile[0]) as usize].push(SortEntry::new(h.key, h.id));
     }
     for (t, want) in lists.iter().enumerate() {
-        let base = LIST_BASE + ENTRY_BYTES * (t * cfg.list_stride()) as u64;
+        let base = neo_golden::engine::pre::list_addr(cfg, LIST_BASE, t as u64);
         let kept = want.len().min(cap);
         let line_end = kept.div_ceil(8) * 8;
         for k in 0..line_end {

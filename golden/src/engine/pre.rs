@@ -151,6 +151,16 @@ pub fn preprocess_frame(
     Ok(PreWork { visible: visible.len() as u64, lists })
 }
 
+/// Byte address of tile `t`'s incoming list: `list_stride` entries per tile from `list_base`.
+pub fn list_addr(cfg: &EngineConfig, list_base: u64, t: u64) -> u64 {
+    list_base + ENTRY_BYTES * cfg.list_stride() as u64 * t
+}
+
+/// Byte address of tile `t`'s `list_len` in its descriptor.
+pub fn list_len_addr(desc_base: u64, t: u64) -> u64 {
+    desc_base + DESCRIPTOR_BYTES * t + LIST_LEN_OFFSET
+}
+
 /// What a Preprocessing Engine transfer moves ([`pre_transfers`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum PrePart {
@@ -275,11 +285,10 @@ pub fn pre_transfers_of<V>(
     for i in 0..p.gaussians as u64 {
         out(PrePart::Feature, regs.feat_base + feature * i, feature);
     }
-    let stride = cfg.list_stride() as u64;
     let per_line = LIST_LINE_BYTES / ENTRY_BYTES;
     let mut tiles = 0u64;
     for (t, len) in list_lens.into_iter().enumerate() {
-        let base = p.list_base + ENTRY_BYTES * stride * t as u64;
+        let base = list_addr(cfg, p.list_base, t as u64);
         let lines = (len as u64).min(cfg.table_capacity as u64).div_ceil(per_line);
         for k in 0..lines {
             out(PrePart::ListLine, base + LIST_LINE_BYTES * k, LIST_LINE_BYTES);
@@ -287,7 +296,7 @@ pub fn pre_transfers_of<V>(
         tiles += 1;
     }
     for t in 0..tiles {
-        out(PrePart::ListLen, regs.desc_base + DESCRIPTOR_BYTES * t + LIST_LEN_OFFSET, 4);
+        out(PrePart::ListLen, list_len_addr(regs.desc_base, t), 4);
     }
 }
 
@@ -318,7 +327,7 @@ fn write_lists(cfg: &EngineConfig, regs: &FrameRegs, mem: &mut Memory, lists: &[
     let sfmt = cfg.format();
     let per_line = (LIST_LINE_BYTES / ENTRY_BYTES) as usize;
     for (t, list) in lists.iter().enumerate() {
-        let base = regs.pre.list_base + ENTRY_BYTES * (t * cfg.list_stride()) as u64;
+        let base = list_addr(cfg, regs.pre.list_base, t as u64);
         let kept = &list[..list.len().min(cfg.table_capacity)];
         for (k, line) in kept.chunks(per_line).enumerate() {
             let mut bytes = [0u8; LIST_LINE_BYTES as usize];
@@ -328,8 +337,7 @@ fn write_lists(cfg: &EngineConfig, regs: &FrameRegs, mem: &mut Memory, lists: &[
             let at = base + LIST_LINE_BYTES * k as u64;
             mem.write(at, &bytes);
         }
-        let at = regs.desc_base + DESCRIPTOR_BYTES * t as u64 + LIST_LEN_OFFSET;
-        mem.write(at, &(list.len() as u32).to_le_bytes());
+        mem.write(list_len_addr(regs.desc_base, t as u64), &(list.len() as u32).to_le_bytes());
     }
 }
 

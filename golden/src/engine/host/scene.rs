@@ -144,7 +144,8 @@ impl EngineSession<'_> {
                     from_scratch: cut,
                     prev: prev.addr as u32,
                     prev_len: prev.len,
-                    list: (regs.pre.list_base / ENTRY_BYTES + t as u64 * stride) as u32,
+                    list: (crate::engine::pre::list_addr(&self.cfg, regs.pre.list_base, t as u64)
+                        / ENTRY_BYTES) as u32,
                     list_len: list.len() as u32,
                     next: (next_base + t as u64 * cap) as u32,
                 }
