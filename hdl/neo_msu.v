@@ -32,21 +32,30 @@ module neo_msu (
   reg  out_last_q;
   reg  out_empty_q;
 
+  // Head fields: live = the entry's valid bit (0: deleted), rank = {key, id}, the merge order.
+  wire a_live;
+  assign a_live = a_data_i[47];
+  wire [46:0] a_rank;
+  assign a_rank = a_data_i[46:0];
+  wire b_live;
+  assign b_live = b_data_i[47];
+  wire [46:0] b_rank;
+  assign b_rank = b_data_i[46:0];
   // Heads: available, to be dropped, or carrying an entry to merge.
   wire a_avail;
   assign a_avail = a_valid_i & ~a_done_q;
   wire a_skip;
-  assign a_skip = a_avail & (a_empty_i | (drop_invalid_i & ~a_data_i[47]));
+  assign a_skip = a_avail & (a_empty_i | (drop_invalid_i & ~a_live));
   wire a_ent;
   assign a_ent = a_avail & ~a_skip;
   wire b_avail;
   assign b_avail = b_valid_i & ~b_done_q;
   wire b_skip;
-  assign b_skip = b_avail & (b_empty_i | (drop_invalid_i & ~b_data_i[47]));
+  assign b_skip = b_avail & (b_empty_i | (drop_invalid_i & ~b_live));
   wire b_ent;
   assign b_ent = b_avail & ~b_skip;
   wire b_first;
-  assign b_first = b_data_i[46:0] < a_data_i[46:0];
+  assign b_first = b_rank < a_rank;
   wire any_skip;
   assign any_skip = a_skip | b_skip;
   wire take_a;

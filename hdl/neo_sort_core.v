@@ -410,6 +410,9 @@ module neo_sort_core (
   assign b_pop = b_valid & b_ready;
   wire b_pop_ent;
   assign b_pop_ent = b_pop & ~sb_none;
+  // Stream A's head entry field live: its valid bit (0: deleted), for the merge-drop cover point.
+  wire a_live;
+  assign a_live = a_data[47];
 
   // MSU+ output: to the other work buffer during non-final passes, else memory writes.
   assign o_ready = ~to_mem | o_empty | mem_wr_ready_i;
@@ -712,8 +715,8 @@ module neo_sort_core (
   cov_empty_chunk: cover property (@(posedge clk_i) (take_empty));
   // a load overlaps the previous chunk's passes
   cov_load_during_passes: cover property (@(posedge clk_i) (ld_act_q & st_pass));
-  // MERGE_DELETE drops an entry of stream A (valid bit, the entry's MSB, clear)
-  cov_merge_drop: cover property (@(posedge clk_i) (st_merge & drop_q & a_pop_ent & ~a_data[47]));
+  // MERGE_DELETE drops an entry of stream A (its valid field clear)
+  cov_merge_drop: cover property (@(posedge clk_i) (st_merge & drop_q & a_pop_ent & ~a_live));
   // merge FIFO A holds a whole chunk buffer
   cov_fifo_a_full: cover property (@(posedge clk_i) (st_merge & (fa_cnt_q == 9'd256)));
   // merge FIFO B holds a whole chunk buffer

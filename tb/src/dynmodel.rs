@@ -172,9 +172,9 @@ impl DynModel {
         if threads == 0 {
             return Err(format!("{}: threads must be at least 1", iface.name));
         }
-        let format = effective_format(format);
-        let info = build_library(iface, files, vlt, format, threads, OPT_FAST)?;
-        let model = DynModel::load(iface, &info.library, format)?;
+        let flavour = Flavour::for_run(format);
+        let info = build_library(iface, files, vlt, &flavour, threads, OPT_FAST)?;
+        let model = DynModel::load(iface, &info.library, flavour.trace)?;
         Ok((model, info))
     }
 
@@ -187,9 +187,9 @@ impl DynModel {
         vlt: Option<&str>,
         format: Option<WaveFormat>,
     ) -> Result<(DynModel, BuildInfo), String> {
-        let format = effective_format(format);
-        let info = build_library(iface, files, vlt, format, 1, OPT_QUICK)?;
-        let model = DynModel::load(iface, &info.library, format)?;
+        let flavour = Flavour::for_run(format);
+        let info = build_library(iface, files, vlt, &flavour, 1, OPT_QUICK)?;
+        let model = DynModel::load(iface, &info.library, flavour.trace)?;
         Ok((model, info))
     }
 
@@ -417,19 +417,11 @@ fn cxx_version(cxx: &str) -> String {
         .unwrap_or_default()
 }
 
-/// The trace format a build gets: none in coverage mode ([`crate::coverage::at_run_time`]:
-/// coverage models are untraced), else `format`.
-fn effective_format(format: Option<WaveFormat>) -> Option<WaveFormat> {
-    if crate::coverage::at_run_time() {
-        None
-    } else {
-        format
-    }
-}
-
 /// The trace-dependent parts of a build: the shim's trace writer, Verilator flags, C++ defines,
 /// runtime sources, extra link libraries, cache name suffix, coverage.
 struct Flavour {
+    /// The trace format the model is built with (`None`: untraced; coverage models are untraced).
+    trace: Option<WaveFormat>,
     coverage: bool,
     shim: shim::ShimTrace,
     flags: &'static [&'static str],
@@ -443,6 +435,7 @@ impl Flavour {
     /// The coverage model (`--coverage`, untraced).
     fn coverage() -> Flavour {
         Flavour {
+            trace: None,
             coverage: true,
             shim: shim::ShimTrace::Off,
             flags: verilator::VERILATOR_FLAGS_COVERAGE,
@@ -453,7 +446,8 @@ impl Flavour {
         }
     }
 
-    /// The coverage model in coverage mode, else the model traced as `format`.
+    /// The coverage model in coverage mode ([`crate::coverage::at_run_time`]), else the model
+    /// traced as `format`: the one place that decides what a run builds.
     fn for_run(format: Option<WaveFormat>) -> Flavour {
         if crate::coverage::at_run_time() {
             Flavour::coverage()
@@ -465,6 +459,7 @@ impl Flavour {
     fn of(format: Option<WaveFormat>) -> Flavour {
         match format {
             None => Flavour {
+                trace: format,
                 coverage: false,
                 shim: shim::ShimTrace::Off,
                 flags: verilator::VERILATOR_FLAGS_UNTRACED,
@@ -474,6 +469,7 @@ impl Flavour {
                 suffix: "-untraced",
             },
             Some(WaveFormat::Vcd) => Flavour {
+                trace: format,
                 coverage: false,
                 shim: shim::ShimTrace::Vcd,
                 flags: verilator::VERILATOR_FLAGS,
@@ -483,6 +479,7 @@ impl Flavour {
                 suffix: "",
             },
             Some(WaveFormat::Fst) => Flavour {
+                trace: format,
                 coverage: false,
                 shim: shim::ShimTrace::Fst,
                 flags: verilator::VERILATOR_FLAGS_FST,
@@ -500,7 +497,7 @@ fn build_library(
     iface: &ModuleInterface,
     files: &[(String, String)],
     vlt: Option<&str>,
-    format: Option<WaveFormat>,
+    flavour: &Flavour,
     threads: usize,
     opt_fast: &'static str,
 ) -> Result<BuildInfo, String> {
@@ -509,7 +506,6 @@ fn build_library(
     let v = verilator::Verilator::find()
         .ok_or("verilator not found: install it (scripts/setup does) or set VERILATOR")?;
     let top = &iface.name;
-    let flavour = Flavour::for_run(format);
     let mut cpp = shim::cpp_traced(iface, flavour.shim);
     shim::cpp_by_index(&mut cpp, iface);
     if flavour.coverage {
@@ -518,7 +514,7 @@ fn build_library(
     let cxx = cxx();
     let tools = format!("{cxx} {}", cxx_version(&cxx));
     let key = library_key(
-        LibraryKey { iface, files, vlt, flavour: &flavour, threads, opt_fast, cpp: &cpp },
+        LibraryKey { iface, files, vlt, flavour, threads, opt_fast, cpp: &cpp },
         &v.version,
         &tools,
     );
@@ -534,7 +530,7 @@ fn build_library(
     let (dir, cached) = cache::get_or_build(&cache_root(), &name, &key, &lib_name, |d| {
         let mut flags: Vec<&str> = flavour.flags.to_vec();
         flags.extend(thread_flags.iter().map(String::as_str));
-        log = compile(&v, &cxx, (&flavour, opt_fast), &flags, top, files, vlt, &cpp, d)?;
+        log = compile(&v, &cxx, (flavour, opt_fast), &flags, top, files, vlt, &cpp, d)?;
         fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
     })?;
     Ok(BuildInfo { library: dir.join(lib_name), cached, seconds: t0.elapsed().as_secs_f64(), log })
@@ -633,14 +629,15 @@ fn compile(
         fast.iter().map(|c| (obj.join(format!("{c}.cpp")), opt_fast)).collect();
     units.extend(slow.iter().map(|c| (obj.join(format!("{c}.cpp")), OPT_SLOW)));
     units.push((shim, OPT_FAST));
-    units.extend(flavour.runtime.iter().map(|f| (v.include().join(f), OPT_FAST)));
     let t1 = Instant::now();
+    let runtime = runtime_objects(v, cxx, flavour)?;
     let objects = compile_all(v, cxx, flavour.defines, &obj, &units)?;
     let lib = dir.join(format!("libneo_{top}.so"));
     let mut link = Command::new(cxx);
     link.args(["-shared", "-Wl,-Bsymbolic", "-o"])
         .arg(&lib)
         .args(&objects)
+        .args(&runtime)
         .args(flavour.libs)
         .arg("-lpthread");
     if flags.contains(&"--threads") {
@@ -656,6 +653,25 @@ fn compile(
         t1.elapsed().as_secs_f64(),
         units.len()
     ))
+}
+
+/// The flavour's Verilator runtime (`verilated.cpp` and its trace writer, position-independent,
+/// at [`OPT_FAST`]) as objects from the cache, compiled on a miss: the same objects serve every
+/// model of the flavour, instead of each model compiling its own copy (about 10 s of CPU).
+fn runtime_objects(v: &verilator::Verilator, cxx: &str, flavour: &Flavour) -> Result<Vec<PathBuf>, String> {
+    let mut key = cache::Key::new();
+    key.add("runtime", format!("{:?} {:?} {OPT_FAST}", flavour.defines, flavour.runtime).as_bytes());
+    key.add("verilator", v.version.as_bytes());
+    key.add("compiler", format!("{cxx} {}", cxx_version(cxx)).as_bytes());
+    key.add("include", v.include().to_string_lossy().as_bytes());
+    let name = format!("dynrt{}", flavour.suffix);
+    let units: Vec<(PathBuf, &str)> =
+        flavour.runtime.iter().map(|f| (v.include().join(f), OPT_FAST)).collect();
+    let (dir, _) = cache::get_or_build(&cache_root(), &name, &key, "done", |d| {
+        compile_all(v, cxx, flavour.defines, d, &units)?;
+        fs::write(d.join("done"), "").map_err(|e| e.to_string())
+    })?;
+    Ok((0..units.len()).map(|i| dir.join(format!("u{i}.o"))).collect())
 }
 
 /// Compiles every `(source, opt)` to an object under `obj`, on all cores; returns the objects.

@@ -63,17 +63,22 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.reg("a_done_q", 1).reg("b_done_q", 1).reg("pend_valid_q", 1).reg("pend_data_q", w);
     m.reg("out_valid_q", 1).reg("out_data_q", w).reg("out_last_q", 1).reg("out_empty_q", 1);
     m.blank();
+    m.comment("Head fields: live = the entry's valid bit (0: deleted), rank = {key, id}, the merge order.");
+    for s in ["a", "b"] {
+        m.wire_assign(format!("{s}_live"), 1, slice(&format!("{s}_data_i"), w - 1, w - 1));
+        m.wire_assign(format!("{s}_rank"), c, slice(&format!("{s}_data_i"), c - 1, 0));
+    }
     m.comment("Heads: available, to be dropped, or carrying an entry to merge.");
     for s in ["a", "b"] {
         m.wire_assign(format!("{s}_avail"), 1, format!("{s}_valid_i & ~{s}_done_q"));
         m.wire_assign(
             format!("{s}_skip"),
             1,
-            format!("{s}_avail & ({s}_empty_i | (drop_invalid_i & ~{s}_data_i[{}]))", w - 1),
+            format!("{s}_avail & ({s}_empty_i | (drop_invalid_i & ~{s}_live))"),
         );
         m.wire_assign(format!("{s}_ent"), 1, format!("{s}_avail & ~{s}_skip"));
     }
-    m.wire_assign("b_first", 1, format!("{} < {}", slice("b_data_i", c - 1, 0), slice("a_data_i", c - 1, 0)));
+    m.wire_assign("b_first", 1, "b_rank < a_rank");
     m.wire_assign("any_skip", 1, "a_skip | b_skip");
     m.wire_assign("take_a", 1, "~any_skip & a_ent & (b_done_q | (b_ent & ~b_first))");
     m.wire_assign("take_b", 1, "~any_skip & b_ent & (a_done_q | (a_ent & b_first))");

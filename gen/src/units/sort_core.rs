@@ -39,7 +39,7 @@
 //! two input buffers used as circular FIFOs (space reserved before a read is issued, so
 //! responses are always accepted); the MSU+ output is written to memory.
 
-use crate::emit::expr::{bits_for, hex, lane, lit, resize};
+use crate::emit::expr::{bits_for, hex, lane, lit, resize, slice};
 use crate::emit::{conns, if_, if_else, set, Item, Module, Stmt};
 use neo_golden::engine::EngineConfig;
 use neo_golden::sort::SortMode;
@@ -179,7 +179,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
 /// drains), each merge stream starved while the other has an entry waiting, and the read issuer
 /// at its outstanding-burst limit.
 fn covers(m: &mut Module, k: &Dims) {
-    let Dims { dc, d, w, .. } = *k;
+    let Dims { dc, d, .. } = *k;
     let mode = |mo: SortMode| format!("cmd_mode_i == {}", lit(SortMode::BITS, mo.code()));
     let full = |f: &str| format!("st_merge & ({f}_cnt_q == {})", lit(dc, d));
     let starved = |s: &str, o: &str| format!("st_merge & s{s}_act_q & ~{s}_valid & {o}_valid & ~s{o}_none");
@@ -200,8 +200,8 @@ fn covers(m: &mut Module, k: &Dims) {
         ),
         (
             "cov_merge_drop",
-            format!("st_merge & drop_q & a_pop_ent & ~a_data[{}]", w - 1),
-            "MERGE_DELETE drops an entry of stream A (valid bit, the entry's MSB, clear)",
+            "st_merge & drop_q & a_pop_ent & ~a_live".into(),
+            "MERGE_DELETE drops an entry of stream A (its valid field clear)",
         ),
         ("cov_fifo_a_full", full("fa"), "merge FIFO A holds a whole chunk buffer"),
         ("cov_fifo_b_full", full("fb"), "merge FIFO B holds a whole chunk buffer"),
@@ -542,6 +542,10 @@ fn sources(m: &mut Module, k: &Dims) {
         m.wire_assign(format!("{s}_pop"), 1, format!("{s}_valid & {s}_ready"));
         m.wire_assign(format!("{s}_pop_ent"), 1, format!("{s}_pop & ~s{s}_none"));
     }
+    m.comment(
+        "Stream A's head entry field live: its valid bit (0: deleted), for the merge-drop cover point.",
+    );
+    m.wire_assign("a_live", 1, slice("a_data", k.w - 1, k.w - 1));
 }
 
 /// Output side.
