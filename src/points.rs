@@ -9,11 +9,14 @@ use neo_golden::{scene::Scene, shared};
 use neo_sim::config::SimConfig;
 use neo_sim::driver::GoldenRaster;
 use neo_sim::latency::{self, Latency};
-use neo_sim::report_plan::PointRunner;
-use neo_sim::run::Arch;
+use neo_sim::report_plan::{PointJob, PointRunner};
+use neo_sim::run::{simulate, Arch, ArchResult, RunOptions};
 use neo_sim::suite::{self, Point, PointResult};
+use neo_sim::workload::Workload;
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// Reads the configuration file, or the defaults.
@@ -108,52 +111,122 @@ pub fn run_point(
     Ok(r)
 }
 
-/// Runs `points` two at a time (each workload is only partly parallel, the model not at all),
-/// with one progress bar over the points; `log` reports each finished point. Results keep the
-/// order of `points`.
+/// A job's result and the seconds from the start to its end.
+type Timed = (PointResult, f64);
+
+/// One job's workload and architecture results while its simulations run.
+struct JobRun {
+    wl: Workload,
+    cfg: SimConfig,
+    archs: Mutex<Vec<Option<Result<ArchResult, String>>>>,
+    left: AtomicUsize,
+}
+
+/// Runs `jobs` on the machine's cores: the workloads of jobs that share their cameras are
+/// generated together ([`suite::workloads`]), group after group, and each job's architectures run
+/// on its workload ([`suite::evaluate`]) while the next groups generate. One progress bar over
+/// the work (frames generated, frames simulated per accelerator) with its ETA; `log` reports each
+/// finished job. Returns, in the order of `jobs`, each result and the seconds from the start to
+/// its end.
 #[allow(clippy::too_many_arguments)]
-pub fn run_points_parallel(
+pub fn run_jobs(
     scenes: &mut Scenes,
-    points: &[Point],
+    jobs: &[PointJob],
     cfg: &SimConfig,
     lat: &Latency,
-    archs: &[Arch],
-    golden: GoldenRaster,
     raster_sample: u32,
     what: &str,
-    log: &(dyn Fn(&PointResult, &str) + Sync),
-) -> Result<Vec<PointResult>> {
-    use rayon::prelude::*;
-    for p in points {
-        scenes.get(&p.scene)?;
+    log: &(dyn Fn(&PointJob, &PointResult, &str) + Sync),
+) -> Result<Vec<Timed>> {
+    for j in jobs {
+        scenes.get(&j.point.scene)?;
     }
     let scenes = &*scenes;
-    let bar = ProgressBar::new(points.len() as u64);
+    // Groups of jobs sharing their cameras, in the order of their first job.
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (k, j) in jobs.iter().enumerate() {
+        match groups.iter_mut().find(|g| jobs[g[0]].point.camera_key() == j.point.camera_key()) {
+            Some(g) => g.push(k),
+            None => groups.push(vec![k]),
+        }
+    }
+    // Work units: a frame generated, and a frame simulated on each accelerator (the GPU model
+    // is instant).
+    let model_units =
+        |j: &PointJob| (j.point.frames * j.archs.iter().filter(|a| **a != Arch::Gpu).count()) as u64;
+    let total: u64 = jobs.iter().map(|j| j.point.frames as u64 + model_units(j)).sum();
+    let bar = ProgressBar::new(total);
     bar.set_style(
-        ProgressStyle::with_template("{prefix} {bar:24} {pos}/{len} points [{elapsed} < {eta}]")
+        ProgressStyle::with_template("{prefix} {bar:24} {percent:>3}% [{elapsed} < {eta}] {msg}")
             .expect("valid template"),
     );
     bar.set_prefix(what.to_string());
     bar.enable_steady_tick(Duration::from_millis(200));
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
-    let out: Result<Vec<PointResult>> = pool.install(|| {
-        points
-            .par_iter()
-            .enumerate()
-            .with_max_len(1)
-            .map(|(k, p)| {
-                let scene = scenes.loaded(&p.scene).expect("loaded above");
-                let wl =
-                    suite::workload(scene, p, cfg, golden, raster_sample, |_| {}).map_err(|e| anyhow!(e))?;
-                let r = suite::evaluate(p, &wl, cfg, lat, archs).map_err(|e| anyhow!(e))?;
-                bar.suspend(|| log(&r, &format!("[{what} {}/{}]", k + 1, points.len())));
-                bar.inc(1);
-                Ok(r)
+    let started = Instant::now();
+    let slots: Vec<Mutex<Option<Result<Timed>>>> = jobs.iter().map(|_| Mutex::new(None)).collect();
+    let finished = AtomicUsize::new(0);
+    let generated: Result<()> = rayon::scope_fifo(|s| {
+        for g in &groups {
+            let points: Vec<&Point> = g.iter().map(|&k| &jobs[k].point).collect();
+            let first = points[0];
+            let scene = scenes.loaded(&first.scene).expect("loaded above");
+            bar.set_message(format!(
+                "generating {} workload(s) at {} ({} frames)",
+                points.len(),
+                first.res,
+                first.frames
+            ));
+            let golden: Vec<GoldenRaster> = g.iter().map(|&k| jobs[k].golden).collect();
+            let wls = suite::workloads_with(scene, &points, &golden, cfg, raster_sample, |_| {
+                bar.inc(g.len() as u64)
             })
-            .collect()
+            .map_err(|e| anyhow!(e))?;
+            // One task per architecture (each a sequential simulation, first in first out):
+            // the last of a job's tasks makes its result.
+            for (&k, wl) in g.iter().zip(wls) {
+                let job = &jobs[k];
+                let run = Arc::new(JobRun {
+                    wl,
+                    cfg: suite::point_config(&job.point, cfg),
+                    archs: Mutex::new(vec![None; job.archs.len()]),
+                    left: AtomicUsize::new(job.archs.len()),
+                });
+                for (i, &arch) in job.archs.iter().enumerate() {
+                    let (run, slot, bar, finished) = (run.clone(), &slots[k], &bar, &finished);
+                    s.spawn_fifo(move |_| {
+                        let r = simulate(arch, &run.cfg, lat, &run.wl, RunOptions::default());
+                        run.archs.lock().expect("arch results")[i] = Some(r);
+                        if arch != Arch::Gpu {
+                            bar.inc(job.point.frames as u64);
+                        }
+                        if run.left.fetch_sub(1, Ordering::AcqRel) != 1 {
+                            return;
+                        }
+                        let results = std::mem::take(&mut *run.archs.lock().expect("arch results"));
+                        let r = results
+                            .into_iter()
+                            .map(|r| r.expect("every architecture ran"))
+                            .collect::<Result<Vec<_>, String>>()
+                            .and_then(|a| suite::point_result(&job.point, &run.wl, a))
+                            .map_err(|e| anyhow!(e));
+                        let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                        if let Ok(r) = &r {
+                            bar.suspend(|| log(job, r, &format!("[{what} {n}/{}]", jobs.len())));
+                        }
+                        *slot.lock().expect("result slot") =
+                            Some(r.map(|r| (r, started.elapsed().as_secs_f64())));
+                    });
+                }
+            }
+        }
+        Ok(())
     });
     bar.finish_and_clear();
-    out
+    generated?;
+    slots
+        .into_iter()
+        .map(|m| m.into_inner().expect("result slot").expect("every spawned job is done"))
+        .collect()
 }
 
 /// A [`PointRunner`] with progress bars that logs every finished point's FPS.
@@ -188,45 +261,21 @@ impl ProgressRunner<'_> {
 }
 
 impl PointRunner for ProgressRunner<'_> {
-    fn run_one(
-        &mut self,
-        point: &Point,
-        archs: &[Arch],
-        golden: GoldenRaster,
-        raster_sample: u32,
-        label: &str,
-    ) -> Result<PointResult, String> {
-        let r = run_point(&mut self.scenes, point, self.cfg, self.lat, archs, golden, raster_sample, label)
-            .map_err(|e| format!("{e:#}"))?;
-        Self::log(self.started, &r, label);
-        Ok(r)
-    }
-
     fn run_many(
         &mut self,
-        points: &[Point],
-        archs: &[Arch],
-        golden: GoldenRaster,
+        jobs: &[PointJob],
         raster_sample: u32,
         what: &str,
-    ) -> Result<Vec<PointResult>, String> {
+    ) -> Result<Vec<(PointResult, f64)>, String> {
         let started = self.started;
-        let log = move |r: &PointResult, label: &str| Self::log(started, r, label);
-        run_points_parallel(
-            &mut self.scenes,
-            points,
-            self.cfg,
-            self.lat,
-            archs,
-            golden,
-            raster_sample,
-            what,
-            &log,
-        )
-        .map_err(|e| format!("{e:#}"))
-    }
-
-    fn headline_done(&mut self, result: &PointResult) {
-        println!("{}", neo_sim::report::point_table(result));
+        // Throughput runs print their table as soon as they are done.
+        let log = move |j: &PointJob, r: &PointResult, label: &str| {
+            Self::log(started, r, label);
+            if j.headline {
+                println!("{}", neo_sim::report::point_table(r));
+            }
+        };
+        run_jobs(&mut self.scenes, jobs, self.cfg, self.lat, raster_sample, what, &log)
+            .map_err(|e| format!("{e:#}"))
     }
 }

@@ -16,3 +16,16 @@ pub fn spin<T>(what: &str, f: impl FnOnce() -> T) -> (T, Duration) {
     bar.finish_and_clear();
     (out, elapsed)
 }
+
+/// CPU seconds (user + system) of this process so far, every thread included (what a run costs
+/// on a shared machine, whatever the other jobs take).
+pub fn self_cpu() -> f64 {
+    // SAFETY: getrusage only writes the struct it is given.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: `u` is a valid rusage to fill.
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
+        return 0.0;
+    }
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    secs(u.ru_utime) + secs(u.ru_stime)
+}

@@ -14,9 +14,13 @@
 //!   agree exactly.
 
 use std::path::PathBuf;
+use std::sync::Arc;
+
+use rayon::prelude::*;
 
 use neo_golden::camera::Camera;
 use neo_golden::hwpre::bake;
+use neo_golden::pipeline::frame::{FrameInputs, FramePrep};
 use neo_golden::pipeline::hierarchical::HierWork;
 use neo_golden::pipeline::Preprocessing;
 use neo_golden::pipeline::{
@@ -145,6 +149,23 @@ impl<'s> WorkDriver<'s> {
         Ok(WorkDriver { pipeline, options: WorkOptions { hierarchical, raster_sample } })
     }
 
+    /// A driver that makes no frame inputs of its own: every frame is given them
+    /// ([`WorkDriver::step_with`]).
+    pub fn for_shared_inputs(
+        scene: &'s Scene,
+        strategy: Strategy,
+        params: &PipelineParams,
+        width: u32,
+        height: u32,
+        hierarchical: bool,
+        raster_sample: u32,
+    ) -> Result<Self, DriverError> {
+        let cfg = pipeline_config(strategy, params, GoldenRaster::Off);
+        let formats = Formats::artifact(cfg.chunk)?;
+        let pipeline = Pipeline::for_shared_inputs(scene, cfg, formats, width, height)?;
+        Ok(WorkDriver { pipeline, options: WorkOptions { hierarchical, raster_sample } })
+    }
+
     /// The number formats.
     pub fn formats(&self) -> &Formats {
         self.pipeline.formats()
@@ -168,6 +189,28 @@ impl<'s> WorkDriver<'s> {
     /// Runs frame `frame` from `cam`.
     pub fn step(&mut self, cam: &Camera, frame: usize, cut: bool) -> FrameWork {
         let gw = self.pipeline.work_frame(cam, frame, cut, &self.options);
+        self.record(gw, frame, cut)
+    }
+
+    /// Lets go of the last frame's inputs ([`Pipeline::release_inputs`]).
+    pub fn release_inputs(&mut self) {
+        self.pipeline.release_inputs();
+    }
+
+    /// Runs frame `frame` from `cam` on its (shared) `inputs` ([`Pipeline::work_frame_with`]).
+    pub fn step_with(
+        &mut self,
+        cam: &Camera,
+        frame: usize,
+        cut: bool,
+        inputs: Arc<FrameInputs>,
+    ) -> FrameWork {
+        let gw = self.pipeline.work_frame_with(cam, frame, cut, &self.options, inputs);
+        self.record(gw, frame, cut)
+    }
+
+    /// The model's record of golden's frame work.
+    fn record(&self, gw: golden::FrameWork, frame: usize, cut: bool) -> FrameWork {
         let visible_set = id_set(gw.gaussians, self.pipeline.visible_ids());
         let strategy = self.pipeline.config().strategy;
         let chunk = self.pipeline.config().chunk as u32;
@@ -308,58 +351,78 @@ pub fn generate(
     cams: &[Camera],
     cuts: &[usize],
     spec: &WorkloadSpec,
-    mut on_frame: impl FnMut(usize),
+    on_frame: impl FnMut(usize),
 ) -> Result<Workload, DriverError> {
-    let t0 = std::time::Instant::now();
-    let Some(first) = cams.first() else {
-        return Err(DriverError::Other("no frames".into()));
-    };
-    let (w, h) = (first.width, first.height);
-    let mut drv =
-        WorkDriver::new(scene, spec.strategy, &spec.params, w, h, spec.hierarchical, spec.raster_sample)?;
-    let mut golden = if spec.golden_raster != GoldenRaster::Off {
-        let cfg = pipeline_config(spec.strategy, &spec.params, spec.golden_raster);
-        let formats = Formats::artifact(cfg.chunk)?;
-        Some(Pipeline::new(scene, cfg, formats, w, h)?)
-    } else {
-        None
-    };
-    if let Some((dir, _)) = &spec.trace {
-        std::fs::create_dir_all(dir).map_err(|err| DriverError::Io { path: dir.clone(), err })?;
-    }
-    let f = drv.formats();
-    let info = WorkloadInfo {
-        scene: spec.scene.clone(),
-        trajectory: spec.trajectory.clone(),
-        strategy: spec.strategy.to_string(),
-        width: w,
-        height: h,
-        grid: drv.grid(),
-        tile: spec.params.tile,
-        subtile: spec.params.subtile,
-        chunk: spec.params.chunk,
-        dps_passes: spec.params.dps_passes,
-        capacity: spec.params.capacity,
-        sort_entry_bytes: f.sort.format().bytes_per_entry() as u32,
-        feature_entry_bytes: f.feature.bytes_per_entry(),
-        sh_degree: scene.sh_degree,
-        gaussian_geometry_bytes: bake::geometry_bytes(),
-        gaussian_sh_bytes: bake::sh_bytes(scene.sh_degree, Preprocessing::DEFAULT_SH),
-        gaussians: scene.len() as u64,
-        golden_raster: golden.is_some(),
-    };
-    let mut frames = Vec::with_capacity(cams.len());
-    for (i, cam) in cams.iter().enumerate() {
-        if (cam.width, cam.height) != (w, h) {
-            return Err(DriverError::Other(format!(
-                "camera {i} is {}x{}, not {w}x{h}",
-                cam.width, cam.height
-            )));
+    let mut v = generate_many(scene, cams, cuts, std::slice::from_ref(spec), on_frame)?;
+    Ok(v.remove(0))
+}
+
+/// One workload in the making: the work-only state, the golden pipeline beside it when the
+/// golden raster runs, and the frames so far.
+struct InMaking<'s> {
+    spec: &'s WorkloadSpec,
+    drv: WorkDriver<'s>,
+    golden: Option<Pipeline<'s>>,
+    info: WorkloadInfo,
+    frames: Vec<FrameWork>,
+}
+
+impl<'s> InMaking<'s> {
+    fn new(scene: &'s Scene, spec: &'s WorkloadSpec, w: u32, h: u32) -> Result<Self, DriverError> {
+        let drv = WorkDriver::for_shared_inputs(
+            scene,
+            spec.strategy,
+            &spec.params,
+            w,
+            h,
+            spec.hierarchical,
+            spec.raster_sample,
+        )?;
+        let golden = if spec.golden_raster != GoldenRaster::Off {
+            let cfg = pipeline_config(spec.strategy, &spec.params, spec.golden_raster);
+            let formats = Formats::artifact(cfg.chunk)?;
+            Some(Pipeline::for_shared_inputs(scene, cfg, formats, w, h)?)
+        } else {
+            None
+        };
+        if let Some((dir, _)) = &spec.trace {
+            std::fs::create_dir_all(dir).map_err(|err| DriverError::Io { path: dir.clone(), err })?;
         }
-        let cut = cuts.contains(&i);
-        let mut fw = drv.step(cam, i, cut);
-        if let Some(p) = golden.as_mut() {
-            let out = p.render_frame(cam, i, cut);
+        let f = drv.formats();
+        let info = WorkloadInfo {
+            scene: spec.scene.clone(),
+            trajectory: spec.trajectory.clone(),
+            strategy: spec.strategy.to_string(),
+            width: w,
+            height: h,
+            grid: drv.grid(),
+            tile: spec.params.tile,
+            subtile: spec.params.subtile,
+            chunk: spec.params.chunk,
+            dps_passes: spec.params.dps_passes,
+            capacity: spec.params.capacity,
+            sort_entry_bytes: f.sort.format().bytes_per_entry() as u32,
+            feature_entry_bytes: f.feature.bytes_per_entry(),
+            sh_degree: scene.sh_degree,
+            gaussian_geometry_bytes: bake::geometry_bytes(),
+            gaussian_sh_bytes: bake::sh_bytes(scene.sh_degree, Preprocessing::DEFAULT_SH),
+            gaussians: scene.len() as u64,
+            golden_raster: golden.is_some(),
+        };
+        Ok(InMaking { spec, drv, golden, info, frames: Vec::with_capacity(0) })
+    }
+
+    /// Frame `i` from `cam` on the shared `inputs`.
+    fn step(
+        &mut self,
+        cam: &Camera,
+        i: usize,
+        cut: bool,
+        inputs: &Arc<FrameInputs>,
+    ) -> Result<(), DriverError> {
+        let mut fw = self.drv.step_with(cam, i, cut, inputs.clone());
+        if let Some(p) = self.golden.as_mut() {
+            let out = p.render_frame_with(cam, i, cut, inputs.clone());
             check_frame(&fw, &out.stats, &out.tiles.table_len)
                 .map_err(|what| DriverError::Mismatch { frame: i, what })?;
             let routed: u64 = fw.tiles.iter().flat_map(|t| t.routed.iter()).map(|&r| r as u64).sum();
@@ -373,7 +436,7 @@ pub fn generate(
                 exact_psnr_vs_float: s.exact_psnr_vs_float,
                 identical_to_exact: s.identical_to_exact,
             });
-            if let Some((dir, which)) = &spec.trace {
+            if let Some((dir, which)) = &self.spec.trace {
                 if which.is_empty() || which.contains(&i) {
                     let path = dir.join(format!("frame_{i:05}.poc.trace"));
                     let mut file = std::fs::File::create(&path)
@@ -382,8 +445,73 @@ pub fn generate(
                 }
             }
         }
-        frames.push(fw);
+        self.frames.push(fw);
+        Ok(())
+    }
+
+    /// Lets go of the shared inputs of the last frame.
+    fn release_inputs(&mut self) {
+        self.drv.release_inputs();
+        if let Some(p) = self.golden.as_mut() {
+            p.release_inputs();
+        }
+    }
+}
+
+/// Generates the workloads of `specs` over the same cameras `cams` (all of one size) with scene
+/// cuts `cuts`, in one pass over the frames: each frame's strategy-independent stages
+/// (preprocessing and binning, golden's [`FrameInputs`]) run once and every spec's work-only
+/// state and golden pipeline take them, the specs in parallel; so do the exact-order rasters of
+/// the golden pipelines of one capacity. Each workload is the one [`generate`] makes of its spec
+/// alone. The specs must share the tile and subtile sizes. `on_frame(i)` is called after each
+/// frame; each workload's `generation_s` is the wall time of the whole pass.
+pub fn generate_many(
+    scene: &Scene,
+    cams: &[Camera],
+    cuts: &[usize],
+    specs: &[WorkloadSpec],
+    mut on_frame: impl FnMut(usize),
+) -> Result<Vec<Workload>, DriverError> {
+    let t0 = std::time::Instant::now();
+    let Some(first) = cams.first() else {
+        return Err(DriverError::Other("no frames".into()));
+    };
+    let Some(spec0) = specs.first() else {
+        return Ok(Vec::new());
+    };
+    let (w, h) = (first.width, first.height);
+    let geometry = |s: &WorkloadSpec| (s.params.tile, s.params.subtile);
+    if let Some(s) = specs.iter().find(|s| geometry(s) != geometry(spec0)) {
+        return Err(DriverError::Other(format!(
+            "workloads generated together need one tile geometry: tile {} subtile {} and tile {} subtile {}",
+            spec0.params.tile, spec0.params.subtile, s.params.tile, s.params.subtile
+        )));
+    }
+    let mut making =
+        specs.iter().map(|s| InMaking::new(scene, s, w, h)).collect::<Result<Vec<_>, DriverError>>()?;
+    for m in &mut making {
+        m.frames.reserve(cams.len());
+    }
+    let cfg0 = pipeline_config(spec0.strategy, &spec0.params, GoldenRaster::Off);
+    let prep = FramePrep::new(scene, &Formats::artifact(cfg0.chunk)?, cfg0.raster, cfg0.preprocess, w, h);
+    let mut inputs = Arc::new(FrameInputs::default());
+    for (i, cam) in cams.iter().enumerate() {
+        if (cam.width, cam.height) != (w, h) {
+            return Err(DriverError::Other(format!(
+                "camera {i} is {}x{}, not {w}x{h}",
+                cam.width, cam.height
+            )));
+        }
+        let cut = cuts.contains(&i);
+        // The last frame's inputs, released by every pipeline, are made again in place.
+        match Arc::get_mut(&mut inputs) {
+            Some(buffers) => prep.prepare_into(cam, buffers),
+            None => inputs = Arc::new(prep.prepare(cam)),
+        }
+        making.par_iter_mut().with_max_len(1).try_for_each(|m| m.step(cam, i, cut, &inputs))?;
+        making.iter_mut().for_each(InMaking::release_inputs);
         on_frame(i);
     }
-    Ok(Workload { info, frames, generation_s: t0.elapsed().as_secs_f64() })
+    let generation_s = t0.elapsed().as_secs_f64();
+    Ok(making.into_iter().map(|m| Workload { info: m.info, frames: m.frames, generation_s }).collect())
 }

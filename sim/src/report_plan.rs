@@ -8,7 +8,13 @@
 //! 3. the speed/error sweep over strategies, chunk sizes, DPS passes and camera speeds, with the
 //!    golden raster on for PSNR (or point results read from files).
 //!
-//! How a point runs (progress display, parallelism) is the caller's: a [`PointRunner`].
+//! The steps run as one set of jobs ([`PointJob`]), so that the architectures of one point run
+//! while the next workloads are generated, and points that share their cameras generate their
+//! workloads together, each frame preprocessed and binned once ([`crate::suite::workloads`]): the
+//! throughput run at the timeline resolution with the compared strategies, the sweep's points
+//! of one camera speed. Every point's result is the one it has when run alone.
+//!
+//! How the jobs run (progress display, parallelism) is the caller's: a [`PointRunner`].
 
 use std::path::Path;
 
@@ -64,33 +70,32 @@ pub struct SweepSpec {
     pub speeds: Vec<f64>,
 }
 
+/// A point of the plan and the architectures that run on its workload.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointJob {
+    /// The point.
+    pub point: Point,
+    /// Architectures.
+    pub archs: Vec<Arch>,
+    /// Whether the golden raster runs (the sweep's PSNR).
+    pub golden: GoldenRaster,
+    /// A throughput run: its table is shown as soon as it is done (the headline tables need not
+    /// wait for the rest of the report).
+    pub headline: bool,
+}
+
 /// Runs the plan's points.
 pub trait PointRunner {
-    /// Runs `point` on `archs`, its workload generated with `golden` and `raster_sample`
-    /// ([`crate::suite::workload`]); `label` names it in progress messages.
-    fn run_one(
-        &mut self,
-        point: &Point,
-        archs: &[Arch],
-        golden: GoldenRaster,
-        raster_sample: u32,
-        label: &str,
-    ) -> Result<PointResult, String>;
-
-    /// Runs `points` as [`PointRunner::run_one`] does (`what` names the group); results in the
-    /// order of `points`.
+    /// Runs `jobs`, their workloads generated with `raster_sample` (jobs sharing their cameras
+    /// together, [`crate::suite::workloads`]), and each job's architectures on its workload
+    /// ([`crate::suite::evaluate`]); `what` names the set in progress messages. Returns, in the
+    /// order of `jobs`, each result and the seconds from the call to its end.
     fn run_many(
         &mut self,
-        points: &[Point],
-        archs: &[Arch],
-        golden: GoldenRaster,
+        jobs: &[PointJob],
         raster_sample: u32,
         what: &str,
-    ) -> Result<Vec<PointResult>, String>;
-
-    /// Called as soon as a throughput point is done (the headline tables need not wait for the
-    /// rest of the report).
-    fn headline_done(&mut self, _result: &PointResult) {}
+    ) -> Result<Vec<(PointResult, f64)>, String>;
 }
 
 /// The points of a report.
@@ -121,11 +126,12 @@ pub struct ReportPlan {
 /// Wall-clock seconds of a report's steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ReportTimes {
-    /// Throughput and traffic runs.
+    /// Throughput and traffic runs (until the last is done).
     pub headline_s: f64,
-    /// Timelines.
+    /// Timelines: from the end of the throughput runs to the end of the last timeline (every
+    /// step runs in one set of jobs).
     pub timelines_s: f64,
-    /// Sweep.
+    /// Sweep: from the end of the steps before to the end of the last sweep point.
     pub sweep_s: f64,
 }
 
@@ -225,46 +231,43 @@ impl ReportPlan {
         let mut times = ReportTimes::default();
         let sample = self.spec.raster_sample;
 
-        // 1-2. Throughput and traffic.
-        let t = std::time::Instant::now();
-        let total = self.headline.len();
-        let mut headline = Vec::new();
-        for (k, p) in self.headline.iter().enumerate() {
-            let label = format!("[{}/{total}]", k + 1);
-            let r = runner.run_one(p, &self.archs, GoldenRaster::Off, sample, &label)?;
-            runner.headline_done(&r);
-            headline.push(r);
-        }
-        times.headline_s = t.elapsed().as_secs_f64();
-
-        // 3. Timelines (Neo's own run comes from the throughput runs when it matches).
-        let t = std::time::Instant::now();
+        // Every step in one set of jobs, in order: throughput runs, Neo's timeline unless a
+        // throughput run is it, the compared strategies' timelines, the sweep.
         let main_scene = &self.scenes[0];
-        let neo = headline.iter().find(|r| &r.point.scene == main_scene && r.point.res == self.timeline_res);
-        let neo = match neo.cloned() {
-            Some(mut r) => {
-                r.archs.retain(|x| x.arch == "neo");
-                r
-            }
-            None => {
-                runner.run_one(&self.neo_timeline, &[Arch::Neo], GoldenRaster::Off, sample, "[timeline]")?
-            }
+        let job = |point: &Point, archs: Vec<Arch>, golden, headline| PointJob {
+            point: point.clone(),
+            archs,
+            golden,
+            headline,
         };
-        let mut timelines = vec![neo];
-        timelines.extend(runner.run_many(
-            &self.timelines,
-            &[Arch::Neo],
-            GoldenRaster::Off,
-            sample,
-            "timelines",
-        )?);
-        times.timelines_s = t.elapsed().as_secs_f64();
-
-        // 4. Sweep.
-        let t = std::time::Instant::now();
+        let off = GoldenRaster::Off;
+        let mut jobs: Vec<PointJob> =
+            self.headline.iter().map(|p| job(p, self.archs.clone(), off, true)).collect();
+        let neo_from =
+            self.headline.iter().position(|p| &p.scene == main_scene && p.res == self.timeline_res);
+        if neo_from.is_none() {
+            jobs.push(job(&self.neo_timeline, vec![Arch::Neo], off, false));
+        }
+        jobs.extend(self.timelines.iter().map(|p| job(p, vec![Arch::Neo], off, false)));
+        let n_sweep = self.sweep.len();
+        jobs.extend(self.sweep.iter().map(|p| job(p, vec![Arch::Neo], GoldenRaster::Exact, false)));
+        let mut done = runner.run_many(&jobs, sample, "report")?;
+        let swept = done.split_off(done.len() - n_sweep);
+        let timed = done.split_off(self.headline.len());
+        let last = |d: &[(PointResult, f64)]| d.iter().map(|x| x.1).fold(0.0, f64::max);
+        times.headline_s = last(&done);
+        times.timelines_s = (last(&timed) - times.headline_s).max(0.0);
+        times.sweep_s = (last(&swept) - times.headline_s - times.timelines_s).max(0.0);
+        let headline: Vec<PointResult> = done.into_iter().map(|d| d.0).collect();
+        let mut timelines = Vec::with_capacity(timed.len() + 1);
+        if let Some(k) = neo_from {
+            let mut r = headline[k].clone();
+            r.archs.retain(|x| x.arch == "neo");
+            timelines.push(r);
+        }
+        timelines.extend(timed.into_iter().map(|d| d.0));
         let mut sweep = sweep_results;
-        sweep.extend(runner.run_many(&self.sweep, &[Arch::Neo], GoldenRaster::Exact, sample, "sweep")?);
-        times.sweep_s = t.elapsed().as_secs_f64();
+        sweep.extend(swept.into_iter().map(|d| d.0));
 
         let data = ReportData {
             headline,

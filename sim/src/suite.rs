@@ -12,7 +12,7 @@ use neo_golden::scene::Scene;
 use neo_golden::{source, trajectory};
 
 use crate::config::{PipelineParams, SimConfig};
-use crate::driver::{generate, GoldenRaster, WorkloadSpec};
+use crate::driver::{generate, generate_many, GoldenRaster, WorkloadSpec};
 use crate::latency::Latency;
 use crate::run::{simulate, Arch, ArchResult, RunOptions};
 use crate::workload::Workload;
@@ -95,6 +95,13 @@ impl Point {
     /// The strategy.
     pub fn strategy(&self) -> Result<Strategy, String> {
         self.strategy.parse()
+    }
+
+    /// What fixes the point's cameras: scene, trajectory, speed, size and frames. Points with
+    /// the same key see the same frames and generate their workloads together
+    /// ([`workloads`]).
+    pub fn camera_key(&self) -> (&str, &str, u64, u32, u32, usize) {
+        (&self.scene, &self.trajectory, self.speed.to_bits(), self.width, self.height, self.frames)
     }
 }
 
@@ -327,6 +334,50 @@ pub fn workload(
     generate(scene, &traj.frames, &traj.cuts, &ws, on_frame).map_err(|e| e.to_string())
 }
 
+/// Generates the workloads of `points`, which share their cameras ([`Point::camera_key`]), in one
+/// pass over the frames ([`generate_many`]: each frame is preprocessed and binned once for all
+/// of them); each is the workload [`workload`] makes of its point alone. `on_frame(i)` after
+/// each frame.
+pub fn workloads(
+    scene: &Scene,
+    points: &[&Point],
+    cfg: &SimConfig,
+    golden: GoldenRaster,
+    raster_sample: u32,
+    on_frame: impl FnMut(usize),
+) -> Result<Vec<Workload>, String> {
+    workloads_with(scene, points, &vec![golden; points.len()], cfg, raster_sample, on_frame)
+}
+
+/// [`workloads`] with each point's golden raster mode (`golden[i]` for `points[i]`).
+pub fn workloads_with(
+    scene: &Scene,
+    points: &[&Point],
+    golden: &[GoldenRaster],
+    cfg: &SimConfig,
+    raster_sample: u32,
+    on_frame: impl FnMut(usize),
+) -> Result<Vec<Workload>, String> {
+    if golden.len() != points.len() {
+        return Err(format!("{} points, {} golden raster modes", points.len(), golden.len()));
+    }
+    let Some(first) = points.first() else {
+        return Ok(Vec::new());
+    };
+    if let Some(p) = points.iter().find(|p| p.camera_key() != first.camera_key()) {
+        return Err(format!("points {} and {} do not share their cameras", first.id(), p.id()));
+    }
+    let mut specs = Vec::with_capacity(points.len());
+    let mut traj = None;
+    for (p, &golden) in points.iter().zip(golden) {
+        let (ws, t) = workload_spec(scene, p, cfg, golden, raster_sample)?;
+        specs.push(ws);
+        traj.get_or_insert(t);
+    }
+    let traj = traj.expect("at least one point");
+    generate_many(scene, &traj.frames, &traj.cuts, &specs, on_frame).map_err(|e| e.to_string())
+}
+
 /// Runs `archs` on a workload of `point`.
 pub fn evaluate(
     point: &Point,
@@ -335,16 +386,28 @@ pub fn evaluate(
     lat: &Latency,
     archs: &[Arch],
 ) -> Result<PointResult, String> {
-    let mut cfg = cfg.clone();
-    cfg.engine.chunk = point.chunk;
-    cfg.pipeline.dps_passes = point.passes;
-    let strategy = point.strategy()?;
+    let cfg = point_config(point, cfg);
     // Architectures are independent single-threaded simulations: run them in parallel.
     use rayon::prelude::*;
     let results: Vec<ArchResult> = archs
         .par_iter()
         .map(|&a| simulate(a, &cfg, lat, wl, RunOptions::default()))
         .collect::<Result<_, _>>()?;
+    point_result(point, wl, results)
+}
+
+/// The model configuration of `point`: `cfg` with the point's chunk and DPS passes.
+pub fn point_config(point: &Point, cfg: &SimConfig) -> SimConfig {
+    let mut cfg = cfg.clone();
+    cfg.engine.chunk = point.chunk;
+    cfg.pipeline.dps_passes = point.passes;
+    cfg
+}
+
+/// The result of `point` from its workload and its architectures' results (each from
+/// [`simulate`] with [`point_config`]), as [`evaluate`] makes it.
+pub fn point_result(point: &Point, wl: &Workload, results: Vec<ArchResult>) -> Result<PointResult, String> {
+    let strategy = point.strategy()?;
     let n = wl.frames.len().max(1) as f64;
     let pairs: u64 = wl.frames.iter().flat_map(|f| f.tiles.iter().map(|t| t.current as u64)).sum();
     let incoming: u64 =

@@ -3,6 +3,7 @@
 //! Speed targets live here rather than in timed unit tests, because the machines are noisy.
 
 mod engine;
+mod model;
 
 use crate::progress::spin;
 use anyhow::Result;
@@ -33,6 +34,9 @@ pub enum BenchCommand {
     /// memory, or the cache), then whole frames through the `neo cosim` harness, golden-checked,
     /// in simulated kcycles/s against the 50 kcycles/s target. Not run in CI.
     Engine(engine::EngineBenchArgs),
+    /// The cycle model's CPU per frame, workload generation included (default: 500k Gaussians
+    /// at QHD), against issue 13's target of 0.33 CPU s per frame.
+    Model(model::ModelBenchArgs),
 }
 
 fn best_of<T>(n: usize, what: &str, mut f: impl FnMut() -> T) -> (T, Duration) {
@@ -56,8 +60,10 @@ fn verdict(ok: bool) -> &'static str {
 
 /// Runs `neo bench` (or its subcommand).
 pub fn run(a: BenchArgs) -> Result<()> {
-    if let Some(BenchCommand::Engine(e)) = a.command {
-        return engine::run(e);
+    match a.command {
+        Some(BenchCommand::Engine(e)) => return engine::run(e),
+        Some(BenchCommand::Model(m)) => return model::run(m),
+        None => {}
     }
     let n = a.gaussians;
     let threads = rayon::current_num_threads();

@@ -142,11 +142,12 @@ pub fn run(a: ReportArgs) -> Result<()> {
     }
     println!("wrote {} and {} figures", index.display(), svgs.len());
     println!(
-        "time: throughput {:.0} s, timelines {:.0} s, sweep {:.0} s, total {:.0} s; peak memory {}",
+        "time: throughput {:.0} s, timelines {:.0} s more, sweep {:.0} s more, total {:.0} s wall, {:.0} s CPU; peak memory {}",
         times.headline_s,
         times.timelines_s,
         times.sweep_s,
         t0.elapsed().as_secs_f64(),
+        crate::progress::self_cpu(),
         peak_rss_mb().map_or("unknown".into(), |m| format!("{m:.0} MB"))
     );
     Ok(())

@@ -3,12 +3,13 @@
 //! A Gaussian belongs to tile `t` when [`touches_tile`] (its subtile bitmap in `t` is not
 //! empty); only the tiles of [`candidate_tiles`] are tested. Each tile's list holds `{key =
 //! depth key of the feature entry, id = Gaussian index in the scene, valid = 1}` in ascending id
-//! order (the feature table is in Gaussian order).
+//! order (the feature table is in Gaussian order). Each entry's subtile bitmap in its tile,
+//! which the test computes, is kept beside it ([`Binning::tile_bitmaps`]).
 
 use rayon::prelude::*;
 
 use crate::formats::{FeatureEntry, FeatureFormat};
-use crate::raster::{candidate_tiles, touches_tile, RasterConfig};
+use crate::raster::{candidate_tiles, subtile_bitmap, RasterConfig};
 use crate::sort::SortEntry;
 
 /// Features per parallel work item.
@@ -23,15 +24,22 @@ pub struct Binning {
     pub offsets: Vec<usize>,
     /// The lists.
     pub entries: Vec<SortEntry>,
+    /// The subtile bitmap of each entry of `entries` in its tile (never 0).
+    pub bitmaps: Vec<u64>,
     /// Candidate tiles tested (ITU work of the binning).
     pub tiles_tested: u64,
-    pairs: Vec<Vec<(u32, u32)>>,
+    pairs: Vec<Vec<(u32, u32, u64)>>,
 }
 
 impl Binning {
     /// The current list of tile `t` (row-major index).
     pub fn tile(&self, t: usize) -> &[SortEntry] {
         &self.entries[self.offsets[t]..self.offsets[t + 1]]
+    }
+
+    /// The subtile bitmaps of tile `t`'s current list, entry by entry.
+    pub fn tile_bitmaps(&self, t: usize) -> &[u64] {
+        &self.bitmaps[self.offsets[t]..self.offsets[t + 1]]
     }
 
     /// Number of tiles.
@@ -69,8 +77,10 @@ impl Binning {
                     for ty in yr {
                         for tx in xr.clone() {
                             tested += 1;
-                            if touches_tile(f, fmt, tx, ty, cfg) {
-                                out.push((ty * gx + tx, (c * CHUNK + j) as u32));
+                            // `touches_tile`: the bitmap is not empty.
+                            let b = subtile_bitmap(f, fmt, tx, ty, cfg);
+                            if b != 0 {
+                                out.push((ty * gx + tx, (c * CHUNK + j) as u32, b));
                             }
                         }
                     }
@@ -82,7 +92,7 @@ impl Binning {
         self.offsets.clear();
         self.offsets.resize(tiles + 1, 0);
         for list in &self.pairs {
-            for &(t, _) in list {
+            for &(t, _, _) in list {
                 self.offsets[t as usize + 1] += 1;
             }
         }
@@ -91,11 +101,14 @@ impl Binning {
         }
         self.entries.clear();
         self.entries.resize(self.offsets[tiles], SortEntry::default());
+        self.bitmaps.clear();
+        self.bitmaps.resize(self.offsets[tiles], 0);
         let mut cursor = self.offsets[..tiles].to_vec();
         for list in &self.pairs {
-            for &(t, i) in list {
+            for &(t, i, b) in list {
                 let c = &mut cursor[t as usize];
                 self.entries[*c] = SortEntry::new(features[i as usize].depth_key, ids[i as usize]);
+                self.bitmaps[*c] = b;
                 *c += 1;
             }
         }

@@ -7,16 +7,18 @@
 //! so that the timing of every stage is a wall-clock figure. Per-tile buffers live in the
 //! pipeline and are reused from frame to frame; per-thread buffers come from a pool. The
 //! work-only mode ([`Pipeline::work_frame`], in `frame/work_only.rs`) shares the stages up to the sort.
+//! The strategy-independent stages (preprocessing, binning) make a [`FrameInputs`]
+//! (`frame/inputs.rs`), which pipelines along the same cameras can share
+//! ([`Pipeline::render_frame_with`], [`Pipeline::work_frame_with`]).
 
 use std::io::{self, Write};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use rayon::prelude::*;
 
 use super::adaptive::{self, angle_deg, writeback_signals, CameraMotion, TilePlan};
-use super::binning::Binning;
-use super::config::{Formats, PipelineConfig, PipelineError, Preprocessing};
+use super::config::{Formats, PipelineConfig, PipelineError};
 use super::order::{compare_orders, TileOrder};
 use super::stats::{
     finite, FrameStats, GaussianCounts, OrderStats, RasterWork, Retention, TileAggregates, TileColumns,
@@ -26,16 +28,18 @@ use super::strategy::Strategy;
 use super::tile::{exact_table, sort_tile, FramePos, TileCtx, TileSortOutput, TileState};
 use super::trace::write_trace;
 use crate::camera::Camera;
-use crate::formats::{quantize, FeatureEntry};
-use crate::hwpre::{preprocess_hw, Baked};
+use crate::formats::FeatureEntry;
+use crate::hwpre::Baked;
 use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
 use crate::raster::{raster_tile_into, TileRaster};
-use crate::render::{self, preprocess, Projected};
+use crate::render;
 use crate::scene::Scene;
 use crate::sort::SortEntry;
+pub use inputs::{ExactPixels, FrameInputs, FramePrep};
 pub use work_only::{gpu_duplication, FrameWork, SampledRaster, TileWork, WorkOptions, GPU_TILE};
 
+mod inputs;
 mod work_only;
 
 /// Marks a Gaussian without a feature entry this frame.
@@ -126,8 +130,10 @@ pub struct FrameOutput {
 /// The golden pipeline over a sequence of frames of one scene at one resolution.
 pub struct Pipeline<'s> {
     scene: &'s Scene,
-    /// The scene baked for the hardware preprocessing (`None`: float preprocessing).
-    baked: Option<Baked>,
+    /// Makes the frame's inputs (`None`: the pipeline takes shared inputs only).
+    prep: Option<FramePrep<'s>>,
+    /// The current frame's feature table and binning.
+    inputs: Arc<FrameInputs>,
     cfg: PipelineConfig,
     formats: Formats,
     width: u32,
@@ -136,10 +142,6 @@ pub struct Pipeline<'s> {
     states: Vec<TileState>,
     slots: Vec<TileSlot>,
     pool: CtxPool,
-    features: Vec<FeatureEntry>,
-    feature_ids: Vec<u32>,
-    feature_of: Vec<u32>,
-    binning: Binning,
     shot_start: usize,
     last_frame: Option<usize>,
     /// The previous frame's camera.
@@ -168,6 +170,21 @@ impl<'s> Pipeline<'s> {
         width: u32,
         height: u32,
     ) -> Result<Self, PipelineError> {
+        let mut p = Self::for_shared_inputs(scene, cfg, formats, width, height)?;
+        p.prep = Some(p.frame_prep());
+        Ok(p)
+    }
+
+    /// A pipeline that makes no inputs of its own: every frame is given its
+    /// [`FrameInputs`] ([`Pipeline::render_frame_with`], [`Pipeline::work_frame_with`]), made
+    /// by a [`FramePrep`] of the same scene, size and formats ([`Pipeline::frame_prep`]).
+    pub fn for_shared_inputs(
+        scene: &'s Scene,
+        cfg: PipelineConfig,
+        formats: Formats,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, PipelineError> {
         formats.check(&cfg.raster, scene.len())?;
         if width == 0 || height == 0 {
             return Err(PipelineError::Other(format!("image size {width}x{height} is empty")));
@@ -182,13 +199,10 @@ impl<'s> Pipeline<'s> {
         let grid = [width.div_ceil(cfg.raster.tile), height.div_ceil(cfg.raster.tile)];
         let tiles = grid[0] as usize * grid[1] as usize;
         let proto = TileCtx::new(cfg.strategy, &formats.sort, cfg.dps_passes, cfg.capacity_or_max());
-        let baked = match cfg.preprocess {
-            Preprocessing::Hardware(sh) => Some(Baked::from_scene(scene, &formats.feature, sh)),
-            Preprocessing::Float => None,
-        };
         Ok(Pipeline {
             scene,
-            baked,
+            prep: None,
+            inputs: Arc::default(),
             formats,
             width,
             height,
@@ -196,10 +210,6 @@ impl<'s> Pipeline<'s> {
             states: vec![TileState::default(); tiles],
             slots: vec![TileSlot::default(); tiles],
             pool: CtxPool { free: Mutex::new(Vec::new()), proto },
-            features: Vec::new(),
-            feature_ids: Vec::new(),
-            feature_of: vec![CULLED; scene.len()],
-            binning: Binning::default(),
             shot_start: 0,
             last_frame: None,
             prev_cam: None,
@@ -230,9 +240,55 @@ impl<'s> Pipeline<'s> {
     }
 
     /// The baked scene the hardware preprocessing runs on (`None` with
-    /// [`Preprocessing::Float`]).
+    /// [`super::Preprocessing::Float`], or for a pipeline made [`Pipeline::for_shared_inputs`]).
     pub fn baked(&self) -> Option<&Baked> {
-        self.baked.as_ref()
+        self.prep.as_ref().and_then(FramePrep::baked)
+    }
+
+    /// A preparer of this pipeline's frame inputs (the scene baked again: make one and share
+    /// it).
+    pub fn frame_prep(&self) -> FramePrep<'s> {
+        FramePrep::new(
+            self.scene,
+            &self.formats,
+            self.cfg.raster,
+            self.cfg.preprocess,
+            self.width,
+            self.height,
+        )
+    }
+
+    /// The pipeline's own inputs of the frame seen from `cam` (its buffers reused when no other
+    /// pipeline holds them).
+    ///
+    /// # Panics
+    /// For a pipeline made [`Pipeline::for_shared_inputs`].
+    fn own_inputs(&mut self, cam: &Camera) -> Arc<FrameInputs> {
+        let prep = self.prep.as_ref().expect("a pipeline for shared inputs is given every frame's inputs");
+        let mut inputs = std::mem::take(&mut self.inputs);
+        match Arc::get_mut(&mut inputs) {
+            Some(own) => prep.prepare_into(cam, own),
+            None => inputs = Arc::new(prep.prepare(cam)),
+        }
+        inputs
+    }
+
+    /// Lets go of the last frame's inputs (shared ones can then be reused for the next frame);
+    /// [`Pipeline::current_lists`], [`Pipeline::visible_ids`] and [`Pipeline::feature`] see an
+    /// empty frame until the next one.
+    pub fn release_inputs(&mut self) {
+        self.inputs = Arc::default();
+    }
+
+    /// Takes `inputs` as the current frame's.
+    ///
+    /// # Panics
+    /// When they were made for another image size or raster geometry.
+    fn set_inputs(&mut self, inputs: Arc<FrameInputs>) {
+        assert_eq!(inputs.size, (self.width, self.height), "frame inputs of another image size");
+        assert_eq!(inputs.raster, Some(self.cfg.raster), "frame inputs of another raster geometry");
+        assert_eq!(inputs.feature, Some(self.formats.feature), "frame inputs of another feature format");
+        self.inputs = inputs;
     }
 
     /// The tables after the last frame's write-back (row-major tiles): the next frame's reused
@@ -243,13 +299,14 @@ impl<'s> Pipeline<'s> {
 
     /// The current list of every tile in the last frame (ascending ids, current keys).
     pub fn current_lists(&self) -> impl Iterator<Item = &[SortEntry]> {
-        (0..self.binning.tiles()).map(|t| self.binning.tile(t))
+        let b = &self.inputs.binning;
+        (0..b.tiles()).map(|t| b.tile(t))
     }
 
     /// The ids of the Gaussians with a feature entry (not culled) in the last frame, in feature
     /// order (ascending ids).
     pub fn visible_ids(&self) -> &[u32] {
-        &self.feature_ids
+        &self.inputs.feature_ids
     }
 
     /// The exact tables of the last frame (when the exact order was computed).
@@ -260,8 +317,8 @@ impl<'s> Pipeline<'s> {
     /// The last frame's feature entry of Gaussian `id`, or `None` when it has none (culled this
     /// frame, or `id` out of range): what the raster reads by a table entry's id.
     pub fn feature(&self, id: u32) -> Option<&FeatureEntry> {
-        match self.feature_of.get(id as usize) {
-            Some(&f) if f != CULLED => self.features.get(f as usize),
+        match self.inputs.feature_of.get(id as usize) {
+            Some(&f) if f != CULLED => self.inputs.features.get(f as usize),
             _ => None,
         }
     }
@@ -278,12 +335,40 @@ impl<'s> Pipeline<'s> {
     /// When the camera's size differs from the pipeline's.
     pub fn render_frame(&mut self, cam: &Camera, frame: usize, cut: bool) -> FrameOutput {
         let t_start = Instant::now();
+        let inputs = self.own_inputs(cam);
+        self.render_frame_from(cam, frame, cut, inputs, t_start)
+    }
+
+    /// [`Pipeline::render_frame`] on `inputs` (of this frame's camera, from a [`FramePrep`] of
+    /// the pipeline's scene, size and formats), which other pipelines may share: the same
+    /// output as making them here. The timing's preprocessing and binning are the inputs'.
+    ///
+    /// # Panics
+    /// When the camera's size differs from the pipeline's, or the inputs were made for another
+    /// size or raster geometry.
+    pub fn render_frame_with(
+        &mut self,
+        cam: &Camera,
+        frame: usize,
+        cut: bool,
+        inputs: Arc<FrameInputs>,
+    ) -> FrameOutput {
+        self.render_frame_from(cam, frame, cut, inputs, Instant::now())
+    }
+
+    fn render_frame_from(
+        &mut self,
+        cam: &Camera,
+        frame: usize,
+        cut: bool,
+        inputs: Arc<FrameInputs>,
+        t_start: Instant,
+    ) -> FrameOutput {
         let pos = self.begin_frame(cam, frame, cut);
+        self.set_inputs(inputs);
         let mut timing = Timing::default();
-        (timing.preprocess_s, timing.quantize_s) = self.feature_phase(cam, |_| {});
-        let t = Instant::now();
-        self.binning_phase();
-        timing.binning_s = t.elapsed().as_secs_f64();
+        (timing.preprocess_s, timing.quantize_s) = self.inputs.feature_s;
+        timing.binning_s = self.inputs.binning_s;
         let t = Instant::now();
         self.sort_phase(pos);
         timing.sort_s = t.elapsed().as_secs_f64();
@@ -389,52 +474,10 @@ impl<'s> Pipeline<'s> {
         }
     }
 
-    /// Preprocessing (`inspect` sees the projected Gaussians) into the feature table: the
-    /// hardware's arithmetic on the baked scene, or the float preprocess and its quantisation.
-    /// Returns the seconds of the two (the hardware's are one: all in the first).
-    fn feature_phase(&mut self, cam: &Camera, inspect: impl FnOnce(&[Projected])) -> (f64, f64) {
-        let t = Instant::now();
-        let (fmt, key, tile) = (&self.formats.feature, &self.formats.key, self.cfg.raster.tile);
-        let (projected, preprocess_s, t) = match &self.baked {
-            Some(baked) => {
-                let hw = preprocess_hw(baked, cam, fmt, key, tile);
-                let preprocess_s = t.elapsed().as_secs_f64();
-                let projected: Vec<Projected> = hw.iter().map(|h| h.projected).collect();
-                inspect(&projected);
-                let t = Instant::now();
-                self.features.clear();
-                self.features.extend(hw.iter().map(|h| h.entry));
-                (projected, preprocess_s, t)
-            }
-            None => {
-                let projected = preprocess(self.scene, cam, tile);
-                let preprocess_s = t.elapsed().as_secs_f64();
-                inspect(&projected);
-                let t = Instant::now();
-                projected.par_iter().map(|p| quantize(p, fmt, key)).collect_into_vec(&mut self.features);
-                (projected, preprocess_s, t)
-            }
-        };
-        self.feature_ids.clear();
-        self.feature_ids.extend(projected.iter().map(|p| p.index));
-        self.feature_of.par_iter_mut().for_each(|v| *v = CULLED);
-        for (i, &id) in self.feature_ids.iter().enumerate() {
-            self.feature_of[id as usize] = i as u32;
-        }
-        drop(projected);
-        (preprocess_s, t.elapsed().as_secs_f64())
-    }
-
-    /// Binning with the ITU: every tile's current list.
-    fn binning_phase(&mut self) {
-        let fmt = &self.formats.feature;
-        self.binning.run(&self.features, &self.feature_ids, fmt, &self.cfg.raster, self.width, self.height);
-    }
-
     /// The strategy's sorting step of every tile; records each tile's incoming ids.
     fn sort_phase(&mut self, pos: FramePos) {
         let strategy = self.cfg.strategy;
-        let binning = &self.binning;
+        let binning = &self.inputs.binning;
         let pool = &self.pool;
         self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each_init(
             || pool.take(),
@@ -454,7 +497,8 @@ impl<'s> Pipeline<'s> {
     /// Rasterises every tile's table, fills the slots' bitmaps and pixels, and writes keys (when
     /// `write_keys`) and valid bits back into the tables.
     fn raster_phase(&mut self, write_keys: bool) {
-        let (features, feature_of, binning) = (&self.features, &self.feature_of, &self.binning);
+        let inp = &*self.inputs;
+        let (features, feature_of, binning) = (&inp.features, &inp.feature_of, &inp.binning);
         let (fmt, cfg, w, h, gx) =
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let subtiles = cfg.subtiles_per_tile() as u64;
@@ -513,7 +557,8 @@ impl<'s> Pipeline<'s> {
     /// Exact tables of every tile and, when compared, their raster (and each tile's absolute
     /// error against it).
     fn reference_phase(&mut self) {
-        let (features, feature_of, binning) = (&self.features, &self.feature_of, &self.binning);
+        let inp = &*self.inputs;
+        let (features, feature_of, binning) = (&inp.features, &inp.feature_of, &inp.binning);
         let (fmt, cfg, w, h, gx) =
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let capacity = self.cfg.capacity_or_max();
@@ -547,11 +592,21 @@ impl<'s> Pipeline<'s> {
                     }
                 }
                 slot.exact_same = false;
-                slot.feats.clear();
-                slot.feats.extend(slot.exact.iter().map(|e| features[feature_of[e.id as usize] as usize]));
-                let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
-                raster_tile_into(&slot.feats, fmt, tx, ty, w, h, cfg, &mut slot.raster);
-                std::mem::swap(&mut slot.exact_pixels, &mut slot.raster.pixels);
+                // The exact raster depends on the exact table only: made once per tile for the
+                // pipelines sharing these inputs (with this capacity).
+                let cell = &inp.exact[ti];
+                if let Some(done) = cell.get().filter(|c| c.capacity == capacity) {
+                    slot.exact_pixels.clear();
+                    slot.exact_pixels.extend_from_slice(&done.pixels);
+                } else {
+                    slot.feats.clear();
+                    slot.feats
+                        .extend(slot.exact.iter().map(|e| features[feature_of[e.id as usize] as usize]));
+                    let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
+                    raster_tile_into(&slot.feats, fmt, tx, ty, w, h, cfg, &mut slot.raster);
+                    std::mem::swap(&mut slot.exact_pixels, &mut slot.raster.pixels);
+                    let _ = cell.set(ExactPixels { capacity, pixels: slot.exact_pixels.clone() });
+                }
                 slot.abs_error = slot
                     .pixels
                     .iter()
@@ -658,7 +713,7 @@ impl<'s> Pipeline<'s> {
                 },
             )
         };
-        let visible = self.features.len() as u64;
+        let visible = self.inputs.features.len() as u64;
         FrameStats {
             frame: pos.frame,
             cut: cut && pos.frame == pos.shot_start,
@@ -676,7 +731,7 @@ impl<'s> Pipeline<'s> {
                 visible,
                 culled: self.scene.len() as u64 - visible,
             },
-            tiles: TileAggregates::from_counts(&counts, from_scratch, self.binning.tiles_tested),
+            tiles: TileAggregates::from_counts(&counts, from_scratch, self.inputs.binning.tiles_tested),
             order,
             retention: Retention::from_counts(&counts),
             dropped_capacity: work.dropped_capacity,
@@ -695,7 +750,7 @@ impl<'s> Pipeline<'s> {
         let bitmaps: Vec<&[u64]> = self.slots.iter().map(|s| s.bitmaps.as_slice()).collect();
         let incoming: Vec<&[u32]> = self.slots.iter().map(|s| s.incoming.as_slice()).collect();
         let reused: Vec<u32> = self.slots.iter().map(|s| s.sort.counts.reused).collect();
-        let culled: Vec<bool> = self.feature_of.iter().map(|&f| f == CULLED).collect();
+        let culled: Vec<bool> = self.inputs.feature_of.iter().map(|&f| f == CULLED).collect();
         let header = super::trace::TraceHeader {
             width: self.width,
             height: self.height,

@@ -8,6 +8,7 @@
 
 use crate::args::{StrictArg, TrajectoryArg};
 use crate::engine_run;
+use crate::progress::self_cpu;
 use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use neo_golden::engine::cases::CaseScene;
@@ -90,19 +91,6 @@ fn children_usage() -> (f64, u64) {
     let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
     // Linux reports ru_maxrss in KiB.
     (secs(u.ru_utime) + secs(u.ru_stime), u.ru_maxrss.max(0) as u64 * 1024)
-}
-
-/// CPU seconds (user + system) of this process so far, every thread included (Verilator's
-/// worker threads with `--threads`).
-fn self_cpu() -> f64 {
-    // SAFETY: getrusage only writes the struct it is given.
-    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    // SAFETY: `u` is a valid rusage to fill.
-    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
-        return 0.0;
-    }
-    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    secs(u.ru_utime) + secs(u.ru_stime)
 }
 
 /// The target against `cycles` simulated in `wall` seconds using `cpu` CPU seconds: the wall

@@ -9,14 +9,16 @@
 //! ([`subtile_bitmap`]). Only the SCUs' early termination needs blending: it is measured with
 //! the golden raster on every [`WorkOptions::raster_sample`]-th tile.
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
-use super::{record_writeback, Pipeline, CULLED};
+use super::{record_writeback, FrameInputs, Pipeline, CULLED};
 use crate::camera::Camera;
 use crate::pipeline::hierarchical::{hierarchical_sort, HierWork};
 use crate::pipeline::prefetch::prefetch;
 use crate::pipeline::tile::{FramePos, TileCtx, TileSortOutput};
-use crate::raster::{raster_tile_into, subtile_bitmap};
+use crate::raster::raster_tile_into;
 use crate::render::Projected;
 
 /// How many table entries ahead the feature gathers are prefetched.
@@ -89,20 +91,37 @@ impl Pipeline<'_> {
     /// # Panics
     /// When the camera's size differs from the pipeline's.
     pub fn work_frame(&mut self, cam: &Camera, frame: usize, cut: bool, opts: &WorkOptions) -> FrameWork {
+        let inputs = self.own_inputs(cam);
+        self.work_frame_with(cam, frame, cut, opts, inputs)
+    }
+
+    /// [`Pipeline::work_frame`] on `inputs` (of this frame's camera, from a [`super::FramePrep`]
+    /// of the pipeline's scene, size and formats), which other pipelines may share: the same
+    /// counters as making them here.
+    ///
+    /// # Panics
+    /// When the camera's size differs from the pipeline's, or the inputs were made for another
+    /// size or raster geometry.
+    pub fn work_frame_with(
+        &mut self,
+        cam: &Camera,
+        frame: usize,
+        cut: bool,
+        opts: &WorkOptions,
+        inputs: Arc<FrameInputs>,
+    ) -> FrameWork {
         let pos = self.begin_frame(cam, frame, cut);
-        let (mut gpu_pairs, mut gpu_visible) = (0, 0);
-        let (w, h) = (self.width, self.height);
-        self.feature_phase(cam, |p| (gpu_pairs, gpu_visible) = gpu_duplication(p, w, h, GPU_TILE));
-        self.binning_phase();
+        self.set_inputs(inputs);
         self.sort_phase(pos);
         let tiles = self.work_phase(opts);
+        let inp = &*self.inputs;
         FrameWork {
             pos,
             gaussians: self.scene.len() as u64,
-            visible: self.features.len() as u64,
-            binning_tests: self.binning.tiles_tested,
-            gpu_pairs,
-            gpu_visible,
+            visible: inp.features.len() as u64,
+            binning_tests: inp.binning.tiles_tested,
+            gpu_pairs: inp.gpu.0,
+            gpu_visible: inp.gpu.1,
             tiles,
         }
     }
@@ -110,7 +129,8 @@ impl Pipeline<'_> {
     /// Writes keys (when the strategy does) and valid bits back into every tile's table and
     /// counts the tile's work.
     fn work_phase(&mut self, opts: &WorkOptions) -> Vec<TileWork> {
-        let (features, feature_of, binning) = (&self.features, &self.feature_of, &self.binning);
+        let inp = &*self.inputs;
+        let (features, feature_of, binning) = (&inp.features, &inp.feature_of, &inp.binning);
         let (fmt, rcfg, w, h, gx) =
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let write_keys = self.cfg.strategy.writes_back_keys();
@@ -125,6 +145,7 @@ impl Pipeline<'_> {
                 |pooled, (ti, (state, slot))| {
                     let ctx: &mut TileCtx = pooled;
                     let current = binning.tile(ti);
+                    let bitmaps = binning.tile_bitmaps(ti);
                     let hierarchical = opts
                         .hierarchical
                         .then(|| hierarchical_sort(current, &mut ctx.table, &mut ctx.sorter, &mut ctx.bins));
@@ -165,13 +186,15 @@ impl Pipeline<'_> {
                         if sampled {
                             slot.feats.push(*fe);
                         }
-                        let in_current = current.binary_search_by_key(&e.id, |c| c.id).is_ok();
-                        e.valid = in_current;
+                        let at = current.binary_search_by_key(&e.id, |c| c.id);
+                        e.valid = at.is_ok();
                         if write_keys {
                             e.key = fe.depth_key;
                         }
-                        if in_current {
-                            let mut b = subtile_bitmap(fe, fmt, tx, ty, rcfg) & inside;
+                        // The binning's bitmap of this Gaussian in this tile (the same feature
+                        // entry's `subtile_bitmap`).
+                        if let Ok(k) = at {
+                            let mut b = bitmaps[k] & inside;
                             while b != 0 {
                                 routed[b.trailing_zeros() as usize] += 1;
                                 b &= b - 1;
