@@ -394,7 +394,7 @@ impl DataSizes {
 /// speed bin as Ramulator's `LPDDR4_3200` lists it (JESD209-4 core timings converted to
 /// single-cycle commands): CL 32 (RL 28 + tDQSCK 3 + 1), CWL 18, RCD 29, RPpb 27, RAS 68, RC 95,
 /// RTP 14, WTR 16, WR 28, RRD 16, FAW 64, CCD 8, BL 8 (16 beats), RTRS 2, REFI 6247 (3.9 us),
-/// RFCab 288 (8 Gb die: 180 ns). See docs/cycle-model.md for what is modelled.
+/// RFCab 288 (8 Gb die: 180 ns), RPab 32, PPD 4. See docs/cycle-model.md for what is modelled.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DramConfig {
@@ -458,14 +458,19 @@ pub struct DramConfig {
     pub n_refi: u64,
     /// All-bank refresh time.
     pub n_rfc: u64,
-    /// Write-queue entries per channel: more than 80% of them waiting trigger a write drain
-    /// (Ramulator's high watermark); `neo dram` also blocks a stream on a full queue.
+    /// All-bank precharge period (before a refresh, or an activate after an all-bank precharge).
+    pub n_rpab: u64,
+    /// Precharge to precharge, any banks of the channel.
+    pub n_ppd: u64,
+    /// Write-queue entries per channel: write mode starts when more than 80% of them wait (or no
+    /// read waits) and ends when fewer than 20% wait and a read waits (Ramulator's watermarks);
+    /// `neo dram` also blocks a stream on a full queue.
     pub write_queue: u32,
-    /// Read-queue entries per channel the scheduler looks at (FR-FCFS: the oldest row hit among
-    /// them goes first); `0` serves reads strictly in issue order.
+    /// Read-queue entries per channel the scheduler looks at (FR-FCFS: the oldest request whose
+    /// next command can issue goes first); `0` serves reads strictly in issue order.
     pub read_queue: u32,
-    /// Times the oldest queued read may be bypassed by younger row hits before it is served
-    /// regardless (starvation cap).
+    /// Accesses an open row serves before its further hits stop counting as ready (Ramulator's
+    /// FRFCFS_Cap cap), so an older request to another row of the bank can close it.
     pub bypass_cap: u32,
 }
 
@@ -499,6 +504,8 @@ impl Default for DramConfig {
             n_rtrs: 2,
             n_refi: 6247,
             n_rfc: 288,
+            n_rpab: 32,
+            n_ppd: 4,
             write_queue: 32,
             read_queue: 32,
             bypass_cap: 16,

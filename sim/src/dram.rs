@@ -1,36 +1,37 @@
-//! A transaction-level LPDDR4 model: channels, banks with an open row each, a shared data bus per
-//! channel, the activation limits and refresh, and posted writes drained in batches.
+//! A command-level LPDDR4 model: per channel, a controller with read, write and activate
+//! queues that issues at most one command (ACT, PRE, RD, WR, PREA, REF) per DRAM clock under
+//! the standard's timing constraints, as Ramulator 1's controller does (docs/cycle-model.md,
+//! "DRAM model" and "Against Ramulator").
 //!
-//! Requests arrive in non-decreasing issue time (the engine serves them in time order). Each
-//! 64-byte request is mapped to (channel, bank, row) by [`crate::config::DramConfig::mapping`]
-//! and timed at once:
-//! - **row hit** (the bank has the row open): column command as soon as the bank allows;
-//! - **row miss** (bank closed) or **conflict** (another row open): precharge when allowed
-//!   (`tRAS` after the activate, `tRTP` after a read, `tWR` after write data), `tRP`, then
-//!   activate, subject to `tRC` (same bank), `tRRD` and the four-activate window `tFAW` (same
-//!   channel), then `tRCD` to the column command;
-//! - data follows the column command after `CL` (reads) or `CWL` (writes) and occupies the
-//!   channel's data bus for `BL` clocks (so column commands are at least `tCCD = BL` apart); a
-//!   read takes the earliest free bus slot at or after its data is ready, so a row hit issued
-//!   after a slow miss to another bank may return first (bank-level parallelism);
-//! - **FR-FCFS read scheduling**: reads wait in a per-channel queue ([`Dram::submit_read`]) and
-//!   are timed when their arrival is needed ([`Dram::arrival`]). The scheduler looks at the
-//!   first `read_queue` queued reads that had been issued by its decision time (the later of the
-//!   oldest read's issue and the column command of the read it scheduled last) and serves the
-//!   oldest one that hits an open row, else the one whose bank can activate first (first
-//!   ready, the oldest among equals); the oldest is bypassed at most `bypass_cap` times.
-//!   `read_queue = 0` serves reads in issue order, timed at once;
-//! - **writes** are posted: they return at once and wait in a per-channel queue; when more than
-//!   80% of `write_queue` wait, or no read is queued, the channel enters write mode: the queued
-//!   reads whose commands come before it are served, then all posted writes drain (first ready,
-//!   banks in parallel, write data `tRTRS` after the last read burst), and the reads after the
-//!   drain wait for the write-to-read turnaround (`tWTR`), as Ramulator's controller does;
-//! - **refresh**: every `tREFI` each channel is blocked for `tRFCab` (after the data already
-//!   scheduled, as a controller may postpone refreshes) and all its rows close.
+//! Each 64-byte request is mapped to (channel, bank, row) by
+//! [`crate::config::DramConfig::mapping`]. Per channel and clock:
+//! - **refresh**: every `tREFI` a refresh is queued; it takes precedence over reads and writes
+//!   (all-bank precharge `PREA` if a row is open, then `REF`, which blocks activates `tRFCab`);
+//! - **write mode** starts when more than 80% of `write_queue` writes wait or no read waits, and
+//!   ends when fewer than 20% wait and a read waits; reads are served outside it, writes in it;
+//! - **activate queue**: a request whose row the controller has just opened goes first if its
+//!   column command can issue;
+//! - **FR-FCFS with a cap** (Ramulator's `FRFCFS_Cap`): among the first `read_queue` requests
+//!   of the queue served, the oldest whose *next command* can issue now, counting a hit of a row
+//!   that has already served more than `bypass_cap` accesses as not ready; if none can, the
+//!   oldest, if its command can issue; else nothing this clock. So a younger request's
+//!   precharge may close a row while older hits to it wait for the data bus;
+//! - constraints: `tRCD`, `tRAS`, `tRC`, `tRP` per bank; `tRRD`, `tFAW`, `tPPD`, `tCCD` (= `BL`),
+//!   read-to-write (`CL + BL + tDQSCK + 1 - CWL`), write-to-read (`CWL + BL + tWTR + 1`),
+//!   `tRTP` and write recovery (`CWL + BL + tWR`) to precharge, per channel;
+//! - a read's data returns `CL + tDQSCK + BL` after its RD; a write is done at its WR.
 //!
-//! Not modelled: command-bus conflicts between banks, reads that arrive after the scheduler
-//! needed an earlier read's time (the queue holds what was issued by then), per-bank refresh,
-//! power-down, on-die ECC, data bus inversion, rank switching (one rank).
+//! Time is simulated lazily: a channel advances to a request's issue time when the request is
+//! submitted, and further when a read's data time is asked for ([`Dram::arrival`]); clocks on
+//! which no command can issue are skipped (the next issue time is computed, not searched).
+//! Requests arrive in non-decreasing issue time; a request submitted after its channel has
+//! already advanced past its issue time (because an earlier read's time was needed) is queued
+//! at the channel's clock, its latency still counted from its issue.
+//!
+//! Not modelled: power-down, per-bank refresh, ranks (one), command-bus slots beyond one command
+//! per clock, data bus inversion, on-die ECC.
+
+use std::collections::VecDeque;
 
 use serde::{Deserialize, Serialize};
 
@@ -39,56 +40,112 @@ use crate::config::DramConfig;
 /// Time in picoseconds.
 pub type Ps = u64;
 
-const CLOSED: u32 = u32::MAX;
+/// DRAM clocks.
+type Clk = u64;
 
+const CLOSED: u32 = u32::MAX;
+const NEVER: Clk = Clk::MAX;
+
+/// One bank: its open row and the earliest clock of each command.
 #[derive(Clone, Copy, Debug)]
 struct Bank {
     open: u32,
-    act: Ps,
-    rd_col: Ps,
-    wr_end: Ps,
-    activated: bool,
+    /// Column accesses to the open row since it was opened.
+    hits: u32,
+    act: Clk,
+    pre: Clk,
+    rd: Clk,
+    wr: Clk,
 }
 
 impl Default for Bank {
     fn default() -> Self {
-        Bank { open: CLOSED, act: 0, rd_col: 0, wr_end: 0, activated: false }
+        Bank { open: CLOSED, hits: 0, act: 0, pre: 0, rd: 0, wr: 0 }
     }
 }
 
-#[derive(Clone, Debug)]
-struct Channel {
-    banks: Vec<Bank>,
-    /// Reserved data-bus bursts `(start, end)`, sorted, non-overlapping; bursts ending before
-    /// the latest issue time are pruned.
-    busy: std::collections::VecDeque<(Ps, Ps)>,
-    /// Latest end of any burst.
-    bus_free: Ps,
-    /// No read data before this (write-to-read turnaround after a drain, refresh).
-    floor: Ps,
-    /// Activate times that can still constrain new ones (`tRRD`, `tFAW`), sorted.
-    acts: std::collections::VecDeque<Ps>,
-    next_ref: Ps,
-    blocked_until: Ps,
-    wq: Vec<(u32, u32)>,
-    /// Reads waiting for the scheduler, in issue order.
-    rq: std::collections::VecDeque<QueuedRead>,
-    /// Column command of the read scheduled last (the scheduler's clock).
-    last_col: Ps,
-    /// Latest end of a read burst.
-    read_end: Ps,
-    /// No write data before this (read-to-write turnaround).
-    write_floor: Ps,
-}
-
-/// A read waiting in a channel's queue.
-#[derive(Clone, Copy, Debug)]
-struct QueuedRead {
+/// A request in a controller queue.
+#[derive(Clone, Copy, Debug, Default)]
+struct Req {
+    /// Clock of entry (age order).
+    arrive: Clk,
+    /// Issue time (latency is counted from it).
     issue: Ps,
     bank: u32,
     row: u32,
+    line: u64,
     ticket: u32,
-    bypassed: u32,
+    write: bool,
+    /// No command issued for it yet (its row outcome is counted at the first).
+    first: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Cmd {
+    Act,
+    Pre,
+    Rd,
+    Wr,
+    Prea,
+    Ref,
+}
+
+/// Which queue a request is picked from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Q {
+    Act,
+    Read,
+    Write,
+}
+
+#[derive(Clone, Debug, Default)]
+struct Channel {
+    /// Clocks ticked.
+    clk: Clk,
+    banks: Vec<Bank>,
+    /// Earliest clock of each command as far as the channel (rank) constraints go.
+    act: Clk,
+    pre: Clk,
+    rd: Clk,
+    wr: Clk,
+    prea: Clk,
+    refresh: Clk,
+    /// The last four activates (`tFAW`).
+    acts: VecDeque<Clk>,
+    readq: VecDeque<Req>,
+    writeq: VecDeque<Req>,
+    actq: VecDeque<Req>,
+    /// Refreshes queued.
+    ref_pending: u32,
+    /// Clock of the last refresh request.
+    refreshed: Clk,
+    write_mode: bool,
+    /// Drain every write (the high watermark is 0: end of a run).
+    flushing: bool,
+    /// Clock of the last WR command.
+    last_wr: Clk,
+    /// The next command as [`Dram::plan`] found it (cleared when a request arrives, a command
+    /// issues or the mode changes).
+    plan: Option<Plan>,
+}
+
+/// What a channel does next if no request arrives first.
+#[derive(Clone, Copy, Debug)]
+struct Plan {
+    /// The clock.
+    at: Clk,
+    pick: Pick,
+}
+
+/// The command of a [`Plan`].
+#[derive(Clone, Copy, Debug)]
+enum Pick {
+    /// A command of request `.1` of a queue.
+    Issue(Q, usize, Cmd),
+    /// The queued refresh's next command.
+    Refresh(Cmd),
+    /// A refresh is queued on that clock: the controller's rules are applied directly.
+    Slow,
 }
 
 /// A read submitted with [`Dram::submit_read`]; [`Dram::arrival`] gives its data time and
@@ -111,11 +168,11 @@ pub struct DramStats {
     pub row_misses: u64,
     /// Requests that found another row open.
     pub row_conflicts: u64,
-    /// Reads served before an older queued read (FR-FCFS row-hit bypasses).
+    /// Reads whose first command issued while an older read waited in the read queue.
     pub reordered: u64,
     /// Refreshes performed.
     pub refreshes: u64,
-    /// Write drains.
+    /// Times a channel entered write mode.
     pub drains: u64,
     /// Reads answered from a queued write to the same line (no DRAM access; Ramulator's
     /// enqueue shortcut, used by [`crate::dram_stream::QueueFeeder`]).
@@ -148,100 +205,28 @@ impl DramStats {
     }
 }
 
-/// The earliest activate time at or after `x` that keeps `rrd` to every other activate of the
-/// channel and at most four activates in any `faw` window; records it. Activates may be placed
-/// between earlier-scheduled ones (banks activate out of issue order). `t` is the issue time
-/// (activates ending their influence before it are pruned).
-fn act_slot(acts: &mut std::collections::VecDeque<Ps>, mut x: Ps, t: Ps, rrd: Ps, faw: Ps) -> Ps {
-    while acts.front().is_some_and(|&a| a + faw.max(rrd) <= t) {
-        acts.pop_front();
-    }
-    // `pos` is the partition point of `x` (the first activate after it); `x` only grows, so
-    // it moves forward.
-    let mut pos = partition_from_back(acts, |&a| a <= x);
-    'search: loop {
-        while pos < acts.len() && acts[pos] <= x {
-            pos += 1;
-        }
-        // tRRD to the neighbours.
-        if pos > 0 && acts[pos - 1] + rrd > x {
-            x = acts[pos - 1] + rrd;
-            continue;
-        }
-        if pos < acts.len() && x + rrd > acts[pos] {
-            x = acts[pos] + rrd;
-            continue;
-        }
-        // Every five consecutive activates (x among them) must span at least faw.
-        for k in 0..5usize {
-            // The window holds acts[pos - 4 + k .. pos], x, acts[pos .. pos + k].
-            if pos + k < 4 || pos + k > acts.len() {
-                continue;
-            }
-            let first = if k < 4 { acts[pos + k - 4] } else { x };
-            let last = if k > 0 { acts[pos + k - 1] } else { x };
-            if last - first < faw {
-                x = if k == 0 { first + faw } else { acts[pos] + rrd };
-                continue 'search;
-            }
-        }
-        acts.insert(pos, x);
-        return x;
-    }
-}
-
-/// `v.partition_point(pred)`, looking at the last few elements first (new requests mostly
-/// land near the end of a calendar).
-#[inline]
-fn partition_from_back<T>(v: &std::collections::VecDeque<T>, pred: impl Fn(&T) -> bool) -> usize {
-    let n = v.len();
-    for i in (n.saturating_sub(4)..n).rev() {
-        if pred(&v[i]) {
-            return i + 1;
-        }
-    }
-    if n <= 4 {
-        0
-    } else {
-        v.partition_point(pred)
-    }
-}
-
-/// The earliest start at or after `ready` of a `bl`-long burst that overlaps no block of
-/// `busy` (sorted, non-overlapping), and the index of the first block after it.
-fn bus_slot(busy: &std::collections::VecDeque<(Ps, Ps)>, ready: Ps, bl: Ps) -> (usize, Ps) {
-    let mut i = partition_from_back(busy, |&(_, e)| e <= ready);
-    let mut start = ready;
-    while i < busy.len() {
-        let (s, e) = busy[i];
-        if s >= start + bl {
-            break;
-        }
-        start = start.max(e);
-        i += 1;
-    }
-    (i, start)
-}
-
-/// Timing in picoseconds, from the configuration's clock counts.
+/// Timing in DRAM clocks, from the configuration.
 #[derive(Clone, Copy, Debug)]
 struct T {
-    cl: Ps,
-    dqsck: Ps,
-    cwl: Ps,
-    rcd: Ps,
-    rp: Ps,
-    ras: Ps,
-    rc: Ps,
-    rtp: Ps,
-    wtr: Ps,
-    wr: Ps,
-    rrd: Ps,
-    faw: Ps,
-    bl: Ps,
-    rtrs: Ps,
-    refi: Ps,
-    rfc: Ps,
+    rcd: Clk,
+    rp: Clk,
+    rpab: Clk,
+    ras: Clk,
+    rc: Clk,
+    rrd: Clk,
+    faw: Clk,
+    ppd: Clk,
+    ccd: Clk,
+    bl: Clk,
+    cwl: Clk,
+    /// RD to data end (`CL + tDQSCK + BL`).
+    read_latency: Clk,
+    rd_to_wr: Clk,
+    wr_to_rd: Clk,
+    rd_to_pre: Clk,
+    wr_to_pre: Clk,
+    refi: Clk,
+    rfc: Clk,
 }
 
 /// The DRAM: either the LPDDR4 model or an ideal memory (validation against the cosimulation,
@@ -254,61 +239,65 @@ pub struct Dram {
     col_bits: u32,
     bank_first: bool,
     bank_xor: bool,
+    ck: Ps,
     t: T,
     channels: Vec<Channel>,
-    write_queue: usize,
-    read_queue: usize,
-    bypass_cap: u32,
+    /// Write-mode watermarks: enter above `hi` writes, leave below `lo`.
+    hi: usize,
+    lo: usize,
+    /// Requests of a queue the scheduler looks at (1: in order).
+    window: usize,
+    cap: u32,
     /// Data time per ticket (`PENDING` while queued), and the free tickets.
     arrivals: Vec<Ps>,
     free_tickets: Vec<u32>,
     ticket_channel: Vec<u32>,
+    /// Bank and row of each ticket's read.
+    ticket_place: Vec<(u32, u32)>,
     ideal: Option<Ps>,
     stats: DramStats,
-    /// `(channel, command time)` of every write drained, when logging ([`Dram::log_writes`]).
-    write_log: Option<Vec<(u32, Ps)>>,
+    /// Scratch buffers of [`Dram::plan`].
+    scratch: [Vec<Clk>; 2],
+    bank_scratch: Vec<BankReady>,
+}
+
+/// A bank's readiness for each kind of request ([`Dram::bank_table`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct BankReady {
+    open: u32,
+    rd: Clk,
+    wr: Clk,
+    other: Clk,
 }
 
 impl Dram {
     /// The model of `cfg` (which must pass [`DramConfig::check`]).
     pub fn new(cfg: &DramConfig) -> Self {
-        let ck = cfg.t_ck_ps;
+        let bl = cfg.n_bl;
         let t = T {
-            cl: cfg.n_cl * ck,
-            dqsck: cfg.n_dqsck * ck,
-            cwl: cfg.n_cwl * ck,
-            rcd: cfg.n_rcd * ck,
-            rp: cfg.n_rp * ck,
-            ras: cfg.n_ras * ck,
-            rc: cfg.n_rc * ck,
-            rtp: cfg.n_rtp * ck,
-            wtr: cfg.n_wtr * ck,
-            wr: cfg.n_wr * ck,
-            rrd: cfg.n_rrd * ck,
-            faw: cfg.n_faw * ck,
-            bl: cfg.n_bl * ck,
-            rtrs: cfg.n_rtrs * ck,
-            refi: cfg.n_refi * ck,
-            rfc: cfg.n_rfc * ck,
+            rcd: cfg.n_rcd,
+            rp: cfg.n_rp,
+            rpab: cfg.n_rpab,
+            ras: cfg.n_ras,
+            rc: cfg.n_rc,
+            rrd: cfg.n_rrd,
+            faw: cfg.n_faw,
+            ppd: cfg.n_ppd,
+            ccd: cfg.n_ccd.max(bl),
+            bl,
+            cwl: cfg.n_cwl,
+            read_latency: cfg.n_cl + cfg.n_dqsck + bl,
+            rd_to_wr: (cfg.n_cl + bl + cfg.n_dqsck + 1).saturating_sub(cfg.n_cwl),
+            wr_to_rd: cfg.n_cwl + bl + cfg.n_wtr + 1,
+            rd_to_pre: cfg.n_rtp,
+            wr_to_pre: cfg.n_cwl + bl + cfg.n_wr,
+            refi: if cfg.n_refi == 0 { NEVER } else { cfg.n_refi },
+            rfc: cfg.n_rfc,
         };
         let channels = (0..cfg.channels)
-            .map(|_| Channel {
-                banks: vec![Bank::default(); cfg.banks as usize],
-                busy: std::collections::VecDeque::new(),
-                bus_free: 0,
-                floor: 0,
-                acts: std::collections::VecDeque::new(),
-                // All channels refresh together (staggering would let one refreshing channel
-                // stall in-order requesters that stream over all of them).
-                next_ref: if t.refi == 0 { Ps::MAX } else { t.refi },
-                blocked_until: 0,
-                wq: Vec::with_capacity(cfg.write_queue as usize),
-                rq: std::collections::VecDeque::new(),
-                last_col: 0,
-                read_end: 0,
-                write_floor: 0,
-            })
+            .map(|_| Channel { banks: vec![Bank::default(); cfg.banks as usize], ..Channel::default() })
             .collect();
+        let wq = cfg.write_queue as f64;
         Dram {
             line_shift: cfg.line_bytes.trailing_zeros(),
             ch_bits: cfg.channels.trailing_zeros(),
@@ -316,17 +305,22 @@ impl Dram {
             col_bits: (cfg.row_bytes / cfg.line_bytes).trailing_zeros(),
             bank_first: cfg.mapping == "RoCoBaCh",
             bank_xor: cfg.bank_xor,
+            ck: cfg.t_ck_ps.max(1),
             t,
             channels,
-            write_queue: cfg.write_queue as usize,
-            read_queue: cfg.read_queue as usize,
-            bypass_cap: cfg.bypass_cap,
+            // Ramulator: int(0.8 * size) and int(0.2 * size).
+            hi: (0.8 * wq) as usize,
+            lo: (0.2 * wq) as usize,
+            window: (cfg.read_queue as usize).max(1),
+            cap: cfg.bypass_cap,
             arrivals: Vec::new(),
             free_tickets: Vec::new(),
             ticket_channel: Vec::new(),
+            ticket_place: Vec::new(),
             ideal: None,
             stats: DramStats::default(),
-            write_log: None,
+            scratch: [Vec::new(), Vec::new()],
+            bank_scratch: Vec::new(),
         }
     }
 
@@ -367,8 +361,12 @@ impl Dram {
         (ch, bank as usize, row as u32)
     }
 
-    /// Reads the line holding `addr`, issued at `t`; returns when its data has arrived (the
-    /// read is scheduled with whatever is queued before it, then timed at once).
+    /// The first clock at or after `t`.
+    fn clock_of(&self, t: Ps) -> Clk {
+        t.div_ceil(self.ck)
+    }
+
+    /// Reads the line holding `addr`, issued at `t`; returns when its data has arrived.
     pub fn read(&mut self, t: Ps, addr: u64) -> Ps {
         let ticket = self.submit_read(t, addr);
         let done = self.arrival(ticket);
@@ -377,7 +375,7 @@ impl Dram {
     }
 
     /// Queues a read of the line holding `addr`, issued at `t` (not before any earlier
-    /// submission). With `read_queue = 0` or the ideal memory it is timed at once.
+    /// submission).
     pub fn submit_read(&mut self, t: Ps, addr: u64) -> Ticket {
         self.stats.reads += 1;
         let ticket = self.new_ticket();
@@ -386,23 +384,45 @@ impl Dram {
             self.arrivals[ticket as usize] = t + l;
             return Ticket(ticket);
         }
-        let (c, b, r) = self.map(addr);
-        self.ticket_channel[ticket as usize] = c as u32;
-        if self.read_queue == 0 {
-            let done = self.access(t, t, c, b, r, false) + self.t.dqsck;
-            self.stats.read_latency_ps += done - t;
-            self.arrivals[ticket as usize] = done;
-        } else {
-            self.arrivals[ticket as usize] = PENDING;
-            self.channels[c].rq.push_back(QueuedRead {
-                issue: t,
-                bank: b as u32,
-                row: r,
-                ticket,
-                bypassed: 0,
-            });
-        }
+        let req = self.request(t, addr, false, ticket);
+        let c = self.ticket_channel[ticket as usize] as usize;
+        self.arrivals[ticket as usize] = PENDING;
+        self.channels[c].readq.push_back(req);
+        self.replan_after_push(c, Q::Read);
         Ticket(ticket)
+    }
+
+    /// Posts a write of the line holding `addr` at `t` (returns at once; served in write mode).
+    pub fn write(&mut self, t: Ps, addr: u64) {
+        self.stats.writes += 1;
+        if self.ideal.is_some() {
+            return;
+        }
+        let req = self.request(t, addr, true, u32::MAX);
+        let c = self.map(addr).0;
+        self.channels[c].writeq.push_back(req);
+        self.replan_after_push(c, Q::Write);
+    }
+
+    /// A request of `addr` issued at `t`, its channel advanced to `t`.
+    fn request(&mut self, t: Ps, addr: u64, write: bool, ticket: u32) -> Req {
+        let (c, b, r) = self.map(addr);
+        if !write {
+            self.ticket_channel[ticket as usize] = c as u32;
+            self.ticket_place[ticket as usize] = (b as u32, r);
+        }
+        let k = self.clock_of(t);
+        self.advance(c, k);
+        Req {
+            arrive: k.max(self.channels[c].clk),
+            issue: t,
+            bank: b as u32,
+            row: r,
+            line: addr >> self.line_shift,
+            ticket,
+            write,
+            first: true,
+        }
     }
 
     /// A free ticket (a returned one, or a new slot).
@@ -410,6 +430,7 @@ impl Dram {
         self.free_tickets.pop().unwrap_or_else(|| {
             self.arrivals.push(PENDING);
             self.ticket_channel.push(0);
+            self.ticket_place.push((0, 0));
             (self.arrivals.len() - 1) as u32
         })
     }
@@ -423,14 +444,12 @@ impl Dram {
         Ticket(ticket)
     }
 
-    /// When the data of `ticket` arrives (scheduling queued reads as far as needed).
+    /// When the data of `ticket` arrives (advancing its channel as far as needed).
     pub fn arrival(&mut self, ticket: Ticket) -> Ps {
         let k = ticket.0 as usize;
-        if self.arrivals[k] == PENDING {
-            let c = self.ticket_channel[k] as usize;
-            while self.arrivals[k] == PENDING {
-                self.schedule_one(c);
-            }
+        let c = self.ticket_channel[k] as usize;
+        while self.arrivals[k] == PENDING {
+            self.step(c, NEVER);
         }
         self.arrivals[k]
     }
@@ -444,301 +463,520 @@ impl Dram {
         self.free_tickets.push(ticket.0);
     }
 
-    /// Serves one queued read of channel `c` (the one the scheduler picks next); false when
-    /// none is queued.
-    pub fn schedule_next(&mut self, c: usize) -> bool {
-        if self.channels[c].rq.is_empty() {
-            return false;
+    /// The data time of `ticket` if its read command has issued by `now` (its channel advanced
+    /// to `now`, never further: an event-driven caller can poll without running a channel ahead
+    /// of requests still to come); else a time, after `now`, before which its data cannot
+    /// arrive.
+    pub fn poll(&mut self, ticket: Ticket, now: Ps) -> Result<Ps, Ps> {
+        let k = ticket.0 as usize;
+        if self.arrivals[k] == PENDING {
+            let c = self.ticket_channel[k] as usize;
+            self.advance_to(c, now);
+            if self.arrivals[k] == PENDING {
+                let ch = &self.channels[c];
+                let (bank, row) = self.ticket_place[k];
+                let r = &Req { bank, row, ..Req::default() };
+                let rd = self.read_bound(c, r).max(ch.clk + 1);
+                return Err(((rd + self.t.read_latency) * self.ck).max(now + 1));
+            }
         }
-        self.schedule_one(c);
-        true
+        Ok(self.arrivals[k])
     }
 
-    /// The data time of `ticket` if it is already scheduled (without scheduling anything).
+    /// A clock before which the read command of queued read `r` cannot issue.
+    fn read_bound(&self, c: usize, r: &Req) -> Clk {
+        let (cmd, at) = self.next_cmd(c, r);
+        match cmd {
+            Cmd::Act => at + self.t.rcd,
+            Cmd::Pre => at + self.t.rp + self.t.rcd,
+            _ => at,
+        }
+    }
+
+    /// The data time of `ticket` if its read command has issued (without advancing anything).
     pub fn scheduled(&self, ticket: Ticket) -> Option<Ps> {
         let a = self.arrivals[ticket.0 as usize];
         (a != PENDING).then_some(a)
     }
 
-    /// When the read command of a read whose data arrives at `arrival` was issued.
-    pub fn read_command_time(&self, arrival: Ps) -> Ps {
-        arrival - self.t.dqsck - self.t.bl - self.t.cl
+    /// Reads of channel `c` in its read queue (not yet activated or read) at its clock.
+    pub fn read_queue_len(&self, c: usize) -> usize {
+        self.channels[c].readq.len()
     }
 
-    /// Writes posted to channel `c` and not yet drained.
-    pub fn posted_writes(&self, c: usize) -> usize {
-        self.channels[c].wq.len()
+    /// Writes of channel `c` in its write queue at its clock.
+    pub fn write_queue_len(&self, c: usize) -> usize {
+        self.channels[c].writeq.len()
     }
 
-    /// Drains the posted writes of channel `c` at `t` (after its queued reads).
-    pub fn drain_channel(&mut self, t: Ps, c: usize) {
-        self.drain(t, c);
+    /// True when a write of the line holding `addr` waits in its channel's write queue.
+    pub fn write_queued(&self, addr: u64) -> bool {
+        let line = addr >> self.line_shift;
+        self.channels[self.map(addr).0].writeq.iter().any(|w| w.line == line)
     }
 
-    /// Starts recording the command time of every drained write ([`Dram::take_write_log`]).
-    pub fn log_writes(&mut self) {
-        self.write_log.get_or_insert_with(Vec::new);
+    /// The time of channel `c`'s clock.
+    pub fn channel_time(&self, c: usize) -> Ps {
+        self.channels[c].clk * self.ck
     }
 
-    /// The `(channel, command time)` of the writes drained since the last call.
-    pub fn take_write_log(&mut self) -> Vec<(u32, Ps)> {
-        self.write_log.as_mut().map(std::mem::take).unwrap_or_default()
+    /// Advances channel `c` to time `t` (no effect if it is already there).
+    pub fn advance_to(&mut self, c: usize, t: Ps) {
+        let k = self.clock_of(t);
+        self.advance(c, k);
     }
 
-    /// Serves every queued read of channel `c`.
-    fn schedule_all(&mut self, c: usize) {
-        while !self.channels[c].rq.is_empty() {
-            self.schedule_one(c);
+    /// The time of the next clock on which channel `c` can change (issue a command or queue a
+    /// refresh) if no request arrives before it.
+    pub fn next_change(&mut self, c: usize) -> Ps {
+        self.update_mode(c);
+        let plan = self.plan(c);
+        self.channels[c].plan = Some(plan);
+        plan.at.saturating_mul(self.ck)
+    }
+
+    /// Advances channel `c` until `done` holds of it; returns its time then.
+    pub fn advance_until(&mut self, c: usize, done: impl Fn(&Dram) -> bool) -> Ps {
+        while !done(self) {
+            self.step(c, NEVER);
         }
+        self.channel_time(c)
     }
 
-    /// The earliest activate of queued read `q` on channel `c` as far as its bank allows
-    /// (precharge of another open row, `tRP`, `tRC`).
-    fn act_ready(&self, c: usize, q: &QueuedRead) -> Ps {
-        let tm = self.t;
-        let bank = &self.channels[c].banks[q.bank as usize];
-        let mut act = q.issue;
-        if bank.open != CLOSED {
-            let pre = act.max(bank.act + tm.ras).max(bank.rd_col + tm.rtp).max(bank.wr_end + tm.wr);
-            act = pre + tm.rp;
-        }
-        if bank.activated {
-            act = act.max(bank.act + tm.rc);
-        }
-        act
+    /// The latest write command's time over all channels.
+    pub fn last_write_command(&self) -> Ps {
+        self.channels.iter().map(|c| c.last_wr * self.ck).max().unwrap_or(0)
     }
 
-    /// FR-FCFS: times one queued read of channel `c` (which must have one).
-    fn schedule_one(&mut self, c: usize) {
-        let ch = &self.channels[c];
-        let oldest = ch.rq[0];
-        let decision = oldest.issue.max(ch.last_col);
-        let mut pick = 0;
-        if oldest.bypassed < self.bypass_cap && ch.banks[oldest.bank as usize].open != oldest.row {
-            let (front, back) = ch.rq.as_slices();
-            let limit = self.read_queue.min(ch.rq.len());
-            for i in 1..limit {
-                let q = if i < front.len() { &front[i] } else { &back[i - front.len()] };
-                if q.issue > decision {
-                    break;
-                }
-                if ch.banks[q.bank as usize].open == q.row {
-                    pick = i;
-                    break;
-                }
-            }
-            if pick == 0 {
-                // No row hit: the read whose bank can activate first (first ready, as a
-                // cycle-level FR-FCFS issues whichever request's command is ready), the oldest
-                // among equals.
-                let mut best = self.act_ready(c, &oldest);
-                for i in 1..limit {
-                    let q = if i < front.len() { &front[i] } else { &back[i - front.len()] };
-                    if q.issue > decision {
-                        break;
-                    }
-                    let r = self.act_ready(c, q);
-                    if r < best {
-                        best = r;
-                        pick = i;
-                    }
-                }
-            }
-        }
-        let ch = &mut self.channels[c];
-        let q = ch.rq.remove(pick).expect("a queued read");
-        if pick > 0 {
-            ch.rq[0].bypassed += 1;
-            self.stats.reordered += 1;
-        }
-        let horizon = ch.rq.front().map_or(q.issue, |o| o.issue.min(q.issue));
-        let end = self.access(q.issue, horizon, c, q.bank as usize, q.row, false);
-        let ch = &mut self.channels[c];
-        ch.last_col = ch.last_col.max(end - self.t.bl - self.t.cl);
-        let done = end + self.t.dqsck;
-        self.stats.read_latency_ps += done - q.issue;
-        self.arrivals[q.ticket as usize] = done;
-    }
-
-    /// Posts a write of the line holding `addr` at `t` (returns at once; drained later).
-    pub fn write(&mut self, t: Ps, addr: u64) {
-        self.stats.writes += 1;
-        if self.ideal.is_some() {
-            return;
-        }
-        let (c, b, r) = self.map(addr);
-        let ch = &mut self.channels[c];
-        ch.wq.push((b as u32, r));
-        // Write mode: the queue is full, or no read is waiting (Ramulator's controller).
-        if ch.wq.len() * 5 > self.write_queue * 4 || ch.rq.is_empty() {
-            self.drain(t, c);
-        }
-    }
-
-    /// Serves every queued read and drains every write queue at `t`; returns when the last data
-    /// has left (at least `t`).
+    /// Serves every queued read and write (writes drain as at the end of Ramulator's run);
+    /// returns when the last data has left (at least `t`).
     pub fn flush(&mut self, t: Ps) -> Ps {
-        for c in 0..self.channels.len() {
-            self.schedule_all(c);
-            self.drain(t, c);
+        if self.ideal.is_some() {
+            return t;
         }
-        self.channels.iter().map(|c| c.bus_free).max().unwrap_or(0).max(t)
+        let k = self.clock_of(t);
+        for c in 0..self.channels.len() {
+            self.advance(c, k);
+            self.channels[c].flushing = true;
+            self.channels[c].plan = None;
+            while !self.idle(c) {
+                self.step(c, NEVER);
+            }
+            self.channels[c].flushing = false;
+            self.channels[c].plan = None;
+        }
+        self.stats.last_data_ps.max(t)
     }
 
-    fn drain(&mut self, t: Ps, c: usize) {
-        // Write mode starts at `t`: the queued reads whose commands come before it are served,
-        // the others wait for the drain (a controller in write mode serves no reads).
-        while !self.channels[c].rq.is_empty() && self.channels[c].last_col < t {
-            self.schedule_one(c);
+    /// No request waits in channel `c`.
+    fn idle(&self, c: usize) -> bool {
+        let ch = &self.channels[c];
+        ch.readq.is_empty() && ch.writeq.is_empty() && ch.actq.is_empty()
+    }
+
+    /// Ticks channel `c` until its clock is `k`.
+    fn advance(&mut self, c: usize, k: Clk) {
+        while self.channels[c].clk < k {
+            self.step(c, k);
         }
-        let mut q = std::mem::take(&mut self.channels[c].wq);
-        if q.is_empty() {
-            self.channels[c].wq = q;
+    }
+
+    /// Skips to the next clock (at most `limit`) on which channel `c` can issue a command or
+    /// queue a refresh, and ticks it.
+    fn step(&mut self, c: usize, limit: Clk) {
+        self.update_mode(c);
+        let plan = match self.channels[c].plan {
+            Some(p) => p,
+            None => {
+                let p = self.plan(c);
+                self.channels[c].plan = Some(p);
+                p
+            }
+        };
+        let ch = &mut self.channels[c];
+        assert!(plan.at != NEVER || limit != NEVER, "DRAM channel {c} waits for nothing");
+        if plan.at > limit {
+            ch.clk = ch.clk.max(limit);
             return;
         }
-        self.stats.drains += 1;
-        // First ready: repeatedly the write whose bank can take it first (row hits at once),
-        // so the activates of different banks interleave as a cycle-level scheduler issues them.
-        let mut order = Vec::with_capacity(q.len());
-        {
-            let tm = self.t;
-            let banks = &self.channels[c].banks;
-            let mut state: Vec<(u32, Ps, bool)> =
-                banks.iter().map(|b| (b.open, b.act, b.activated)).collect();
-            let mut left = q.clone();
-            while !left.is_empty() {
-                let ready = |&(b, r): &(u32, u32), st: &[(u32, Ps, bool)]| -> Ps {
-                    let (open, act, activated) = st[b as usize];
-                    if open == r {
-                        return 0;
-                    }
-                    let mut a = t;
-                    if open != CLOSED {
-                        a = a.max(act + tm.ras) + tm.rp;
-                    }
-                    if activated {
-                        a = a.max(act + tm.rc);
-                    }
-                    a
-                };
-                let (i, at) = left
-                    .iter()
-                    .enumerate()
-                    .map(|(i, w)| (i, ready(w, &state)))
-                    .min_by_key(|&(i, a)| (a, i))
-                    .expect("a write left");
-                let (b, r) = left.remove(i);
-                if state[b as usize].0 != r {
-                    state[b as usize] = (r, at.max(t), true);
-                }
-                order.push((b, r));
-            }
+        ch.clk = plan.at;
+        ch.plan = None;
+        match plan.pick {
+            Pick::Issue(q, i, cmd) => self.issue(c, q, i, cmd, plan.at),
+            Pick::Refresh(cmd) => self.refresh_command(c, cmd, plan.at),
+            Pick::Slow => self.tick(c),
         }
-        q.clear();
-        q.extend(order);
-        // Writes go after the reads already scheduled, with the read-to-write turnaround after
-        // the last read burst; banks work in parallel (the data bus orders the bursts).
-        let tm = self.t;
-        {
-            let ch = &mut self.channels[c];
-            ch.write_floor = ch.write_floor.max(t.max(ch.read_end + tm.rtrs));
-        }
-        let mut end = 0;
-        for &(b, r) in &q {
-            let e = self.access(t, t, c, b as usize, r, true);
-            end = end.max(e);
-            if let Some(log) = self.write_log.as_mut() {
-                log.push((c as u32, e - tm.bl - tm.cwl));
-            }
-        }
-        // Reads wait for the write-to-read turnaround.
-        let ch = &mut self.channels[c];
-        ch.floor = ch.floor.max(end + tm.wtr + tm.cl);
-        q.clear();
-        self.channels[c].wq = q;
     }
 
-    /// Performs the refreshes due by the channel's frontier (the later of `t` and its data
-    /// bus): a refresh waits for the data already scheduled (LPDDR4 lets a controller postpone
-    /// refreshes), then blocks the channel for `tRFCab` and closes every row.
-    fn refresh_until(&mut self, c: usize, t: Ps) {
-        let tm = self.t;
+    /// Write mode by Ramulator's rule (a fixed point after one application).
+    fn update_mode(&mut self, c: usize) {
+        let (hi, lo) = (self.hi, self.lo);
         let ch = &mut self.channels[c];
-        while ch.next_ref <= t.max(ch.bus_free) {
-            let start = ch.next_ref.max(ch.bus_free).max(ch.blocked_until);
-            ch.blocked_until = start + tm.rfc;
-            ch.floor = ch.floor.max(ch.blocked_until);
-            for b in ch.banks.iter_mut() {
-                b.open = CLOSED;
+        let hi = if ch.flushing { 0 } else { hi };
+        if !ch.write_mode {
+            if ch.writeq.len() > hi || ch.readq.is_empty() {
+                ch.write_mode = true;
+                ch.plan = None;
+                if !ch.writeq.is_empty() {
+                    self.stats.drains += 1;
+                }
             }
-            ch.next_ref += tm.refi;
+        } else if ch.writeq.len() < lo && !ch.readq.is_empty() {
+            ch.write_mode = false;
+            ch.plan = None;
+        }
+    }
+
+    /// The next command of `r` and the clock from which it can issue.
+    fn next_cmd(&self, c: usize, r: &Req) -> (Cmd, Clk) {
+        let ch = &self.channels[c];
+        let b = &ch.banks[r.bank as usize];
+        if b.open == CLOSED {
+            (Cmd::Act, b.act.max(ch.act))
+        } else if b.open == r.row {
+            if r.write {
+                (Cmd::Wr, b.wr.max(ch.wr))
+            } else {
+                (Cmd::Rd, b.rd.max(ch.rd))
+            }
+        } else {
+            (Cmd::Pre, b.pre.max(ch.pre))
+        }
+    }
+
+    /// A request whose next command is a hit of a row that has served more than the cap.
+    fn capped(&self, c: usize, r: &Req) -> bool {
+        let b = &self.channels[c].banks[r.bank as usize];
+        b.open == r.row && b.hits > self.cap
+    }
+
+    /// The refresh's next command and its clock.
+    fn refresh_cmd(&self, c: usize) -> (Cmd, Clk) {
+        let ch = &self.channels[c];
+        if ch.banks.iter().any(|b| b.open != CLOSED) {
+            (Cmd::Prea, ch.prea)
+        } else {
+            (Cmd::Ref, ch.refresh)
+        }
+    }
+
+    /// The queue served outside the activate queue (refresh aside).
+    fn mode_queue(&self, c: usize) -> Q {
+        if self.channels[c].write_mode {
+            Q::Write
+        } else {
+            Q::Read
+        }
+    }
+
+    fn queue(&self, c: usize, q: Q) -> &VecDeque<Req> {
+        let ch = &self.channels[c];
+        match q {
+            Q::Act => &ch.actq,
+            Q::Read => &ch.readq,
+            Q::Write => &ch.writeq,
+        }
+    }
+
+    /// FRFCFS_Cap over the first `window` requests of queue `q` at clock `now`: the oldest
+    /// whose next command can issue (a capped hit counts as not ready), else the oldest. Returns
+    /// its index, its command and whether that command can issue now.
+    fn head(&self, c: usize, q: Q, now: Clk) -> Option<(usize, Cmd, bool)> {
+        let queue = self.queue(c, q);
+        let n = queue.len().min(self.window);
+        let mut oldest: Option<usize> = None;
+        let mut best: Option<(usize, Cmd)> = None;
+        for i in 0..n {
+            let r = &queue[i];
+            if oldest.is_none_or(|o| r.arrive < queue[o].arrive) {
+                oldest = Some(i);
+            }
+            let (cmd, at) = self.next_cmd(c, r);
+            if at <= now && !self.capped(c, r) && best.is_none_or(|(b, _)| r.arrive < queue[b].arrive) {
+                best = Some((i, cmd));
+            }
+        }
+        if let Some((i, cmd)) = best {
+            return Some((i, cmd, true));
+        }
+        let o = oldest?;
+        let (cmd, at) = self.next_cmd(c, &queue[o]);
+        Some((o, cmd, at <= now))
+    }
+
+    /// Per bank of channel `c`, the open row and the clock from which a read hit, a write hit
+    /// and a request of another row (activate or precharge) can issue its next command (`NEVER`
+    /// for hits of a row past the cap).
+    fn bank_table(&self, c: usize, out: &mut Vec<BankReady>) {
+        let ch = &self.channels[c];
+        out.clear();
+        out.extend(ch.banks.iter().map(|b| {
+            let capped = b.open != CLOSED && b.hits > self.cap;
+            BankReady {
+                open: b.open,
+                rd: if capped { NEVER } else { b.rd.max(ch.rd) },
+                wr: if capped { NEVER } else { b.wr.max(ch.wr) },
+                other: if b.open == CLOSED { b.act.max(ch.act) } else { b.pre.max(ch.pre) },
+            }
+        }));
+    }
+
+    /// The earliest clock at which a head of queue `q` can issue (its state otherwise
+    /// unchanged), with each of its first `window` requests' ready clock (`NEVER` for a capped
+    /// hit, which can issue only as the oldest) in `ready`, and the index of the oldest.
+    fn scan(&self, c: usize, q: Q, banks: &[BankReady], ready: &mut Vec<Clk>) -> (Clk, Option<usize>) {
+        let queue = self.queue(c, q);
+        ready.clear();
+        let mut next = NEVER;
+        for r in queue.iter().take(self.window) {
+            let b = &banks[r.bank as usize];
+            let hit = if r.write { b.wr } else { b.rd };
+            let at = if b.open == r.row { hit } else { b.other };
+            ready.push(at);
+            next = next.min(at);
+        }
+        let oldest = if q == Q::Act {
+            (0..ready.len()).min_by_key(|&i| (queue[i].arrive, i))
+        } else {
+            // Read and write queues are in age order.
+            (!ready.is_empty()).then_some(0)
+        };
+        if let Some(o) = oldest {
+            next = next.min(self.next_cmd(c, &queue[o]).1);
+        }
+        (next, oldest)
+    }
+
+    /// FRFCFS_Cap's pick of queue `q` at clock `now` from a [`Dram::scan`] of it: the oldest
+    /// ready request, else the oldest if its command can issue.
+    fn pick_at(&self, c: usize, q: Q, ready: &[Clk], oldest: Option<usize>, now: Clk) -> Option<usize> {
+        let queue = self.queue(c, q);
+        let mut best: Option<usize> = None;
+        for (i, &at) in ready.iter().enumerate() {
+            if at <= now && best.is_none_or(|b| queue[i].arrive < queue[b].arrive) {
+                best = Some(i);
+                if q != Q::Act {
+                    // Read and write queues are in age order.
+                    break;
+                }
+            }
+        }
+        best.or_else(|| oldest.filter(|&o| self.next_cmd(c, &queue[o]).1 <= now))
+    }
+
+    /// What channel `c` does next if no request arrives first: the clock (after its current
+    /// one) and the command, as [`Dram::tick`] would choose it then.
+    fn plan(&mut self, c: usize) -> Plan {
+        let mut ready_a = std::mem::take(&mut self.scratch[0]);
+        let mut ready_q = std::mem::take(&mut self.scratch[1]);
+        let mut banks = std::mem::take(&mut self.bank_scratch);
+        self.bank_table(c, &mut banks);
+        let ch = &self.channels[c];
+        let t_ref = ch.refreshed.saturating_add(self.t.refi);
+        let (next_a, oldest_a) = self.scan(c, Q::Act, &banks, &mut ready_a);
+        let mode = self.mode_queue(c);
+        let (mut next, mut oldest_q) = (next_a, None);
+        let refresh = (ch.ref_pending > 0).then(|| self.refresh_cmd(c));
+        match refresh {
+            Some((_, at)) => next = next.min(at),
+            None => {
+                let (next_q, o) = self.scan(c, mode, &banks, &mut ready_q);
+                next = next.min(next_q);
+                oldest_q = o;
+            }
+        }
+        let at = next.min(t_ref).max(ch.clk + 1);
+        let pick = if at >= t_ref {
+            Pick::Slow
+        } else if let Some(i) = self.pick_at(c, Q::Act, &ready_a, oldest_a, at) {
+            Pick::Issue(Q::Act, i, self.next_cmd(c, &self.channels[c].actq[i]).0)
+        } else if let Some((cmd, _)) = refresh {
+            Pick::Refresh(cmd)
+        } else {
+            match self.pick_at(c, mode, &ready_q, oldest_q, at) {
+                Some(i) => Pick::Issue(mode, i, self.next_cmd(c, &self.queue(c, mode)[i]).0),
+                None => Pick::Slow,
+            }
+        };
+        self.scratch = [ready_a, ready_q];
+        self.bank_scratch = banks;
+        Plan { at, pick }
+    }
+
+    /// Updates channel `c`'s plan for the request just appended to queue `q` (the youngest):
+    /// it changes the plan only if it can issue before the planned clock (then it is the only
+    /// request that can), or at it (then the plan is made again).
+    fn replan_after_push(&mut self, c: usize, q: Q) {
+        let ch = &self.channels[c];
+        let Some(plan) = ch.plan else { return };
+        let n = self.queue(c, q).len() - 1;
+        if ch.ref_pending > 0 || q != self.mode_queue(c) || n >= self.window {
+            // A refresh goes first, the queue is not served now (a mode change clears the
+            // plan), or the scheduler does not look that far.
+            return;
+        }
+        let r = self.queue(c, q)[n];
+        if n == 0 || self.capped(c, &r) {
+            // The only request, or a capped hit that can issue only as the oldest.
+            if n == 0 {
+                self.channels[c].plan = None;
+            }
+            return;
+        }
+        let (cmd, at) = self.next_cmd(c, &r);
+        let at = at.max(ch.clk + 1);
+        let ch = &mut self.channels[c];
+        if at < plan.at {
+            ch.plan = Some(Plan { at, pick: Pick::Issue(q, n, cmd) });
+        } else if at == plan.at {
+            ch.plan = None;
+        }
+    }
+
+    /// Issues the refresh's `cmd` at clock `now`.
+    fn refresh_command(&mut self, c: usize, cmd: Cmd, now: Clk) {
+        self.command(c, cmd, 0, 0, now);
+        if cmd == Cmd::Ref {
+            self.channels[c].ref_pending -= 1;
             self.stats.refreshes += 1;
         }
     }
 
-    /// One request on channel `c` issued at `t`; returns the end of its data on the bus.
-    /// `horizon` (at most `t`) is the earliest issue time any later request of the channel can
-    /// have: bus bursts and activates that end before it are pruned.
-    fn access(&mut self, t: Ps, horizon: Ps, c: usize, b: usize, row: u32, write: bool) -> Ps {
-        self.refresh_until(c, t);
-        let tm = self.t;
+    /// One clock of channel `c`'s controller (its clock already advanced to it), by the rules
+    /// directly: used on the clocks where a refresh is queued.
+    fn tick(&mut self, c: usize) {
+        let now = self.channels[c].clk;
+        if now - self.channels[c].refreshed >= self.t.refi {
+            let ch = &mut self.channels[c];
+            ch.ref_pending += 1;
+            ch.refreshed = now;
+        }
+        self.update_mode(c);
+        self.channels[c].plan = None;
+        if let Some((i, cmd, true)) = self.head(c, Q::Act, now) {
+            self.issue(c, Q::Act, i, cmd, now);
+            return;
+        }
+        if self.channels[c].ref_pending > 0 {
+            let (cmd, at) = self.refresh_cmd(c);
+            if at <= now {
+                self.refresh_command(c, cmd, now);
+            }
+            return;
+        }
+        let q = self.mode_queue(c);
+        if let Some((i, cmd, true)) = self.head(c, q, now) {
+            self.issue(c, q, i, cmd, now);
+        }
+    }
+
+    /// Issues `cmd` for request `i` of queue `q` at clock `now`.
+    fn issue(&mut self, c: usize, q: Q, i: usize, cmd: Cmd, now: Clk) {
         let ch = &mut self.channels[c];
-        let t = t.max(ch.blocked_until);
-        let bank = &mut ch.banks[b];
-        let col_ready = if bank.open == row {
-            self.stats.row_hits += 1;
-            t.max(bank.act + tm.rcd)
-        } else {
-            let mut act = t;
-            if bank.open != CLOSED {
-                self.stats.row_conflicts += 1;
-                let pre = t.max(bank.act + tm.ras).max(bank.rd_col + tm.rtp).max(bank.wr_end + tm.wr);
-                act = act.max(pre + tm.rp);
-            } else {
-                self.stats.row_misses += 1;
-            }
-            if bank.activated {
-                act = act.max(bank.act + tm.rc);
-            }
-            act = act_slot(&mut ch.acts, act, horizon, tm.rrd, tm.faw);
-            bank.activated = true;
-            bank.open = row;
-            bank.act = act;
-            act + tm.rcd
+        let queue = match q {
+            Q::Act => &mut ch.actq,
+            Q::Read => &mut ch.readq,
+            Q::Write => &mut ch.writeq,
         };
-        let lat = if write { tm.cwl } else { tm.cl };
-        let ready = (col_ready + lat).max(if write { ch.write_floor } else { ch.floor });
-        // Earliest free burst slot at or after `ready`. Busy blocks are merged when the gap
-        // between them is shorter than a burst, so a saturated bus is one block.
-        while ch.busy.front().is_some_and(|&(_, e)| e <= horizon) {
-            ch.busy.pop_front();
-        }
-        let (i, start) = bus_slot(&ch.busy, ready, tm.bl);
-        let end = start + tm.bl;
-        // Insert [start, end) before block i, merging with neighbours closer than a burst (such
-        // a gap can never hold a burst, so the merge loses nothing and keeps the calendar short).
-        let touches_prev = i > 0 && start - ch.busy[i - 1].1 < tm.bl;
-        let touches_next = i < ch.busy.len() && ch.busy[i].0 - end < tm.bl;
-        match (touches_prev, touches_next) {
-            (true, true) => {
-                let next_end = ch.busy[i].1;
-                ch.busy[i - 1].1 = next_end;
-                ch.busy.remove(i);
+        let r = &mut queue[i];
+        if r.first {
+            r.first = false;
+            let open = ch.banks[r.bank as usize].open;
+            if open == r.row {
+                self.stats.row_hits += 1;
+            } else if open == CLOSED {
+                self.stats.row_misses += 1;
+            } else {
+                self.stats.row_conflicts += 1;
             }
-            (true, false) => ch.busy[i - 1].1 = end,
-            (false, true) => ch.busy[i].0 = start,
-            (false, false) => ch.busy.insert(i, (start, end)),
+            if q == Q::Read && i > 0 {
+                self.stats.reordered += 1;
+            }
         }
-        ch.bus_free = ch.bus_free.max(end);
-        let col = start - lat;
-        if write {
-            bank.wr_end = bank.wr_end.max(end);
-        } else {
-            bank.rd_col = bank.rd_col.max(col);
-            ch.read_end = ch.read_end.max(end);
+        let r = *r;
+        if matches!(cmd, Cmd::Act | Cmd::Rd | Cmd::Wr) {
+            queue.remove(i);
         }
-        self.stats.last_data_ps = self.stats.last_data_ps.max(end);
-        end
+        if cmd == Cmd::Act {
+            // Ramulator promotes the request to the activate queue.
+            ch.actq.push_back(r);
+        }
+        self.command(c, cmd, r.bank as usize, r.row, now);
+        match cmd {
+            Cmd::Rd => {
+                let done = (now + self.t.read_latency) * self.ck;
+                self.stats.read_latency_ps += done.saturating_sub(r.issue);
+                self.stats.last_data_ps = self.stats.last_data_ps.max(done);
+                self.arrivals[r.ticket as usize] = done;
+            }
+            Cmd::Wr => {
+                let end = (now + self.t.cwl + self.t.bl) * self.ck;
+                self.stats.last_data_ps = self.stats.last_data_ps.max(end);
+                self.channels[c].last_wr = now;
+            }
+            _ => {}
+        }
+    }
+
+    /// The state and timing effects of `cmd` to bank `b` (row `row`) at clock `now`.
+    fn command(&mut self, c: usize, cmd: Cmd, b: usize, row: u32, now: Clk) {
+        let t = self.t;
+        let ch = &mut self.channels[c];
+        let up = |x: &mut Clk, v: Clk| *x = (*x).max(v);
+        match cmd {
+            Cmd::Act => {
+                up(&mut ch.act, now + t.rrd);
+                ch.acts.push_back(now);
+                if ch.acts.len() > 4 {
+                    ch.acts.pop_front();
+                }
+                if ch.acts.len() == 4 {
+                    up(&mut ch.act, ch.acts[0] + t.faw);
+                }
+                up(&mut ch.prea, now + t.ras);
+                let bank = &mut ch.banks[b];
+                bank.open = row;
+                bank.hits = 0;
+                up(&mut bank.rd, now + t.rcd);
+                up(&mut bank.wr, now + t.rcd);
+                up(&mut bank.act, now + t.rc);
+                up(&mut bank.pre, now + t.ras);
+            }
+            Cmd::Pre => {
+                up(&mut ch.pre, now + t.ppd);
+                up(&mut ch.refresh, now + t.rp);
+                let bank = &mut ch.banks[b];
+                bank.open = CLOSED;
+                up(&mut bank.act, now + t.rp);
+            }
+            Cmd::Rd => {
+                up(&mut ch.rd, now + t.ccd);
+                up(&mut ch.wr, now + t.rd_to_wr);
+                up(&mut ch.prea, now + t.rd_to_pre);
+                let bank = &mut ch.banks[b];
+                bank.hits += 1;
+                up(&mut bank.pre, now + t.rd_to_pre);
+            }
+            Cmd::Wr => {
+                up(&mut ch.wr, now + t.ccd);
+                up(&mut ch.rd, now + t.wr_to_rd);
+                up(&mut ch.prea, now + t.wr_to_pre);
+                let bank = &mut ch.banks[b];
+                bank.hits += 1;
+                up(&mut bank.pre, now + t.wr_to_pre);
+            }
+            Cmd::Prea => {
+                up(&mut ch.act, now + t.rpab);
+                up(&mut ch.refresh, now + t.rpab);
+                for bank in ch.banks.iter_mut() {
+                    bank.open = CLOSED;
+                }
+            }
+            Cmd::Ref => {
+                up(&mut ch.act, now + t.rfc);
+                up(&mut ch.refresh, now + t.rfc);
+            }
+        }
     }
 }
 
@@ -750,7 +988,8 @@ mod tests {
         bytes as f64 / (ps as f64 * 1e-12) / 1e9
     }
 
-    /// Streams `n` reads with at most `window` outstanding; returns the achieved GB/s.
+    /// Streams `n` reads with at most `window` outstanding (the next is issued when the oldest
+    /// returns); returns the achieved GB/s.
     fn run(d: &mut Dram, addrs: impl Iterator<Item = u64>, window: usize) -> f64 {
         let mut inflight = std::collections::VecDeque::new();
         let mut t = 0;
@@ -758,14 +997,18 @@ mod tests {
         let mut last = 0;
         for a in addrs {
             if inflight.len() == window {
-                t = t.max(inflight.pop_front().unwrap());
+                let old = inflight.pop_front().unwrap();
+                t = t.max(d.arrival(old));
+                d.release(old);
             }
-            let done = d.read(t, a);
-            last = last.max(done);
-            inflight.push_back(done);
+            inflight.push_back(d.submit_read(t, a));
             n += 1;
         }
-        gbs(n * 64, last)
+        for k in inflight {
+            last = last.max(d.arrival(k));
+            d.release(k);
+        }
+        gbs(n * 64, last.max(t))
     }
 
     #[test]
@@ -847,135 +1090,39 @@ mod tests {
         assert!(moved > 0);
         assert!(hits_fr > hits_io + 0.1, "hits {hits_fr} vs {hits_io}");
         assert!(bw_fr > 1.2 * bw_io, "bandwidth {bw_fr} vs {bw_io}");
-        // One stream is already in row order: reordering changes nothing.
+        // One stream is already in row order: the row hits are the same, and first-ready only
+        // adds the next bank's activate during the current row's bursts.
         let (a, ha, _) = interleaved(&fr, 1, 20_000, 64);
         let (b, hb, _) = interleaved(&in_order, 1, 20_000, 64);
-        assert!((a - b).abs() < 1e-9 && (ha - hb).abs() < 1e-12, "{a} {b}");
+        eprintln!("1 stream: FR-FCFS {a:.2} GB/s ({ha:.3} hits), in order {b:.2} GB/s ({hb:.3} hits)");
+        assert!(a >= b && (ha - hb).abs() < 0.01, "{a} {b}, hits {ha} {hb}");
     }
 
     #[test]
-    fn the_oldest_read_is_bypassed_at_most_bypass_cap_times() {
+    fn an_open_row_serves_at_most_cap_hits_past_an_older_conflict() {
         let cfg = DramConfig::default();
         let mut d = Dram::new(&cfg);
-        // Open row 0 of channel 0, bank 0.
-        let t0 = d.read(0, 0);
+        // Opens row 0 of channel 0, bank 0 (its first access).
+        let first = d.submit_read(0, 0);
         let (c, b, r) = d.map(0);
-        // Row 1 of the same bank (the bank index is XORed with the row's low bits).
-        let conflict = (0..64u64)
-            .map(|k| k * 128 * 1024 + (1 << 14) * (k % 8))
+        let conflict = (1..64u64)
+            .map(|k| k * 128 * 1024)
             .find(|&a| {
                 let (c2, b2, r2) = d.map(a);
                 c2 == c && b2 == b && r2 != r
             })
             .expect("another row of bank 0");
-        let old = d.submit_read(t0, conflict);
+        let old = d.submit_read(0, conflict);
         // 60 more lines of the open row (channel 0 holds every 4th line; a row has 64 of them).
-        let hits: Vec<Ticket> = (1..61u64).map(|k| d.submit_read(t0, k * 4 * 64)).collect();
+        let hits: Vec<Ticket> = (1..61u64).map(|k| d.submit_read(0, k * 4 * 64)).collect();
+        d.arrival(first);
         let t_old = d.arrival(old);
         let before = hits.iter().filter(|&&h| d.arrival(h) < t_old).count();
-        assert_eq!(before as u32, cfg.bypass_cap, "hits served before the old conflict");
-        assert_eq!(d.stats().reordered, cfg.bypass_cap as u64);
-    }
-
-    /// The straightforward `act_slot`: a fresh binary search after every move of `x`.
-    fn act_slot_reference(
-        acts: &mut std::collections::VecDeque<Ps>,
-        mut x: Ps,
-        t: Ps,
-        rrd: Ps,
-        faw: Ps,
-    ) -> Ps {
-        while acts.front().is_some_and(|&a| a + faw.max(rrd) <= t) {
-            acts.pop_front();
-        }
-        'search: loop {
-            let pos = acts.partition_point(|&a| a <= x);
-            if pos > 0 && acts[pos - 1] + rrd > x {
-                x = acts[pos - 1] + rrd;
-                continue;
-            }
-            if pos < acts.len() && x + rrd > acts[pos] {
-                x = acts[pos] + rrd;
-                continue;
-            }
-            for k in 0..5usize {
-                if pos + k < 4 || pos + k > acts.len() {
-                    continue;
-                }
-                let first = if k < 4 { acts[pos + k - 4] } else { x };
-                let last = if k > 0 { acts[pos + k - 1] } else { x };
-                if last - first < faw {
-                    x = if k == 0 { first + faw } else { acts[pos] + rrd };
-                    continue 'search;
-                }
-            }
-            acts.insert(pos, x);
-            return x;
-        }
-    }
-
-    #[test]
-    fn act_slot_places_activates_as_the_reference_search_does() {
-        let mut x = 0x2545_F491_4F6C_DD1Du64;
-        let mut rnd = move |m: u64| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x % m
-        };
-        let (rrd, faw) = (7_500, 40_000);
-        for _ in 0..50 {
-            let (mut fast, mut slow) = (std::collections::VecDeque::new(), std::collections::VecDeque::new());
-            let mut t = 0;
-            for _ in 0..2_000 {
-                t += rnd(20_000);
-                // Requests wanting an activate at, or well after, their issue (some on a coarse
-                // grid, so that many want the same time and the search jumps over several).
-                let want = t + match rnd(3) {
-                    0 => 0,
-                    1 => rnd(400_000),
-                    _ => rnd(8) * 50_000,
-                };
-                let a = act_slot(&mut fast, want, t, rrd, faw);
-                let b = act_slot_reference(&mut slow, want, t, rrd, faw);
-                assert_eq!(a, b, "activate slot");
-                assert_eq!(fast, slow, "activate calendar");
-            }
-        }
-    }
-
-    #[test]
-    fn bus_slot_is_the_first_gap_that_holds_a_burst() {
-        let mut x = 0x9E37_79B9_7F4A_7C15u64;
-        let mut rnd = move |m: u64| {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x % m
-        };
-        let bl = 5_000;
-        for _ in 0..2_000 {
-            // A calendar of random blocks with random gaps.
-            let mut busy = std::collections::VecDeque::new();
-            let mut t = rnd(20_000);
-            for _ in 0..rnd(12) {
-                let s = t + rnd(12_000);
-                let e = s + 1 + rnd(30_000);
-                busy.push_back((s, e));
-                t = e;
-            }
-            let ready = rnd(t + 20_000);
-            let (i, start) = bus_slot(&busy, ready, bl);
-            // Straightforward: the first start at or after `ready` clear of every block.
-            let clear = |x: Ps| busy.iter().all(|&(s, e)| x + bl <= s || x >= e);
-            let want = std::iter::once(ready)
-                .chain(busy.iter().map(|&(_, e)| e).filter(|&e| e >= ready))
-                .filter(|&x| clear(x))
-                .min()
-                .unwrap();
-            assert_eq!(start, want, "calendar {busy:?}, ready {ready}");
-            assert_eq!(i, busy.iter().filter(|&&(_, e)| e <= start).count(), "index after {busy:?}");
-        }
+        // Column commands are tCCD apart and each pushes the conflict's precharge tRTP (> tCCD)
+        // later, so the row serves hits until it has served more than the cap (its first access
+        // and `cap` hits); then the hits are not ready and the older conflict's precharge goes.
+        assert_eq!(before as u32, cfg.bypass_cap, "hits served before the older conflict");
+        assert!(d.stats().reordered >= cfg.bypass_cap as u64);
     }
 
     #[test]
@@ -987,36 +1134,46 @@ mod tests {
     }
 
     #[test]
-    fn writes_are_posted_and_drained() {
-        let mut d = Dram::new(&DramConfig::default());
-        // No read waits: every write drains at once (write mode).
-        for i in 0..8u64 {
-            d.write(i, i * 64);
+    fn write_mode_follows_the_watermarks() {
+        let cfg = DramConfig::default();
+        let ck = cfg.t_ck_ps;
+        let miss = (1 + cfg.n_rcd + cfg.n_cl + cfg.n_dqsck + cfg.n_bl) * ck;
+        // A read waits in channel 0 (bank 1) with 25 writes (bank 0): not above 80% of 32, so
+        // the read goes first, as a plain miss.
+        let mut d = Dram::new(&cfg);
+        let read = d.submit_read(0, 16 * 1024);
+        for i in 0..25u64 {
+            d.write(0, i * 256);
         }
-        assert_eq!(d.stats().drains, 8);
-        let mut d = Dram::new(&DramConfig::default());
-        // A read waits in every channel: writes are posted until more than 80% of 32 wait.
-        let waiting: Vec<Ticket> = (0..4u64).map(|c| d.submit_read(0, (1 << 20) + c * 64)).collect();
-        for i in 0..100u64 {
-            d.write(i, i * 64);
+        assert_eq!(d.arrival(read), miss);
+        // With 26 writes the channel enters write mode first and stays in it until fewer than
+        // 20% of 32 (6) writes remain: 21 writes go before the read.
+        let mut d = Dram::new(&cfg);
+        let read = d.submit_read(0, 16 * 1024);
+        for i in 0..26u64 {
+            d.write(0, i * 256);
         }
-        assert_eq!(d.stats().drains, 0, "25 writes per channel are posted");
-        for i in 100..104u64 {
-            d.write(i, i * 64);
-        }
-        assert_eq!(d.stats().drains, 4, "the 26th (above 80% of 32) drains, after the waiting read");
-        for k in waiting {
-            assert!(d.scheduled(k).is_some());
-            d.release(k);
-        }
-        for i in 104..400u64 {
+        d.advance_until(0, |d| d.read_queue_len(0) == 0);
+        assert_eq!(d.write_queue_len(0), 5, "writes left when the read leaves the read queue");
+        let t = d.arrival(read);
+        // The read's activate moves it to the activate queue, the read queue is empty, and the
+        // channel enters write mode again for the other 5 while the read waits for tRCD.
+        assert_eq!(d.stats().drains, 2);
+        assert!(t > miss + 21 * cfg.n_bl * ck, "read at {t}");
+        // With no read waiting every write is served; a flush drains the rest, and a read after
+        // it waits for the write-to-read turnaround.
+        let mut d = Dram::new(&cfg);
+        for i in 0..400u64 {
             d.write(i, i * 64);
         }
         let end = d.flush(1000);
-        assert!(end > 100 * 5000, "100 bursts of 5 ns per channel: {end}");
+        assert!((0..4).all(|c| d.write_queue_len(c) == 0));
+        assert!(end > 100 * cfg.n_bl * ck, "100 bursts per channel: {end}");
         assert_eq!(d.stats().writes, 400);
-        // A read after the drain waits for the write-to-read turnaround.
-        let r = d.read(1000, 0);
-        assert!(r >= end, "read {r} before the drain ended {end}");
+        // The last write went to channel 3 (line 399); read it back there.
+        let last_wr = d.last_write_command();
+        let r = d.read(end, 399 * 64);
+        let turnaround = cfg.n_cwl + cfg.n_bl + cfg.n_wtr + 1;
+        assert!(r >= last_wr + (turnaround + cfg.n_cl + cfg.n_dqsck + cfg.n_bl) * ck, "read {r}");
     }
 }

@@ -11,17 +11,14 @@
 //! - requests enter in file order, at most one per DRAM clock;
 //! - a request waits while its channel's queue of its type holds `read_queue` (reads) or
 //!   `write_queue` (writes) requests, and nothing behind it enters meanwhile (head-of-line
-//!   blocking across channels); a read leaves its queue at its read command, a write at its
-//!   write command;
-//! - a read of a line whose write is still queued is answered one clock later from that write
-//!   (Ramulator's enqueue shortcut; here "queued" means posted since the channel's last drain);
+//!   blocking across channels); a read leaves its queue at its activate (or its read command if
+//!   its row is open), a write at its write command;
+//! - a read of a line whose write is still in the write queue is answered one clock later from
+//!   that write (Ramulator's enqueue shortcut);
 //! - after the last request the posted writes are drained; the run ends when the last read's
 //!   data has returned and the last write command has issued;
 //! - a read's latency runs from its entry to its data return; bandwidth is all bytes moved
 //!   over the run's time.
-
-use std::cmp::Reverse;
-use std::collections::{BinaryHeap, VecDeque};
 
 use std::path::Path;
 
@@ -131,75 +128,26 @@ impl StreamRun {
     }
 }
 
-/// Per-channel queue occupancy as the feeder sees it.
-#[derive(Default)]
-struct Occupancy {
-    /// Reads submitted and not yet scheduled by the model.
-    unscheduled: VecDeque<Ticket>,
-    /// Command times of scheduled reads that may still hold a queue entry.
-    reads: BinaryHeap<Reverse<Ps>>,
-    /// Command times of drained writes that may still hold a queue entry.
-    writes: BinaryHeap<Reverse<Ps>>,
-}
-
-impl Occupancy {
-    /// Drops the entries whose command issued before `t` (freed for an entry at `t`).
-    fn expire(&mut self, t: Ps) {
-        while self.reads.peek().is_some_and(|r| r.0 < t) {
-            self.reads.pop();
-        }
-        while self.writes.peek().is_some_and(|r| r.0 < t) {
-            self.writes.pop();
-        }
-    }
-}
-
-/// Moves the reads of `o` the model has scheduled (by a drain, a refresh or the feeder) to the
-/// command-time heap.
-fn sweep(d: &Dram, o: &mut Occupancy) {
-    let mut i = 0;
-    while i < o.unscheduled.len() {
-        match d.scheduled(o.unscheduled[i]) {
-            Some(a) => {
-                o.reads.push(Reverse(d.read_command_time(a)));
-                o.unscheduled.remove(i);
-            }
-            None => i += 1,
-        }
-    }
-}
-
 /// The DRAM model behind Ramulator's request queues: a request enters its channel's read or
 /// write queue only while that queue has room (`read_queue`, `write_queue` entries; a read
-/// leaves at its read command, a write at its write command). Callers ask for room, then submit.
+/// leaves the read queue at its activate, or at its read command if its row is open, a write
+/// leaves at its write command). Callers ask for room, then submit.
 pub struct QueueFeeder {
     /// The DRAM model.
     pub dram: Dram,
-    occ: Vec<Occupancy>,
     rcap: usize,
     wcap: usize,
     ck: Ps,
-    line: u64,
-    /// The latest write command's end seen so far.
-    pub write_end: Ps,
-    /// Per channel, the lines of the writes posted since its last drain.
-    queued_lines: Vec<Vec<u64>>,
 }
 
 impl QueueFeeder {
     /// A fresh DRAM of `cfg` behind empty queues.
     pub fn new(cfg: &DramConfig) -> Self {
-        let mut dram = Dram::new(cfg);
-        dram.log_writes();
         QueueFeeder {
-            dram,
-            occ: (0..cfg.channels as usize).map(|_| Occupancy::default()).collect(),
+            dram: Dram::new(cfg),
             rcap: cfg.read_queue.max(1) as usize,
             wcap: cfg.write_queue as usize,
             ck: cfg.t_ck_ps,
-            line: cfg.line_bytes.max(1) as u64,
-            write_end: 0,
-            queued_lines: vec![Vec::new(); cfg.channels as usize],
         }
     }
 
@@ -208,77 +156,53 @@ impl QueueFeeder {
         self.dram.map(addr).0
     }
 
-    fn collect_writes(&mut self) {
-        for (c, cmd) in self.dram.take_write_log() {
-            self.occ[c as usize].writes.push(Reverse(cmd));
-            self.write_end = self.write_end.max(cmd + self.ck);
-        }
+    /// The latest write command so far (a write is done at its command).
+    pub fn write_end(&self) -> Ps {
+        self.dram.last_write_command()
     }
 
-    /// `Ok` when channel `c`'s read queue has room at `t`; else the time to ask again (the
-    /// model schedules the queue's next read, whose command frees an entry).
+    /// `Ok` when channel `c`'s read queue has room at `t`; else the first time it has.
     pub fn read_room(&mut self, t: Ps, c: usize) -> Result<(), Ps> {
-        let o = &mut self.occ[c];
-        sweep(&self.dram, o);
-        o.expire(t);
-        if o.unscheduled.len() + o.reads.len() < self.rcap {
+        let cap = self.rcap;
+        self.room(t, c, move |d: &Dram| d.read_queue_len(c) < cap)
+    }
+
+    /// `Ok` when channel `c`'s write queue has room at `t`; else the first time it has.
+    pub fn write_room(&mut self, t: Ps, c: usize) -> Result<(), Ps> {
+        let cap = self.wcap;
+        self.room(t, c, move |d: &Dram| d.write_queue_len(c) < cap)
+    }
+
+    /// `Ok` when `has_room` at `t`; else the next time channel `c` can change (the channel is
+    /// never advanced past `t`, so requests of other channels' or other lists still to come at
+    /// times before that enter in order).
+    fn room(&mut self, t: Ps, c: usize, has_room: impl Fn(&Dram) -> bool) -> Result<(), Ps> {
+        self.dram.advance_to(c, t);
+        if has_room(&self.dram) {
             return Ok(());
         }
-        self.dram.schedule_next(c);
-        sweep(&self.dram, o);
-        let first = o.reads.peek().expect("a scheduled read").0;
-        Err(t.max(first + 1))
-    }
-
-    /// `Ok` when channel `c`'s write queue has room at `t`; else the time to ask again.
-    pub fn write_room(&mut self, t: Ps, c: usize) -> Result<(), Ps> {
-        loop {
-            self.occ[c].expire(t);
-            if self.dram.posted_writes(c) + self.occ[c].writes.len() < self.wcap {
-                return Ok(());
-            }
-            match self.occ[c].writes.peek() {
-                Some(first) => return Err(t.max(first.0 + 1)),
-                None => {
-                    self.dram.drain_channel(t, c);
-                    self.queued_lines[c].clear();
-                    self.collect_writes();
-                }
-            }
-        }
+        Err(self.dram.next_change(c).max(t + 1))
     }
 
     /// Queues a read of `addr` at `t` (after [`QueueFeeder::read_room`] said yes). A read of a
     /// line with a write still in the write queue is answered one clock later from that write,
     /// as Ramulator's controller does on enqueue.
     pub fn submit_read(&mut self, t: Ps, addr: u64) -> Ticket {
-        let c = self.channel(addr);
-        let line = addr / self.line;
-        if self.queued_lines[c].contains(&line) {
+        self.dram.advance_to(self.channel(addr), t);
+        if self.dram.write_queued(addr) {
             return self.dram.forwarded_read(t + self.ck);
         }
-        let k = self.dram.submit_read(t, addr);
-        self.occ[c].unscheduled.push_back(k);
-        k
+        self.dram.submit_read(t, addr)
     }
 
     /// Posts a write of `addr` at `t` (after [`QueueFeeder::write_room`] said yes).
     pub fn write(&mut self, t: Ps, addr: u64) {
-        let c = self.channel(addr);
         self.dram.write(t, addr);
-        if self.dram.posted_writes(c) == 0 {
-            self.queued_lines[c].clear();
-        } else {
-            self.queued_lines[c].push(addr / self.line);
-        }
-        self.collect_writes();
     }
 
     /// Serves every queued read and drains every write at `last`.
     pub fn flush(&mut self, last: Ps) {
         self.dram.flush(last);
-        self.queued_lines.iter_mut().for_each(Vec::clear);
-        self.collect_writes();
     }
 }
 
@@ -305,12 +229,12 @@ pub fn run_stream(cfg: &DramConfig, reqs: &[StreamRequest]) -> StreamRun {
         // The next request enters one clock later at the earliest.
         t = (t / ck + 1) * ck;
     }
-    let mut end = f.write_end;
+    let mut end = 0;
     for k in all_reads {
         end = end.max(f.dram.arrival(k));
     }
     f.flush(t);
-    end = end.max(f.write_end);
+    end = end.max(f.write_end());
     let s = f.dram.stats();
     let n = reqs.len() as u64;
     let bytes = n * cfg.line_bytes as u64;
@@ -379,10 +303,11 @@ mod tests {
     #[test]
     fn reads_enter_one_per_clock_and_wait_for_a_full_queue() {
         let cfg = DramConfig::default();
-        // 4 reads, one per channel, of closed banks: each takes RCD + CL + DQSCK + BL.
+        // 4 reads, one per channel, of closed banks: each activates on the clock after its
+        // entry, then takes RCD + CL + DQSCK + BL.
         let reqs: Vec<_> = (0..4).map(|i| StreamRequest { addr: i * 64, write: false }).collect();
         let run = run_stream(&cfg, &reqs);
-        let miss = cfg.n_rcd + cfg.n_cl + cfg.n_dqsck + cfg.n_bl;
+        let miss = 1 + cfg.n_rcd + cfg.n_cl + cfg.n_dqsck + cfg.n_bl;
         assert_eq!(run.row_misses, 4);
         // The last enters at clock 3 and is not slowed by the others (other channels).
         assert_eq!(run.dram_cycles, 3 + miss);

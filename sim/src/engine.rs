@@ -458,16 +458,48 @@ impl Engine {
         }
     }
 
+    /// Issues the agent's reads from `t` on, as long as its window and pacing allow and no
+    /// other event comes first. A read's data time is asked of the DRAM only as of the current
+    /// time ([`Dram::poll`]): while it is not known, the agent waits for the earliest time it can
+    /// be, so no channel is simulated ahead of requests other agents have yet to issue.
     fn issue(&mut self, a: usize, mut t: Ps) {
         let line = self.line;
         let window = self.specs[a].window.max(1) as usize;
         let mut wlines: Vec<(u64, Stage)> = Vec::new();
         loop {
+            // A full window waits for its oldest read's data.
+            if self.agents[a].inflight.len() >= window {
+                let old = *self.agents[a].inflight.front().expect("window > 0");
+                match self.dram.poll(old, t) {
+                    Ok(arrival) if arrival <= t => {
+                        let st = &mut self.agents[a];
+                        st.inflight.pop_front();
+                        st.last_arrival = st.last_arrival.max(arrival);
+                        self.dram.release(old);
+                        continue;
+                    }
+                    Ok(later) | Err(later) => {
+                        self.push(later, Ev::Issue(a));
+                        return;
+                    }
+                }
+            }
             let st = &mut self.agents[a];
             let job = st.job.as_ref().expect("a job");
             let frame = job.tag.frame;
             let seg = &job.segments[st.seg];
             let Some((addr, stage)) = st.cursor.next(&seg.reads, line) else {
+                // The segment ends when every read's data time is known.
+                let mut wait = None;
+                for i in 0..self.agents[a].inflight.len() {
+                    if let Err(later) = self.dram.poll(self.agents[a].inflight[i], t) {
+                        wait = Some(wait.map_or(later, |w: Ps| w.min(later)));
+                    }
+                }
+                if let Some(w) = wait {
+                    self.push(w, Ev::Issue(a));
+                    return;
+                }
                 if self.finish_segment(a, t) {
                     let rs = self.agents[a].next_rs;
                     self.start_segment(a, rs);
@@ -501,15 +533,7 @@ impl Engine {
             }
             let st = &mut self.agents[a];
             st.inflight.push_back(ticket);
-            while st.inflight.len() > window {
-                let old = st.inflight.pop_front().expect("a read in flight");
-                st.last_arrival = st.last_arrival.max(self.dram.arrival(old));
-                self.dram.release(old);
-            }
-            let mut next = t + st.interval;
-            if st.inflight.len() == window {
-                next = next.max(self.dram.arrival(*st.inflight.front().expect("window > 0")));
-            }
+            let next = t + st.interval;
             let top = self.heap.peek().map_or(Ps::MAX, |r| r.0 .0);
             if next < top {
                 t = next;

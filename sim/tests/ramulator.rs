@@ -16,28 +16,6 @@ use serde_json::Value;
 
 const REF: &str = "reference/ramulator";
 
-/// Streams that do not match yet, with the known cause: their figures are printed, not asserted.
-const KNOWN_MISMATCH: &[(&str, &str)] = &[
-    (
-        "seq_rw_5050",
-        "write mode: the model drains every posted write at once and goes back to reads, where \
-         Ramulator stays in write mode down to 6 writes and serves writes arriving meanwhile; \
-         latency and row hits match, the batches move more bytes per unit time",
-    ),
-    (
-        "rand_rw_1g",
-        "write mode as in seq_rw_5050: a drain of random writes is bound by tRRD/tRC while reads \
-         wait, where Ramulator overlaps the two modes' activates",
-    ),
-    (
-        "stride4k_read",
-        "row-hit classification: Ramulator's FRFCFS_Cap picks the oldest request whose next \
-         command is ready, so a younger conflict's precharge (ready) closes a row while older hits \
-         wait for the data bus (not ready): a quarter of its requests re-open their row (misses); \
-         the model serves hits of the open row before a conflict in the same bank",
-    ),
-];
-
 /// Fails (in CI) or skips with a message naming `path`.
 fn bad_reference(test: &str, path: &Path, why: &str) {
     neo_golden::shared::skip_or_fail(test, &format!("reference file {} is unusable: {why}", path.display()));
@@ -51,6 +29,7 @@ struct Reference {
     reads: u64,
     writes: u64,
     bandwidth_gbs: f64,
+    dram_cycles: u64,
     latency_ns: Option<f64>,
     hit_rate: f64,
     hits: u64,
@@ -83,6 +62,7 @@ fn load(test: &str) -> Option<Vec<Reference>> {
                     trace: dir.join(trace),
                     requests,
                     reads: u(s, "reads")?,
+                    dram_cycles: u(s, "dram_cycles")?,
                     writes: u(s, "writes")?,
                     bandwidth_gbs: s["bandwidth_gbs"]
                         .as_f64()
@@ -113,7 +93,9 @@ fn load(test: &str) -> Option<Vec<Reference>> {
 fn row(name: &str, r: &Reference, n: &StreamRun) -> String {
     let lat = |x: Option<f64>| x.map_or("n/a".to_string(), |v| format!("{v:.1}"));
     format!(
-        "{name:16} GB/s {:6.2} vs {:6.2} ({:+5.1}%)  lat ns {:>7} vs {:>7}  hits {:5.1}% vs {:5.1}%  h/m/c {}/{}/{} vs {}/{}/{}",
+        "{name:16} cycles {:8} vs {:8}  GB/s {:6.2} vs {:6.2} ({:+5.1}%)  lat ns {:>7} vs {:>7}  hits {:5.1}% vs {:5.1}%  h/m/c {}/{}/{} vs {}/{}/{}",
+        n.dram_cycles,
+        r.dram_cycles,
         n.bandwidth_gbs,
         r.bandwidth_gbs,
         (n.bandwidth_gbs / r.bandwidth_gbs - 1.0) * 100.0,
@@ -177,12 +159,8 @@ fn dram_model_matches_ramulator_on_every_stream() {
         if dh.abs() > 5.0 {
             off.push(format!("row-hit rate {dh:+.1} points (limit 5)"));
         }
-        if off.is_empty() {
-            continue;
-        }
-        match KNOWN_MISMATCH.iter().find(|(s, _)| *s == r.name) {
-            Some((_, cause)) => eprintln!("  KNOWN MISMATCH {}: {} ({cause})", r.name, off.join(", ")),
-            None => failures.push(format!("{}: {}", r.name, off.join(", "))),
+        if !off.is_empty() {
+            failures.push(format!("{}: {}", r.name, off.join(", ")));
         }
     }
     assert!(failures.is_empty(), "streams off Ramulator:\n{}", failures.join("\n"));

@@ -95,6 +95,8 @@ struct List {
     sent: usize,
     tickets: Vec<Ticket>,
     retry_at: Ps,
+    /// The latest data time of the reads resolved so far.
+    last: Ps,
     done_at: Option<Ps>,
 }
 
@@ -113,7 +115,15 @@ type ReqList = (Vec<u64>, bool);
 impl Wrapper {
     fn open(&mut self, addrs: Vec<u64>, write: bool) -> ListId {
         let done_at = addrs.is_empty().then_some(0);
-        self.lists.push(Some(List { addrs, write, sent: 0, tickets: Vec::new(), retry_at: 0, done_at }));
+        self.lists.push(Some(List {
+            addrs,
+            write,
+            sent: 0,
+            tickets: Vec::new(),
+            retry_at: 0,
+            last: 0,
+            done_at,
+        }));
         let id = self.lists.len() - 1;
         if done_at.is_none() {
             self.active.push(id);
@@ -143,18 +153,30 @@ impl Wrapper {
                     Err(next) => l.retry_at = next,
                 }
             }
-            if l.sent == l.addrs.len() {
-                let done = if l.write {
-                    t
-                } else {
-                    let f = &mut self.feeder;
-                    l.tickets.drain(..).map(|k| f.dram.arrival(k)).max().unwrap_or(t)
-                };
-                l.done_at = Some(done);
-                self.active.remove(i);
-            } else {
-                i += 1;
+            if l.sent == l.addrs.len() && l.retry_at <= t {
+                // A read list is done when every read's data time is known as of `t` (no channel
+                // is advanced past `t`, so later requests of other lists enter in order).
+                let f = &mut self.feeder;
+                let mut wait = Ps::MAX;
+                l.tickets.retain(|&k| match f.dram.poll(k, t) {
+                    Ok(a) => {
+                        l.last = l.last.max(a);
+                        f.dram.release(k);
+                        false
+                    }
+                    Err(later) => {
+                        wait = wait.min(later);
+                        true
+                    }
+                });
+                if l.tickets.is_empty() {
+                    l.done_at = Some(l.last.max(t));
+                    self.active.remove(i);
+                    continue;
+                }
+                l.retry_at = wait;
             }
+            i += 1;
         }
     }
 
