@@ -23,7 +23,10 @@
 //!
 //! Time is simulated lazily: a channel advances to a request's issue time when the request is
 //! submitted, and further when a read's data time is asked for ([`Dram::arrival`]); clocks on
-//! which no command can issue are skipped (the next issue time is computed, not searched).
+//! which no command can issue are skipped (the next issue time is computed, not searched). The
+//! FR-FCFS pick of the read or write queue looks, per bank with queued requests, only at the
+//! oldest request of the window that hits the open row and the oldest that does not (their ready
+//! clocks are the bank's), kept up to date as requests come and go and rows open and close.
 //! Requests arrive in non-decreasing issue time; a request submitted after its channel has
 //! already advanced past its issue time (because an earlier read's time was needed) is queued
 //! at the channel's clock, its latency still counted from its issue.
@@ -78,6 +81,116 @@ struct Req {
     write: bool,
     /// No command issued for it yet (its row outcome is counted at the first).
     first: bool,
+    /// Position in its queue's order of entry (read and write queues; [`Index`]).
+    seq: u64,
+}
+
+/// No request.
+const NONE: u64 = u64::MAX;
+
+/// Per bank, the requests of a read or write queue and, within the scheduler's window (its
+/// first `window` requests), the oldest that hits the bank's open row and the oldest that does
+/// not. A request's ready clock depends only on its bank and on whether it hits (the queue's
+/// requests are all reads or all writes), so the FR-FCFS pick needs only these two per bank.
+#[derive(Clone, Debug, Default)]
+struct Index {
+    /// Per bank, `(seq, row)` of its queued requests in entry order.
+    lists: Vec<VecDeque<(u64, u32)>>,
+    /// Bit set of the banks whose list is not empty (64 banks a word).
+    live: Vec<u64>,
+    /// Per bank, the oldest hit and the oldest other request in the window (`NONE` if none);
+    /// each valid unless its `dirty` flag is set.
+    hit: Vec<u64>,
+    other: Vec<u64>,
+    dirty_hit: Vec<bool>,
+    dirty_other: Vec<bool>,
+    /// The next request's `seq`.
+    next_seq: u64,
+}
+
+impl Index {
+    fn new(banks: usize) -> Self {
+        Index {
+            lists: vec![VecDeque::new(); banks],
+            live: vec![0; banks.div_ceil(64)],
+            hit: vec![NONE; banks],
+            other: vec![NONE; banks],
+            dirty_hit: vec![false; banks],
+            dirty_other: vec![false; banks],
+            next_seq: 0,
+        }
+    }
+
+    /// Request `(seq, bank, row)`, the youngest in the window, entered it.
+    fn enter(&mut self, seq: u64, bank: u32, row: u32, open: u32) {
+        let b = bank as usize;
+        let (class, dirty) = if open == row {
+            (&mut self.hit[b], self.dirty_hit[b])
+        } else {
+            (&mut self.other[b], self.dirty_other[b])
+        };
+        if !dirty && *class == NONE {
+            *class = seq;
+        }
+    }
+
+    /// Request `(seq, bank)` left the queue.
+    fn leave(&mut self, seq: u64, bank: u32) {
+        let b = bank as usize;
+        let list = &mut self.lists[b];
+        let p = list.iter().position(|e| e.0 == seq).expect("an indexed request");
+        list.remove(p);
+        if list.is_empty() {
+            self.live[b / 64] &= !(1 << (b % 64));
+        }
+        if self.hit[b] == seq {
+            self.dirty_hit[b] = true;
+        } else if self.other[b] == seq {
+            self.dirty_other[b] = true;
+        }
+    }
+
+    /// Bank `b`'s open row changed: both its requests are to be found again.
+    fn reopen(&mut self, b: usize) {
+        self.dirty_hit[b] = true;
+        self.dirty_other[b] = true;
+    }
+
+    /// Recomputes bank `b`'s requests that need it: the window ends at request `bound`.
+    fn clean(&mut self, b: usize, bound: u64, open: u32) {
+        let (dh, dother) = (self.dirty_hit[b], self.dirty_other[b]);
+        if !dh && !dother {
+            return;
+        }
+        // A clean class counts as found.
+        let (mut h, mut o) = (NONE, NONE);
+        let (mut need_h, mut need_o) = (dh, dother);
+        for &(s, row) in &self.lists[b] {
+            if s > bound {
+                break;
+            }
+            if open == row {
+                if need_h {
+                    h = s;
+                    need_h = false;
+                }
+            } else if need_o {
+                o = s;
+                need_o = false;
+            }
+            if !need_h && !need_o {
+                break;
+            }
+        }
+        if dh {
+            self.hit[b] = h;
+            self.dirty_hit[b] = false;
+        }
+        if dother {
+            self.other[b] = o;
+            self.dirty_other[b] = false;
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -98,6 +211,17 @@ enum Q {
     Write,
 }
 
+impl Q {
+    /// The [`Channel::idx`] of the read or write queue.
+    fn index(self) -> usize {
+        match self {
+            Q::Read => 0,
+            Q::Write => 1,
+            Q::Act => unreachable!("the activate queue has no index"),
+        }
+    }
+}
+
 #[derive(Clone, Debug, Default)]
 struct Channel {
     /// Clocks ticked.
@@ -115,6 +239,8 @@ struct Channel {
     readq: VecDeque<Req>,
     writeq: VecDeque<Req>,
     actq: VecDeque<Req>,
+    /// Indexes of the read and write queues.
+    idx: [Index; 2],
     /// Refreshes queued.
     ref_pending: u32,
     /// Clock of the last refresh request.
@@ -257,17 +383,9 @@ pub struct Dram {
     ideal: Option<Ps>,
     stats: DramStats,
     /// Scratch buffers of [`Dram::plan`].
-    scratch: [Vec<Clk>; 2],
-    bank_scratch: Vec<BankReady>,
-}
-
-/// A bank's readiness for each kind of request ([`Dram::bank_table`]).
-#[derive(Clone, Copy, Debug, Default)]
-struct BankReady {
-    open: u32,
-    rd: Clk,
-    wr: Clk,
-    other: Clk,
+    scratch: Vec<Clk>,
+    /// `(ready clock, seq)` of each candidate of the queue served ([`Dram::scan_classes`]).
+    cands: Vec<(Clk, u64)>,
 }
 
 impl Dram {
@@ -295,7 +413,11 @@ impl Dram {
             rfc: cfg.n_rfc,
         };
         let channels = (0..cfg.channels)
-            .map(|_| Channel { banks: vec![Bank::default(); cfg.banks as usize], ..Channel::default() })
+            .map(|_| Channel {
+                banks: vec![Bank::default(); cfg.banks as usize],
+                idx: [Index::new(cfg.banks as usize), Index::new(cfg.banks as usize)],
+                ..Channel::default()
+            })
             .collect();
         let wq = cfg.write_queue as f64;
         Dram {
@@ -319,8 +441,8 @@ impl Dram {
             ticket_place: Vec::new(),
             ideal: None,
             stats: DramStats::default(),
-            scratch: [Vec::new(), Vec::new()],
-            bank_scratch: Vec::new(),
+            scratch: Vec::new(),
+            cands: Vec::new(),
         }
     }
 
@@ -387,7 +509,7 @@ impl Dram {
         let req = self.request(t, addr, false, ticket);
         let c = self.ticket_channel[ticket as usize] as usize;
         self.arrivals[ticket as usize] = PENDING;
-        self.channels[c].readq.push_back(req);
+        self.push(c, Q::Read, req);
         self.replan_after_push(c, Q::Read);
         Ticket(ticket)
     }
@@ -400,7 +522,7 @@ impl Dram {
         }
         let req = self.request(t, addr, true, u32::MAX);
         let c = self.map(addr).0;
-        self.channels[c].writeq.push_back(req);
+        self.push(c, Q::Write, req);
         self.replan_after_push(c, Q::Write);
     }
 
@@ -422,6 +544,23 @@ impl Dram {
             ticket,
             write,
             first: true,
+            seq: 0,
+        }
+    }
+
+    /// Appends `r` to read or write queue `q` of channel `c`.
+    fn push(&mut self, c: usize, q: Q, mut r: Req) {
+        let window = self.window;
+        let ch = &mut self.channels[c];
+        let ix = &mut ch.idx[q.index()];
+        r.seq = ix.next_seq;
+        ix.next_seq += 1;
+        ix.lists[r.bank as usize].push_back((r.seq, r.row));
+        ix.live[r.bank as usize / 64] |= 1 << (r.bank % 64);
+        let queue = if q == Q::Read { &mut ch.readq } else { &mut ch.writeq };
+        queue.push_back(r);
+        if queue.len() <= window {
+            ix.enter(r.seq, r.bank, r.row, ch.banks[r.bank as usize].open);
         }
     }
 
@@ -704,102 +843,146 @@ impl Dram {
         Some((o, cmd, at <= now))
     }
 
-    /// Per bank of channel `c`, the open row and the clock from which a read hit, a write hit
-    /// and a request of another row (activate or precharge) can issue its next command (`NEVER`
-    /// for hits of a row past the cap).
-    fn bank_table(&self, c: usize, out: &mut Vec<BankReady>) {
+    /// The clock from which request `r` of channel `c` can issue its next command as a
+    /// candidate of FR-FCFS (`NEVER` for a hit of a row past the cap, which can issue only as
+    /// the oldest).
+    fn ready(&self, c: usize, r: &Req) -> Clk {
         let ch = &self.channels[c];
-        out.clear();
-        out.extend(ch.banks.iter().map(|b| {
-            let capped = b.open != CLOSED && b.hits > self.cap;
-            BankReady {
-                open: b.open,
-                rd: if capped { NEVER } else { b.rd.max(ch.rd) },
-                wr: if capped { NEVER } else { b.wr.max(ch.wr) },
-                other: if b.open == CLOSED { b.act.max(ch.act) } else { b.pre.max(ch.pre) },
+        let b = &ch.banks[r.bank as usize];
+        if b.open == r.row {
+            if b.open != CLOSED && b.hits > self.cap {
+                NEVER
+            } else if r.write {
+                b.wr.max(ch.wr)
+            } else {
+                b.rd.max(ch.rd)
             }
-        }));
+        } else if b.open == CLOSED {
+            b.act.max(ch.act)
+        } else {
+            b.pre.max(ch.pre)
+        }
     }
 
-    /// The earliest clock at which a head of queue `q` can issue (its state otherwise
-    /// unchanged), with each of its first `window` requests' ready clock (`NEVER` for a capped
-    /// hit, which can issue only as the oldest) in `ready`, and the index of the oldest.
-    fn scan(&self, c: usize, q: Q, banks: &[BankReady], ready: &mut Vec<Clk>) -> (Clk, Option<usize>) {
-        let queue = self.queue(c, q);
+    /// The earliest clock at which a head of the activate queue can issue (its state otherwise
+    /// unchanged), with each of its first `window` requests' ready clock in `ready`, and the
+    /// index of the oldest.
+    fn scan_act(&self, c: usize, ready: &mut Vec<Clk>) -> (Clk, Option<usize>) {
+        let queue = &self.channels[c].actq;
         ready.clear();
         let mut next = NEVER;
         for r in queue.iter().take(self.window) {
-            let b = &banks[r.bank as usize];
-            let hit = if r.write { b.wr } else { b.rd };
-            let at = if b.open == r.row { hit } else { b.other };
+            let at = self.ready(c, r);
             ready.push(at);
             next = next.min(at);
         }
-        let oldest = if q == Q::Act {
-            (0..ready.len()).min_by_key(|&i| (queue[i].arrive, i))
-        } else {
-            // Read and write queues are in age order.
-            (!ready.is_empty()).then_some(0)
-        };
+        let oldest = (0..ready.len()).min_by_key(|&i| (queue[i].arrive, i));
         if let Some(o) = oldest {
             next = next.min(self.next_cmd(c, &queue[o]).1);
         }
         (next, oldest)
     }
 
-    /// FRFCFS_Cap's pick of queue `q` at clock `now` from a [`Dram::scan`] of it: the oldest
-    /// ready request, else the oldest if its command can issue.
-    fn pick_at(&self, c: usize, q: Q, ready: &[Clk], oldest: Option<usize>, now: Clk) -> Option<usize> {
-        let queue = self.queue(c, q);
+    /// FRFCFS_Cap's pick of the activate queue at clock `now` from a [`Dram::scan_act`] of it:
+    /// the oldest ready request, else the oldest if its command can issue.
+    fn pick_act(&self, c: usize, ready: &[Clk], oldest: Option<usize>, now: Clk) -> Option<usize> {
+        let queue = &self.channels[c].actq;
         let mut best: Option<usize> = None;
         for (i, &at) in ready.iter().enumerate() {
             if at <= now && best.is_none_or(|b| queue[i].arrive < queue[b].arrive) {
                 best = Some(i);
-                if q != Q::Act {
-                    // Read and write queues are in age order.
-                    break;
-                }
             }
         }
         best.or_else(|| oldest.filter(|&o| self.next_cmd(c, &queue[o]).1 <= now))
     }
 
+    /// The candidates of read or write queue `q` (in age order): per bank, the oldest hit and
+    /// the oldest other request of the window, each with its ready clock, into `cands`; returns
+    /// the earliest clock at which a head of the queue can issue (the oldest request included,
+    /// capped or not).
+    fn scan_classes(&mut self, c: usize, q: Q, cands: &mut Vec<(Clk, u64)>) -> Clk {
+        cands.clear();
+        let window = self.window;
+        let ch = &mut self.channels[c];
+        let queue = if q == Q::Read { &ch.readq } else { &ch.writeq };
+        let Some(front) = queue.front() else { return NEVER };
+        let bound = queue[queue.len().min(window) - 1].seq;
+        let front = *front;
+        let ix = &mut ch.idx[q.index()];
+        let write = q == Q::Write;
+        let mut next = NEVER;
+        for w in 0..ix.live.len() {
+            let mut bits = ix.live[w];
+            while bits != 0 {
+                let i = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let b = &ch.banks[i];
+                ix.clean(i, bound, b.open);
+                let (h, o) = (ix.hit[i], ix.other[i]);
+                if h != NONE {
+                    let at = if b.open != CLOSED && b.hits > self.cap {
+                        NEVER
+                    } else if write {
+                        b.wr.max(ch.wr)
+                    } else {
+                        b.rd.max(ch.rd)
+                    };
+                    cands.push((at, h));
+                    next = next.min(at);
+                }
+                if o != NONE {
+                    let at = if b.open == CLOSED { b.act.max(ch.act) } else { b.pre.max(ch.pre) };
+                    cands.push((at, o));
+                    next = next.min(at);
+                }
+            }
+        }
+        next.min(self.next_cmd(c, &front).1)
+    }
+
+    /// FRFCFS_Cap's pick of read or write queue `q` at clock `now` from its
+    /// [`Dram::scan_classes`]: the oldest ready request, else the oldest if its command can
+    /// issue; as an index into the queue.
+    fn pick_classes(&self, c: usize, q: Q, cands: &[(Clk, u64)], now: Clk) -> Option<usize> {
+        let queue = self.queue(c, q);
+        let best = cands.iter().filter(|&&(at, _)| at <= now).map(|&(_, s)| s).min();
+        match best {
+            // Mostly the oldest.
+            Some(s) if queue[0].seq == s => Some(0),
+            Some(s) => Some(queue.binary_search_by_key(&s, |r| r.seq).expect("an indexed request")),
+            None => queue.front().filter(|r| self.next_cmd(c, r).1 <= now).map(|_| 0),
+        }
+    }
+
     /// What channel `c` does next if no request arrives first: the clock (after its current
     /// one) and the command, as [`Dram::tick`] would choose it then.
     fn plan(&mut self, c: usize) -> Plan {
-        let mut ready_a = std::mem::take(&mut self.scratch[0]);
-        let mut ready_q = std::mem::take(&mut self.scratch[1]);
-        let mut banks = std::mem::take(&mut self.bank_scratch);
-        self.bank_table(c, &mut banks);
-        let ch = &self.channels[c];
-        let t_ref = ch.refreshed.saturating_add(self.t.refi);
-        let (next_a, oldest_a) = self.scan(c, Q::Act, &banks, &mut ready_a);
+        let mut ready_a = std::mem::take(&mut self.scratch);
+        let mut cands = std::mem::take(&mut self.cands);
+        let t_ref = self.channels[c].refreshed.saturating_add(self.t.refi);
+        let (next_a, oldest_a) = self.scan_act(c, &mut ready_a);
         let mode = self.mode_queue(c);
-        let (mut next, mut oldest_q) = (next_a, None);
-        let refresh = (ch.ref_pending > 0).then(|| self.refresh_cmd(c));
+        let mut next = next_a;
+        let refresh = (self.channels[c].ref_pending > 0).then(|| self.refresh_cmd(c));
         match refresh {
             Some((_, at)) => next = next.min(at),
-            None => {
-                let (next_q, o) = self.scan(c, mode, &banks, &mut ready_q);
-                next = next.min(next_q);
-                oldest_q = o;
-            }
+            None => next = next.min(self.scan_classes(c, mode, &mut cands)),
         }
-        let at = next.min(t_ref).max(ch.clk + 1);
+        let at = next.min(t_ref).max(self.channels[c].clk + 1);
         let pick = if at >= t_ref {
             Pick::Slow
-        } else if let Some(i) = self.pick_at(c, Q::Act, &ready_a, oldest_a, at) {
+        } else if let Some(i) = self.pick_act(c, &ready_a, oldest_a, at) {
             Pick::Issue(Q::Act, i, self.next_cmd(c, &self.channels[c].actq[i]).0)
         } else if let Some((cmd, _)) = refresh {
             Pick::Refresh(cmd)
         } else {
-            match self.pick_at(c, mode, &ready_q, oldest_q, at) {
+            match self.pick_classes(c, mode, &cands, at) {
                 Some(i) => Pick::Issue(mode, i, self.next_cmd(c, &self.queue(c, mode)[i]).0),
                 None => Pick::Slow,
             }
         };
-        self.scratch = [ready_a, ready_q];
-        self.bank_scratch = banks;
+        self.scratch = ready_a;
+        self.cands = cands;
         Plan { at, pick }
     }
 
@@ -896,6 +1079,13 @@ impl Dram {
         let r = *r;
         if matches!(cmd, Cmd::Act | Cmd::Rd | Cmd::Wr) {
             queue.remove(i);
+            if q != Q::Act {
+                let ix = &mut ch.idx[q.index()];
+                ix.leave(r.seq, r.bank);
+                if let Some(e) = queue.get(self.window - 1) {
+                    ix.enter(e.seq, e.bank, e.row, ch.banks[e.bank as usize].open);
+                }
+            }
         }
         if cmd == Cmd::Act {
             // Ramulator promotes the request to the activate queue.
@@ -937,6 +1127,8 @@ impl Dram {
                 let bank = &mut ch.banks[b];
                 bank.open = row;
                 bank.hits = 0;
+                ch.idx[0].reopen(b);
+                ch.idx[1].reopen(b);
                 up(&mut bank.rd, now + t.rcd);
                 up(&mut bank.wr, now + t.rcd);
                 up(&mut bank.act, now + t.rc);
@@ -948,6 +1140,8 @@ impl Dram {
                 let bank = &mut ch.banks[b];
                 bank.open = CLOSED;
                 up(&mut bank.act, now + t.rp);
+                ch.idx[0].reopen(b);
+                ch.idx[1].reopen(b);
             }
             Cmd::Rd => {
                 up(&mut ch.rd, now + t.ccd);
@@ -970,6 +1164,10 @@ impl Dram {
                 up(&mut ch.refresh, now + t.rpab);
                 for bank in ch.banks.iter_mut() {
                     bank.open = CLOSED;
+                }
+                for ix in ch.idx.iter_mut() {
+                    ix.dirty_hit.fill(true);
+                    ix.dirty_other.fill(true);
                 }
             }
             Cmd::Ref => {
