@@ -125,6 +125,17 @@ pub fn pipeline_config(strategy: Strategy, p: &PipelineParams, raster: GoldenRas
     cfg
 }
 
+/// The work-only pipeline's configuration (no golden raster) and the artifact's number formats,
+/// for both of [`WorkDriver`]'s constructors.
+fn work_config(
+    strategy: Strategy,
+    params: &PipelineParams,
+) -> Result<(PipelineConfig, Formats), DriverError> {
+    let cfg = pipeline_config(strategy, params, GoldenRaster::Off);
+    let formats = Formats::artifact(cfg.chunk)?;
+    Ok((cfg, formats))
+}
+
 /// The work-only state of a strategy along a trajectory: golden's pipeline in its work-only
 /// mode.
 pub struct WorkDriver<'s> {
@@ -143,8 +154,7 @@ impl<'s> WorkDriver<'s> {
         hierarchical: bool,
         raster_sample: u32,
     ) -> Result<Self, DriverError> {
-        let cfg = pipeline_config(strategy, params, GoldenRaster::Off);
-        let formats = Formats::artifact(cfg.chunk)?;
+        let (cfg, formats) = work_config(strategy, params)?;
         let pipeline = Pipeline::new(scene, cfg, formats, width, height)?;
         Ok(WorkDriver { pipeline, options: WorkOptions { hierarchical, raster_sample } })
     }
@@ -160,8 +170,7 @@ impl<'s> WorkDriver<'s> {
         hierarchical: bool,
         raster_sample: u32,
     ) -> Result<Self, DriverError> {
-        let cfg = pipeline_config(strategy, params, GoldenRaster::Off);
-        let formats = Formats::artifact(cfg.chunk)?;
+        let (cfg, formats) = work_config(strategy, params)?;
         let pipeline = Pipeline::for_shared_inputs(scene, cfg, formats, width, height)?;
         Ok(WorkDriver { pipeline, options: WorkOptions { hierarchical, raster_sample } })
     }
