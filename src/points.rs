@@ -268,11 +268,24 @@ impl PointRunner for ProgressRunner<'_> {
         what: &str,
     ) -> Result<Vec<(PointResult, f64)>, String> {
         let started = self.started;
-        // Throughput runs print their table as soon as they are done.
+        // Throughput runs print their table as soon as they are done, and the last of them the
+        // table of all.
+        let n_headline = jobs.iter().filter(|j| j.headline).count();
+        let headline = Mutex::new(Vec::new());
         let log = move |j: &PointJob, r: &PointResult, label: &str| {
             Self::log(started, r, label);
-            if j.headline {
-                println!("{}", neo_sim::report::point_table(r));
+            if !j.headline {
+                return;
+            }
+            println!("{}", neo_sim::report::point_table(r));
+            let mut done = headline.lock().expect("headline results");
+            done.push(r.clone());
+            if done.len() == n_headline {
+                println!(
+                    "throughput runs done in {:.0} s:\n{}",
+                    started.elapsed().as_secs_f64(),
+                    neo_sim::report::headline_table(&done)
+                );
             }
         };
         run_jobs(&mut self.scenes, jobs, self.cfg, self.lat, raster_sample, what, &log)

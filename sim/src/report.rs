@@ -275,6 +275,39 @@ pub fn point_table(r: &PointResult) -> String {
     s
 }
 
+/// The throughput runs in one plain-text table (scene, resolution, architecture, FPS, speedup
+/// of Neo, DRAM GB per 60 frames): what `neo report` prints as soon as they are done.
+pub fn headline_table(runs: &[PointResult]) -> String {
+    let mut s = String::new();
+    let w = runs.iter().map(|r| scene_name(&r.point.scene).len()).max().unwrap_or(0).max(5);
+    let _ =
+        writeln!(s, "{:<w$} {:<9} {:<9} {:>8} {:>9} {:>9}", "scene", "res", "arch", "FPS", "Neo vs", "GB/60");
+    let mut runs: Vec<&PointResult> = runs.iter().collect();
+    runs.sort_by(|a, b| {
+        (a.point.scene.as_str(), res_order(&a.point.res))
+            .cmp(&(b.point.scene.as_str(), res_order(&b.point.res)))
+    });
+    for r in runs {
+        let neo = r.arch("neo");
+        let mut archs: Vec<&ArchResult> = r.archs.iter().collect();
+        archs.sort_by_key(|a| arch_order(&a.arch));
+        for a in archs {
+            let sp = neo.map_or("-".into(), |n| format!("{:.2}x", speedup(n, a)));
+            let _ = writeln!(
+                s,
+                "{:<w$} {:<9} {:<9} {:>8} {:>9} {:>9}",
+                scene_name(&r.point.scene),
+                r.point.res,
+                a.arch,
+                f1(a.fps),
+                sp,
+                f2(a.gb_per_60(None))
+            );
+        }
+    }
+    s
+}
+
 /// Renders the report: the markdown and the SVG files `(name, content)`.
 pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String> {
     let mut md = String::new();

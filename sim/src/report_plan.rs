@@ -8,9 +8,10 @@
 //! 3. the speed/error sweep over strategies, chunk sizes, DPS passes and camera speeds, with the
 //!    golden raster on for PSNR (or point results read from files).
 //!
-//! The steps run as one set of jobs ([`PointJob`]), so that the architectures of one point run
-//! while the next workloads are generated, and points that share their cameras generate their
-//! workloads together, each frame preprocessed and binned once ([`crate::suite::workloads`]): the
+//! The steps run as jobs ([`PointJob`]) in two sets: the throughput runs (with the timelines that
+//! share their cameras) first, so that their table is out early, then the rest. Within a set,
+//! the architectures of one point run while the next workloads are generated, and points that
+//! share their cameras generate their workloads together, each frame preprocessed and binned once ([`crate::suite::workloads`]): the
 //! throughput run at the timeline resolution with the compared strategies, the sweep's points
 //! of one camera speed. Every point's result is the one it has when run alone.
 //!
@@ -128,8 +129,8 @@ pub struct ReportPlan {
 pub struct ReportTimes {
     /// Throughput and traffic runs (until the last is done).
     pub headline_s: f64,
-    /// Timelines: from the end of the throughput runs to the end of the last timeline (every
-    /// step runs in one set of jobs).
+    /// Timelines: from the end of the throughput runs to the end of the last timeline (those
+    /// that share the throughput runs' cameras run with them).
     pub timelines_s: f64,
     /// Sweep: from the end of the steps before to the end of the last sweep point.
     pub sweep_s: f64,
@@ -231,8 +232,8 @@ impl ReportPlan {
         let mut times = ReportTimes::default();
         let sample = self.spec.raster_sample;
 
-        // Every step in one set of jobs, in order: throughput runs, Neo's timeline unless a
-        // throughput run is it, the compared strategies' timelines, the sweep.
+        // Every step's jobs, in order: throughput runs, Neo's timeline unless a throughput run
+        // is it, the compared strategies' timelines, the sweep.
         let main_scene = &self.scenes[0];
         let job = |point: &Point, archs: Vec<Arch>, golden, headline| PointJob {
             point: point.clone(),
@@ -251,7 +252,7 @@ impl ReportPlan {
         jobs.extend(self.timelines.iter().map(|p| job(p, vec![Arch::Neo], off, false)));
         let n_sweep = self.sweep.len();
         jobs.extend(self.sweep.iter().map(|p| job(p, vec![Arch::Neo], GoldenRaster::Exact, false)));
-        let mut done = runner.run_many(&jobs, sample, "report")?;
+        let mut done = run_headline_first(runner, &jobs, sample)?;
         let swept = done.split_off(done.len() - n_sweep);
         let timed = done.split_off(self.headline.len());
         let last = |d: &[(PointResult, f64)]| d.iter().map(|x| x.1).fold(0.0, f64::max);
@@ -307,6 +308,38 @@ impl ReportPlan {
     }
 }
 
+/// Runs `jobs` in two sets: first the throughput runs (`headline`) with the jobs that share
+/// their cameras (generated with them, [`crate::suite::workloads`]), then the others, so that the
+/// throughput runs are not slowed by the generation of later workloads. Returns, in the order
+/// of `jobs`, each result and the seconds from the first set's start to its end (the second set
+/// starting when the first's last job ends).
+fn run_headline_first(
+    runner: &mut dyn PointRunner,
+    jobs: &[PointJob],
+    sample: u32,
+) -> Result<Vec<(PointResult, f64)>, String> {
+    let first_set = |j: &PointJob| {
+        j.headline || jobs.iter().any(|h| h.headline && h.point.camera_key() == j.point.camera_key())
+    };
+    let (first, rest): (Vec<usize>, Vec<usize>) = (0..jobs.len()).partition(|&k| first_set(&jobs[k]));
+    let pick = |ks: &[usize]| ks.iter().map(|&k| jobs[k].clone()).collect::<Vec<_>>();
+    let mut out: Vec<Option<(PointResult, f64)>> = vec![None; jobs.len()];
+    // The second set starts when the first's last job ends.
+    let mut offset = 0.0;
+    for (set, what) in [(first, "throughput"), (rest, "report")] {
+        if set.is_empty() {
+            continue;
+        }
+        let mut end: f64 = 0.0;
+        for (k, (r, t)) in set.iter().zip(runner.run_many(&pick(&set), sample, what)?) {
+            out[*k] = Some((r, offset + t));
+            end = end.max(t);
+        }
+        offset += end;
+    }
+    Ok(out.into_iter().map(|r| r.expect("every job ran")).collect())
+}
+
 /// The point results (`*.json` written by `neo simulate --out DIR`) in `dir`, by file name.
 pub fn read_point_results(dir: &Path) -> Result<Vec<PointResult>, String> {
     let entries =
@@ -327,4 +360,80 @@ pub fn read_point_results(dir: &Path) -> Result<Vec<PointResult>, String> {
         return Err(format!("{}: no point results (*.json from `neo simulate --out DIR`)", dir.display()));
     }
     Ok(results)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Records each set of jobs it is given and returns a result per job, ending 1 s after the
+    /// set's start.
+    #[derive(Default)]
+    struct Recorder(Vec<Vec<PointJob>>);
+
+    impl PointRunner for Recorder {
+        fn run_many(
+            &mut self,
+            jobs: &[PointJob],
+            _: u32,
+            _: &str,
+        ) -> Result<Vec<(PointResult, f64)>, String> {
+            self.0.push(jobs.to_vec());
+            let result = |j: &PointJob| PointResult {
+                point: j.point.clone(),
+                workload: Default::default(),
+                quality: Default::default(),
+                archs: Vec::new(),
+            };
+            Ok(jobs.iter().map(|j| (result(j), 1.0)).collect())
+        }
+    }
+
+    fn spec() -> ReportSpec {
+        ReportSpec {
+            scenes: Vec::new(),
+            default_scene: true,
+            trajectory: "orbit".into(),
+            frames: 3,
+            res: vec!["hd".into(), "fhd".into()],
+            timeline_res: "fhd".into(),
+            timeline_sort: vec!["periodic:4".into(), "hierarchical".into()],
+            sweep: Some(SweepSpec {
+                scene: "synthetic:outdoor?gaussians=10k&seed=1".into(),
+                res: "128x64".into(),
+                frames: 2,
+                strategies: vec!["neo".into()],
+                chunks: vec![64, 128],
+                passes: vec![1],
+                speeds: vec![1.0],
+            }),
+            raster_sample: 16,
+        }
+    }
+
+    #[test]
+    fn throughput_runs_and_the_timelines_sharing_their_cameras_run_first() {
+        let plan = ReportPlan::new(spec(), &SimConfig::default()).expect("plan");
+        let mut runner = Recorder::default();
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(latency::DEFAULT_PATH);
+        let lat = Latency::from_file(&file).expect("reports/latency.json");
+        let (data, times) = plan.run(&mut runner, &lat, Vec::new()).expect("runs");
+        let strategies = |set: &[PointJob]| {
+            set.iter().map(|j| (j.point.res.clone(), j.point.strategy.clone())).collect::<Vec<_>>()
+        };
+        assert_eq!(runner.0.len(), 2);
+        assert_eq!(
+            strategies(&runner.0[0]),
+            [("hd", "neo"), ("fhd", "neo"), ("fhd", "periodic:4"), ("fhd", "hierarchical")]
+                .map(|(r, s)| (r.to_string(), s.to_string()))
+        );
+        assert!(runner.0[1].iter().all(|j| j.golden == GoldenRaster::Exact && !j.headline));
+        assert_eq!(runner.0[1].len(), 2);
+        // Results in the plan's order; the second set ends 1 s after the first.
+        assert_eq!(data.headline.iter().map(|r| r.point.res.as_str()).collect::<Vec<_>>(), ["hd", "fhd"]);
+        let timeline: Vec<&str> = data.timelines.iter().map(|r| r.point.strategy.as_str()).collect();
+        assert_eq!(timeline, ["neo", "periodic:4", "hierarchical"]);
+        assert_eq!(data.sweep.iter().map(|r| r.point.chunk).collect::<Vec<_>>(), [64, 128]);
+        assert_eq!((times.headline_s, times.timelines_s, times.sweep_s), (1.0, 0.0, 1.0));
+    }
 }

@@ -27,9 +27,9 @@ pub struct ReportArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub trajectory: TrajectoryArg,
-    /// Frames of the throughput, traffic and timeline runs.
-    #[arg(long, default_value_t = 24)]
-    pub frames: usize,
+    /// Frames of the throughput, traffic and timeline runs (default: 24, or 60 with `--full`).
+    #[arg(long)]
+    pub frames: Option<usize>,
     /// Resolutions of the throughput and traffic runs.
     #[arg(long, default_value = "hd,fhd,qhd", value_delimiter = ',', value_parser = resolution)]
     pub res: Vec<String>,
@@ -46,9 +46,9 @@ pub struct ReportArgs {
     /// Resolution of the sweep.
     #[arg(long, default_value = "448x256", value_parser = resolution)]
     pub sweep_res: String,
-    /// Frames per sweep point.
-    #[arg(long, default_value_t = 5)]
-    pub sweep_frames: usize,
+    /// Frames per sweep point (default: 5, or 12 with `--full`).
+    #[arg(long)]
+    pub sweep_frames: Option<usize>,
     /// Strategies of the sweep.
     #[arg(
         long,
@@ -72,6 +72,10 @@ pub struct ReportArgs {
     /// Skip the sweep.
     #[arg(long)]
     pub no_sweep: bool,
+    /// The paper-scale run: 60 frames per throughput, traffic and timeline run (the paper's
+    /// 60-frame sequences), 12 per sweep point (each default is overridden by its own option).
+    #[arg(long)]
+    pub full: bool,
     #[command(flatten)]
     pub model: ModelArgs,
     /// Leave the default scene out (only the `--scene`s; for quick checks).
@@ -79,13 +83,24 @@ pub struct ReportArgs {
     pub no_default_scene: bool,
 }
 
+/// Frames per throughput, traffic and timeline run: by default, and with `--full`.
+pub const FRAMES: (usize, usize) = (24, 60);
+
+/// Frames per sweep point: by default, and with `--full`.
+pub const SWEEP_FRAMES: (usize, usize) = (5, 12);
+
 impl ReportArgs {
+    /// `default`'s first value, or its second with `--full`, unless `given`.
+    fn scaled(&self, given: Option<usize>, default: (usize, usize)) -> usize {
+        given.unwrap_or(if self.full { default.1 } else { default.0 })
+    }
+
     /// The report's plan specification.
     fn spec(&self) -> ReportSpec {
         let sweep = (!self.no_sweep && self.sweep_results.is_none()).then(|| SweepSpec {
             scene: self.sweep_scene.clone(),
             res: self.sweep_res.clone(),
-            frames: self.sweep_frames,
+            frames: self.scaled(self.sweep_frames, SWEEP_FRAMES),
             strategies: self.sweep_sort.clone(),
             chunks: self.sweep_chunk.clone(),
             passes: self.sweep_passes.clone(),
@@ -95,7 +110,7 @@ impl ReportArgs {
             scenes: self.scene.clone(),
             default_scene: !self.no_default_scene,
             trajectory: self.trajectory.trajectory.clone(),
-            frames: self.frames,
+            frames: self.scaled(self.frames, FRAMES),
             res: self.res.clone(),
             timeline_res: self.timeline_res.clone(),
             timeline_sort: self.timeline_sort.clone(),
@@ -158,6 +173,34 @@ mod tests {
     use super::*;
     use neo_sim::latency;
 
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(subcommand)]
+        command: Top,
+    }
+
+    #[derive(clap::Subcommand)]
+    enum Top {
+        Report(ReportArgs),
+    }
+
+    fn spec_of(args: &[&str]) -> ReportSpec {
+        use clap::Parser;
+        let argv = ["neo", "report"].into_iter().chain(args.iter().copied());
+        let Top::Report(a) = Cli::try_parse_from(argv).expect("parses").command;
+        a.spec()
+    }
+
+    #[test]
+    fn full_scales_the_frames_unless_they_are_given() {
+        let frames = |s: ReportSpec| (s.frames, s.sweep.expect("a sweep").frames);
+        assert_eq!(frames(spec_of(&[])), (FRAMES.0, SWEEP_FRAMES.0));
+        assert_eq!(frames(spec_of(&["--full"])), (FRAMES.1, SWEEP_FRAMES.1));
+        assert_eq!(frames(spec_of(&["--full", "--frames", "7"])), (7, SWEEP_FRAMES.1));
+        assert_eq!(frames(spec_of(&["--sweep-frames", "3"])), (FRAMES.0, 3));
+        assert!(FRAMES.0 < FRAMES.1 && SWEEP_FRAMES.0 < SWEEP_FRAMES.1);
+    }
+
     #[test]
     fn a_tiny_report_writes_index_and_figures() {
         let dir = tempfile::tempdir().unwrap();
@@ -165,19 +208,20 @@ mod tests {
             scene: vec!["synthetic:outdoor?gaussians=10k&seed=2".into()],
             out: dir.path().to_path_buf(),
             trajectory: TrajectoryArg { trajectory: "orbit".into() },
-            frames: 3,
+            frames: Some(3),
             res: vec!["128x64".into()],
             timeline_res: "128x64".into(),
             timeline_sort: vec!["periodic:2".into()],
             sweep_scene: "synthetic:outdoor?gaussians=10k&seed=1".into(),
             sweep_res: "128x64".into(),
-            sweep_frames: 2,
+            sweep_frames: Some(2),
             sweep_sort: vec!["neo".into(), "hierarchical".into()],
             sweep_chunk: vec![64],
             sweep_passes: vec![1],
             sweep_speed: vec![1.0],
             sweep_results: None,
             no_sweep: false,
+            full: false,
             model: ModelArgs {
                 config: None,
                 engine: None,
