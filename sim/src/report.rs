@@ -34,6 +34,12 @@ pub mod published {
     /// figure 5: 16.0 feature extraction + 55.3 sorting + 8.5 rasterisation), which disagrees
     /// with Fig. 16's 104.6 GB.
     pub const GSCORE_FIG5_60_QHD_GB: f64 = 79.9;
+    /// Fig. 18 (Section 6.3 text): Neo-S (GSCore with Neo's Sorting Engine) over GSCore, speedup
+    /// and the fraction of DRAM traffic it removes. GSCore's side is the published constant.
+    pub const NEO_S_OVER_GSCORE: (f64, f64) = (3.3, 0.711);
+    /// Fig. 18 (Section 6.3 text): Neo over Neo-S, speedup and the fraction of DRAM traffic
+    /// Neo's Rasterization Engine (depth update in the raster) removes further.
+    pub const NEO_OVER_NEO_S: (f64, f64) = (1.7, 0.358);
 }
 
 /// What the report shows besides the results.
@@ -91,10 +97,13 @@ fn res_order(r: &str) -> usize {
 
 /// Architecture names in display order.
 fn arch_order(a: &str) -> (usize, u32) {
-    match a {
-        "neo" => (0, 0),
-        "gpu" => (2, 0),
-        g => (1, g.trim_start_matches("gscore").parse().unwrap_or(0)),
+    let count = |prefix: &str| a.strip_prefix(prefix).and_then(|c| c.parse().ok());
+    match (a, count("neos"), count("gscore")) {
+        ("neo", _, _) => (0, 0),
+        (_, Some(c), _) => (1, c),
+        (_, _, Some(c)) => (2, c),
+        ("gpu", _, _) => (3, 0),
+        _ => (4, 0),
     }
 }
 
@@ -275,6 +284,52 @@ pub fn point_table(r: &PointResult) -> String {
     s
 }
 
+/// The Fig. 18 ablation (after section 2): GSCore, Neo-S and Neo on the run that has Neo-S
+/// (the largest resolution of the main scene), speedup and traffic against GSCore with the same
+/// core count, beside the paper's Section 6.3 figures. Nothing when no run has Neo-S.
+fn ablation(md: &mut String, head: &[&PointResult]) {
+    let found = head.iter().find_map(|r| {
+        let s = r.archs.iter().find(|a| a.arch.starts_with("neos"))?;
+        let g = r.arch(&s.arch.replacen("neos", "gscore", 1))?;
+        Some((r, g, s, r.arch("neo")?))
+    });
+    let Some((r, gscore, neos, neo)) = found else { return };
+    let _ = writeln!(
+        md,
+        "### Ablation: Neo's Sorting Engine in GSCore (paper Fig. 18)
+"
+    );
+    let _ = writeln!(
+        md,
+        "{} at {} ({}x{}), {} frames. `{}` is {} with Neo's Sorting Engine (the tables reused and updated) but not its Rasterization Engine: no ITU, no depth write-back in the raster, so a separate pass per tile after its raster reads the table, gathers every entry's feature word (its new depth and visibility) and writes the table back (the depth write-back row of section 2). The paper's figures come from the text of its Section 6.3; its GSCore is a published constant.\n",
+        scene_name(&r.point.scene),
+        r.point.res,
+        r.point.width,
+        r.point.height,
+        r.point.frames,
+        neos.arch,
+        gscore.arch
+    );
+    let _ = writeln!(md, "| arch | FPS | speedup over {0} | DRAM GB / 60 | traffic vs {0} | paper: speedup over GSCore | paper: traffic vs GSCore |", gscore.arch);
+    let _ = writeln!(md, "| --- | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let (ps, pn) = (published::NEO_S_OVER_GSCORE, published::NEO_OVER_NEO_S);
+    let paper = [(1.0, 1.0), (ps.0, 1.0 - ps.1), (ps.0 * pn.0, (1.0 - ps.1) * (1.0 - pn.1))];
+    for (a, (p_speed, p_traffic)) in [gscore, neos, neo].into_iter().zip(paper) {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.2}x | {} | {:.3} | {:.2}x | {:.3} |",
+            a.arch,
+            f1(a.fps),
+            a.fps / gscore.fps.max(1e-12),
+            f2(a.gb_per_60(None)),
+            a.gb_per_60(None) / gscore.gb_per_60(None).max(1e-12),
+            p_speed,
+            p_traffic
+        );
+    }
+    md.push('\n');
+}
+
 /// The throughput runs in one plain-text table (scene, resolution, architecture, FPS, speedup
 /// of Neo, DRAM GB per 60 frames): what `neo report` prints as soon as they are done.
 pub fn headline_table(runs: &[PointResult]) -> String {
@@ -366,6 +421,8 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
         let mut names: Vec<String> = rs.iter().flat_map(|r| r.archs.iter().map(|a| a.arch.clone())).collect();
         names.sort_by_key(|a| arch_order(a));
         names.dedup();
+        // Only the architectures run at every resolution (Neo-S runs at one, section 3).
+        names.retain(|n| rs.iter().all(|r| r.arch(n).is_some()));
         let series: Vec<(String, Vec<f64>)> = names
             .iter()
             .map(|n| (n.clone(), rs.iter().map(|r| r.arch(n).map_or(0.0, |a| a.fps)).collect()))
@@ -501,6 +558,8 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
         ));
         let _ = writeln!(md, "![DRAM traffic]({file})\n");
     }
+
+    ablation(&mut md, &head);
 
     // 3. Strategies on Neo's hardware.
     if !d.timelines.is_empty() {

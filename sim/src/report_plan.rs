@@ -112,6 +112,9 @@ pub struct ReportPlan {
     pub passes: usize,
     /// Every architecture (throughput runs).
     pub archs: Vec<Arch>,
+    /// Neo-S with the engine's sorting cores, run besides on the main scene's largest
+    /// resolution (the paper's Fig. 18 ablation).
+    pub neo_s: Arch,
     /// Throughput and traffic runs.
     pub headline: Vec<Point>,
     /// Timelines of the compared strategies.
@@ -213,6 +216,7 @@ impl ReportPlan {
             chunk,
             passes,
             archs,
+            neo_s: Arch::NeoS(cfg.engine.sort_cores as u32),
             headline,
             timelines,
             neo_timeline,
@@ -242,8 +246,23 @@ impl ReportPlan {
             headline,
         };
         let off = GoldenRaster::Off;
-        let mut jobs: Vec<PointJob> =
-            self.headline.iter().map(|p| job(p, self.archs.clone(), off, true)).collect();
+        // Neo-S (the Fig. 18 ablation) on the main scene's largest resolution.
+        let ablation = self
+            .headline
+            .iter()
+            .filter(|p| &p.scene == main_scene)
+            .max_by_key(|p| p.width as u64 * p.height as u64);
+        let mut jobs: Vec<PointJob> = self
+            .headline
+            .iter()
+            .map(|p| {
+                let mut archs = self.archs.clone();
+                if Some(p) == ablation {
+                    archs.push(self.neo_s);
+                }
+                job(p, archs, off, true)
+            })
+            .collect();
         let neo_from =
             self.headline.iter().position(|p| &p.scene == main_scene && p.res == self.timeline_res);
         if neo_from.is_none() {

@@ -21,6 +21,8 @@ pub enum Arch {
     Gscore(u32),
     /// GPU-style (Orin-AGX-like).
     Gpu,
+    /// Neo-S with this many cores: GSCore-style with Neo's Sorting Engine (the paper's Fig. 18).
+    NeoS(u32),
 }
 
 impl Arch {
@@ -30,11 +32,12 @@ impl Arch {
             Arch::Neo => "neo".into(),
             Arch::Gscore(c) => format!("gscore{c}"),
             Arch::Gpu => "gpu".into(),
+            Arch::NeoS(c) => format!("neos{c}"),
         }
     }
 
-    /// Parses `neo`, `gscore` (every configured core count), `gscoreN`, `gpu` or `all`,
-    /// comma-separated.
+    /// Parses `neo`, `gscore` (every configured core count), `gscoreN`, `gpu`, `all` (these),
+    /// `neos` (Neo-S with the engine's sorting-core count) or `neosN`, comma-separated.
     pub fn parse_list(s: &str, cfg: &SimConfig) -> Result<Vec<Arch>, String> {
         let mut v = Vec::new();
         for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
@@ -42,19 +45,27 @@ impl Arch {
                 "neo" => v.push(Arch::Neo),
                 "gpu" => v.push(Arch::Gpu),
                 "gscore" => v.extend(cfg.gscore.core_counts.iter().map(|&c| Arch::Gscore(c))),
+                "neos" => v.push(Arch::NeoS(cfg.engine.sort_cores as u32)),
                 "all" => {
                     v.push(Arch::Neo);
                     v.extend(cfg.gscore.core_counts.iter().map(|&c| Arch::Gscore(c)));
                     v.push(Arch::Gpu);
                 }
-                other => match other.strip_prefix("gscore").map(str::parse::<u32>) {
-                    Some(Ok(c)) if c > 0 => v.push(Arch::Gscore(c)),
-                    _ => {
-                        return Err(format!(
-                            "unknown architecture '{other}' (expected neo, gscore, gscoreN, gpu or all)"
-                        ))
+                other => {
+                    let count = |prefix: &str| match other.strip_prefix(prefix).map(str::parse::<u32>) {
+                        Some(Ok(c)) if c > 0 => Some(c),
+                        _ => None,
+                    };
+                    match (count("gscore"), count("neos")) {
+                        (Some(c), _) => v.push(Arch::Gscore(c)),
+                        (_, Some(c)) => v.push(Arch::NeoS(c)),
+                        _ => {
+                            return Err(format!(
+                                "unknown architecture '{other}' (expected neo, gscore, gscoreN, gpu, all, neos or neosN)"
+                            ))
+                        }
                     }
-                },
+                }
             }
         }
         if v.is_empty() {
@@ -294,9 +305,10 @@ pub fn simulate(
                 model_s: t0.elapsed().as_secs_f64(),
             })
         }
-        Arch::Neo | Arch::Gscore(_) => {
+        Arch::Neo | Arch::Gscore(_) | Arch::NeoS(_) => {
             let accel = match arch {
                 Arch::Gscore(c) => Accel::Gscore { cores: c },
+                Arch::NeoS(c) => Accel::NeoS { cores: c },
                 _ => Accel::Neo,
             };
             let model = Model::new(accel, cfg, lat, wl)?;
@@ -352,7 +364,7 @@ pub fn simulate(
             Ok(ArchResult {
                 arch: arch.name(),
                 strategy: match accel {
-                    Accel::Neo => wl.info.strategy.clone(),
+                    Accel::Neo | Accel::NeoS { .. } => wl.info.strategy.clone(),
                     Accel::Gscore { .. } => "hierarchical (from scratch)".into(),
                 },
                 frames,
@@ -374,6 +386,24 @@ pub fn simulate(
                 preprocess_timing: lat.preprocess.label(),
                 model_s: t0.elapsed().as_secs_f64(),
             })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn architecture_lists_parse_and_name_back() {
+        let cfg = SimConfig::default();
+        let names = |s: &str| Arch::parse_list(s, &cfg).map(|v| v.iter().map(Arch::name).collect::<Vec<_>>());
+        assert_eq!(names("all").unwrap(), ["neo", "gscore4", "gscore16", "gpu"]);
+        assert_eq!(names("neos, neos8,gscore4,neo").unwrap(), ["neos16", "neos8", "gscore4", "neo"]);
+        assert_eq!(names("neo,neo").unwrap(), ["neo"], "duplicates dropped");
+        for bad in ["", "neos0", "gscorex", "neo-s"] {
+            let e = names(bad).unwrap_err();
+            assert!(e.contains("architecture"), "{bad}: {e}");
         }
     }
 }

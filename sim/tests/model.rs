@@ -333,3 +333,45 @@ fn incoming_detection_reads_the_previous_word_of_each_visible_gaussian() {
         assert_eq!(neo.frames[k].dram_bytes - full.frames[k].dram_bytes, reads, "frame {k}");
     }
 }
+
+/// Neo-S (the paper's Fig. 18: GSCore with Neo's Sorting Engine, without its Rasterization
+/// Engine) reuses the tables like Neo, so it sorts far fewer bytes than GSCore; but without the
+/// raster core's write-back, a separate pass per tile reads the table, gathers every entry's
+/// feature word (a whole line each) and writes the table back.
+#[test]
+fn neo_s_sorts_like_neo_and_pays_a_separate_update_pass() {
+    let lat = latency();
+    let cfg = SimConfig::default();
+    let (scene, _) = source::load_scene("synthetic:outdoor?gaussians=20k&seed=2", false).unwrap();
+    let traj = trajectory::parse_trajectory("orbit:speed=4", source::robust_bounds(&scene), 4)
+        .unwrap()
+        .with_resolution(256, 192);
+    let spec = WorkloadSpec::new("s", "orbit", Strategy::Neo);
+    let wl = generate(&scene, &traj.frames, &traj.cuts, &spec, |_| {}).unwrap();
+    let run = |arch| simulate(arch, &cfg, &lat, &wl, RunOptions::default()).unwrap();
+    let (neo, neos, gscore) = (run(Arch::Neo), run(Arch::NeoS(16)), run(Arch::Gscore(16)));
+    assert_eq!(neos.arch, "neos16");
+    per_frame_records_add_up(&neos);
+    // Frame 0 sorts from scratch on both; the others reuse the tables on Neo-S.
+    for (s, g) in neos.frames.iter().zip(&gscore.frames).skip(1) {
+        assert!(
+            s.sort_bytes * 2 < g.sort_bytes,
+            "frame {}: sorting neo-s {} vs gscore {}",
+            s.frame,
+            s.sort_bytes,
+            g.sort_bytes
+        );
+    }
+    let entries: u64 = wl.frames.iter().flat_map(|f| &f.tiles).map(|t| t.table_len as u64).sum();
+    let eb = (wl.info.sort_entry_bytes + cfg.gscore.bitmap_bytes) as u64;
+    let (reads, writes) = (
+        neos.traffic.bytes(Stage::DepthWriteback, Dir::Read),
+        neos.traffic.bytes(Stage::DepthWriteback, Dir::Write),
+    );
+    assert!(reads >= entries * (64 + eb), "update reads {reads} B for {entries} entries");
+    assert!(writes >= entries * eb, "update writes {writes} B for {entries} entries");
+    assert!(writes > neo.traffic.bytes(Stage::DepthWriteback, Dir::Write), "more than Neo's write-back");
+    assert_eq!(gscore.traffic.stage_bytes(Stage::DepthWriteback), 0);
+    // The pass sits between a tile's raster and its next sort: Neo-S is slower than Neo.
+    assert!(neos.fps > 0.0 && neos.fps < neo.fps, "neo-s {} FPS vs neo {}", neos.fps, neo.fps);
+}

@@ -28,9 +28,10 @@ fn published_constants_are_labelled_and_kept_apart() {
         passes: 1,
     };
     let wl = workload(&scene, &point, &cfg, neo_sim::driver::GoldenRaster::Off, 16, |_| {}).unwrap();
-    let r = evaluate(&point, &wl, &cfg, &lat, &[Arch::Neo, Arch::Gscore(16)]).unwrap();
-    let data = ReportData { headline: vec![r], ..ReportData::default() };
+    let r = evaluate(&point, &wl, &cfg, &lat, &[Arch::Neo, Arch::Gscore(16), Arch::NeoS(16)]).unwrap();
+    let data = ReportData { headline: vec![r.clone()], ..ReportData::default() };
     let (md, _) = render(&data).unwrap();
+    ablation_rows_are_simulated_beside_the_papers(&md, &r);
     // The speed-up table names the paper's ratio as one over a published constant, with the
     // paper's value, beside neo's own simulated ratio.
     let lines: Vec<&str> = md.lines().collect();
@@ -48,6 +49,29 @@ fn published_constants_are_labelled_and_kept_apart() {
         "{md}"
     );
     assert!(md.contains("GSCore 104.6 GB as a published constant (Fig. 5's constant says 79.9 GB)"), "{md}");
+}
+
+/// The Fig. 18 table: GSCore-16, Neo-S and Neo with their simulated speedups and traffic over
+/// GSCore-16, and the paper's Section 6.3 figures in their own columns.
+fn ablation_rows_are_simulated_beside_the_papers(md: &str, r: &neo_sim::suite::PointResult) {
+    let lines: Vec<&str> = md.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| l.starts_with("| arch | FPS | speedup over gscore16"))
+        .expect("ablation table");
+    assert!(lines[at].contains("paper: speedup over GSCore"), "{}", lines[at]);
+    let (g, s) = (r.arch("gscore16").unwrap(), r.arch("neos16").unwrap());
+    let (ps, pn) = (published::NEO_S_OVER_GSCORE, published::NEO_OVER_NEO_S);
+    for (k, (name, paper)) in
+        [("gscore16", 1.0), ("neos16", ps.0), ("neo", ps.0 * pn.0)].into_iter().enumerate()
+    {
+        let cells: Vec<&str> = lines[at + 2 + k].split('|').map(str::trim).collect();
+        let a = r.arch(name).unwrap();
+        assert_eq!(cells[1], name);
+        assert_eq!(cells[3], format!("{:.2}x", a.fps / g.fps), "{name}: simulated speedup");
+        assert_eq!(cells[6], format!("{paper:.2}x"), "{name}: the paper's");
+    }
+    assert!(s.gb_per_60(None) > 0.0);
 }
 
 #[test]

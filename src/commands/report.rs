@@ -237,6 +237,8 @@ mod tests {
             "## 1. Throughput",
             "gscore16",
             "## 2. DRAM traffic",
+            "(paper Fig. 18)",
+            "neos16",
             "## 3. Sorting strategies",
             "periodic:2",
             "## 4. Speed against error",

@@ -10,7 +10,7 @@ use neo_golden::pipeline::Strategy;
 use neo_golden::sort::{conventional_sort_plan, merge_pass_count, Parity, SortBuffer};
 
 use super::timing::raster_tile_cycles;
-use super::{Accel, Model, K_BG, K_PRE, K_RASTER, K_SORT};
+use super::{Accel, Model, K_BG, K_PRE, K_RASTER, K_SORT, K_UPDATE};
 use crate::dram::Ps;
 use crate::engine::{Access, AccessKind, Job, JobTag, Segment};
 use crate::sortcmd::{dps_pass, Cmd, Mode};
@@ -40,7 +40,7 @@ impl Model<'_> {
         let cyc = cyc.max((fw.binning_tests as f64 / n.duplication_units as f64).ceil() * p.duplication_ii);
         let compute = self.ps(cyc + p.latency as f64);
         let l = &self.layout;
-        let (reads, mut writes) = if self.accel == Accel::Neo {
+        let (reads, mut writes) = if self.neo_sorting() {
             self.pre_engine_accesses(f)
         } else {
             let s = &self.cfg.sizes;
@@ -253,7 +253,7 @@ impl Model<'_> {
         let tw = &self.wl.frames[f].tiles[t];
         let eb = self.eb;
         let sc = self.layout.scratch(agent);
-        let list = if self.accel == Accel::Neo {
+        let list = if self.neo_sorting() {
             self.layout.list_slot(f, t)
         } else {
             self.layout.lists[f % 2] + list_off * eb
@@ -434,9 +434,15 @@ impl Model<'_> {
         let fw = &self.wl.frames[f];
         let tw = &fw.tiles[t];
         let info = &self.wl.info;
+        // Neo's raster core (ITUs, write-back) only on Neo; Neo's tables and feature words
+        // whenever the sorting engine is Neo's (Neo-S too).
         let neo = self.accel == Accel::Neo;
-        let (entries, table_entries) =
-            if neo { (tw.raster_entries, tw.table_len as u64) } else { (tw.current, tw.current as u64) };
+        let neo_tables = self.neo_sorting();
+        let (entries, table_entries) = if neo_tables {
+            (tw.raster_entries, tw.table_len as u64)
+        } else {
+            (tw.current, tw.current as u64)
+        };
         let (cyc, tail) = raster_tile_cycles(
             &tw.routed,
             fw.processed_ratio,
@@ -452,7 +458,7 @@ impl Model<'_> {
         if entries > 0 {
             // Neo's feature table is a word per Gaussian id, GSCore's the compacted entries.
             let (record_bytes, records) =
-                if neo { (self.pre_records().feature, fw.gaussians) } else { (self.fb, fw.visible) };
+                if neo_tables { (self.pre_records().feature, fw.gaussians) } else { (self.fb, fw.visible) };
             reads.push(Access {
                 stage: Stage::FeatureTable,
                 base: self.layout.features[f % 2],
@@ -492,6 +498,44 @@ impl Model<'_> {
                 writes,
                 writes_at_end: true,
                 min_interval: self.ps(1.0),
+                spread_reads: true,
+            }],
+        }
+    }
+
+    /// Neo-S's update pass of tile `t` in frame `f`, on a sorting core after the tile's raster:
+    /// it reads the table, gathers every entry's feature word (its depth and visibility this
+    /// frame) and writes the table back, one entry per cycle (the MSU+ rate), all charged to
+    /// the depth write-back stage. Neo does this in its raster core (the write-back of
+    /// [`Model::raster_job`]) from the features it reads anyway.
+    pub(super) fn update_job(&self, f: usize, t: usize) -> Job {
+        let fw = &self.wl.frames[f];
+        let n = fw.tiles[t].table_len as u64;
+        let cur = self.layout.table(f, t);
+        let mut reads = vec![Access::seq(Stage::DepthWriteback, cur, n * self.eb)];
+        if n > 0 {
+            reads.push(Access {
+                stage: Stage::DepthWriteback,
+                base: self.layout.features[f % 2],
+                kind: AccessKind::Gather {
+                    count: n,
+                    record_bytes: self.pre_records().feature as u32,
+                    records_in_region: fw.gaussians.max(1),
+                    seed: crate::engine::mix(((f as u64) << 32) ^ t as u64 ^ 0x5eed),
+                },
+            });
+        }
+        let compute = self.ps(n as f64 * self.lat.msu_ii + 1.0);
+        Job {
+            tag: JobTag { frame: f as u32, tile: t as u32, kind: K_UPDATE },
+            segments: vec![Segment {
+                compute,
+                load: compute,
+                serial: false,
+                reads,
+                writes: vec![Access::seq(Stage::DepthWriteback, cur, n * self.eb)],
+                writes_at_end: true,
+                min_interval: self.sort_port(),
                 spread_reads: true,
             }],
         }

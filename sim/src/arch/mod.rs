@@ -19,6 +19,10 @@
 //! - **Raster** (`raster_cores` agents): per tile, reads the sorted table and gathers the
 //!   features, runs the ITU/SCU pipeline over subtile groups, writes the depth keys and valid
 //!   bits back (Neo) and the tile's pixels.
+//! - **Update** (Neo-S only, on the sorting cores): per tile after its raster, reads the table,
+//!   gathers each entry's feature word (its new depth and visibility) and writes the table back
+//!   with depths, valid bits and bitmaps: the separate post-processing the paper's Fig. 18 names
+//!   for a GSCore with Neo's Sorting Engine but not its Rasterization Engine.
 //!
 //! # Dependencies
 //! - preprocessing of frame `f` after that of `f - 1` and after every raster of frame
@@ -27,7 +31,9 @@
 //!   are double-buffered) and, when the strategy reuses tables (Neo hardware), after the raster
 //!   of `(f - 1, t)`, whose write-back it reads; `background:K` also after the background sort of
 //!   the frame whose order it uses;
-//! - the raster of `(f, t)` after its sort.
+//! - the raster of `(f, t)` after its sort;
+//! - Neo-S: the update pass of `(f, t)` (on a sorting core) after the raster of `(f, t)`, and the
+//!   sort of `(f + 1, t)` after that pass instead of after the raster.
 //!
 //! Ready jobs run in (frame, tile) order on the first idle agent of their engine; background
 //! sorts run on idle sorting cores after every ready foreground sort.
@@ -61,6 +67,7 @@ const K_PRE: u8 = 0;
 const K_SORT: u8 = 1;
 const K_RASTER: u8 = 2;
 const K_BG: u8 = 3;
+const K_UPDATE: u8 = 4;
 
 /// Which accelerator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,6 +76,14 @@ pub enum Accel {
     Neo,
     /// GSCore-style with `cores` sorting cores and `cores` subtile units.
     Gscore {
+        /// Core count.
+        cores: u32,
+    },
+    /// Neo-S, the paper's Fig. 18 ablation: GSCore-style with `cores` cores whose sorting engine
+    /// is Neo's (the workload's strategy on reused tables), without Neo's Rasterization Engine
+    /// (no ITU, no depth write-back), so a separate pass after each tile's raster refreshes
+    /// its table's depths, valid bits and bitmaps for the next frame's sort.
+    NeoS {
         /// Core count.
         cores: u32,
     },
@@ -109,13 +124,13 @@ impl<'a> Model<'a> {
                 cfg.engine.raster_itus as u32,
                 strategy == Strategy::Hierarchical,
             ),
-            Accel::Gscore { cores } => (
+            Accel::Gscore { cores } | Accel::NeoS { cores } => (
                 (wl.info.sort_entry_bytes + cfg.gscore.bitmap_bytes) as u64,
                 cores,
                 cores.div_ceil(4).max(1),
                 cores.min(4),
                 0,
-                true,
+                matches!(accel, Accel::Gscore { .. }) || strategy == Strategy::Hierarchical,
             ),
         };
         if hier && wl.frames.iter().any(|f| f.tiles.iter().any(|t| t.hier.entries != t.current)) {
@@ -200,8 +215,20 @@ impl<'a> Model<'a> {
     /// reused table is frame `f - K`'s); not GSCore (no incoming step), not `full` or
     /// `hierarchical` (every frame from scratch).
     fn detects_incoming(&self) -> bool {
-        self.accel == Accel::Neo
+        self.neo_sorting()
             && (self.strategy.reuses_tables() || matches!(self.strategy, Strategy::Background(_)))
+    }
+
+    /// True when the sorting engine is Neo's (Neo and Neo-S): the Preprocessing Engine writes
+    /// incoming lists in per-tile slots and the sorts follow the workload's strategy.
+    fn neo_sorting(&self) -> bool {
+        matches!(self.accel, Accel::Neo | Accel::NeoS { .. })
+    }
+
+    /// True when the tables are reused and a frame's sort of a tile reads what the frame
+    /// before left in it (Neo's raster write-back, or Neo-S's update pass).
+    fn reuses(&self) -> bool {
+        self.neo_sorting() && !self.hier && self.strategy != Strategy::Full
     }
 
     fn ps(&self, cycles: f64) -> Ps {

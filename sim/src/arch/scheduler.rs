@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 
 use neo_golden::pipeline::Strategy;
 
-use super::{Accel, Model, CLASS_PRE, CLASS_SORT, K_PRE, K_RASTER, K_SORT};
+use super::{Accel, Model, CLASS_PRE, CLASS_SORT, K_PRE, K_RASTER, K_SORT, K_UPDATE};
 use crate::dram::Ps;
 use crate::engine::{Job, JobTag, Scheduler};
 
@@ -34,6 +34,8 @@ pub struct Sched<'m, 'a> {
     times: Vec<FrameTimes>,
     sort_queued: Vec<bool>,
     raster_done: Vec<bool>,
+    /// The tile's table is ready for the next frame's sort (raster done, and Neo-S's update).
+    reused_ready: Vec<bool>,
     bg_done: Vec<bool>,
     raster_left: Vec<usize>,
     sort_left: Vec<usize>,
@@ -42,6 +44,8 @@ pub struct Sched<'m, 'a> {
     sort_ready: BinaryHeap<Reverse<(u32, u32)>>,
     bg_ready: BinaryHeap<Reverse<(u32, u32)>>,
     raster_ready: BinaryHeap<Reverse<(u32, u32)>>,
+    update_ready: BinaryHeap<Reverse<(u32, u32)>>,
+    update_left: usize,
     offsets: Vec<Option<Vec<u64>>>,
     bg_offsets: Vec<Option<Vec<u64>>>,
     background: Option<usize>,
@@ -65,6 +69,7 @@ impl<'m, 'a> Sched<'m, 'a> {
             times: vec![FrameTimes::default(); frames],
             sort_queued: vec![false; frames * tiles],
             raster_done: vec![false; frames * tiles],
+            reused_ready: vec![false; frames * tiles],
             bg_done: vec![false; frames * tiles],
             raster_left: vec![tiles; frames],
             sort_left: vec![tiles; frames],
@@ -73,6 +78,8 @@ impl<'m, 'a> Sched<'m, 'a> {
             sort_ready: BinaryHeap::new(),
             bg_ready: BinaryHeap::new(),
             raster_ready: BinaryHeap::new(),
+            update_ready: BinaryHeap::new(),
+            update_left: 0,
             offsets: vec![None; frames],
             bg_offsets: vec![None; frames],
             background,
@@ -84,8 +91,9 @@ impl<'m, 'a> Sched<'m, 'a> {
         &self.times
     }
 
-    fn reuses(&self) -> bool {
-        self.m.accel == Accel::Neo && !self.m.hier && self.m.strategy != Strategy::Full
+    /// True when a tile's table is refreshed by an update pass after its raster (Neo-S).
+    fn updates(&self) -> bool {
+        matches!(self.m.accel, Accel::NeoS { .. }) && self.m.reuses()
     }
 
     fn sort_deps_met(&self, f: usize, t: usize) -> bool {
@@ -96,7 +104,7 @@ impl<'m, 'a> Sched<'m, 'a> {
         if f >= 2 && !self.raster_done[i - 2 * self.tiles] {
             return false;
         }
-        if f >= 1 && self.reuses() && !self.raster_done[i - self.tiles] {
+        if f >= 1 && self.m.reuses() && !self.reused_ready[i - self.tiles] {
             return false;
         }
         if let Some(k) = self.background {
@@ -157,6 +165,16 @@ impl Scheduler for Sched<'_, '_> {
                 Some(self.m.preprocess_job(f))
             }
             CLASS_SORT => {
+                // An update pass before the sorts of later frames (they wait for it).
+                let update_first = match (self.update_ready.peek(), self.sort_ready.peek()) {
+                    (Some(Reverse((fu, _))), Some(Reverse((fs, _)))) => fu < fs,
+                    (Some(_), None) => true,
+                    _ => false,
+                };
+                if update_first {
+                    let Reverse((f, tile)) = self.update_ready.pop()?;
+                    return Some(self.m.update_job(f as usize, tile as usize));
+                }
                 if let Some(Reverse((f, tile))) = self.sort_ready.pop() {
                     let off = self.offsets_of(f as usize, false)[tile as usize];
                     return Some(self.m.sort_job(f as usize, tile as usize, agent, off));
@@ -203,8 +221,19 @@ impl Scheduler for Sched<'_, '_> {
                     self.frame_done[f] = true;
                     self.times[f].done = t;
                 }
-                self.try_queue_sort(f + 1, tile);
+                if self.updates() {
+                    self.update_ready.push(Reverse((tag.frame, tag.tile)));
+                    self.update_left += 1;
+                } else {
+                    self.reused_ready[f * self.tiles + tile] = true;
+                    self.try_queue_sort(f + 1, tile);
+                }
                 self.try_queue_sort(f + 2, tile);
+            }
+            K_UPDATE => {
+                self.reused_ready[f * self.tiles + tile] = true;
+                self.update_left -= 1;
+                self.try_queue_sort(f + 1, tile);
             }
             _ => {
                 self.bg_done[f * self.tiles + tile] = true;
@@ -219,6 +248,6 @@ impl Scheduler for Sched<'_, '_> {
     }
 
     fn finished(&self) -> bool {
-        self.frame_done.iter().all(|&d| d) && self.bg_left == 0
+        self.frame_done.iter().all(|&d| d) && self.bg_left == 0 && self.update_left == 0
     }
 }
