@@ -185,8 +185,13 @@ impl Index {
     fn leave(&mut self, seq: u64, bank: u32) {
         let b = bank as usize;
         let sl = &mut self.slots[b];
-        let p = sl.list.iter().position(|e| e.0 == seq).expect("an indexed request");
-        sl.list.remove(p);
+        // Mostly the bank's oldest.
+        if sl.list.front().is_some_and(|e| e.0 == seq) {
+            sl.list.pop_front();
+        } else {
+            let p = sl.list.iter().position(|e| e.0 == seq).expect("an indexed request");
+            sl.list.remove(p);
+        }
         if sl.list.is_empty() {
             self.live[b / 64] &= !(1 << (b % 64));
         }
@@ -308,7 +313,7 @@ impl Channel {
     /// `cap`): per bank, the oldest hit and the oldest other request of the window, each added
     /// to `cands` with its ready clock; returns the clock from which the queue's oldest request
     /// can issue its next command (capped or not; `NEVER` for an empty queue).
-    fn scan_classes(&mut self, q: Q, window: usize, cap: u32, cands: &mut Oldest<u64>) -> Clk {
+    fn scan_classes(&mut self, q: Q, window: usize, cap: u32, cands: &mut Oldest) -> Clk {
         let queue = if q == Q::Read { &self.readq } else { &self.writeq };
         let Some(front) = queue.front() else { return NEVER };
         let front_at = self.next_cmd(front);
@@ -327,10 +332,10 @@ impl Channel {
                 let (h, o) = (sl.hit, sl.other);
                 // A hit of a row past the cap can issue only as the oldest: not a candidate.
                 if h != NONE && !(b.open != CLOSED && b.hits > cap) {
-                    cands.add(if write { b.wr } else { b.rd }.max(col), h);
+                    cands.add(if write { b.wr } else { b.rd }.max(col), h, 0);
                 }
                 if o != NONE {
-                    cands.add(if b.open == CLOSED { b.act.max(self.act) } else { b.pre.max(self.pre) }, o);
+                    cands.add(if b.open == CLOSED { b.act.max(self.act) } else { b.pre.max(self.pre) }, o, 0);
                 }
             }
         }
@@ -375,11 +380,15 @@ impl Channel {
     fn plan(&mut self, window: usize, cap: u32, refi: Clk) -> Plan {
         let floor = self.clk + 1;
         let t_ref = self.refreshed.saturating_add(refi);
+        // The activate queue, in order (so of equal arrivals the first counts as older).
         let mut act = Oldest::new(floor);
-        // The activate queue's oldest request: (arrival, index).
+        // Its oldest request: (arrival, index).
         let mut oldest_a: Option<(Clk, usize)> = None;
-        for (i, r) in self.actq.iter().take(window).enumerate() {
-            act.add(self.ready(r, cap), (r.arrive, i));
+        for (i, r) in self.actq.iter().enumerate() {
+            if i == window {
+                break;
+            }
+            act.add(self.ready(r, cap), r.arrive, i);
             if oldest_a.is_none_or(|(a, _)| r.arrive < a) {
                 oldest_a = Some((r.arrive, i));
             }
@@ -407,7 +416,7 @@ impl Channel {
             Pick::Refresh(cmd)
         } else {
             let i = match cands.pick(at) {
-                Some(s) => Some(self.position(mode, window, s)),
+                Some((s, _)) => Some(self.position(mode, window, s)),
                 None => (front_at <= at).then_some(0),
             };
             match i {
@@ -447,39 +456,40 @@ enum Pick {
 /// is ready then, and a later plan clock is the earliest ready clock of all, so only the
 /// candidates ready at that clock are.
 #[derive(Clone, Copy, Debug)]
-struct Oldest<K> {
+struct Oldest {
     floor: Clk,
-    /// The oldest candidate ready at or before `floor`.
-    early: Option<K>,
+    /// The oldest candidate ready at or before `floor`: its key (`NONE` if none) and index.
+    early: (u64, usize),
     /// The earliest ready clock after `floor`, and the oldest candidate ready then.
     late_at: Clk,
-    late: Option<K>,
+    late: (u64, usize),
 }
 
-impl<K: Ord + Copy> Oldest<K> {
+impl Oldest {
     fn new(floor: Clk) -> Self {
-        Oldest { floor, early: None, late_at: NEVER, late: None }
+        Oldest { floor, early: (NONE, 0), late_at: NEVER, late: (NONE, 0) }
     }
 
-    /// A candidate ready from clock `at` (`NEVER`: not a candidate).
+    /// Candidate `i` with key `key` (below `NONE`; of equal keys the first added counts as
+    /// older), ready from clock `at` (`NEVER`: not a candidate).
     #[inline]
-    fn add(&mut self, at: Clk, key: K) {
+    fn add(&mut self, at: Clk, key: u64, i: usize) {
         if at <= self.floor {
-            if self.early.is_none_or(|e| key < e) {
-                self.early = Some(key);
+            if key < self.early.0 {
+                self.early = (key, i);
             }
         } else if at < self.late_at {
             self.late_at = at;
-            self.late = Some(key);
-        } else if at == self.late_at && at != NEVER && self.late.is_none_or(|l| key < l) {
-            self.late = Some(key);
+            self.late = (key, i);
+        } else if at == self.late_at && at != NEVER && key < self.late.0 {
+            self.late = (key, i);
         }
     }
 
     /// The earliest ready clock, or `floor` if a candidate is ready by then (the same plan
     /// clock either way).
     fn earliest(&self) -> Clk {
-        if self.early.is_some() {
+        if self.early.0 != NONE {
             self.floor
         } else {
             self.late_at
@@ -487,12 +497,12 @@ impl<K: Ord + Copy> Oldest<K> {
     }
 
     /// The oldest candidate ready at plan clock `at` (at least `floor`, and at most
-    /// [`Oldest::earliest`] unless it is `floor`).
-    fn pick(&self, at: Clk) -> Option<K> {
-        if self.early.is_some() {
-            self.early
-        } else if self.late_at <= at {
-            self.late
+    /// [`Oldest::earliest`] unless it is `floor`): its key and index.
+    fn pick(&self, at: Clk) -> Option<(u64, usize)> {
+        if self.early.0 != NONE {
+            Some(self.early)
+        } else if self.late_at <= at && self.late.0 != NONE {
+            Some(self.late)
         } else {
             None
         }
@@ -591,6 +601,8 @@ pub struct Dram {
     bank_first: bool,
     bank_xor: bool,
     ck: Ps,
+    /// `floor((2^64 - 1) / ck)`, for [`ceil_div`].
+    ck_inv: u64,
     t: T,
     channels: Vec<Channel>,
     /// Write-mode watermarks: enter above `hi` writes, leave below `lo`.
@@ -607,6 +619,19 @@ pub struct Dram {
     ticket_place: Vec<(u32, u32)>,
     ideal: Option<Ps>,
     stats: DramStats,
+}
+
+/// `ceil(t / d)` by a multiply, with `inv = floor((2^64 - 1) / d)` (`d > 0`): `t inv / 2^64`
+/// is below `t / d` and above `t / d - 1`, so one correction step gives the floor.
+#[inline]
+fn ceil_div(t: u64, d: u64, inv: u64) -> u64 {
+    let mut q = ((t as u128 * inv as u128) >> 64) as u64;
+    let mut r = t - q * d;
+    if r >= d {
+        q += 1;
+        r -= d;
+    }
+    q + (r != 0) as u64
 }
 
 impl Dram {
@@ -649,6 +674,7 @@ impl Dram {
             bank_first: cfg.mapping == "RoCoBaCh",
             bank_xor: cfg.bank_xor,
             ck: cfg.t_ck_ps.max(1),
+            ck_inv: u64::MAX / cfg.t_ck_ps.max(1),
             t,
             channels,
             // Ramulator: int(0.8 * size) and int(0.2 * size).
@@ -704,7 +730,7 @@ impl Dram {
 
     /// The first clock at or after `t`.
     fn clock_of(&self, t: Ps) -> Clk {
-        t.div_ceil(self.ck)
+        ceil_div(t, self.ck, self.ck_inv)
     }
 
     /// Reads the line holding `addr`, issued at `t`; returns when its data has arrived.
@@ -1147,7 +1173,12 @@ impl Dram {
         }
         let r = *r;
         if matches!(cmd, Cmd::Act | Cmd::Rd | Cmd::Wr) {
-            queue.remove(i);
+            // Mostly the oldest.
+            if i == 0 {
+                queue.pop_front();
+            } else {
+                queue.remove(i);
+            }
             if q != Q::Act {
                 let ix = &mut ch.idx[q.index()];
                 ix.leave(r.seq, r.bank);
@@ -1399,6 +1430,23 @@ mod tests {
             d.release(k);
         }
         gbs(n * 64, last.max(t))
+    }
+
+    #[test]
+    fn ceil_div_by_multiply_is_div_ceil() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for d in [1u64, 2, 3, 625, 750, 1000, 1 << 20, u64::MAX / 3, u64::MAX] {
+            let inv = u64::MAX / d;
+            let edges = [0, 1, d - 1, d, d.saturating_add(1), 2 * (d / 2), u64::MAX - 1, u64::MAX];
+            for t in edges.into_iter().chain((0..10_000).map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                x >> (x % 64)
+            })) {
+                assert_eq!(ceil_div(t, d, inv), t.div_ceil(d), "{t} / {d}");
+            }
+        }
     }
 
     #[test]
