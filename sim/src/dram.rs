@@ -88,84 +88,43 @@ struct Req {
 /// No request.
 const NONE: u64 = u64::MAX;
 
-/// Per bank, the requests of a read or write queue and, within the scheduler's window (its
-/// first `window` requests), the oldest that hits the bank's open row and the oldest that does
-/// not. A request's ready clock depends only on its bank and on whether it hits (the queue's
-/// requests are all reads or all writes), so the FR-FCFS pick needs only these two per bank.
-#[derive(Clone, Debug, Default)]
-struct Index {
-    /// Per bank, `(seq, row)` of its queued requests in entry order.
-    lists: Vec<VecDeque<(u64, u32)>>,
-    /// Bit set of the banks whose list is not empty (64 banks a word).
-    live: Vec<u64>,
-    /// Per bank, the oldest hit and the oldest other request in the window (`NONE` if none);
-    /// each valid unless its `dirty` flag is set.
-    hit: Vec<u64>,
-    other: Vec<u64>,
-    dirty_hit: Vec<bool>,
-    dirty_other: Vec<bool>,
-    /// The next request's `seq`.
-    next_seq: u64,
+/// One bank's part of an [`Index`]: its queued requests and, within the scheduler's window,
+/// the oldest that hits the bank's open row and the oldest that does not (`NONE` if none), each
+/// valid unless its `dirty` flag is set.
+#[derive(Clone, Debug)]
+struct Slot {
+    /// `(seq, row)` of the bank's queued requests in entry order.
+    list: VecDeque<(u64, u32)>,
+    hit: u64,
+    other: u64,
+    dirty_hit: bool,
+    dirty_other: bool,
 }
 
-impl Index {
-    fn new(banks: usize) -> Self {
-        Index {
-            lists: vec![VecDeque::new(); banks],
-            live: vec![0; banks.div_ceil(64)],
-            hit: vec![NONE; banks],
-            other: vec![NONE; banks],
-            dirty_hit: vec![false; banks],
-            dirty_other: vec![false; banks],
-            next_seq: 0,
-        }
+impl Default for Slot {
+    fn default() -> Self {
+        Slot { list: VecDeque::new(), hit: NONE, other: NONE, dirty_hit: false, dirty_other: false }
+    }
+}
+
+impl Slot {
+    /// The open row changed: both requests are to be found again.
+    fn reopen(&mut self) {
+        self.dirty_hit = true;
+        self.dirty_other = true;
     }
 
-    /// Request `(seq, bank, row)`, the youngest in the window, entered it.
-    fn enter(&mut self, seq: u64, bank: u32, row: u32, open: u32) {
-        let b = bank as usize;
-        let (class, dirty) = if open == row {
-            (&mut self.hit[b], self.dirty_hit[b])
-        } else {
-            (&mut self.other[b], self.dirty_other[b])
-        };
-        if !dirty && *class == NONE {
-            *class = seq;
-        }
-    }
-
-    /// Request `(seq, bank)` left the queue.
-    fn leave(&mut self, seq: u64, bank: u32) {
-        let b = bank as usize;
-        let list = &mut self.lists[b];
-        let p = list.iter().position(|e| e.0 == seq).expect("an indexed request");
-        list.remove(p);
-        if list.is_empty() {
-            self.live[b / 64] &= !(1 << (b % 64));
-        }
-        if self.hit[b] == seq {
-            self.dirty_hit[b] = true;
-        } else if self.other[b] == seq {
-            self.dirty_other[b] = true;
-        }
-    }
-
-    /// Bank `b`'s open row changed: both its requests are to be found again.
-    fn reopen(&mut self, b: usize) {
-        self.dirty_hit[b] = true;
-        self.dirty_other[b] = true;
-    }
-
-    /// Recomputes bank `b`'s requests that need it: the window ends at request `bound`.
-    fn clean(&mut self, b: usize, bound: u64, open: u32) {
-        let (dh, dother) = (self.dirty_hit[b], self.dirty_other[b]);
+    /// Recomputes the requests that need it: the window ends at request `bound`.
+    #[inline]
+    fn clean(&mut self, bound: u64, open: u32) {
+        let (dh, dother) = (self.dirty_hit, self.dirty_other);
         if !dh && !dother {
             return;
         }
         // A clean class counts as found.
         let (mut h, mut o) = (NONE, NONE);
         let (mut need_h, mut need_o) = (dh, dother);
-        for &(s, row) in &self.lists[b] {
+        for &(s, row) in &self.list {
             if s > bound {
                 break;
             }
@@ -183,13 +142,69 @@ impl Index {
             }
         }
         if dh {
-            self.hit[b] = h;
-            self.dirty_hit[b] = false;
+            self.hit = h;
+            self.dirty_hit = false;
         }
         if dother {
-            self.other[b] = o;
-            self.dirty_other[b] = false;
+            self.other = o;
+            self.dirty_other = false;
         }
+    }
+}
+
+/// Per bank, the requests of a read or write queue and, within the scheduler's window (its
+/// first `window` requests), the oldest that hits the bank's open row and the oldest that does
+/// not. A request's ready clock depends only on its bank and on whether it hits (the queue's
+/// requests are all reads or all writes), so the FR-FCFS pick needs only these two per bank.
+#[derive(Clone, Debug, Default)]
+struct Index {
+    /// Per bank.
+    slots: Vec<Slot>,
+    /// Bit set of the banks whose list is not empty (64 banks a word).
+    live: Vec<u64>,
+    /// The next request's `seq`.
+    next_seq: u64,
+}
+
+impl Index {
+    fn new(banks: usize) -> Self {
+        Index { slots: vec![Slot::default(); banks], live: vec![0; banks.div_ceil(64)], next_seq: 0 }
+    }
+
+    /// Request `(seq, bank, row)`, the youngest in the window, entered it.
+    fn enter(&mut self, seq: u64, bank: u32, row: u32, open: u32) {
+        let sl = &mut self.slots[bank as usize];
+        let (class, dirty) =
+            if open == row { (&mut sl.hit, sl.dirty_hit) } else { (&mut sl.other, sl.dirty_other) };
+        if !dirty && *class == NONE {
+            *class = seq;
+        }
+    }
+
+    /// Request `(seq, bank)` left the queue.
+    fn leave(&mut self, seq: u64, bank: u32) {
+        let b = bank as usize;
+        let sl = &mut self.slots[b];
+        // Mostly the bank's oldest.
+        if sl.list.front().is_some_and(|e| e.0 == seq) {
+            sl.list.pop_front();
+        } else {
+            let p = sl.list.iter().position(|e| e.0 == seq).expect("an indexed request");
+            sl.list.remove(p);
+        }
+        if sl.list.is_empty() {
+            self.live[b / 64] &= !(1 << (b % 64));
+        }
+        if sl.hit == seq {
+            sl.dirty_hit = true;
+        } else if sl.other == seq {
+            sl.dirty_other = true;
+        }
+    }
+
+    /// Bank `b`'s open row changed: both its requests are to be found again.
+    fn reopen(&mut self, b: usize) {
+        self.slots[b].reopen();
     }
 }
 
@@ -255,8 +270,169 @@ struct Channel {
     plan: Option<Plan>,
 }
 
+impl Channel {
+    /// The next command of `r` and the clock from which it can issue.
+    #[inline]
+    fn next_cmd(&self, r: &Req) -> (Cmd, Clk) {
+        let b = &self.banks[r.bank as usize];
+        if b.open == CLOSED {
+            (Cmd::Act, b.act.max(self.act))
+        } else if b.open == r.row {
+            if r.write {
+                (Cmd::Wr, b.wr.max(self.wr))
+            } else {
+                (Cmd::Rd, b.rd.max(self.rd))
+            }
+        } else {
+            (Cmd::Pre, b.pre.max(self.pre))
+        }
+    }
+
+    /// The clock from which request `r` can issue its next command as a candidate of FR-FCFS
+    /// (`NEVER` for a hit of a row that has served more than `cap` accesses, which can issue
+    /// only as the oldest).
+    #[inline]
+    fn ready(&self, r: &Req, cap: u32) -> Clk {
+        let b = &self.banks[r.bank as usize];
+        if b.open == r.row {
+            if b.open != CLOSED && b.hits > cap {
+                NEVER
+            } else if r.write {
+                b.wr.max(self.wr)
+            } else {
+                b.rd.max(self.rd)
+            }
+        } else if b.open == CLOSED {
+            b.act.max(self.act)
+        } else {
+            b.pre.max(self.pre)
+        }
+    }
+
+    /// FRFCFS_Cap's candidates of read or write queue `q` (scheduler window `window`, row cap
+    /// `cap`): per bank, the oldest hit and the oldest other request of the window, each added
+    /// to `cands` with its ready clock; returns the clock from which the queue's oldest request
+    /// can issue its next command (capped or not; `NEVER` for an empty queue).
+    fn scan_classes(&mut self, q: Q, window: usize, cap: u32, cands: &mut Oldest) -> Clk {
+        let queue = if q == Q::Read { &self.readq } else { &self.writeq };
+        let Some(front) = queue.front() else { return NEVER };
+        let front_at = self.next_cmd(front);
+        let bound = queue[queue.len().min(window) - 1].seq;
+        let ix = &mut self.idx[q.index()];
+        let col = if q == Q::Write { self.wr } else { self.rd };
+        let write = q == Q::Write;
+        for w in 0..ix.live.len() {
+            let mut bits = ix.live[w];
+            while bits != 0 {
+                let i = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let b = &self.banks[i];
+                let sl = &mut ix.slots[i];
+                sl.clean(bound, b.open);
+                let (h, o) = (sl.hit, sl.other);
+                // A hit of a row past the cap can issue only as the oldest: not a candidate.
+                if h != NONE && !(b.open != CLOSED && b.hits > cap) {
+                    cands.add(if write { b.wr } else { b.rd }.max(col), h, 0);
+                }
+                if o != NONE {
+                    cands.add(if b.open == CLOSED { b.act.max(self.act) } else { b.pre.max(self.pre) }, o, 0);
+                }
+            }
+        }
+        front_at.1
+    }
+
+    /// The index of the request with entry number `seq` in the first `window` requests of read
+    /// or write queue `q`.
+    fn position(&self, q: Q, window: usize, seq: u64) -> usize {
+        let queue = if q == Q::Read { &self.readq } else { &self.writeq };
+        // Mostly the oldest.
+        if queue[0].seq == seq {
+            return 0;
+        }
+        let (mut lo, mut hi) = (1, queue.len().min(window));
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if queue[mid].seq < seq {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        debug_assert_eq!(queue[lo].seq, seq, "an indexed request");
+        lo
+    }
+
+    /// The refresh's next command and its clock.
+    fn refresh_cmd(&self) -> (Cmd, Clk) {
+        if self.banks.iter().any(|b| b.open != CLOSED) {
+            (Cmd::Prea, self.prea)
+        } else {
+            (Cmd::Ref, self.refresh)
+        }
+    }
+
+    /// What the channel does next if no request arrives first (scheduler window `window`, row
+    /// cap `cap`, refresh interval `refi`): the clock (after its current one) and the command,
+    /// as [`Dram::tick`] would choose it then. One pass over each queue's candidates
+    /// ([`Oldest`]): the activate queue's first `window` requests, then (unless a refresh is
+    /// queued) the served queue's per-bank candidates.
+    fn plan(&mut self, window: usize, cap: u32, refi: Clk) -> Plan {
+        let floor = self.clk + 1;
+        let t_ref = self.refreshed.saturating_add(refi);
+        // The activate queue, in order (so of equal arrivals the first counts as older).
+        let mut act = Oldest::new(floor);
+        // Its oldest request: (arrival, index).
+        let mut oldest_a: Option<(Clk, usize)> = None;
+        for (i, r) in self.actq.iter().enumerate() {
+            if i == window {
+                break;
+            }
+            act.add(self.ready(r, cap), r.arrive, i);
+            if oldest_a.is_none_or(|(a, _)| r.arrive < a) {
+                oldest_a = Some((r.arrive, i));
+            }
+        }
+        let oldest_at = oldest_a.map_or(NEVER, |(_, o)| self.next_cmd(&self.actq[o]).1);
+        let mut next = act.earliest().min(oldest_at);
+        let mode = if self.write_mode { Q::Write } else { Q::Read };
+        let refresh = (self.ref_pending > 0).then(|| self.refresh_cmd());
+        let mut cands = Oldest::new(floor);
+        let mut front_at = NEVER;
+        match refresh {
+            Some((_, at)) => next = next.min(at),
+            None => {
+                front_at = self.scan_classes(mode, window, cap, &mut cands);
+                next = next.min(cands.earliest()).min(front_at);
+            }
+        }
+        let at = next.min(t_ref).max(floor);
+        let act_pick = act.pick(at).map(|(_, i)| i).or(oldest_a.filter(|_| oldest_at <= at).map(|(_, o)| o));
+        let pick = if at >= t_ref {
+            Pick::Slow
+        } else if let Some(i) = act_pick {
+            Pick::Issue(Q::Act, i, self.next_cmd(&self.actq[i]).0)
+        } else if let Some((cmd, _)) = refresh {
+            Pick::Refresh(cmd)
+        } else {
+            let i = match cands.pick(at) {
+                Some((s, _)) => Some(self.position(mode, window, s)),
+                None => (front_at <= at).then_some(0),
+            };
+            match i {
+                Some(i) => {
+                    let queue = if mode == Q::Read { &self.readq } else { &self.writeq };
+                    Pick::Issue(mode, i, self.next_cmd(&queue[i]).0)
+                }
+                None => Pick::Slow,
+            }
+        };
+        Plan { at, pick }
+    }
+}
+
 /// What a channel does next if no request arrives first.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Plan {
     /// The clock.
     at: Clk,
@@ -264,7 +440,7 @@ struct Plan {
 }
 
 /// The command of a [`Plan`].
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Pick {
     /// A command of request `.1` of a queue.
     Issue(Q, usize, Cmd),
@@ -272,6 +448,65 @@ enum Pick {
     Refresh(Cmd),
     /// A refresh is queued on that clock: the controller's rules are applied directly.
     Slow,
+}
+
+/// The oldest of a plan's candidates (by key `K`, smallest first) among those ready by the
+/// planned clock, found in one pass before that clock is known. The plan chooses a clock no
+/// earlier than `floor` (the channel's next clock): every candidate ready at or before `floor`
+/// is ready then, and a later plan clock is the earliest ready clock of all, so only the
+/// candidates ready at that clock are.
+#[derive(Clone, Copy, Debug)]
+struct Oldest {
+    floor: Clk,
+    /// The oldest candidate ready at or before `floor`: its key (`NONE` if none) and index.
+    early: (u64, usize),
+    /// The earliest ready clock after `floor`, and the oldest candidate ready then.
+    late_at: Clk,
+    late: (u64, usize),
+}
+
+impl Oldest {
+    fn new(floor: Clk) -> Self {
+        Oldest { floor, early: (NONE, 0), late_at: NEVER, late: (NONE, 0) }
+    }
+
+    /// Candidate `i` with key `key` (below `NONE`; of equal keys the first added counts as
+    /// older), ready from clock `at` (`NEVER`: not a candidate).
+    #[inline]
+    fn add(&mut self, at: Clk, key: u64, i: usize) {
+        if at <= self.floor {
+            if key < self.early.0 {
+                self.early = (key, i);
+            }
+        } else if at < self.late_at {
+            self.late_at = at;
+            self.late = (key, i);
+        } else if at == self.late_at && at != NEVER && key < self.late.0 {
+            self.late = (key, i);
+        }
+    }
+
+    /// The earliest ready clock, or `floor` if a candidate is ready by then (the same plan
+    /// clock either way).
+    fn earliest(&self) -> Clk {
+        if self.early.0 != NONE {
+            self.floor
+        } else {
+            self.late_at
+        }
+    }
+
+    /// The oldest candidate ready at plan clock `at` (at least `floor`, and at most
+    /// [`Oldest::earliest`] unless it is `floor`): its key and index.
+    fn pick(&self, at: Clk) -> Option<(u64, usize)> {
+        if self.early.0 != NONE {
+            Some(self.early)
+        } else if self.late_at <= at && self.late.0 != NONE {
+            Some(self.late)
+        } else {
+            None
+        }
+    }
 }
 
 /// A read submitted with [`Dram::submit_read`]; [`Dram::arrival`] gives its data time and
@@ -366,6 +601,8 @@ pub struct Dram {
     bank_first: bool,
     bank_xor: bool,
     ck: Ps,
+    /// `floor((2^64 - 1) / ck)`, for [`ceil_div`].
+    ck_inv: u64,
     t: T,
     channels: Vec<Channel>,
     /// Write-mode watermarks: enter above `hi` writes, leave below `lo`.
@@ -382,10 +619,19 @@ pub struct Dram {
     ticket_place: Vec<(u32, u32)>,
     ideal: Option<Ps>,
     stats: DramStats,
-    /// Scratch buffers of [`Dram::plan`].
-    scratch: Vec<Clk>,
-    /// `(ready clock, seq)` of each candidate of the queue served ([`Dram::scan_classes`]).
-    cands: Vec<(Clk, u64)>,
+}
+
+/// `ceil(t / d)` by a multiply, with `inv = floor((2^64 - 1) / d)` (`d > 0`): `t inv / 2^64`
+/// is below `t / d` and above `t / d - 1`, so one correction step gives the floor.
+#[inline]
+fn ceil_div(t: u64, d: u64, inv: u64) -> u64 {
+    let mut q = ((t as u128 * inv as u128) >> 64) as u64;
+    let mut r = t - q * d;
+    if r >= d {
+        q += 1;
+        r -= d;
+    }
+    q + (r != 0) as u64
 }
 
 impl Dram {
@@ -428,6 +674,7 @@ impl Dram {
             bank_first: cfg.mapping == "RoCoBaCh",
             bank_xor: cfg.bank_xor,
             ck: cfg.t_ck_ps.max(1),
+            ck_inv: u64::MAX / cfg.t_ck_ps.max(1),
             t,
             channels,
             // Ramulator: int(0.8 * size) and int(0.2 * size).
@@ -441,8 +688,6 @@ impl Dram {
             ticket_place: Vec::new(),
             ideal: None,
             stats: DramStats::default(),
-            scratch: Vec::new(),
-            cands: Vec::new(),
         }
     }
 
@@ -485,7 +730,7 @@ impl Dram {
 
     /// The first clock at or after `t`.
     fn clock_of(&self, t: Ps) -> Clk {
-        t.div_ceil(self.ck)
+        ceil_div(t, self.ck, self.ck_inv)
     }
 
     /// Reads the line holding `addr`, issued at `t`; returns when its data has arrived.
@@ -555,7 +800,7 @@ impl Dram {
         let ix = &mut ch.idx[q.index()];
         r.seq = ix.next_seq;
         ix.next_seq += 1;
-        ix.lists[r.bank as usize].push_back((r.seq, r.row));
+        ix.slots[r.bank as usize].list.push_back((r.seq, r.row));
         ix.live[r.bank as usize / 64] |= 1 << (r.bank % 64);
         let queue = if q == Q::Read { &mut ch.readq } else { &mut ch.writeq };
         queue.push_back(r);
@@ -768,19 +1013,7 @@ impl Dram {
 
     /// The next command of `r` and the clock from which it can issue.
     fn next_cmd(&self, c: usize, r: &Req) -> (Cmd, Clk) {
-        let ch = &self.channels[c];
-        let b = &ch.banks[r.bank as usize];
-        if b.open == CLOSED {
-            (Cmd::Act, b.act.max(ch.act))
-        } else if b.open == r.row {
-            if r.write {
-                (Cmd::Wr, b.wr.max(ch.wr))
-            } else {
-                (Cmd::Rd, b.rd.max(ch.rd))
-            }
-        } else {
-            (Cmd::Pre, b.pre.max(ch.pre))
-        }
+        self.channels[c].next_cmd(r)
     }
 
     /// A request whose next command is a hit of a row that has served more than the cap.
@@ -791,12 +1024,7 @@ impl Dram {
 
     /// The refresh's next command and its clock.
     fn refresh_cmd(&self, c: usize) -> (Cmd, Clk) {
-        let ch = &self.channels[c];
-        if ch.banks.iter().any(|b| b.open != CLOSED) {
-            (Cmd::Prea, ch.prea)
-        } else {
-            (Cmd::Ref, ch.refresh)
-        }
+        self.channels[c].refresh_cmd()
     }
 
     /// The queue served outside the activate queue (refresh aside).
@@ -843,147 +1071,14 @@ impl Dram {
         Some((o, cmd, at <= now))
     }
 
-    /// The clock from which request `r` of channel `c` can issue its next command as a
-    /// candidate of FR-FCFS (`NEVER` for a hit of a row past the cap, which can issue only as
-    /// the oldest).
-    fn ready(&self, c: usize, r: &Req) -> Clk {
-        let ch = &self.channels[c];
-        let b = &ch.banks[r.bank as usize];
-        if b.open == r.row {
-            if b.open != CLOSED && b.hits > self.cap {
-                NEVER
-            } else if r.write {
-                b.wr.max(ch.wr)
-            } else {
-                b.rd.max(ch.rd)
-            }
-        } else if b.open == CLOSED {
-            b.act.max(ch.act)
-        } else {
-            b.pre.max(ch.pre)
-        }
-    }
-
-    /// The earliest clock at which a head of the activate queue can issue (its state otherwise
-    /// unchanged), with each of its first `window` requests' ready clock in `ready`, and the
-    /// index of the oldest.
-    fn scan_act(&self, c: usize, ready: &mut Vec<Clk>) -> (Clk, Option<usize>) {
-        let queue = &self.channels[c].actq;
-        ready.clear();
-        let mut next = NEVER;
-        for r in queue.iter().take(self.window) {
-            let at = self.ready(c, r);
-            ready.push(at);
-            next = next.min(at);
-        }
-        let oldest = (0..ready.len()).min_by_key(|&i| (queue[i].arrive, i));
-        if let Some(o) = oldest {
-            next = next.min(self.next_cmd(c, &queue[o]).1);
-        }
-        (next, oldest)
-    }
-
-    /// FRFCFS_Cap's pick of the activate queue at clock `now` from a [`Dram::scan_act`] of it:
-    /// the oldest ready request, else the oldest if its command can issue.
-    fn pick_act(&self, c: usize, ready: &[Clk], oldest: Option<usize>, now: Clk) -> Option<usize> {
-        let queue = &self.channels[c].actq;
-        let mut best: Option<usize> = None;
-        for (i, &at) in ready.iter().enumerate() {
-            if at <= now && best.is_none_or(|b| queue[i].arrive < queue[b].arrive) {
-                best = Some(i);
-            }
-        }
-        best.or_else(|| oldest.filter(|&o| self.next_cmd(c, &queue[o]).1 <= now))
-    }
-
-    /// The candidates of read or write queue `q` (in age order): per bank, the oldest hit and
-    /// the oldest other request of the window, each with its ready clock, into `cands`; returns
-    /// the earliest clock at which a head of the queue can issue (the oldest request included,
-    /// capped or not).
-    fn scan_classes(&mut self, c: usize, q: Q, cands: &mut Vec<(Clk, u64)>) -> Clk {
-        cands.clear();
-        let window = self.window;
-        let ch = &mut self.channels[c];
-        let queue = if q == Q::Read { &ch.readq } else { &ch.writeq };
-        let Some(front) = queue.front() else { return NEVER };
-        let bound = queue[queue.len().min(window) - 1].seq;
-        let front = *front;
-        let ix = &mut ch.idx[q.index()];
-        let write = q == Q::Write;
-        let mut next = NEVER;
-        for w in 0..ix.live.len() {
-            let mut bits = ix.live[w];
-            while bits != 0 {
-                let i = w * 64 + bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                let b = &ch.banks[i];
-                ix.clean(i, bound, b.open);
-                let (h, o) = (ix.hit[i], ix.other[i]);
-                if h != NONE {
-                    let at = if b.open != CLOSED && b.hits > self.cap {
-                        NEVER
-                    } else if write {
-                        b.wr.max(ch.wr)
-                    } else {
-                        b.rd.max(ch.rd)
-                    };
-                    cands.push((at, h));
-                    next = next.min(at);
-                }
-                if o != NONE {
-                    let at = if b.open == CLOSED { b.act.max(ch.act) } else { b.pre.max(ch.pre) };
-                    cands.push((at, o));
-                    next = next.min(at);
-                }
-            }
-        }
-        next.min(self.next_cmd(c, &front).1)
-    }
-
-    /// FRFCFS_Cap's pick of read or write queue `q` at clock `now` from its
-    /// [`Dram::scan_classes`]: the oldest ready request, else the oldest if its command can
-    /// issue; as an index into the queue.
-    fn pick_classes(&self, c: usize, q: Q, cands: &[(Clk, u64)], now: Clk) -> Option<usize> {
-        let queue = self.queue(c, q);
-        let best = cands.iter().filter(|&&(at, _)| at <= now).map(|&(_, s)| s).min();
-        match best {
-            // Mostly the oldest.
-            Some(s) if queue[0].seq == s => Some(0),
-            Some(s) => Some(queue.binary_search_by_key(&s, |r| r.seq).expect("an indexed request")),
-            None => queue.front().filter(|r| self.next_cmd(c, r).1 <= now).map(|_| 0),
-        }
-    }
-
     /// What channel `c` does next if no request arrives first: the clock (after its current
-    /// one) and the command, as [`Dram::tick`] would choose it then.
+    /// one) and the command, as [`Dram::tick`] would choose it then ([`Channel::plan`]).
     fn plan(&mut self, c: usize) -> Plan {
-        let mut ready_a = std::mem::take(&mut self.scratch);
-        let mut cands = std::mem::take(&mut self.cands);
-        let t_ref = self.channels[c].refreshed.saturating_add(self.t.refi);
-        let (next_a, oldest_a) = self.scan_act(c, &mut ready_a);
-        let mode = self.mode_queue(c);
-        let mut next = next_a;
-        let refresh = (self.channels[c].ref_pending > 0).then(|| self.refresh_cmd(c));
-        match refresh {
-            Some((_, at)) => next = next.min(at),
-            None => next = next.min(self.scan_classes(c, mode, &mut cands)),
-        }
-        let at = next.min(t_ref).max(self.channels[c].clk + 1);
-        let pick = if at >= t_ref {
-            Pick::Slow
-        } else if let Some(i) = self.pick_act(c, &ready_a, oldest_a, at) {
-            Pick::Issue(Q::Act, i, self.next_cmd(c, &self.channels[c].actq[i]).0)
-        } else if let Some((cmd, _)) = refresh {
-            Pick::Refresh(cmd)
-        } else {
-            match self.pick_classes(c, mode, &cands, at) {
-                Some(i) => Pick::Issue(mode, i, self.next_cmd(c, &self.queue(c, mode)[i]).0),
-                None => Pick::Slow,
-            }
-        };
-        self.scratch = ready_a;
-        self.cands = cands;
-        Plan { at, pick }
+        let (window, cap, refi) = (self.window, self.cap, self.t.refi);
+        let plan = self.channels[c].plan(window, cap, refi);
+        #[cfg(test)]
+        assert_eq!(plan, self.plan_reference(c), "the one-pass plan against the reference");
+        plan
     }
 
     /// Updates channel `c`'s plan for the request just appended to queue `q` (the youngest):
@@ -1078,7 +1173,12 @@ impl Dram {
         }
         let r = *r;
         if matches!(cmd, Cmd::Act | Cmd::Rd | Cmd::Wr) {
-            queue.remove(i);
+            // Mostly the oldest.
+            if i == 0 {
+                queue.pop_front();
+            } else {
+                queue.remove(i);
+            }
             if q != Q::Act {
                 let ix = &mut ch.idx[q.index()];
                 ix.leave(r.seq, r.bank);
@@ -1166,8 +1266,7 @@ impl Dram {
                     bank.open = CLOSED;
                 }
                 for ix in ch.idx.iter_mut() {
-                    ix.dirty_hit.fill(true);
-                    ix.dirty_other.fill(true);
+                    ix.slots.iter_mut().for_each(Slot::reopen);
                 }
             }
             Cmd::Ref => {
@@ -1181,6 +1280,130 @@ impl Dram {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The plan as first written (a scan of each queue into candidate lists, then a pick over
+    /// them): every [`Dram::plan`] of the unit tests is checked against it.
+    impl Dram {
+        /// The earliest clock at which a head of the activate queue can issue (its state otherwise
+        /// unchanged), with each of its first `window` requests' ready clock in `ready`, and the
+        /// index of the oldest.
+        fn scan_act(&self, c: usize, ready: &mut Vec<Clk>) -> (Clk, Option<usize>) {
+            let queue = &self.channels[c].actq;
+            ready.clear();
+            let mut next = NEVER;
+            for r in queue.iter().take(self.window) {
+                let at = self.channels[c].ready(r, self.cap);
+                ready.push(at);
+                next = next.min(at);
+            }
+            let oldest = (0..ready.len()).min_by_key(|&i| (queue[i].arrive, i));
+            if let Some(o) = oldest {
+                next = next.min(self.next_cmd(c, &queue[o]).1);
+            }
+            (next, oldest)
+        }
+
+        /// FRFCFS_Cap's pick of the activate queue at clock `now` from a [`Dram::scan_act`] of it:
+        /// the oldest ready request, else the oldest if its command can issue.
+        fn pick_act(&self, c: usize, ready: &[Clk], oldest: Option<usize>, now: Clk) -> Option<usize> {
+            let queue = &self.channels[c].actq;
+            let mut best: Option<usize> = None;
+            for (i, &at) in ready.iter().enumerate() {
+                if at <= now && best.is_none_or(|b| queue[i].arrive < queue[b].arrive) {
+                    best = Some(i);
+                }
+            }
+            best.or_else(|| oldest.filter(|&o| self.next_cmd(c, &queue[o]).1 <= now))
+        }
+
+        /// The candidates of read or write queue `q` (in age order): per bank, the oldest hit and
+        /// the oldest other request of the window, each with its ready clock, into `cands`; returns
+        /// the earliest clock at which a head of the queue can issue (the oldest request included,
+        /// capped or not).
+        fn scan_classes_reference(&mut self, c: usize, q: Q, cands: &mut Vec<(Clk, u64)>) -> Clk {
+            cands.clear();
+            let window = self.window;
+            let ch = &mut self.channels[c];
+            let queue = if q == Q::Read { &ch.readq } else { &ch.writeq };
+            let Some(front) = queue.front() else { return NEVER };
+            let bound = queue[queue.len().min(window) - 1].seq;
+            let front = *front;
+            let ix = &mut ch.idx[q.index()];
+            let write = q == Q::Write;
+            let mut next = NEVER;
+            for w in 0..ix.live.len() {
+                let mut bits = ix.live[w];
+                while bits != 0 {
+                    let i = w * 64 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let b = &ch.banks[i];
+                    ix.slots[i].clean(bound, b.open);
+                    let (h, o) = (ix.slots[i].hit, ix.slots[i].other);
+                    if h != NONE {
+                        let at = if b.open != CLOSED && b.hits > self.cap {
+                            NEVER
+                        } else if write {
+                            b.wr.max(ch.wr)
+                        } else {
+                            b.rd.max(ch.rd)
+                        };
+                        cands.push((at, h));
+                        next = next.min(at);
+                    }
+                    if o != NONE {
+                        let at = if b.open == CLOSED { b.act.max(ch.act) } else { b.pre.max(ch.pre) };
+                        cands.push((at, o));
+                        next = next.min(at);
+                    }
+                }
+            }
+            next.min(self.next_cmd(c, &front).1)
+        }
+
+        /// FRFCFS_Cap's pick of read or write queue `q` at clock `now` from its
+        /// [`Dram::scan_classes`]: the oldest ready request, else the oldest if its command can
+        /// issue; as an index into the queue.
+        fn pick_classes(&self, c: usize, q: Q, cands: &[(Clk, u64)], now: Clk) -> Option<usize> {
+            let queue = self.queue(c, q);
+            let best = cands.iter().filter(|&&(at, _)| at <= now).map(|&(_, s)| s).min();
+            match best {
+                // Mostly the oldest.
+                Some(s) if queue[0].seq == s => Some(0),
+                Some(s) => Some(queue.binary_search_by_key(&s, |r| r.seq).expect("an indexed request")),
+                None => queue.front().filter(|r| self.next_cmd(c, r).1 <= now).map(|_| 0),
+            }
+        }
+
+        /// What channel `c` does next if no request arrives first: the clock (after its current
+        /// one) and the command, as [`Dram::tick`] would choose it then.
+        pub(super) fn plan_reference(&mut self, c: usize) -> Plan {
+            let mut ready_a = Vec::new();
+            let mut cands = Vec::new();
+            let t_ref = self.channels[c].refreshed.saturating_add(self.t.refi);
+            let (next_a, oldest_a) = self.scan_act(c, &mut ready_a);
+            let mode = self.mode_queue(c);
+            let mut next = next_a;
+            let refresh = (self.channels[c].ref_pending > 0).then(|| self.refresh_cmd(c));
+            match refresh {
+                Some((_, at)) => next = next.min(at),
+                None => next = next.min(self.scan_classes_reference(c, mode, &mut cands)),
+            }
+            let at = next.min(t_ref).max(self.channels[c].clk + 1);
+            let pick = if at >= t_ref {
+                Pick::Slow
+            } else if let Some(i) = self.pick_act(c, &ready_a, oldest_a, at) {
+                Pick::Issue(Q::Act, i, self.next_cmd(c, &self.channels[c].actq[i]).0)
+            } else if let Some((cmd, _)) = refresh {
+                Pick::Refresh(cmd)
+            } else {
+                match self.pick_classes(c, mode, &cands, at) {
+                    Some(i) => Pick::Issue(mode, i, self.next_cmd(c, &self.queue(c, mode)[i]).0),
+                    None => Pick::Slow,
+                }
+            };
+            Plan { at, pick }
+        }
+    }
 
     fn gbs(bytes: u64, ps: Ps) -> f64 {
         bytes as f64 / (ps as f64 * 1e-12) / 1e9
@@ -1207,6 +1430,23 @@ mod tests {
             d.release(k);
         }
         gbs(n * 64, last.max(t))
+    }
+
+    #[test]
+    fn ceil_div_by_multiply_is_div_ceil() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for d in [1u64, 2, 3, 625, 750, 1000, 1 << 20, u64::MAX / 3, u64::MAX] {
+            let inv = u64::MAX / d;
+            let edges = [0, 1, d - 1, d, d.saturating_add(1), 2 * (d / 2), u64::MAX - 1, u64::MAX];
+            for t in edges.into_iter().chain((0..10_000).map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                x >> (x % 64)
+            })) {
+                assert_eq!(ceil_div(t, d, inv), t.div_ceil(d), "{t} / {d}");
+            }
+        }
     }
 
     #[test]

@@ -37,7 +37,9 @@ use crate::render;
 use crate::scene::Scene;
 use crate::sort::SortEntry;
 pub use inputs::{ExactPixels, FrameInputs, FramePrep};
-pub use work_only::{gpu_duplication, FrameWork, SampledRaster, TileWork, WorkOptions, GPU_TILE};
+pub use work_only::{
+    gpu_duplication, gpu_duplication_of, FrameWork, SampledRaster, TileWork, WorkOptions, GPU_TILE,
+};
 
 mod inputs;
 mod work_only;

@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::{gpu_duplication, CULLED, GPU_TILE};
+use super::{gpu_duplication, gpu_duplication_of, CULLED, GPU_TILE};
 use crate::camera::Camera;
 use crate::formats::{quantize, FeatureEntry, FeatureFormat};
 use crate::hwpre::{preprocess_hw, Baked};
@@ -151,13 +151,12 @@ impl<'s> FramePrep<'s> {
             Some(baked) => {
                 let hw = preprocess_hw(baked, cam, fmt, key, tile);
                 let preprocess_s = t.elapsed().as_secs_f64();
-                let projected: Vec<Projected> = hw.iter().map(|h| h.projected).collect();
-                inp.gpu = gpu(&projected);
+                inp.gpu = gpu_duplication_of(&hw, |x| &x.projected, w, h, GPU_TILE);
                 let t = Instant::now();
                 inp.features.clear();
                 inp.features.extend(hw.iter().map(|h| h.entry));
                 inp.feature_ids.clear();
-                inp.feature_ids.extend(projected.iter().map(|p| p.index));
+                inp.feature_ids.extend(hw.iter().map(|h| h.projected.index));
                 (preprocess_s, t)
             }
             None => {

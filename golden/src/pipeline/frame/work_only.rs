@@ -231,11 +231,24 @@ impl Pipeline<'_> {
 /// `getRect(mean, radius)` clamped to the grid; returns (pairs, Gaussians with a non-empty
 /// rectangle and a positive radius).
 pub fn gpu_duplication(projected: &[Projected], width: u32, height: u32, tile: u32) -> (u64, u64) {
+    gpu_duplication_of(projected, |p| p, width, height, tile)
+}
+
+/// [`gpu_duplication`] of the [`Projected`] each of `items` holds (`proj` gives it), without
+/// gathering them into a slice of their own.
+pub fn gpu_duplication_of<T: Sync>(
+    items: &[T],
+    proj: impl Fn(&T) -> &Projected + Sync,
+    width: u32,
+    height: u32,
+    tile: u32,
+) -> (u64, u64) {
     let (gx, gy) = (width.div_ceil(tile) as i64, height.div_ceil(tile) as i64);
     let t = tile as f32;
-    projected
+    items
         .par_iter()
-        .map(|p| {
+        .map(|item| {
+            let p = proj(item);
             if p.radius == 0 {
                 return (0u64, 0u64);
             }
