@@ -99,6 +99,21 @@ pub fn raster_core() -> Vec<UnitConfig> {
     ]
 }
 
+/// True in a coverage run (`NEO_COVERAGE=1`, `scripts/coverage`), after printing why test
+/// `test` does not run there: coverage counts the configuration the crate was built with, and
+/// another configuration's Verilog has other lines under the same module names, which would
+/// merge into that count.
+pub fn excluded_from_coverage(test: &str) -> bool {
+    let excluded = crate::coverage::at_run_time();
+    if excluded {
+        println!(
+            "{test}: not run with NEO_COVERAGE=1 (coverage counts the built configuration only; \
+             other configurations' modules have the same names and other lines)"
+        );
+    }
+    excluded
+}
+
 /// Builds (or loads from the cache) top `top` of `cfg`, traced in the format `WAVES` asks for
 /// (untraced without it: about half the C++), its per-cycle code compiled for build time
 /// ([`DynModel::build_for_short_runs`]: these benches run seconds).
