@@ -3,6 +3,7 @@
 //! Every generated wrapper in [`crate::models`] implements [`Dut`], so drivers, monitors and wave
 //! tooling can be written once and bound to port names at run time.
 
+use crate::waves::Traceable;
 use std::path::Path;
 
 /// One port of a Verilated top.
@@ -126,6 +127,50 @@ impl<D: Dut> PortIo for D {
 
     fn io_eval(&mut self) {
         self.eval();
+    }
+}
+
+/// A model the unit benches (ITU, SCU, raster core) drive in any engine configuration: ports by
+/// index ([`PortIo`]), the clock, the reset and waves ([`Traceable`]). The statically linked
+/// models ([`Dut`], the configuration this crate was built with) and the models built at run
+/// time ([`crate::dynmodel::DynModel`], any configuration) both are.
+pub trait Clocked: PortIo + Traceable {
+    /// One clock cycle (the static wrappers' `tick`).
+    fn io_tick(&mut self);
+    /// The reset sequence; restarts the cycle count at zero.
+    fn io_reset(&mut self);
+
+    /// Index of the port called `name`.
+    ///
+    /// # Panics
+    /// When there is none (a bench bound to the wrong interface), naming the module and port.
+    fn pin(&self, name: &str) -> usize {
+        self.io_port(name).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// Reads a 1-bit (or any up to 64-bit) port as a flag: nonzero.
+    fn flag(&self, port: usize) -> bool {
+        self.io_get(port) != 0
+    }
+}
+
+impl<D: Dut> Clocked for D {
+    fn io_tick(&mut self) {
+        self.tick();
+    }
+
+    fn io_reset(&mut self) {
+        self.reset();
+    }
+}
+
+impl Clocked for crate::dynmodel::DynModel {
+    fn io_tick(&mut self) {
+        self.tick();
+    }
+
+    fn io_reset(&mut self) {
+        self.reset();
     }
 }
 

@@ -8,7 +8,7 @@
 
 use crate::bits::get_bits;
 use crate::check::Checker;
-use crate::models::NeoItu;
+use crate::dut::Clocked;
 use crate::rng::Rng;
 use crate::stream::{Beat, Sink, Source};
 use neo_gen::units::itu::{geom_bits_lsb, mean_bits};
@@ -86,9 +86,10 @@ pub struct ItuRun {
 
 /// Runs `jobs` through the ITU in order and checks every result (bitmap, hit, tag); stops at
 /// the first mismatch naming the job, the field and the values in hex. `stall_pct` applies to
-/// the input, `ready_pct` to the output. Resets the DUT first.
-pub fn run_checked(
-    dut: &mut NeoItu,
+/// the input, `ready_pct` to the output. Resets the DUT first. `dut` is `neo_itu` built from
+/// `cfg` (the static model for [`crate::config`], a run-time one for another configuration).
+pub fn run_checked<M: Clocked>(
+    dut: &mut M,
     cfg: &EngineConfig,
     seed: u64,
     jobs: &[ItuJob],
@@ -96,25 +97,19 @@ pub fn run_checked(
     ready_pct: u32,
 ) -> ItuRun {
     let mut rng = Rng::new(seed);
-    let checker = Checker::new(NeoItu::NAME, seed);
-    let mut src = Source::new::<NeoItu>(
-        "in_valid_i",
-        "in_ready_o",
-        &["mean_i", "geom_i", "tile_x_i", "tile_y_i", "tag_i"],
-        rng.fork(1),
-        stall_pct,
-    );
-    let mut sink = Sink::new::<NeoItu>(
-        "out_valid_o",
-        "out_ready_i",
-        &["bitmap_o", "hit_o", "tag_o"],
-        rng.fork(2),
-        ready_pct,
-    );
+    let checker = Checker::new(dut.top(), seed);
+    let ins = ["mean_i", "geom_i", "tile_x_i", "tile_y_i", "tag_i"];
+    let mut src = Source::bind(dut, "in_valid_i", "in_ready_o", &ins, rng.fork(1), stall_pct)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let outs = ["bitmap_o", "hit_o", "tag_o"];
+    let mut sink = Sink::bind(dut, "out_valid_o", "out_ready_i", &outs, rng.fork(2), ready_pct)
+        .unwrap_or_else(|e| panic!("{e}"));
     let tag_mask = if cfg.itu_tag_bits >= 64 { u64::MAX } else { (1u64 << cfg.itu_tag_bits) - 1 };
-    dut.set_in_valid_i(false);
-    dut.set_out_ready_i(false);
-    dut.reset();
+    let (in_valid, out_ready, out_valid) =
+        (dut.pin("in_valid_i"), dut.pin("out_ready_i"), dut.pin("out_valid_o"));
+    dut.io_set(in_valid, 0);
+    dut.io_set(out_ready, 0);
+    dut.io_reset();
     let mut run = ItuRun { jobs: jobs.len(), ..ItuRun::default() };
     let mut expected: VecDeque<(usize, u64)> = VecDeque::new();
     for (i, j) in jobs.iter().enumerate() {
@@ -124,11 +119,11 @@ pub fn run_checked(
         run.set_bits += b.count_ones() as u64;
         expected.push_back((i, b));
     }
-    let budget = dut.cycle() + 100 + 50 * jobs.len() as u64;
+    let budget = dut.io_cycle() + 100 + 50 * jobs.len() as u64;
     while !expected.is_empty() {
-        if dut.cycle() > budget {
+        if dut.io_cycle() > budget {
             checker.fail(
-                dut.cycle(),
+                dut.io_cycle(),
                 "out_valid_o",
                 &format!("job {}", expected[0].0),
                 "no output (timeout)",
@@ -136,16 +131,16 @@ pub fn run_checked(
         }
         src.drive(dut);
         sink.drive(dut);
-        dut.eval();
+        dut.io_eval();
         if src.sample(dut) && run.first_in.is_none() {
-            run.first_in = Some(dut.cycle());
+            run.first_in = Some(dut.io_cycle());
         }
         if let Some(beat) = sink.sample(dut, &checker) {
             let (i, want) = expected.pop_front().expect("checked non-empty");
-            let c = dut.cycle();
+            let c = dut.io_cycle();
             run.first_out.get_or_insert(c);
             run.last_out = Some(c);
-            let got = beat[0][0] as u64 | (beat[0][1] as u64) << 32;
+            let got = beat[0][0] as u64 | (beat[0].get(1).copied().unwrap_or(0) as u64) << 32;
             if got != want {
                 let j = &jobs[i];
                 checker.fail(
@@ -159,14 +154,14 @@ pub fn run_checked(
             let tag = beat[2][0] as u64 | (beat[2].get(1).copied().unwrap_or(0) as u64) << 32;
             checker.value(c, &format!("job {i} tag_o"), i as u64 & tag_mask, tag);
         }
-        dut.tick();
+        dut.io_tick();
     }
     for _ in 0..3 {
-        dut.set_in_valid_i(false);
-        dut.set_out_ready_i(true);
-        dut.eval();
-        checker.protocol(dut.cycle(), !dut.out_valid_o(), "an output after the last job");
-        dut.tick();
+        dut.io_set(in_valid, 0);
+        dut.io_set(out_ready, 1);
+        dut.io_eval();
+        checker.protocol(dut.io_cycle(), !dut.flag(out_valid), "an output after the last job");
+        dut.io_tick();
     }
     run
 }
@@ -177,15 +172,16 @@ fn sraw(rng: &mut Rng, bits: u8) -> i32 {
     ((rng.next_u64() << shift) as i64 >> shift) as i32
 }
 
-/// An extent raw value: mostly small, sometimes anything, sometimes unbounded.
-fn ext(rng: &mut Rng, fmt: &FeatureFormat) -> i32 {
+/// An extent raw value: mostly small (up to 640 raw, scaled by `scale`, the tile side over 64),
+/// sometimes anything, sometimes unbounded.
+fn ext(rng: &mut Rng, fmt: &FeatureFormat, scale: f64) -> i32 {
     let unb = fmt.unbounded_extent();
     match rng.below(20) {
         0 => unb,
         1 => unb - 1,
         2 => rng.below(unb as u64 + 1) as i32,
         3 => 0,
-        _ => rng.below(4 * 160) as i32,
+        _ => rng.below(((640.0 * scale) as u64).max(2)) as i32,
     }
 }
 
@@ -209,10 +205,13 @@ fn mean_near(rng: &mut Rng, fmt: &FeatureFormat, origin: i64, reach: i64) -> i32
 }
 
 /// `count` random jobs: a mix of arbitrary raw fields, random octagons around the tile, and
-/// quantised random Gaussians (needles to screen-fillers, all orientations).
+/// quantised random Gaussians (needles to screen-fillers, all orientations). Sizes and distances
+/// are those of the default 64-pixel tile, scaled with the configuration's tile side.
 pub fn random_jobs(cfg: &EngineConfig, rng: &mut Rng, count: usize) -> Vec<ItuJob> {
     let fmt = cfg.feature_format();
     let t = cfg.raster_config().tile as i64;
+    let scale = t as f64 / 64.0;
+    let reach = ((140.0 * scale).round() as i64).max(1);
     (0..count)
         .map(|_| {
             let tile = tile(rng, cfg);
@@ -230,8 +229,8 @@ pub fn random_jobs(cfg: &EngineConfig, rng: &mut Rng, count: usize) -> Vec<ItuJo
                 1..=5 => {
                     // A random octagon near the tile.
                     e.mean = [
-                        mean_near(rng, &fmt, origin[0] + 32, 140),
-                        mean_near(rng, &fmt, origin[1] + 32, 140),
+                        mean_near(rng, &fmt, origin[0] + t / 2, reach),
+                        mean_near(rng, &fmt, origin[1] + t / 2, reach),
                     ];
                     if rng.percent(10) {
                         e.axis = [sraw(rng, fmt.axis.bits), sraw(rng, fmt.axis.bits)];
@@ -239,18 +238,24 @@ pub fn random_jobs(cfg: &EngineConfig, rng: &mut Rng, count: usize) -> Vec<ItuJo
                         let th = rng.below(1 << 16) as f64 / 65536.0 * std::f64::consts::TAU;
                         e.axis = [fmt.axis.quantize(th.cos()) as i32, fmt.axis.quantize(th.sin()) as i32];
                     }
-                    e.extent_xy = [ext(rng, &fmt), ext(rng, &fmt)];
-                    e.extent_uv = [ext(rng, &fmt), ext(rng, &fmt)];
+                    e.extent_xy = [ext(rng, &fmt, scale), ext(rng, &fmt, scale)];
+                    e.extent_uv = [ext(rng, &fmt, scale), ext(rng, &fmt, scale)];
                 }
                 _ => {
                     // A quantised Gaussian.
-                    let su =
-                        (rng.below(4000) as f64 / 100.0 + 0.3).powf(if rng.percent(20) { 1.5 } else { 1.0 });
+                    let su = scale
+                        * (rng.below(4000) as f64 / 100.0 + 0.3).powf(if rng.percent(20) {
+                            1.5
+                        } else {
+                            1.0
+                        });
                     let sv = su * (rng.below(1000) as f64 / 1000.0 + 0.001);
                     let th = rng.below(1 << 16) as f64 / 65536.0 * std::f64::consts::TAU;
                     let cov = cov_from_axes(su, sv, th);
-                    let m =
-                        [0, 1].map(|a| origin[a] as f32 + 32.0 + (rng.below(20_000) as f32 / 100.0 - 100.0));
+                    let m = [0, 1].map(|a| {
+                        let off = rng.below(20_000) as f32 / 100.0 - 100.0;
+                        origin[a] as f32 + (t / 2) as f32 + scale as f32 * off
+                    });
                     let op = (rng.below(1000) as f32 + 1.0) / 1000.0;
                     let p = projected_from_cov(0, m, cov, op, [0.5; 3], 1.0);
                     e = quantize(&p, &fmt, &DepthKeyCodec::Fp16);
@@ -272,16 +277,22 @@ pub fn directed_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
     let px = |v: f64| (v * (1u64 << f) as f64).round() as i32;
     let epx = |v: f64| (v * (1u64 << ef) as f64).round() as i32;
     let one = 1i32 << fmt.axis.frac;
+    // The geometry (64 and 8 px by default): every position below is in tiles and subtiles.
+    let (tt, st) = (cfg.raster_config().tile as f64, cfg.raster_config().subtile as f64);
     let mut out = Vec::new();
     let mut add =
         |name: String, mean: [i32; 2], exy: [i32; 2], axis: [i32; 2], euv: [i32; 2], tile: [u32; 2]| {
             let e = FeatureEntry { mean, extent_xy: exy, axis, extent_uv: euv, ..FeatureEntry::default() };
             out.push((name, ItuJob { entry: e, tile }));
         };
-    // Border cases: the mean at 12 px reaches x = 16 exactly (touching, not separated) or falls
-    // one extent LSB short; the same across a tile border (x = 64) and on y.
-    for (t, base) in [(0u32, 12.0), (1, 76.0), (0, 60.0)] {
-        for (k, r) in [(0, 4.0), (1, 4.0 - 1.0 / (1 << ef) as f64), (2, 3.5), (3, 0.0)] {
+    // Border cases (default geometry): the mean at 12 px reaches x = 16 exactly (touching, not
+    // separated) or falls one extent LSB short; the same across a tile border (x = 64) and on
+    // y. In general: a radius of half a subtile from 1.5 subtiles (from half a subtile with 2 x 2
+    // subtiles, where 2 subtiles are the tile), and from a tile border.
+    let half = st / 2.0;
+    let inner = (1.5 * st).min(tt - 1.5 * st);
+    for (t, base) in [(0u32, inner), (1, tt + inner), (0, tt - half)] {
+        for (k, r) in [(0, half), (1, half - 1.0 / (1 << ef) as f64), (2, half - 0.5), (3, 0.0)] {
             let r = epx(r);
             let big = epx(1000.0);
             add(
@@ -311,9 +322,12 @@ pub fn directed_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
         }
     }
     // Means on subtile and tile corners, at and one mean LSB off.
-    for (name, x) in
-        [("corner 64", 64.0), ("corner 64-", 64.0 - 1.0 / (1 << f) as f64), ("corner 8", 8.0), ("half", 7.5)]
-    {
+    for (name, x) in [
+        ("corner tile", tt),
+        ("corner tile-", tt - 1.0 / (1 << f) as f64),
+        ("corner subtile", st),
+        ("half", st - 0.5),
+    ] {
         for t in [[0u32, 0], [1, 1], [0, 1], [1, 0]] {
             let r = epx(0.5);
             add(format!("{name} tile {t:?}"), [px(x), px(x)], [r, r], [one, 0], [r, r], t);
@@ -321,7 +335,7 @@ pub fn directed_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
     }
     // Needles (sigma 20 px along, 0.3 across), through the tile centre and through a corner.
     for (k, th) in [0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 2.8].iter().enumerate() {
-        for centre in [32.0f32, 64.0, 0.0] {
+        for centre in [tt as f32 / 2.0, tt as f32, 0.0] {
             let p = projected_from_cov(
                 0,
                 [centre, centre + 3.0],
@@ -349,7 +363,7 @@ pub fn directed_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
     // Centred outside the tile, reaching in (and not).
     add2(
         "outside left reaching",
-        [px(-100.0), px(30.0)],
+        [px(-100.0), px(tt / 2.0 - 2.0)],
         [epx(100.0), epx(5.0)],
         [one, 0],
         [epx(100.0), epx(5.0)],
@@ -357,7 +371,7 @@ pub fn directed_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
     );
     add2(
         "outside left short",
-        [px(-100.0), px(30.0)],
+        [px(-100.0), px(tt / 2.0 - 2.0)],
         [epx(99.75), epx(5.0)],
         [one, 0],
         [epx(99.75), epx(5.0)],
@@ -400,7 +414,21 @@ pub fn directed_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
             );
         }
     }
+    // Tile indices the configuration's `tile_bits` cannot hold wrap (the RTL takes the low bits).
+    for (_, j) in out.iter_mut() {
+        j.tile = j.tile.map(|t| t & tmax);
+    }
     out
+}
+
+/// The bitmap with every subtile of a tile set (all 64 bits in the default geometry).
+pub fn full_bitmap(cfg: &EngineConfig) -> u64 {
+    let n = cfg.raster_config().subtiles_per_tile();
+    if n >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << n) - 1
+    }
 }
 
 /// Measured ITU timing: latency (input transfer to output valid) and initiation interval.
@@ -413,7 +441,7 @@ pub struct ItuTiming {
 }
 
 /// Measures [`ItuTiming`] with `jobs` random jobs, no stalls, output always ready.
-pub fn measure_timing(dut: &mut NeoItu, cfg: &EngineConfig, seed: u64, jobs: usize) -> ItuTiming {
+pub fn measure_timing<M: Clocked>(dut: &mut M, cfg: &EngineConfig, seed: u64, jobs: usize) -> ItuTiming {
     let mut rng = Rng::new(seed);
     let one = random_jobs(cfg, &mut rng, 1);
     let r = run_checked(dut, cfg, seed, &one, 0, 100);

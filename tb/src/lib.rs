@@ -13,6 +13,7 @@ pub mod bits;
 #[cfg(neo_has_verilator)]
 pub mod bsu;
 pub mod check;
+pub mod configs;
 #[cfg(neo_has_verilator)]
 pub mod core;
 pub mod coverage;

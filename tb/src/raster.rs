@@ -13,7 +13,8 @@
 use crate::bits::get_bits;
 use crate::check::{Checker, WriteOnce};
 use crate::core::MemTiming;
-use crate::dut::Dut;
+use crate::dut::Clocked;
+use crate::dynmodel::DynModel;
 use crate::itu::entry_words;
 use crate::models::NeoRasterCore;
 use crate::rng::Rng;
@@ -106,10 +107,12 @@ struct Memory {
     last_read: u64,
 }
 
-/// The raster core with its memory model, command driver and checker.
-pub struct RasterCore {
+/// The raster core with its memory model, command driver and checker. `M` is the model: the
+/// static one for [`crate::config`] ([`RasterCore::new`]), or one built at run time for another
+/// configuration ([`RasterCore::build`]).
+pub struct RasterCore<M: Clocked = NeoRasterCore> {
     /// The model.
-    pub dut: NeoRasterCore,
+    pub dut: M,
     /// Mismatch reporting.
     pub checker: Checker,
     mem: Memory,
@@ -119,25 +122,92 @@ pub struct RasterCore {
     sort: SortFormat,
     fwords: usize,
     burst: u64,
+    /// `scu_lanes` and `raster_scus` (the hang budget: [`RasterCore::cycle_budget`]).
+    scu_lanes: u64,
+    scus: u64,
     ports: Ports,
     req_hs: Handshake,
 }
 
+/// The ports the bench drives and reads by index.
 #[derive(Clone, Copy)]
 struct Ports {
     rsp_data: usize,
+    rsp_valid: usize,
+    rsp_ready: usize,
     wdata: usize,
+    req_valid: usize,
+    req_ready: usize,
+    req_write: usize,
+    req_space: usize,
+    req_addr: usize,
+    req_len: usize,
+    cmd_valid: usize,
+    cmd_ready: usize,
+    /// `cmd_tile_x_i`, `cmd_tile_y_i`, `cmd_width_i`, `cmd_height_i`, `cmd_table_i`, `cmd_len_i`,
+    /// `cmd_feat_i`, `cmd_pix_i`.
+    cmd: [usize; 8],
+    done: usize,
 }
 
-impl RasterCore {
-    /// A reset core whose memory follows `timing`.
+impl Ports {
+    fn of<M: Clocked>(dut: &M) -> Self {
+        let p = |n: &str| dut.pin(n);
+        Ports {
+            rsp_data: p("mem_rsp_data_i"),
+            rsp_valid: p("mem_rsp_valid_i"),
+            rsp_ready: p("mem_rsp_ready_o"),
+            wdata: p("mem_wdata_o"),
+            req_valid: p("mem_req_valid_o"),
+            req_ready: p("mem_req_ready_i"),
+            req_write: p("mem_req_write_o"),
+            req_space: p("mem_req_space_o"),
+            req_addr: p("mem_req_addr_o"),
+            req_len: p("mem_req_len_o"),
+            cmd_valid: p("cmd_valid_i"),
+            cmd_ready: p("cmd_ready_o"),
+            cmd: [
+                "cmd_tile_x_i",
+                "cmd_tile_y_i",
+                "cmd_width_i",
+                "cmd_height_i",
+                "cmd_table_i",
+                "cmd_len_i",
+                "cmd_feat_i",
+                "cmd_pix_i",
+            ]
+            .map(p),
+            done: p("done_o"),
+        }
+    }
+}
+
+impl RasterCore<NeoRasterCore> {
+    /// A reset core (the static model of [`crate::config`]) whose memory follows `timing`.
     pub fn new(cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Self {
+        RasterCore::with_model(NeoRasterCore::new(), cfg, seed, timing)
+    }
+}
+
+impl RasterCore<DynModel> {
+    /// A reset core of any configuration `cfg` (`neo_raster_core` built at run time, or loaded
+    /// from the cache: [`crate::configs::build`]) whose memory follows `timing`.
+    pub fn build(cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Result<Self, String> {
+        let dut = crate::configs::build(cfg, "neo_raster_core")?;
+        Ok(RasterCore::with_model(dut, cfg, seed, timing))
+    }
+}
+
+impl<M: Clocked> RasterCore<M> {
+    /// A reset core on model `dut` (`neo_raster_core` generated from `cfg`) whose memory
+    /// follows `timing`.
+    pub fn with_model(mut dut: M, cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Self {
         let mut rng = Rng::new(seed);
-        let mut dut = NeoRasterCore::new();
-        dut.set_cmd_valid_i(false);
-        dut.set_mem_req_ready_i(false);
-        dut.set_mem_rsp_valid_i(false);
-        dut.reset();
+        let ports = Ports::of(&dut);
+        dut.io_set(ports.cmd_valid, 0);
+        dut.io_set(ports.req_ready, 0);
+        dut.io_set(ports.rsp_valid, 0);
+        dut.io_reset();
         let mem = Memory {
             timing,
             rng: rng.fork(1),
@@ -151,16 +221,19 @@ impl RasterCore {
         };
         // docs/rtl.md "Memory protocol": an offered request that is not taken may change in the
         // next cycle (fixed priority), so only "valid does not depend on ready" applies.
-        let mut req_hs = Handshake::new::<NeoRasterCore>(
+        let mut req_hs = Handshake::bind(
+            &dut,
             "memory request port",
             "mem_req_valid_o",
             "mem_req_ready_i",
             &["mem_req_write_o", "mem_req_space_o", "mem_req_addr_o", "mem_req_len_o", "mem_wdata_o"],
-        );
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
         req_hs.check_stable = false;
+        let checker = Checker::new(dut.top(), seed);
         RasterCore {
             dut,
-            checker: Checker::new(NeoRasterCore::NAME, seed),
+            checker,
             mem,
             rng: rng.fork(2),
             fmt: cfg.feature_format(),
@@ -168,12 +241,20 @@ impl RasterCore {
             sort: cfg.format(),
             fwords: feature_word_bits(cfg).div_ceil(32) as usize,
             burst: cfg.burst as u64,
-            ports: Ports {
-                rsp_data: NeoRasterCore::port("mem_rsp_data_i"),
-                wdata: NeoRasterCore::port("mem_wdata_o"),
-            },
+            scu_lanes: cfg.scu_lanes as u64,
+            scus: cfg.raster_scus as u64,
+            ports,
             req_hs,
         }
+    }
+
+    /// Restarts the bench's random streams (memory timing, addresses) and its checker's seed
+    /// from `seed`, as a core made with `seed` has them.
+    pub fn reseed(&mut self, seed: u64) {
+        let mut rng = Rng::new(seed);
+        self.mem.rng = rng.fork(1);
+        self.rng = rng.fork(2);
+        self.checker = Checker::new(self.dut.top(), seed);
     }
 
     /// Changes the memory timing.
@@ -183,45 +264,47 @@ impl RasterCore {
 
     /// One cycle of the memory model and the clock.
     fn step(&mut self, b: &Bases, len: u64) {
-        let c = self.dut.cycle();
+        let p = self.ports;
+        let c = self.dut.io_cycle();
         let ready = self.mem.rng.percent(self.mem.timing.req_ready_pct);
-        self.dut.set_mem_req_ready_i(ready);
+        self.dut.io_set(p.req_ready, ready as u64);
         if !self.mem.offering {
             if let Some((due, data)) = self.mem.rsp.front() {
                 if *due <= c && !self.mem.rng.percent(self.mem.timing.rsp_gap_pct) {
                     self.mem.offering = true;
                     let d = data.clone();
-                    self.dut.set_words(self.ports.rsp_data, &d);
+                    self.dut.io_set_words(p.rsp_data, &d);
                 }
             }
         }
         if !self.mem.offering {
             let junk: Vec<u32> = (0..self.fwords).map(|_| self.mem.rng.next_u32()).collect();
-            self.dut.set_words(self.ports.rsp_data, &junk);
+            self.dut.io_set_words(p.rsp_data, &junk);
         }
-        self.dut.set_mem_rsp_valid_i(self.mem.offering);
-        self.dut.eval();
+        self.dut.io_set(p.rsp_valid, self.mem.offering as u64);
+        self.dut.io_eval();
         self.req_hs.check(&mut self.dut, ready, &self.checker);
         if self.mem.offering {
-            self.checker.protocol(c, self.dut.mem_rsp_ready_o(), "mem_rsp_ready_o low");
+            self.checker.protocol(c, self.dut.flag(p.rsp_ready), "mem_rsp_ready_o low");
             self.mem.rsp.pop_front();
             self.mem.offering = false;
         }
-        if ready && self.dut.mem_req_valid_o() {
+        if ready && self.dut.flag(p.req_valid) {
             self.request(c, b, len);
         }
-        self.dut.tick();
+        self.dut.io_tick();
     }
 
     fn request(&mut self, c: u64, b: &Bases, len: u64) {
-        let addr = self.dut.mem_req_addr_o();
-        let n = self.dut.mem_req_len_o();
-        let sp = self.dut.mem_req_space_o();
+        let p = self.ports;
+        let addr = self.dut.io_get(p.req_addr);
+        let n = self.dut.io_get(p.req_len);
+        let sp = self.dut.io_get(p.req_space);
         let tile = self.rc.tile as u64;
         let side = self.rc.subtile as u64;
-        if self.dut.mem_req_write_o() {
-            let mut w = vec![0u32; 8];
-            self.dut.get_words(self.ports.wdata, &mut w);
+        if self.dut.flag(p.req_write) {
+            let mut w = vec![0u32; (self.dut.io_width(p.wdata).div_ceil(32) as usize).max(2)];
+            self.dut.io_get_words(p.wdata, &mut w);
             match sp {
                 space::TABLE => {
                     self.checker.value(c, "mem_req_len_o (write-back)", 1, n);
@@ -313,47 +396,44 @@ impl RasterCore {
         for _ in 0..self.rng.below(3) {
             self.step(&b, len);
         }
-        self.dut.set_cmd_tile_x_i(case.tile[0] as u64);
-        self.dut.set_cmd_tile_y_i(case.tile[1] as u64);
-        self.dut.set_cmd_width_i(case.size[0] as u64);
-        self.dut.set_cmd_height_i(case.size[1] as u64);
-        self.dut.set_cmd_table_i(b.table);
-        self.dut.set_cmd_len_i(len);
-        self.dut.set_cmd_feat_i(b.feat);
-        self.dut.set_cmd_pix_i(b.pix);
-        self.dut.set_cmd_valid_i(true);
-        let limit = self.dut.cycle() + 20_000 + 200 * len;
+        let p = self.ports;
+        let cmd = [case.tile[0] as u64, case.tile[1] as u64, case.size[0] as u64, case.size[1] as u64];
+        for (k, v) in cmd.into_iter().chain([b.table, len, b.feat, b.pix]).enumerate() {
+            self.dut.io_set(p.cmd[k], v);
+        }
+        self.dut.io_set(p.cmd_valid, 1);
+        let limit = self.dut.io_cycle() + self.cycle_budget(len);
         let start;
         loop {
-            self.dut.eval();
-            let accepted = self.dut.cmd_ready_o();
-            let c = self.dut.cycle();
-            self.checker.protocol(c, !self.dut.done_o(), "done_o while no command is running");
+            self.dut.io_eval();
+            let accepted = self.dut.flag(p.cmd_ready);
+            let c = self.dut.io_cycle();
+            self.checker.protocol(c, !self.dut.flag(p.done), "done_o while no command is running");
             self.step(&b, len);
             if accepted {
                 start = c;
                 break;
             }
         }
-        self.dut.set_cmd_valid_i(false);
-        self.dut.set_cmd_len_i(self.rng.next_u64());
-        self.dut.set_cmd_table_i(self.rng.next_u64());
+        self.dut.io_set(p.cmd_valid, 0);
+        self.dut.io_set(p.cmd[5], self.rng.next_u64());
+        self.dut.io_set(p.cmd[4], self.rng.next_u64());
         let mut reads = 0;
         loop {
-            self.dut.eval();
-            if self.dut.done_o() {
+            self.dut.io_eval();
+            if self.dut.flag(p.done) {
                 break;
             }
-            let c = self.dut.cycle();
+            let c = self.dut.io_cycle();
             if c > limit {
                 self.checker.fail(c, "done_o", "a pulse", &format!("none after {} cycles", c - start));
             }
-            if self.dut.mem_req_valid_o() && !self.dut.mem_req_write_o() {
+            if self.dut.flag(p.req_valid) && !self.dut.flag(p.req_write) {
                 reads += 1;
             }
             self.step(&b, len);
         }
-        let c = self.dut.cycle();
+        let c = self.dut.io_cycle();
         self.checker.protocol(
             c,
             self.mem.rsp.is_empty() && !self.mem.offering,
@@ -368,10 +448,22 @@ impl RasterCore {
         };
         self.check(c, case, want, &b);
         self.step(&b, len);
-        self.dut.eval();
-        self.checker.protocol(self.dut.cycle(), !self.dut.done_o(), "done_o longer than one cycle");
-        self.checker.protocol(self.dut.cycle(), self.dut.cmd_ready_o(), "cmd_ready_o low after done_o");
+        self.dut.io_eval();
+        let c = self.dut.io_cycle();
+        self.checker.protocol(c, !self.dut.flag(p.done), "done_o longer than one cycle");
+        self.checker.protocol(c, self.dut.flag(p.cmd_ready), "cmd_ready_o low after done_o");
         run
+    }
+
+    /// Cycles a tile of `len` entries may take before the bench calls it a hang: 20k + 200 a
+    /// entry in the default configuration, scaled by the SCU passes per Gaussian (pixels of a
+    /// subtile over `scu_lanes`) against the default's 4, and by the subtile groups
+    /// (`subtiles / raster_scus`) against the default's 16.
+    fn cycle_budget(&self, len: u64) -> u64 {
+        let passes = (self.rc.subtile * self.rc.subtile) as u64 / self.scu_lanes;
+        let groups = self.rc.subtiles_per_tile() as u64 / self.scus;
+        let scale = (passes * groups).div_ceil(4 * 16).max(1);
+        (20_000 + 200 * len) * scale
     }
 
     /// Checker: every pixel and every table entry.

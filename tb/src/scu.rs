@@ -10,8 +10,7 @@
 
 use crate::bits::get_bits;
 use crate::check::Checker;
-use crate::dut::Dut;
-use crate::models::NeoScu;
+use crate::dut::Clocked;
 use crate::rng::Rng;
 use crate::stream::{Beat, Sink, Source};
 use neo_gen::EngineConfig;
@@ -81,8 +80,14 @@ struct PieceFlags {
     sub: u64,
 }
 
-/// The beat of Gaussian `e` (None: an empty beat) of a list.
-fn beat(e: Option<&FeatureEntry>, list: &ScuList, fl: PieceFlags) -> Beat {
+/// The widths of [`IN_PORTS`] on `dut` (the values of a beat are cut to them).
+pub fn in_widths<M: Clocked>(dut: &M) -> Vec<u32> {
+    IN_PORTS.iter().map(|n| dut.io_width(dut.pin(n))).collect()
+}
+
+/// The beat of Gaussian `e` (None: an empty beat) of a list, each value cut to its port's
+/// width (`widths`, [`in_widths`]).
+fn beat(e: Option<&FeatureEntry>, list: &ScuList, fl: PieceFlags, widths: &[u32]) -> Beat {
     let f = e.copied().unwrap_or_default();
     let vals: [u64; 19] = [
         f.mean[0] as u32 as u64,
@@ -105,18 +110,12 @@ fn beat(e: Option<&FeatureEntry>, list: &ScuList, fl: PieceFlags) -> Beat {
         fl.resume as u64,
         fl.sub,
     ];
-    vals.iter()
-        .enumerate()
-        .map(|(k, &v)| {
-            let w = NeoScu::PORTS[NeoScu::port(IN_PORTS[k])].width;
-            vec![(v & ((1u64 << w) - 1)) as u32]
-        })
-        .collect()
+    vals.iter().enumerate().map(|(k, &v)| vec![(v & ((1u64 << widths[k]) - 1)) as u32]).collect()
 }
 
-/// The beats of `list` (one piece, slot 0).
-pub fn beats(list: &ScuList) -> Vec<Beat> {
-    piece_beats(list, 0..list.entries.len(), false, true, 0)
+/// The beats of `list` (one piece, slot 0) for input ports of `widths`.
+pub fn beats(list: &ScuList, widths: &[u32]) -> Vec<Beat> {
+    piece_beats(list, 0..list.entries.len(), false, true, 0, widths)
 }
 
 /// The beats of the piece `range` of `list`'s entries (an empty range: one empty beat),
@@ -127,20 +126,21 @@ fn piece_beats(
     resume: bool,
     fin: bool,
     sub: u64,
+    widths: &[u32],
 ) -> Vec<Beat> {
     let flags = |last: bool| PieceFlags { last, fin: fin && last, resume, sub };
     if range.is_empty() {
-        return vec![beat(None, list, flags(true))];
+        return vec![beat(None, list, flags(true), widths)];
     }
     let end = range.end;
-    range.map(|i| beat(Some(&list.entries[i]), list, flags(i + 1 == end))).collect()
+    range.map(|i| beat(Some(&list.entries[i]), list, flags(i + 1 == end), widths)).collect()
 }
 
 /// The beats of `lists` cut into `pieces` pieces each (random cut points, empty pieces
 /// included) and interleaved as the raster core sends them: piece 0 of every list (list `k` in
 /// slot `k`), then piece 1 of every list, ...; only the last pieces end their subtiles, so the
-/// outputs come in list order.
-pub fn interleaved_piece_beats(rng: &mut Rng, lists: &[ScuList], pieces: usize) -> Vec<Beat> {
+/// outputs come in list order. `widths`: the input ports' ([`in_widths`]).
+pub fn interleaved_piece_beats(rng: &mut Rng, lists: &[ScuList], pieces: usize, widths: &[u32]) -> Vec<Beat> {
     let cuts: Vec<Vec<usize>> = lists
         .iter()
         .map(|l| {
@@ -155,7 +155,7 @@ pub fn interleaved_piece_beats(rng: &mut Rng, lists: &[ScuList], pieces: usize) 
     let mut out = Vec::new();
     for p in 0..pieces {
         for (k, l) in lists.iter().enumerate() {
-            out.extend(piece_beats(l, cuts[k][p]..cuts[k][p + 1], p > 0, p + 1 == pieces, k as u64));
+            out.extend(piece_beats(l, cuts[k][p]..cuts[k][p + 1], p > 0, p + 1 == pieces, k as u64, widths));
         }
     }
     out
@@ -181,23 +181,25 @@ pub fn golden_pixels(list: &ScuList, fmt: &FeatureFormat, rc: &RasterConfig) -> 
 
 /// Sends `lists` through a fresh SCU (input stalls with probability `stall_pct`, output ready
 /// with probability `ready_pct`), checking every pixel against [`golden_pixels`] and the
-/// valid/ready rules; panics at the first mismatch.
-pub fn run_checked(
-    dut: &mut NeoScu,
+/// valid/ready rules; panics at the first mismatch. `dut` is `neo_scu` built from `cfg` (the
+/// static model for [`crate::config`], a run-time one for another configuration).
+pub fn run_checked<M: Clocked>(
+    dut: &mut M,
     cfg: &EngineConfig,
     seed: u64,
     lists: &[ScuList],
     stall_pct: u32,
     ready_pct: u32,
 ) -> ScuRun {
-    let all: Vec<Beat> = lists.iter().flat_map(beats).collect();
+    let widths = in_widths(dut);
+    let all: Vec<Beat> = lists.iter().flat_map(|l| beats(l, &widths)).collect();
     run_beats_checked(dut, cfg, seed, lists, all, stall_pct, ready_pct)
 }
 
 /// [`run_checked`] with each list cut into `pieces` interleaved pieces
 /// ([`interleaved_piece_beats`]; at most the SCU's state slots of lists).
-pub fn run_pieces_checked(
-    dut: &mut NeoScu,
+pub fn run_pieces_checked<M: Clocked>(
+    dut: &mut M,
     cfg: &EngineConfig,
     seed: u64,
     lists: &[ScuList],
@@ -208,13 +210,13 @@ pub fn run_pieces_checked(
     let slots = neo_gen::units::scu::ScuWidths::new(cfg).rows as usize;
     assert!(lists.len() <= slots, "{} lists for {slots} state slots", lists.len());
     let mut rng = Rng::new(seed ^ 0x9e37);
-    let all = interleaved_piece_beats(&mut rng, lists, pieces);
+    let all = interleaved_piece_beats(&mut rng, lists, pieces, &in_widths(dut));
     run_beats_checked(dut, cfg, seed, lists, all, stall_pct, ready_pct)
 }
 
 /// Sends `beats` (ending `lists`' subtiles in order) and checks the outputs.
-fn run_beats_checked(
-    dut: &mut NeoScu,
+fn run_beats_checked<M: Clocked>(
+    dut: &mut M,
     cfg: &EngineConfig,
     seed: u64,
     lists: &[ScuList],
@@ -225,9 +227,12 @@ fn run_beats_checked(
     let fmt = cfg.feature_format();
     let rc = cfg.raster_config();
     let mut rng = Rng::new(seed);
-    let checker = Checker::new(NeoScu::NAME, seed);
-    let mut src = Source::new::<NeoScu>("in_valid_i", "in_ready_o", &IN_PORTS, rng.fork(1), stall_pct);
-    let mut sink = Sink::new::<NeoScu>("out_valid_o", "out_ready_i", &["out_rgb_o"], rng.fork(2), ready_pct);
+    let checker = Checker::new(dut.top(), seed);
+    let mut src = Source::bind(dut, "in_valid_i", "in_ready_o", &IN_PORTS, rng.fork(1), stall_pct)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut sink = Sink::bind(dut, "out_valid_o", "out_ready_i", &["out_rgb_o"], rng.fork(2), ready_pct)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let p = ScuPorts::of(dut);
     let mut expected: VecDeque<Vec<[u8; 3]>> = VecDeque::with_capacity(lists.len());
     let beat_count = beats.len() as u64;
     for b in beats {
@@ -238,21 +243,21 @@ fn run_beats_checked(
         gaussians += l.entries.len();
         expected.push_back(golden_pixels(l, &fmt, &rc));
     }
-    dut.set_in_valid_i(false);
-    dut.set_out_ready_i(false);
-    dut.reset();
+    dut.io_set(p.in_valid, 0);
+    dut.io_set(p.out_ready, 0);
+    dut.io_reset();
     let passes = (rc.subtile * rc.subtile) as u64 / cfg.scu_lanes as u64;
     let limit = 1000 + beat_count * (passes + 2) * 8 + 40 * lists.len() as u64;
     let mut index = 0usize;
     let mut term_cycles = 0;
     while let Some(want) = expected.front() {
-        if dut.cycle() > limit {
-            checker.fail(dut.cycle(), "out_valid_o", "a subtile", &format!("none for {limit} cycles"));
+        if dut.io_cycle() > limit {
+            checker.fail(dut.io_cycle(), "out_valid_o", "a subtile", &format!("none for {limit} cycles"));
         }
         src.drive(dut);
         sink.drive(dut);
-        dut.eval();
-        term_cycles += dut.term_o() as u64;
+        dut.io_eval();
+        term_cycles += dut.flag(p.term) as u64;
         src.sample(dut);
         if let Some(b) = sink.sample(dut, &checker) {
             for (k, px) in want.iter().enumerate() {
@@ -261,7 +266,7 @@ fn run_beats_checked(
                     if got != px[c] as u64 {
                         let s = rc.subtile as usize;
                         checker.value(
-                            dut.cycle(),
+                            dut.io_cycle(),
                             &format!("list {index} pixel {k} (lx {}, ly {}).{name}", k % s, k / s),
                             px[c] as u64,
                             got,
@@ -272,17 +277,39 @@ fn run_beats_checked(
             expected.pop_front();
             index += 1;
         }
-        dut.tick();
+        dut.io_tick();
     }
-    checker.protocol(dut.cycle(), src.is_idle(), "an output for every list but input beats left over");
+    checker.protocol(dut.io_cycle(), src.is_idle(), "an output for every list but input beats left over");
     for _ in 0..passes + 12 {
-        dut.set_in_valid_i(false);
-        dut.set_out_ready_i(true);
-        dut.eval();
-        checker.protocol(dut.cycle(), !dut.out_valid_o(), "an output subtile with no list left");
-        dut.tick();
+        dut.io_set(p.in_valid, 0);
+        dut.io_set(p.out_ready, 1);
+        dut.io_eval();
+        checker.protocol(dut.io_cycle(), !dut.flag(p.out_valid), "an output subtile with no list left");
+        dut.io_tick();
     }
-    ScuRun { lists: lists.len(), gaussians, cycles: dut.cycle(), term_cycles }
+    ScuRun { lists: lists.len(), gaussians, cycles: dut.io_cycle(), term_cycles }
+}
+
+/// The control ports the SCU bench drives and reads itself (the streams' are bound by the agents).
+#[derive(Clone, Copy)]
+struct ScuPorts {
+    in_valid: usize,
+    out_ready: usize,
+    out_valid: usize,
+    out_rgb: usize,
+    term: usize,
+}
+
+impl ScuPorts {
+    fn of<M: Clocked>(dut: &M) -> Self {
+        ScuPorts {
+            in_valid: dut.pin("in_valid_i"),
+            out_ready: dut.pin("out_ready_i"),
+            out_valid: dut.pin("out_valid_o"),
+            out_rgb: dut.pin("out_rgb_o"),
+            term: dut.pin("term_o"),
+        }
+    }
 }
 
 /// A log-uniform draw in `[lo, hi]`.
@@ -426,51 +453,54 @@ pub struct ScuTiming {
 
 /// Runs one list at full rate; returns the cycle out_valid_o first rises and the cycle of every
 /// input transfer. Checks the pixels against golden.
-fn timed(dut: &mut NeoScu, cfg: &EngineConfig, seed: u64, list: &ScuList) -> (u64, Vec<u64>) {
+fn timed<M: Clocked>(dut: &mut M, cfg: &EngineConfig, seed: u64, list: &ScuList) -> (u64, Vec<u64>) {
     let fmt = cfg.feature_format();
     let rc = cfg.raster_config();
-    let checker = Checker::new(NeoScu::NAME, seed);
+    let checker = Checker::new(dut.top(), seed);
     let mut rng = Rng::new(seed);
-    let mut src = Source::new::<NeoScu>("in_valid_i", "in_ready_o", &IN_PORTS, rng.fork(1), 0);
-    for b in beats(list) {
+    let mut src = Source::bind(dut, "in_valid_i", "in_ready_o", &IN_PORTS, rng.fork(1), 0)
+        .unwrap_or_else(|e| panic!("{e}"));
+    for b in beats(list, &in_widths(dut)) {
         src.push(b);
     }
     let want = golden_pixels(list, &fmt, &rc);
-    dut.set_out_ready_i(true);
-    dut.set_in_valid_i(false);
-    dut.reset();
+    let p = ScuPorts::of(dut);
+    let mut got = vec![0u32; dut.io_width(p.out_rgb).div_ceil(32) as usize];
+    dut.io_set(p.out_ready, 1);
+    dut.io_set(p.in_valid, 0);
+    dut.io_reset();
     let mut sent = Vec::new();
     loop {
-        if dut.cycle() > 100_000 {
-            checker.fail(dut.cycle(), "out_valid_o", "a subtile", "none");
+        if dut.io_cycle() > 100_000 {
+            checker.fail(dut.io_cycle(), "out_valid_o", "a subtile", "none");
         }
         src.drive(dut);
-        dut.eval();
+        dut.io_eval();
         if src.sample(dut) {
-            sent.push(dut.cycle());
+            sent.push(dut.io_cycle());
         }
-        if dut.out_valid_o() {
-            let got = dut.out_rgb_o();
+        if dut.flag(p.out_valid) {
+            dut.io_get_words(p.out_rgb, &mut got);
             for (k, px) in want.iter().enumerate() {
                 for (c, &v) in px.iter().enumerate() {
                     checker.value(
-                        dut.cycle(),
+                        dut.io_cycle(),
                         &format!("pixel {k}.{c}"),
                         v as u64,
                         get_bits(&got, RGB_BITS as usize * k + 8 * c, 8),
                     );
                 }
             }
-            let out = dut.cycle();
-            dut.tick();
+            let out = dut.io_cycle();
+            dut.io_tick();
             return (out, sent);
         }
-        dut.tick();
+        dut.io_tick();
     }
 }
 
 /// Measures [`ScuTiming`] (every output checked against golden).
-pub fn measure_timing(dut: &mut NeoScu, cfg: &EngineConfig, seed: u64) -> ScuTiming {
+pub fn measure_timing<M: Clocked>(dut: &mut M, cfg: &EngineConfig, seed: u64) -> ScuTiming {
     let fmt = cfg.feature_format();
     let side = cfg.raster_config().subtile;
     let origin = [64, 128];

@@ -14,10 +14,12 @@ fn raster_core_skipped_without_verilator() {
 
 #[cfg(neo_has_verilator)]
 mod cosim {
+    use neo_gen::EngineConfig;
     use neo_golden::raster::raster_tile;
     use neo_golden::shared::shared_file_for_test;
     use neo_golden::{source, trajectory};
     use neo_tb::core::MemTiming;
+    use neo_tb::dut::Clocked;
     use neo_tb::raster::{at, case_of, g, golden, random_case, RasterCore, TileCase};
     use neo_tb::rng::{for_each_seed, seed_share, Rng, SeedSplit};
     use neo_tb::scu::gaussian_with_alpha;
@@ -35,8 +37,7 @@ mod cosim {
         MemTiming { req_ready_pct: 90, wr_ready_pct: 90, min_latency: 4, max_latency: 12, rsp_gap_pct: 5 },
     ];
 
-    fn check_case(core: &mut RasterCore, case: &TileCase) -> u64 {
-        let cfg = neo_tb::config();
+    fn check_case<M: Clocked>(core: &mut RasterCore<M>, cfg: &EngineConfig, case: &TileCase) -> u64 {
         let want = golden(case, &cfg.feature_format(), &cfg.raster_config());
         core.run(case, &want).cycles
     }
@@ -46,30 +47,44 @@ mod cosim {
         let name = "raster_core_random_tiles_under_memory_stalls";
         for_each_seed(name, |seed| {
             let cfg = neo_tb::config();
-            let mut rng = Rng::new(seed);
             let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
             maybe_trace(&mut core.dut, name);
             // The Gaussians are split over the seeds (each seed its share: the same with NEO_SEED).
-            let total = seed_share(gaussian_count());
-            let (mut sent, mut tiles, mut edge) = (0, 0, 0);
-            while sent < total {
-                core.set_timing(TIMINGS[tiles % TIMINGS.len()]);
-                let tile = [rng.below(40) as u32, rng.below(40) as u32];
-                let mut size =
-                    [(tile[0] + 1 + rng.below(3) as u32) * 64, (tile[1] + 1 + rng.below(3) as u32) * 64];
-                if rng.percent(25) {
-                    size = [tile[0] * 64 + 1 + rng.below(64) as u32, tile[1] * 64 + 1 + rng.below(64) as u32];
-                    edge += 1;
-                }
-                let n = rng.below(48) as usize;
-                let case = random_case(&mut rng, &cfg, tile, size, n, 5);
-                check_case(&mut core, &case);
-                sent += n;
-                tiles += 1;
-            }
-            assert!(edge > 0);
-            println!("{name}: {sent} Gaussians in {tiles} tiles ({edge} edge tiles) checked");
+            random_tiles(&mut core, &cfg, seed, seed_share(gaussian_count()), 48);
         });
+    }
+
+    /// Random tables of up to `max_len` entries, at least `total` Gaussians, on random tiles
+    /// (a quarter of them at the image's edge), the memory timings in turn.
+    fn random_tiles<M: Clocked>(
+        core: &mut RasterCore<M>,
+        cfg: &EngineConfig,
+        seed: u64,
+        total: usize,
+        max_len: u64,
+    ) {
+        let name = "raster_core_random_tiles_under_memory_stalls";
+        let mut rng = Rng::new(seed);
+        let t = cfg.raster_config().tile;
+        let (mut sent, mut tiles, mut edge) = (0, 0, 0);
+        while sent < total || edge == 0 {
+            core.set_timing(TIMINGS[tiles % TIMINGS.len()]);
+            let tile = [rng.below(40) as u32, rng.below(40) as u32];
+            let mut size = [(tile[0] + 1 + rng.below(3) as u32) * t, (tile[1] + 1 + rng.below(3) as u32) * t];
+            if rng.percent(25) {
+                size = [
+                    tile[0] * t + 1 + rng.below(t as u64) as u32,
+                    tile[1] * t + 1 + rng.below(t as u64) as u32,
+                ];
+                edge += 1;
+            }
+            let n = rng.below(max_len) as usize;
+            let case = random_case(&mut rng, cfg, tile, size, n, 5);
+            check_case(core, cfg, &case);
+            sent += n;
+            tiles += 1;
+        }
+        println!("{name}: {sent} Gaussians in {tiles} tiles ({edge} edge tiles) checked");
     }
 
     #[test]
@@ -77,90 +92,91 @@ mod cosim {
         let name = "raster_core_directed_cases";
         for_each_seed(name, |seed| {
             let cfg = neo_tb::config();
-            let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
             let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
             maybe_trace(&mut core.dut, name);
-            let t = [5, 3];
-            let size = [640, 480];
-            let c = at(t, &rc, 31.5, 30.0);
-            let mut cases: Vec<(&str, TileCase)> = vec![
-                ("empty table", case_of(t, size, &[])),
-                ("one entry", case_of(t, size, &[g(c, 9.0, 5.0, 0.4, 0.8, [1.0, 0.5, 0.25])])),
-                (
-                    "centred outside the tile",
-                    case_of(t, size, &[g(at(t, &rc, -6.0, 12.0), 5.0, 3.0, 0.3, 0.9, [1.0; 3])]),
-                ),
-                ("screen-filling", case_of(t, size, &[g(c, 3000.0, 2500.0, 0.2, 0.5, [0.2, 0.9, 0.4])])),
-                ("needle", case_of(t, size, &[g(c, 40.0, 0.3, 0.7, 0.9, [1.0, 1.0, 0.0])])),
-            ];
-            // Opaque stack: T of every pixel falls below 1e-4 (golden terminates every subtile).
-            let stack: Vec<_> = (0..40)
-                .map(|i| g(at(t, &rc, 30.0 + i as f64, 33.0), 200.0, 180.0, 0.1, 0.99, [0.9, 0.1, 0.3]))
-                .collect();
-            let opaque = case_of(t, size, &stack);
-            let feats: Vec<_> = opaque.table.iter().map(|e| opaque.features[&e.id]).collect();
-            let r = raster_tile(&feats, &fmt, t[0], t[1], size[0], size[1], &rc);
-            assert!(r.work.iter().all(|w| w.terminated), "the opaque stack terminates every subtile");
-            cases.push(("opaque stack", opaque));
-            // Degenerate conics: non-positive-definite and zero mantissas.
-            let mut d1 = g(c, 6.0, 6.0, 0.0, 0.8, [1.0; 3]);
-            // b^2 > a c with every field inside its width (b has one more bit than a, c).
-            d1.conic.b = d1.conic.a / 2;
-            d1.conic.a /= 4;
-            d1.conic.c /= 4;
-            assert!((d1.conic.b as i64).pow(2) > d1.conic.a as i64 * d1.conic.c as i64);
-            let mut d2 = g(at(t, &rc, 10.0, 50.0), 6.0, 6.0, 0.0, 0.8, [0.5; 3]);
-            d2.conic.a = 0;
-            d2.conic.b = 0;
-            d2.conic.c = 0;
-            cases.push(("non-positive-definite conic", case_of(t, size, &[d1])));
-            cases.push(("zero conic", case_of(t, size, &[d2])));
-            cases
-                .push(("degenerate conics", case_of(t, size, &[d1, d2, g(c, 4.0, 4.0, 0.0, 0.7, [0.3; 3])])));
-            // Alpha exactly 1/255 at a tile pixel (found with golden pixel_alpha).
-            let (px, py) = ((t[0] * rc.tile) as i64 + 20, (t[1] * rc.tile) as i64 + 41);
-            let exact = gaussian_with_alpha(&fmt, &rc, px, py, rc.blend.min_alpha_raw())
-                .expect("a Gaussian with alpha exactly 1/255");
-            let one = case_of(t, size, &[exact]);
-            let k = ((py - (t[1] * rc.tile) as i64) * rc.tile as i64 + px - (t[0] * rc.tile) as i64) as usize;
-            assert_ne!(golden(&one, &fmt, &rc).pixels[k], [0; 3], "alpha 1/255 is blended");
-            cases.push(("alpha exactly 1/255", one));
-            // Culled Gaussians in the table (no feature entry): valid cleared, key kept.
-            let mut culled = case_of(
-                t,
-                size,
-                &[g(c, 9.0, 9.0, 0.0, 0.8, [1.0; 3]), g(c, 3.0, 3.0, 0.0, 0.8, [0.0, 1.0, 0.0])],
-            );
-            culled.features.remove(&culled.table[0].id);
-            cases.push(("culled entry", culled));
-            // Edge tile: partly outside the image; a tile far from the origin.
-            let e = [3, 2];
-            cases.push((
-                "edge tile",
-                case_of(
-                    e,
-                    [3 * 64 + 13, 2 * 64 + 40],
-                    &[g(at(e, &rc, 20.0, 20.0), 30.0, 30.0, 0.0, 0.8, [1.0; 3])],
-                ),
-            ));
-            let far = [1000, 999];
-            cases.push((
-                "far tile",
-                case_of(
-                    far,
-                    [64_000, 64_000],
-                    &[g(at(far, &rc, 20.0, 50.0), 12.0, 30.0, 1.0, 0.8, [1.0; 3])],
-                ),
-            ));
-            for (k, (label, case)) in cases.iter().enumerate() {
-                for (i, timing) in TIMINGS.iter().enumerate() {
-                    core.set_timing(*timing);
-                    let cycles = check_case(&mut core, case);
-                    println!("{name}: {label} (memory {i}): {cycles} cycles");
-                    let _ = k;
-                }
-            }
+            directed(&mut core, &cfg, TIMINGS.len());
         });
+    }
+
+    /// The directed cases, each under `timings` of the memory timings (all of them: every case
+    /// under every timing; fewer: case `k` under timings `k, k + 1, ...`).
+    fn directed<M: Clocked>(core: &mut RasterCore<M>, cfg: &EngineConfig, timings: usize) {
+        let name = "raster_core_directed_cases";
+        let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
+        let t = [5, 3];
+        let size = [640, 480];
+        let c = at(t, &rc, 31.5, 30.0);
+        let mut cases: Vec<(&str, TileCase)> = vec![
+            ("empty table", case_of(t, size, &[])),
+            ("one entry", case_of(t, size, &[g(c, 9.0, 5.0, 0.4, 0.8, [1.0, 0.5, 0.25])])),
+            (
+                "centred outside the tile",
+                case_of(t, size, &[g(at(t, &rc, -6.0, 12.0), 5.0, 3.0, 0.3, 0.9, [1.0; 3])]),
+            ),
+            ("screen-filling", case_of(t, size, &[g(c, 3000.0, 2500.0, 0.2, 0.5, [0.2, 0.9, 0.4])])),
+            ("needle", case_of(t, size, &[g(c, 40.0, 0.3, 0.7, 0.9, [1.0, 1.0, 0.0])])),
+        ];
+        // Opaque stack: T of every pixel falls below 1e-4 (golden terminates every subtile).
+        let stack: Vec<_> = (0..40)
+            .map(|i| g(at(t, &rc, 30.0 + i as f64, 33.0), 200.0, 180.0, 0.1, 0.99, [0.9, 0.1, 0.3]))
+            .collect();
+        let opaque = case_of(t, size, &stack);
+        let feats: Vec<_> = opaque.table.iter().map(|e| opaque.features[&e.id]).collect();
+        let r = raster_tile(&feats, &fmt, t[0], t[1], size[0], size[1], &rc);
+        assert!(r.work.iter().all(|w| w.terminated), "the opaque stack terminates every subtile");
+        cases.push(("opaque stack", opaque));
+        // Degenerate conics: non-positive-definite and zero mantissas.
+        let mut d1 = g(c, 6.0, 6.0, 0.0, 0.8, [1.0; 3]);
+        // b^2 > a c with every field inside its width (b has one more bit than a, c).
+        d1.conic.b = d1.conic.a / 2;
+        d1.conic.a /= 4;
+        d1.conic.c /= 4;
+        assert!((d1.conic.b as i64).pow(2) > d1.conic.a as i64 * d1.conic.c as i64);
+        let mut d2 = g(at(t, &rc, 10.0, 50.0), 6.0, 6.0, 0.0, 0.8, [0.5; 3]);
+        d2.conic.a = 0;
+        d2.conic.b = 0;
+        d2.conic.c = 0;
+        cases.push(("non-positive-definite conic", case_of(t, size, &[d1])));
+        cases.push(("zero conic", case_of(t, size, &[d2])));
+        cases.push(("degenerate conics", case_of(t, size, &[d1, d2, g(c, 4.0, 4.0, 0.0, 0.7, [0.3; 3])])));
+        // Alpha exactly 1/255 at a tile pixel (found with golden pixel_alpha).
+        let (px, py) = ((t[0] * rc.tile) as i64 + 20, (t[1] * rc.tile) as i64 + 41);
+        let exact = gaussian_with_alpha(&fmt, &rc, px, py, rc.blend.min_alpha_raw())
+            .expect("a Gaussian with alpha exactly 1/255");
+        let one = case_of(t, size, &[exact]);
+        let k = ((py - (t[1] * rc.tile) as i64) * rc.tile as i64 + px - (t[0] * rc.tile) as i64) as usize;
+        assert_ne!(golden(&one, &fmt, &rc).pixels[k], [0; 3], "alpha 1/255 is blended");
+        cases.push(("alpha exactly 1/255", one));
+        // Culled Gaussians in the table (no feature entry): valid cleared, key kept.
+        let mut culled = case_of(
+            t,
+            size,
+            &[g(c, 9.0, 9.0, 0.0, 0.8, [1.0; 3]), g(c, 3.0, 3.0, 0.0, 0.8, [0.0, 1.0, 0.0])],
+        );
+        culled.features.remove(&culled.table[0].id);
+        cases.push(("culled entry", culled));
+        // Edge tile: partly outside the image; a tile far from the origin.
+        let e = [3, 2];
+        cases.push((
+            "edge tile",
+            case_of(
+                e,
+                [3 * 64 + 13, 2 * 64 + 40],
+                &[g(at(e, &rc, 20.0, 20.0), 30.0, 30.0, 0.0, 0.8, [1.0; 3])],
+            ),
+        ));
+        let far = [1000, 999];
+        cases.push((
+            "far tile",
+            case_of(far, [64_000, 64_000], &[g(at(far, &rc, 20.0, 50.0), 12.0, 30.0, 1.0, 0.8, [1.0; 3])]),
+        ));
+        for (k, (label, case)) in cases.iter().enumerate() {
+            for i in (k..k + timings).map(|i| i % TIMINGS.len()) {
+                core.set_timing(TIMINGS[i]);
+                let cycles = check_case(core, cfg, case);
+                println!("{name}: {label} (memory {i}): {cycles} cycles");
+            }
+        }
     }
 
     #[test]
@@ -168,17 +184,51 @@ mod cosim {
         let name = "raster_core_tables_longer_than_the_feature_buffer";
         for_each_seed(name, |seed| {
             let cfg = neo_tb::config();
-            let f = cfg.raster_feature_buffer;
-            let mut rng = Rng::new(seed);
             let mut core = RasterCore::new(&cfg, seed, MemTiming::IDEAL);
             maybe_trace(&mut core.dut, name);
-            for (i, n) in [f + 1, f + 37, 2 * f + 5].into_iter().enumerate() {
-                core.set_timing(TIMINGS[i % TIMINGS.len()]);
-                let case = random_case(&mut rng, &cfg, [7, 9], [1024, 1024], n, 3);
-                let cycles = check_case(&mut core, &case);
-                println!("{name}: {n} entries (buffer {f}): {cycles} cycles");
-            }
+            longer_tables(&mut core, &cfg, seed);
         });
+    }
+
+    /// Tables one entry, 37 entries and a bank and 5 entries longer than a bank of the feature
+    /// buffer, and (with more than two banks) one entry longer than every bank together.
+    fn longer_tables<M: Clocked>(core: &mut RasterCore<M>, cfg: &EngineConfig, seed: u64) {
+        let name = "raster_core_tables_longer_than_the_feature_buffer";
+        let (f, b) = (cfg.raster_feature_buffer, cfg.raster_feature_banks);
+        let mut rng = Rng::new(seed);
+        let mut lengths = vec![f + 1, f + 37, 2 * f + 5];
+        if b * f + 1 > 2 * f + 5 {
+            lengths.push(b * f + 1);
+        }
+        for (i, n) in lengths.into_iter().enumerate() {
+            core.set_timing(TIMINGS[i % TIMINGS.len()]);
+            let case = random_case(&mut rng, cfg, [7, 9], [1024, 1024], n, 3);
+            let cycles = check_case(core, cfg, &case);
+            println!("{name}: {n} entries (buffer {b} x {f}): {cycles} cycles");
+        }
+    }
+
+    /// The same benches (random tiles, fewer and shorter; the directed cases, each under one
+    /// or two memory timings; tables longer than the feature buffer) on `neo_raster_core`
+    /// generated for each of [`neo_tb::configs::raster_core`].
+    #[test]
+    fn raster_core_in_other_configurations() {
+        let name = "raster_core_in_other_configurations";
+        if neo_tb::configs::excluded_from_coverage(name) {
+            return;
+        }
+        for u in neo_tb::configs::raster_core() {
+            let mut core =
+                RasterCore::build(&u.cfg, 0, MemTiming::IDEAL).unwrap_or_else(|e| panic!("{}: {e}", u.name));
+            maybe_trace(&mut core.dut, &format!("{name}_{}", u.name));
+            for_each_seed(&format!("{name} {}", u.name), |seed| {
+                println!("{name}: {} ({})", u.name, u.why);
+                core.reseed(seed);
+                random_tiles(&mut core, &u.cfg, seed, 300, 48);
+                directed(&mut core, &u.cfg, 1);
+                longer_tables(&mut core, &u.cfg, seed);
+            });
+        }
     }
 
     #[test]

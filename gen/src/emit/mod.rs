@@ -87,7 +87,9 @@ pub enum Item {
     LocalParam {
         /// Name.
         name: String,
-        /// Width in bits.
+        /// Width in bits; 0 for an untyped integer, `localparam NAME = VALUE;`
+        /// ([`Module::localparam_int`]). One bit is `[0:0]`: an unsized parameter would be a
+        /// 32-bit integer in a concatenation.
         width: u32,
         /// Value expression (a sized literal).
         value: String,
@@ -315,7 +317,7 @@ impl Module {
     /// Declares an untyped integer local parameter, `localparam NAME = VALUE;` (for the bit
     /// offsets and widths that name the fields of a packed bundle).
     pub fn localparam_int(&mut self, name: impl Into<String>, value: u32) -> &mut Self {
-        self.item(Item::LocalParam { name: name.into(), width: 1, value: value.to_string() })
+        self.item(Item::LocalParam { name: name.into(), width: 0, value: value.to_string() })
     }
 
     /// Declares a wire.
@@ -698,5 +700,17 @@ endmodule
     #[test]
     fn printing_is_deterministic() {
         assert_eq!(counter().to_verilog(), counter().to_verilog());
+    }
+
+    /// A one-bit local parameter keeps its `[0:0]` (unsized, it would be a 32-bit integer in a
+    /// concatenation: the SCU's `{pass, LANE}` with 2 lanes); only `localparam_int` is untyped.
+    #[test]
+    fn one_bit_localparams_are_sized_and_ints_untyped() {
+        let mut m = Module::new("p");
+        m.localparam("LANE", 1, "1'b1").localparam("TWO", 2, "2'd2").localparam_int("OFF", 7);
+        let v = m.to_verilog();
+        assert!(v.contains("localparam [0:0] LANE = 1'b1;"), "{v}");
+        assert!(v.contains("localparam [1:0] TWO = 2'd2;"), "{v}");
+        assert!(v.contains("localparam OFF = 7;"), "{v}");
     }
 }

@@ -98,8 +98,7 @@ fn items(s: &mut String, level: usize, list: &[Item], vectors: &std::collections
             Item::Comment(t) => push_comment(s, level, t),
             Item::Blank => s.push('\n'),
             Item::LocalParam { name, width, value } => {
-                let r = range(*width);
-                let r = if r.is_empty() { String::new() } else { format!("{r} ") };
+                let r = if *width == 0 { String::new() } else { format!("{} ", vec_range(*width, true)) };
                 writeln!(s, "{ind}localparam {r}{name} = {value};").unwrap();
             }
             Item::Wire { name, width } if *width == 1 && vectors.contains(name) => {

@@ -30,9 +30,9 @@ pub fn module(cfg: &EngineConfig) -> Module {
     );
     m.doc("then feeds the routed entries' features to the SCU in table order, one beat per set mask bit.");
     ports(&mut m, cfg, &d);
-    if d.cb > 0 {
-        m.localparam("SCU_IDX", d.cb, format!("SCU[{}:0]", d.cb - 1));
-    }
+    // One bit with one SCU (which `pix_scu_i`, one bit too, is compared with).
+    let ib = d.cb.max(1);
+    m.localparam("SCU_IDX", ib, format!("SCU[{}:0]", ib - 1));
     route(&mut m, &d);
     element(&mut m, &d);
     beats(&mut m, cfg, &d);
@@ -58,7 +58,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.param("SCU", 0).clock_reset();
     m.input_c("clear_i", 1, "command accepted: a new tile starts");
     m.input_c("res_fire_i", 1, "an ITU result (a quad) is taken");
-    m.input_c("res_lanes_i", d.ni, "its valid lanes");
+    m.input_c("res_lanes_i", d.ni, "its valid lanes").vector("res_lanes_i");
     m.input_c("res_bitmaps_i", d.ni * d.nsub, "lane u's subtile bitmap at [u * subtiles +: subtiles]");
     m.input_c("res_group_i", d.gw, "its subtile group");
     m.input_c("res_base_i", d.fx, "feature-buffer index {bank, entry} of lane 0");
@@ -101,7 +101,7 @@ fn route(m: &mut Module, d: &Dims) {
     m.blank();
     m.comment("Routing: lane u goes to this SCU when bit {group, SCU} of its bitmap is set.");
     m.wire_assign("route_sub", d.sub_w, scu_subtile(d, "res_group_i"));
-    m.wire("route_mask", d.ni);
+    m.wire("route_mask", d.ni).vector("route_mask");
     m.localparam_int("SUBTILES", d.nsub);
     m.gen_for(
         "u",
@@ -185,13 +185,7 @@ fn element(m: &mut Module, d: &Dims) {
                 vec![set("elem_valid_q", lit(1, 1))],
                 vec![if_("elem_done", vec![set("elem_valid_q", lit(1, 0))])],
             ),
-            set(
-                "out_ready_q",
-                format!(
-                    "pix_taken_i & (pix_scu_i == {})",
-                    if d.cb == 0 { lit(1, 0) } else { "SCU_IDX".into() }
-                ),
-            ),
+            set("out_ready_q", "pix_taken_i & (pix_scu_i == SCU_IDX)"),
         ],
     );
     m.seq_d(

@@ -392,6 +392,10 @@ fn scus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.localparam_int(SUB_RGB, px).localparam_int(ROW_RGB, d.rw);
     m.wire("feeder_full", nc).wire("feeder_busy", nc).wire("seg_taken", nc).wire("scu_taken", nc);
     m.wire("scu_out_valid", nc).wire("scu_rgb", nc * px).wire("scu_term", nc);
+    // One bit per SCU, indexed even with one SCU.
+    for v in ["feeder_full", "feeder_busy", "seg_taken", "scu_taken", "scu_out_valid", "scu_term"] {
+        m.vector(v);
+    }
     let w = scu::ScuWidths::new(cfg);
     let mut items: Vec<Item> = Vec::new();
     let wire = |n: &str, wi: u32| Item::Wire { name: n.into(), width: wi };

@@ -97,6 +97,10 @@ pub(super) fn itus(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.comment("ITUs: lane u tests entry quad_base_q + u; they share every control input (lockstep).");
     m.wire("lane_valid", ni).wire("itu_in_readys", ni).wire("itu_out_valids", ni);
     m.wire("itu_bitmaps", ni * nsub).wire("itu_hits", ni).wire("itu_tags", ni * tg);
+    // One bit per ITU, indexed even with one ITU.
+    for v in ["lane_valid", "itu_in_readys", "itu_out_valids", "itu_hits"] {
+        m.vector(v);
+    }
     m.comment("The results are taken when no routing FIFO is full.");
     m.wire("itu_out_ready", 1);
     m.comment("Per lane, the subtile groups its bitmap touches (group 0's walk records them per quad).");
@@ -201,6 +205,8 @@ pub(super) fn results(m: &mut Module, d: &Dims) {
     for (name, width) in fields {
         m.wire_assign(format!("res_{name}"), width, info.get(&last, name));
     }
+    // One bit per ITU, indexed even with one ITU.
+    m.vector("res_lanes");
     m.wire_assign("res_base", d.fx, "{res_bank, res_entry}");
     let ifl = d.inflight_bits();
     m.reg("inflight_q", ifl);
