@@ -166,6 +166,45 @@ pub fn run_jobs(
     let slots: Vec<Mutex<Option<Result<Timed>>>> = jobs.iter().map(|_| Mutex::new(None)).collect();
     let finished = AtomicUsize::new(0);
     let generated: Result<()> = rayon::scope_fifo(|s| {
+        // One task per architecture (each a sequential simulation, first in first out): the
+        // last of a job's tasks makes its result.
+        let spawn = |k: usize, wl: Workload| {
+            let job = &jobs[k];
+            let run = Arc::new(JobRun {
+                wl,
+                cfg: suite::point_config(&job.point, cfg),
+                archs: Mutex::new(vec![None; job.archs.len()]),
+                left: AtomicUsize::new(job.archs.len()),
+            });
+            for (i, &arch) in job.archs.iter().enumerate() {
+                let (run, slot, bar, finished) = (run.clone(), &slots[k], &bar, &finished);
+                s.spawn_fifo(move |_| {
+                    let r = simulate(arch, &run.cfg, lat, &run.wl, RunOptions::default());
+                    run.archs.lock().expect("arch results")[i] = Some(r);
+                    if arch != Arch::Gpu {
+                        bar.inc(job.point.frames as u64);
+                    }
+                    if run.left.fetch_sub(1, Ordering::AcqRel) != 1 {
+                        return;
+                    }
+                    let results = std::mem::take(&mut *run.archs.lock().expect("arch results"));
+                    let r = results
+                        .into_iter()
+                        .map(|r| r.expect("every architecture ran"))
+                        .collect::<Result<Vec<_>, String>>()
+                        .and_then(|a| suite::point_result(&job.point, &run.wl, a))
+                        .map_err(|e| anyhow!(e));
+                    let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                    if let Ok(r) = &r {
+                        bar.suspend(|| log(job, r, &format!("[{what} {n}/{}]", jobs.len())));
+                    }
+                    *slot.lock().expect("result slot") =
+                        Some(r.map(|r| (r, started.elapsed().as_secs_f64())));
+                });
+            }
+        };
+        let any_headline = jobs.iter().any(|j| j.headline);
+        let mut deferred = Vec::new();
         for g in &groups {
             let points: Vec<&Point> = g.iter().map(|&k| &jobs[k].point).collect();
             let first = points[0];
@@ -181,43 +220,18 @@ pub fn run_jobs(
                 bar.inc(g.len() as u64)
             })
             .map_err(|e| anyhow!(e))?;
-            // One task per architecture (each a sequential simulation, first in first out):
-            // the last of a job's tasks makes its result.
             for (&k, wl) in g.iter().zip(wls) {
-                let job = &jobs[k];
-                let run = Arc::new(JobRun {
-                    wl,
-                    cfg: suite::point_config(&job.point, cfg),
-                    archs: Mutex::new(vec![None; job.archs.len()]),
-                    left: AtomicUsize::new(job.archs.len()),
-                });
-                for (i, &arch) in job.archs.iter().enumerate() {
-                    let (run, slot, bar, finished) = (run.clone(), &slots[k], &bar, &finished);
-                    s.spawn_fifo(move |_| {
-                        let r = simulate(arch, &run.cfg, lat, &run.wl, RunOptions::default());
-                        run.archs.lock().expect("arch results")[i] = Some(r);
-                        if arch != Arch::Gpu {
-                            bar.inc(job.point.frames as u64);
-                        }
-                        if run.left.fetch_sub(1, Ordering::AcqRel) != 1 {
-                            return;
-                        }
-                        let results = std::mem::take(&mut *run.archs.lock().expect("arch results"));
-                        let r = results
-                            .into_iter()
-                            .map(|r| r.expect("every architecture ran"))
-                            .collect::<Result<Vec<_>, String>>()
-                            .and_then(|a| suite::point_result(&job.point, &run.wl, a))
-                            .map_err(|e| anyhow!(e));
-                        let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
-                        if let Ok(r) = &r {
-                            bar.suspend(|| log(job, r, &format!("[{what} {n}/{}]", jobs.len())));
-                        }
-                        *slot.lock().expect("result slot") =
-                            Some(r.map(|r| (r, started.elapsed().as_secs_f64())));
-                    });
+                if jobs[k].headline || !any_headline {
+                    spawn(k, wl);
+                } else {
+                    deferred.push((k, wl));
                 }
             }
+        }
+        // The other jobs of a set with throughput runs go after all of those (first in first
+        // out), so that the throughput table is out first.
+        for (k, wl) in deferred {
+            spawn(k, wl);
         }
         Ok(())
     });

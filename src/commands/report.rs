@@ -27,7 +27,7 @@ pub struct ReportArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub trajectory: TrajectoryArg,
-    /// Frames of the throughput, traffic and timeline runs (default: 24, or 60 with `--full`).
+    /// Frames of the throughput, traffic and timeline runs (default: 8, or 60 with `--full`).
     #[arg(long)]
     pub frames: Option<usize>,
     /// Resolutions of the throughput and traffic runs.
@@ -46,7 +46,7 @@ pub struct ReportArgs {
     /// Resolution of the sweep.
     #[arg(long, default_value = "448x256", value_parser = resolution)]
     pub sweep_res: String,
-    /// Frames per sweep point (default: 5, or 12 with `--full`).
+    /// Frames per sweep point (default: 4, or 12 with `--full`).
     #[arg(long)]
     pub sweep_frames: Option<usize>,
     /// Strategies of the sweep.
@@ -84,10 +84,10 @@ pub struct ReportArgs {
 }
 
 /// Frames per throughput, traffic and timeline run: by default, and with `--full`.
-pub const FRAMES: (usize, usize) = (24, 60);
+pub const FRAMES: (usize, usize) = (8, 60);
 
 /// Frames per sweep point: by default, and with `--full`.
-pub const SWEEP_FRAMES: (usize, usize) = (5, 12);
+pub const SWEEP_FRAMES: (usize, usize) = (4, 12);
 
 impl ReportArgs {
     /// `default`'s first value, or its second with `--full`, unless `given`.
