@@ -116,14 +116,15 @@ type Timed = (PointResult, f64);
 
 /// One job's workload and architecture results while its simulations run.
 struct JobRun {
-    wl: Workload,
+    wl: Arc<Workload>,
     cfg: SimConfig,
     archs: Mutex<Vec<Option<Result<ArchResult, String>>>>,
     left: AtomicUsize,
 }
 
 /// Runs `jobs` on the machine's cores: the workloads of jobs that share their cameras are
-/// generated together ([`suite::workloads`]), group after group, and each job's architectures run
+/// generated together ([`suite::workloads`]), group after group (jobs with the same point and
+/// golden raster share one), and each job's architectures run
 /// on its workload ([`suite::evaluate`]) while the next groups generate. One progress bar over
 /// the work (frames generated, frames simulated per accelerator) with its ETA; `log` reports each
 /// finished job. Returns, in the order of `jobs`, each result and the seconds from the start to
@@ -168,7 +169,7 @@ pub fn run_jobs(
     let generated: Result<()> = rayon::scope_fifo(|s| {
         // One task per architecture (each a sequential simulation, first in first out): the
         // last of a job's tasks makes its result.
-        let spawn = |k: usize, wl: Workload| {
+        let spawn = |k: usize, wl: Arc<Workload>| {
             let job = &jobs[k];
             let run = Arc::new(JobRun {
                 wl,
@@ -206,7 +207,16 @@ pub fn run_jobs(
         let any_headline = jobs.iter().any(|j| j.headline);
         let mut deferred = Vec::new();
         for g in &groups {
-            let points: Vec<&Point> = g.iter().map(|&k| &jobs[k].point).collect();
+            // Jobs of the group with the same point and golden raster share one workload.
+            let (mut unique, mut shared_by): (Vec<usize>, Vec<usize>) = (Vec::new(), Vec::new());
+            for &k in g {
+                let same = |&u: &usize| jobs[u].point == jobs[k].point && jobs[u].golden == jobs[k].golden;
+                shared_by.push(unique.iter().position(same).unwrap_or_else(|| {
+                    unique.push(k);
+                    unique.len() - 1
+                }));
+            }
+            let points: Vec<&Point> = unique.iter().map(|&k| &jobs[k].point).collect();
             let first = points[0];
             let scene = scenes.loaded(&first.scene).expect("loaded above");
             bar.set_message(format!(
@@ -215,12 +225,17 @@ pub fn run_jobs(
                 first.res,
                 first.frames
             ));
-            let golden: Vec<GoldenRaster> = g.iter().map(|&k| jobs[k].golden).collect();
-            let wls = suite::workloads_with(scene, &points, &golden, cfg, raster_sample, |_| {
-                bar.inc(g.len() as u64)
-            })
-            .map_err(|e| anyhow!(e))?;
-            for (&k, wl) in g.iter().zip(wls) {
+            let golden: Vec<GoldenRaster> = unique.iter().map(|&k| jobs[k].golden).collect();
+            let wls: Vec<Arc<Workload>> =
+                suite::workloads_with(scene, &points, &golden, cfg, raster_sample, |_| {
+                    bar.inc(g.len() as u64)
+                })
+                .map_err(|e| anyhow!(e))?
+                .into_iter()
+                .map(Arc::new)
+                .collect();
+            for (&k, &i) in g.iter().zip(&shared_by) {
+                let wl = wls[i].clone();
                 if jobs[k].headline || !any_headline {
                     spawn(k, wl);
                 } else {

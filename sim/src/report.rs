@@ -393,7 +393,7 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
         archs.sort_by_key(|a| arch_order(&a.arch));
         for a in archs {
             let sp = neo.map_or("-".into(), |n| format!("{:.2}x", speedup(n, a)));
-            let sorting = a.traffic.sorting_bytes() as f64 * 60.0 / a.frames.len().max(1) as f64 / 1e9;
+            let sorting = a.sorting_gb_per_60();
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {} | {:.3} | {:.3} | {} | {} | {} |",
@@ -580,7 +580,7 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
         let mut series = Vec::new();
         for r in &d.timelines {
             let Some(a) = r.arch("neo") else { continue };
-            let sorting = a.traffic.sorting_bytes() as f64 * 60.0 / a.frames.len().max(1) as f64 / 1e9;
+            let sorting = a.sorting_gb_per_60();
             let _ = writeln!(
                 md,
                 "| {} | {} | {:.3} | {:.3} | {:.3} | {} | {} |",

@@ -158,7 +158,7 @@ pub struct Utilisation {
 }
 
 /// One architecture on one workload.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ArchResult {
     /// Architecture name.
     pub arch: String,
@@ -193,14 +193,37 @@ pub struct ArchResult {
 }
 
 impl ArchResult {
-    /// DRAM bytes per 60 frames of `stage` (the paper's Fig. 16 unit), in GB.
+    /// DRAM GB of `stage` (all stages with `None`) in a 60-frame run (the paper's Fig. 16 unit),
+    /// estimated by [`ArchResult::per_60`] from the frames run.
     pub fn gb_per_60(&self, stage: Option<Stage>) -> f64 {
-        let n = self.frames.len().max(1) as f64;
-        let b = match stage {
-            Some(s) => self.traffic.stage_bytes(s),
-            None => self.traffic.total_bytes(),
+        let bytes = match stage {
+            Some(s) => self.per_60(self.traffic.stage_bytes(s), |f| {
+                f.stages.iter().find(|b| b.stage == s.name()).map_or(0, |b| b.read_bytes + b.write_bytes)
+            }),
+            None => self.per_60(self.traffic.total_bytes(), |f| f.dram_bytes),
         };
-        b as f64 * 60.0 / n / 1e9
+        bytes / 1e9
+    }
+
+    /// DRAM GB of the sorting stages in a 60-frame run, estimated like [`ArchResult::gb_per_60`].
+    pub fn sorting_gb_per_60(&self) -> f64 {
+        self.per_60(self.traffic.sorting_bytes(), |f| f.sort_bytes) / 1e9
+    }
+
+    /// Bytes in a 60-frame run from the run's `total` and its frames' bytes (`per_frame`): frame
+    /// 0 (the sort from scratch) plus 59 times the mean of the other frames, so that a short
+    /// run does not weigh its first frame more than a 60-frame run does (exact for 60 frames).
+    /// With one frame, or when the frames' bytes do not add up to `total` (a model without
+    /// per-frame records), `total` scaled by 60 over the frames run.
+    pub fn per_60(&self, total: u64, per_frame: impl Fn(&FrameResult) -> u64) -> f64 {
+        let n = self.frames.len();
+        let v: Vec<u64> = self.frames.iter().map(per_frame).collect();
+        if n > 1 && v.iter().sum::<u64>() == total {
+            let rest = v[1..].iter().sum::<u64>() as f64 / (n - 1) as f64;
+            v[0] as f64 + 59.0 * rest
+        } else {
+            total as f64 * 60.0 / n.max(1) as f64
+        }
     }
 }
 
@@ -393,6 +416,20 @@ pub fn simulate(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_60_frame_run_is_frame_0_and_59_of_the_mean_of_the_others() {
+        let frame = |b: u64| FrameResult { dram_bytes: b, ..FrameResult::default() };
+        let r = ArchResult { frames: vec![frame(100), frame(10), frame(20)], ..ArchResult::default() };
+        assert_eq!(r.per_60(130, |f| f.dram_bytes), 100.0 + 59.0 * 15.0);
+        // 60 frames: exactly their sum.
+        let sixty = ArchResult { frames: (0..60).map(|k| frame(k + 1)).collect(), ..ArchResult::default() };
+        assert_eq!(sixty.per_60(1830, |f| f.dram_bytes), 1830.0);
+        // Per-frame bytes that do not add up to the total, or one frame: scaled.
+        assert_eq!(r.per_60(300, |f| f.dram_bytes), 300.0 * 20.0);
+        let one = ArchResult { frames: vec![frame(7)], ..ArchResult::default() };
+        assert_eq!(one.per_60(7, |f| f.dram_bytes), 420.0);
+    }
 
     #[test]
     fn architecture_lists_parse_and_name_back() {
