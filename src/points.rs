@@ -122,13 +122,114 @@ struct JobRun {
     left: AtomicUsize,
 }
 
+/// Groups of the jobs sharing their cameras (indices into `jobs`), in the order of their first
+/// job.
+fn camera_groups(jobs: &[PointJob]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (k, j) in jobs.iter().enumerate() {
+        match groups.iter_mut().find(|g| jobs[g[0]].point.camera_key() == j.point.camera_key()) {
+            Some(g) => g.push(k),
+            None => groups.push(vec![k]),
+        }
+    }
+    groups
+}
+
+/// The distinct workloads of `group` (jobs with the same point and golden raster share one):
+/// the first job of each, and for every job of the group the index of its workload.
+fn distinct_workloads(jobs: &[PointJob], group: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let (mut unique, mut shared_by): (Vec<usize>, Vec<usize>) = (Vec::new(), Vec::new());
+    for &k in group {
+        let same = |&u: &usize| jobs[u].point == jobs[k].point && jobs[u].golden == jobs[k].golden;
+        shared_by.push(unique.iter().position(same).unwrap_or_else(|| {
+            unique.push(k);
+            unique.len() - 1
+        }));
+    }
+    (unique, shared_by)
+}
+
+/// The progress bar of `jobs`: a unit per frame generated and per frame simulated on each
+/// accelerator (the GPU model is instant).
+fn jobs_bar(jobs: &[PointJob], what: &str) -> ProgressBar {
+    let model_units =
+        |j: &PointJob| (j.point.frames * j.archs.iter().filter(|a| **a != Arch::Gpu).count()) as u64;
+    let total: u64 = jobs.iter().map(|j| j.point.frames as u64 + model_units(j)).sum();
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix} {bar:24} {percent:>3}% [{elapsed} < {eta}] {msg}")
+            .expect("valid template"),
+    );
+    bar.set_prefix(what.to_string());
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
+}
+
+/// A set of jobs while they run: what their simulations need and where their results go.
+struct JobSet<'a> {
+    jobs: &'a [PointJob],
+    cfg: &'a SimConfig,
+    lat: &'a Latency,
+    what: &'a str,
+    log: &'a (dyn Fn(&PointJob, &PointResult, &str) + Sync),
+    bar: ProgressBar,
+    slots: Vec<Mutex<Option<Result<Timed>>>>,
+    finished: AtomicUsize,
+    started: Instant,
+}
+
+impl<'a> JobSet<'a> {
+    /// Spawns job `k`'s simulations on `wl`, a task per architecture (each a sequential
+    /// simulation, first in first out); the last of them makes the job's result.
+    fn spawn<'s>(&'s self, s: &rayon::ScopeFifo<'s>, k: usize, wl: Arc<Workload>) {
+        let job = &self.jobs[k];
+        let run = Arc::new(JobRun {
+            wl,
+            cfg: suite::point_config(&job.point, self.cfg),
+            archs: Mutex::new(vec![None; job.archs.len()]),
+            left: AtomicUsize::new(job.archs.len()),
+        });
+        for (i, &arch) in job.archs.iter().enumerate() {
+            let run = run.clone();
+            s.spawn_fifo(move |_| {
+                let r = simulate(arch, &run.cfg, self.lat, &run.wl, RunOptions::default());
+                run.archs.lock().expect("arch results")[i] = Some(r);
+                if arch != Arch::Gpu {
+                    self.bar.inc(job.point.frames as u64);
+                }
+                if run.left.fetch_sub(1, Ordering::AcqRel) == 1 {
+                    self.finish(k, &run);
+                }
+            });
+        }
+    }
+
+    /// Job `k`'s result from its architectures' (all done), logged and put in its slot.
+    fn finish(&self, k: usize, run: &JobRun) {
+        let job = &self.jobs[k];
+        let results = std::mem::take(&mut *run.archs.lock().expect("arch results"));
+        let r = results
+            .into_iter()
+            .map(|r| r.expect("every architecture ran"))
+            .collect::<Result<Vec<_>, String>>()
+            .and_then(|a| suite::point_result(&job.point, &run.wl, a))
+            .map_err(|e| anyhow!(e));
+        let n = self.finished.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Ok(r) = &r {
+            self.bar.suspend(|| (self.log)(job, r, &format!("[{} {n}/{}]", self.what, self.jobs.len())));
+        }
+        *self.slots[k].lock().expect("result slot") =
+            Some(r.map(|r| (r, self.started.elapsed().as_secs_f64())));
+    }
+}
+
 /// Runs `jobs` on the machine's cores: the workloads of jobs that share their cameras are
 /// generated together ([`suite::workloads`]), group after group (jobs with the same point and
-/// golden raster share one), and each job's architectures run
-/// on its workload ([`suite::evaluate`]) while the next groups generate. One progress bar over
-/// the work (frames generated, frames simulated per accelerator) with its ETA; `log` reports each
-/// finished job. Returns, in the order of `jobs`, each result and the seconds from the start to
-/// its end.
+/// golden raster share one), and each job's architectures run on its workload
+/// ([`suite::evaluate`]) while the next groups generate; in a set with throughput runs
+/// (`headline`), the other jobs' simulations are queued after all of theirs. One progress bar
+/// over the work with its ETA; `log` reports each finished job. Returns, in the order of
+/// `jobs`, each result and the seconds from the start to its end.
 #[allow(clippy::too_many_arguments)]
 pub fn run_jobs(
     scenes: &mut Scenes,
@@ -143,116 +244,50 @@ pub fn run_jobs(
         scenes.get(&j.point.scene)?;
     }
     let scenes = &*scenes;
-    // Groups of jobs sharing their cameras, in the order of their first job.
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (k, j) in jobs.iter().enumerate() {
-        match groups.iter_mut().find(|g| jobs[g[0]].point.camera_key() == j.point.camera_key()) {
-            Some(g) => g.push(k),
-            None => groups.push(vec![k]),
-        }
-    }
-    // Work units: a frame generated, and a frame simulated on each accelerator (the GPU model
-    // is instant).
-    let model_units =
-        |j: &PointJob| (j.point.frames * j.archs.iter().filter(|a| **a != Arch::Gpu).count()) as u64;
-    let total: u64 = jobs.iter().map(|j| j.point.frames as u64 + model_units(j)).sum();
-    let bar = ProgressBar::new(total);
-    bar.set_style(
-        ProgressStyle::with_template("{prefix} {bar:24} {percent:>3}% [{elapsed} < {eta}] {msg}")
-            .expect("valid template"),
-    );
-    bar.set_prefix(what.to_string());
-    bar.enable_steady_tick(Duration::from_millis(200));
-    let started = Instant::now();
-    let slots: Vec<Mutex<Option<Result<Timed>>>> = jobs.iter().map(|_| Mutex::new(None)).collect();
-    let finished = AtomicUsize::new(0);
+    let set = JobSet {
+        jobs,
+        cfg,
+        lat,
+        what,
+        log,
+        bar: jobs_bar(jobs, what),
+        slots: jobs.iter().map(|_| Mutex::new(None)).collect(),
+        finished: AtomicUsize::new(0),
+        started: Instant::now(),
+    };
+    let any_headline = jobs.iter().any(|j| j.headline);
     let generated: Result<()> = rayon::scope_fifo(|s| {
-        // One task per architecture (each a sequential simulation, first in first out): the
-        // last of a job's tasks makes its result.
-        let spawn = |k: usize, wl: Arc<Workload>| {
-            let job = &jobs[k];
-            let run = Arc::new(JobRun {
-                wl,
-                cfg: suite::point_config(&job.point, cfg),
-                archs: Mutex::new(vec![None; job.archs.len()]),
-                left: AtomicUsize::new(job.archs.len()),
-            });
-            for (i, &arch) in job.archs.iter().enumerate() {
-                let (run, slot, bar, finished) = (run.clone(), &slots[k], &bar, &finished);
-                s.spawn_fifo(move |_| {
-                    let r = simulate(arch, &run.cfg, lat, &run.wl, RunOptions::default());
-                    run.archs.lock().expect("arch results")[i] = Some(r);
-                    if arch != Arch::Gpu {
-                        bar.inc(job.point.frames as u64);
-                    }
-                    if run.left.fetch_sub(1, Ordering::AcqRel) != 1 {
-                        return;
-                    }
-                    let results = std::mem::take(&mut *run.archs.lock().expect("arch results"));
-                    let r = results
-                        .into_iter()
-                        .map(|r| r.expect("every architecture ran"))
-                        .collect::<Result<Vec<_>, String>>()
-                        .and_then(|a| suite::point_result(&job.point, &run.wl, a))
-                        .map_err(|e| anyhow!(e));
-                    let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
-                    if let Ok(r) = &r {
-                        bar.suspend(|| log(job, r, &format!("[{what} {n}/{}]", jobs.len())));
-                    }
-                    *slot.lock().expect("result slot") =
-                        Some(r.map(|r| (r, started.elapsed().as_secs_f64())));
-                });
-            }
-        };
-        let any_headline = jobs.iter().any(|j| j.headline);
         let mut deferred = Vec::new();
-        for g in &groups {
-            // Jobs of the group with the same point and golden raster share one workload.
-            let (mut unique, mut shared_by): (Vec<usize>, Vec<usize>) = (Vec::new(), Vec::new());
-            for &k in g {
-                let same = |&u: &usize| jobs[u].point == jobs[k].point && jobs[u].golden == jobs[k].golden;
-                shared_by.push(unique.iter().position(same).unwrap_or_else(|| {
-                    unique.push(k);
-                    unique.len() - 1
-                }));
-            }
+        for g in camera_groups(jobs) {
+            let (unique, shared_by) = distinct_workloads(jobs, &g);
             let points: Vec<&Point> = unique.iter().map(|&k| &jobs[k].point).collect();
             let first = points[0];
             let scene = scenes.loaded(&first.scene).expect("loaded above");
-            bar.set_message(format!(
-                "generating {} workload(s) at {} ({} frames)",
-                points.len(),
-                first.res,
-                first.frames
-            ));
+            let msg =
+                format!("generating {} workload(s) at {} ({} frames)", points.len(), first.res, first.frames);
+            set.bar.set_message(msg);
             let golden: Vec<GoldenRaster> = unique.iter().map(|&k| jobs[k].golden).collect();
-            let wls: Vec<Arc<Workload>> =
-                suite::workloads_with(scene, &points, &golden, cfg, raster_sample, |_| {
-                    bar.inc(g.len() as u64)
-                })
-                .map_err(|e| anyhow!(e))?
-                .into_iter()
-                .map(Arc::new)
-                .collect();
+            let wls = suite::workloads_with(scene, &points, &golden, cfg, raster_sample, |_| {
+                set.bar.inc(g.len() as u64)
+            })
+            .map_err(|e| anyhow!(e))?;
+            let wls: Vec<Arc<Workload>> = wls.into_iter().map(Arc::new).collect();
             for (&k, &i) in g.iter().zip(&shared_by) {
-                let wl = wls[i].clone();
                 if jobs[k].headline || !any_headline {
-                    spawn(k, wl);
+                    set.spawn(s, k, wls[i].clone());
                 } else {
-                    deferred.push((k, wl));
+                    deferred.push((k, wls[i].clone()));
                 }
             }
         }
-        // The other jobs of a set with throughput runs go after all of those (first in first
-        // out), so that the throughput table is out first.
         for (k, wl) in deferred {
-            spawn(k, wl);
+            set.spawn(s, k, wl);
         }
         Ok(())
     });
-    bar.finish_and_clear();
+    set.bar.finish_and_clear();
     generated?;
-    slots
+    set.slots
         .into_iter()
         .map(|m| m.into_inner().expect("result slot").expect("every spawned job is done"))
         .collect()
