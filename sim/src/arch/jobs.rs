@@ -459,16 +459,14 @@ impl Model<'_> {
             // Neo's feature table is a word per Gaussian id, GSCore's the compacted entries.
             let (record_bytes, records) =
                 if neo_tables { (self.pre_records().feature, fw.gaussians) } else { (self.fb, fw.visible) };
-            reads.push(Access {
-                stage: Stage::FeatureTable,
-                base: self.layout.features[f % 2],
-                kind: AccessKind::Gather {
-                    count: entries as u64,
-                    record_bytes: record_bytes as u32,
-                    records_in_region: records.max(1),
-                    seed: crate::engine::mix(((f as u64) << 32) ^ t as u64),
-                },
-            });
+            let seed = crate::engine::mix(((f as u64) << 32) ^ t as u64);
+            reads.push(self.feature_gather(
+                Stage::FeatureTable,
+                f,
+                entries as u64,
+                (record_bytes, records),
+                seed,
+            ));
         }
         let mut writes = Vec::new();
         if neo && tw.writeback > 0 {
@@ -503,6 +501,21 @@ impl Model<'_> {
         }
     }
 
+    /// `count` random reads of frame `f`'s feature table, whose `records` are (bytes, count),
+    /// charged to `stage`.
+    fn feature_gather(&self, stage: Stage, f: usize, count: u64, records: (u64, u64), seed: u64) -> Access {
+        Access {
+            stage,
+            base: self.layout.features[f % 2],
+            kind: AccessKind::Gather {
+                count,
+                record_bytes: records.0 as u32,
+                records_in_region: records.1.max(1),
+                seed,
+            },
+        }
+    }
+
     /// Neo-S's update pass of tile `t` in frame `f`, on a sorting core after the tile's raster:
     /// it reads the table, gathers every entry's feature word (its depth and visibility this
     /// frame) and writes the table back, one entry per cycle (the MSU+ rate), all charged to
@@ -514,16 +527,9 @@ impl Model<'_> {
         let cur = self.layout.table(f, t);
         let mut reads = vec![Access::seq(Stage::DepthWriteback, cur, n * self.eb)];
         if n > 0 {
-            reads.push(Access {
-                stage: Stage::DepthWriteback,
-                base: self.layout.features[f % 2],
-                kind: AccessKind::Gather {
-                    count: n,
-                    record_bytes: self.pre_records().feature as u32,
-                    records_in_region: fw.gaussians.max(1),
-                    seed: crate::engine::mix(((f as u64) << 32) ^ t as u64 ^ 0x5eed),
-                },
-            });
+            let seed = crate::engine::mix(((f as u64) << 32) ^ t as u64 ^ 0x5eed);
+            let records = (self.pre_records().feature, fw.gaussians);
+            reads.push(self.feature_gather(Stage::DepthWriteback, f, n, records, seed));
         }
         let compute = self.ps(n as f64 * self.lat.msu_ii + 1.0);
         Job {
