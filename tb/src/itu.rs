@@ -414,9 +414,54 @@ pub fn directed_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
             );
         }
     }
+    out.extend(unbounded_far_jobs(cfg));
     // Tile indices the configuration's `tile_bits` cannot hold wrap (the RTL takes the low bits).
     for (_, j) in out.iter_mut() {
         j.tile = j.tile.map(|t| t & tmax);
+    }
+    out
+}
+
+/// Pairs of jobs that tell an unbounded extent from the largest finite one, one pair per axis
+/// `k` (x, y, U, V): the mean sits farther from tile `(1, 1)` along axis `k` than the largest
+/// finite extent reaches, and the other axes reach the tile. `"unbounded far on axis k"` hits
+/// the tile; `"bounded far on axis k"` (extent one LSB smaller) misses it. The axes are at 45
+/// degrees, so the other axes' largest finite extents cover the offset. A configuration whose
+/// largest extent is under 5 tiles, or whose mean cannot hold the offset, gets no pairs.
+pub fn unbounded_far_jobs(cfg: &EngineConfig) -> Vec<(String, ItuJob)> {
+    let fmt = cfg.feature_format();
+    let unb = fmt.unbounded_extent();
+    let tt = cfg.raster_config().tile as f64;
+    let reach = fmt.extent.dequantize(unb as i64 - 1);
+    let offset = reach + 2.0 * tt;
+    let centre = 1.5 * tt;
+    if reach < 5.0 * tt || centre + offset >= fmt.mean.max_value() - 1.0 {
+        return Vec::new();
+    }
+    let (c, s) = (fmt.axis.quantize(0.5f64.sqrt()) as i32, fmt.axis.quantize(0.5f64.sqrt()) as i32);
+    let norm = (((c * c + s * s) as f64).sqrt()).max(1.0);
+    let dirs =
+        [[-1.0, 0.0], [0.0, 1.0], [c as f64 / norm, s as f64 / norm], [-s as f64 / norm, c as f64 / norm]];
+    let small = fmt.extent.quantize_ceil(2.0) as i32;
+    let mut out = Vec::new();
+    for (k, dir) in dirs.iter().enumerate() {
+        let mean = [0, 1].map(|a| fmt.mean.quantize(centre + offset * dir[a]) as i32);
+        for (name, far) in [("unbounded", unb), ("bounded", unb - 1)] {
+            // The far axis gets `far`; the other axis of its pair a small extent (the offset is
+            // along the far axis only); the other pair the largest finite extent.
+            let mut ext = [[unb - 1; 2], [unb - 1; 2]];
+            let pair = k / 2;
+            ext[pair] = [small; 2];
+            ext[pair][k % 2] = far;
+            let e = FeatureEntry {
+                mean,
+                extent_xy: ext[0],
+                axis: [c, s],
+                extent_uv: ext[1],
+                ..FeatureEntry::default()
+            };
+            out.push((format!("{name} far on axis {k}"), ItuJob { entry: e, tile: [1, 1] }));
+        }
     }
     out
 }

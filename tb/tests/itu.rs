@@ -95,6 +95,14 @@ mod cosim {
         }
         assert_ne!(bm("outside left reaching"), bm("outside left short"));
         assert_eq!(bm("all unbounded"), full_bitmap(cfg));
+        // An unbounded extent is told from the largest finite one on every axis.
+        for k in 0..4 {
+            let far = |n: &str| cases.iter().find(|(c, _)| *c == format!("{n} far on axis {k}"));
+            if let (Some(unb), Some(bounded)) = (far("unbounded"), far("bounded")) {
+                assert_ne!(unb.1.expected(cfg), 0, "{}", unb.0);
+                assert_eq!(bounded.1.expected(cfg), 0, "{}", bounded.0);
+            }
+        }
     }
 
     #[test]
