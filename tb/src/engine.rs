@@ -16,6 +16,7 @@ use crate::dut::PortIo;
 use crate::dynmodel::{BuildInfo, DynModel};
 use crate::rng::Rng;
 use crate::waves::WaveFormat;
+use neo_gen::interface::ModuleInterface;
 use neo_gen::EngineConfig;
 use neo_golden::engine::expected::Mismatch;
 use neo_golden::engine::host::FramePlan;
@@ -64,6 +65,18 @@ impl EngineModel {
         Self::build_threaded(cfg, format, 1)
     }
 
+    /// [`EngineModel::build_traced`] with the per-cycle code compiled for build time rather
+    /// than speed ([`DynModel::build_for_short_runs`], `-O1`; its own cache entry): for the
+    /// benches' small engines, whose frames simulate about as fast as at `-O3`.
+    pub fn build_for_short_runs(
+        cfg: &EngineConfig,
+        format: Option<WaveFormat>,
+    ) -> Result<EngineModel, String> {
+        let (files, vlt, iface) = engine_sources(cfg)?;
+        let (model, build) = DynModel::build_for_short_runs(&iface, &files, Some(&vlt), format)?;
+        Ok(EngineModel { cfg: cfg.clone(), model, build })
+    }
+
     /// [`EngineModel::build_traced`] verilated with `--threads threads` (1: the usual
     /// single-threaded model); see [`DynModel::build_threaded`].
     pub fn build_threaded(
@@ -71,17 +84,27 @@ impl EngineModel {
         format: Option<WaveFormat>,
         threads: usize,
     ) -> Result<EngineModel, String> {
-        cfg.validate().map_err(|e| e.to_string())?;
-        let (files, vlt) = crate::dynmodel::generated_files(cfg, TOP)?;
-        let iface = neo_gen::units::modules(cfg)
-            .map_err(|e| e.to_string())?
-            .into_iter()
-            .find(|m| m.name == TOP)
-            .ok_or("the generator emits no neo_engine")?
-            .interface();
+        let (files, vlt, iface) = engine_sources(cfg)?;
         let (model, build) = DynModel::build_threaded(&iface, &files, Some(&vlt), format, threads)?;
         Ok(EngineModel { cfg: cfg.clone(), model, build })
     }
+}
+
+/// The Verilog files (name, text) of a top.
+type Files = Vec<(String, String)>;
+
+/// The Verilog files, the lint waivers and the interface of `neo_engine` for `cfg` (see
+/// [`EngineModel::build`] for `NEO_HDL_DIR`).
+fn engine_sources(cfg: &EngineConfig) -> Result<(Files, String, ModuleInterface), String> {
+    cfg.validate().map_err(|e| e.to_string())?;
+    let (files, vlt) = crate::dynmodel::generated_files(cfg, TOP)?;
+    let iface = neo_gen::units::modules(cfg)
+        .map_err(|e| e.to_string())?
+        .into_iter()
+        .find(|m| m.name == TOP)
+        .ok_or("the generator emits no neo_engine")?
+        .interface();
+    Ok((files, vlt, iface))
 }
 
 /// The transactions each memory client may have in flight, `(reads, writes)`, in client order

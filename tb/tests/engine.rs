@@ -35,9 +35,12 @@ use std::sync::Mutex;
 /// Builds are serialised in this process (a second build of a configuration is a cache hit).
 static BUILD: Mutex<()> = Mutex::new(());
 
+/// The engine of `cfg`, traced in `format`, compiled for build time (`-O1`,
+/// [`EngineModel::build_for_short_runs`]): on the CI engine the C++ compiles in about half the
+/// time of `-O3`, and biker's 256x256 frames simulate no slower (docs/rtl.md).
 fn model(cfg: &EngineConfig, format: Option<WaveFormat>) -> EngineModel {
     let _one_at_a_time = BUILD.lock().unwrap_or_else(|e| e.into_inner());
-    let m = EngineModel::build_traced(cfg, format).unwrap_or_else(|e| panic!("building neo_engine: {e}"));
+    let m = EngineModel::build_for_short_runs(cfg, format).unwrap_or_else(|e| panic!("building neo_engine: {e}"));
     let how = if m.build.cached { "cached" } else { "built" };
     println!(
         "neo_engine ({} + {} cores): {how} in {:.1} s {}",
@@ -271,7 +274,12 @@ fn engine_scene_two_lanes_are_bit_exact() {
     run_case_in(&scene, &how, c, (3, [128, 128]), (&base, HostMode::Scene), case_seed(&seeds, 0, c));
 }
 
+/// Biker's orbit behind the hostile memory (about 5 minutes of simulation on two cores, the
+/// longest CI test): `--ignored`. CI checks biker bit-exact over the same orbit's frames in
+/// `biker_cycle_model_matches_the_rtl` (the ideal memory, at 256x256), and the hostile memory
+/// in the synthetic cases.
 #[test]
+#[ignore = "biker behind the hostile memory (about 5 minutes); biker_cycle_model_matches_the_rtl checks biker in CI"]
 fn biker_orbit_is_bit_exact_over_reuse_frames() {
     let Some(path) = shared_file_for_test("biker_orbit_is_bit_exact_over_reuse_frames", "scenes/biker.ply")
     else {
