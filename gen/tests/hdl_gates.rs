@@ -257,11 +257,30 @@ fn icarus_compiles_every_top() {
     });
 }
 
+/// The top that checks primitive `p` and its files: its module, or for a primitive with
+/// parameters (`to_int`: the rounding) a wrapper instantiating the module with them, so every
+/// parameterisation is checked and measured on its own (the wrapper adds no logic).
+fn prim_top(cfg: &EngineConfig, p: neo_gen::units::fp::FpPrim) -> (String, Vec<VerilogFile>) {
+    use neo_gen::units::fp::{instantiate, module_name, params};
+    if params(p).is_empty() {
+        return (module_name(p).to_string(), files_for(cfg, module_name(p)));
+    }
+    let name = format!("neo_fp_{}_top", p.short());
+    let mut m = neo_gen::emit::Module::new(&name);
+    m.input("clk_i", 1).input("en_i", 1).input("a_i", 32);
+    if p.binary() {
+        m.input("b_i", 32);
+    }
+    m.output("y_o", 32);
+    instantiate(&mut m, p, "u_prim", "en_i", "a_i", p.binary().then_some("b_i"), "y_o");
+    (name.clone(), neo_gen::units::files_for_module(cfg, &m))
+}
+
 /// The binary32 primitives (`neo_fp_*`, not cosimulation tops of their own: tb builds them
 /// together in `neo_fp_bench`): each lint-clean and latch-free, every pipelined one with flip-flops.
 #[test]
 fn fp_primitives_are_lint_clean_and_latch_free() {
-    use neo_gen::units::fp::{bench, cmp, module_name, FpPrim};
+    use neo_gen::units::fp::{bench, cmp, FpPrim};
     if !require_for_test("verilator", "fp_primitives_are_lint_clean_and_latch_free")
         || !require_for_test("yosys", "fp_primitives_are_lint_clean_and_latch_free")
     {
@@ -269,19 +288,20 @@ fn fp_primitives_are_lint_clean_and_latch_free() {
     }
     let cfg = EngineConfig::default();
     let vlt = hdl_dir().join("lint.vlt");
-    let mut tops: Vec<&str> = FpPrim::ALL.iter().map(|&p| module_name(p)).collect();
-    tops.extend([cmp::NAME, bench::NAME]);
+    let mut tops: Vec<(String, Vec<VerilogFile>)> = FpPrim::ALL.iter().map(|&p| prim_top(&cfg, p)).collect();
+    tops.extend([cmp::NAME, bench::NAME].map(|t| (t.to_string(), files_for(&cfg, t))));
     let mut failures = Vec::new();
-    for top in tops {
-        let files = files_for(&cfg, top);
-        assert!(!files.is_empty(), "{top} is not generated");
-        if let Err(e) = verilator_lint(&files, top, Some(&vlt)) {
+    for (top, files) in &tops {
+        let top = top.as_str();
+        assert!(files.iter().any(|f| f.name == top), "{top} is not generated");
+        let files = files.as_slice();
+        if let Err(e) = verilator_lint(files, top, Some(&vlt)) {
             failures.push(format!("lint: {top}: {e}"));
         }
         if top == bench::NAME {
             continue; // side by side copies of the primitives checked above: lint only
         }
-        match coarse_synth_stats(&files, top) {
+        match coarse_synth_stats(files, top) {
             Ok(s) if s.latches != 0 => failures.push(format!("{top}: {} latch cells", s.latches)),
             Ok(s) if s.flip_flops == 0 && top != cmp::NAME => failures.push(format!("{top}: no flip-flops")),
             Ok(_) => {}
@@ -302,18 +322,23 @@ fn fp_primitives_are_lint_clean_and_latch_free() {
 #[ignore]
 fn fp_primitive_cells() {
     use neo_gen::tools::synth_stats;
-    use neo_gen::units::fp::{cmp, latency, module_name, FpPrim};
+    use neo_gen::units::fp::{cmp, label, latency, FpPrim};
     if !require_for_test("yosys", "fp_primitive_cells") {
         return;
     }
     let cfg = EngineConfig::default();
     println!("| module | latency | cells | flip-flops |");
     println!("|---|---:|---:|---:|");
-    let mut rows: Vec<(&str, String)> =
-        FpPrim::ALL.iter().map(|&p| (module_name(p), latency(p).to_string())).collect();
-    rows.push((cmp::NAME, "0 (combinational)".into()));
-    for (top, lat) in rows {
-        let s = synth_stats(&files_for(&cfg, top), top).unwrap_or_else(|e| panic!("{top}: {e}"));
-        println!("| `{top}` | {lat} | {} | {} |", s.cells, s.flip_flops);
+    let mut rows: Vec<(String, String, String, Vec<VerilogFile>)> = FpPrim::ALL
+        .iter()
+        .map(|&p| {
+            let (top, files) = prim_top(&cfg, p);
+            (label(p), latency(p).to_string(), top, files)
+        })
+        .collect();
+    rows.push((cmp::NAME.into(), "0 (combinational)".into(), cmp::NAME.into(), files_for(&cfg, cmp::NAME)));
+    for (what, lat, top, files) in rows {
+        let s = synth_stats(&files, &top).unwrap_or_else(|e| panic!("{top}: {e}"));
+        println!("| `{what}` | {lat} | {} | {} |", s.cells, s.flip_flops);
     }
 }
