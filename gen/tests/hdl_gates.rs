@@ -5,7 +5,8 @@
 
 use neo_gen::output::check_dir;
 use neo_gen::tools::{
-    coarse_glue_synth_stats, coarse_synth_stats, icarus_compile, require_for_test, verilator_lint,
+    coarse_glue_synth_stats, coarse_synth_stats, coarse_synth_stats_with, icarus_compile, require_for_test,
+    verilator_lint, verilator_lint_with,
 };
 use neo_gen::units::run_time_tops;
 use neo_gen::units::VerilogFile;
@@ -257,23 +258,18 @@ fn icarus_compiles_every_top() {
     });
 }
 
-/// The top that checks primitive `p` and its files: its module, or for a primitive with
-/// parameters (`to_int`: the rounding) a wrapper instantiating the module with them, so every
-/// parameterisation is checked and measured on its own (the wrapper adds no logic).
-fn prim_top(cfg: &EngineConfig, p: neo_gen::units::fp::FpPrim) -> (String, Vec<VerilogFile>) {
-    use neo_gen::units::fp::{instantiate, module_name, params};
-    if params(p).is_empty() {
-        return (module_name(p).to_string(), files_for(cfg, module_name(p)));
-    }
-    let name = format!("neo_fp_{}_top", p.short());
-    let mut m = neo_gen::emit::Module::new(&name);
-    m.input("clk_i", 1).input("en_i", 1).input("a_i", 32);
-    if p.binary() {
-        m.input("b_i", 32);
-    }
-    m.output("y_o", 32);
-    instantiate(&mut m, p, "u_prim", "en_i", "a_i", p.binary().then_some("b_i"), "y_o");
-    (name.clone(), neo_gen::units::files_for_module(cfg, &m))
+/// A top the primitive gates check: module, files, parameters.
+type PrimTop = (String, Vec<VerilogFile>, Vec<(String, String)>);
+
+/// What the primitive gates check for primitive `p`: its module (the top), the files, and the
+/// parameters it is checked and measured at (`to_int`: its rounding; Yosys `chparam`, Verilator
+/// `-G`), so every parameterisation is checked on its own.
+fn prim_top(
+    cfg: &EngineConfig,
+    p: neo_gen::units::fp::FpPrim,
+) -> (String, Vec<VerilogFile>, Vec<(String, String)>) {
+    use neo_gen::units::fp::{module_name, params};
+    (module_name(p).to_string(), files_for(cfg, module_name(p)), params(p))
 }
 
 /// The binary32 primitives (`neo_fp_*`, not cosimulation tops of their own: tb builds them
@@ -288,20 +284,20 @@ fn fp_primitives_are_lint_clean_and_latch_free() {
     }
     let cfg = EngineConfig::default();
     let vlt = hdl_dir().join("lint.vlt");
-    let mut tops: Vec<(String, Vec<VerilogFile>)> = FpPrim::ALL.iter().map(|&p| prim_top(&cfg, p)).collect();
-    tops.extend([cmp::NAME, bench::NAME].map(|t| (t.to_string(), files_for(&cfg, t))));
+    let mut tops: Vec<PrimTop> = FpPrim::ALL.iter().map(|&p| prim_top(&cfg, p)).collect();
+    tops.extend([cmp::NAME, bench::NAME].map(|t| (t.to_string(), files_for(&cfg, t), Vec::new())));
     let mut failures = Vec::new();
-    for (top, files) in &tops {
+    for (top, files, params) in &tops {
         let top = top.as_str();
         assert!(files.iter().any(|f| f.name == top), "{top} is not generated");
         let files = files.as_slice();
-        if let Err(e) = verilator_lint(files, top, Some(&vlt)) {
-            failures.push(format!("lint: {top}: {e}"));
+        if let Err(e) = verilator_lint_with(files, top, Some(&vlt), params) {
+            failures.push(format!("lint: {top} {params:?}: {e}"));
         }
         if top == bench::NAME {
             continue; // side by side copies of the primitives checked above: lint only
         }
-        match coarse_synth_stats(files, top) {
+        match coarse_synth_stats_with(files, top, params) {
             Ok(s) if s.latches != 0 => failures.push(format!("{top}: {} latch cells", s.latches)),
             Ok(s) if s.flip_flops == 0 && top != cmp::NAME => failures.push(format!("{top}: no flip-flops")),
             Ok(_) => {}
@@ -321,7 +317,7 @@ fn fp_primitives_are_lint_clean_and_latch_free() {
 #[test]
 #[ignore]
 fn fp_primitive_cells() {
-    use neo_gen::tools::synth_stats;
+    use neo_gen::tools::synth_stats_with;
     use neo_gen::units::fp::{cmp, label, latency, FpPrim};
     if !require_for_test("yosys", "fp_primitive_cells") {
         return;
@@ -329,16 +325,12 @@ fn fp_primitive_cells() {
     let cfg = EngineConfig::default();
     println!("| module | latency | cells | flip-flops |");
     println!("|---|---:|---:|---:|");
-    let mut rows: Vec<(String, String, String, Vec<VerilogFile>)> = FpPrim::ALL
-        .iter()
-        .map(|&p| {
-            let (top, files) = prim_top(&cfg, p);
-            (label(p), latency(p).to_string(), top, files)
-        })
-        .collect();
-    rows.push((cmp::NAME.into(), "0 (combinational)".into(), cmp::NAME.into(), files_for(&cfg, cmp::NAME)));
-    for (what, lat, top, files) in rows {
-        let s = synth_stats(&files, &top).unwrap_or_else(|e| panic!("{top}: {e}"));
+    let mut rows: Vec<(String, String, PrimTop)> =
+        FpPrim::ALL.iter().map(|&p| (label(p), latency(p).to_string(), prim_top(&cfg, p))).collect();
+    let cmp_top = (cmp::NAME.to_string(), files_for(&cfg, cmp::NAME), Vec::new());
+    rows.push((cmp::NAME.into(), "0 (combinational)".into(), cmp_top));
+    for (what, lat, (top, files, params)) in rows {
+        let s = synth_stats_with(&files, &top, &params).unwrap_or_else(|e| panic!("{top}: {e}"));
         println!("| `{what}` | {lat} | {} | {} |", s.cells, s.flip_flops);
     }
 }
