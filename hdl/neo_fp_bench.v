@@ -10,10 +10,10 @@ module neo_fp_bench (
   output wire [31:0] mul_y_o,            // neo_fp_mul
   output wire [31:0] div_y_o,            // neo_fp_div
   output wire [31:0] sqrt_y_o,           // neo_fp_sqrt
-  output wire [31:0] to_int_trunc_y_o,   // neo_fp_to_int_trunc
-  output wire [31:0] to_int_floor_y_o,   // neo_fp_to_int_floor
-  output wire [31:0] to_int_ceil_y_o,    // neo_fp_to_int_ceil
-  output wire [31:0] to_int_halfup_y_o,  // neo_fp_to_int_halfup
+  output wire [31:0] to_int_trunc_y_o,   // neo_fp_to_int #(ROUND_TRUNC)
+  output wire [31:0] to_int_floor_y_o,   // neo_fp_to_int #(ROUND_FLOOR)
+  output wire [31:0] to_int_ceil_y_o,    // neo_fp_to_int #(ROUND_CEIL)
+  output wire [31:0] to_int_halfup_y_o,  // neo_fp_to_int #(ROUND_HALF_UP)
   output wire [31:0] from_int_y_o,       // neo_fp_from_int
   output wire [31:0] f16_y_o,            // neo_fp_f16
   output wire [31:0] widen_half_y_o,     // neo_fp_widen_half
@@ -58,25 +58,33 @@ module neo_fp_bench (
     .a_i(a_i),
     .y_o(sqrt_y_o)
   );
-  neo_fp_to_int_trunc u_to_int_trunc (
+  neo_fp_to_int #(
+    .ROUNDING(0)
+  ) u_to_int_trunc (
     .clk_i(clk_i),
     .en_i(en_i),
     .a_i(a_i),
     .y_o(to_int_trunc_y_o)
   );
-  neo_fp_to_int_floor u_to_int_floor (
+  neo_fp_to_int #(
+    .ROUNDING(1)
+  ) u_to_int_floor (
     .clk_i(clk_i),
     .en_i(en_i),
     .a_i(a_i),
     .y_o(to_int_floor_y_o)
   );
-  neo_fp_to_int_ceil u_to_int_ceil (
+  neo_fp_to_int #(
+    .ROUNDING(2)
+  ) u_to_int_ceil (
     .clk_i(clk_i),
     .en_i(en_i),
     .a_i(a_i),
     .y_o(to_int_ceil_y_o)
   );
-  neo_fp_to_int_halfup u_to_int_halfup (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_to_int_halfup (
     .clk_i(clk_i),
     .en_i(en_i),
     .a_i(a_i),

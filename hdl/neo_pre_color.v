@@ -2459,7 +2459,9 @@ module neo_pre_color (
     .y_o(n242_mul)
   );
   wire [31:0] n243_toint;
-  neo_fp_to_int_halfup u_n243 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n243 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n242_mul),
@@ -2490,7 +2492,9 @@ module neo_pre_color (
     .y_o(n248_mul)
   );
   wire [31:0] n249_toint;
-  neo_fp_to_int_halfup u_n249 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n249 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n248_mul),
@@ -2517,7 +2521,9 @@ module neo_pre_color (
     .y_o(n252_mul)
   );
   wire [31:0] n253_toint;
-  neo_fp_to_int_halfup u_n253 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n253 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n252_mul),

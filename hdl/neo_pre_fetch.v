@@ -66,7 +66,10 @@ module neo_pre_fetch (
   wire q_pop;
   wire [39:0] q_data;
   assign cmd_ready_o = (ar_left_q == 39'd0) & q_ready;
-  neo_pre_fifo_w40_d64 u_cmdq (
+  neo_pre_fifo #(
+    .WIDTH(40),
+    .DEPTH(64)
+  ) u_cmdq (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
     .push_valid_i(cmd_take & ~cmd_empty),
@@ -140,7 +143,10 @@ module neo_pre_fetch (
   wire [63:0] head;
   wire head_valid;
   assign head_valid = buf_cnt_q != 11'd0;
-  neo_pre_ram_w64_d1024 u_buf (
+  neo_pre_ram #(
+    .WIDTH(64),
+    .DEPTH(1024)
+  ) u_buf (
     .clk_i(clk_i),
     .we_i(r_fire),
     .waddr_i(wr_ptr_q),

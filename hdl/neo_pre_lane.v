@@ -236,7 +236,10 @@ module neo_pre_lane (
   assign geo_ready = p_in_ready & posq_ready;
   wire posq_valid;
   wire [95:0] posq_data;
-  neo_pre_fifo_w96_d256 u_posq (
+  neo_pre_fifo #(
+    .WIDTH(96),
+    .DEPTH(256)
+  ) u_posq (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
     .push_valid_i(geo_valid & p_in_ready),
@@ -394,7 +397,10 @@ module neo_pre_lane (
   wire pend_valid;
   wire [317:0] pend_data;
   wire pend_pop;
-  neo_pre_fifo_w318_d64 u_pendq (
+  neo_pre_fifo #(
+    .WIDTH(318),
+    .DEPTH(64)
+  ) u_pendq (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
     .push_valid_i(proj_take),
@@ -626,7 +632,10 @@ module neo_pre_lane (
   wire colq_valid;
   wire [221:0] colq_data;
   wire word_take;
-  neo_pre_fifo_w222_d256 u_colq (
+  neo_pre_fifo #(
+    .WIDTH(222),
+    .DEPTH(256)
+  ) u_colq (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
     .push_valid_i(c_take),

@@ -119,7 +119,10 @@ module neo_pre_lists (
   assign slot = cnt[2:0];
   wire [47:0] entry;
   assign entry = {1'b1, hit_key_i, hit_id_i};
-  neo_pre_ram_w32_d2048 u_cnt (
+  neo_pre_ram #(
+    .WIDTH(32),
+    .DEPTH(2048)
+  ) u_cnt (
     .clk_i(clk_i),
     .we_i(in_clear | hit_take),
     .waddr_i(at_t),
@@ -132,7 +135,10 @@ module neo_pre_lists (
   genvar s;
   generate
     for (s = 0; s < 7; s = s + 1) begin : g_slot
-      neo_pre_ram_w48_d2048 u_line (
+      neo_pre_ram #(
+        .WIDTH(48),
+        .DEPTH(2048)
+      ) u_line (
         .clk_i(clk_i),
         .we_i(hit_take & in_cap & (slot == s[2:0])),
         .waddr_i(at_t),
@@ -188,7 +194,10 @@ module neo_pre_lists (
   assign hit_ready_o = in_run & wq_ready;
   wire [544:0] wq_in;
   assign wq_in = flush_len ? {len_data, len_addr, 1'b1} : {line_full ? line_with_new : line_partial, line_addr, 1'b0};
-  neo_pre_fifo_w545_d4 u_wq (
+  neo_pre_fifo #(
+    .WIDTH(545),
+    .DEPTH(4)
+  ) u_wq (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
     .push_valid_i(wq_push_valid),

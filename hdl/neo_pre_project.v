@@ -1545,7 +1545,9 @@ module neo_pre_project (
     .y_o(n160_mul)
   );
   wire [31:0] n161_toint;
-  neo_fp_to_int_ceil u_n161 (
+  neo_fp_to_int #(
+    .ROUNDING(2)
+  ) u_n161 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n160_mul),
@@ -1789,7 +1791,9 @@ module neo_pre_project (
     .y_o(n187_mul)
   );
   wire [31:0] n188_toint;
-  neo_fp_to_int_trunc u_n188 (
+  neo_fp_to_int #(
+    .ROUNDING(0)
+  ) u_n188 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n187_mul),
@@ -1850,7 +1854,9 @@ module neo_pre_project (
     .y_o(n194_mul)
   );
   wire [31:0] n195_toint;
-  neo_fp_to_int_trunc u_n195 (
+  neo_fp_to_int #(
+    .ROUNDING(0)
+  ) u_n195 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n194_mul),
@@ -1893,7 +1899,9 @@ module neo_pre_project (
     .y_o(n199_mul)
   );
   wire [31:0] n200_toint;
-  neo_fp_to_int_trunc u_n200 (
+  neo_fp_to_int #(
+    .ROUNDING(0)
+  ) u_n200 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n199_mul),
@@ -1954,7 +1962,9 @@ module neo_pre_project (
     .y_o(n206_mul)
   );
   wire [31:0] n207_toint;
-  neo_fp_to_int_trunc u_n207 (
+  neo_fp_to_int #(
+    .ROUNDING(0)
+  ) u_n207 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n206_mul),
@@ -2029,7 +2039,9 @@ module neo_pre_project (
     .y_o(n216_mul)
   );
   wire [31:0] n217_toint;
-  neo_fp_to_int_halfup u_n217 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n217 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n216_mul),
@@ -2068,7 +2080,9 @@ module neo_pre_project (
     .y_o(n222_mul)
   );
   wire [31:0] n223_toint;
-  neo_fp_to_int_halfup u_n223 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n223 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n222_mul),
@@ -2151,7 +2165,9 @@ module neo_pre_project (
     .y_o(n233_mul)
   );
   wire [31:0] n234_toint;
-  neo_fp_to_int_halfup u_n234 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n234 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n233_mul),
@@ -2510,7 +2526,9 @@ module neo_pre_project (
     .y_o(n273_mul)
   );
   wire [31:0] n274_toint;
-  neo_fp_to_int_halfup u_n274 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n274 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n273_mul),
@@ -2635,7 +2653,9 @@ module neo_pre_project (
     .y_o(n289_mul)
   );
   wire [31:0] n290_toint;
-  neo_fp_to_int_halfup u_n290 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n290 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n289_mul),
@@ -2684,7 +2704,9 @@ module neo_pre_project (
     .y_o(n295_mul)
   );
   wire [31:0] n296_toint;
-  neo_fp_to_int_halfup u_n296 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n296 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n295_mul),
@@ -2733,7 +2755,9 @@ module neo_pre_project (
     .y_o(n301_mul)
   );
   wire [31:0] n302_toint;
-  neo_fp_to_int_halfup u_n302 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n302 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n301_mul),
@@ -3126,7 +3150,9 @@ module neo_pre_project (
     .y_o(n338_mul)
   );
   wire [31:0] n339_toint;
-  neo_fp_to_int_halfup u_n339 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n339 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n338_mul),
@@ -3165,7 +3191,9 @@ module neo_pre_project (
     .y_o(n344_mul)
   );
   wire [31:0] n345_toint;
-  neo_fp_to_int_halfup u_n345 (
+  neo_fp_to_int #(
+    .ROUNDING(3)
+  ) u_n345 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n344_mul),
@@ -4176,7 +4204,9 @@ module neo_pre_project (
     .y_o(n456_mul)
   );
   wire [31:0] n457_toint;
-  neo_fp_to_int_ceil u_n457 (
+  neo_fp_to_int #(
+    .ROUNDING(2)
+  ) u_n457 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n456_mul),
@@ -4225,7 +4255,9 @@ module neo_pre_project (
     .y_o(n463_mul)
   );
   wire [31:0] n464_toint;
-  neo_fp_to_int_ceil u_n464 (
+  neo_fp_to_int #(
+    .ROUNDING(2)
+  ) u_n464 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n463_mul),
@@ -4272,7 +4304,9 @@ module neo_pre_project (
     .y_o(n469_mul)
   );
   wire [31:0] n470_toint;
-  neo_fp_to_int_ceil u_n470 (
+  neo_fp_to_int #(
+    .ROUNDING(2)
+  ) u_n470 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n469_mul),
@@ -4327,7 +4361,9 @@ module neo_pre_project (
     .y_o(n475_mul)
   );
   wire [31:0] n476_toint;
-  neo_fp_to_int_ceil u_n476 (
+  neo_fp_to_int #(
+    .ROUNDING(2)
+  ) u_n476 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n475_mul),

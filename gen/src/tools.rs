@@ -137,6 +137,36 @@ pub fn synth_stats(files: &[VerilogFile], top: &str) -> Result<SynthStats, ToolE
     yosys_script_stat(files, top, &format!("synth -flatten -top {top};"))
 }
 
+/// [`synth_stats`] of `top` with its parameters set to `params` (`(name, value)`, Yosys
+/// `chparam -set NAME VALUE TOP` before the synthesis): a parametric module measured at one
+/// parameterisation as its own top (`neo_fp_to_int` at each rounding).
+pub fn synth_stats_with(
+    files: &[VerilogFile],
+    top: &str,
+    params: &[(String, String)],
+) -> Result<SynthStats, ToolError> {
+    yosys_script_stat(files, top, &format!("{} synth -flatten -top {top};", chparam(top, params)))
+}
+
+/// [`coarse_synth_stats`] of `top` with its parameters set to `params` (see [`synth_stats_with`]).
+pub fn coarse_synth_stats_with(
+    files: &[VerilogFile],
+    top: &str,
+    params: &[(String, String)],
+) -> Result<SynthStats, ToolError> {
+    let script = format!("{} hierarchy -check -top {top}; proc; flatten; opt_clean;", chparam(top, params));
+    yosys_script_stat(files, top, &script)
+}
+
+/// `chparam -set NAME VALUE ... TOP;`, or nothing without parameters.
+fn chparam(top: &str, params: &[(String, String)]) -> String {
+    if params.is_empty() {
+        return String::new();
+    }
+    let sets: Vec<String> = params.iter().map(|(n, v)| format!("-set {n} {v}")).collect();
+    format!("chparam {} {top};", sets.join(" "))
+}
+
 /// The latch check: the front of `synth -flatten` up to `proc`, where a latch is inferred (as
 /// `$dlatch`, or `$sr` / `$dlatchsr`) and flip-flops become `$dff` / `$adff` cells
 /// (`hierarchy -check; proc; flatten; opt_clean`), and its statistics. `proc` alone decides
@@ -201,9 +231,20 @@ pub fn parse_stat_json(top: &str, text: &str) -> Result<SynthStats, ToolError> {
 /// `verilator --lint-only -Wall [vlt] FILES --top-module TOP`; `Ok` when it prints nothing and
 /// succeeds, else the output.
 pub fn verilator_lint(files: &[VerilogFile], top: &str, vlt: Option<&Path>) -> Result<(), ToolError> {
+    verilator_lint_with(files, top, vlt, &[])
+}
+
+/// [`verilator_lint`] with the top's parameters set to `params` (`-GNAME=VALUE`).
+pub fn verilator_lint_with(
+    files: &[VerilogFile],
+    top: &str,
+    vlt: Option<&Path>,
+    params: &[(String, String)],
+) -> Result<(), ToolError> {
     let tmp = TempFiles::write(files).map_err(|e| io_err("verilator", e))?;
     let mut cmd = Command::new("verilator");
     cmd.args(["--lint-only", "-Wall"]);
+    cmd.args(params.iter().map(|(n, v)| format!("-G{n}={v}")));
     if let Some(v) = vlt {
         cmd.arg(v);
     }
@@ -243,6 +284,13 @@ mod tests {
             assert!(is_latch(l) && !is_flip_flop(l), "{l}");
         }
         assert!(!is_flip_flop("$_MUX_") && !is_latch("$_MUX_"));
+    }
+
+    #[test]
+    fn chparam_sets_every_parameter_of_the_top() {
+        assert_eq!(chparam("t", &[]), "");
+        let p = [("WIDTH".to_string(), "40".to_string()), ("DEPTH".to_string(), "64".to_string())];
+        assert_eq!(chparam("t", &p), "chparam -set WIDTH 40 -set DEPTH 64 t;");
     }
 
     #[test]

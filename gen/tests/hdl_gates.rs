@@ -5,7 +5,8 @@
 
 use neo_gen::output::check_dir;
 use neo_gen::tools::{
-    coarse_glue_synth_stats, coarse_synth_stats, icarus_compile, require_for_test, verilator_lint,
+    coarse_glue_synth_stats, coarse_synth_stats, coarse_synth_stats_with, icarus_compile, require_for_test,
+    verilator_lint, verilator_lint_with,
 };
 use neo_gen::units::run_time_tops;
 use neo_gen::units::VerilogFile;
@@ -257,11 +258,25 @@ fn icarus_compiles_every_top() {
     });
 }
 
+/// A top the primitive gates check: module, files, parameters.
+type PrimTop = (String, Vec<VerilogFile>, Vec<(String, String)>);
+
+/// What the primitive gates check for primitive `p`: its module (the top), the files, and the
+/// parameters it is checked and measured at (`to_int`: its rounding; Yosys `chparam`, Verilator
+/// `-G`), so every parameterisation is checked on its own.
+fn prim_top(
+    cfg: &EngineConfig,
+    p: neo_gen::units::fp::FpPrim,
+) -> (String, Vec<VerilogFile>, Vec<(String, String)>) {
+    use neo_gen::units::fp::{module_name, params};
+    (module_name(p).to_string(), files_for(cfg, module_name(p)), params(p))
+}
+
 /// The binary32 primitives (`neo_fp_*`, not cosimulation tops of their own: tb builds them
 /// together in `neo_fp_bench`): each lint-clean and latch-free, every pipelined one with flip-flops.
 #[test]
 fn fp_primitives_are_lint_clean_and_latch_free() {
-    use neo_gen::units::fp::{bench, cmp, module_name, FpPrim};
+    use neo_gen::units::fp::{bench, cmp, FpPrim};
     if !require_for_test("verilator", "fp_primitives_are_lint_clean_and_latch_free")
         || !require_for_test("yosys", "fp_primitives_are_lint_clean_and_latch_free")
     {
@@ -269,19 +284,20 @@ fn fp_primitives_are_lint_clean_and_latch_free() {
     }
     let cfg = EngineConfig::default();
     let vlt = hdl_dir().join("lint.vlt");
-    let mut tops: Vec<&str> = FpPrim::ALL.iter().map(|&p| module_name(p)).collect();
-    tops.extend([cmp::NAME, bench::NAME]);
+    let mut tops: Vec<PrimTop> = FpPrim::ALL.iter().map(|&p| prim_top(&cfg, p)).collect();
+    tops.extend([cmp::NAME, bench::NAME].map(|t| (t.to_string(), files_for(&cfg, t), Vec::new())));
     let mut failures = Vec::new();
-    for top in tops {
-        let files = files_for(&cfg, top);
-        assert!(!files.is_empty(), "{top} is not generated");
-        if let Err(e) = verilator_lint(&files, top, Some(&vlt)) {
-            failures.push(format!("lint: {top}: {e}"));
+    for (top, files, params) in &tops {
+        let top = top.as_str();
+        assert!(files.iter().any(|f| f.name == top), "{top} is not generated");
+        let files = files.as_slice();
+        if let Err(e) = verilator_lint_with(files, top, Some(&vlt), params) {
+            failures.push(format!("lint: {top} {params:?}: {e}"));
         }
         if top == bench::NAME {
             continue; // side by side copies of the primitives checked above: lint only
         }
-        match coarse_synth_stats(&files, top) {
+        match coarse_synth_stats_with(files, top, params) {
             Ok(s) if s.latches != 0 => failures.push(format!("{top}: {} latch cells", s.latches)),
             Ok(s) if s.flip_flops == 0 && top != cmp::NAME => failures.push(format!("{top}: no flip-flops")),
             Ok(_) => {}
@@ -301,19 +317,20 @@ fn fp_primitives_are_lint_clean_and_latch_free() {
 #[test]
 #[ignore]
 fn fp_primitive_cells() {
-    use neo_gen::tools::synth_stats;
-    use neo_gen::units::fp::{cmp, latency, module_name, FpPrim};
+    use neo_gen::tools::synth_stats_with;
+    use neo_gen::units::fp::{cmp, label, latency, FpPrim};
     if !require_for_test("yosys", "fp_primitive_cells") {
         return;
     }
     let cfg = EngineConfig::default();
     println!("| module | latency | cells | flip-flops |");
     println!("|---|---:|---:|---:|");
-    let mut rows: Vec<(&str, String)> =
-        FpPrim::ALL.iter().map(|&p| (module_name(p), latency(p).to_string())).collect();
-    rows.push((cmp::NAME, "0 (combinational)".into()));
-    for (top, lat) in rows {
-        let s = synth_stats(&files_for(&cfg, top), top).unwrap_or_else(|e| panic!("{top}: {e}"));
-        println!("| `{top}` | {lat} | {} | {} |", s.cells, s.flip_flops);
+    let mut rows: Vec<(String, String, PrimTop)> =
+        FpPrim::ALL.iter().map(|&p| (label(p), latency(p).to_string(), prim_top(&cfg, p))).collect();
+    let cmp_top = (cmp::NAME.to_string(), files_for(&cfg, cmp::NAME), Vec::new());
+    rows.push((cmp::NAME.into(), "0 (combinational)".into(), cmp_top));
+    for (what, lat, (top, files, params)) in rows {
+        let s = synth_stats_with(&files, &top, &params).unwrap_or_else(|e| panic!("{top}: {e}"));
+        println!("| `{what}` | {lat} | {} | {} |", s.cells, s.flip_flops);
     }
 }

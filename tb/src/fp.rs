@@ -7,7 +7,7 @@
 use crate::check::Checker;
 use crate::dynmodel::DynModel;
 use crate::rng::Rng;
-use neo_gen::units::fp::{bench, latency, module_name, FpPrim};
+use neo_gen::units::fp::{bench, label, latency, FpPrim};
 use neo_golden::hwarith::graph::{eval_op, Op, Ty};
 
 /// The generated Verilog's lint waivers (passed to Verilator before the files).
@@ -204,7 +204,7 @@ impl FpBench {
             let (v, i, want) = &ring[(c - l) % ring.len()];
             let got = self.model.get_u64(port) as u32;
             if got != want[k] {
-                Checker::new(module_name(p), seed).fail(
+                Checker::new(&label(p), seed).fail(
                     self.model.cycle(),
                     &format!(
                         "y_o (vector {i}, class {}, a 0x{:08x}, b 0x{:08x}, latency {l})",

@@ -13,7 +13,7 @@ fn fp_skipped_without_verilator() {
 
 #[cfg(neo_has_verilator)]
 mod cosim {
-    use neo_gen::units::fp::{latency, module_name, FpPrim};
+    use neo_gen::units::fp::{label, latency, FpPrim};
     use neo_tb::fp::{directed, directed_vectors, expected, random_vectors, FpBench};
     use neo_tb::rng::{for_each_seed, seed_share, Rng};
     use neo_tb::waves::maybe_trace;
@@ -113,8 +113,8 @@ mod cosim {
         with_bench(|b| {
             for_each_seed(name, |seed| {
                 for (p, measured) in b.measure_latencies(seed) {
-                    println!("{name}: {} latency {measured:?} (declared {})", module_name(p), latency(p));
-                    assert_eq!(measured, Some(latency(p)), "{}", module_name(p));
+                    println!("{name}: {} latency {measured:?} (declared {})", label(p), latency(p));
+                    assert_eq!(measured, Some(latency(p)), "{}", label(p));
                 }
             });
         });
@@ -145,7 +145,7 @@ fn native_nan_results_are_canonical() {
 /// comparator output: the primitive bench and the datapath benches check the same mapping.
 #[test]
 fn golden_ops_round_trip_through_the_datapath_library() {
-    use neo_gen::units::fp::{module_name, FpPrim};
+    use neo_gen::units::fp::{module_name, params, FpPrim};
     use neo_gen::units::pre::datapath::{Library, Lowering};
     use neo_gen::units::pre::library::PreLibrary;
     use neo_tb::fp::{op, CMP_OPS};
@@ -154,6 +154,7 @@ fn golden_ops_round_trip_through_the_datapath_library() {
         match PreLibrary.lower(&o, ty) {
             Lowering::Primitive(prim) => {
                 assert_eq!(prim.module, module_name(p), "{p:?} as {o:?}");
+                assert_eq!(prim.params, params(p), "{p:?} as {o:?}: parameters");
                 assert_eq!(prim.ports.len(), o.args().len(), "{p:?}: operands");
             }
             other => panic!("{p:?} as {o:?} lowers to {other:?}, not a primitive"),

@@ -52,6 +52,13 @@ pub struct Module {
     /// Ports and wires that are per-instance vectors (one bit per core, ...): declared with a
     /// range even when they are one bit wide, so `name[0]` stays legal ([`Module::vector`]).
     pub vectors: std::collections::BTreeSet<String>,
+    /// Ports, wires, registers and memories whose width is an expression of the module's
+    /// parameters (name -> width expression, printed `[EXPR-1:0]`; [`Module::width_param`]). Their
+    /// declared numeric width is the width at the parameters' defaults (the [`Module::interface`]).
+    pub param_widths: std::collections::BTreeMap<String, String>,
+    /// Memories whose depth is an expression of the module's parameters (name -> depth
+    /// expression, printed `[0:EXPR-1]`; [`Module::depth_param`]).
+    pub param_depths: std::collections::BTreeMap<String, String>,
 }
 
 /// A module parameter: `parameter integer NAME = VALUE`.
@@ -231,6 +238,8 @@ impl Module {
             source: workspace_relative(file),
             config_hash: None,
             vectors: Default::default(),
+            param_widths: Default::default(),
+            param_depths: Default::default(),
         }
     }
 
@@ -266,6 +275,41 @@ impl Module {
     pub fn vector(&mut self, name: impl Into<String>) -> &mut Self {
         self.vectors.insert(name.into());
         self
+    }
+
+    /// Declares the width of port, wire, register or memory `name` (declared already, with its
+    /// width at the parameters' defaults) as the parameter expression `width` (`WIDTH`,
+    /// `$clog2(DEPTH)`): printed `[width-1:0]`.
+    ///
+    /// # Panics
+    /// When `name` is not declared yet (a generator bug).
+    pub fn width_param(&mut self, name: &str, width: impl Into<String>) -> &mut Self {
+        assert!(self.declares(name), "width_param: {name} is not declared in {}", self.name);
+        self.param_widths.insert(name.to_string(), width.into());
+        self
+    }
+
+    /// Declares the depth of memory `name` (declared already) as the parameter expression `depth`:
+    /// printed `[0:depth-1]`.
+    ///
+    /// # Panics
+    /// When `name` is not a declared memory (a generator bug).
+    pub fn depth_param(&mut self, name: &str, depth: impl Into<String>) -> &mut Self {
+        let mem = self.items.iter().any(|i| matches!(i, Item::Mem { name: n, .. } if n == name));
+        assert!(mem, "depth_param: {name} is not a memory of {}", self.name);
+        self.param_depths.insert(name.to_string(), depth.into());
+        self
+    }
+
+    /// True when `name` is a port or a top-level wire, register or memory.
+    fn declares(&self, name: &str) -> bool {
+        self.ports.iter().any(|p| p.name == name)
+            || self.items.iter().any(|i| match i {
+                Item::Wire { name: n, .. } | Item::Reg { name: n, .. } | Item::Mem { name: n, .. } => {
+                    n == name
+                }
+                _ => false,
+            })
     }
 
     /// Adds an input port.
@@ -416,6 +460,17 @@ impl Module {
             params: Vec::new(),
             conns,
         }))
+    }
+
+    /// An instance with parameter overrides `(parameter, value)` and named connections.
+    pub fn instance_with(
+        &mut self,
+        module: impl Into<String>,
+        name: impl Into<String>,
+        params: Vec<(String, String)>,
+        conns: Vec<(String, String)>,
+    ) -> &mut Self {
+        self.item(Item::Instance(Instance { module: module.into(), name: name.into(), params, conns }))
     }
 
     /// Named cover points `(label, condition, what)`, sampled at every rising edge of `clk_i`
@@ -695,6 +750,35 @@ endmodule
         assert!(v.contains("  other u_other (\n    .a_i(d_i),\n    .b_o(q_o)\n  );\n"), "{v}");
         assert!(v.contains("  always @(posedge clk_i) begin\n    ram[0] <= d_i;\n  end\n"), "{v}");
         assert_eq!(m.instantiated(), vec!["cell".to_string(), "other".to_string()]);
+    }
+
+    /// Widths and depths given as parameter expressions print as ranges of them; instances
+    /// print their parameter overrides.
+    #[test]
+    fn parametric_widths_and_depths_print_as_expressions() {
+        let mut m = Module::new("ram");
+        m.param("WIDTH", 8).param("DEPTH", 4);
+        m.input("a_i", 2).input("d_i", 8).output("q_o", 8);
+        m.width_param("a_i", "$clog2(DEPTH)").width_param("d_i", "WIDTH").width_param("q_o", "WIDTH");
+        m.reg("last_q", 8).width_param("last_q", "WIDTH");
+        m.mem("mem", 8, 4).width_param("mem", "WIDTH").depth_param("mem", "DEPTH");
+        m.instance_with("leaf", "u_leaf", vec![("W".into(), "3".into())], conns(&[("x_i", "d_i".into())]));
+        let v = m.to_verilog();
+        assert!(
+            v.contains("module ram #(\n  parameter integer WIDTH = 8,\n  parameter integer DEPTH = 4\n) (\n"),
+            "{v}"
+        );
+        assert!(v.contains("  input  wire [$clog2(DEPTH)-1:0] a_i,\n"), "{v}");
+        assert!(v.contains("  output wire [WIDTH-1:0]         q_o\n"), "{v}");
+        assert!(v.contains("  reg  [WIDTH-1:0] last_q;\n  reg  [WIDTH-1:0] mem [0:DEPTH-1];\n"), "{v}");
+        assert!(v.contains("  leaf #(\n    .W(3)\n  ) u_leaf (\n"), "{v}");
+        assert_eq!(m.interface().port("q_o").map(|p| p.width), Some(8), "the width at the defaults");
+    }
+
+    #[test]
+    #[should_panic(expected = "nope is not declared")]
+    fn a_parametric_width_needs_a_declaration() {
+        Module::new("p").width_param("nope", "WIDTH");
     }
 
     #[test]

@@ -41,7 +41,10 @@ pub(super) fn module(m: &Module) -> String {
         s.push(')');
     }
     s.push_str(" (\n");
-    let pr = |p: &super::PortDecl| vec_range(p.width, m.vectors.contains(&p.name));
+    let pr = |p: &super::PortDecl| match m.param_widths.get(&p.name) {
+        Some(w) => format!("[{w}-1:0]"),
+        None => vec_range(p.width, m.vectors.contains(&p.name)),
+    };
     let rw = m.ports.iter().map(|p| pr(p).len()).max().unwrap_or(0);
     let decls: Vec<String> = m
         .ports
@@ -65,7 +68,7 @@ pub(super) fn module(m: &Module) -> String {
         }
     }
     s.push_str(");\n\n");
-    items(&mut s, 1, &m.items, &m.vectors);
+    items(&mut s, 1, &m.items, m);
     s.push_str("\nendmodule\n");
     s
 }
@@ -83,15 +86,18 @@ fn push_comment(s: &mut String, level: usize, text: &str) {
     }
 }
 
-fn decl(kind: &str, width: u32, name: &str) -> String {
-    if width == 1 {
+/// `KIND [W-1:0] name` (`[EXPR-1:0]` for a width of [`Module::param_widths`]).
+fn decl(m: &Module, kind: &str, width: u32, name: &str) -> String {
+    if let Some(w) = m.param_widths.get(name) {
+        format!("{kind:<4} [{w}-1:0] {name}")
+    } else if width == 1 {
         format!("{kind:<4} {name}")
     } else {
         format!("{kind:<4} {} {name}", range(width))
     }
 }
 
-fn items(s: &mut String, level: usize, list: &[Item], vectors: &std::collections::BTreeSet<String>) {
+fn items(s: &mut String, level: usize, list: &[Item], m: &Module) {
     let ind = indent(level);
     for it in list {
         match it {
@@ -101,13 +107,15 @@ fn items(s: &mut String, level: usize, list: &[Item], vectors: &std::collections
                 let r = if *width == 0 { String::new() } else { format!("{} ", vec_range(*width, true)) };
                 writeln!(s, "{ind}localparam {r}{name} = {value};").unwrap();
             }
-            Item::Wire { name, width } if *width == 1 && vectors.contains(name) => {
+            Item::Wire { name, width } if *width == 1 && m.vectors.contains(name) => {
                 writeln!(s, "{ind}wire [0:0] {name};").unwrap()
             }
-            Item::Wire { name, width } => writeln!(s, "{ind}{};", decl("wire", *width, name)).unwrap(),
-            Item::Reg { name, width } => writeln!(s, "{ind}{};", decl("reg", *width, name)).unwrap(),
+            Item::Wire { name, width } => writeln!(s, "{ind}{};", decl(m, "wire", *width, name)).unwrap(),
+            Item::Reg { name, width } => writeln!(s, "{ind}{};", decl(m, "reg", *width, name)).unwrap(),
             Item::Mem { name, width, depth } => {
-                writeln!(s, "{ind}{} [0:{}];", decl("reg", *width, name), depth - 1).unwrap()
+                let last =
+                    m.param_depths.get(name).map_or_else(|| (depth - 1).to_string(), |d| format!("{d}-1"));
+                writeln!(s, "{ind}{} [0:{last}];", decl(m, "reg", *width, name)).unwrap()
             }
             Item::Assign { lhs, rhs } => writeln!(s, "{ind}assign {lhs} = {rhs};").unwrap(),
             Item::Seq { reset: Some(reset), body } => with_reset(s, level, "posedge", reset, body),
@@ -128,7 +136,7 @@ fn items(s: &mut String, level: usize, list: &[Item], vectors: &std::collections
                 writeln!(s, "{ind}generate").unwrap();
                 writeln!(s, "{ind}{IND}for ({var} = 0; {var} < {count}; {var} = {var} + 1) begin : {label}")
                     .unwrap();
-                items(s, level + 2, body, vectors);
+                items(s, level + 2, body, m);
                 writeln!(s, "{ind}{IND}end").unwrap();
                 writeln!(s, "{ind}endgenerate").unwrap();
             }

@@ -160,9 +160,12 @@ pub fn engine_mux(cfg: &EngineConfig) -> String {
 pub fn hierarchical_boxes(cfg: &EngineConfig, top: &str) -> Option<Vec<String>> {
     use crate::units::{fp, itu, pre};
     if top == pre::COLOR_NAME || top == pre::PROJECT_NAME {
-        let mut boxes: Vec<String> =
-            fp::FpPrim::ALL.iter().map(|&p| fp::module_name(p).to_string()).collect();
-        boxes.push(fp::cmp::NAME.to_string());
+        let mut boxes: Vec<String> = Vec::new();
+        for name in fp::FpPrim::ALL.iter().map(|&p| fp::module_name(p)).chain([fp::cmp::NAME]) {
+            if !boxes.iter().any(|b| b == name) {
+                boxes.push(name.to_string());
+            }
+        }
         return Some(boxes);
     }
     if top == pre::dup::NAME {

@@ -22,6 +22,8 @@
 //! | `neo_pre_fetch` | Preprocessing: record fetch unit (streams, gathers; the read window) | run time |
 //! | `neo_pre_lane`  | Preprocessing: one lane (fetch, projection, colour, duplication, feature words) | run time |
 //! | `neo_pre_lists` | Preprocessing: the incoming-list writer                  | run time |
+//! | `neo_pre_fifo`  | Preprocessing: a queue, parameters `WIDTH` and `DEPTH`      | no        |
+//! | `neo_pre_ram`   | Preprocessing: a memory, parameters `WIDTH` and `DEPTH`     | no        |
 //! | `neo_pre_engine` | the Preprocessing Engine: lanes, hit arbiter, list writer | in `neo_engine` |
 //! | `neo_perf_counter` | one 64-bit performance counter                       | no        |
 //! | `neo_perf_counters` | the engine's performance counters                   | yes       |
@@ -33,7 +35,7 @@
 //! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (the engine's P, and P=3) | P=3 |
 //! | `neo_clock_gate` | a falling-edge-enabled clock gate (the idle Preprocessing Engine) | no |
 //! | `neo_engine`    | the engine: control port, frame controller, cores, bridges, port muxes | run time |
-//! | `neo_fp_*`      | binary32 primitives of the Preprocessing Engine (`fp`)   | no        |
+//! | `neo_fp_*`      | binary32 primitives of the Preprocessing Engine (`fp`; `neo_fp_to_int`'s rounding a parameter) | no |
 //! | `neo_fp_bench`  | every `neo_fp_*` primitive side by side                 | run time  |
 
 pub mod axi;
@@ -142,17 +144,8 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(engine::module(cfg));
     all.extend(fp::modules(cfg));
     all.push(pre::dup::module(cfg));
-    let mut queues = vec![(pre::fetch::cmd_queue_width(cfg), pre::fetch::CMD_QUEUE)];
-    queues.extend(pre::lane::queues(cfg));
-    queues.push(pre::lists::queue(cfg));
-    queues.sort_unstable();
-    queues.dedup();
-    all.extend(queues.into_iter().map(|(w, d)| pre::fifo::module(w, d)));
-    let mut memories = pre::lists::memories(cfg);
-    memories.push(pre::fetch::buffer_memory(cfg));
-    memories.sort_unstable();
-    memories.dedup();
-    all.extend(memories.into_iter().map(|(w, d)| pre::ram::module(w, d)));
+    all.push(pre::fifo::module());
+    all.push(pre::ram::module());
     all.push(pre::fetch::module(cfg));
     all.push(pre::color_module(cfg));
     all.push(pre::project_module(cfg));

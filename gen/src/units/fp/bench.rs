@@ -2,7 +2,7 @@
 //! cosimulation bench (one Verilator build for all of them; tb builds it at run time). Not
 //! part of `neo_engine`.
 
-use super::{cmp, module_name, FpPrim};
+use super::{cmp, label, FpPrim};
 use crate::emit::{conns, Module};
 
 /// Module name.
@@ -23,7 +23,7 @@ pub fn module() -> Module {
     m.input_c("a_i", 32, "operand a (an integer for from_int, half bits for widen_half)");
     m.input_c("b_i", 32, "operand b of the binary primitives");
     for p in FpPrim::ALL {
-        m.output_c(port(p), 32, module_name(p));
+        m.output_c(port(p), 32, &label(p));
     }
     m.output_c("lt_o", 1, "neo_fp_cmp: a < b");
     m.output_c("le_o", 1, "neo_fp_cmp: a <= b");

@@ -1,22 +1,46 @@
-//! The conversions: `neo_fp_to_int_<mode>` (golden `Native::to_int`: exact rounding, saturated,
-//! NaN gives 0), `neo_fp_from_int` (`int_to_float`, RNE), `neo_fp_f16` (`f16_bits`: |a| as
+//! The conversions: `neo_fp_to_int` (golden `Native::to_int`: exact rounding, the mode a
+//! parameter, saturated, NaN gives 0), `neo_fp_from_int` (`int_to_float`, RNE), `neo_fp_f16` (`f16_bits`: |a| as
 //! binary16 bits, RNE, saturating at 0x7bff) and `neo_fp_widen_half` (`widen_half`: exact).
 
 use super::common::{lzc, q, r, round_pack, unpack, Fields, Pipe, CANONICAL_NAN};
 use super::{latency, FpPrim};
-use crate::emit::Module;
+use crate::emit::{set, Module, Stmt};
 use neo_golden::hwarith::Round;
 
-/// `a` rounded to an integer as `mode` says. Stage 1: the magnitude as a fixed-point number
-/// (31 integer bits, the half bit and a sticky bit); stage 2: the mode's increment, the sign
-/// and the saturation.
-pub fn to_int(mode: Round) -> Module {
-    let prim = FpPrim::ToInt(mode);
-    let mut p = Pipe::new(super::module_name(prim), false);
-    p.m.doc(format!(
-        "binary32 -> int32 rounded {mode:?} (exact), saturated to [-2^31, 2^31 - 1]; NaN gives 0."
-    ));
+/// Module name of the float-to-integer conversion (every rounding mode, [`ROUNDINGS`]).
+pub const TO_INT_NAME: &str = "neo_fp_to_int";
+
+/// The rounding modes of `neo_fp_to_int`: (mode, its local parameter, the value of the module's
+/// `ROUNDING` parameter that selects it). The default (0) is truncation.
+pub const ROUNDINGS: [(Round, &str, u32); 4] = [
+    (Round::Trunc, "ROUND_TRUNC", 0),
+    (Round::Floor, "ROUND_FLOOR", 1),
+    (Round::Ceil, "ROUND_CEIL", 2),
+    (Round::HalfUp, "ROUND_HALF_UP", 3),
+];
+
+/// The `ROUNDING` parameter value of `mode` ([`ROUNDINGS`]).
+pub fn rounding_code(mode: Round) -> u32 {
+    ROUNDINGS.iter().find(|(r, _, _)| *r == mode).map(|&(_, _, c)| c).expect("every mode is coded")
+}
+
+/// `a` rounded to an integer as parameter `ROUNDING` says ([`ROUNDINGS`]). Stage 1: the
+/// magnitude as a fixed-point number (31 integer bits, the half bit and a sticky bit); stage 2:
+/// the mode's increment (a `case` on the parameter: synthesis keeps only the selected mode's
+/// logic, and truncation's half and sticky registers have no load), the sign and the saturation.
+pub fn to_int() -> Module {
+    let prim = FpPrim::ToInt(Round::Trunc);
+    let mut p = Pipe::new(TO_INT_NAME, false);
+    p.m.doc(
+        "binary32 -> int32 rounded as ROUNDING says (exact), saturated to [-2^31, 2^31 - 1]; NaN gives 0.",
+    );
+    let modes: Vec<String> = ROUNDINGS.iter().map(|(r, n, c)| format!("{c} {n} ({r:?})")).collect();
+    p.m.doc(format!("ROUNDING: {}; any other value truncates.", modes.join(", ")));
     p.m.doc(format!("Latency {} enabled cycles, one operation per cycle.", latency(prim)));
+    p.m.param("ROUNDING", 0);
+    for (_, name, code) in ROUNDINGS {
+        p.m.localparam_int(name, code);
+    }
     unpack(&mut p, "a", "a_i", Fields { nan: true, m: true, ..Default::default() });
     // |a| >= 2^31 (infinities included) saturates; |a| < 1/2 has integer part 0.
     p.w("sat", 1, "a_i[30:23] >= 8'd158");
@@ -26,29 +50,27 @@ pub fn to_int(mode: Round) -> Module {
     p.w("v", 57, "{a_m, 33'd0} >> rsh[4:0]");
     p.w("ip", 31, "tiny ? 31'd0 : v[56:26]");
     p.unused("rsh[7:5]");
-    let needs_frac = mode != Round::Trunc;
-    let mut regs = vec![
+    p.w("hb", 1, "~tiny & v[25]");
+    p.w("rest", 1, "tiny ? (|a_i[30:0]) : (|v[24:0])");
+    let regs = [
         r(q("ip", 1), 31, "ip"),
         r(q("sg", 1), 1, "a_s"),
         r(q("sat", 1), 1, "sat"),
         r(q("nan", 1), 1, "a_nan"),
+        r(q("hb", 1), 1, "hb"),
+        r(q("rest", 1), 1, "rest"),
     ];
-    if needs_frac {
-        p.w("hb", 1, "~tiny & v[25]");
-        p.w("rest", 1, "tiny ? (|a_i[30:0]) : (|v[24:0])");
-        regs.push(r(q("hb", 1), 1, "hb"));
-        regs.push(r(q("rest", 1), 1, "rest"));
-    } else {
-        p.unused("v[25:0]");
-    }
     p.stage("fixed-point magnitude", &regs);
-    let inc = match mode {
+    let inc = |mode: Round| match mode {
         Round::Trunc => "1'b0",
         Round::Floor => "sg_q & (hb_q | rest_q)",
         Round::Ceil => "~sg_q & (hb_q | rest_q)",
         Round::HalfUp => "sg_q ? (hb_q & rest_q) : hb_q",
     };
-    p.w("inc", 1, inc);
+    let arms =
+        ROUNDINGS.iter().map(|&(mode, name, _)| (name.to_string(), vec![set("inc", inc(mode))])).collect();
+    p.m.reg("inc", 1);
+    p.m.comb(vec![Stmt::Case("ROUNDING".into(), arms, vec![set("inc", inc(Round::Trunc))])]);
     p.w("mag", 32, "{1'b0, ip_q} + {31'd0, inc}");
     p.w("val", 32, "sg_q ? 32'd0 - mag : mag");
     p.w("y", 32, "nan_q ? 32'd0 : sat_q ? (sg_q ? 32'h80000000 : 32'h7fffffff) : val");

@@ -1,7 +1,8 @@
 //! The binary32 primitives of the Preprocessing Engine's datapath (golden `hwarith`: every one
 //! bit-exact against `Native` for every input bit pattern).
 //!
-//! Each pipelined primitive is one module with the interface
+//! Each pipelined primitive is one module (the four roundings of `to_int` one module with a
+//! `ROUNDING` parameter, [`params`]) with the interface
 //! `neo_fp_X (input clk_i, input en_i, input [31:0] a_i, [input [31:0] b_i,] output [31:0] y_o)`:
 //! the result of the operands presented while `en_i` is high appears on `y_o` [`latency`]
 //! enabled cycles later (the registers advance only when `en_i` is 1; datapath registers have
@@ -15,7 +16,7 @@
 //! | [`FpPrim::Mul`]    | `neo_fp_mul`                | `mul`            |
 //! | [`FpPrim::Div`]    | `neo_fp_div` (+ `neo_fp_div_stage`)   | `div`  |
 //! | [`FpPrim::Sqrt`]   | `neo_fp_sqrt` (+ `neo_fp_sqrt_stage`) | `sqrt` |
-//! | [`FpPrim::ToInt`]  | `neo_fp_to_int_{trunc,floor,ceil,halfup}` | `to_int` |
+//! | [`FpPrim::ToInt`]  | `neo_fp_to_int` (`ROUNDING`: the mode, [`conv::ROUNDINGS`]) | `to_int` |
 //! | [`FpPrim::FromInt`]| `neo_fp_from_int`           | `int_to_float`   |
 //! | [`FpPrim::F16`]    | `neo_fp_f16`                | `f16_bits`       |
 //! | [`FpPrim::WidenHalf`] | `neo_fp_widen_half`      | `widen_half`     |
@@ -84,9 +85,16 @@ impl FpPrim {
         matches!(self, FpPrim::Add | FpPrim::Sub | FpPrim::Mul | FpPrim::Div)
     }
 
-    /// A short name: the module name without `neo_fp_` (`add`, `to_int_floor`, ...).
+    /// A short name, unique per primitive: the module name without `neo_fp_` (`add`, ...), and
+    /// the rounding for `to_int` (`to_int_floor`, ...).
     pub fn short(self) -> &'static str {
-        &module_name(self)["neo_fp_".len()..]
+        match self {
+            FpPrim::ToInt(Round::Trunc) => "to_int_trunc",
+            FpPrim::ToInt(Round::Floor) => "to_int_floor",
+            FpPrim::ToInt(Round::Ceil) => "to_int_ceil",
+            FpPrim::ToInt(Round::HalfUp) => "to_int_halfup",
+            _ => &module_name(self)["neo_fp_".len()..],
+        }
     }
 }
 
@@ -98,13 +106,31 @@ pub fn module_name(p: FpPrim) -> &'static str {
         FpPrim::Mul => "neo_fp_mul",
         FpPrim::Div => "neo_fp_div",
         FpPrim::Sqrt => "neo_fp_sqrt",
-        FpPrim::ToInt(Round::Trunc) => "neo_fp_to_int_trunc",
-        FpPrim::ToInt(Round::Floor) => "neo_fp_to_int_floor",
-        FpPrim::ToInt(Round::Ceil) => "neo_fp_to_int_ceil",
-        FpPrim::ToInt(Round::HalfUp) => "neo_fp_to_int_halfup",
+        FpPrim::ToInt(_) => conv::TO_INT_NAME,
         FpPrim::FromInt => "neo_fp_from_int",
         FpPrim::F16 => "neo_fp_f16",
         FpPrim::WidenHalf => "neo_fp_widen_half",
+    }
+}
+
+/// Primitive `p` as messages and reports name it: its module, and for `to_int` the rounding's
+/// `ROUNDING` value by name (`neo_fp_to_int #(ROUND_FLOOR)`).
+pub fn label(p: FpPrim) -> String {
+    match p {
+        FpPrim::ToInt(mode) => {
+            let name = conv::ROUNDINGS.iter().find(|r| r.0 == mode).map_or("?", |r| r.1);
+            format!("{} #({name})", conv::TO_INT_NAME)
+        }
+        _ => module_name(p).to_string(),
+    }
+}
+
+/// The parameter overrides an instance of primitive `p` needs: `ROUNDING` for `to_int`, none
+/// for the others.
+pub fn params(p: FpPrim) -> Vec<(String, String)> {
+    match p {
+        FpPrim::ToInt(mode) => vec![("ROUNDING".into(), conv::rounding_code(mode).to_string())],
+        _ => Vec::new(),
     }
 }
 
@@ -123,7 +149,7 @@ pub fn latency(p: FpPrim) -> u32 {
     }
 }
 
-/// The module of primitive `p`.
+/// The module of primitive `p` (the same module for every rounding of `to_int`).
 pub fn module(p: FpPrim) -> Module {
     match p {
         FpPrim::Add => add::add(),
@@ -131,14 +157,14 @@ pub fn module(p: FpPrim) -> Module {
         FpPrim::Mul => mul::module(),
         FpPrim::Div => div::module(),
         FpPrim::Sqrt => sqrt::module(),
-        FpPrim::ToInt(mode) => conv::to_int(mode),
+        FpPrim::ToInt(_) => conv::to_int(),
         FpPrim::FromInt => conv::from_int(),
         FpPrim::F16 => conv::f16(),
         FpPrim::WidenHalf => conv::widen_half(),
     }
 }
 
-/// Places an instance `inst` of primitive `p` in `m`: `clk_i` from `clk_i`, `en_i` from `en`,
+/// Places an instance `inst` of primitive `p` in `m` (with its [`params`]): `clk_i` from `clk_i`, `en_i` from `en`,
 /// operands `a` (and `b`, required exactly when [`FpPrim::binary`]) and the result on `y`.
 ///
 /// # Panics
@@ -150,14 +176,18 @@ pub fn instantiate(m: &mut Module, p: FpPrim, inst: &str, en: &str, a: &str, b: 
         c.push(("b_i", b.to_string()));
     }
     c.push(("y_o", y.to_string()));
-    m.instance(module_name(p), inst, crate::emit::conns(&c));
+    m.instance_with(module_name(p), inst, params(p), crate::emit::conns(&c));
 }
 
 /// Every module of the primitives, leaves first: the recurrence stages, the primitives, the
 /// comparator and the bench top `neo_fp_bench`. They do not depend on the configuration.
 pub fn modules(_cfg: &EngineConfig) -> Vec<Module> {
     let mut all = vec![div::stage_module(), sqrt::stage_module()];
-    all.extend(FpPrim::ALL.iter().map(|&p| module(p)));
+    for p in FpPrim::ALL {
+        if !all.iter().any(|m| m.name == module_name(p)) {
+            all.push(module(p));
+        }
+    }
     all.push(cmp::module());
     all.push(bench::module());
     all
@@ -169,10 +199,21 @@ mod tests {
 
     #[test]
     fn names_are_unique_and_every_primitive_has_the_common_ports() {
+        let mut shorts: Vec<&str> = FpPrim::ALL.iter().map(|&p| p.short()).collect();
+        shorts.sort_unstable();
+        shorts.dedup();
+        assert_eq!(shorts.len(), FpPrim::ALL.len());
+        // One module per primitive but the roundings of to_int, which share one (a parameter).
         let mut names: Vec<&str> = FpPrim::ALL.iter().map(|&p| module_name(p)).collect();
         names.sort_unstable();
         names.dedup();
-        assert_eq!(names.len(), FpPrim::ALL.len());
+        assert_eq!(names.len(), FpPrim::ALL.len() - 3);
+        let codes: Vec<Vec<(String, String)>> = FpPrim::ALL.iter().map(|&p| params(p)).collect();
+        for (k, c) in codes.iter().enumerate() {
+            let to_int = matches!(FpPrim::ALL[k], FpPrim::ToInt(_));
+            assert_eq!(c.len(), usize::from(to_int), "{:?}", FpPrim::ALL[k]);
+            assert!(!to_int || codes.iter().filter(|o| *o == c).count() == 1, "ROUNDING codes are distinct");
+        }
         for p in FpPrim::ALL {
             let i = module(p).interface();
             let ports: Vec<(&str, u32)> = i.ports.iter().map(|p| (p.name.as_str(), p.width)).collect();

@@ -35,6 +35,8 @@ pub struct Primitive {
     pub latency: u32,
     /// Operand port names, in the operation's operand order.
     pub ports: Vec<&'static str>,
+    /// Parameter overrides of every instance (`(parameter, value)`: `to_int`'s `ROUNDING`).
+    pub params: Vec<(String, String)>,
 }
 
 /// How the datapath realises one operation.
@@ -337,7 +339,7 @@ impl<'a> Datapath<'a> {
                 m.item(Item::Instance(Instance {
                     module: p.module.clone(),
                     name: format!("u_n{id}"),
-                    params: Vec::new(),
+                    params: p.params.clone(),
                     conns: conns(&c),
                 }));
             }

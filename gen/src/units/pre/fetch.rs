@@ -102,12 +102,6 @@ impl Dims {
     }
 }
 
-/// The beat buffer's memory: (width, depth), a `neo_pre_ram`.
-pub fn buffer_memory(cfg: &EngineConfig) -> (u32, u32) {
-    let d = Dims::new(cfg);
-    (d.db, d.depth)
-}
-
 /// The fetch unit for `cfg`.
 pub fn module(cfg: &EngineConfig) -> Module {
     let d = Dims::new(cfg);
@@ -162,8 +156,9 @@ fn start(m: &mut Module, d: &Dims) {
     let qw = kb + d.wb + COUNT_BITS;
     m.wire("q_ready", 1).wire("q_valid", 1).wire("q_pop", 1).wire("q_data", qw);
     m.assign("cmd_ready_o", format!("(ar_left_q == {}) & q_ready", lit(d.lb, 0)));
-    m.instance(
-        super::fifo::name(qw, CMD_QUEUE),
+    m.item(super::fifo::instance(
+        qw,
+        CMD_QUEUE,
         "u_cmdq",
         vec![
             ("clk_i".into(), "clk_i".into()),
@@ -175,16 +170,10 @@ fn start(m: &mut Module, d: &Dims) {
             ("pop_ready_i".into(), "q_pop".into()),
             ("pop_data_o".into(), "q_data".into()),
         ],
-    );
+    ));
     m.wire_assign("q_skip", kb, format!("q_data[{}:{}]", qw - 1, d.wb + COUNT_BITS));
     m.wire_assign("q_words", d.wb, format!("q_data[{}:{COUNT_BITS}]", d.wb + COUNT_BITS - 1));
     m.wire_assign("q_count", COUNT_BITS, format!("q_data[{}:0]", COUNT_BITS - 1));
-}
-
-/// Width of a command-queue entry.
-pub fn cmd_queue_width(cfg: &EngineConfig) -> u32 {
-    let d = Dims::new(cfg);
-    bits_for(u64::from(d.w)) + d.wb + COUNT_BITS
 }
 
 /// AR: bursts over the command's beats, each issued when the buffer has room for it.
@@ -269,8 +258,9 @@ fn buffer(m: &mut Module, d: &Dims) {
     m.reg("wr_ptr_q", pb).reg("rd_ptr_q", pb).reg("buf_cnt_q", sb);
     m.wire("head", d.db);
     m.wire_assign("head_valid", 1, format!("buf_cnt_q != {}", lit(sb, 0)));
-    m.instance(
-        super::ram::name(d.db, d.depth),
+    m.item(super::ram::instance(
+        d.db,
+        d.depth,
         "u_buf",
         vec![
             ("clk_i".into(), "clk_i".into()),
@@ -280,7 +270,7 @@ fn buffer(m: &mut Module, d: &Dims) {
             ("raddr_i".into(), "rd_ptr_q".into()),
             ("rdata_o".into(), "head".into()),
         ],
-    );
+    ));
     let step = |p: &str| format!("{p} + {}", lit(pb, 1));
     m.seq(
         vec![set("wr_ptr_q", lit(pb, 0)), set("rd_ptr_q", lit(pb, 0)), set("buf_cnt_q", lit(sb, 0))],

@@ -149,13 +149,6 @@ fn prev_word(cfg: &EngineConfig) -> Bundle {
 /// The feature fields the colour unit makes (its outputs `out_<name>_o`).
 const COLOR_FIELDS: [&str; 3] = ["red", "green", "blue"];
 
-/// The queues the lane instantiates: (width, depth) of each.
-pub fn queues(cfg: &EngineConfig) -> Vec<(u32, u32)> {
-    let d = LaneDims::new(cfg);
-    let fb = d.fields_bits();
-    vec![(96, posq_depth(d.project_depth)), (1 + fb + 96, PEND_DEPTH), (1 + fb, colq_depth(d.color_depth))]
-}
-
 /// The per-frame inputs of `module_name` (its `_i` ports other than the clock, reset and the
 /// `in_*` / `out_*` handshakes), as (name, width).
 fn frame_inputs(m: &Module) -> Vec<(String, u32)> {
@@ -316,8 +309,9 @@ fn geometry(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims) 
     m.assign("geo_ready", "p_in_ready & posq_ready");
     let pq = posq_depth(d.project_depth);
     m.wire("posq_valid", 1).wire("posq_data", 96);
-    m.instance(
-        fifo::name(96, pq),
+    m.item(fifo::instance(
+        96,
+        pq,
         "u_posq",
         vec![
             conn("clk_i", "clk_i"),
@@ -329,7 +323,7 @@ fn geometry(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims) 
             conn("pop_ready_i", "proj_take"),
             conn("pop_data_o", "posq_data"),
         ],
-    );
+    ));
     m.comment(
         "The position queue holds an entry for every Gaussian inside u_project: never empty at its output.",
     );
@@ -424,8 +418,9 @@ fn projected(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims)
     }
     debug_assert_eq!(pend.width(), pw);
     m.wire("pend_valid", 1).wire("pend_data", pw).wire("pend_pop", 1);
-    m.instance(
-        fifo::name(pw, PEND_DEPTH),
+    m.item(fifo::instance(
+        pw,
+        PEND_DEPTH,
         "u_pendq",
         vec![
             conn("clk_i", "clk_i"),
@@ -437,7 +432,7 @@ fn projected(m: &mut Module, cfg: &EngineConfig, project: &Module, d: &LaneDims)
             conn("pop_ready_i", "pend_pop"),
             conn("pop_data_o", "pend_data"),
         ],
-    );
+    ));
     let rw = max_record_words() * 32;
     m.wire("sh_busy", 1)
         .wire("sh_valid", 1)
@@ -557,8 +552,9 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
     }
     debug_assert_eq!(colq.width(), cw);
     m.wire("colq_valid", 1).wire("colq_data", cw).wire("word_take", 1);
-    m.instance(
-        fifo::name(cw, colq_depth(d.color_depth)),
+    m.item(fifo::instance(
+        cw,
+        colq_depth(d.color_depth),
         "u_colq",
         vec![
             conn("clk_i", "clk_i"),
@@ -570,7 +566,7 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
             conn("pop_ready_i", "word_take"),
             conn("pop_data_o", "colq_data"),
         ],
-    );
+    ));
 }
 
 /// The feature word of the colour unit's output and the head of `u_colq`, and its write.

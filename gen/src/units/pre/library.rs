@@ -4,7 +4,7 @@
 //! selects, integer and boolean operations behind one register).
 
 use super::datapath::{Library, Lowering, Primitive};
-use crate::units::fp::{latency, module_name, FpPrim};
+use crate::units::fp::{latency, module_name, params, FpPrim};
 use neo_golden::hwarith::graph::{Op, Ty};
 
 /// The Preprocessing Engine's library.
@@ -16,7 +16,12 @@ fn inline(expr: String, registered: bool) -> Lowering {
 
 fn prim(p: FpPrim) -> Lowering {
     let ports = if p.binary() { vec!["a_i", "b_i"] } else { vec!["a_i"] };
-    Lowering::Primitive(Primitive { module: module_name(p).into(), latency: latency(p), ports })
+    Lowering::Primitive(Primitive {
+        module: module_name(p).into(),
+        latency: latency(p),
+        ports,
+        params: params(p),
+    })
 }
 
 impl Library for PreLibrary {

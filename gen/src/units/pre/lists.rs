@@ -24,7 +24,7 @@ use super::writer::{self, Writes};
 use super::{fifo, ram};
 use crate::emit::bundle::Bundle;
 use crate::emit::expr::{lit, zext};
-use crate::emit::{if_, set, Instance, Item, Module};
+use crate::emit::{if_, set, Module};
 use crate::units::axi;
 use neo_golden::engine::memory::{DESCRIPTOR_BYTES, ENTRY_BYTES};
 use neo_golden::engine::EngineConfig;
@@ -49,17 +49,6 @@ const FLUSH: u64 = 3;
 fn wq_bundle(cfg: &EngineConfig) -> Bundle {
     let line = LINE * ENTRY_BYTES as u32 * 8;
     Bundle::packed("WQ", &[("len_write", 1), ("addr", cfg.axi_addr_bits), ("data", line)])
-}
-
-/// The memories the writer instantiates: (width, depth).
-pub fn memories(cfg: &EngineConfig) -> Vec<(u32, u32)> {
-    let mt = cfg.pre_max_tiles as u32;
-    vec![(CNT_BITS, mt), (entry_bits(cfg), mt)]
-}
-
-/// The queue it instantiates: (width, depth).
-pub fn queue(cfg: &EngineConfig) -> (u32, u32) {
-    (wq_bundle(cfg).width(), WQ_DEPTH)
 }
 
 fn entry_bits(cfg: &EngineConfig) -> u32 {
@@ -171,8 +160,9 @@ fn storage(m: &mut Module, cfg: &EngineConfig) {
     m.wire_assign("in_cap", 1, format!("cnt < {}", lit(CNT_BITS, cap)));
     m.wire_assign("slot", 3, "cnt[2:0]");
     m.wire_assign("entry", eb, "{1'b1, hit_key_i, hit_id_i}");
-    m.instance(
-        ram::name(CNT_BITS, mt),
+    m.item(ram::instance(
+        CNT_BITS,
+        mt,
         "u_cnt",
         vec![
             ("clk_i".into(), "clk_i".into()),
@@ -182,14 +172,14 @@ fn storage(m: &mut Module, cfg: &EngineConfig) {
             ("raddr_i".into(), "at_t".into()),
             ("rdata_o".into(), "cnt".into()),
         ],
-    );
+    ));
     m.comment("Slots 0 to 6 of each tile's line; an entry for slot 7 completes the line and leaves at once.");
     m.wire("slots", (LINE - 1) * eb);
-    let inst = Item::Instance(Instance {
-        module: ram::name(eb, mt),
-        name: "u_line".into(),
-        params: Vec::new(),
-        conns: vec![
+    let inst = ram::instance(
+        eb,
+        mt,
+        "u_line",
+        vec![
             ("clk_i".into(), "clk_i".into()),
             ("we_i".into(), "hit_take & in_cap & (slot == s[2:0])".into()),
             ("waddr_i".into(), "at_t".into()),
@@ -197,7 +187,7 @@ fn storage(m: &mut Module, cfg: &EngineConfig) {
             ("raddr_i".into(), "at_t".into()),
             ("rdata_o".into(), format!("slots[{eb}*s +: {eb}]")),
         ],
-    });
+    );
     m.gen_for("s", LINE - 1, "g_slot", vec![inst]);
 }
 
@@ -277,8 +267,9 @@ fn pushes(m: &mut Module, cfg: &EngineConfig) {
         wq.width(),
         "flush_len ? {len_data, len_addr, 1'b1} : {line_full ? line_with_new : line_partial, line_addr, 1'b0}",
     );
-    m.instance(
-        fifo::name(wq.width(), WQ_DEPTH),
+    m.item(fifo::instance(
+        wq.width(),
+        WQ_DEPTH,
         "u_wq",
         vec![
             ("clk_i".into(), "clk_i".into()),
@@ -290,7 +281,7 @@ fn pushes(m: &mut Module, cfg: &EngineConfig) {
             ("pop_ready_i".into(), "wq_pop".into()),
             ("pop_data_o".into(), "wq_data".into()),
         ],
-    );
+    ));
 }
 
 /// The AXI4 writes of the queue's head; reads idle; `busy_o`.
