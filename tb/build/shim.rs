@@ -13,13 +13,27 @@
 //!
 //! Rust side: a struct named after the top in CamelCase (`neo_bsu` -> `NeoBsu`) with typed
 //! setters and getters (`bool` for 1 bit, `u64` up to 64 bits, `[u32; W]` above), `eval`, `tick`,
-//! `reset`, `cycle`, tracing, `Drop`, and an implementation of `crate::dut::Dut`.
+//! `reset`, `cycle`, tracing, `Drop`, and an implementation of `crate::dut::Dut`. A generated
+//! top's wrapper ([`HdlFiles`]) runs, when `$NEO_HDL_DIR` holds other Verilog for it, a model of
+//! that Verilog built at run time (`crate::hdl_dir::substitute`, a `crate::dynmodel::DynModel`)
+//! instead of the linked one: every method then dispatches to it (ports by index).
 
 use neo_gen::interface::{Dir, ModuleInterface, Port};
 use std::fmt::Write;
 
-/// Bump whenever the generated C++ or Rust changes: it is part of the cache key.
+/// Bump whenever the generated C++ changes: it is part of the cache key (the Rust wrapper is
+/// regenerated on every build).
 pub const SHIM_VERSION: u32 = 4;
+
+/// The Verilog a generated top's static model is built from: the file names (the top's and
+/// every module it instantiates) and their hash (`build/hdl_hash.rs`). Its wrapper compares
+/// them with `$NEO_HDL_DIR`'s at run time (`neo_tb::hdl_dir`).
+pub struct HdlFiles {
+    /// The file names, e.g. `neo_bsu.v`.
+    pub names: Vec<String>,
+    /// `hdl_hash::verilog_hash` of the files.
+    pub hash: String,
+}
 
 /// Number of 32-bit words of a `width`-bit port.
 fn words(width: u32) -> u32 {
@@ -260,7 +274,7 @@ fn cpp_port(s: &mut String, t: &str, p: &Port) {
 /// The Rust wrapper for one top (module-level items, to be `include!`d in `crate::models`).
 /// With `coverage` (the shim has [`cpp_coverage`]), dropping a model writes its coverage data
 /// to `crate::coverage::next_path` first.
-pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
+pub fn rust(iface: &ModuleInterface, coverage: bool, hdl: Option<&HdlFiles>) -> String {
     let t = &iface.name;
     let sn = struct_name(t);
     let has = |name: &str| iface.ports.iter().any(|p| p.name == name && p.dir == Dir::In && p.width == 1);
@@ -309,7 +323,7 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
     }
     let _ = writeln!(
         s,
-        "pub struct {sn} {{\n    raw: std::ptr::NonNull<std::ffi::c_void>,\n    cycle: u64,\n    time: u64,\n    tracing: bool,\n}}\n"
+        "pub struct {sn} {{\n    raw: std::ptr::NonNull<std::ffi::c_void>,\n    /// The model of `$NEO_HDL_DIR`'s Verilog, when it differs from the linked model's.\n    alt: Option<Box<crate::dynmodel::DynModel>>,\n    cycle: u64,\n    time: u64,\n    tracing: bool,\n}}\n"
     );
     let _ = writeln!(s, "// SAFETY: the model (and its VerilatedContext) is owned by this value alone; Verilator\n// supports one context per thread, and `&mut self` serialises every call.\nunsafe impl Send for {sn} {{}}\n");
 
@@ -326,9 +340,15 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
         );
     }
     s.push_str("    ];\n\n");
+    rust_hdl_consts(&mut s, hdl);
+    let alt = if hdl.is_some() {
+        "crate::hdl_dir::substitute(Self::NAME, Self::PORTS, Self::HDL_FILES, Self::HDL_HASH).map(Box::new)"
+    } else {
+        "None"
+    };
     let _ = writeln!(
         s,
-        "    /// A new model, clock low, reset released, all other inputs zero (call [`Self::reset`]).\n    #[allow(clippy::new_without_default)]\n    pub fn new() -> Self {{\n        // SAFETY: plain constructor; a null return is checked.\n        let raw = unsafe {{ ffi_{t}::neo_{t}_new() }};\n        let raw = std::ptr::NonNull::new(raw).expect(\"Verilated model allocation failed\");\n        let mut m = {sn} {{ raw, cycle: 0, time: 0, tracing: false }};"
+        "    /// A new model, clock low, reset released, all other inputs zero (call [`Self::reset`]).\n    /// With `$NEO_HDL_DIR` set, a model of its Verilog when that differs from this build's\n    /// (`crate::hdl_dir::substitute`).\n    ///\n    /// # Panics\n    /// When `$NEO_HDL_DIR` lacks one of the files or its model does not build.\n    #[allow(clippy::new_without_default)]\n    pub fn new() -> Self {{\n        // SAFETY: plain constructor; a null return is checked.\n        let raw = unsafe {{ ffi_{t}::neo_{t}_new() }};\n        let raw = std::ptr::NonNull::new(raw).expect(\"Verilated model allocation failed\");\n        let alt = {alt};\n        let mut m = {sn} {{ raw, alt, cycle: 0, time: 0, tracing: false }};"
     );
     if has_clk {
         s.push_str("        m.set_clk_i(false);\n");
@@ -337,9 +357,10 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
         s.push_str("        m.set_rst_ni(true);\n");
     }
     s.push_str("        m.eval();\n        m\n    }\n\n");
+    s.push_str("    /// True when this model runs `$NEO_HDL_DIR`'s Verilog (it differs from the linked model's).\n    pub fn is_substituted(&self) -> bool {\n        self.alt.is_some()\n    }\n\n");
     let _ = writeln!(
         s,
-        "    /// Evaluates the model (settles combinational logic after input changes).\n    #[inline]\n    pub fn eval(&mut self) {{\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_eval(self.raw.as_ptr()) }}\n    }}\n"
+        "    /// Evaluates the model (settles combinational logic after input changes).\n    #[inline]\n    pub fn eval(&mut self) {{\n        if let Some(d) = self.alt.as_deref_mut() {{\n            return d.eval();\n        }}\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_eval(self.raw.as_ptr()) }}\n    }}\n"
     );
     s.push_str("    #[inline]\n    fn dump(&mut self) {\n        if self.tracing {\n");
     let _ = writeln!(
@@ -350,6 +371,7 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
     s.push_str("    /// One clock cycle: clock low, eval, dump; clock high (the rising edge), eval, dump.\n");
     s.push_str("    /// Simulation time advances by 10 units a cycle (5 per half period).\n");
     s.push_str("    #[inline]\n    pub fn tick(&mut self) {\n");
+    s.push_str("        if let Some(d) = self.alt.as_deref_mut() {\n            d.tick();\n            self.time += 10;\n            self.cycle += 1;\n            return;\n        }\n");
     if has_clk {
         s.push_str("        self.set_clk_i(false);\n");
     }
@@ -363,6 +385,8 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
     );
     s.push_str("    /// [`Self::cycle`] at zero. Set the inputs to their idle values first.\n");
     s.push_str("    pub fn reset(&mut self) {\n");
+    // The run-time model's reset is the same sequence (four ticks).
+    s.push_str("        if let Some(d) = self.alt.as_deref_mut() {\n            d.reset();\n            self.time += 40;\n            self.cycle = 0;\n            return;\n        }\n");
     if has_rst {
         s.push_str("        self.set_rst_ni(true);\n        self.eval();\n        self.set_rst_ni(false);\n        self.eval();\n        for _ in 0..4 {\n            self.tick();\n        }\n        self.set_rst_ni(true);\n");
     } else {
@@ -378,21 +402,22 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
     s.push_str("    #[inline]\n    pub fn time(&self) -> u64 {\n        self.time\n    }\n\n");
     let _ = writeln!(
         s,
-        "    /// Starts writing a trace to `path` (replacing an open one): a VCD, or an FST when the crate\n    /// was built with `WAVES=fst` (`neo_tb::waves::MODEL_FORMAT`); every later half cycle is dumped.\n    pub fn trace_open(&mut self, path: &std::path::Path) -> std::io::Result<()> {{\n        let c = std::ffi::CString::new(path.as_os_str().to_string_lossy().as_bytes())\n            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;\n        // SAFETY: `raw` is live; `c` outlives the call.\n        let ok = unsafe {{ ffi_{t}::neo_{t}_trace_open(self.raw.as_ptr(), c.as_ptr()) }};\n        if ok == 0 {{\n            return Err(std::io::Error::other(format!(\"cannot open trace {{}}\", path.display())));\n        }}\n        self.tracing = true;\n        Ok(())\n    }}\n"
+        "    /// Starts writing a trace to `path` (replacing an open one): a VCD, or an FST when the crate\n    /// was built with `WAVES=fst` (`neo_tb::waves::MODEL_FORMAT`); every later half cycle is dumped.\n    pub fn trace_open(&mut self, path: &std::path::Path) -> std::io::Result<()> {{\n        if let Some(d) = self.alt.as_deref_mut() {{\n            return d.trace_open(path);\n        }}\n        let c = std::ffi::CString::new(path.as_os_str().to_string_lossy().as_bytes())\n            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;\n        // SAFETY: `raw` is live; `c` outlives the call.\n        let ok = unsafe {{ ffi_{t}::neo_{t}_trace_open(self.raw.as_ptr(), c.as_ptr()) }};\n        if ok == 0 {{\n            return Err(std::io::Error::other(format!(\"cannot open trace {{}}\", path.display())));\n        }}\n        self.tracing = true;\n        Ok(())\n    }}\n"
     );
     let _ = writeln!(
         s,
-        "    /// Flushes and closes the trace, if one is open.\n    pub fn trace_close(&mut self) {{\n        if self.tracing {{\n            // SAFETY: `raw` is a live model owned by `self`.\n            unsafe {{ ffi_{t}::neo_{t}_trace_close(self.raw.as_ptr()) }};\n            self.tracing = false;\n        }}\n    }}\n"
+        "    /// Flushes and closes the trace, if one is open.\n    pub fn trace_close(&mut self) {{\n        if let Some(d) = self.alt.as_deref_mut() {{\n            return d.trace_close();\n        }}\n        if self.tracing {{\n            // SAFETY: `raw` is a live model owned by `self`.\n            unsafe {{ ffi_{t}::neo_{t}_trace_close(self.raw.as_ptr()) }};\n            self.tracing = false;\n        }}\n    }}\n"
     );
 
-    for p in &iface.ports {
-        rust_port(&mut s, t, p);
+    for (i, p) in iface.ports.iter().enumerate() {
+        rust_port(&mut s, t, i, p);
     }
     s.push_str("}\n\n");
 
+    // A substituted model writes its own coverage (crate::dynmodel); the linked one, unused, none.
     let cov = if coverage {
         format!(
-            "        crate::coverage::write_model(Self::NAME, |path| {{\n            // SAFETY: `raw` is live; `path` outlives the call.\n            unsafe {{ ffi_{t}::neo_{t}_coverage_write(self.raw.as_ptr(), path.as_ptr()) }}\n        }});\n"
+            "        if self.alt.is_none() {{\n            crate::coverage::write_model(Self::NAME, |path| {{\n                // SAFETY: `raw` is live; `path` outlives the call.\n                unsafe {{ ffi_{t}::neo_{t}_coverage_write(self.raw.as_ptr(), path.as_ptr()) }}\n            }});\n        }}\n"
         )
     } else {
         String::new()
@@ -405,7 +430,12 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
     // The generic Dut implementation.
     let _ = writeln!(s, "impl crate::dut::Dut for {sn} {{");
     s.push_str("    const NAME: &'static str = Self::NAME;\n    const PORTS: &'static [crate::dut::PortSpec] = Self::PORTS;\n\n");
-    s.push_str("    fn set_words(&mut self, port: usize, words: &[u32]) {\n        let lo = |i: usize| words.get(i).copied().unwrap_or(0) as u64;\n        let _ = lo;\n        match port {\n");
+    s.push_str("    fn set_words(&mut self, port: usize, words: &[u32]) {\n");
+    let _ = writeln!(
+        s,
+        "        if let Some(d) = self.alt.as_deref_mut() {{\n            assert!(Self::PORTS.get(port).is_some_and(|p| p.input), \"{t}: port {{port}} is not an input\");\n            return d.set_words(port, words);\n        }}"
+    );
+    s.push_str("        let lo = |i: usize| words.get(i).copied().unwrap_or(0) as u64;\n        let _ = lo;\n        match port {\n");
     for (i, p) in iface.ports.iter().enumerate() {
         if p.dir != Dir::In {
             continue;
@@ -425,7 +455,12 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
     }
     let _ =
         writeln!(s, "            _ => panic!(\"{t}: port {{port}} is not an input\"),\n        }}\n    }}\n");
-    s.push_str("    fn get_words(&self, port: usize, out: &mut [u32]) {\n        match port {\n");
+    s.push_str("    fn get_words(&self, port: usize, out: &mut [u32]) {\n");
+    let _ = writeln!(
+        s,
+        "        if let Some(d) = self.alt.as_deref() {{\n            assert!(port < Self::PORTS.len(), \"{t}: no port {{port}}\");\n            out.fill(0);\n            return d.get_words(port, out);\n        }}"
+    );
+    s.push_str("        match port {\n");
     for (i, p) in iface.ports.iter().enumerate() {
         let n = &p.name;
         if p.width <= 64 {
@@ -450,7 +485,20 @@ pub fn rust(iface: &ModuleInterface, coverage: bool) -> String {
     s
 }
 
-fn rust_port(s: &mut String, t: &str, p: &Port) {
+/// The wrapper's constants naming the Verilog its model is built from (for generated tops).
+fn rust_hdl_consts(s: &mut String, hdl: Option<&HdlFiles>) {
+    if let Some(h) = hdl {
+        let _ = writeln!(
+            s,
+            "    /// The Verilog files this model is built from (the top's and its submodules').\n    pub const HDL_FILES: &'static [&'static str] = &{:?};\n    /// Their content hash, headers left out (`build/hdl_hash.rs`).\n    pub const HDL_HASH: &'static str = \"{}\";\n",
+            h.names, h.hash
+        );
+    }
+}
+
+/// The typed accessors of port `p` (index `i`): the linked model's shim, or the run-time
+/// model's port `i` when the wrapper has one.
+fn rust_port(s: &mut String, t: &str, i: usize, p: &Port) {
     let n = &p.name;
     let w = words(p.width);
     if p.dir == Dir::In {
@@ -460,19 +508,19 @@ fn rust_port(s: &mut String, t: &str, p: &Port) {
             1 => {
                 let _ = writeln!(
                     s,
-                    "{doc}\n    #[inline]\n    pub fn set_{n}(&mut self, v: bool) {{\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_set_{n}(self.raw.as_ptr(), v as u64) }}\n    }}\n"
+                    "{doc}\n    #[inline]\n    pub fn set_{n}(&mut self, v: bool) {{\n        if let Some(d) = self.alt.as_deref_mut() {{\n            return d.set_u64({i}, v as u64);\n        }}\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_set_{n}(self.raw.as_ptr(), v as u64) }}\n    }}\n"
                 );
             }
             2..=64 => {
                 let _ = writeln!(
                     s,
-                    "{doc}\n    #[inline]\n    pub fn set_{n}(&mut self, v: u64) {{\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_set_{n}(self.raw.as_ptr(), v) }}\n    }}\n"
+                    "{doc}\n    #[inline]\n    pub fn set_{n}(&mut self, v: u64) {{\n        if let Some(d) = self.alt.as_deref_mut() {{\n            return d.set_u64({i}, v);\n        }}\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_set_{n}(self.raw.as_ptr(), v) }}\n    }}\n"
                 );
             }
             _ => {
                 let _ = writeln!(
                     s,
-                    "{doc}\n    /// Words are little-endian: `v[0]` holds bits 31..0.\n    #[inline]\n    pub fn set_{n}(&mut self, v: &[u32; {w}]) {{\n        // SAFETY: `raw` is live and `v` holds exactly the port's {w} words.\n        unsafe {{ ffi_{t}::neo_{t}_set_{n}_words(self.raw.as_ptr(), v.as_ptr(), {w}) }}\n    }}\n"
+                    "{doc}\n    /// Words are little-endian: `v[0]` holds bits 31..0.\n    #[inline]\n    pub fn set_{n}(&mut self, v: &[u32; {w}]) {{\n        if let Some(d) = self.alt.as_deref_mut() {{\n            return d.set_words({i}, v);\n        }}\n        // SAFETY: `raw` is live and `v` holds exactly the port's {w} words.\n        unsafe {{ ffi_{t}::neo_{t}_set_{n}_words(self.raw.as_ptr(), v.as_ptr(), {w}) }}\n    }}\n"
                 );
             }
         }
@@ -482,19 +530,19 @@ fn rust_port(s: &mut String, t: &str, p: &Port) {
         1 => {
             let _ = writeln!(
                 s,
-                "{doc}\n    #[inline]\n    pub fn {n}(&self) -> bool {{\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_get_{n}(self.raw.as_ptr()) != 0 }}\n    }}\n"
+                "{doc}\n    #[inline]\n    pub fn {n}(&self) -> bool {{\n        if let Some(d) = self.alt.as_deref() {{\n            return d.get_u64({i}) != 0;\n        }}\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_get_{n}(self.raw.as_ptr()) != 0 }}\n    }}\n"
             );
         }
         2..=64 => {
             let _ = writeln!(
                 s,
-                "{doc}\n    #[inline]\n    pub fn {n}(&self) -> u64 {{\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_get_{n}(self.raw.as_ptr()) }}\n    }}\n"
+                "{doc}\n    #[inline]\n    pub fn {n}(&self) -> u64 {{\n        if let Some(d) = self.alt.as_deref() {{\n            return d.get_u64({i});\n        }}\n        // SAFETY: `raw` is a live model owned by `self`.\n        unsafe {{ ffi_{t}::neo_{t}_get_{n}(self.raw.as_ptr()) }}\n    }}\n"
             );
         }
         _ => {
             let _ = writeln!(
                 s,
-                "{doc}\n    /// Words are little-endian: element 0 holds bits 31..0.\n    #[inline]\n    pub fn {n}(&self) -> [u32; {w}] {{\n        let mut v = [0u32; {w}];\n        // SAFETY: `raw` is live and `v` has room for the port's {w} words.\n        unsafe {{ ffi_{t}::neo_{t}_get_{n}_words(self.raw.as_ptr(), v.as_mut_ptr(), {w}) }};\n        v\n    }}\n"
+                "{doc}\n    /// Words are little-endian: element 0 holds bits 31..0.\n    #[inline]\n    pub fn {n}(&self) -> [u32; {w}] {{\n        let mut v = [0u32; {w}];\n        if let Some(d) = self.alt.as_deref() {{\n            d.get_words({i}, &mut v);\n            return v;\n        }}\n        // SAFETY: `raw` is live and `v` has room for the port's {w} words.\n        unsafe {{ ffi_{t}::neo_{t}_get_{n}_words(self.raw.as_ptr(), v.as_mut_ptr(), {w}) }};\n        v\n    }}\n"
             );
         }
     }

@@ -33,6 +33,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
+/// Part of the error of a model that does not build (Verilator or the C++ compiler failed):
+/// `scripts/mutate-check` reports a mutant whose log holds it as one that does not build.
+pub const MODEL_DOES_NOT_BUILD: &str = "the Verilated model does not build";
+
 /// Version of the way shared libraries are compiled (part of the cache key).
 const DYN_VERSION: u32 = 1;
 /// C++ optimisation of the per-cycle code.
@@ -103,9 +107,13 @@ unsafe impl Send for DynModel {}
 pub const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
 
 /// The files of generated top `top` for `cfg` (itself and every module it instantiates) and
-/// the lint waivers, for [`DynModel::build`]. With `$NEO_HDL_DIR` holding a `top.v` generated
-/// from `cfg` (its header names the configuration's hash), that file and `DIR/lint.vlt` replace
-/// the generated ones (`scripts/mutate-check` runs the benches on mutated copies of `hdl/`).
+/// the lint waivers, for [`DynModel::build`]. With `$NEO_HDL_DIR` set, each of its files there
+/// generated from `cfg` (its header names the configuration's hash) replaces the generated one
+/// and is listed as read ([`crate::hdl_dir::note_read`]), and `DIR/lint.vlt` replaces the
+/// waivers (`scripts/mutate-check` runs the benches on mutated copies of `hdl/`). A file
+/// generated from another configuration is left alone: a directory holds one configuration's
+/// `hdl/` (plus, for `scripts/mutate-check`'s engine mutants, another's top), and the benches
+/// build tops of other configurations too.
 pub fn generated_files(
     cfg: &neo_gen::EngineConfig,
     top: &str,
@@ -114,19 +122,18 @@ pub fn generated_files(
     let mut files: Vec<(String, String)> =
         neo_gen::files_for(cfg, top).into_iter().map(|f| (f.file_name(), f.text)).collect();
     let mut vlt = LINT_VLT.to_string();
-    let dir = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()).map(std::path::PathBuf::from);
-    if let Some(dir) = dir {
-        let name = format!("{top}.v");
-        let p = dir.join(&name);
-        let text = std::fs::read_to_string(&p).ok();
-        let ours = text
-            .as_deref()
-            .and_then(|t| t.lines().next())
-            .is_some_and(|h| h.contains(&format!("config 0x{:016x}", cfg.hash())));
-        if let (true, Some(text)) = (ours, text) {
-            if let Some(f) = files.iter_mut().find(|(n, _)| *n == name) {
-                f.1 = text;
+    if let Some(dir) = crate::hdl_dir::dir() {
+        let header = format!("config 0x{:016x}", cfg.hash());
+        let mut read = Vec::new();
+        for (name, text) in &mut files {
+            let theirs = std::fs::read_to_string(dir.join(&*name)).ok();
+            if let Some(t) = theirs.filter(|t| t.lines().next().is_some_and(|h| h.contains(&header))) {
+                *text = t;
+                read.push(name.clone());
             }
+        }
+        if !read.is_empty() {
+            crate::hdl_dir::note_read(&dir, read.iter().map(String::as_str));
             vlt = std::fs::read_to_string(dir.join("lint.vlt")).unwrap_or(vlt);
         }
     }
@@ -179,8 +186,10 @@ impl DynModel {
     }
 
     /// [`DynModel::build_traced`] with the per-cycle code compiled for build time rather than
-    /// speed (`-O1`; its own cache entry): for the preprocessing datapaths, whose C++ takes
-    /// minutes at `-O3` and whose benches run seconds.
+    /// speed (`-O1`, the generated files compiled as one unity translation unit per core:
+    /// `unity_units`; its own cache entry): for the preprocessing datapaths, whose C++ takes
+    /// minutes at `-O3` and whose benches run seconds, the other configurations' unit models and
+    /// the models of `$NEO_HDL_DIR`'s Verilog ([`crate::hdl_dir`]).
     pub fn build_for_short_runs(
         iface: &ModuleInterface,
         files: &[(String, String)],
@@ -530,7 +539,8 @@ fn build_library(
     let (dir, cached) = cache::get_or_build(&cache_root(), &name, &key, &lib_name, |d| {
         let mut flags: Vec<&str> = flavour.flags.to_vec();
         flags.extend(thread_flags.iter().map(String::as_str));
-        log = compile(&v, &cxx, (flavour, opt_fast), &flags, top, files, vlt, &cpp, d)?;
+        log = compile(&v, &cxx, (flavour, opt_fast), &flags, top, files, vlt, &cpp, d)
+            .map_err(|e| format!("{top}: {MODEL_DOES_NOT_BUILD}: {e}"))?;
         fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())
     })?;
     Ok(BuildInfo { library: dir.join(lib_name), cached, seconds: t0.elapsed().as_secs_f64(), log })
@@ -629,6 +639,9 @@ fn compile(
         fast.iter().map(|c| (obj.join(format!("{c}.cpp")), opt_fast)).collect();
     units.extend(slow.iter().map(|c| (obj.join(format!("{c}.cpp")), OPT_SLOW)));
     units.push((shim, OPT_FAST));
+    if opt_fast == OPT_QUICK {
+        units = unity_units(&obj, &units)?;
+    }
     let t1 = Instant::now();
     let runtime = runtime_objects(v, cxx, flavour)?;
     let objects = compile_all(v, cxx, flavour.defines, &obj, &units)?;
@@ -653,6 +666,29 @@ fn compile(
         t1.elapsed().as_secs_f64(),
         units.len()
     ))
+}
+
+/// The translation units of a model built for short runs ([`OPT_QUICK`]): `units` included into
+/// one `unity<k>.cpp` per core (at most 4; largest files first into the smallest group), all at
+/// [`OPT_QUICK`], as Verilator's own makefile does without parallel builds (`V<top>__ALL.cpp`).
+/// Each generated file includes Verilator's headers, whose parsing dominates a small model's
+/// compile: the BSU's 8 files take 58 s of CPU one by one and 10 s as one unit.
+fn unity_units(obj: &Path, units: &[(PathBuf, &str)]) -> Result<Vec<(PathBuf, &'static str)>, String> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()).min(4);
+    let mut sized: Vec<(u64, &PathBuf)> =
+        units.iter().map(|(p, _)| (fs::metadata(p).map_or(0, |m| m.len()), p)).collect();
+    sized.sort_by_key(|s| std::cmp::Reverse(s.0));
+    let mut groups: Vec<(u64, String)> = vec![(0, String::new()); cores.min(sized.len()).max(1)];
+    for (size, path) in sized {
+        let g = groups.iter_mut().min_by_key(|g| g.0).expect("at least one group");
+        g.0 += size;
+        g.1.push_str(&format!("#include \"{}\"\n", path.display()));
+    }
+    groups
+        .iter()
+        .enumerate()
+        .map(|(k, (_, text))| Ok((write(&obj.join(format!("unity{k}.cpp")), text)?, OPT_QUICK)))
+        .collect()
 }
 
 /// The flavour's Verilator runtime (`verilated.cpp` and its trace writer, position-independent,

@@ -102,11 +102,11 @@ impl FpBench {
         let mut files: Vec<(String, String)> =
             neo_gen::files_for(&cfg, bench::NAME).into_iter().map(|f| (f.file_name(), f.text)).collect();
         let mut vlt = LINT_VLT.to_string();
-        if let Some(dir) = std::env::var_os("NEO_HDL_DIR").filter(|d| !d.is_empty()) {
-            let dir = std::path::PathBuf::from(dir);
+        if let Some(dir) = crate::hdl_dir::dir() {
             for (name, text) in &mut files {
                 if let Ok(t) = std::fs::read_to_string(dir.join(&*name)) {
                     *text = t;
+                    crate::hdl_dir::note_read(&dir, [name.as_str()]);
                 }
             }
             vlt = std::fs::read_to_string(dir.join("lint.vlt")).unwrap_or(vlt);

@@ -27,6 +27,7 @@ pub mod fetch;
 pub mod fp;
 #[cfg(neo_has_verilator)]
 pub mod frame;
+pub mod hdl_dir;
 #[cfg(neo_has_verilator)]
 pub mod itu;
 pub mod lane;
