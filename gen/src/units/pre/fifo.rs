@@ -4,7 +4,7 @@
 //! `pop_valid_o` is high). Storage is a register file with one synchronous write port and one
 //! combinational read port, as `neo_chunk_ram`.
 
-use crate::emit::{if_, set, Instance, Item, Module};
+use crate::emit::{if_, set, Item, Module};
 
 /// Module name.
 pub const NAME: &str = "neo_pre_fifo";
@@ -22,12 +22,7 @@ const DEFAULT_DEPTH: u32 = 4;
 pub fn instance(width: u32, depth: u32, name: &str, conns: Vec<(String, String)>) -> Item {
     assert!(depth.is_power_of_two() && depth >= 2, "queue depth {depth} is not a power of two >= 2");
     assert!(width >= 1, "a queue of {width}-bit words");
-    Item::Instance(Instance {
-        module: NAME.into(),
-        name: name.into(),
-        params: vec![("WIDTH".into(), width.to_string()), ("DEPTH".into(), depth.to_string())],
-        conns,
-    })
+    super::sized_instance(NAME, (width, depth), name, conns)
 }
 
 /// The queue, parametric in `WIDTH` (bits per word) and `DEPTH` (words, a power of two of at

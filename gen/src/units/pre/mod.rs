@@ -60,6 +60,22 @@ pub fn project_module(cfg: &EngineConfig) -> Module {
     )
 }
 
+/// An instance `name` of `module` (the parametric queue or memory) at `WIDTH = width` and
+/// `DEPTH = depth`, with connections `conns` (`(port, expression)`).
+fn sized_instance(
+    module: &str,
+    (width, depth): (u32, u32),
+    name: &str,
+    conns: Vec<(String, String)>,
+) -> crate::emit::Item {
+    crate::emit::Item::Instance(crate::emit::Instance {
+        module: module.into(),
+        name: name.into(),
+        params: vec![("WIDTH".into(), width.to_string()), ("DEPTH".into(), depth.to_string())],
+        conns,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,7 +3,7 @@
 //! every use instantiates it with its own `WIDTH` and `DEPTH` ([`instance`]).
 
 use crate::emit::expr::bits_for;
-use crate::emit::{if_, set, Instance, Item, Module};
+use crate::emit::{if_, set, Item, Module};
 
 /// Module name.
 pub const NAME: &str = "neo_pre_ram";
@@ -26,12 +26,7 @@ pub fn addr_bits(depth: u32) -> u32 {
 pub fn instance(width: u32, depth: u32, name: &str, conns: Vec<(String, String)>) -> Item {
     assert!(depth >= 2, "a memory of {depth} words");
     assert!(width >= 1, "a memory of {width}-bit words");
-    Item::Instance(Instance {
-        module: NAME.into(),
-        name: name.into(),
-        params: vec![("WIDTH".into(), width.to_string()), ("DEPTH".into(), depth.to_string())],
-        conns,
-    })
+    super::sized_instance(NAME, (width, depth), name, conns)
 }
 
 /// The memory, parametric in `WIDTH` (bits per word) and `DEPTH` (words, at least 2; addresses
