@@ -54,12 +54,7 @@ impl DatapathBench {
     /// files (or `$NEO_HDL_DIR`'s copy of `top.v`: [`crate::dynmodel::generated_files`]).
     pub fn build_generated(graph: Graph, cfg: &neo_gen::EngineConfig, top: &str) -> Result<Self, String> {
         let (files, vlt) = crate::dynmodel::generated_files(cfg, top)?;
-        let iface = neo_gen::units::modules(cfg)
-            .map_err(|e| e.to_string())?
-            .into_iter()
-            .find(|m| m.name == top)
-            .ok_or(format!("the generator emits no {top}"))?
-            .interface();
+        let iface = crate::dynmodel::generated_interface(cfg, top)?;
         Self::build_from(graph, &iface, &files, &vlt)
     }
 

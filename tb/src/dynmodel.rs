@@ -106,6 +106,16 @@ unsafe impl Send for DynModel {}
 /// The lint waivers every generated model is verilated with.
 pub const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
 
+/// The interface of generated top `top` for `cfg` (an error when the generator emits none).
+pub fn generated_interface(cfg: &neo_gen::EngineConfig, top: &str) -> Result<ModuleInterface, String> {
+    neo_gen::units::modules(cfg)
+        .map_err(|e| e.to_string())?
+        .into_iter()
+        .find(|m| m.name == top)
+        .map(|m| m.interface())
+        .ok_or(format!("the generator emits no {top}"))
+}
+
 /// The files of generated top `top` for `cfg` (itself and every module it instantiates) and
 /// the lint waivers, for [`DynModel::build`]. With `$NEO_HDL_DIR` set, each of its files there
 /// generated from `cfg` (its header names the configuration's hash) replaces the generated one

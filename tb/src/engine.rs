@@ -98,13 +98,7 @@ type Files = Vec<(String, String)>;
 fn engine_sources(cfg: &EngineConfig) -> Result<(Files, String, ModuleInterface), String> {
     cfg.validate().map_err(|e| e.to_string())?;
     let (files, vlt) = crate::dynmodel::generated_files(cfg, TOP)?;
-    let iface = neo_gen::units::modules(cfg)
-        .map_err(|e| e.to_string())?
-        .into_iter()
-        .find(|m| m.name == TOP)
-        .ok_or("the generator emits no neo_engine")?
-        .interface();
-    Ok((files, vlt, iface))
+    Ok((files, vlt, crate::dynmodel::generated_interface(cfg, TOP)?))
 }
 
 /// The transactions each memory client may have in flight, `(reads, writes)`, in client order

@@ -10,9 +10,6 @@ use crate::rng::Rng;
 use neo_gen::units::fp::{bench, label, latency, FpPrim};
 use neo_golden::hwarith::graph::{eval_op, Op, Ty};
 
-/// The generated Verilog's lint waivers (passed to Verilator before the files).
-const LINT_VLT: &str = include_str!("../../hdl/lint.vlt");
-
 /// Number of pipelined primitives.
 const NP: usize = FpPrim::ALL.len();
 
@@ -95,28 +92,12 @@ pub struct FpRun {
 
 impl FpBench {
     /// Generates `neo_fp_bench` (default configuration), verilates and compiles it (or finds it
-    /// in the cache) and loads it; traced when `WAVES` asks for it. With `NEO_HDL_DIR=DIR` the
-    /// files of the same names (and `DIR/lint.vlt`) are read from `DIR` (mutation testing).
+    /// in the cache) and loads it; traced when `WAVES` asks for it. With `NEO_HDL_DIR=DIR`, `DIR`'s
+    /// copies of its files and `DIR/lint.vlt` ([`crate::dynmodel::generated_files`]).
     pub fn build() -> Result<FpBench, String> {
         let cfg = neo_gen::EngineConfig::default();
-        let mut files: Vec<(String, String)> =
-            neo_gen::files_for(&cfg, bench::NAME).into_iter().map(|f| (f.file_name(), f.text)).collect();
-        let mut vlt = LINT_VLT.to_string();
-        if let Some(dir) = crate::hdl_dir::dir() {
-            for (name, text) in &mut files {
-                if let Ok(t) = std::fs::read_to_string(dir.join(&*name)) {
-                    *text = t;
-                    crate::hdl_dir::note_read(&dir, [name.as_str()]);
-                }
-            }
-            vlt = std::fs::read_to_string(dir.join("lint.vlt")).unwrap_or(vlt);
-        }
-        let iface = neo_gen::units::modules(&cfg)
-            .map_err(|e| e.to_string())?
-            .into_iter()
-            .find(|m| m.name == bench::NAME)
-            .ok_or("the generator emits no neo_fp_bench")?
-            .interface();
+        let (files, vlt) = crate::dynmodel::generated_files(&cfg, bench::NAME)?;
+        let iface = crate::dynmodel::generated_interface(&cfg, bench::NAME)?;
         let format = crate::waves::requested_format();
         let (model, info) = DynModel::build_traced(&iface, &files, Some(&vlt), format)?;
         if !info.cached {
