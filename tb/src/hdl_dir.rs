@@ -72,7 +72,12 @@ static CHOICES: Mutex<Vec<(String, PathBuf, Choice)>> = Mutex::new(Vec::new());
 /// message holds [`crate::dynmodel::MODEL_DOES_NOT_BUILD`]) or load.
 pub fn substitute(top: &str, ports: &[PortSpec], files: &[&str], hash: &str) -> Option<DynModel> {
     let dir = dir()?;
-    choose(&dir, top, ports, files, hash).and_then(|c| open(&c)).unwrap_or_else(|e| panic!("{e}"))
+    let model = match choose(&dir, top, ports, files, hash) {
+        Ok((_, Some(built))) => Ok(Some(built)),
+        Ok((choice, None)) => open(&choice),
+        Err(e) => Err(e),
+    };
+    model.unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn open(choice: &Choice) -> Result<Option<DynModel>, String> {
@@ -82,11 +87,18 @@ fn open(choice: &Choice) -> Result<Option<DynModel>, String> {
     }
 }
 
-/// The choice for `top` and `dir`, made (and recorded) on first use.
-fn choose(dir: &Path, top: &str, ports: &[PortSpec], files: &[&str], hash: &str) -> Result<Choice, String> {
+/// The choice for `top` and `dir`, made (and recorded) on first use; with the model when this
+/// call built it (it is loaded already).
+fn choose(
+    dir: &Path,
+    top: &str,
+    ports: &[PortSpec],
+    files: &[&str],
+    hash: &str,
+) -> Result<(Choice, Option<DynModel>), String> {
     let mut choices = CHOICES.lock().unwrap_or_else(|e| e.into_inner());
     if let Some((_, _, c)) = choices.iter().find(|(t, d, _)| t == top && d == dir) {
-        return Ok(c.clone());
+        return Ok((c.clone(), None));
     }
     let texts = files
         .iter()
@@ -98,19 +110,27 @@ fn choose(dir: &Path, top: &str, ports: &[PortSpec], files: &[&str], hash: &str)
         })
         .collect::<Result<Vec<_>, String>>()?;
     note_read(dir, files.iter().copied());
-    let choice = if hdl_hash::verilog_hash(texts.iter().map(|(n, t)| (n.as_str(), t.as_str()))) == hash {
-        Choice::Linked
-    } else {
-        build(dir, top, ports, &texts)?
-    };
+    let (choice, model) =
+        if hdl_hash::verilog_hash(texts.iter().map(|(n, t)| (n.as_str(), t.as_str()))) == hash {
+            (Choice::Linked, None)
+        } else {
+            let (choice, model) = build(dir, top, ports, &texts)?;
+            (choice, Some(model))
+        };
     choices.push((top.to_string(), dir.to_path_buf(), choice.clone()));
-    Ok(choice)
+    Ok((choice, model))
 }
 
 /// Builds (or finds in the cache) the model of `top` from `dir`'s `texts`: untraced unless
 /// `WAVES` asks for waves (then in this build's format, as the linked models), its per-cycle
-/// code compiled for build time (the benches run seconds).
-fn build(dir: &Path, top: &str, ports: &[PortSpec], texts: &[(String, String)]) -> Result<Choice, String> {
+/// code compiled for build time (the benches run seconds). Returns the choice (for later
+/// models of `top`) and the loaded model.
+fn build(
+    dir: &Path,
+    top: &str,
+    ports: &[PortSpec],
+    texts: &[(String, String)],
+) -> Result<(Choice, DynModel), String> {
     let iface = ModuleInterface {
         name: top.to_string(),
         ports: ports
@@ -132,7 +152,8 @@ fn build(dir: &Path, top: &str, ports: &[PortSpec], texts: &[(String, String)]) 
         dir.display(),
         if info.cached { "from the cache".to_string() } else { format!("built in {:.1} s", info.seconds) }
     );
-    Ok(Choice::Built { library: info.library, iface, format: model.wave_format() })
+    let choice = Choice::Built { library: info.library, iface, format: model.wave_format() };
+    Ok((choice, model))
 }
 
 #[cfg(test)]
