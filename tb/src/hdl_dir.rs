@@ -121,9 +121,11 @@ fn choose(
     Ok((choice, model))
 }
 
-/// Builds (or finds in the cache) the model of `top` from `dir`'s `texts`: untraced unless
-/// `WAVES` asks for waves (then in this build's format, as the linked models), its per-cycle
-/// code compiled for build time (the benches run seconds). Returns the choice (for later
+/// Builds (or finds in the cache) the model of `top` from `dir`'s `texts`: traced in this
+/// build's format, as the linked model it stands for (a bench may open a trace without `WAVES`:
+/// `bsu_vcd_shows_handshake_rules_and_every_transfer`; an untraced stand-in failed it on any
+/// change, so every BSU mutant counted as caught), its per-cycle code compiled for build time
+/// (the benches run seconds). A `WAVES` value that is not a waveform choice is an error. Returns the choice (for later
 /// models of `top`) and the loaded model.
 fn build(
     dir: &Path,
@@ -144,7 +146,8 @@ fn build(
     };
     let vlt = std::fs::read_to_string(dir.join("lint.vlt"))
         .unwrap_or_else(|_| crate::dynmodel::LINT_VLT.to_string());
-    let format = crate::waves::try_requested_format()?.map(|_| crate::waves::MODEL_FORMAT);
+    crate::waves::try_requested_format()?;
+    let format = Some(crate::waves::MODEL_FORMAT);
     let (model, info) = DynModel::build_for_short_runs(&iface, texts, Some(&vlt), format)
         .map_err(|e| format!("NEO_HDL_DIR={}: {top}: {e}", dir.display()))?;
     println!(
