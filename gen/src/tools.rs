@@ -186,7 +186,7 @@ pub fn glue_synth_stats(
     blackboxes: &[&str],
 ) -> Result<SynthStats, ToolError> {
     let script = format!("hierarchy -top {top}; blackbox {}; synth -top {top};", blackboxes.join(" "));
-    yosys_script_stat(files, top, &script)
+    yosys_script_stat(&boxed_files("yosys", files, top, &owned(blackboxes))?, top, &script)
 }
 
 /// The latch check of [`coarse_synth_stats`] on `top`'s own logic, `blackboxes` as black boxes
@@ -197,7 +197,11 @@ pub fn coarse_glue_synth_stats(
     blackboxes: &[&str],
 ) -> Result<SynthStats, ToolError> {
     let script = format!("hierarchy -top {top}; blackbox {}; proc; opt_clean;", blackboxes.join(" "));
-    yosys_script_stat(files, top, &script)
+    yosys_script_stat(&boxed_files("yosys", files, top, &owned(blackboxes))?, top, &script)
+}
+
+fn owned(names: &[&str]) -> Vec<String> {
+    names.iter().map(|s| s.to_string()).collect()
 }
 
 /// Runs `script` (Yosys commands after reading `files`) and returns `stat -json`'s statistics.
@@ -257,6 +261,75 @@ pub fn verilator_lint_with(
     }
 }
 
+/// [`verilator_lint`] of `top` with the modules named in `boxes` replaced by their interfaces
+/// ([`interface_stub`]): the lint covers `top`'s own text and every connection to the boxed
+/// modules (their ports and parameters are declared as generated), but not the boxed bodies,
+/// which must be linted on their own (see [`crate::units::lint_boxes`]).
+pub fn verilator_lint_boxed(
+    files: &[VerilogFile],
+    top: &str,
+    vlt: Option<&Path>,
+    boxes: &[String],
+) -> Result<(), ToolError> {
+    verilator_lint(&boxed_files("verilator", files, top, boxes)?, top, vlt)
+}
+
+/// `files` for a run on `top` with the modules in `boxes` as interface stubs
+/// ([`interface_stub`]), without the files that only boxed modules instantiate (a module is kept
+/// when a kept, unboxed file names it).
+fn boxed_files(
+    tool: &str,
+    files: &[VerilogFile],
+    top: &str,
+    boxes: &[String],
+) -> Result<Vec<VerilogFile>, ToolError> {
+    let mut kept: Vec<VerilogFile> = Vec::with_capacity(files.len());
+    let mut open: Vec<&VerilogFile> = files.iter().filter(|f| f.name == top).collect();
+    while let Some(f) = open.pop() {
+        if kept.iter().any(|k| k.name == f.name) {
+            continue;
+        }
+        if f.name != top && boxes.contains(&f.name) {
+            let text = interface_stub(&f.text).ok_or_else(|| ToolError::Failed {
+                tool: tool.into(),
+                top: top.into(),
+                output: format!("{}: no `module ... );` header to box", f.file_name()),
+            })?;
+            kept.push(VerilogFile { name: f.name.clone(), text });
+            continue;
+        }
+        open.extend(files.iter().filter(|g| g.name != f.name && instantiates(&f.text, &g.name)));
+        kept.push(f.clone());
+    }
+    // Dependencies first, as given.
+    kept.sort_by_key(|k| files.iter().position(|f| f.name == k.name));
+    Ok(kept)
+}
+
+/// True when `text` names module `name` as a word followed by a space (an instance, or a
+/// comment: keeping a file too many is harmless).
+fn instantiates(text: &str, name: &str) -> bool {
+    text.match_indices(name).any(|(k, _)| {
+        let before = text[..k].chars().next_back().is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+        before && text[k + name.len()..].starts_with(' ')
+    })
+}
+
+/// A generated module's text reduced to its declaration: everything up to the line `);` that
+/// closes its port list, then `endmodule`, inside lint waivers for the ports the empty body
+/// leaves unused or undriven. `None` when the text has no such header.
+pub fn interface_stub(text: &str) -> Option<String> {
+    let start = text.find("\nmodule ").map(|k| k + 1).or_else(|| text.starts_with("module ").then_some(0))?;
+    let close = text[start..].find("\n);\n")? + start + "\n);\n".len();
+    Some(format!(
+        "// interface stub for a boxed lint: the body is linted on its own\n\
+         /* verilator lint_off UNUSEDSIGNAL */\n/* verilator lint_off UNUSEDPARAM */\n\
+         /* verilator lint_off UNDRIVEN */\n{}endmodule\n/* verilator lint_on UNDRIVEN */\n\
+         /* verilator lint_on UNUSEDPARAM */\n/* verilator lint_on UNUSEDSIGNAL */\n",
+        &text[start..close]
+    ))
+}
+
 /// `iverilog -g2005 -s TOP FILES` (compile only); `Ok` when it succeeds silently.
 pub fn icarus_compile(files: &[VerilogFile], top: &str) -> Result<(), ToolError> {
     let tmp = TempFiles::write(files).map_err(|e| io_err("iverilog", e))?;
@@ -274,6 +347,33 @@ pub fn icarus_compile(files: &[VerilogFile], top: &str) -> Result<(), ToolError>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn file(name: &str, body: &str) -> VerilogFile {
+        VerilogFile {
+            name: name.into(),
+            text: format!("// header\nmodule {name} (\n  input wire a_i\n);\n{body}endmodule\n"),
+        }
+    }
+
+    #[test]
+    fn boxing_stubs_the_boxes_and_drops_what_only_they_use() {
+        let files = [
+            file("leaf", ""),
+            file("leaf_wide", ""),
+            file("mid", "  leaf u_leaf (.a_i(a_i));\n"),
+            file("top", "  mid u_mid (.a_i(a_i));\n  leaf_wide u_w (.a_i(a_i));\n"),
+        ];
+        let kept = boxed_files("t", &files, "top", &["mid".to_string()]).unwrap();
+        let names: Vec<&str> = kept.iter().map(|f| f.name.as_str()).collect();
+        assert_eq!(names, ["leaf_wide", "mid", "top"], "leaf is only under the boxed mid");
+        let stub = &kept[1].text;
+        assert!(
+            stub.contains("module mid (") && stub.contains("endmodule") && !stub.contains("u_leaf"),
+            "{stub}"
+        );
+        assert!(!instantiates("  leaf_wide u_w", "leaf"), "a longer name is not the module");
+        assert!(interface_stub("no module here").is_none());
+    }
 
     #[test]
     fn cell_classes() {

@@ -1,11 +1,14 @@
 //! `neo_engine` (run-time cosim top, not in `top_modules`): Verilator-lint clean with the
-//! waivers of `hdl/lint.vlt`, and its own glue and its port mux latch-free, for the default
+//! waivers of `hdl/lint.vlt` (the submodules that `hdl_gates.rs` lints as tops of their own, with
+//! the same text, boxed: `neo_gen::units::lint_boxes`), and its own glue and its port mux
+//! latch-free, for the default
 //! 16 + 4 engine and the small engines the benches build (every other module of the engine is a
 //! `top_modules` unit, checked by `hdl_gates.rs`; `neo gen --stats` synthesizes them all in full
 //! for the default engine and reports their latches).
 
-use neo_gen::tools::{coarse_glue_synth_stats, coarse_synth_stats, require_for_test, verilator_lint};
+use neo_gen::tools::{coarse_glue_synth_stats, coarse_synth_stats, require_for_test, verilator_lint_boxed};
 use neo_gen::units::engine::NAME;
+use neo_gen::units::lint_boxes;
 use neo_gen::{files_for, EngineConfig};
 use std::path::PathBuf;
 
@@ -50,7 +53,9 @@ fn the_engine_is_lint_clean() {
     }
     let vlt = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../hdl/lint.vlt");
     for (what, cfg) in configs() {
-        verilator_lint(&files_for(&cfg, NAME), NAME, Some(&vlt)).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let boxes = lint_boxes(&cfg, NAME);
+        verilator_lint_boxed(&files_for(&cfg, NAME), NAME, Some(&vlt), &boxes)
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
     }
 }
 

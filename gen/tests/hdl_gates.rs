@@ -6,10 +6,10 @@
 use neo_gen::output::check_dir;
 use neo_gen::tools::{
     coarse_glue_synth_stats, coarse_synth_stats, coarse_synth_stats_with, icarus_compile, require_for_test,
-    verilator_lint, verilator_lint_with,
+    verilator_lint, verilator_lint_boxed, verilator_lint_with,
 };
-use neo_gen::units::run_time_tops;
 use neo_gen::units::VerilogFile;
+use neo_gen::units::{lint_boxes, run_time_tops};
 use neo_gen::{files_for, generate, top_modules, EngineConfig, Topology};
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -135,7 +135,9 @@ fn checked_in_hdl_is_the_generators_output() {
 
 fn lint(cfg: &EngineConfig, what: &str) {
     let vlt = hdl_dir().join("lint.vlt");
-    for_every_top(cfg, what, |files, top| verilator_lint(files, top, Some(&vlt)).map_err(|e| e.to_string()));
+    for_every_top(cfg, what, |files, top| {
+        verilator_lint_boxed(files, top, Some(&vlt), &lint_boxes(cfg, top)).map_err(|e| e.to_string())
+    });
 }
 
 fn no_latches(cfg: &EngineConfig, what: &str) {
@@ -209,7 +211,9 @@ fn other_configurations_are_lint_clean() {
         return;
     }
     let vlt = hdl_dir().join("lint.vlt");
-    for_other_configs(|_, files, top| verilator_lint(files, top, Some(&vlt)).map_err(|e| e.to_string()));
+    for_other_configs(|cfg, files, top| {
+        verilator_lint_boxed(files, top, Some(&vlt), &lint_boxes(cfg, top)).map_err(|e| e.to_string())
+    });
 }
 
 #[test]
@@ -237,6 +241,53 @@ fn latch_check_catches_a_latch() {
                 always @* begin if (en_i) q_o = d_i; end\nendmodule\n";
     let s = coarse_synth_stats(&[VerilogFile { name: "l".into(), text: text.into() }], "l").unwrap();
     assert!(s.latches >= 1, "{:?}", s.cells_by_type);
+}
+
+/// The boxed lint still sees the parent's side of a boxed module: a connection of the wrong
+/// width to the stub's port is reported (the stub keeps the generated port declarations).
+#[test]
+fn boxed_lint_catches_a_wrong_connection() {
+    if !require_for_test("verilator", "boxed_lint_catches_a_wrong_connection") {
+        return;
+    }
+    let child = "module c (\n  input  wire [3:0] a_i,\n  output wire [3:0] y_o\n);\n  assign y_o = ~a_i;\nendmodule\n";
+    let parent = |w: u32| {
+        format!(
+            "module p (\n  input  wire [{w}:0] a_i,\n  output wire [{w}:0] y_o\n);\n  c u_c (.a_i(a_i), .y_o(y_o));\nendmodule\n"
+        )
+    };
+    let files = |w| {
+        vec![
+            VerilogFile { name: "c".into(), text: child.into() },
+            VerilogFile { name: "p".into(), text: parent(w) },
+        ]
+    };
+    let boxes = ["c".to_string()];
+    verilator_lint_boxed(&files(3), "p", None, &boxes).expect("matching widths lint clean against the stub");
+    assert!(
+        verilator_lint_boxed(&files(5), "p", None, &boxes).is_err(),
+        "a 6-bit connection to a 4-bit port"
+    );
+}
+
+/// Every module a lint boxes is a top of the gates with the default configuration's text, and
+/// the cores under the engine are boxed (their bodies are linted as tops of their own).
+#[test]
+fn lint_boxes_are_tops_linted_on_their_own() {
+    let cfg = EngineConfig::default();
+    let tops: Vec<&str> = neo_gen::top_modules().iter().chain(run_time_tops()).copied().collect();
+    let engine = lint_boxes(&cfg, neo_gen::units::engine::NAME);
+    for core in [neo_gen::units::sort_core::NAME, neo_gen::units::raster_core::NAME] {
+        assert!(engine.iter().any(|b| b == core), "{core} boxed under the engine: {engine:?}");
+    }
+    for top in &tops {
+        for b in lint_boxes(&cfg, top) {
+            assert!(tops.contains(&b.as_str()), "{top} boxes {b}, which is not a top of the gates");
+        }
+    }
+    let odd = EngineConfig { topology: Topology::OddEvenMerge, ..cfg };
+    let sort = lint_boxes(&odd, neo_gen::units::sort_core::NAME);
+    assert!(!sort.iter().any(|b| b == "neo_bsu"), "a BSU of another topology is linted in full: {sort:?}");
 }
 
 #[test]

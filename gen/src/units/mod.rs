@@ -111,6 +111,23 @@ pub fn run_time_tops() -> &'static [&'static str] {
     ]
 }
 
+/// The modules under `top` (in `cfg`) that a lint of `top` may box
+/// ([`crate::tools::verilator_lint_boxed`]): those that are tops of the lint gates themselves
+/// ([`top_modules`], [`run_time_tops`]) and whose text is the default configuration's (the
+/// header line aside), since the gates lint every top of the default configuration.
+pub fn lint_boxes(cfg: &EngineConfig, top: &str) -> Vec<String> {
+    let body = |t: &str| t.split_once('\n').map_or(String::new(), |(_, rest)| rest.to_string());
+    let default = EngineConfig::default();
+    let default_files = generate(&default);
+    let checked: Vec<&str> = top_modules().iter().chain(run_time_tops()).copied().collect();
+    files_for(cfg, top)
+        .into_iter()
+        .filter(|f| f.name != top && checked.contains(&f.name.as_str()))
+        .filter(|f| default_files.iter().any(|d| d.name == f.name && body(&d.text) == body(&f.text)))
+        .map(|f| f.name)
+        .collect()
+}
+
 /// Every module of the configuration, leaves first.
 pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     cfg.validate()?;
