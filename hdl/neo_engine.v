@@ -608,8 +608,15 @@ module neo_engine (
       wire mem_rsp_valid;
       wire mem_rsp_ready;
       wire [254:0] mem_rsp_data;
-      neo_raster_core u_core (
+      wire core_clk;
+      neo_clock_gate u_gate (
         .clk_i(clk_i),
+        .rst_ni(rst_ni),
+        .en_i(ras_valid[j] | ~ras_ready[j] | ras_done[j]),
+        .clk_o(core_clk)
+      );
+      neo_raster_core u_core (
+        .clk_i(core_clk),
         .rst_ni(rst_ni),
         .cmd_valid_i(ras_valid[j]),
         .cmd_ready_o(ras_ready[j]),

@@ -7,7 +7,8 @@
 //! - `g_sort[i]`: sequencer `u_seq` (`neo_sort_seq`), Sorting Core `u_core` and its AXI4 bridge
 //!   `u_bridge`; memory client `1 + i`;
 //! - `g_raster[j]`: Rasterization Core `u_core` and its AXI4 bridge `u_bridge`; memory client
-//!   `1 + N + j`;
+//!   `1 + N + j`; the core's clock is gated by `u_gate` (`neo_clock_gate`) while it is idle (no
+//!   command offered or running, its done given), so an idle core holds every register;
 //! - `u_pre` (`neo_pre_engine`): the Preprocessing Engine, run before the frame controller when
 //!   `PRE_CTRL.enable` is set (its `done_o` starts `u_ctrl`), on a clock gated by `u_pre_gate`
 //!   (`neo_clock_gate`) from its start to its done; its managers `q` are memory clients
@@ -464,7 +465,9 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.gen_for("i", n, "g_sort", items);
 }
 
-/// `g_raster[j]`: Rasterization Core and bridge.
+/// `g_raster[j]`: Rasterization Core and bridge. The core's clock is gated (`u_gate`) while it
+/// is idle with no command offered and its done pulse given: it runs from the cycle a command is
+/// offered to the cycle after its done.
 fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     let (n, mm) = (cl.sort, cl.raster as u32);
     let (k, p) = (cl.ports, cl.slots());
@@ -478,7 +481,18 @@ fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         .iter()
         .map(|(p, _, width)| Item::Wire { name: wire_of(p).into(), width: *width })
         .collect();
-    let mut core = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    items.push(Item::Wire { name: "core_clk".into(), width: 1 });
+    items.push(inst(
+        clock_gate::NAME,
+        "u_gate",
+        vec![
+            pair("clk_i", "clk_i"),
+            pair("rst_ni", "rst_ni"),
+            pair("en_i", "ras_valid[j] | ~ras_ready[j] | ras_done[j]"),
+            pair("clk_o", "core_clk"),
+        ],
+    ));
+    let mut core = vec![pair("clk_i", "core_clk"), pair("rst_ni", "rst_ni")];
     core.push(pair("cmd_valid_i", "ras_valid[j]"));
     core.push(pair("cmd_ready_o", "ras_ready[j]"));
     for s in ["tile_x", "tile_y", "width", "height", "table", "len", "feat", "pix"] {
