@@ -114,6 +114,31 @@ pub fn excluded_from_coverage(test: &str) -> bool {
     excluded
 }
 
+/// The body of the benches' `*_in_other_configurations` tests: for each of `variants`, builds a
+/// bench with `build` (a failure panics naming the variant), traces its model (`dut`) when
+/// `WAVES` asks for waves, and runs `run` on it behind every seed of `test`
+/// ([`crate::rng::for_each_seed`]), printing the variant and why it is awkward. Nothing runs in
+/// a coverage run ([`excluded_from_coverage`]).
+pub fn run_in_other_configurations<B>(
+    test: &str,
+    variants: Vec<UnitConfig>,
+    build: impl Fn(&EngineConfig) -> Result<B, String>,
+    dut: impl Fn(&mut B) -> &mut DynModel,
+    mut run: impl FnMut(&mut B, &EngineConfig, u64),
+) {
+    if excluded_from_coverage(test) {
+        return;
+    }
+    for u in variants {
+        let mut bench = build(&u.cfg).unwrap_or_else(|e| panic!("{test}: {}: {e}", u.name));
+        crate::waves::maybe_trace(dut(&mut bench), &format!("{test}_{}", u.name));
+        crate::rng::for_each_seed(&format!("{test} {}", u.name), |seed| {
+            println!("{test}: {} ({})", u.name, u.why);
+            run(&mut bench, &u.cfg, seed);
+        });
+    }
+}
+
 /// Builds (or loads from the cache) top `top` of `cfg`, traced in the format `WAVES` asks for
 /// (untraced without it: about half the C++), its per-cycle code compiled for build time
 /// ([`DynModel::build_for_short_runs`]: these benches run seconds).

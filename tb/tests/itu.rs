@@ -132,21 +132,17 @@ mod cosim {
     /// `neo_itu` generated for each of [`neo_tb::configs::itu`].
     #[test]
     fn itu_in_other_configurations() {
-        let name = "itu_in_other_configurations";
-        if neo_tb::configs::excluded_from_coverage(name) {
-            return;
-        }
-        for u in neo_tb::configs::itu() {
-            let mut dut =
-                neo_tb::configs::build(&u.cfg, "neo_itu").unwrap_or_else(|e| panic!("{}: {e}", u.name));
-            maybe_trace(&mut dut, &format!("{name}_{}", u.name));
-            for_each_seed(&format!("{name} {}", u.name), |seed| {
-                println!("{name}: {} ({})", u.name, u.why);
-                random_gaussians(&mut dut, &u.cfg, seed, 10_000);
-                directed(&mut dut, &u.cfg, seed);
-                latency_and_ii(&mut dut, &u.cfg, seed);
-            });
-        }
+        neo_tb::configs::run_in_other_configurations(
+            "itu_in_other_configurations",
+            neo_tb::configs::itu(),
+            |cfg| neo_tb::configs::build(cfg, "neo_itu"),
+            |dut| dut,
+            |dut, cfg, seed| {
+                random_gaussians(dut, cfg, seed, 10_000);
+                directed(dut, cfg, seed);
+                latency_and_ii(dut, cfg, seed);
+            },
+        );
     }
 
     #[test]

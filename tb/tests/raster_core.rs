@@ -213,22 +213,18 @@ mod cosim {
     /// generated for each of [`neo_tb::configs::raster_core`].
     #[test]
     fn raster_core_in_other_configurations() {
-        let name = "raster_core_in_other_configurations";
-        if neo_tb::configs::excluded_from_coverage(name) {
-            return;
-        }
-        for u in neo_tb::configs::raster_core() {
-            let mut core =
-                RasterCore::build(&u.cfg, 0, MemTiming::IDEAL).unwrap_or_else(|e| panic!("{}: {e}", u.name));
-            maybe_trace(&mut core.dut, &format!("{name}_{}", u.name));
-            for_each_seed(&format!("{name} {}", u.name), |seed| {
-                println!("{name}: {} ({})", u.name, u.why);
+        neo_tb::configs::run_in_other_configurations(
+            "raster_core_in_other_configurations",
+            neo_tb::configs::raster_core(),
+            |cfg| RasterCore::build(cfg, 0, MemTiming::IDEAL),
+            |core| &mut core.dut,
+            |core, cfg, seed| {
                 core.reseed(seed);
-                random_tiles(&mut core, &u.cfg, seed, 300, 48);
-                directed(&mut core, &u.cfg, 1);
-                longer_tables(&mut core, &u.cfg, seed);
-            });
-        }
+                random_tiles(core, cfg, seed, 300, 48);
+                directed(core, cfg, 1);
+                longer_tables(core, cfg, seed);
+            },
+        );
     }
 
     #[test]

@@ -264,22 +264,18 @@ mod cosim {
     /// of [`neo_tb::configs::scu`].
     #[test]
     fn scu_in_other_configurations() {
-        let name = "scu_in_other_configurations";
-        if neo_tb::configs::excluded_from_coverage(name) {
-            return;
-        }
-        for u in neo_tb::configs::scu() {
-            let mut dut =
-                neo_tb::configs::build(&u.cfg, "neo_scu").unwrap_or_else(|e| panic!("{}: {e}", u.name));
-            maybe_trace(&mut dut, &format!("{name}_{}", u.name));
-            for_each_seed(&format!("{name} {}", u.name), |seed| {
-                println!("{name}: {} ({})", u.name, u.why);
-                random_lists(&mut dut, &u.cfg, seed, 2000);
-                resumes(&mut dut, &u.cfg, seed, 1000);
-                directed(&mut dut, &u.cfg, seed);
-                terminates(&mut dut, &u.cfg, seed);
-                reproduces_raster_tile(&mut dut, &u.cfg, seed, 150);
-            });
-        }
+        neo_tb::configs::run_in_other_configurations(
+            "scu_in_other_configurations",
+            neo_tb::configs::scu(),
+            |cfg| neo_tb::configs::build(cfg, "neo_scu"),
+            |dut| dut,
+            |dut, cfg, seed| {
+                random_lists(dut, cfg, seed, 2000);
+                resumes(dut, cfg, seed, 1000);
+                directed(dut, cfg, seed);
+                terminates(dut, cfg, seed);
+                reproduces_raster_tile(dut, cfg, seed, 150);
+            },
+        );
     }
 }
