@@ -2,7 +2,9 @@
 //! the safe Rust wrapper that calls it.
 //!
 //! C side, for a top `T` (every symbol prefixed `neo_T_`):
-//! `void* neo_T_new(void)` (one `VerilatedContext` per model, owned by it), `neo_T_free`,
+//! `void* neo_T_new(uint32_t rand_reset, uint32_t seed)` (one `VerilatedContext` per model, owned
+//! by it; its `randReset` and `randSeed` set before the model is constructed, which draws the
+//! initial values of every variable from them: `crate::xinit`; inputs start at zero), `neo_T_free`,
 //! `neo_T_eval`, `neo_T_set_P(void*, uint64_t)` / `uint64_t neo_T_get_P(void*)` for ports of
 //! at most 64 bits, `neo_T_set_P_words(void*, const uint32_t*, size_t)` /
 //! `neo_T_get_P_words(void*, uint32_t*, size_t)` for wider ones (little-endian 32-bit words),
@@ -23,7 +25,7 @@ use std::fmt::Write;
 
 /// Bump whenever the generated C++ changes: it is part of the cache key (the Rust wrapper is
 /// regenerated on every build).
-pub const SHIM_VERSION: u32 = 4;
+pub const SHIM_VERSION: u32 = 5;
 
 /// The Verilog a generated top's static model is built from: the file names (the top's and
 /// every module it instantiates) and their hash (`build/hdl_hash.rs`). Its wrapper compares
@@ -144,9 +146,26 @@ pub fn cpp_traced(iface: &ModuleInterface, trace: ShimTrace) -> String {
     );
     s.push_str("extern \"C\" {\n\n");
     let trace_on = if writer.is_some() { "  mm->ctx.traceEverOn(true);\n" } else { "" };
+    // The initial values (`--x-initial unique`) are drawn by `VL_RAND_RESET` in the model's
+    // constructor, from the thread's context (the context just constructed sets itself as that),
+    // as its randReset says (0 zeros, 1 ones, 2 random from randSeed). The inputs are the
+    // bench's: they start at zero whatever the mode.
+    let mut zero_inputs = String::new();
+    for p in iface.ports.iter().filter(|p| p.dir == Dir::In) {
+        if p.width <= 64 {
+            let _ = writeln!(zero_inputs, "  mm->top->{} = 0;", p.name);
+        } else {
+            let _ = writeln!(
+                zero_inputs,
+                "  for (size_t i = 0; i < {}; ++i) mm->top->{}[i] = 0u;",
+                words(p.width),
+                p.name
+            );
+        }
+    }
     let _ = writeln!(
         s,
-        "void* neo_{t}_new(void) {{\n  Model_{t}* mm = new Model_{t};\n{trace_on}  mm->top = new {v}(&mm->ctx, \"TOP\");\n  return mm;\n}}\n"
+        "void* neo_{t}_new(uint32_t rand_reset, uint32_t seed) {{\n  Model_{t}* mm = new Model_{t};\n  Verilated::threadContextp(&mm->ctx);\n  mm->ctx.randReset((int)rand_reset);\n  mm->ctx.randSeed((int)seed);\n{trace_on}  mm->top = new {v}(&mm->ctx, \"TOP\");\n{zero_inputs}  return mm;\n}}\n"
     );
     let close = if writer.is_some() { "  if (mm->vcd) { mm->vcd->close(); delete mm->vcd; }\n" } else { "" };
     let _ = writeln!(
@@ -283,7 +302,7 @@ pub fn rust(iface: &ModuleInterface, coverage: bool, hdl: Option<&HdlFiles>) -> 
 
     // FFI declarations.
     let _ = writeln!(s, "mod ffi_{t} {{\n    use std::ffi::{{c_char, c_int, c_void}};\n    extern \"C\" {{");
-    let _ = writeln!(s, "        pub fn neo_{t}_new() -> *mut c_void;");
+    let _ = writeln!(s, "        pub fn neo_{t}_new(rand_reset: u32, seed: u32) -> *mut c_void;");
     let _ = writeln!(s, "        pub fn neo_{t}_free(p: *mut c_void);");
     let _ = writeln!(s, "        pub fn neo_{t}_eval(p: *mut c_void);");
     for p in &iface.ports {
@@ -348,7 +367,7 @@ pub fn rust(iface: &ModuleInterface, coverage: bool, hdl: Option<&HdlFiles>) -> 
     };
     let _ = writeln!(
         s,
-        "    /// A new model, clock low, reset released, all other inputs zero (call [`Self::reset`]).\n    /// With `$NEO_HDL_DIR` set, a model of its Verilog when that differs from this build's\n    /// (`crate::hdl_dir::substitute`).\n    ///\n    /// # Panics\n    /// When `$NEO_HDL_DIR` lacks one of the files or its model does not build.\n    #[allow(clippy::new_without_default)]\n    pub fn new() -> Self {{\n        // SAFETY: plain constructor; a null return is checked.\n        let raw = unsafe {{ ffi_{t}::neo_{t}_new() }};\n        let raw = std::ptr::NonNull::new(raw).expect(\"Verilated model allocation failed\");\n        let alt = {alt};\n        let mut m = {sn} {{ raw, alt, cycle: 0, time: 0, tracing: false }};"
+        "    /// A new model, clock low, reset released, all other inputs zero, every variable of the\n    /// design at its initial value (random by default, from the bench seed: `crate::xinit`;\n    /// call [`Self::reset`]).\n    /// With `$NEO_HDL_DIR` set, a model of its Verilog when that differs from this build's\n    /// (`crate::hdl_dir::substitute`).\n    ///\n    /// # Panics\n    /// When `$NEO_HDL_DIR` lacks one of the files or its model does not build.\n    #[allow(clippy::new_without_default)]\n    pub fn new() -> Self {{\n        // SAFETY: plain constructor; a null return is checked.\n        let raw = crate::xinit::construct(Self::NAME, |mode, seed| unsafe {{ ffi_{t}::neo_{t}_new(mode, seed) }});\n        let raw = std::ptr::NonNull::new(raw).expect(\"Verilated model allocation failed\");\n        let alt = {alt};\n        let mut m = {sn} {{ raw, alt, cycle: 0, time: 0, tracing: false }};"
     );
     if has_clk {
         s.push_str("        m.set_clk_i(false);\n");

@@ -7,7 +7,16 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Verilator flags used for every top (part of the cache key). Lint warnings stay fatal.
-pub const VERILATOR_FLAGS: &[&str] = &["--cc", "--trace", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+/// `--x-initial unique`: every variable's initial value is drawn when the model is constructed,
+/// as the context's `randReset`/`randSeed` say (random by default: `neo_tb::xinit`), so an
+/// output that depends on an unreset register or an unwritten memory word differs from the
+/// golden model. `--x-assign unique`: an X Verilator itself inserts (a variable part-select
+/// whose index can run past the vector) reads a value drawn the same way, not 0. The generator
+/// writes no X; for every unit top and the CI engine the C++ is the same as with
+/// `--x-assign fast`; the default engine's differs in three such selects (`docs/rtl.md`,
+/// "Initial values").
+pub const VERILATOR_FLAGS: &[&str] =
+    &["--cc", "--trace", "-O3", "--x-assign", "unique", "--x-initial", "unique"];
 
 /// Preprocessor definitions of every C++ file of a model and of the runtime (VCD tracing on).
 pub const CPP_DEFINES: &[(&str, &str)] =
@@ -19,7 +28,8 @@ pub const RUNTIME_SOURCES: &[&str] = &["verilated.cpp", "verilated_vcd_c.cpp", "
 /// [`VERILATOR_FLAGS`] for a model without tracing (`--trace` left out: a run-time model that
 /// writes no waves; its C++ is about half as large).
 #[allow(dead_code)] // build.rs builds traced models only
-pub const VERILATOR_FLAGS_UNTRACED: &[&str] = &["--cc", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+pub const VERILATOR_FLAGS_UNTRACED: &[&str] =
+    &["--cc", "-O3", "--x-assign", "unique", "--x-initial", "unique"];
 
 /// [`CPP_DEFINES`] for a model without tracing.
 #[allow(dead_code)] // build.rs builds traced models only
@@ -32,7 +42,7 @@ pub const RUNTIME_SOURCES_UNTRACED: &[&str] = &["verilated.cpp", "verilated_thre
 
 /// [`VERILATOR_FLAGS`] for a model traced as FST (`--trace-fst`; `WAVES=fst` builds).
 pub const VERILATOR_FLAGS_FST: &[&str] =
-    &["--cc", "--trace-fst", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+    &["--cc", "--trace-fst", "-O3", "--x-assign", "unique", "--x-initial", "unique"];
 
 /// [`CPP_DEFINES`] for a model traced as FST.
 pub const CPP_DEFINES_FST: &[(&str, &str)] =
@@ -46,13 +56,13 @@ pub const RUNTIME_SOURCES_FST: &[&str] = &["verilated.cpp", "verilated_fst_c.cpp
 /// the generator's named cover points) instead of `--trace` (coverage models write no waves: the
 /// C++ stays smaller).
 pub const VERILATOR_FLAGS_COVERAGE: &[&str] =
-    &["--cc", "--coverage", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+    &["--cc", "--coverage", "-O3", "--x-assign", "unique", "--x-initial", "unique"];
 
 /// [`VERILATOR_FLAGS_COVERAGE`] without toggle coverage (`--coverage-line --coverage-user`):
 /// for tops whose toggle instrumentation is too large to build routinely (the raster core's
 /// C++ grows from 28 to over 300 files).
 pub const VERILATOR_FLAGS_COVERAGE_NO_TOGGLE: &[&str] =
-    &["--cc", "--coverage-line", "--coverage-user", "-O3", "--x-assign", "fast", "--x-initial", "fast"];
+    &["--cc", "--coverage-line", "--coverage-user", "-O3", "--x-assign", "unique", "--x-initial", "unique"];
 
 /// [`CPP_DEFINES`] for a coverage model.
 pub const CPP_DEFINES_COVERAGE: &[(&str, &str)] =

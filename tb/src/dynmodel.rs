@@ -61,7 +61,7 @@ pub struct BuildInfo {
     pub log: String,
 }
 
-type NewFn = unsafe extern "C" fn() -> *mut c_void;
+type NewFn = unsafe extern "C" fn(u32, u32) -> *mut c_void;
 type PtrFn = unsafe extern "C" fn(*mut c_void);
 type SetFn = unsafe extern "C" fn(*mut c_void, usize, *const u32, usize);
 type GetFn = unsafe extern "C" fn(*mut c_void, usize, *mut u32, usize);
@@ -248,8 +248,9 @@ impl DynModel {
                 unsafe { lib.get::<CoverageFn>(name.as_bytes()) }.ok().map(|s| *s)
             },
         };
-        // SAFETY: plain constructor; a null return is checked.
-        let raw = unsafe { (api.new)() };
+        // SAFETY: plain constructor; a null return is checked. The initial values come from the
+        // bench seed (`crate::xinit`).
+        let raw = crate::xinit::construct(t, |mode, seed| unsafe { (api.new)(mode, seed) });
         if raw.is_null() {
             return Err(format!("{t}: model allocation failed"));
         }

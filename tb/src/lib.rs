@@ -49,6 +49,7 @@ pub mod seq;
 pub mod stimulus;
 pub mod stream;
 pub mod waves;
+pub mod xinit;
 
 /// The Verilated models, one struct per top (generated; absent without Verilator).
 #[cfg(neo_has_verilator)]

@@ -4,8 +4,9 @@
 //! a result is reproducible) and then one fresh seed drawn from the clock ([`test_seeds`],
 //! [`for_each_seed`]). Each seed is printed as `seed = 0x...`; running the test again with
 //! `NEO_SEED=0x...` replays exactly that seed's stimulus, stalls and backpressure (and only that
-//! seed). `NEO_FIXED_SEEDS=1` drops the fresh seed (`scripts/mutate-check`: a mutant counts as
-//! caught only when the fixed seeds catch it).
+//! seed), and with it the models' random initial values ([`crate::xinit`]). `NEO_FIXED_SEEDS=1`
+//! drops the fresh seed (`scripts/mutate-check`: a mutant counts as caught only when the fixed
+//! seeds catch it).
 
 /// xoshiro256** (Blackman and Vigna): good statistical quality, a few ns per draw.
 #[derive(Clone, Debug)]
@@ -139,6 +140,7 @@ pub fn test_seeds(test: &str) -> Vec<u64> {
 pub fn for_each_seed(test: &str, mut body: impl FnMut(u64)) {
     for seed in test_seeds(test) {
         println!("{test}: seed = 0x{seed:016x}");
+        crate::xinit::enter(test, seed);
         let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| body(seed)));
         if let Err(e) = run {
             let msg = e
@@ -158,17 +160,22 @@ pub fn for_each_seed(test: &str, mut body: impl FnMut(u64)) {
 pub struct SeedSplit {
     /// The test's seeds.
     pub seeds: Vec<u64>,
+    /// The test's name (with the seed, it chooses the models' initial values).
+    test: String,
 }
 
 impl SeedSplit {
     /// The seeds of `test` ([`test_seeds`]).
     pub fn new(test: &str) -> Self {
-        SeedSplit { seeds: test_seeds(test) }
+        SeedSplit { seeds: test_seeds(test), test: test.to_string() }
     }
 
-    /// The seed of item `k`.
+    /// The seed of item `k`; it also becomes the thread's bench seed, from which the models
+    /// constructed next draw their initial values ([`crate::xinit::enter`]).
     pub fn seed(&self, k: usize) -> u64 {
-        self.seeds[k % self.seeds.len()]
+        let seed = self.seeds[k % self.seeds.len()];
+        crate::xinit::enter(&self.test, seed);
+        seed
     }
 }
 
@@ -198,11 +205,12 @@ fn fresh_seed(test: &str) -> u64 {
 pub fn test_seed(test: &str) -> u64 {
     let seed = replay_seed().unwrap_or_else(|| fresh_seed(test));
     println!("{test}: seed = 0x{seed:016x} (reproduce with NEO_SEED=0x{seed:016x})");
+    crate::xinit::enter(test, seed);
     seed
 }
 
 /// FNV-1a of a string (mixes the test name into fresh seeds).
-fn fnv(s: &str) -> u64 {
+pub(crate) fn fnv(s: &str) -> u64 {
     s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
 }
 

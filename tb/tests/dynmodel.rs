@@ -4,7 +4,9 @@
 //! bench does under `WAVES=fst` (`neo_tb::waves::trace_to`: `<test>.fst` and a `.gtkw` naming
 //! it; the same cached model, so no extra build). Its
 //! two-thread build (Verilator `--threads 2`, `neo bench engine --threads 2`) is a cache entry
-//! of its own and gives the same outputs.
+//! of its own and gives the same outputs. A variant whose counter lacks its reset shows the X
+//! check (`neo_tb::xinit`): the counter starts from a random value, the same for the same bench
+//! seed and another for another seed, while the inputs start at zero.
 
 use neo_gen::interface::ModuleInterface;
 use neo_tb::dynmodel::DynModel;
@@ -93,6 +95,39 @@ neo_tb::with_models! {
         }
         assert_eq!(dynm.cycle(), 500);
         assert!(dynm.port("no_such_port").unwrap_err().contains("neo_tb_adder has no port no_such_port"));
+    }
+
+    /// The X check (`neo_tb::xinit`, `--x-initial unique`): the fixture with `count_q`'s reset
+    /// removed counts from the value the model was constructed with, drawn from the bench seed
+    /// (the same seed, the same value; another seed, another value), not from zero.
+    #[test]
+    fn an_unreset_register_starts_from_the_bench_seeds_random_value() {
+        let (iface, mut files) = fixture();
+        let reset = "      count_q    <= 64'd0;\n    end else begin";
+        assert!(files[0].1.contains(reset), "the fixture's count_q reset moved");
+        files[0].1 = files[0].1.replace(reset, "    end else begin");
+        let (_, info) = DynModel::build_traced(&iface, &files, None, None).expect("build");
+        println!("library {} (cached {}, {:.1} s)", info.library.display(), info.cached, info.seconds);
+        let count = iface.ports.iter().position(|p| p.name == "out_count_o").expect("out_count_o");
+        let tag = iface.ports.iter().position(|p| p.name == "in_tag_i").expect("in_tag_i");
+        let start = |seed: u64| {
+            neo_tb::xinit::enter("xinit", seed);
+            let mut m = DynModel::load(&iface, &info.library, None).expect("load");
+            assert_eq!(m.get_u64(tag), 0, "an input starts at zero");
+            m.reset();
+            m.get_u64(count)
+        };
+        let (a, b, c) = (start(1), start(1), start(2));
+        println!("count_q after reset: 0x{a:016x} (seed 1, twice), 0x{c:016x} (seed 2)");
+        match neo_tb::xinit::XInit::from_env() {
+            neo_tb::xinit::XInit::Random => {
+                assert_eq!(a, b, "the same bench seed gives the same initial value");
+                assert_ne!(a, c, "another bench seed gives another initial value");
+                assert_ne!(a, 0, "a random 64-bit initial value");
+            }
+            neo_tb::xinit::XInit::Zero => assert_eq!((a, c), (0, 0)),
+            neo_tb::xinit::XInit::Ones => assert_eq!((a, c), (u64::MAX, u64::MAX)),
+        }
     }
 
     /// Random words for every input port but the clock and reset: `(port index, words)`.
