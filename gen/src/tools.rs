@@ -177,26 +177,30 @@ pub fn coarse_synth_stats(files: &[VerilogFile], top: &str) -> Result<SynthStats
 }
 
 /// Synthesis of `top`'s own logic: the modules in `blackboxes` become black boxes and the design
-/// is not flattened (`hierarchy -top TOP; blackbox ...; synth -top TOP`), so the statistics are
+/// is not flattened (`blackbox ...; hierarchy -top TOP; synth -top TOP`), so the statistics are
 /// the top's glue cells plus one cell per black-box instance (counted by type in
-/// `cells_by_type`). For cores too large to synthesize flat.
+/// `cells_by_type`). For cores too large to synthesize flat. The boxes are made before
+/// `hierarchy`: an instance of a parametric box with parameters (`neo_axi_mux #(.PORTS(8))`)
+/// then stays a cell of the box's name, where `hierarchy` first would derive and keep a
+/// `$paramod` copy of the module (synthesized into the glue, not counted as the box).
 pub fn glue_synth_stats(
     files: &[VerilogFile],
     top: &str,
     blackboxes: &[&str],
 ) -> Result<SynthStats, ToolError> {
-    let script = format!("hierarchy -top {top}; blackbox {}; synth -top {top};", blackboxes.join(" "));
+    let script = format!("blackbox {}; hierarchy -top {top}; synth -top {top};", blackboxes.join(" "));
     yosys_script_stat(&boxed_files("yosys", files, top, &owned(blackboxes))?, top, &script)
 }
 
 /// The latch check of [`coarse_synth_stats`] on `top`'s own logic, `blackboxes` as black boxes
-/// (one cell per instance, by type), not flattened.
+/// (one cell per instance, by type, made before `hierarchy` as in [`glue_synth_stats`]), not
+/// flattened.
 pub fn coarse_glue_synth_stats(
     files: &[VerilogFile],
     top: &str,
     blackboxes: &[&str],
 ) -> Result<SynthStats, ToolError> {
-    let script = format!("hierarchy -top {top}; blackbox {}; proc; opt_clean;", blackboxes.join(" "));
+    let script = format!("blackbox {}; hierarchy -top {top}; proc; opt_clean;", blackboxes.join(" "));
     yosys_script_stat(&boxed_files("yosys", files, top, &owned(blackboxes))?, top, &script)
 }
 

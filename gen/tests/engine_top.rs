@@ -65,9 +65,9 @@ fn the_engine_glue_is_latch_free() {
         return;
     }
     for (what, cfg) in configs() {
-        let mux = neo_gen::report::engine_mux(&cfg);
+        let mux = neo_gen::units::axi::mux::NAME;
         let mut boxes: Vec<&str> = neo_gen::units::engine::SUBMODULES.to_vec();
-        boxes.push(&mux);
+        boxes.push(mux);
         let s = coarse_glue_synth_stats(&files_for(&cfg, NAME), NAME, &boxes)
             .unwrap_or_else(|e| panic!("{what}: {e}"));
         assert_eq!(s.latches, 0, "{what}: {:?}", s.cells_by_type);
@@ -75,12 +75,12 @@ fn the_engine_glue_is_latch_free() {
         let n = |m: &str| s.cells_by_type.get(m).copied().unwrap_or(0);
         assert_eq!(n(neo_gen::units::sort_core::NAME), cfg.sort_cores as u64, "{what}");
         assert_eq!(n(neo_gen::units::raster_core::NAME), cfg.raster_cores as u64, "{what}");
-        assert_eq!(n(&mux), cfg.mem_channels as u64, "{what}");
+        assert_eq!(n(mux), cfg.mem_channels as u64, "{what}");
         let has_pre = u64::from(cfg.has_preprocessing());
         assert_eq!(n(neo_gen::units::pre::engine::NAME), has_pre, "{what}");
         // One gate per raster core, and the Preprocessing Engine's.
         assert_eq!(n(neo_gen::units::clock_gate::NAME), cfg.raster_cores as u64 + has_pre, "{what}");
-        let m = coarse_synth_stats(&files_for(&cfg, &mux), &mux).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let m = coarse_synth_stats(&files_for(&cfg, mux), mux).unwrap_or_else(|e| panic!("{what}: {e}"));
         assert_eq!(m.latches, 0, "{what}: {mux}: {:?}", m.cells_by_type);
         if !cfg.has_preprocessing() {
             continue;

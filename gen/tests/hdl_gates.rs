@@ -175,7 +175,7 @@ fn latch_free(cfg: &EngineConfig, files: &[VerilogFile], top: &str) -> Result<()
     }
     // Cores too large to flatten: their own logic, the units as black boxes (each unit is
     // checked as its own top).
-    let boxes = neo_gen::report::hierarchical_boxes(cfg, top);
+    let boxes = neo_gen::report::hierarchical_boxes(top);
     let s = match &boxes {
         Some(boxes) => {
             coarse_glue_synth_stats(files, top, &boxes.iter().map(String::as_str).collect::<Vec<_>>())
@@ -361,6 +361,38 @@ fn fp_primitives_are_lint_clean_and_latch_free() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The port mux at the client counts the benches and engines use and at the bounds (1 client, and
+/// `2^axi_id_bits`): lint-clean (Verilator `-GPORTS=P`) and latch-free (Yosys `chparam`), with
+/// flip-flops; fewer clients than the engine's default `PORTS` make fewer cells.
+#[test]
+fn the_port_mux_is_lint_clean_and_latch_free_at_every_size() {
+    use neo_gen::units::axi::mux;
+    if !require_for_test("verilator", "the_port_mux_is_lint_clean_and_latch_free_at_every_size")
+        || !require_for_test("yosys", "the_port_mux_is_lint_clean_and_latch_free_at_every_size")
+    {
+        return;
+    }
+    let cfg = EngineConfig::default();
+    let (files, vlt) = (files_for(&cfg, mux::NAME), hdl_dir().join("lint.vlt"));
+    let mut failures = Vec::new();
+    let mut cells = Vec::new();
+    for p in [1usize, 2, 3, 8, 1 << cfg.axi_id_bits] {
+        let params = vec![("PORTS".to_string(), p.to_string())];
+        if let Err(e) = verilator_lint_with(&files, mux::NAME, Some(&vlt), &params) {
+            failures.push(format!("lint: PORTS={p}: {e}"));
+        }
+        match coarse_synth_stats_with(&files, mux::NAME, &params) {
+            Ok(s) if s.latches != 0 || s.flip_flops == 0 => {
+                failures.push(format!("PORTS={p}: {} latches, {} flip-flops", s.latches, s.flip_flops))
+            }
+            Ok(s) => cells.push(s.cells),
+            Err(e) => failures.push(format!("yosys: PORTS={p}: {e}")),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(cells.windows(2).all(|w| w[0] < w[1]), "cells grow with the clients: {cells:?}");
 }
 
 /// Yosys cells (generic gates, `synth -flatten`) and latency of each binary32 primitive, the

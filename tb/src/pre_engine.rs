@@ -1,13 +1,14 @@
-//! The Preprocessing Engine's bench (`neo_pre_engine` against golden `hwpre`): the baked scene
-//! in an [`AxiMemory`] with one port per AXI4 manager of the engine (two per lane, the list
-//! writer), the driver programs a camera and starts it, [`AxiChecker`]s watch every port, and the
-//! checker compares what the engine leaves in memory with golden:
+//! The Preprocessing Engine's bench (`neo_pre_engine` against golden
+//! `engine::preprocess_frame`): the baked scene in an [`AxiMemory`] with one port per AXI4
+//! manager of the engine (two per lane, the list writer), the driver programs a camera and starts
+//! it, [`AxiChecker`]s watch every port, and the checker compares what the engine leaves in memory
+//! with what golden's memory-level reference leaves in a copy of the same memory, programmed with
+//! the same registers ([`FrameRegs`], from which the bench also drives the ports):
 //!
-//! - every Gaussian's feature word (as the lane bench checks it, [`crate::lane`]);
-//! - every tile's list length in its descriptor (bytes 20..24; the rest of the descriptor keeps
-//!   its canary);
-//! - every tile's incoming list as a multiset (the lanes interleave their hits), the rest of its
-//!   last line zero.
+//! - every Gaussian's feature word (and the canary word after the last);
+//! - every tile's descriptor (the list length in bytes 20..24; the rest keeps its canary);
+//! - every tile's incoming list as a multiset (the lanes interleave their hits; golden appends in
+//!   Gaussian order), the rest of its last line zero.
 //!
 //! The engine's managers are packed buses; the bench verilates it inside a wrapper
 //! (`neo_pre_engine_tb`, built here, not in `hdl/`) that names manager `q`'s signals
@@ -16,19 +17,21 @@
 use crate::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, SubordinateSignals};
 use crate::check::Checker;
 use crate::dynmodel::DynModel;
-use crate::lane::{check_feature_words, expected_hits, scene_memory, LaneFrame, LaneHit, LaneRange};
+use crate::lane::{scene_memory, LaneFrame, LaneRange};
 use crate::lane::{FEAT_BASE, GEO_BASE, PREV_BASE, SH_BASE};
 use crate::rng::Rng;
 use neo_gen::emit::Module;
 use neo_gen::units::axi;
 use neo_gen::units::pre::engine::{managers, NAME};
 use neo_gen::EngineConfig;
-use neo_golden::engine::memory::{entry_from_u64, entry_to_u64, Memory, DESCRIPTOR_BYTES, ENTRY_BYTES};
-use neo_golden::engine::CameraWord;
+use neo_golden::engine::memory::{
+    entry_from_u64, entry_to_u64, feature_from_bytes, Memory, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
+};
+use neo_golden::engine::{
+    preprocess_frame, CameraWord, Counters, FrameRegs, PreRegs, PreWork, PRE_ENABLE, PRE_FRESH,
+};
 use neo_golden::hwpre::bake::Baked;
 use neo_golden::hwpre::camera_registers;
-use neo_golden::sort::SortEntry;
-use std::collections::BTreeMap;
 
 /// The configuration the bench runs (`tb/pre_engine.json`: two lanes).
 pub fn bench_config() -> EngineConfig {
@@ -130,29 +133,50 @@ impl PreEngineBench {
         &mut self.model
     }
 
-    /// Programs the per-frame inputs of `frame` for `baked`; returns the tiles.
-    fn program(&mut self, baked: &Baked, frame: &LaneFrame) -> Result<u64, String> {
-        let cam = frame.cam;
-        let words = CameraWord::values(cam, self.cfg.tile);
-        let mut all: Vec<(String, u64)> =
-            CameraWord::all().map(|c| (c.port(), u64::from(words[c.0 as usize]))).collect();
-        let (regs, _) = camera_registers(cam, self.cfg.tile);
-        let tiles = regs.grid[0] as u64 * regs.grid[1] as u64;
-        all.push(("degree_i".into(), u64::from(baked.sh_degree)));
-        all.push(("fresh_i".into(), u64::from(frame.all_fresh)));
-        all.push(("gaussians_i".into(), baked.len() as u64));
-        all.push(("geo_base_i".into(), GEO_BASE));
-        all.push(("sh_base_i".into(), SH_BASE));
-        all.push(("feat_base_i".into(), FEAT_BASE));
-        all.push(("prev_base_i".into(), PREV_BASE));
-        all.push(("list_base_i".into(), LIST_BASE));
-        all.push(("desc_base_i".into(), DESC_BASE));
-        all.push(("tiles_i".into(), tiles));
-        for (name, v) in all {
-            let p = self.model.port(&name)?;
-            self.model.set_u64(p, v);
+    /// The registers of a frame of `baked` for `frame` (the engine's memory map of the bench):
+    /// what golden's reference reads, and what [`PreEngineBench::program`] drives.
+    fn regs(&self, baked: &Baked, frame: &LaneFrame) -> FrameRegs {
+        let (regs, _) = camera_registers(frame.cam, self.cfg.tile);
+        let tiles = regs.grid[0] as u32 * regs.grid[1] as u32;
+        let fresh = if frame.all_fresh { PRE_FRESH } else { 0 };
+        FrameRegs {
+            tiles,
+            desc_base: DESC_BASE,
+            feat_base: FEAT_BASE,
+            pre: PreRegs {
+                ctrl: PRE_ENABLE | fresh,
+                gaussians: baked.len() as u32,
+                sh_degree: u32::from(baked.sh_degree),
+                geo_base: GEO_BASE,
+                sh_base: SH_BASE,
+                prev_feat_base: PREV_BASE,
+                list_base: LIST_BASE,
+                camera: CameraWord::values(frame.cam, self.cfg.tile),
+            },
+            ..FrameRegs::default()
         }
-        Ok(tiles)
+    }
+
+    /// Drives the engine's per-frame inputs from `regs`.
+    fn program(&mut self, regs: &FrameRegs) -> Result<(), String> {
+        let p = &regs.pre;
+        let mut all: Vec<(String, u64)> =
+            CameraWord::all().map(|c| (c.port(), u64::from(p.camera[c.0 as usize]))).collect();
+        all.push(("degree_i".into(), u64::from(p.sh_degree)));
+        all.push(("fresh_i".into(), u64::from(p.fresh())));
+        all.push(("gaussians_i".into(), u64::from(p.gaussians)));
+        all.push(("geo_base_i".into(), p.geo_base));
+        all.push(("sh_base_i".into(), p.sh_base));
+        all.push(("feat_base_i".into(), regs.feat_base));
+        all.push(("prev_base_i".into(), p.prev_feat_base));
+        all.push(("list_base_i".into(), p.list_base));
+        all.push(("desc_base_i".into(), regs.desc_base));
+        all.push(("tiles_i".into(), u64::from(regs.tiles)));
+        for (name, v) in all {
+            let port = self.model.port(&name)?;
+            self.model.set_u64(port, v);
+        }
+        Ok(())
     }
 
     /// Runs the engine over `baked` for `frame` with memory `timing` and checks what it leaves
@@ -162,8 +186,13 @@ impl PreEngineBench {
         let mut rng = Rng::new(check.seed);
         let all = LaneRange { first: 0, count: baked.len() as u32 };
         let mut mem = scene_memory(baked, all, frame.prev);
-        let tiles = self.program(baked, frame).unwrap_or_else(|e| panic!("{NAME}: {e}"));
+        let regs = self.regs(baked, frame);
+        let tiles = u64::from(regs.tiles);
+        self.program(&regs).unwrap_or_else(|e| panic!("{NAME}: {e}"));
         mem.write(DESC_BASE, &vec![DESC_CANARY; (DESCRIPTOR_BYTES * tiles) as usize]);
+        let mut golden = mem.clone();
+        let work = preprocess_frame(&self.cfg, &regs, &mut golden, &mut Counters::default())
+            .unwrap_or_else(|e| panic!("golden preprocess_frame: {e}"));
         let mut mem = AxiMemory::new(n, mem, timing, rng.next_u64());
         for p in &self.ports {
             p.set_subordinate(&mut self.model, &SubordinateSignals::default());
@@ -173,9 +202,9 @@ impl PreEngineBench {
         let (ro, wo) = (self.cfg.pre_outstanding, self.cfg.pre_outstanding.max(self.cfg.axi_outstanding));
         let mut chk: Vec<AxiChecker> =
             (0..n).map(|q| AxiChecker::new(q, &format!("m{q}_axi"), ro, wo)).collect();
-        let want = expected_hits(&self.cfg, baked, frame, all);
+        let hits: u64 = work.lists.iter().map(|l| l.len() as u64).sum();
         let start = self.model.cycle();
-        let limit = 5_000 + 200 * baked.len() as u64 + 4 * want.len() as u64 + 4 * tiles;
+        let limit = 5_000 + 200 * baked.len() as u64 + 4 * hits + 4 * tiles;
         let mut first = true;
         loop {
             self.model.set_u64(self.start, u64::from(first));
@@ -207,8 +236,8 @@ impl PreEngineBench {
             let (r, w) = c.in_flight();
             check.value(cycles, &format!("manager {q}: AXI transactions open at done_o"), 0, (r + w) as u64);
         }
-        let visible = check_feature_words(&self.cfg, baked, frame.cam, all, mem.memory(), check, cycles);
-        let hits = self.check_lists(mem.memory(), &self.want_by_tile(&want, frame), tiles, check, cycles);
+        self.check_feature_words(mem.memory(), &golden, baked.len() as u64, check, cycles);
+        let hits = self.check_lists(mem.memory(), &golden, &work, check, cycles);
         let beats = (0..n).map(|q| mem.beats(q)).fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         let table = (0..baked.len() as u64)
             .map(|i| {
@@ -217,52 +246,56 @@ impl PreEngineBench {
                 b
             })
             .collect();
-        PreRun { gaussians: baked.len() as u64, visible, hits, tiles, cycles, beats, table }
+        PreRun { gaussians: baked.len() as u64, visible: work.visible, hits, tiles, cycles, beats, table }
     }
 
-    /// Golden's incoming entries, as list words by tile index.
-    fn want_by_tile(&self, hits: &[LaneHit], frame: &LaneFrame) -> BTreeMap<u64, Vec<u64>> {
-        let fmt = self.cfg.format();
-        let (regs, _) = camera_registers(frame.cam, self.cfg.tile);
-        let gx = regs.grid[0] as u64;
-        let mut by: BTreeMap<u64, Vec<u64>> = BTreeMap::new();
-        for h in hits {
-            let e = SortEntry { key: h.key, id: h.id, valid: true };
-            by.entry(h.tile[1] as u64 * gx + h.tile[0] as u64).or_default().push(entry_to_u64(&fmt, &e));
+    /// Checks the feature words of the `n` Gaussians, and the canary word after them, against
+    /// golden's memory.
+    fn check_feature_words(&self, mem: &Memory, golden: &Memory, n: u64, check: &Checker, cycle: u64) {
+        let fmt = self.cfg.feature_format();
+        for i in 0..=n {
+            let (mut want, mut got) = ([0u8; FEATURE_BYTES as usize], [0u8; FEATURE_BYTES as usize]);
+            golden.read(FEAT_BASE + FEATURE_BYTES * i, &mut want);
+            mem.read(FEAT_BASE + FEATURE_BYTES * i, &mut got);
+            if got != want {
+                let show = |b: &[u8; 32]| format!("{:?} (0x{})", feature_from_bytes(&fmt, b), hex(b));
+                let what = if i == n {
+                    "canary word after the last Gaussian".to_string()
+                } else {
+                    format!("feature word of Gaussian {i}")
+                };
+                check.fail(cycle, &what, &show(&want), &show(&got));
+            }
         }
-        by
     }
 
-    /// Checks every tile's list length and entries; returns the entries checked.
-    fn check_lists(
-        &self,
-        mem: &Memory,
-        want: &BTreeMap<u64, Vec<u64>>,
-        tiles: u64,
-        check: &Checker,
-        cycle: u64,
-    ) -> u64 {
+    /// Checks every tile's descriptor and list against golden's memory and lists; returns the
+    /// entries checked.
+    fn check_lists(&self, mem: &Memory, golden: &Memory, work: &PreWork, check: &Checker, cycle: u64) -> u64 {
         let fmt = self.cfg.format();
         let (cap, stride) = (self.cfg.table_capacity as u64, self.cfg.list_stride() as u64);
         let mut checked = 0;
-        for t in 0..tiles {
+        for (t, want_t) in work.lists.iter().enumerate() {
+            let t = t as u64;
             let d = DESC_BASE + DESCRIPTOR_BYTES * t;
-            let mut desc = [0u8; DESCRIPTOR_BYTES as usize];
+            let (mut want_d, mut desc) = ([0u8; DESCRIPTOR_BYTES as usize], [0u8; DESCRIPTOR_BYTES as usize]);
+            golden.read(d, &mut want_d);
             mem.read(d, &mut desc);
-            let none = Vec::new();
-            let want_t = want.get(&t).unwrap_or(&none);
-            let len = u32::from_le_bytes(desc[20..24].try_into().expect("4 bytes")) as u64;
+            let len_at = |b: &[u8; DESCRIPTOR_BYTES as usize]| {
+                u64::from(u32::from_le_bytes(b[20..24].try_into().expect("4 bytes")))
+            };
+            let len = len_at(&desc);
             check.value(
                 cycle,
                 &format!("tile {t}: list_len (descriptor bytes 20..24)"),
-                want_t.len() as u64,
+                len_at(&want_d),
                 len,
             );
-            for (k, b) in desc.iter().enumerate().filter(|(k, _)| !(20..24).contains(k)) {
+            for (k, (w, b)) in want_d.iter().zip(&desc).enumerate().filter(|(k, _)| !(20..24).contains(k)) {
                 check.value(
                     cycle,
                     &format!("tile {t}: descriptor byte {k} (not the engine's)"),
-                    u64::from(DESC_CANARY),
+                    u64::from(*w),
                     u64::from(*b),
                 );
             }
@@ -270,13 +303,13 @@ impl PreEngineBench {
             let base = LIST_BASE + ENTRY_BYTES * t * stride;
             let mut got: Vec<u64> = (0..kept).map(|i| mem.read_u64(base + ENTRY_BYTES * i)).collect();
             got.sort_unstable_by_key(|w| order(&fmt, *w));
-            let mut want_kept: Vec<u64> = want_t.clone();
-            if (want_kept.len() as u64) > cap {
+            if (want_t.len() as u64) > cap {
                 // Which entries a long list keeps depends on the arrival order: only its length
                 // is the contract (the tile overflows).
                 checked += kept;
                 continue;
             }
+            let mut want_kept: Vec<u64> = want_t.iter().map(|e| entry_to_u64(&fmt, e)).collect();
             want_kept.sort_unstable_by_key(|w| order(&fmt, *w));
             for (i, (w, g)) in want_kept.iter().zip(&got).enumerate() {
                 if w != g {
@@ -290,17 +323,22 @@ impl PreEngineBench {
                 }
             }
             for i in kept..kept.next_multiple_of(8) {
+                let at = base + ENTRY_BYTES * i;
                 check.value(
                     cycle,
                     &format!("tile {t}: list slot {i} past the length"),
-                    0,
-                    mem.read_u64(base + ENTRY_BYTES * i),
+                    golden.read_u64(at),
+                    mem.read_u64(at),
                 );
             }
             checked += kept;
         }
         checked
     }
+}
+
+fn hex(b: &[u8; 32]) -> String {
+    b.iter().rev().map(|x| format!("{x:02x}")).collect()
 }
 
 /// A list word's sort order: key, then id.

@@ -1,8 +1,10 @@
-//! `neo_axi_mux_p3` between three Rust-driven random AXI4 managers ([`RandomManager`]) and an
-//! [`AxiMemory`] port: random reads and writes (bursts of 1..16 beats, partial strobes) under
-//! contention, with random request rates, backpressure, latencies and responses reordered across
-//! IDs. Every R beat is checked against the manager's shadow, the memory against the shadows at
-//! the end, and every port (the three client ports and the memory port) by an [`AxiChecker`].
+//! `neo_axi_mux #(.PORTS(P))` at P = 3 and P = 8 (the engine's ports) between P Rust-driven
+//! random AXI4 managers ([`RandomManager`]) and an [`AxiMemory`] port: random reads and writes
+//! (bursts of 1..16 beats, partial strobes) under contention, with random request rates,
+//! backpressure, latencies and responses reordered across IDs. Every R beat is checked against
+//! the manager's shadow, the memory against the shadows at the end, and every port (the P client
+//! ports and the memory port) by an [`AxiChecker`]. The model is built at run time from
+//! `neo_axi_mux.v` and a wrapper naming each client's signals ([`neo_tb::axi::mux`]).
 
 #[cfg(not(neo_has_verilator))]
 #[test]
@@ -17,11 +19,10 @@ mod cosim {
     use neo_tb::axi::manager::{RandomManager, Traffic};
     use neo_tb::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, ManagerSignals, SubordinateSignals};
     use neo_tb::check::Checker;
-    use neo_tb::models::NeoAxiMuxP3;
+    use neo_tb::dynmodel::DynModel;
     use neo_tb::rng::{for_each_seed, Rng};
     use neo_tb::waves::maybe_trace;
 
-    const P: usize = 3;
     /// Bytes of each manager's region (4 pages).
     const REGION: u64 = 16 * 1024;
 
@@ -34,7 +35,7 @@ mod cosim {
     }
 
     struct Bench {
-        dut: NeoAxiMuxP3,
+        dut: DynModel,
         s_ports: Vec<AxiBinding>,
         m_port: AxiBinding,
         mem: AxiMemory,
@@ -46,8 +47,10 @@ mod cosim {
     }
 
     impl Bench {
+        /// A mux of one client per entry of `traffic`.
         fn new(name: &str, seed: u64, timing: AxiTiming, traffic: &[Traffic]) -> Bench {
             let cfg = neo_tb::config();
+            let p = traffic.len();
             let o = cfg.axi_outstanding;
             let mut rng = Rng::new(seed);
             let mut mem = Memory::new();
@@ -70,22 +73,21 @@ mod cosim {
                     init,
                 ));
             }
-            let mut dut = NeoAxiMuxP3::new();
+            let mut dut = neo_tb::axi::mux::build(&cfg, p).unwrap_or_else(|e| panic!("{e}"));
             maybe_trace(&mut dut, name);
+            let bind = |prefix: &str, manager| AxiBinding::bind(&dut, prefix, manager).expect("port");
             let mut b = Bench {
-                s_ports: (0..P)
-                    .map(|i| AxiBinding::new::<NeoAxiMuxP3>(&format!("s{i}_axi_"), false))
-                    .collect(),
-                m_port: AxiBinding::new::<NeoAxiMuxP3>("m_axi_", true),
+                s_ports: (0..p).map(|i| bind(&format!("s{i}_axi_"), false)).collect(),
+                m_port: bind("m_axi_", true),
                 mem: AxiMemory::new(1, mem, timing, rng.next_u64()),
-                s_chk: (0..P).map(|i| AxiChecker::new(i, &format!("s{i}_axi"), o, o)).collect(),
-                m_chk: AxiChecker::new(P, "m_axi", P * o, P * o),
-                chk: Checker::new("neo_axi_mux_p3", seed),
+                s_chk: (0..p).map(|i| AxiChecker::new(i, &format!("s{i}_axi"), o, o)).collect(),
+                m_chk: AxiChecker::new(p, "m_axi", p * o, p * o),
+                chk: Checker::new(&format!("neo_axi_mux #(.PORTS({p}))"), seed),
                 mgrs,
                 beats: 0,
                 dut,
             };
-            for i in 0..P {
+            for i in 0..p {
                 b.s_ports[i].set_manager(&mut b.dut, &ManagerSignals::default());
             }
             b.m_port.set_subordinate(&mut b.dut, &SubordinateSignals::default());
@@ -166,56 +168,82 @@ mod cosim {
         }
     }
 
-    #[test]
-    fn axi_mux_random_traffic_under_contention() {
-        let name = "axi_mux_random_traffic_under_contention";
-        for_each_seed(name, |seed| {
+    /// The client counts benched: the cosimulated 3 and the engine's 8 slots per port.
+    const PORTS: [usize; 2] = [3, 8];
+
+    /// Random traffic, a mix of request rates and backpressure, on `p` clients.
+    fn random_traffic_under_contention(p: usize) {
+        let name = format!("axi_mux_random_traffic_under_contention_p{p}");
+        for_each_seed(&name, |seed| {
             let n = transactions(600);
-            let t = [traffic(n, 90, 80), traffic(n, 60, 50), traffic(n, 95, 95)];
-            let mut b = Bench::new(name, seed, AxiTiming::RANDOM, &t);
-            let cycles = b.run(400 * n as u64);
-            println!("{name}: {} transactions in {cycles} cycles, {} R beats", 6 * n, b.beats);
+            let mix = [traffic(n, 90, 80), traffic(n, 60, 50), traffic(n, 95, 95)];
+            let t: Vec<Traffic> = (0..p).map(|i| mix[i % mix.len()]).collect();
+            let mut b = Bench::new(&name, seed, AxiTiming::RANDOM, &t);
+            let cycles = b.run(400 * (p * n) as u64 / 3);
+            println!("{name}: {} transactions in {cycles} cycles, {} R beats", 2 * p * n, b.beats);
         });
     }
 
-    #[test]
-    fn axi_mux_single_beat_storm_on_a_fast_memory() {
-        let name = "axi_mux_single_beat_storm_on_a_fast_memory";
-        for_each_seed(name, |seed| {
+    /// Single-beat reads and writes from every one of `p` clients on a fast memory.
+    fn single_beat_storm_on_a_fast_memory(p: usize) {
+        let name = format!("axi_mux_single_beat_storm_on_a_fast_memory_p{p}");
+        for_each_seed(&name, |seed| {
             let n = transactions(1500);
             let t = Traffic { max_beats: 1, partial_strobe_percent: 0, ..traffic(n, 100, 100) };
             let fast = AxiTiming { latency: 2, ..AxiTiming::IDEAL };
-            let mut b = Bench::new(name, seed, fast, &[t, t, t]);
-            let cycles = b.run(100 * n as u64);
-            // Reads and writes go through the port in parallel, one beat per cycle each at best (3n
-            // cycles); a mux that took two cycles a write (or serialised reads and writes) needs 6n.
-            println!("{name}: {} single-beat transactions in {cycles} cycles", 6 * n);
-            let bound = 3 * n as u64 * 3 / 2;
+            let mut b = Bench::new(&name, seed, fast, &vec![t; p]);
+            let cycles = b.run(100 * (p * n) as u64 / 3);
+            // Reads and writes go through the port in parallel, one beat per cycle each at best (p n
+            // cycles); a mux that took two cycles a write (or serialised reads and writes) needs 2 p n.
+            println!("{name}: {} single-beat transactions in {cycles} cycles", 2 * p * n);
+            let bound = (p * n) as u64 * 3 / 2;
             assert!(
                 cycles < bound,
                 "{cycles} cycles (bound {bound}) for {} reads + {} writes: the mux serialises",
-                3 * n,
-                3 * n
+                p * n,
+                p * n
             );
         });
     }
 
-    #[test]
-    fn axi_mux_long_bursts_one_client_at_a_time_and_all_together() {
-        let name = "axi_mux_long_bursts_one_client_at_a_time_and_all_together";
-        for_each_seed(name, |seed| {
+    /// Long bursts from the first client alone, the last alone, then all `p` together.
+    fn long_bursts_one_client_at_a_time_and_all_together(p: usize) {
+        let name = format!("axi_mux_long_bursts_one_client_at_a_time_and_all_together_p{p}");
+        for_each_seed(&name, |seed| {
             let n = transactions(200);
             let long = Traffic { max_beats: 16, ..traffic(n, 100, 100) };
             let idle = Traffic { reads: 0, writes: 0, ..long };
-            for (k, t) in [[long, idle, idle], [idle, idle, long], [long, long, long]].iter().enumerate() {
+            let alone = |k: usize| (0..p).map(|i| if i == k { long } else { idle }).collect::<Vec<_>>();
+            for (k, t) in [alone(0), alone(p - 1), vec![long; p]].iter().enumerate() {
                 let mut b = Bench::new(
                     &format!("{name}_{k}"),
                     seed ^ k as u64,
                     AxiTiming { reorder: true, ..AxiTiming::IDEAL },
                     t,
                 );
-                b.run(200 * n as u64);
+                b.run(200 * (p * n) as u64 / 3);
             }
         });
+    }
+
+    #[test]
+    fn axi_mux_random_traffic_under_contention() {
+        for p in PORTS {
+            random_traffic_under_contention(p);
+        }
+    }
+
+    #[test]
+    fn axi_mux_single_beat_storm_on_a_fast_memory() {
+        for p in PORTS {
+            single_beat_storm_on_a_fast_memory(p);
+        }
+    }
+
+    #[test]
+    fn axi_mux_long_bursts_one_client_at_a_time_and_all_together() {
+        for p in PORTS {
+            long_bursts_one_client_at_a_time_and_all_together(p);
+        }
     }
 }

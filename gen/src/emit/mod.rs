@@ -101,6 +101,8 @@ pub enum Item {
         /// Value expression (a sized literal).
         value: String,
     },
+    /// `integer name;` (the loop variable of [`Stmt::For`]).
+    Integer(String),
     /// `wire [W-1:0] name;`
     Wire {
         /// Name.
@@ -206,6 +208,15 @@ pub enum Stmt {
     Case(String, Vec<(String, Vec<Stmt>)>, Vec<Stmt>),
     /// A comment line.
     Comment(String),
+    /// `for (VAR = 0; VAR < BOUND; VAR = VAR + 1) begin ... end` over an `integer` VAR declared
+    /// with [`Module::integer`] (a loop over the clients of a parametric module; `BOUND` is a
+    /// constant expression, so synthesis unrolls it).
+    For(String, String, Vec<Stmt>),
+}
+
+/// `for (var = 0; var < bound; var = var + 1) body`.
+pub fn for_(var: impl Into<String>, bound: impl Into<String>, body: Vec<Stmt>) -> Stmt {
+    Stmt::For(var.into(), bound.into(), body)
 }
 
 /// `lhs <= rhs` / `lhs = rhs`.
@@ -277,7 +288,7 @@ impl Module {
         self
     }
 
-    /// Declares the width of port, wire, register or memory `name` (declared already, with its
+    /// Declares the width of port, wire, register, memory or sized local parameter `name` (declared already, with its
     /// width at the parameters' defaults) as the parameter expression `width` (`WIDTH`,
     /// `$clog2(DEPTH)`): printed `[width-1:0]`.
     ///
@@ -301,13 +312,14 @@ impl Module {
         self
     }
 
-    /// True when `name` is a port or a top-level wire, register or memory.
+    /// True when `name` is a port or a top-level wire, register, memory or local parameter.
     fn declares(&self, name: &str) -> bool {
         self.ports.iter().any(|p| p.name == name)
             || self.items.iter().any(|i| match i {
-                Item::Wire { name: n, .. } | Item::Reg { name: n, .. } | Item::Mem { name: n, .. } => {
-                    n == name
-                }
+                Item::Wire { name: n, .. }
+                | Item::Reg { name: n, .. }
+                | Item::Mem { name: n, .. }
+                | Item::LocalParam { name: n, .. } => n == name,
                 _ => false,
             })
     }
@@ -362,6 +374,11 @@ impl Module {
     /// offsets and widths that name the fields of a packed bundle).
     pub fn localparam_int(&mut self, name: impl Into<String>, value: u32) -> &mut Self {
         self.item(Item::LocalParam { name: name.into(), width: 0, value: value.to_string() })
+    }
+
+    /// Declares an `integer` (a loop variable of [`Stmt::For`] in combinational blocks).
+    pub fn integer(&mut self, name: impl Into<String>) -> &mut Self {
+        self.item(Item::Integer(name.into()))
     }
 
     /// Declares a wire.
@@ -773,6 +790,30 @@ endmodule
         assert!(v.contains("  reg  [WIDTH-1:0] last_q;\n  reg  [WIDTH-1:0] mem [0:DEPTH-1];\n"), "{v}");
         assert!(v.contains("  leaf #(\n    .W(3)\n  ) u_leaf (\n"), "{v}");
         assert_eq!(m.interface().port("q_o").map(|p| p.width), Some(8), "the width at the defaults");
+    }
+
+    /// A loop over a parameter's count in a combinational block, over an `integer`, and a local
+    /// parameter whose width is a parameter expression.
+    #[test]
+    fn for_loops_integers_and_parametric_localparams_print() {
+        let mut m = Module::new("sel");
+        m.param("N", 4).input("oh_i", 4).input("d_i", 32).output("y_o", 8);
+        m.width_param("oh_i", "N").width_param("d_i", "N*8");
+        m.localparam("ONE", 4, "1").width_param("ONE", "N");
+        m.integer("c").reg("y", 8);
+        m.comb(vec![
+            set("y", lit(8, 0)),
+            for_("c", "N", vec![set("y", "y | ({8{oh_i[c]}} & d_i[c*8 +: 8])")]),
+        ]);
+        m.assign("y_o", "y");
+        let v = m.to_verilog();
+        assert!(v.contains("  localparam [N-1:0] ONE = 1;\n  integer c;\n"), "{v}");
+        assert!(
+            v.contains(
+                "    y = 8'd0;\n    for (c = 0; c < N; c = c + 1) begin\n      y = y | ({8{oh_i[c]}} & d_i[c*8 +: 8]);\n    end\n  end\n"
+            ),
+            "{v}"
+        );
     }
 
     #[test]

@@ -38,6 +38,7 @@ fn targets(body: &[Stmt], out: &mut Vec<String>) {
                 }
                 targets(default, out);
             }
+            Stmt::For(_, _, b) => targets(b, out),
             Stmt::Comment(_) => {}
         }
     }
@@ -58,6 +59,7 @@ fn to_next(body: &[Stmt]) -> Vec<Stmt> {
                 arms.iter().map(|(l, b)| (l.clone(), to_next(b))).collect(),
                 to_next(default),
             ),
+            Stmt::For(v, n, b) => Stmt::For(v.clone(), n.clone(), to_next(b)),
             Stmt::Comment(t) => Stmt::Comment(t.clone()),
         })
         .collect()

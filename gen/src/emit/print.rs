@@ -104,9 +104,14 @@ fn items(s: &mut String, level: usize, list: &[Item], m: &Module) {
             Item::Comment(t) => push_comment(s, level, t),
             Item::Blank => s.push('\n'),
             Item::LocalParam { name, width, value } => {
-                let r = if *width == 0 { String::new() } else { format!("{} ", vec_range(*width, true)) };
+                let r = match m.param_widths.get(name) {
+                    Some(w) => format!("[{w}-1:0] "),
+                    None if *width == 0 => String::new(),
+                    None => format!("{} ", vec_range(*width, true)),
+                };
                 writeln!(s, "{ind}localparam {r}{name} = {value};").unwrap();
             }
+            Item::Integer(name) => writeln!(s, "{ind}integer {name};").unwrap(),
             Item::Wire { name, width } if *width == 1 && m.vectors.contains(name) => {
                 writeln!(s, "{ind}wire [0:0] {name};").unwrap()
             }
@@ -207,6 +212,11 @@ fn stmts(s: &mut String, level: usize, list: &[Stmt], op: &str) {
                     stmts(s, level + 1, els, op);
                     writeln!(s, "{ind}end").unwrap();
                 }
+            }
+            Stmt::For(var, bound, body) => {
+                writeln!(s, "{ind}for ({var} = 0; {var} < {bound}; {var} = {var} + 1) begin").unwrap();
+                stmts(s, level + 1, body, op);
+                writeln!(s, "{ind}end").unwrap();
             }
             Stmt::Case(sel, arms, default) => {
                 writeln!(s, "{ind}case ({sel})").unwrap();

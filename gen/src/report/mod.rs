@@ -142,22 +142,17 @@ fn parallel<T: Send, R: Send>(jobs: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R>
 
 /// Tops synthesized hierarchically with a fixed set of black boxes (a flat synthesis of 4 SCUs,
 /// ~2 M cells, takes too long): (top, units kept as black boxes; their figures come from their
-/// own reports). The engine's boxes depend on the configuration ([`hierarchical_boxes`]).
+/// own reports). The engine's and the preprocessing units' boxes are in [`hierarchical_boxes`].
 pub const HIERARCHICAL: &[(&str, &[&str])] = &[(
     crate::units::raster_core::NAME,
     &[crate::units::itu::NAME, crate::units::scu::NAME, crate::units::scu::EXP_NAME],
 )];
 
-/// The engine's port mux module for `cfg` (one size serves every port).
-pub fn engine_mux(cfg: &EngineConfig) -> String {
-    crate::units::axi::mux::name(engine::Clients::of(cfg).slots())
-}
-
 /// The black boxes of `top` when it is synthesized hierarchically: the raster core's units,
 /// the preprocessing datapaths' binary32 primitives (each checked as its own top), the
 /// duplication unit's ITUs, or every module the engine instantiates; `None` for the tops
 /// synthesized flat.
-pub fn hierarchical_boxes(cfg: &EngineConfig, top: &str) -> Option<Vec<String>> {
+pub fn hierarchical_boxes(top: &str) -> Option<Vec<String>> {
     use crate::units::{fp, itu, pre};
     if top == pre::COLOR_NAME || top == pre::PROJECT_NAME {
         let mut boxes: Vec<String> = Vec::new();
@@ -184,20 +179,18 @@ pub fn hierarchical_boxes(cfg: &EngineConfig, top: &str) -> Option<Vec<String>> 
     }
     if top == engine::NAME {
         let mut boxes: Vec<String> = engine::SUBMODULES.iter().map(|s| s.to_string()).collect();
-        boxes.push(engine_mux(cfg));
+        boxes.push(crate::units::axi::mux::NAME.to_string());
         return Some(boxes);
     }
     HIERARCHICAL.iter().find(|(t, _)| *t == top).map(|(_, b)| b.iter().map(|s| s.to_string()).collect())
 }
 
-/// The tops `--stats` reports, in order: [`top_modules`], the engine's port mux when it is not
-/// one of them, and `neo_engine` (hierarchical tops after the units they box).
-pub fn stats_tops(cfg: &EngineConfig) -> Vec<String> {
+/// The tops `--stats` reports, in order: [`top_modules`], the port mux (at its default `PORTS`,
+/// the engine's slots per port: the engine's instances) and `neo_engine` (hierarchical tops after
+/// the units they box).
+pub fn stats_tops() -> Vec<String> {
     let mut tops: Vec<String> = top_modules().iter().map(|s| s.to_string()).collect();
-    let mux = engine_mux(cfg);
-    if !tops.contains(&mux) {
-        tops.push(mux);
-    }
+    tops.push(crate::units::axi::mux::NAME.to_string());
     tops.push(engine::NAME.to_string());
     tops
 }
@@ -210,7 +203,7 @@ pub fn verilog_hash(cfg: &EngineConfig, top: &str) -> String {
         text.push('\n');
         text.push_str(f.text.split_once('\n').map_or("", |(_, body)| body));
     }
-    if let Some(boxes) = hierarchical_boxes(cfg, top) {
+    if let Some(boxes) = hierarchical_boxes(top) {
         text.push_str(&format!("blackbox {}", boxes.join(" ")));
     }
     let h =
@@ -229,8 +222,7 @@ pub fn unit_reports(
 ) -> Result<Vec<UnitReport>, ToolError> {
     let net = cfg.network();
     let previous = previous.filter(|p| p.command == YOSYS_COMMAND);
-    let jobs: Vec<(String, String)> =
-        stats_tops(cfg).into_iter().map(|t| (verilog_hash(cfg, &t), t)).collect();
+    let jobs: Vec<(String, String)> = stats_tops().into_iter().map(|t| (verilog_hash(cfg, &t), t)).collect();
     let mut reports: Vec<UnitReport> = parallel(jobs, |(hash, top)| {
         let old = previous.and_then(|p| p.units.iter().find(|u| u.unit == top && u.verilog_hash == hash));
         if let Some(old) = old {
@@ -239,7 +231,7 @@ pub fn unit_reports(
         }
         let t0 = Instant::now();
         let bsu = top == crate::units::bsu::NAME;
-        let synth = match hierarchical_boxes(cfg, &top) {
+        let synth = match hierarchical_boxes(&top) {
             Some(boxes) => {
                 let boxes: Vec<&str> = boxes.iter().map(|s| s.as_str()).collect();
                 glue_synth_stats(&files_for(cfg, &top), &top, &boxes)?
@@ -262,7 +254,7 @@ pub fn unit_reports(
     .into_iter()
     .collect::<Result<_, ToolError>>()?;
     for i in 0..reports.len() {
-        let Some(boxes) = hierarchical_boxes(cfg, &reports[i].unit) else { continue };
+        let Some(boxes) = hierarchical_boxes(&reports[i].unit) else { continue };
         let instances: Vec<(String, u64, u64, u64)> = reports
             .iter()
             .filter(|u| boxes.contains(&u.unit))

@@ -56,10 +56,7 @@ impl Part {
             m if m == crate::units::pre::engine::NAME || m == crate::units::clock_gate::NAME => {
                 Part::Preprocessing
             }
-            m if m == axi::sort_bridge::NAME
-                || m == axi::raster_bridge::NAME
-                || m.starts_with("neo_axi_mux") =>
-            {
+            m if m == axi::sort_bridge::NAME || m == axi::raster_bridge::NAME || m == axi::mux::NAME => {
                 Part::Interconnect
             }
             // The frame controller, the control port, the counters (and anything else).
@@ -337,7 +334,7 @@ mod tests {
     /// A report with made-up figures: unit i has 1000 (i + 1) cells and 10 (i + 1) flip-flops;
     /// the engine's glue 7 cells, 3 flip-flops.
     fn fake_report(cfg: &EngineConfig) -> SynthReport {
-        let mut units: Vec<UnitReport> = stats_tops(cfg)
+        let mut units: Vec<UnitReport> = stats_tops()
             .iter()
             .enumerate()
             .map(|(i, t)| unit(t, 1000 * (i as u64 + 1), 10 * (i as u64 + 1)))
@@ -380,12 +377,12 @@ mod tests {
         let raster = find(&format!("g_raster[{}]", cfg.raster_cores));
         assert_eq!(raster.count, cfg.raster_cores as u64);
         let port = find(&format!("g_port[{}]", cfg.mem_channels));
-        let mux = crate::report::engine_mux(&cfg);
-        assert_eq!(port.children[0].module.as_deref(), Some(mux.as_str()));
+        let mux = axi::mux::NAME;
+        assert_eq!(port.children[0].module.as_deref(), Some(mux));
         assert_eq!(port.children[0].count, cfg.mem_channels as u64);
         let text = t.text(&cfg);
         println!("{text}");
-        assert!(text.contains("g_sort[16]") && text.contains(&mux), "{text}");
+        assert!(text.contains("g_sort[16]") && text.contains(mux), "{text}");
 
         let totals = t.totals();
         let get = |p: Part| totals.iter().find(|(q, _)| *q == p).map(|(_, t)| t.clone()).expect("part");
@@ -402,7 +399,7 @@ mod tests {
             Some(
                 n * cells(&r, axi::sort_bridge::NAME)
                     + m * cells(&r, axi::raster_bridge::NAME)
-                    + k * cells(&r, &mux)
+                    + k * cells(&r, mux)
             )
         );
         assert_eq!(

@@ -539,16 +539,21 @@ fn ports(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         m.wire(format!("port_{}", s.name), k * s.width).vector(format!("port_{}", s.name));
     }
     let mut c = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
-    for slot in 0..p {
-        for s in &sigs {
-            let bus = format!("cl_{}[(k*{p} + {slot})*{w} +: {w}]", s.name, w = s.width);
-            c.push((axi::port_name(&format!("s{slot}_axi_"), s, false), bus));
-        }
+    for s in &sigs {
+        // Port k's P clients are clients k*P .. k*P+P-1 of the client buses.
+        let bus = format!("cl_{}[k*{p}*{w} +: {p}*{w}]", s.name, w = s.width);
+        c.push((axi::mux::client_port(s), bus));
     }
     for s in &sigs {
         c.push((axi::port_name("m_axi_", s, true), format!("port_{}[k*{w} +: {w}]", s.name, w = s.width)));
     }
-    m.gen_for("k", k, "g_port", vec![inst(&axi::mux::name(p), "u_mux", c)]);
+    let mux = Item::Instance(Instance {
+        module: axi::mux::NAME.into(),
+        name: "u_mux".into(),
+        params: vec![("PORTS".into(), p.to_string())],
+        conns: c,
+    });
+    m.gen_for("k", k, "g_port", vec![mux]);
     for port in 0..k {
         for s in &sigs {
             let top = axi::port_name(&format!("m{port}_axi_"), s, true);

@@ -32,7 +32,7 @@
 //! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | yes      |
 //! | `neo_axi_sort_bridge` | sorting core memory port -> AXI4 manager          | yes       |
 //! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
-//! | `neo_axi_mux_p{P}` | P AXI4 managers -> one port (the engine's P, and P=3) | P=3 |
+//! | `neo_axi_mux`   | PORTS AXI4 managers -> one port, parameter `PORTS` (the engine's, and 3 and 8 in its bench) | run time |
 //! | `neo_clock_gate` | a falling-edge-enabled clock gate (the idle Preprocessing Engine) | no |
 //! | `neo_engine`    | the engine: control port, frame controller, cores, bridges, port muxes | run time |
 //! | `neo_fp_*`      | binary32 primitives of the Preprocessing Engine (`fp`; `neo_fp_to_int`'s rounding a parameter) | no |
@@ -91,16 +91,17 @@ pub fn top_modules() -> &'static [&'static str] {
         "neo_frame_ctrl",
         "neo_axi_sort_bridge",
         "neo_axi_raster_bridge",
-        "neo_axi_mux_p3",
     ]
 }
 
 /// Tops the benches verilate at run time (`neo_tb::dynmodel`) rather than with every build:
 /// the lint and latch gates check them like [`top_modules`] (the lane with the units it
-/// instantiates as black boxes, each checked as its own top). (The engine, which has its own
-/// gates, is not listed.)
+/// instantiates as black boxes, each checked as its own top; the port mux at its defaults, and
+/// at other client counts by `gen/tests/hdl_gates.rs`). (The engine, which has its own gates,
+/// is not listed.)
 pub fn run_time_tops() -> &'static [&'static str] {
     &[
+        axi::mux::NAME,
         pre::dup::NAME,
         pre::COLOR_NAME,
         pre::PROJECT_NAME,
@@ -155,9 +156,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         axi::sort_bridge::module(cfg),
         axi::raster_bridge::module(cfg),
     ];
-    for p in axi::mux_sizes(cfg) {
-        all.push(axi::mux::module(cfg, p)?);
-    }
+    all.push(axi::mux::module(cfg)?);
     all.push(engine::module(cfg));
     all.extend(fp::modules(cfg));
     all.push(pre::dup::module(cfg));

@@ -1,7 +1,7 @@
 //! AXI4 on the test-bench side: one port's signals as plain structs ([`ManagerSignals`],
 //! [`SubordinateSignals`]), their binding to a Verilated model's ports ([`AxiBinding`]), a memory
 //! that serves AXI4 ports from a golden [`neo_golden::engine::memory::Memory`] ([`AxiMemory`]) and
-//! a protocol checker ([`AxiChecker`]).
+//! a protocol checker ([`AxiChecker`]); the port mux at a chosen client count as a model ([`mux`]).
 //!
 //! The subset is the engine contract's (docs/rtl.md "AXI4 memory side"): AR/AW `{id, addr, len,
 //! size, burst}`, R `{id, data, resp, last}`, W `{data, strb, last}`, B `{id, resp}`, 64-bit data.
@@ -14,6 +14,7 @@
 pub mod checker;
 pub mod manager;
 pub mod memory;
+pub mod mux;
 
 pub use checker::{AxiChecker, Violation};
 pub use memory::{AxiMemory, AxiTiming};

@@ -3,7 +3,7 @@
 //! - [`sort_bridge`]: `neo_axi_sort_bridge`, a `neo_sort_core` memory port as an AXI4 manager;
 //! - [`raster_bridge`]: `neo_axi_raster_bridge`, a `neo_raster_core` memory port as an AXI4
 //!   manager;
-//! - [`mux`]: `neo_axi_mux_p{P}`, P AXI4 managers onto one AXI4 port (one module per distinct P).
+//! - [`mux`]: `neo_axi_mux #(PORTS)`, PORTS AXI4 managers onto one AXI4 port.
 //!
 //! Every manager drives the AXI4 subset of the engine contract (docs/rtl.md "AXI4 memory side"):
 //! AR/AW `{valid, ready, id, addr, len, size, burst}`, R `{valid, ready, id, data, resp, last}`,
@@ -271,38 +271,19 @@ fn unused_responses(m: &mut Module, extra: &[&str]) {
     m.wire_assign("unused_rsp", 1, format!("^{{{}}}", v.join(", ")));
 }
 
-/// The client counts of the muxes: the engine's (every port has `ceil(C / K)` slots, see
-/// [`super::engine::Clients`]) and the cosimulated one ([`mux::COSIM_P`]), ascending.
-pub fn mux_sizes(cfg: &EngineConfig) -> Vec<usize> {
-    let mut v = vec![super::engine::Clients::of(cfg).slots(), mux::COSIM_P];
-    v.sort_unstable();
-    v.dedup();
-    v
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn mux_sizes_follow_the_client_to_port_mapping() {
-        // 1 + 16 + 4 + (2 x 4 + 1) clients on 4 ports of ceil(31 / 4) = 8 slots; plus the
-        // cosimulated P = 3.
-        let cfg = EngineConfig::default();
-        assert_eq!(mux_sizes(&cfg), vec![3, 8]);
-        let small =
-            EngineConfig { sort_cores: 2, raster_cores: 1, mem_channels: 2, pre_units: 1, ..cfg.clone() };
-        assert_eq!(mux_sizes(&small), vec![3, 4], "1 + 2 + 1 + 3 clients on 2 ports of 4 slots");
-        let one = EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 4, pre_units: 1, ..cfg };
-        assert_eq!(mux_sizes(&one), vec![2, 3]);
-    }
-
-    #[test]
     fn a_mux_whose_client_index_does_not_fit_the_id_is_refused() {
         let cfg = EngineConfig { axi_id_bits: 1, ..EngineConfig::default() };
-        let e = mux::module(&cfg, 3).unwrap_err().to_string();
-        assert!(e.contains("neo_axi_mux_p3") && e.contains("axi_id_bits is 1"), "{e}");
-        assert!(mux::module(&cfg, 2).is_ok());
+        let e = mux::check(&cfg, 3).unwrap_err().to_string();
+        assert!(e.contains("neo_axi_mux #(.PORTS(3))") && e.contains("axi_id_bits is 1"), "{e}");
+        assert!(mux::check(&cfg, 2).is_ok() && mux::check(&cfg, 1).is_ok());
+        assert!(mux::check(&EngineConfig::default(), 0).is_err());
+        // The engine's 8 slots per port need 3 ID bits.
+        assert!(mux::module(&cfg).is_err());
         assert!(crate::units::try_generate(&cfg).is_err());
     }
 
@@ -320,15 +301,29 @@ mod tests {
                 assert!(has(&m, p, w), "{}: {p}", m.name);
             }
         }
-        let mux = mux::module(&cfg, 3).unwrap();
-        assert_eq!(mux.name, "neo_axi_mux_p3");
+        let mux = mux::module(&cfg).unwrap();
+        assert_eq!(mux.name, "neo_axi_mux");
+        // The client buses at the default PORTS (the engine's 8 slots per port), the manager port.
         assert!(
-            has(&mux, "s2_axi_rdata_o", 64)
-                && has(&mux, "s0_axi_awaddr_i", 32)
+            has(&mux, "s_axi_rdata_o", 8 * 64)
+                && has(&mux, "s_axi_awaddr_i", 8 * 32)
+                && has(&mux, "s_axi_arvalid_i", 8)
                 && has(&mux, "m_axi_bready_o", 1)
+                && has(&mux, "m_axi_araddr_o", 32)
         );
-        assert!(!mux.ports.iter().any(|p| p.name.starts_with("s3_")));
-        // The downstream ID is the client index: bits 1:0 of a 4-bit ID for 3 clients.
-        assert!(mux.to_verilog().contains("assign m_axi_arid_o = {2'd0, {(ar_oh[2]), (ar_oh[1])}};"));
+        let v = mux.to_verilog();
+        for l in [
+            "  parameter integer PORTS = 8,\n",
+            "  input  wire [PORTS*ADDR_BITS-1:0]     s_axi_araddr_i,\n",
+            "  input  wire [PORTS*(DATA_BITS/8)-1:0] s_axi_wstrb_i,\n",
+            "  localparam [PORTS-1:0] CLIENT0 = 1;\n",
+            "    for (c = 0; c < PORTS; c = c + 1) begin\n",
+            // The downstream ID is the client index.
+            "      ar_id = ar_id | ({ID_BITS{ar_oh[c]}} & c[ID_BITS-1:0]);\n",
+            "      ar_addr = ar_addr | ({ADDR_BITS{ar_oh[c]}} & s_axi_araddr_i[c*ADDR_BITS +: ADDR_BITS]);\n",
+            "  assign s_axi_rdata_o = {PORTS{m_axi_rdata_i}};\n",
+        ] {
+            assert!(v.contains(l), "{l:?} missing in\n{v}");
+        }
     }
 }

@@ -1,5 +1,6 @@
-//! `neo_axi_mux_p{P}`: P AXI4 managers (`s{i}_axi_*`, the engine's clients of one memory port)
-//! onto one AXI4 port (`m_axi_*`).
+//! `neo_axi_mux #(PORTS, ID_BITS, ADDR_BITS, DATA_BITS)`: `PORTS` AXI4 managers (the packed
+//! `s_axi_*` buses, client `i`'s signals at `[i*W +: W]` of each; the engine's clients of one
+//! memory port) onto one AXI4 port (`m_axi_*`).
 //!
 //! - AR: round-robin arbiter (the client after the last granted one first); a request offered
 //!   downstream and not yet accepted keeps its grant (AXI: valid held with a stable payload).
@@ -7,116 +8,184 @@
 //!   [`W_FIFO`] entries, and the W channel forwards the head client's beats until WLAST, so the
 //!   W beats downstream follow the AW order (AXI4 has no WID). AW waits while the FIFO is full.
 //! - IDs: the client's own ID is ignored (each client uses one ID); the downstream ID is the
-//!   client index (`clog2(P)` bits, zero-extended to `axi_id_bits`). R and B are routed back by
+//!   client index (`clog2(PORTS)` bits, zero-extended to `ID_BITS`). R and B are routed back by
 //!   that index; responses to a client carry ID 0.
 //! - No buffering on R, B: `rready`/`bready` downstream are the addressed client's.
+//!
+//! The granted client's fields are an AND-OR over the one-hot grant, written as a `for` loop over
+//! the clients in one `always @*` block per channel. The defaults of `ID_BITS`, `ADDR_BITS` and
+//! `DATA_BITS` are the configuration's; the default of `PORTS` is the engine's slots per port
+//! ([`super::super::engine::Clients::slots`]), so the module synthesized on its own at its
+//! defaults is the engine's (`neo gen --stats` multiplies it by the engine's ports).
 
-use super::{index_bits, ports, signals};
-use crate::emit::expr::{bits_for, lit, slice, zext};
-use crate::emit::{if_, if_else, set, Module};
+use super::{index_bits, signals, AxiSignal};
+use crate::emit::expr::{bits_for, lit};
+use crate::emit::{for_, if_, if_else, set, Module};
 use neo_golden::engine::{ConfigError, EngineConfig};
 
-/// The client count of the cosimulated mux (`tb/tests/axi.rs`), generated in every
-/// configuration beside the ones the engine needs.
-pub const COSIM_P: usize = 3;
+/// Module name.
+pub const NAME: &str = "neo_axi_mux";
 
 /// Entries of the W-order FIFO (AWs accepted whose W beats have not all passed).
 pub const W_FIFO: u32 = 4;
 
-/// Module name of the mux of `p` clients.
-pub fn name(p: usize) -> String {
-    format!("neo_axi_mux_p{p}")
+/// The loop variable of the selections over the clients.
+const C: &str = "c";
+
+/// The parameter expression of `sig`'s width on the manager side (`ID_BITS`, ...), or `None`
+/// for the widths AXI4 fixes (LEN 8, SIZE 3, BURST 2, RESP 2, the one-bit signals).
+fn width_expr(sig: &AxiSignal) -> Option<&'static str> {
+    match sig.name {
+        "arid" | "rid" | "awid" | "bid" => Some("ID_BITS"),
+        "araddr" | "awaddr" => Some("ADDR_BITS"),
+        "rdata" | "wdata" => Some("DATA_BITS"),
+        "wstrb" => Some("(DATA_BITS/8)"),
+        _ => None,
+    }
 }
 
-/// `(oh[0] ? a0 : 0) | (oh[1] ? a1 : 0) | ...` for a one-hot `oh` over `n` signals of `width`.
-fn or_mux(oh: &str, n: usize, width: u32, sig: impl Fn(usize) -> String) -> String {
-    (0..n)
-        .map(|i| {
-            if width == 1 {
-                format!("({oh}[{i}] & {})", sig(i))
-            } else {
-                format!("({{{width}{{{oh}[{i}]}}}} & {})", sig(i))
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(" | ")
+/// `sig`'s width as a Verilog expression: its parameter or its fixed width.
+fn width_of(sig: &AxiSignal) -> String {
+    width_expr(sig).map_or_else(|| sig.width.to_string(), str::to_string)
 }
 
-/// `{x{n-1}, ..., x0}`.
-fn concat(n: usize, sig: impl Fn(usize) -> String) -> String {
-    format!("{{{}}}", (0..n).rev().map(sig).collect::<Vec<_>>().join(", "))
+/// The bus port of `sig` on the client side, `s_axi_araddr_i` (`PORTS` x the signal).
+pub fn client_port(sig: &AxiSignal) -> String {
+    super::port_name("s_axi_", sig, false)
 }
 
-/// The index of the set bit of one-hot `oh` (`n` bits) as `xb` bits (bit `b` = OR of the lanes
-/// whose index has bit `b`).
-fn oh_index(oh: &str, n: usize, xb: u32) -> String {
-    let bits: Vec<String> = (0..xb)
-        .rev()
-        .map(|b| {
-            let lanes: Vec<String> =
-                (0..n).filter(|i| (i >> b) & 1 == 1).map(|i| format!("{oh}[{i}]")).collect();
-            if lanes.is_empty() {
-                lit(1, 0)
-            } else {
-                lanes.join(" | ")
-            }
-        })
-        .map(|e| format!("({e})"))
-        .collect();
-    format!("{{{}}}", bits.join(", "))
+/// Client `c`'s slice of the bus of `sig` (`s_axi_araddr_i[c*ADDR_BITS +: ADDR_BITS]`).
+fn client_field(sig: &AxiSignal) -> String {
+    let w = width_of(sig);
+    if sig.width == 1 && width_expr(sig).is_none() {
+        format!("{}[{C}]", client_port(sig))
+    } else {
+        format!("{}[{C}*{w} +: {w}]", client_port(sig))
+    }
+}
+
+/// Checks that `ports` clients fit `cfg`'s AXI IDs (the downstream ID is the client index).
+///
+/// # Errors
+/// When the client index needs more than `axi_id_bits` bits.
+pub fn check(cfg: &EngineConfig, ports: usize) -> Result<(), ConfigError> {
+    let (xb, ib) = (index_bits(ports), cfg.axi_id_bits);
+    if ports == 0 || xb > ib {
+        return Err(ConfigError(format!(
+            "{NAME} #(.PORTS({ports})): {ports} clients need {xb} ID bits, axi_id_bits is {ib}"
+        )));
+    }
+    Ok(())
+}
+
+/// Declares the module's ports: the client buses (`PORTS` x each signal) and the manager port.
+fn declare_ports(m: &mut Module, cfg: &EngineConfig, ports: usize) {
+    let n = ports as u32;
+    m.clock_reset();
+    for sig in signals(cfg) {
+        let name = client_port(&sig);
+        if sig.from_manager {
+            m.input(name.clone(), n * sig.width);
+        } else {
+            m.output(name.clone(), n * sig.width);
+        }
+        let w = if sig.width == 1 { "PORTS".to_string() } else { format!("PORTS*{}", width_of(&sig)) };
+        m.width_param(&name, w);
+    }
+    for sig in signals(cfg) {
+        let name = super::port_name("m_axi_", &sig, true);
+        if sig.from_manager {
+            m.output(name.clone(), sig.width);
+        } else {
+            m.input(name.clone(), sig.width);
+        }
+        if let Some(w) = width_expr(&sig) {
+            m.width_param(&name, w);
+        }
+    }
+}
+
+/// `{W{oh[c]}} & x` (`oh[c] & x` for one bit).
+fn gated(oh: &str, width: &str, x: &str) -> String {
+    if width == "1" {
+        format!("{oh}[{C}] & {x}")
+    } else {
+        format!("{{{width}{{{oh}[{C}]}}}} & {x}")
+    }
+}
+
+/// One `always @*` block: the fields `(reg, width expression, width at the defaults, value of
+/// client C)` of the client granted by one-hot `oh`, each an OR over the clients of
+/// `{W{oh[c]}} & value`, declared as `reg`s.
+fn or_select(m: &mut Module, oh: &str, fields: &[(String, String, u32, String)]) {
+    let mut init = Vec::new();
+    let mut body = Vec::new();
+    for (reg, w, width, value) in fields {
+        m.reg(reg.clone(), *width);
+        if w.parse::<u32>().is_err() {
+            m.width_param(reg, w.clone());
+        }
+        let zero = if w.parse::<u32>().is_ok() { lit(*width, 0) } else { format!("{{{w}{{1'b0}}}}") };
+        init.push(set(reg.clone(), zero));
+        body.push(set(reg.clone(), format!("{reg} | ({})", gated(oh, w, value))));
+    }
+    init.push(for_(C, "PORTS", body));
+    m.comb(init);
 }
 
 /// A round-robin arbiter for channel `ch` (`ar` or `aw`) over the clients' `{ch}valid`, gated by
-/// `en` (none: always enabled): declares `{ch}_oh` (the one-hot grant), `{ch}_fire`, drives `m_axi_{ch}*` from the
-/// granted client and the clients' `{ch}ready`.
-fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: Option<&str>) {
-    let gate = en.map_or(String::new(), |e| format!("{e} & "));
-    let n = p as u32;
-    let xb = index_bits(p);
+/// `en` (none: always enabled): declares `{ch}_oh` (the one-hot grant), `{ch}_fire`, drives
+/// `m_axi_{ch}*` from the granted client (its index as the ID) and the clients' `{ch}ready`.
+fn arbiter(m: &mut Module, cfg: &EngineConfig, ports: usize, ch: &str, en: Option<&str>) {
+    let n = ports as u32;
+    let req = format!("s_axi_{ch}valid_i");
     m.blank();
     m.comment(format!(
         "{} arbiter: round robin from the client after the last grant; a grant offered downstream and not taken is held.",
         ch.to_uppercase()
     ));
-    m.reg(format!("{ch}_lock_q"), 1).reg(format!("{ch}_lock_oh_q"), n).reg(format!("{ch}_mask_q"), n);
-    // One bit per client: declared with a range even for one client, so `oh[0]` stays legal.
-    for v in ["lock_oh_q", "mask_q", "req", "hi", "src", "pick", "oh"] {
-        m.vector(format!("{ch}_{v}"));
+    for r in ["lock_oh_q", "mask_q"] {
+        m.reg(format!("{ch}_{r}"), n).width_param(&format!("{ch}_{r}"), "PORTS");
     }
-    m.wire_assign(format!("{ch}_req"), n, concat(p, |i| format!("s{i}_axi_{ch}valid_i")));
-    m.wire_assign(format!("{ch}_hi"), n, format!("{ch}_req & {ch}_mask_q"));
-    m.wire_assign(format!("{ch}_src"), n, format!("(|{ch}_hi) ? {ch}_hi : {ch}_req"));
-    m.wire_assign(format!("{ch}_pick"), n, format!("{ch}_src & (~{ch}_src + {})", lit(n, 1)));
-    m.wire_assign(format!("{ch}_oh"), n, format!("{ch}_lock_q ? {ch}_lock_oh_q : {ch}_pick"));
-    m.assign(format!("m_axi_{ch}valid_o"), format!("{gate}(|({ch}_oh & {ch}_req))"));
+    m.reg(format!("{ch}_lock_q"), 1);
+    for (w, rhs) in [
+        ("hi", format!("{req} & {ch}_mask_q")),
+        ("src", format!("(|{ch}_hi) ? {ch}_hi : {req}")),
+        ("pick", format!("{ch}_src & (~{ch}_src + CLIENT0)")),
+        ("oh", format!("{ch}_lock_q ? {ch}_lock_oh_q : {ch}_pick")),
+    ] {
+        let name = format!("{ch}_{w}");
+        m.wire_assign(name.clone(), n, rhs).width_param(&name, "PORTS");
+    }
+    let gate = en.map_or(String::new(), |e| format!("{e} & "));
+    m.assign(format!("m_axi_{ch}valid_o"), format!("{gate}(|({ch}_oh & {req}))"));
     m.wire_assign(format!("{ch}_fire"), 1, format!("m_axi_{ch}valid_o & m_axi_{ch}ready_i"));
+    m.assign(format!("s_axi_{ch}ready_o"), format!("{ch}_oh & {{PORTS{{{gate}m_axi_{ch}ready_i}}}}"));
+    m.comment("The granted client's request; its index is the downstream ID.");
+    let sigs = signals(cfg);
+    let sig = |f: &str| *sigs.iter().find(|s| s.name == format!("{ch}{f}")).expect("AXI field");
+    let mut fields =
+        vec![(format!("{ch}_id"), "ID_BITS".to_string(), cfg.axi_id_bits, format!("{C}[ID_BITS-1:0]"))];
     for f in ["addr", "len", "size", "burst"] {
-        let w = signals(cfg).iter().find(|s| s.name == format!("{ch}{f}")).expect("AXI field").width;
-        m.assign(
-            format!("m_axi_{ch}{f}_o"),
-            or_mux(&format!("{ch}_oh"), p, w, |i| format!("s{i}_axi_{ch}{f}_i")),
-        );
+        let s = sig(f);
+        fields.push((format!("{ch}_{f}"), width_of(&s), s.width, client_field(&s)));
     }
-    let id = if xb == 0 {
-        lit(cfg.axi_id_bits, 0)
-    } else {
-        zext(&oh_index(&format!("{ch}_oh"), p, xb), xb, cfg.axi_id_bits)
-    };
-    m.assign(format!("m_axi_{ch}id_o"), id);
-    for i in 0..p {
-        m.assign(format!("s{i}_axi_{ch}ready_o"), format!("{gate}{ch}_oh[{i}] & m_axi_{ch}ready_i"));
+    or_select(m, &format!("{ch}_oh"), &fields);
+    for f in ["id", "addr", "len", "size", "burst"] {
+        m.assign(format!("m_axi_{ch}{f}_o"), format!("{ch}_{f}"));
     }
+    let one = "CLIENT0";
     m.seq(
         vec![
             set(format!("{ch}_lock_q"), lit(1, 0)),
-            set(format!("{ch}_lock_oh_q"), lit(n, 0)),
-            set(format!("{ch}_mask_q"), lit(n, 0)),
+            set(format!("{ch}_lock_oh_q"), "{PORTS{1'b0}}"),
+            set(format!("{ch}_mask_q"), "{PORTS{1'b0}}"),
         ],
         vec![if_else(
             format!("{ch}_fire"),
             vec![
                 set(format!("{ch}_lock_q"), lit(1, 0)),
-                set(format!("{ch}_mask_q"), format!("~({ch}_oh | ({ch}_oh - {}))", lit(n, 1))),
+                set(format!("{ch}_mask_q"), format!("~({ch}_oh | ({ch}_oh - {one}))")),
             ],
             vec![if_(
                 format!("m_axi_{ch}valid_o"),
@@ -129,56 +198,37 @@ fn arbiter(m: &mut Module, cfg: &EngineConfig, p: usize, ch: &str, en: Option<&s
     );
 }
 
-/// The mux of `p` clients for `cfg`.
-///
-/// # Errors
-/// When the client index does not fit `axi_id_bits`.
-pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
-    let n = p as u32;
-    let xb = index_bits(p);
-    let ib = cfg.axi_id_bits;
-    if xb > ib {
-        return Err(ConfigError(format!("{}: {p} clients need {xb} ID bits, axi_id_bits is {ib}", name(p))));
-    }
-    let (db, fb) = (cfg.axi_data_bits, bits_for(u64::from(W_FIFO - 1)));
-    let mut m = Module::new(name(p));
-    m.doc(format!(
-        "AXI4 port mux: {p} managers (s0_axi_* .. s{}_axi_*) onto one port (m_axi_*). Round-robin AR and AW",
-        p - 1
-    ));
-    m.doc(format!(
-        "arbiters; W beats follow the AW order (a {W_FIFO}-entry FIFO of granted clients, each until WLAST)."
-    ));
-    m.doc(format!(
-        "Downstream ID = client index ({xb} bits, zero-extended); client IDs are ignored, R/B go back by the"
-    ));
-    m.doc("index with ID 0. See docs/rtl.md \"AXI4 memory side\".");
-    m.clock_reset();
-    for i in 0..p {
-        ports(&mut m, cfg, &format!("s{i}_axi_"), false);
-    }
-    ports(&mut m, cfg, "m_axi_", true);
-
-    arbiter(&mut m, cfg, p, "ar", None);
-
+/// The W-order FIFO (`wq_*`: the one-hot grants of the accepted AWs, [`W_FIFO`] at most) and
+/// `w_oh`, the client whose beats pass (the head's, until WLAST). Declares `wq_room`.
+fn w_order(m: &mut Module, ports: usize) {
+    let (n, fb) = (ports as u32, bits_for(u64::from(W_FIFO - 1)));
     m.blank();
     m.comment(format!(
         "W order: clients of the accepted AWs ({W_FIFO} at most), the head's beats pass until WLAST."
     ));
-    m.mem("wq_mem", n, W_FIFO).reg("wq_wp_q", fb).reg("wq_rp_q", fb).reg("wq_cnt_q", fb + 1);
+    m.mem("wq_mem", n, W_FIFO).width_param("wq_mem", "PORTS");
+    m.reg("wq_wp_q", fb).reg("wq_rp_q", fb).reg("wq_cnt_q", fb + 1);
     m.wire_assign("wq_room", 1, format!("wq_cnt_q != {}", lit(fb + 1, u64::from(W_FIFO))));
     m.wire_assign("wq_any", 1, format!("wq_cnt_q != {}", lit(fb + 1, 0)));
-    m.vector("w_oh").vector("w_req");
-    m.wire_assign("w_oh", n, format!("wq_any ? wq_mem[wq_rp_q] : {}", lit(n, 0)));
-    arbiter(&mut m, cfg, p, "aw", Some("wq_room"));
-    m.wire_assign("w_req", n, concat(p, |i| format!("s{i}_axi_wvalid_i")));
-    m.assign("m_axi_wvalid_o", "|(w_oh & w_req)");
-    m.assign("m_axi_wdata_o", or_mux("w_oh", p, db, |i| format!("s{i}_axi_wdata_i")));
-    m.assign("m_axi_wstrb_o", or_mux("w_oh", p, db / 8, |i| format!("s{i}_axi_wstrb_i")));
-    m.assign("m_axi_wlast_o", or_mux("w_oh", p, 1, |i| format!("s{i}_axi_wlast_i")));
-    for i in 0..p {
-        m.assign(format!("s{i}_axi_wready_o"), format!("w_oh[{i}] & m_axi_wready_i"));
+    m.wire_assign("w_oh", n, "wq_any ? wq_mem[wq_rp_q] : {PORTS{1'b0}}").width_param("w_oh", "PORTS");
+}
+
+/// The W channel: the head client's beats, and the FIFO's updates (needs `aw_fire`, `aw_oh`).
+fn w_channel(m: &mut Module, cfg: &EngineConfig) {
+    let fb = bits_for(u64::from(W_FIFO - 1));
+    m.blank();
+    m.comment("W: the head client's beats.");
+    m.assign("m_axi_wvalid_o", "|(w_oh & s_axi_wvalid_i)");
+    let fields: Vec<_> = signals(cfg)
+        .into_iter()
+        .filter(|s| ["wdata", "wstrb", "wlast"].contains(&s.name))
+        .map(|s| (format!("w_{}", &s.name[1..]), width_of(&s), s.width, client_field(&s)))
+        .collect();
+    or_select(m, "w_oh", &fields);
+    for (reg, ..) in &fields {
+        m.assign(format!("m_axi_w{}_o", &reg[2..]), reg.clone());
     }
+    m.assign("s_axi_wready_o", "w_oh & {PORTS{m_axi_wready_i}}");
     m.wire_assign("w_done", 1, "m_axi_wvalid_o & m_axi_wready_i & m_axi_wlast_o");
     let one = lit(fb + 1, 1);
     m.seq(
@@ -194,39 +244,67 @@ pub fn module(cfg: &EngineConfig, p: usize) -> Result<Module, ConfigError> {
         ],
     );
     m.seq_noreset(vec![if_("aw_fire", vec![set("wq_mem[wq_wp_q]", "aw_oh")])]);
+}
 
+/// R and B: each response goes to the client its ID's low `IDX_BITS` bits name, with ID 0.
+fn responses(m: &mut Module, ports: usize) {
+    let n = ports as u32;
     m.blank();
-    m.comment("R and B: back to the client named by the ID's low bits, with ID 0.");
-    for (ch, fields) in [("r", &["data", "resp", "last"][..]), ("b", &["resp"][..])] {
+    m.comment("R and B: back to the client named by the ID's low IDX_BITS bits, with ID 0.");
+    let mut body = Vec::new();
+    for ch in ["r", "b"] {
         let sel = format!("{ch}_sel");
-        m.vector(sel.clone());
-        if xb == 0 {
-            m.wire_assign(sel.clone(), n, lit(1, 1));
-        } else {
-            let idx = format!("{ch}_idx");
-            m.wire_assign(idx.clone(), xb, slice(&format!("m_axi_{ch}id_i"), xb - 1, 0));
-            m.wire_assign(sel.clone(), n, concat(p, |i| format!("({idx} == {})", lit(xb, i as u64))));
-        }
-        m.assign(
-            format!("m_axi_{ch}ready_o"),
-            format!("|({sel} & {})", concat(p, |i| format!("s{i}_axi_{ch}ready_i"))),
-        );
-        for i in 0..p {
-            m.assign(format!("s{i}_axi_{ch}valid_o"), format!("m_axi_{ch}valid_i & {sel}[{i}]"));
-            m.assign(format!("s{i}_axi_{ch}id_o"), lit(ib, 0));
-            for f in fields {
-                m.assign(format!("s{i}_axi_{ch}{f}_o"), format!("m_axi_{ch}{f}_i"));
-            }
+        m.reg(sel.clone(), n).width_param(&sel, "PORTS");
+        body.push(set(format!("{sel}[{C}]"), format!("m_axi_{ch}id_i[IDX_BITS-1:0] == {C}[IDX_BITS-1:0]")));
+    }
+    m.comb(vec![for_(C, "PORTS", body)]);
+    for (ch, fields) in [("r", &["data", "resp", "last"][..]), ("b", &["resp"][..])] {
+        m.assign(format!("m_axi_{ch}ready_o"), format!("|({ch}_sel & s_axi_{ch}ready_i)"));
+        m.assign(format!("s_axi_{ch}valid_o"), format!("{ch}_sel & {{PORTS{{m_axi_{ch}valid_i}}}}"));
+        m.assign(format!("s_axi_{ch}id_o"), "{(PORTS*ID_BITS){1'b0}}");
+        for f in fields {
+            m.assign(format!("s_axi_{ch}{f}_o"), format!("{{PORTS{{m_axi_{ch}{f}_i}}}}"));
         }
     }
+}
+
+/// The mux for `cfg`, `PORTS` defaulting to the engine's slots per port.
+///
+/// # Errors
+/// When the engine's client index does not fit `axi_id_bits`.
+pub fn module(cfg: &EngineConfig) -> Result<Module, ConfigError> {
+    let ports = super::super::engine::Clients::of(cfg).slots();
+    check(cfg, ports)?;
+    let mut m = Module::new(NAME);
+    m.doc("AXI4 port mux: PORTS managers (the s_axi_* buses, client i's signals at [i*W +: W] of each) onto");
+    m.doc(format!(
+        "one port (m_axi_*). Round-robin AR and AW arbiters; W beats follow the AW order (a {W_FIFO}-entry FIFO"
+    ));
+    m.doc(
+        "of granted clients, each until WLAST). Downstream ID = client index (IDX_BITS bits, zero-extended);",
+    );
+    m.doc(
+        "client IDs are ignored, R/B go back by the index with ID 0. See docs/rtl.md \"AXI4 memory side\".",
+    );
+    m.doc("PORTS: clients, 1 to 2^ID_BITS. ID_BITS, ADDR_BITS, DATA_BITS: AXI4 ID, address and data widths.");
+    m.param("PORTS", ports as i64)
+        .param("ID_BITS", i64::from(cfg.axi_id_bits))
+        .param("ADDR_BITS", i64::from(cfg.axi_addr_bits))
+        .param("DATA_BITS", i64::from(cfg.axi_data_bits));
+    declare_ports(&mut m, cfg, ports);
+    m.comment("Bits of a client index (the low bits of the downstream ID).");
+    m.localparam("IDX_BITS", 0, "(PORTS > 1) ? $clog2(PORTS) : 1");
+    m.comment("The grant of client 0 (the arbiters' +1 and -1).");
+    m.localparam("CLIENT0", ports as u32, "1").width_param("CLIENT0", "PORTS");
+    m.comment("The loop variable of the selections over the clients.");
+    m.integer(C);
+    arbiter(&mut m, cfg, ports, "ar", None);
+    w_order(&mut m, ports);
+    arbiter(&mut m, cfg, ports, "aw", Some("wq_room"));
+    w_channel(&mut m, cfg);
+    responses(&mut m, ports);
     m.blank();
-    m.comment("The clients' IDs (each client uses one) and the ID bits above the client index are not used.");
-    let mut unused: Vec<String> =
-        (0..p).flat_map(|i| [format!("s{i}_axi_arid_i"), format!("s{i}_axi_awid_i")]).collect();
-    if xb < ib {
-        unused.push(slice("m_axi_rid_i", ib - 1, xb));
-        unused.push(slice("m_axi_bid_i", ib - 1, xb));
-    }
-    m.wire_assign("unused_ids", 1, format!("^{{{}}}", unused.join(", ")));
+    m.comment("The clients' IDs (each client uses one) and the response IDs above IDX_BITS are not used.");
+    m.wire_assign("unused_ids", 1, "^{s_axi_arid_i, s_axi_awid_i, m_axi_rid_i, m_axi_bid_i}");
     Ok(m)
 }
