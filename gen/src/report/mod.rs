@@ -201,7 +201,7 @@ pub fn verilog_hash(cfg: &EngineConfig, top: &str) -> String {
     for f in files_for(cfg, top) {
         text.push_str(&f.name);
         text.push('\n');
-        text.push_str(f.text.split_once('\n').map_or("", |(_, body)| body));
+        text.push_str(f.body());
     }
     if let Some(boxes) = hierarchical_boxes(top) {
         text.push_str(&format!("blackbox {}", boxes.join(" ")));

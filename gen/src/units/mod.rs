@@ -74,6 +74,16 @@ impl VerilogFile {
     pub fn file_name(&self) -> String {
         format!("{}.v", self.name)
     }
+
+    /// The text without the generator's header line ([`crate::emit::HEADER`], which names the
+    /// configuration's hash): two configurations whose modules are otherwise the same text
+    /// give the same body. A text without that header is its own body.
+    pub fn body(&self) -> &str {
+        match self.text.split_once('\n') {
+            Some((first, rest)) if first.starts_with(crate::emit::HEADER) => rest,
+            _ => &self.text,
+        }
+    }
 }
 
 /// Names of the tops that get their own cosimulation model, in order.
@@ -117,14 +127,13 @@ pub fn run_time_tops() -> &'static [&'static str] {
 /// ([`top_modules`], [`run_time_tops`]) and whose text is the default configuration's (the
 /// header line aside), since the gates lint every top of the default configuration.
 pub fn lint_boxes(cfg: &EngineConfig, top: &str) -> Vec<String> {
-    let body = |t: &str| t.split_once('\n').map_or(String::new(), |(_, rest)| rest.to_string());
     let default = EngineConfig::default();
     let default_files = generate(&default);
     let checked: Vec<&str> = top_modules().iter().chain(run_time_tops()).copied().collect();
     files_for(cfg, top)
         .into_iter()
         .filter(|f| f.name != top && checked.contains(&f.name.as_str()))
-        .filter(|f| default_files.iter().any(|d| d.name == f.name && body(&d.text) == body(&f.text)))
+        .filter(|f| default_files.iter().any(|d| d.name == f.name && d.body() == f.body()))
         .map(|f| f.name)
         .collect()
 }
