@@ -487,8 +487,15 @@ module neo_engine (
       wire mem_wr_ready;
       wire [31:0] mem_wr_addr;
       wire [47:0] mem_wr_data;
-      neo_sort_seq u_seq (
+      wire core_clk;
+      neo_clock_gate u_gate (
         .clk_i(clk_i),
+        .rst_ni(rst_ni),
+        .en_i(job_valid[i] | ~job_ready[i]),
+        .clk_o(core_clk)
+      );
+      neo_sort_seq u_seq (
+        .clk_i(core_clk),
         .rst_ni(rst_ni),
         .job_valid_i(job_valid[i]),
         .job_ready_o(job_ready[i]),
@@ -516,7 +523,7 @@ module neo_engine (
         .cpl_len_o(cpl_len[i*32 +: 32])
       );
       neo_sort_core u_core (
-        .clk_i(clk_i),
+        .clk_i(core_clk),
         .rst_ni(rst_ni),
         .cmd_valid_i(cmd_valid),
         .cmd_ready_o(cmd_ready),

@@ -78,8 +78,12 @@ fn the_engine_glue_is_latch_free() {
         assert_eq!(n(mux), cfg.mem_channels as u64, "{what}");
         let has_pre = u64::from(cfg.has_preprocessing());
         assert_eq!(n(neo_gen::units::pre::engine::NAME), has_pre, "{what}");
-        // One gate per raster core, and the Preprocessing Engine's.
-        assert_eq!(n(neo_gen::units::clock_gate::NAME), cfg.raster_cores as u64 + has_pre, "{what}");
+        // One gate per sorting and raster core, and the Preprocessing Engine's.
+        assert_eq!(
+            n(neo_gen::units::clock_gate::NAME),
+            (cfg.sort_cores + cfg.raster_cores) as u64 + has_pre,
+            "{what}"
+        );
         let m = coarse_synth_stats(&files_for(&cfg, mux), mux).unwrap_or_else(|e| panic!("{what}: {e}"));
         assert_eq!(m.latches, 0, "{what}: {mux}: {:?}", m.cells_by_type);
         if !cfg.has_preprocessing() {

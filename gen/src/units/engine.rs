@@ -5,7 +5,8 @@
 //! - `u_ctrl` (`neo_frame_ctrl`): descriptors, the tile scheduler, results, raster dispatch; it
 //!   is memory client 0;
 //! - `g_sort[i]`: sequencer `u_seq` (`neo_sort_seq`), Sorting Core `u_core` and its AXI4 bridge
-//!   `u_bridge`; memory client `1 + i`;
+//!   `u_bridge`; memory client `1 + i`; the sequencer's and core's clock is gated by `u_gate`
+//!   while the sequencer is idle and no job is offered;
 //! - `g_raster[j]`: Rasterization Core `u_core` and its AXI4 bridge `u_bridge`; memory client
 //!   `1 + N + j`; the core's clock is gated by `u_gate` (`neo_clock_gate`) while it is idle (no
 //!   command offered or running, its done given), so an idle core holds every register;
@@ -418,7 +419,10 @@ fn pair(a: &str, b: &str) -> (String, String) {
     (a.to_string(), b.to_string())
 }
 
-/// `g_sort[i]`: sequencer, Sorting Core, bridge.
+/// `g_sort[i]`: sequencer, Sorting Core, bridge. The sequencer and the core are clocked by
+/// `u_gate` from the cycle a job is offered until the sequencer is idle again: it completes a job
+/// only after every command's done and an idle bridge, so the core is idle whenever the clock
+/// stops.
 fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     let (n, aw, lw) = (cl.sort as u32, cfg.addr_bits, cfg.len_bits);
     let (k, p) = (cl.ports, cl.slots());
@@ -434,7 +438,18 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     for (port, _, width) in &core_ports {
         items.push(w(wire_of(port), *width));
     }
-    let mut seq = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    items.push(w("core_clk", 1));
+    items.push(inst(
+        clock_gate::NAME,
+        "u_gate",
+        vec![
+            pair("clk_i", "clk_i"),
+            pair("rst_ni", "rst_ni"),
+            pair("en_i", "job_valid[i] | ~job_ready[i]"),
+            pair("clk_o", "core_clk"),
+        ],
+    ));
+    let mut seq = vec![pair("clk_i", "core_clk"), pair("rst_ni", "rst_ni")];
     seq.push(pair("job_valid_i", "job_valid[i]"));
     seq.push(pair("job_ready_o", "job_ready[i]"));
     for s in ["from_scratch", "prev", "prev_len", "list", "list_len", "next", "odd"] {
@@ -451,7 +466,7 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     seq.push(pair("cpl_ready_i", "cpl_ready[i]"));
     seq.push(pair("cpl_len_o", &format!("cpl_len[i*{lw} +: {lw}]")));
     items.push(inst(sort_seq::NAME, "u_seq", seq));
-    let mut core = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
+    let mut core = vec![pair("clk_i", "core_clk"), pair("rst_ni", "rst_ni")];
     core.extend(core_ports.iter().map(|(p, _, _)| (p.clone(), wire_of(p).to_string())));
     items.push(inst(sort_core::NAME, "u_core", core));
     let mut br = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
