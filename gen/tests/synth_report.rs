@@ -4,9 +4,6 @@
 //! top) fails this test until `neo gen --stats --all-topologies` is run again; that run reuses
 //! every entry whose hash still matches, so only the changed tops are synthesized. Checking is
 //! cheap (no tool runs: the files are generated and hashed, in under a second).
-//!
-//! Ignored until `reports/synth.json` is regenerated for the parametric port mux (about 45 min of
-//! Yosys on two idle cores: the SCU and the raster core's glue); then remove the `#[ignore]`.
 
 use neo_gen::report::{stats_tops, verilog_hash, SynthReport, YOSYS_COMMAND};
 use neo_gen::EngineConfig;
@@ -19,7 +16,6 @@ fn report() -> SynthReport {
 }
 
 #[test]
-#[ignore = "reports/synth.json predates neo_axi_mux and later Verilog changes: regenerate it with neo gen --stats --all-topologies, then remove this ignore"]
 fn the_synthesis_report_is_of_the_current_verilog() {
     let r = report();
     let cfg = EngineConfig::default();

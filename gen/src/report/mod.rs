@@ -186,11 +186,12 @@ pub fn hierarchical_boxes(top: &str) -> Option<Vec<String>> {
 }
 
 /// The tops `--stats` reports, in order: [`top_modules`], the port mux (at its default `PORTS`,
-/// the engine's slots per port: the engine's instances) and `neo_engine` (hierarchical tops after
-/// the units they box).
+/// the engine's slots per port: the engine's instances), the clock gate and `neo_engine`
+/// (hierarchical tops after the units they box).
 pub fn stats_tops() -> Vec<String> {
     let mut tops: Vec<String> = top_modules().iter().map(|s| s.to_string()).collect();
     tops.push(crate::units::axi::mux::NAME.to_string());
+    tops.push(crate::units::clock_gate::NAME.to_string());
     tops.push(engine::NAME.to_string());
     tops
 }

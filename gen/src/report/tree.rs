@@ -38,8 +38,8 @@ pub enum Part {
     Interconnect,
     /// Frame controller, control port, performance counters and the engine's own glue.
     Control,
-    /// The Preprocessing Engine and its clock gate (not yet synthesized by `neo gen --stats`:
-    /// its cells are unknown).
+    /// The Preprocessing Engine (not yet synthesized by `neo gen --stats`: its cells are
+    /// unknown).
     Preprocessing,
 }
 
@@ -53,13 +53,12 @@ impl Part {
         match module {
             m if m == sort_seq::NAME || m == sort_core::NAME => Part::Sorting,
             m if m == raster_core::NAME => Part::Rasterization,
-            m if m == crate::units::pre::engine::NAME || m == crate::units::clock_gate::NAME => {
-                Part::Preprocessing
-            }
+            m if m == crate::units::pre::engine::NAME => Part::Preprocessing,
             m if m == axi::sort_bridge::NAME || m == axi::raster_bridge::NAME || m == axi::mux::NAME => {
                 Part::Interconnect
             }
-            // The frame controller, the control port, the counters (and anything else).
+            // The frame controller, the control port, the counters, the clock gates of the
+            // cores and of the Preprocessing Engine (and anything else).
             _ => Part::Control,
         }
     }
@@ -310,7 +309,7 @@ mod tests {
     use super::*;
     use crate::report::{stats_tops, Hierarchy, UnitReport, YOSYS_COMMAND};
     use crate::tools::SynthStats;
-    use crate::units::{engine_regs, frame_ctrl, perf_counters};
+    use crate::units::{clock_gate, engine_regs, frame_ctrl, perf_counters};
 
     fn unit(name: &str, cells: u64, ffs: u64) -> UnitReport {
         UnitReport {
@@ -408,6 +407,7 @@ mod tests {
                 cells(&r, frame_ctrl::NAME)
                     + cells(&r, engine_regs::NAME)
                     + cells(&r, perf_counters::NAME)
+                    + (n + m + 1) * cells(&r, clock_gate::NAME)
                     + 7
             )
         );
