@@ -2,18 +2,24 @@
 //! ([`EngineSession`]) writes each frame's inputs into memory, the harness programs the control
 //! port through an AXI4-Lite driver, an [`AxiMemory`] serves the engine's AXI4 ports (with its
 //! latency, bandwidth, random delays and reordering across IDs) under an [`AxiChecker`] per
-//! port, and after `done` the frame buffer, every tile's next table, the results, the status
-//! registers and the golden counters are compared with [`Expected`].
+//! port and a [`HazardChecker`] over all ports (no RAW, WAR or WAW between transactions in
+//! flight at once; nothing in flight when `done` rises), and after `done` the frame buffer,
+//! every tile's next table, the results, the status registers and the golden counters are
+//! compared with [`Expected`]. A frame is declared hung after [`quiet_limit`] cycles without a
+//! handshake on any port, or after its [`frame_cycle_bound`] (from its work).
 //!
 //! Driver (AXI4-Lite manager, memory ports), golden model (the session's [`Expected`]) and
 //! checker (`Expected::compare`, the AXI checkers) are apart. The engine model is built at run
 //! time for any configuration ([`EngineModel::build`]) and cached by content hash.
 
-use crate::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, ManagerSignals};
+use crate::axi::{
+    AxiBinding, AxiChecker, AxiMemory, AxiTiming, HazardChecker, ManagerSignals, SubordinateSignals,
+};
 use crate::axil::{AxilManager, AxilOp};
 use crate::check::Checker;
 use crate::dut::PortIo;
 use crate::dynmodel::{BuildInfo, DynModel};
+pub use crate::engine_budget::{frame_cycle_bound, quiet_limit, FrameWork};
 use crate::rng::Rng;
 use crate::waves::WaveFormat;
 use neo_gen::interface::ModuleInterface;
@@ -129,18 +135,58 @@ pub fn port_limits(cfg: &EngineConfig) -> Vec<(usize, usize)> {
     ports
 }
 
-/// Memory timing and stimulus of a run.
+/// The name of memory client `c` (`EngineConfig::memory_clients` order): the frame controller,
+/// `sort core i`, `raster core j`, the Preprocessing Engine's lane ports and its list writer.
+pub fn client_name(cfg: &EngineConfig, c: usize) -> String {
+    let (n, m, p) = (cfg.sort_cores, cfg.raster_cores, cfg.pre_units);
+    match c {
+        0 => "frame controller".into(),
+        c if c <= n => format!("sort core {}", c - 1),
+        c if c <= n + m => format!("raster core {}", c - 1 - n),
+        c if c < cfg.memory_clients() => match c - 1 - n - m {
+            q if q < p => format!("preprocessing lane {q} (geometry, features)"),
+            q if q < 2 * p => format!("preprocessing lane {} (SH, previous features)", q - p),
+            _ => "preprocessing list writer".into(),
+        },
+        c => format!("no client ({c})"),
+    }
+}
+
+/// Names `(port, id)` by its memory client: the port mux's ID is the client's slot, and
+/// client `c` is in slot `c div K` of port `c mod K`.
+fn client_namer(cfg: &EngineConfig) -> crate::axi::hazard::Namer {
+    let cfg = cfg.clone();
+    Box::new(move |port, id| {
+        let c = id as usize * cfg.mem_channels + port;
+        format!("client {c}: {}", client_name(&cfg, c))
+    })
+}
+
+/// Whether one port had a handshake (AR, AW, W, R or B) this cycle.
+fn any_handshake(m: &ManagerSignals, s: &SubordinateSignals) -> bool {
+    (m.ar.is_some() && s.arready)
+        || (m.aw.is_some() && s.awready)
+        || (m.w.is_some() && s.wready)
+        || (s.r.is_some() && m.rready)
+        || (s.b.is_some() && m.bready)
+}
+
+/// Memory timing and stimulus of a run, and when a frame is declared hung.
 #[derive(Clone, Copy, Debug)]
 pub struct RunOptions {
     /// The memory's timing on every port.
     pub timing: AxiTiming,
-    /// Cycles a frame may take before the run is declared hung.
-    pub max_cycles: u64,
+    /// Cycles a frame may take before the run is declared hung; `None` (the default): the
+    /// frame's own bound from its work, [`frame_cycle_bound`].
+    pub max_cycles: Option<u64>,
+    /// Cycles without a handshake on any AXI4 port and without a change of `done` before the
+    /// run is declared hung; `None` (the default): the configuration's [`quiet_limit`].
+    pub max_quiet: Option<u64>,
 }
 
 impl Default for RunOptions {
     fn default() -> Self {
-        RunOptions { timing: AxiTiming::RANDOM, max_cycles: 200_000_000 }
+        RunOptions { timing: AxiTiming::RANDOM, max_cycles: None, max_quiet: None }
     }
 }
 
@@ -159,6 +205,12 @@ pub struct FrameReport {
     pub counters: Counters,
     /// Cycles the harness ran (programming and read-back included).
     pub harness_cycles: u64,
+    /// The cycles the frame was allowed before it counted as hung (the frame's
+    /// [`frame_cycle_bound`] or `RunOptions::max_cycles`).
+    pub cycle_bound: u64,
+    /// The longest stretch of the frame without a handshake on any AXI4 port (cycles), against
+    /// the watchdog's limit ([`quiet_limit`] or `RunOptions::max_quiet`).
+    pub longest_quiet: u64,
 }
 
 /// The engine under test, its memory and its control-port driver.
@@ -166,6 +218,7 @@ pub struct EngineRig {
     engine: EngineModel,
     axi: Vec<AxiBinding>,
     checkers: Vec<AxiChecker>,
+    hazards: HazardChecker,
     mem: AxiMemory,
     lite: AxilManager,
     checker: Checker,
@@ -196,6 +249,7 @@ impl EngineRig {
             .enumerate()
             .map(|(p, &(reads, writes))| AxiChecker::new(p, &format!("m{p}_axi"), reads, writes))
             .collect();
+        let hazards = HazardChecker::new(k).with_namer(client_namer(&engine.cfg));
         let mut rng = Rng::new(seed);
         let lite = AxilManager::bind(m, "s_axil_", rng.fork(1))?;
         let done = m.port("done_o")?;
@@ -213,6 +267,7 @@ impl EngineRig {
             engine,
             axi,
             checkers,
+            hazards,
             mem,
             lite,
             checker: Checker::new(TOP, seed),
@@ -243,8 +298,9 @@ impl EngineRig {
     }
 
     /// One clock cycle: drive the control port and the memory's outputs, settle, check and
-    /// sample every port, then the edge.
-    fn cycle(&mut self) -> Result<(), String> {
+    /// sample every port (the protocol checker of each, the ordering checker of all), then the
+    /// edge. Returns whether any AXI4 port had a handshake this cycle.
+    fn cycle(&mut self) -> Result<bool, String> {
         let model = &mut self.engine.model;
         self.lite.drive(model);
         for (k, b) in self.axi.iter().enumerate() {
@@ -252,21 +308,27 @@ impl EngineRig {
         }
         model.eval();
         let cycle = model.cycle();
-        let mut drives: Vec<ManagerSignals> = Vec::with_capacity(self.axi.len());
+        let seed = self.checker.seed;
+        let mut ports: Vec<(ManagerSignals, SubordinateSignals)> = Vec::with_capacity(self.axi.len());
         for (k, b) in self.axi.iter().enumerate() {
             let m = b.get_manager(model);
             let s = self.mem.outputs(k);
             if let Err(v) = self.checkers[k].observe(&m, &s) {
-                return Err(format!("cycle {cycle}: {v} (seed 0x{:016x})", self.checker.seed));
+                return Err(format!("cycle {cycle}: {v} (seed 0x{seed:016x})"));
             }
-            drives.push(m);
+            ports.push((m, s));
+        }
+        if let Err(h) = self.hazards.observe(&ports) {
+            return Err(format!("cycle {cycle}: {h} (seed 0x{seed:016x})"));
         }
         self.lite.sample(model, &self.checker);
-        for (k, m) in drives.iter().enumerate() {
+        let mut handshake = false;
+        for (k, (m, s)) in ports.iter().enumerate() {
+            handshake |= any_handshake(m, s);
             self.mem.tick(k, m);
         }
         model.tick();
-        Ok(())
+        Ok(handshake)
     }
 
     /// Runs cycles until the control-port driver has finished every queued operation.
@@ -294,14 +356,38 @@ impl EngineRig {
         self.settle_lite()?;
         while self.lite.pop().is_some() {}
         let started = self.engine.model.cycle();
+        let bound = self
+            .opts
+            .max_cycles
+            .unwrap_or_else(|| frame_cycle_bound(&self.engine.cfg, plan, &self.opts.timing));
+        let quiet_max = self.opts.max_quiet.unwrap_or_else(|| quiet_limit(&self.engine.cfg));
+        let (mut last_progress, mut longest_quiet) = (started, 0);
         while self.engine.model.io_get(self.done) == 0 {
-            self.cycle()?;
-            if self.engine.model.cycle() - started > self.opts.max_cycles {
-                return Err(format!(
-                    "frame {}: no done after {} cycles (seed 0x{:016x})",
-                    plan.frame, self.opts.max_cycles, self.checker.seed
+            let progress = self.cycle()?;
+            let now = self.engine.model.cycle();
+            if progress {
+                last_progress = now;
+            }
+            longest_quiet = longest_quiet.max(now - last_progress);
+            if now - last_progress > quiet_max {
+                return Err(self.hung(plan, &format!("no AXI4 handshake on any port for {quiet_max} cycles (the watchdog's limit, quiet_limit)")));
+            }
+            if now - started > bound {
+                return Err(self.hung(
+                    plan,
+                    &format!(
+                        "no done after {bound} cycles (the frame's bound from its work, frame_cycle_bound)"
+                    ),
                 ));
             }
+        }
+        if let Err(busy) = self.hazards.check_quiescent() {
+            return Err(format!(
+                "frame {}: EARLY DONE at cycle {}: done raised while transactions are in flight or offered (seed 0x{:016x}):{busy}",
+                plan.frame,
+                self.engine.model.cycle(),
+                self.checker.seed
+            ));
         }
         let regs = self.read_registers()?;
         let outcome =
@@ -315,7 +401,21 @@ impl EngineRig {
             rtl_cycles: outcome.counters.get(Counter::Cycles),
             counters: outcome.counters,
             harness_cycles: self.engine.model.cycle() - t0,
+            cycle_bound: bound,
+            longest_quiet,
         })
+    }
+
+    /// The error of a hung frame: `why`, the frame, cycle and seed, and what each port has in
+    /// flight.
+    fn hung(&self, plan: &FramePlan, why: &str) -> String {
+        format!(
+            "frame {}: HUNG at cycle {}: {why} (seed 0x{:016x}); in flight:{}",
+            plan.frame,
+            self.engine.model.cycle(),
+            self.checker.seed,
+            self.hazards.describe()
+        )
     }
 
     /// Reads STATUS, FIRST_OVERFLOW, OVERFLOWS and both words of every counter.

@@ -22,6 +22,7 @@ pub mod dup;
 pub mod dut;
 pub mod dynmodel;
 pub mod engine;
+pub mod engine_budget;
 pub mod engine_regs;
 pub mod fetch;
 pub mod fp;

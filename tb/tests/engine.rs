@@ -26,7 +26,7 @@ use neo_golden::scene::Scene;
 use neo_golden::shared::shared_file_for_test;
 use neo_golden::source::load_scene;
 use neo_tb::axi::AxiTiming;
-use neo_tb::engine::{ci_config, EngineModel, EngineRig, RunOptions};
+use neo_tb::engine::{ci_config, quiet_limit, EngineModel, EngineRig, FrameWork, RunOptions};
 use neo_tb::rng::SeedSplit;
 use neo_tb::waves::WaveFormat;
 use std::collections::HashMap;
@@ -154,6 +154,18 @@ fn run_case_full(
             error_pct(p.cycles, r.rtl_cycles),
             error_pct(p.sort_busy, r.counters.get(Counter::SortBusy)),
             error_pct(p.raster_busy, r.counters.get(Counter::RasterBusy)),
+        );
+        println!(
+            "case {} frame {}: hang limits: {} of the frame's bound {} cycles (measured/bound {:.3}; work {:?}), longest quiet stretch {} of the watchdog's {} ({:.3})",
+            c.name(),
+            r.frame,
+            r.rtl_cycles,
+            r.cycle_bound,
+            r.rtl_cycles as f64 / r.cycle_bound as f64,
+            FrameWork::of(&cfg, &plan),
+            r.longest_quiet,
+            quiet_limit(&cfg),
+            r.longest_quiet as f64 / quiet_limit(&cfg) as f64,
         );
         if mode == HostMode::Scene {
             println!(

@@ -1,7 +1,9 @@
 //! AXI4 on the test-bench side: one port's signals as plain structs ([`ManagerSignals`],
 //! [`SubordinateSignals`]), their binding to a Verilated model's ports ([`AxiBinding`]), a memory
-//! that serves AXI4 ports from a golden [`neo_golden::engine::memory::Memory`] ([`AxiMemory`]) and
-//! a protocol checker ([`AxiChecker`]); the port mux at a chosen client count as a model ([`mux`]).
+//! that serves AXI4 ports from a golden [`neo_golden::engine::memory::Memory`] ([`AxiMemory`]), a
+//! protocol checker per port ([`AxiChecker`]) and a memory-ordering checker over all ports of one
+//! manager ([`HazardChecker`]: RAW, WAR and WAW between transactions in flight at once); the port
+//! mux at a chosen client count as a model ([`mux`]).
 //!
 //! The subset is the engine contract's (docs/rtl.md "AXI4 memory side"): AR/AW `{id, addr, len,
 //! size, burst}`, R `{id, data, resp, last}`, W `{data, strb, last}`, B `{id, resp}`, 64-bit data.
@@ -12,11 +14,13 @@
 //! outputs for the next cycle) and [`AxiChecker::observe`] with both sides, then clock the model.
 
 pub mod checker;
+pub mod hazard;
 pub mod manager;
 pub mod memory;
 pub mod mux;
 
 pub use checker::{AxiChecker, Violation};
+pub use hazard::{Hazard, HazardChecker, HazardKind};
 pub use memory::{AxiMemory, AxiTiming};
 
 use crate::dut::{Dut, PortIo};
