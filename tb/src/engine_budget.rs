@@ -57,21 +57,7 @@ impl FrameWork {
     /// The work of `plan` on an engine of `cfg`.
     pub fn of(cfg: &EngineConfig, plan: &FramePlan) -> FrameWork {
         let c = &plan.expected.outcome.counters;
-        let bytes: u64 = [
-            Counter::RdDesc,
-            Counter::RdSort,
-            Counter::WrSort,
-            Counter::RdTable,
-            Counter::RdFeat,
-            Counter::WrTable,
-            Counter::WrPixel,
-            Counter::WrResult,
-            Counter::RdPre,
-            Counter::WrPre,
-        ]
-        .iter()
-        .map(|&k| c.get(k))
-        .sum();
+        let bytes: u64 = Counter::ALL.iter().filter(|k| k.counts_bytes()).map(|&k| c.get(k)).sum();
         let chunk = cfg.chunk.max(1) as u64;
         let longest =
             plan.expected.descriptors.iter().map(|d| u64::from(d.list_len) + u64::from(d.prev_len)).max();

@@ -419,6 +419,13 @@ fn pair(a: &str, b: &str) -> (String, String) {
     (a.to_string(), b.to_string())
 }
 
+/// A core's clock gate `u_gate` in a generate block: the wire `core_clk`, running while `en`.
+fn core_clock_gate(en: &str) -> [Item; 2] {
+    let ports =
+        vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni"), pair("en_i", en), pair("clk_o", "core_clk")];
+    [Item::Wire { name: "core_clk".into(), width: 1 }, inst(clock_gate::NAME, "u_gate", ports)]
+}
+
 /// `g_sort[i]`: sequencer, Sorting Core, bridge. The sequencer and the core are clocked by
 /// `u_gate` from the cycle a job is offered until the sequencer is idle again: it completes a job
 /// only after every command's done and an idle bridge, so the core is idle whenever the clock
@@ -438,17 +445,7 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     for (port, _, width) in &core_ports {
         items.push(w(wire_of(port), *width));
     }
-    items.push(w("core_clk", 1));
-    items.push(inst(
-        clock_gate::NAME,
-        "u_gate",
-        vec![
-            pair("clk_i", "clk_i"),
-            pair("rst_ni", "rst_ni"),
-            pair("en_i", "job_valid[i] | ~job_ready[i]"),
-            pair("clk_o", "core_clk"),
-        ],
-    ));
+    items.extend(core_clock_gate("job_valid[i] | ~job_ready[i]"));
     let mut seq = vec![pair("clk_i", "core_clk"), pair("rst_ni", "rst_ni")];
     seq.push(pair("job_valid_i", "job_valid[i]"));
     seq.push(pair("job_ready_o", "job_ready[i]"));
@@ -496,17 +493,7 @@ fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         .iter()
         .map(|(p, _, width)| Item::Wire { name: wire_of(p).into(), width: *width })
         .collect();
-    items.push(Item::Wire { name: "core_clk".into(), width: 1 });
-    items.push(inst(
-        clock_gate::NAME,
-        "u_gate",
-        vec![
-            pair("clk_i", "clk_i"),
-            pair("rst_ni", "rst_ni"),
-            pair("en_i", "ras_valid[j] | ~ras_ready[j] | ras_done[j]"),
-            pair("clk_o", "core_clk"),
-        ],
-    ));
+    items.extend(core_clock_gate("ras_valid[j] | ~ras_ready[j] | ras_done[j]"));
     let mut core = vec![pair("clk_i", "core_clk"), pair("rst_ni", "rst_ni")];
     core.push(pair("cmd_valid_i", "ras_valid[j]"));
     core.push(pair("cmd_ready_o", "ras_ready[j]"));

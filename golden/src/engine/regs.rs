@@ -381,6 +381,23 @@ impl Counter {
     pub const fn is_golden(self) -> bool {
         !matches!(self, Counter::Cycles | Counter::SortBusy | Counter::RasterBusy | Counter::PreBusy)
     }
+
+    /// Whether the counter counts bytes moved over the memory ports (`RD_*` and `WR_*`).
+    pub const fn counts_bytes(self) -> bool {
+        matches!(
+            self,
+            Counter::RdDesc
+                | Counter::RdSort
+                | Counter::WrSort
+                | Counter::RdTable
+                | Counter::RdFeat
+                | Counter::WrTable
+                | Counter::WrPixel
+                | Counter::WrResult
+                | Counter::RdPre
+                | Counter::WrPre
+        )
+    }
 }
 
 /// The values of every performance counter, indexed by [`Counter`].
@@ -556,6 +573,14 @@ impl FrameRegs {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_byte_counters_are_the_rd_and_wr_counters() {
+        for c in Counter::ALL {
+            let by_name = c.name().starts_with("RD_") || c.name().starts_with("WR_");
+            assert_eq!(c.counts_bytes(), by_name, "{}", c.name());
+        }
+    }
 
     #[test]
     fn register_offsets_are_the_contract() {
