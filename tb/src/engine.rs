@@ -382,12 +382,8 @@ impl EngineRig {
             }
         }
         if let Err(busy) = self.hazards.check_quiescent() {
-            return Err(format!(
-                "frame {}: EARLY DONE at cycle {}: done raised while transactions are in flight or offered (seed 0x{:016x}):{busy}",
-                plan.frame,
-                self.engine.model.cycle(),
-                self.checker.seed
-            ));
+            let why = "done raised while transactions are in flight or offered";
+            return Err(self.stopped(plan, "EARLY DONE", why, &busy));
         }
         let regs = self.read_registers()?;
         let outcome =
@@ -406,16 +402,20 @@ impl EngineRig {
         })
     }
 
-    /// The error of a hung frame: `why`, the frame, cycle and seed, and what each port has in
-    /// flight.
-    fn hung(&self, plan: &FramePlan, why: &str) -> String {
+    /// The error of a frame stopped as `what` (HUNG, EARLY DONE): `why`, the frame, cycle and
+    /// seed, and what each port has in flight (`in_flight`).
+    fn stopped(&self, plan: &FramePlan, what: &str, why: &str, in_flight: &str) -> String {
         format!(
-            "frame {}: HUNG at cycle {}: {why} (seed 0x{:016x}); in flight:{}",
+            "frame {}: {what} at cycle {}: {why} (seed 0x{:016x}); in flight:{in_flight}",
             plan.frame,
             self.engine.model.cycle(),
-            self.checker.seed,
-            self.hazards.describe()
+            self.checker.seed
         )
+    }
+
+    /// The error of a hung frame: [`Self::stopped`] with every port's transactions.
+    fn hung(&self, plan: &FramePlan, why: &str) -> String {
+        self.stopped(plan, "HUNG", why, &self.hazards.describe())
     }
 
     /// Reads STATUS, FIRST_OVERFLOW, OVERFLOWS and both words of every counter.

@@ -7,6 +7,7 @@ use crate::axi::AxiTiming;
 use neo_gen::EngineConfig;
 use neo_golden::engine::host::FramePlan;
 use neo_golden::engine::regs::Counter;
+use neo_golden::sort::merge_pass_count;
 
 /// How many times the longest legitimate quiet stretch the watchdog allows.
 pub const QUIET_MARGIN: u64 = 4;
@@ -30,7 +31,7 @@ pub fn quiet_limit(cfg: &EngineConfig) -> u64 {
     let pair_cycles = (u64::from(cfg.subtile.pow(2)) / cfg.scu_lanes.max(1) as u64).max(1);
     let raster = cfg.raster_feature_buffer as u64 * subtiles_per_scu * pair_cycles;
     let chunk = cfg.chunk as u64;
-    let sort = chunk * (u64::from((chunk / cfg.bsu_width.max(1) as u64).max(1).ilog2()) + 2);
+    let sort = chunk * (merge_pass_count(chunk, cfg.bsu_width.max(1) as u64) + 2);
     let lists = if cfg.has_preprocessing() { cfg.pre_max_tiles as u64 } else { 0 };
     QUIET_MARGIN * raster.max(sort).max(lists)
 }
@@ -61,8 +62,7 @@ impl FrameWork {
         let chunk = cfg.chunk.max(1) as u64;
         let longest =
             plan.expected.descriptors.iter().map(|d| u64::from(d.list_len) + u64::from(d.prev_len)).max();
-        let chunks = longest.unwrap_or(0).div_ceil(chunk).max(1);
-        let passes = 1 + u64::from(chunks.next_power_of_two().ilog2()) + 2;
+        let passes = 1 + merge_pass_count(longest.unwrap_or(0), chunk) + 2;
         FrameWork {
             tiles: u64::from(plan.regs.tiles),
             sorted: c.get(Counter::EntriesSorted),

@@ -215,32 +215,9 @@ impl HazardChecker {
         self.namer.as_ref().map(|n| n(port, id)).unwrap_or_default()
     }
 
-    fn read_access(&self, port: usize, r: &Read) -> Access {
-        let (start, end) = r.span();
-        Access {
-            port,
-            id: r.a.id,
-            write: false,
-            start,
-            end,
-            req: r.a,
-            since: r.since,
-            who: self.who(port, r.a.id),
-        }
-    }
-
-    fn write_access(&self, port: usize, w: &Write) -> Access {
-        let (start, end) = w.span();
-        Access {
-            port,
-            id: w.a.id,
-            write: true,
-            start,
-            end,
-            req: w.a,
-            since: w.since,
-            who: self.who(port, w.a.id),
-        }
+    /// Transaction `a` on `port`, in flight since `since`, covering `[start, end)`.
+    fn access(&self, port: usize, write: bool, a: Addr, since: u64, (start, end): (u64, u64)) -> Access {
+        Access { port, id: a.id, write, start, end, req: a, since, who: self.who(port, a.id) }
     }
 
     /// Every read and write in flight, port by port.
@@ -252,10 +229,10 @@ impl HazardChecker {
             ids.dedup();
             for id in ids {
                 for r in s.reads.get(&id).into_iter().flatten() {
-                    v.push(self.read_access(p, r));
+                    v.push(self.access(p, false, r.a, r.since, r.span()));
                 }
                 for w in s.writes.get(&id).into_iter().flatten() {
-                    v.push(self.write_access(p, w));
+                    v.push(self.access(p, true, w.a, w.since, w.span()));
                 }
             }
         }
@@ -320,7 +297,7 @@ impl HazardChecker {
             if write {
                 let r = s.reads.values().flatten().find(|r| overlap(r.span(), span));
                 if let Some(r) = r {
-                    return Some((HazardKind::War, self.read_access(p, r)));
+                    return Some((HazardKind::War, self.access(p, false, r.a, r.since, r.span())));
                 }
             }
             // One ID's writes on one port are ordered by AXI4.
@@ -331,7 +308,7 @@ impl HazardChecker {
                 .find(|w| overlap(w.span(), span) && !(write && p == port && w.a.id == id));
             if let Some(w) = w {
                 let kind = if write { HazardKind::Waw } else { HazardKind::Raw };
-                return Some((kind, self.write_access(p, w)));
+                return Some((kind, self.access(p, true, w.a, w.since, w.span())));
             }
         }
         None
@@ -389,7 +366,7 @@ impl HazardChecker {
                 let (read, wr) = (Read { a, taken: 0, since: self.cycle }, Write { a, since: self.cycle });
                 let span = if write { wr.span() } else { read.span() };
                 if let Some((kind, old)) = self.conflict(p, a.id, write, span) {
-                    let new = if write { self.write_access(p, &wr) } else { self.read_access(p, &read) };
+                    let new = self.access(p, write, a, self.cycle, span);
                     return Err(Box::new(Hazard { cycle: self.cycle, kind, new, old }));
                 }
                 let s = &mut self.ports[p];
