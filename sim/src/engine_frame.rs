@@ -27,8 +27,8 @@
 
 use neo_golden::engine::memory::{ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
 use neo_golden::engine::{
-    execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory, SchedulerPolicy,
-    TileTrace, COMPLETION_QUEUE_DEPTH,
+    client_port_slot, execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory,
+    SchedulerPolicy, TileTrace, COMPLETION_QUEUE_DEPTH,
 };
 use neo_golden::sort::SortMode;
 
@@ -272,7 +272,7 @@ impl<'a> EngineFrameModel<'a> {
             s.sorts.push(Job {
                 tile: i,
                 engine: 0,
-                port: (1 + c) % s.ports,
+                port: client_port_slot(1 + c, s.ports).0,
                 start,
                 work_end: start + dur[i][0],
                 end: 0.0,
@@ -302,6 +302,7 @@ struct Pending {
 struct Scheduling<'d> {
     dur: &'d [[f64; 2]],
     policy: SchedulerPolicy,
+    /// AXI4 ports; memory client `c` is on port `client_port_slot(c, ports).0`.
     ports: usize,
     sort_cores: usize,
     /// When each sequencer takes a new tile (infinite while its completion is pending).
@@ -368,7 +369,7 @@ impl<'d> Scheduling<'d> {
         let end = start + self.dur[p.tile][1];
         self.raster_free[r] = end;
         self.left.push(start);
-        let port = (1 + self.sort_cores + r) % self.ports;
+        let port = client_port_slot(1 + self.sort_cores + r, self.ports).0;
         self.rasters.push(Job { tile: p.tile, engine: 1, port, start, work_end: end, end });
         true
     }

@@ -124,13 +124,14 @@ pub fn client_limits(cfg: &EngineConfig) -> Vec<(usize, usize)> {
 }
 
 /// The transactions in flight each AXI port may carry, `(reads, writes)`: the sums of its
-/// clients' limits ([`client_limits`]; client `c` on port `c mod mem_channels`).
+/// clients' limits ([`client_limits`]; client `c` on its port of
+/// [`EngineConfig::client_port_slot`]).
 pub fn port_limits(cfg: &EngineConfig) -> Vec<(usize, usize)> {
-    let k = cfg.mem_channels;
-    let mut ports = vec![(0, 0); k];
+    let mut ports = vec![(0, 0); cfg.mem_channels];
     for (c, (r, w)) in client_limits(cfg).into_iter().enumerate() {
-        ports[c % k].0 += r;
-        ports[c % k].1 += w;
+        let (port, _) = cfg.client_port_slot(c);
+        ports[port].0 += r;
+        ports[port].1 += w;
     }
     ports
 }
@@ -152,12 +153,12 @@ pub fn client_name(cfg: &EngineConfig, c: usize) -> String {
     }
 }
 
-/// Names `(port, id)` by its memory client: the port mux's ID is the client's slot, and
-/// client `c` is in slot `c div K` of port `c mod K`.
+/// Names `(port, id)` by its memory client: the port mux's ID is the client's slot
+/// ([`EngineConfig::port_slot_client`]).
 fn client_namer(cfg: &EngineConfig) -> crate::axi::hazard::Namer {
     let cfg = cfg.clone();
     Box::new(move |port, id| {
-        let c = id as usize * cfg.mem_channels + port;
+        let c = cfg.port_slot_client(port, id as usize);
         format!("client {c}: {}", client_name(&cfg, c))
     })
 }

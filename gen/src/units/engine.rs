@@ -89,9 +89,12 @@ impl Clients {
         self.count().div_ceil(self.ports)
     }
 
-    /// Index of client `c` in the client buses: port `c mod K`, slot `c div K`.
+    /// Index of client `c` in the client buses, `port * slots + slot`: port `k`'s mux takes
+    /// entries `k*slots ..`, client `c` at its (port, slot) of golden's
+    /// [`neo_golden::engine::client_port_slot`].
     pub fn position(&self, c: usize) -> usize {
-        (c % self.ports) * self.slots() + c / self.ports
+        let (port, slot) = neo_golden::engine::client_port_slot(c, self.ports);
+        port * self.slots() + slot
     }
 }
 
@@ -675,7 +678,7 @@ mod tests {
             seen.dedup();
             assert_eq!(seen.len(), cl.count(), "{cl:?}");
             assert!(seen.iter().all(|&p| p < cl.ports * cl.slots()), "{cl:?}");
-            let per_port = |k: usize| (0..cl.count()).filter(|c| c % ports == k).count();
+            let per_port = |k: usize| (0..cl.count()).filter(|&c| cl.position(c) / cl.slots() == k).count();
             let (lo, hi) = ((0..ports).map(per_port).min().unwrap(), (0..ports).map(per_port).max().unwrap());
             assert!(hi - lo <= 1 && hi == cl.slots(), "{cl:?}: {lo}..{hi}");
         }

@@ -32,6 +32,7 @@
 //! | `neo_frame_ctrl` | engine: descriptors, scheduler, results, raster dispatch | yes      |
 //! | `neo_axi_sort_bridge` | sorting core memory port -> AXI4 manager          | yes       |
 //! | `neo_axi_raster_bridge` | raster core memory port -> AXI4 manager         | yes       |
+//! | `neo_axi_rr_arb` | the port mux's round-robin AR / AW request arbiter, parameter `PORTS` | no |
 //! | `neo_axi_mux`   | PORTS AXI4 managers -> one port, parameter `PORTS` (the engine's, and 3 and 8 in its bench) | run time |
 //! | `neo_clock_gate` | a falling-edge-enabled clock gate (the idle Preprocessing Engine) | no |
 //! | `neo_engine`    | the engine: control port, frame controller, cores, bridges, port muxes | run time |
@@ -165,6 +166,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         axi::sort_bridge::module(cfg),
         axi::raster_bridge::module(cfg),
     ];
+    all.push(axi::rr_arb::module(cfg));
     all.push(axi::mux::module(cfg)?);
     all.push(engine::module(cfg));
     all.extend(fp::modules(cfg));

@@ -348,7 +348,7 @@ impl EngineConfig {
         }
         // Each port's mux prefixes the ID with the client's slot: ceil(clients / ports) slots.
         let clients = self.memory_clients();
-        let slots = clients.div_ceil(self.mem_channels);
+        let slots = self.port_slots();
         let slot_bits = usize::BITS - (slots - 1).leading_zeros();
         if slot_bits > self.axi_id_bits {
             return err(format!(
@@ -400,6 +400,23 @@ impl EngineConfig {
     /// bridges, and the Preprocessing Engine's ([`EngineConfig::pre_managers`]).
     pub fn memory_clients(&self) -> usize {
         1 + self.sort_cores + self.raster_cores + self.pre_managers()
+    }
+
+    /// Slots of each AXI4 port's mux, `ceil(memory_clients / mem_channels)` (the clients are
+    /// dealt round the ports: [`client_port_slot`]).
+    pub fn port_slots(&self) -> usize {
+        self.memory_clients().div_ceil(self.mem_channels)
+    }
+
+    /// Memory client `c`'s `(port, slot)` on this engine's `mem_channels` ports
+    /// ([`client_port_slot`]).
+    pub fn client_port_slot(&self, c: usize) -> (usize, usize) {
+        client_port_slot(c, self.mem_channels)
+    }
+
+    /// The memory client in `slot` of `port` ([`port_slot_client`]).
+    pub fn port_slot_client(&self, port: usize, slot: usize) -> usize {
+        port_slot_client(port, slot, self.mem_channels)
     }
 
     /// Whether the engine has a Preprocessing Engine (`pre_units` > 0).
@@ -507,6 +524,22 @@ impl EngineConfig {
     pub fn bsu_latency(&self) -> usize {
         self.network().depth().div_ceil(self.register_every)
     }
+}
+
+/// Where memory client `c` (in [`EngineConfig::memory_clients`] order) sits among `ports` AXI4
+/// ports: `(port, slot)` = `(c mod ports, c div ports)`. The clients are dealt round the ports,
+/// so each port's mux has `ceil(clients / ports)` slots and the ports' loads differ by one
+/// client at most; the mux's downstream ID is the slot. The one definition of the mapping: gen
+/// wires the engine's client buses by it, tb sums each port's limits and names a port's IDs by
+/// it, and sim's engine model puts each core's traffic on its port by it.
+pub fn client_port_slot(c: usize, ports: usize) -> (usize, usize) {
+    (c % ports, c / ports)
+}
+
+/// The memory client in `slot` of `port` among `ports` ports: the inverse of
+/// [`client_port_slot`] (a slot past the last client gives an index past it too).
+pub fn port_slot_client(port: usize, slot: usize, ports: usize) -> usize {
+    slot * ports + port
 }
 
 #[cfg(test)]
@@ -661,5 +694,31 @@ mod tests {
                 proptest::prop_assert!(c.raster_config().subtiles_per_tile() <= 64);
             }
         }
+    }
+
+    #[test]
+    fn clients_are_dealt_round_the_ports_one_slot_each() {
+        for (sort_cores, raster_cores, pre_units, mem_channels) in
+            [(16, 4, 4, 4), (2, 1, 1, 2), (1, 1, 1, 1), (3, 2, 2, 4), (16, 4, 0, 3), (2, 1, 0, 16)]
+        {
+            let cfg =
+                EngineConfig { sort_cores, raster_cores, pre_units, mem_channels, ..EngineConfig::default() };
+            let (n, k, slots) = (cfg.memory_clients(), mem_channels, cfg.port_slots());
+            let places: Vec<(usize, usize)> = (0..n).map(|c| cfg.client_port_slot(c)).collect();
+            for (c, &(port, slot)) in places.iter().enumerate() {
+                assert!(port < k && slot < slots, "{cfg:?}: client {c} at {port}, {slot}");
+                assert_eq!(cfg.port_slot_client(port, slot), c, "{cfg:?}: client {c}");
+            }
+            let mut distinct = places.clone();
+            distinct.sort_unstable();
+            distinct.dedup();
+            assert_eq!(distinct.len(), n, "{cfg:?}: two clients share a slot");
+            // The ports' loads differ by one client at most; the fullest uses every slot.
+            let load = |p: usize| places.iter().filter(|q| q.0 == p).count();
+            let (lo, hi) = ((0..k).map(load).min().unwrap(), (0..k).map(load).max().unwrap());
+            assert!(hi - lo <= 1 && hi == slots, "{cfg:?}: loads {lo}..{hi}, {slots} slots");
+        }
+        // The default engine: client 5 (sort core 4) on port 1, slot 1.
+        assert_eq!(EngineConfig::default().client_port_slot(5), (1, 1));
     }
 }

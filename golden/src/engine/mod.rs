@@ -17,7 +17,8 @@ pub mod regs;
 
 pub use cases::{CaseScene, EngineCase};
 pub use config::{
-    ConfigError, EngineConfig, SchedulerPolicy, Topology, COMPLETION_QUEUE_DEPTH, ROUTING_FIFO_DEPTH,
+    client_port_slot, port_slot_client, ConfigError, EngineConfig, SchedulerPolicy, Topology,
+    COMPLETION_QUEUE_DEPTH, ROUTING_FIFO_DEPTH,
 };
 pub use expected::{Expected, Mismatch, Place, PreExpected};
 pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError};

@@ -3,7 +3,8 @@
 //! - [`sort_bridge`]: `neo_axi_sort_bridge`, a `neo_sort_core` memory port as an AXI4 manager;
 //! - [`raster_bridge`]: `neo_axi_raster_bridge`, a `neo_raster_core` memory port as an AXI4
 //!   manager;
-//! - [`mux`]: `neo_axi_mux #(PORTS)`, PORTS AXI4 managers onto one AXI4 port.
+//! - [`mux`]: `neo_axi_mux #(PORTS)`, PORTS AXI4 managers onto one AXI4 port;
+//! - [`rr_arb`]: `neo_axi_rr_arb #(PORTS)`, the mux's round-robin AR and AW request arbiter.
 //!
 //! Every manager drives the AXI4 subset of the engine contract (docs/rtl.md "AXI4 memory side"):
 //! AR/AW `{valid, ready, id, addr, len, size, burst}`, R `{valid, ready, id, data, resp, last}`,
@@ -11,6 +12,7 @@
 
 pub mod mux;
 pub mod raster_bridge;
+pub mod rr_arb;
 pub mod sort_bridge;
 
 use crate::emit::expr::{bits_for, lit, resize, slice};
@@ -316,14 +318,31 @@ mod tests {
             "  parameter integer PORTS = 8,\n",
             "  input  wire [PORTS*ADDR_BITS-1:0]     s_axi_araddr_i,\n",
             "  input  wire [PORTS*(DATA_BITS/8)-1:0] s_axi_wstrb_i,\n",
-            "  localparam [PORTS-1:0] CLIENT0 = 1;\n",
             "    for (c = 0; c < PORTS; c = c + 1) begin\n",
-            // The downstream ID is the client index.
-            "      ar_id = ar_id | ({ID_BITS{ar_oh[c]}} & c[ID_BITS-1:0]);\n",
-            "      ar_addr = ar_addr | ({ADDR_BITS{ar_oh[c]}} & s_axi_araddr_i[c*ADDR_BITS +: ADDR_BITS]);\n",
             "  assign s_axi_rdata_o = {PORTS{m_axi_rdata_i}};\n",
+            // One arbiter module, twice; the AW one offers only with room in the W-order FIFO.
+            "  neo_axi_rr_arb #(\n    .PORTS(PORTS),\n    .ID_BITS(ID_BITS),\n    .ADDR_BITS(ADDR_BITS)\n  ) u_ar_arb (\n",
+            "  ) u_aw_arb (\n",
+            "    .en_i(1'b1),\n",
+            "    .en_i(wq_room),\n",
+            "    .grant_o(aw_oh),\n",
+            "    .addr_i(s_axi_awaddr_i),\n",
+            "    .id_o(m_axi_arid_o),\n",
         ] {
             assert!(v.contains(l), "{l:?} missing in\n{v}");
+        }
+        assert_eq!(mux.instantiated(), vec![rr_arb::NAME.to_string()]);
+        let arb = rr_arb::module(&cfg).to_verilog();
+        for l in [
+            "  parameter integer PORTS = 8,\n",
+            "  localparam [PORTS-1:0] CLIENT0 = 1;\n",
+            "  assign oh = lock_q ? lock_oh_q : pick;\n",
+            "  assign valid_o = en_i & (|(oh & req_i));\n",
+            // The downstream ID is the client index.
+            "      sel_id = sel_id | ({ID_BITS{oh[c]}} & c[ID_BITS-1:0]);\n",
+            "      sel_addr = sel_addr | ({ADDR_BITS{oh[c]}} & addr_i[c*ADDR_BITS +: ADDR_BITS]);\n",
+        ] {
+            assert!(arb.contains(l), "{l:?} missing in\n{arb}");
         }
     }
 }

@@ -2,9 +2,10 @@
 //! `s_axi_*` buses, client `i`'s signals at `[i*W +: W]` of each; the engine's clients of one
 //! memory port) onto one AXI4 port (`m_axi_*`).
 //!
-//! - AR: round-robin arbiter (the client after the last granted one first); a request offered
-//!   downstream and not yet accepted keeps its grant (AXI: valid held with a stable payload).
-//! - AW: the same arbiter; each accepted AW pushes its client onto a W-order FIFO of
+//! - AR: round-robin arbiter, an instance `u_ar_arb` of [`rr_arb`] (the client after the last
+//!   granted one first); a request offered downstream and not yet accepted keeps its grant (AXI:
+//!   valid held with a stable payload).
+//! - AW: the same arbiter (`u_aw_arb`), its offer gated by the FIFO's room; each accepted AW pushes its client onto a W-order FIFO of
 //!   [`W_FIFO`] entries, and the W channel forwards the head client's beats until WLAST, so the
 //!   W beats downstream follow the AW order (AXI4 has no WID). AW waits while the FIFO is full.
 //! - IDs: the client's own ID is ignored (each client uses one ID); the downstream ID is the
@@ -12,13 +13,14 @@
 //!   that index; responses to a client carry ID 0.
 //! - No buffering on R, B: `rready`/`bready` downstream are the addressed client's.
 //!
-//! The granted client's fields are an AND-OR over the one-hot grant, written as a `for` loop over
-//! the clients in one `always @*` block per channel. The defaults of `ID_BITS`, `ADDR_BITS` and
+//! The granted client's fields (the W channel's here, the AR and AW ones in [`rr_arb`]) are an
+//! AND-OR over the one-hot grant, written as a `for` loop over the clients in one `always @*`
+//! block per channel ([`or_select`]). The defaults of `ID_BITS`, `ADDR_BITS` and
 //! `DATA_BITS` are the configuration's; the default of `PORTS` is the engine's slots per port
 //! ([`super::super::engine::Clients::slots`]), so the module synthesized on its own at its
 //! defaults is the engine's (`neo gen --stats` multiplies it by the engine's ports).
 
-use super::{index_bits, signals, AxiSignal};
+use super::{index_bits, rr_arb, signals, AxiSignal};
 use crate::emit::expr::{bits_for, lit};
 use crate::emit::{for_, if_, if_else, set, Module};
 use neo_golden::engine::{ConfigError, EngineConfig};
@@ -30,11 +32,11 @@ pub const NAME: &str = "neo_axi_mux";
 pub const W_FIFO: u32 = 4;
 
 /// The loop variable of the selections over the clients.
-const C: &str = "c";
+pub(super) const C: &str = "c";
 
 /// The parameter expression of `sig`'s width on the manager side (`ID_BITS`, ...), or `None`
 /// for the widths AXI4 fixes (LEN 8, SIZE 3, BURST 2, RESP 2, the one-bit signals).
-fn width_expr(sig: &AxiSignal) -> Option<&'static str> {
+pub(super) fn width_expr(sig: &AxiSignal) -> Option<&'static str> {
     match sig.name {
         "arid" | "rid" | "awid" | "bid" => Some("ID_BITS"),
         "araddr" | "awaddr" => Some("ADDR_BITS"),
@@ -45,7 +47,7 @@ fn width_expr(sig: &AxiSignal) -> Option<&'static str> {
 }
 
 /// `sig`'s width as a Verilog expression: its parameter or its fixed width.
-fn width_of(sig: &AxiSignal) -> String {
+pub(super) fn width_of(sig: &AxiSignal) -> String {
     width_expr(sig).map_or_else(|| sig.width.to_string(), str::to_string)
 }
 
@@ -117,7 +119,7 @@ fn gated(oh: &str, width: &str, x: &str) -> String {
 /// One `always @*` block: the fields `(reg, width expression, width at the defaults, value of
 /// client C)` of the client granted by one-hot `oh`, each an OR over the clients of
 /// `{W{oh[c]}} & value`, declared as `reg`s.
-fn or_select(m: &mut Module, oh: &str, fields: &[(String, String, u32, String)]) {
+pub(super) fn or_select(m: &mut Module, oh: &str, fields: &[(String, String, u32, String)]) {
     let mut init = Vec::new();
     let mut body = Vec::new();
     for (reg, w, width, value) in fields {
@@ -133,69 +135,37 @@ fn or_select(m: &mut Module, oh: &str, fields: &[(String, String, u32, String)])
     m.comb(init);
 }
 
-/// A round-robin arbiter for channel `ch` (`ar` or `aw`) over the clients' `{ch}valid`, gated by
-/// `en` (none: always enabled): declares `{ch}_oh` (the one-hot grant), `{ch}_fire`, drives
-/// `m_axi_{ch}*` from the granted client (its index as the ID) and the clients' `{ch}ready`.
-fn arbiter(m: &mut Module, cfg: &EngineConfig, ports: usize, ch: &str, en: Option<&str>) {
-    let n = ports as u32;
-    let req = format!("s_axi_{ch}valid_i");
+/// The request arbiter of channel `ch` (`ar` or `aw`): a [`rr_arb`] instance `u_{ch}_arb` between
+/// the clients' `s_axi_{ch}*` and `m_axi_{ch}*`, its offer gated by `en` (`1'b1`: always), its
+/// one-hot grant on wire `{ch}_oh`.
+fn arbiter(m: &mut Module, ports: usize, ch: &str, en: &str) {
     m.blank();
     m.comment(format!(
-        "{} arbiter: round robin from the client after the last grant; a grant offered downstream and not taken is held.",
+        "{}: the clients' requests one at a time, round robin; the granted client's index is the ID.",
         ch.to_uppercase()
     ));
-    for r in ["lock_oh_q", "mask_q"] {
-        m.reg(format!("{ch}_{r}"), n).width_param(&format!("{ch}_{r}"), "PORTS");
+    let oh = format!("{ch}_oh");
+    m.wire(oh.clone(), ports as u32).width_param(&oh, "PORTS");
+    let pair = |p: &str, e: String| (p.to_string(), e);
+    let mut conns = vec![
+        pair("clk_i", "clk_i".into()),
+        pair("rst_ni", "rst_ni".into()),
+        pair("req_i", format!("s_axi_{ch}valid_i")),
+        pair("ready_o", format!("s_axi_{ch}ready_o")),
+    ];
+    for f in rr_arb::FIELDS {
+        conns.push(pair(&format!("{f}_i"), format!("s_axi_{ch}{f}_i")));
     }
-    m.reg(format!("{ch}_lock_q"), 1);
-    for (w, rhs) in [
-        ("hi", format!("{req} & {ch}_mask_q")),
-        ("src", format!("(|{ch}_hi) ? {ch}_hi : {req}")),
-        ("pick", format!("{ch}_src & (~{ch}_src + CLIENT0)")),
-        ("oh", format!("{ch}_lock_q ? {ch}_lock_oh_q : {ch}_pick")),
-    ] {
-        let name = format!("{ch}_{w}");
-        m.wire_assign(name.clone(), n, rhs).width_param(&name, "PORTS");
+    conns.push(pair("en_i", en.to_string()));
+    conns.push(pair("valid_o", format!("m_axi_{ch}valid_o")));
+    conns.push(pair("ready_i", format!("m_axi_{ch}ready_i")));
+    conns.push(pair("grant_o", oh));
+    conns.push(pair("id_o", format!("m_axi_{ch}id_o")));
+    for f in rr_arb::FIELDS {
+        conns.push(pair(&format!("{f}_o"), format!("m_axi_{ch}{f}_o")));
     }
-    let gate = en.map_or(String::new(), |e| format!("{e} & "));
-    m.assign(format!("m_axi_{ch}valid_o"), format!("{gate}(|({ch}_oh & {req}))"));
-    m.wire_assign(format!("{ch}_fire"), 1, format!("m_axi_{ch}valid_o & m_axi_{ch}ready_i"));
-    m.assign(format!("s_axi_{ch}ready_o"), format!("{ch}_oh & {{PORTS{{{gate}m_axi_{ch}ready_i}}}}"));
-    m.comment("The granted client's request; its index is the downstream ID.");
-    let sigs = signals(cfg);
-    let sig = |f: &str| *sigs.iter().find(|s| s.name == format!("{ch}{f}")).expect("AXI field");
-    let mut fields =
-        vec![(format!("{ch}_id"), "ID_BITS".to_string(), cfg.axi_id_bits, format!("{C}[ID_BITS-1:0]"))];
-    for f in ["addr", "len", "size", "burst"] {
-        let s = sig(f);
-        fields.push((format!("{ch}_{f}"), width_of(&s), s.width, client_field(&s)));
-    }
-    or_select(m, &format!("{ch}_oh"), &fields);
-    for f in ["id", "addr", "len", "size", "burst"] {
-        m.assign(format!("m_axi_{ch}{f}_o"), format!("{ch}_{f}"));
-    }
-    let one = "CLIENT0";
-    m.seq(
-        vec![
-            set(format!("{ch}_lock_q"), lit(1, 0)),
-            set(format!("{ch}_lock_oh_q"), "{PORTS{1'b0}}"),
-            set(format!("{ch}_mask_q"), "{PORTS{1'b0}}"),
-        ],
-        vec![if_else(
-            format!("{ch}_fire"),
-            vec![
-                set(format!("{ch}_lock_q"), lit(1, 0)),
-                set(format!("{ch}_mask_q"), format!("~({ch}_oh | ({ch}_oh - {one}))")),
-            ],
-            vec![if_(
-                format!("m_axi_{ch}valid_o"),
-                vec![
-                    set(format!("{ch}_lock_q"), lit(1, 1)),
-                    set(format!("{ch}_lock_oh_q"), format!("{ch}_oh")),
-                ],
-            )],
-        )],
-    );
+    let params = ["PORTS", "ID_BITS", "ADDR_BITS"].iter().map(|p| (p.to_string(), p.to_string())).collect();
+    m.instance_with(rr_arb::NAME, format!("u_{ch}_arb"), params, conns);
 }
 
 /// The W-order FIFO (`wq_*`: the one-hot grants of the accepted AWs, [`W_FIFO`] at most) and
@@ -277,15 +247,12 @@ pub fn module(cfg: &EngineConfig) -> Result<Module, ConfigError> {
     check(cfg, ports)?;
     let mut m = Module::new(NAME);
     m.doc("AXI4 port mux: PORTS managers (the s_axi_* buses, client i's signals at [i*W +: W] of each) onto");
+    m.doc("one port (m_axi_*). Round-robin AR and AW arbiters (neo_axi_rr_arb u_ar_arb, u_aw_arb); W beats follow");
     m.doc(format!(
-        "one port (m_axi_*). Round-robin AR and AW arbiters; W beats follow the AW order (a {W_FIFO}-entry FIFO"
+        "the AW order (a {W_FIFO}-entry FIFO of granted clients, each until WLAST). Downstream ID = client index"
     ));
-    m.doc(
-        "of granted clients, each until WLAST). Downstream ID = client index (IDX_BITS bits, zero-extended);",
-    );
-    m.doc(
-        "client IDs are ignored, R/B go back by the index with ID 0. See docs/rtl.md \"AXI4 memory side\".",
-    );
+    m.doc("(IDX_BITS bits, zero-extended); client IDs are ignored, R/B go back by the index with ID 0.");
+    m.doc("See docs/rtl.md \"AXI4 memory side\".");
     m.doc("PORTS: clients, 1 to 2^ID_BITS. ID_BITS, ADDR_BITS, DATA_BITS: AXI4 ID, address and data widths.");
     m.param("PORTS", ports as i64)
         .param("ID_BITS", i64::from(cfg.axi_id_bits))
@@ -294,17 +261,18 @@ pub fn module(cfg: &EngineConfig) -> Result<Module, ConfigError> {
     declare_ports(&mut m, cfg, ports);
     m.comment("Bits of a client index (the low bits of the downstream ID).");
     m.localparam("IDX_BITS", 0, "(PORTS > 1) ? $clog2(PORTS) : 1");
-    m.comment("The grant of client 0 (the arbiters' +1 and -1).");
-    m.localparam("CLIENT0", ports as u32, "1").width_param("CLIENT0", "PORTS");
     m.comment("The loop variable of the selections over the clients.");
     m.integer(C);
-    arbiter(&mut m, cfg, ports, "ar", None);
+    arbiter(&mut m, ports, "ar", "1'b1");
     w_order(&mut m, ports);
-    arbiter(&mut m, cfg, ports, "aw", Some("wq_room"));
+    arbiter(&mut m, ports, "aw", "wq_room");
+    m.wire_assign("aw_fire", 1, "m_axi_awvalid_o & m_axi_awready_i");
     w_channel(&mut m, cfg);
     responses(&mut m, ports);
     m.blank();
     m.comment("The clients' IDs (each client uses one) and the response IDs above IDX_BITS are not used.");
     m.wire_assign("unused_ids", 1, "^{s_axi_arid_i, s_axi_awid_i, m_axi_rid_i, m_axi_bid_i}");
+    m.comment("Nor is the AR grant (the R beats go back by their ID).");
+    m.wire_assign("unused_ar_grant", 1, "^ar_oh");
     Ok(m)
 }
