@@ -357,6 +357,7 @@ module neo_engine (
   wire [31:0] job_list;
   wire [31:0] job_list_len;
   wire [31:0] job_next;
+  wire [3:0] job_dps_passes;
   wire job_odd;
   wire [511:0] job_scratch;
   wire [15:0] cpl_valid;
@@ -434,6 +435,7 @@ module neo_engine (
     .job_list_o(job_list),
     .job_list_len_o(job_list_len),
     .job_next_o(job_next),
+    .job_dps_passes_o(job_dps_passes),
     .job_odd_o(job_odd),
     .job_scratch_o(job_scratch),
     .cpl_ready_o(cpl_ready),
@@ -505,6 +507,7 @@ module neo_engine (
         .job_list_i(job_list),
         .job_list_len_i(job_list_len),
         .job_next_i(job_next),
+        .job_dps_passes_i(job_dps_passes),
         .job_odd_i(job_odd),
         .job_scratch_i(job_scratch[i*32 +: 32]),
         .cmd_valid_o(cmd_valid),

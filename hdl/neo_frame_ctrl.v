@@ -56,6 +56,7 @@ module neo_frame_ctrl (
   output wire [31:0]  job_list_o,
   output wire [31:0]  job_list_len_o,
   output wire [31:0]  job_next_o,
+  output wire [3:0]   job_dps_passes_o,       // descriptor: DPS passes
   output wire         job_odd_o,              // FRAME[0]
   output wire [511:0] job_scratch_o,          // sequencer k's scratch entry base at [k*AW +: AW]
   input  wire [15:0]  cpl_valid_i,            // per sequencer: tile sorted
@@ -114,6 +115,7 @@ module neo_frame_ctrl (
   reg  dv_q;
   reg  [31:0] dt_q;
   reg  [20:0] w0_q;
+  reg  [3:0] passes_q;
   reg  [63:0] w1_q;
   reg  [63:0] w2_q;
   reg  [31:0] w3_q;
@@ -173,6 +175,7 @@ module neo_frame_ctrl (
       case (beat_q)
         2'd0: begin
           w0_q <= {r_word[32], r_word[25:16], r_word[9:0]};
+          passes_q <= r_word[43:40];
         end
         2'd1: begin
           w1_q <= r_word;
@@ -269,6 +272,7 @@ module neo_frame_ctrl (
   assign job_list_o = w2_q[31:0];
   assign job_list_len_o = w2_q[63:32];
   assign job_next_o = w3_q[31:0];
+  assign job_dps_passes_o = passes_q;
   assign job_odd_o = frame_i[0];
   wire [31:0] scratch_entry;
   assign scratch_entry = {3'd0, scratch_base_i[31:3]};

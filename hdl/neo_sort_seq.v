@@ -12,7 +12,8 @@ module neo_sort_seq (
   input  wire [31:0] job_list_i,          // descriptor: incoming list (entry address)
   input  wire [31:0] job_list_len_i,      // descriptor: its entries
   input  wire [31:0] job_next_i,          // descriptor: next table (entry address)
-  input  wire        job_odd_i,           // frame parity (FRAME[0]): DPS chunks shifted by C/2
+  input  wire [3:0]  job_dps_passes_i,    // descriptor: DPS passes of a reuse tile (0: none)
+  input  wire        job_odd_i,           // frame parity (FRAME[0]): DPS chunks shifted by C/2 on odd frame + pass
   input  wire [31:0] job_scratch_i,       // this core's first scratch region (entry address)
   output wire        cmd_valid_o,         // to neo_sort_core: command
   input  wire        cmd_ready_i,         // 
@@ -48,12 +49,15 @@ module neo_sort_seq (
   reg  [31:0] n_q;
   reg  [31:0] next_q;
   reg  [31:0] scr0_q;
-  // Plan state: stage mode, offset in the stage, input run of a merge pass, scratch written.
+  reg  [3:0] passes_q;
+  // Plan state: stage mode, offset in the stage, input run of a merge pass, scratch written,
+  // DPS pass.
   reg  [1:0] state_q;
   reg  [1:0] mode_q;
   reg  [31:0] pos_q;
   reg  [31:0] half_q;
   reg  buf_q;
+  reg  [3:0] pass_q;
   reg  [8:0] out_q;
   reg  [31:0] dlen_q;
   reg  [31:0] cpl_len_q;
@@ -71,9 +75,11 @@ module neo_sort_seq (
   assign total = is_dps ? plen_q : n_q;
   wire [31:0] rem;
   assign rem = total - pos_q;
-  // Longest A: a chunk; C/2 for the first DPS chunk of an odd frame; a run for a pass.
+  // Longest A: a chunk; C/2 for the first DPS chunk of an odd frame + pass; a run for a pass.
+  wire dps_odd;
+  assign dps_odd = odd_q ^ pass_q[0];
   wire [31:0] lim;
-  assign lim = is_merge ? half_q : ((is_dps & odd_q & (pos_q == 32'd0)) ? 32'd128 : 32'd256);
+  assign lim = is_merge ? half_q : ((is_dps & dps_odd & (pos_q == 32'd0)) ? 32'd128 : 32'd256);
   wire [31:0] len_a;
   assign len_a = is_md ? plen_q : (((lim) < (rem)) ? (lim) : (rem));
   wire [31:0] rem_b;
@@ -130,6 +136,8 @@ module neo_sort_seq (
   end
 
   // Plan: IDLE -> (ISSUE -> WAIT)* per stage -> CPL -> IDLE.
+  wire [3:0] pass_next;
+  assign pass_next = pass_q + 4'd1;
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       fs_q <= 1'b0;
@@ -140,11 +148,13 @@ module neo_sort_seq (
       n_q <= 32'd0;
       next_q <= 32'd0;
       scr0_q <= 32'd0;
+      passes_q <= 4'd0;
       state_q <= S_IDLE;
       mode_q <= M_SORT;
       pos_q <= 32'd0;
       half_q <= 32'd256;
       buf_q <= 1'b0;
+      pass_q <= 4'd0;
       cpl_len_q <= 32'd0;
     end else begin
       case (state_q)
@@ -158,6 +168,8 @@ module neo_sort_seq (
             n_q <= job_list_len_i;
             next_q <= job_next_i;
             scr0_q <= job_scratch_i;
+            passes_q <= job_dps_passes_i;
+            pass_q <= 4'd0;
             half_q <= 32'd256;
             buf_q <= 1'b0;
             if (job_list_len_i != 32'd0) begin
@@ -167,7 +179,7 @@ module neo_sort_seq (
             end else if (job_from_scratch_i) begin
               cpl_len_q <= 32'd0;
               state_q <= S_CPL;
-            end else if (job_prev_len_i != 32'd0) begin
+            end else if ((job_prev_len_i != 32'd0) & (job_dps_passes_i != 4'd0)) begin
               mode_q <= M_DPS;
               pos_q <= 32'd0;
               state_q <= S_ISSUE;
@@ -190,9 +202,16 @@ module neo_sort_seq (
           if (barrier_ok) begin
             case (mode_q)
               M_DPS: begin
-                mode_q <= M_MD;
-                pos_q <= 32'd0;
-                state_q <= S_ISSUE;
+                if (pass_next != passes_q) begin
+                  mode_q <= M_DPS;
+                  pos_q <= 32'd0;
+                  state_q <= S_ISSUE;
+                  pass_q <= pass_next;
+                end else begin
+                  mode_q <= M_MD;
+                  pos_q <= 32'd0;
+                  state_q <= S_ISSUE;
+                end
               end
               M_MD: begin
                 cpl_len_q <= dlen_q;
@@ -203,7 +222,7 @@ module neo_sort_seq (
                   if (fs_q) begin
                     cpl_len_q <= n_q;
                     state_q <= S_CPL;
-                  end else if (plen_q != 32'd0) begin
+                  end else if ((plen_q != 32'd0) & (passes_q != 4'd0)) begin
                     mode_q <= M_DPS;
                     pos_q <= 32'd0;
                     state_q <= S_ISSUE;

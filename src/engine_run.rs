@@ -8,6 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use neo_golden::engine::host::FramePlan;
 use neo_golden::engine::memory::Memory;
 use neo_golden::engine::{EngineConfig, EngineSession, HostMode};
+use neo_golden::pipeline::Strategy;
 use neo_golden::scene::Scene;
 use neo_golden::source;
 use neo_golden::trajectory::{parse_trajectory, Trajectory};
@@ -42,14 +43,15 @@ pub fn trajectory_at(spec: &str, scene: &Scene, frames: usize, res: (u32, u32)) 
 }
 
 /// The golden host session of `traj` on `scene` for engine `cfg`, feeding the engine as `mode`
-/// says.
+/// says, its tables sorted by `strategy` (`neo`, or `adaptive` with per-tile DPS passes).
 pub fn session<'s>(
     scene: &'s Scene,
     traj: Trajectory,
     cfg: &EngineConfig,
     mode: HostMode,
+    strategy: Strategy,
 ) -> Result<EngineSession<'s>> {
-    EngineSession::with_mode(scene, traj, cfg, mode).context("engine session")
+    EngineSession::with_strategy(scene, traj, cfg, mode, strategy).context("engine session")
 }
 
 /// The host mode named by `--input`: `scene` or `lists`.

@@ -20,6 +20,8 @@ struct Seen {
     empty_tiles: usize,
     partial_tiles: usize,
     reused_entries: u64,
+    /// Reuse tiles by their descriptor's DPS passes (index = passes).
+    passes: [usize; 16],
     /// Scene mode: incoming entries the engine listed, and its preprocessing reads.
     incoming: u64,
     pre_read: u64,
@@ -50,6 +52,9 @@ fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
             let full = (tile_x as u32 + 1) * tile <= w && (tile_y as u32 + 1) * tile <= h;
             seen.partial_tiles += !full as usize;
             seen.reused_entries += if d.from_scratch { 0 } else { d.prev_len as u64 };
+            if !d.from_scratch && d.prev_len > 0 {
+                seen.passes[d.dps_passes as usize] += 1;
+            }
         }
         if std::env::var_os("ENGINE_DEBUG").is_some() {
             let v: Vec<u64> = plan.expected.descriptors.iter().map(|d| d.entries_in()).collect();
@@ -72,7 +77,7 @@ fn case(
     mode: HostMode,
 ) -> Seen {
     let (traj, cfg) = c.setup(scene, how, frames, res, base).expect("case setup");
-    let mut s = EngineSession::with_mode(scene, traj, &cfg, mode).expect("session");
+    let mut s = EngineSession::with_strategy(scene, traj, &cfg, mode, c.strategy()).expect("session");
     let seen = run(&mut s, &cfg);
     assert_eq!(seen.frames, frames, "{} ({mode:?})", c.name());
     if mode == HostMode::Scene {
@@ -98,7 +103,17 @@ fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
         }
         EngineCase::ManyCores => assert!(s.tiles < cfg.sort_cores && s.tiles < cfg.raster_cores, "{name}"),
         EngineCase::Turn => assert!(!s.from_scratch[1], "{name}: frame 1 reuses the tables: {s:?}"),
+        EngineCase::Adaptive => {
+            assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
+            let more = s.passes[2..].iter().sum::<usize>();
+            assert!(s.passes[1] > 0 && more > 0, "{name}: tiles with one and with more DPS passes: {s:?}");
+        }
         _ => {
+            assert_eq!(
+                s.passes[2..].iter().sum::<usize>() + s.passes[0],
+                0,
+                "{name}: Neo's single pass: {s:?}"
+            );
             assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
             assert!(s.reused_entries > 0, "{name}: tables reused");
             assert!(s.overflows.iter().all(|&o| o == 0), "{name}: no overflow");

@@ -11,6 +11,7 @@ use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use indicatif::ProgressBar;
 use neo_golden::engine::Counter;
+use neo_golden::pipeline::Strategy;
 use neo_golden::source;
 use neo_golden::trajectory::parse_resolution;
 use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
@@ -56,6 +57,11 @@ pub struct CosimArgs {
     /// feature words; the Preprocessing Engine is off).
     #[arg(long, default_value = "scene")]
     pub input: String,
+    /// The sorting strategy the host plans and the engine runs: `neo` (one DPS pass per reuse
+    /// tile) or `adaptive:wide=1,resort=0[,budget=B,max=P]` (the per-tile DPS passes of golden's
+    /// adaptive policy, written into the descriptors).
+    #[arg(long, default_value = "neo")]
+    pub sort: String,
     /// Print one JSON record per frame instead of text.
     #[arg(long)]
     pub json: bool,
@@ -81,7 +87,8 @@ pub fn run(a: CosimArgs) -> Result<()> {
     };
     let (scene, _) = source::load_scene(&a.scene.scene, a.strict.strict)?;
     let traj = engine_run::trajectory_at(&a.trajectory.trajectory, &scene, a.frames, a.res)?;
-    let mut session = engine_run::session(&scene, traj, &cfg, mode)?;
+    let strategy: Strategy = a.sort.parse().map_err(|e| anyhow!("--sort {:?}: {e}", a.sort))?;
+    let mut session = engine_run::session(&scene, traj, &cfg, mode, strategy)?;
     eprintln!(
         "neo cosim: {} Gaussians, {} tiles, {} frames, engine {} + {} cores, {} ports, seed 0x{seed:016x}",
         scene.len(),

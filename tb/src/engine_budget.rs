@@ -46,7 +46,8 @@ pub struct FrameWork {
     pub sorted: u64,
     /// Entries the Rasterization Cores raster (`ENTRIES_RASTERED`).
     pub rastered: u64,
-    /// Merge passes of the longest sorted tile (its conventional sort, DPS and MERGE_DELETE).
+    /// Merge passes of the longest sorted tile (its conventional sort, the frame's most DPS
+    /// passes and MERGE_DELETE).
     pub passes: u64,
     /// 8-byte beats over all AXI4 ports (every byte counter, reads and writes).
     pub beats: u64,
@@ -62,7 +63,10 @@ impl FrameWork {
         let chunk = cfg.chunk.max(1) as u64;
         let longest =
             plan.expected.descriptors.iter().map(|d| u64::from(d.list_len) + u64::from(d.prev_len)).max();
-        let passes = 1 + merge_pass_count(longest.unwrap_or(0), chunk) + 2;
+        // The conventional sort's stages, the most DPS passes of a tile (at least one) and the
+        // MERGE_DELETE.
+        let dps = plan.expected.descriptors.iter().map(|d| u64::from(d.dps_passes)).max().unwrap_or(0).max(1);
+        let passes = 1 + merge_pass_count(longest.unwrap_or(0), chunk) + dps + 1;
         FrameWork {
             tiles: u64::from(plan.regs.tiles),
             sorted: c.get(Counter::EntriesSorted),

@@ -24,6 +24,7 @@ use crate::dut::Dut;
 use crate::models::NeoFrameCtrl;
 use crate::rng::Rng;
 use neo_gen::{EngineConfig, SchedulerPolicy};
+use neo_golden::engine::memory::MAX_DPS_PASSES;
 use neo_golden::engine::{FrameRegs, Memory, TileDescriptor, TileResult};
 use std::collections::VecDeque;
 
@@ -67,6 +68,7 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize) -> FrameCase
                 list: rng.next_u32(),
                 list_len,
                 next: 0x100_0000 + 0x40 * t as u32,
+                dps_passes: rng.below(MAX_DPS_PASSES as u64 + 1) as u8,
             }
         })
         .collect();
@@ -350,6 +352,7 @@ impl FrameBench {
                     ("job_prev_len_o", d.prev_len as u64),
                     ("job_list_o", d.list as u64),
                     ("job_list_len_o", d.list_len as u64),
+                    ("job_dps_passes_o", (d.dps_passes & MAX_DPS_PASSES) as u64),
                     ("job_odd_o", (regs.frame & 1) as u64),
                 ];
                 for (f, w) in fields {

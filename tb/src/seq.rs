@@ -19,6 +19,7 @@ use crate::check::Checker;
 use crate::models::NeoSortSeq;
 use crate::rng::Rng;
 use neo_gen::EngineConfig;
+use neo_golden::engine::memory::MAX_DPS_PASSES;
 use neo_golden::engine::{run_command, tile_plan, FrameRegs, Memory, TileCmd, TileDescriptor};
 use neo_golden::sort::{SortMode, Sorter};
 use std::collections::VecDeque;
@@ -181,6 +182,7 @@ impl SeqBench {
         dut.set_job_list_i(d.list as u64);
         dut.set_job_list_len_i(d.list_len as u64);
         dut.set_job_next_i(d.next as u64);
+        dut.set_job_dps_passes_i((d.dps_passes & MAX_DPS_PASSES) as u64);
         dut.set_job_odd_i(odd);
         dut.set_job_scratch_i(scratch & mask(self.cfg.addr_bits));
     }
@@ -361,7 +363,8 @@ pub fn fill(cfg: &EngineConfig, rng: &mut Rng, mem: &mut Memory, d: &TileDescrip
 }
 
 /// A random descriptor: list and previous lengths drawn from the edge cases (0, 1, `C - 1`, `C`,
-/// `C + 1`) or up to `max_chunks` chunks, at random (non-overlapping) addresses.
+/// `C + 1`) or up to `max_chunks` chunks, at random (non-overlapping) addresses; mostly Neo's
+/// single DPS pass, else 0, 2 or 3 passes.
 pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDescriptor {
     let c = cfg.chunk as u64;
     let len = |rng: &mut Rng| -> u32 {
@@ -383,5 +386,6 @@ pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDe
         list: 2 * region + rng.below(1 << 16) as u32,
         list_len,
         next: 3 * region + rng.below(1 << 16) as u32,
+        dps_passes: if rng.percent(60) { 1 } else { *rng.pick(&[0u8, 2, 3]) },
     }
 }

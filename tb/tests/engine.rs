@@ -121,7 +121,7 @@ fn run_case_full(
     seed: u64,
 ) -> Vec<FrameCheck> {
     let (traj, cfg) = c.setup(scene, how, frames, res, base).expect("case setup");
-    let mut session = EngineSession::with_mode(scene, traj, &cfg, mode).expect("session");
+    let mut session = EngineSession::with_strategy(scene, traj, &cfg, mode, c.strategy()).expect("session");
     let format = neo_tb::waves::requested_format();
     let waves = format.map(|f| {
         neo_tb::waves::target_dir().join("waves").join(format!("engine_{}.{}", c.name(), f.extension()))
@@ -203,13 +203,16 @@ fn synthetic() -> Scene {
     load_scene(CaseScene::SYNTHETIC, false).expect("synthetic scene").0
 }
 
+/// Reuse frames on the CI engine: the orbit, a cut, a 180-degree turn, partial tiles, and the
+/// adaptive case (per-tile DPS passes from the descriptors).
 #[test]
 fn synthetic_orbit_cut_and_turn_are_bit_exact_over_reuse_frames() {
     let scene = synthetic();
     let how = CaseScene::synthetic();
     let seeds = SeedSplit::new("synthetic_orbit_cut_and_turn_are_bit_exact_over_reuse_frames");
     let mut all = HashMap::new();
-    for (k, c) in [EngineCase::Orbit, EngineCase::Cut, EngineCase::Turn, EngineCase::EdgeTiles].into_iter().enumerate() {
+    let cases = [EngineCase::Orbit, EngineCase::Cut, EngineCase::Turn, EngineCase::EdgeTiles, EngineCase::Adaptive];
+    for (k, c) in cases.into_iter().enumerate() {
         all.insert(c.name(), run_case(&scene, &how, c, 3, [128, 128], case_seed(&seeds, k, c)));
     }
     assert!(all.values().flatten().all(|&c| c > 0), "every frame takes cycles: {all:?}");

@@ -57,6 +57,7 @@ mod cosim {
                                 list: 0x20_0000 + n,
                                 list_len: n,
                                 next: 0x30_0000 + 8 * p,
+                                dps_passes: 1,
                             };
                             fill(&cfg, &mut rng, &mut b.mem, &d);
                             let job = SeqJob {
@@ -119,6 +120,7 @@ mod cosim {
                         list: 0x20_0000,
                         list_len: rng.below(3) as u32,
                         next: 0x30_0000,
+                        dps_passes: 1,
                     };
                     fill(&cfg, &mut rng, &mut b.mem, &d);
                     let job = SeqJob { desc: d, regs: regs(frame, &mut rng), core: 0 };
@@ -143,6 +145,47 @@ mod cosim {
             assert_eq!(restated_dps_chunks(600, 256, false), [(0, 256), (256, 256), (512, 88)]);
             assert_eq!(restated_dps_chunks(600, 256, true), [(0, 128), (128, 256), (384, 216)]);
             println!("{name}: {checked} tiles");
+        });
+    }
+
+    /// Several DPS passes: pass `k` of frame `f` cuts with the parity of `f + k` (restated
+    /// plainly), each pass a stage of its own, none for 0 passes, then the merge.
+    #[test]
+    fn seq_dps_passes_alternate_the_parity() {
+        let name = "seq_dps_passes_alternate_the_parity";
+        for_each_seed(name, |seed| {
+            let cfg = neo_tb::config();
+            let c = cfg.chunk as u64;
+            let mut rng = Rng::new(seed);
+            let mut b = bench(name, seed, SeqTiming::RANDOM);
+            for frame in [10u32, 11] {
+                for passes in [0u8, 1, 2, 3, 5] {
+                    let p = 2 * c + 3;
+                    let d = TileDescriptor {
+                        prev: 0x10_0000,
+                        prev_len: p as u32,
+                        list: 0x20_0000,
+                        list_len: rng.below(3) as u32,
+                        next: 0x30_0000,
+                        dps_passes: passes,
+                        ..TileDescriptor::default()
+                    };
+                    fill(&cfg, &mut rng, &mut b.mem, &d);
+                    let r = b.run(&SeqJob { desc: d, regs: regs(frame, &mut rng), core: 0 });
+                    let got: Vec<(u64, u64)> = r
+                        .cmds
+                        .iter()
+                        .filter(|x| x.mode == SortMode::Dps)
+                        .map(|x| (x.src_a - d.prev as u64, x.len_a))
+                        .collect();
+                    let want: Vec<(u64, u64)> = (0..passes as u32)
+                        .flat_map(|k| restated_dps_chunks(p, c, (frame + k) % 2 == 1))
+                        .collect();
+                    assert_eq!(got, want, "{passes} passes, frame {frame} (seed 0x{seed:016x})");
+                    let sort_stages = if d.list_len == 0 { 0 } else { 1 };
+                    assert_eq!(r.stages, sort_stages + passes as usize + 1, "{passes} passes, frame {frame}");
+                }
+            }
         });
     }
 

@@ -26,7 +26,9 @@ use super::{clock_gate, engine_regs, frame_ctrl, perf_counters, pre, raster_core
 use crate::emit::expr::lit;
 use crate::emit::{Instance, Item, Module};
 use crate::interface::Dir;
-use neo_golden::engine::memory::{DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES, RESULT_BYTES};
+use neo_golden::engine::memory::{
+    DESCRIPTOR_BYTES, DPS_PASSES_BITS, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES, RESULT_BYTES,
+};
 use neo_golden::engine::regs::{CameraWord, Counter, COUNTERS};
 use neo_golden::engine::EngineConfig;
 
@@ -258,7 +260,10 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.comment("Frame controller <-> sequencers, raster cores, bridges.");
     m.wire("job_valid", n).wire("job_ready", n).wire("job_from_scratch", 1);
     m.wire("job_prev", aw).wire("job_prev_len", lw).wire("job_list", aw).wire("job_list_len", lw);
-    m.wire("job_next", aw).wire("job_odd", 1).wire("job_scratch", n * aw);
+    m.wire("job_next", aw)
+        .wire("job_dps_passes", DPS_PASSES_BITS)
+        .wire("job_odd", 1)
+        .wire("job_scratch", n * aw);
     m.wire("cpl_valid", n).wire("cpl_ready", n).wire("cpl_len", n * lw);
     m.wire("ras_valid", mm).wire("ras_ready", mm).wire("ras_done", mm);
     m.wire("ras_tile_x", cfg.tile_bits).wire("ras_tile_y", cfg.tile_bits);
@@ -288,10 +293,11 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     for s in ["job_valid", "job_from_scratch", "job_prev", "job_prev_len", "job_list", "job_list_len"] {
         c.push((format!("{s}_o"), s.to_string()));
     }
-    for s in ["job_next", "job_odd", "job_scratch", "cpl_ready", "ras_valid", "ras_tile_x", "ras_tile_y"] {
+    for s in ["job_next", "job_dps_passes", "job_odd", "job_scratch", "cpl_ready", "ras_valid", "ras_tile_x"]
+    {
         c.push((format!("{s}_o"), s.to_string()));
     }
-    for s in ["ras_width", "ras_height", "ras_table", "ras_len", "ras_feat", "ras_pix"] {
+    for s in ["ras_tile_y", "ras_width", "ras_height", "ras_table", "ras_len", "ras_feat", "ras_pix"] {
         c.push((format!("{s}_o"), s.to_string()));
     }
     for s in ["job_ready", "cpl_valid", "cpl_len", "ras_ready", "ras_done", "idle"] {
@@ -452,7 +458,7 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     let mut seq = vec![pair("clk_i", "core_clk"), pair("rst_ni", "rst_ni")];
     seq.push(pair("job_valid_i", "job_valid[i]"));
     seq.push(pair("job_ready_o", "job_ready[i]"));
-    for s in ["from_scratch", "prev", "prev_len", "list", "list_len", "next", "odd"] {
+    for s in ["from_scratch", "prev", "prev_len", "list", "list_len", "next", "dps_passes", "odd"] {
         seq.push((format!("job_{s}_i"), format!("job_{s}")));
     }
     seq.push(pair("job_scratch_i", &format!("job_scratch[i*{aw} +: {aw}]")));

@@ -27,6 +27,7 @@
 
 use crate::emit::expr::{bits_for, lit, resize, zext};
 use crate::emit::{if_, if_else, set, Module, Stmt};
+use neo_golden::engine::memory::{DPS_PASSES_BITS, DPS_PASSES_LSB};
 use neo_golden::engine::{EngineConfig, SchedulerPolicy};
 
 /// Module name.
@@ -140,6 +141,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.output("job_list_o", aw);
     m.output("job_list_len_o", lw);
     m.output("job_next_o", aw);
+    m.output_c("job_dps_passes_o", DPS_PASSES_BITS, "descriptor: DPS passes");
     m.output_c("job_odd_o", 1, "FRAME[0]");
     m.output_c("job_scratch_o", d.n * aw, "sequencer k's scratch entry base at [k*AW +: AW]");
     m.input_c("cpl_valid_i", d.n, "per sequencer: tile sorted");
@@ -193,7 +195,11 @@ fn fetch(m: &mut Module, d: &Dims) {
     m.blank();
     m.comment("Descriptors: tile fetch_q's 4 words at DESC_BASE + 32 t into w0_q..w3_q (dv_q: buffer full).");
     m.reg("fetch_q", 32).reg("ar_q", 1).reg("rd_q", 1).reg("beat_q", 2).reg("dv_q", 1).reg("dt_q", 32);
-    m.reg("w0_q", 1 + 2 * d.tb).reg("w1_q", 64).reg("w2_q", 64).reg("w3_q", 32);
+    m.reg("w0_q", 1 + 2 * d.tb)
+        .reg("passes_q", DPS_PASSES_BITS)
+        .reg("w1_q", 64)
+        .reg("w2_q", 64)
+        .reg("w3_q", 32);
     m.wire_assign("more", 1, "fetch_q != tiles_i");
     m.wire_assign("ar_start", 1, "busy_q & more & ~ar_q & ~rd_q & ~dv_q");
     m.assign("m_axi_arvalid_o", "ar_q");
@@ -252,12 +258,13 @@ fn fetch(m: &mut Module, d: &Dims) {
     );
     let tb = d.tb;
     let w0 = format!("{{r_word[32], r_word[{}:16], r_word[{}:0]}}", 15 + tb, tb - 1);
+    let passes = format!("r_word[{}:{DPS_PASSES_LSB}]", DPS_PASSES_LSB + DPS_PASSES_BITS - 1);
     m.seq_noreset(vec![if_(
         "r_fire",
         vec![Stmt::Case(
             "beat_q".into(),
             vec![
-                ("2'd0".into(), vec![set("w0_q", w0)]),
+                ("2'd0".into(), vec![set("w0_q", w0), set("passes_q", passes)]),
                 ("2'd1".into(), vec![set("w1_q", "r_word")]),
                 ("2'd2".into(), vec![set("w2_q", "r_word")]),
             ],
@@ -312,6 +319,7 @@ fn dispatch(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.assign("job_list_o", resize_part("w2_q", 31, 0, aw));
     m.assign("job_list_len_o", resize_part("w2_q", 63, 32, lw));
     m.assign("job_next_o", resize_part("w3_q", 31, 0, aw));
+    m.assign("job_dps_passes_o", "passes_q");
     m.assign("job_odd_o", "frame_i[0]");
     m.wire_assign("scratch_entry", aw, resize_part("scratch_base_i", d.xa - 1, 3, aw));
     let scr: Vec<String> =
@@ -474,7 +482,7 @@ fn head(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     };
     // Every control register but the fetch engine's (reset in its own block) and the
     // descriptor words (datapath, no reset).
-    let own = ["fetch_q", "ar_q", "rd_q", "beat_q", "dt_q", "w0_q", "w1_q", "w2_q", "w3_q"];
+    let own = ["fetch_q", "ar_q", "rd_q", "beat_q", "dt_q", "w0_q", "passes_q", "w1_q", "w2_q", "w3_q"];
     finish(m, d);
     let mut reset = m.q_resets(&[("first_ovf_q", "32'hffffffff")]);
     reset.retain(|s| !matches!(s, Stmt::Set(n, _) if own.contains(&n.as_str())));

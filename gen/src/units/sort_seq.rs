@@ -13,9 +13,9 @@
 //! - stage outputs ping-pong between the scratch regions `S0 = job_scratch_i` and `S1 = S0 +
 //!   table_capacity` (`buf_q` = the region written), reading the list first; the last stage of a
 //!   from-scratch tile writes `next`;
-//! - reuse tiles then: DPS (when `prev_len > 0`), chunks of `C` over `prev` in place, the first
-//!   one `C/2` on odd frames; and one `MERGE_DELETE` of `prev` (A) and the sorted list (B, in
-//!   `S[buf_q]`) into `next`.
+//! - reuse tiles then: `dps_passes` DPS stages (when `prev_len > 0`), chunks of `C` over `prev`
+//!   in place, the first one `C/2` when `frame + pass` is odd (`odd_q ^ pass_q[0]`); and one
+//!   `MERGE_DELETE` of `prev` (A) and the sorted list (B, in `S[buf_q]`) into `next`.
 //!
 //! # Barrier
 //! After a stage's last command is taken, the sequencer waits until every command it issued
@@ -26,6 +26,7 @@
 
 use crate::emit::expr::{bits_for, lit, resize};
 use crate::emit::{if_, if_else, set, Module, Stmt};
+use neo_golden::engine::memory::DPS_PASSES_BITS;
 use neo_golden::engine::EngineConfig;
 use neo_golden::sort::SortMode;
 
@@ -76,9 +77,11 @@ pub fn module(cfg: &EngineConfig) -> Module {
     }
     m.comment("The job (descriptor fields, parity, scratch base).");
     m.reg("fs_q", 1).reg("odd_q", 1).reg("prev_q", d.aw).reg("plen_q", d.lw).reg("list_q", d.aw);
-    m.reg("n_q", d.lw).reg("next_q", d.aw).reg("scr0_q", d.aw);
-    m.comment("Plan state: stage mode, offset in the stage, input run of a merge pass, scratch written.");
+    m.reg("n_q", d.lw).reg("next_q", d.aw).reg("scr0_q", d.aw).reg("passes_q", DPS_PASSES_BITS);
+    m.comment("Plan state: stage mode, offset in the stage, input run of a merge pass, scratch written,");
+    m.comment("DPS pass.");
     m.reg("state_q", 2).reg("mode_q", SortMode::BITS).reg("pos_q", d.lw).reg("half_q", d.lw).reg("buf_q", 1);
+    m.reg("pass_q", DPS_PASSES_BITS);
     m.reg("out_q", d.ow).reg("dlen_q", d.lw).reg("cpl_len_q", d.lw);
     command(&mut m, cfg, &d);
     control(&mut m, cfg, &d);
@@ -96,7 +99,8 @@ fn ports(m: &mut Module, d: &Dims) {
     m.input_c("job_list_i", aw, "descriptor: incoming list (entry address)");
     m.input_c("job_list_len_i", lw, "descriptor: its entries");
     m.input_c("job_next_i", aw, "descriptor: next table (entry address)");
-    m.input_c("job_odd_i", 1, "frame parity (FRAME[0]): DPS chunks shifted by C/2");
+    m.input_c("job_dps_passes_i", DPS_PASSES_BITS, "descriptor: DPS passes of a reuse tile (0: none)");
+    m.input_c("job_odd_i", 1, "frame parity (FRAME[0]): DPS chunks shifted by C/2 on odd frame + pass");
     m.input_c("job_scratch_i", aw, "this core's first scratch region (entry address)");
     m.output_c("cmd_valid_o", 1, "to neo_sort_core: command");
     m.input_c("cmd_ready_i", 1, "");
@@ -127,12 +131,13 @@ fn command(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire_assign("is_md", 1, "mode_q == M_MD");
     m.wire_assign("total", lw, "is_dps ? plen_q : n_q");
     m.wire_assign("rem", lw, "total - pos_q");
-    m.comment("Longest A: a chunk; C/2 for the first DPS chunk of an odd frame; a run for a pass.");
+    m.comment("Longest A: a chunk; C/2 for the first DPS chunk of an odd frame + pass; a run for a pass.");
+    m.wire_assign("dps_odd", 1, "odd_q ^ pass_q[0]");
     m.wire_assign(
         "lim",
         lw,
         format!(
-            "is_merge ? half_q : ((is_dps & odd_q & (pos_q == {z})) ? {h} : {c})",
+            "is_merge ? half_q : ((is_dps & dps_odd & (pos_q == {z})) ? {h} : {c})",
             z = lit(lw, 0),
             h = lit(lw, c / 2),
             c = lit(lw, c)
@@ -189,9 +194,13 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     );
     m.blank();
     m.comment("Plan: IDLE -> (ISSUE -> WAIT)* per stage -> CPL -> IDLE.");
+    let pz = lit(DPS_PASSES_BITS, 0);
     let issue = |mode: &str| vec![set("mode_q", mode), set("pos_q", z.clone()), set("state_q", "S_ISSUE")];
-    // After the conventional sort of a reuse tile: DPS over prev when there is one, else the merge.
-    let reuse_next = || vec![if_else(format!("plen_q != {z}"), issue("M_DPS"), issue("M_MD"))];
+    // After the conventional sort of a reuse tile: DPS over prev when there is one and a pass is
+    // asked for, else the merge.
+    let reuse_next =
+        || vec![if_else(format!("(plen_q != {z}) & (passes_q != {pz})"), issue("M_DPS"), issue("M_MD"))];
+    m.wire_assign("pass_next", DPS_PASSES_BITS, format!("pass_q + {}", lit(DPS_PASSES_BITS, 1)));
     let complete = |len: &str| vec![set("cpl_len_q", len), set("state_q", "S_CPL")];
     let start = vec![
         set("fs_q", "job_from_scratch_i"),
@@ -202,6 +211,8 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         set("n_q", "job_list_len_i"),
         set("next_q", "job_next_i"),
         set("scr0_q", "job_scratch_i"),
+        set("passes_q", "job_dps_passes_i"),
+        set("pass_q", pz.clone()),
         set("half_q", lit(lw, c)),
         set("buf_q", "1'b0"),
         if_else(
@@ -210,13 +221,27 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
             vec![if_else(
                 "job_from_scratch_i",
                 complete(&z),
-                vec![if_else(format!("job_prev_len_i != {z}"), issue("M_DPS"), issue("M_MD"))],
+                vec![if_else(
+                    format!("(job_prev_len_i != {z}) & (job_dps_passes_i != {pz})"),
+                    issue("M_DPS"),
+                    issue("M_MD"),
+                )],
             )],
         ),
     ];
+    // After a DPS pass: the next pass (the other parity) or the merge.
+    let after_dps = vec![if_else(
+        "pass_next != passes_q",
+        {
+            let mut v = issue("M_DPS");
+            v.push(set("pass_q", "pass_next"));
+            v
+        },
+        issue("M_MD"),
+    )];
     let after_stage = Stmt::Case(
         "mode_q".into(),
-        vec![("M_DPS".into(), issue("M_MD")), ("M_MD".into(), complete("dlen_q"))],
+        vec![("M_DPS".into(), after_dps), ("M_MD".into(), complete("dlen_q"))],
         // SORT or a MERGE pass.
         vec![if_else("fin", vec![if_else("fs_q", complete("n_q"), reuse_next())], {
             let mut v = issue("M_MERGE");

@@ -10,9 +10,12 @@
 //! | `overflow` | a small `table_capacity`: some tiles overflow (reported, nothing else written), the next frame from scratch |
 //! | `one_core` | one sorting core and one raster core: every tile on the same cores |
 //! | `many_cores` | one tile, more cores (3 + 2) than busy tiles |
+//! | `adaptive` | the orbit 4x faster, sorted by `adaptive:wide=1,resort=0`: per-tile DPS passes (1 to 4) from the descriptors |
 
-use super::host::{pipeline_for, EngineSession, SessionError};
+use super::host::{pipeline_for, EngineSession, HostMode, SessionError};
 use super::EngineConfig;
+use crate::pipeline::adaptive::AdaptiveParams;
+use crate::pipeline::Strategy;
 use crate::scene::Scene;
 use crate::source::robust_bounds;
 use crate::trajectory::{parse_trajectory, Trajectory};
@@ -34,6 +37,8 @@ pub enum EngineCase {
     OneCore,
     /// More cores than busy tiles.
     ManyCores,
+    /// A fast orbit with per-tile DPS passes (`adaptive` without the wide chunk or the re-sort).
+    Adaptive,
 }
 
 /// How to film a scene for the cases: orbit keys (`radius`, `height`, `target`, `fov`; no
@@ -71,7 +76,7 @@ impl CaseScene {
 
 impl EngineCase {
     /// Every case.
-    pub const ALL: [EngineCase; 7] = [
+    pub const ALL: [EngineCase; 8] = [
         EngineCase::Orbit,
         EngineCase::Cut,
         EngineCase::Turn,
@@ -79,6 +84,7 @@ impl EngineCase {
         EngineCase::Overflow,
         EngineCase::OneCore,
         EngineCase::ManyCores,
+        EngineCase::Adaptive,
     ];
 
     /// The case's name.
@@ -91,6 +97,17 @@ impl EngineCase {
             EngineCase::Overflow => "overflow",
             EngineCase::OneCore => "one_core",
             EngineCase::ManyCores => "many_cores",
+            EngineCase::Adaptive => "adaptive",
+        }
+    }
+
+    /// The sorting strategy of the case's pipeline (the host's per-tile DPS passes follow it).
+    pub fn strategy(self) -> Strategy {
+        match self {
+            EngineCase::Adaptive => {
+                Strategy::Adaptive(AdaptiveParams { resort: false, wide: 1, ..AdaptiveParams::default() })
+            }
+            _ => Strategy::Neo,
         }
     }
 
@@ -122,6 +139,7 @@ impl EngineCase {
                 res = [64, 64];
                 (cfg.sort_cores, cfg.raster_cores) = (3, 2);
             }
+            EngineCase::Adaptive => extra = format!("speed={}", 4.0 * how.speed),
         }
         let sep = if keys.is_empty() { "" } else { "," };
         let spec = format!("orbit:{keys}{sep}start=0,{extra},frames={frames},res={}x{}", res[0], res[1]);
@@ -144,7 +162,7 @@ impl EngineCase {
         base: &EngineConfig,
     ) -> Result<EngineSession<'s>, SessionError> {
         let (traj, cfg) = self.setup(scene, how, frames, res, base)?;
-        EngineSession::new(scene, traj, &cfg)
+        EngineSession::with_strategy(scene, traj, &cfg, HostMode::Lists, self.strategy())
     }
 }
 
@@ -152,7 +170,7 @@ impl EngineCase {
 /// tiles' list lengths (every tile is sorted from scratch in frame 0), at least the chunk.
 fn overflow_capacity(scene: &Scene, traj: &Trajectory, cfg: &EngineConfig) -> Result<usize, SessionError> {
     let cam = traj.frames.first().ok_or(SessionError::NoFrames)?;
-    let mut p = pipeline_for(scene, cfg, cam.width, cam.height)?;
+    let mut p = pipeline_for(scene, cfg, cam.width, cam.height, Strategy::Neo)?;
     p.render_frame(cam, 0, true);
     let mut lens: Vec<usize> = p.current_lists().map(|l| l.len()).collect();
     lens.sort_unstable();

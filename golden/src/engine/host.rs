@@ -51,7 +51,7 @@
 use super::expected::{Expected, Untouched};
 use super::memory::{
     entry_to_u64, Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
-    PIXEL_BYTES, RESULT_BYTES,
+    MAX_DPS_PASSES, PIXEL_BYTES, RESULT_BYTES,
 };
 use super::reference::{add_raster_traffic, sort_traffic, FrameOutcome};
 use super::regs::{Counter, FrameRegs, PreRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
@@ -87,6 +87,9 @@ pub enum SessionError {
     /// Scene mode on an engine without a Preprocessing Engine.
     #[error("scene mode needs a Preprocessing Engine: the configuration has pre_units 0 (use lists mode)")]
     NoPreprocessing,
+    /// A sorting strategy the engine does not run.
+    #[error("strategy {0}: the engine runs `neo` and `adaptive` with wide=1 and resort=0 (DPS passes per tile) only")]
+    Strategy(String),
 }
 
 /// How the host feeds the engine (see the module docs).
@@ -273,19 +276,39 @@ impl<'s> EngineSession<'s> {
         Self::with_mode(scene, traj, cfg, HostMode::Scene)
     }
 
-    /// A session in `mode` (see the module docs).
+    /// A session in `mode` (see the module docs), Neo's strategy.
     pub fn with_mode(
         scene: &'s Scene,
         traj: Trajectory,
         cfg: &EngineConfig,
         mode: HostMode,
     ) -> Result<Self, SessionError> {
+        Self::with_strategy(scene, traj, cfg, mode, Strategy::Neo)
+    }
+
+    /// A session in `mode` whose pipeline sorts with `strategy`: `neo`, or `adaptive` without
+    /// the wide chunk and the re-sort, whose per-tile DPS passes go into the descriptors.
+    pub fn with_strategy(
+        scene: &'s Scene,
+        traj: Trajectory,
+        cfg: &EngineConfig,
+        mode: HostMode,
+        strategy: Strategy,
+    ) -> Result<Self, SessionError> {
         cfg.validate()?;
+        let runs = match strategy {
+            Strategy::Neo => true,
+            Strategy::Adaptive(p) => p.wide == 1 && !p.resort && p.max_passes <= MAX_DPS_PASSES as u32,
+            _ => false,
+        };
+        if !runs {
+            return Err(SessionError::Strategy(strategy.to_string()));
+        }
         if mode == HostMode::Scene && !cfg.has_preprocessing() {
             return Err(SessionError::NoPreprocessing);
         }
         let first = traj.frames.first().ok_or(SessionError::NoFrames)?;
-        let pipeline = pipeline_for(scene, cfg, first.width, first.height)?;
+        let pipeline = pipeline_for(scene, cfg, first.width, first.height, strategy)?;
         let [gx, gy] = pipeline.grid();
         let tiles = gx as u64 * gy as u64;
         let layout = match mode {
@@ -357,7 +380,7 @@ impl<'s> EngineSession<'s> {
         let lists = self.incoming_lists(cut, &prev_tables);
         let expected = match self.mode {
             HostMode::Lists => {
-                let descriptors = self.write_lists(mem, f, cut, &lists)?;
+                let descriptors = self.write_lists(mem, f, cut, &lists, &out)?;
                 for (t, d) in descriptors.iter().enumerate() {
                     mem.write_descriptor(regs.desc_base, t as u64, d);
                 }
@@ -417,6 +440,7 @@ impl<'s> EngineSession<'s> {
         f: usize,
         cut: bool,
         lists: &[Vec<SortEntry>],
+        frame: &FrameOutput,
     ) -> Result<Vec<TileDescriptor>, SessionError> {
         let fmt = self.cfg.format();
         let cap = self.cfg.table_capacity as u64;
@@ -442,6 +466,7 @@ impl<'s> EngineSession<'s> {
                 list: list_at as u32,
                 list_len: list.len() as u32,
                 next: next_at as u32,
+                dps_passes: dps_passes(frame, t)?,
             };
             list_at += list.len() as u64;
             next_at += (prev.len as u64 + list.len() as u64).min(cap);
@@ -545,16 +570,28 @@ impl<'s> EngineSession<'s> {
     }
 }
 
-/// The golden pipeline (Neo strategy, no capacity cut, no references) for engine `cfg` at
+/// The DPS passes the pipeline ran on tile `t` this frame (0 for a sort from scratch), as a
+/// descriptor carries them.
+fn dps_passes(out: &FrameOutput, t: usize) -> Result<u8, SessionError> {
+    let p = out.tiles.dps_passes[t];
+    u8::try_from(p).ok().filter(|&p| p <= MAX_DPS_PASSES).ok_or_else(|| {
+        SessionError::Inconsistent(format!(
+            "tile {t}: {p} DPS passes, a descriptor holds at most {MAX_DPS_PASSES}"
+        ))
+    })
+}
+
+/// The golden pipeline (`strategy`, no capacity cut, no references) for engine `cfg` at
 /// `width x height`.
 pub(crate) fn pipeline_for<'s>(
     scene: &'s Scene,
     cfg: &EngineConfig,
     width: u32,
     height: u32,
+    strategy: Strategy,
 ) -> Result<Pipeline<'s>, SessionError> {
     let pcfg = PipelineConfig {
-        strategy: Strategy::Neo,
+        strategy,
         raster: cfg.raster_config(),
         chunk: cfg.chunk,
         dps_passes: 1,

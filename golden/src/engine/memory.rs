@@ -27,13 +27,13 @@ pub const RESULT_BYTES: u64 = 8;
 
 /// One tile's descriptor: 4 little-endian u64 words at `DESC_BASE + 32 t`.
 ///
-/// - word 0: `[15:0]` tile_x, `[31:16]` tile_y, `[32]` from_scratch
+/// - word 0: `[15:0]` tile_x, `[31:16]` tile_y, `[32]` from_scratch, `[43:40]` dps_passes
 /// - word 1: `[31:0]` prev table entry address, `[63:32]` prev_len
 /// - word 2: `[31:0]` incoming list entry address, `[63:32]` list_len
 /// - word 3: `[31:0]` next table entry address, `[63:32]` reserved 0
 ///
 /// Decoding ignores the reserved bits (as the RTL does).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct TileDescriptor {
     /// Tile column.
     pub tile_x: u16,
@@ -52,13 +52,46 @@ pub struct TileDescriptor {
     pub list_len: u32,
     /// Entry address of the next table (the host double-buffers the tables).
     pub next: u32,
+    /// DPS passes over the previous table of a reuse tile, pass `p` with golden
+    /// [`Parity::of`](crate::sort::Parity::of)`(frame, p)` (Neo: 1; 0: none, the previous table
+    /// is merged as it is); at most [`MAX_DPS_PASSES`] (a larger value is truncated to its
+    /// [`DPS_PASSES_BITS`] bits, as the RTL reads it).
+    pub dps_passes: u8,
+}
+
+/// Bits of a descriptor's `dps_passes` field.
+pub const DPS_PASSES_BITS: u32 = 4;
+/// The most DPS passes a descriptor can ask for.
+pub const MAX_DPS_PASSES: u8 = (1 << DPS_PASSES_BITS) - 1;
+/// The lowest bit of `dps_passes` in descriptor word 0.
+pub const DPS_PASSES_LSB: u32 = 40;
+
+impl Default for TileDescriptor {
+    /// An empty tile at (0, 0), reused with Neo's single DPS pass.
+    fn default() -> TileDescriptor {
+        TileDescriptor {
+            tile_x: 0,
+            tile_y: 0,
+            from_scratch: false,
+            prev: 0,
+            prev_len: 0,
+            list: 0,
+            list_len: 0,
+            next: 0,
+            dps_passes: 1,
+        }
+    }
 }
 
 impl TileDescriptor {
     /// The four words, word 0 first.
     pub fn to_words(&self) -> [u64; 4] {
+        let passes = (self.dps_passes & MAX_DPS_PASSES) as u64;
         [
-            self.tile_x as u64 | (self.tile_y as u64) << 16 | (self.from_scratch as u64) << 32,
+            self.tile_x as u64
+                | (self.tile_y as u64) << 16
+                | (self.from_scratch as u64) << 32
+                | passes << DPS_PASSES_LSB,
             self.prev as u64 | (self.prev_len as u64) << 32,
             self.list as u64 | (self.list_len as u64) << 32,
             self.next as u64,
@@ -76,6 +109,7 @@ impl TileDescriptor {
             list: w[2] as u32,
             list_len: (w[2] >> 32) as u32,
             next: w[3] as u32,
+            dps_passes: (w[0] >> DPS_PASSES_LSB) as u8 & MAX_DPS_PASSES,
         }
     }
 
@@ -338,13 +372,14 @@ mod tests {
             list: 0x2000,
             list_len: 9,
             next: 0x3000,
+            dps_passes: 3,
         };
-        assert_eq!(d.to_words(), [0x1_0034_0012, 7 << 32 | 0x1000, 9 << 32 | 0x2000, 0x3000]);
+        assert_eq!(d.to_words(), [0x301_0034_0012, 7 << 32 | 0x1000, 9 << 32 | 0x2000, 0x3000]);
         assert_eq!(d.entries_in(), 9);
         assert_eq!(TileDescriptor { from_scratch: false, ..d }.entries_in(), 16);
         // Reserved bits are ignored.
         let mut w = d.to_words();
-        w[0] |= 0xFFFF_FFFE << 32;
+        w[0] |= 0xFFFF_F0FE << 32;
         w[3] |= 0xABCD << 32;
         assert_eq!(TileDescriptor::from_words(&w), d);
     }
@@ -397,8 +432,8 @@ mod tests {
 
     proptest! {
         #[test]
-        fn descriptor_round_trip(x in any::<u16>(), y in any::<u16>(), s in any::<bool>(), v in any::<[u32; 5]>()) {
-            let d = TileDescriptor { tile_x: x, tile_y: y, from_scratch: s, prev: v[0], prev_len: v[1], list: v[2], list_len: v[3], next: v[4] };
+        fn descriptor_round_trip(x in any::<u16>(), y in any::<u16>(), s in any::<bool>(), v in any::<[u32; 5]>(), p in 0..=MAX_DPS_PASSES) {
+            let d = TileDescriptor { tile_x: x, tile_y: y, from_scratch: s, prev: v[0], prev_len: v[1], list: v[2], list_len: v[3], next: v[4], dps_passes: p };
             prop_assert_eq!(TileDescriptor::from_words(&d.to_words()), d);
             let mut m = Memory::new();
             m.write_descriptor(0x40, 3, &d);

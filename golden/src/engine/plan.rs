@@ -12,15 +12,16 @@
 //!   each (a lone last run is copied with an empty B; B follows A directly);
 //! - stage `s` (`0..=P`) reads the list (`s = 0`) or `S[(s - 1) % 2]` and writes `S[s % 2]`,
 //!   except the last (`s = P`) of a from-scratch tile, which writes `next`;
-//! - a reuse tile (not from scratch) then has a DPS stage (when `prev_len > 0`): one `DPS` per
-//!   chunk of the frame's parity (golden [`Parity::chunks`], pass 0 of frame `frame`) over the
-//!   previous table in place, and a last stage: one `MERGE_DELETE` of A = the previous table and
-//!   B = the sorted list (`S[P % 2]`, `n` entries) into `next`.
+//! - a reuse tile (not from scratch) then has one DPS stage per pass `p` of its descriptor's
+//!   `dps_passes` (when `prev_len > 0`): one `DPS` per chunk of parity `Parity::of(frame, p)`
+//!   (golden [`Parity::chunks`]) over the previous table in place, and a last stage: one
+//!   `MERGE_DELETE` of A = the previous table and B = the sorted list (`S[P % 2]`, `n`
+//!   entries) into `next`.
 //!
 //! Every stage waits for the previous one to finish: all its commands done and the memory
 //! bridge idle (its writes acknowledged). A tile that overflows has no stage.
 
-use super::memory::{Memory, TileDescriptor, ENTRY_BYTES};
+use super::memory::{Memory, TileDescriptor, ENTRY_BYTES, MAX_DPS_PASSES};
 use super::regs::FrameRegs;
 use super::EngineConfig;
 use crate::sort::{
@@ -112,15 +113,24 @@ pub fn tile_plan(cfg: &EngineConfig, regs: &FrameRegs, d: &TileDescriptor, core:
     }
     if !d.from_scratch {
         let prev = d.prev as u64;
-        let dps: Vec<TileCmd> = Parity::of(regs.frame as u64, 0)
-            .chunks(d.prev_len as usize, cfg.chunk)
-            .map(|r| {
-                let at = prev + r.start as u64;
-                TileCmd { mode: SortMode::Dps, src_a: at, len_a: r.len() as u64, src_b: 0, len_b: 0, dst: at }
-            })
-            .collect();
-        if !dps.is_empty() {
-            stages.push(dps);
+        for p in 0..(d.dps_passes & MAX_DPS_PASSES) as usize {
+            let dps: Vec<TileCmd> = Parity::of(regs.frame as u64, p)
+                .chunks(d.prev_len as usize, cfg.chunk)
+                .map(|r| {
+                    let at = prev + r.start as u64;
+                    TileCmd {
+                        mode: SortMode::Dps,
+                        src_a: at,
+                        len_a: r.len() as u64,
+                        src_b: 0,
+                        len_b: 0,
+                        dst: at,
+                    }
+                })
+                .collect();
+            if !dps.is_empty() {
+                stages.push(dps);
+            }
         }
         stages.push(vec![TileCmd {
             mode: SortMode::MergeDelete,
@@ -240,6 +250,27 @@ mod tests {
         assert_eq!(p.stages.len(), 1);
         assert_eq!((p.stages[0][0].len_a, p.stages[0][0].len_b, p.stages[0][0].src_b), (0, 0, s0));
         assert!(tile_plan(&cfg, &regs(1), &desc(true, 0, 9), 0).stages.is_empty());
+    }
+
+    #[test]
+    fn every_dps_pass_is_a_stage_with_the_parity_of_its_pass() {
+        let cfg = EngineConfig::default();
+        let chunk_starts = |stage: &Vec<TileCmd>| stage.iter().map(|c| c.src_a - 0x4000).collect::<Vec<_>>();
+        for frame in [4u32, 5] {
+            for passes in [0u8, 1, 2, 3] {
+                let d = TileDescriptor { dps_passes: passes, ..desc(false, 100, 600) };
+                let p = tile_plan(&cfg, &regs(frame), &d, 0);
+                // sort, the passes, merge_delete
+                assert_eq!(p.stages.len(), 2 + passes as usize, "frame {frame}, {passes} passes");
+                for k in 0..passes as usize {
+                    assert!(p.stages[1 + k].iter().all(|c| c.mode == SortMode::Dps));
+                    let odd = (frame as usize + k) % 2 == 1;
+                    let want: &[u64] = if odd { &[0, 128, 384] } else { &[0, 256, 512] };
+                    assert_eq!(chunk_starts(&p.stages[1 + k]), want, "frame {frame}, pass {k}");
+                }
+                assert_eq!(p.stages.last().unwrap()[0].mode, SortMode::MergeDelete);
+            }
+        }
     }
 
     #[test]

@@ -26,8 +26,8 @@
 //! outcome.
 
 use super::memory::{
-    Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES,
-    RESULT_BYTES,
+    Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, MAX_DPS_PASSES,
+    PIXEL_BYTES, RESULT_BYTES,
 };
 use super::plan::{run_command, tile_plan, TilePlan};
 use super::pre::{preprocess_frame, PreWork};
@@ -97,7 +97,7 @@ pub fn add_raster_traffic(c: &mut Counters, len: u64, pixels: u64) {
 /// The closed-form sort traffic of one sorted tile (entries read, entries written) for a tile
 /// whose sort keeps `next_len` entries: the conventional sort reads and writes the list once per
 /// stage (`1 + merge_pass_count` stages); a reuse tile adds the DPS (the previous table read
-/// and written once) and the MERGE_DELETE (both inputs read, `next_len` written).
+/// and written once per pass) and the MERGE_DELETE (both inputs read, `next_len` written).
 pub fn sort_traffic(d: &TileDescriptor, next_len: u64, chunk: u64) -> (u64, u64) {
     let n = d.list_len as u64;
     let conventional = if n == 0 { 0 } else { n * (1 + merge_pass_count(n, chunk)) };
@@ -105,7 +105,8 @@ pub fn sort_traffic(d: &TileDescriptor, next_len: u64, chunk: u64) -> (u64, u64)
         return (conventional, conventional);
     }
     let prev = d.prev_len as u64;
-    (conventional + prev + prev + n, conventional + prev + next_len)
+    let dps = prev * (d.dps_passes & MAX_DPS_PASSES) as u64;
+    (conventional + dps + prev + n, conventional + dps + next_len)
 }
 
 /// Runs one frame on `mem` (see the module docs).

@@ -138,7 +138,7 @@ impl EngineSession<'_> {
             .enumerate()
             .map(|(t, list)| {
                 let prev = if cut { Default::default() } else { self.prev[t] };
-                TileDescriptor {
+                Ok(TileDescriptor {
                     tile_x: (t % gx) as u16,
                     tile_y: (t / gx) as u16,
                     from_scratch: cut,
@@ -148,9 +148,10 @@ impl EngineSession<'_> {
                         / ENTRY_BYTES) as u32,
                     list_len: list.len() as u32,
                     next: (next_base + t as u64 * cap) as u32,
-                }
+                    dps_passes: super::dps_passes(out, t)?,
+                })
             })
-            .collect();
+            .collect::<Result<_, SessionError>>()?;
         for (t, d) in descriptors.iter().enumerate() {
             mem.write_descriptor(
                 regs.desc_base,
