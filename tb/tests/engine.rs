@@ -19,6 +19,7 @@ fn models_present() {
 }
 
 neo_tb::with_models! {
+use neo_golden::engine::memory::Memory;
 use neo_golden::engine::{CaseScene, Counter, EngineCase, EngineConfig, EngineSession, HostMode};
 use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
 use neo_sim::latency::Latency;
@@ -216,6 +217,66 @@ fn synthetic_orbit_cut_and_turn_are_bit_exact_over_reuse_frames() {
         all.insert(c.name(), run_case(&scene, &how, c, 3, [128, 128], case_seed(&seeds, k, c)));
     }
     assert!(all.values().flatten().all(|&c| c > 0), "every frame takes cycles: {all:?}");
+}
+
+/// What a case's reuse frames hold (golden host only): tiles whose previous table has 1 to
+/// `short` entries and an empty incoming list (DPS, then `MERGE_DELETE` reading the table DPS
+/// just wrote), and such tiles with an incoming list of 1 to `short` entries (SORT, DPS,
+/// `MERGE_DELETE`).
+fn short_reuse_tiles(
+    scene: &Scene,
+    how: &CaseScene,
+    c: EngineCase,
+    (frames, res): (usize, [u32; 2]),
+    short: u32,
+) -> [usize; 2] {
+    let (traj, cfg) = c.setup(scene, how, frames, res, &ci_config()).expect("case setup");
+    let mut session = EngineSession::with_mode(scene, traj, &cfg, HostMode::Lists).expect("session");
+    let mut mem = Memory::new();
+    let mut n = [0; 2];
+    while let Some(plan) = session.next_frame(&mut mem).expect("host frame") {
+        let reused = plan.expected.descriptors.iter().filter(|d| !d.from_scratch);
+        for d in reused.filter(|d| (1..=short).contains(&d.prev_len)) {
+            match d.list_len {
+                0 => n[0] += 1,
+                l if l <= short => n[1] += 1,
+                _ => {}
+            }
+        }
+    }
+    n
+}
+
+/// Issue 16: reuse frames whose tiles are all short (a sparse scene, [`CaseScene::SPARSE`]: 8
+/// Gaussians, 16 tiles of 2 to 8 entries at 256x256). A stage of such a tile writes at most the
+/// sort bridge's `axi_outstanding` entries, so when the sequencer's barrier (every `done_i`,
+/// then the bridge's `idle_i`) lets the next stage start, its first reads are of the lines the
+/// last stage just wrote: DPS's table read back by `MERGE_DELETE`, the next table read by the
+/// raster core once the tile completes (from frame 0 on). A barrier that skipped `idle_i` reads them before their B (the hazard checker's
+/// RAW); on the long lists of the other cases the last writes and the next stage's first reads
+/// are far apart. Orbit frames reuse every tile with an empty incoming list, turn frames with
+/// lists of 1 to 4 entries.
+#[test]
+fn sparse_short_tiles_are_bit_exact_over_reuse_frames() {
+    let scene = load_scene(CaseScene::SPARSE, false).expect("sparse scene").0;
+    let how = CaseScene::synthetic();
+    let seeds = SeedSplit::new("sparse_short_tiles_are_bit_exact_over_reuse_frames");
+    let (frames, res) = (3, [256, 256]);
+    let short = ci_config().axi_outstanding as u32;
+    for (k, c) in [EngineCase::Orbit, EngineCase::Turn].into_iter().enumerate() {
+        let [empty, tiny] = short_reuse_tiles(&scene, &how, c, (frames, res), short);
+        println!(
+            "case {}: reuse tiles of at most {short} entries: {empty} with an empty list, {tiny} with 1 to {short} incoming",
+            c.name()
+        );
+        let want = if c == EngineCase::Orbit { empty } else { tiny };
+        assert!(
+            want >= 8,
+            "case {}: the sparse scene no longer gives short reuse tiles ({empty} empty, {tiny} tiny)",
+            c.name()
+        );
+        run_case(&scene, &how, c, frames, res, case_seed(&seeds, k, c));
+    }
 }
 
 /// The cases with their own engine configurations (a table capacity, core counts), on engines

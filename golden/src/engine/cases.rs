@@ -72,6 +72,13 @@ impl CaseScene {
 
     /// The synthetic scene [`CaseScene::synthetic`] is made for (20000 Gaussians).
     pub const SYNTHETIC: &'static str = "synthetic:blobs?gaussians=20000&seed=3";
+
+    /// A sparse synthetic scene for [`CaseScene::synthetic`]'s framing: 8 Gaussians (large ones:
+    /// the blobs scale with the spacing), so at 256x256 every one of the 16 tiles holds 2 to 8
+    /// entries, orbit frames reuse them with empty incoming lists and turn frames with lists of 1
+    /// to 4 entries. Each stage of a tile then writes no more entries than a sort bridge may have
+    /// in flight (`axi_outstanding` = 8), so the next stage's first reads hit its last writes.
+    pub const SPARSE: &'static str = "synthetic:blobs?gaussians=8&seed=3";
 }
 
 impl EngineCase {
