@@ -65,7 +65,7 @@ impl FrameWork {
             plan.expected.descriptors.iter().map(|d| u64::from(d.list_len) + u64::from(d.prev_len)).max();
         // The conventional sort's stages, the most DPS passes of a tile (at least one) and the
         // MERGE_DELETE.
-        let dps = plan.expected.descriptors.iter().map(|d| u64::from(d.dps_passes)).max().unwrap_or(0).max(1);
+        let dps = plan.expected.descriptors.iter().map(|d| d.passes()).max().unwrap_or(0).max(1);
         let passes = 1 + merge_pass_count(longest.unwrap_or(0), chunk) + dps + 1;
         FrameWork {
             tiles: u64::from(plan.regs.tiles),

@@ -352,7 +352,7 @@ impl FrameBench {
                     ("job_prev_len_o", d.prev_len as u64),
                     ("job_list_o", d.list as u64),
                     ("job_list_len_o", d.list_len as u64),
-                    ("job_dps_passes_o", (d.dps_passes & MAX_DPS_PASSES) as u64),
+                    ("job_dps_passes_o", d.passes()),
                     ("job_odd_o", (regs.frame & 1) as u64),
                 ];
                 for (f, w) in fields {

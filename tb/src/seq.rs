@@ -19,7 +19,6 @@ use crate::check::Checker;
 use crate::models::NeoSortSeq;
 use crate::rng::Rng;
 use neo_gen::EngineConfig;
-use neo_golden::engine::memory::MAX_DPS_PASSES;
 use neo_golden::engine::{run_command, tile_plan, FrameRegs, Memory, TileCmd, TileDescriptor};
 use neo_golden::sort::{SortMode, Sorter};
 use std::collections::VecDeque;
@@ -182,7 +181,7 @@ impl SeqBench {
         dut.set_job_list_i(d.list as u64);
         dut.set_job_list_len_i(d.list_len as u64);
         dut.set_job_next_i(d.next as u64);
-        dut.set_job_dps_passes_i((d.dps_passes & MAX_DPS_PASSES) as u64);
+        dut.set_job_dps_passes_i(d.passes());
         dut.set_job_odd_i(odd);
         dut.set_job_scratch_i(scratch & mask(self.cfg.addr_bits));
     }

@@ -88,7 +88,7 @@ impl Clients {
 
     /// Slots per port mux, `ceil(C / K)`.
     pub fn slots(&self) -> usize {
-        self.count().div_ceil(self.ports)
+        neo_golden::engine::port_slots(self.count(), self.ports)
     }
 
     /// Index of client `c` in the client buses, `port * slots + slot`: port `k`'s mux takes

@@ -402,10 +402,9 @@ impl EngineConfig {
         1 + self.sort_cores + self.raster_cores + self.pre_managers()
     }
 
-    /// Slots of each AXI4 port's mux, `ceil(memory_clients / mem_channels)` (the clients are
-    /// dealt round the ports: [`client_port_slot`]).
+    /// Slots of each AXI4 port's mux ([`port_slots`] of this engine's clients and ports).
     pub fn port_slots(&self) -> usize {
-        self.memory_clients().div_ceil(self.mem_channels)
+        port_slots(self.memory_clients(), self.mem_channels)
     }
 
     /// Memory client `c`'s `(port, slot)` on this engine's `mem_channels` ports
@@ -534,6 +533,12 @@ impl EngineConfig {
 /// it, and sim's engine model puts each core's traffic on its port by it.
 pub fn client_port_slot(c: usize, ports: usize) -> (usize, usize) {
     (c % ports, c / ports)
+}
+
+/// Slots of each port's mux when `clients` memory clients are dealt round `ports` ports
+/// ([`client_port_slot`]): `ceil(clients / ports)`.
+pub fn port_slots(clients: usize, ports: usize) -> usize {
+    clients.div_ceil(ports)
 }
 
 /// The memory client in `slot` of `port` among `ports` ports: the inverse of

@@ -84,9 +84,15 @@ impl Default for TileDescriptor {
 }
 
 impl TileDescriptor {
+    /// The DPS passes the engine runs: `dps_passes` as its [`DPS_PASSES_BITS`] bits of word 0
+    /// hold it (the value the RTL reads).
+    pub fn passes(&self) -> u64 {
+        u64::from(self.dps_passes & MAX_DPS_PASSES)
+    }
+
     /// The four words, word 0 first.
     pub fn to_words(&self) -> [u64; 4] {
-        let passes = (self.dps_passes & MAX_DPS_PASSES) as u64;
+        let passes = self.passes();
         [
             self.tile_x as u64
                 | (self.tile_y as u64) << 16

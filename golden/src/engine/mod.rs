@@ -17,7 +17,7 @@ pub mod regs;
 
 pub use cases::{CaseScene, EngineCase};
 pub use config::{
-    client_port_slot, port_slot_client, ConfigError, EngineConfig, SchedulerPolicy, Topology,
+    client_port_slot, port_slot_client, port_slots, ConfigError, EngineConfig, SchedulerPolicy, Topology,
     COMPLETION_QUEUE_DEPTH, ROUTING_FIFO_DEPTH,
 };
 pub use expected::{Expected, Mismatch, Place, PreExpected};

@@ -21,7 +21,7 @@
 //! Every stage waits for the previous one to finish: all its commands done and the memory
 //! bridge idle (its writes acknowledged). A tile that overflows has no stage.
 
-use super::memory::{Memory, TileDescriptor, ENTRY_BYTES, MAX_DPS_PASSES};
+use super::memory::{Memory, TileDescriptor, ENTRY_BYTES};
 use super::regs::FrameRegs;
 use super::EngineConfig;
 use crate::sort::{
@@ -113,7 +113,7 @@ pub fn tile_plan(cfg: &EngineConfig, regs: &FrameRegs, d: &TileDescriptor, core:
     }
     if !d.from_scratch {
         let prev = d.prev as u64;
-        for p in 0..(d.dps_passes & MAX_DPS_PASSES) as usize {
+        for p in 0..d.passes() as usize {
             let dps: Vec<TileCmd> = Parity::of(regs.frame as u64, p)
                 .chunks(d.prev_len as usize, cfg.chunk)
                 .map(|r| {

@@ -26,8 +26,8 @@
 //! outcome.
 
 use super::memory::{
-    Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, MAX_DPS_PASSES,
-    PIXEL_BYTES, RESULT_BYTES,
+    Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES,
+    RESULT_BYTES,
 };
 use super::plan::{run_command, tile_plan, TilePlan};
 use super::pre::{preprocess_frame, PreWork};
@@ -105,7 +105,7 @@ pub fn sort_traffic(d: &TileDescriptor, next_len: u64, chunk: u64) -> (u64, u64)
         return (conventional, conventional);
     }
     let prev = d.prev_len as u64;
-    let dps = prev * (d.dps_passes & MAX_DPS_PASSES) as u64;
+    let dps = prev * d.passes();
     (conventional + dps + prev + n, conventional + dps + next_len)
 }
 

@@ -5,9 +5,10 @@
 //! - AR: round-robin arbiter, an instance `u_ar_arb` of [`rr_arb`] (the client after the last
 //!   granted one first); a request offered downstream and not yet accepted keeps its grant (AXI:
 //!   valid held with a stable payload).
-//! - AW: the same arbiter (`u_aw_arb`), its offer gated by the FIFO's room; each accepted AW pushes its client onto a W-order FIFO of
-//!   [`W_FIFO`] entries, and the W channel forwards the head client's beats until WLAST, so the
-//!   W beats downstream follow the AW order (AXI4 has no WID). AW waits while the FIFO is full.
+//! - AW: the same arbiter (`u_aw_arb`), its offer gated by the FIFO's room; each accepted AW
+//!   pushes its client onto a W-order FIFO of [`W_FIFO`] entries, and the W channel forwards
+//!   the head client's beats until WLAST, so the W beats downstream follow the AW order (AXI4
+//!   has no WID). AW waits while the FIFO is full.
 //! - IDs: the client's own ID is ignored (each client uses one ID); the downstream ID is the
 //!   client index (`clog2(PORTS)` bits, zero-extended to `ID_BITS`). R and B are routed back by
 //!   that index; responses to a client carry ID 0.
@@ -58,11 +59,17 @@ pub fn client_port(sig: &AxiSignal) -> String {
 
 /// Client `c`'s slice of the bus of `sig` (`s_axi_araddr_i[c*ADDR_BITS +: ADDR_BITS]`).
 fn client_field(sig: &AxiSignal) -> String {
+    client_slice(&client_port(sig), sig)
+}
+
+/// Client `C`'s part of `bus`, which holds every client's `sig` (`bus[C]` for a one-bit
+/// signal, else `bus[C*W +: W]`).
+pub(super) fn client_slice(bus: &str, sig: &AxiSignal) -> String {
     let w = width_of(sig);
     if sig.width == 1 && width_expr(sig).is_none() {
-        format!("{}[{C}]", client_port(sig))
+        format!("{bus}[{C}]")
     } else {
-        format!("{}[{C}*{w} +: {w}]", client_port(sig))
+        format!("{bus}[{C}*{w} +: {w}]")
     }
 }
 

@@ -103,9 +103,8 @@ fn request(m: &mut Module, cfg: &EngineConfig) {
     )];
     for f in FIELDS {
         let s = signal(cfg, f);
-        let w = mux::width_of(&s);
-        let value = format!("{f}_i[{c}*{w} +: {w}]", c = mux::C);
-        fields.push((format!("sel_{f}"), w, s.width, value));
+        let value = mux::client_slice(&format!("{f}_i"), &s);
+        fields.push((format!("sel_{f}"), mux::width_of(&s), s.width, value));
     }
     mux::or_select(m, "oh", &fields);
     m.assign("id_o", "sel_id");
