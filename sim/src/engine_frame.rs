@@ -27,7 +27,7 @@
 
 use neo_golden::engine::memory::{ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
 use neo_golden::engine::{
-    client_port_slot, execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory,
+    execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory, MemoryClient,
     SchedulerPolicy, TileTrace, COMPLETION_QUEUE_DEPTH,
 };
 use neo_golden::sort::SortMode;
@@ -86,6 +86,7 @@ impl<'a> EngineFrameModel<'a> {
     /// do not change a core's timing; the Preprocessing Engine's lane count is one of them, the
     /// frame model covers the tile walk).
     pub fn new(cfg: &'a EngineConfig, lat: &'a Latency, mem: PortTiming) -> Result<Self, String> {
+        cfg.validate().map_err(|e| e.to_string())?;
         let same_cores = EngineConfig {
             sort_cores: lat.config.sort_cores,
             raster_cores: lat.config.raster_cores,
@@ -272,7 +273,7 @@ impl<'a> EngineFrameModel<'a> {
             s.sorts.push(Job {
                 tile: i,
                 engine: 0,
-                port: client_port_slot(1 + c, s.ports).0,
+                port: s.sort_port[c],
                 start,
                 work_end: start + dur[i][0],
                 end: 0.0,
@@ -302,9 +303,10 @@ struct Pending {
 struct Scheduling<'d> {
     dur: &'d [[f64; 2]],
     policy: SchedulerPolicy,
-    /// AXI4 ports; memory client `c` is on port `client_port_slot(c, ports).0`.
-    ports: usize,
-    sort_cores: usize,
+    /// The AXI4 port of each sorting core's and each raster core's bridge
+    /// ([`EngineConfig::client_port`]).
+    sort_port: Vec<usize>,
+    raster_port: Vec<usize>,
     /// When each sequencer takes a new tile (infinite while its completion is pending).
     seq_free: Vec<f64>,
     raster_free: Vec<f64>,
@@ -320,8 +322,10 @@ impl<'d> Scheduling<'d> {
         Scheduling {
             dur,
             policy: cfg.scheduler,
-            ports: cfg.mem_channels.max(1),
-            sort_cores: cfg.sort_cores,
+            sort_port: (0..cfg.sort_cores).map(|i| cfg.client_port(MemoryClient::SortCore(i))).collect(),
+            raster_port: (0..cfg.raster_cores)
+                .map(|j| cfg.client_port(MemoryClient::RasterCore(j)))
+                .collect(),
             seq_free: vec![0.0; cfg.sort_cores],
             raster_free: vec![0.0; cfg.raster_cores],
             pending: Vec::new(),
@@ -369,8 +373,14 @@ impl<'d> Scheduling<'d> {
         let end = start + self.dur[p.tile][1];
         self.raster_free[r] = end;
         self.left.push(start);
-        let port = client_port_slot(1 + self.sort_cores + r, self.ports).0;
-        self.rasters.push(Job { tile: p.tile, engine: 1, port, start, work_end: end, end });
+        self.rasters.push(Job {
+            tile: p.tile,
+            engine: 1,
+            port: self.raster_port[r],
+            start,
+            work_end: end,
+            end,
+        });
         true
     }
 }

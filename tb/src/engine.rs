@@ -29,6 +29,7 @@ use neo_golden::engine::host::FramePlan;
 use neo_golden::engine::memory::Memory;
 use neo_golden::engine::reference::FrameOutcome;
 use neo_golden::engine::regs::{Counter, Counters, Reg, CTRL_START};
+use neo_golden::engine::MemoryClient;
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -108,19 +109,17 @@ fn engine_sources(cfg: &EngineConfig) -> Result<(Files, String, ModuleInterface)
 }
 
 /// The transactions each memory client may have in flight, `(reads, writes)`, in client order
-/// (`EngineConfig::memory_clients`): the frame controller and the bridges `axi_outstanding`
-/// each; the Preprocessing Engine's managers (client `1 + N + M + q`, when it has one): the
-/// lanes' ports (`q < 2 P`) read `pre_outstanding` bursts and write `axi_outstanding`, the list
-/// writer (`q = 2 P`) `pre_outstanding` each.
+/// ([`MemoryClient`]): the frame controller and the bridges `axi_outstanding` each; the
+/// Preprocessing Engine's lane ports read `pre_outstanding` bursts and write `axi_outstanding`,
+/// its list writer `pre_outstanding` each.
 pub fn client_limits(cfg: &EngineConfig) -> Vec<(usize, usize)> {
     let (a, p) = (cfg.axi_outstanding, cfg.pre_outstanding);
-    let mut v = vec![(a, a); 1 + cfg.sort_cores + cfg.raster_cores];
-    if cfg.has_preprocessing() {
-        v.extend((0..2 * cfg.pre_units).map(|_| (p, a)));
-        v.push((p, p));
-    }
-    debug_assert_eq!(v.len(), cfg.memory_clients());
-    v
+    let limits = |client: &MemoryClient| match client {
+        MemoryClient::PreGeometry(_) | MemoryClient::PreSh(_) => (p, a),
+        MemoryClient::PreListWriter => (p, p),
+        _ => (a, a),
+    };
+    cfg.memory_client_list().iter().map(limits).collect()
 }
 
 /// The transactions in flight each AXI port may carry, `(reads, writes)`: the sums of its
@@ -136,21 +135,9 @@ pub fn port_limits(cfg: &EngineConfig) -> Vec<(usize, usize)> {
     ports
 }
 
-/// The name of memory client `c` (`EngineConfig::memory_clients` order): the frame controller,
-/// `sort core i`, `raster core j`, the Preprocessing Engine's lane ports and its list writer.
+/// The name of memory client `c` ([`MemoryClient`]'s), or `no client (c)` past the last.
 pub fn client_name(cfg: &EngineConfig, c: usize) -> String {
-    let (n, m, p) = (cfg.sort_cores, cfg.raster_cores, cfg.pre_units);
-    match c {
-        0 => "frame controller".into(),
-        c if c <= n => format!("sort core {}", c - 1),
-        c if c <= n + m => format!("raster core {}", c - 1 - n),
-        c if c < cfg.memory_clients() => match c - 1 - n - m {
-            q if q < p => format!("preprocessing lane {q} (geometry, features)"),
-            q if q < 2 * p => format!("preprocessing lane {} (SH, previous features)", q - p),
-            _ => "preprocessing list writer".into(),
-        },
-        c => format!("no client ({c})"),
-    }
+    cfg.memory_client(c).map_or_else(|| format!("no client ({c})"), |client| client.to_string())
 }
 
 /// Names `(port, id)` by its memory client: the port mux's ID is the client's slot

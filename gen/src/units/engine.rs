@@ -30,7 +30,7 @@ use neo_golden::engine::memory::{
     DESCRIPTOR_BYTES, DPS_PASSES_BITS, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES, RESULT_BYTES,
 };
 use neo_golden::engine::regs::{CameraWord, Counter, COUNTERS};
-use neo_golden::engine::EngineConfig;
+use neo_golden::engine::{EngineConfig, MemoryClient};
 
 /// Module name.
 pub const NAME: &str = "neo_engine";
@@ -49,46 +49,51 @@ pub const SUBMODULES: &[&str] = &[
     clock_gate::NAME,
 ];
 
-/// The engine's memory clients and ports.
+/// The engine's memory clients and ports: golden's client numbering
+/// ([`neo_golden::engine::MemoryClient`]) laid out on the client buses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Clients {
     /// Sorting cores `N`.
     pub sort: usize,
     /// Raster cores `M`.
     pub raster: usize,
-    /// The Preprocessing Engine's managers `Q` (`2 pre_units + 1`).
+    /// The Preprocessing Engine's managers `Q` (`2 pre_units + 1`, or none).
     pub pre: usize,
     /// AXI4 ports `K`.
     pub ports: usize,
+    /// Clients `C` ([`EngineConfig::memory_clients`]).
+    count: usize,
+    /// The client index of sorting core 0, raster core 0 and the Preprocessing Engine's first
+    /// manager (its managers are consecutive, in the Preprocessing Engine's order).
+    first_sort: usize,
+    first_raster: usize,
+    first_pre: usize,
 }
 
 impl Clients {
     /// The clients of `cfg`'s engine.
     pub fn of(cfg: &EngineConfig) -> Clients {
-        let c = Clients {
+        Clients {
             sort: cfg.sort_cores,
             raster: cfg.raster_cores,
             pre: pre::engine::managers(cfg),
             ports: cfg.mem_channels,
-        };
-        debug_assert_eq!(c.count(), cfg.memory_clients());
-        c
+            count: cfg.memory_clients(),
+            first_sort: cfg.client_index(MemoryClient::SortCore(0)),
+            first_raster: cfg.client_index(MemoryClient::RasterCore(0)),
+            first_pre: cfg.client_index(MemoryClient::PreGeometry(0)),
+        }
     }
 
-    /// Clients `C = 1 + N + M + Q` (the frame controller, the sort bridges, the raster bridges,
-    /// the Preprocessing Engine's managers).
+    /// Clients `C`: the frame controller, the sort bridges, the raster bridges, the
+    /// Preprocessing Engine's managers.
     pub fn count(&self) -> usize {
-        1 + self.sort + self.raster + self.pre
-    }
-
-    /// The first client of the Preprocessing Engine, `1 + N + M`.
-    pub fn first_pre(&self) -> usize {
-        1 + self.sort + self.raster
+        self.count
     }
 
     /// Slots per port mux, `ceil(C / K)`.
     pub fn slots(&self) -> usize {
-        neo_golden::engine::port_slots(self.count(), self.ports)
+        neo_golden::engine::port_slots(self.count, self.ports)
     }
 
     /// Index of client `c` in the client buses, `port * slots + slot`: port `k`'s mux takes
@@ -97,6 +102,13 @@ impl Clients {
     pub fn position(&self, c: usize) -> usize {
         let (port, slot) = neo_golden::engine::client_port_slot(c, self.ports);
         port * self.slots() + slot
+    }
+
+    /// [`Clients::position`] as a Verilog constant expression, for the client `first + var` of
+    /// a generate loop's variable `var`.
+    fn position_expr(&self, var: &str, first: usize) -> String {
+        let (k, p) = (self.ports, self.slots());
+        format!("(({var} + {first}) % {k}) * {p} + ({var} + {first}) / {k}")
     }
 }
 
@@ -358,7 +370,7 @@ fn preprocessing(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         m.wire_assign("unused_pre_regs", 1, format!("^{{{}}}", nets.join(", ")));
         return;
     }
-    let (q, k, p) = (cl.pre as u32, cl.ports, cl.slots());
+    let q = cl.pre as u32;
     let sigs = axi::signals(cfg);
     m.blank();
     m.comment(format!(
@@ -405,8 +417,7 @@ fn preprocessing(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         c.push((axi::port_name("m_axi_", s, true), format!("pre_{}", s.name)));
     }
     m.instance(pre::engine::NAME, "u_pre", c);
-    let c0 = cl.first_pre();
-    let pos = format!("((q + {c0}) % {k}) * {p} + (q + {c0}) / {k}");
+    let pos = cl.position_expr("q", cl.first_pre);
     let items = sigs
         .iter()
         .map(|s| {
@@ -441,7 +452,6 @@ fn core_clock_gate(en: &str) -> [Item; 2] {
 /// stops.
 fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     let (n, aw, lw) = (cl.sort as u32, cfg.addr_bits, cfg.len_bits);
-    let (k, p) = (cl.ports, cl.slots());
     m.blank();
     m.comment("Sort bridges' events (one bit per core).");
     m.wire("sort_rd", n).wire("sort_wr", n).vector("sort_rd").vector("sort_wr");
@@ -481,7 +491,7 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     br.push(pair("idle_o", "idle[i]"));
     br.push(pair("rd_beat_o", "sort_rd[i]"));
     br.push(pair("wr_beat_o", "sort_wr[i]"));
-    br.extend(client_conns(cfg, "m_axi_", &format!("((i + 1) % {k}) * {p} + (i + 1) / {k}")));
+    br.extend(client_conns(cfg, "m_axi_", &cl.position_expr("i", cl.first_sort)));
     items.push(inst(axi::sort_bridge::NAME, "u_bridge", br));
     m.gen_for("i", n, "g_sort", items);
 }
@@ -491,7 +501,6 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
 /// offered to the cycle after its done.
 fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     let (n, mm) = (cl.sort, cl.raster as u32);
-    let (k, p) = (cl.ports, cl.slots());
     m.blank();
     m.comment("Raster bridges' events (one bit per core).");
     for e in ["ras_rd_table", "ras_rd_feat", "ras_wr_table", "ras_wr_pixels"] {
@@ -519,8 +528,7 @@ fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     br.push(pair("rd_feat_o", "ras_rd_feat[j]"));
     br.push(pair("wr_table_o", "ras_wr_table[j]"));
     br.push(pair("wr_pixels_o", "ras_wr_pixels[j]"));
-    let c0 = 1 + n;
-    br.extend(client_conns(cfg, "m_axi_", &format!("((j + {c0}) % {k}) * {p} + (j + {c0}) / {k}")));
+    br.extend(client_conns(cfg, "m_axi_", &cl.position_expr("j", cl.first_raster)));
     items.push(inst(axi::raster_bridge::NAME, "u_bridge", br));
     m.gen_for("j", mm, "g_raster", items);
 }
@@ -675,10 +683,17 @@ mod tests {
 
     #[test]
     fn every_client_has_its_own_slot_and_ports_share_the_load() {
-        for (sort, raster, pre, ports) in
-            [(16, 4, 9, 4), (2, 1, 3, 2), (1, 1, 3, 1), (3, 2, 5, 4), (16, 4, 33, 1), (2, 1, 0, 2)]
+        for (sort_cores, raster_cores, pre_units, ports) in
+            [(16, 4, 4, 4), (2, 1, 1, 2), (1, 1, 1, 1), (3, 2, 2, 4), (16, 4, 16, 1), (2, 1, 0, 2)]
         {
-            let cl = Clients { sort, raster, pre, ports };
+            let cfg = EngineConfig {
+                sort_cores,
+                raster_cores,
+                pre_units,
+                mem_channels: ports,
+                ..EngineConfig::default()
+            };
+            let cl = Clients::of(&cfg);
             let mut seen: Vec<usize> = (0..cl.count()).map(|c| cl.position(c)).collect();
             seen.sort_unstable();
             seen.dedup();

@@ -396,28 +396,6 @@ impl EngineConfig {
         Ok(())
     }
 
-    /// The engine's AXI4 memory clients: the frame controller, the sorting and raster cores'
-    /// bridges, and the Preprocessing Engine's ([`EngineConfig::pre_managers`]).
-    pub fn memory_clients(&self) -> usize {
-        1 + self.sort_cores + self.raster_cores + self.pre_managers()
-    }
-
-    /// Slots of each AXI4 port's mux ([`port_slots`] of this engine's clients and ports).
-    pub fn port_slots(&self) -> usize {
-        port_slots(self.memory_clients(), self.mem_channels)
-    }
-
-    /// Memory client `c`'s `(port, slot)` on this engine's `mem_channels` ports
-    /// ([`client_port_slot`]).
-    pub fn client_port_slot(&self, c: usize) -> (usize, usize) {
-        client_port_slot(c, self.mem_channels)
-    }
-
-    /// The memory client in `slot` of `port` ([`port_slot_client`]).
-    pub fn port_slot_client(&self, port: usize, slot: usize) -> usize {
-        port_slot_client(port, slot, self.mem_channels)
-    }
-
     /// Whether the engine has a Preprocessing Engine (`pre_units` > 0).
     pub fn has_preprocessing(&self) -> bool {
         self.pre_units > 0
@@ -523,28 +501,6 @@ impl EngineConfig {
     pub fn bsu_latency(&self) -> usize {
         self.network().depth().div_ceil(self.register_every)
     }
-}
-
-/// Where memory client `c` (in [`EngineConfig::memory_clients`] order) sits among `ports` AXI4
-/// ports: `(port, slot)` = `(c mod ports, c div ports)`. The clients are dealt round the ports,
-/// so each port's mux has `ceil(clients / ports)` slots and the ports' loads differ by one
-/// client at most; the mux's downstream ID is the slot. The one definition of the mapping: gen
-/// wires the engine's client buses by it, tb sums each port's limits and names a port's IDs by
-/// it, and sim's engine model puts each core's traffic on its port by it.
-pub fn client_port_slot(c: usize, ports: usize) -> (usize, usize) {
-    (c % ports, c / ports)
-}
-
-/// Slots of each port's mux when `clients` memory clients are dealt round `ports` ports
-/// ([`client_port_slot`]): `ceil(clients / ports)`.
-pub fn port_slots(clients: usize, ports: usize) -> usize {
-    clients.div_ceil(ports)
-}
-
-/// The memory client in `slot` of `port` among `ports` ports: the inverse of
-/// [`client_port_slot`] (a slot past the last client gives an index past it too).
-pub fn port_slot_client(port: usize, slot: usize, ports: usize) -> usize {
-    slot * ports + port
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@
 //! cosimulation ([`host`], [`expected`], [`cases`]).
 
 pub mod cases;
+mod clients;
 mod config;
 pub mod expected;
 pub mod host;
@@ -16,9 +17,9 @@ pub mod reference;
 pub mod regs;
 
 pub use cases::{CaseScene, EngineCase};
+pub use clients::{client_port_slot, port_slot_client, port_slots, MemoryClient};
 pub use config::{
-    client_port_slot, port_slot_client, port_slots, ConfigError, EngineConfig, SchedulerPolicy, Topology,
-    COMPLETION_QUEUE_DEPTH, ROUTING_FIFO_DEPTH,
+    ConfigError, EngineConfig, SchedulerPolicy, Topology, COMPLETION_QUEUE_DEPTH, ROUTING_FIFO_DEPTH,
 };
 pub use expected::{Expected, Mismatch, Place, PreExpected};
 pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError};
