@@ -25,6 +25,7 @@ fn models_present() {
 neo_tb::with_models! {
     use std::collections::HashSet;
 
+    use neo_golden::engine::{tile_plan, EngineConfig, FrameRegs, TileDescriptor};
     use neo_golden::pipeline::Strategy;
     use neo_golden::scene::Scene;
     use neo_golden::sort::{full_sort, Parity, SortEntry};
@@ -33,8 +34,23 @@ neo_tb::with_models! {
     use neo_sim::config::PipelineParams;
     use neo_sim::driver::WorkDriver;
     use neo_sim::latency::Latency;
-    use neo_sim::sortcmd::{batch_cycles, conventional_sort, update_batches, Mode};
+    use neo_sim::sortcmd::{batch_cycles, conventional_sort, Cmd, Mode};
     use neo_tb::core::{dps_pass_checked, full_sort_checked, merge_checked, Core, MemTiming};
+
+    /// The commands of golden's plan for a reuse tile of `table` previous entries and
+    /// `incoming` new ones in frame `frame`, with Neo's one DPS pass (the engine's table capacity
+    /// raised to hold it: the plan of a tile that overflows is empty).
+    fn reuse_plan(gen: &EngineConfig, table: usize, incoming: usize, frame: usize) -> Vec<Cmd> {
+        let d = TileDescriptor {
+            prev_len: table as u32,
+            list_len: incoming as u32,
+            dps_passes: 1,
+            ..TileDescriptor::default()
+        };
+        let cfg = EngineConfig { table_capacity: gen.table_capacity.max(table + incoming), ..gen.clone() };
+        let regs = FrameRegs { frame: frame as u32, ..FrameRegs::default() };
+        tile_plan(&cfg, &regs, &d, 0).commands().map(Cmd::from).collect()
+    }
 
     fn latency() -> Latency {
         Latency::from_file(&shared::workspace_root().join("reports/latency.json")).unwrap()
@@ -92,18 +108,19 @@ neo_tb::with_models! {
                 let incoming: Vec<SortEntry> =
                     current.iter().filter(|e| !valid.contains(&e.id)).copied().collect();
                 assert_eq!(incoming.len() as u32, fw.tiles[t].sort_n, "tile {t}: incoming list");
-                let batches = update_batches(table.len() as u64, incoming.len() as u64, f as u64, 1, c);
-                cmds += batches.iter().map(Vec::len).sum::<usize>();
-                let seq = batches.concat();
+                let plan = reuse_plan(&gen, table.len(), incoming.len(), f);
+                cmds += plan.len();
                 let (dps_table, c1) = dps_pass_checked(&mut core, &gen, table, Parity::of(f as u64, 0));
                 let c2 = full_sort_checked(&mut core, &gen, &incoming);
                 let (sorted, _) = full_sort(&incoming, &sort_cfg);
                 let c3 = merge_checked(&mut core, &dps_table, &sorted, true).cycles;
                 rtl += c1 + c2 + c3;
-                let dps: Vec<_> = seq.iter().filter(|c| c.mode == Mode::Dps).copied().collect();
-                let conv = conventional_sort(incoming.len() as u64, c);
-                let md = &seq[seq.len() - 1..];
-                let (m1, m2, m3) = (batch_cycles(&dps, &lat), batch_cycles(&conv, &lat), batch_cycles(md, &lat));
+                let of_mode = |m: Mode| plan.iter().filter(|c| c.mode == m).copied().collect::<Vec<_>>();
+                let (dps, md) = (of_mode(Mode::Dps), of_mode(Mode::MergeDelete));
+                let conv: Vec<Cmd> =
+                    plan.iter().filter(|c| !matches!(c.mode, Mode::Dps | Mode::MergeDelete)).copied().collect();
+                assert_eq!(conv, conventional_sort(incoming.len() as u64, c), "the plan's sort of the list");
+                let (m1, m2, m3) = (batch_cycles(&dps, &lat), batch_cycles(&conv, &lat), batch_cycles(&md, &lat));
                 model += m1 + m2 + m3;
                 parts[1].1.add(m1, c1);
                 parts[0].1.add(m2, c2);

@@ -135,8 +135,7 @@ impl<'a> EngineFrameModel<'a> {
     pub fn sort_cycles(&self, t: &TileTrace) -> f64 {
         let mut total = 0.0;
         for (s, stage) in t.plan.stages.iter().enumerate() {
-            let cmds: Vec<Cmd> =
-                stage.iter().map(|c| Cmd { mode: c.mode, len_a: c.len_a, len_b: c.len_b }).collect();
+            let cmds: Vec<Cmd> = stage.iter().map(Cmd::from).collect();
             let (read, written) = stage_entries(t, s);
             let extra =
                 written as f64 * (self.write_beats(1) - 1.0) + read as f64 * (1.0 / self.mem.bandwidth - 1.0);

@@ -7,8 +7,9 @@
 //!   `neo_golden::sort::full_sort` executes and `tb::core::full_sort_checked` drives;
 //! - a DPS pass over `L` entries: one `DPS` per chunk of the pass's parity
 //!   ([`Parity::chunks`]);
-//! - the reuse-and-update step of a tile: DPS passes, the conventional sort of the incoming
-//!   list, `MERGE_DELETE` of the two (`tb::core::update_checked`).
+//! - the reuse-and-update step of a tile: golden's tile plan (`neo_golden::engine::tile_plan`:
+//!   the conventional sort of the incoming list, the DPS passes, `MERGE_DELETE` of the two),
+//!   whose commands convert to [`Cmd`]s.
 //!
 //! # Timing of commands issued back to back
 //! The core takes a chunk command (SORT / DPS) while the previous one is still merging: its
@@ -23,6 +24,7 @@
 //! The engine (`crate::arch`, with `double_buffered_io`) gives the same with an ideal memory: a
 //! chunk segment's load phase is `T(n) - I(n)`, started under the previous segment.
 
+use neo_golden::engine::TileCmd;
 use neo_golden::sort::{conventional_sort_plan, Parity, PlannedCommand};
 
 use crate::latency::{ChunkMode, Latency};
@@ -103,6 +105,13 @@ pub fn conventional_sort(n: u64, c: u64) -> Vec<Cmd> {
     conventional_sort_plan(n, c).map(|p| Cmd::from(&p)).collect()
 }
 
+impl From<&TileCmd> for Cmd {
+    /// The command of one of golden's tile plans (its addresses aside).
+    fn from(c: &TileCmd) -> Cmd {
+        Cmd { mode: c.mode, len_a: c.len_a, len_b: c.len_b }
+    }
+}
+
 impl From<&PlannedCommand> for Cmd {
     /// The command of a planned one (its placement aside).
     fn from(p: &PlannedCommand) -> Cmd {
@@ -117,23 +126,6 @@ pub fn dps_pass(len: u64, c: u64, parity: Parity) -> Vec<Cmd> {
         .map(|r| Cmd { mode: Mode::Dps, len_a: r.len() as u64, len_b: 0 })
         .filter(|c| c.len_a > 0)
         .collect()
-}
-
-/// The RTL command batches of one reuse-and-update step (`tb::core::update_checked`): each DPS
-/// pass over the `table` reused entries (pass `p` with parity `(frame + p) % 2`), the
-/// conventional sort of `incoming` entries, and the `MERGE_DELETE` of the two; each batch waits
-/// for the previous one (it reads its output).
-pub fn update_batches(table: u64, incoming: u64, frame: u64, passes: usize, c: u64) -> Vec<Vec<Cmd>> {
-    let mut v: Vec<Vec<Cmd>> = (0..passes).map(|p| dps_pass(table, c, Parity::of(frame, p))).collect();
-    v.push(conventional_sort(incoming, c));
-    v.push(vec![Cmd { mode: Mode::MergeDelete, len_a: table, len_b: incoming }]);
-    v.retain(|b| !b.is_empty());
-    v
-}
-
-/// The commands of [`update_batches`] in order.
-pub fn update(table: u64, incoming: u64, frame: u64, passes: usize, c: u64) -> Vec<Cmd> {
-    update_batches(table, incoming, frame, passes, c).concat()
 }
 
 /// Cycles of one batch `cmds` issued back to back (the cosimulation's ideal-memory queue, from
@@ -188,11 +180,6 @@ mod tests {
         assert_eq!(even.iter().map(|c| c.len_a).collect::<Vec<_>>(), vec![256, 256, 88]);
         let odd = dps_pass(600, 256, Parity::Odd);
         assert_eq!(odd.iter().map(|c| c.len_a).collect::<Vec<_>>(), vec![128, 256, 216]);
-        let u = update(600, 40, 1, 1, 256);
-        assert_eq!(u.len(), 3 + 1 + 1);
-        assert_eq!(u.last().unwrap().mode, Mode::MergeDelete);
-        let b = update_batches(600, 40, 1, 2, 256);
-        assert_eq!(b.iter().map(Vec::len).collect::<Vec<_>>(), vec![3, 3, 1, 1]);
     }
 
     #[test]
