@@ -205,8 +205,9 @@ fn synthetic() -> Scene {
 }
 
 /// The synthetic reuse cases on the CI engine, split over two tests (the suite runs them in
-/// parallel); the seeds are one split, named after the first test, so each case's seed is the
-/// same whichever test runs it.
+/// parallel; libtest starts tests in name order, so the two are named to start after the biker
+/// check and before the overflow, which keeps both threads busy to the end); the seeds are one
+/// split, named after the first test, so each case's seed is the same whichever test runs it.
 const SYNTHETIC_CASES: [EngineCase; 5] =
     [EngineCase::Orbit, EngineCase::Cut, EngineCase::Turn, EngineCase::EdgeTiles, EngineCase::Adaptive];
 
@@ -232,7 +233,7 @@ fn synthetic_orbit_cut_and_turn_are_bit_exact_over_reuse_frames() {
 /// Reuse frames on the CI engine: partial tiles at the frame's edges, and the adaptive case
 /// (per-tile DPS passes from the descriptors).
 #[test]
-fn synthetic_edge_tiles_and_adaptive_passes_are_bit_exact_over_reuse_frames() {
+fn synthetic_orbit_with_edge_tiles_and_adaptive_passes_is_bit_exact_over_reuse_frames() {
     synthetic_cases(3..5);
 }
 
