@@ -38,8 +38,9 @@ over every bench that instantiates it:
   `if`, each `case` item) points hit at least once;
 - toggle bits: every bit of every port, register and wire that changed at least twice (rose and
   fell) in one model instance after the end of its first reset (the changes up to then come
-  from the random initial values; `neo_tb::coverage::reduce_instance`); Verilator leaves out signals wider than 256 bits (`--coverage-max-width`: the BSU's
-  vectors, the SCU's packed pixel states) and memories, and the raster core's own modules
+  from the random initial values; `neo_tb::coverage::reduce_instance`); Verilator leaves out
+  signals wider than 256 bits (`--coverage-max-width`: the BSU's vectors, the SCU's packed pixel
+  states) and memories, and the raster core's own modules
   (`neo_raster_core`, `neo_raster_loader`, `neo_raster_feeder`) are built without toggle
   coverage (316 C++ files instead of 28); the SCU and ITU inside it have theirs from their own
   benches;
