@@ -342,7 +342,7 @@ pub fn rust(iface: &ModuleInterface, coverage: bool, hdl: Option<&HdlFiles>) -> 
     }
     let _ = writeln!(
         s,
-        "pub struct {sn} {{\n    raw: std::ptr::NonNull<std::ffi::c_void>,\n    /// The model of `$NEO_HDL_DIR`'s Verilog, when it differs from the linked model's.\n    alt: Option<Box<crate::dynmodel::DynModel>>,\n    cycle: u64,\n    time: u64,\n    tracing: bool,\n}}\n"
+        "pub struct {sn} {{\n    raw: std::ptr::NonNull<std::ffi::c_void>,\n    /// The model of `$NEO_HDL_DIR`'s Verilog, when it differs from the linked model's.\n    alt: Option<Box<crate::dynmodel::DynModel>>,\n    cycle: u64,\n    time: u64,\n    tracing: bool,\n    /// Coverage models: the toggle baseline's file (`crate::coverage::write_baseline`).\n    #[allow(dead_code)]\n    cov_base: Option<std::path::PathBuf>,\n}}\n"
     );
     let _ = writeln!(s, "// SAFETY: the model (and its VerilatedContext) is owned by this value alone; Verilator\n// supports one context per thread, and `&mut self` serialises every call.\nunsafe impl Send for {sn} {{}}\n");
 
@@ -367,7 +367,7 @@ pub fn rust(iface: &ModuleInterface, coverage: bool, hdl: Option<&HdlFiles>) -> 
     };
     let _ = writeln!(
         s,
-        "    /// A new model, clock low, reset released, all other inputs zero, every variable of the\n    /// design at its initial value (random by default, from the bench seed: `crate::xinit`;\n    /// call [`Self::reset`]).\n    /// With `$NEO_HDL_DIR` set, a model of its Verilog when that differs from this build's\n    /// (`crate::hdl_dir::substitute`).\n    ///\n    /// # Panics\n    /// When `$NEO_HDL_DIR` lacks one of the files or its model does not build.\n    #[allow(clippy::new_without_default)]\n    pub fn new() -> Self {{\n        // SAFETY: plain constructor; a null return is checked.\n        let raw = crate::xinit::construct(Self::NAME, |mode, seed| unsafe {{ ffi_{t}::neo_{t}_new(mode, seed) }});\n        let raw = std::ptr::NonNull::new(raw).expect(\"Verilated model allocation failed\");\n        let alt = {alt};\n        let mut m = {sn} {{ raw, alt, cycle: 0, time: 0, tracing: false }};"
+        "    /// A new model, clock low, reset released, all other inputs zero, every variable of the\n    /// design at its initial value (random by default, from the bench seed: `crate::xinit`;\n    /// call [`Self::reset`]).\n    /// With `$NEO_HDL_DIR` set, a model of its Verilog when that differs from this build's\n    /// (`crate::hdl_dir::substitute`).\n    ///\n    /// # Panics\n    /// When `$NEO_HDL_DIR` lacks one of the files or its model does not build.\n    #[allow(clippy::new_without_default)]\n    pub fn new() -> Self {{\n        // SAFETY: plain constructor; a null return is checked.\n        let raw = crate::xinit::construct(Self::NAME, |mode, seed| unsafe {{ ffi_{t}::neo_{t}_new(mode, seed) }});\n        let raw = std::ptr::NonNull::new(raw).expect(\"Verilated model allocation failed\");\n        let alt = {alt};\n        let mut m = {sn} {{ raw, alt, cycle: 0, time: 0, tracing: false, cov_base: None }};"
     );
     if has_clk {
         s.push_str("        m.set_clk_i(false);\n");
@@ -375,7 +375,18 @@ pub fn rust(iface: &ModuleInterface, coverage: bool, hdl: Option<&HdlFiles>) -> 
     if has_rst {
         s.push_str("        m.set_rst_ni(true);\n");
     }
-    s.push_str("        m.eval();\n        m\n    }\n\n");
+    s.push_str("        m.eval();\n");
+    if coverage && !has_rst {
+        // No reset: the baseline is the first evaluation's.
+        s.push_str("        m.coverage_baseline();\n");
+    }
+    s.push_str("        m\n    }\n\n");
+    if coverage {
+        let _ = writeln!(
+            s,
+            "    /// Writes the toggle baseline once (`crate::coverage::write_baseline`).\n    fn coverage_baseline(&mut self) {{\n        if self.alt.is_none() && self.cov_base.is_none() {{\n            self.cov_base = Some(crate::coverage::write_baseline(Self::NAME, |path| {{\n                // SAFETY: `raw` is live; `path` outlives the call.\n                unsafe {{ ffi_{t}::neo_{t}_coverage_write(self.raw.as_ptr(), path.as_ptr()) }}\n            }}));\n        }}\n    }}\n"
+        );
+    }
     s.push_str("    /// True when this model runs `$NEO_HDL_DIR`'s Verilog (it differs from the linked model's).\n    pub fn is_substituted(&self) -> bool {\n        self.alt.is_some()\n    }\n\n");
     let _ = writeln!(
         s,
@@ -414,7 +425,11 @@ pub fn rust(iface: &ModuleInterface, coverage: bool, hdl: Option<&HdlFiles>) -> 
     if has_clk {
         s.push_str("        self.set_clk_i(false);\n");
     }
-    s.push_str("        self.eval();\n        self.cycle = 0;\n    }\n\n");
+    s.push_str("        self.eval();\n        self.cycle = 0;\n");
+    if coverage {
+        s.push_str("        self.coverage_baseline();\n");
+    }
+    s.push_str("    }\n\n");
     s.push_str("    /// Rising clock edges since the end of the last [`Self::reset`] (or since creation).\n");
     s.push_str("    #[inline]\n    pub fn cycle(&self) -> u64 {\n        self.cycle\n    }\n\n");
     s.push_str("    /// Simulation time (10 units a cycle), as written to the trace.\n");
@@ -436,7 +451,7 @@ pub fn rust(iface: &ModuleInterface, coverage: bool, hdl: Option<&HdlFiles>) -> 
     // A substituted model writes its own coverage (crate::dynmodel); the linked one, unused, none.
     let cov = if coverage {
         format!(
-            "        if self.alt.is_none() {{\n            crate::coverage::write_model(Self::NAME, |path| {{\n                // SAFETY: `raw` is live; `path` outlives the call.\n                unsafe {{ ffi_{t}::neo_{t}_coverage_write(self.raw.as_ptr(), path.as_ptr()) }}\n            }});\n        }}\n"
+            "        if self.alt.is_none() {{\n            crate::coverage::write_model(Self::NAME, self.cov_base.as_deref(), |path| {{\n                // SAFETY: `raw` is live; `path` outlives the call.\n                unsafe {{ ffi_{t}::neo_{t}_coverage_write(self.raw.as_ptr(), path.as_ptr()) }}\n            }});\n        }}\n"
         )
     } else {
         String::new()

@@ -12,8 +12,10 @@
 //!
 //! Rules: a line point (`v_line`, `v_branch`: a statement block or a branch of an `if` / `case`)
 //! is hit at least once; a toggle point (one bit of a port, register or wire) is covered when it
-//! changed at least twice (Verilator counts changes, so 2 means it rose and fell); a named cover
-//! point (`v_user`) is hit at least once.
+//! changed at least twice (Verilator counts changes, so 2 means it rose and fell) in one model
+//! instance after the end of that instance's first reset ([`write_baseline`], [`reduce_instance`]:
+//! each model file is reduced when it is written); a named cover point (`v_user`) is hit at
+//! least once.
 
 #[allow(dead_code)]
 #[path = "../build/coverage_env.rs"]
@@ -22,7 +24,7 @@ mod coverage_env;
 use std::collections::BTreeMap;
 use std::ffi::CString;
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The start of `reports/coverage.md`: what it is and how the numbers are counted.
@@ -35,8 +37,10 @@ over every bench that instantiates it:
 - lines + branches: Verilator's `v_line` (a block of statements) and `v_branch` (each side of an
   `if`, each `case` item) points hit at least once;
 - toggle bits: every bit of every port, register and wire that changed at least twice (rose and
-  fell); Verilator leaves out signals wider than 256 bits (`--coverage-max-width`: the BSU's
-  vectors, the SCU's packed pixel states) and memories, and the raster core's own modules
+  fell) in one model instance after the end of its first reset (the changes up to then come
+  from the random initial values; `neo_tb::coverage::reduce_instance`); Verilator leaves out
+  signals wider than 256 bits (`--coverage-max-width`: the BSU's vectors, the SCU's packed pixel
+  states) and memories, and the raster core's own modules
   (`neo_raster_core`, `neo_raster_loader`, `neo_raster_feeder`) are built without toggle
   coverage (316 C++ files instead of 28); the SCU and ITU inside it have theirs from their own
   benches;
@@ -78,9 +82,67 @@ pub fn next_path(top: &str) -> PathBuf {
     dir.join(format!("{top}-{}-{n}.dat", std::process::id()))
 }
 
-/// Calls `write` with a fresh [`next_path`] for model `top` (the models' `Drop`).
-pub fn write_model(top: &str, write: impl FnOnce(&CString)) {
+/// Calls `write` with a fresh [`next_path`] for model `top` (the models' `Drop`), then reduces
+/// the file to this instance's toggles ([`reduce_instance`]) against its baseline `base` (the
+/// file [`write_baseline`] wrote; none: every change counts), which it removes.
+pub fn write_model(top: &str, base: Option<&Path>, write: impl FnOnce(&CString)) {
     let path = next_path(top);
+    write_to(path.clone(), write);
+    let base_text = base.map(|b| std::fs::read_to_string(b).unwrap_or_default()).unwrap_or_default();
+    match std::fs::read_to_string(&path) {
+        Ok(text) => {
+            if let Err(e) = std::fs::write(&path, reduce_instance(&text, &base_text)) {
+                eprintln!("coverage: cannot write {}: {e}", path.display());
+            }
+        }
+        Err(e) => eprintln!("coverage: cannot read {}: {e}", path.display()),
+    }
+    if let Some(b) = base {
+        let _ = std::fs::remove_file(b);
+    }
+}
+
+/// Calls `write` with a fresh file of `<data_dir>/base` for model `top` and returns it: the
+/// counts at the end of the model's first reset (or, for a model without a reset, after its
+/// first evaluation), its toggle baseline. Verilator starts every toggle point's shadow copy
+/// from the random initial values (`--x-initial unique`), so the first evaluation and the reset
+/// count changes that are not toggles of the design.
+pub fn write_baseline(top: &str, write: impl FnOnce(&CString)) -> PathBuf {
+    let dir = data_dir().join("base");
+    let _ = std::fs::create_dir_all(&dir);
+    let path = dir.join(next_path(top).file_name().unwrap_or_default());
+    write_to(path.clone(), write);
+    path
+}
+
+/// One model instance's data as the report counts it: line, branch and cover points as they
+/// are; a toggle point (`v_toggle`) `2` when it changed at least twice after the baseline `base`
+/// (the same instance's data at the end of its first reset; empty: none), else `0`. Merged
+/// files add up, so a toggle point counts as covered when one instance rose and fell, and
+/// changes of different instances (one rise here, one fall there) never add up to a toggle.
+pub fn reduce_instance(text: &str, base: &str) -> String {
+    let count_of = |line: &str| -> Option<(String, u64)> {
+        let (key, n) = line.strip_prefix("C '")?.rsplit_once("' ")?;
+        Some((key.to_string(), n.trim().parse().ok()?))
+    };
+    let before: std::collections::HashMap<String, u64> = base.lines().filter_map(count_of).collect();
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        match count_of(line) {
+            Some((key, n)) if key.contains("\u{1}page\u{2}v_toggle/") => {
+                let d = n.saturating_sub(before.get(&key).copied().unwrap_or(0));
+                let _ = writeln!(out, "C '{key}' {}", if covered(Kind::Toggle, d) { 2 } else { 0 });
+            }
+            _ => {
+                out.push_str(line);
+                out.push('\n');
+            }
+        }
+    }
+    out
+}
+
+fn write_to(path: PathBuf, write: impl FnOnce(&CString)) {
     match CString::new(path.to_string_lossy().as_bytes()) {
         Ok(c) => write(&c),
         Err(e) => eprintln!("coverage: cannot write {}: {e}", path.display()),
@@ -290,10 +352,60 @@ pub fn waiver_for<'a>(
     source: &str,
 ) -> Option<&'a Waiver> {
     waivers.iter().find(|w| {
-        (w.module == "*" || w.module == module)
+        glob(&w.module, module)
             && w.kind == waiver_kind(p.kind)
-            && (p.what.contains(&w.pattern) || (w.kind == "line" && source.contains(&w.pattern)))
+            && match (p.kind, bit_range(&w.pattern)) {
+                (Kind::Toggle, Some((name, hi, lo))) => {
+                    glob(name, signal_of(&p.what)) && bit_of(&p.what).is_some_and(|b| (lo..=hi).contains(&b))
+                }
+                _ => p.what.contains(&w.pattern) || (w.kind == "line" && source.contains(&w.pattern)),
+            }
     })
+}
+
+/// Whether `name` matches `pattern`, where `*` stands for any run of characters.
+fn glob(pattern: &str, name: &str) -> bool {
+    match pattern.split_once('*') {
+        None => pattern == name,
+        Some((head, rest)) => {
+            name.starts_with(head)
+                && (0..=name.len() - head.len())
+                    .any(|i| name.is_char_boundary(head.len() + i) && glob(rest, &name[head.len() + i..]))
+        }
+    }
+}
+
+/// A toggle waiver's `signal[hi:lo]` pattern: bits `lo..=hi` of the signals `signal` matches
+/// (`*` for any run of characters).
+fn bit_range(pattern: &str) -> Option<(&str, u32, u32)> {
+    let (name, rest) = pattern.strip_suffix(']')?.rsplit_once('[')?;
+    let (hi, lo) = rest.split_once(':')?;
+    let (hi, lo) = (hi.trim().parse().ok()?, lo.trim().parse().ok()?);
+    (hi >= lo).then_some((name, hi, lo))
+}
+
+/// Bit indices as sorted ranges: `0-2, 8, 29-31`.
+fn bit_ranges(bits: impl Iterator<Item = u32>) -> String {
+    let mut v: Vec<u32> = bits.collect();
+    v.sort_unstable();
+    v.dedup();
+    let mut out: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < v.len() {
+        let mut j = i;
+        while j + 1 < v.len() && v[j + 1] == v[j] + 1 {
+            j += 1;
+        }
+        out.push(if j == i { v[i].to_string() } else { format!("{}-{}", v[i], v[j]) });
+        i = j + 1;
+    }
+    out.join(", ")
+}
+
+/// `signal[3]` -> 3.
+fn bit_of(what: &str) -> Option<u32> {
+    let i = what.rfind('[')?;
+    what.strip_suffix(']')?[i + 1..].parse().ok()
 }
 
 /// `signal[3]` -> `signal` (a toggle point's signal).
@@ -350,24 +462,29 @@ pub fn markdown(
                 why.map_or("**open**".to_string(), |r| format!("justified: {r}"))
             );
         }
-        let mut signals: BTreeMap<&str, (usize, usize, Option<String>)> = BTreeMap::new();
+        // Per signal: its width, and its untoggled bits by waiver reason (None: open).
+        type Holes = BTreeMap<Option<String>, Vec<Option<u32>>>;
+        let mut signals: BTreeMap<&str, (usize, Holes)> = BTreeMap::new();
         for p in pts.iter().filter(|p| p.kind == Kind::Toggle) {
-            let e = signals.entry(signal_of(&p.what)).or_insert((0, 0, None));
-            e.1 += 1;
+            let e = signals.entry(signal_of(&p.what)).or_default();
+            e.0 += 1;
             if !p.covered() {
-                e.0 += 1;
-                if e.2.is_none() {
-                    e.2 = waiver_for(waivers, m, p, "").map(|w| w.reason.clone());
-                }
+                let why = waiver_for(waivers, m, p, "").map(|w| w.reason.clone());
+                e.1.entry(why).or_default().push(bit_of(&p.what));
             }
         }
-        for (sig, (untoggled, bits, why)) in signals.iter().filter(|(_, v)| v.0 > 0) {
-            open += usize::from(why.is_none());
-            let _ = writeln!(
-                list,
-                "- toggle `{sig}`: {untoggled} of {bits} bit(s) not toggled: {}",
-                why.as_ref().map_or("**open**".to_string(), |r| format!("justified: {r}"))
-            );
+        for (sig, (bits, holes)) in &signals {
+            open += usize::from(holes.contains_key(&None));
+            for (why, list_bits) in holes {
+                let which = bit_ranges(list_bits.iter().flatten().copied());
+                let which = if which.is_empty() { String::new() } else { format!(" [{which}]") };
+                let _ = writeln!(
+                    list,
+                    "- toggle `{sig}`: {} of {bits} bit(s) not toggled{which}: {}",
+                    list_bits.len(),
+                    why.as_ref().map_or("**open**".to_string(), |r| format!("justified: {r}"))
+                );
+            }
         }
         all_open += open;
         let _ = writeln!(
@@ -410,6 +527,21 @@ mod tests {
         t += &point("v_expr/sub", "sub.v", 6, "expr", "TOP.m.u1", 7);
         t += &point("v_line/sub__S1", "sub.v", 5, "block", "TOP.m.u2", 9);
         t
+    }
+
+    #[test]
+    fn an_instance_counts_its_toggles_after_its_baseline() {
+        let mut base = String::from("# SystemC::Coverage-3\n");
+        base += &point("v_line/m", "m.v", 10, "block", "TOP.m", 4);
+        base += &point("v_toggle/m", "m.v", 2, "q[0]", "TOP.m", 2);
+        let r = parse_dat(&reduce_instance(&sample(), &base)).unwrap();
+        assert_eq!(r.len(), 8);
+        assert_eq!(r[0].count, 4, "line counts keep the reset's statements");
+        assert_eq!(r[2].count, 0, "q[0]: 3 changes, 2 of them up to the end of the reset");
+        assert_eq!(r[3].count, 0, "q[1]: one change is not a toggle");
+        let r = parse_dat(&reduce_instance(&sample(), "")).unwrap();
+        assert_eq!(r[2].count, 2, "q[0]: 3 changes and no baseline");
+        assert_eq!(r[4].count, 0, "a cover point keeps its count");
     }
 
     #[test]
@@ -479,8 +611,23 @@ mod tests {
         assert!(r.contains("| `sub` | 100.0% (1/1) | - (0/0) | 0/0 | 0 |"), "{r}");
         assert!(r.contains("- m.v:11 if `m.v line 11`: **open**"), "{r}");
         assert!(r.contains("cover point `cov_x`: **open**"), "{r}");
-        assert!(r.contains("toggle `q`: 1 of 2 bit(s) not toggled: justified: q[1] is set once"), "{r}");
+        assert!(r.contains("toggle `q`: 1 of 2 bit(s) not toggled [1]: justified: q[1] is set once"), "{r}");
         assert!(r.contains("Open holes in all: 2."), "{r}");
+        // A bit-range waiver covers its bits of that signal only.
+        let w = parse_waivers("m | toggle | q[1:1] | q[1] is set once\nm | toggle | q[0:0] | no\n").unwrap();
+        let r = markdown(&m, &w, &src, "# Coverage\n");
+        assert!(r.contains("toggle `q`: 1 of 2 bit(s) not toggled [1]: justified: q[1] is set once"), "{r}");
+        let w = parse_waivers("m | toggle | x*[1:1] | no\nm | toggle | q*[1:1] | any q\n").unwrap();
+        let r = markdown(&m, &w, &src, "# Coverage\n");
+        assert!(r.contains("toggle `q`: 1 of 2 bit(s) not toggled [1]: justified: any q"), "{r}");
+        let w = parse_waivers("m | toggle | q[0:0] | only bit 0\n").unwrap();
+        let r = markdown(&m, &w, &src, "# Coverage\n");
+        assert!(r.contains("toggle `q`: 1 of 2 bit(s) not toggled [1]: **open**"), "{r}");
+        assert_eq!(bit_range("a_b[31:3]"), Some(("a_b", 31, 3)));
+        assert_eq!(bit_range("a_b[3]"), None);
+        assert_eq!(bit_ranges([31, 0, 2, 1, 8, 30, 29].into_iter()), "0-2, 8, 29-31");
+        assert!(glob("*", "anything") && glob("s*_axi_a*addr_i", "s7_axi_araddr_i"));
+        assert!(!glob("s*_axi_a*addr_i", "s7_axi_arlen_i") && !glob("ab", "abc") && glob("a*", "a"));
         assert_eq!(signal_of("g[3].x[12]"), "g[3].x");
         assert_eq!(signal_of("clk_i"), "clk_i");
     }

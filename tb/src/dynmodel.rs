@@ -94,6 +94,8 @@ pub struct DynModel {
     cycle: u64,
     time: u64,
     tracing: bool,
+    /// Coverage models: the toggle baseline's file (`crate::coverage::write_baseline`).
+    cov_base: Option<PathBuf>,
     format: Option<WaveFormat>,
     // Kept last: dropped after `raw` is freed.
     _lib: libloading::Library,
@@ -257,12 +259,37 @@ impl DynModel {
         let find = |n: &str| iface.ports.iter().position(|p| p.name == n && p.dir == Dir::In);
         let (clk, rst) = (find("clk_i"), find("rst_ni"));
         let iface = iface.clone();
-        let mut m =
-            DynModel { api, raw, iface, clk, rst, cycle: 0, time: 0, tracing: false, format, _lib: lib };
+        let mut m = DynModel {
+            api,
+            raw,
+            iface,
+            clk,
+            rst,
+            cycle: 0,
+            time: 0,
+            tracing: false,
+            cov_base: None,
+            format,
+            _lib: lib,
+        };
         m.set_bit(clk, false);
         m.set_bit(rst, true);
         m.eval();
+        if m.rst.is_none() {
+            // No reset: the baseline is the first evaluation's.
+            m.coverage_baseline();
+        }
         Ok(m)
+    }
+
+    /// Coverage models: writes the toggle baseline once (`crate::coverage::write_baseline`).
+    fn coverage_baseline(&mut self) {
+        if let (Some(write), None) = (self.api.coverage_write, &self.cov_base) {
+            // SAFETY: `raw` is live; `path` outlives the call.
+            self.cov_base = Some(crate::coverage::write_baseline(&self.iface.name, |path| unsafe {
+                write(self.raw, path.as_ptr())
+            }));
+        }
     }
 
     /// Index of the port called `name`, or an error naming the module and the port.
@@ -351,6 +378,7 @@ impl DynModel {
         self.set_bit(self.clk, false);
         self.eval();
         self.cycle = 0;
+        self.coverage_baseline();
     }
 
     /// Rising edges since the last reset.
@@ -408,7 +436,9 @@ impl Drop for DynModel {
     fn drop(&mut self) {
         if let Some(write) = self.api.coverage_write {
             // SAFETY: `raw` is live; `path` outlives the call.
-            crate::coverage::write_model(&self.iface.name, |path| unsafe { write(self.raw, path.as_ptr()) });
+            crate::coverage::write_model(&self.iface.name, self.cov_base.as_deref(), |path| unsafe {
+                write(self.raw, path.as_ptr())
+            });
         }
         // SAFETY: `raw` came from `new` and is freed once, before the library is unloaded.
         unsafe { (self.api.free)(self.raw) }

@@ -46,42 +46,77 @@ pub struct FrameRun {
     pub overflows: u32,
 }
 
-/// The `next_len` the sequencer model reports for tile `t` with descriptor `d`.
-pub fn model_next_len(t: u64, d: &TileDescriptor) -> u64 {
-    (d.list_len as u64 + (d.prev_len as u64 / 2) + t) & 0xffff
+/// The `next_len` the sequencer model reports for tile `t` with descriptor `d`: at most the
+/// table capacity `cap` (the contract of a sort), and `cap` itself for one tile in 16.
+pub fn model_next_len(t: u64, d: &TileDescriptor, cap: u64) -> u64 {
+    if t % 16 == 5 {
+        cap
+    } else {
+        (d.list_len as u64 + (d.prev_len as u64 / 2) + t * 977) % (cap + 1)
+    }
 }
 
-/// A random frame of `tiles` tiles, some over `table_capacity`.
-pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize) -> FrameCase {
+/// A random frame of `tiles` tiles, some over `table_capacity` (`huge_percent` of them with
+/// any 32-bit lengths), a few exactly at it, with the registers drawn over their whole range: width and height any 16-bit
+/// value, FEAT_BASE, FB_BASE and SCRATCH_BASE any 32-bit value (the controller uses their
+/// upper bits only), DESC_BASE (32-byte aligned: one 4-beat burst a descriptor) and RESULT_BASE
+/// (8-byte aligned: one beat a result) anywhere in the 32-bit address space with their regions
+/// apart. Every tile's `next` is a distinct random 32-bit address.
+pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent: u32) -> FrameCase {
     let cap = cfg.table_capacity as u64;
+    let mut nexts = std::collections::HashSet::new();
     let descs = (0..tiles)
-        .map(|t| {
-            let big = rng.percent(15);
+        .map(|_| {
+            let (big, huge, full) = (rng.percent(15), rng.percent(huge_percent), rng.percent(3));
             let list_len = if big { rng.range(cap / 2, cap + 10) } else { rng.below(3000) } as u32;
             let prev_len = if big { rng.range(cap / 2, cap) } else { rng.below(3000) } as u32;
+            let from_scratch = rng.percent(30);
+            let (list_len, prev_len) = if huge {
+                (rng.next_u32(), rng.next_u32())
+            } else if full {
+                // entries_in = table_capacity exactly: sorted, not an overflow.
+                let p = if from_scratch { prev_len } else { prev_len.min(cap as u32) };
+                (cap as u32 - if from_scratch { 0 } else { p }, p)
+            } else {
+                (list_len, prev_len)
+            };
+            let next = loop {
+                let a = rng.next_u32();
+                if nexts.insert(a) {
+                    break a;
+                }
+            };
             TileDescriptor {
                 tile_x: rng.next_u32() as u16,
                 tile_y: rng.next_u32() as u16,
-                from_scratch: rng.percent(30),
+                from_scratch,
                 prev: rng.next_u32(),
                 prev_len,
                 list: rng.next_u32(),
                 list_len,
-                next: 0x100_0000 + 0x40 * t as u32,
+                next,
                 dps_passes: rng.below(MAX_DPS_PASSES as u64 + 1) as u8,
             }
         })
         .collect();
+    let (desc_bytes, result_bytes) = (32 * tiles as u64, 8 * tiles as u64);
+    let desc_base = 32 * rng.below(((1u64 << 32) - desc_bytes) / 32 + 1);
+    let result_base = loop {
+        let b = 8 * rng.below(((1u64 << 32) - result_bytes) / 8 + 1);
+        if b + result_bytes <= desc_base || desc_base + desc_bytes <= b {
+            break b;
+        }
+    };
     let regs = FrameRegs {
         frame: rng.next_u32(),
         tiles: tiles as u32,
-        width: rng.range(1, 4000) as u32,
-        height: rng.range(1, 4000) as u32,
-        desc_base: 0x1000 + 32 * rng.below(100),
-        result_base: 0x20_0000 + 8 * rng.below(100),
-        feat_base: 0x40_0000 + 32 * rng.below(100),
-        fb_base: 0x80_0000 + 4 * rng.below(100),
-        scratch_base: 0x1000_0000 + 8 * rng.below(100),
+        width: rng.range(1, 0xffff) as u32,
+        height: rng.range(1, 0xffff) as u32,
+        desc_base,
+        result_base,
+        feat_base: rng.next_u32() as u64,
+        fb_base: rng.next_u32() as u64,
+        scratch_base: rng.next_u32() as u64,
         pre: Default::default(),
     };
     FrameCase { regs, descs }
@@ -199,6 +234,10 @@ impl FrameBench {
         let mut w_q: VecDeque<(u64, u64)> = VecDeque::new();
         let mut b_due: VecDeque<u64> = VecDeque::new();
         let mut writes = vec![0u32; tiles];
+        // Half of the frames stall the raster cores for 128 cycles in every 384 (the completion
+        // queue fills) and end raster commands on multiples of 32 cycles (several cores
+        // report done in the same cycle).
+        let (stall, align) = (self.rng.percent(50), self.rng.percent(50));
         let mut prev_idle_all = true;
         let mut was_busy = false;
         let mut started = false;
@@ -210,8 +249,12 @@ impl FrameBench {
             let start_pulse = !started;
             let job_ready: Vec<u64> = seqs.iter().map(|s| (s.is_none() && r.percent(60)) as u64).collect();
             let cpl_valid: Vec<u64> = seqs.iter().map(|s| s.is_some_and(|s| s.due <= c) as u64).collect();
-            let cpl_len: Vec<u64> = seqs.iter().map(|s| s.map_or(r.next_u64() & 0xffff, |s| s.len)).collect();
-            let ras_ready: Vec<u64> = rasters.iter().map(|s| (s.is_none() && r.percent(60)) as u64).collect();
+            // A lane without cpl_valid carries any 32-bit value (the controller must not take it).
+            let cpl_len: Vec<u64> =
+                seqs.iter().map(|s| s.map_or(r.next_u64() & mask(lw), |s| s.len)).collect();
+            let stalled = stall && (c / 128).is_multiple_of(3);
+            let ras_ready: Vec<u64> =
+                rasters.iter().map(|s| (s.is_none() && !stalled && r.percent(60)) as u64).collect();
             let mut ras_done = vec![0u64; m];
             for (j, s) in rasters.iter_mut().enumerate() {
                 if s.is_some_and(|due| due <= c) {
@@ -371,7 +414,7 @@ impl FrameBench {
                 // high-index completions of the first-free scheduler are exercised too).
                 let slow = self.rng.percent(50);
                 let due = c + 1 + if slow { self.rng.below(1000) } else { self.rng.below(40) };
-                seqs[k] = Some(SeqModel { tile: t as u64, due, len: model_next_len(t as u64, d) });
+                seqs[k] = Some(SeqModel { tile: t as u64, due, len: model_next_len(t as u64, d, cap) });
             }
             // Completions.
             for k in 0..n {
@@ -422,7 +465,8 @@ impl FrameBench {
                 }
                 rastered[t] = true;
                 ras_cmds += 1;
-                rasters[j] = Some(c + 2 + self.rng.below(30));
+                let due = c + 2 + self.rng.below(30);
+                rasters[j] = Some(if align { (due | 31) + 1 } else { due });
             }
             self.dut.tick();
         }

@@ -29,19 +29,6 @@ mod cosim {
     use neo_tb::waves::maybe_trace;
     use std::collections::{HashMap, VecDeque};
 
-    /// Entry address of the read-only table region (8 pages of entries).
-    const RD_BASE: u64 = 0x1000;
-    const RD_ENTRIES: u64 = 4096;
-    /// Entry address of the write region.
-    const WR_BASE: u64 = 0x4_0000;
-    const WR_ENTRIES: u64 = 2048;
-    /// Feature word address of the read-only feature region.
-    const FEAT_BASE: u64 = 0x2_0000;
-    const FEAT_WORDS: u64 = 1024;
-    /// Pixel address of the pixel region (bytes 0x80_0000.., clear of the others).
-    const PIX_BASE: u64 = 0x20_0000;
-    const PIX_ROWS: u64 = 512;
-
     fn requests() -> usize {
         std::env::var("NEO_TB_VECTORS")
             .ok()
@@ -49,23 +36,86 @@ mod cosim {
             .map_or(3000, |v| (v / 3).max(300))
     }
 
-    /// A random burst start: often just below a 4 KiB page end, so the burst straddles it.
-    fn table_addr(rng: &mut Rng, len: u64) -> u64 {
-        let page = rng.below(RD_ENTRIES / 512 - 1);
-        let off = if rng.percent(40) { 512 - rng.range(1, 20) } else { rng.below(512) };
-        let a = RD_BASE + 512 * page + off;
-        a.min(RD_BASE + RD_ENTRIES - len)
+    /// Read-only table regions of 2 pages (1024 entries) each.
+    const RD_REGIONS: usize = 8;
+    const RD_ENTRIES: u64 = 1024;
+    /// Write regions of 2 pages (1024 entries) each.
+    const WR_REGIONS: usize = 8;
+    const WR_ENTRIES: u64 = 1024;
+    /// Read-only feature regions (feature words).
+    const FEAT_REGIONS: usize = 4;
+    const FEAT_WORDS: u64 = 256;
+    /// Pixel regions (rows of S pixels).
+    const PIX_REGIONS: usize = 8;
+    const PIX_ROWS: u64 = 64;
+
+    /// The regions, spread over the whole 32-bit byte address space (random 4 KiB pages, apart
+    /// from each other): entry addresses below 2^29, feature words below 2^27, pixels below
+    /// 2^30, as 32-bit byte addresses allow. The memories are sparse ([`Memory`]).
+    struct Regions {
+        /// First entry of each table region.
+        rd: Vec<u64>,
+        /// First entry of each write region.
+        wr: Vec<u64>,
+        /// First word of each feature region.
+        feat: Vec<u64>,
+        /// First pixel of each pixel region.
+        pix: Vec<u64>,
     }
 
-    fn preload(rng: &mut Rng) -> Memory {
-        let mut mem = Memory::new();
-        for a in 0..RD_ENTRIES {
-            mem.write(8 * (RD_BASE + a), &rng.next_u64().to_le_bytes());
+    impl Regions {
+        fn new(rng: &mut Rng, s: u64) -> Regions {
+            let mut taken: Vec<(u64, u64)> = Vec::new();
+            // A random page-aligned byte range of `bytes`, clear of the others.
+            let mut place = |rng: &mut Rng, bytes: u64| loop {
+                let b = 4096 * rng.below(((1u64 << 32) - bytes) / 4096);
+                if taken.iter().all(|&(lo, hi)| b + bytes <= lo || hi <= b) {
+                    taken.push((b, b + bytes));
+                    break b;
+                }
+            };
+            let rd = (0..RD_REGIONS).map(|_| place(rng, 8 * RD_ENTRIES) / 8).collect();
+            let wr = (0..WR_REGIONS).map(|_| place(rng, 8 * WR_ENTRIES) / 8).collect();
+            let feat = (0..FEAT_REGIONS).map(|_| place(rng, 32 * FEAT_WORDS) / 32).collect();
+            let pix = (0..PIX_REGIONS).map(|_| place(rng, 4 * s * PIX_ROWS) / 4).collect();
+            Regions { rd, wr, feat, pix }
         }
-        for w in 0..FEAT_WORDS * 4 {
-            mem.write(32 * FEAT_BASE + 8 * w, &rng.next_u64().to_le_bytes());
+
+        /// A random burst start: often just below a 4 KiB page end, so the burst straddles it.
+        fn table_addr(&self, rng: &mut Rng, len: u64) -> u64 {
+            let base = *rng.pick(&self.rd);
+            let page = rng.below(RD_ENTRIES / 512);
+            let off = if rng.percent(40) { 512 - rng.range(1, 20) } else { rng.below(512) };
+            (base + 512 * page + off).min(base + RD_ENTRIES - len)
         }
-        mem
+
+        fn write_addr(&self, rng: &mut Rng) -> u64 {
+            rng.pick(&self.wr) + rng.below(WR_ENTRIES)
+        }
+
+        fn feature(&self, rng: &mut Rng) -> u64 {
+            rng.pick(&self.feat) + rng.below(FEAT_WORDS)
+        }
+
+        fn pixels(&self, rng: &mut Rng, s: u64) -> u64 {
+            rng.pick(&self.pix) + s * rng.below(PIX_ROWS)
+        }
+
+        /// The memory with random table entries and feature words.
+        fn preload(&self, rng: &mut Rng) -> Memory {
+            let mut mem = Memory::new();
+            for &b in &self.rd {
+                for a in b..b + RD_ENTRIES {
+                    mem.write(8 * a, &rng.next_u64().to_le_bytes());
+                }
+            }
+            for &b in &self.feat {
+                for w in 4 * b..4 * (b + FEAT_WORDS) {
+                    mem.write(8 * w, &rng.next_u64().to_le_bytes());
+                }
+            }
+            mem
+        }
     }
 
     #[test]
@@ -76,7 +126,8 @@ mod cosim {
             let (eb, o) = (cfg.entry_bits(), cfg.axi_outstanding);
             let chk = Checker::new("neo_axi_sort_bridge", seed);
             let mut rng = Rng::new(seed);
-            let mut mem = AxiMemory::new(1, preload(&mut rng), AxiTiming::RANDOM, rng.next_u64());
+            let reg = Regions::new(&mut rng, 0);
+            let mut mem = AxiMemory::new(1, reg.preload(&mut rng), AxiTiming::RANDOM, rng.next_u64());
             let golden = mem.memory().clone();
             let mut axi_chk = AxiChecker::new(0, "m_axi", o, o);
             let port = AxiBinding::new::<NeoAxiSortBridge>("m_axi_", true);
@@ -95,11 +146,11 @@ mod cosim {
             loop {
                 if req.is_none() && reads_left > 0 && rng.percent(60) {
                     let len = rng.range(1, cfg.burst as u64);
-                    req = Some((table_addr(&mut rng, len), len));
+                    req = Some((reg.table_addr(&mut rng, len), len));
                     reads_left -= 1;
                 }
                 if wr.is_none() && writes_left > 0 && rng.percent(60) {
-                    wr = Some((WR_BASE + rng.below(WR_ENTRIES), rng.next_u64() & mask(eb)));
+                    wr = Some((reg.write_addr(&mut rng), rng.next_u64() & mask(eb)));
                     writes_left -= 1;
                 }
                 let (ra, rl) = req.unwrap_or_default();
@@ -202,7 +253,8 @@ mod cosim {
             let fw = neo_golden::engine::memory::feature_word_bits(&cfg.feature_format());
             let chk = Checker::new("neo_axi_raster_bridge", seed);
             let mut rng = Rng::new(seed);
-            let mut mem = AxiMemory::new(1, preload(&mut rng), AxiTiming::RANDOM, rng.next_u64());
+            let reg = Regions::new(&mut rng, s as u64);
+            let mut mem = AxiMemory::new(1, reg.preload(&mut rng), AxiTiming::RANDOM, rng.next_u64());
             let golden = mem.memory().clone();
             let mut axi_chk = AxiChecker::new(0, "m_axi", o, o);
             let port = AxiBinding::new::<NeoAxiRasterBridge>("m_axi_", true);
@@ -247,16 +299,16 @@ mod cosim {
                     req = Some(match rng.below(4) {
                         0 => {
                             let len = rng.range(1, cfg.burst as u64);
-                            Req::Table(table_addr(&mut rng, len), len)
+                            Req::Table(reg.table_addr(&mut rng, len), len)
                         }
-                        1 => Req::Feature(FEAT_BASE + rng.below(FEAT_WORDS)),
-                        2 => Req::WriteEntry(WR_BASE + rng.below(WR_ENTRIES), rng.next_u64() & mask(eb)),
+                        1 => Req::Feature(reg.feature(&mut rng)),
+                        2 => Req::WriteEntry(reg.write_addr(&mut rng), rng.next_u64() & mask(eb)),
                         _ => {
                             let mut px = [0u32; 16];
                             for p in px.iter_mut().take(s) {
                                 *p = rng.next_u32() & 0xff_ffff;
                             }
-                            Req::Pixels(PIX_BASE + s as u64 * rng.below(PIX_ROWS), px)
+                            Req::Pixels(reg.pixels(&mut rng, s as u64), px)
                         }
                     });
                 }

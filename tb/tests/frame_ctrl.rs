@@ -27,8 +27,11 @@ mod cosim {
             let mut b = FrameBench::new(&cfg, seed);
             maybe_trace(&mut b.dut, name);
             let mut total = (0, 0, 0);
-            for tiles in [0usize, 1, 2, 7, 40, 100, 3, 64] {
-                let case = random_case(&cfg, &mut rng, tiles);
+            // 4095 tiles, most of them overflowing: TILES, the tile counters and OVERFLOWS run
+            // through their low 12 bits.
+            for tiles in [0usize, 1, 2, 7, 40, 4095, 100, 3, 64] {
+                let huge = if tiles > 1000 { 60 } else { 4 };
+                let case = random_case(&cfg, &mut rng, tiles, huge);
                 let r = b.run(&case);
                 total = (total.0 + tiles, total.1 + r.overflows, total.2 + r.cycles);
             }

@@ -1,10 +1,10 @@
 //! [`RandomManager`]: a Rust-driven AXI4 manager issuing random reads and writes (one ID, at most
-//! `outstanding` of each in flight) over its own address region, checking every R beat against
-//! its shadow of the region.
+//! `outstanding` of each in flight) over its own 4 KiB pages (anywhere in the address space),
+//! checking every R beat against its shadow of them.
 //!
 //! A read never overlaps a write in flight (AW issued, B not received) and a write never overlaps
 //! a read or write in flight, so the shadow (updated when a B arrives) is exactly what the memory
-//! must return. Bursts are INCR, 8-byte beats, 1..=16 beats, inside one 4 KiB page.
+//! must return. Bursts are INCR, 8-byte beats, 1..=256 beats, inside one 4 KiB page.
 
 use super::{Addr, ManagerSignals, SubordinateSignals, WBeat};
 use crate::check::Checker;
@@ -23,7 +23,7 @@ pub struct Traffic {
     pub issue_percent: u32,
     /// Percent of cycles RREADY and BREADY are high.
     pub ready_percent: u32,
-    /// Longest burst (beats, 1..=16).
+    /// Longest burst (beats, 1..=256).
     pub max_beats: u32,
     /// Percent of write beats with random (not all-ones) strobes.
     pub partial_strobe_percent: u32,
@@ -33,8 +33,8 @@ pub struct Traffic {
 #[derive(Debug)]
 pub struct RandomManager {
     name: String,
-    base: u64,
-    size: u64,
+    /// Byte address of each of its pages.
+    pages: Vec<u64>,
     id: u32,
     outstanding: usize,
     t: Traffic,
@@ -53,12 +53,12 @@ pub struct RandomManager {
 }
 
 impl RandomManager {
-    /// A manager named `name` over the bytes of `region` (4 KiB aligned), using ID `id`, at
-    /// most `outstanding` reads and writes each in flight; `shadow` holds the region's initial
-    /// contents (as the memory does).
+    /// A manager named `name` over the 4 KiB pages at byte addresses `pages` (4 KiB aligned,
+    /// at least one), using ID `id`, at most `outstanding` reads and writes each in flight;
+    /// `shadow` holds the pages' initial contents (as the memory does).
     pub fn new(
         name: &str,
-        region: std::ops::Range<u64>,
+        pages: &[u64],
         id: u32,
         outstanding: usize,
         t: Traffic,
@@ -67,8 +67,13 @@ impl RandomManager {
     ) -> RandomManager {
         RandomManager {
             name: name.to_string(),
-            base: region.start,
-            size: region.end - region.start,
+            pages: {
+                assert!(
+                    !pages.is_empty() && pages.iter().all(|p| p.is_multiple_of(4096)),
+                    "{name}: 4 KiB pages"
+                );
+                pages.to_vec()
+            },
             id,
             outstanding,
             t,
@@ -82,6 +87,11 @@ impl RandomManager {
             issued: (0, 0),
             done: (0, 0),
         }
+    }
+
+    /// Byte addresses of its pages.
+    pub fn pages(&self) -> &[u64] {
+        &self.pages
     }
 
     /// Every request issued and answered.
@@ -118,15 +128,9 @@ impl RandomManager {
 
     fn random_burst(&mut self) -> Addr {
         let beats = self.rng.range(1, self.t.max_beats.into());
-        let page = self.rng.below(self.size / 4096);
+        let page = self.pages[self.rng.below(self.pages.len() as u64) as usize];
         let word = self.rng.range(0, 512 - beats);
-        Addr {
-            id: self.id,
-            addr: self.base + 4096 * page + 8 * word,
-            len: (beats - 1) as u8,
-            size: 3,
-            burst: 1,
-        }
+        Addr { id: self.id, addr: page + 8 * word, len: (beats - 1) as u8, size: 3, burst: 1 }
     }
 
     /// What the manager drives this cycle (new requests are decided here and then held).
