@@ -3,9 +3,11 @@
 //! ([`tree`]: instances, Verilog lines, cells per instance, totals per engine).
 //!
 //! Every unit of [`stats_tops`] is synthesized on its own (flat), except the tops of
-//! [`hierarchical_boxes`] (the raster core, the engine), whose own logic is synthesized with their
-//! units as black boxes and whose totals add the instances times the units' figures
-//! ([`Hierarchy`]). An entry of the previous report whose Verilog hash and Yosys command match is
+//! [`hierarchical_boxes`] (the raster core, the Preprocessing Engine, its lane, its projection,
+//! colour and duplication units, and the engine), whose own logic is synthesized with their units
+//! as black boxes and whose totals add the instances times the units' figures ([`Hierarchy`]). A
+//! parametric box is a top once per parameterisation its parents use ([`unit_label`],
+//! `neo_fp_to_int #(.ROUNDING(1))`, synthesized after `chparam`). An entry of the previous report whose Verilog hash and Yosys command match is
 //! reused instead of synthesized again ([`unit_reports`]).
 
 pub mod tree;
