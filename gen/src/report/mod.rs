@@ -477,3 +477,26 @@ pub fn table(r: &SynthReport) -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_labels_round_trip_and_count_the_instances_with_their_parameters() {
+        let p = vec![("WIDTH".to_string(), "48".to_string()), ("DEPTH".to_string(), "2048".to_string())];
+        let label = unit_label("neo_pre_ram", &p);
+        assert_eq!(label, "neo_pre_ram #(.WIDTH(48), .DEPTH(2048))");
+        assert_eq!(parse_unit_label(&label), ("neo_pre_ram".to_string(), p.clone()));
+        assert_eq!(parse_unit_label("neo_itu"), ("neo_itu".to_string(), Vec::new()));
+        let all = crate::units::modules(&EngineConfig::default()).expect("modules");
+        let lists = all.iter().find(|m| m.name == crate::units::pre::lists::NAME).expect("lists");
+        assert_eq!(lists.count_instances("neo_pre_ram", &p), 7, "one line memory per slot, in a loop");
+        let tops = stats_tops(&EngineConfig::default());
+        let at = |t: &str| tops.iter().position(|x| x == t).unwrap_or_else(|| panic!("{t} in {tops:?}"));
+        assert!(at("neo_fp_to_int #(.ROUNDING(3))") < at(crate::units::pre::PROJECT_NAME));
+        assert!(at(crate::units::pre::lane::NAME) < at(crate::units::pre::engine::NAME));
+        assert!(at(crate::units::pre::engine::NAME) < at(engine::NAME));
+        assert_eq!(tops.iter().filter(|t| *t == crate::units::itu::NAME).count(), 1, "each module once");
+    }
+}
