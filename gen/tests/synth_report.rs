@@ -24,7 +24,11 @@ fn the_synthesis_report_is_of_the_current_verilog() {
     assert_eq!(r.config, cfg, "reports/synth.json is not of the default configuration: {rerun}");
     assert_eq!(r.command, YOSYS_COMMAND, "reports/synth.json used another Yosys flow: {rerun}");
     let units: Vec<&str> = r.units.iter().map(|u| u.unit.as_str()).collect();
-    assert_eq!(units, stats_tops(), "reports/synth.json reports other tops than neo gen --stats: {rerun}");
+    assert_eq!(
+        units,
+        stats_tops(&cfg),
+        "reports/synth.json reports other tops than neo gen --stats: {rerun}"
+    );
     let stale: Vec<String> = r
         .units
         .iter()
@@ -33,4 +37,23 @@ fn the_synthesis_report_is_of_the_current_verilog() {
         .collect();
     assert!(stale.is_empty(), "reports/synth.json is stale for {stale:?} (their Verilog changed): {rerun}");
     assert!(!r.bsu_topologies.is_empty(), "reports/synth.json has no BSU topologies: {rerun}");
+}
+
+/// The report's figures hold together: no unit has a latch (its own synthesis, and for a
+/// hierarchical top its boxed units), and the engine's total counts every module it instantiates,
+/// the Preprocessing Engine's lanes included.
+#[test]
+fn the_synthesis_report_has_no_latch_and_the_whole_engine() {
+    let r = report();
+    let latched: Vec<&str> =
+        r.units.iter().filter(|u| u.total_latches() != 0).map(|u| u.unit.as_str()).collect();
+    assert!(latched.is_empty(), "latches in {latched:?}");
+    let unit = |name: &str| r.units.iter().find(|u| u.unit == name).unwrap_or_else(|| panic!("no {name}"));
+    let engine = unit(neo_gen::units::engine::NAME).hierarchy.as_ref().expect("the engine is hierarchical");
+    for m in neo_gen::units::engine::SUBMODULES {
+        assert!(engine.instances.iter().any(|i| i.0 == *m && i.1 > 0), "the engine's total leaves out {m}");
+    }
+    let pre = unit(neo_gen::units::pre::engine::NAME).hierarchy.as_ref().expect("hierarchical");
+    let lanes = pre.instances.iter().find(|i| i.0 == neo_gen::units::pre::lane::NAME).expect("lanes");
+    assert_eq!(lanes.1, EngineConfig::default().pre_units as u64);
 }

@@ -552,6 +552,23 @@ impl Module {
         placements(&self.items)
     }
 
+    /// Instances of `module` with exactly the parameter overrides `params` in the body, generate
+    /// loops multiplied out (`neo gen --stats` splits a parametric black box's instances by their
+    /// parameters).
+    pub fn count_instances(&self, module: &str, params: &[(String, String)]) -> u64 {
+        fn count(items: &[Item], module: &str, params: &[(String, String)]) -> u64 {
+            items
+                .iter()
+                .map(|it| match it {
+                    Item::Instance(i) if i.module == module && i.params == params => 1,
+                    Item::GenFor { count: c, items, .. } => u64::from(*c) * count(items, module, params),
+                    _ => 0,
+                })
+                .sum()
+        }
+        count(&self.items, module, params)
+    }
+
     /// The module as Verilog-2005 text (header line first, trailing newline).
     pub fn to_verilog(&self) -> String {
         print::module(self)
@@ -567,6 +584,8 @@ pub enum Placement {
         name: String,
         /// Instantiated module.
         module: String,
+        /// Parameter overrides (`#(.P(V))`), in order.
+        params: Vec<(String, String)>,
     },
     /// A `generate for` block `LABEL` of `count` iterations and the placements in its body.
     Loop {
@@ -583,7 +602,11 @@ fn placements(items: &[Item]) -> Vec<Placement> {
     items
         .iter()
         .filter_map(|it| match it {
-            Item::Instance(i) => Some(Placement::Instance { name: i.name.clone(), module: i.module.clone() }),
+            Item::Instance(i) => Some(Placement::Instance {
+                name: i.name.clone(),
+                module: i.module.clone(),
+                params: i.params.clone(),
+            }),
             Item::GenFor { count, label, items, .. } => {
                 let body = placements(items);
                 (!body.is_empty()).then(|| Placement::Loop { label: label.clone(), count: *count, body })

@@ -3,14 +3,17 @@
 //! ([`tree`]: instances, Verilog lines, cells per instance, totals per engine).
 //!
 //! Every unit of [`stats_tops`] is synthesized on its own (flat), except the tops of
-//! [`hierarchical_boxes`] (the raster core, the engine), whose own logic is synthesized with their
-//! units as black boxes and whose totals add the instances times the units' figures
-//! ([`Hierarchy`]). An entry of the previous report whose Verilog hash and Yosys command match is
+//! [`hierarchical_boxes`] (the raster core, the Preprocessing Engine, its lane, its projection,
+//! colour and duplication units, and the engine), whose own logic is synthesized with their units
+//! as black boxes and whose totals add the instances times the units' figures ([`Hierarchy`]). A
+//! parametric box is a top once per parameterisation its parents use ([`unit_label`],
+//! `neo_fp_to_int #(.ROUNDING(1))`, synthesized after `chparam`). An entry of the previous report whose Verilog hash and Yosys command match is
 //! reused instead of synthesized again ([`unit_reports`]).
 
 pub mod tree;
 
-use crate::tools::{glue_synth_stats, synth_stats, SynthStats, ToolError};
+use crate::emit::{Module, Placement};
+use crate::tools::{glue_synth_stats, synth_stats, synth_stats_with, SynthStats, ToolError};
 use crate::units::{engine, files_for, top_modules};
 use neo_golden::engine::{EngineConfig, Topology};
 use serde::{Deserialize, Serialize};
@@ -185,27 +188,104 @@ pub fn hierarchical_boxes(top: &str) -> Option<Vec<String>> {
     HIERARCHICAL.iter().find(|(t, _)| *t == top).map(|(_, b)| b.iter().map(|s| s.to_string()).collect())
 }
 
-/// The tops `--stats` reports, in order: [`top_modules`], the port mux (at its default `PORTS`,
-/// the engine's slots per port: the engine's instances), the clock gate and `neo_engine`
-/// (hierarchical tops after the units they box).
-pub fn stats_tops() -> Vec<String> {
+/// The report's name of a top at the parameter overrides `params`: the module, followed by
+/// ` #(.P(V), ...)` when there are overrides (a parametric black box measured once per
+/// parameterisation its parent uses, `neo_fp_to_int #(.ROUNDING(1))`).
+pub fn unit_label(module: &str, params: &[(String, String)]) -> String {
+    if params.is_empty() {
+        return module.to_string();
+    }
+    let p: Vec<String> = params.iter().map(|(n, v)| format!(".{n}({v})")).collect();
+    format!("{module} #({})", p.join(", "))
+}
+
+/// The module and parameter overrides of a top named by [`unit_label`].
+pub fn parse_unit_label(label: &str) -> (String, Vec<(String, String)>) {
+    let Some((module, rest)) = label.split_once(" #(") else { return (label.to_string(), Vec::new()) };
+    let params = rest
+        .strip_suffix(')')
+        .unwrap_or(rest)
+        .split(", ")
+        .filter_map(|p| {
+            let (n, v) = p.strip_prefix('.')?.strip_suffix(')')?.split_once('(')?;
+            Some((n.to_string(), v.to_string()))
+        })
+        .collect();
+    (module.to_string(), params)
+}
+
+/// The tops `--stats` reports for `cfg`, in order: [`top_modules`]; the Preprocessing Engine's
+/// units ([`add_subtree`] from `neo_pre_engine`: each module once, every box before the
+/// hierarchical top that boxes it, a parametric box once per parameterisation); the port mux
+/// (at its default `PORTS`, the engine's slots per port: the engine's instances), the clock
+/// gate and `neo_engine` (hierarchical tops after the units they box).
+///
+/// # Panics
+/// When `cfg` is invalid.
+pub fn stats_tops(cfg: &EngineConfig) -> Vec<String> {
+    let all = crate::units::modules(cfg).unwrap_or_else(|e| panic!("{e}"));
     let mut tops: Vec<String> = top_modules().iter().map(|s| s.to_string()).collect();
+    add_subtree(&all, crate::units::pre::engine::NAME, &mut tops);
     tops.push(crate::units::axi::mux::NAME.to_string());
     tops.push(crate::units::clock_gate::NAME.to_string());
     tops.push(engine::NAME.to_string());
     tops
 }
 
-/// FNV-1a 64 (hex) of `top`'s files without their header lines, and of its black boxes.
+/// Adds `top` to `tops` (unless there), after its [`hierarchical_boxes`] as instantiated (in
+/// first-use order; a box without parameter overrides with its own boxes first, one with
+/// overrides as its [`unit_label`]).
+fn add_subtree(all: &[Module], top: &str, tops: &mut Vec<String>) {
+    if let (Some(boxes), Some(m)) = (hierarchical_boxes(top), all.iter().find(|m| m.name == top)) {
+        for (module, params) in instances(&m.placements()) {
+            if !boxes.contains(&module) {
+                continue;
+            }
+            if params.is_empty() {
+                add_subtree(all, &module, tops);
+            } else if !tops.contains(&unit_label(&module, &params)) {
+                tops.push(unit_label(&module, &params));
+            }
+        }
+    }
+    if !tops.iter().any(|t| t == top) {
+        tops.push(top.to_string());
+    }
+}
+
+/// The distinct (module, parameter overrides) of the instances in `ps`, generate loops looked
+/// through, in first-use order.
+fn instances(ps: &[Placement]) -> Vec<(String, Vec<(String, String)>)> {
+    let mut out: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    for p in ps {
+        let found = match p {
+            Placement::Instance { module, params, .. } => vec![(module.clone(), params.clone())],
+            Placement::Loop { body, .. } => instances(body),
+        };
+        for f in found {
+            if !out.contains(&f) {
+                out.push(f);
+            }
+        }
+    }
+    out
+}
+
+/// FNV-1a 64 (hex) of `top`'s files without their header lines, and of its black boxes (and of
+/// its parameter overrides, for a top named with them, [`unit_label`]).
 pub fn verilog_hash(cfg: &EngineConfig, top: &str) -> String {
+    let (module, params) = parse_unit_label(top);
     let mut text = String::new();
-    for f in files_for(cfg, top) {
+    for f in files_for(cfg, &module) {
         text.push_str(&f.name);
         text.push('\n');
         text.push_str(f.body());
     }
     if let Some(boxes) = hierarchical_boxes(top) {
         text.push_str(&format!("blackbox {}", boxes.join(" ")));
+    }
+    if !params.is_empty() {
+        text.push_str(&format!("\nparameters {top}"));
     }
     let h =
         text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3));
@@ -223,7 +303,8 @@ pub fn unit_reports(
 ) -> Result<Vec<UnitReport>, ToolError> {
     let net = cfg.network();
     let previous = previous.filter(|p| p.command == YOSYS_COMMAND);
-    let jobs: Vec<(String, String)> = stats_tops().into_iter().map(|t| (verilog_hash(cfg, &t), t)).collect();
+    let jobs: Vec<(String, String)> =
+        stats_tops(cfg).into_iter().map(|t| (verilog_hash(cfg, &t), t)).collect();
     let mut reports: Vec<UnitReport> = parallel(jobs, |(hash, top)| {
         let old = previous.and_then(|p| p.units.iter().find(|u| u.unit == top && u.verilog_hash == hash));
         if let Some(old) = old {
@@ -232,12 +313,14 @@ pub fn unit_reports(
         }
         let t0 = Instant::now();
         let bsu = top == crate::units::bsu::NAME;
+        let (module, params) = parse_unit_label(&top);
         let synth = match hierarchical_boxes(&top) {
             Some(boxes) => {
                 let boxes: Vec<&str> = boxes.iter().map(|s| s.as_str()).collect();
                 glue_synth_stats(&files_for(cfg, &top), &top, &boxes)?
             }
-            None => synth_stats(&files_for(cfg, &top), &top)?,
+            None if params.is_empty() => synth_stats(&files_for(cfg, &top), &top)?,
+            None => synth_stats_with(&files_for(cfg, &module), &module, &params)?,
         };
         let r = UnitReport {
             unit: top.clone(),
@@ -254,34 +337,72 @@ pub fn unit_reports(
     })
     .into_iter()
     .collect::<Result<_, ToolError>>()?;
+    let all = crate::units::modules(cfg).map_err(|e| ToolError::Failed {
+        tool: "neo gen".into(),
+        top: engine::NAME.into(),
+        output: e.to_string(),
+    })?;
     for i in 0..reports.len() {
         let Some(boxes) = hierarchical_boxes(&reports[i].unit) else { continue };
-        let instances: Vec<(String, u64, u64, u64)> = reports
-            .iter()
-            .filter(|u| boxes.contains(&u.unit))
-            .map(|u| {
-                let k = reports[i].synth.cells_by_type.get(&u.unit).copied().unwrap_or(0);
-                (u.unit.clone(), k, u.total_cells(), u.total_flip_flops())
-            })
-            .filter(|x| x.1 > 0)
-            .collect();
-        let latches: u64 = reports
-            .iter()
-            .filter(|u| boxes.contains(&u.unit))
-            .map(|u| reports[i].synth.cells_by_type.get(&u.unit).copied().unwrap_or(0) * u.total_latches())
-            .sum();
-        let core = &mut reports[i];
-        let boxed: u64 = instances.iter().map(|x| x.1).sum();
-        let glue_cells = core.synth.cells - boxed;
-        core.hierarchy = Some(Hierarchy {
-            total_cells: glue_cells + instances.iter().map(|x| x.1 * x.2).sum::<u64>(),
-            total_flip_flops: core.synth.flip_flops + instances.iter().map(|x| x.1 * x.3).sum::<u64>(),
-            glue_cells,
-            instances,
-            latches,
-        });
+        let m = all.iter().find(|m| m.name == reports[i].unit);
+        let hierarchy = hierarchy(&reports, &reports[i].synth, &boxes, m)?;
+        reports[i].hierarchy = Some(hierarchy);
     }
     Ok(reports)
+}
+
+/// The [`Hierarchy`] of a top whose glue synthesis is `glue`, with `boxes` black-boxed, from the
+/// box units' reports in `reports` (earlier in the list). A box unit named without parameters
+/// counts every black-box cell of its module; one named with parameters ([`unit_label`]) the
+/// instances with those overrides in `m`, the top's module; the counts of each box module must
+/// add up to its black-box cells in `glue` (no parameterisation left out).
+fn hierarchy(
+    reports: &[UnitReport],
+    glue: &SynthStats,
+    boxes: &[String],
+    m: Option<&Module>,
+) -> Result<Hierarchy, ToolError> {
+    let mut instances: Vec<(String, u64, u64, u64)> = Vec::new();
+    let mut latches = 0;
+    let mut per_module: std::collections::BTreeMap<String, u64> = Default::default();
+    for u in reports {
+        let (module, params) = parse_unit_label(&u.unit);
+        if !boxes.contains(&module) {
+            continue;
+        }
+        let k = match (params.is_empty(), m) {
+            (true, _) => glue.cells_by_type.get(&module).copied().unwrap_or(0),
+            (false, Some(m)) => m.count_instances(&module, &params),
+            (false, None) => 0,
+        };
+        *per_module.entry(module).or_default() += k;
+        latches += k * u.total_latches();
+        if k > 0 {
+            instances.push((u.unit.clone(), k, u.total_cells(), u.total_flip_flops()));
+        }
+    }
+    for b in boxes {
+        let cells = glue.cells_by_type.get(b).copied().unwrap_or(0);
+        let counted = per_module.get(b).copied().unwrap_or(0);
+        if cells != counted {
+            return Err(ToolError::Failed {
+                tool: "yosys".into(),
+                top: glue.top.clone(),
+                output: format!(
+                    "{cells} black-box cells of {b}, but the report's units of {b} count {counted}"
+                ),
+            });
+        }
+    }
+    let boxed: u64 = instances.iter().map(|x| x.1).sum();
+    let glue_cells = glue.cells - boxed;
+    Ok(Hierarchy {
+        total_cells: glue_cells + instances.iter().map(|x| x.1 * x.2).sum::<u64>(),
+        total_flip_flops: glue.flip_flops + instances.iter().map(|x| x.1 * x.3).sum::<u64>(),
+        glue_cells,
+        instances,
+        latches,
+    })
 }
 
 /// Synthesizes the BSU of every topology valid at `cfg.bsu_width`.
@@ -315,12 +436,12 @@ pub fn topology_reports(cfg: &EngineConfig) -> Result<Vec<TopologyReport>, ToolE
 pub fn table(r: &SynthReport) -> String {
     let dash = |o: Option<usize>| o.map_or("-".to_string(), |v| v.to_string());
     let mut s = format!(
-        "{:<22} {:>9} {:>10} {:>7} {:>11} {:>6} {:>8}\n",
+        "{:<30} {:>9} {:>10} {:>7} {:>11} {:>6} {:>8}\n",
         "unit", "cells", "flip-flops", "latches", "comparators", "depth", "latency"
     );
     for u in &r.units {
         s += &format!(
-            "{:<22} {:>9} {:>10} {:>7} {:>11} {:>6} {:>8}\n",
+            "{:<30} {:>9} {:>10} {:>7} {:>11} {:>6} {:>8}\n",
             u.unit,
             u.synth.cells,
             u.synth.flip_flops,
@@ -355,4 +476,27 @@ pub fn table(r: &SynthReport) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_labels_round_trip_and_count_the_instances_with_their_parameters() {
+        let p = vec![("WIDTH".to_string(), "48".to_string()), ("DEPTH".to_string(), "2048".to_string())];
+        let label = unit_label("neo_pre_ram", &p);
+        assert_eq!(label, "neo_pre_ram #(.WIDTH(48), .DEPTH(2048))");
+        assert_eq!(parse_unit_label(&label), ("neo_pre_ram".to_string(), p.clone()));
+        assert_eq!(parse_unit_label("neo_itu"), ("neo_itu".to_string(), Vec::new()));
+        let all = crate::units::modules(&EngineConfig::default()).expect("modules");
+        let lists = all.iter().find(|m| m.name == crate::units::pre::lists::NAME).expect("lists");
+        assert_eq!(lists.count_instances("neo_pre_ram", &p), 7, "one line memory per slot, in a loop");
+        let tops = stats_tops(&EngineConfig::default());
+        let at = |t: &str| tops.iter().position(|x| x == t).unwrap_or_else(|| panic!("{t} in {tops:?}"));
+        assert!(at("neo_fp_to_int #(.ROUNDING(3))") < at(crate::units::pre::PROJECT_NAME));
+        assert!(at(crate::units::pre::lane::NAME) < at(crate::units::pre::engine::NAME));
+        assert!(at(crate::units::pre::engine::NAME) < at(engine::NAME));
+        assert_eq!(tops.iter().filter(|t| *t == crate::units::itu::NAME).count(), 1, "each module once");
+    }
 }

@@ -4,7 +4,7 @@
 //! module as a top, Yosys cells and flip-flops of one instance; then totals per engine part
 //! ([`Part`]: sorting, rasterization, interconnect, control).
 
-use super::{SynthReport, UnitReport};
+use super::{unit_label, SynthReport, UnitReport};
 use crate::emit::{Module, Placement};
 use crate::units::{axi, engine, raster_core, sort_core, sort_seq};
 use neo_golden::engine::{ConfigError, EngineConfig};
@@ -17,6 +17,9 @@ pub struct Node {
     pub label: String,
     /// The instantiated module (`None` for a generate loop).
     pub module: Option<String>,
+    /// The instance's parameter overrides (its report unit is then the module's
+    /// [`super::unit_label`] with them, when the report has one).
+    pub params: Vec<(String, String)>,
     /// Instances (or loop iterations) in the whole engine.
     pub count: u64,
     /// Lines of the module's Verilog file.
@@ -38,8 +41,8 @@ pub enum Part {
     Interconnect,
     /// Frame controller, control port, performance counters and the engine's own glue.
     Control,
-    /// The Preprocessing Engine (not yet synthesized by `neo gen --stats`: its cells are
-    /// unknown).
+    /// The Preprocessing Engine (lanes with projection, colour, fetch and duplication units, and
+    /// the list writer).
     Preprocessing,
 }
 
@@ -91,18 +94,28 @@ pub struct PartTotal {
 /// The tree of `neo_engine` for `cfg`, with the figures of `report` where it has the module.
 pub fn build(cfg: &EngineConfig, report: Option<&SynthReport>) -> Result<Node, ConfigError> {
     let all = crate::units::modules(cfg)?;
-    Ok(node(&all, report, engine::NAME, engine::NAME, 1))
+    Ok(node(&all, report, engine::NAME, (engine::NAME, &[]), 1))
 }
 
-fn node(all: &[Module], report: Option<&SynthReport>, label: &str, module: &str, count: u64) -> Node {
+/// The node of an instance `label` of `module` at parameter overrides `params`; its report
+/// unit is the one named [`unit_label`]`(module, params)`, else the module's own.
+fn node(
+    all: &[Module],
+    report: Option<&SynthReport>,
+    label: &str,
+    (module, params): (&str, &[(String, String)]),
+    count: u64,
+) -> Node {
     let m = all.iter().find(|m| m.name == module);
     let children = m.map_or_else(Vec::new, |m| placed(all, report, &m.placements(), count));
+    let find = |name: &str| report.and_then(|r| r.units.iter().find(|u| u.unit == name)).cloned();
     Node {
         label: label.to_string(),
         module: Some(module.to_string()),
+        params: params.to_vec(),
         count,
         lines: m.map(|m| m.to_verilog().lines().count()),
-        unit: report.and_then(|r| r.units.iter().find(|u| u.unit == module)).cloned(),
+        unit: find(&unit_label(module, params)).or_else(|| find(module)),
         children,
     }
 }
@@ -113,7 +126,8 @@ fn placed(all: &[Module], report: Option<&SynthReport>, ps: &[Placement], count:
     let mut out: Vec<Node> = Vec::new();
     let mut names: Vec<Vec<String>> = Vec::new();
     for n in placed_each(all, report, ps, count) {
-        let same = out.iter().position(|o| o.module.is_some() && o.module == n.module);
+        let same =
+            out.iter().position(|o| o.module.is_some() && o.module == n.module && o.params == n.params);
         match same {
             Some(i) => {
                 out[i].count += n.count;
@@ -140,12 +154,13 @@ fn placed(all: &[Module], report: Option<&SynthReport>, ps: &[Placement], count:
 fn placed_each(all: &[Module], report: Option<&SynthReport>, ps: &[Placement], count: u64) -> Vec<Node> {
     ps.iter()
         .map(|p| match p {
-            Placement::Instance { name, module } => node(all, report, name, module, count),
+            Placement::Instance { name, module, params } => node(all, report, name, (module, params), count),
             Placement::Loop { label, count: c, body } => {
                 let n = count * u64::from(*c);
                 Node {
                     label: format!("{label}[{c}]"),
                     module: None,
+                    params: Vec::new(),
                     count: n,
                     lines: None,
                     unit: None,
@@ -230,7 +245,7 @@ impl Node {
             self.label, cfg.sort_cores, cfg.raster_cores, cfg.mem_channels
         );
         s += &format!(
-            "{:<34} {:<22} {:>6} {:>6} {:>10} {:>10}\n",
+            "{:<34} {:<30} {:>6} {:>6} {:>10} {:>10}\n",
             "instance", "module", "count", "lines", "cells", "flip-flops"
         );
         self.rows(0, &mut s);
@@ -279,9 +294,9 @@ impl Node {
         let label = format!("{}{}", "  ".repeat(depth), self.label);
         let u = self.unit.as_ref();
         *s += &format!(
-            "{:<34} {:<22} {:>6} {:>6} {:>10} {:>10}\n",
+            "{:<34} {:<30} {:>6} {:>6} {:>10} {:>10}\n",
             label,
-            self.module.as_deref().unwrap_or(""),
+            self.module.as_deref().map_or(String::new(), |m| unit_label(m, &self.params)),
             self.count,
             self.lines.map_or(String::new(), |l| l.to_string()),
             if self.module.is_some() { opt(u.map(|u| u.total_cells())) } else { String::new() },
@@ -289,7 +304,7 @@ impl Node {
         );
         if let Some(h) = u.and_then(|u| u.hierarchy.as_ref()) {
             *s += &format!(
-                "{:<34} {:<22} {:>6} {:>6} {:>10} {:>10}\n",
+                "{:<34} {:<30} {:>6} {:>6} {:>10} {:>10}\n",
                 format!("{}  (own logic)", "  ".repeat(depth)),
                 "",
                 "",
@@ -333,7 +348,7 @@ mod tests {
     /// A report with made-up figures: unit i has 1000 (i + 1) cells and 10 (i + 1) flip-flops;
     /// the engine's glue 7 cells, 3 flip-flops.
     fn fake_report(cfg: &EngineConfig) -> SynthReport {
-        let mut units: Vec<UnitReport> = stats_tops()
+        let mut units: Vec<UnitReport> = stats_tops(cfg)
             .iter()
             .enumerate()
             .map(|(i, t)| unit(t, 1000 * (i as u64 + 1), 10 * (i as u64 + 1)))
@@ -411,7 +426,28 @@ mod tests {
                     + 7
             )
         );
+        assert_eq!(get(Part::Preprocessing).cells, Some(cells(&r, crate::units::pre::engine::NAME)));
         assert!(get(Part::Sorting).lines > 0 && get(Part::Control).lines > 0);
+        // The lanes, and the parametric primitives' rows by their parameters.
+        let pre =
+            t.instances().into_iter().find(|n| n.module.as_deref() == Some(crate::units::pre::engine::NAME));
+        let lanes = pre.expect("pre engine").instances()[0].clone();
+        assert_eq!(lanes.count, cfg.pre_units as u64);
+        let project = lanes
+            .instances()
+            .into_iter()
+            .find(|n| n.module.as_deref() == Some(crate::units::pre::PROJECT_NAME))
+            .expect("projection unit")
+            .clone();
+        let to_int: Vec<&Node> = project
+            .instances()
+            .into_iter()
+            .filter(|n| n.module.as_deref() == Some("neo_fp_to_int"))
+            .collect();
+        assert!(
+            to_int.len() > 1 && to_int.iter().all(|n| n.unit.is_some() && !n.params.is_empty()),
+            "{text}"
+        );
         let all: usize = totals.iter().map(|(_, t)| t.lines).sum();
         assert!(all >= get(Part::Sorting).lines);
     }
