@@ -63,6 +63,9 @@ impl SeqTiming {
         max_job_gap: 5,
         idle_busy_pct: 30,
     };
+    /// Always ready, every done pulse 600 to 700 cycles late: a whole stage of a tile at the
+    /// table capacity (`capacity / C + 1` commands) is in flight before its first done.
+    pub const LATE_DONE: SeqTiming = SeqTiming { min_done: 600, max_done: 700, ..SeqTiming::FAST };
 }
 
 /// One tile job: the descriptor, the frame (registers `frame` and `scratch_base`) and the core.
@@ -89,6 +92,8 @@ pub struct SeqRun {
     pub next_len: u64,
     /// The commands the sequencer issued, in order (each already checked against the plan).
     pub cmds: Vec<TileCmd>,
+    /// The most commands taken and not yet done at once.
+    pub max_in_flight: usize,
 }
 
 /// The golden side of one job: the plan and the tile's `next_len`.
@@ -216,6 +221,7 @@ impl SeqBench {
         let mut busy_until = 0u64;
         let mut held: Option<TileCmd> = None;
         let mut issued = Vec::new();
+        let mut max_in_flight = 0;
         loop {
             let c = self.dut.cycle();
             self.checker.protocol(c, c < limit, &format!("timeout: tile {:?} not completed", job.desc));
@@ -295,6 +301,7 @@ impl SeqBench {
                     });
                     let due = c + self.rng.range(t.min_done, t.max_done);
                     pending.push_back((due.max(pending.back().map_or(0, |p| p.0)), e.written));
+                    max_in_flight = max_in_flight.max(pending.len());
                     taken += 1;
                 }
             }
@@ -316,6 +323,7 @@ impl SeqBench {
                         cycles: c - start,
                         next_len: want.next_len,
                         cmds: issued,
+                        max_in_flight,
                     };
                 }
             }
@@ -362,8 +370,11 @@ pub fn fill(cfg: &EngineConfig, rng: &mut Rng, mem: &mut Memory, d: &TileDescrip
 }
 
 /// A random descriptor: list and previous lengths drawn from the edge cases (0, 1, `C - 1`, `C`,
-/// `C + 1`) or up to `max_chunks` chunks, at random (non-overlapping) addresses; mostly Neo's
-/// single DPS pass, else 0, 2 or 3 passes.
+/// `C + 1`) or up to `max_chunks` chunks, and now and then a table or a list as long as what is
+/// left of the table capacity; its previous table, list and next table in three consecutive
+/// regions of 2^17 entries at a random place in one half of the entry space below 2^29 (the
+/// entry addresses' upper bits toggle; [`random_scratch_base`] puts the scratch regions in the
+/// other half); mostly Neo's single DPS pass, else 0, 2, 3, 8 or 15 passes.
 pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDescriptor {
     let c = cfg.chunk as u64;
     let len = |rng: &mut Rng| -> u32 {
@@ -374,17 +385,35 @@ pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDe
             rng.range(0, max_chunks * c) as u32
         }
     };
-    let (list_len, prev_len) = (len(rng), len(rng));
-    let region = 1u32 << 20;
+    let cap = cfg.table_capacity as u64;
+    let long =
+        |rng: &mut Rng, room: u64| if rng.percent(4) { Some(rng.range(0, room + 1) as u32) } else { None };
+    let prev_len = long(rng, cap).unwrap_or_else(|| len(rng));
+    let list_len = long(rng, cap - prev_len as u64).unwrap_or_else(|| len(rng));
+    let region = 1u64 << 17;
+    let base = HALF * rng.below(2) + rng.below(HALF - 3 * region);
+    let at = |k: u64, rng: &mut Rng| (base + k * region + rng.below(1 << 16)) as u32;
     TileDescriptor {
         tile_x: rng.next_u32() as u16,
         tile_y: rng.next_u32() as u16,
         from_scratch: rng.percent(40),
-        prev: region + rng.below(1 << 16) as u32,
+        prev: at(0, rng),
         prev_len,
-        list: 2 * region + rng.below(1 << 16) as u32,
+        list: at(1, rng),
         list_len,
-        next: 3 * region + rng.below(1 << 16) as u32,
-        dps_passes: if rng.percent(60) { 1 } else { *rng.pick(&[0u8, 2, 3]) },
+        next: at(2, rng),
+        dps_passes: if rng.percent(60) { 1 } else { *rng.pick(&[0u8, 2, 3, 8, 15]) },
     }
+}
+
+/// Half of the entry space below 2^29 (entry addresses of 32-bit byte addresses).
+const HALF: u64 = 1 << 28;
+
+/// A random `SCRATCH_BASE` (bytes, 8-aligned) whose scratch regions, `2 table_capacity` entries
+/// for each of the sorting cores, lie in the half of the entry space below 2^29 that `d`'s
+/// regions ([`random_desc`]) do not use.
+pub fn random_scratch_base(cfg: &EngineConfig, rng: &mut Rng, d: &TileDescriptor) -> u64 {
+    let span = 2 * (cfg.table_capacity * cfg.sort_cores) as u64;
+    let half = if d.prev as u64 >= HALF { 0 } else { HALF };
+    8 * (half + rng.below(HALF - span))
 }

@@ -20,7 +20,7 @@ mod cosim {
     use neo_golden::engine::{FrameRegs, TileDescriptor};
     use neo_golden::sort::SortMode;
     use neo_tb::rng::{for_each_seed, Rng};
-    use neo_tb::seq::{fill, random_desc, SeqBench, SeqJob, SeqTiming};
+    use neo_tb::seq::{fill, random_desc, random_scratch_base, SeqBench, SeqJob, SeqTiming};
     use neo_tb::waves::maybe_trace;
 
     fn bench(name: &str, seed: u64, timing: SeqTiming) -> SeqBench {
@@ -29,8 +29,12 @@ mod cosim {
         b
     }
 
-    fn regs(frame: u32, rng: &mut Rng) -> FrameRegs {
-        FrameRegs { frame, scratch_base: 0x800_0000 + 8 * rng.below(1 << 12), ..FrameRegs::default() }
+    fn regs(frame: u32, d: &TileDescriptor, rng: &mut Rng) -> FrameRegs {
+        FrameRegs {
+            frame,
+            scratch_base: random_scratch_base(&neo_tb::config(), rng, d),
+            ..FrameRegs::default()
+        }
     }
 
     #[test]
@@ -62,7 +66,7 @@ mod cosim {
                             fill(&cfg, &mut rng, &mut b.mem, &d);
                             let job = SeqJob {
                                 desc: d,
-                                regs: regs(frame, &mut rng),
+                                regs: regs(frame, &d, &mut rng),
                                 core: rng.below(cfg.sort_cores as u64),
                             };
                             let r = b.run(&job);
@@ -123,7 +127,7 @@ mod cosim {
                         dps_passes: 1,
                     };
                     fill(&cfg, &mut rng, &mut b.mem, &d);
-                    let job = SeqJob { desc: d, regs: regs(frame, &mut rng), core: 0 };
+                    let job = SeqJob { desc: d, regs: regs(frame, &d, &mut rng), core: 0 };
                     let r = b.run(&job);
                     let got: Vec<(u64, u64)> = r
                         .cmds
@@ -159,7 +163,7 @@ mod cosim {
             let mut rng = Rng::new(seed);
             let mut b = bench(name, seed, SeqTiming::RANDOM);
             for frame in [10u32, 11] {
-                for passes in [0u8, 1, 2, 3, 5] {
+                for passes in [0u8, 1, 2, 3, 5, 8, 15] {
                     let p = 2 * c + 3;
                     let d = TileDescriptor {
                         prev: 0x10_0000,
@@ -171,7 +175,7 @@ mod cosim {
                         ..TileDescriptor::default()
                     };
                     fill(&cfg, &mut rng, &mut b.mem, &d);
-                    let r = b.run(&SeqJob { desc: d, regs: regs(frame, &mut rng), core: 0 });
+                    let r = b.run(&SeqJob { desc: d, regs: regs(frame, &d, &mut rng), core: 0 });
                     let got: Vec<(u64, u64)> = r
                         .cmds
                         .iter()
@@ -202,13 +206,59 @@ mod cosim {
                 let d = random_desc(&cfg, &mut rng, 12);
                 fill(&cfg, &mut rng, &mut b.mem, &d);
                 let frame = rng.next_u32();
-                let job =
-                    SeqJob { desc: d, regs: regs(frame, &mut rng), core: rng.below(cfg.sort_cores as u64) };
+                let job = SeqJob {
+                    desc: d,
+                    regs: regs(frame, &d, &mut rng),
+                    core: rng.below(cfg.sort_cores as u64),
+                };
                 let r = b.run(&job);
                 cmds += r.commands;
                 cycles += r.cycles;
             }
             println!("150 random tiles: {cmds} commands in {cycles} cycles");
+        });
+    }
+
+    /// Tiles at exactly the table capacity (an empty table with a full list, a list sorted from
+    /// scratch, a reused table with an empty list) at the top of the entry space: lengths and
+    /// positions reach the capacity's bit, addresses their upper bits. The core holds its done
+    /// pulses until a whole stage is in flight (`capacity / C` SORT chunks, `capacity / C + 1`
+    /// DPS chunks on an odd frame), so the in-flight count reaches its top bit.
+    #[test]
+    fn seq_tiles_at_the_table_capacity() {
+        let name = "seq_tiles_at_the_table_capacity";
+        for_each_seed(name, |seed| {
+            let cfg = neo_tb::config();
+            let cap = cfg.table_capacity as u32;
+            let chunks = (cap / cfg.chunk as u32) as usize;
+            let mut rng = Rng::new(seed);
+            let mut b = bench(name, seed, SeqTiming::LATE_DONE);
+            let top = (1u32 << 28) - 3 * cap;
+            // A short tile last, so that every long field falls again. Frame 5 is odd: the DPS
+            // of the full table starts with a half chunk.
+            for (from_scratch, prev_len, list_len, in_flight) in [
+                (false, 0, cap, chunks),
+                (true, 0, cap, chunks),
+                (false, cap, 0, chunks + 1),
+                (false, 1, 1, 1),
+            ] {
+                let d = TileDescriptor {
+                    from_scratch,
+                    prev: top,
+                    prev_len,
+                    list: top + cap,
+                    list_len,
+                    next: top + 2 * cap,
+                    ..TileDescriptor::default()
+                };
+                fill(&cfg, &mut rng, &mut b.mem, &d);
+                let r = b.run(&SeqJob {
+                    desc: d,
+                    regs: regs(5, &d, &mut rng),
+                    core: rng.below(cfg.sort_cores as u64),
+                });
+                assert_eq!(r.max_in_flight, in_flight, "commands in flight at once: {d:?}");
+            }
         });
     }
 
@@ -234,7 +284,7 @@ mod cosim {
                     ..TileDescriptor::default()
                 };
                 fill(&cfg, &mut rng, &mut b.mem, &d);
-                let r = b.run(&SeqJob { desc: d, regs: regs(1, &mut rng), core: 0 });
+                let r = b.run(&SeqJob { desc: d, regs: regs(1, &d, &mut rng), core: 0 });
                 assert_eq!(r.stages, if from_scratch { 4 } else { 6 });
             }
         });
