@@ -678,8 +678,20 @@ pub fn chunk_cmd(
     entries: &[SortEntry],
     mode: Mode,
 ) -> CheckedCmd {
-    let src = layout::SRC + slot * SLOT;
-    let dst = layout::DST + slot * SLOT;
+    let (src, dst) = (layout::SRC + slot * SLOT, layout::DST + slot * SLOT);
+    chunk_cmd_at(core, cfg, src, dst, entries, mode)
+}
+
+/// [`chunk_cmd`] with `entries` at entry address `src` and the output at `dst` (the caller keeps
+/// the commands' regions apart).
+pub fn chunk_cmd_at(
+    core: &mut Core,
+    cfg: &EngineConfig,
+    src: u64,
+    dst: u64,
+    entries: &[SortEntry],
+    mode: Mode,
+) -> CheckedCmd {
     core.write_entries(src, entries);
     core.clear(dst..dst + SLOT);
     let n = entries.len().min(cfg.chunk);
@@ -699,18 +711,45 @@ pub fn merge_cmd(
     b: &[SortEntry],
     drop_invalid: bool,
 ) -> CheckedCmd {
-    let (sa, sb, dst) = (layout::SRC + slot * SLOT, layout::SRC_B + slot * SLOT, layout::DST + slot * SLOT);
-    core.write_entries(sa, a);
-    core.write_entries(sb, b);
-    core.clear(dst..dst + SLOT);
+    let at = MergeAt {
+        src_a: layout::SRC + slot * SLOT,
+        src_b: layout::SRC_B + slot * SLOT,
+        dst: layout::DST + slot * SLOT,
+    };
+    merge_cmd_at(core, at, a, b, drop_invalid)
+}
+
+/// Where a merge's inputs and output lie (entry addresses).
+#[derive(Clone, Copy, Debug)]
+pub struct MergeAt {
+    /// Stream A.
+    pub src_a: u64,
+    /// Stream B.
+    pub src_b: u64,
+    /// The output.
+    pub dst: u64,
+}
+
+/// [`merge_cmd`] at the addresses `at` (the caller keeps the commands' regions apart; the
+/// output's region, `max(SLOT, len_a + len_b)` entries, is cleared first).
+pub fn merge_cmd_at(
+    core: &mut Core,
+    at: MergeAt,
+    a: &[SortEntry],
+    b: &[SortEntry],
+    drop_invalid: bool,
+) -> CheckedCmd {
+    core.write_entries(at.src_a, a);
+    core.write_entries(at.src_b, b);
+    core.clear(at.dst..at.dst + SLOT.max((a.len() + b.len()) as u64));
     CheckedCmd {
         cmd: Command {
             mode: if drop_invalid { Mode::MergeDelete } else { Mode::Merge },
-            src_a: sa,
+            src_a: at.src_a,
             len_a: a.len() as u64,
-            src_b: sb,
+            src_b: at.src_b,
             len_b: b.len() as u64,
-            dst,
+            dst: at.dst,
         },
         want: merge2(a, b, drop_invalid),
     }

@@ -18,7 +18,7 @@
 use crate::core::{layout, merge_cmd, queue_checked, sort_chunks_checked, Command, Core, MemTiming, Mode};
 use crate::models::{NeoBsu, NeoMsu};
 use crate::rng::Rng;
-use crate::stimulus::{sorted_stream, tile_entries};
+use crate::stimulus::{merge_stream, sorted_stream, tile_entries};
 use neo_gen::EngineConfig;
 use neo_golden::formats::latency::{
     BsuUnit, ChunkPoint, ItuUnit, LatencyReport, MemoryModel, MergeDeletePoint, MergePoint, MsuUnit, Raster,
@@ -247,17 +247,8 @@ fn sort_core_section(cfg: &EngineConfig, core: &mut Core) -> SortCore {
     let mut merge = Vec::new();
     let mut merge_delete = Vec::new();
     for &(len_a, len_b) in &merge_sizes {
-        let a = sorted_stream(&fmt, &mut rng, len_a as usize, 100, false);
-        let b = sorted_stream(&fmt, &mut rng, len_b as usize, 100, false);
-        let fix = |v: Vec<SortEntry>| -> Vec<SortEntry> {
-            v.into_iter()
-                .map(|mut e| {
-                    e.id = e.id.min(fmt.id_max() - 1);
-                    e
-                })
-                .collect()
-        };
-        let (a, b) = (fix(a), fix(b));
+        let a = merge_stream(&fmt, &mut rng, len_a as usize, 100, false);
+        let b = merge_stream(&fmt, &mut rng, len_b as usize, 100, false);
         let (cycles, _) = core_cycles(core, cfg, Mode::Merge, &a, &b);
         let interval = merge_interval(core, &a, &b, false);
         merge.push(MergePoint { entries: len_a + len_b, len_a, len_b, cycles, interval });

@@ -99,6 +99,20 @@ pub fn sorted_stream(
     v
 }
 
+/// A merge input: [`sorted_stream`] with real ids only (the format's largest id is the reserved
+/// padding id, which no stream in memory holds).
+pub fn merge_stream(
+    fmt: &SortFormat,
+    rng: &mut Rng,
+    len: usize,
+    valid_pct: u32,
+    ties: bool,
+) -> Vec<SortEntry> {
+    let mut v = sorted_stream(fmt, rng, len, valid_pct, ties);
+    v.iter_mut().for_each(|e| e.id = e.id.min(fmt.id_max() - 1));
+    v
+}
+
 /// `n` entries of one tile: distinct real ids (never the reserved one), keys uniform or (with
 /// `ties`) in `0..8`, valid bits at density `valid_pct`, in random order.
 pub fn tile_entries(fmt: &SortFormat, rng: &mut Rng, n: usize, ties: bool, valid_pct: u32) -> Vec<SortEntry> {

@@ -22,11 +22,12 @@ fn sort_core_skipped_without_verilator() {
 mod cosim {
     use neo_golden::sort::{merge_pass_count, Parity, SortEntry};
     use neo_tb::core::{
-        chunk_cmd, dps_pass_checked, full_sort_checked, layout, merge_checked, merge_cmd, queue_checked,
-        sort_chunk_checked, sort_chunks_checked, update_checked, CheckedCmd, Command, Core, MemTiming, Mode,
+        chunk_cmd, chunk_cmd_at, dps_pass_checked, full_sort_checked, layout, merge_checked, merge_cmd,
+        merge_cmd_at, queue_checked, sort_chunk_checked, sort_chunks_checked, update_checked, CheckedCmd,
+        Command, Core, MemTiming, MergeAt, Mode,
     };
     use neo_tb::rng::{for_each_seed, Rng};
-    use neo_tb::stimulus::{nearly_sorted, sorted_stream, starved_merge, tile_entries, MergeShape};
+    use neo_tb::stimulus::{merge_stream, nearly_sorted, starved_merge, tile_entries, MergeShape};
     use neo_tb::waves::maybe_trace;
 
     fn core(name: &str, seed: u64, timing: MemTiming) -> Core {
@@ -167,17 +168,11 @@ mod cosim {
                 let lb = if k == 1 { 0 } else { rng.below(301) as usize };
                 let ties = k % 3 == 0;
                 let va = *rng.pick(&[100, 80, 30]);
-                let a = sorted_stream(&fmt, &mut rng, la, va, ties);
-                let mut b = sorted_stream(&fmt, &mut rng, lb, 70, ties);
+                let a = merge_stream(&fmt, &mut rng, la, va, ties);
+                let mut b = merge_stream(&fmt, &mut rng, lb, 70, ties);
                 if k % 5 == 4 {
                     b = a.iter().map(|e| e.with_valid(!e.valid)).collect();
                 }
-                // Stream entries must be real (not the reserved padding id).
-                let fix =
-                    |v: &mut Vec<SortEntry>| v.iter_mut().for_each(|e| e.id = e.id.min(fmt.id_max() - 1));
-                let (mut a, mut b) = (a, b);
-                fix(&mut a);
-                fix(&mut b);
                 merge_checked(&mut c, &a, &b, k % 2 == 0);
                 entries += a.len() + b.len();
             }
@@ -233,6 +228,86 @@ mod cosim {
         });
     }
 
+    /// Regions of the entry space below 2^29 (32-bit byte addresses of 8-byte entries) for
+    /// commands that must not overlap: the first and the last region, then random ones, each of
+    /// `4 table_capacity` entries, a command at a random offset below `3 table_capacity` in it
+    /// (so that every address bit varies).
+    struct Places {
+        size: u64,
+        count: u64,
+        used: Vec<u64>,
+    }
+
+    impl Places {
+        fn new(cfg: &neo_gen::EngineConfig) -> Places {
+            let space = (1u64 << cfg.axi_addr_bits.min(32)) / neo_golden::engine::memory::ENTRY_BYTES;
+            let size = 4 * cfg.table_capacity as u64;
+            Places { size, count: space / size, used: Vec::new() }
+        }
+
+        fn next(&mut self, rng: &mut Rng) -> u64 {
+            let region = match self.used.len() {
+                0 => 0,
+                1 => self.count - 1,
+                _ => loop {
+                    let r = rng.below(self.count);
+                    if !self.used.contains(&r) {
+                        break r;
+                    }
+                },
+            };
+            self.used.push(region);
+            region * self.size + rng.below(self.size / 4 * 3)
+        }
+    }
+
+    /// Commands as long as a tile's table can be (`table_capacity` entries: lengths, remaining
+    /// counts and the output count reach their top bits) at places spread over the whole entry
+    /// space (every address bit), with chunks between them, back to back under the random memory.
+    #[test]
+    fn core_long_commands_across_the_entry_space() {
+        let name = "core_long_commands_across_the_entry_space";
+        for_each_seed(name, |seed| {
+            let cfg = neo_tb::config();
+            let fmt = cfg.format();
+            let cap = cfg.table_capacity;
+            let mut rng = Rng::new(seed);
+            let mut c = core(name, seed, MemTiming::RANDOM);
+            let mut places = Places::new(&cfg);
+            // (len_a, len_b, delete): the capacity from A alone (deleting), from B alone, split so
+            // that B's length has its upper bits (63/64 of it), and an output of 15/16 of it.
+            let merges = [
+                (cap, 0, true),
+                (0, cap, false),
+                (cap / 64, cap - cap / 64, false),
+                (cap * 15 / 32, cap * 15 / 32, false),
+            ];
+            let mut jobs = Vec::new();
+            for (k, &(la, lb, delete)) in merges.iter().enumerate() {
+                let a = merge_stream(&fmt, &mut rng, la, 85, k % 2 == 0);
+                let b = merge_stream(&fmt, &mut rng, lb, 85, false);
+                let at = MergeAt {
+                    src_a: places.next(&mut rng),
+                    src_b: places.next(&mut rng),
+                    dst: places.next(&mut rng),
+                };
+                jobs.push(merge_cmd_at(&mut c, at, &a, &b, delete));
+                // Chunks between and after the merges, each input buffer's several times.
+                for j in 0..4 {
+                    let n = rng.range(1, cfg.chunk as u64 + 1) as usize;
+                    let v = tile_entries(&fmt, &mut rng, n, false, 90);
+                    let mode = if j % 2 == 0 { Mode::Sort } else { Mode::Dps };
+                    let (src, dst) = (places.next(&mut rng), places.next(&mut rng));
+                    jobs.push(chunk_cmd_at(&mut c, &cfg, src, dst, &v, mode));
+                }
+            }
+            let q = queue_checked(&mut c, &jobs);
+            let longest = jobs.iter().map(|j| j.want.len()).max().unwrap_or(0);
+            assert_eq!(longest, cap, "a merge's output fills the capacity");
+            println!("{name}: {} commands, {} cycles", jobs.len(), q.span);
+        });
+    }
+
     #[test]
     fn core_update_flow_matches_golden_update_tile() {
         let name = "core_update_flow_matches_golden_update_tile";
@@ -277,17 +352,9 @@ mod cosim {
                     chunk_cmd(c, &cfg, slot, &v, if rng.percent(50) { Mode::Sort } else { Mode::Dps })
                 } else {
                     let (la, lb) = (rng.below(300) as usize, rng.below(300) as usize);
-                    let fix = |v: Vec<SortEntry>| -> Vec<SortEntry> {
-                        v.into_iter()
-                            .map(|mut e| {
-                                e.id = e.id.min(fmt.id_max() - 1);
-                                e
-                            })
-                            .collect()
-                    };
                     let ties = rng.percent(30);
-                    let a = fix(sorted_stream(&fmt, rng, la, 75, ties));
-                    let b = fix(sorted_stream(&fmt, rng, lb, 75, false));
+                    let a = merge_stream(&fmt, rng, la, 75, ties);
+                    let b = merge_stream(&fmt, rng, lb, 75, false);
                     merge_cmd(c, slot, &a, &b, rng.percent(50))
                 }
             })
