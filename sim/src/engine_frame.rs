@@ -28,7 +28,7 @@
 use neo_golden::engine::memory::{ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
 use neo_golden::engine::{
     execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory, MemoryClient,
-    SchedulerPolicy, TileTrace, COMPLETION_QUEUE_DEPTH,
+    SchedulerPolicy, TileTrace, BRIDGE_W_SLOTS, COMPLETION_QUEUE_DEPTH, MUX_W_FIFO_DEPTH,
 };
 use neo_golden::sort::SortMode;
 
@@ -51,15 +51,136 @@ pub const AXI_PATH_CYCLES: f64 = 4.0;
 pub struct PortTiming {
     /// Cycles from a request to its first response beat (the harness's `latency`).
     pub latency: f64,
-    /// Beats per cycle per port and direction.
+    /// Beats per cycle per port and direction: each channel (R, W) earns `bandwidth` beats of
+    /// credit a cycle, up to two beats, and moves a beat only when it holds a whole one.
     pub bandwidth: f64,
-    /// Fraction of cycles the port accepts a request (AR, AW) or a write beat.
+    /// Fraction of cycles the port accepts a request (AR, AW) or a write beat (drawn each
+    /// cycle; a W beat needs the credit too).
     pub ready: f64,
 }
 
 impl PortTiming {
     /// One-cycle latency, one beat per cycle.
     pub const IDEAL: PortTiming = PortTiming { latency: 1.0, bandwidth: 1.0, ready: 1.0 };
+
+    /// W beats per cycle a port takes while a write is always offered: the chance that a cycle
+    /// finds a whole beat of credit, times `ready`. The credit is a Markov chain over its
+    /// level in units of `1 / d` (`bandwidth = n / d`, the smallest `d` up to 256, else the
+    /// nearest 256th), solved for its stationary distribution (by iterating the lazy chain,
+    /// which has the same one and no period). Neither `min(bandwidth, ready)` nor their
+    /// product: at 3/4 and 60% it is 0.577 (the product, 0.45, charged the writes of the
+    /// harness's random memory 28% too many cycles).
+    pub fn write_rate(&self) -> f64 {
+        let (n, d) = rational(self.bandwidth.min(1.0));
+        let cap = 2 * d;
+        let p = self.ready.clamp(0.0, 1.0);
+        let earned = |c: usize| (c + n).min(cap);
+        let mut dist = vec![0.0f64; cap + 1];
+        dist[0] = 1.0;
+        for _ in 0..1_000_000 {
+            let mut next: Vec<f64> = dist.iter().map(|w| w / 2.0).collect();
+            for (c, &w) in dist.iter().enumerate() {
+                let e = earned(c);
+                if e >= d {
+                    next[e - d] += w * p / 2.0;
+                    next[e] += w * (1.0 - p) / 2.0;
+                } else {
+                    next[e] += w / 2.0;
+                }
+            }
+            let moved: f64 = dist.iter().zip(&next).map(|(a, b)| (a - b).abs()).sum();
+            dist = next;
+            if moved < 1e-14 {
+                break;
+            }
+        }
+        dist.iter().enumerate().filter(|&(c, _)| earned(c) >= d).map(|(_, w)| w * p).sum()
+    }
+}
+
+impl PortTiming {
+    /// Single-beat writes per cycle through a bridge, its port mux and the port, while a core
+    /// offers one every cycle (a sort's output entries, a raster core's write-back), played
+    /// cycle by cycle for [`WRITE_PLAY_CYCLES`] (after a warm-up) with fixed random draws. Structure read off
+    /// the RTL: the bridge takes a write when its AW register is free (or its AW leaves) and
+    /// one of its [`BRIDGE_W_SLOTS`] W registers is, with fewer than `outstanding` writes
+    /// awaiting their B; the mux passes an AW while its W-order FIFO
+    /// ([`MUX_W_FIFO_DEPTH`]) has room and forwards the head's W; the memory takes an AW on
+    /// `ready` of its cycles and a W only for an AW it took, with the credit of
+    /// [`Self::write_rate`]; a B comes back `latency` cycles after the W plus the path's
+    /// [`AXI_PATH_CYCLES`]. On the ideal memory it is 1; on the harness's random one 0.43, below
+    /// the W channel's 0.577: the AW and W each wait for a ready draw of their own.
+    pub fn single_write_rate(&self, outstanding: usize) -> f64 {
+        let (n, d) = rational(self.bandwidth.min(1.0));
+        let (n, d) = (n as u64, d as u64);
+        let mut draws = XorShift(0x2545_F491_4F6C_DD1D);
+        let mut ready = |p: f64| p >= 1.0 || draws.unit() < p;
+        let b_delay = (self.latency.round().max(1.0) + AXI_PATH_CYCLES) as u64;
+        let (mut aw_v, mut w_slots, mut in_flight) = (false, 0u32, 0usize);
+        let (mut mem_aw, mut w_fifo, mut credit) = (0u64, 0u32, 0u64);
+        let (mut aw_ready, mut w_ready) = (ready(self.ready), false);
+        let mut b_due = std::collections::VecDeque::new();
+        let mut writes = 0u64;
+        for t in 0..WRITE_PLAY_CYCLES {
+            while b_due.front().is_some_and(|&due| due <= t) {
+                b_due.pop_front();
+                in_flight -= 1;
+            }
+            let aw_fire = aw_v && w_fifo < MUX_W_FIFO_DEPTH && aw_ready;
+            let w_fire = w_slots > 0 && w_fifo > 0 && w_ready;
+            let take = (!aw_v || aw_fire) && (w_slots < BRIDGE_W_SLOTS || w_fire) && in_flight < outstanding;
+            if w_fire {
+                w_slots -= 1;
+                w_fifo -= 1;
+                mem_aw -= 1;
+                credit -= d;
+                writes += u64::from(t >= WRITE_PLAY_WARM_UP);
+                b_due.push_back(t + b_delay);
+            }
+            if aw_fire {
+                aw_v = false;
+                mem_aw += 1;
+                w_fifo += 1;
+            }
+            if take {
+                aw_v = true;
+                w_slots += 1;
+                in_flight += 1;
+            }
+            credit = (credit + n).min(2 * d);
+            aw_ready = ready(self.ready);
+            w_ready = mem_aw > 0 && credit >= d && ready(self.ready);
+        }
+        writes as f64 / (WRITE_PLAY_CYCLES - WRITE_PLAY_WARM_UP) as f64
+    }
+}
+
+/// Cycles [`PortTiming::single_write_rate`] plays, and the first of them it does not count.
+const WRITE_PLAY_CYCLES: u64 = 200_000;
+const WRITE_PLAY_WARM_UP: u64 = 1_000;
+
+/// A xorshift64 generator: the fixed draws of [`PortTiming::single_write_rate`].
+struct XorShift(u64);
+
+impl XorShift {
+    /// A draw in `[0, 1)`.
+    fn unit(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// `x` (in `(0, 1]`) as `n / d`: the smallest `d <= 256` that gives it within `1e-9`, else the
+/// nearest `n / 256`.
+fn rational(x: f64) -> (usize, usize) {
+    (1..=256usize)
+        .find_map(|d| {
+            let n = (x * d as f64).round();
+            ((x * d as f64 - n).abs() < 1e-9 && n >= 1.0).then_some((n as usize, d))
+        })
+        .unwrap_or_else(|| (((x * 256.0).round() as usize).max(1), 256))
 }
 
 /// The model's prediction of one frame.
@@ -78,6 +199,10 @@ pub struct EngineFrameModel<'a> {
     cfg: &'a EngineConfig,
     lat: &'a Latency,
     mem: PortTiming,
+    /// [`PortTiming::write_rate`] of `mem`: W beats of bursts.
+    write_rate: f64,
+    /// [`PortTiming::single_write_rate`] of `mem`: single-beat writes.
+    single_write_rate: f64,
 }
 
 impl<'a> EngineFrameModel<'a> {
@@ -108,7 +233,8 @@ impl<'a> EngineFrameModel<'a> {
                 "memory timing {mem:?}: bandwidth and ready must be positive, latency not negative"
             ));
         }
-        Ok(EngineFrameModel { cfg, lat, mem })
+        let (write_rate, single_write_rate) = (mem.write_rate(), mem.single_write_rate(cfg.axi_outstanding));
+        Ok(EngineFrameModel { cfg, lat, mem, write_rate, single_write_rate })
     }
 
     /// Extra cycles of one dependent round trip over the unit benches' memory.
@@ -116,9 +242,15 @@ impl<'a> EngineFrameModel<'a> {
         self.mem.latency + AXI_PATH_CYCLES - 1.0
     }
 
-    /// Cycles of `beats` write beats through a port (bandwidth and readiness).
+    /// Cycles of `beats` write beats in bursts through a port ([`PortTiming::write_rate`]).
     fn write_beats(&self, beats: u64) -> f64 {
-        beats as f64 / (self.mem.bandwidth * self.mem.ready).min(1.0)
+        beats as f64 / self.write_rate
+    }
+
+    /// Cycles of `n` single-beat writes through a bridge and its port
+    /// ([`PortTiming::single_write_rate`]).
+    fn single_writes(&self, n: u64) -> f64 {
+        n as f64 / self.single_write_rate
     }
 
     /// Cycles of `beats` read beats through a port (bandwidth-limited).
@@ -128,7 +260,7 @@ impl<'a> EngineFrameModel<'a> {
 
     /// Cycles of one tile's sort: every stage back to back ([`batch_cycles`]: the measured
     /// latency of the first command, then the measured intervals), each command's output written
-    /// at the port's write rate ([`Self::write_beats`]: the bridges' two W slots take one
+    /// at the port's write rate ([`Self::single_writes`]: the bridges' two W slots take one
     /// single-beat write a cycle on an always-ready port) instead of the unit bench's one a
     /// cycle, and its input read at the port's bandwidth; then the barrier (the last write's
     /// response).
@@ -137,8 +269,8 @@ impl<'a> EngineFrameModel<'a> {
         for (s, stage) in t.plan.stages.iter().enumerate() {
             let cmds: Vec<Cmd> = stage.iter().map(Cmd::from).collect();
             let (read, written) = stage_entries(t, s);
-            let extra =
-                written as f64 * (self.write_beats(1) - 1.0) + read as f64 * (1.0 / self.mem.bandwidth - 1.0);
+            let extra = written as f64 * (self.single_writes(1) - 1.0)
+                + read as f64 * (1.0 / self.mem.bandwidth - 1.0);
             total += batch_cycles(&cmds, self.lat) as f64 + extra + self.round_trip();
         }
         total
@@ -161,7 +293,7 @@ impl<'a> EngineFrameModel<'a> {
         // load cycles, if longer); its write-back takes the core's one request port, stopping the
         // loads while it lasts. The pixels leave in bursts.
         rt.load_cycles_per_entry = rt.load_cycles_per_entry.max(self.beats(RASTER_ENTRY_BEATS));
-        rt.write_back_cycles_per_entry = rt.write_back_cycles_per_entry.max(self.write_beats(1));
+        rt.write_back_cycles_per_entry = rt.write_back_cycles_per_entry.max(self.single_writes(1));
         rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.write_beats(self.pixel_beats()).ceil() as u64);
         let writes = self.raster_traffic(t).write;
         let (cycles, _) = raster_tile_cycles_in_segments(
@@ -187,7 +319,7 @@ impl<'a> EngineFrameModel<'a> {
         Traffic {
             read: self.beats(r),
             read_burst: self.cfg.burst as f64,
-            write: self.write_beats(w),
+            write: self.single_writes(w),
             write_burst: 1.0,
         }
     }
@@ -203,7 +335,7 @@ impl<'a> EngineFrameModel<'a> {
         Traffic {
             read: self.beats(RASTER_ENTRY_BEATS * t.raster.len),
             read_burst: if len > 0.0 { read / read_bursts } else { 1.0 },
-            write: self.write_beats(t.raster.len + self.pixel_beats()),
+            write: self.single_writes(t.raster.len) + self.write_beats(self.pixel_beats()),
             write_burst: (len + pixels) / (len + pixels / row_beats),
         }
     }
@@ -567,6 +699,59 @@ mod tests {
         // the last sort.
         assert!(p1.sort_busy + p1.raster_busy / 2.0 <= p1.cycles + 1.0, "{p1:?}");
         assert!(p1.sort_busy + p1.raster_busy > p1.cycles, "{p1:?}");
+    }
+
+    /// The credit rule played cycle by cycle (a whole beat of credit and a ready draw move a
+    /// beat; `bandwidth` earned a cycle up to two beats), with a fixed xorshift for the draws.
+    fn played_write_rate(bandwidth: f64, ready: f64, cycles: u64) -> f64 {
+        let (mut credit, mut beats, mut x) = (0.0f64, 0u64, 0x9E37_79B9_7F4A_7C15u64);
+        for _ in 0..cycles {
+            credit = (credit + bandwidth).min(2.0);
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            if credit >= 1.0 - 1e-12 && ((x >> 11) as f64) < ready * (1u64 << 53) as f64 {
+                credit -= 1.0;
+                beats += 1;
+            }
+        }
+        beats as f64 / cycles as f64
+    }
+
+    #[test]
+    fn the_write_rate_is_the_credit_rules_played_rate() {
+        assert_eq!(PortTiming::IDEAL.write_rate(), 1.0);
+        for (bandwidth, ready) in [(0.75, 0.6), (0.75, 1.0), (1.0, 0.6), (0.5, 0.6), (0.75, 0.3), (0.3, 0.9)]
+        {
+            let t = PortTiming { bandwidth, ready, ..PortTiming::IDEAL };
+            let (got, played) = (t.write_rate(), played_write_rate(bandwidth, ready, 2_000_000));
+            assert!(
+                (got - played).abs() < 0.003,
+                "bandwidth {bandwidth}, ready {ready}: {got} vs played {played}"
+            );
+            assert!(
+                got <= bandwidth.min(ready) + 1e-12 && got >= bandwidth * ready - 1e-12,
+                "{bandwidth} {ready}: {got}"
+            );
+        }
+        // The harness's random memory (3/4 bandwidth, ready 60% of cycles).
+        let random = PortTiming { latency: 6.0, bandwidth: 0.75, ready: 0.6 };
+        assert!((random.write_rate() - 0.5766).abs() < 0.001, "{}", random.write_rate());
+    }
+
+    #[test]
+    fn single_beat_writes_wait_for_an_aw_and_a_w_ready_each() {
+        assert_eq!(PortTiming::IDEAL.single_write_rate(8), 1.0);
+        let random = PortTiming { latency: 6.0, bandwidth: 0.75, ready: 0.6 };
+        let single = random.single_write_rate(8);
+        assert!(single < random.write_rate() && single > 0.3, "{single}");
+        // One write in flight: a round trip per write.
+        let one = random.single_write_rate(1);
+        assert!(one < 1.0 / (6.0 + AXI_PATH_CYCLES) + 0.01, "{one}");
+        // Always ready at full bandwidth: only the outstanding limit and the B's delay matter.
+        let slow_b = PortTiming { latency: 30.0, ..PortTiming::IDEAL };
+        let limited = slow_b.single_write_rate(8);
+        assert!((limited - 8.0 / (30.0 + AXI_PATH_CYCLES + 1.0)).abs() < 0.02, "{limited}");
     }
 
     #[test]

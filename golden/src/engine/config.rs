@@ -66,6 +66,15 @@ pub const COMPLETION_QUEUE_DEPTH: usize = 4;
 /// walked quads the ITUs may run ahead of an SCU.
 pub const ROUTING_FIFO_DEPTH: u32 = 64;
 
+/// Entries of each AXI4 port mux's W-order FIFO (`neo_axi_mux`): AWs accepted whose W beats have
+/// not all passed; the mux grants no AW while it is full.
+pub const MUX_W_FIFO_DEPTH: u32 = 4;
+
+/// Write slots of each AXI4 bridge (`neo_axi_sort_bridge`, `neo_axi_raster_bridge`): one AW
+/// register and two W registers (`w_v_q`, `w2_v_q`), so a single-beat write's W can wait for
+/// the mux while the next write's AW goes out.
+pub const BRIDGE_W_SLOTS: u32 = 2;
+
 /// Parameters of the generated RTL. [`EngineConfig::default`] is the paper's configuration.
 ///
 /// JSON: an object with any subset of these fields (missing ones take the default), e.g.

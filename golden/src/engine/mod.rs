@@ -19,7 +19,8 @@ pub mod regs;
 pub use cases::{CaseScene, EngineCase};
 pub use clients::{client_port_slot, port_slot_client, port_slots, MemoryClient};
 pub use config::{
-    ConfigError, EngineConfig, SchedulerPolicy, Topology, COMPLETION_QUEUE_DEPTH, ROUTING_FIFO_DEPTH,
+    ConfigError, EngineConfig, SchedulerPolicy, Topology, BRIDGE_W_SLOTS, COMPLETION_QUEUE_DEPTH,
+    MUX_W_FIFO_DEPTH, ROUTING_FIFO_DEPTH,
 };
 pub use expected::{Expected, Mismatch, Place, PreExpected};
 pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError};

@@ -29,8 +29,9 @@ use neo_golden::engine::{ConfigError, EngineConfig};
 /// Module name.
 pub const NAME: &str = "neo_axi_mux";
 
-/// Entries of the W-order FIFO (AWs accepted whose W beats have not all passed).
-pub const W_FIFO: u32 = 4;
+/// Entries of the W-order FIFO (AWs accepted whose W beats have not all passed): golden's
+/// [`neo_golden::engine::MUX_W_FIFO_DEPTH`], which the engine-level cycle model reads too.
+pub const W_FIFO: u32 = neo_golden::engine::MUX_W_FIFO_DEPTH;
 
 /// The loop variable of the selections over the clients.
 pub(super) const C: &str = "c";
