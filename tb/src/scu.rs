@@ -14,6 +14,7 @@ use crate::dut::Clocked;
 use crate::rng::Rng;
 use crate::stream::{Beat, Sink, Source};
 use neo_gen::EngineConfig;
+use neo_golden::formats::conic::QuantConic;
 use neo_golden::formats::feature::{quantize, FeatureEntry, FeatureFormat};
 use neo_golden::raster::synth::{cov_from_axes, projected_from_cov};
 use neo_golden::raster::{pixel_alpha, shade_pixel, ExpTable, RasterConfig, RGB_BITS};
@@ -359,6 +360,57 @@ pub fn gaussian_with_alpha(
         }
     }
     None
+}
+
+/// The top of the SCU's origin range: the last subtile whose pixels the origin field holds
+/// (`2^(mean.bits - mean.frac) - S` on both axes; the datapath is sized for it, ScuWidths::origin).
+pub fn top_origin(fmt: &FeatureFormat, side: u32) -> [u32; 2] {
+    let o = (1u32 << (fmt.mean.bits - fmt.mean.frac)) - side;
+    [o, o]
+}
+
+/// Gaussians at the far end of the lane datapath for the subtile at [`top_origin`]: means at
+/// the most negative raw value, 3/4, 1/2 and 0 of it on each axis (`|dx|`, `|dy|` from below
+/// `2^(mean.bits)` up to their bound `2^(mean.bits - 1) + (2^origin - 1) 2^Fm`, so the squares
+/// reach `2^(2 mean.bits + 1)`), positive definite conics with the largest mantissa at
+/// `2^M - 1`, `2^(M-1)`, `2^(M-2)`, `2^(M-3)` (`b` of both signs) and exponents from the
+/// largest down by 4 (`np` from 0 to the saturation), opacities from the largest down to one
+/// LSB and colours up to the largest. All are quantised values the formats hold (a screen-filling Gaussian far off).
+pub fn far_gaussians(fmt: &FeatureFormat) -> Vec<FeatureEntry> {
+    let lo = -(1i64 << (fmt.mean.bits - 1));
+    let means = [lo, lo / 4 * 3, lo / 2, 0];
+    let m = fmt.conic.max_mantissa();
+    // (a, b, c) with b^2 < a c; the largest of each at 2^M - 1 .. 2^(M-3).
+    let conics = [
+        (m, -(m - 1), m),
+        (m / 2 + 1, m / 4, m),
+        (m / 4 + 3, -(m / 8), m / 2),
+        (m / 8 + 5, m / 16 + 1, m / 8 + 1),
+    ];
+    let max_exp = fmt.conic.max_exp();
+    let max_col = (1i64 << fmt.color.bits) - 1;
+    let max_op = (1i64 << fmt.opacity.bits) - 1;
+    let mut out = Vec::new();
+    for (i, &mean_y) in means.iter().enumerate() {
+        for (j, &mean_x) in means.iter().enumerate() {
+            for (k, &(a, b, c)) in conics.iter().enumerate() {
+                let n = (16 * i + 4 * j + k) as u32;
+                out.push(FeatureEntry {
+                    mean: [mean_x as i32, mean_y as i32],
+                    conic: QuantConic {
+                        a: a as i32,
+                        b: b as i32,
+                        c: c as i32,
+                        exp: max_exp.saturating_sub(4 * (n % 8)),
+                    },
+                    opacity: [max_op, max_op / 3, max_op / 8, 1][(n / 8 % 4) as usize] as i32,
+                    rgb: [max_col, max_col / 2 + n as i64, (n as i64 * 97) % (max_col + 1)].map(|v| v as i32),
+                    ..FeatureEntry::default()
+                });
+            }
+        }
+    }
+    out
 }
 
 /// A random Gaussian for a subtile at `origin`: mostly real (quantised) Gaussians near the

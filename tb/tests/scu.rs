@@ -12,12 +12,13 @@ fn scu_skipped_without_verilator() {
 mod cosim {
     use neo_gen::EngineConfig;
     use neo_golden::formats::feature::FeatureEntry;
-    use neo_golden::raster::raster_tile;
+    use neo_golden::raster::{pixel_alpha, raster_tile, ExpTable};
     use neo_tb::dut::Clocked;
     use neo_tb::models::NeoScu;
     use neo_tb::rng::{for_each_seed, Rng};
     use neo_tb::scu::{
-        gaussian, gaussian_with_alpha, lists_of, measure_timing, run_checked, run_pieces_checked, ScuList,
+        far_gaussians, gaussian, gaussian_with_alpha, lists_of, measure_timing, run_checked,
+        run_pieces_checked, top_origin, ScuList,
     };
     use neo_tb::waves::maybe_trace;
 
@@ -108,9 +109,34 @@ mod cosim {
             "subtile outside the image",
             ScuList { origin: o, cols: 0, rows: 8, entries: vec![gaussian(c, 6.0, 6.0, 0.0, 0.8, [1.0; 3])] },
         ));
+        // The far end of the lane datapath: the subtile at the top of the origin range, means at
+        // the most negative value (|dx|, |dy| up to 3 2^27 - 2^8, q up to 2^76), largest
+        // mantissas and exponents from the largest down: np from 0 (alpha at the cap) to the
+        // saturation (skipped), checked here with golden pixel_alpha at the origin pixel.
+        let side = rc.subtile;
+        let far =
+            ScuList { origin: top_origin(&fmt, side), cols: side, rows: side, entries: far_gaussians(&fmt) };
+        let exp = ExpTable::new(&rc.blend.exp, rc.blend.power_frac);
+        let (fx, fy) = (far.origin[0] as i64, far.origin[1] as i64);
+        let alphas: Vec<i64> = far
+            .entries
+            .iter()
+            .map(|e| pixel_alpha(e, &fmt, &rc, &exp, fx, fy).expect("a positive definite conic"))
+            .collect();
+        let (min_alpha, max_alpha) = (rc.blend.min_alpha_raw(), rc.blend.max_alpha_raw());
+        assert!(alphas.contains(&max_alpha), "far: an entry at the alpha cap: {alphas:?}");
+        assert!(
+            alphas.iter().any(|&a| (min_alpha..max_alpha).contains(&a)),
+            "far: below the cap: {alphas:?}"
+        );
+        assert!(alphas.iter().any(|&a| a < min_alpha), "far: an entry below 1/255: {alphas:?}");
+        assert!(
+            neo_tb::scu::golden_pixels(&far, &fmt, &rc).iter().any(|p| *p != [0; 3]),
+            "far: some pixel is blended"
+        );
+        cases.push(("far end: top origin, means at the far end", far));
         // Alpha exactly at 1/255 (min_alpha_raw) and one LSB below, at a subtile pixel: search
         // the opacity and offset with golden pixel_alpha, then check the golden decision.
-        let min_alpha = rc.blend.min_alpha_raw();
         let (px, py) = (o[0] as i64 + 2, o[1] as i64 + 5);
         let at = gaussian_with_alpha(&fmt, &rc, px, py, min_alpha).expect("an entry at 1/255");
         let below = gaussian_with_alpha(&fmt, &rc, px, py, min_alpha - 1).expect("an entry one LSB below");
