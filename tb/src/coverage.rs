@@ -37,8 +37,9 @@ over every bench that instantiates it:
 - lines + branches: Verilator's `v_line` (a block of statements) and `v_branch` (each side of an
   `if`, each `case` item) points hit at least once;
 - toggle bits: every bit of every port, register and wire that changed at least twice (rose and
-  fell) in one model instance after the end of its first reset (the changes up to then come
-  from the random initial values; `neo_tb::coverage::reduce_instance`); Verilator leaves out
+  fell) in one model instance after the end of its first reset (`neo_tb::coverage::reduce_instance`;
+  the models start from zero initial values, `NEO_XINIT=zero`, so that no toggle comes from a
+  random value left in a register without reset or a queue slot); Verilator leaves out
   signals wider than 256 bits (`--coverage-max-width`: the BSU's vectors, the SCU's packed pixel
   states) and memories, and the raster core's own modules
   (`neo_raster_core`, `neo_raster_loader`, `neo_raster_feeder`) are built without toggle
