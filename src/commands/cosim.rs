@@ -130,7 +130,8 @@ pub fn run(a: CosimArgs) -> Result<()> {
 /// The cycle model's timing of the harness's memory (its means).
 fn port_timing(t: &AxiTiming) -> PortTiming {
     let (latency, bandwidth, ready) = t.means();
-    PortTiming { latency, bandwidth, ready }
+    let (late_share, late_max) = (t.extra_percent as f64 / 100.0, t.extra_max as f64);
+    PortTiming { latency, bandwidth, ready, late_share, late_max }
 }
 
 /// One frame's line (or JSON record).

@@ -148,7 +148,9 @@ fn run_case_full(
     let mut cycles = Vec::new();
     let lat = Latency::from_file(&neo_golden::shared::workspace_root().join("reports/latency.json"))
         .expect("reports/latency.json");
-    let model = EngineFrameModel::new(&cfg, &lat, PortTiming { latency, bandwidth, ready }).expect("cycle model");
+    let (late_share, late_max) = (opts.timing.extra_percent as f64 / 100.0, opts.timing.extra_max as f64);
+    let mem = PortTiming { latency, bandwidth, ready, late_share, late_max };
+    let model = EngineFrameModel::new(&cfg, &lat, mem).expect("cycle model");
     let t0 = std::time::Instant::now();
     while let Some(plan) = session.next_frame(rig.memory_mut()).expect("host frame") {
         let p = model.predict_frame(&plan.regs, rig.memory_mut()).expect("golden reference");
