@@ -103,9 +103,7 @@ impl PortTiming {
         }
         dist.iter().enumerate().filter(|&(c, _)| earned(c) >= d).map(|(_, w)| w * p).sum()
     }
-}
 
-impl PortTiming {
     /// Single-beat writes per cycle through a bridge, its port mux and the port, while a core
     /// offers one every cycle (a sort's output entries, a raster core's write-back), played
     /// cycle by cycle for [`WRITE_PLAY_CYCLES`] (after a warm-up) with fixed random draws. Structure read off
@@ -177,7 +175,7 @@ impl PortTiming {
 const WRITE_PLAY_CYCLES: u64 = 200_000;
 const WRITE_PLAY_WARM_UP: u64 = 1_000;
 
-/// A xorshift64 generator: the fixed draws of [`PortTiming::single_write_rate`].
+/// A xorshift64 generator: the fixed draws of [`PortTiming::single_write_rate`] (and its test).
 struct XorShift(u64);
 
 impl XorShift {
@@ -288,7 +286,7 @@ impl<'a> EngineFrameModel<'a> {
             let cmds: Vec<Cmd> = stage.iter().map(Cmd::from).collect();
             let (read, written) = stage_entries(t, s);
             let batch = batch_cycles(&cmds, self.lat) as f64;
-            let port = (self.single_writes(written)).max(read as f64 / self.mem.bandwidth);
+            let port = self.single_writes(written).max(self.beats(read));
             total += batch.max(port) + self.round_trip();
         }
         total
@@ -720,15 +718,12 @@ mod tests {
     }
 
     /// The credit rule played cycle by cycle (a whole beat of credit and a ready draw move a
-    /// beat; `bandwidth` earned a cycle up to two beats), with a fixed xorshift for the draws.
+    /// beat; `bandwidth` earned a cycle up to two beats), with fixed draws.
     fn played_write_rate(bandwidth: f64, ready: f64, cycles: u64) -> f64 {
-        let (mut credit, mut beats, mut x) = (0.0f64, 0u64, 0x9E37_79B9_7F4A_7C15u64);
+        let (mut credit, mut beats, mut draws) = (0.0f64, 0u64, XorShift(0x9E37_79B9_7F4A_7C15));
         for _ in 0..cycles {
             credit = (credit + bandwidth).min(2.0);
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            if credit >= 1.0 - 1e-12 && ((x >> 11) as f64) < ready * (1u64 << 53) as f64 {
+            if credit >= 1.0 - 1e-12 && draws.unit() < ready {
                 credit -= 1.0;
                 beats += 1;
             }

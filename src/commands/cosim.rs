@@ -130,7 +130,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
 /// The cycle model's timing of the harness's memory (its means).
 fn port_timing(t: &AxiTiming) -> PortTiming {
     let (latency, bandwidth, ready) = t.means();
-    let (late_share, late_max) = (t.extra_percent as f64 / 100.0, t.extra_max as f64);
+    let (late_share, late_max) = t.late();
     PortTiming { latency, bandwidth, ready, late_share, late_max }
 }
 

@@ -18,6 +18,7 @@ use crate::bits::mask;
 use crate::check::Checker;
 use crate::models::NeoSortSeq;
 use crate::rng::Rng;
+use crate::stimulus::entry_space;
 use neo_gen::EngineConfig;
 use neo_golden::engine::{run_command, tile_plan, FrameRegs, Memory, TileCmd, TileDescriptor};
 use neo_golden::sort::{SortMode, Sorter};
@@ -390,8 +391,8 @@ pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDe
         |rng: &mut Rng, room: u64| if rng.percent(4) { Some(rng.range(0, room + 1) as u32) } else { None };
     let prev_len = long(rng, cap).unwrap_or_else(|| len(rng));
     let list_len = long(rng, cap - prev_len as u64).unwrap_or_else(|| len(rng));
-    let region = 1u64 << 17;
-    let base = HALF * rng.below(2) + rng.below(HALF - 3 * region);
+    let (region, half) = (1u64 << 17, entry_space(cfg) / 2);
+    let base = half * rng.below(2) + rng.below(half - 3 * region);
     let at = |k: u64, rng: &mut Rng| (base + k * region + rng.below(1 << 16)) as u32;
     TileDescriptor {
         tile_x: rng.next_u32() as u16,
@@ -406,14 +407,12 @@ pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDe
     }
 }
 
-/// Half of the entry space below 2^29 (entry addresses of 32-bit byte addresses).
-const HALF: u64 = 1 << 28;
-
 /// A random `SCRATCH_BASE` (bytes, 8-aligned) whose scratch regions, `2 table_capacity` entries
 /// for each of the sorting cores, lie in the half of the entry space below 2^29 that `d`'s
 /// regions ([`random_desc`]) do not use.
 pub fn random_scratch_base(cfg: &EngineConfig, rng: &mut Rng, d: &TileDescriptor) -> u64 {
     let span = 2 * (cfg.table_capacity * cfg.sort_cores) as u64;
-    let half = if d.prev as u64 >= HALF { 0 } else { HALF };
-    8 * (half + rng.below(HALF - span))
+    let half = entry_space(cfg) / 2;
+    let other = if d.prev as u64 >= half { 0 } else { half };
+    8 * (other + rng.below(half - span))
 }

@@ -84,6 +84,12 @@ pub fn directed_vectors(fmt: &SortFormat, n: usize) -> Vec<(&'static str, Vec<So
     cases
 }
 
+/// Entry addresses the engine reaches: its AXI4 byte addresses (at most 32 bits in the benches)
+/// over 8-byte entries, `2^29` by default.
+pub fn entry_space(cfg: &neo_gen::EngineConfig) -> u64 {
+    (1u64 << cfg.axi_addr_bits.min(32)) / neo_golden::engine::memory::ENTRY_BYTES
+}
+
 /// A sorted stream of `len` entries (THE ORDER), with valid bits at density `valid_pct`.
 /// With `ties`, keys repeat a lot (ids distinguish them, and may collide with the other stream).
 pub fn sorted_stream(

@@ -148,7 +148,7 @@ fn run_case_full(
     let mut cycles = Vec::new();
     let lat = Latency::from_file(&neo_golden::shared::workspace_root().join("reports/latency.json"))
         .expect("reports/latency.json");
-    let (late_share, late_max) = (opts.timing.extra_percent as f64 / 100.0, opts.timing.extra_max as f64);
+    let (late_share, late_max) = opts.timing.late();
     let mem = PortTiming { latency, bandwidth, ready, late_share, late_max };
     let model = EngineFrameModel::new(&cfg, &lat, mem).expect("cycle model");
     let t0 = std::time::Instant::now();

@@ -27,7 +27,9 @@ mod cosim {
         Command, Core, MemTiming, MergeAt, Mode,
     };
     use neo_tb::rng::{for_each_seed, Rng};
-    use neo_tb::stimulus::{merge_stream, nearly_sorted, starved_merge, tile_entries, MergeShape};
+    use neo_tb::stimulus::{
+        entry_space, merge_stream, nearly_sorted, starved_merge, tile_entries, MergeShape,
+    };
     use neo_tb::waves::maybe_trace;
 
     fn core(name: &str, seed: u64, timing: MemTiming) -> Core {
@@ -240,9 +242,8 @@ mod cosim {
 
     impl Places {
         fn new(cfg: &neo_gen::EngineConfig) -> Places {
-            let space = (1u64 << cfg.axi_addr_bits.min(32)) / neo_golden::engine::memory::ENTRY_BYTES;
             let size = 4 * cfg.table_capacity as u64;
-            Places { size, count: space / size, used: Vec::new() }
+            Places { size, count: entry_space(cfg) / size, used: Vec::new() }
         }
 
         fn next(&mut self, rng: &mut Rng) -> u64 {

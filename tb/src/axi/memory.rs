@@ -47,6 +47,12 @@ impl AxiTiming {
         (self.latency as f64 + extra, bandwidth, (self.ready_percent as f64 / 100.0).min(1.0))
     }
 
+    /// The late responses, for a cycle model: (the share of responses delayed further, the
+    /// longest extra delay in cycles).
+    pub fn late(&self) -> (f64, f64) {
+        (self.extra_percent as f64 / 100.0, self.extra_max as f64)
+    }
+
     /// One-cycle latency, full bandwidth, always ready, in order.
     pub const IDEAL: AxiTiming = AxiTiming {
         latency: 1,
