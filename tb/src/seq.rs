@@ -390,7 +390,9 @@ pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDe
     let long =
         |rng: &mut Rng, room: u64| if rng.percent(4) { Some(rng.range(0, room + 1) as u32) } else { None };
     let prev_len = long(rng, cap).unwrap_or_else(|| len(rng));
-    let list_len = long(rng, cap - prev_len as u64).unwrap_or_else(|| len(rng));
+    // Within what is left: a long table leaves little room for a list of the usual lengths.
+    let list_len =
+        long(rng, cap - prev_len as u64).unwrap_or_else(|| len(rng)).min((cap - prev_len as u64) as u32);
     let (region, half) = (1u64 << 17, entry_space(cfg) / 2);
     let base = half * rng.below(2) + rng.below(half - 3 * region);
     let at = |k: u64, rng: &mut Rng| (base + k * region + rng.below(1 << 16)) as u32;
