@@ -343,12 +343,34 @@ fn check_frame(
             return Err(format!("tile {i}: table length {} here, {l} in the golden pipeline", t.table_len));
         }
     }
+    for (i, t) in fw.tiles.iter().enumerate() {
+        tile_shape_holds(t).map_err(|e| format!("tile {i}: {e}"))?;
+    }
     let routed: u64 = fw.tiles.iter().flat_map(|t| t.routed.iter()).map(|&r| r as u64).sum();
     if routed > stats.raster.subtile_blends {
         return Err(format!(
             "routed pairs {routed} exceed the golden raster's {}",
             stats.raster.subtile_blends
         ));
+    }
+    Ok(())
+}
+
+/// A reuse tile's counters are one tile of golden's command sequence (`tile_steps`, which the
+/// model's sort jobs run): its conventional sort is the merge's stream B and each DPS pass
+/// covers the merge's stream A (the previous table).
+fn tile_shape_holds(t: &TileWork) -> Result<(), String> {
+    if t.from_scratch {
+        return Ok(());
+    }
+    if t.sort_n != t.merge_b {
+        return Err(format!(
+            "the incoming sort has {} entries, the merge's stream B {}",
+            t.sort_n, t.merge_b
+        ));
+    }
+    if t.dps_passes > 0 && t.dps_len != t.merge_a {
+        return Err(format!("DPS covers {} entries, the merge's stream A {}", t.dps_len, t.merge_a));
     }
     Ok(())
 }
@@ -523,4 +545,29 @@ pub fn generate_many(
     }
     let generation_s = t0.elapsed().as_secs_f64();
     Ok(making.into_iter().map(|m| Workload { info: m.info, frames: m.frames, generation_s }).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_reuse_tile_whose_counters_are_not_one_command_sequence_is_refused() {
+        let t = TileWork {
+            sort_n: 40,
+            merge_a: 300,
+            merge_b: 40,
+            dps_len: 300,
+            dps_passes: 1,
+            ..TileWork::default()
+        };
+        assert_eq!(tile_shape_holds(&t), Ok(()));
+        let e = tile_shape_holds(&TileWork { merge_b: 41, ..t.clone() }).unwrap_err();
+        assert!(e.contains("40") && e.contains("41"), "{e}");
+        let e = tile_shape_holds(&TileWork { dps_len: 299, ..t.clone() }).unwrap_err();
+        assert!(e.contains("DPS covers 299"), "{e}");
+        // No DPS pass: the table goes into the merge unsorted; from scratch: no merge at all.
+        assert_eq!(tile_shape_holds(&TileWork { dps_len: 0, dps_passes: 0, ..t.clone() }), Ok(()));
+        assert_eq!(tile_shape_holds(&TileWork { from_scratch: true, merge_b: 0, ..t }), Ok(()));
+    }
 }

@@ -5,11 +5,10 @@
 //!   pairing runs of `C, 2C, ...` with `MERGE` (a lone last run is copied by a `MERGE` with an
 //!   empty second stream): golden's plan `neo_golden::sort::conventional_sort_plan`, which
 //!   `neo_golden::sort::full_sort` executes and `tb::core::full_sort_checked` drives;
-//! - a DPS pass over `L` entries: one `DPS` per chunk of the pass's parity
-//!   ([`Parity::chunks`]);
-//! - the reuse-and-update step of a tile: golden's tile plan (`neo_golden::engine::tile_plan`:
-//!   the conventional sort of the incoming list, the DPS passes, `MERGE_DELETE` of the two),
-//!   whose commands convert to [`Cmd`]s.
+//! - the reuse-and-update step of a tile: golden's tile commands (`neo_golden::engine::tile_steps`:
+//!   the conventional sort of the incoming list, one `DPS` per chunk of each pass's parity,
+//!   `MERGE_DELETE` of the two), placed by `tile_plan` for the RTL and by `crate::arch` for
+//!   the model, whose commands convert to [`Cmd`]s.
 //!
 //! # Timing of commands issued back to back
 //! The core takes a chunk command (SORT / DPS) while the previous one is still merging: its
@@ -25,7 +24,7 @@
 //! chunk segment's load phase is `T(n) - I(n)`, started under the previous segment.
 
 use neo_golden::engine::TileCmd;
-use neo_golden::sort::{conventional_sort_plan, Parity, PlannedCommand};
+use neo_golden::sort::{conventional_sort_plan, PlannedCommand};
 
 use crate::latency::{ChunkMode, Latency};
 
@@ -119,15 +118,6 @@ impl From<&PlannedCommand> for Cmd {
     }
 }
 
-/// The `DPS` commands of one pass over `len` entries with chunk `c` and `parity`.
-pub fn dps_pass(len: u64, c: u64, parity: Parity) -> Vec<Cmd> {
-    parity
-        .chunks(len as usize, c as usize)
-        .map(|r| Cmd { mode: Mode::Dps, len_a: r.len() as u64, len_b: 0 })
-        .filter(|c| c.len_a > 0)
-        .collect()
-}
-
 /// Cycles of one batch `cmds` issued back to back (the cosimulation's ideal-memory queue, from
 /// the first command's acceptance to the last `done_o`): the fill plus each later command's
 /// [`Cmd::charge`].
@@ -172,14 +162,6 @@ mod tests {
             let read: u64 = cmds.iter().map(|c| c.entries_in()).sum();
             assert_eq!(read as usize, w.dram_entries_read());
         }
-    }
-
-    #[test]
-    fn dps_chunks_follow_the_parity() {
-        let even = dps_pass(600, 256, Parity::Even);
-        assert_eq!(even.iter().map(|c| c.len_a).collect::<Vec<_>>(), vec![256, 256, 88]);
-        let odd = dps_pass(600, 256, Parity::Odd);
-        assert_eq!(odd.iter().map(|c| c.len_a).collect::<Vec<_>>(), vec![128, 256, 216]);
     }
 
     #[test]

@@ -25,7 +25,8 @@ use crate::models::NeoSortCore;
 use crate::rng::Rng;
 use crate::stream::Handshake;
 use neo_gen::EngineConfig;
-use neo_golden::sort::{conventional_sort_plan, merge2, Parity, SortEntry, SortFormat};
+use neo_golden::engine::{tile_steps, TileRegion, TileShape};
+use neo_golden::sort::{merge2, merge_pass_count, Parity, SortEntry, SortFormat};
 use std::collections::{HashMap, VecDeque};
 use std::ops::Range;
 
@@ -542,8 +543,8 @@ pub fn sort_chunks_checked(
     q
 }
 
-/// (a) Conventional sort of any number of entries, golden's `conventional_sort_plan` (which golden
-/// `full_sort` executes): `SORT` per chunk into runs, then `MERGE` passes over runs of `C, 2C, ...` (a lone last run is copied by merging it
+/// (a) Conventional sort of any number of entries, golden's commands of a tile sorted from
+/// scratch (`tile_steps`, of `conventional_sort_plan`, which golden `full_sort` executes): `SORT` per chunk into runs, then `MERGE` passes over runs of `C, 2C, ...` (a lone last run is copied by merging it
 /// with an empty B), all issued as one back-to-back queue (the chunk SORTs overlap; each MERGE
 /// waits for the commands whose output it reads). Checks the result and returns the cycles from
 /// the first command's acceptance to the last `done_o`.
@@ -552,19 +553,20 @@ pub fn full_sort_checked(core: &mut Core, cfg: &EngineConfig, entries: &[SortEnt
     let len = entries.len() as u64;
     core.write_entries(layout::SRC, entries);
     core.clear(layout::PING..layout::DST + layout::REGION);
-    // golden's plan: the chunk sorts into PING, then each merge pass from one buffer into the
-    // other.
+    // golden's commands of a tile sorted from scratch: the chunk sorts into PING, then each
+    // merge pass from one buffer into the other, the last into the buffer of its parity.
     let buffer = |stage: u64| if stage.is_multiple_of(2) { layout::PING } else { layout::PONG };
-    let plan: Vec<_> = conventional_sort_plan(len, c as u64).collect();
-    let cmds: Vec<Command> = plan
-        .iter()
-        .map(|p| {
-            let src = if p.stage == 0 { layout::SRC } else { buffer(p.stage - 1) };
-            Command::planned(p, src, buffer(p.stage))
-        })
-        .collect();
-    let want_len: Vec<u64> = plan.iter().map(|p| p.entries()).collect();
-    let from = buffer(plan.last().map_or(0, |p| p.stage));
+    let passes = merge_pass_count(len, c as u64);
+    let shape = TileShape { from_scratch: true, list_len: len, chunk: c as u64, ..TileShape::default() };
+    let base = |region| match region {
+        TileRegion::List => layout::SRC,
+        TileRegion::Scratch(k) => buffer(k as u64),
+        TileRegion::Prev | TileRegion::Next => buffer(passes),
+    };
+    let steps = tile_steps(&shape).concat();
+    let cmds: Vec<Command> = steps.iter().map(|s| s.place(base)).collect();
+    let want_len: Vec<u64> = steps.iter().map(|s| s.a.2 + s.b.2).collect();
+    let from = buffer(passes);
     let q = core.run_queue(&cmds);
     for (k, (r, w)) in q.results.iter().zip(&want_len).enumerate() {
         core.checker.value(

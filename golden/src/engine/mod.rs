@@ -25,7 +25,7 @@ pub use config::{
 pub use expected::{Expected, Mismatch, Place, PreExpected};
 pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError};
 pub use memory::{Memory, TileDescriptor, TileResult};
-pub use plan::{run_command, tile_plan, TileCmd, TilePlan};
+pub use plan::{run_command, tile_plan, tile_steps, TileCmd, TilePlan, TileRegion, TileShape, TileStep};
 pub use pre::{
     beats_spanned, pre_traffic, pre_transfers, pre_transfers_of, preprocess_frame, PrePart, PreRecords,
     PreTransfer, PreWork,

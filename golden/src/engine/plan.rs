@@ -25,8 +25,7 @@ use super::memory::{Memory, TileDescriptor, ENTRY_BYTES};
 use super::regs::FrameRegs;
 use super::EngineConfig;
 use crate::sort::{
-    conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, PlannedCommand, SortBuffer,
-    SortMode, Sorter,
+    conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, SortBuffer, SortMode, Sorter,
 };
 
 /// One Sorting Core command at entry addresses (the fields of `neo_sort_core`'s cmd port).
@@ -44,23 +43,6 @@ pub struct TileCmd {
     pub len_b: u64,
     /// Entry address of the output.
     pub dst: u64,
-}
-
-impl TileCmd {
-    /// Command `c` of a conventional sort ([`conventional_sort_plan`]) placed in memory: its
-    /// stage reads the data starting at entry address `src` and writes the data starting at
-    /// `dst` (`c`'s offsets are relative to both).
-    pub fn planned(c: &PlannedCommand, src: u64, dst: u64) -> TileCmd {
-        let src_b = if c.mode == SortMode::Merge { src + c.start_b() } else { 0 };
-        TileCmd {
-            mode: c.mode,
-            src_a: src + c.start,
-            len_a: c.len_a,
-            src_b,
-            len_b: c.len_b,
-            dst: dst + c.start,
-        }
-    }
 }
 
 /// A tile's commands (see the module docs).
@@ -85,62 +67,150 @@ pub fn scratch_entry_base(cfg: &EngineConfig, regs: &FrameRegs, core: u64) -> u6
     regs.scratch_base / ENTRY_BYTES + core * 2 * cfg.table_capacity as u64
 }
 
+/// What decides a tile's commands, whatever its placement in memory: the one input of
+/// [`tile_steps`], filled from a descriptor by [`tile_plan`] and from a workload by the cycle
+/// model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TileShape {
+    /// The tile is sorted from scratch (no previous table, no DPS, no merge with it).
+    pub from_scratch: bool,
+    /// Entries of the incoming list (the whole tile from scratch).
+    pub list_len: u64,
+    /// Entries of the previous table (a reuse tile).
+    pub prev_len: u64,
+    /// DPS passes over the previous table (a reuse tile).
+    pub dps_passes: u64,
+    /// The frame (the parity of the DPS passes, [`Parity::of`]).
+    pub frame: u64,
+    /// Chunk of the conventional sort.
+    pub chunk: u64,
+    /// Chunk of the DPS passes (the engine's chunk in the RTL; wider in an adaptive model).
+    pub dps_chunk: u64,
+}
+
+/// A region a tile's command reads or writes (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TileRegion {
+    /// The incoming list.
+    List,
+    /// Scratch region 0 or 1 of the core.
+    Scratch(usize),
+    /// The previous table (DPS sorts it in place).
+    Prev,
+    /// The next table.
+    Next,
+}
+
+/// One command of a tile in regions and offsets: [`tile_plan`] places it at entry addresses,
+/// the cycle model at its own layout's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileStep {
+    /// The mode.
+    pub mode: SortMode,
+    /// The chunk / stream A: region, offset in it, entries.
+    pub a: (TileRegion, u64, u64),
+    /// Stream B of a merge (entries 0 for a chunk command).
+    pub b: (TileRegion, u64, u64),
+    /// The output: region and offset.
+    pub dst: (TileRegion, u64),
+}
+
+impl TileStep {
+    /// The command at entry addresses, with region `r` starting at entry address `base(r)`
+    /// (`src_b` 0 for a chunk command, as the core's cmd port has it).
+    pub fn place(&self, base: impl Fn(TileRegion) -> u64) -> TileCmd {
+        TileCmd {
+            mode: self.mode,
+            src_a: base(self.a.0) + self.a.1,
+            len_a: self.a.2,
+            src_b: if self.mode.is_chunk() { 0 } else { base(self.b.0) + self.b.1 },
+            len_b: self.b.2,
+            dst: base(self.dst.0) + self.dst.1,
+        }
+    }
+}
+
+/// The commands of a tile of `shape`, in stages (see the module docs): the conventional sort of
+/// the list (into [`TileRegion::Next`] from scratch, else into the scratch region of its last
+/// pass), then for a reuse tile its DPS passes and the `MERGE_DELETE` into the next table. The
+/// one statement of Neo's per-tile sequence: [`tile_plan`] (the reference and the RTL's
+/// sequencer) and the cycle model's sort jobs both take it from here.
+pub fn tile_steps(shape: &TileShape) -> Vec<Vec<TileStep>> {
+    let n = shape.list_len;
+    let passes = merge_pass_count(n, shape.chunk);
+    let sorted =
+        if shape.from_scratch { TileRegion::Next } else { TileRegion::Scratch((passes % 2) as usize) };
+    let region = |b: SortBuffer| match b {
+        SortBuffer::Input => TileRegion::List,
+        SortBuffer::Scratch(k) => TileRegion::Scratch(k),
+        SortBuffer::Output => sorted,
+    };
+    let mut stages: Vec<Vec<TileStep>> = Vec::new();
+    for c in conventional_sort_plan(n, shape.chunk) {
+        let src = region(c.source());
+        let step = TileStep {
+            mode: c.mode,
+            a: (src, c.start, c.len_a),
+            b: (src, c.start_b(), c.len_b),
+            dst: (region(c.target(passes)), c.start),
+        };
+        if stages.len() as u64 == c.stage {
+            stages.push(Vec::new());
+        }
+        stages[c.stage as usize].push(step);
+    }
+    if shape.from_scratch {
+        return stages;
+    }
+    for p in 0..shape.dps_passes as usize {
+        let parity = Parity::of(shape.frame, p);
+        let dps: Vec<TileStep> = parity
+            .chunks(shape.prev_len as usize, shape.dps_chunk as usize)
+            .map(|r| TileStep {
+                mode: SortMode::Dps,
+                a: (TileRegion::Prev, r.start as u64, r.len() as u64),
+                b: (TileRegion::Prev, r.end as u64, 0),
+                dst: (TileRegion::Prev, r.start as u64),
+            })
+            .collect();
+        if !dps.is_empty() {
+            stages.push(dps);
+        }
+    }
+    stages.push(vec![TileStep {
+        mode: SortMode::MergeDelete,
+        a: (TileRegion::Prev, 0, shape.prev_len),
+        b: (sorted, 0, n),
+        dst: (TileRegion::Next, 0),
+    }]);
+    stages
+}
+
 /// The plan of tile descriptor `d` on sorting core `core` in frame `regs.frame` (see the
-/// module docs).
+/// module docs): [`tile_steps`] at the descriptor's and the core's scratch addresses.
 pub fn tile_plan(cfg: &EngineConfig, regs: &FrameRegs, d: &TileDescriptor, core: u64) -> TilePlan {
     let cap = cfg.table_capacity as u64;
     if d.entries_in() > cap {
         return TilePlan { overflow: true, stages: Vec::new() };
     }
-    let chunk = cfg.chunk as u64;
-    let s0 = scratch_entry_base(cfg, regs, core);
-    let scratch = [s0, s0 + cap];
-    let n = d.list_len as u64;
-    let passes = merge_pass_count(n, chunk);
-    let last = if d.from_scratch { d.next as u64 } else { scratch[(passes % 2) as usize] };
-    let mut stages: Vec<Vec<TileCmd>> = Vec::new();
-    let at = |b: SortBuffer| match b {
-        SortBuffer::Input => d.list as u64,
-        SortBuffer::Scratch(k) => scratch[k],
-        SortBuffer::Output => last,
+    let shape = TileShape {
+        from_scratch: d.from_scratch,
+        list_len: d.list_len as u64,
+        prev_len: d.prev_len as u64,
+        dps_passes: d.passes(),
+        frame: regs.frame as u64,
+        chunk: cfg.chunk as u64,
+        dps_chunk: cfg.chunk as u64,
     };
-    for c in conventional_sort_plan(n, chunk) {
-        let cmd = TileCmd::planned(&c, at(c.source()), at(c.target(passes)));
-        if stages.len() as u64 == c.stage {
-            stages.push(Vec::new());
-        }
-        stages[c.stage as usize].push(cmd);
-    }
-    if !d.from_scratch {
-        let prev = d.prev as u64;
-        for p in 0..d.passes() as usize {
-            let dps: Vec<TileCmd> = Parity::of(regs.frame as u64, p)
-                .chunks(d.prev_len as usize, cfg.chunk)
-                .map(|r| {
-                    let at = prev + r.start as u64;
-                    TileCmd {
-                        mode: SortMode::Dps,
-                        src_a: at,
-                        len_a: r.len() as u64,
-                        src_b: 0,
-                        len_b: 0,
-                        dst: at,
-                    }
-                })
-                .collect();
-            if !dps.is_empty() {
-                stages.push(dps);
-            }
-        }
-        stages.push(vec![TileCmd {
-            mode: SortMode::MergeDelete,
-            src_a: prev,
-            len_a: d.prev_len as u64,
-            src_b: last,
-            len_b: n,
-            dst: d.next as u64,
-        }]);
-    }
+    let s0 = scratch_entry_base(cfg, regs, core);
+    let base = |region| match region {
+        TileRegion::List => d.list as u64,
+        TileRegion::Scratch(k) => s0 + k as u64 * cap,
+        TileRegion::Prev => d.prev as u64,
+        TileRegion::Next => d.next as u64,
+    };
+    let stages =
+        tile_steps(&shape).iter().map(|stage| stage.iter().map(|s| s.place(base)).collect()).collect();
     TilePlan { overflow: false, stages }
 }
 
@@ -270,6 +340,51 @@ mod tests {
                 }
                 assert_eq!(p.stages.last().unwrap()[0].mode, SortMode::MergeDelete);
             }
+        }
+    }
+
+    #[test]
+    fn a_reuse_tile_merges_the_list_from_the_scratch_region_of_its_last_pass() {
+        let shape = |n| TileShape {
+            list_len: n,
+            prev_len: 600,
+            dps_passes: 1,
+            frame: 3,
+            chunk: 256,
+            dps_chunk: 256,
+            ..TileShape::default()
+        };
+        for (n, passes) in [(0u64, 0u64), (200, 0), (300, 1), (600, 2), (1100, 3)] {
+            let steps = tile_steps(&shape(n));
+            let merge = steps.last().unwrap()[0];
+            let sorted = TileRegion::Scratch((passes % 2) as usize);
+            assert_eq!(merge.b, (sorted, 0, n), "{n} entries");
+            assert_eq!((merge.a, merge.dst), ((TileRegion::Prev, 0, 600), (TileRegion::Next, 0)));
+            let last_sort = steps.iter().flatten().rfind(|s| s.a.0 != TileRegion::Prev);
+            assert!(last_sort.is_none_or(|s| s.dst.0 == sorted), "{n} entries: {last_sort:?}");
+        }
+    }
+
+    #[test]
+    fn a_wider_dps_chunk_changes_only_the_dps_stages() {
+        let narrow = TileShape {
+            list_len: 700,
+            prev_len: 3000,
+            dps_passes: 2,
+            frame: 5,
+            chunk: 256,
+            dps_chunk: 256,
+            ..TileShape::default()
+        };
+        let wide = TileShape { dps_chunk: 1024, ..narrow };
+        let (a, b) = (tile_steps(&narrow), tile_steps(&wide));
+        assert_eq!(a.len(), b.len());
+        let dps_lens = |stage: &Vec<TileStep>| stage.iter().map(|s| s.a.2).collect::<Vec<_>>();
+        // Frame 5: pass 0 odd (a half chunk first), pass 1 even.
+        assert_eq!(dps_lens(&b[3]), [512, 1024, 1024, 440]);
+        assert_eq!(dps_lens(&b[4]), [1024, 1024, 952]);
+        for k in [0, 1, 2, 5] {
+            assert_eq!(a[k], b[k], "stage {k}");
         }
     }
 

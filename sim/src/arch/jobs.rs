@@ -2,18 +2,16 @@
 //! (timed by `latency.json`, [`crate::sortcmd`]) and the raster core per tile
 //! ([`super::raster_tile_cycles`]), each with its DRAM reads and writes.
 
-use std::ops::Range;
-
 use neo_golden::engine::pre::{pre_transfers_of, PrePart, PreRecords};
+use neo_golden::engine::{tile_steps, TileRegion, TileShape, TileStep};
 use neo_golden::engine::{FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
 use neo_golden::pipeline::Strategy;
-use neo_golden::sort::{conventional_sort_plan, merge_pass_count, Parity, SortBuffer};
 
 use super::timing::raster_tile_cycles;
 use super::{Accel, Model, K_BG, K_PRE, K_RASTER, K_SORT, K_UPDATE};
 use crate::dram::Ps;
 use crate::engine::{Access, AccessKind, Job, JobTag, Segment};
-use crate::sortcmd::{dps_pass, Cmd, Mode};
+use crate::sortcmd::{Cmd, Mode};
 use crate::traffic::Stage;
 use crate::workload::TileWork;
 
@@ -171,38 +169,54 @@ impl Model<'_> {
         }
     }
 
-    /// Conventional sort of `n` entries from `src` (charged to `src_stage`) into `dst`, with
-    /// temporaries in `scratch` (two run buffers); `stage` for everything after the first read.
-    /// The commands and the buffers each reads and writes are golden's plan
-    /// ([`conventional_sort_plan`], [`neo_golden::sort::PlannedCommand::source`] and `target`).
-    #[allow(clippy::too_many_arguments)]
-    fn conv_sort(
+    /// The segment of one of golden's tile commands ([`tile_steps`]) with its regions at `at`:
+    /// a merge whose stream B follows A directly reads them as one run; the output is
+    /// `written` entries (the command's input when `None`).
+    fn step_segment(&self, s: &TileStep, at: &Regions, written: Option<u64>) -> Segment {
+        let (a, b) = (s.a, s.b);
+        let cmd = Cmd { mode: s.mode, len_a: a.2, len_b: b.2 };
+        let reads = if s.mode.is_chunk() {
+            vec![at.access(a.0, a.1, a.2)]
+        } else if b.0 == a.0 && b.1 == a.1 + a.2 {
+            vec![at.access(a.0, a.1, a.2 + b.2)]
+        } else {
+            vec![at.access(a.0, a.1, a.2), at.access(b.0, b.1, b.2)]
+        };
+        let writes = vec![at.access(s.dst.0, s.dst.1, written.unwrap_or(a.2 + b.2))];
+        self.cmd_segment(cmd, reads, writes, 0.0)
+    }
+
+    /// The last DPS pass fused with the MSU+ merge (`fused_dps_merge`): each chunk of the pass
+    /// `dps` streams into the `merge` with its share of the sorted list (stream B) and of the
+    /// `out` entries written.
+    fn fused_dps_merge(
         &self,
         segs: &mut Vec<Segment>,
-        n: u64,
-        src: u64,
-        src_stage: Stage,
-        dst: u64,
-        scratch: [u64; 2],
-        stage: Stage,
+        dps: &[TileStep],
+        merge: &TileStep,
+        at: &Regions,
+        out: u64,
     ) {
-        let c = self.cfg.engine.chunk as u64;
-        let eb = self.eb;
-        let passes = merge_pass_count(n, c);
-        let at = |b: SortBuffer| match b {
-            SortBuffer::Input => src,
-            SortBuffer::Scratch(k) => scratch[k],
-            SortBuffer::Output => dst,
-        };
-        for p in conventional_sort_plan(n, c) {
-            let read_stage = if p.source() == SortBuffer::Input { src_stage } else { stage };
-            let (off, len) = (p.start * eb, p.entries() * eb);
-            segs.push(self.cmd_segment(
-                Cmd::from(&p),
-                vec![Access::seq(read_stage, at(p.source()) + off, len)],
-                vec![Access::seq(stage, at(p.target(passes)) + off, len)],
-                0.0,
-            ));
+        let ((_, _, a), (b_region, b_base, b)) = (merge.a, merge.b);
+        let extra = (self.lat.merge_cycles(a, b, true) as f64 - a as f64).max(b as f64);
+        let (mut b_done, mut o_done) = (0u64, 0u64);
+        for step in dps {
+            let (off, len) = (step.a.1, step.a.2);
+            let end = off + len;
+            let (b_to, o_to) = (b * end / a, out * end / a);
+            let (bi, oi) = (b_to - b_done, o_to - o_done);
+            let mut reads = vec![at.access(step.a.0, off, len)];
+            if bi > 0 {
+                reads.push(at.access(b_region, b_base + b_done, bi));
+            }
+            let writes = vec![at.access(merge.dst.0, merge.dst.1 + o_done, oi)];
+            let share = extra * len as f64 / a as f64;
+            let cmd = Cmd { mode: step.mode, len_a: len, len_b: 0 };
+            let mut seg = self.cmd_segment(cmd, reads, writes, share);
+            seg.load =
+                self.ps(((len + bi) as f64 * self.lat.msu_ii).min(cmd.cycles(self.lat) as f64 + share));
+            segs.push(seg);
+            (b_done, o_done) = (b_to, o_to);
         }
     }
 
@@ -219,33 +233,43 @@ impl Model<'_> {
         }
     }
 
-    /// DPS passes `passes` of frame `f` over the `len`-entry table at `table`, each chunk read
-    /// and written back in place.
-    fn dps_in_place(
-        &self,
-        segs: &mut Vec<Segment>,
-        tw: &TileWork,
-        table: u64,
-        f: usize,
-        passes: Range<usize>,
-    ) {
-        let (len, c, eb) = (tw.dps_len as u64, self.dps_chunk(tw), self.eb);
-        for p in passes {
-            let mut off = 0;
-            for cmd in dps_pass(len, c, Parity::of(f as u64, p)) {
-                let acc = Access::seq(Stage::SortTable, table + off * eb, cmd.len_a * eb);
-                segs.push(self.cmd_segment(cmd, vec![acc], vec![acc], 0.0));
-                off += cmd.len_a;
-            }
-        }
-    }
-
     /// The chunk of a tile's DPS passes (the engine's unless the workload names another).
     fn dps_chunk(&self, tw: &TileWork) -> u64 {
         if tw.dps_chunk > 0 {
             tw.dps_chunk as u64
         } else {
             self.cfg.engine.chunk as u64
+        }
+    }
+
+    /// The segments of Neo's sort of tile `tw` of frame `f` at `at`: golden's commands for
+    /// the tile ([`tile_steps`]), the last DPS pass fused with the merge when the configuration
+    /// says so (`fused_dps_merge`).
+    fn tile_segments(&self, segs: &mut Vec<Segment>, tw: &TileWork, f: usize, at: &Regions) {
+        let shape = TileShape {
+            from_scratch: tw.from_scratch,
+            list_len: tw.sort_n as u64,
+            prev_len: tw.merge_a as u64,
+            dps_passes: tw.dps_passes as u64,
+            frame: f as u64,
+            chunk: self.cfg.engine.chunk as u64,
+            dps_chunk: self.dps_chunk(tw),
+        };
+        // The merge writes what survives the deletions and the capacity cut.
+        let out = (tw.merge_out - tw.merge_out.min(tw.dropped_capacity)) as u64;
+        let mut stages = tile_steps(&shape);
+        let reuse = !tw.from_scratch && shape.dps_passes > 0 && shape.prev_len > 0;
+        let tail = if reuse && self.cfg.neo.fused_dps_merge {
+            stages.split_off(stages.len() - 2)
+        } else {
+            Vec::new()
+        };
+        for step in stages.iter().flatten() {
+            let written = (step.mode == Mode::MergeDelete).then_some(out);
+            segs.push(self.step_segment(step, at, written));
+        }
+        if let [dps, merge] = &tail[..] {
+            self.fused_dps_merge(segs, dps, &merge[0], at, out);
         }
     }
 
@@ -262,86 +286,23 @@ impl Model<'_> {
         let mut segs = Vec::new();
         if self.hier {
             self.hier_sort(&mut segs, tw, list, cur, sc);
-        } else if tw.from_scratch {
-            self.conv_sort(
-                &mut segs,
-                tw.sort_n as u64,
-                list,
-                Stage::IncomingList,
-                cur,
-                [sc[0], sc[1]],
-                Stage::SortTable,
-            );
         } else {
-            let (prev, prev_stage) = match self.strategy {
-                Strategy::Background(k) => {
+            let prev = match self.strategy {
+                Strategy::Background(k) if !tw.from_scratch => {
                     let src = f.saturating_sub(k).max(self.shot_start[f]);
-                    (self.layout.bg_tables[src % 2] + t as u64 * self.layout.slot, Stage::SortTable)
+                    self.layout.bg_tables[src % 2] + t as u64 * self.layout.slot
                 }
-                _ => (self.layout.table(f + 1, t), Stage::SortTable),
+                _ => self.layout.table(f + 1, t),
             };
-            let c = self.dps_chunk(tw);
-            let (a, b) = (tw.merge_a as u64, tw.merge_b as u64);
-            let out = (tw.merge_out - tw.merge_out.min(tw.dropped_capacity)) as u64;
-            let passes = tw.dps_passes as usize;
-            let fused = self.cfg.neo.fused_dps_merge && passes > 0 && tw.dps_len > 0;
-            if fused {
-                // Sorted incoming list first; DPS passes; the last pass feeds the MSU+.
-                self.conv_sort(
-                    &mut segs,
-                    b,
-                    list,
-                    Stage::IncomingList,
-                    sc[2],
-                    [sc[0], sc[1]],
-                    Stage::SortTable,
-                );
-                let len = tw.dps_len as u64;
-                self.dps_in_place(&mut segs, tw, prev, f, 0..passes - 1);
-                let extra = (self.lat.merge_cycles(a, b, true) as f64 - a as f64).max(b as f64);
-                let (mut off, mut b_done, mut o_done) = (0u64, 0u64, 0u64);
-                for cmd in dps_pass(len, c, Parity::of(f as u64, passes - 1)) {
-                    let end = off + cmd.len_a;
-                    let b_to = b * end / len;
-                    let o_to = out * end / len;
-                    let (bi, oi) = (b_to - b_done, o_to - o_done);
-                    let mut reads = vec![Access::seq(prev_stage, prev + off * eb, cmd.len_a * eb)];
-                    if bi > 0 {
-                        reads.push(Access::seq(Stage::SortTable, sc[2] + b_done * eb, bi * eb));
-                    }
-                    let writes = vec![Access::seq(Stage::SortTable, cur + o_done * eb, oi * eb)];
-                    let share = extra * cmd.len_a as f64 / len as f64;
-                    let mut s = self.cmd_segment(cmd, reads, writes, share);
-                    s.load = self
-                        .ps(((cmd.len_a + bi) as f64 * self.lat.msu_ii)
-                            .min(cmd.cycles(self.lat) as f64 + share));
-                    segs.push(s);
-                    (off, b_done, o_done) = (end, b_to, o_to);
-                }
-            } else {
-                self.dps_in_place(&mut segs, tw, prev, f, 0..passes);
-                self.conv_sort(
-                    &mut segs,
-                    b,
-                    list,
-                    Stage::IncomingList,
-                    sc[2],
-                    [sc[0], sc[1]],
-                    Stage::SortTable,
-                );
-                if a + b > 0 {
-                    let cmd = Cmd { mode: Mode::MergeDelete, len_a: a, len_b: b };
-                    segs.push(self.cmd_segment(
-                        cmd,
-                        vec![
-                            Access::seq(prev_stage, prev, a * eb),
-                            Access::seq(Stage::SortTable, sc[2], b * eb),
-                        ],
-                        vec![Access::seq(Stage::SortTable, cur, out * eb)],
-                        0.0,
-                    ));
-                }
-            }
+            let at = Regions {
+                list: (list, Stage::IncomingList),
+                scratch: [sc[0], sc[1]],
+                prev,
+                next: cur,
+                stage: Stage::SortTable,
+                eb,
+            };
+            self.tile_segments(&mut segs, tw, f, &at);
         }
         if segs.is_empty() {
             segs.push(self.empty_segment());
@@ -415,15 +376,23 @@ impl Model<'_> {
         let mut segs = Vec::new();
         let src = self.layout.bg_lists[f % 2] + off * self.eb;
         let dst = self.layout.bg_tables[f % 2] + t as u64 * self.layout.slot;
-        self.conv_sort(
-            &mut segs,
-            tw.background_n as u64,
-            src,
-            Stage::BackgroundSort,
-            dst,
-            [sc[0], sc[1]],
-            Stage::BackgroundSort,
-        );
+        let at = Regions {
+            list: (src, Stage::BackgroundSort),
+            scratch: [sc[0], sc[1]],
+            prev: dst,
+            next: dst,
+            stage: Stage::BackgroundSort,
+            eb: self.eb,
+        };
+        let shape = TileShape {
+            from_scratch: true,
+            list_len: tw.background_n as u64,
+            chunk: self.cfg.engine.chunk as u64,
+            ..TileShape::default()
+        };
+        for step in tile_steps(&shape).iter().flatten() {
+            segs.push(self.step_segment(step, &at, None));
+        }
         if segs.is_empty() {
             segs.push(self.empty_segment());
         }
@@ -566,4 +535,34 @@ fn push_transfer(v: &mut Vec<Access>, stage: Stage, addr: u64, bytes: u64) {
         }
     }
     v.push(Access::records(stage, addr, 1, bytes, bytes));
+}
+
+/// Where the regions of a tile's commands are in the model's memory, and the stage their
+/// traffic is charged to.
+struct Regions {
+    /// The list: its address and stage.
+    list: (u64, Stage),
+    /// The two scratch regions.
+    scratch: [u64; 2],
+    /// The previous table.
+    prev: u64,
+    /// The next table.
+    next: u64,
+    /// The stage of every region but the list.
+    stage: Stage,
+    /// Bytes per entry.
+    eb: u64,
+}
+
+impl Regions {
+    /// The access of `len` entries at entry offset `off` of `region`.
+    fn access(&self, region: TileRegion, off: u64, len: u64) -> Access {
+        let (base, stage) = match region {
+            TileRegion::List => self.list,
+            TileRegion::Scratch(k) => (self.scratch[k], self.stage),
+            TileRegion::Prev => (self.prev, self.stage),
+            TileRegion::Next => (self.next, self.stage),
+        };
+        Access::seq(stage, base + off * self.eb, len * self.eb)
+    }
 }

@@ -12,10 +12,12 @@
 //!   table and every pair (with its subtile bitmap). Compute: the slowest of projection, colour
 //!   and duplication units (measured timing).
 //! - **Sorting** (`sort_cores` agents): per tile, the sorting-core commands of the strategy
-//!   ([`crate::sortcmd`]), each a segment timed by `latency.json`: Neo's DPS (the last pass
-//!   fused with the MSU+ insert/delete merge when `fused_dps_merge`), conventional sorts of the
-//!   incoming lists, or, from scratch, of the whole list; GSCore's hierarchical sort (an
-//!   approximate binning pass, then one on-chip sort per bin).
+//!   ([`crate::sortcmd`]), each a segment timed by `latency.json`: Neo's are golden's tile
+//!   commands (`neo_golden::engine::tile_steps`, as the RTL's sequencer issues them): the
+//!   conventional sort of the incoming list (from scratch, of the whole list), the DPS passes
+//!   and the MSU+ insert/delete merge, the last DPS pass fused with that merge when
+//!   `fused_dps_merge`; GSCore's hierarchical sort (an approximate binning pass, then one
+//!   on-chip sort per bin).
 //! - **Raster** (`raster_cores` agents): per tile, reads the sorted table and gathers the
 //!   features, runs the ITU/SCU pipeline over subtile groups, writes the depth keys and valid
 //!   bits back (Neo) and the tile's pixels.
