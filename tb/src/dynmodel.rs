@@ -45,8 +45,22 @@ const OPT_FAST: &str = "-O3";
 const OPT_SLOW: &str = "-O1";
 /// C++ optimisation of the per-cycle code of a model built for short runs
 /// ([`DynModel::build_for_short_runs`]): large datapaths whose benches simulate seconds compile
-/// in about half the time.
+/// in about half the time. `NEO_TB_QUICK_OPT` overrides it ([`quick_opt`]).
 const OPT_QUICK: &str = "-O1";
+
+/// The optimisation of the models built for short runs: `$NEO_TB_QUICK_OPT` (`-O0` to `-O3`,
+/// `-Os`; `scripts/mutate-check` sets `-O0`: its mutants' models run until their first
+/// mismatch, so their compile time is what counts), else [`OPT_QUICK`]. Part of the cache key.
+fn quick_opt() -> Result<&'static str, String> {
+    match std::env::var("NEO_TB_QUICK_OPT") {
+        Err(_) => Ok(OPT_QUICK),
+        Ok(v) if v.is_empty() => Ok(OPT_QUICK),
+        Ok(v) => ["-O0", "-O1", "-O2", "-O3", "-Os"]
+            .into_iter()
+            .find(|o| *o == v)
+            .ok_or_else(|| format!("NEO_TB_QUICK_OPT: '{v}' is not one of -O0, -O1, -O2, -O3, -Os")),
+    }
+}
 
 /// What a build did: where the library is, whether it came from the cache, how long it took.
 #[derive(Clone, Debug)]
@@ -209,7 +223,7 @@ impl DynModel {
         format: Option<WaveFormat>,
     ) -> Result<(DynModel, BuildInfo), String> {
         let flavour = Flavour::for_run(format);
-        let info = build_library(iface, files, vlt, &flavour, 1, OPT_QUICK)?;
+        let info = build_library(iface, files, vlt, &flavour, 1, quick_opt()?)?;
         let model = DynModel::load(iface, &info.library, flavour.trace)?;
         Ok((model, info))
     }
@@ -680,8 +694,8 @@ fn compile(
         fast.iter().map(|c| (obj.join(format!("{c}.cpp")), opt_fast)).collect();
     units.extend(slow.iter().map(|c| (obj.join(format!("{c}.cpp")), OPT_SLOW)));
     units.push((shim, OPT_FAST));
-    if opt_fast == OPT_QUICK {
-        units = unity_units(&obj, &units)?;
+    if opt_fast != OPT_FAST {
+        units = unity_units(&obj, &units, opt_fast)?;
     }
     let t1 = Instant::now();
     let runtime = runtime_objects(v, cxx, flavour)?;
@@ -709,12 +723,16 @@ fn compile(
     ))
 }
 
-/// The translation units of a model built for short runs ([`OPT_QUICK`]): `units` included into
+/// The translation units of a model built for short runs ([`quick_opt`]): `units` included into
 /// one `unity<k>.cpp` per core (at most 4; largest files first into the smallest group), all at
-/// [`OPT_QUICK`], as Verilator's own makefile does without parallel builds (`V<top>__ALL.cpp`).
+/// `opt`, as Verilator's own makefile does without parallel builds (`V<top>__ALL.cpp`).
 /// Each generated file includes Verilator's headers, whose parsing dominates a small model's
 /// compile: the BSU's 8 files take 58 s of CPU one by one and 10 s as one unit.
-fn unity_units(obj: &Path, units: &[(PathBuf, &str)]) -> Result<Vec<(PathBuf, &'static str)>, String> {
+fn unity_units(
+    obj: &Path,
+    units: &[(PathBuf, &str)],
+    opt: &'static str,
+) -> Result<Vec<(PathBuf, &'static str)>, String> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()).min(4);
     let mut sized: Vec<(u64, &PathBuf)> =
         units.iter().map(|(p, _)| (fs::metadata(p).map_or(0, |m| m.len()), p)).collect();
@@ -728,7 +746,7 @@ fn unity_units(obj: &Path, units: &[(PathBuf, &str)]) -> Result<Vec<(PathBuf, &'
     groups
         .iter()
         .enumerate()
-        .map(|(k, (_, text))| Ok((write(&obj.join(format!("unity{k}.cpp")), text)?, OPT_QUICK)))
+        .map(|(k, (_, text))| Ok((write(&obj.join(format!("unity{k}.cpp")), text)?, opt)))
         .collect()
 }
 
