@@ -39,26 +39,27 @@ mod cosim {
         assert_eq!(msu_ii, 1, "the MSU+ emits an entry every cycle at full rate");
     }
 
+    /// How a stale report is brought up to date.
+    const REGENERATE: &str =
+        "regenerate it with\n  NEO_UPDATE_REPORTS=1 cargo test -p neo-tb --release --test latency_report";
+
     /// The Sorting Core's cycles alone against the checked-in report (seconds, where the whole
     /// report takes minutes): `scripts/mutate-check`'s timing-only mutants of the core run this.
     #[test]
     fn the_sort_core_timing_is_current() {
         let Some(path) = report_path() else { return };
-        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let current = neo_golden::formats::latency::LatencyReport::from_json_str(&text, &path)
-            .unwrap_or_else(|e| panic!("{e}"));
+        let current =
+            neo_golden::formats::latency::LatencyReport::from_file(&path).unwrap_or_else(|e| panic!("{e}"));
         let (overhead, sort_core) = neo_tb::latency::sort_core_timing(&neo_tb::config());
-        let regenerate =
-            "regenerate it with\n  NEO_UPDATE_REPORTS=1 cargo test -p neo-tb --release --test latency_report";
         assert_eq!(
             overhead,
             current.units.neo_sort_core.command_overhead,
-            "{}: units.neo_sort_core.command_overhead is out of date with the RTL; {regenerate}",
+            "{}: units.neo_sort_core.command_overhead is out of date with the RTL; {REGENERATE}",
             path.display()
         );
         assert!(
             sort_core == current.sort_core,
-            "{}: sort_core is out of date with the RTL (measured: {sort_core:?}); {regenerate}",
+            "{}: sort_core is out of date with the RTL (measured: {sort_core:?}); {REGENERATE}",
             path.display()
         );
     }
@@ -79,8 +80,7 @@ mod cosim {
         let current = std::fs::read_to_string(&path).unwrap_or_default();
         assert!(
             current == text,
-            "{} is out of date with the RTL (fresh measurement in {}); regenerate it with\n  \
-             NEO_UPDATE_REPORTS=1 cargo test -p neo-tb --release --test latency_report",
+            "{} is out of date with the RTL (fresh measurement in {}); {REGENERATE}",
             path.display(),
             tmp.into_temp_path().keep().unwrap().display()
         );

@@ -242,23 +242,12 @@ impl Model<'_> {
         }
     }
 
-    /// The segments of Neo's sort of tile `tw` of frame `f` at `at`: golden's commands for
-    /// the tile ([`tile_steps`]), the last DPS pass fused with the merge when the configuration
-    /// says so (`fused_dps_merge`).
-    fn tile_segments(&self, segs: &mut Vec<Segment>, tw: &TileWork, f: usize, at: &Regions) {
-        let shape = TileShape {
-            from_scratch: tw.from_scratch,
-            list_len: tw.sort_n as u64,
-            prev_len: tw.merge_a as u64,
-            dps_passes: tw.dps_passes as u64,
-            frame: f as u64,
-            chunk: self.cfg.engine.chunk as u64,
-            dps_chunk: self.dps_chunk(tw),
-        };
-        // The merge writes what survives the deletions and the capacity cut.
-        let out = (tw.merge_out - tw.merge_out.min(tw.dropped_capacity)) as u64;
-        let mut stages = tile_steps(&shape);
-        let reuse = !tw.from_scratch && shape.dps_passes > 0 && shape.prev_len > 0;
+    /// The segments of golden's commands for a tile of `shape` ([`tile_steps`]) at `at`, the
+    /// `MERGE_DELETE` writing `out` entries; the last DPS pass fused with the merge when the
+    /// configuration says so (`fused_dps_merge`).
+    fn tile_segments(&self, segs: &mut Vec<Segment>, shape: &TileShape, at: &Regions, out: u64) {
+        let mut stages = tile_steps(shape);
+        let reuse = !shape.from_scratch && shape.dps_passes > 0 && shape.prev_len > 0;
         let tail = if reuse && self.cfg.neo.fused_dps_merge {
             stages.split_off(stages.len() - 2)
         } else {
@@ -302,7 +291,18 @@ impl Model<'_> {
                 stage: Stage::SortTable,
                 eb,
             };
-            self.tile_segments(&mut segs, tw, f, &at);
+            let shape = TileShape {
+                from_scratch: tw.from_scratch,
+                list_len: tw.sort_n as u64,
+                prev_len: tw.merge_a as u64,
+                dps_passes: tw.dps_passes as u64,
+                frame: f as u64,
+                chunk: self.cfg.engine.chunk as u64,
+                dps_chunk: self.dps_chunk(tw),
+            };
+            // The merge writes what survives the deletions and the capacity cut.
+            let out = (tw.merge_out - tw.merge_out.min(tw.dropped_capacity)) as u64;
+            self.tile_segments(&mut segs, &shape, &at, out);
         }
         if segs.is_empty() {
             segs.push(self.empty_segment());
@@ -390,9 +390,8 @@ impl Model<'_> {
             chunk: self.cfg.engine.chunk as u64,
             ..TileShape::default()
         };
-        for step in tile_steps(&shape).iter().flatten() {
-            segs.push(self.step_segment(step, &at, None));
-        }
+        // A sort from scratch: no merge, so nothing is written but the sorted list.
+        self.tile_segments(&mut segs, &shape, &at, 0);
         if segs.is_empty() {
             segs.push(self.empty_segment());
         }
