@@ -43,22 +43,26 @@ const DYN_VERSION: u32 = 1;
 const OPT_FAST: &str = "-O3";
 /// C++ optimisation of the construction-time code.
 const OPT_SLOW: &str = "-O1";
+/// C++ optimisation of the construction-time code (Verilator's `__Slow` files: constructor,
+/// reset values, initial and settle evaluation, run once per model) of a model built for short
+/// runs: 44% of the CI engine's C++, 47 CPU s at `-O1`, 13 s at `-O0`.
+const OPT_QUICK_SLOW: &str = "-O0";
 /// C++ optimisation of the per-cycle code of a model built for short runs
 /// ([`DynModel::build_for_short_runs`]): large datapaths whose benches simulate seconds compile
 /// in about half the time. `NEO_TB_QUICK_OPT` overrides it ([`quick_opt`]).
 const OPT_QUICK: &str = "-O1";
 
 /// The optimisation of the models built for short runs: `$NEO_TB_QUICK_OPT` (`-O0` to `-O3`,
-/// `-Os`; `scripts/mutate-check` sets `-O0`: its mutants' models run until their first
+/// `-Og`, `-Os`; `scripts/mutate-check` sets `-O0`: its mutants' models run until their first
 /// mismatch, so their compile time is what counts), else [`OPT_QUICK`]. Part of the cache key.
 fn quick_opt() -> Result<&'static str, String> {
     match std::env::var("NEO_TB_QUICK_OPT") {
         Err(_) => Ok(OPT_QUICK),
         Ok(v) if v.is_empty() => Ok(OPT_QUICK),
-        Ok(v) => ["-O0", "-O1", "-O2", "-O3", "-Os"]
+        Ok(v) => ["-O0", "-O1", "-O2", "-O3", "-Og", "-Os"]
             .into_iter()
             .find(|o| *o == v)
-            .ok_or_else(|| format!("NEO_TB_QUICK_OPT: '{v}' is not one of -O0, -O1, -O2, -O3, -Os")),
+            .ok_or_else(|| format!("NEO_TB_QUICK_OPT: '{v}' is not one of -O0, -O1, -O2, -O3, -Og, -Os")),
     }
 }
 
@@ -212,8 +216,9 @@ impl DynModel {
     }
 
     /// [`DynModel::build_traced`] with the per-cycle code compiled for build time rather than
-    /// speed (`-O1`, the generated files compiled as one unity translation unit per core:
-    /// `unity_units`; its own cache entry): for the preprocessing datapaths, whose C++ takes
+    /// speed (`-O1`, the construction-time code at `-O0`, the generated files compiled as one
+    /// unity translation unit per core and level: `unity_units`; its own cache entry): for the
+    /// preprocessing datapaths, whose C++ takes
     /// minutes at `-O3` and whose benches run seconds, the other configurations' unit models and
     /// the models of `$NEO_HDL_DIR`'s Verilog ([`crate::hdl_dir`]).
     pub fn build_for_short_runs(
@@ -639,7 +644,8 @@ fn library_key(k: LibraryKey<'_>, verilator: &str, cxx: &str) -> cache::Key {
     }
     key.add("verilator", verilator.as_bytes());
     key.add("compiler", cxx.as_bytes());
-    key.add("dyn", format!("{DYN_VERSION} {} {OPT_SLOW} {}", k.opt_fast, shim::SHIM_VERSION).as_bytes());
+    let opt_slow = if k.opt_fast == OPT_FAST { OPT_SLOW } else { OPT_QUICK_SLOW };
+    key.add("dyn", format!("{DYN_VERSION} {} {opt_slow} {}", k.opt_fast, shim::SHIM_VERSION).as_bytes());
     key.add("shim.cpp", k.cpp.as_bytes());
     key
 }
@@ -690,13 +696,16 @@ fn compile(
     let (fast, slow) = verilator::verilate_with(v, flags, top, &paths, &obj)?;
     let verilate_s = t0.elapsed().as_secs_f64();
     let shim = write(&dir.join("shim.cpp"), cpp)?;
-    let mut units: Vec<(PathBuf, &str)> =
-        fast.iter().map(|c| (obj.join(format!("{c}.cpp")), opt_fast)).collect();
-    units.extend(slow.iter().map(|c| (obj.join(format!("{c}.cpp")), OPT_SLOW)));
-    units.push((shim, OPT_FAST));
-    if opt_fast != OPT_FAST {
-        units = unity_units(&obj, &units, opt_fast)?;
-    }
+    let fast: Vec<PathBuf> = fast.iter().map(|c| obj.join(format!("{c}.cpp"))).chain([shim]).collect();
+    let slow: Vec<PathBuf> = slow.iter().map(|c| obj.join(format!("{c}.cpp"))).collect();
+    let units: Vec<(PathBuf, &str)> = if opt_fast == OPT_FAST {
+        let fast = fast.into_iter().map(|p| (p, OPT_FAST));
+        fast.chain(slow.into_iter().map(|p| (p, OPT_SLOW))).collect()
+    } else {
+        let mut units = unity_units(&obj, "unity", &fast, opt_fast)?;
+        units.extend(unity_units(&obj, "unity-slow", &slow, OPT_QUICK_SLOW)?);
+        units
+    };
     let t1 = Instant::now();
     let runtime = runtime_objects(v, cxx, flavour)?;
     let objects = compile_all(v, cxx, flavour.defines, &obj, &units)?;
@@ -723,19 +732,23 @@ fn compile(
     ))
 }
 
-/// The translation units of a model built for short runs ([`quick_opt`]): `units` included into
-/// one `unity<k>.cpp` per core (at most 4; largest files first into the smallest group), all at
-/// `opt`, as Verilator's own makefile does without parallel builds (`V<top>__ALL.cpp`).
+/// The translation units of a model built for short runs ([`quick_opt`]): the `files` included
+/// into one `<stem><k>.cpp` per core (at most 4; largest files first into the smallest group),
+/// all at `opt`, as Verilator's own makefile does without parallel builds (`V<top>__ALL.cpp`).
 /// Each generated file includes Verilator's headers, whose parsing dominates a small model's
 /// compile: the BSU's 8 files take 58 s of CPU one by one and 10 s as one unit.
 fn unity_units(
     obj: &Path,
-    units: &[(PathBuf, &str)],
+    stem: &str,
+    files: &[PathBuf],
     opt: &'static str,
 ) -> Result<Vec<(PathBuf, &'static str)>, String> {
+    if files.is_empty() {
+        return Ok(Vec::new());
+    }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()).min(4);
     let mut sized: Vec<(u64, &PathBuf)> =
-        units.iter().map(|(p, _)| (fs::metadata(p).map_or(0, |m| m.len()), p)).collect();
+        files.iter().map(|p| (fs::metadata(p).map_or(0, |m| m.len()), p)).collect();
     sized.sort_by_key(|s| std::cmp::Reverse(s.0));
     let mut groups: Vec<(u64, String)> = vec![(0, String::new()); cores.min(sized.len()).max(1)];
     for (size, path) in sized {
@@ -746,7 +759,7 @@ fn unity_units(
     groups
         .iter()
         .enumerate()
-        .map(|(k, (_, text))| Ok((write(&obj.join(format!("unity{k}.cpp")), text)?, opt)))
+        .map(|(k, (_, text))| Ok((write(&obj.join(format!("{stem}{k}.cpp")), text)?, opt)))
         .collect()
 }
 
