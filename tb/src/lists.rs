@@ -14,10 +14,29 @@ use neo_gen::EngineConfig;
 use neo_golden::engine::memory::{Memory, DESCRIPTOR_BYTES, ENTRY_BYTES};
 use neo_golden::sort::SortEntry;
 
-/// Byte address of tile 0's list in the bench memory.
-pub const LIST_BASE: u64 = 0x0100_0000;
-/// Byte address of tile 0's descriptor.
-pub const DESC_BASE: u64 = 0x0080_0000;
+/// Where a run's lists and descriptors start: drawn per run over the whole 32-bit address space
+/// (the memory is sparse), one region in each half, so every address bit of the writer changes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bases {
+    /// Byte address of tile 0's list (64-byte aligned: a line of 8 entries).
+    pub list: u64,
+    /// Byte address of tile 0's descriptor (32-byte aligned).
+    pub desc: u64,
+}
+
+impl Bases {
+    /// Random bases for `tiles` tiles of `cfg`: the lists in one half of the address space, the
+    /// descriptors in the other, each region inside its half.
+    pub fn random(cfg: &EngineConfig, rng: &mut Rng, tiles: u64) -> Bases {
+        const HALF: u64 = 1 << 31;
+        let list_bytes = neo_golden::engine::pre::list_addr(cfg, 0, tiles);
+        let desc_bytes = tiles * DESCRIPTOR_BYTES;
+        let (list_half, desc_half) = if rng.percent(50) { (0, HALF) } else { (HALF, 0) };
+        let list = list_half + (rng.below(HALF - list_bytes) & !63);
+        let desc = desc_half + (rng.below(HALF - desc_bytes) & !31);
+        Bases { list, desc }
+    }
+}
 /// What untouched descriptor bytes hold.
 const CANARY: u8 = 0x5a;
 
@@ -105,11 +124,12 @@ impl ListsBench {
     ) -> ListsRun {
         let mut rng = Rng::new(check.seed);
         let tiles = u64::from(grid[0] * grid[1]);
-        let mut mem = AxiMemory::new(1, canaries(tiles), timing, rng.next_u64());
+        let bases = Bases::random(&self.cfg, &mut rng, tiles);
+        let mut mem = AxiMemory::new(1, canaries(bases, tiles), timing, rng.next_u64());
         let key_port = self.model.port("hit_key_i").expect("hit_key_i");
         self.axi.set_subordinate(&mut self.model, &SubordinateSignals::default());
         for (k, v) in
-            [(0, 0), (1, 0), (3, tiles), (4, u64::from(grid[0])), (5, LIST_BASE), (6, DESC_BASE), (7, 0)]
+            [(0, 0), (1, 0), (3, tiles), (4, u64::from(grid[0])), (5, bases.list), (6, bases.desc), (7, 0)]
         {
             self.set(k, v);
         }
@@ -155,21 +175,29 @@ impl ListsBench {
         }
         let cycles = self.model.cycle() - start;
         check.value(cycles, "AXI writes open after busy_o fell", 0, chk.in_flight().1 as u64);
-        check_lists(&self.cfg, grid, hits, mem.memory(), check, cycles);
+        check_lists(&self.cfg, bases, grid, hits, mem.memory(), check, cycles);
         ListsRun { hits: hits.len() as u64, cycles }
     }
 }
 
-/// The bench memory: descriptors of `tiles` full of canaries (the lists are checked entry by
-/// entry, so they start empty).
-fn canaries(tiles: u64) -> Memory {
+/// The bench memory: descriptors of `tiles` at `bases` full of canaries (the lists are checked
+/// entry by entry, so they start empty).
+fn canaries(bases: Bases, tiles: u64) -> Memory {
     let mut mem = Memory::new();
-    mem.write(DESC_BASE, &vec![CANARY; (tiles * DESCRIPTOR_BYTES) as usize]);
+    mem.write(bases.desc, &vec![CANARY; (tiles * DESCRIPTOR_BYTES) as usize]);
     mem
 }
 
-/// Checks every tile's list and descriptor against `hits`.
-fn check_lists(cfg: &EngineConfig, grid: [u32; 2], hits: &[Hit], mem: &Memory, check: &Checker, cycle: u64) {
+/// Checks every tile's list and descriptor at `bases` against `hits`.
+fn check_lists(
+    cfg: &EngineConfig,
+    bases: Bases,
+    grid: [u32; 2],
+    hits: &[Hit],
+    mem: &Memory,
+    check: &Checker,
+    cycle: u64,
+) {
     let fmt = cfg.format();
     let cap = cfg.table_capacity;
     let tiles = (grid[0] * grid[1]) as usize;
@@ -178,7 +206,7 @@ fn check_lists(cfg: &EngineConfig, grid: [u32; 2], hits: &[Hit], mem: &Memory, c
         lists[(h.tile[1] * grid[0] + h.tile[0]) as usize].push(SortEntry::new(h.key, h.id));
     }
     for (t, want) in lists.iter().enumerate() {
-        let base = neo_golden::engine::pre::list_addr(cfg, LIST_BASE, t as u64);
+        let base = neo_golden::engine::pre::list_addr(cfg, bases.list, t as u64);
         let kept = want.len().min(cap);
         let line_end = kept.div_ceil(8) * 8;
         for k in 0..line_end {
@@ -186,7 +214,7 @@ fn check_lists(cfg: &EngineConfig, grid: [u32; 2], hits: &[Hit], mem: &Memory, c
             let w = want.get(k).filter(|_| k < kept).map_or(0, |e| fmt.pack(e));
             check.value(cycle, &format!("tile {t} list entry {k}"), w, got);
         }
-        let desc = DESC_BASE + DESCRIPTOR_BYTES * t as u64;
+        let desc = bases.desc + DESCRIPTOR_BYTES * t as u64;
         let mut b = [0u8; DESCRIPTOR_BYTES as usize];
         mem.read(desc, &mut b);
         let len = u32::from_le_bytes([b[20], b[21], b[22], b[23]]);
