@@ -52,6 +52,17 @@ const OPT_QUICK_SLOW: &str = "-O0";
 /// in about half the time. `NEO_TB_QUICK_OPT` overrides it ([`quick_opt`]).
 const OPT_QUICK: &str = "-O1";
 
+/// The optimisation of the construction-time code of a model whose per-cycle code is at
+/// `opt_fast`: [`OPT_SLOW`] beside [`OPT_FAST`], else (a model built for short runs)
+/// [`OPT_QUICK_SLOW`]. Part of the cache key.
+fn slow_opt(opt_fast: &str) -> &'static str {
+    if opt_fast == OPT_FAST {
+        OPT_SLOW
+    } else {
+        OPT_QUICK_SLOW
+    }
+}
+
 /// The optimisation of the models built for short runs: `$NEO_TB_QUICK_OPT` (`-O0` to `-O3`,
 /// `-Og`, `-Os`; `scripts/mutate-check` sets `-O0`: its mutants' models run until their first
 /// mismatch, so their compile time is what counts), else [`OPT_QUICK`]. Part of the cache key.
@@ -644,7 +655,7 @@ fn library_key(k: LibraryKey<'_>, verilator: &str, cxx: &str) -> cache::Key {
     }
     key.add("verilator", verilator.as_bytes());
     key.add("compiler", cxx.as_bytes());
-    let opt_slow = if k.opt_fast == OPT_FAST { OPT_SLOW } else { OPT_QUICK_SLOW };
+    let opt_slow = slow_opt(k.opt_fast);
     key.add("dyn", format!("{DYN_VERSION} {} {opt_slow} {}", k.opt_fast, shim::SHIM_VERSION).as_bytes());
     key.add("shim.cpp", k.cpp.as_bytes());
     key
@@ -700,10 +711,10 @@ fn compile(
     let slow: Vec<PathBuf> = slow.iter().map(|c| obj.join(format!("{c}.cpp"))).collect();
     let units: Vec<(PathBuf, &str)> = if opt_fast == OPT_FAST {
         let fast = fast.into_iter().map(|p| (p, OPT_FAST));
-        fast.chain(slow.into_iter().map(|p| (p, OPT_SLOW))).collect()
+        fast.chain(slow.into_iter().map(|p| (p, slow_opt(opt_fast)))).collect()
     } else {
         let mut units = unity_units(&obj, "unity", &fast, opt_fast)?;
-        units.extend(unity_units(&obj, "unity-slow", &slow, OPT_QUICK_SLOW)?);
+        units.extend(unity_units(&obj, "unity-slow", &slow, slow_opt(opt_fast))?);
         units
     };
     let t1 = Instant::now();

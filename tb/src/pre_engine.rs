@@ -120,8 +120,11 @@ impl PreEngineBench {
         let w = wrapper(cfg);
         files.push((format!("{WRAPPER}.v"), w.to_verilog()));
         let iface = w.interface();
-        let own = [format!("{NAME}.v"), format!("{WRAPPER}.v")];
-        let vlt = crate::coverage::only_in(vlt, &files, &[own[0].as_str(), own[1].as_str()]);
+        let vlt = crate::coverage::only_in(
+            vlt,
+            &files,
+            &[format!("{NAME}.v").as_str(), format!("{WRAPPER}.v").as_str()],
+        );
         let (model, _) = DynModel::build_for_short_runs(&iface, &files, Some(&vlt), None)?;
         let ports = (0..managers(cfg))
             .map(|q| AxiBinding::bind(&model, &format!("m{q}_axi_"), true))
