@@ -51,7 +51,9 @@ over every bench that instantiates it:
   hit at least once.
 
 Holes are listed below the table, each justified by a waiver in `tb/coverage-waivers.txt` or
-marked **open**.
+marked **open**; the bits of `neo_pre_project` and `neo_pre_color` that the datapath's known-bits
+analysis proves constant (`gen/src/units/pre/known_bits.rs`, checked against golden on random and
+edge inputs) are justified automatically, each with the analysis' reason.
 ";
 
 /// Whether the static models (`crate::models`) of this build write coverage (`NEO_COVERAGE=1`
@@ -357,6 +359,58 @@ pub fn parse_waivers(text: &str) -> Result<Vec<Waiver>, String> {
     Ok(out)
 }
 
+/// The reason text of [`known_bits_waivers`].
+pub const KNOWN_BITS_REASON: &str =
+    "constant by the datapath's known-bits analysis (gen/src/units/pre/known_bits.rs)";
+
+/// The Preprocessing Engine's datapath modules (`neo_pre_project`, `neo_pre_color`) of `cfg`,
+/// each with its module text.
+pub fn pre_datapaths(cfg: &neo_gen::EngineConfig) -> Vec<(String, String)> {
+    use neo_gen::units::pre;
+    vec![
+        (pre::PROJECT_NAME.to_string(), pre::project_module(cfg).to_verilog()),
+        (pre::COLOR_NAME.to_string(), pre::color_module(cfg).to_verilog()),
+    ]
+}
+
+/// Automatic toggle waivers of the Preprocessing Engine's datapath modules for `cfg`: every
+/// bit the known-bits analysis proves constant (`Datapath::constant_bits`: node nets, delay
+/// taps and shift registers, comparator outputs, output ports), one `net[hi:lo]` waiver per
+/// run of constant bits, with the analysis' reason.
+pub fn known_bits_waivers(cfg: &neo_gen::EngineConfig) -> Vec<Waiver> {
+    use neo_gen::units::pre::{self, datapath::Datapath, library::PreLibrary};
+    let project = neo_golden::hwpre::project::project_graph(&pre::project_params(cfg));
+    let color = neo_golden::hwpre::color::color_graph(&cfg.feature_format().color);
+    let mut out = Vec::new();
+    let contracts = [
+        (pre::PROJECT_NAME, &project, pre::project_contracts(cfg)),
+        (pre::COLOR_NAME, &color, pre::color_contracts()),
+    ];
+    for (module, graph, contracts) in contracts {
+        let datapath = Datapath::new(graph, &PreLibrary);
+        for net in datapath.unread_compare_nets() {
+            let hi = if net.contains("_cmp_m") { 31 } else { 0 };
+            out.push(Waiver {
+                module: module.into(),
+                kind: "toggle".into(),
+                pattern: format!("{net}[{hi}:0]"),
+                reason: "a comparator output no logic reads (the node uses another; reduced into the unused_cmp lint sink)".into(),
+            });
+        }
+        for c in datapath.constant_bits(&contracts) {
+            for (hi, lo) in &c.ranges {
+                out.push(Waiver {
+                    module: module.into(),
+                    kind: "toggle".into(),
+                    pattern: format!("{}[{hi}:{lo}]", c.net),
+                    reason: format!("{KNOWN_BITS_REASON}: {}", c.reason),
+                });
+            }
+        }
+    }
+    out
+}
+
 /// The kind name waivers use for `kind`.
 fn waiver_kind(kind: Kind) -> &'static str {
     match kind {
@@ -378,7 +432,8 @@ pub fn waiver_for<'a>(
             && w.kind == waiver_kind(p.kind)
             && match (p.kind, bit_range(&w.pattern)) {
                 (Kind::Toggle, Some((name, hi, lo))) => {
-                    glob(name, signal_of(&p.what)) && bit_of(&p.what).is_some_and(|b| (lo..=hi).contains(&b))
+                    // A one-bit signal's point has no index: its bit is bit 0.
+                    glob(name, signal_of(&p.what)) && (lo..=hi).contains(&bit_of(&p.what).unwrap_or(0))
                 }
                 _ => p.what.contains(&w.pattern) || (w.kind == "line" && source.contains(&w.pattern)),
             }

@@ -31,6 +31,173 @@ pub const PREV_BASE: u64 = 0x0c00_0000;
 /// What the words around the lane's range hold (they must keep it).
 const CANARY: u8 = 0xa5;
 
+/// Where a lane run's arrays sit in the 32-bit address space, and the id of baked Gaussian 0
+/// (the lane's ids are `id0 + k`): every address the lane forms wraps modulo 2^32, as the
+/// RTL's 32-bit sums do, so the bench memory is written and read modulo 2^32 too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LanePlacement {
+    /// Id of baked Gaussian 0.
+    pub id0: u32,
+    /// `geo_base_i`: byte address of the range's first geometry record (4-byte aligned).
+    pub geo: u32,
+    /// `sh_base_i`: byte address of id 0's SH record (4-byte aligned).
+    pub sh: u32,
+    /// `feat_base_i`: byte address of id 0's feature word (32-byte aligned).
+    pub feat: u32,
+    /// `prev_base_i`: byte address of id 0's previous feature word (32-byte aligned).
+    pub prev: u32,
+}
+
+impl LanePlacement {
+    /// The fixed map: ids are baked indices, the arrays at [`GEO_BASE`] etc.
+    pub fn fixed(range: LaneRange) -> LanePlacement {
+        let gb = u64::from(geometry_bytes());
+        LanePlacement {
+            id0: 0,
+            geo: (GEO_BASE + gb * u64::from(range.first)) as u32,
+            sh: SH_BASE as u32,
+            feat: FEAT_BASE as u32,
+            prev: PREV_BASE as u32,
+        }
+    }
+
+    /// Two placements for a lane running `range` (at most `max_count` Gaussians from
+    /// `range.first`), each the bitwise complement of the other in every bit above the
+    /// alignment (`first_i` over 31 bits), so that alternating them toggles every base and id
+    /// bit; drawn until the arrays of each (feature words with their canaries) do not overlap.
+    pub fn complement_pair(rng: &mut Rng, range: LaneRange, max_count: u32) -> [LanePlacement; 2] {
+        const ID_MASK: u64 = (1 << 31) - 1;
+        loop {
+            let pair = |r: u64, align: u64| [r & 0xffff_ffff & !(align - 1), !r & 0xffff_ffff & !(align - 1)];
+            let (geo, sh, feat, prev) = (
+                pair(rng.next_u64(), 4),
+                pair(rng.next_u64(), 4),
+                pair(rng.next_u64(), 32),
+                pair(rng.next_u64(), 32),
+            );
+            let r = rng.next_u64() & ID_MASK;
+            let first = [r, !r & ID_MASK];
+            // first_i + count stays below 2^31 (31-bit ids), id0 = first_i - range.first >= 0.
+            let room = u64::from(range.first) + u64::from(max_count) + 1;
+            if first.iter().any(|&f| f < room || f + room > ID_MASK) {
+                continue;
+            }
+            let places: Vec<LanePlacement> = (0..2)
+                .map(|k| LanePlacement {
+                    id0: (first[k] - u64::from(range.first)) as u32,
+                    geo: geo[k] as u32,
+                    sh: sh[k] as u32,
+                    feat: feat[k] as u32,
+                    prev: prev[k] as u32,
+                })
+                .collect();
+            if places.iter().all(|p| p.disjoint(range, max_count)) {
+                return [places[0], places[1]];
+            }
+        }
+    }
+
+    /// Whether the arrays of `range` (up to `max_count` Gaussians, degree-3 SH records) are
+    /// disjoint modulo 2^32.
+    fn disjoint(&self, range: LaneRange, max_count: u32) -> bool {
+        let n = u64::from(max_count) + 2;
+        let first = u64::from(self.id0) + u64::from(range.first);
+        let regions = [
+            (u64::from(self.geo), u64::from(geometry_bytes()) * n),
+            (u64::from(self.sh) + 4 * 48 * first, 4 * 48 * n),
+            (u64::from(self.feat) + FEATURE_BYTES * (first.wrapping_sub(1)), FEATURE_BYTES * (n + 1)),
+            (u64::from(self.prev) + FEATURE_BYTES * first, FEATURE_BYTES * n),
+        ];
+        let ring = |x: u64| x & 0xffff_ffff;
+        regions.iter().enumerate().all(|(i, a)| {
+            regions[i + 1..]
+                .iter()
+                .all(|b| ring(b.0.wrapping_sub(a.0)) >= a.1 && ring(a.0.wrapping_sub(b.0)) >= b.1)
+        })
+    }
+
+    /// Byte address of id `id`'s feature word.
+    fn feat_at(&self, id: u64) -> u64 {
+        (u64::from(self.feat) + FEATURE_BYTES * id) & 0xffff_ffff
+    }
+}
+
+/// Writes `data` at `addr` modulo 2^32 (a write past the top wraps to address 0).
+pub fn write_wrapped(mem: &mut Memory, addr: u64, data: &[u8]) {
+    let a = addr & 0xffff_ffff;
+    let head = data.len().min((0x1_0000_0000 - a) as usize);
+    mem.write(a, &data[..head]);
+    if head < data.len() {
+        mem.write(0, &data[head..]);
+    }
+}
+
+/// Reads `out.len()` bytes at `addr` modulo 2^32.
+pub fn read_wrapped(mem: &Memory, addr: u64, out: &mut [u8]) {
+    let a = addr & 0xffff_ffff;
+    let head = out.len().min((0x1_0000_0000 - a) as usize);
+    mem.read(a, &mut out[..head]);
+    if head < out.len() {
+        mem.read(0, &mut out[head..]);
+    }
+}
+
+/// The signed unit axis nearest to `c` (not axis `not`), and its index.
+fn snap_axis(c: [f64; 3], not: Option<usize>) -> ([f64; 3], usize) {
+    let k = (0..3)
+        .filter(|&k| Some(k) != not)
+        .max_by(|&a, &b| c[a].abs().total_cmp(&c[b].abs()))
+        .expect("an axis");
+    let mut u = [0.0; 3];
+    u[k] = c[k].signum();
+    (u, k)
+}
+
+/// The camera of frame `f` of a per-frame-input sweep from `base` (its position kept): a
+/// random orientation (rolled, so the w2v words of the camera's x and y axes take every sign
+/// and size, and turned up to 45 degrees) except on every fifth frame, the nearest axis-aligned
+/// one (w2v words exactly 0 and 1); a random
+/// focal length (short on the strips); and a resolution whose tile grid runs GRID_X through 10, !10, 10 and GRID_Y
+/// through 8, 1, 8, !8, 8 (10-bit complements: every bit of the 10-bit tile indices rises and
+/// falls) with at most 2048 tiles (`pre_max_tiles`), the other side of a huge grid one tile.
+pub fn sweep_camera(base: &Camera, tile: u32, f: usize, rng: &mut Rng) -> Camera {
+    let gx = [10u32, 1013, 10, 1, 10][f % 5];
+    let gy = [8u32, 1, 8, 1015, 8][f % 5];
+    let size = |g: u32, rng: &mut Rng| g * tile - rng.below(u64::from(tile)) as u32;
+    let (width, height) = (size(gx, rng), size(gy, rng));
+    // A strip of tiles at a short focal length: its Gaussians touch few tiles (cheap frames).
+    let (lo, hi) = if f % 5 % 2 == 1 { (60, 300) } else { (200, 2000) };
+    let focal = rng.range(lo, hi) as f64 + rng.below(1000) as f64 / 1000.0;
+    let aspect = 0.8 + rng.below(400) as f64 / 1000.0;
+    let mut m = base.cam_to_world;
+    if f % 5 == 4 {
+        // The axis-aligned rotation nearest to base's: forward snapped to its largest world
+        // axis, right to the largest of the others, down = forward x right.
+        let (zc, xc) = ([m.z_axis.x, m.z_axis.y, m.z_axis.z], [m.x_axis.x, m.x_axis.y, m.x_axis.z]);
+        let (z, kz) = snap_axis(zc, None);
+        let (x, _) = snap_axis(xc, Some(kz));
+        (m.z_axis.x, m.z_axis.y, m.z_axis.z) = (z[0], z[1], z[2]);
+        (m.x_axis.x, m.x_axis.y, m.x_axis.z) = (x[0], x[1], x[2]);
+        m.y_axis = m.z_axis.cross(m.x_axis);
+    } else {
+        // Roll about the view axis, then a turn of up to 45 degrees about a random axis.
+        let (s, c) = (rng.below(1_000_000) as f64 * std::f64::consts::TAU / 1e6).sin_cos();
+        let (x, y) = (m.x_axis, m.y_axis);
+        (m.x_axis, m.y_axis) = (x * c + y * s, y * c - x * s);
+        let mut k = m.z_axis;
+        let mut u = || rng.below(2_000_001) as f64 / 1e6 - 1.0;
+        (k.x, k.y, k.z) = (u(), u(), u() + 1e-3);
+        let k = k.normalize();
+        let (s, c) = (u() * std::f64::consts::FRAC_PI_4).sin_cos();
+        for col in [&mut m.x_axis, &mut m.y_axis, &mut m.z_axis] {
+            let v = *col;
+            *col = v * c + k.cross(v) * s + k * (k.dot(v) * (1.0 - c));
+        }
+    }
+    let cam_to_world = m;
+    Camera { width, height, fx: focal, fy: focal * aspect, cam_to_world, ..base.clone() }
+}
+
 /// The Gaussians a lane run covers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LaneRange {
@@ -112,19 +279,19 @@ impl LaneBench {
         cam: &Camera,
         all_fresh: bool,
         range: LaneRange,
+        place: &LanePlacement,
     ) -> Result<(), String> {
         let words = CameraWord::values(cam, self.cfg.tile);
         let mut all: Vec<(String, u64)> =
             CameraWord::all().map(|c| (c.port(), u64::from(words[c.0 as usize]))).collect();
         all.push(("degree_i".into(), u64::from(baked.sh_degree)));
-        let gb = u64::from(geometry_bytes());
-        all.push(("geo_base_i".into(), GEO_BASE + gb * u64::from(range.first)));
-        all.push(("sh_base_i".into(), SH_BASE));
+        all.push(("geo_base_i".into(), u64::from(place.geo)));
+        all.push(("sh_base_i".into(), u64::from(place.sh)));
         all.push(("sh_words_i".into(), u64::from(sh_bytes(baked.sh_degree, ShPrecision::F32) / 4)));
-        all.push(("feat_base_i".into(), FEAT_BASE));
-        all.push(("prev_base_i".into(), PREV_BASE));
+        all.push(("feat_base_i".into(), u64::from(place.feat)));
+        all.push(("prev_base_i".into(), u64::from(place.prev)));
         all.push(("all_fresh_i".into(), u64::from(all_fresh)));
-        all.push(("first_i".into(), u64::from(range.first)));
+        all.push(("first_i".into(), u64::from(place.id0 + range.first)));
         all.push(("count_i".into(), u64::from(range.count)));
         for (name, v) in all {
             let p = self.model.port(&name)?;
@@ -141,12 +308,27 @@ impl LaneBench {
         baked: &Baked,
         frame: &LaneFrame,
         range: LaneRange,
+        pace: (AxiTiming, u32),
+        check: &Checker,
+    ) -> LaneRun {
+        self.run_at(baked, frame, range, &LanePlacement::fixed(range), pace, check)
+    }
+
+    /// [`LaneBench::run`] with the arrays and ids of `place`.
+    pub fn run_at(
+        &mut self,
+        baked: &Baked,
+        frame: &LaneFrame,
+        range: LaneRange,
+        place: &LanePlacement,
         (timing, ready_percent): (AxiTiming, u32),
         check: &Checker,
     ) -> LaneRun {
         let mut rng = Rng::new(check.seed);
-        let mut mem = AxiMemory::new(2, scene_memory(baked, range, frame.prev), timing, rng.next_u64());
-        self.program(baked, frame.cam, frame.all_fresh, range).unwrap_or_else(|e| panic!("{NAME}: {e}"));
+        let mem = placed_memory(baked, range, frame.prev, place);
+        let mut mem = AxiMemory::new(2, mem, timing, rng.next_u64());
+        self.program(baked, frame.cam, frame.all_fresh, range, place)
+            .unwrap_or_else(|e| panic!("{NAME}: {e}"));
         for p in &self.ports {
             p.set_subordinate(&mut self.model, &SubordinateSignals::default());
         }
@@ -154,7 +336,7 @@ impl LaneBench {
         self.model.reset();
         let (ro, wo) = (self.cfg.pre_outstanding, self.cfg.axi_outstanding);
         let mut chk = [AxiChecker::new(0, "ma_axi", ro, wo), AxiChecker::new(1, "mb_axi", ro, wo)];
-        let want_hits = expected_hits(&self.cfg, baked, frame, range);
+        let want_hits = expected_hits_at(&self.cfg, baked, frame, range, place.id0);
         let start = self.model.cycle();
         let limit = 2_000 + 200 * u64::from(range.count) + 4 * want_hits.len() as u64;
         let (mut first, mut hits) = (true, 0usize);
@@ -198,9 +380,14 @@ impl LaneBench {
                 (r + w) as u64,
             );
         }
-        let visible = check_feature_words(&self.cfg, baked, frame.cam, range, mem.memory(), check, cycles);
-        let table =
-            (range.first..range.first + range.count).map(|i| word_at(mem.memory(), FEAT_BASE, i)).collect();
+        let visible = check_words_at(&self.cfg, baked, frame.cam, range, place, mem.memory(), check, cycles);
+        let table = (range.first..range.first + range.count)
+            .map(|i| {
+                let mut b = [0u8; FEATURE_BYTES as usize];
+                read_wrapped(mem.memory(), place.feat_at(u64::from(place.id0 + i)), &mut b);
+                b
+            })
+            .collect();
         LaneRun { gaussians: u64::from(range.count), visible, hits: hits as u64, cycles, table }
     }
 
@@ -224,6 +411,17 @@ impl LaneBench {
 /// The incoming hits of `range` in the lane's order (Gaussians in index order, each one's tiles
 /// row-major): golden `hwpre::duplicate::incoming` with the previous entries of `frame`.
 pub fn expected_hits(cfg: &EngineConfig, baked: &Baked, frame: &LaneFrame, range: LaneRange) -> Vec<LaneHit> {
+    expected_hits_at(cfg, baked, frame, range, 0)
+}
+
+/// [`expected_hits`] with baked Gaussian `k`'s id `id0 + k`.
+pub fn expected_hits_at(
+    cfg: &EngineConfig,
+    baked: &Baked,
+    frame: &LaneFrame,
+    range: LaneRange,
+    id0: u32,
+) -> Vec<LaneHit> {
     let (fmt, r) = (cfg.feature_format(), cfg.raster_config());
     let (regs, cam_pos) = camera_registers(frame.cam, cfg.tile);
     let params = ProjectParams { feature: fmt, tile: cfg.tile };
@@ -242,7 +440,7 @@ pub fn expected_hits(cfg: &EngineConfig, baked: &Baked, frame: &LaneFrame, range
         let prev = TouchRecord { entry: prev_entry.as_ref() };
         for h in incoming(&now.entry, prev, &fmt, &r, size, |_, _| frame.all_fresh) {
             if h.incoming {
-                out.push(LaneHit { tile: [h.tile_x, h.tile_y], id: i, key: now.entry.depth_key });
+                out.push(LaneHit { tile: [h.tile_x, h.tile_y], id: id0 + i, key: now.entry.depth_key });
             }
         }
     }
@@ -306,6 +504,82 @@ pub fn check_feature_words(
     for i in around.into_iter().flatten() {
         let got = word_at(u64::from(i));
         check.value(cycle, &format!("canary word {i} outside the lane's range"), 1, u64::from(got == canary));
+    }
+    visible
+}
+
+/// [`scene_memory`] at `place`: the geometry records of `range` from `place.geo`, their SH
+/// records and previous words at their ids' addresses, canaries around the range's feature
+/// words, every address modulo 2^32.
+pub fn placed_memory(baked: &Baked, range: LaneRange, prev: &[[u8; 32]], place: &LanePlacement) -> Memory {
+    assert_eq!(baked.sh_precision, ShPrecision::F32, "the lane reads f32 SH");
+    let mut mem = Memory::new();
+    let (gb, sb) = (u64::from(geometry_bytes()), u64::from(sh_bytes(baked.sh_degree, ShPrecision::F32)));
+    let (words, first) = ((sb / 4) as usize, u64::from(place.id0) + u64::from(range.first));
+    for (j, k) in (range.first..range.first + range.count).enumerate() {
+        let g: Vec<u8> = baked.geometry[k as usize].to_le_bytes().into_iter().collect();
+        write_wrapped(&mut mem, u64::from(place.geo) + gb * j as u64, &g);
+        let id = first + j as u64;
+        let sh: Vec<u8> =
+            baked.sh[k as usize * words..][..words].iter().flat_map(|w| w.to_le_bytes()).collect();
+        write_wrapped(&mut mem, u64::from(place.sh) + sb * id, &sh);
+        if let Some(w) = prev.get(j) {
+            write_wrapped(&mut mem, u64::from(place.prev) + FEATURE_BYTES * id, w);
+        }
+    }
+    let canary = [CANARY; FEATURE_BYTES as usize];
+    write_wrapped(&mut mem, place.feat_at(first.wrapping_sub(1)), &canary);
+    write_wrapped(&mut mem, place.feat_at(first + u64::from(range.count)), &canary);
+    mem
+}
+
+/// [`check_feature_words`] at `place` (baked Gaussian `k`'s word at id `place.id0 + k`).
+#[allow(clippy::too_many_arguments)]
+pub fn check_words_at(
+    cfg: &EngineConfig,
+    baked: &Baked,
+    cam: &Camera,
+    range: LaneRange,
+    place: &LanePlacement,
+    mem: &Memory,
+    check: &Checker,
+    cycle: u64,
+) -> u64 {
+    let fmt = cfg.feature_format();
+    let (regs, cam_pos) = camera_registers(cam, cfg.tile);
+    let params = ProjectParams { feature: fmt, tile: cfg.tile };
+    let word_at = |id: u64| {
+        let mut b = [0u8; FEATURE_BYTES as usize];
+        read_wrapped(mem, place.feat_at(id), &mut b);
+        b
+    };
+    let id0 = u64::from(place.id0);
+    let mut visible = 0;
+    for i in range.first..range.first + range.count {
+        let want = preprocess_one(baked, &regs, cam_pos, &params, &DepthKeyCodec::Fp16, i as usize);
+        visible += u64::from(want.is_some());
+        let want_bytes = feature_to_bytes(&fmt, want.as_ref().map(|h| &h.entry));
+        let got = word_at(id0 + u64::from(i));
+        if got != want_bytes {
+            let show = |b: &[u8; 32]| format!("{:?} (0x{})", feature_from_bytes(&fmt, b), hex(b));
+            check.fail(
+                cycle,
+                &format!("feature word of Gaussian {i} (id {})", id0 + u64::from(i)),
+                &show(&want_bytes),
+                &show(&got),
+            );
+        }
+    }
+    let canary = [CANARY; FEATURE_BYTES as usize];
+    let first = id0 + u64::from(range.first);
+    for id in [first.wrapping_sub(1), first + u64::from(range.count)] {
+        let got = word_at(id);
+        check.value(
+            cycle,
+            &format!("canary word of id {id} outside the lane's range"),
+            1,
+            u64::from(got == canary),
+        );
     }
     visible
 }

@@ -230,13 +230,16 @@ fn check_lists(
     }
 }
 
-/// `n` random hits on `grid`, each tile's ids distinct (an id enters a tile once).
+/// `n` random hits on `grid`, each tile's ids distinct (an id enters a tile once): hit `k`'s id
+/// is `k` in its low 13 bits (`n` is at most 8192) under random upper bits of the id width.
 pub fn random_hits(cfg: &EngineConfig, rng: &mut Rng, grid: [u32; 2], n: usize) -> Vec<Hit> {
+    assert!(n <= 1 << 13, "{n} hits: ids are k in their low 13 bits");
     let keys = 1u64 << cfg.key_bits;
+    let ids = (1u64 << cfg.id_bits) - 1;
     (0..n)
         .map(|k| Hit {
             tile: [rng.below(u64::from(grid[0])) as u32, rng.below(u64::from(grid[1])) as u32],
-            id: k as u32,
+            id: ((rng.next_u64() & ids & !0x1fff) | k as u64) as u32,
             key: rng.below(keys) as u32,
         })
         .collect()

@@ -109,3 +109,123 @@ pub fn measure(unit: &mut UnitBench, items: &[Vec<u32>], check: &Checker) -> Dat
         settle: unit.settle as u64,
     }
 }
+
+/// Resolutions of [`random_camera`]: tiny images, the common ones, an odd one, and one whose
+/// tile grid is the largest the 10-bit tile indices allow (1023 x 1023 tiles of 64 pixels).
+const CAMERA_RESOLUTIONS: [(u32, u32); 8] =
+    [(3, 2), (64, 48), (640, 480), (1280, 720), (2560, 1440), (3840, 2160), (1001, 77), (65_472, 65_472)];
+
+/// A magnitude between `10^lo` and `10^hi`, log-uniform.
+fn log_uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    10f64.powf(lo + (hi - lo) * rng.below(1 << 20) as f64 / (1 << 20) as f64)
+}
+
+/// A unit vector in a uniformly random direction.
+fn random_direction(rng: &mut Rng) -> glam::DVec3 {
+    loop {
+        let mut c = || rng.below(2_000_001) as f64 / 1e6 - 1.0;
+        let v = glam::DVec3::new(c(), c(), c());
+        if (1e-3..=1.0).contains(&v.length_squared()) {
+            return v.normalize();
+        }
+    }
+}
+
+/// A signed axis of world space, uniformly.
+fn random_axis(rng: &mut Rng) -> glam::DVec3 {
+    let mut v = glam::DVec3::ZERO;
+    v[rng.below(3) as usize] = if rng.percent(50) { 1.0 } else { -1.0 };
+    v
+}
+
+/// How [`random_camera`] places a camera.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraPlacement {
+    /// From a random direction with a random up vector (every rotation term varies, roll
+    /// included).
+    Random,
+    /// Along a world axis with an axis as up: rotation terms exact zeros and ones.
+    AxisAligned,
+    /// Within 10^-3 of the world origin, on a 3x2 image with focal lengths of 0.03 to 1 image
+    /// widths: a translation of magnitude below 2, focal lengths below 2.
+    NearOrigin,
+}
+
+/// A camera that looks at `center`, placed by `placement`; a [`CameraPlacement::Random`] or
+/// [`CameraPlacement::AxisAligned`] one mostly 1.5 to 6 `radius` away (one in four anywhere from
+/// inside the scene to 1000 radii away), with a resolution of [`CAMERA_RESOLUTIONS`] and focal
+/// lengths of 0.03 to 30 image widths (x and y apart): the per-frame inputs of the projection
+/// unit drawn over their range, with a scene in view.
+pub fn random_camera(
+    rng: &mut Rng,
+    center: [f32; 3],
+    radius: f64,
+    placement: CameraPlacement,
+) -> neo_golden::camera::Camera {
+    let center = glam::DVec3::new(center[0] as f64, center[1] as f64, center[2] as f64);
+    let distance = radius.max(1e-3)
+        * if rng.percent(75) {
+            1.5 + 4.5 * rng.below(1001) as f64 / 1000.0
+        } else {
+            log_uniform(rng, -2.0, 3.0)
+        };
+    let ((width, height), focal_range, position, up) = match placement {
+        CameraPlacement::Random => {
+            let position = center + random_direction(rng) * distance;
+            (*rng.pick(&CAMERA_RESOLUTIONS), (-1.5, 1.5), position, random_direction(rng))
+        }
+        CameraPlacement::AxisAligned => {
+            let position = center + random_axis(rng) * distance;
+            (*rng.pick(&CAMERA_RESOLUTIONS), (-1.5, 1.5), position, random_axis(rng))
+        }
+        CameraPlacement::NearOrigin => {
+            ((3, 2), (-1.5, 0.0), random_direction(rng) * 1e-3, random_direction(rng))
+        }
+    };
+    let focal = |rng: &mut Rng| width as f64 * log_uniform(rng, focal_range.0, focal_range.1);
+    let (fx, fy) = (focal(rng), focal(rng));
+    let cam_to_world = neo_golden::camera::look_at_rotation(position, center, up);
+    neo_golden::camera::Camera { name: "random".into(), width, height, fx, fy, position, cam_to_world }
+}
+
+/// The baked Gaussians of a synthetic scene (`gaussians`, `seed`) as projection items, one list
+/// per camera of `cameras` [`random_camera`]s (of every eight, two axis-aligned and one near the
+/// world origin).
+pub fn random_camera_project_items(
+    cfg: &EngineConfig,
+    rng: &mut Rng,
+    gaussians: usize,
+    cameras: usize,
+) -> Vec<Vec<Vec<u32>>> {
+    let spec = format!("synthetic:blobs?gaussians={gaussians}&seed={}", rng.below(1000) + 1);
+    let (scene, _) = neo_golden::source::load_scene(&spec, false).expect("synthetic scene");
+    let baked = Baked::from_scene(&scene, &cfg.feature_format(), ShPrecision::F32);
+    let (lo, hi) = neo_golden::source::robust_bounds(&scene);
+    let center = [0, 1, 2].map(|k| (lo[k] + hi[k]) / 2.0);
+    let radius = (0..3).map(|k| (hi[k] - lo[k]) as f64).fold(0.0, f64::max) / 2.0;
+    (0..cameras)
+        .map(|k| {
+            let placement = match k % 8 {
+                1 | 5 => CameraPlacement::AxisAligned,
+                3 => CameraPlacement::NearOrigin,
+                _ => CameraPlacement::Random,
+            };
+            let cam = random_camera(rng, center, radius, placement);
+            let (regs, _) = neo_golden::hwpre::camera_registers(&cam, cfg.tile);
+            baked.geometry.iter().map(|g| project_item(g, &regs)).collect()
+        })
+        .collect()
+}
+
+/// A colour unit's camera position: each coordinate of either sign and of magnitude 10^-3 to
+/// 10^4 (per-frame input drawn over its range).
+pub fn random_camera_position(rng: &mut Rng) -> [f32; 3] {
+    [(); 3].map(|_| {
+        let m = log_uniform(rng, -3.0, 4.0) as f32;
+        if rng.percent(50) {
+            -m
+        } else {
+            m
+        }
+    })
+}

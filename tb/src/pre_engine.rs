@@ -17,7 +17,7 @@
 use crate::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, SubordinateSignals};
 use crate::check::Checker;
 use crate::dynmodel::DynModel;
-use crate::lane::{scene_memory, LaneFrame, LaneRange};
+use crate::lane::LaneFrame;
 use crate::lane::{FEAT_BASE, GEO_BASE, PREV_BASE, SH_BASE};
 use crate::rng::Rng;
 use neo_gen::emit::Module;
@@ -47,6 +47,90 @@ pub const LIST_BASE: u64 = 0x1000_0000;
 pub const DESC_BASE: u64 = 0x0f00_0000;
 /// What the descriptors hold before the run (the engine writes only the list lengths).
 const DESC_CANARY: u8 = 0x5c;
+/// What the feature word after the last Gaussian holds (the engine must keep it).
+const FEAT_CANARY: u8 = 0xa5;
+
+/// A run's map and sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EngineSetup {
+    /// The base registers.
+    pub bases: EngineBases,
+    /// GAUSSIANS (`None`: the scene's).
+    pub gaussians: Option<u32>,
+    /// TILES (`None`: the camera's grid; more: the extra tiles' lists are empty).
+    pub tiles: Option<u32>,
+}
+
+/// Where a run's arrays sit (the engine's base registers).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EngineBases {
+    /// Geometry array (4-byte aligned).
+    pub geo: u64,
+    /// SH array (4-byte aligned).
+    pub sh: u64,
+    /// Feature table (32-byte aligned).
+    pub feat: u64,
+    /// Previous feature table (32-byte aligned).
+    pub prev: u64,
+    /// Tile 0's incoming list (64-byte aligned).
+    pub list: u64,
+    /// Tile 0's descriptor (32-byte aligned).
+    pub desc: u64,
+}
+
+impl EngineBases {
+    /// The bench's constant map.
+    pub const FIXED: EngineBases = EngineBases {
+        geo: GEO_BASE,
+        sh: SH_BASE,
+        feat: FEAT_BASE,
+        prev: PREV_BASE,
+        list: LIST_BASE,
+        desc: DESC_BASE,
+    };
+
+    /// Two maps for up to `n` Gaussians and `tiles` tiles of `cfg`, each base the bitwise
+    /// complement of the other's above its alignment (alternating them toggles every base bit),
+    /// drawn until every array of each fits below 2^32 and none overlaps another.
+    pub fn complement_pair(cfg: &EngineConfig, rng: &mut Rng, n: u64, tiles: u64) -> [EngineBases; 2] {
+        let gb = u64::from(neo_golden::hwpre::bake::geometry_bytes());
+        let sizes = [
+            (gb * n, 4),
+            (4 * 48 * n, 4),
+            (FEATURE_BYTES * (n + 1), 32),
+            (FEATURE_BYTES * n, 32),
+            (neo_golden::engine::pre::list_addr(cfg, 0, tiles), 64),
+            (DESCRIPTOR_BYTES * tiles, 32),
+        ];
+        loop {
+            let r: Vec<u64> = sizes.iter().map(|_| rng.next_u64()).collect();
+            let pick = |k: usize| -> Vec<u64> {
+                sizes
+                    .iter()
+                    .zip(&r)
+                    .map(|(&(_, a), &r)| if k == 0 { r } else { !r } & 0xffff_ffff & !(a - 1))
+                    .collect()
+            };
+            let fits = |v: &[u64]| {
+                v.iter().zip(&sizes).all(|(&b, &(s, _))| b + s <= 1 << 32)
+                    && (0..6)
+                        .all(|i| (i + 1..6).all(|j| v[i] + sizes[i].0 <= v[j] || v[j] + sizes[j].0 <= v[i]))
+            };
+            let (a, b) = (pick(0), pick(1));
+            if fits(&a) && fits(&b) {
+                let mk = |v: &[u64]| EngineBases {
+                    geo: v[0],
+                    sh: v[1],
+                    feat: v[2],
+                    prev: v[3],
+                    list: v[4],
+                    desc: v[5],
+                };
+                return [mk(&a), mk(&b)];
+            }
+        }
+    }
+}
 
 /// What a run measured.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -140,22 +224,23 @@ impl PreEngineBench {
 
     /// The registers of a frame of `baked` for `frame` (the engine's memory map of the bench):
     /// what golden's reference reads, and what [`PreEngineBench::program`] drives.
-    fn regs(&self, baked: &Baked, frame: &LaneFrame) -> FrameRegs {
+    fn regs(&self, baked: &Baked, frame: &LaneFrame, at: &EngineSetup) -> FrameRegs {
         let (regs, _) = camera_registers(frame.cam, self.cfg.tile);
-        let tiles = regs.grid[0] as u32 * regs.grid[1] as u32;
+        let tiles = at.tiles.unwrap_or(regs.grid[0] as u32 * regs.grid[1] as u32);
         let fresh = if frame.all_fresh { PRE_FRESH } else { 0 };
+        let b = &at.bases;
         FrameRegs {
             tiles,
-            desc_base: DESC_BASE,
-            feat_base: FEAT_BASE,
+            desc_base: b.desc,
+            feat_base: b.feat,
             pre: PreRegs {
                 ctrl: PRE_ENABLE | fresh,
-                gaussians: baked.len() as u32,
+                gaussians: at.gaussians.unwrap_or(baked.len() as u32),
                 sh_degree: u32::from(baked.sh_degree),
-                geo_base: GEO_BASE,
-                sh_base: SH_BASE,
-                prev_feat_base: PREV_BASE,
-                list_base: LIST_BASE,
+                geo_base: b.geo,
+                sh_base: b.sh,
+                prev_feat_base: b.prev,
+                list_base: b.list,
                 camera: CameraWord::values(frame.cam, self.cfg.tile),
             },
             ..FrameRegs::default()
@@ -187,14 +272,36 @@ impl PreEngineBench {
     /// Runs the engine over `baked` for `frame` with memory `timing` and checks what it leaves
     /// against golden. Stops the test at the first mismatch.
     pub fn run(&mut self, baked: &Baked, frame: &LaneFrame, timing: AxiTiming, check: &Checker) -> PreRun {
+        let at = EngineSetup { bases: EngineBases::FIXED, gaussians: None, tiles: None };
+        self.run_at(baked, frame, &at, timing, check)
+    }
+
+    /// [`PreEngineBench::run`] with the bases, Gaussian count and tile count of `at`.
+    pub fn run_at(
+        &mut self,
+        baked: &Baked,
+        frame: &LaneFrame,
+        at: &EngineSetup,
+        timing: AxiTiming,
+        check: &Checker,
+    ) -> PreRun {
         let n = managers(&self.cfg);
         let mut rng = Rng::new(check.seed);
-        let all = LaneRange { first: 0, count: baked.len() as u32 };
-        let mut mem = scene_memory(baked, all, frame.prev);
-        let regs = self.regs(baked, frame);
+        let b = at.bases;
+        let mut mem = Memory::new();
+        let geo: Vec<u8> = baked.geometry.iter().flat_map(|g| g.to_le_bytes()).collect();
+        mem.write(b.geo, &geo);
+        let sh: Vec<u8> = baked.sh.iter().flat_map(|w| w.to_le_bytes()).collect();
+        mem.write(b.sh, &sh);
+        for (k, w) in frame.prev.iter().enumerate() {
+            mem.write(b.prev + FEATURE_BYTES * k as u64, w);
+        }
+        let regs = self.regs(baked, frame, at);
+        let count = u64::from(regs.pre.gaussians);
+        mem.write(b.feat + FEATURE_BYTES * count, &[FEAT_CANARY; FEATURE_BYTES as usize]);
         let tiles = u64::from(regs.tiles);
         self.program(&regs).unwrap_or_else(|e| panic!("{NAME}: {e}"));
-        mem.write(DESC_BASE, &vec![DESC_CANARY; (DESCRIPTOR_BYTES * tiles) as usize]);
+        mem.write(b.desc, &vec![DESC_CANARY; (DESCRIPTOR_BYTES * tiles) as usize]);
         let mut golden = mem.clone();
         let work = preprocess_frame(&self.cfg, &regs, &mut golden, &mut Counters::default())
             .unwrap_or_else(|e| panic!("golden preprocess_frame: {e}"));
@@ -209,7 +316,7 @@ impl PreEngineBench {
             (0..n).map(|q| AxiChecker::new(q, &format!("m{q}_axi"), ro, wo)).collect();
         let hits: u64 = work.lists.iter().map(|l| l.len() as u64).sum();
         let start = self.model.cycle();
-        let limit = 5_000 + 200 * baked.len() as u64 + 4 * hits + 4 * tiles;
+        let limit = 5_000 + 200 * count + 4 * hits + 4 * tiles;
         let mut first = true;
         loop {
             self.model.set_u64(self.start, u64::from(first));
@@ -241,27 +348,35 @@ impl PreEngineBench {
             let (r, w) = c.in_flight();
             check.value(cycles, &format!("manager {q}: AXI transactions open at done_o"), 0, (r + w) as u64);
         }
-        self.check_feature_words(mem.memory(), &golden, baked.len() as u64, check, cycles);
-        let hits = self.check_lists(mem.memory(), &golden, &work, check, cycles);
+        self.check_feature_words(mem.memory(), &golden, b.feat, count, check, cycles);
+        let hits = self.check_lists(mem.memory(), &golden, &work, &b, check, cycles);
         let beats = (0..n).map(|q| mem.beats(q)).fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        let table = (0..baked.len() as u64)
+        let table = (0..count)
             .map(|i| {
-                let mut b = [0u8; 32];
-                mem.memory().read(FEAT_BASE + 32 * i, &mut b);
-                b
+                let mut w = [0u8; 32];
+                mem.memory().read(b.feat + 32 * i, &mut w);
+                w
             })
             .collect();
-        PreRun { gaussians: baked.len() as u64, visible: work.visible, hits, tiles, cycles, beats, table }
+        PreRun { gaussians: count, visible: work.visible, hits, tiles, cycles, beats, table }
     }
 
     /// Checks the feature words of the `n` Gaussians, and the canary word after them, against
     /// golden's memory.
-    fn check_feature_words(&self, mem: &Memory, golden: &Memory, n: u64, check: &Checker, cycle: u64) {
+    fn check_feature_words(
+        &self,
+        mem: &Memory,
+        golden: &Memory,
+        feat: u64,
+        n: u64,
+        check: &Checker,
+        cycle: u64,
+    ) {
         let fmt = self.cfg.feature_format();
         for i in 0..=n {
             let (mut want, mut got) = ([0u8; FEATURE_BYTES as usize], [0u8; FEATURE_BYTES as usize]);
-            golden.read(FEAT_BASE + FEATURE_BYTES * i, &mut want);
-            mem.read(FEAT_BASE + FEATURE_BYTES * i, &mut got);
+            golden.read(feat + FEATURE_BYTES * i, &mut want);
+            mem.read(feat + FEATURE_BYTES * i, &mut got);
             if got != want {
                 let show = |b: &[u8; 32]| format!("{:?} (0x{})", feature_from_bytes(&fmt, b), hex(b));
                 let what = if i == n {
@@ -276,13 +391,21 @@ impl PreEngineBench {
 
     /// Checks every tile's descriptor and list against golden's memory and lists; returns the
     /// entries checked.
-    fn check_lists(&self, mem: &Memory, golden: &Memory, work: &PreWork, check: &Checker, cycle: u64) -> u64 {
+    fn check_lists(
+        &self,
+        mem: &Memory,
+        golden: &Memory,
+        work: &PreWork,
+        b: &EngineBases,
+        check: &Checker,
+        cycle: u64,
+    ) -> u64 {
         let fmt = self.cfg.format();
         let (cap, stride) = (self.cfg.table_capacity as u64, self.cfg.list_stride() as u64);
         let mut checked = 0;
         for (t, want_t) in work.lists.iter().enumerate() {
             let t = t as u64;
-            let d = DESC_BASE + DESCRIPTOR_BYTES * t;
+            let d = b.desc + DESCRIPTOR_BYTES * t;
             let (mut want_d, mut desc) = ([0u8; DESCRIPTOR_BYTES as usize], [0u8; DESCRIPTOR_BYTES as usize]);
             golden.read(d, &mut want_d);
             mem.read(d, &mut desc);
@@ -305,7 +428,7 @@ impl PreEngineBench {
                 );
             }
             let kept = len.min(cap);
-            let base = LIST_BASE + ENTRY_BYTES * t * stride;
+            let base = b.list + ENTRY_BYTES * t * stride;
             let mut got: Vec<u64> = (0..kept).map(|i| mem.read_u64(base + ENTRY_BYTES * i)).collect();
             got.sort_unstable_by_key(|w| order(&fmt, *w));
             if (want_t.len() as u64) > cap {

@@ -11,9 +11,9 @@ neo_tb::with_models! {
     use neo_golden::hwpre::bake::{Baked, ShPrecision};
     use neo_tb::axi::AxiTiming;
     use neo_tb::check::Checker;
-    use neo_tb::lane::LaneFrame;
-    use neo_tb::pre_engine::PreEngineBench;
-    use neo_tb::rng::for_each_seed;
+    use neo_tb::lane::{sweep_camera, LaneFrame};
+    use neo_tb::pre_engine::{EngineBases, EngineSetup, PreEngineBench};
+    use neo_tb::rng::{for_each_seed, Rng};
 
     /// `tb/pre_engine.json`: two lanes (the split and the arbiter at work; a lane's C++ is
     /// compiled per instance, so the default four cost twice the build; `scripts/mutate-check`
@@ -36,26 +36,52 @@ neo_tb::with_models! {
     #[test]
     fn pre_engine_writes_golden_features_lists_and_lengths() {
         let name = "pre_engine_writes_golden_features_lists_and_lengths";
-        let mut bench = PreEngineBench::build(&config()).unwrap();
+        let cfg = config();
+        let mut bench = PreEngineBench::build(&cfg).unwrap();
         neo_tb::waves::maybe_trace(bench.model_mut(), name);
         for_each_seed(name, |seed| {
-            // Odd counts: the last lane's share is one shorter.
-            let n = 601 + 2 * (seed % 200) as usize;
-            // SH degrees 0, 2 and 3 on the fixed seeds (1 in the one-Gaussian test).
-            let (baked, cams) = scene(n, seed % 1000, 3, ((seed >> 1) % 4) as u8);
-            let mut prev: Vec<[u8; 32]> = Vec::new();
-            for (f, cam) in cams.iter().enumerate() {
+            // Every per-frame input changes from frame to frame of the one model: the SH degree
+            // (0, 1, 2, 3, 0: every bit of degree_i and the SH record size rises and falls), the
+            // camera (neo_tb::lane::sweep_camera: orientations, focal lengths, tile grids up to
+            // 1015 columns or rows), the base registers (complement maps over the 32-bit space,
+            // alternating), GAUSSIANS (c, 1023 - c) and TILES (T, 2047 - T, at least the grid).
+            // Three frames a seed, at phase g0 of the 5-frame schedule (degrees, grids): the fixed
+            // seeds run frames 0-8 of it on the one model.
+            let frames = 3;
+            let g0 = neo_tb::rng::FIXED_SEEDS.iter().position(|&s| s == seed).map_or(seed as usize % 5, |k| 3 * k);
+            let mut rng = Rng::new(seed ^ 0xe9e);
+            let n = 601 + 2 * (seed % 50) as usize;
+            let scenes: Vec<(Baked, Vec<neo_golden::camera::Camera>)> =
+                (0..4u8).map(|d| scene(n, seed % 1000, frames, d)).collect();
+            // Odd and even counts: the last lane's share is one shorter on the odd ones.
+            let c = rng.range(430, 594) as u32;
+            let t = rng.range(80, 1032) as u32;
+            let bases = EngineBases::complement_pair(&cfg, &mut rng, n as u64, 2047);
+            let mut prev = vec![[0u8; 32]; n];
+            for f in 0..frames {
+                let g = g0 + f;
+                let (baked, cams) = &scenes[[0, 1, 2, 3, 0][g % 5]];
+                let cam = sweep_camera(&cams[f], cfg.tile, g, &mut rng);
                 let check = Checker::new("neo_pre_engine", seed ^ f as u64);
-                let frame = LaneFrame { cam, all_fresh: f == 0, prev: &prev };
+                let frame = LaneFrame { cam: &cam, all_fresh: f == 0, prev: &prev };
+                let at = EngineSetup {
+                    bases: bases[f % 2],
+                    gaussians: Some([c, 1023 - c][f % 2]),
+                    // A strip's grid has more than 1032 tiles: its TILES is 2047 - T.
+                    tiles: Some(if g % 5 % 2 == 1 || f % 2 == 1 { 2047 - t } else { t }),
+                };
                 let timing = if f % 2 == 0 { AxiTiming::RANDOM } else { AxiTiming::IDEAL };
-                let run = bench.run(&baked, &frame, timing, &check);
+                let run = bench.run_at(baked, &frame, &at, timing, &check);
                 eprintln!(
-                    "{name}: frame {f}: {} Gaussians (degree {}), {} visible, {} incoming entries in {} tiles, {} cycles, {} / {} beats read / written",
-                    run.gaussians, baked.sh_degree, run.visible, run.hits, run.tiles, run.cycles, run.beats.0, run.beats.1
+                    "{name}: frame {f}: {}x{} pixels, {} Gaussians (degree {}), {} visible, {} incoming entries in {} tiles, {} cycles, {} / {} beats read / written",
+                    cam.width, cam.height, run.gaussians, baked.sh_degree, run.visible, run.hits, run.tiles, run.cycles, run.beats.0, run.beats.1
                 );
-                assert!(run.visible > 0 && run.visible < run.gaussians, "the camera must cull some Gaussians and keep some");
-                assert!(run.hits > 0, "frame {f}: no incoming entry");
-                prev = run.table;
+                if g % 5 % 2 == 0 {
+                    // The ordinary grids (the others are a strip of tiles).
+                    assert!(run.visible > 0 && run.visible < run.gaussians, "the camera must cull some Gaussians and keep some");
+                    assert!(f == 0 || run.hits > 0, "frame {f}: no incoming entry");
+                }
+                prev[..run.table.len()].copy_from_slice(&run.table);
             }
         });
     }

@@ -22,12 +22,15 @@ neo_tb::with_models! {
         neo_tb::waves::maybe_trace(bench.model_mut(), name);
         for_each_seed(name, |seed| {
             let mut rng = Rng::new(seed);
-            for (k, grid) in [[7u32, 5u32], [1, 1], [40, 23], [3, 9]].into_iter().enumerate() {
+            // Strips of 1013 columns and 1015 rows (10-bit complements of the small grids' sides,
+            // near pre_max_tiles), a frame of no tile at all.
+            let grids = [[7u32, 5u32], [1, 1], [1013, 2], [40, 23], [2, 1015], [0, 4], [3, 9]];
+            for (k, grid) in grids.into_iter().enumerate() {
                 let check = Checker::new("neo_pre_lists", seed ^ k as u64);
-                let n = [3000, 13, 5000, 0][k];
+                let n = [3000, 13, 600, 5000, 600, 0, 0][k];
                 let hits = random_hits(&cfg, &mut rng, grid, n);
                 let timing = if k % 2 == 0 { AxiTiming::RANDOM } else { AxiTiming::IDEAL };
-                let run = bench.run(grid, &hits, [100, 50, 80, 100][k], timing, &check);
+                let run = bench.run(grid, &hits, [100, 50, 90, 80, 90, 100, 100][k], timing, &check);
                 assert_eq!(run.hits, n as u64);
             }
         });

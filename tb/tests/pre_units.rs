@@ -182,7 +182,10 @@ neo_tb::with_models! {
     use neo_gen::units::pre::{COLOR_NAME, PROJECT_NAME};
     use neo_golden::hwpre::bake::BakedGeometry;
     use neo_golden::hwpre::project::CameraIn;
-    use neo_tb::pre::{color_bench, color_item, project_bench, project_item, random_color_items, scene_project_items, UnitBench};
+    use neo_tb::pre::{
+        color_bench, color_item, project_bench, project_item, random_camera_position, random_camera_project_items,
+        random_color_items, scene_project_items, UnitBench,
+    };
 
     /// At least 10k random Gaussians per seed share over the four SH degrees and backpressure mixes.
     #[test]
@@ -194,11 +197,14 @@ neo_tb::with_models! {
             let mut rng = Rng::new(seed);
             let check = Checker::new(COLOR_NAME, seed);
             let per_degree = neo_tb::rng::seed_share(dup_vectors().max(10_000) * neo_tb::rng::SEED_RUNS) / 4;
+            // Two camera positions per degree, drawn over their range (per-frame inputs).
             for degree in 0..4u32 {
-                let cam = [0.5, -1.0, -3.0];
-                let items = random_color_items(&mut rng, per_degree, cam, degree);
-                let mix = [(100, 100), (70, 50), (40, 90), (90, 30)][degree as usize];
-                bench.run(&items, settle, &mut rng, mix, &check);
+                for half in 0..2 {
+                    let cam = if degree + half == 0 { [0.5, -1.0, -3.0] } else { random_camera_position(&mut rng) };
+                    let items = random_color_items(&mut rng, per_degree / 2, cam, degree);
+                    let mix = [(100, 100), (70, 50), (40, 90), (90, 30)][degree as usize];
+                    bench.run(&items, settle, &mut rng, mix, &check);
+                }
             }
         });
     }
@@ -255,6 +261,23 @@ neo_tb::with_models! {
             let n = neo_tb::rng::seed_share(dup_vectors().max(10_000) * neo_tb::rng::SEED_RUNS) / 3;
             for (k, items) in scene_project_items(&neo_tb::config(), seed % 1000 + 1, n, 3).iter().enumerate() {
                 bench.run(items, settle, &mut rng, [(100, 100), (60, 80), (90, 40)][k], &check);
+            }
+        });
+    }
+
+    /// Random cameras (every orientation, roll included; resolutions up to the largest tile grid;
+    /// focal lengths of 0.3 to 3 image widths): the per-frame inputs over their range.
+    #[test]
+    fn project_random_cameras() {
+        let name = "project_random_cameras";
+        let cfg = neo_tb::config();
+        let UnitBench { mut bench, settle, .. } = project_bench(&cfg);
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            let check = Checker::new(PROJECT_NAME, seed);
+            let per_camera = neo_tb::rng::seed_share(500 * neo_tb::rng::SEED_RUNS);
+            for (k, items) in random_camera_project_items(&cfg, &mut rng, per_camera, 16).iter().enumerate() {
+                bench.run(items, settle, &mut rng, [(100, 100), (60, 80), (90, 40)][k % 3], &check);
             }
         });
     }

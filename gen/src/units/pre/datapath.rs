@@ -17,6 +17,7 @@
 //! One enable stalls the whole pipeline: `en = out_ready_i | ~out_valid_o`, and
 //! `in_ready_o = en`. So the unit accepts one item per cycle while its output is taken.
 
+use super::known_bits::{Analysis, InputContract, KnownBits};
 use crate::emit::expr::hex;
 use crate::emit::{conns, if_, set, Instance, Item, Module};
 use neo_golden::hwarith::graph::{Graph, NodeId, Op, Ty};
@@ -202,8 +203,21 @@ impl<'a> Datapath<'a> {
             let v = self.value_at(*id, self.depth);
             m.assign(format!("out_{name}_o"), v);
         }
-        let unused: Vec<String> = self
-            .lowering
+        let unused = self.unread_compare_nets();
+        if !unused.is_empty() {
+            m.wire_assign("unused_cmp", 1, format!("^{{{}}}", unused.join(", ")));
+        }
+        let partial = self.partially_read();
+        if !partial.is_empty() {
+            m.wire_assign("unused_bits", 1, format!("^{{{}}}", partial.join(", ")));
+        }
+        m
+    }
+
+    /// The comparator outputs no logic reads (each compare node uses one of the five; the others
+    /// are reduced into the `unused_cmp` lint sink).
+    pub fn unread_compare_nets(&self) -> Vec<String> {
+        self.lowering
             .iter()
             .enumerate()
             .filter_map(|(id, l)| match l {
@@ -213,15 +227,7 @@ impl<'a> Datapath<'a> {
                 _ => None,
             })
             .flatten()
-            .collect();
-        if !unused.is_empty() {
-            m.wire_assign("unused_cmp", 1, format!("^{{{}}}", unused.join(", ")));
-        }
-        let partial = self.partially_read();
-        if !partial.is_empty() {
-            m.wire_assign("unused_bits", 1, format!("^{{{}}}", partial.join(", ")));
-        }
-        m
+            .collect()
     }
 
     /// The operand nets of operations that read only some of their bits (`abs` and `is_nan`
@@ -360,6 +366,87 @@ impl<'a> Datapath<'a> {
                 if w * longest == 1 { reg.clone() } else { format!("{reg}[{}:{}]", w * t - 1, w * (t - 1)) };
             m.wire_assign(format!("n{id}_d{t}"), w, tap);
         }
+    }
+}
+
+/// Bits of one net of a datapath proven constant ([`Datapath::constant_bits`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ConstantBits {
+    /// The net (a node's net, its delay taps and shift register, a comparator output, an
+    /// output port).
+    pub net: String,
+    /// Its width.
+    pub width: u32,
+    /// The constant bits, as inclusive `(hi, lo)` ranges, ascending.
+    pub ranges: Vec<(u32, u32)>,
+    /// Why ([`KnownBits::reason`]).
+    pub reason: String,
+}
+
+impl Datapath<'_> {
+    /// The bits of the module's nets that the known-bits analysis ([`Analysis`]) proves
+    /// constant: every node's net, its delay taps `n<id>_d<t>` and every copy in its shift
+    /// register `n<id>_dly_q`, each comparator's five outputs `n<id>_cmp_*` (of the node's
+    /// operands), and the output ports `out_<name>_o`. Inputs are constant only where
+    /// `contracts` bound them (then their ports `<name>_i` are listed too).
+    pub fn constant_bits(&self, contracts: &[InputContract]) -> Vec<ConstantBits> {
+        let a = Analysis::with_contracts(self.graph, contracts);
+        let mut out = Vec::new();
+        let mut push = |net: String, width: u32, k: &KnownBits, copies: u32| {
+            let mask = if width == 32 { k.mask } else { k.mask & ((1 << width) - 1) };
+            if mask == 0 {
+                return;
+            }
+            let mut ranges = Vec::new();
+            for c in 0..copies {
+                let mut b = 0;
+                while b < width {
+                    if mask >> b & 1 == 0 {
+                        b += 1;
+                        continue;
+                    }
+                    let lo = b;
+                    while b < width && mask >> b & 1 == 1 {
+                        b += 1;
+                    }
+                    ranges.push((c * width + b - 1, c * width + lo));
+                }
+            }
+            out.push(ConstantBits { net, width: width * copies, ranges, reason: k.reason.clone() });
+        };
+        let taps = self.taps();
+        for (id, n) in self.graph.nodes.iter().enumerate() {
+            let w = n.ty.bits();
+            let k = a.node(id);
+            match n.op {
+                Op::Input(i) => {
+                    let input = &self.graph.inputs[i];
+                    if contracts.iter().any(|c| c.input == input.name) {
+                        push(self.name(id), w, &k, 1);
+                        push(format!("{}_i", input.name), w, &k, 1);
+                    }
+                }
+                _ => push(self.name(id), w, &k, 1),
+            }
+            if let Some(&longest) = taps[id].last() {
+                for t in &taps[id] {
+                    push(format!("n{id}_d{t}"), w, &k, 1);
+                }
+                push(format!("n{id}_dly_q"), w, &k, longest);
+            }
+            if let (Lowering::Compare { .. }, [p, q]) = (&self.lowering[id], n.op.args().as_slice()) {
+                let (p, q) = (*p, *q);
+                let ops = [Op::Lt(p, q), Op::Le(p, q), Op::Eq(p, q), Op::Max(p, q), Op::Min(p, q)];
+                for (port, op) in COMPARE_OUTPUTS.iter().zip(ops) {
+                    let ty = if port.starts_with('m') { Ty::F } else { Ty::B };
+                    push(compare_net(id, port), ty.bits(), &a.op(&op, ty), 1);
+                }
+            }
+        }
+        for (name, id) in &self.graph.outputs {
+            push(format!("out_{name}_o"), self.graph.nodes[*id].ty.bits(), &a.node(*id), 1);
+        }
+        out
     }
 }
 

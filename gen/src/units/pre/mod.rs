@@ -7,6 +7,7 @@ pub mod dup;
 pub mod engine;
 pub mod fetch;
 pub mod fifo;
+pub mod known_bits;
 pub mod lane;
 pub mod library;
 pub mod lists;
@@ -33,6 +34,62 @@ pub fn color_module(cfg: &EngineConfig) -> Module {
         &["Colour unit (paper Section 5.2): view-dependent colour from spherical harmonics of degree 0 to 3,".into(),
           "+0.5, clamped at 0 and quantised to the feature entry's colour format; golden hwpre::color.".into()],
     )
+}
+
+/// The colour unit's per-frame input contracts ([`known_bits::InputContract`]): the SH degree
+/// is 0 to 3.
+pub fn color_contracts() -> Vec<known_bits::InputContract> {
+    vec![known_bits::InputContract {
+        input: "degree".into(),
+        range: Some((0, 3)),
+        mask: 0,
+        value: 0,
+        finite: false,
+        why: "the SH degree is 0 to 3".into(),
+    }]
+}
+
+/// The projection unit's per-frame input contracts ([`known_bits::InputContract`]), as the
+/// host derives the registers from a camera (golden `hwpre::camera_registers`):
+/// - the tile grid fits the `tile_bits`-bit tile indices: 1 to `2^tile_bits - 1` tiles per axis;
+/// - focal lengths and FOV limits are positive and finite;
+/// - the principal point is the image centre `(W - 1) / 2`, a multiple of 1/2 below `2^15` for
+///   images of at most 65536 pixels, so at most 16 significant bits: the low 8 fraction bits are
+///   zero, and it is non-negative;
+/// - the rotation terms are those of an orthonormal matrix: `|w| <= 1`, so the exponent's top
+///   bit (bit 30) is zero.
+pub fn project_contracts(cfg: &EngineConfig) -> Vec<known_bits::InputContract> {
+    let c = |input: String, range: Option<(i64, i64)>, mask: u32, finite: bool, why: &str| {
+        known_bits::InputContract { input, range, mask, value: 0, finite, why: why.into() }
+    };
+    let max_grid = (1i64 << cfg.tile_bits.min(31)) - 1;
+    let mut out = Vec::new();
+    for a in ["x", "y"] {
+        let grid_why =
+            format!("the tile grid fits the {}-bit tile indices (1 to {max_grid} tiles)", cfg.tile_bits);
+        out.push(c(format!("grid_{a}"), Some((1, max_grid)), 0, false, &grid_why));
+        out.push(c(format!("focal_{a}"), None, 1 << 31, true, "focal lengths are positive and finite"));
+        out.push(c(format!("lim_{a}"), None, 1 << 31, true, "FOV limits are positive and finite"));
+        out.push(c(
+            format!("principal_{a}"),
+            None,
+            1 << 31 | 0xFF,
+            true,
+            "the principal point is the image centre (W - 1) / 2 of an image of at most 65536 pixels: non-negative, at most 16 significant bits",
+        ));
+    }
+    for r in 0..3 {
+        for col in 0..3 {
+            out.push(c(
+                format!("w2v_{r}{col}"),
+                None,
+                1 << 30,
+                true,
+                "a rotation term of an orthonormal matrix: |w| <= 1, exponent bit 30 zero",
+            ));
+        }
+    }
+    out
 }
 
 /// Module name of the projection unit.
