@@ -363,20 +363,23 @@ pub fn parse_waivers(text: &str) -> Result<Vec<Waiver>, String> {
 pub const KNOWN_BITS_REASON: &str =
     "constant by the datapath's known-bits analysis (gen/src/units/pre/known_bits.rs)";
 
-/// The Preprocessing Engine's datapath modules (`neo_pre_project`, `neo_pre_color`) of `cfg`,
-/// each with its module text.
+/// The modules [`known_bits_waivers`] names nets of, each with its module text for `cfg`: the
+/// Preprocessing Engine's datapaths (`neo_pre_project`, `neo_pre_color`) and the lane
+/// (`neo_pre_lane`) that instantiates them.
 pub fn pre_datapaths(cfg: &neo_gen::EngineConfig) -> Vec<(String, String)> {
     use neo_gen::units::pre;
     vec![
         (pre::PROJECT_NAME.to_string(), pre::project_module(cfg).to_verilog()),
         (pre::COLOR_NAME.to_string(), pre::color_module(cfg).to_verilog()),
+        (pre::lane::NAME.to_string(), pre::lane::module(cfg).to_verilog()),
     ]
 }
 
 /// Automatic toggle waivers of the Preprocessing Engine's datapath modules for `cfg`: every
 /// bit the known-bits analysis proves constant (`Datapath::constant_bits`: node nets, delay
 /// taps and shift registers, comparator outputs, output ports), one `net[hi:lo]` waiver per
-/// run of constant bits, with the analysis' reason.
+/// run of constant bits, with the analysis' reason; and the same bits of the lane's nets that
+/// an output port drives unchanged (`.out_NAME_o(net)` of a datapath instance in `neo_pre_lane`).
 pub fn known_bits_waivers(cfg: &neo_gen::EngineConfig) -> Vec<Waiver> {
     use neo_gen::units::pre::{self, datapath::Datapath, library::PreLibrary};
     let project = neo_golden::hwpre::project::project_graph(&pre::project_params(cfg));
@@ -404,6 +407,35 @@ pub fn known_bits_waivers(cfg: &neo_gen::EngineConfig) -> Vec<Waiver> {
                     kind: "toggle".into(),
                     pattern: format!("{}[{hi}:{lo}]", c.net),
                     reason: format!("{KNOWN_BITS_REASON}: {}", c.reason),
+                });
+            }
+        }
+    }
+    out.extend(carried_waivers(&pre::lane::module(cfg), &out));
+    out
+}
+
+/// Waivers of `parent`'s nets that carry an output port of a datapath instance unchanged
+/// (`.out_NAME_o(net)`, `net` a plain identifier): the port's waivers in `datapath` (the
+/// datapath's module), for the same bits of `net` in `parent`.
+fn carried_waivers(parent: &neo_gen::emit::Module, datapath: &[Waiver]) -> Vec<Waiver> {
+    let mut out = Vec::new();
+    for item in &parent.items {
+        let neo_gen::emit::Item::Instance(inst) = item else { continue };
+        for (port, net) in &inst.conns {
+            let plain = net.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            if !port.starts_with("out_") || !port.ends_with("_o") || !plain {
+                continue;
+            }
+            for w in datapath.iter().filter(|w| w.module == inst.module) {
+                let Some(bits) = w.pattern.strip_prefix(port.as_str()).filter(|b| b.starts_with('[')) else {
+                    continue;
+                };
+                out.push(Waiver {
+                    module: parent.name.clone(),
+                    kind: w.kind.clone(),
+                    pattern: format!("{net}{bits}"),
+                    reason: format!("{net} is {}.{port} ({}): {}", inst.name, inst.module, w.reason),
                 });
             }
         }

@@ -94,6 +94,40 @@ pub fn random_items(cfg: &EngineConfig, rng: &mut Rng, count: usize) -> Vec<DupI
         .collect()
 }
 
+/// The tile grid of run `k` of a per-frame-input sweep from `g` (each side in
+/// `1..=2^tile_bits - 2`): `g`, its complement in the tile index bits (`1023 - g` by default),
+/// `g` again (so every bit of `grid_x_i` and `grid_y_i` rises and falls in one model), then the
+/// extreme strips `1023 x 1` and `1 x 1023`.
+pub fn sweep_grid(cfg: &EngineConfig, g: [u32; 2], k: usize) -> [u32; 2] {
+    let max = (1u32 << cfg.tile_bits) - 1;
+    let c = g.map(|v| max - v);
+    [g, c, g, [max, 1], [1, max]][k % 5]
+}
+
+/// `count` of [`random_items`] whose candidate rectangles on `grid` have at most `max_tiles`
+/// tiles (the walker's cycles stay bounded on a 1023-tile grid: no unbounded or screen-sized
+/// extents). Their means spread over the whole tile index range (the ITU bench's tiles), so on
+/// a large grid their tiles, rectangles and hits reach every tile index bit.
+pub fn bounded_items(
+    cfg: &EngineConfig,
+    rng: &mut Rng,
+    grid: [u32; 2],
+    count: usize,
+    max_tiles: u32,
+) -> Vec<DupItem> {
+    let (fmt, r) = (cfg.feature_format(), cfg.raster_config());
+    let size = (grid[0] * r.tile, grid[1] * r.tile);
+    let mut out = Vec::with_capacity(count);
+    while out.len() < count {
+        let batch = random_items(cfg, rng, count);
+        out.extend(batch.into_iter().filter(|it| {
+            neo_golden::hwpre::duplicate::candidate_count(&it.now, &fmt, &r, size) <= max_tiles
+        }));
+    }
+    out.truncate(count);
+    out
+}
+
 /// A Verilated `neo_pre_dup` and its per-frame ports.
 pub struct DupBench {
     cfg: EngineConfig,

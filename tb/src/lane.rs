@@ -155,8 +155,9 @@ fn snap_axis(c: [f64; 3], not: Option<usize>) -> ([f64; 3], usize) {
 
 /// The camera of frame `f` of a per-frame-input sweep from `base` (its position kept): a
 /// random orientation (rolled, so the w2v words of the camera's x and y axes take every sign
-/// and size, and turned up to 45 degrees) except on every fifth frame, the nearest axis-aligned
-/// one (w2v words exactly 0 and 1); a random
+/// and size, and turned up to 45 degrees) except on frames 1 and 4 of every five, the nearest
+/// axis-aligned one (w2v words exactly 0 and 1; [`sweep_world`] turns them into two
+/// patterns); a random
 /// focal length (short on the strips); and a resolution whose tile grid runs GRID_X through 10, !10, 10 and GRID_Y
 /// through 8, 1, 8, !8, 8 (10-bit complements: every bit of the 10-bit tile indices rises and
 /// falls) with at most 2048 tiles (`pre_max_tiles`), the other side of a huge grid one tile.
@@ -170,7 +171,7 @@ pub fn sweep_camera(base: &Camera, tile: u32, f: usize, rng: &mut Rng) -> Camera
     let focal = rng.range(lo, hi) as f64 + rng.below(1000) as f64 / 1000.0;
     let aspect = 0.8 + rng.below(400) as f64 / 1000.0;
     let mut m = base.cam_to_world;
-    if f % 5 == 4 {
+    if f % 5 == 4 || f % 5 == 1 {
         // The axis-aligned rotation nearest to base's: forward snapped to its largest world
         // axis, right to the largest of the others, down = forward x right.
         let (zc, xc) = ([m.z_axis.x, m.z_axis.y, m.z_axis.z], [m.x_axis.x, m.x_axis.y, m.x_axis.z]);
@@ -196,6 +197,80 @@ pub fn sweep_camera(base: &Camera, tile: u32, f: usize, rng: &mut Rng) -> Camera
     }
     let cam_to_world = m;
     Camera { width, height, fx: focal, fy: focal * aspect, cam_to_world, ..base.clone() }
+}
+
+/// Frame `f` of a sweep ([`sweep_camera`]'s `cam`) in a moved world: the scene and the camera
+/// turned by one signed permutation of the world axes and shifted by one vector, so the view
+/// is the same (up to f32 rounding of the moved means) while the per-frame inputs change: the
+/// camera sits at a new position whose coordinates have either sign and a random 23-bit
+/// mantissa, of magnitude 1/8 to 1/4 on even frames and 16 to 32 on odd ones (every exponent
+/// bit of the camera position rises and falls, and the translation's with it); the axis-aligned
+/// cameras become the identity (frame 4 of five) or a cyclic permutation of the axes (frame 1:
+/// zero w2v terms where frame 4 has ones), the others turn by a random one. When `near` is
+/// given, that Gaussian is moved half a unit in front of the camera and made huge (sigma 15):
+/// a depth below 2 (key bit 14 clear) and a splat over the whole image (the largest extents and
+/// conic exponents).
+pub fn sweep_world(
+    baked: &Baked,
+    cam: &Camera,
+    f: usize,
+    near: Option<usize>,
+    rng: &mut Rng,
+) -> (Baked, Camera) {
+    use glam::{DMat3, DVec3};
+    let r = cam.cam_to_world;
+    let perm = |p: [usize; 3], s: [f64; 3]| {
+        let col = |k: usize| {
+            let mut v = DVec3::ZERO;
+            v[p[k]] = s[k];
+            v
+        };
+        DMat3::from_cols(col(0), col(1), col(2))
+    };
+    let q = match f % 5 {
+        4 => DMat3::IDENTITY * r.transpose(),
+        1 => perm([1, 2, 0], [1.0; 3]) * r.transpose(),
+        _ => {
+            const PERMS: [[usize; 3]; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+            let mut s = [(); 3].map(|_| if rng.percent(50) { -1.0 } else { 1.0 });
+            let p = *rng.pick(&PERMS);
+            if perm(p, s).determinant() < 0.0 {
+                // A rotation, not a reflection.
+                s[2] = -s[2];
+            }
+            perm(p, s)
+        }
+    };
+    let mag = if f.is_multiple_of(2) { 0.125 } else { 16.0 };
+    let coord = |rng: &mut Rng| {
+        let m = mag * (1.0 + rng.below(1 << 23) as f64 / f64::from(1u32 << 23));
+        if rng.percent(50) {
+            -m
+        } else {
+            m
+        }
+    };
+    let position = DVec3::new(coord(rng), coord(rng), coord(rng));
+    let cam_to_world = q * r;
+    let shift = position - q * cam.position;
+    let mut out = baked.clone();
+    for g in &mut out.geometry {
+        let p = DVec3::new(g.position[0].into(), g.position[1].into(), g.position[2].into());
+        let p = q * p + shift;
+        g.position = [p.x as f32, p.y as f32, p.z as f32];
+        let [xx, xy, xz, yy, yz, zz] = g.cov3d.map(f64::from);
+        let c = q
+            * DMat3::from_cols(DVec3::new(xx, xy, xz), DVec3::new(xy, yy, yz), DVec3::new(xz, yz, zz))
+            * q.transpose();
+        g.cov3d = [c.x_axis.x, c.x_axis.y, c.x_axis.z, c.y_axis.y, c.y_axis.z, c.z_axis.z].map(|v| v as f32);
+    }
+    if let Some(i) = near {
+        let g = &mut out.geometry[i];
+        let p = position + cam_to_world.z_axis * 0.5;
+        g.position = [p.x as f32, p.y as f32, p.z as f32];
+        g.cov3d = [225.0, 0.0, 0.0, 225.0, 0.0, 225.0];
+    }
+    (out, Camera { position, cam_to_world, ..cam.clone() })
 }
 
 /// The Gaussians a lane run covers.
@@ -447,70 +522,9 @@ pub fn expected_hits_at(
     out
 }
 
-fn word_at(mem: &Memory, base: u64, i: u32) -> [u8; 32] {
-    let mut b = [0u8; FEATURE_BYTES as usize];
-    mem.read(base + FEATURE_BYTES * u64::from(i), &mut b);
-    b
-}
-
-/// The bench memory: the baked geometry and SH arrays, the previous feature words of `range`
-/// (when given), and canaries in the feature words just outside `range`.
-pub fn scene_memory(baked: &Baked, range: LaneRange, prev: &[[u8; 32]]) -> Memory {
-    assert_eq!(baked.sh_precision, ShPrecision::F32, "the lane reads f32 SH");
-    let mut mem = Memory::new();
-    let geo: Vec<u8> = baked.geometry.iter().flat_map(|g| g.to_le_bytes()).collect();
-    mem.write(GEO_BASE, &geo);
-    let sh: Vec<u8> = baked.sh.iter().flat_map(|w| w.to_le_bytes()).collect();
-    mem.write(SH_BASE, &sh);
-    for (k, w) in prev.iter().enumerate() {
-        mem.write(PREV_BASE + FEATURE_BYTES * (u64::from(range.first) + k as u64), w);
-    }
-    let canary = [CANARY; FEATURE_BYTES as usize];
-    if range.first > 0 {
-        mem.write(FEAT_BASE + FEATURE_BYTES * u64::from(range.first - 1), &canary);
-    }
-    mem.write(FEAT_BASE + FEATURE_BYTES * u64::from(range.first + range.count), &canary);
-    mem
-}
-
-/// Checks the feature words of `range` at [`FEAT_BASE`] (and the canaries around it); returns
-/// the visible count.
-pub fn check_feature_words(
-    cfg: &EngineConfig,
-    baked: &Baked,
-    cam: &Camera,
-    range: LaneRange,
-    mem: &Memory,
-    check: &Checker,
-    cycle: u64,
-) -> u64 {
-    let fmt = cfg.feature_format();
-    let (regs, cam_pos) = camera_registers(cam, cfg.tile);
-    let params = ProjectParams { feature: fmt, tile: cfg.tile };
-    let mut visible = 0;
-    let word_at = |i: u64| word_at(mem, FEAT_BASE, i as u32);
-    for i in range.first..range.first + range.count {
-        let want = preprocess_one(baked, &regs, cam_pos, &params, &DepthKeyCodec::Fp16, i as usize);
-        visible += u64::from(want.is_some());
-        let want_bytes = feature_to_bytes(&fmt, want.as_ref().map(|h| &h.entry));
-        let got = word_at(u64::from(i));
-        if got != want_bytes {
-            let show = |b: &[u8; 32]| format!("{:?} (0x{})", feature_from_bytes(&fmt, b), hex(b));
-            check.fail(cycle, &format!("feature word of Gaussian {i}"), &show(&want_bytes), &show(&got));
-        }
-    }
-    let canary = [CANARY; FEATURE_BYTES as usize];
-    let around = [range.first.checked_sub(1), Some(range.first + range.count)];
-    for i in around.into_iter().flatten() {
-        let got = word_at(u64::from(i));
-        check.value(cycle, &format!("canary word {i} outside the lane's range"), 1, u64::from(got == canary));
-    }
-    visible
-}
-
-/// [`scene_memory`] at `place`: the geometry records of `range` from `place.geo`, their SH
-/// records and previous words at their ids' addresses, canaries around the range's feature
-/// words, every address modulo 2^32.
+/// The bench memory of a lane run at `place`: the geometry records of `range` from
+/// `place.geo`, their SH records and previous feature words (when given) at their ids'
+/// addresses, canaries in the feature words just outside the range, every address modulo 2^32.
 pub fn placed_memory(baked: &Baked, range: LaneRange, prev: &[[u8; 32]], place: &LanePlacement) -> Memory {
     assert_eq!(baked.sh_precision, ShPrecision::F32, "the lane reads f32 SH");
     let mut mem = Memory::new();
@@ -533,7 +547,8 @@ pub fn placed_memory(baked: &Baked, range: LaneRange, prev: &[[u8; 32]], place: 
     mem
 }
 
-/// [`check_feature_words`] at `place` (baked Gaussian `k`'s word at id `place.id0 + k`).
+/// Checks the feature words of `range` at `place` (baked Gaussian `k`'s word at id
+/// `place.id0 + k`) and the canaries around them; returns the visible count.
 #[allow(clippy::too_many_arguments)]
 pub fn check_words_at(
     cfg: &EngineConfig,

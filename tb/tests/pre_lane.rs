@@ -12,7 +12,7 @@ neo_tb::with_models! {
     use neo_tb::axi::AxiTiming;
     use neo_tb::check::Checker;
     use neo_golden::camera::Camera;
-    use neo_tb::lane::{sweep_camera, LaneBench, LaneFrame, LanePlacement, LaneRange};
+    use neo_tb::lane::{sweep_camera, sweep_world, LaneBench, LaneFrame, LanePlacement, LaneRange};
     use neo_tb::rng::{for_each_seed, Rng};
 
     /// The baked synthetic scene (`gaussians`, `seed`, SH `degree`) and `frames` cameras of a fast walk through it
@@ -52,18 +52,30 @@ neo_tb::with_models! {
             // The larger count on the ordinary grids, the smaller on the strips of tiles.
             let c = rng.range(420, 603) as u32;
             let counts = [c.max(1023 - c), c.min(1023 - c)];
-            let places = LanePlacement::complement_pair(&mut rng, LaneRange { first, count: 0 }, c.max(1023 - c));
+            let mut places = LanePlacement::complement_pair(&mut rng, LaneRange { first, count: 0 }, c.max(1023 - c));
+            // The higher ids first: frames 0 and 2 (the fixed seeds' degree-3 frames) read SH
+            // records past 2^37 bytes from sh_base_i (sh_off[37]).
+            if places[0].id0 < places[1].id0 {
+                places.swap(0, 1);
+            }
             let mut prev = vec![[0u8; 32]; n as usize];
             for f in 0..frames {
                 let g = g0 + f;
                 let (baked, cams) = &scenes[[0, 1, 2, 3, 0][g % 5]];
                 let cam = sweep_camera(&cams[f], cfg.tile, g, &mut rng);
+                // The world moved (camera position, translation, rotation patterns), and on the
+                // ordinary grids a huge Gaussian half a unit in front of the camera.
+                let near = (g % 5 % 2 == 0).then_some(first as usize);
+                let (baked, cam) = sweep_world(baked, &cam, g, near, &mut rng);
+                let baked = &baked;
                 let range = LaneRange { first, count: counts[g % 2] };
                 let check = Checker::new("neo_pre_lane", seed ^ f as u64);
                 // Frame 0 from scratch; then reuse, on a hostile and on an ideal memory.
                 let span = range.first as usize..(range.first + range.count) as usize;
                 let frame = LaneFrame { cam: &cam, all_fresh: f == 0, prev: &prev[span.clone()] };
-                let pace = if f % 2 == 0 { (AxiTiming::RANDOM, 60) } else { (AxiTiming::IDEAL, 100) };
+                // The ideal memory answers after 64 cycles: eight feature words wait for their B.
+                let slow = AxiTiming { latency: 64, ..AxiTiming::IDEAL };
+                let pace = if f % 2 == 0 { (AxiTiming::RANDOM, 60) } else { (slow, 100) };
                 let run = bench.run_at(baked, &frame, range, &places[f % 2], pace, &check);
                 eprintln!(
                     "{name}: frame {f}: {}x{} pixels, degree {}, {} Gaussians from id {}, {} visible, {} incoming hits, {} cycles",
@@ -89,5 +101,60 @@ neo_tb::with_models! {
         let frame = LaneFrame { cam: &cams[0], all_fresh: true, prev: &[] };
         let run = bench.run(&baked, &frame, LaneRange { first: 3, count: 190 }, (AxiTiming::RANDOM, 70), &check);
         assert!(run.visible > 0 && run.hits > 0, "{run:?}");
+    }
+
+    /// A slow writer (AW and W ready 12 % of the cycles, full read bandwidth): the colour
+    /// unit's output waits for each feature word's write, the pending queue fills, and the
+    /// projection unit advances one stage per word written while the geometry fetch has a
+    /// record ready at each advance, so its stages fill up and `u_posq` (one entry per Gaussian
+    /// inside `u_project`) passes 128 entries and drains again. The camera moves along its view
+    /// axis until the visible depths straddle 2 (the FP16 depth key's bit 14 set and clear in
+    /// `u_colq`'s words).
+    #[test]
+    fn lane_fills_its_queues_behind_a_slow_writer() {
+        use neo_golden::hwpre::project::ProjectParams;
+        use neo_golden::hwpre::{camera_registers, preprocess_one};
+        use neo_golden::sort::DepthKeyCodec;
+        let name = "lane_fills_its_queues_behind_a_slow_writer";
+        let cfg = neo_tb::config();
+        let mut bench = LaneBench::build(&cfg).unwrap();
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        let (baked, cams) = scene(400, 11, 1, 0);
+        let range = LaneRange { first: 1, count: baked.len() as u32 - 1 };
+        let params = ProjectParams { feature: cfg.feature_format(), tile: cfg.tile };
+        // (visible depths below 2, at least 2) for a camera.
+        let split = |cam: &Camera| {
+            let (regs, pos) = camera_registers(cam, cfg.tile);
+            let keys: Vec<u32> = (range.first..range.first + range.count)
+                .filter_map(|i| preprocess_one(&baked, &regs, pos, &params, &DepthKeyCodec::Fp16, i as usize))
+                .map(|h| h.entry.depth_key)
+                .collect();
+            let far = keys.iter().filter(|&&k| k >= 0x4000).count();
+            (keys.len() - far, far)
+        };
+        let cam = (-16..=40)
+            .map(|k| {
+                let mut c = cams[0].clone();
+                c.position -= c.cam_to_world.z_axis * (0.25 * f64::from(k));
+                c
+            })
+            .max_by_key(|c| {
+                let (near, far) = split(c);
+                near.min(far)
+            })
+            .expect("cameras");
+        let (near, far) = split(&cam);
+        assert!(near > 0 && far > 0, "visible depths below 2: {near}, at least 2: {far}");
+        let slow = AxiTiming { ready_percent: 12, ..AxiTiming::IDEAL };
+        for_each_seed(name, |seed| {
+            let check = Checker::new("neo_pre_lane", seed);
+            let frame = LaneFrame { cam: &cam, all_fresh: true, prev: &[] };
+            let run = bench.run(&baked, &frame, range, (slow, 100), &check);
+            eprintln!(
+                "{name}: {} Gaussians, {} visible ({near} nearer than 2), {} cycles",
+                run.gaussians, run.visible, run.cycles
+            );
+            assert!(run.visible > 0 && run.visible < run.gaussians, "{run:?}");
+        });
     }
 }

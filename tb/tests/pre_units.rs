@@ -98,7 +98,7 @@ neo_tb::with_models! {
         });
     }
 
-    use neo_tb::dup::{random_items, DupBench, DupFrame, DupItem};
+    use neo_tb::dup::{bounded_items, random_items, sweep_grid, DupBench, DupFrame, DupItem};
 
     fn dup_vectors() -> usize {
         std::env::var("NEO_TB_VECTORS").ok().and_then(|v| v.parse().ok()).unwrap_or(3000)
@@ -177,6 +177,39 @@ neo_tb::with_models! {
             .sum();
         let run = bench.run(frame, &items, &mut rng, (100, 100), &Checker::new("neo_pre_dup", 7));
         assert_eq!(run.accept_span, walker, "{} hits over {walker} walker cycles", run.hits);
+    }
+
+    /// The per-frame grid swept over the tile index range in one model
+    /// (`neo_tb::dup::sweep_grid`: a random grid, its 10-bit complement, the grid again, the
+    /// 1023 x 1 and 1 x 1023 strips), with Gaussians spread over the whole index range (their
+    /// candidate rectangles bounded to keep the walker short): every bit of the grid, of the
+    /// rectangles, of the walker's tile and of the hits' tiles rises and falls.
+    #[test]
+    fn dup_grids_swept_over_the_tile_range() {
+        let name = "dup_grids_swept_over_the_tile_range";
+        let cfg = neo_tb::config();
+        let mut bench = DupBench::build(&cfg).expect("build neo_pre_dup");
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        let top = (1u64 << cfg.tile_bits) - 2;
+        let half = 1u32 << (cfg.tile_bits - 1);
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            let check = Checker::new("neo_pre_dup", seed);
+            let g = [rng.range(1, top) as u32, rng.range(1, top) as u32];
+            let mut far = [0usize; 2];
+            for k in 0..5 {
+                let grid = sweep_grid(&cfg, g, k);
+                let frame = DupFrame { grid, all_fresh: k % 2 == 1 };
+                let items = bounded_items(&cfg, &mut rng, grid, 150, 64);
+                for h in neo_tb::dup::expected(&cfg, frame, &items) {
+                    far[0] += usize::from(h.tile[0] >= half);
+                    far[1] += usize::from(h.tile[1] >= half);
+                }
+                bench.run(frame, &items, &mut rng, [(100, 100), (60, 50), (90, 40)][k % 3], &check);
+            }
+            // Hits in the upper half of the index range on both axes (tile index bit 9).
+            assert!(far[0] > 0 && far[1] > 0, "hits beyond tile {half}: {far:?}");
+        });
     }
 
     use neo_gen::units::pre::{COLOR_NAME, PROJECT_NAME};
