@@ -375,7 +375,9 @@ pub fn pre_datapaths(cfg: &neo_gen::EngineConfig) -> Vec<(String, String)> {
     ]
 }
 
-/// Automatic toggle waivers of the Preprocessing Engine's datapath modules for `cfg`: every
+/// Automatic toggle waivers of the Preprocessing Engine's datapath modules for `cfg` (and of the
+/// inline logic bench's, `pre::INLINE_BENCH_NAME`, which its test generates from the same
+/// graph, so it is never stale): every
 /// bit the known-bits analysis proves constant (`Datapath::constant_bits`: node nets, delay
 /// taps and shift registers, comparator outputs, output ports), one `net[hi:lo]` waiver per
 /// run of constant bits, with the analysis' reason; and the same bits of the lane's nets that
@@ -384,10 +386,12 @@ pub fn known_bits_waivers(cfg: &neo_gen::EngineConfig) -> Vec<Waiver> {
     use neo_gen::units::pre::{self, datapath::Datapath, library::PreLibrary};
     let project = neo_golden::hwpre::project::project_graph(&pre::project_params(cfg));
     let color = neo_golden::hwpre::color::color_graph(&cfg.feature_format().color);
+    let inline = crate::pre::inline_graph();
     let mut out = Vec::new();
     let contracts = [
         (pre::PROJECT_NAME, &project, pre::project_contracts(cfg)),
         (pre::COLOR_NAME, &color, pre::color_contracts()),
+        (crate::pre::INLINE_BENCH_NAME, &inline, Vec::new()),
     ];
     for (module, graph, contracts) in contracts {
         let datapath = Datapath::new(graph, &PreLibrary);

@@ -13,7 +13,7 @@ use neo_gen::units::pre::lane::NAME;
 use neo_gen::EngineConfig;
 use neo_golden::camera::Camera;
 use neo_golden::engine::memory::{feature_from_bytes, feature_to_bytes, Memory, FEATURE_BYTES};
-use neo_golden::engine::CameraWord;
+use neo_golden::engine::{CameraWord, CAMERA_WORDS};
 use neo_golden::hwpre::bake::{geometry_bytes, sh_bytes, Baked, ShPrecision};
 use neo_golden::hwpre::duplicate::{incoming, TouchRecord};
 use neo_golden::hwpre::project::ProjectParams;
@@ -357,12 +357,25 @@ impl LaneBench {
         place: &LanePlacement,
     ) -> Result<(), String> {
         let words = CameraWord::values(cam, self.cfg.tile);
+        self.program_words(&words, baked.sh_degree, all_fresh, range, place)
+    }
+
+    /// Programs the per-frame inputs: the camera words `words` as they are (any bits, in
+    /// [`CameraWord`] order), SH `degree` (f32 records), `all_fresh`, `range` at `place`.
+    fn program_words(
+        &mut self,
+        words: &[u32; CAMERA_WORDS],
+        degree: u8,
+        all_fresh: bool,
+        range: LaneRange,
+        place: &LanePlacement,
+    ) -> Result<(), String> {
         let mut all: Vec<(String, u64)> =
             CameraWord::all().map(|c| (c.port(), u64::from(words[c.0 as usize]))).collect();
-        all.push(("degree_i".into(), u64::from(baked.sh_degree)));
+        all.push(("degree_i".into(), u64::from(degree)));
         all.push(("geo_base_i".into(), u64::from(place.geo)));
         all.push(("sh_base_i".into(), u64::from(place.sh)));
-        all.push(("sh_words_i".into(), u64::from(sh_bytes(baked.sh_degree, ShPrecision::F32) / 4)));
+        all.push(("sh_words_i".into(), u64::from(sh_bytes(degree, ShPrecision::F32) / 4)));
         all.push(("feat_base_i".into(), u64::from(place.feat)));
         all.push(("prev_base_i".into(), u64::from(place.prev)));
         all.push(("all_fresh_i".into(), u64::from(all_fresh)));
@@ -373,6 +386,85 @@ impl LaneBench {
             self.model.set_u64(p, v);
         }
         Ok(())
+    }
+
+    /// Runs the lane over no Gaussian (`count_i` 0 from `first`, at `place`, SH `degree`) with
+    /// the camera words `words` as they are: any bits at all (the complement of a real frame's
+    /// words, say), since an empty range must do nothing whatever its per-frame inputs hold.
+    /// Checks, every cycle, that neither port issues a read or a write and no hit is offered,
+    /// and that `busy_o` falls within 2000 cycles (the budget of a run of 0 Gaussians); the
+    /// memory (canaries around `first`) must be left as it was. Returns the cycles.
+    pub fn run_empty(
+        &mut self,
+        words: &[u32; CAMERA_WORDS],
+        degree: u8,
+        first: u32,
+        place: &LanePlacement,
+        check: &Checker,
+    ) -> u64 {
+        let mut rng = Rng::new(check.seed);
+        let range = LaneRange { first, count: 0 };
+        let mut mem = Memory::new();
+        let canary = [CANARY; FEATURE_BYTES as usize];
+        let id = u64::from(place.id0) + u64::from(first);
+        for id in [id.wrapping_sub(1), id] {
+            write_wrapped(&mut mem, place.feat_at(id), &canary);
+        }
+        let mut mem = AxiMemory::new(2, mem, AxiTiming::RANDOM, rng.next_u64());
+        self.program_words(words, degree, false, range, place).unwrap_or_else(|e| panic!("{NAME}: {e}"));
+        for p in &self.ports {
+            p.set_subordinate(&mut self.model, &SubordinateSignals::default());
+        }
+        self.model.set_u64(self.start, 0);
+        self.model.reset();
+        let (ro, wo) = (self.cfg.pre_outstanding, self.cfg.axi_outstanding);
+        let mut chk = [AxiChecker::new(0, "ma_axi", ro, wo), AxiChecker::new(1, "mb_axi", ro, wo)];
+        let start = self.model.cycle();
+        let (mut first_cycle, mut rose) = (true, false);
+        loop {
+            self.model.set_u64(self.start, u64::from(first_cycle));
+            self.model.set_u64(self.hit[1], u64::from(rng.percent(50)));
+            let subs = [mem.outputs(0), mem.outputs(1)];
+            for (p, s) in self.ports.iter().zip(&subs) {
+                p.set_subordinate(&mut self.model, s);
+            }
+            self.model.eval();
+            let cyc = self.model.cycle();
+            let busy = self.model.get_u64(self.busy) == 1;
+            rose |= busy;
+            check.protocol(cyc, self.model.get_u64(self.hit[0]) == 0, "an empty range offers no hit");
+            for k in 0..2 {
+                let man = self.ports[k].get_manager(&self.model);
+                if let Err(v) = chk[k].observe(&man, &subs[k]) {
+                    check.fail(cyc, "AXI protocol", "no violation", &v.to_string());
+                }
+                check.protocol(
+                    cyc,
+                    man.ar.is_none() && man.aw.is_none() && man.w.is_none(),
+                    &format!("port {k}: an empty range neither reads nor writes"),
+                );
+                mem.tick(k, &man);
+            }
+            self.model.tick();
+            if !first_cycle && !busy {
+                break;
+            }
+            first_cycle = false;
+            check.protocol(cyc, cyc - start < 2_000, "the lane finishes an empty range within 2000 cycles");
+        }
+        let cycles = self.model.cycle() - start;
+        check.value(cycles, "busy_o rose after start_i", 1, u64::from(rose));
+        for id in [id.wrapping_sub(1), id] {
+            let mut got = [0u8; FEATURE_BYTES as usize];
+            read_wrapped(mem.memory(), place.feat_at(id), &mut got);
+            check.value(
+                cycles,
+                &format!("canary word of id {id} around an empty range"),
+                1,
+                u64::from(got == canary),
+            );
+        }
+        cycles
     }
 
     /// Runs the lane over `range` of `baked` for `frame` with memory `timing`, taking hits

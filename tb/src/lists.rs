@@ -58,6 +58,8 @@ pub struct ListsRun {
     pub hits: u64,
     /// Cycles from the start to `busy_o` falling.
     pub cycles: u64,
+    /// Most writes issued (AW accepted) and waiting for their B, over the run.
+    pub max_writes_in_flight: u64,
 }
 
 /// A Verilated `neo_pre_lists`.
@@ -139,6 +141,7 @@ impl ListsBench {
         let start = self.model.cycle();
         let limit = 4_000 + 20 * hits.len() as u64 + 8 * tiles;
         let (mut next, mut held, mut cyc_k, mut flushed) = (0usize, false, 0u64, false);
+        let mut max_writes = 0;
         loop {
             let h = hits.get(next).copied();
             let offer = h.is_some() && (held || rng.percent(offer_percent));
@@ -160,6 +163,7 @@ impl ListsBench {
             if let Err(v) = chk.observe(&man, &sub) {
                 check.fail(cyc, "AXI protocol", "no violation", &v.to_string());
             }
+            max_writes = max_writes.max(chk.in_flight().1 as u64);
             let taken = offer && self.get(8) == 1;
             held = offer && !taken;
             next += usize::from(taken);
@@ -176,7 +180,7 @@ impl ListsBench {
         let cycles = self.model.cycle() - start;
         check.value(cycles, "AXI writes open after busy_o fell", 0, chk.in_flight().1 as u64);
         check_lists(&self.cfg, bases, grid, hits, mem.memory(), check, cycles);
-        ListsRun { hits: hits.len() as u64, cycles }
+        ListsRun { hits: hits.len() as u64, cycles, max_writes_in_flight: max_writes }
     }
 }
 

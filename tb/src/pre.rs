@@ -10,7 +10,8 @@ use neo_gen::units::pre::library::PreLibrary;
 use neo_gen::units::pre::{project_params, COLOR_NAME, PROJECT_NAME};
 use neo_gen::EngineConfig;
 use neo_golden::formats::latency::DatapathUnit;
-use neo_golden::hwarith::graph::Graph;
+use neo_golden::hwarith::graph::{Graph, Trace};
+use neo_golden::hwarith::Arith;
 use neo_golden::hwpre::bake::{Baked, BakedGeometry, ShPrecision};
 use neo_golden::hwpre::color::color_graph;
 use neo_golden::hwpre::project::{project_graph, CameraIn};
@@ -228,4 +229,143 @@ pub fn random_camera_position(rng: &mut Rng) -> [f32; 3] {
             m
         }
     })
+}
+
+/// Module name of the bench of the datapath library's inline logic (`pre_units`).
+pub const INLINE_BENCH_NAME: &str = "neo_pre_inline_bench";
+
+/// The inline logic bench's graph ([`INLINE_BENCH_NAME`]): every inline operation of the
+/// datapath library on two floats and two integers.
+pub fn inline_graph() -> Graph {
+    let mut t = Trace::new();
+    let a = t.input_f("a", false);
+    let b = t.input_f("b", false);
+    let i = t.input_i("i", false);
+    let j = t.input_i("j", false);
+    let outs_f = [
+        ("neg", t.neg(a)),
+        ("abs", t.abs(b)),
+        ("max", t.max(a, b)),
+        ("min", t.min(a, b)),
+        ("pow2", t.pow2_field(i)),
+    ];
+    let lt = t.lt(a, b);
+    let le = t.le(a, b);
+    let eq = t.eq(a, b);
+    let nan = t.is_nan(a);
+    let fin = t.is_finite(b);
+    let ilt = t.ilt(i, j);
+    let ieq = t.ieq(i, j);
+    let and = t.and(lt, ilt);
+    let or = t.or(eq, ieq);
+    let not = t.not(le);
+    let sel = t.select(ilt, a, b);
+    let outs_i = [
+        ("exp", t.exp_field(a)),
+        ("iadd", t.iadd(i, j)),
+        ("isub", t.isub(i, j)),
+        ("imin", t.imin(i, j)),
+        ("imax", t.imax(i, j)),
+        ("isel", t.iselect(lt, i, j)),
+    ];
+    for (n, v) in outs_f {
+        t.output_f(n, v);
+    }
+    t.output_f("sel", sel);
+    for (n, v) in outs_i {
+        t.output_i(n, v);
+    }
+    for (n, v) in [
+        ("lt", lt),
+        ("le", le),
+        ("eq", eq),
+        ("nan", nan),
+        ("fin", fin),
+        ("and", and),
+        ("or", or),
+        ("not", not),
+    ] {
+        t.output_b(n, v);
+    }
+    t.finish()
+}
+
+/// The bit values (`[seen 0, seen 1]` masks per node) that `items` give the nodes of `graph`.
+pub fn node_bits_seen(graph: &Graph, items: &[Vec<u32>]) -> Vec<[u32; 2]> {
+    let mut seen = vec![[0u32; 2]; graph.nodes.len()];
+    for item in items {
+        for (s, v) in seen.iter_mut().zip(graph.eval_nodes(item)) {
+            s[0] |= !v;
+            s[1] |= v;
+        }
+    }
+    seen
+}
+
+/// Coverage-directed stimulus: of `candidates`, in order, the items that give some node of
+/// `graph` a bit value none of the items before gave it (`seen`, from [`node_bits_seen`], is
+/// updated), at most `max`. Golden's node values are the datapath's node nets, so each item
+/// kept drives a net bit the bench had not driven to that value.
+pub fn items_with_unseen_bits(
+    graph: &Graph,
+    seen: &mut [[u32; 2]],
+    candidates: impl Iterator<Item = Vec<u32>>,
+    max: usize,
+) -> Vec<Vec<u32>> {
+    let mut kept = Vec::new();
+    for item in candidates {
+        if kept.len() == max {
+            break;
+        }
+        let v = graph.eval_nodes(&item);
+        if seen.iter().zip(&v).any(|(s, &x)| x & !s[1] != 0 || !x & !s[0] != 0) {
+            for (s, x) in seen.iter_mut().zip(&v) {
+                s[0] |= !x;
+                s[1] |= x;
+            }
+            kept.push(item);
+        }
+    }
+    kept
+}
+
+/// Projection items of hard geometry on the axis of a camera at the origin looking down +z (f =
+/// 500 px, 640x480): isotropic covariances of every scale with a cross term `xy` from 10^-32
+/// to 10^-20 of either sign, so that the 2D covariance's diagonal terms are equal and its
+/// off-diagonal term's square is subnormal (the major axis where rounding is coarsest), half
+/// of them with a 2D variance just above a power of two (a conic whose block-float mantissa
+/// rounds up to the next exponent), and depths from the near plane to 10^4.
+pub fn on_axis_project_items(rng: &mut Rng, n: usize) -> Vec<Vec<u32>> {
+    let (w, h, f) = (640.0f32, 480.0f32, 500.0f32);
+    let cam = CameraIn {
+        w2v: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        translation: [0.0; 3],
+        focal: [f, f],
+        lim: [1.3 * w / (2.0 * f), 1.3 * h / (2.0 * f)],
+        principal: [(w - 1.0) / 2.0, (h - 1.0) / 2.0],
+        grid: [10, 8],
+    };
+    (0..n)
+        .map(|_| {
+            let z = log_uniform(rng, -0.6, 4.0) as f32;
+            let s = if rng.percent(50) {
+                log_uniform(rng, -12.0, 2.0) as f32
+            } else {
+                // The 2D variance (f / z)^2 s + 0.3 just above a power of two 2^k: the conic
+                // 1 / v just below 2^-k, whose block-float mantissa rounds up to the next
+                // exponent (conic_bfp's decrement).
+                let k = rng.below(12) as i32 - 1;
+                let v = 2f64.powi(k) * (1.0 + rng.below(1 << 10) as f64 * 2f64.powi(-28));
+                ((v - 0.3) * (z as f64 / f as f64).powi(2)) as f32
+            };
+            let xy = log_uniform(rng, -32.0, -20.0) as f32 * if rng.percent(50) { 1.0 } else { -1.0 };
+            let g = BakedGeometry {
+                position: [0.0, 0.0, z],
+                cov3d: [s, xy, 0.0, s, 0.0, s],
+                opacity: 0.8,
+                k2: 11.0,
+            };
+            project_item(&g, &cam)
+        })
+        .collect()
 }

@@ -224,7 +224,7 @@ impl PreEngineBench {
 
     /// The registers of a frame of `baked` for `frame` (the engine's memory map of the bench):
     /// what golden's reference reads, and what [`PreEngineBench::program`] drives.
-    fn regs(&self, baked: &Baked, frame: &LaneFrame, at: &EngineSetup) -> FrameRegs {
+    pub fn frame_regs(&self, baked: &Baked, frame: &LaneFrame, at: &EngineSetup) -> FrameRegs {
         let (regs, _) = camera_registers(frame.cam, self.cfg.tile);
         let tiles = at.tiles.unwrap_or(regs.grid[0] as u32 * regs.grid[1] as u32);
         let fresh = if frame.all_fresh { PRE_FRESH } else { 0 };
@@ -285,25 +285,47 @@ impl PreEngineBench {
         timing: AxiTiming,
         check: &Checker,
     ) -> PreRun {
+        let regs = self.frame_regs(baked, frame, at);
+        self.run_regs(baked, frame.prev, &regs, timing, check)
+    }
+
+    /// Runs the engine with the registers `regs` as they are (any camera words: golden decodes
+    /// the same ones) over `baked` placed at the bases of `regs`, `prev` the previous feature
+    /// words, and checks what it leaves against golden. Stops the test at the first mismatch.
+    pub fn run_regs(
+        &mut self,
+        baked: &Baked,
+        prev: &[[u8; 32]],
+        regs: &FrameRegs,
+        timing: AxiTiming,
+        check: &Checker,
+    ) -> PreRun {
         let n = managers(&self.cfg);
         let mut rng = Rng::new(check.seed);
-        let b = at.bases;
+        let p = &regs.pre;
+        let b = EngineBases {
+            geo: p.geo_base,
+            sh: p.sh_base,
+            feat: regs.feat_base,
+            prev: p.prev_feat_base,
+            list: p.list_base,
+            desc: regs.desc_base,
+        };
         let mut mem = Memory::new();
         let geo: Vec<u8> = baked.geometry.iter().flat_map(|g| g.to_le_bytes()).collect();
         mem.write(b.geo, &geo);
         let sh: Vec<u8> = baked.sh.iter().flat_map(|w| w.to_le_bytes()).collect();
         mem.write(b.sh, &sh);
-        for (k, w) in frame.prev.iter().enumerate() {
+        for (k, w) in prev.iter().enumerate() {
             mem.write(b.prev + FEATURE_BYTES * k as u64, w);
         }
-        let regs = self.regs(baked, frame, at);
         let count = u64::from(regs.pre.gaussians);
         mem.write(b.feat + FEATURE_BYTES * count, &[FEAT_CANARY; FEATURE_BYTES as usize]);
         let tiles = u64::from(regs.tiles);
-        self.program(&regs).unwrap_or_else(|e| panic!("{NAME}: {e}"));
+        self.program(regs).unwrap_or_else(|e| panic!("{NAME}: {e}"));
         mem.write(b.desc, &vec![DESC_CANARY; (DESCRIPTOR_BYTES * tiles) as usize]);
         let mut golden = mem.clone();
-        let work = preprocess_frame(&self.cfg, &regs, &mut golden, &mut Counters::default())
+        let work = preprocess_frame(&self.cfg, regs, &mut golden, &mut Counters::default())
             .unwrap_or_else(|e| panic!("golden preprocess_frame: {e}"));
         let mut mem = AxiMemory::new(n, mem, timing, rng.next_u64());
         for p in &self.ports {

@@ -79,6 +79,7 @@ neo_tb::with_models! {
                 };
                 let timing = if f % 2 == 0 { AxiTiming::RANDOM } else { AxiTiming::IDEAL };
                 let run = bench.run_at(baked, &frame, &at, timing, &check);
+                let mut regs = bench.frame_regs(baked, &frame, &at);
                 eprintln!(
                     "{name}: frame {f}: {}x{} pixels, {} Gaussians (degree {}), {} visible, {} incoming entries in {} tiles, {} cycles, {} / {} beats read / written",
                     cam.width, cam.height, run.gaussians, baked.sh_degree, run.visible, run.hits, run.tiles, run.cycles, run.beats.0, run.beats.1
@@ -89,8 +90,70 @@ neo_tb::with_models! {
                     assert!(f == 0 || run.hits > 0, "frame {f}: no incoming entry");
                 }
                 prev[..run.table.len()].copy_from_slice(&run.table);
+                // Then an empty frame (GAUSSIANS and TILES 0) whose camera words are the bitwise
+                // complement of this frame's: every camera bit rises and falls (v, !v, w, !w) on
+                // the one model, and an empty frame must do nothing whatever the words hold
+                // (checked against golden, and here: no beat read or written, no entry, done_o
+                // within 64 cycles).
+                regs.pre.camera = regs.pre.camera.map(|w| !w);
+                (regs.pre.gaussians, regs.tiles) = (0, 0);
+                let check = Checker::new("neo_pre_engine", seed ^ f as u64 ^ 0xe3);
+                let empty = bench.run_regs(baked, &prev, &regs, AxiTiming::RANDOM, &check);
+                eprintln!(
+                    "{name}: frame {f}: an empty frame, complement camera words: {} cycles",
+                    empty.cycles
+                );
+                let what = (empty.beats, empty.hits, empty.visible);
+                assert_eq!(what, ((0, 0), 0, 0), "an empty frame: {empty:?}");
+                assert!(empty.cycles <= 64, "an empty frame: {empty:?}");
             }
         });
+    }
+
+    /// A camera backed off along its view axis until the visible depths straddle 2: the FP16
+    /// depth key's bit 14 set and clear in the lanes' hits, the arbiter's and the list lines
+    /// (the walk's cameras see every Gaussian nearer than 2).
+    #[test]
+    fn depths_on_both_sides_of_2_reach_the_lists() {
+        use neo_golden::hwpre::project::ProjectParams;
+        use neo_golden::hwpre::{camera_registers, preprocess_one};
+        use neo_golden::sort::DepthKeyCodec;
+        let name = "depths_on_both_sides_of_2_reach_the_lists";
+        let cfg = config();
+        let mut bench = PreEngineBench::build(&cfg).unwrap();
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        let (baked, cams) = scene(601, 11, 1, 0);
+        let params = ProjectParams { feature: cfg.feature_format(), tile: cfg.tile };
+        // (visible depths below 2, at least 2) for a camera.
+        let split = |cam: &neo_golden::camera::Camera| {
+            let (regs, pos) = camera_registers(cam, cfg.tile);
+            let keys: Vec<u32> = (0..baked.len())
+                .filter_map(|i| preprocess_one(&baked, &regs, pos, &params, &DepthKeyCodec::Fp16, i))
+                .map(|h| h.entry.depth_key)
+                .collect();
+            let far = keys.iter().filter(|&&k| k >= 0x4000).count();
+            (keys.len() - far, far)
+        };
+        let cam = (0..=40)
+            .map(|k| {
+                let mut c = cams[0].clone();
+                c.position -= c.cam_to_world.z_axis * (0.25 * f64::from(k));
+                c
+            })
+            .max_by_key(|c| {
+                let (near, far) = split(c);
+                near.min(far)
+            })
+            .expect("cameras");
+        let (near, far) = split(&cam);
+        assert!(near > 0 && far > 0, "visible depths below 2: {near}, at least 2: {far}");
+        let check = Checker::new("neo_pre_engine", 11);
+        let frame = LaneFrame { cam: &cam, all_fresh: true, prev: &[] };
+        let run = bench.run(&baked, &frame, AxiTiming::RANDOM, &check);
+        eprintln!(
+            "{name}: {} Gaussians, {} visible ({near} nearer than 2), {} entries, {} cycles",
+            run.gaussians, run.visible, run.hits, run.cycles
+        );
     }
 
     #[test]

@@ -12,6 +12,7 @@ neo_tb::with_models! {
     use neo_tb::axi::AxiTiming;
     use neo_tb::check::Checker;
     use neo_golden::camera::Camera;
+    use neo_golden::engine::CameraWord;
     use neo_tb::lane::{sweep_camera, sweep_world, LaneBench, LaneFrame, LanePlacement, LaneRange};
     use neo_tb::rng::{for_each_seed, Rng};
 
@@ -87,6 +88,14 @@ neo_tb::with_models! {
                     assert!(f == 0 || run.hits > 0, "frame {f}: no incoming hit");
                 }
                 prev[span].copy_from_slice(&run.table);
+                // Then an empty range (count 0) with the bitwise complement of the frame's camera
+                // words: every camera bit rises and falls (v, !v, w, !w) on the one model, and an
+                // empty range must do nothing whatever the words hold (checked: no read, write or
+                // hit, busy_o falls).
+                let words = CameraWord::values(&cam, cfg.tile).map(|w| !w);
+                let check = Checker::new("neo_pre_lane", seed ^ f as u64 ^ 0xe3);
+                let cycles = bench.run_empty(&words, baked.sh_degree, first, &places[f % 2], &check);
+                eprintln!("{name}: frame {f}: an empty range, complement camera words: {cycles} cycles");
             }
         });
     }
@@ -109,7 +118,11 @@ neo_tb::with_models! {
     /// record ready at each advance, so its stages fill up and `u_posq` (one entry per Gaussian
     /// inside `u_project`) passes 128 entries and drains again. The camera moves along its view
     /// axis until the visible depths straddle 2 (the FP16 depth key's bit 14 set and clear in
-    /// `u_colq`'s words).
+    /// `u_colq`'s words), and one Gaussian (sigma 400, half a unit in front of the camera) is
+    /// so wide that its conic exponent field reaches 32. Then the same frame again reusing the
+    /// table just written (no incoming hit): every visible Gaussian takes its previous word into
+    /// `prev_q`, whose depth keys and conic exponents (fields the duplication unit does not use)
+    /// take both values of their bits 14 and 5.
     #[test]
     fn lane_fills_its_queues_behind_a_slow_writer() {
         use neo_golden::hwpre::project::ProjectParams;
@@ -119,17 +132,21 @@ neo_tb::with_models! {
         let cfg = neo_tb::config();
         let mut bench = LaneBench::build(&cfg).unwrap();
         neo_tb::waves::maybe_trace(bench.model_mut(), name);
-        let (baked, cams) = scene(400, 11, 1, 0);
+        let (mut baked, cams) = scene(400, 11, 1, 0);
         let range = LaneRange { first: 1, count: baked.len() as u32 - 1 };
         let params = ProjectParams { feature: cfg.feature_format(), tile: cfg.tile };
-        // (visible depths below 2, at least 2) for a camera.
-        let split = |cam: &Camera| {
+        // The visible Gaussians' entries for a camera.
+        let entries = |baked: &Baked, cam: &Camera| {
             let (regs, pos) = camera_registers(cam, cfg.tile);
-            let keys: Vec<u32> = (range.first..range.first + range.count)
-                .filter_map(|i| preprocess_one(&baked, &regs, pos, &params, &DepthKeyCodec::Fp16, i as usize))
-                .map(|h| h.entry.depth_key)
-                .collect();
-            let far = keys.iter().filter(|&&k| k >= 0x4000).count();
+            (range.first..range.first + range.count)
+                .filter_map(|i| preprocess_one(baked, &regs, pos, &params, &DepthKeyCodec::Fp16, i as usize))
+                .map(|h| h.entry)
+                .collect::<Vec<_>>()
+        };
+        // (visible depths below 2, at least 2) for a camera.
+        let split = |baked: &Baked, cam: &Camera| {
+            let keys = entries(baked, cam);
+            let far = keys.iter().filter(|e| e.depth_key >= 0x4000).count();
             (keys.len() - far, far)
         };
         let cam = (-16..=40)
@@ -139,12 +156,19 @@ neo_tb::with_models! {
                 c
             })
             .max_by_key(|c| {
-                let (near, far) = split(c);
+                let (near, far) = split(&baked, c);
                 near.min(far)
             })
             .expect("cameras");
-        let (near, far) = split(&cam);
+        let wide = &mut baked.geometry[5];
+        let p = cam.position + cam.cam_to_world.z_axis * 0.5;
+        wide.position = [p.x as f32, p.y as f32, p.z as f32];
+        wide.cov3d = [160_000.0, 0.0, 0.0, 160_000.0, 0.0, 160_000.0];
+        let baked = baked;
+        let (near, far) = split(&baked, &cam);
         assert!(near > 0 && far > 0, "visible depths below 2: {near}, at least 2: {far}");
+        let exps: Vec<u32> = entries(&baked, &cam).iter().map(|e| e.conic.exp).collect();
+        assert!(exps.iter().any(|&e| e >= 32) && exps.iter().any(|&e| e < 32), "conic exponents {exps:?}");
         let slow = AxiTiming { ready_percent: 12, ..AxiTiming::IDEAL };
         for_each_seed(name, |seed| {
             let check = Checker::new("neo_pre_lane", seed);
@@ -155,6 +179,9 @@ neo_tb::with_models! {
                 run.gaussians, run.visible, run.cycles
             );
             assert!(run.visible > 0 && run.visible < run.gaussians, "{run:?}");
+            let again = LaneFrame { cam: &cam, all_fresh: false, prev: &run.table };
+            let reuse = bench.run(&baked, &again, range, (AxiTiming::IDEAL, 100), &check);
+            assert_eq!((reuse.visible, reuse.hits), (run.visible, 0), "{reuse:?}");
         });
     }
 }

@@ -60,6 +60,27 @@ neo_tb::with_models! {
         });
     }
 
+    /// A memory whose B comes 1500 cycles after the last W beat: the writer issues writes until
+    /// `pre_outstanding` of them wait for their B (its counter of open writes climbs to the
+    /// limit and back to 0), then one per B, and loses nothing. 1200 hits on 2 x 2 tiles: about
+    /// 150 full lines.
+    #[test]
+    fn writes_wait_for_a_slow_response_up_to_the_outstanding_limit() {
+        let name = "writes_wait_for_a_slow_response_up_to_the_outstanding_limit";
+        let cfg = neo_tb::config();
+        let mut bench = ListsBench::build(&cfg).unwrap();
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        let check = Checker::new("neo_pre_lists", 13);
+        let hits = random_hits(&cfg, &mut Rng::new(13), [2, 2], 1200);
+        let slow = AxiTiming { latency: 1500, ..AxiTiming::IDEAL };
+        let run = bench.run([2, 2], &hits, 100, slow, &check);
+        eprintln!(
+            "{name}: {} hits in {} cycles, {} writes open at most",
+            run.hits, run.cycles, run.max_writes_in_flight
+        );
+        assert_eq!(run.max_writes_in_flight, cfg.pre_outstanding as u64, "{run:?}");
+    }
+
     #[test]
     fn a_list_longer_than_the_capacity_stops_there_and_counts_on() {
         let cfg = neo_tb::config();

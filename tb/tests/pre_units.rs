@@ -11,57 +11,10 @@ fn models_present() {
 neo_tb::with_models! {
     use neo_gen::units::pre::datapath::Datapath;
     use neo_gen::units::pre::library::PreLibrary;
-    use neo_golden::hwarith::graph::{Graph, Trace};
-    use neo_golden::hwarith::Arith;
     use neo_tb::check::Checker;
+    use neo_tb::pre::{inline_graph, INLINE_BENCH_NAME};
     use neo_tb::datapath::DatapathBench;
     use neo_tb::rng::{for_each_seed, Rng};
-
-    /// Every inline operation of the library on two floats and two integers.
-    fn inline_graph() -> Graph {
-        let mut t = Trace::new();
-        let a = t.input_f("a", false);
-        let b = t.input_f("b", false);
-        let i = t.input_i("i", false);
-        let j = t.input_i("j", false);
-        let outs_f = [
-            ("neg", t.neg(a)),
-            ("abs", t.abs(b)),
-            ("max", t.max(a, b)),
-            ("min", t.min(a, b)),
-            ("pow2", t.pow2_field(i)),
-        ];
-        let lt = t.lt(a, b);
-        let le = t.le(a, b);
-        let eq = t.eq(a, b);
-        let nan = t.is_nan(a);
-        let fin = t.is_finite(b);
-        let ilt = t.ilt(i, j);
-        let ieq = t.ieq(i, j);
-        let and = t.and(lt, ilt);
-        let or = t.or(eq, ieq);
-        let not = t.not(le);
-        let sel = t.select(ilt, a, b);
-        let outs_i = [
-            ("exp", t.exp_field(a)),
-            ("iadd", t.iadd(i, j)),
-            ("isub", t.isub(i, j)),
-            ("imin", t.imin(i, j)),
-            ("imax", t.imax(i, j)),
-            ("isel", t.iselect(lt, i, j)),
-        ];
-        for (n, v) in outs_f {
-            t.output_f(n, v);
-        }
-        t.output_f("sel", sel);
-        for (n, v) in outs_i {
-            t.output_i(n, v);
-        }
-        for (n, v) in [("lt", lt), ("le", le), ("eq", eq), ("nan", nan), ("fin", fin), ("and", and), ("or", or), ("not", not)] {
-            t.output_b(n, v);
-        }
-        t.finish()
-    }
 
     /// Floats that stress compares and sign handling.
     const EDGE_F: [u32; 14] = [
@@ -74,7 +27,7 @@ neo_tb::with_models! {
     fn inline_logic_on_edge_and_random_values() {
         let name = "inline_logic_on_edge_and_random_values";
         let g = inline_graph();
-        let top = Datapath::new(&g, &PreLibrary).module("neo_pre_inline_bench", &[]);
+        let top = Datapath::new(&g, &PreLibrary).module(INLINE_BENCH_NAME, &[]);
         let files = neo_gen::units::files_for_module(&neo_tb::config(), &top);
         let mut bench = DatapathBench::build(g, &top, &files).expect("build");
         for_each_seed(name, |seed| {
@@ -91,7 +44,7 @@ neo_tb::with_models! {
                 let small = |rng: &mut Rng| if rng.percent(50) { rng.below(300) as u32 } else { rng.next_u32() };
                 items.push(vec![f(&mut rng), f(&mut rng), small(&mut rng), small(&mut rng)]);
             }
-            let check = Checker::new("neo_pre_inline_bench", seed);
+            let check = Checker::new(INLINE_BENCH_NAME, seed);
             for mix in [(100, 100), (60, 70), (30, 100)] {
                 bench.run(&items, 0, &mut rng, mix, &check);
             }
@@ -216,8 +169,9 @@ neo_tb::with_models! {
     use neo_golden::hwpre::bake::BakedGeometry;
     use neo_golden::hwpre::project::CameraIn;
     use neo_tb::pre::{
-        color_bench, color_item, project_bench, project_item, random_camera_position, random_camera_project_items,
-        random_color_items, scene_project_items, UnitBench,
+        color_bench, color_item, items_with_unseen_bits, node_bits_seen, on_axis_project_items, project_bench,
+        project_item, random_camera_position, random_camera_project_items, random_color_items, scene_project_items,
+        UnitBench,
     };
 
     /// At least 10k random Gaussians per seed share over the four SH degrees and backpressure mixes.
@@ -312,6 +266,36 @@ neo_tb::with_models! {
             for (k, items) in random_camera_project_items(&cfg, &mut rng, per_camera, 16).iter().enumerate() {
                 bench.run(items, settle, &mut rng, [(100, 100), (60, 80), (90, 40)][k % 3], &check);
             }
+        });
+    }
+
+    /// Coverage-directed stimulus: hard on-axis geometry (`on_axis_project_items`: equal
+    /// diagonal 2D covariances with a subnormal-squared cross term, every scale and depth) kept
+    /// only when golden says it drives a node net bit that no item before it did
+    /// (`items_with_unseen_bits`, from 100k candidates a seed); each kept item runs between
+    /// ordinary ones, so such a bit rises and falls.
+    #[test]
+    fn project_items_that_drive_unseen_bits() {
+        let name = "project_items_that_drive_unseen_bits";
+        let cfg = neo_tb::config();
+        let graph = neo_golden::hwpre::project::project_graph(&neo_gen::units::pre::project_params(&cfg));
+        let UnitBench { mut bench, settle, .. } = project_bench(&cfg);
+        for_each_seed(name, |seed| {
+            let mut rng = Rng::new(seed);
+            let check = Checker::new(PROJECT_NAME, seed);
+            let base = on_axis_project_items(&mut rng, 400);
+            let mut seen = node_bits_seen(&graph, &base);
+            let candidates = on_axis_project_items(&mut rng, 100_000);
+            let found = items_with_unseen_bits(&graph, &mut seen, candidates.into_iter(), 300);
+            println!("{name}: {} items drive bits the {} before them did not", found.len(), base.len());
+            assert!(found.len() >= 3, "the search found {} items", found.len());
+            let mut items = Vec::new();
+            for (f, b) in found.iter().zip(base.iter().cycle()) {
+                items.push(b.clone());
+                items.push(f.clone());
+            }
+            items.extend(base.iter().cloned());
+            bench.run(&items, settle, &mut rng, (100, 100), &check);
         });
     }
 

@@ -141,6 +141,44 @@ pub struct Graph {
     pub inputs: Vec<Input>,
     /// The outputs: name and node.
     pub outputs: Vec<(String, NodeId)>,
+    /// The ranges the program asserts of its values ([`Arith::assume_f`], [`Arith::assume_i`]).
+    pub assumptions: Vec<Assumption>,
+}
+
+/// A range a node's value always lies in, as the program asserts it ([`Arith::assume_f`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Assumption {
+    /// The node.
+    pub node: NodeId,
+    /// The range.
+    pub range: AssumedRange,
+    /// Why it holds.
+    pub why: &'static str,
+}
+
+/// The range of an [`Assumption`], inclusive.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub enum AssumedRange {
+    /// A binary32 in `[lo, hi]` (never NaN).
+    F(f32, f32),
+    /// An integer in `[lo, hi]`.
+    I(i32, i32),
+    /// A binary32 that is a zero or of magnitude in `[lo, hi]` (`0 < lo`; never NaN).
+    ZeroOr(f32, f32),
+}
+
+impl AssumedRange {
+    /// Whether a node's raw bits `v` lie in the range.
+    pub fn admits(&self, v: u32) -> bool {
+        match *self {
+            AssumedRange::F(lo, hi) => (lo..=hi).contains(&f32::from_bits(v)),
+            AssumedRange::I(lo, hi) => (lo..=hi).contains(&(v as i32)),
+            AssumedRange::ZeroOr(lo, hi) => {
+                let x = f32::from_bits(v);
+                x == 0.0 || (lo..=hi).contains(&x.abs())
+            }
+        }
+    }
 }
 
 /// A binary32 value of a traced program.
@@ -213,7 +251,8 @@ impl Trace {
         self.output(name, v.0)
     }
 
-    /// The recorded graph, without the nodes no output depends on (ids renumbered, order kept).
+    /// The recorded graph, without the nodes no output depends on (ids renumbered, order kept;
+    /// the assumptions of the nodes kept).
     pub fn finish(self) -> Graph {
         let g = self.graph;
         let mut live = vec![false; g.nodes.len()];
@@ -236,7 +275,13 @@ impl Trace {
             }
         }
         let outputs = g.outputs.iter().map(|(name, id)| (name.clone(), new_id[*id])).collect();
-        Graph { nodes, inputs: g.inputs, outputs }
+        let assumptions = g
+            .assumptions
+            .iter()
+            .filter(|a| live[a.node])
+            .map(|a| Assumption { node: new_id[a.node], ..*a })
+            .collect();
+        Graph { nodes, inputs: g.inputs, outputs, assumptions }
     }
 }
 
@@ -295,6 +340,19 @@ impl Arith for Trace {
     type I = INode;
     type B = BNode;
 
+    fn assume_f(&mut self, x: FNode, lo: f32, hi: f32, why: &'static str) {
+        let range = AssumedRange::F(lo, hi);
+        self.graph.assumptions.push(Assumption { node: x.0, range, why });
+    }
+    fn assume_i(&mut self, x: INode, lo: i32, hi: i32, why: &'static str) {
+        let range = AssumedRange::I(lo, hi);
+        self.graph.assumptions.push(Assumption { node: x.0, range, why });
+    }
+    fn assume_zero_or(&mut self, x: FNode, lo: f32, hi: f32, why: &'static str) {
+        let range = AssumedRange::ZeroOr(lo, hi);
+        self.graph.assumptions.push(Assumption { node: x.0, range, why });
+    }
+
     fn lit(&mut self, v: f32) -> FNode {
         FNode(self.node(Op::Lit(v.to_bits()), Ty::F))
     }
@@ -344,15 +402,35 @@ impl Graph {
     /// (binary32 bits, integer bits, or 0/1). Returns the outputs' raw bits in order.
     ///
     /// # Panics
-    /// When `inputs` does not have one value per input.
+    /// When `inputs` does not have one value per input, or a value breaks one of the graph's
+    /// [`Assumption`]s (a wrong proof: the known-bits analysis relies on them).
     pub fn eval(&self, inputs: &[u32]) -> Vec<u32> {
+        let v = self.eval_nodes(inputs);
+        self.outputs.iter().map(|&(_, id)| v[id]).collect()
+    }
+
+    /// [`Graph::eval`]'s value of every node (the raw bits the datapath's node nets carry).
+    ///
+    /// # Panics
+    /// As [`Graph::eval`].
+    pub fn eval_nodes(&self, inputs: &[u32]) -> Vec<u32> {
         assert_eq!(inputs.len(), self.inputs.len(), "one value per graph input");
         let mut v: Vec<u32> = Vec::with_capacity(self.nodes.len());
         for n in &self.nodes {
             let x = eval_op(&n.op, n.ty, &v, inputs);
             v.push(x);
         }
-        self.outputs.iter().map(|&(_, id)| v[id]).collect()
+        for a in &self.assumptions {
+            assert!(
+                a.range.admits(v[a.node]),
+                "assumption of node {} broken: {} ({:?}, value {:#010x}; inputs {inputs:08x?})",
+                a.node,
+                a.why,
+                a.range,
+                v[a.node]
+            );
+        }
+        v
     }
 }
 

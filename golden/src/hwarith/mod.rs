@@ -133,4 +133,14 @@ pub trait Arith {
     fn select(&mut self, c: Self::B, a: Self::F, b: Self::F) -> Self::F;
     /// `c ? a : b` on integers.
     fn iselect(&mut self, c: Self::B, a: Self::I, b: Self::I) -> Self::I;
+
+    /// A range the binary32 `x` always lies in, `lo <= x <= hi` (never NaN), proved by the
+    /// program's author where `x` is made (`why`): no operation and no hardware. [`Native`]
+    /// checks it in debug builds; a [`graph::Trace`] records it, [`graph::Graph::eval`] checks
+    /// it on every item, and the datapath's known-bits analysis uses it.
+    fn assume_f(&mut self, x: Self::F, lo: f32, hi: f32, why: &'static str);
+    /// [`Arith::assume_f`] for an integer: `lo <= x <= hi`.
+    fn assume_i(&mut self, x: Self::I, lo: i32, hi: i32, why: &'static str);
+    /// [`Arith::assume_f`] for a binary32 that is a zero or of magnitude in `[lo, hi]`.
+    fn assume_zero_or(&mut self, x: Self::F, lo: f32, hi: f32, why: &'static str);
 }

@@ -54,6 +54,16 @@ impl Arith for Native {
     type I = i32;
     type B = bool;
 
+    fn assume_f(&mut self, x: f32, lo: f32, hi: f32, why: &'static str) {
+        debug_assert!((lo..=hi).contains(&x), "{why}: {x} outside [{lo}, {hi}]");
+    }
+    fn assume_i(&mut self, x: i32, lo: i32, hi: i32, why: &'static str) {
+        debug_assert!((lo..=hi).contains(&x), "{why}: {x} outside [{lo}, {hi}]");
+    }
+    fn assume_zero_or(&mut self, x: f32, lo: f32, hi: f32, why: &'static str) {
+        debug_assert!(x == 0.0 || (lo..=hi).contains(&x.abs()), "{why}: {x} is not 0 nor in [{lo}, {hi}]");
+    }
+
     fn lit(&mut self, v: f32) -> f32 {
         v
     }

@@ -191,6 +191,13 @@ pub fn conic_bfp<A: Arith>(a: &mut A, conic: [A::F; 3], f: &ConicFormat) -> ([A:
     let qb = q(a, conic[1], neg_max);
     let qc = q(a, cc, izero);
     let exp = a.isub(s, lo);
+    // s0 is clamped to [lo, hi] and decremented only above lo (`above_min`).
+    a.assume_i(
+        exp,
+        0,
+        s_max - s_min,
+        "the conic exponent s - s_min: s in [s_min, s_max], decremented only above s_min",
+    );
     let max_exp = a.ilit(f.max_exp() as i32);
     let exp = a.iselect(any_nan, max_exp, exp);
     ([qa, qb, qc], exp)
@@ -230,18 +237,49 @@ pub fn major_axis<A: Arith>(a: &mut A, cov: [A::F; 3]) -> [A::F; 2] {
     let pos = a.lt(zero, n);
     let ok = a.and(ok, pos);
     let one = a.lit(1.0);
-    [a.select(ok, c, one), a.select(ok, s, zero)]
+    let (c, s) = (a.select(ok, c, one), a.select(ok, s, zero));
+    // A unit vector up to rounding: big = w / n = sqrt(w / 2r) with r <= w <= 2r, in
+    // [sqrt(1/2), 1]; small = |b| / n = sqrt((r - |d|) / 2r) (b^2 = (r - |d|) w), in
+    // [0, sqrt(1/2)]; c is one of them or 1, and |s| the other or 0. The bound leaves 2^-16
+    // for rounding. Asserted, not proved for every input (subnormal products round coarsely):
+    // every evaluation of the traced graph checks it (`Graph::eval`), and the known-bits
+    // soundness test runs it on random, edge and adversarial inputs.
+    a.assume_f(c, 0.0, AXIS_BOUND, "the major axis' C: big or small (in [0, 1] up to rounding), or 1");
+    a.assume_f(
+        s,
+        -AXIS_BOUND,
+        AXIS_BOUND,
+        "the major axis' S: +-big, b / n (in [-1, 1] up to rounding) or 0",
+    );
+    [c, s]
 }
+
+/// The bound [`major_axis`] asserts of `|C|` and `|S|`: 1, with 2^-16 for rounding.
+const AXIS_BOUND: f32 = 1.0 + 1.0 / 65536.0;
 
 /// Conservative support (pixels) of the ellipse `d^T cov^-1 d <= k2` around the float mean
 /// along `n` (not necessarily unit), seen from the quantised mean (`dm = mean - mean_q`).
-fn support<A: Arith>(a: &mut A, cov: [A::F; 3], k2: A::F, dm: [A::F; 2], n: [A::F; 2]) -> A::F {
+fn support<A: Arith>(
+    a: &mut A,
+    cov: [A::F; 3],
+    k2: A::F,
+    dm: [A::F; 2],
+    n: [A::F; 2],
+    axis_frac: u8,
+) -> A::F {
     let [sxx, sxy, syy] = cov;
     let xx = a.mul(n[0], n[0]);
     let yy = a.mul(n[1], n[1]);
     let xy = a.mul(n[0], n[1]);
     let two = a.lit(2.0);
     let xy2 = a.mul(two, xy);
+    // n is (1, 0), (0, 1) or the quantised major axis (C, S) or (-S, C) of major_axis (a unit
+    // vector up to rounding) times 2^frac: integers of magnitude at most 2^frac, not both
+    // nonzero and 1 in magnitude (one is at least about 0.7 2^frac), nor both 2^frac.
+    let full = 2f32.powi(2 * i32::from(axis_frac));
+    let why = "x y of a support direction: 0, or in [2, 2^2frac - 1] (asserted like major_axis' bound)";
+    a.assume_zero_or(xy, 2.0, full - 1.0, why);
+    a.assume_zero_or(xy2, 4.0, 2.0 * (full - 1.0), "2 x y of a support direction");
     let t0 = a.mul(xx, sxx);
     let t1 = a.mul(xy2, sxy);
     let t2 = a.mul(yy, syy);
@@ -442,12 +480,13 @@ pub fn project<A: Arith>(
     let cs = axis.map(|v| a.int_to_float(v));
     let ncs = a.neg(cs[1]);
     let inv_axis = a.lit((-(fmt.axis.frac as f32)).exp2());
-    let su = support(a, cov, g.k2, dm, cs);
+    let frac = fmt.axis.frac;
+    let su = support(a, cov, g.k2, dm, cs, frac);
     let su = a.mul(su, inv_axis);
-    let sv = support(a, cov, g.k2, dm, [ncs, cs[0]]);
+    let sv = support(a, cov, g.k2, dm, [ncs, cs[0]], frac);
     let sv = a.mul(sv, inv_axis);
-    let sx = support(a, cov, g.k2, dm, [one, fzero]);
-    let sy = support(a, cov, g.k2, dm, [fzero, one]);
+    let sx = support(a, cov, g.k2, dm, [one, fzero], frac);
+    let sy = support(a, cov, g.k2, dm, [fzero, one], frac);
     let extent_uv = [extent_ceil(a, su, fmt), extent_ceil(a, sv, fmt)];
     let extent_xy = [extent_ceil(a, sx, fmt), extent_ceil(a, sy, fmt)];
     let depth_key = a.f16_bits(tz);

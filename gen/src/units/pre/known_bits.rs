@@ -19,7 +19,7 @@
 //!
 //! [`eval_op`]: neo_golden::hwarith::graph::eval_op
 
-use neo_golden::hwarith::graph::{eval_op, Graph, NodeId, Op, Ty};
+use neo_golden::hwarith::graph::{eval_op, AssumedRange, Assumption, Graph, NodeId, Op, Ty};
 use neo_golden::hwarith::{Round, CANONICAL_NAN};
 
 /// The bits of a value proven constant: `mask` has the constant bits, `value` their values
@@ -242,18 +242,33 @@ struct Fact {
     /// Bits the operation fixes, beyond what the classes or the range say.
     mask: u32,
     value: u32,
+    /// binary32: the value is an integer (or a zero) of at most this many significant bits,
+    /// exactly.
+    int_sig: Option<u32>,
+    /// binary32: a bound on its magnitude (a finite value's; NaN and infinities are classes).
+    mag: Option<f64>,
     /// What the operation is, for the reason.
     what: String,
 }
 
 impl Fact {
     fn f(classes: u16, what: impl Into<String>) -> Self {
-        Fact { classes, range: I32, mask: 0, value: 0, what: what.into() }
+        Fact { classes, range: I32, mask: 0, value: 0, int_sig: None, mag: None, what: what.into() }
     }
 
     fn i(range: (i64, i64), what: impl Into<String>) -> Self {
         let range = if range.0 < I32.0 || range.1 > I32.1 { I32 } else { range };
-        Fact { classes: ALL, range, mask: 0, value: 0, what: what.into() }
+        Fact { classes: ALL, range, mask: 0, value: 0, int_sig: None, mag: None, what: what.into() }
+    }
+
+    /// The value is an integer of at most `k` significant bits (exactly): its mantissa's low
+    /// `24 - k` bits are zero.
+    fn integer(mut self, k: u32) -> Self {
+        self.int_sig = Some(k);
+        if k <= 23 {
+            self = self.bits((1 << (24 - k)) - 1, 0);
+        }
+        self
     }
 
     fn bits(mut self, mask: u32, value: u32) -> Self {
@@ -368,6 +383,61 @@ fn contracted(ty: Ty, c: &InputContract) -> Fact {
     }
 }
 
+/// `f` narrowed by the program's assumption `x` (checked by `Graph::eval` on every item).
+fn assume(mut f: Fact, x: &Assumption) -> Fact {
+    f.what = format!("{} (asserted: {})", f.what, x.why);
+    match x.range {
+        AssumedRange::I(lo, hi) => {
+            f.range = (f.range.0.max(lo as i64), f.range.1.min(hi as i64));
+            f
+        }
+        AssumedRange::F(lo, hi) => {
+            // Finite, never NaN; the signs the range excludes (-0 is in any range holding 0).
+            f.classes &= !(NAN | INF);
+            if lo >= 0.0 {
+                f.classes &= !(NFIN | if lo > 0.0 { ZERO } else { 0 });
+            }
+            if hi <= 0.0 {
+                f.classes &= !(PFIN | if hi < 0.0 { ZERO } else { 0 });
+            }
+            // |x| <= the larger bound: the exponent field at most its exponent field, so that
+            // field's leading zeros are zero.
+            f.mag = Some(lo.abs().max(hi.abs()) as f64);
+            let e_max = (lo.abs().max(hi.abs()).to_bits() >> 23) & 0xFF;
+            let lead = !(0xFFu32 >> (e_max.leading_zeros() - 24)) & 0xFF;
+            f.bits(lead << 23, 0)
+        }
+        AssumedRange::ZeroOr(lo, hi) => {
+            // Finite; exponent field 0 (a zero) or from lo's to hi's.
+            f.classes &= !(NAN | INF);
+            f.mag = Some(hi as f64);
+            let field = |x: f32| (x.to_bits() >> 23) & 0xFF;
+            let (em, ev) = common_bits(std::iter::once(0).chain(field(lo)..=field(hi)));
+            f.bits((em & 0xFF) << 23, (ev & 0xFF) << 23)
+        }
+    }
+}
+
+/// The most significant bits of any integer in `[lo, hi]` (`lo <= hi`): a power of two has
+/// one, so the largest magnitude counts only when it is not one.
+fn max_sig(lo: i64, hi: i64) -> u32 {
+    let side = |a: i64, b: i64| -> u32 {
+        // Magnitudes a..=b, 0 <= a <= b.
+        if b == 0 {
+            0
+        } else if a == b {
+            bitlen(b) - b.trailing_zeros()
+        } else if b.count_ones() == 1 {
+            bitlen(b - 1).max(1)
+        } else {
+            bitlen(b)
+        }
+    };
+    let pos = if hi >= 0 { side(lo.max(0), hi) } else { 0 };
+    let neg = if lo < 0 { side((-hi).max(0), -lo) } else { 0 };
+    pos.max(neg)
+}
+
 fn bitlen(v: i64) -> u32 {
     64 - (v as u64).leading_zeros()
 }
@@ -417,6 +487,9 @@ impl Analysis {
                 if let Some(c) = contracts.iter().find(|c| c.input == graph.inputs[k].name) {
                     f = contracted(n.ty, c);
                 }
+            }
+            for assumed in graph.assumptions.iter().filter(|x| x.node == id) {
+                f = assume(f, assumed);
             }
             a.facts.push(f);
             a.tys.push(n.ty);
@@ -499,7 +572,17 @@ impl Analysis {
                 Ty::B => Fact::i((0, 1), "input"),
             },
             Lit(v) => match ty {
-                Ty::F => Fact::f(class_of(v), "literal").bits(u32::MAX, v),
+                Ty::F => {
+                    let mut lit = Fact::f(class_of(v), "literal").bits(u32::MAX, v);
+                    let x = f32::from_bits(v);
+                    lit.mag = x.is_finite().then_some(x.abs() as f64);
+                    if x.is_finite() && x.fract() == 0.0 && x.abs() < (1 << 24) as f32 {
+                        let n = x.abs() as i64;
+                        lit.integer(max_sig(n, n))
+                    } else {
+                        lit
+                    }
+                }
                 Ty::I => Fact::i((v as i32 as i64, v as i32 as i64), "literal"),
                 Ty::B => Fact::i((v as i64, v as i64), "literal"),
             },
@@ -511,14 +594,38 @@ impl Analysis {
                 pairs(fc(a), fc(b), a == b, |x, y| add1(x, negc(y))),
                 format!("x - y with x {}, y {} (NaN results canonical, +0 on cancellation)", sw(a), sw(b)),
             ),
-            Mul(a, b) => Fact::f(
-                pairs(fc(a), fc(b), a == b, mul1),
-                if a == b {
+            Mul(a, b) => {
+                let what = if a == b {
                     format!("a square x * x, x {} (NaN results canonical)", sw(a))
                 } else {
                     format!("x * y with x {}, y {} (NaN results canonical)", sw(a), sw(b))
-                },
-            ),
+                };
+                let mut f = Fact::f(pairs(fc(a), fc(b), a == b, mul1), what);
+                // |x y| <= |x| |y|, rounded up by at most half an ulp (2^-24 relative).
+                f.mag = self.facts[a].mag.zip(self.facts[b].mag).map(|(x, y)| x * y * (1.0 + 2f64.powi(-23)));
+                if (fc(a) | fc(b)) & INF == 0 && f.mag.is_some_and(|m| m < f32::MAX as f64) {
+                    // Finite operands whose product stays below the largest finite: no overflow.
+                    f.classes &= !INF;
+                }
+                // Integers of ka and kb significant bits: a product of at most ka + kb (ka when
+                // y is a power of two), exact when that is at most 24.
+                let sig = self.facts[a].int_sig.zip(self.facts[b].int_sig).map(|(ka, kb)| {
+                    if ka.min(kb) <= 1 {
+                        ka.max(kb)
+                    } else {
+                        ka + kb
+                    }
+                });
+                match sig {
+                    Some(k) if k <= 24 => {
+                        let mut f = f.integer(k);
+                        f.what =
+                            format!("{} of integers: an integer of at most {k} significant bits", f.what);
+                        f
+                    }
+                    _ => f,
+                }
+            }
             Div(a, b) => Fact::f(
                 pairs(fc(a), fc(b), a == b, div1),
                 format!("x / y with x {}, y {} (NaN results canonical)", sw(a), sw(b)),
@@ -529,7 +636,11 @@ impl Analysis {
             ),
             Neg(a) => {
                 let (m, v) = self.bits_of(a);
-                Fact::f(neg_set(fc(a)), "-x (sign flipped) of an x with known bits").bits(m, v ^ (1 << 31))
+                let mut f = Fact::f(neg_set(fc(a)), "-x (sign flipped) of an x with known bits")
+                    .bits(m, v ^ (1 << 31));
+                f.int_sig = self.facts[a].int_sig;
+                f.mag = self.facts[a].mag;
+                f
             }
             Abs(a) => {
                 let (m, v) = self.bits_of(a);
@@ -538,8 +649,11 @@ impl Analysis {
                 } else {
                     "|x| of an x with known bits, sign cleared"
                 };
-                Fact::f(each(fc(a)).fold(0, |s, c| s | (c & SIGN0) | neg_set(c & SIGN1)), what)
-                    .bits(m | (1 << 31), v & 0x7FFF_FFFF)
+                let mut f = Fact::f(each(fc(a)).fold(0, |s, c| s | (c & SIGN0) | neg_set(c & SIGN1)), what)
+                    .bits(m | (1 << 31), v & 0x7FFF_FFFF);
+                f.int_sig = self.facts[a].int_sig;
+                f.mag = self.facts[a].mag;
+                f
             }
             Max(a, b) | Min(a, b) => {
                 let max = matches!(op, Max(..));
@@ -585,6 +699,15 @@ impl Analysis {
                     };
                     (lo, hi) = (lo.min(l), hi.max(h));
                 }
+                if let Some(m) = self.facts[a].mag.filter(|m| *m < I32.1 as f64 && fc(a) & INF == 0) {
+                    // A finite |x| <= m rounds to an integer of magnitude at most this.
+                    let m = match mode {
+                        Round::Trunc => m.floor(),
+                        Round::HalfUp => (m + 0.5).floor(),
+                        Round::Floor | Round::Ceil => m.ceil(),
+                    } as i64;
+                    (lo, hi) = (lo.max(-m), hi.min(m));
+                }
                 Fact::i(
                     (lo, hi),
                     format!("to_int(x) with x {} (saturating, NaN gives 0): in [{lo}, {hi}]", sw(a)),
@@ -620,11 +743,9 @@ impl Analysis {
                 let mut f = Fact::f(classes, format!("int_to_float of an integer in [{lo}, {hi}]"))
                     .bits((em & 0xFF) << 23, ev << 23);
                 if exact && big > 0 {
-                    // At most bitlen(big) significant bits: the mantissa's low bits are zero.
-                    let k = bitlen(big);
-                    if k <= 23 {
-                        f = f.bits((1 << (24 - k)) - 1, 0);
-                    }
+                    // An integer of at most max_sig significant bits: the mantissa's low bits are
+                    // zero.
+                    f = f.integer(max_sig(lo, hi));
                 }
                 f
             }
@@ -725,7 +846,10 @@ impl Analysis {
                             fa.range.0, fa.range.1, fb.range.0, fb.range.1
                         ),
                     };
-                    Fact { classes: fa.classes | fb.classes, range, mask: 0, value: 0, what }.bits(agree, va)
+                    let int_sig = fa.int_sig.zip(fb.int_sig).map(|(x, y)| x.max(y));
+                    let mag = fa.mag.zip(fb.mag).map(|(x, y)| x.max(y));
+                    Fact { classes: fa.classes | fb.classes, range, mask: 0, value: 0, int_sig, mag, what }
+                        .bits(agree, va)
                 }
             },
         }
@@ -914,6 +1038,9 @@ mod tests {
         let mut bad = Vec::new();
         for (id, n) in g.nodes.iter().enumerate() {
             let x = eval_op(&n.op, n.ty, &v, inputs);
+            for x_assumed in g.assumptions.iter().filter(|a| a.node == id && !a.range.admits(x)) {
+                bad.push(format!("n{id} = {x:#010x} breaks the assumption {x_assumed:?}"));
+            }
             if !known[id].admits(x) {
                 bad.push(format!(
                     "n{id} {:?} = {x:#010x}, known {:?} (inputs {inputs:08x?})",
@@ -996,6 +1123,59 @@ mod tests {
         let c = check_sound(&color, 0x2545_F491_4F6C_DD1D, 20_000);
         // The analysis proves something (the numbers only grow as it gets sharper).
         assert!(p > 2000 && c > 700, "known bits: project {p}, colour {c}");
+    }
+
+    #[test]
+    fn significant_bits_of_integer_ranges_and_products() {
+        assert_eq!(max_sig(0, 256), 8, "256 has one significant bit, 255 eight");
+        assert_eq!(max_sig(-256, 256), 8);
+        assert_eq!(max_sig(-257, 3), 9);
+        assert_eq!(max_sig(256, 256), 1);
+        assert_eq!(max_sig(0, 0), 0);
+        assert_eq!(max_sig(5, 7), 3);
+        // float(c) * float(c) and 2 * float(c) * float(s) for c in [0, 256], s in [-256, 256].
+        let mut t = Trace::new();
+        let (c, s) = (t.input_i("c", false), t.input_i("s", false));
+        let (zero, lo, hi) = (t.ilit(0), t.ilit(-256), t.ilit(256));
+        let (c, s) = (t.imax(c, zero), t.imax(s, lo));
+        let (c, s) = (t.imin(c, hi), t.imin(s, hi));
+        let (cf, sf) = (t.int_to_float(c), t.int_to_float(s));
+        let cc = t.mul(cf, cf);
+        let cs = t.mul(cf, sf);
+        let two = t.lit(2.0);
+        let cs2 = t.mul(two, cs);
+        t.output_f("cf", cf);
+        t.output_f("cc", cc);
+        t.output_f("cs2", cs2);
+        let g = t.finish();
+        assert_eq!(kb(&g, "cf").mask & 0xFFFF, 0xFFFF, "8 significant bits: mantissa bits 15..0 zero");
+        assert_eq!(kb(&g, "cc").mask & 0xFF, 0xFF, "16 significant bits: mantissa bits 7..0 zero");
+        assert_eq!(kb(&g, "cs2").mask & 0xFF, 0xFF, "times 2 adds no significant bit");
+        assert!(check_sound(&g, 5, 5000) > 0);
+    }
+
+    #[test]
+    fn an_assumed_range_narrows_and_is_checked() {
+        let mut t = Trace::new();
+        let x = t.input_f("x", false);
+        let ax = t.abs(x);
+        let one = t.lit(1.0);
+        let m = t.min(ax, one);
+        t.assume_f(m, 0.0, 1.0, "min(|x|, 1)");
+        let q = t.to_int(m, Round::Trunc);
+        t.assume_i(q, 0, 1, "trunc of [0, 1]");
+        t.output_f("m", m);
+        t.output_i("q", q);
+        let g = t.finish();
+        assert_eq!(kb(&g, "m").mask & (1 << 30), 1 << 30, "|m| <= 1: exponent bit 30 zero");
+        assert_eq!(kb(&g, "q").mask, u32::MAX - 1, "q in [0, 1]");
+        let a = Analysis::of(&g);
+        let known: Vec<KnownBits> = (0..g.nodes.len()).map(|id| a.node(id)).collect();
+        assert!(violations(&g, &a, &known, &[0x4000_0000]).is_empty(), "min(2, 1) = 1");
+        // A broken assumption is reported (here: min(|NaN|, 1) is 1, but claim [0, 0.5]).
+        let mut g2 = g.clone();
+        g2.assumptions[0].range = neo_golden::hwarith::graph::AssumedRange::F(0.0, 0.5);
+        assert!(!violations(&g2, &a, &known, &[0x4000_0000]).is_empty());
     }
 
     #[test]
