@@ -51,9 +51,11 @@ over every bench that instantiates it:
   hit at least once.
 
 Holes are listed below the table, each justified by a waiver in `tb/coverage-waivers.txt` or
-marked **open**; the bits of `neo_pre_project` and `neo_pre_color` that the datapath's known-bits
-analysis proves constant (`gen/src/units/pre/known_bits.rs`, checked against golden on random and
-edge inputs) are justified automatically, each with the analysis' reason.
+marked **open**; the bits of the datapaths (`neo_pre_project`, `neo_pre_color`, the inline logic
+bench, and the lane's nets that carry their outputs) that the known-bits analysis proves constant
+(`gen/src/units/pre/known_bits.rs`: from the per-frame inputs' contracts and the ranges golden's
+arithmetic asserts, which every `Graph::eval` checks; its soundness test checks every claim on
+random, edge and adversarial inputs) are justified automatically, each with the analysis' reason.
 ";
 
 /// Whether the static models (`crate::models`) of this build write coverage (`NEO_COVERAGE=1`
