@@ -412,23 +412,11 @@ impl LaneBench {
         }
         let mut mem = AxiMemory::new(2, mem, AxiTiming::RANDOM, rng.next_u64());
         self.program_words(words, degree, false, range, place).unwrap_or_else(|e| panic!("{NAME}: {e}"));
-        for p in &self.ports {
-            p.set_subordinate(&mut self.model, &SubordinateSignals::default());
-        }
-        self.model.set_u64(self.start, 0);
-        self.model.reset();
-        let (ro, wo) = (self.cfg.pre_outstanding, self.cfg.axi_outstanding);
-        let mut chk = [AxiChecker::new(0, "ma_axi", ro, wo), AxiChecker::new(1, "mb_axi", ro, wo)];
+        let mut chk = self.reset_for_run();
         let start = self.model.cycle();
         let (mut first_cycle, mut rose) = (true, false);
         loop {
-            self.model.set_u64(self.start, u64::from(first_cycle));
-            self.model.set_u64(self.hit[1], u64::from(rng.percent(50)));
-            let subs = [mem.outputs(0), mem.outputs(1)];
-            for (p, s) in self.ports.iter().zip(&subs) {
-                p.set_subordinate(&mut self.model, s);
-            }
-            self.model.eval();
+            let subs = self.drive_cycle(&mem, first_cycle, rng.percent(50));
             let cyc = self.model.cycle();
             let busy = self.model.get_u64(self.busy) == 1;
             rose |= busy;
@@ -470,6 +458,31 @@ impl LaneBench {
     /// Runs the lane over `range` of `baked` for `frame` with memory `timing`, taking hits
     /// `ready_percent` of the cycles, and checks the feature table and the incoming hits it
     /// leaves against golden. Stops the test at the first mismatch.
+    /// One cycle's inputs: `start_i`, the hit port's ready, both ports' subordinate signals from
+    /// `mem` (returned, for the protocol checkers); then evaluates.
+    fn drive_cycle(&mut self, mem: &AxiMemory, start: bool, hit_ready: bool) -> [SubordinateSignals; 2] {
+        self.model.set_u64(self.start, u64::from(start));
+        self.model.set_u64(self.hit[1], u64::from(hit_ready));
+        let subs = [mem.outputs(0), mem.outputs(1)];
+        for (p, s) in self.ports.iter().zip(&subs) {
+            p.set_subordinate(&mut self.model, s);
+        }
+        self.model.eval();
+        subs
+    }
+
+    /// Drives both ports idle, resets the lane (keeping its programmed registers) and returns
+    /// the two ports' protocol checkers.
+    fn reset_for_run(&mut self) -> [AxiChecker; 2] {
+        for p in &self.ports {
+            p.set_subordinate(&mut self.model, &SubordinateSignals::default());
+        }
+        self.model.set_u64(self.start, 0);
+        self.model.reset();
+        let (ro, wo) = (self.cfg.pre_outstanding, self.cfg.axi_outstanding);
+        [AxiChecker::new(0, "ma_axi", ro, wo), AxiChecker::new(1, "mb_axi", ro, wo)]
+    }
+
     pub fn run(
         &mut self,
         baked: &Baked,
@@ -496,26 +509,14 @@ impl LaneBench {
         let mut mem = AxiMemory::new(2, mem, timing, rng.next_u64());
         self.program(baked, frame.cam, frame.all_fresh, range, place)
             .unwrap_or_else(|e| panic!("{NAME}: {e}"));
-        for p in &self.ports {
-            p.set_subordinate(&mut self.model, &SubordinateSignals::default());
-        }
-        self.model.set_u64(self.start, 0);
-        self.model.reset();
-        let (ro, wo) = (self.cfg.pre_outstanding, self.cfg.axi_outstanding);
-        let mut chk = [AxiChecker::new(0, "ma_axi", ro, wo), AxiChecker::new(1, "mb_axi", ro, wo)];
+        let mut chk = self.reset_for_run();
         let want_hits = expected_hits_at(&self.cfg, baked, frame, range, place.id0);
         let start = self.model.cycle();
         let limit = 2_000 + 200 * u64::from(range.count) + 4 * want_hits.len() as u64;
         let (mut first, mut hits) = (true, 0usize);
         loop {
-            self.model.set_u64(self.start, u64::from(first));
             let ready = rng.percent(ready_percent);
-            self.model.set_u64(self.hit[1], u64::from(ready));
-            let subs = [mem.outputs(0), mem.outputs(1)];
-            for (p, s) in self.ports.iter().zip(&subs) {
-                p.set_subordinate(&mut self.model, s);
-            }
-            self.model.eval();
+            let subs = self.drive_cycle(&mem, first, ready);
             let cyc = self.model.cycle();
             let busy = self.model.get_u64(self.busy) == 1;
             if ready && self.model.get_u64(self.hit[0]) == 1 {

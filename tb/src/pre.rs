@@ -329,6 +329,19 @@ pub fn items_with_unseen_bits(
     kept
 }
 
+/// A camera at the origin looking down +z (world = view coordinates), f = 500 px, 640x480.
+pub fn axis_camera() -> CameraIn<f32, i32> {
+    let (w, h, f) = (640.0f32, 480.0f32, 500.0f32);
+    CameraIn {
+        w2v: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        translation: [0.0; 3],
+        focal: [f, f],
+        lim: [1.3 * w / (2.0 * f), 1.3 * h / (2.0 * f)],
+        principal: [(w - 1.0) / 2.0, (h - 1.0) / 2.0],
+        grid: [10, 8],
+    }
+}
+
 /// Projection items of hard geometry on the axis of a camera at the origin looking down +z (f =
 /// 500 px, 640x480): isotropic covariances of every scale with a cross term `xy` from 10^-32
 /// to 10^-20 of either sign, so that the 2D covariance's diagonal terms are equal and its
@@ -336,15 +349,8 @@ pub fn items_with_unseen_bits(
 /// of them with a 2D variance just above a power of two (a conic whose block-float mantissa
 /// rounds up to the next exponent), and depths from the near plane to 10^4.
 pub fn on_axis_project_items(rng: &mut Rng, n: usize) -> Vec<Vec<u32>> {
-    let (w, h, f) = (640.0f32, 480.0f32, 500.0f32);
-    let cam = CameraIn {
-        w2v: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        translation: [0.0; 3],
-        focal: [f, f],
-        lim: [1.3 * w / (2.0 * f), 1.3 * h / (2.0 * f)],
-        principal: [(w - 1.0) / 2.0, (h - 1.0) / 2.0],
-        grid: [10, 8],
-    };
+    let cam = axis_camera();
+    let f = cam.focal[0];
     (0..n)
         .map(|_| {
             let z = log_uniform(rng, -0.6, 4.0) as f32;

@@ -167,9 +167,8 @@ neo_tb::with_models! {
 
     use neo_gen::units::pre::{COLOR_NAME, PROJECT_NAME};
     use neo_golden::hwpre::bake::BakedGeometry;
-    use neo_golden::hwpre::project::CameraIn;
     use neo_tb::pre::{
-        color_bench, color_item, items_with_unseen_bits, node_bits_seen, on_axis_project_items, project_bench,
+        axis_camera, color_bench, color_item, items_with_unseen_bits, node_bits_seen, on_axis_project_items, project_bench,
         project_item, random_camera_position, random_camera_project_items, random_color_items, scene_project_items,
         UnitBench,
     };
@@ -297,19 +296,6 @@ neo_tb::with_models! {
             items.extend(base.iter().cloned());
             bench.run(&items, settle, &mut rng, (100, 100), &check);
         });
-    }
-
-    /// A camera at the origin looking down +z (world = view coordinates), f = 500 px, 640x480.
-    fn axis_camera() -> CameraIn<f32, i32> {
-        let (w, h, f) = (640.0f32, 480.0f32, 500.0f32);
-        CameraIn {
-            w2v: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            translation: [0.0; 3],
-            focal: [f, f],
-            lim: [1.3 * w / (2.0 * f), 1.3 * h / (2.0 * f)],
-            principal: [(w - 1.0) / 2.0, (h - 1.0) / 2.0],
-            grid: [10, 8],
-        }
     }
 
     /// Named hard cases (golden `hwpre_project`'s classes, at the unit).
