@@ -310,6 +310,13 @@ impl<'s> EngineSession<'s> {
         let first = traj.frames.first().ok_or(SessionError::NoFrames)?;
         let pipeline = pipeline_for(scene, cfg, first.width, first.height, strategy)?;
         let [gx, gy] = pipeline.grid();
+        let max_grid = (1u64 << cfg.tile_bits.min(32)) - 1;
+        if gx as u64 > max_grid || gy as u64 > max_grid {
+            return Err(SessionError::Layout(format!(
+                "{}x{} px gives a {gx}x{gy} tile grid: the {}-bit tile indices (tile_bits) hold at most {max_grid} tiles a side",
+                first.width, first.height, cfg.tile_bits
+            )));
+        }
         let tiles = gx as u64 * gy as u64;
         let layout = match mode {
             HostMode::Lists => MemoryLayout::new(cfg, tiles, scene.len() as u64)?,
@@ -665,6 +672,22 @@ mod tests {
         assert_eq!(l.list_bytes, 80 * 64 * 8, "61 entries round up to 8 lines of 8");
         let e = MemoryLayout::for_scene(&cfg, 4096, 10, 0).expect_err("too many tiles");
         assert!(e.to_string().contains("pre_max_tiles 2048"), "{e}");
+    }
+
+    #[test]
+    fn a_tile_grid_wider_than_the_tile_indices_is_refused() {
+        let (scene, _) =
+            crate::source::load_scene("synthetic:blobs?gaussians=10&seed=1", false).expect("scene");
+        let bounds = crate::source::robust_bounds(&scene);
+        let traj = crate::trajectory::parse_trajectory("orbit:res=640x480", bounds, 1).expect("orbit");
+        // 640x480 at 64-pixel tiles is a 10x8 grid; 3-bit tile indices hold at most 7.
+        let cfg = EngineConfig { tile_bits: 3, ..EngineConfig::default() };
+        let e = EngineSession::new(&scene, traj.clone(), &cfg)
+            .err()
+            .expect("a 10x8 grid with 3-bit tile indices");
+        assert!(e.to_string().contains("10x8 tile grid") && e.to_string().contains("at most 7"), "{e}");
+        let cfg = EngineConfig { tile_bits: 4, ..EngineConfig::default() };
+        assert!(EngineSession::new(&scene, traj, &cfg).is_ok(), "4 bits hold 15 tiles a side");
     }
 
     #[test]

@@ -105,6 +105,13 @@ pub fn preprocess_frame(
     let baked = baked_from_memory(cfg, p, mem).map_err(err)?;
     let (cam, cam_pos) = CameraWord::decode(&p.camera);
     let grid = cam.grid.map(|g| g.max(0) as u32);
+    let max_grid = (1u64 << cfg.tile_bits.min(32)) - 1;
+    if grid.iter().any(|&g| g as u64 > max_grid) {
+        let bits = cfg.tile_bits;
+        return Err(err(format!(
+            "the camera's tile grid {grid:?} exceeds the {bits}-bit tile indices ({max_grid} a side)"
+        )));
+    }
     if grid[0] as u64 * grid[1] as u64 > regs.tiles as u64 {
         return Err(err(format!("the camera's tile grid {grid:?} has more tiles than TILES {}", regs.tiles)));
     }
