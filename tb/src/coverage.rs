@@ -397,12 +397,11 @@ pub fn known_bits_waivers(cfg: &neo_gen::EngineConfig) -> Vec<Waiver> {
     ];
     for (module, graph, contracts) in contracts {
         let datapath = Datapath::new(graph, &PreLibrary);
-        for net in datapath.unread_compare_nets() {
-            let hi = if net.contains("_cmp_m") { 31 } else { 0 };
+        for (net, width) in datapath.unread_compare_nets() {
             out.push(Waiver {
                 module: module.into(),
                 kind: "toggle".into(),
-                pattern: format!("{net}[{hi}:0]"),
+                pattern: format!("{net}[{}:0]", width - 1),
                 reason: "a comparator output no logic reads (the node uses another; reduced into the unused_cmp lint sink)".into(),
             });
         }

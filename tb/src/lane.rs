@@ -5,7 +5,7 @@
 //! (`engine::memory::feature_to_bytes`), stopping at the first mismatch with both entries
 //! decoded. The words just outside the lane's range must keep their canary.
 
-use crate::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, SubordinateSignals};
+use crate::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, ManagerSignals, SubordinateSignals};
 use crate::check::Checker;
 use crate::dynmodel::DynModel;
 use crate::rng::Rng;
@@ -14,6 +14,7 @@ use neo_gen::EngineConfig;
 use neo_golden::camera::Camera;
 use neo_golden::engine::memory::{feature_from_bytes, feature_to_bytes, Memory, FEATURE_BYTES};
 use neo_golden::engine::{CameraWord, CAMERA_WORDS};
+use neo_golden::formats::FeatureEntry;
 use neo_golden::hwpre::bake::{geometry_bytes, sh_bytes, Baked, ShPrecision};
 use neo_golden::hwpre::duplicate::{incoming, TouchRecord};
 use neo_golden::hwpre::project::ProjectParams;
@@ -68,12 +69,11 @@ impl LanePlacement {
     pub fn complement_pair(rng: &mut Rng, range: LaneRange, max_count: u32) -> [LanePlacement; 2] {
         const ID_MASK: u64 = (1 << 31) - 1;
         loop {
-            let pair = |r: u64, align: u64| [r & 0xffff_ffff & !(align - 1), !r & 0xffff_ffff & !(align - 1)];
             let (geo, sh, feat, prev) = (
-                pair(rng.next_u64(), 4),
-                pair(rng.next_u64(), 4),
-                pair(rng.next_u64(), 32),
-                pair(rng.next_u64(), 32),
+                complement_bases(rng.next_u64(), 4),
+                complement_bases(rng.next_u64(), 4),
+                complement_bases(rng.next_u64(), 32),
+                complement_bases(rng.next_u64(), 32),
             );
             let r = rng.next_u64() & ID_MASK;
             let first = [r, !r & ID_MASK];
@@ -120,6 +120,47 @@ impl LanePlacement {
     fn feat_at(&self, id: u64) -> u64 {
         (u64::from(self.feat) + FEATURE_BYTES * id) & 0xffff_ffff
     }
+
+    /// Id `id`'s feature word in `mem`.
+    fn feature_word(&self, mem: &Memory, id: u64) -> [u8; 32] {
+        let mut b = [0u8; FEATURE_BYTES as usize];
+        read_wrapped(mem, self.feat_at(id), &mut b);
+        b
+    }
+
+    /// The ids of the feature words just outside `range`, where the canaries go.
+    fn canary_ids(&self, range: LaneRange) -> [u64; 2] {
+        let first = u64::from(self.id0) + u64::from(range.first);
+        [first.wrapping_sub(1), first + u64::from(range.count)]
+    }
+
+    /// Writes the canaries around `range`'s feature words.
+    fn write_canaries(&self, mem: &mut Memory, range: LaneRange) {
+        for id in self.canary_ids(range) {
+            write_wrapped(mem, self.feat_at(id), &[CANARY; FEATURE_BYTES as usize]);
+        }
+    }
+
+    /// Checks that the canaries around `range`'s feature words are intact.
+    fn check_canaries(&self, mem: &Memory, range: LaneRange, check: &Checker, cycle: u64) {
+        for id in self.canary_ids(range) {
+            let intact = self.feature_word(mem, id) == [CANARY; FEATURE_BYTES as usize];
+            check.value(
+                cycle,
+                &format!("canary word of id {id} outside the lane's range"),
+                1,
+                u64::from(intact),
+            );
+        }
+    }
+}
+
+/// Two 32-bit base addresses aligned to `align` (a power of two), from the random bits `r`, each
+/// the bitwise complement of the other above the alignment: alternating them makes every such
+/// base bit rise and fall.
+pub fn complement_bases(r: u64, align: u64) -> [u64; 2] {
+    let keep = 0xffff_ffff & !(align - 1);
+    [r & keep, !r & keep]
 }
 
 /// Writes `data` at `addr` modulo 2^32 (a write past the top wraps to address 0).
@@ -156,11 +197,11 @@ fn snap_axis(c: [f64; 3], not: Option<usize>) -> ([f64; 3], usize) {
 /// The camera of frame `f` of a per-frame-input sweep from `base` (its position kept): a
 /// random orientation (rolled, so the w2v words of the camera's x and y axes take every sign
 /// and size, and turned up to 45 degrees) except on frames 1 and 4 of every five, the nearest
-/// axis-aligned one (w2v words exactly 0 and 1; [`sweep_world`] turns them into two
-/// patterns); a random
-/// focal length (short on the strips); and a resolution whose tile grid runs GRID_X through 10, !10, 10 and GRID_Y
-/// through 8, 1, 8, !8, 8 (10-bit complements: every bit of the 10-bit tile indices rises and
-/// falls) with at most 2048 tiles (`pre_max_tiles`), the other side of a huge grid one tile.
+/// axis-aligned one (w2v words exactly 0 and 1; [`sweep_world`] turns them into two patterns);
+/// a random focal length (short on the strips); and a resolution whose tile grid runs x through
+/// 10, 1013, 10, 1, 10 and y through 8, 1, 8, 1015, 8 (10-bit complements: every bit of the
+/// 10-bit tile indices rises and falls) with at most 2048 tiles (`pre_max_tiles`), the other
+/// side of a huge grid one tile.
 pub fn sweep_camera(base: &Camera, tile: u32, f: usize, rng: &mut Rng) -> Camera {
     let gx = [10u32, 1013, 10, 1, 10][f % 5];
     let gy = [8u32, 1, 8, 1015, 8][f % 5];
@@ -271,6 +312,51 @@ pub fn sweep_world(
         g.cov3d = [225.0, 0.0, 0.0, 225.0, 0.0, 225.0];
     }
     (out, Camera { position, cam_to_world, ..cam.clone() })
+}
+
+/// The feature entries golden gives the visible Gaussians of `range` of `baked` for `cam`.
+pub fn visible_entries(
+    cfg: &EngineConfig,
+    baked: &Baked,
+    cam: &Camera,
+    range: LaneRange,
+) -> Vec<FeatureEntry> {
+    let (regs, pos) = camera_registers(cam, cfg.tile);
+    let params = ProjectParams { feature: cfg.feature_format(), tile: cfg.tile };
+    (range.first..range.first + range.count)
+        .filter_map(|i| preprocess_one(baked, &regs, pos, &params, &DepthKeyCodec::Fp16, i as usize))
+        .map(|h| h.entry)
+        .collect()
+}
+
+/// Of the visible Gaussians of `range` for `cam`: (depths below 2, depths of at least 2), the
+/// FP16 depth key's bit 14 clear and set.
+pub fn depth_split(cfg: &EngineConfig, baked: &Baked, cam: &Camera, range: LaneRange) -> (usize, usize) {
+    let entries = visible_entries(cfg, baked, cam, range);
+    let far = entries.iter().filter(|e| e.depth_key >= 0x4000).count();
+    (entries.len() - far, far)
+}
+
+/// `cam` moved back along its view axis by a quarter unit times each of `steps`: the one whose
+/// visible Gaussians of `range` fall most evenly on both sides of depth 2 ([`depth_split`]).
+pub fn camera_straddling_depth_2(
+    cfg: &EngineConfig,
+    baked: &Baked,
+    cam: &Camera,
+    range: LaneRange,
+    steps: std::ops::RangeInclusive<i32>,
+) -> Camera {
+    steps
+        .map(|k| {
+            let mut c = cam.clone();
+            c.position -= c.cam_to_world.z_axis * (0.25 * f64::from(k));
+            c
+        })
+        .max_by_key(|c| {
+            let (near, far) = depth_split(cfg, baked, c, range);
+            near.min(far)
+        })
+        .expect("at least one step")
 }
 
 /// The Gaussians a lane run covers.
@@ -405,11 +491,7 @@ impl LaneBench {
         let mut rng = Rng::new(check.seed);
         let range = LaneRange { first, count: 0 };
         let mut mem = Memory::new();
-        let canary = [CANARY; FEATURE_BYTES as usize];
-        let id = u64::from(place.id0) + u64::from(first);
-        for id in [id.wrapping_sub(1), id] {
-            write_wrapped(&mut mem, place.feat_at(id), &canary);
-        }
+        place.write_canaries(&mut mem, range);
         let mut mem = AxiMemory::new(2, mem, AxiTiming::RANDOM, rng.next_u64());
         self.program_words(words, degree, false, range, place).unwrap_or_else(|e| panic!("{NAME}: {e}"));
         let mut chk = self.reset_for_run();
@@ -421,17 +503,12 @@ impl LaneBench {
             let busy = self.model.get_u64(self.busy) == 1;
             rose |= busy;
             check.protocol(cyc, self.model.get_u64(self.hit[0]) == 0, "an empty range offers no hit");
-            for k in 0..2 {
-                let man = self.ports[k].get_manager(&self.model);
-                if let Err(v) = chk[k].observe(&man, &subs[k]) {
-                    check.fail(cyc, "AXI protocol", "no violation", &v.to_string());
-                }
+            for (k, man) in self.observe_ports(&mut mem, &mut chk, &subs, check, cyc).iter().enumerate() {
                 check.protocol(
                     cyc,
                     man.ar.is_none() && man.aw.is_none() && man.w.is_none(),
                     &format!("port {k}: an empty range neither reads nor writes"),
                 );
-                mem.tick(k, &man);
             }
             self.model.tick();
             if !first_cycle && !busy {
@@ -442,22 +519,10 @@ impl LaneBench {
         }
         let cycles = self.model.cycle() - start;
         check.value(cycles, "busy_o rose after start_i", 1, u64::from(rose));
-        for id in [id.wrapping_sub(1), id] {
-            let mut got = [0u8; FEATURE_BYTES as usize];
-            read_wrapped(mem.memory(), place.feat_at(id), &mut got);
-            check.value(
-                cycles,
-                &format!("canary word of id {id} around an empty range"),
-                1,
-                u64::from(got == canary),
-            );
-        }
+        place.check_canaries(mem.memory(), range, check, cycles);
         cycles
     }
 
-    /// Runs the lane over `range` of `baked` for `frame` with memory `timing`, taking hits
-    /// `ready_percent` of the cycles, and checks the feature table and the incoming hits it
-    /// leaves against golden. Stops the test at the first mismatch.
     /// One cycle's inputs: `start_i`, the hit port's ready, both ports' subordinate signals from
     /// `mem` (returned, for the protocol checkers); then evaluates.
     fn drive_cycle(&mut self, mem: &AxiMemory, start: bool, hit_ready: bool) -> [SubordinateSignals; 2] {
@@ -469,6 +534,26 @@ impl LaneBench {
         }
         self.model.eval();
         subs
+    }
+
+    /// The ports' half of a cycle at `cyc`: each manager's signals checked by its protocol
+    /// checker against the subordinate signals `subs` and handed to `mem`; returned.
+    fn observe_ports(
+        &self,
+        mem: &mut AxiMemory,
+        chk: &mut [AxiChecker; 2],
+        subs: &[SubordinateSignals; 2],
+        check: &Checker,
+        cyc: u64,
+    ) -> [ManagerSignals; 2] {
+        [0, 1].map(|k| {
+            let man = self.ports[k].get_manager(&self.model);
+            if let Err(v) = chk[k].observe(&man, &subs[k]) {
+                check.fail(cyc, "AXI protocol", "no violation", &v.to_string());
+            }
+            mem.tick(k, &man);
+            man
+        })
     }
 
     /// Drives both ports idle, resets the lane (keeping its programmed registers) and returns
@@ -483,6 +568,9 @@ impl LaneBench {
         [AxiChecker::new(0, "ma_axi", ro, wo), AxiChecker::new(1, "mb_axi", ro, wo)]
     }
 
+    /// Runs the lane over `range` of `baked` for `frame` with memory `timing`, taking hits
+    /// `ready_percent` of the cycles, and checks the feature table and the incoming hits it
+    /// leaves against golden. Stops the test at the first mismatch.
     pub fn run(
         &mut self,
         baked: &Baked,
@@ -523,13 +611,7 @@ impl LaneBench {
                 self.check_hit(check, cyc, want_hits.get(hits), hits);
                 hits += 1;
             }
-            for k in 0..2 {
-                let man = self.ports[k].get_manager(&self.model);
-                if let Err(v) = chk[k].observe(&man, &subs[k]) {
-                    check.fail(cyc, "AXI protocol", "no violation", &v.to_string());
-                }
-                mem.tick(k, &man);
-            }
+            self.observe_ports(&mut mem, &mut chk, &subs, check, cyc);
             self.model.tick();
             if !first && !busy {
                 break;
@@ -550,11 +632,7 @@ impl LaneBench {
         }
         let visible = check_words_at(&self.cfg, baked, frame.cam, range, place, mem.memory(), check, cycles);
         let table = (range.first..range.first + range.count)
-            .map(|i| {
-                let mut b = [0u8; FEATURE_BYTES as usize];
-                read_wrapped(mem.memory(), place.feat_at(u64::from(place.id0 + i)), &mut b);
-                b
-            })
+            .map(|i| place.feature_word(mem.memory(), u64::from(place.id0 + i)))
             .collect();
         LaneRun { gaussians: u64::from(range.count), visible, hits: hits as u64, cycles, table }
     }
@@ -634,9 +712,7 @@ pub fn placed_memory(baked: &Baked, range: LaneRange, prev: &[[u8; 32]], place: 
             write_wrapped(&mut mem, u64::from(place.prev) + FEATURE_BYTES * id, w);
         }
     }
-    let canary = [CANARY; FEATURE_BYTES as usize];
-    write_wrapped(&mut mem, place.feat_at(first.wrapping_sub(1)), &canary);
-    write_wrapped(&mut mem, place.feat_at(first + u64::from(range.count)), &canary);
+    place.write_canaries(&mut mem, range);
     mem
 }
 
@@ -656,18 +732,13 @@ pub fn check_words_at(
     let fmt = cfg.feature_format();
     let (regs, cam_pos) = camera_registers(cam, cfg.tile);
     let params = ProjectParams { feature: fmt, tile: cfg.tile };
-    let word_at = |id: u64| {
-        let mut b = [0u8; FEATURE_BYTES as usize];
-        read_wrapped(mem, place.feat_at(id), &mut b);
-        b
-    };
     let id0 = u64::from(place.id0);
     let mut visible = 0;
     for i in range.first..range.first + range.count {
         let want = preprocess_one(baked, &regs, cam_pos, &params, &DepthKeyCodec::Fp16, i as usize);
         visible += u64::from(want.is_some());
         let want_bytes = feature_to_bytes(&fmt, want.as_ref().map(|h| &h.entry));
-        let got = word_at(id0 + u64::from(i));
+        let got = place.feature_word(mem, id0 + u64::from(i));
         if got != want_bytes {
             let show = |b: &[u8; 32]| format!("{:?} (0x{})", feature_from_bytes(&fmt, b), hex(b));
             check.fail(
@@ -678,17 +749,7 @@ pub fn check_words_at(
             );
         }
     }
-    let canary = [CANARY; FEATURE_BYTES as usize];
-    let first = id0 + u64::from(range.first);
-    for id in [first.wrapping_sub(1), first + u64::from(range.count)] {
-        let got = word_at(id);
-        check.value(
-            cycle,
-            &format!("canary word of id {id} outside the lane's range"),
-            1,
-            u64::from(got == canary),
-        );
-    }
+    place.check_canaries(mem, range, check, cycle);
     visible
 }
 

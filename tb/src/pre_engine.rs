@@ -17,7 +17,7 @@
 use crate::axi::{AxiBinding, AxiChecker, AxiMemory, AxiTiming, SubordinateSignals};
 use crate::check::Checker;
 use crate::dynmodel::DynModel;
-use crate::lane::LaneFrame;
+use crate::lane::{complement_bases, LaneFrame};
 use crate::lane::{FEAT_BASE, GEO_BASE, PREV_BASE, SH_BASE};
 use crate::rng::Rng;
 use neo_gen::emit::Module;
@@ -103,14 +103,9 @@ impl EngineBases {
             (DESCRIPTOR_BYTES * tiles, 32),
         ];
         loop {
-            let r: Vec<u64> = sizes.iter().map(|_| rng.next_u64()).collect();
-            let pick = |k: usize| -> Vec<u64> {
-                sizes
-                    .iter()
-                    .zip(&r)
-                    .map(|(&(_, a), &r)| if k == 0 { r } else { !r } & 0xffff_ffff & !(a - 1))
-                    .collect()
-            };
+            let pairs: Vec<[u64; 2]> =
+                sizes.iter().map(|&(_, a)| complement_bases(rng.next_u64(), a)).collect();
+            let pick = |k: usize| -> Vec<u64> { pairs.iter().map(|p| p[k]).collect() };
             let fits = |v: &[u64]| {
                 v.iter().zip(&sizes).all(|(&b, &(s, _))| b + s <= 1 << 32)
                     && (0..6)

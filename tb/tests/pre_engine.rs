@@ -11,7 +11,7 @@ neo_tb::with_models! {
     use neo_golden::hwpre::bake::{Baked, ShPrecision};
     use neo_tb::axi::AxiTiming;
     use neo_tb::check::Checker;
-    use neo_tb::lane::{sweep_camera, sweep_world, LaneFrame};
+    use neo_tb::lane::{camera_straddling_depth_2, depth_split, sweep_camera, sweep_world, LaneFrame, LaneRange};
     use neo_tb::pre_engine::{EngineBases, EngineSetup, PreEngineBench};
     use neo_tb::rng::{for_each_seed, Rng};
 
@@ -115,37 +115,14 @@ neo_tb::with_models! {
     /// (the walk's cameras see every Gaussian nearer than 2).
     #[test]
     fn depths_on_both_sides_of_2_reach_the_lists() {
-        use neo_golden::hwpre::project::ProjectParams;
-        use neo_golden::hwpre::{camera_registers, preprocess_one};
-        use neo_golden::sort::DepthKeyCodec;
         let name = "depths_on_both_sides_of_2_reach_the_lists";
         let cfg = config();
         let mut bench = PreEngineBench::build(&cfg).unwrap();
         neo_tb::waves::maybe_trace(bench.model_mut(), name);
         let (baked, cams) = scene(601, 11, 1, 0);
-        let params = ProjectParams { feature: cfg.feature_format(), tile: cfg.tile };
-        // (visible depths below 2, at least 2) for a camera.
-        let split = |cam: &neo_golden::camera::Camera| {
-            let (regs, pos) = camera_registers(cam, cfg.tile);
-            let keys: Vec<u32> = (0..baked.len())
-                .filter_map(|i| preprocess_one(&baked, &regs, pos, &params, &DepthKeyCodec::Fp16, i))
-                .map(|h| h.entry.depth_key)
-                .collect();
-            let far = keys.iter().filter(|&&k| k >= 0x4000).count();
-            (keys.len() - far, far)
-        };
-        let cam = (0..=40)
-            .map(|k| {
-                let mut c = cams[0].clone();
-                c.position -= c.cam_to_world.z_axis * (0.25 * f64::from(k));
-                c
-            })
-            .max_by_key(|c| {
-                let (near, far) = split(c);
-                near.min(far)
-            })
-            .expect("cameras");
-        let (near, far) = split(&cam);
+        let all = LaneRange { first: 0, count: baked.len() as u32 };
+        let cam = camera_straddling_depth_2(&cfg, &baked, &cams[0], all, 0..=40);
+        let (near, far) = depth_split(&cfg, &baked, &cam, all);
         assert!(near > 0 && far > 0, "visible depths below 2: {near}, at least 2: {far}");
         let check = Checker::new("neo_pre_engine", 11);
         let frame = LaneFrame { cam: &cam, all_fresh: true, prev: &[] };

@@ -13,7 +13,10 @@ neo_tb::with_models! {
     use neo_tb::check::Checker;
     use neo_golden::camera::Camera;
     use neo_golden::engine::CameraWord;
-    use neo_tb::lane::{sweep_camera, sweep_world, LaneBench, LaneFrame, LanePlacement, LaneRange};
+    use neo_tb::lane::{
+        camera_straddling_depth_2, depth_split, sweep_camera, sweep_world, visible_entries, LaneBench, LaneFrame,
+        LanePlacement, LaneRange,
+    };
     use neo_tb::rng::{for_each_seed, Rng};
 
     /// The baked synthetic scene (`gaussians`, `seed`, SH `degree`) and `frames` cameras of a fast walk through it
@@ -125,49 +128,21 @@ neo_tb::with_models! {
     /// take both values of their bits 14 and 5.
     #[test]
     fn lane_fills_its_queues_behind_a_slow_writer() {
-        use neo_golden::hwpre::project::ProjectParams;
-        use neo_golden::hwpre::{camera_registers, preprocess_one};
-        use neo_golden::sort::DepthKeyCodec;
         let name = "lane_fills_its_queues_behind_a_slow_writer";
         let cfg = neo_tb::config();
         let mut bench = LaneBench::build(&cfg).unwrap();
         neo_tb::waves::maybe_trace(bench.model_mut(), name);
         let (mut baked, cams) = scene(400, 11, 1, 0);
         let range = LaneRange { first: 1, count: baked.len() as u32 - 1 };
-        let params = ProjectParams { feature: cfg.feature_format(), tile: cfg.tile };
-        // The visible Gaussians' entries for a camera.
-        let entries = |baked: &Baked, cam: &Camera| {
-            let (regs, pos) = camera_registers(cam, cfg.tile);
-            (range.first..range.first + range.count)
-                .filter_map(|i| preprocess_one(baked, &regs, pos, &params, &DepthKeyCodec::Fp16, i as usize))
-                .map(|h| h.entry)
-                .collect::<Vec<_>>()
-        };
-        // (visible depths below 2, at least 2) for a camera.
-        let split = |baked: &Baked, cam: &Camera| {
-            let keys = entries(baked, cam);
-            let far = keys.iter().filter(|e| e.depth_key >= 0x4000).count();
-            (keys.len() - far, far)
-        };
-        let cam = (-16..=40)
-            .map(|k| {
-                let mut c = cams[0].clone();
-                c.position -= c.cam_to_world.z_axis * (0.25 * f64::from(k));
-                c
-            })
-            .max_by_key(|c| {
-                let (near, far) = split(&baked, c);
-                near.min(far)
-            })
-            .expect("cameras");
+        let cam = camera_straddling_depth_2(&cfg, &baked, &cams[0], range, -16..=40);
         let wide = &mut baked.geometry[5];
         let p = cam.position + cam.cam_to_world.z_axis * 0.5;
         wide.position = [p.x as f32, p.y as f32, p.z as f32];
         wide.cov3d = [160_000.0, 0.0, 0.0, 160_000.0, 0.0, 160_000.0];
         let baked = baked;
-        let (near, far) = split(&baked, &cam);
+        let (near, far) = depth_split(&cfg, &baked, &cam, range);
         assert!(near > 0 && far > 0, "visible depths below 2: {near}, at least 2: {far}");
-        let exps: Vec<u32> = entries(&baked, &cam).iter().map(|e| e.conic.exp).collect();
+        let exps: Vec<u32> = visible_entries(&cfg, &baked, &cam, range).iter().map(|e| e.conic.exp).collect();
         assert!(exps.iter().any(|&e| e >= 32) && exps.iter().any(|&e| e < 32), "conic exponents {exps:?}");
         let slow = AxiTiming { ready_percent: 12, ..AxiTiming::IDEAL };
         for_each_seed(name, |seed| {

@@ -203,7 +203,7 @@ impl<'a> Datapath<'a> {
             let v = self.value_at(*id, self.depth);
             m.assign(format!("out_{name}_o"), v);
         }
-        let unused = self.unread_compare_nets();
+        let unused: Vec<String> = self.unread_compare_nets().into_iter().map(|(net, _)| net).collect();
         if !unused.is_empty() {
             m.wire_assign("unused_cmp", 1, format!("^{{{}}}", unused.join(", ")));
         }
@@ -214,15 +214,18 @@ impl<'a> Datapath<'a> {
         m
     }
 
-    /// The comparator outputs no logic reads (each compare node uses one of the five; the others
-    /// are reduced into the `unused_cmp` lint sink).
-    pub fn unread_compare_nets(&self) -> Vec<String> {
+    /// The comparator outputs no logic reads, with their widths (each compare node uses one of
+    /// the five; the others are reduced into the `unused_cmp` lint sink).
+    pub fn unread_compare_nets(&self) -> Vec<(String, u32)> {
         self.lowering
             .iter()
             .enumerate()
             .filter_map(|(id, l)| match l {
                 Lowering::Compare { output } => Some(
-                    COMPARE_OUTPUTS.iter().filter(move |o| *o != output).map(move |o| compare_net(id, o)),
+                    COMPARE_OUTPUTS
+                        .iter()
+                        .filter(move |o| *o != output)
+                        .map(move |o| (compare_net(id, o), compare_ty(o).bits())),
                 ),
                 _ => None,
             })
@@ -318,7 +321,7 @@ impl<'a> Datapath<'a> {
                 let mut c: Vec<(&str, String)> = vec![("a_i", args[0].clone()), ("b_i", args[1].clone())];
                 for o in COMPARE_OUTPUTS {
                     let wire = compare_net(id, o);
-                    m.wire(&wire, if o.starts_with("m") { 32 } else { 1 });
+                    m.wire(&wire, compare_ty(o).bits());
                     c.push((o, wire));
                 }
                 m.item(Item::Instance(Instance {
@@ -438,7 +441,7 @@ impl Datapath<'_> {
                 let (p, q) = (*p, *q);
                 let ops = [Op::Lt(p, q), Op::Le(p, q), Op::Eq(p, q), Op::Max(p, q), Op::Min(p, q)];
                 for (port, op) in COMPARE_OUTPUTS.iter().zip(ops) {
-                    let ty = if port.starts_with('m') { Ty::F } else { Ty::B };
+                    let ty = compare_ty(port);
                     push(compare_net(id, port), ty.bits(), &a.op(&op, ty), 1);
                 }
             }
@@ -447,6 +450,16 @@ impl Datapath<'_> {
             push(format!("out_{name}_o"), self.graph.nodes[*id].ty.bits(), &a.node(*id), 1);
         }
         out
+    }
+}
+
+/// The type of the comparator's output `port`: `max_o` and `min_o` are binary32, the others
+/// booleans.
+fn compare_ty(port: &str) -> Ty {
+    if port.starts_with('m') {
+        Ty::F
+    } else {
+        Ty::B
     }
 }
 
