@@ -235,6 +235,7 @@ module neo_engine (
   wire [1151:0] counters;
   wire pre_enable;
   wire pre_fresh;
+  wire pre_sh_half;
   wire [31:0] pre_gaussians;
   wire [31:0] pre_sh_degree;
   wire [31:0] pre_geo_base;
@@ -296,6 +297,7 @@ module neo_engine (
     .scratch_base_o(scratch_base),
     .pre_enable_o(pre_enable),
     .pre_fresh_o(pre_fresh),
+    .pre_sh_half_o(pre_sh_half),
     .gaussians_o(pre_gaussians),
     .sh_degree_o(pre_sh_degree),
     .geo_base_o(pre_geo_base),
@@ -770,6 +772,7 @@ module neo_engine (
     .cam_z_i(pre_cam_z),
     .degree_i(pre_sh_degree),
     .fresh_i(pre_fresh),
+    .sh_half_i(pre_sh_half),
     .gaussians_i(pre_gaussians),
     .geo_base_i(pre_geo_base),
     .sh_base_i(pre_sh_base),

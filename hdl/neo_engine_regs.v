@@ -34,6 +34,7 @@ module neo_engine_regs (
   output wire [31:0]   scratch_base_o,
   output wire          pre_enable_o,
   output wire          pre_fresh_o,
+  output wire          pre_sh_half_o,
   output wire [31:0]   gaussians_o,
   output wire [31:0]   sh_degree_o,
   output wire [31:0]   geo_base_o,
@@ -763,6 +764,7 @@ module neo_engine_regs (
   assign scratch_base_o = scratch_base_lo_q;
   assign pre_enable_o = pre_ctrl_q[0];
   assign pre_fresh_o = pre_ctrl_q[1];
+  assign pre_sh_half_o = pre_ctrl_q[2];
   assign gaussians_o = gaussians_q;
   assign sh_degree_o = sh_degree_q[31:0];
   assign geo_base_o = geo_base_lo_q;

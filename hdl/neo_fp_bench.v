@@ -21,7 +21,8 @@ module neo_fp_bench (
   output wire        le_o,               // neo_fp_cmp: a <= b
   output wire        eq_o,               // neo_fp_cmp: a == b
   output wire [31:0] max_o,              // neo_fp_cmp: max(a, b)
-  output wire [31:0] min_o               // neo_fp_cmp: min(a, b)
+  output wire [31:0] min_o,              // neo_fp_cmp: min(a, b)
+  output wire [31:0] widen_comb_y_o      // neo_fp_widen_half_comb: a's low half widened (combinational)
 );
 
   neo_fp_add u_add (
@@ -116,6 +117,10 @@ module neo_fp_bench (
     .eq_o(eq_o),
     .max_o(max_o),
     .min_o(min_o)
+  );
+  neo_fp_widen_half_comb u_widen_comb (
+    .a_i(a_i),
+    .y_o(widen_comb_y_o)
   );
 
 endmodule

@@ -33,6 +33,7 @@ module neo_pre_engine (
   input  wire [31:0]  cam_z_i,        // per frame (camera word or SH degree)
   input  wire [31:0]  degree_i,       // per frame (camera word or SH degree)
   input  wire         fresh_i,        // no table is reused: every Gaussian is incoming, no previous word read
+  input  wire         sh_half_i,      // the SH records hold binary16 coefficients (PRE_CTRL.sh_half)
   input  wire [31:0]  gaussians_i,    // Gaussians of the baked scene
   input  wire [31:0]  geo_base_i,     // byte address: geometry array (Gaussian 0's record)
   input  wire [31:0]  sh_base_i,      // byte address: SH array (Gaussian 0's record)
@@ -123,10 +124,14 @@ module neo_pre_engine (
   assign share_sum = {1'b0, gaussians_i} + 33'd3;
   wire [32:0] share;
   assign share = share_sum >> 2;
-  // SH record words of the degree (golden hwpre::bake::sh_bytes, f32).
+  // SH record words of the degree and precision (golden engine::pre::sh_record_words).
   // A degree above 3 reads degree-3 records (SH_DEGREE is 0 to 3).
+  wire [5:0] sh_words_f32;
+  assign sh_words_f32 = (degree_i == 32'd0) ? 6'd3 : (degree_i == 32'd1) ? 6'd12 : (degree_i == 32'd2) ? 6'd27 : 6'd48;
+  wire [5:0] sh_words_f16;
+  assign sh_words_f16 = (degree_i == 32'd0) ? 6'd2 : (degree_i == 32'd1) ? 6'd6 : (degree_i == 32'd2) ? 6'd14 : 6'd24;
   wire [5:0] sh_words;
-  assign sh_words = (degree_i == 32'd3) ? 6'd48 : (degree_i == 32'd2) ? 6'd27 : (degree_i == 32'd1) ? 6'd12 : (degree_i == 32'd0) ? 6'd3 : 6'd48;
+  assign sh_words = sh_half_i ? sh_words_f16 : sh_words_f32;
 
   // Lanes: hit buses (lane p at [p*W +: W]), busy bits.
   wire [3:0] lane_busy;
@@ -197,6 +202,7 @@ module neo_pre_engine (
         .geo_base_i(geo_base),
         .sh_base_i(sh_base_i),
         .sh_words_i(sh_words),
+        .sh_half_i(sh_half_i),
         .feat_base_i(feat_base_i),
         .prev_base_i(prev_base_i),
         .all_fresh_i(fresh_i),

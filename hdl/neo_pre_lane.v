@@ -33,7 +33,8 @@ module neo_pre_lane (
   input  wire [31:0] degree_i,       // per frame
   input  wire [31:0] geo_base_i,     // byte address of Gaussian first_i's geometry record
   input  wire [31:0] sh_base_i,      // byte address of Gaussian 0's SH record
-  input  wire [5:0]  sh_words_i,     // words of an SH record (the scene's degree, f32)
+  input  wire [5:0]  sh_words_i,     // words of an SH record (golden engine::pre::sh_record_words)
+  input  wire        sh_half_i,      // SH records hold binary16 coefficients (two a word, the even one low)
   input  wire [31:0] feat_base_i,    // byte address of Gaussian 0's feature word (32-byte aligned)
   input  wire [31:0] prev_base_i,    // byte address of Gaussian 0's previous feature word
   input  wire        all_fresh_i,    // no table is reused: every Gaussian is incoming, no previous word read
@@ -526,8 +527,23 @@ module neo_pre_lane (
       prev_q <= sh_rec[255:0];
     end
   end
+  // SH coefficients: word k, or with sh_half_i half k widened (golden engine::pre::unpack_sh_record).
+  wire [1535:0] sh_coef;
+  genvar k;
+  generate
+    for (k = 0; k < 48; k = k + 1) begin : g_sh_coef
+      wire [31:0] half;
+      wire [31:0] wide;
+      assign half = {16'd0, sh_rec[16*k +: 16]};
+      neo_fp_widen_half_comb u_widen (
+        .a_i(half),
+        .y_o(wide)
+      );
+      assign sh_coef[32*k +: 32] = sh_half_i ? wide : sh_rec[32*k +: 32];
+    end
+  endgenerate
   wire [1535:0] c_sh;
-  assign c_sh = pend_visible ? sh_rec : 1536'd0;
+  assign c_sh = pend_visible ? sh_coef : 1536'd0;
   wire c_out_ready;
   wire c_valid;
   wire [31:0] c_red;

@@ -7,8 +7,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use neo_golden::engine::host::FramePlan;
 use neo_golden::engine::memory::Memory;
-use neo_golden::engine::{EngineConfig, EngineSession, HostMode};
-use neo_golden::pipeline::Strategy;
+use neo_golden::engine::{EngineConfig, EngineSession, HostMode, SessionOptions};
 use neo_golden::scene::Scene;
 use neo_golden::source;
 use neo_golden::trajectory::{parse_trajectory, Trajectory};
@@ -42,16 +41,16 @@ pub fn trajectory_at(spec: &str, scene: &Scene, frames: usize, res: (u32, u32)) 
     Ok(traj)
 }
 
-/// The golden host session of `traj` on `scene` for engine `cfg`, feeding the engine as `mode`
-/// says, its tables sorted by `strategy` (`neo`, or `adaptive` with per-tile DPS passes).
+/// The golden host session of `traj` on `scene` for engine `cfg`, feeding the engine as
+/// `opts.mode` says, its tables sorted by `opts.strategy` (`neo`, or `adaptive` with per-tile
+/// DPS passes), the scene's SH records in `opts.sh`.
 pub fn session<'s>(
     scene: &'s Scene,
     traj: Trajectory,
     cfg: &EngineConfig,
-    mode: HostMode,
-    strategy: Strategy,
+    opts: SessionOptions,
 ) -> Result<EngineSession<'s>> {
-    EngineSession::with_strategy(scene, traj, cfg, mode, strategy).context("engine session")
+    EngineSession::with_options(scene, traj, cfg, opts).context("engine session")
 }
 
 /// The host mode named by `--input`: `scene` or `lists`.

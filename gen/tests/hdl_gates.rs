@@ -397,7 +397,7 @@ fn the_port_mux_is_lint_clean_and_latch_free_at_every_size() {
 #[ignore]
 fn fp_primitive_cells() {
     use neo_gen::tools::synth_stats_with;
-    use neo_gen::units::fp::{cmp, label, latency, FpPrim};
+    use neo_gen::units::fp::{cmp, conv, label, latency, FpPrim};
     if !require_for_test("yosys", "fp_primitive_cells") {
         return;
     }
@@ -406,8 +406,10 @@ fn fp_primitive_cells() {
     println!("|---|---:|---:|---:|");
     let mut rows: Vec<(String, String, PrimTop)> =
         FpPrim::ALL.iter().map(|&p| (label(p), latency(p).to_string(), prim_top(&cfg, p))).collect();
-    let cmp_top = (cmp::NAME.to_string(), files_for(&cfg, cmp::NAME), Vec::new());
-    rows.push((cmp::NAME.into(), "0 (combinational)".into(), cmp_top));
+    for name in [cmp::NAME, conv::WIDEN_HALF_COMB_NAME] {
+        let top = (name.to_string(), files_for(&cfg, name), Vec::new());
+        rows.push((name.into(), "0 (combinational)".into(), top));
+    }
     for (what, lat, (top, files, params)) in rows {
         let s = synth_stats_with(&files, &top, &params).unwrap_or_else(|e| panic!("{top}: {e}"));
         println!("| `{what}` | {lat} | {} | {} |", s.cells, s.flip_flops);

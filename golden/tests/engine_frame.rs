@@ -149,6 +149,56 @@ fn reference_preprocessing_matches_pipeline_on_every_case_synthetic() {
     }
 }
 
+/// Scene mode with binary16 SH records (`PRE_SH_HALF`): at every SH degree (degrees 0 and 2 have
+/// padded records), the reference reads the packed records and leaves what the pipeline computed
+/// with `hw:f16` preprocessing; the records are the f32 ones' size halved, rounded up to words.
+#[test]
+fn reference_preprocessing_reads_half_sh_records_at_every_degree() {
+    use neo_golden::engine::{sh_record_words, SessionOptions, PRE_SH_HALF};
+    use neo_golden::hwpre::ShPrecision;
+    let how = CaseScene::synthetic();
+    for degree in 0..=3u8 {
+        let spec = format!("synthetic:blobs?gaussians=3000&seed=5&sh={degree}");
+        let (scene, _) = load_scene(&spec, false).expect("synthetic scene");
+        let c = [EngineCase::Orbit, EngineCase::Cut][degree as usize % 2];
+        let base = EngineConfig { pre_units: 2, ..small_config() };
+        let (traj, cfg) = c.setup(&scene, &how, 3, [128, 128], &base).expect("case setup");
+        let opts = SessionOptions { mode: HostMode::Scene, strategy: c.strategy(), sh: ShPrecision::F16 };
+        let mut s = EngineSession::with_options(&scene, traj, &cfg, opts).expect("session");
+        let mut mem = Memory::new();
+        let mut frames = 0;
+        while let Some(plan) = s.next_frame(&mut mem).expect("host frame") {
+            assert_ne!(plan.regs.pre.ctrl & PRE_SH_HALF, 0, "degree {degree}: the host says half records");
+            let out = execute_frame(&cfg, &plan.regs, &mut mem).expect("reference frame");
+            if let Some(m) = plan.expected.compare(&mem) {
+                panic!("degree {degree}, frame {}: {m}", plan.frame);
+            }
+            if let Some(m) = plan.expected.compare_outcome(&out) {
+                panic!("degree {degree}, frame {}: {m}", plan.frame);
+            }
+            frames += 1;
+        }
+        assert_eq!(frames, 3);
+        let (w16, w32) =
+            (sh_record_words(degree, ShPrecision::F16), sh_record_words(degree, ShPrecision::F32));
+        assert_eq!(w16, w32.div_ceil(2), "degree {degree}");
+    }
+}
+
+/// The binary16 record packing: two coefficients a word, the even one low, the odd count padded.
+#[test]
+fn half_sh_records_pack_two_coefficients_a_word() {
+    use neo_golden::engine::pre::{pack_sh_record, unpack_sh_record};
+    use neo_golden::hwpre::ShPrecision;
+    let coeffs: Vec<u32> = (0..27).map(|k| 0x3c00 + k).collect();
+    let words = pack_sh_record(&coeffs, ShPrecision::F16);
+    assert_eq!(words.len(), 14);
+    assert_eq!(words[0], 0x3c01_3c00);
+    assert_eq!(words[13], 0x3c1a, "the last word's high half is padding");
+    assert_eq!(unpack_sh_record(&words, 27, ShPrecision::F16), coeffs);
+    assert_eq!(unpack_sh_record(&pack_sh_record(&coeffs, ShPrecision::F32), 27, ShPrecision::F32), coeffs);
+}
+
 /// An engine without a Preprocessing Engine (`pre_units` 0): lists mode runs as on any engine,
 /// with `PRE_CTRL.enable` set (ignored: no preprocessing traffic); scene mode is refused.
 #[test]

@@ -20,12 +20,16 @@
 //! - **Raster.** [`raster_tile_cycles`] with the engine's load rate: a table entry is one beat
 //!   and its feature word `FEATURE_BYTES / 8` beats on the port; the pixels `tile^2 * 4 / 8`
 //!   write beats, the write-back one beat per entry.
+//! - **Preprocessing** (scene mode, [`EngineFrameModel::predict_frame`]): the Preprocessing
+//!   Engine's phase comes before the tile walk ([`EngineFrameModel::pre_cycles`]: its busiest
+//!   port's traffic, charged client by client).
 //! - **Scheduling.** Tiles in index order; a descriptor read (4 beats) per tile into a
 //!   one-descriptor buffer; `first_free` (the lowest-numbered free core) or `round_robin`; a
 //!   tile's raster after its sort, in completion order; the frame ends with the last raster and
 //!   its writes' responses.
 
 use neo_golden::engine::memory::{ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
+use neo_golden::engine::pre::{beats_spanned, pre_transfers, PrePart, PreRecords, PreWork};
 use neo_golden::engine::{
     execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory, MemoryClient,
     SchedulerPolicy, TileTrace, BRIDGE_W_SLOTS, COMPLETION_QUEUE_DEPTH, MUX_W_FIFO_DEPTH,
@@ -208,6 +212,9 @@ pub struct FramePrediction {
     pub sort_busy: f64,
     /// Cycles with any raster core busy.
     pub raster_busy: f64,
+    /// Cycles of the Preprocessing Engine's phase before the tile walk (0 when it does not run;
+    /// [`EngineFrameModel::pre_cycles`]); part of `cycles`.
+    pub pre_busy: f64,
 }
 
 /// The engine-level model for one configuration, unit timing and memory timing.
@@ -357,11 +364,87 @@ impl<'a> EngineFrameModel<'a> {
     }
 
     /// [`Self::predict`] for the frame of `regs` whose inputs are in `mem` (before the engine
-    /// runs it): golden's reference runs the frame on a copy of the memory for its trace.
+    /// runs it): golden's reference runs the frame on a copy of the memory for its trace. A
+    /// frame that runs the Preprocessing Engine gets its phase ([`Self::pre_cycles`]) added.
     pub fn predict_frame(&self, regs: &FrameRegs, mem: &Memory) -> Result<FramePrediction, FrameError> {
         let mut copy = mem.clone();
         let (_, trace) = execute_frame_traced(self.cfg, regs, &mut copy)?;
-        Ok(self.predict(&trace))
+        let mut p = self.predict(&trace);
+        if let Some(pre) = &trace.pre {
+            p.pre_busy = self.pre_cycles(regs, pre);
+            p.cycles += p.pre_busy;
+        }
+        Ok(p)
+    }
+
+    /// Cycles of the Preprocessing Engine's phase (the tile walk starts at its `done`): the
+    /// busiest port's traffic, the lanes' own pace, the slowest client's read window, then the
+    /// pipeline fill and the lists' flush.
+    ///
+    /// - **Ports.** Every transfer of golden `pre_transfers` (geometry streams, one SH record
+    ///   and previous word per visible Gaussian, feature words, list lines, lengths) is charged
+    ///   to the client that makes it (lane `p`'s geometry port or SH port, by the Gaussian's
+    ///   lane; the list writer), its beats ([`beats_spanned`]) to that client's port: a port's
+    ///   phase lasts its read beats at `bandwidth` or its write beats at
+    ///   [`PortTiming::write_rate`], whichever is longer (the lanes keep both channels busy).
+    /// - **Lanes.** A lane takes one Gaussian a cycle at most (the units' measured II).
+    /// - **Window.** A client's reads move at most its fetch unit's window
+    ///   ([`EngineConfig::pre_window_beats`]) per round trip.
+    /// - **Fill and flush.** The projection and colour units' measured latencies, a round trip
+    ///   for the first read and one for the last write's response; then each tile's length (a
+    ///   single write) after the lanes are done.
+    pub fn pre_cycles(&self, regs: &FrameRegs, pre: &PreWork) -> f64 {
+        let cfg = self.cfg;
+        let p = &regs.pre;
+        let ports = cfg.mem_channels;
+        let lane_of = |id: u64| {
+            (0..cfg.pre_units)
+                .find(|&l| {
+                    let (first, count) = cfg.pre_lane_range(p.gaussians, l);
+                    id < u64::from(first) + u64::from(count)
+                })
+                .unwrap_or(0)
+        };
+        let records = PreRecords::engine(p.sh_degree as u8, p.sh_precision());
+        let id = |addr: u64, base: u64, bytes: u64| (addr - base) / bytes.max(1);
+        let mut client_reads = vec![0u64; cfg.memory_clients()];
+        let mut port_beats = vec![[0u64; 2]; ports];
+        let lens = pre.lists.iter().map(Vec::len);
+        pre_transfers(cfg, regs, pre.visible.iter().copied(), lens, |t| {
+            let client = match t.part {
+                PrePart::Geometry => {
+                    MemoryClient::PreGeometry(lane_of(id(t.addr, p.geo_base, records.geometry)))
+                }
+                PrePart::Feature => {
+                    MemoryClient::PreGeometry(lane_of(id(t.addr, regs.feat_base, records.feature)))
+                }
+                PrePart::Sh => MemoryClient::PreSh(lane_of(id(t.addr, p.sh_base, records.sh))),
+                PrePart::PrevFeature => {
+                    MemoryClient::PreSh(lane_of(id(t.addr, p.prev_feat_base, records.feature)))
+                }
+                PrePart::ListLine | PrePart::ListLen => MemoryClient::PreListWriter,
+            };
+            let beats = beats_spanned(t.addr, t.bytes, BEAT_BYTES);
+            let c = cfg.client_index(client);
+            port_beats[c % ports][t.part.is_write() as usize] += beats;
+            if !t.part.is_write() {
+                client_reads[c] += beats;
+            }
+        });
+        let port =
+            port_beats.iter().map(|&[r, w]| self.beats(r).max(self.write_beats(w))).fold(0.0, f64::max);
+        let ii = |u: Option<(f64, u64)>| u.map_or(1.0, |(ii, _)| ii);
+        let pre_lat = &self.lat.preprocess;
+        let pace = ii(pre_lat.projection).max(ii(pre_lat.color));
+        let lanes = (0..cfg.pre_units).map(|l| cfg.pre_lane_range(p.gaussians, l).1).max().unwrap_or(0);
+        let window = cfg.pre_window_beats().max(1) as f64;
+        let windowed =
+            client_reads.iter().map(|&r| r as f64 * self.round_trip() / window).fold(0.0, f64::max);
+        let fill = [pre_lat.projection, pre_lat.color].iter().map(|u| u.map_or(0, |(_, l)| l)).sum::<u64>()
+            as f64
+            + 2.0 * self.round_trip();
+        let flush = self.single_writes(pre.lists.len() as u64);
+        port.max(f64::from(lanes) * pace).max(windowed) + fill + flush
     }
 
     /// The prediction for one frame: the schedule with every job alone on its port, then
@@ -581,7 +664,7 @@ impl Schedule {
                 self.jobs.iter().filter(|j| j.engine == e).map(|j| (j.start, j.end)).collect();
             union(&mut v)
         };
-        FramePrediction { cycles: self.end, sort_busy: spans(0), raster_busy: spans(1) }
+        FramePrediction { cycles: self.end, sort_busy: spans(0), raster_busy: spans(1), pre_busy: 0.0 }
     }
 }
 

@@ -10,7 +10,8 @@ use crate::engine_run;
 use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use indicatif::ProgressBar;
-use neo_golden::engine::Counter;
+use neo_golden::engine::{Counter, SessionOptions};
+use neo_golden::hwpre::ShPrecision;
 use neo_golden::pipeline::Strategy;
 use neo_golden::source;
 use neo_golden::trajectory::parse_resolution;
@@ -57,6 +58,10 @@ pub struct CosimArgs {
     /// feature words; the Preprocessing Engine is off).
     #[arg(long, default_value = "scene")]
     pub input: String,
+    /// SH records the engine reads in scene mode: `f32` or `f16` (binary16, two coefficients a
+    /// word: `PRE_CTRL.sh_half`; the golden pipeline preprocesses with `hw:f16`).
+    #[arg(long, default_value = "f32", value_parser = super::scene::parse_sh)]
+    pub sh: ShPrecision,
     /// The sorting strategy the host plans and the engine runs: `neo` (one DPS pass per reuse
     /// tile) or `adaptive:wide=1,resort=0[,budget=B,max=P]` (the per-tile DPS passes of golden's
     /// adaptive policy, written into the descriptors).
@@ -88,7 +93,8 @@ pub fn run(a: CosimArgs) -> Result<()> {
     let (scene, _) = source::load_scene(&a.scene.scene, a.strict.strict)?;
     let traj = engine_run::trajectory_at(&a.trajectory.trajectory, &scene, a.frames, a.res)?;
     let strategy: Strategy = a.sort.parse().map_err(|e| anyhow!("--sort {:?}: {e}", a.sort))?;
-    let mut session = engine_run::session(&scene, traj, &cfg, mode, strategy)?;
+    let opts = SessionOptions { mode, strategy, sh: a.sh };
+    let mut session = engine_run::session(&scene, traj, &cfg, opts)?;
     eprintln!(
         "neo cosim: {} Gaussians, {} tiles, {} frames, engine {} + {} cores, {} ports, seed 0x{seed:016x}",
         scene.len(),

@@ -35,7 +35,8 @@ pub struct BakeArgs {
     pub strict: bool,
 }
 
-fn parse_sh(s: &str) -> Result<ShPrecision, String> {
+/// Parses an SH precision argument (`f32`, `f16`): `neo scene bake --sh`, `neo cosim --sh`.
+pub fn parse_sh(s: &str) -> Result<ShPrecision, String> {
     match s {
         "f32" => Ok(ShPrecision::F32),
         "f16" => Ok(ShPrecision::F16),

@@ -79,6 +79,7 @@ pub struct FpBench {
     b: usize,
     y: Vec<(FpPrim, usize)>,
     cmp: [usize; 5],
+    widen_comb: usize,
 }
 
 /// Counts of a checked run.
@@ -107,7 +108,8 @@ impl FpBench {
         let y =
             FpPrim::ALL.iter().map(|&p| Ok((p, port(&bench::port(p))?))).collect::<Result<_, String>>()?;
         let cmp = [port("lt_o")?, port("le_o")?, port("eq_o")?, port("max_o")?, port("min_o")?];
-        Ok(FpBench { en: port("en_i")?, a: port("a_i")?, b: port("b_i")?, y, cmp, model })
+        let widen_comb = port(bench::WIDEN_COMB_PORT)?;
+        Ok(FpBench { en: port("en_i")?, a: port("a_i")?, b: port("b_i")?, y, cmp, widen_comb, model })
     }
 
     fn drive(&mut self, en: bool, a: u32, b: u32) {
@@ -117,8 +119,18 @@ impl FpBench {
         self.model.eval();
     }
 
-    /// Checks `neo_fp_cmp` on the operands driven now.
-    fn check_cmp(&self, seed: u64, a: u32, b: u32, class: &str) {
+    /// Checks the combinational modules (`neo_fp_cmp`, `neo_fp_widen_half_comb`) on the operands
+    /// driven now.
+    fn check_combinational(&self, seed: u64, a: u32, b: u32, class: &str) {
+        let (want, got) = (expected(FpPrim::WidenHalf, a, b), self.model.get_u64(self.widen_comb) as u32);
+        if got != want {
+            Checker::new("neo_fp_widen_half_comb", seed).fail(
+                self.model.cycle(),
+                &format!("y_o (class {class}, a 0x{a:08x})"),
+                &format!("0x{want:08x}"),
+                &format!("0x{got:08x}"),
+            );
+        }
         let (lt, le, eq, max, min) = expected_cmp(a, b);
         let want = [lt as u64, le as u64, eq as u64, max as u64, min as u64];
         for (k, field) in ["lt_o", "le_o", "eq_o", "max_o", "min_o"].iter().enumerate() {
@@ -138,7 +150,7 @@ impl FpBench {
     /// before an operation with probability `stall_pct`%, then drains the pipelines. After
     /// every clock edge each primitive's `y_o` must be the golden result of the operation
     /// presented `latency(p)` enabled cycles before (so results hold while `en_i` is low), and
-    /// `neo_fp_cmp` that of the operands driven. Panics at the first mismatch.
+    /// the combinational modules' that of the operands driven. Panics at the first mismatch.
     pub fn run_checked(&mut self, seed: u64, vectors: &[Vector], stall_pct: u32) -> FpRun {
         const RING: usize = 64;
         let max_l = FpPrim::ALL.iter().map(|&p| latency(p)).max().unwrap_or(0) as usize;
@@ -153,7 +165,7 @@ impl FpBench {
             while stall_pct > 0 && rng.percent(stall_pct) {
                 let (a, b) = (rng.next_u32(), rng.next_u32());
                 self.drive(false, a, b);
-                self.check_cmp(seed, a, b, "stall");
+                self.check_combinational(seed, a, b, "stall");
                 self.model.tick();
                 self.check_outputs(seed, &ring, c);
             }
@@ -167,7 +179,7 @@ impl FpBench {
             }
             ring[c % RING] = (v, i, want);
             self.drive(true, v.a, v.b);
-            self.check_cmp(seed, v.a, v.b, v.class);
+            self.check_combinational(seed, v.a, v.b, v.class);
             self.model.tick();
             c += 1;
             self.check_outputs(seed, &ring, c);

@@ -13,9 +13,10 @@ use neo_gen::units::pre::lane::NAME;
 use neo_gen::EngineConfig;
 use neo_golden::camera::Camera;
 use neo_golden::engine::memory::{feature_from_bytes, feature_to_bytes, Memory, FEATURE_BYTES};
+use neo_golden::engine::pre::{pack_sh_record, sh_record_words};
 use neo_golden::engine::{CameraWord, CAMERA_WORDS};
 use neo_golden::formats::FeatureEntry;
-use neo_golden::hwpre::bake::{geometry_bytes, sh_bytes, Baked, ShPrecision};
+use neo_golden::hwpre::bake::{geometry_bytes, Baked, ShPrecision};
 use neo_golden::hwpre::duplicate::{incoming, TouchRecord};
 use neo_golden::hwpre::project::ProjectParams;
 use neo_golden::hwpre::{camera_registers, preprocess_one};
@@ -443,15 +444,16 @@ impl LaneBench {
         place: &LanePlacement,
     ) -> Result<(), String> {
         let words = CameraWord::values(cam, self.cfg.tile);
-        self.program_words(&words, baked.sh_degree, all_fresh, range, place)
+        self.program_words(&words, (baked.sh_degree, baked.sh_precision), all_fresh, range, place)
     }
 
     /// Programs the per-frame inputs: the camera words `words` as they are (any bits, in
-    /// [`CameraWord`] order), SH `degree` (f32 records), `all_fresh`, `range` at `place`.
+    /// [`CameraWord`] order), SH `degree` and records' `precision`, `all_fresh`, `range` at
+    /// `place`.
     fn program_words(
         &mut self,
         words: &[u32; CAMERA_WORDS],
-        degree: u8,
+        (degree, precision): (u8, ShPrecision),
         all_fresh: bool,
         range: LaneRange,
         place: &LanePlacement,
@@ -461,7 +463,8 @@ impl LaneBench {
         all.push(("degree_i".into(), u64::from(degree)));
         all.push(("geo_base_i".into(), u64::from(place.geo)));
         all.push(("sh_base_i".into(), u64::from(place.sh)));
-        all.push(("sh_words_i".into(), u64::from(sh_bytes(degree, ShPrecision::F32) / 4)));
+        all.push(("sh_words_i".into(), u64::from(sh_record_words(degree, precision))));
+        all.push(("sh_half_i".into(), u64::from(precision == ShPrecision::F16)));
         all.push(("feat_base_i".into(), u64::from(place.feat)));
         all.push(("prev_base_i".into(), u64::from(place.prev)));
         all.push(("all_fresh_i".into(), u64::from(all_fresh)));
@@ -493,7 +496,8 @@ impl LaneBench {
         let mut mem = Memory::new();
         place.write_canaries(&mut mem, range);
         let mut mem = AxiMemory::new(2, mem, AxiTiming::RANDOM, rng.next_u64());
-        self.program_words(words, degree, false, range, place).unwrap_or_else(|e| panic!("{NAME}: {e}"));
+        self.program_words(words, (degree, ShPrecision::F32), false, range, place)
+            .unwrap_or_else(|e| panic!("{NAME}: {e}"));
         let mut chk = self.reset_for_run();
         let start = self.model.cycle();
         let (mut first_cycle, mut rose) = (true, false);
@@ -697,16 +701,15 @@ pub fn expected_hits_at(
 /// `place.geo`, their SH records and previous feature words (when given) at their ids'
 /// addresses, canaries in the feature words just outside the range, every address modulo 2^32.
 pub fn placed_memory(baked: &Baked, range: LaneRange, prev: &[[u8; 32]], place: &LanePlacement) -> Memory {
-    assert_eq!(baked.sh_precision, ShPrecision::F32, "the lane reads f32 SH");
     let mut mem = Memory::new();
-    let (gb, sb) = (u64::from(geometry_bytes()), u64::from(sh_bytes(baked.sh_degree, ShPrecision::F32)));
-    let (words, first) = ((sb / 4) as usize, u64::from(place.id0) + u64::from(range.first));
+    let sb = 4 * u64::from(sh_record_words(baked.sh_degree, baked.sh_precision));
+    let (gb, first) = (u64::from(geometry_bytes()), u64::from(place.id0) + u64::from(range.first));
     for (j, k) in (range.first..range.first + range.count).enumerate() {
         let g: Vec<u8> = baked.geometry[k as usize].to_le_bytes().into_iter().collect();
         write_wrapped(&mut mem, u64::from(place.geo) + gb * j as u64, &g);
         let id = first + j as u64;
-        let sh: Vec<u8> =
-            baked.sh[k as usize * words..][..words].iter().flat_map(|w| w.to_le_bytes()).collect();
+        let record = pack_sh_record(baked.sh_of(k as usize), baked.sh_precision);
+        let sh: Vec<u8> = record.iter().flat_map(|w| w.to_le_bytes()).collect();
         write_wrapped(&mut mem, u64::from(place.sh) + sb * id, &sh);
         if let Some(w) = prev.get(j) {
             write_wrapped(&mut mem, u64::from(place.prev) + FEATURE_BYTES * id, w);

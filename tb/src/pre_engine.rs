@@ -27,10 +27,11 @@ use neo_gen::EngineConfig;
 use neo_golden::engine::memory::{
     entry_from_u64, entry_to_u64, feature_from_bytes, Memory, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
 };
+use neo_golden::engine::pre::sh_array_bytes;
 use neo_golden::engine::{
     preprocess_frame, CameraWord, Counters, FrameRegs, PreRegs, PreWork, PRE_ENABLE, PRE_FRESH,
 };
-use neo_golden::hwpre::bake::Baked;
+use neo_golden::hwpre::bake::{Baked, ShPrecision};
 use neo_golden::hwpre::camera_registers;
 
 /// The configuration the bench runs (`tb/pre_engine.json`: two lanes).
@@ -229,7 +230,7 @@ impl PreEngineBench {
             desc_base: b.desc,
             feat_base: b.feat,
             pre: PreRegs {
-                ctrl: PRE_ENABLE | fresh,
+                ctrl: PRE_ENABLE | fresh | PreRegs::sh_ctrl(baked.sh_precision),
                 gaussians: at.gaussians.unwrap_or(baked.len() as u32),
                 sh_degree: u32::from(baked.sh_degree),
                 geo_base: b.geo,
@@ -249,6 +250,7 @@ impl PreEngineBench {
             CameraWord::all().map(|c| (c.port(), u64::from(p.camera[c.0 as usize]))).collect();
         all.push(("degree_i".into(), u64::from(p.sh_degree)));
         all.push(("fresh_i".into(), u64::from(p.fresh())));
+        all.push(("sh_half_i".into(), u64::from(p.sh_precision() == ShPrecision::F16)));
         all.push(("gaussians_i".into(), u64::from(p.gaussians)));
         all.push(("geo_base_i".into(), p.geo_base));
         all.push(("sh_base_i".into(), p.sh_base));
@@ -309,8 +311,7 @@ impl PreEngineBench {
         let mut mem = Memory::new();
         let geo: Vec<u8> = baked.geometry.iter().flat_map(|g| g.to_le_bytes()).collect();
         mem.write(b.geo, &geo);
-        let sh: Vec<u8> = baked.sh.iter().flat_map(|w| w.to_le_bytes()).collect();
-        mem.write(b.sh, &sh);
+        mem.write(b.sh, &sh_array_bytes(baked));
         for (k, w) in prev.iter().enumerate() {
             mem.write(b.prev + FEATURE_BYTES * k as u64, w);
         }
@@ -375,7 +376,7 @@ impl PreEngineBench {
                 w
             })
             .collect();
-        PreRun { gaussians: count, visible: work.visible, hits, tiles, cycles, beats, table }
+        PreRun { gaussians: count, visible: work.visible.len() as u64, hits, tiles, cycles, beats, table }
     }
 
     /// Checks the feature words of the `n` Gaussians, and the canary word after them, against

@@ -20,7 +20,8 @@ fn models_present() {
 
 neo_tb::with_models! {
 use neo_golden::engine::memory::Memory;
-use neo_golden::engine::{CaseScene, Counter, EngineCase, EngineConfig, EngineSession, HostMode};
+use neo_golden::engine::{CaseScene, Counter, EngineCase, EngineConfig, EngineSession, HostMode, SessionOptions};
+use neo_golden::hwpre::ShPrecision;
 use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
 use neo_sim::latency::Latency;
 use neo_golden::scene::Scene;
@@ -56,6 +57,8 @@ struct FrameCheck {
     rtl_cycles: u64,
     sort_busy: u64,
     raster_busy: u64,
+    /// The PRE_BUSY counter (scene mode).
+    pre_busy: u64,
     model: FramePrediction,
 }
 
@@ -68,6 +71,11 @@ impl FrameCheck {
             error_pct(self.model.raster_busy, self.raster_busy),
         ]
     }
+
+    /// The model's error on the Preprocessing Engine's phase, in percent.
+    fn pre_error(&self) -> f64 {
+        error_pct(self.model.pre_busy, self.pre_busy)
+    }
 }
 
 /// Issue 11's targets for the engine-level cycle model (docs/cycle-model.md section 8): every
@@ -79,6 +87,17 @@ fn assert_model_matches(what: &str, frames: &[FrameCheck]) {
         assert!(cycles.abs() <= 5.0, "{what} frame {k}{scratch}: model cycles {cycles:+.2}% off the RTL's");
         assert!(sort.abs() <= 10.0, "{what} frame {k}: model sort busy {sort:+.2}% off the RTL's");
         assert!(raster.abs() <= 10.0, "{what} frame {k}: model raster busy {raster:+.2}% off the RTL's");
+    }
+}
+
+/// The engine-level model's Preprocessing Engine phase (`EngineFrameModel::pre_cycles`: the
+/// busiest port's traffic) within 2% of the RTL's PRE_BUSY on every frame (measured: -0.1% to
+/// -0.2% behind the hostile memory, one and two lanes, binary32 and binary16 SH).
+fn assert_pre_model_matches(what: &str, frames: &[FrameCheck]) {
+    for (k, f) in frames.iter().enumerate() {
+        let e = f.pre_error();
+        assert!(f.pre_busy > 0, "{what} frame {k}: the Preprocessing Engine ran");
+        assert!(e.abs() <= 2.0, "{what} frame {k}: model preprocessing {e:+.2}% off the RTL's PRE_BUSY");
     }
 }
 
@@ -103,10 +122,10 @@ fn run_case_in(
     how: &CaseScene,
     c: EngineCase,
     (frames, res): (usize, [u32; 2]),
-    (base, mode): (&EngineConfig, HostMode),
+    (base, mode, sh): (&EngineConfig, HostMode, ShPrecision),
     seed: u64,
 ) -> Vec<FrameCheck> {
-    run_case_full(scene, how, c, (frames, res), (base, mode), RunOptions::default(), seed)
+    run_case_full(scene, how, c, (frames, res), (base, mode, sh), RunOptions::default(), seed)
 }
 
 /// Runs every frame of `case` behind a memory of `opts.timing` and returns each frame's check;
@@ -120,7 +139,7 @@ fn run_case_with(
     opts: RunOptions,
     seed: u64,
 ) -> Vec<FrameCheck> {
-    run_case_full(scene, how, c, (frames, res), (&ci_config(), HostMode::Lists), opts, seed)
+    run_case_full(scene, how, c, (frames, res), (&ci_config(), HostMode::Lists, ShPrecision::F32), opts, seed)
 }
 
 /// [`run_case_with`] on an engine derived from `base`, the host in `mode`.
@@ -129,12 +148,13 @@ fn run_case_full(
     how: &CaseScene,
     c: EngineCase,
     (frames, res): (usize, [u32; 2]),
-    (base, mode): (&EngineConfig, HostMode),
+    (base, mode, sh): (&EngineConfig, HostMode, ShPrecision),
     opts: RunOptions,
     seed: u64,
 ) -> Vec<FrameCheck> {
     let (traj, cfg) = c.setup(scene, how, frames, res, base).expect("case setup");
-    let mut session = EngineSession::with_strategy(scene, traj, &cfg, mode, c.strategy()).expect("session");
+    let opts_session = SessionOptions { mode, strategy: c.strategy(), sh };
+    let mut session = EngineSession::with_options(scene, traj, &cfg, opts_session).expect("session");
     let format = neo_tb::waves::requested_format();
     let waves = format.map(|f| {
         neo_tb::waves::target_dir().join("waves").join(format!("engine_{}.{}", c.name(), f.extension()))
@@ -184,10 +204,12 @@ fn run_case_full(
         );
         if mode == HostMode::Scene {
             println!(
-                "case {} frame {}: preprocessing busy {} cycles, read {} B, wrote {} B",
+                "case {} frame {}: preprocessing busy {} cycles (cycle model {:.0}, {:+.1}%), read {} B, wrote {} B",
                 c.name(),
                 r.frame,
                 r.counters.get(Counter::PreBusy),
+                p.pre_busy,
+                error_pct(p.pre_busy, r.counters.get(Counter::PreBusy)),
                 r.counters.get(Counter::RdPre),
                 r.counters.get(Counter::WrPre),
             );
@@ -197,6 +219,7 @@ fn run_case_full(
             rtl_cycles: r.rtl_cycles,
             sort_busy: r.counters.get(Counter::SortBusy),
             raster_busy: r.counters.get(Counter::RasterBusy),
+            pre_busy: r.counters.get(Counter::PreBusy),
             model: p,
         };
         if let Some(m) = r.mismatch {
@@ -326,7 +349,7 @@ fn synthetic_overflow_and_core_counts_are_bit_exact() {
     let base = EngineConfig { pre_units: 0, ..ci_config() };
     let one_core = EngineConfig { sort_cores: 1, raster_cores: 1, ..base.clone() };
     for (k, (c, cfg)) in [(EngineCase::Overflow, &one_core), (EngineCase::ManyCores, &base)].into_iter().enumerate() {
-        let f = run_case_in(&scene, &how, c, (2, [128, 128]), (cfg, HostMode::Lists), case_seed(&seeds, k, c));
+        let f = run_case_in(&scene, &how, c, (2, [128, 128]), (cfg, HostMode::Lists, ShPrecision::F32), case_seed(&seeds, k, c));
         assert!(f.iter().all(|f| f.rtl_cycles > 0));
     }
 }
@@ -341,7 +364,8 @@ fn small_synthetic() -> Scene {
 /// Scene mode (issue 12): the engine preprocesses the baked scene (its lane reads geometry, SH
 /// and previous feature words, writes the feature words, incoming lists and lengths), then walks
 /// the tiles: feature words, lists (as multisets), lengths, the tile walk's outputs and every
-/// golden counter (`RD_PRE`, `WR_PRE` included) bit-exact over reuse frames and a cut, on the
+/// golden counter (`RD_PRE`, `WR_PRE` included) bit-exact over reuse frames and a cut (binary16
+/// SH records, `PRE_CTRL.sh_half`), on the
 /// CI engine (one lane). Two lanes: `tb/tests/pre_engine.rs`; an overflow and two lanes in the
 /// whole engine: the ignored tests below (each builds its own engine, 12 to 24 minutes).
 #[test]
@@ -351,9 +375,11 @@ fn engine_scene_orbit_and_cut_are_bit_exact() {
     let seeds = SeedSplit::new("engine_scene_orbit_and_cut_are_bit_exact");
     let base = ci_config();
     assert_eq!(base.pre_units, 1, "the CI engine has one lane");
-    for (k, c) in [EngineCase::Orbit, EngineCase::Cut].into_iter().enumerate() {
-        let f = run_case_in(&scene, &how, c, (3, [128, 128]), (&base, HostMode::Scene), case_seed(&seeds, k, c));
+    // The cut reads binary16 SH records (PRE_CTRL.sh_half), the orbit binary32 ones.
+    for (k, (c, sh)) in [(EngineCase::Orbit, ShPrecision::F32), (EngineCase::Cut, ShPrecision::F16)].into_iter().enumerate() {
+        let f = run_case_in(&scene, &how, c, (3, [128, 128]), (&base, HostMode::Scene, sh), case_seed(&seeds, k, c));
         assert!(f.iter().all(|f| f.rtl_cycles > 0));
+        assert_pre_model_matches(c.name(), &f);
     }
 }
 
@@ -367,7 +393,7 @@ fn engine_scene_overflow_is_bit_exact() {
     let how = CaseScene::synthetic();
     let seeds = SeedSplit::new("engine_scene_overflow_is_bit_exact");
     let c = EngineCase::Overflow;
-    let f = run_case_in(&scene, &how, c, (2, [128, 128]), (&ci_config(), HostMode::Scene), case_seed(&seeds, 0, c));
+    let f = run_case_in(&scene, &how, c, (2, [128, 128]), (&ci_config(), HostMode::Scene, ShPrecision::F32), case_seed(&seeds, 0, c));
     assert!(f.iter().all(|f| f.rtl_cycles > 0));
 }
 
@@ -381,7 +407,8 @@ fn engine_scene_two_lanes_are_bit_exact() {
     let seeds = SeedSplit::new("engine_scene_two_lanes_are_bit_exact");
     let base = EngineConfig { pre_units: 2, ..ci_config() };
     let c = EngineCase::Orbit;
-    run_case_in(&scene, &how, c, (3, [128, 128]), (&base, HostMode::Scene), case_seed(&seeds, 0, c));
+    let f = run_case_in(&scene, &how, c, (3, [128, 128]), (&base, HostMode::Scene, ShPrecision::F32), case_seed(&seeds, 0, c));
+    assert_pre_model_matches(c.name(), &f);
 }
 
 /// Biker's orbit behind the hostile memory (about 5 minutes of simulation on two cores, the

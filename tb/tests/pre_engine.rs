@@ -24,9 +24,20 @@ neo_tb::with_models! {
 
     /// The baked synthetic scene and `frames` cameras of a fast walk through it.
     fn scene(gaussians: usize, seed: u64, frames: usize, degree: u8) -> (Baked, Vec<neo_golden::camera::Camera>) {
+        scene_in(gaussians, seed, frames, degree, ShPrecision::F32)
+    }
+
+    /// [`scene`] with SH records of `precision`.
+    fn scene_in(
+        gaussians: usize,
+        seed: u64,
+        frames: usize,
+        degree: u8,
+        precision: ShPrecision,
+    ) -> (Baked, Vec<neo_golden::camera::Camera>) {
         let spec = format!("synthetic:blobs?gaussians={gaussians}&seed={seed}&sh={degree}");
         let (scene, _) = neo_golden::source::load_scene(&spec, false).expect("synthetic scene");
-        let baked = Baked::from_scene(&scene, &config().feature_format(), ShPrecision::F32);
+        let baked = Baked::from_scene(&scene, &config().feature_format(), precision);
         let bounds = neo_golden::source::robust_bounds(&scene);
         let traj = neo_golden::trajectory::parse_trajectory("walk:res=640x480,speed=20", bounds, frames)
             .expect("walk trajectory");
@@ -42,6 +53,8 @@ neo_tb::with_models! {
         for_each_seed(name, |seed| {
             // Every per-frame input changes from frame to frame of the one model: the SH degree
             // (0, 1, 2, 3, 0: every bit of degree_i and the SH record size rises and falls), the
+            // SH records' precision (binary16 on odd frames of the schedule: every degree in
+            // both over its 10 frames; PRE_CTRL.sh_half rises and falls), the
             // camera (neo_tb::lane::sweep_camera: orientations, focal lengths, tile grids up to
             // 1015 columns or rows), the base registers (complement maps over the 32-bit space,
             // alternating), GAUSSIANS (c, 1023 - c) and TILES (T, 2047 - T, at least the grid).
@@ -51,8 +64,11 @@ neo_tb::with_models! {
             let g0 = neo_tb::rng::FIXED_SEEDS.iter().position(|&s| s == seed).map_or(seed as usize % 5, |k| 3 * k);
             let mut rng = Rng::new(seed ^ 0xe9e);
             let n = 601 + 2 * (seed % 50) as usize;
-            let scenes: Vec<(Baked, Vec<neo_golden::camera::Camera>)> =
-                (0..4u8).map(|d| scene(n, seed % 1000, frames, d)).collect();
+            let precisions = [ShPrecision::F32, ShPrecision::F16];
+            let scenes: Vec<Vec<(Baked, Vec<neo_golden::camera::Camera>)>> = precisions
+                .iter()
+                .map(|&p| (0..4u8).map(|d| scene_in(n, seed % 1000, frames, d, p)).collect())
+                .collect();
             // Odd and even counts: the last lane's share is one shorter on the odd ones.
             let c = rng.range(430, 594) as u32;
             // GAUSSIANS + 3 (share_sum) is 0 mod 8 on even seeds, 6 on odd ones (then 5 and 7
@@ -63,7 +79,7 @@ neo_tb::with_models! {
             let mut prev = vec![[0u8; 32]; n];
             for f in 0..frames {
                 let g = g0 + f;
-                let (baked, cams) = &scenes[[0, 1, 2, 3, 0][g % 5]];
+                let (baked, cams) = &scenes[g % 2][[0, 1, 2, 3, 0][g % 5]];
                 let cam = sweep_camera(&cams[f], cfg.tile, g, &mut rng);
                 // The world moved (neo_tb::lane::sweep_world), on the ordinary grids with a huge
                 // Gaussian (id 0) half a unit in front of the camera.
@@ -81,8 +97,8 @@ neo_tb::with_models! {
                 let run = bench.run_at(baked, &frame, &at, timing, &check);
                 let mut regs = bench.frame_regs(baked, &frame, &at);
                 eprintln!(
-                    "{name}: frame {f}: {}x{} pixels, {} Gaussians (degree {}), {} visible, {} incoming entries in {} tiles, {} cycles, {} / {} beats read / written",
-                    cam.width, cam.height, run.gaussians, baked.sh_degree, run.visible, run.hits, run.tiles, run.cycles, run.beats.0, run.beats.1
+                    "{name}: frame {f}: {}x{} pixels, {} Gaussians (degree {}, {:?} SH), {} visible, {} incoming entries in {} tiles, {} cycles, {} / {} beats read / written",
+                    cam.width, cam.height, run.gaussians, baked.sh_degree, baked.sh_precision, run.visible, run.hits, run.tiles, run.cycles, run.beats.0, run.beats.1
                 );
                 if g % 5 % 2 == 0 {
                     // The ordinary grids (the others are a strip of tiles).

@@ -22,10 +22,15 @@ neo_tb::with_models! {
     /// The baked synthetic scene (`gaussians`, `seed`, SH `degree`) and `frames` cameras of a fast walk through it
     /// (cameras inside the scene, so some Gaussians are culled).
     fn scene(gaussians: usize, seed: u64, frames: usize, degree: u8) -> (Baked, Vec<Camera>) {
+        scene_in(gaussians, seed, frames, degree, ShPrecision::F32)
+    }
+
+    /// [`scene`] with SH records of `precision`.
+    fn scene_in(gaussians: usize, seed: u64, frames: usize, degree: u8, precision: ShPrecision) -> (Baked, Vec<Camera>) {
         let cfg = neo_tb::config();
         let spec = format!("synthetic:blobs?gaussians={gaussians}&seed={seed}&sh={degree}");
         let (scene, _) = neo_golden::source::load_scene(&spec, false).expect("synthetic scene");
-        let baked = Baked::from_scene(&scene, &cfg.feature_format(), ShPrecision::F32);
+        let baked = Baked::from_scene(&scene, &cfg.feature_format(), precision);
         let bounds = neo_golden::source::robust_bounds(&scene);
         let traj = neo_golden::trajectory::parse_trajectory("walk:res=640x480,speed=20", bounds, frames)
             .expect("orbit trajectory");
@@ -99,6 +104,49 @@ neo_tb::with_models! {
                 let check = Checker::new("neo_pre_lane", seed ^ f as u64 ^ 0xe3);
                 let cycles = bench.run_empty(&words, baked.sh_degree, first, &places[f % 2], &check);
                 eprintln!("{name}: frame {f}: an empty range, complement camera words: {cycles} cycles");
+            }
+        });
+    }
+
+    /// Binary16 SH records (`sh_half_i`, golden `engine::pre::sh_record_words`: two coefficients
+    /// a word, degrees 0 and 2 padded) at every degree, alternating with binary32 records on the
+    /// one model (so `sh_half_i` rises and falls). Some Gaussians carry directed halves in every
+    /// coefficient: every subnormal significand bit, the largest subnormal and normal, both
+    /// infinities, NaNs and both zeros, so each path of the widening (`neo_fp_widen_half_comb`)
+    /// reaches the colour unit; the feature words are checked against golden `preprocess_one`
+    /// on the same halves.
+    #[test]
+    fn lane_reads_half_sh_records_at_every_degree() {
+        let name = "lane_reads_half_sh_records_at_every_degree";
+        let cfg = neo_tb::config();
+        let mut bench = LaneBench::build(&cfg).unwrap();
+        neo_tb::waves::maybe_trace(bench.model_mut(), name);
+        const HALVES: [u32; 16] = [
+            0x0001, 0x0002, 0x0004, 0x0008, 0x0010, 0x0020, 0x0040, 0x0080, 0x0100, 0x0200, 0x83ff, 0x7bff,
+            0xfc00, 0x7e01, 0x8000, 0x3c00,
+        ];
+        for_each_seed(name, |seed| {
+            for (k, degree) in [0u8, 1, 2, 3, 3, 2, 1, 0].into_iter().enumerate() {
+                let precision = if k % 2 == 0 { ShPrecision::F16 } else { ShPrecision::F32 };
+                let (mut baked, cams) = scene_in(300, seed % 1000 + k as u64, 1, degree, precision);
+                let per = baked.sh_per_gaussian();
+                if precision == ShPrecision::F16 {
+                    // Every fifth Gaussian: coefficient c of Gaussian g is HALVES[(g + c) % 16].
+                    for g in (0..baked.len()).step_by(5) {
+                        for c in 0..per {
+                            baked.sh[g * per + c] = HALVES[(g / 5 + c) % HALVES.len()];
+                        }
+                    }
+                }
+                let check = Checker::new("neo_pre_lane", seed ^ k as u64);
+                let frame = LaneFrame { cam: &cams[0], all_fresh: true, prev: &[] };
+                let range = LaneRange { first: 1, count: baked.len() as u32 - 1 };
+                let run = bench.run(&baked, &frame, range, (AxiTiming::RANDOM, 80), &check);
+                eprintln!(
+                    "{name}: degree {degree}, {precision:?}: {} Gaussians, {} visible, {} cycles",
+                    run.gaussians, run.visible, run.cycles
+                );
+                assert!(run.visible > 0, "degree {degree}, {precision:?}: no visible Gaussian");
             }
         });
     }

@@ -336,7 +336,15 @@ fn pre_registers(m: &mut Module, cfg: &EngineConfig) -> Vec<(String, String)> {
 /// four bases and the camera words.
 fn pre_register_ports(regs: &Module) -> Vec<(String, bool, u32)> {
     let mut v: Vec<(String, bool, u32)> = Vec::new();
-    for p in ["pre_enable_o", "pre_fresh_o", "gaussians_o", "sh_degree_o", "geo_base_o", "sh_base_o"] {
+    for p in [
+        "pre_enable_o",
+        "pre_fresh_o",
+        "pre_sh_half_o",
+        "gaussians_o",
+        "sh_degree_o",
+        "geo_base_o",
+        "sh_base_o",
+    ] {
         v.extend(ports_of(regs, p));
     }
     v.extend(ports_of(regs, "prev_feat_base_o"));
@@ -402,6 +410,7 @@ fn preprocessing(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     }
     for (port, net) in [
         ("fresh_i", "pre_fresh"),
+        ("sh_half_i", "pre_sh_half"),
         ("gaussians_i", "pre_gaussians"),
         ("geo_base_i", "pre_geo_base"),
         ("sh_base_i", "pre_sh_base"),

@@ -31,7 +31,7 @@ use neo_golden::engine::regs::{
     Access, Counter, Reg, ADDR_BITS, COUNTERS, COUNTER_BASE, CTRL_START, DATA_BITS, STATUS_BUSY, STATUS_DONE,
     STATUS_OVERFLOW,
 };
-use neo_golden::engine::regs::{CameraWord, PRE_ENABLE, PRE_FRESH};
+use neo_golden::engine::regs::{CameraWord, PRE_ENABLE, PRE_FRESH, PRE_SH_HALF};
 use neo_golden::engine::EngineConfig;
 
 /// Module name.
@@ -115,6 +115,7 @@ fn outputs(cfg: &EngineConfig) -> Vec<(String, u32, String)> {
     let ctrl = storage(Reg::PreCtrl);
     out.push(("pre_enable_o".into(), 1, format!("{ctrl}[{}]", PRE_ENABLE.trailing_zeros())));
     out.push(("pre_fresh_o".into(), 1, format!("{ctrl}[{}]", PRE_FRESH.trailing_zeros())));
+    out.push(("pre_sh_half_o".into(), 1, format!("{ctrl}[{}]", PRE_SH_HALF.trailing_zeros())));
     out.push(("gaussians_o".into(), DATA_BITS, storage(Reg::Gaussians)));
     let db = crate::units::pre::engine::degree_bits(cfg);
     out.push(("sh_degree_o".into(), db, slice(&storage(Reg::ShDegree), db - 1, 0)));

@@ -15,7 +15,7 @@
 use super::host::{pipeline_for, EngineSession, HostMode, SessionError};
 use super::EngineConfig;
 use crate::pipeline::adaptive::AdaptiveParams;
-use crate::pipeline::Strategy;
+use crate::pipeline::{Preprocessing, Strategy};
 use crate::scene::Scene;
 use crate::source::robust_bounds;
 use crate::trajectory::{parse_trajectory, Trajectory};
@@ -177,7 +177,7 @@ impl EngineCase {
 /// tiles' list lengths (every tile is sorted from scratch in frame 0), at least the chunk.
 fn overflow_capacity(scene: &Scene, traj: &Trajectory, cfg: &EngineConfig) -> Result<usize, SessionError> {
     let cam = traj.frames.first().ok_or(SessionError::NoFrames)?;
-    let mut p = pipeline_for(scene, cfg, cam.width, cam.height, Strategy::Neo)?;
+    let mut p = pipeline_for(scene, cfg, (cam.width, cam.height), Strategy::Neo, Preprocessing::DEFAULT_SH)?;
     p.render_frame(cam, 0, true);
     let mut lens: Vec<usize> = p.current_lists().map(|l| l.len()).collect();
     lens.sort_unstable();

@@ -56,6 +56,7 @@ use super::memory::{
 use super::reference::{add_raster_traffic, sort_traffic, FrameOutcome};
 use super::regs::{Counter, FrameRegs, PreRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
+use crate::hwpre::ShPrecision;
 use crate::pipeline::{Formats, FrameOutput, Pipeline, PipelineConfig, Preprocessing, Strategy};
 use crate::scene::Scene;
 use crate::sort::{DepthKeyCodec, SortEntry};
@@ -227,6 +228,24 @@ fn address_top(cfg: &EngineConfig) -> u64 {
     (1u64 << cfg.axi_addr_bits.min(64 - 1)).min(ENTRY_BYTES << cfg.addr_bits.min(32))
 }
 
+/// How a session runs ([`EngineSession::with_options`]); the default is lists mode, Neo's
+/// strategy and binary32 SH records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SessionOptions {
+    /// Who preprocesses.
+    pub mode: HostMode,
+    /// The pipeline's sorting strategy.
+    pub strategy: Strategy,
+    /// The baked SH records' precision (scene mode: what the engine reads, [`super::PRE_SH_HALF`]).
+    pub sh: ShPrecision,
+}
+
+impl Default for SessionOptions {
+    fn default() -> Self {
+        SessionOptions { mode: HostMode::Lists, strategy: Strategy::Neo, sh: Preprocessing::DEFAULT_SH }
+    }
+}
+
 /// One frame for the engine: the host's writes are already in the memory passed to
 /// [`EngineSession::next_frame`]; program `regs`, start, then check against `expected`.
 #[derive(Clone, Debug)]
@@ -295,6 +314,17 @@ impl<'s> EngineSession<'s> {
         mode: HostMode,
         strategy: Strategy,
     ) -> Result<Self, SessionError> {
+        Self::with_options(scene, traj, cfg, SessionOptions { mode, strategy, ..SessionOptions::default() })
+    }
+
+    /// A session of `opts` ([`EngineSession::with_strategy`], with the SH records' precision).
+    pub fn with_options(
+        scene: &'s Scene,
+        traj: Trajectory,
+        cfg: &EngineConfig,
+        opts: SessionOptions,
+    ) -> Result<Self, SessionError> {
+        let SessionOptions { mode, strategy, sh } = opts;
         cfg.validate()?;
         let runs = match strategy {
             Strategy::Neo => true,
@@ -308,7 +338,7 @@ impl<'s> EngineSession<'s> {
             return Err(SessionError::NoPreprocessing);
         }
         let first = traj.frames.first().ok_or(SessionError::NoFrames)?;
-        let pipeline = pipeline_for(scene, cfg, first.width, first.height, strategy)?;
+        let pipeline = pipeline_for(scene, cfg, (first.width, first.height), strategy, sh)?;
         let [gx, gy] = pipeline.grid();
         let max_grid = (1u64 << cfg.tile_bits.min(32)) - 1;
         if gx as u64 > max_grid || gy as u64 > max_grid {
@@ -320,7 +350,9 @@ impl<'s> EngineSession<'s> {
         let tiles = gx as u64 * gy as u64;
         let layout = match mode {
             HostMode::Lists => MemoryLayout::new(cfg, tiles, scene.len() as u64)?,
-            HostMode::Scene => MemoryLayout::for_scene(cfg, tiles, scene.len() as u64, scene.sh_degree)?,
+            HostMode::Scene => {
+                MemoryLayout::for_scene(cfg, tiles, scene.len() as u64, (scene.sh_degree, sh))?
+            }
         };
         let session = EngineSession {
             cfg: cfg.clone(),
@@ -593,9 +625,9 @@ fn dps_passes(out: &FrameOutput, t: usize) -> Result<u8, SessionError> {
 pub(crate) fn pipeline_for<'s>(
     scene: &'s Scene,
     cfg: &EngineConfig,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     strategy: Strategy,
+    sh: ShPrecision,
 ) -> Result<Pipeline<'s>, SessionError> {
     let pcfg = PipelineConfig {
         strategy,
@@ -607,7 +639,7 @@ pub(crate) fn pipeline_for<'s>(
         compare_float: false,
         ssim: false,
         exact_shortcut: true,
-        preprocess: Preprocessing::Hardware(Preprocessing::DEFAULT_SH),
+        preprocess: Preprocessing::Hardware(sh),
     };
     let formats =
         Formats { feature: cfg.feature_format(), key: DepthKeyCodec::Fp16, sort: cfg.sort_config() };
@@ -651,7 +683,7 @@ mod tests {
     #[test]
     fn scene_layout_adds_aligned_disjoint_scene_regions() {
         let cfg = EngineConfig { table_capacity: 61, ..EngineConfig::default() };
-        let l = MemoryLayout::for_scene(&cfg, 80, 150_000, 3).expect("fits 4 GiB");
+        let l = MemoryLayout::for_scene(&cfg, 80, 150_000, (3, ShPrecision::F32)).expect("fits 4 GiB");
         let s = l.scene.expect("scene regions");
         assert_eq!(s.feat_bases[0], l.feat_base);
         let bases = [
@@ -670,7 +702,7 @@ mod tests {
         assert!(s.feat_bases[1] - s.feat_bases[0] >= 150_000 * 32);
         assert!(s.sh_base - s.geo_base >= 150_000 * 44 && l.list_base - s.sh_base >= 150_000 * 48 * 4);
         assert_eq!(l.list_bytes, 80 * 64 * 8, "61 entries round up to 8 lines of 8");
-        let e = MemoryLayout::for_scene(&cfg, 4096, 10, 0).expect_err("too many tiles");
+        let e = MemoryLayout::for_scene(&cfg, 4096, 10, (0, ShPrecision::F32)).expect_err("too many tiles");
         assert!(e.to_string().contains("pre_max_tiles 2048"), "{e}");
     }
 

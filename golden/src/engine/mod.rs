@@ -23,12 +23,12 @@ pub use config::{
     MUX_W_FIFO_DEPTH, ROUTING_FIFO_DEPTH,
 };
 pub use expected::{Expected, Mismatch, Place, PreExpected};
-pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError};
+pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError, SessionOptions};
 pub use memory::{Memory, TileDescriptor, TileResult};
 pub use plan::{run_command, tile_plan, tile_steps, TileCmd, TilePlan, TileRegion, TileShape, TileStep};
 pub use pre::{
-    beats_spanned, pre_traffic, pre_transfers, pre_transfers_of, preprocess_frame, PrePart, PreRecords,
-    PreTransfer, PreWork,
+    beats_spanned, pre_traffic, pre_transfers, pre_transfers_of, preprocess_frame, sh_record_words, PrePart,
+    PreRecords, PreTransfer, PreWork,
 };
 pub use reference::{
     execute_frame, execute_frame_traced, segment_work, FrameError, FrameOutcome, FrameTrace, RasterTrace,
@@ -36,5 +36,5 @@ pub use reference::{
 };
 pub use regs::{
     fb_base_alignment, CameraWord, Counter, Counters, FrameRegs, MisalignedBase, PreRegs, Reg, CAMERA_WORDS,
-    PRE_ENABLE, PRE_FRESH,
+    PRE_ENABLE, PRE_FRESH, PRE_SH_HALF,
 };

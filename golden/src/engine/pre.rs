@@ -5,8 +5,9 @@
 //! - Lane `p` takes Gaussians [`EngineConfig::pre_lane_range`] and reads their geometry
 //!   records ([`geometry_bytes`] each, Gaussian `i` at `GEO_BASE + geometry_bytes() i`) as one
 //!   stream; an empty lane reads nothing.
-//! - Each visible (not culled) Gaussian's f32 SH record (`sh_words = sh_bytes(degree, F32) / 4`
-//!   words at `SH_BASE + 4 sh_words i`) is read, one read per Gaussian; unless
+//! - Each visible (not culled) Gaussian's SH record ([`sh_record_words`] words of the degree and
+//!   the precision [`PRE_SH_HALF`](super::PRE_SH_HALF) selects, at `SH_BASE + 4 sh_words i`) is
+//!   read, one read per Gaussian; unless
 //!   [`PRE_FRESH`](super::PRE_FRESH), so is its previous feature word (`PREV_FEAT_BASE + 32 i`).
 //! - Every Gaussian's feature word is written at `FEAT_BASE + 32 i` (all zero when culled).
 //! - A visible Gaussian is appended to the incoming list of every tile where golden
@@ -33,6 +34,7 @@ use crate::hwpre::bake::{geometry_bytes, sh_bytes, Baked, BakedGeometry, ShPreci
 use crate::hwpre::duplicate::{incoming, TouchRecord};
 use crate::hwpre::preprocess_one;
 use crate::hwpre::project::ProjectParams;
+use crate::scene::sh_coeffs;
 use crate::sort::{DepthKeyCodec, SortEntry};
 use rayon::prelude::*;
 
@@ -54,16 +56,54 @@ pub fn beats_spanned(addr: u64, bytes: u64, beat: u64) -> u64 {
 /// What the Preprocessing Engine did in one frame.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct PreWork {
-    /// Gaussians not culled.
-    pub visible: u64,
+    /// The Gaussians not culled (ids, ascending): the ones whose SH record (and, unless fresh,
+    /// previous feature word) the engine read.
+    pub visible: Vec<u64>,
     /// Every tile's incoming list (in the reference's order: Gaussian, then tile row-major), at
     /// its full length (the memory holds the first `table_capacity` entries).
     pub lists: Vec<Vec<SortEntry>>,
 }
 
-/// The baked scene `regs` point at, decoded from `mem`: every geometry record and f32 SH
-/// record (the engine reads the SH records of visible Gaussians only; decoding them all here
-/// changes nothing).
+/// Words (4 bytes each) of one SH record in the engine's memory: the `3 (degree + 1)^2`
+/// coefficients in `precision`, packed in order (binary16: coefficient `2j` in the low half of
+/// word `j`, `2j + 1` in the high half) and the last word padded with zeros. Binary32 records are
+/// `sh_bytes / 4` words; binary16 records of degree 0 and 2 (6 and 54 bytes) get 2 pad bytes.
+pub const fn sh_record_words(degree: u8, precision: ShPrecision) -> u32 {
+    sh_bytes(degree, precision).div_ceil(4)
+}
+
+/// The engine-memory record ([`sh_record_words`]) of the coefficient words `coeffs` (one per
+/// coefficient, as [`Baked::sh_of`] holds them: binary16 bits in the low half).
+pub fn pack_sh_record(coeffs: &[u32], precision: ShPrecision) -> Vec<u32> {
+    match precision {
+        ShPrecision::F32 => coeffs.to_vec(),
+        ShPrecision::F16 => {
+            coeffs.chunks(2).map(|p| (p[0] & 0xFFFF) | p.get(1).map_or(0, |h| (h & 0xFFFF) << 16)).collect()
+        }
+    }
+}
+
+/// The SH array of `baked` as the engine's memory holds it from `SH_BASE`: every Gaussian's
+/// record ([`pack_sh_record`]), back to back, little-endian.
+pub fn sh_array_bytes(baked: &Baked) -> Vec<u8> {
+    (0..baked.len())
+        .flat_map(|i| pack_sh_record(baked.sh_of(i), baked.sh_precision))
+        .flat_map(u32::to_le_bytes)
+        .collect()
+}
+
+/// The coefficient words of record `words` holding `n` coefficients: the inverse of
+/// [`pack_sh_record`].
+pub fn unpack_sh_record(words: &[u32], n: usize, precision: ShPrecision) -> Vec<u32> {
+    match precision {
+        ShPrecision::F32 => words[..n].to_vec(),
+        ShPrecision::F16 => (0..n).map(|k| (words[k / 2] >> (16 * (k % 2))) & 0xFFFF).collect(),
+    }
+}
+
+/// The baked scene `regs` point at, decoded from `mem`: every geometry record and SH record
+/// (the engine reads the SH records of visible Gaussians only; decoding them all here changes
+/// nothing).
 fn baked_from_memory(cfg: &EngineConfig, p: &PreRegs, mem: &Memory) -> Result<Baked, String> {
     let degree = u8::try_from(p.sh_degree)
         .ok()
@@ -74,14 +114,18 @@ fn baked_from_memory(cfg: &EngineConfig, p: &PreRegs, mem: &Memory) -> Result<Ba
     let mut geo = vec![0u8; (n * gb) as usize];
     mem.read(p.geo_base, &mut geo);
     let geometry = geo.chunks_exact(gb as usize).map(BakedGeometry::from_le_bytes).collect();
-    let shb = sh_bytes(degree, ShPrecision::F32) as u64;
-    let mut sh = vec![0u8; (n * shb) as usize];
+    let precision = p.sh_precision();
+    let words = sh_record_words(degree, precision) as usize;
+    let mut sh = vec![0u8; n as usize * 4 * words];
     mem.read(p.sh_base, &mut sh);
-    let sh = sh.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes"))).collect();
+    let sh: Vec<u32> =
+        sh.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes"))).collect();
+    let coeffs = 3 * sh_coeffs(degree);
+    let sh = sh.chunks_exact(words).flat_map(|r| unpack_sh_record(r, coeffs, precision)).collect();
     let fmt = cfg.feature_format();
     Ok(Baked {
         sh_degree: degree,
-        sh_precision: ShPrecision::F32,
+        sh_precision: precision,
         cutoff: fmt.cutoff,
         opacity_format: fmt.opacity,
         geometry,
@@ -155,7 +199,7 @@ pub fn preprocess_frame(
     let (rd, wr) = pre_traffic(cfg, regs, &visible, lists.iter().map(Vec::len));
     counters.add(Counter::RdPre, rd);
     counters.add(Counter::WrPre, wr);
-    Ok(PreWork { visible: visible.len() as u64, lists })
+    Ok(PreWork { visible, lists })
 }
 
 /// Byte address of tile `t`'s incoming list: `list_stride` entries per tile from `list_base`.
@@ -173,7 +217,7 @@ pub fn list_len_addr(desc_base: u64, t: u64) -> u64 {
 pub enum PrePart {
     /// A lane's geometry stream (read): its Gaussians' geometry records back to back.
     Geometry,
-    /// A visible Gaussian's f32 SH record (read).
+    /// A visible Gaussian's SH record (read).
     Sh,
     /// A visible Gaussian's previous feature word (read, unless fresh): the incoming detection.
     PrevFeature,
@@ -225,12 +269,12 @@ pub struct PreRecords {
 }
 
 impl PreRecords {
-    /// The engine's records for SH degree `sh_degree`: the baked geometry record, the f32 SH
-    /// record and the 32-byte feature word.
-    pub fn engine(sh_degree: u8) -> Self {
+    /// The engine's records for SH degree `sh_degree` in `precision`: the baked geometry
+    /// record, the SH record ([`sh_record_words`]) and the 32-byte feature word.
+    pub fn engine(sh_degree: u8, precision: ShPrecision) -> Self {
         PreRecords {
             geometry: geometry_bytes() as u64,
-            sh: sh_bytes(sh_degree, ShPrecision::F32) as u64,
+            sh: 4 * sh_record_words(sh_degree, precision) as u64,
             feature: FEATURE_BYTES,
         }
     }
@@ -254,7 +298,7 @@ pub fn pre_transfers<V>(
     V: IntoIterator<Item = u64>,
     V::IntoIter: Clone,
 {
-    let records = PreRecords::engine(regs.pre.sh_degree as u8);
+    let records = PreRecords::engine(regs.pre.sh_degree as u8, regs.pre.sh_precision());
     pre_transfers_of(cfg, regs, records, visible, list_lens, each)
 }
 

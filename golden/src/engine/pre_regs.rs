@@ -13,6 +13,7 @@
 use crate::camera::Camera;
 use crate::hwpre::camera_registers;
 use crate::hwpre::project::CameraIn;
+use crate::hwpre::ShPrecision;
 use serde::{Deserialize, Serialize};
 
 /// `PRE_CTRL` bit 0: preprocess the scene before the tile walk.
@@ -20,6 +21,10 @@ pub const PRE_ENABLE: u32 = 1 << 0;
 /// `PRE_CTRL` bit 1: no table is reused this frame: every (Gaussian, tile) is incoming and no
 /// previous feature word is read (the frame's descriptors say `from_scratch`).
 pub const PRE_FRESH: u32 = 1 << 1;
+/// `PRE_CTRL` bit 2: the SH records hold binary16 coefficients (golden
+/// [`ShPrecision::F16`]: two per word, the even one in the low half, each record padded to whole
+/// words; the lanes widen them exactly); clear: binary32 ([`crate::engine::pre::sh_record_words`]).
+pub const PRE_SH_HALF: u32 = 1 << 2;
 
 /// Number of camera words.
 pub const CAMERA_WORDS: usize = 23;
@@ -117,11 +122,11 @@ impl CameraWord {
 /// is disabled (the host writes the lists and feature words).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct PreRegs {
-    /// `PRE_CTRL` ([`PRE_ENABLE`], [`PRE_FRESH`]).
+    /// `PRE_CTRL` ([`PRE_ENABLE`], [`PRE_FRESH`], [`PRE_SH_HALF`]).
     pub ctrl: u32,
     /// Gaussians of the baked scene.
     pub gaussians: u32,
-    /// SH degree of the baked scene (f32 SH records).
+    /// SH degree of the baked scene (its records' precision: [`PRE_SH_HALF`]).
     pub sh_degree: u32,
     /// Geometry array base (bytes, 8-byte aligned).
     pub geo_base: u64,
@@ -144,6 +149,23 @@ impl PreRegs {
     /// Whether every (Gaussian, tile) is incoming.
     pub fn fresh(&self) -> bool {
         self.ctrl & PRE_FRESH != 0
+    }
+
+    /// The SH records' precision ([`PRE_SH_HALF`]).
+    pub fn sh_precision(&self) -> ShPrecision {
+        if self.ctrl & PRE_SH_HALF != 0 {
+            ShPrecision::F16
+        } else {
+            ShPrecision::F32
+        }
+    }
+
+    /// The `PRE_CTRL` bit of SH records of `precision`.
+    pub fn sh_ctrl(precision: ShPrecision) -> u32 {
+        match precision {
+            ShPrecision::F32 => 0,
+            ShPrecision::F16 => PRE_SH_HALF,
+        }
     }
 
     /// The base registers with the alignment the engine needs: `(name, value, align, why)`.

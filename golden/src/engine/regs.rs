@@ -14,7 +14,7 @@
 
 use super::config::EngineConfig;
 use super::memory::PIXEL_BYTES;
-pub use super::pre_regs::{CameraWord, PreRegs, CAMERA_WORDS, PRE_ENABLE, PRE_FRESH};
+pub use super::pre_regs::{CameraWord, PreRegs, CAMERA_WORDS, PRE_ENABLE, PRE_FRESH, PRE_SH_HALF};
 use serde::{Deserialize, Serialize};
 
 /// Width of the control port's byte addresses (a 4 KiB register space).
@@ -87,11 +87,12 @@ pub enum Reg {
     FirstOverflow,
     /// 0x044: tiles of the last frame that overflowed.
     Overflows,
-    /// 0x048: [`PRE_ENABLE`], [`PRE_FRESH`] (the Preprocessing Engine's frame; [`PreRegs`]).
+    /// 0x048: [`PRE_ENABLE`], [`PRE_FRESH`], [`PRE_SH_HALF`] (the Preprocessing Engine's frame;
+    /// [`PreRegs`]).
     PreCtrl,
     /// 0x04C: Gaussians of the baked scene.
     Gaussians,
-    /// 0x050: the scene's SH degree (0 to 3; SH records are f32).
+    /// 0x050: the scene's SH degree (0 to 3; the records' precision is [`PRE_SH_HALF`]).
     ShDegree,
     /// 0x054: geometry array base (bytes, 8-byte aligned), low word.
     GeoBaseLo,

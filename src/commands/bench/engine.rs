@@ -12,7 +12,7 @@ use crate::progress::self_cpu;
 use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use neo_golden::engine::cases::CaseScene;
-use neo_golden::engine::HostMode;
+use neo_golden::engine::{HostMode, SessionOptions};
 use neo_golden::pipeline::Strategy;
 use neo_golden::{shared, source};
 use neo_tb::axi::AxiTiming;
@@ -124,7 +124,8 @@ pub fn run(a: EngineBenchArgs) -> Result<()> {
     let (spec, res) = scene_and_res(&a)?;
     let (scene, _) = source::load_scene(&spec, a.strict.strict)?;
     let traj = engine_run::trajectory_at(&a.trajectory.trajectory, &scene, a.frames, res)?;
-    let mut session = engine_run::session(&scene, traj, &cfg, HostMode::Lists, Strategy::Neo)?;
+    let opts = SessionOptions { mode: HostMode::Lists, strategy: Strategy::Neo, ..SessionOptions::default() };
+    let mut session = engine_run::session(&scene, traj, &cfg, opts)?;
     println!(
         "neo bench engine: {} + {} cores, {} ports (config 0x{:016x}), {} Verilator thread(s) on a {cores}-core machine; \
          {spec} ({} Gaussians) at {}x{}, {} tiles, {} frames, seed 0x{seed:016x}",

@@ -36,6 +36,14 @@ impl Pipe {
         Pipe { m, stages: 0, unused: Vec::new() }
     }
 
+    /// A combinational unary module: `a_i` and `y_o` only (no clock, no stage).
+    pub fn combinational(name: &str) -> Pipe {
+        let mut m = Module::new(name);
+        m.input_c("a_i", 32, "operand a");
+        m.output_c("y_o", 32, "result (combinational)");
+        Pipe { m, stages: 0, unused: Vec::new() }
+    }
+
     /// Records bits that are intentionally not read.
     pub fn unused(&mut self, bits: impl Into<String>) {
         self.unused.push(bits.into());

@@ -150,6 +150,9 @@ pub fn f16() -> Module {
     p.finish()
 }
 
+/// Module name of the combinational `widen_half` ([`widen_half_comb`]).
+pub const WIDEN_HALF_COMB_NAME: &str = "neo_fp_widen_half_comb";
+
 /// `widen_half(a)`: the binary16 value in a's low 16 bits as binary32 (exact; subnormal halves
 /// normalised by their leading zeros; a half NaN gives the canonical NaN). One stage.
 pub fn widen_half() -> Module {
@@ -157,12 +160,34 @@ pub fn widen_half() -> Module {
     let mut p = Pipe::new(super::module_name(prim), false);
     p.m.doc("binary16 (a_i[15:0]) -> binary32, exact; a half NaN gives the canonical NaN 0x7fc00000.");
     p.m.doc(format!("Latency {} enabled cycle, one operation per cycle.", latency(prim)));
+    widen_half_logic(&mut p);
+    p.stage("widened value", &[r("y_q", 32, "y")]);
+    p.m.assign("y_o", "y_q");
+    assert_eq!(p.stages, latency(prim));
+    p.finish()
+}
+
+/// [`widen_half`] without its register (latency 0), for a datapath that widens halves on the way
+/// into a pipelined unit: the Preprocessing lane's binary16 SH records. The same logic, written
+/// once ([`widen_half_logic`]).
+pub fn widen_half_comb() -> Module {
+    let mut p = Pipe::combinational(WIDEN_HALF_COMB_NAME);
+    p.m.doc("binary16 (a_i[15:0]) -> binary32, exact; a half NaN gives the canonical NaN 0x7fc00000.");
+    p.m.doc("Combinational: latency 0 (neo_fp_widen_half without its register).");
+    widen_half_logic(&mut p);
+    p.m.assign("y_o", "y");
+    p.finish()
+}
+
+/// The widening of `a_i[15:0]` into the wire `y` (subnormal halves normalised by their leading
+/// zeros, the half NaNs to the canonical NaN).
+fn widen_half_logic(p: &mut Pipe) {
     p.w("s", 1, "a_i[15]");
     p.unused("a_i[31:16]");
     p.w("e", 5, "a_i[14:10]");
     p.w("f", 10, "a_i[9:0]");
     p.w("lzin", 16, "{f, 6'b111111}");
-    lzc(&mut p, "lz", "lzin", 16, false);
+    lzc(p, "lz", "lzin", 16, false);
     // Subnormal half: the leading one becomes the hidden bit.
     p.w("fs", 10, "f << (lz_c + 4'd1)");
     p.w("es", 8, "8'd112 - {4'd0, lz_c}");
@@ -176,8 +201,4 @@ pub fn widen_half() -> Module {
              fnz ? {{s, es, fs, 13'd0}} : {{s, 31'd0}}"
         ),
     );
-    p.stage("widened value", &[r("y_q", 32, "y")]);
-    p.m.assign("y_o", "y_q");
-    assert_eq!(p.stages, latency(prim));
-    p.finish()
 }

@@ -189,6 +189,7 @@ pub fn modules(_cfg: &EngineConfig) -> Vec<Module> {
         }
     }
     all.push(cmp::module());
+    all.push(conv::widen_half_comb());
     all.push(bench::module());
     all
 }

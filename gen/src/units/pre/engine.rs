@@ -27,8 +27,9 @@ use crate::emit::expr::{bits_for, lit, zext};
 use crate::emit::{if_, set, Instance, Item, Module};
 use crate::interface::Dir;
 use crate::units::axi;
+use neo_golden::engine::pre::sh_record_words;
 use neo_golden::engine::{CameraWord, EngineConfig};
-use neo_golden::hwpre::bake::{geometry_bytes, sh_bytes, ShPrecision};
+use neo_golden::hwpre::bake::{geometry_bytes, ShPrecision};
 
 /// Module name.
 pub const NAME: &str = "neo_pre_engine";
@@ -61,6 +62,7 @@ pub fn camera_inputs(cfg: &EngineConfig) -> Vec<(String, u32)> {
         "geo_base_i",
         "sh_base_i",
         "sh_words_i",
+        "sh_half_i",
         "feat_base_i",
         "prev_base_i",
         "all_fresh_i",
@@ -104,6 +106,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
         m.input_c(name, w, "per frame (camera word or SH degree)");
     }
     m.input_c("fresh_i", 1, "no table is reused: every Gaussian is incoming, no previous word read");
+    m.input_c("sh_half_i", 1, "the SH records hold binary16 coefficients (PRE_CTRL.sh_half)");
     m.input_c("gaussians_i", COUNT_BITS, "Gaussians of the baked scene");
     for (name, what) in [
         ("geo_base_i", "geometry array (Gaussian 0's record)"),
@@ -175,15 +178,20 @@ fn ranges(m: &mut Module, cfg: &EngineConfig) {
     m.wire_assign("share_sum", wide, format!("{{1'b0, gaussians_i}} + {}", lit(wide, p - 1)));
     m.wire_assign("share", wide, format!("share_sum >> {lb}"));
     let wb = bits_for(u64::from(super::fetch::max_record_words()));
-    let words: Vec<String> = (0..4u8)
-        .rev()
-        .map(|d| (d, u64::from(sh_bytes(d, ShPrecision::F32) / 4)))
-        .map(|(d, w)| format!("(degree_i == {}) ? {}", lit(degree_bits(cfg), u64::from(d)), lit(wb, w)))
-        .collect();
-    m.comment("SH record words of the degree (golden hwpre::bake::sh_bytes, f32).");
-    let deg3 = u64::from(sh_bytes(3, ShPrecision::F32) / 4);
+    let db = degree_bits(cfg);
+    let table = |p: ShPrecision| {
+        let words: Vec<String> = (0..3u8)
+            .map(|d| {
+                format!("(degree_i == {}) ? {}", lit(db, u64::from(d)), lit(wb, sh_record_words(d, p).into()))
+            })
+            .collect();
+        format!("{} : {}", words.join(" : "), lit(wb, sh_record_words(3, p).into()))
+    };
+    m.comment("SH record words of the degree and precision (golden engine::pre::sh_record_words).");
     m.comment("A degree above 3 reads degree-3 records (SH_DEGREE is 0 to 3).");
-    m.wire_assign("sh_words", wb, format!("{} : {}", words.join(" : "), lit(wb, deg3)));
+    m.wire_assign("sh_words_f32", wb, table(ShPrecision::F32));
+    m.wire_assign("sh_words_f16", wb, table(ShPrecision::F16));
+    m.wire_assign("sh_words", wb, "sh_half_i ? sh_words_f16 : sh_words_f32");
 }
 
 /// Width of the lane's `degree_i`.
@@ -250,6 +258,7 @@ fn lanes(m: &mut Module, cfg: &EngineConfig) {
         ("geo_base_i", "geo_base"),
         ("sh_base_i", "sh_base_i"),
         ("sh_words_i", "sh_words"),
+        ("sh_half_i", "sh_half_i"),
         ("feat_base_i", "feat_base_i"),
         ("prev_base_i", "prev_base_i"),
         ("all_fresh_i", "fresh_i"),

@@ -26,9 +26,10 @@ use super::writer::{self, Writes};
 use super::{fifo, COLOR_NAME, PROJECT_NAME};
 use crate::emit::bundle::{Bundle, Field};
 use crate::emit::expr::{bits_for, lit, zext};
-use crate::emit::{if_, if_else, set, Module};
+use crate::emit::{if_, if_else, set, Instance, Item, Module};
 use crate::interface::Dir;
 use crate::units::axi;
+use crate::units::fp::conv::WIDEN_HALF_COMB_NAME;
 use neo_golden::engine::memory::FEATURE_BYTES;
 use neo_golden::engine::EngineConfig;
 use neo_golden::hwpre::bake::geometry_bytes;
@@ -182,7 +183,8 @@ pub fn module(cfg: &EngineConfig) -> Module {
     let (ab, wb) = (cfg.axi_addr_bits, bits_for(u64::from(max_record_words())));
     m.input_c("geo_base_i", ab, "byte address of Gaussian first_i's geometry record");
     m.input_c("sh_base_i", ab, "byte address of Gaussian 0's SH record");
-    m.input_c("sh_words_i", wb, "words of an SH record (the scene's degree, f32)");
+    m.input_c("sh_words_i", wb, "words of an SH record (golden engine::pre::sh_record_words)");
+    m.input_c("sh_half_i", 1, "SH records hold binary16 coefficients (two a word, the even one low)");
     m.input_c("feat_base_i", ab, "byte address of Gaussian 0's feature word (32-byte aligned)");
     m.input_c("prev_base_i", ab, "byte address of Gaussian 0's previous feature word");
     m.input_c("all_fresh_i", 1, "no table is reused: every Gaussian is incoming, no previous word read");
@@ -477,6 +479,33 @@ fn project_unused(project: &Module, d: &LaneDims) -> Vec<String> {
         .collect()
 }
 
+/// `sh_coef`: the SH record's coefficients as binary32 (golden `hwpre::sh_in`): word `k` of
+/// `sh_rec`, or with `sh_half_i` its half `k` widened exactly (`neo_fp_widen_half_comb`; golden
+/// `engine::pre::unpack_sh_record`). A previous feature word also passes here, unread.
+fn sh_unpack(m: &mut Module) {
+    let n = max_record_words();
+    m.comment(
+        "SH coefficients: word k, or with sh_half_i half k widened (golden engine::pre::unpack_sh_record).",
+    );
+    m.wire("sh_coef", 32 * n);
+    let items = vec![
+        Item::Wire { name: "half".into(), width: 32 },
+        Item::Wire { name: "wide".into(), width: 32 },
+        Item::Assign { lhs: "half".into(), rhs: "{16'd0, sh_rec[16*k +: 16]}".into() },
+        Item::Instance(Instance {
+            module: WIDEN_HALF_COMB_NAME.into(),
+            name: "u_widen".into(),
+            params: vec![],
+            conns: vec![("a_i".into(), "half".into()), ("y_o".into(), "wide".into())],
+        }),
+        Item::Assign {
+            lhs: "sh_coef[32*k +: 32]".into(),
+            rhs: "sh_half_i ? wide : sh_rec[32*k +: 32]".into(),
+        },
+    ];
+    m.gen_for("k", n, "g_sh_coef", items);
+}
+
 /// The pending queue's head and its SH record -> `u_color`, its fields -> `u_colq`.
 fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
     let fb = d.fields_bits();
@@ -511,10 +540,11 @@ fn colour(m: &mut Module, color: &Module, d: &LaneDims) {
         )],
     );
     m.seq_noreset(vec![if_("prev_cap", vec![set("prev_q", format!("sh_rec[{}:0]", FEATURE_BYTES * 8 - 1))])]);
+    sh_unpack(m);
     m.wire_assign(
         "c_sh",
         max_record_words() * 32,
-        format!("pend_visible ? sh_rec : {}", lit(max_record_words() * 32, 0)),
+        format!("pend_visible ? sh_coef : {}", lit(max_record_words() * 32, 0)),
     );
     let mut c = vec![conn("clk_i", "clk_i"), conn("rst_ni", "rst_ni")];
     let mut sh_k = 0u32;

@@ -9,10 +9,10 @@ use super::{
 use crate::camera::Camera;
 use crate::engine::expected::PreExpected;
 use crate::engine::memory::{feature_to_bytes, feature_word_bits, Memory, TileDescriptor, ENTRY_BYTES};
-use crate::engine::pre::pre_traffic;
+use crate::engine::pre::{pre_traffic, sh_array_bytes, sh_record_words};
 use crate::engine::regs::{CameraWord, Counter, FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
 use crate::engine::EngineConfig;
-use crate::hwpre::bake::{geometry_bytes, sh_bytes, Baked, ShPrecision};
+use crate::hwpre::bake::{geometry_bytes, Baked, ShPrecision};
 use crate::pipeline::FrameOutput;
 use crate::sort::SortEntry;
 
@@ -22,13 +22,14 @@ pub const LIST_LEN_CANARY: u32 = 0xA5A5_A5A5;
 impl MemoryLayout {
     /// The scene-mode map (4 KiB-aligned regions, in this order): descriptors, results, frame
     /// buffer, the two feature arenas, sort scratch, the two table arenas (`table_capacity`
-    /// entries per tile), geometry records, f32 SH records of degree `sh_degree`, incoming
-    /// lists (`list_stride` entries per tile). Refuses more tiles than `pre_max_tiles`.
+    /// entries per tile), geometry records, SH records of degree `sh_degree` in `sh_precision`
+    /// (golden [`sh_record_words`]), incoming lists (`list_stride` entries per tile). Refuses more
+    /// tiles than `pre_max_tiles`.
     pub fn for_scene(
         cfg: &EngineConfig,
         tiles: u64,
         gaussians: u64,
-        sh_degree: u8,
+        (sh_degree, sh_precision): (u8, ShPrecision),
     ) -> Result<MemoryLayout, SessionError> {
         if tiles > cfg.pre_max_tiles as u64 {
             return Err(SessionError::Layout(format!(
@@ -43,7 +44,7 @@ impl MemoryLayout {
             (f.desc_base, f.result_base, f.fb_base, f.scratch_base, f.table_bases);
         let feat_bases = [f.feat_bases[0], f.feat_bases[1]];
         let geo_base = regions.take(gaussians * geometry_bytes() as u64);
-        let sh_base = regions.take(gaussians * sh_bytes(sh_degree, ShPrecision::F32) as u64);
+        let sh_base = regions.take(gaussians * 4 * sh_record_words(sh_degree, sh_precision) as u64);
         let list_bytes = tiles * cfg.list_stride() as u64 * ENTRY_BYTES;
         let list_base = regions.take(list_bytes);
         let top = address_top(cfg);
@@ -69,21 +70,19 @@ impl MemoryLayout {
 }
 
 impl EngineSession<'_> {
-    /// The baked scene (f32 SH: what the engine reads).
+    /// The baked scene (binary32 or binary16 SH: the engine reads either).
     fn baked(&self) -> Result<&Baked, SessionError> {
-        let b = self.pipeline.baked().ok_or_else(|| {
+        self.pipeline.baked().ok_or_else(|| {
             SessionError::Inconsistent("scene mode needs the pipeline's hardware preprocessing".into())
-        })?;
-        if b.sh_precision != ShPrecision::F32 {
-            return Err(SessionError::Inconsistent("the engine reads f32 SH records".into()));
-        }
-        Ok(b)
+        })
     }
 
     /// Frame `f`'s registers in scene mode (`cut`: from scratch, [`PRE_FRESH`]).
     pub(super) fn scene_regs(&self, s: &SceneLayout, f: usize, cam: &Camera, cut: bool) -> FrameRegs {
         let l = &self.layout;
-        let sh_degree = self.pipeline.baked().map_or(0, |b| b.sh_degree as u32);
+        let baked = self.pipeline.baked();
+        let sh_degree = baked.map_or(0, |b| b.sh_degree as u32);
+        let sh_ctrl = baked.map_or(0, |b| PreRegs::sh_ctrl(b.sh_precision));
         FrameRegs {
             frame: f as u32,
             tiles: self.prev.len() as u32,
@@ -95,7 +94,7 @@ impl EngineSession<'_> {
             fb_base: l.fb_base,
             scratch_base: l.scratch_base,
             pre: PreRegs {
-                ctrl: PRE_ENABLE | if cut { PRE_FRESH } else { 0 },
+                ctrl: PRE_ENABLE | sh_ctrl | if cut { PRE_FRESH } else { 0 },
                 gaussians: self.gaussians as u32,
                 sh_degree,
                 geo_base: s.geo_base,
@@ -125,8 +124,7 @@ impl EngineSession<'_> {
             let b = self.baked()?;
             let geo: Vec<u8> = b.geometry.iter().flat_map(|g| g.to_le_bytes()).collect();
             mem.write(regs.pre.geo_base, &geo);
-            let sh: Vec<u8> = b.sh.iter().flat_map(|w| w.to_le_bytes()).collect();
-            mem.write(regs.pre.sh_base, &sh);
+            mem.write(regs.pre.sh_base, &sh_array_bytes(b));
             self.scene_written = true;
         }
         let cap = self.cfg.table_capacity as u64;
