@@ -64,7 +64,8 @@ pub struct CosimArgs {
     pub sh: ShPrecision,
     /// The sorting strategy the host plans and the engine runs: `neo` (one DPS pass per reuse
     /// tile) or `adaptive:wide=1,resort=0[,budget=B,max=P]` (the per-tile DPS passes of golden's
-    /// adaptive policy, written into the descriptors).
+    /// adaptive policy, written into the descriptors); with `--input lists` also `resort=1`
+    /// (a re-sorted tile's descriptor says from scratch, the host writes its whole list).
     #[arg(long, default_value = "neo")]
     pub sort: String,
     /// Print one JSON record per frame instead of text.

@@ -178,13 +178,14 @@ fn run_case_full(
             .run_frame(&plan)
             .unwrap_or_else(|e| panic!("case {}: {e} (seed = 0x{seed:016x}; reproduce with NEO_SEED=0x{seed:016x})", c.name()));
         println!(
-            "case {} frame {}: {} tiles, {} cycles (harness {}), from scratch {}; cycle model {:.0} ({:+.1}%), busy sort {:+.1}%, raster {:+.1}%",
+            "case {} frame {}: {} tiles, {} cycles (harness {}), from scratch {} ({} tiles from scratch); cycle model {:.0} ({:+.1}%), busy sort {:+.1}%, raster {:+.1}%",
             c.name(),
             r.frame,
             plan.regs.tiles,
             r.rtl_cycles,
             r.harness_cycles,
             r.from_scratch,
+            plan.expected.descriptors.iter().filter(|d| d.from_scratch).count(),
             p.cycles,
             error_pct(p.cycles, r.rtl_cycles),
             error_pct(p.sort_busy, r.counters.get(Counter::SortBusy)),
@@ -245,8 +246,14 @@ fn synthetic() -> Scene {
 /// parallel; libtest starts tests in name order, so the two are named to start after the biker
 /// check and before the overflow, which keeps both threads busy to the end); the seeds are one
 /// split, named after the first test, so each case's seed is the same whichever test runs it.
-const SYNTHETIC_CASES: [EngineCase; 5] =
-    [EngineCase::Orbit, EngineCase::Cut, EngineCase::Turn, EngineCase::EdgeTiles, EngineCase::Adaptive];
+const SYNTHETIC_CASES: [EngineCase; 6] = [
+    EngineCase::Orbit,
+    EngineCase::Cut,
+    EngineCase::Turn,
+    EngineCase::EdgeTiles,
+    EngineCase::Adaptive,
+    EngineCase::AdaptiveResort,
+];
 
 /// Runs `SYNTHETIC_CASES[range]`, 3 frames each at 128x128 behind the hostile memory.
 fn synthetic_cases(range: std::ops::Range<usize>) {
@@ -267,11 +274,12 @@ fn synthetic_orbit_cut_and_turn_are_bit_exact_over_reuse_frames() {
     synthetic_cases(0..3);
 }
 
-/// Reuse frames on the CI engine: partial tiles at the frame's edges, and the adaptive case
-/// (per-tile DPS passes from the descriptors).
+/// Reuse frames on the CI engine: partial tiles at the frame's edges, and the adaptive cases
+/// (per-tile DPS passes from the descriptors; with `resort=1`, single tiles sorted from scratch
+/// in a reuse frame, the host writing their whole lists).
 #[test]
 fn synthetic_orbit_with_edge_tiles_and_adaptive_passes_is_bit_exact_over_reuse_frames() {
-    synthetic_cases(3..5);
+    synthetic_cases(3..6);
 }
 
 /// What a case's reuse frames hold (golden host only): tiles whose previous table has 1 to

@@ -11,6 +11,7 @@
 //! | `one_core` | one sorting core and one raster core: every tile on the same cores |
 //! | `many_cores` | one tile, more cores (3 + 2) than busy tiles |
 //! | `adaptive` | the orbit 4x faster, sorted by `adaptive:wide=1,resort=0`: per-tile DPS passes (1 to 4) from the descriptors |
+//! | `adaptive_resort` | the orbit 16x faster, `adaptive:wide=1,resort=1,max=2,budget=1000`: passes and single tiles re-sorted from scratch in reuse frames (lists mode only) |
 
 use super::host::{pipeline_for, EngineSession, HostMode, SessionError};
 use super::EngineConfig;
@@ -39,6 +40,10 @@ pub enum EngineCase {
     ManyCores,
     /// A fast orbit with per-tile DPS passes (`adaptive` without the wide chunk or the re-sort).
     Adaptive,
+    /// A faster orbit with per-tile DPS passes and re-sorts of single tiles (`adaptive` with
+    /// `resort=1`, without the wide chunk): a re-sorted tile's descriptor says from scratch and
+    /// its list is the tile's whole list (lists mode only).
+    AdaptiveResort,
 }
 
 /// How to film a scene for the cases: orbit keys (`radius`, `height`, `target`, `fov`; no
@@ -83,7 +88,7 @@ impl CaseScene {
 
 impl EngineCase {
     /// Every case.
-    pub const ALL: [EngineCase; 8] = [
+    pub const ALL: [EngineCase; 9] = [
         EngineCase::Orbit,
         EngineCase::Cut,
         EngineCase::Turn,
@@ -92,6 +97,7 @@ impl EngineCase {
         EngineCase::OneCore,
         EngineCase::ManyCores,
         EngineCase::Adaptive,
+        EngineCase::AdaptiveResort,
     ];
 
     /// The case's name.
@@ -105,6 +111,7 @@ impl EngineCase {
             EngineCase::OneCore => "one_core",
             EngineCase::ManyCores => "many_cores",
             EngineCase::Adaptive => "adaptive",
+            EngineCase::AdaptiveResort => "adaptive_resort",
         }
     }
 
@@ -113,6 +120,11 @@ impl EngineCase {
         match self {
             EngineCase::Adaptive => {
                 Strategy::Adaptive(AdaptiveParams { resort: false, wide: 1, ..AdaptiveParams::default() })
+            }
+            // At most 2 passes and the whole budget: a tile whose reach asks for a third pass is
+            // re-sorted.
+            EngineCase::AdaptiveResort => {
+                Strategy::Adaptive(AdaptiveParams { resort: true, wide: 1, max_passes: 2, budget: 1000 })
             }
             _ => Strategy::Neo,
         }
@@ -147,6 +159,7 @@ impl EngineCase {
                 (cfg.sort_cores, cfg.raster_cores) = (3, 2);
             }
             EngineCase::Adaptive => extra = format!("speed={}", 4.0 * how.speed),
+            EngineCase::AdaptiveResort => extra = format!("speed={}", RESORT_SPEED * how.speed),
         }
         let sep = if keys.is_empty() { "" } else { "," };
         let spec = format!("orbit:{keys}{sep}start=0,{extra},frames={frames},res={}x{}", res[0], res[1]);
@@ -172,6 +185,11 @@ impl EngineCase {
         EngineSession::with_strategy(scene, traj, &cfg, HostMode::Lists, self.strategy())
     }
 }
+
+/// The `adaptive_resort` case's orbit speed, as a multiple of the scene's: fast enough that
+/// some tiles' write-back reach asks for more passes than `max` (a re-sort) and others for
+/// passes (measured on the synthetic scene and biker).
+const RESORT_SPEED: f64 = 16.0;
 
 /// A table capacity that some tiles of the first frame exceed but not all: the median of the
 /// tiles' list lengths (every tile is sorted from scratch in frame 0), at least the chunk.

@@ -89,7 +89,9 @@ pub enum SessionError {
     #[error("scene mode needs a Preprocessing Engine: the configuration has pre_units 0 (use lists mode)")]
     NoPreprocessing,
     /// A sorting strategy the engine does not run.
-    #[error("strategy {0}: the engine runs `neo` and `adaptive` with wide=1 and resort=0 (DPS passes per tile) only")]
+    #[error(
+        "strategy {0}: the engine runs `neo` and `adaptive` with wide=1 (DPS passes per tile; re-sorts of single tiles with resort=1 in lists mode only, where the host writes a re-sorted tile's whole list)"
+    )]
     Strategy(String),
 }
 
@@ -328,7 +330,9 @@ impl<'s> EngineSession<'s> {
         cfg.validate()?;
         let runs = match strategy {
             Strategy::Neo => true,
-            Strategy::Adaptive(p) => p.wide == 1 && !p.resort && p.max_passes <= MAX_DPS_PASSES as u32,
+            Strategy::Adaptive(p) => {
+                p.wide == 1 && (!p.resort || mode == HostMode::Lists) && p.max_passes <= MAX_DPS_PASSES as u32
+            }
             _ => false,
         };
         if !runs {
@@ -416,10 +420,12 @@ impl<'s> EngineSession<'s> {
         }
         let regs = self.regs(f, &cam, cut);
         regs.check(&self.cfg).map_err(|e| SessionError::Layout(e.to_string()))?;
-        let lists = self.incoming_lists(cut, &prev_tables);
+        let scratch: Vec<bool> =
+            (0..self.prev.len()).map(|t| cut || out.tiles.from_scratch[t] != 0).collect();
+        let lists = self.incoming_lists(&scratch, &prev_tables);
         let expected = match self.mode {
             HostMode::Lists => {
-                let descriptors = self.write_lists(mem, f, cut, &lists, &out)?;
+                let descriptors = self.write_lists(mem, f, &scratch, &lists, &out)?;
                 for (t, d) in descriptors.iter().enumerate() {
                     mem.write_descriptor(regs.desc_base, t as u64, d);
                 }
@@ -455,13 +461,14 @@ impl<'s> EngineSession<'s> {
     }
 
     /// Every tile's incoming list of the frame the pipeline just rendered: its current list
-    /// (`cut`), or the entries of it not valid in the tile's previous table.
-    fn incoming_lists(&self, cut: bool, prev_tables: &[Vec<SortEntry>]) -> Vec<Vec<SortEntry>> {
+    /// (`scratch[t]`: a cut, or the strategy re-sorted the tile), or the entries of it not valid
+    /// in the tile's previous table.
+    fn incoming_lists(&self, scratch: &[bool], prev_tables: &[Vec<SortEntry>]) -> Vec<Vec<SortEntry>> {
         self.pipeline
             .current_lists()
             .enumerate()
             .map(|(t, current)| {
-                if cut {
+                if scratch[t] {
                     current.to_vec()
                 } else {
                     let valid: std::collections::HashSet<u32> =
@@ -472,12 +479,13 @@ impl<'s> EngineSession<'s> {
             .collect()
     }
 
-    /// Writes every tile's incoming list (compact) and returns the descriptors.
+    /// Writes every tile's incoming list (compact) and returns the descriptors (`scratch[t]`:
+    /// tile `t` is sorted from scratch, its previous table dropped).
     fn write_lists(
         &self,
         mem: &mut Memory,
         f: usize,
-        cut: bool,
+        scratch: &[bool],
         lists: &[Vec<SortEntry>],
         frame: &FrameOutput,
     ) -> Result<Vec<TileDescriptor>, SessionError> {
@@ -495,11 +503,11 @@ impl<'s> EngineSession<'s> {
                 )));
             }
             mem.write_entries(&fmt, list_at, list);
-            let prev = if cut { Placed::default() } else { self.prev[t] };
+            let prev = if scratch[t] { Placed::default() } else { self.prev[t] };
             let d = TileDescriptor {
                 tile_x: (t % gx) as u16,
                 tile_y: (t / gx) as u16,
-                from_scratch: cut,
+                from_scratch: scratch[t],
                 prev: prev.addr as u32,
                 prev_len: prev.len,
                 list: list_at as u32,
