@@ -53,8 +53,9 @@ neo_tb::with_models! {
         for_each_seed(name, |seed| {
             // Every per-frame input changes from frame to frame of the one model: the SH degree
             // (0, 1, 2, 3, 0: every bit of degree_i and the SH record size rises and falls), the
-            // SH records' precision (binary16 on odd frames of the schedule: every degree in
-            // both over its 10 frames; PRE_CTRL.sh_half rises and falls), the
+            // SH records' precision (binary16 on frames 5-9 of a 10-frame schedule: every degree
+            // in both; each empty frame below flips it, so PRE_CTRL.sh_half and the record size
+            // rise and fall on every frame), the
             // camera (neo_tb::lane::sweep_camera: orientations, focal lengths, tile grids up to
             // 1015 columns or rows), the base registers (complement maps over the 32-bit space,
             // alternating), GAUSSIANS (c, 1023 - c) and TILES (T, 2047 - T, at least the grid).
@@ -79,7 +80,7 @@ neo_tb::with_models! {
             let mut prev = vec![[0u8; 32]; n];
             for f in 0..frames {
                 let g = g0 + f;
-                let (baked, cams) = &scenes[g % 2][[0, 1, 2, 3, 0][g % 5]];
+                let (baked, cams) = &scenes[g / 5 % 2][[0, 1, 2, 3, 0][g % 5]];
                 let cam = sweep_camera(&cams[f], cfg.tile, g, &mut rng);
                 // The world moved (neo_tb::lane::sweep_world), on the ordinary grids with a huge
                 // Gaussian (id 0) half a unit in front of the camera.
@@ -106,12 +107,14 @@ neo_tb::with_models! {
                     assert!(f == 0 || run.hits > 0, "frame {f}: no incoming entry");
                 }
                 prev[..run.table.len()].copy_from_slice(&run.table);
-                // Then an empty frame (GAUSSIANS and TILES 0) whose camera words are the bitwise
-                // complement of this frame's: every camera bit rises and falls (v, !v, w, !w) on
-                // the one model, and an empty frame must do nothing whatever the words hold
+                // Then an empty frame (GAUSSIANS and TILES 0) with the other SH precision, whose
+                // camera words are the bitwise complement of this frame's: every camera bit rises
+                // and falls (v, !v, w, !w) on the one model, and an empty frame must do nothing
+                // whatever the words hold
                 // (checked against golden, and here: no beat read or written, no entry, done_o
                 // within 64 cycles).
                 regs.pre.camera = regs.pre.camera.map(|w| !w);
+                regs.pre.ctrl ^= neo_golden::engine::PRE_SH_HALF;
                 (regs.pre.gaussians, regs.tiles) = (0, 0);
                 let check = Checker::new("neo_pre_engine", seed ^ f as u64 ^ 0xe3);
                 let empty = bench.run_regs(baked, &prev, &regs, AxiTiming::RANDOM, &check);
