@@ -151,10 +151,11 @@ fn print_frame(
     bar: &ProgressBar,
 ) {
     let mismatch = r.mismatch.as_ref().map(|m| m.to_string());
-    // The frame model times the tile walk: the Preprocessing Engine's cycles come before it.
+    // The Preprocessing Engine's cycles come before the tile walk, in the RTL and the model.
     let pre = r.counters.get(Counter::PreBusy);
     let walk = r.rtl_cycles.saturating_sub(pre);
-    let model_error = error_pct(p.cycles, walk);
+    let model_walk = p.cycles - p.pre_busy;
+    let model_error = error_pct(p.cycles, r.rtl_cycles);
     let sort_busy = r.counters.get(Counter::SortBusy);
     let raster_busy = r.counters.get(Counter::RasterBusy);
     if a.json {
@@ -167,8 +168,12 @@ fn print_frame(
             "rtl_walk_cycles": walk,
             "rtl_preprocess_read_bytes": r.counters.get(Counter::RdPre),
             "rtl_preprocess_write_bytes": r.counters.get(Counter::WrPre),
-            "model_walk_cycles": p.cycles.round(),
+            "model_cycles": p.cycles.round(),
             "model_error_pct": model_error,
+            "model_preprocess_cycles": p.pre_busy.round(),
+            "preprocess_error_pct": if pre > 0 { Some(error_pct(p.pre_busy, pre)) } else { None },
+            "model_walk_cycles": model_walk.round(),
+            "walk_error_pct": error_pct(model_walk, walk),
             "rtl_sort_busy": sort_busy,
             "model_sort_busy": p.sort_busy.round(),
             "sort_busy_error_pct": error_pct(p.sort_busy, sort_busy),
@@ -193,8 +198,19 @@ fn print_frame(
     } else {
         String::new()
     };
+    let model_pre = if pre > 0 {
+        format!(
+            "; preprocessing {:.0}, {:+.1}%; walk {:.0}, {:+.1}%",
+            p.pre_busy,
+            error_pct(p.pre_busy, pre),
+            model_walk,
+            error_pct(model_walk, walk)
+        )
+    } else {
+        String::new()
+    };
     let line = format!(
-        "frame {:3}{}: {status}, {} RTL cycles{pre_text}, model of the walk {:.0} ({:+.1}%; busy sort {:+.1}%, raster {:+.1}%), {:.1} s ({:.0} cycles/s)",
+        "frame {:3}{}: {status}, {} RTL cycles{pre_text}, model {:.0} ({:+.1}%{model_pre}; busy sort {:+.1}%, raster {:+.1}%), {:.1} s ({:.0} cycles/s)",
         r.frame,
         if r.from_scratch { " (from scratch)" } else { "" },
         r.rtl_cycles,
