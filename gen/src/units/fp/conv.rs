@@ -4,7 +4,7 @@
 
 use super::common::{lzc, q, r, round_pack, unpack, Fields, Pipe, CANONICAL_NAN};
 use super::{latency, FpPrim};
-use crate::emit::{set, Module, Stmt};
+use crate::emit::{conns, set, Module, Stmt};
 use neo_golden::hwarith::Round;
 
 /// Module name of the float-to-integer conversion (every rounding mode, [`ROUNDINGS`]).
@@ -154,40 +154,37 @@ pub fn f16() -> Module {
 pub const WIDEN_HALF_COMB_NAME: &str = "neo_fp_widen_half_comb";
 
 /// `widen_half(a)`: the binary16 value in a's low 16 bits as binary32 (exact; subnormal halves
-/// normalised by their leading zeros; a half NaN gives the canonical NaN). One stage.
+/// normalised by their leading zeros; a half NaN gives the canonical NaN). One stage: the
+/// combinational [`widen_half_comb`] and the result register.
 pub fn widen_half() -> Module {
     let prim = FpPrim::WidenHalf;
     let mut p = Pipe::new(super::module_name(prim), false);
     p.m.doc("binary16 (a_i[15:0]) -> binary32, exact; a half NaN gives the canonical NaN 0x7fc00000.");
-    p.m.doc(format!("Latency {} enabled cycle, one operation per cycle.", latency(prim)));
-    widen_half_logic(&mut p);
+    p.m.doc(format!(
+        "Latency {} enabled cycle, one operation per cycle: {WIDEN_HALF_COMB_NAME} and a register.",
+        latency(prim)
+    ));
+    p.m.wire("y", 32);
+    p.m.instance(WIDEN_HALF_COMB_NAME, "u_widen", conns(&[("a_i", "a_i".into()), ("y_o", "y".into())]));
     p.stage("widened value", &[r("y_q", 32, "y")]);
     p.m.assign("y_o", "y_q");
     assert_eq!(p.stages, latency(prim));
     p.finish()
 }
 
-/// [`widen_half`] without its register (latency 0), for a datapath that widens halves on the way
-/// into a pipelined unit: the Preprocessing lane's binary16 SH records. The same logic, written
-/// once ([`widen_half_logic`]).
+/// The widening of [`widen_half`] without its register (latency 0): `neo_fp_widen_half`'s
+/// logic, and what the Preprocessing lane uses on the way into its colour unit (binary16 SH
+/// records).
 pub fn widen_half_comb() -> Module {
     let mut p = Pipe::combinational(WIDEN_HALF_COMB_NAME);
     p.m.doc("binary16 (a_i[15:0]) -> binary32, exact; a half NaN gives the canonical NaN 0x7fc00000.");
-    p.m.doc("Combinational: latency 0 (neo_fp_widen_half without its register).");
-    widen_half_logic(&mut p);
-    p.m.assign("y_o", "y");
-    p.finish()
-}
-
-/// The widening of `a_i[15:0]` into the wire `y` (subnormal halves normalised by their leading
-/// zeros, the half NaNs to the canonical NaN).
-fn widen_half_logic(p: &mut Pipe) {
+    p.m.doc("Combinational: latency 0 (neo_fp_widen_half is this and a register).");
     p.w("s", 1, "a_i[15]");
     p.unused("a_i[31:16]");
     p.w("e", 5, "a_i[14:10]");
     p.w("f", 10, "a_i[9:0]");
     p.w("lzin", 16, "{f, 6'b111111}");
-    lzc(p, "lz", "lzin", 16, false);
+    lzc(&mut p, "lz", "lzin", 16, false);
     // Subnormal half: the leading one becomes the hidden bit.
     p.w("fs", 10, "f << (lz_c + 4'd1)");
     p.w("es", 8, "8'd112 - {4'd0, lz_c}");
@@ -201,4 +198,6 @@ fn widen_half_logic(p: &mut Pipe) {
              fnz ? {{s, es, fs, 13'd0}} : {{s, 31'd0}}"
         ),
     );
+    p.m.assign("y_o", "y");
+    p.finish()
 }

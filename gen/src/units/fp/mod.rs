@@ -182,14 +182,13 @@ pub fn instantiate(m: &mut Module, p: FpPrim, inst: &str, en: &str, a: &str, b: 
 /// Every module of the primitives, leaves first: the recurrence stages, the primitives, the
 /// comparator and the bench top `neo_fp_bench`. They do not depend on the configuration.
 pub fn modules(_cfg: &EngineConfig) -> Vec<Module> {
-    let mut all = vec![div::stage_module(), sqrt::stage_module()];
+    let mut all = vec![div::stage_module(), sqrt::stage_module(), conv::widen_half_comb()];
     for p in FpPrim::ALL {
         if !all.iter().any(|m| m.name == module_name(p)) {
             all.push(module(p));
         }
     }
     all.push(cmp::module());
-    all.push(conv::widen_half_comb());
     all.push(bench::module());
     all
 }
