@@ -31,7 +31,8 @@
 //!
 //! # Scene mode ([`HostMode::Scene`], [`EngineSession::from_scene`])
 //! The engine preprocesses the scene itself ([`super::PreRegs`]): the host writes the baked
-//! scene once (geometry records and f32 SH records, [`SceneLayout`]) and, each frame, only the
+//! scene once (geometry records and SH records, binary32 or, with [`SessionOptions::sh`],
+//! binary16 and `PRE_SH_HALF`; [`SceneLayout`]) and, each frame, only the
 //! descriptors (their `list_len` a canary the engine overwrites), and programs the camera.
 //! Frame `f` writes its feature words into feature arena `f % 2` (`FEAT_BASE`) and reads the
 //! previous frame's from the other (`PREV_FEAT_BASE`); tile `t`'s incoming list is at
@@ -41,9 +42,11 @@
 //! the feature words, the lists and their lengths ([`super::expected::PreExpected`]) and the
 //! counters `RD_PRE` / `WR_PRE`.
 //!
-//! # Cuts and overflow
+//! # Cuts, re-sorts and overflow
 //! Frame 0 and the trajectory's cuts are sorted from scratch (every tile's list is its current
-//! list). A tile that overflows has no next table, so the frame after a frame with an overflow
+//! list). In lists mode, a tile the strategy re-sorts in a reuse frame (`adaptive` with
+//! `resort=1`) is sorted from scratch alone: its descriptor says so and its list is its
+//! current list. A tile that overflows has no next table, so the frame after a frame with an overflow
 //! is sorted from scratch too (the host re-bins; the pipeline is told it is a cut). The
 //! overflowing tile's next region is filled with a canary and must be left as it is, its
 //! previous table too ([`super::expected::Untouched`]).
