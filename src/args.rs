@@ -58,7 +58,8 @@ pub struct ModelArgs {
     #[arg(long, default_value_t = 16)]
     pub raster_sample: u32,
     /// Byte-size preset replacing the configuration's `sizes`: `neo` (FP32 parameters, golden's
-    /// feature entries) or `artifact` (the official artifact's FP16 parameters and 22-byte
+    /// feature entries), `neo-f16sh` (the same with binary16 SH records, the engine's
+    /// `PRE_CTRL.sh_half`) or `artifact` (the official artifact's FP16 parameters and 22-byte
     /// feature entries).
     #[arg(long)]
     pub sizes: Option<String>,

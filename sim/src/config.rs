@@ -16,8 +16,12 @@
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+use neo_golden::engine::pre::sh_record_words;
 use neo_golden::engine::EngineConfig;
 use neo_golden::error::{InputError, InputResult};
+use neo_golden::hwpre::bake::sh_bytes;
+use neo_golden::hwpre::ShPrecision;
+use neo_golden::pipeline::Preprocessing;
 
 /// The whole model configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -341,6 +345,11 @@ pub struct DataSizes {
     pub pixel_bytes: u32,
     /// Feature-entry bytes in place of the golden format's (`None`: the format's).
     pub feature_entry_bytes: Option<u32>,
+    /// SH records of binary16 coefficients (the engine's `PRE_CTRL.sh_half`): unless
+    /// `gaussian_sh_bytes` sets them, a visible Gaussian's SH bytes are the binary16 record's at
+    /// the scene's degree (golden `engine::pre::sh_record_words`: 8, 24, 56 and 96 bytes at
+    /// degrees 0 to 3).
+    pub sh_half: bool,
 }
 
 impl Default for DataSizes {
@@ -350,6 +359,7 @@ impl Default for DataSizes {
             gaussian_sh_bytes: None,
             pixel_bytes: 3,
             feature_entry_bytes: None,
+            sh_half: false,
         }
     }
 }
@@ -364,6 +374,16 @@ impl DataSizes {
             gaussian_sh_bytes: Some(112),
             pixel_bytes: 3,
             feature_entry_bytes: Some(22),
+            sh_half: false,
+        }
+    }
+
+    /// The precision of the SH records ([`DataSizes::sh_half`]).
+    pub fn sh_precision(&self) -> ShPrecision {
+        if self.sh_half {
+            ShPrecision::F16
+        } else {
+            Preprocessing::DEFAULT_SH
         }
     }
 
@@ -374,15 +394,27 @@ impl DataSizes {
 
     /// SH bytes per visible Gaussian for a workload.
     pub fn sh_bytes(&self, info: &crate::workload::WorkloadInfo) -> u64 {
-        self.gaussian_sh_bytes.unwrap_or(info.gaussian_sh_bytes) as u64
+        self.sh_bytes_of_degree(info.sh_degree)
     }
 
-    /// The named preset: `neo` (the default) or `artifact`.
+    /// SH bytes per visible Gaussian of a scene of SH degree `degree`: `gaussian_sh_bytes`, else
+    /// the binary16 record ([`DataSizes::sh_half`]) or the baked format's SH bytes.
+    pub fn sh_bytes_of_degree(&self, degree: u8) -> u64 {
+        match (self.gaussian_sh_bytes, self.sh_half) {
+            (Some(b), _) => b as u64,
+            (None, true) => 4 * sh_record_words(degree, ShPrecision::F16) as u64,
+            (None, false) => sh_bytes(degree, Preprocessing::DEFAULT_SH) as u64,
+        }
+    }
+
+    /// The named preset: `neo` (the default), `neo-f16sh` (the same with binary16 SH records) or
+    /// `artifact`.
     pub fn preset(name: &str) -> Result<Self, String> {
         match name {
             "neo" => Ok(DataSizes::default()),
+            "neo-f16sh" => Ok(DataSizes { sh_half: true, ..DataSizes::default() }),
             "artifact" => Ok(DataSizes::artifact()),
-            _ => Err(format!("unknown byte-size preset {name:?}: expected neo or artifact")),
+            _ => Err(format!("unknown byte-size preset {name:?}: expected neo, neo-f16sh or artifact")),
         }
     }
 }
@@ -690,6 +722,24 @@ mod tests {
         // The engine's counts live only in `engine`.
         assert!(serde_json::from_str::<SimConfig>(r#"{"neo": {"sort_cores": 4}}"#).is_err());
         assert!(serde_json::from_str::<SimConfig>(r#"{"pipeline": {"chunk": 128}}"#).is_err());
+    }
+
+    /// The byte-size presets: `neo-f16sh` charges the engine's binary16 SH records (padded to
+    /// whole words) at every degree, a set `gaussian_sh_bytes` wins, and an unknown name is an
+    /// error naming the presets.
+    #[test]
+    fn size_presets_charge_their_sh_records() {
+        let neo = DataSizes::preset("neo").unwrap();
+        let half = DataSizes::preset("neo-f16sh").unwrap();
+        assert_eq!((0..=3).map(|d| neo.sh_bytes_of_degree(d)).collect::<Vec<_>>(), [12, 48, 108, 192]);
+        assert_eq!((0..=3).map(|d| half.sh_bytes_of_degree(d)).collect::<Vec<_>>(), [8, 24, 56, 96]);
+        assert_eq!((neo.sh_precision(), half.sh_precision()), (ShPrecision::F32, ShPrecision::F16));
+        let set = DataSizes { gaussian_sh_bytes: Some(100), ..half.clone() };
+        assert_eq!(set.sh_bytes_of_degree(3), 100);
+        let from_json: SimConfig = serde_json::from_str(r#"{"sizes": {"sh_half": true}}"#).unwrap();
+        assert_eq!(from_json.sizes, half);
+        let e = DataSizes::preset("f16").unwrap_err();
+        assert!(e.contains("neo-f16sh") && e.contains("\"f16\""), "{e}");
     }
 
     #[test]

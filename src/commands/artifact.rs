@@ -5,7 +5,7 @@
 use anyhow::Result;
 use clap::Args;
 use neo_golden::hwpre::bake;
-use neo_golden::pipeline::{Formats, Preprocessing};
+use neo_golden::pipeline::Formats;
 use neo_sim::artifact::poc::{read_poc_trace, PocFrame};
 use neo_sim::artifact::timing::artifact_timing_with;
 use neo_sim::artifact::waterfall::{waterfall, NeoSizes};
@@ -45,8 +45,7 @@ pub fn run(a: ArtifactArgs) -> Result<()> {
     let sizes = ArtifactSizes::default();
     let neo = NeoSizes {
         geometry: cfg.sizes.gaussian_geometry_bytes.unwrap_or(bake::geometry_bytes()) as u64,
-        sh: cfg.sizes.gaussian_sh_bytes.unwrap_or(bake::sh_bytes(a.sh_degree, Preprocessing::DEFAULT_SH))
-            as u64,
+        sh: cfg.sizes.sh_bytes_of_degree(a.sh_degree),
         feature: Formats::artifact(sizes.global_chunk as usize)?.feature.bytes_per_entry() as u64,
         pixel: cfg.sizes.pixel_bytes as u64,
         sh_degree: a.sh_degree,

@@ -5,7 +5,7 @@
 use neo_golden::engine::pre::{pre_transfers_of, PrePart, PreRecords};
 use neo_golden::engine::{tile_steps, TileRegion, TileShape, TileStep};
 use neo_golden::engine::{FrameRegs, PreRegs, PRE_ENABLE, PRE_FRESH};
-use neo_golden::pipeline::{Preprocessing, Strategy};
+use neo_golden::pipeline::Strategy;
 
 use super::timing::raster_tile_cycles;
 use super::{Accel, Model, K_BG, K_PRE, K_RASTER, K_SORT, K_UPDATE};
@@ -106,12 +106,13 @@ impl Model<'_> {
     }
 
     /// The records Neo's Preprocessing Engine moves: the engine's (golden
-    /// [`PreRecords::engine`]: 44-byte geometry, SH by the scene's degree in the workload's (default)
-    /// precision, 32-byte feature
-    /// words), each replaced by the configuration's byte-size preset when it sets one
-    /// (`sizes.gaussian_geometry_bytes`, `gaussian_sh_bytes`, `feature_entry_bytes`).
+    /// [`PreRecords::engine`]: 44-byte geometry, SH by the scene's degree in the precision of
+    /// `sizes.sh_half`, 32-byte feature words), each replaced by the configuration's byte-size
+    /// preset when it sets one (`sizes.gaussian_geometry_bytes`, `gaussian_sh_bytes`,
+    /// `feature_entry_bytes`).
     pub(super) fn pre_records(&self) -> PreRecords {
-        let (s, e) = (&self.cfg.sizes, PreRecords::engine(self.wl.info.sh_degree, Preprocessing::DEFAULT_SH));
+        let s = &self.cfg.sizes;
+        let e = PreRecords::engine(self.wl.info.sh_degree, s.sh_precision());
         PreRecords {
             geometry: s.gaussian_geometry_bytes.map_or(e.geometry, u64::from),
             sh: s.gaussian_sh_bytes.map_or(e.sh, u64::from),
