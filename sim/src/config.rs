@@ -19,7 +19,6 @@ use std::path::Path;
 use neo_golden::engine::pre::sh_record_words;
 use neo_golden::engine::EngineConfig;
 use neo_golden::error::{InputError, InputResult};
-use neo_golden::hwpre::bake::sh_bytes;
 use neo_golden::hwpre::ShPrecision;
 use neo_golden::pipeline::Preprocessing;
 
@@ -398,12 +397,12 @@ impl DataSizes {
     }
 
     /// SH bytes per visible Gaussian of a scene of SH degree `degree`: `gaussian_sh_bytes`, else
-    /// the binary16 record ([`DataSizes::sh_half`]) or the baked format's SH bytes.
+    /// the engine's SH record in [`DataSizes::sh_precision`] (golden `sh_record_words`; a binary32
+    /// record is the baked format's SH bytes).
     pub fn sh_bytes_of_degree(&self, degree: u8) -> u64 {
-        match (self.gaussian_sh_bytes, self.sh_half) {
-            (Some(b), _) => b as u64,
-            (None, true) => 4 * sh_record_words(degree, ShPrecision::F16) as u64,
-            (None, false) => sh_bytes(degree, Preprocessing::DEFAULT_SH) as u64,
+        match self.gaussian_sh_bytes {
+            Some(b) => b as u64,
+            None => 4 * sh_record_words(degree, self.sh_precision()) as u64,
         }
     }
 

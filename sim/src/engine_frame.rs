@@ -396,19 +396,11 @@ impl<'a> EngineFrameModel<'a> {
     pub fn pre_cycles(&self, regs: &FrameRegs, pre: &PreWork) -> f64 {
         let cfg = self.cfg;
         let p = &regs.pre;
-        let ports = cfg.mem_channels;
-        let lane_of = |id: u64| {
-            (0..cfg.pre_units)
-                .find(|&l| {
-                    let (first, count) = cfg.pre_lane_range(p.gaussians, l);
-                    id < u64::from(first) + u64::from(count)
-                })
-                .unwrap_or(0)
-        };
+        let lane_of = |id: u64| cfg.pre_lane_of(p.gaussians, id);
         let records = PreRecords::engine(p.sh_degree as u8, p.sh_precision());
         let id = |addr: u64, base: u64, bytes: u64| (addr - base) / bytes.max(1);
         let mut client_reads = vec![0u64; cfg.memory_clients()];
-        let mut port_beats = vec![[0u64; 2]; ports];
+        let mut port_beats = vec![[0u64; 2]; cfg.mem_channels];
         let lens = pre.lists.iter().map(Vec::len);
         pre_transfers(cfg, regs, pre.visible.iter().copied(), lens, |t| {
             let client = match t.part {
@@ -425,10 +417,9 @@ impl<'a> EngineFrameModel<'a> {
                 PrePart::ListLine | PrePart::ListLen => MemoryClient::PreListWriter,
             };
             let beats = beats_spanned(t.addr, t.bytes, BEAT_BYTES);
-            let c = cfg.client_index(client);
-            port_beats[c % ports][t.part.is_write() as usize] += beats;
+            port_beats[cfg.client_port(client)][t.part.is_write() as usize] += beats;
             if !t.part.is_write() {
-                client_reads[c] += beats;
+                client_reads[cfg.client_index(client)] += beats;
             }
         });
         let port =

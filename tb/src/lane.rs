@@ -360,6 +360,26 @@ pub fn camera_straddling_depth_2(
         .expect("at least one step")
 }
 
+/// A synthetic scene (`synthetic:blobs`, `gaussians`, `seed`, SH `degree`) baked for `cfg`'s
+/// feature format with SH records of `precision`, and `frames` cameras of a fast walk through it
+/// (cameras inside the scene, so some Gaussians are culled): the lane and Preprocessing Engine
+/// benches' scenes.
+pub fn walk_scene(
+    cfg: &EngineConfig,
+    (gaussians, seed): (usize, u64),
+    frames: usize,
+    degree: u8,
+    precision: ShPrecision,
+) -> (Baked, Vec<Camera>) {
+    let spec = format!("synthetic:blobs?gaussians={gaussians}&seed={seed}&sh={degree}");
+    let (scene, _) = neo_golden::source::load_scene(&spec, false).expect("synthetic scene");
+    let baked = Baked::from_scene(&scene, &cfg.feature_format(), precision);
+    let bounds = neo_golden::source::robust_bounds(&scene);
+    let traj = neo_golden::trajectory::parse_trajectory("walk:res=640x480,speed=20", bounds, frames)
+        .expect("walk trajectory");
+    (baked, traj.frames)
+}
+
 /// The Gaussians a lane run covers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LaneRange {

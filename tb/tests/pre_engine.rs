@@ -27,7 +27,7 @@ neo_tb::with_models! {
         scene_in(gaussians, seed, frames, degree, ShPrecision::F32)
     }
 
-    /// [`scene`] with SH records of `precision`.
+    /// [`scene`] with SH records of `precision` (`neo_tb::lane::walk_scene` for the bench's format).
     fn scene_in(
         gaussians: usize,
         seed: u64,
@@ -35,13 +35,7 @@ neo_tb::with_models! {
         degree: u8,
         precision: ShPrecision,
     ) -> (Baked, Vec<neo_golden::camera::Camera>) {
-        let spec = format!("synthetic:blobs?gaussians={gaussians}&seed={seed}&sh={degree}");
-        let (scene, _) = neo_golden::source::load_scene(&spec, false).expect("synthetic scene");
-        let baked = Baked::from_scene(&scene, &config().feature_format(), precision);
-        let bounds = neo_golden::source::robust_bounds(&scene);
-        let traj = neo_golden::trajectory::parse_trajectory("walk:res=640x480,speed=20", bounds, frames)
-            .expect("walk trajectory");
-        (baked, traj.frames)
+        neo_tb::lane::walk_scene(&config(), (gaussians, seed), frames, degree, precision)
     }
 
     #[test]

@@ -14,8 +14,8 @@ neo_tb::with_models! {
     use neo_golden::camera::Camera;
     use neo_golden::engine::CameraWord;
     use neo_tb::lane::{
-        camera_straddling_depth_2, depth_split, sweep_camera, sweep_world, visible_entries, LaneBench, LaneFrame,
-        LanePlacement, LaneRange,
+        camera_straddling_depth_2, depth_split, sweep_camera, sweep_world, visible_entries, walk_scene, LaneBench,
+        LaneFrame, LanePlacement, LaneRange,
     };
     use neo_tb::rng::{for_each_seed, Rng};
 
@@ -25,16 +25,9 @@ neo_tb::with_models! {
         scene_in(gaussians, seed, frames, degree, ShPrecision::F32)
     }
 
-    /// [`scene`] with SH records of `precision`.
+    /// [`scene`] with SH records of `precision` (`neo_tb::lane::walk_scene` for the lane's format).
     fn scene_in(gaussians: usize, seed: u64, frames: usize, degree: u8, precision: ShPrecision) -> (Baked, Vec<Camera>) {
-        let cfg = neo_tb::config();
-        let spec = format!("synthetic:blobs?gaussians={gaussians}&seed={seed}&sh={degree}");
-        let (scene, _) = neo_golden::source::load_scene(&spec, false).expect("synthetic scene");
-        let baked = Baked::from_scene(&scene, &cfg.feature_format(), precision);
-        let bounds = neo_golden::source::robust_bounds(&scene);
-        let traj = neo_golden::trajectory::parse_trajectory("walk:res=640x480,speed=20", bounds, frames)
-            .expect("orbit trajectory");
-        (baked, traj.frames)
+        walk_scene(&neo_tb::config(), (gaussians, seed), frames, degree, precision)
     }
 
     #[test]

@@ -434,6 +434,16 @@ impl EngineConfig {
         (first as u32, (end - first) as u32)
     }
 
+    /// The lane of the Preprocessing Engine that takes Gaussian `id` of `gaussians`: the one whose
+    /// [`EngineConfig::pre_lane_range`] holds it (`id / ceil(gaussians / pre_units)`); 0 without a
+    /// Preprocessing Engine or for an id past the last Gaussian.
+    pub fn pre_lane_of(&self, gaussians: u32, id: u64) -> usize {
+        if !self.has_preprocessing() || id >= gaussians as u64 {
+            return 0;
+        }
+        (id / (gaussians as u64).div_ceil(self.pre_units as u64)) as usize
+    }
+
     /// Entries between two tiles' incoming lists as the list writer lays them out:
     /// `table_capacity` rounded up to a whole number of 8-entry (64-byte) lines.
     pub fn list_stride(&self) -> usize {
@@ -626,7 +636,8 @@ mod tests {
     }
 
     proptest::proptest! {
-        /// The lanes' ranges cover the Gaussians in order, each one once.
+        /// The lanes' ranges cover the Gaussians in order, each one once, and `pre_lane_of` names
+        /// the lane whose range holds a Gaussian.
         #[test]
         fn lane_ranges_partition_the_gaussians(gaussians in 0u32..3_000_000, log_units in 0u32..5) {
             let c = EngineConfig { pre_units: 1 << log_units, ..EngineConfig::default() };
@@ -634,6 +645,11 @@ mod tests {
             for lane in 0..c.pre_units {
                 let (first, count) = c.pre_lane_range(gaussians, lane);
                 proptest::prop_assert_eq!(first, next);
+                for id in [first, first + count / 2, (first + count).saturating_sub(1)] {
+                    if count > 0 {
+                        proptest::prop_assert_eq!(c.pre_lane_of(gaussians, id as u64), lane);
+                    }
+                }
                 proptest::prop_assert!(count as u64 <= (gaussians as u64).div_ceil(c.pre_units as u64));
                 next = first + count;
             }

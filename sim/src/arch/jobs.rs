@@ -115,7 +115,7 @@ impl Model<'_> {
         let e = PreRecords::engine(self.wl.info.sh_degree, s.sh_precision());
         PreRecords {
             geometry: s.gaussian_geometry_bytes.map_or(e.geometry, u64::from),
-            sh: s.gaussian_sh_bytes.map_or(e.sh, u64::from),
+            sh: s.sh_bytes(&self.wl.info),
             feature: s.feature_entry_bytes.map_or(e.feature, u64::from),
         }
     }
