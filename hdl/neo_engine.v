@@ -232,7 +232,8 @@ module neo_engine (
   wire frame_overflow;
   wire [31:0] first_overflow;
   wire [31:0] overflows;
-  wire [1151:0] counters;
+  wire [1215:0] counters;
+  wire [31:0] adapt_ctrl;
   wire pre_enable;
   wire pre_fresh;
   wire pre_sh_half;
@@ -327,6 +328,7 @@ module neo_engine (
     .principal_y_o(pre_principal_y),
     .grid_x_o(pre_grid_x),
     .grid_y_o(pre_grid_y),
+    .adapt_ctrl_o(adapt_ctrl),
     .busy_i(frame_busy),
     .done_i(frame_done),
     .overflow_i(frame_overflow),
@@ -365,9 +367,12 @@ module neo_engine (
   wire [15:0] cpl_valid;
   wire [15:0] cpl_ready;
   wire [511:0] cpl_len;
+  wire [511:0] cpl_inv;
   wire [3:0] ras_valid;
   wire [3:0] ras_ready;
   wire [3:0] ras_done;
+  wire [127:0] ras_wb_len;
+  wire [127:0] ras_wb_reach;
   wire [9:0] ras_tile_x;
   wire [9:0] ras_tile_y;
   wire [15:0] ras_width;
@@ -383,6 +388,7 @@ module neo_engine (
   wire [2:0] ev_tile_rastered;
   wire [31:0] ev_entries_rastered;
   wire ev_result_written;
+  wire ev_result_read;
   neo_frame_ctrl u_ctrl (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
@@ -396,6 +402,7 @@ module neo_engine (
     .feat_base_i(feat_base),
     .fb_base_i(fb_base),
     .scratch_base_i(scratch_base),
+    .adapt_ctrl_i(adapt_ctrl),
     .busy_o(ctrl_busy),
     .done_o(ctrl_done),
     .overflow_o(frame_overflow),
@@ -453,15 +460,19 @@ module neo_engine (
     .job_ready_i(job_ready),
     .cpl_valid_i(cpl_valid),
     .cpl_len_i(cpl_len),
+    .cpl_inv_i(cpl_inv),
     .ras_ready_i(ras_ready),
     .ras_done_i(ras_done),
+    .ras_wb_len_i(ras_wb_len),
+    .ras_wb_reach_i(ras_wb_reach),
     .idle_i(idle),
     .ev_desc_read_o(ev_desc_read),
     .ev_tile_sorted_o(ev_tile_sorted),
     .ev_entries_sorted_o(ev_entries_sorted),
     .ev_tile_rastered_o(ev_tile_rastered),
     .ev_entries_rastered_o(ev_entries_rastered),
-    .ev_result_written_o(ev_result_written)
+    .ev_result_written_o(ev_result_written),
+    .ev_result_read_o(ev_result_read)
   );
 
   // Sort bridges' events (one bit per core).
@@ -480,6 +491,7 @@ module neo_engine (
       wire [31:0] cmd_dst;
       wire done;
       wire [31:0] done_len;
+      wire [31:0] done_inv;
       wire mem_req_valid;
       wire mem_req_ready;
       wire [31:0] mem_req_addr;
@@ -522,10 +534,12 @@ module neo_engine (
         .cmd_dst_o(cmd_dst),
         .done_i(done),
         .done_len_i(done_len),
+        .done_inv_i(done_inv),
         .idle_i(idle[i]),
         .cpl_valid_o(cpl_valid[i]),
         .cpl_ready_i(cpl_ready[i]),
-        .cpl_len_o(cpl_len[i*32 +: 32])
+        .cpl_len_o(cpl_len[i*32 +: 32]),
+        .cpl_inv_o(cpl_inv[i*32 +: 32])
       );
       neo_sort_core u_core (
         .clk_i(core_clk),
@@ -540,6 +554,7 @@ module neo_engine (
         .cmd_dst_i(cmd_dst),
         .done_o(done),
         .done_len_o(done_len),
+        .done_inv_o(done_inv),
         .mem_req_valid_o(mem_req_valid),
         .mem_req_ready_i(mem_req_ready),
         .mem_req_addr_o(mem_req_addr),
@@ -641,6 +656,8 @@ module neo_engine (
         .cmd_feat_i(ras_feat),
         .cmd_pix_i(ras_pix),
         .done_o(ras_done[j]),
+        .done_wb_len_o(ras_wb_len[j*32 +: 32]),
+        .done_wb_reach_o(ras_wb_reach[j*32 +: 32]),
         .mem_req_valid_o(mem_req_valid),
         .mem_req_ready_i(mem_req_ready),
         .mem_req_write_o(mem_req_write),
@@ -1063,7 +1080,7 @@ module neo_engine (
   assign port_bresp[3*2 +: 2] = m3_axi_bresp_i;
 
   // Performance counters: each one's increment this cycle (golden engine::regs::Counter).
-  wire [575:0] inc;
+  wire [607:0] inc;
   wire [8:0] pre_r_beat;
   assign pre_r_beat = pre_rvalid & pre_rready;
   wire [8:0] pre_w_beat;
@@ -1082,10 +1099,11 @@ module neo_engine (
   assign inc[11*32 +: 32] = ({31'd0, ras_rd_feat[0]} + {31'd0, ras_rd_feat[1]} + {31'd0, ras_rd_feat[2]} + {31'd0, ras_rd_feat[3]}) * 32'd32;
   assign inc[12*32 +: 32] = ({31'd0, ras_wr_table[0]} + {31'd0, ras_wr_table[1]} + {31'd0, ras_wr_table[2]} + {31'd0, ras_wr_table[3]}) * 32'd8;
   assign inc[13*32 +: 32] = ({31'd0, ras_wr_pixels[0]} + {31'd0, ras_wr_pixels[1]} + {31'd0, ras_wr_pixels[2]} + {31'd0, ras_wr_pixels[3]}) * 32'd32;
-  assign inc[14*32 +: 32] = ({31'd0, ev_result_written}) * 32'd8;
+  assign inc[14*32 +: 32] = ({31'd0, ev_result_written}) * 32'd16;
   assign inc[15*32 +: 32] = {31'd0, pre_busy};
   assign inc[16*32 +: 32] = ({31'd0, pre_r_beat[0]} + {31'd0, pre_r_beat[1]} + {31'd0, pre_r_beat[2]} + {31'd0, pre_r_beat[3]} + {31'd0, pre_r_beat[4]} + {31'd0, pre_r_beat[5]} + {31'd0, pre_r_beat[6]} + {31'd0, pre_r_beat[7]} + {31'd0, pre_r_beat[8]}) * 32'd8;
   assign inc[17*32 +: 32] = ({31'd0, pre_w_beat[0]} + {31'd0, pre_w_beat[1]} + {31'd0, pre_w_beat[2]} + {31'd0, pre_w_beat[3]} + {31'd0, pre_w_beat[4]} + {31'd0, pre_w_beat[5]} + {31'd0, pre_w_beat[6]} + {31'd0, pre_w_beat[7]} + {31'd0, pre_w_beat[8]}) * 32'd8;
+  assign inc[18*32 +: 32] = ({31'd0, ev_result_read}) * 32'd16;
   // ev_entries_sorted above bit 31: never set (a sorted tile holds at most table_capacity entries).
   wire unused_ev_entries_sorted;
   assign unused_ev_entries_sorted = |ev_entries_sorted[32 : 32];

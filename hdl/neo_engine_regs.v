@@ -64,12 +64,13 @@ module neo_engine_regs (
   output wire [31:0]   principal_y_o,
   output wire [31:0]   grid_x_o,
   output wire [31:0]   grid_y_o,
+  output wire [31:0]   adapt_ctrl_o,
   input  wire          busy_i,            // STATUS.busy
   input  wire          done_i,            // STATUS.done
   input  wire          overflow_i,        // STATUS.overflow
   input  wire [31:0]   first_overflow_i,  // FIRST_OVERFLOW
   input  wire [31:0]   overflows_i,       // OVERFLOWS
-  input  wire [1151:0] counters_i         // counter k at [64k +: 64] (golden Counter::index)
+  input  wire [1215:0] counters_i         // counter k at [64k +: 64] (golden Counter::index)
 );
 
   // Write channel: one-entry AW and W buffers, the B slot.
@@ -132,6 +133,7 @@ module neo_engine_regs (
   reg  [31:0] principal_y_q;
   reg  [31:0] grid_x_q;
   reg  [31:0] grid_y_q;
+  reg  [31:0] adapt_ctrl_q;
 
   wire aw_take;
   assign aw_take = s_axil_awvalid_i & ~aw_full_q;
@@ -242,6 +244,8 @@ module neo_engine_regs (
   assign we_grid_x = wr_fire & (aw_addr_q == 10'd50);
   wire we_grid_y;
   assign we_grid_y = wr_fire & (aw_addr_q == 10'd51);
+  wire we_adapt_ctrl;
+  assign we_adapt_ctrl = wr_fire & (aw_addr_q == 10'd52);
 
   // Read decode (golden Reg::offset / Counter::offset): unmapped and write-only words read 0.
   reg  [31:0] r_data_d;
@@ -401,6 +405,9 @@ module neo_engine_regs (
       10'd51: begin
         r_data_d = grid_y_q;
       end
+      10'd52: begin
+        r_data_d = adapt_ctrl_q;
+      end
       10'd64: begin
         r_data_d = counters_i[0 +: 32];
       end
@@ -509,6 +516,12 @@ module neo_engine_regs (
       10'd99: begin
         r_data_d = counters_i[1120 +: 32];
       end
+      10'd100: begin
+        r_data_d = counters_i[1152 +: 32];
+      end
+      10'd101: begin
+        r_data_d = counters_i[1184 +: 32];
+      end
       default: begin
       end
     endcase
@@ -573,6 +586,7 @@ module neo_engine_regs (
       principal_y_q <= 32'd0;
       grid_x_q <= 32'd0;
       grid_y_q <= 32'd0;
+      adapt_ctrl_q <= 32'd0;
     end else begin
       if (aw_take) begin
         aw_full_q <= 1'b1;
@@ -741,6 +755,9 @@ module neo_engine_regs (
       if (we_grid_y) begin
         grid_y_q <= (grid_y_q & ~w_mask) | (w_data_q & w_mask);
       end
+      if (we_adapt_ctrl) begin
+        adapt_ctrl_q <= (adapt_ctrl_q & ~w_mask) | (w_data_q & w_mask);
+      end
     end
   end
 
@@ -794,6 +811,7 @@ module neo_engine_regs (
   assign principal_y_o = principal_y_q;
   assign grid_x_o = grid_x_q;
   assign grid_y_o = grid_y_q;
+  assign adapt_ctrl_o = adapt_ctrl_q;
   // Word addressed: the byte lanes of the addresses are not decoded.
   wire unused_addr_lsbs;
   assign unused_addr_lsbs = ^{s_axil_awaddr_i[1:0], s_axil_araddr_i[1:0]};

@@ -14,6 +14,7 @@ module neo_frame_ctrl (
   input  wire [31:0]  feat_base_i,            // byte address
   input  wire [31:0]  fb_base_i,              // byte address
   input  wire [31:0]  scratch_base_i,         // byte address
+  input  wire [31:0]  adapt_ctrl_i,           // ADAPT_CTRL: the controller plans the DPS passes (golden engine::adapt)
   output wire         busy_o,                 // STATUS.busy
   output wire         done_o,                 // STATUS.done
   output wire         overflow_o,             // STATUS.overflow
@@ -62,6 +63,7 @@ module neo_frame_ctrl (
   input  wire [15:0]  cpl_valid_i,            // per sequencer: tile sorted
   output wire [15:0]  cpl_ready_o,            // 
   input  wire [511:0] cpl_len_i,              // sequencer k's next_len at [k*LW +: LW]
+  input  wire [511:0] cpl_inv_i,              // sequencer k's merge inversions at [k*LW +: LW]
   output wire [3:0]   ras_valid_o,            // per raster core: command
   input  wire [3:0]   ras_ready_i,            // 
   output wire [9:0]   ras_tile_x_o,           // shared raster command payload
@@ -73,13 +75,16 @@ module neo_frame_ctrl (
   output wire [31:0]  ras_feat_o,
   output wire [31:0]  ras_pix_o,
   input  wire [3:0]   ras_done_i,             // per raster core: tile finished
+  input  wire [127:0] ras_wb_len_i,           // raster core j's write-back len at [j*LW +: LW] (with its done)
+  input  wire [127:0] ras_wb_reach_i,         // raster core j's write-back reach at [j*LW +: LW]
   input  wire [19:0]  idle_i,                 // per bridge (sort bridges, then raster bridges): idle
   output wire         ev_desc_read_o,         // a descriptor read
   output wire         ev_tile_sorted_o,       // a tile handed to a sequencer ...
   output wire [32:0]  ev_entries_sorted_o,    // ... with its entries_in
   output wire [2:0]   ev_tile_rastered_o,     // raster done pulses this cycle
   output wire [31:0]  ev_entries_rastered_o,  // a raster command's len (when taken)
-  output wire         ev_result_written_o     // a result's write response
+  output wire         ev_result_written_o,    // a result's write response
+  output wire         ev_result_read_o        // a previous result read (its last beat)
 );
 
 
@@ -107,13 +112,17 @@ module neo_frame_ctrl (
   assign first_overflow_o = first_ovf_q;
   assign overflows_o = ovfs_q;
 
-  // Descriptors: tile fetch_q's 4 words at DESC_BASE + 32 t into w0_q..w3_q (dv_q: buffer full).
+  // Reads: descriptor t (fetch_q) into w0_q..w3_q (dv_q: buffer full), previous results (kind_q).
   reg  [31:0] fetch_q;
   reg  ar_q;
   reg  rd_q;
   reg  [1:0] beat_q;
   reg  dv_q;
   reg  [31:0] dt_q;
+  reg  kind_q;
+  reg  res_pend_q;
+  reg  scan_q;
+  reg  [31:0] scan_t_q;
   reg  [20:0] w0_q;
   reg  [3:0] passes_q;
   reg  [63:0] w1_q;
@@ -121,24 +130,42 @@ module neo_frame_ctrl (
   reg  [31:0] w3_q;
   wire more;
   assign more = fetch_q != tiles_i;
+  wire ad_en;
+  assign ad_en = adapt_ctrl_i[0];
+  wire rd_idle;
+  assign rd_idle = busy_q & ~ar_q & ~rd_q;
+  wire scan_start;
+  assign scan_start = rd_idle & scan_q & (scan_t_q != tiles_i);
+  wire res_start;
+  assign res_start = rd_idle & res_pend_q;
   wire ar_start;
-  assign ar_start = busy_q & more & ~ar_q & ~rd_q & ~dv_q;
+  assign ar_start = rd_idle & ~scan_q & ~cap_q & ~res_pend_q & more & ~dv_q;
+  wire [31:0] res_t;
+  assign res_t = scan_q ? scan_t_q : dt_q;
   assign m_axi_arvalid_o = ar_q;
   assign m_axi_arid_o = 4'd0;
-  assign m_axi_araddr_o = desc_base_i + {fetch_q[26:0], 5'd0};
-  assign m_axi_arlen_o = 8'd3;
+  assign m_axi_araddr_o = kind_q ? (result_base_i + {res_t[27:0], 4'd0}) : (desc_base_i + {fetch_q[26:0], 5'd0});
+  assign m_axi_arlen_o = kind_q ? 8'd1 : 8'd3;
+  wire unused_res_t;
+  assign unused_res_t = ^res_t[31:28];
   assign m_axi_arsize_o = 3'd3;
   assign m_axi_arburst_o = 2'd1;
   assign m_axi_rready_o = rd_q;
   wire unused_regs;
-  assign unused_regs = ^{frame_i[31:1], feat_base_i[4:0], fb_base_i[1:0], scratch_base_i[2:0]};
+  assign unused_regs = ^{frame_i[31:1], feat_base_i[4:0], fb_base_i[1:0], scratch_base_i[2:0], adapt_ctrl_i[31:20], adapt_ctrl_i[15:14], adapt_ctrl_i[3:1]};
   wire r_fire;
   assign r_fire = m_axi_rvalid_i & rd_q;
   wire [63:0] r_word;
   assign r_word = m_axi_rdata_i[63:0];
   wire desc_in;
-  assign desc_in = r_fire & (beat_q == 2'd3);
+  assign desc_in = r_fire & ~kind_q & (beat_q == 2'd3);
+  wire res_in;
+  assign res_in = r_fire & kind_q & (beat_q == 2'd1);
+  // The descriptor buffer is full after the descriptor, or in a planned frame after the tile's result.
+  wire dv_in;
+  assign dv_in = (desc_in & ~ad_en) | (res_in & ~scan_q);
   assign ev_desc_read_o = desc_in;
+  assign ev_result_read_o = res_in;
   wire unused_r;
   assign unused_r = ^{m_axi_rid_i, m_axi_rresp_i, m_axi_rlast_i};
   always @(posedge clk_i or negedge rst_ni) begin
@@ -148,12 +175,24 @@ module neo_frame_ctrl (
       rd_q <= 1'b0;
       beat_q <= 2'd0;
       dt_q <= 32'd0;
+      kind_q <= 1'b0;
+      res_pend_q <= 1'b0;
+      scan_q <= 1'b0;
+      scan_t_q <= 32'd0;
     end else begin
       if (start) begin
         fetch_q <= 32'd0;
+        scan_q <= ad_en;
+        scan_t_q <= 32'd0;
+        res_pend_q <= 1'b0;
+      end
+      if (scan_start | res_start) begin
+        ar_q <= 1'b1;
+        kind_q <= 1'b1;
       end
       if (ar_start) begin
         ar_q <= 1'b1;
+        kind_q <= 1'b0;
       end
       if (ar_q & m_axi_arready_i) begin
         ar_q <= 1'b0;
@@ -162,16 +201,28 @@ module neo_frame_ctrl (
       end
       if (r_fire) begin
         beat_q <= beat_q + 2'd1;
-        if (beat_q == 2'd3) begin
-          rd_q <= 1'b0;
-          dt_q <= fetch_q;
-          fetch_q <= fetch_q + 32'd1;
+      end
+      if (desc_in) begin
+        rd_q <= 1'b0;
+        dt_q <= fetch_q;
+        fetch_q <= fetch_q + 32'd1;
+        res_pend_q <= ad_en;
+      end
+      if (res_in) begin
+        rd_q <= 1'b0;
+        if (scan_q) begin
+          scan_t_q <= scan_t_q + 32'd1;
+        end else begin
+          res_pend_q <= 1'b0;
         end
+      end
+      if (scan_done) begin
+        scan_q <= 1'b0;
       end
     end
   end
   always @(posedge clk_i) begin
-    if (r_fire) begin
+    if (r_fire & ~kind_q) begin
       case (beat_q)
         2'd0: begin
           w0_q <= {r_word[32], r_word[25:16], r_word[9:0]};
@@ -188,6 +239,9 @@ module neo_frame_ctrl (
         end
       endcase
     end
+    if (res_in & ~scan_q) begin
+      passes_q <= ad_plan;
+    end
   end
   // Decoded descriptor and its overflow check.
   wire d_fs;
@@ -198,6 +252,163 @@ module neo_frame_ctrl (
   assign d_y = w0_q[19:10];
   wire [32:0] d_ein;
   assign d_ein = {1'b0, w2_q[63:32]} + (d_fs ? 33'd0 : {1'b0, w1_q[63:32]});
+
+  // Adaptive plan (ADAPT_CTRL): the request of the result read (beat 1, with beat 0's inversions).
+  reg  rinv_q;
+  always @(posedge clk_i) begin
+    if (r_fire & kind_q & (beat_q == 2'd0)) begin
+      rinv_q <= |r_word[63:40];
+    end
+  end
+  wire [9:0] ad_budget;
+  assign ad_budget = adapt_ctrl_i[13:4];
+  wire [3:0] ad_max_f;
+  assign ad_max_f = adapt_ctrl_i[19:16];
+  // A max of 0 grants one pass (golden: every plan has at least one).
+  wire [3:0] ad_max;
+  assign ad_max = (ad_max_f == 4'd0) ? 4'd1 : ad_max_f;
+  wire [31:0] rq_len;
+  assign rq_len = r_word[31:0];
+  wire [31:0] rq_steps;
+  assign rq_steps = r_word[63:32] >> 8;
+  // p = 1 + reach / C, plus one when p > 1 and the merge saw inversions, at most max.
+  wire [33:0] rq_p;
+  assign rq_p = {2'd0, rq_steps} + 34'd1 + {33'd0, (rq_steps != 32'd0) & rinv_q};
+  wire [3:0] rq_pass;
+  assign rq_pass = (rq_p > {30'd0, ad_max}) ? ad_max : rq_p[3:0];
+  // The pass cost: 2 len entries, at least 1.
+  wire [63:0] rq_cost;
+  assign rq_cost = (rq_len == 32'd0) ? 64'd1 : {31'd0, rq_len, 1'b0};
+  // Scan: S (every cost) and hist[l - 2] (costs of requests of at least l passes), l = 2..15.
+  reg  [63:0] sum_q;
+  reg  [63:0] hist [0:13];
+  always @(posedge clk_i) begin
+    if (start) begin
+      hist[0] <= 64'd0;
+      hist[1] <= 64'd0;
+      hist[2] <= 64'd0;
+      hist[3] <= 64'd0;
+      hist[4] <= 64'd0;
+      hist[5] <= 64'd0;
+      hist[6] <= 64'd0;
+      hist[7] <= 64'd0;
+      hist[8] <= 64'd0;
+      hist[9] <= 64'd0;
+      hist[10] <= 64'd0;
+      hist[11] <= 64'd0;
+      hist[12] <= 64'd0;
+      hist[13] <= 64'd0;
+    end else if (res_in & scan_q) begin
+      if (rq_pass >= 4'd2) begin
+        hist[0] <= hist[0] + rq_cost;
+      end
+      if (rq_pass >= 4'd3) begin
+        hist[1] <= hist[1] + rq_cost;
+      end
+      if (rq_pass >= 4'd4) begin
+        hist[2] <= hist[2] + rq_cost;
+      end
+      if (rq_pass >= 4'd5) begin
+        hist[3] <= hist[3] + rq_cost;
+      end
+      if (rq_pass >= 4'd6) begin
+        hist[4] <= hist[4] + rq_cost;
+      end
+      if (rq_pass >= 4'd7) begin
+        hist[5] <= hist[5] + rq_cost;
+      end
+      if (rq_pass >= 4'd8) begin
+        hist[6] <= hist[6] + rq_cost;
+      end
+      if (rq_pass >= 4'd9) begin
+        hist[7] <= hist[7] + rq_cost;
+      end
+      if (rq_pass >= 4'd10) begin
+        hist[8] <= hist[8] + rq_cost;
+      end
+      if (rq_pass >= 4'd11) begin
+        hist[9] <= hist[9] + rq_cost;
+      end
+      if (rq_pass >= 4'd12) begin
+        hist[10] <= hist[10] + rq_cost;
+      end
+      if (rq_pass >= 4'd13) begin
+        hist[11] <= hist[11] + rq_cost;
+      end
+      if (rq_pass >= 4'd14) begin
+        hist[12] <= hist[12] + rq_cost;
+      end
+      if (rq_pass >= 4'd15) begin
+        hist[13] <= hist[13] + rq_cost;
+      end
+    end
+  end
+  wire scan_done;
+  assign scan_done = scan_q & (scan_t_q == tiles_i);
+  // Cap: the largest c with 100 (hist[0] + ... + hist[c - 2]) <= S x budget (c = 1..15).
+  reg  cap_q;
+  reg  [3:0] lvl_q;
+  reg  [3:0] c_q;
+  reg  [63:0] acc_q;
+  reg  [63:0] spent_q;
+  wire [73:0] sb;
+  assign sb = {10'd0, sum_q} * {64'd0, ad_budget};
+  wire [3:0] lvl_idx;
+  assign lvl_idx = lvl_q - 4'd2;
+  wire [63:0] cap_next;
+  assign cap_next = acc_q + hist[lvl_idx];
+  wire cap_fits;
+  assign cap_fits = ({10'd0, cap_next} * 74'd100) <= sb;
+  // Walk: min(p, c), or c + 1 when p > c and 100 (spent + cost) <= S x budget (then spent += cost).
+  wire [63:0] walk_spend;
+  assign walk_spend = spent_q + rq_cost;
+  wire walk_raise;
+  assign walk_raise = (rq_pass > c_q) & (({10'd0, walk_spend} * 74'd100) <= sb);
+  wire [3:0] ad_plan;
+  assign ad_plan = (rq_pass <= c_q) ? rq_pass : (walk_raise ? c_q + 4'd1 : c_q);
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      cap_q <= 1'b0;
+      lvl_q <= 4'd2;
+      c_q <= 4'd1;
+      acc_q <= 64'd0;
+      spent_q <= 64'd0;
+      sum_q <= 64'd0;
+    end else begin
+      if (start) begin
+        cap_q <= 1'b0;
+        lvl_q <= 4'd2;
+        c_q <= 4'd1;
+        acc_q <= 64'd0;
+        spent_q <= 64'd0;
+        sum_q <= 64'd0;
+      end else begin
+        if (res_in & scan_q) begin
+          sum_q <= sum_q + rq_cost;
+        end
+        if (scan_done) begin
+          cap_q <= 1'b1;
+        end
+        if (cap_q) begin
+          if (cap_fits) begin
+            c_q <= lvl_q;
+            acc_q <= cap_next;
+            spent_q <= cap_next;
+            if (lvl_q == 4'd15) begin
+              cap_q <= 1'b0;
+            end else begin
+              lvl_q <= lvl_q + 4'd1;
+            end
+          end else begin
+            cap_q <= 1'b0;
+          end
+        end
+        if (res_in & ~scan_q & walk_raise) begin
+          spent_q <= walk_spend;
+        end
+      end
+    end
+  end
 
   // Sort dispatch (first_free over 16 sequencers).
   wire d_ovf;
@@ -294,7 +505,7 @@ module neo_frame_ctrl (
   end
 
   // Completion queue (4 entries): overflow tiles first, then the lowest sequencer.
-  reg  [116:0] cq [0:3];
+  reg  [148:0] cq [0:3];
   reg  [3:0] cpl_sel;
   always @* begin
     cpl_sel = 4'd0;
@@ -352,17 +563,19 @@ module neo_frame_ctrl (
   assign cpl_ready_o = cpl_take ? (16'd1 << cpl_sel) : 16'd0;
   wire [31:0] cpl_len;
   assign cpl_len = cpl_len_i[cpl_sel * 32 +: 32];
+  wire [31:0] cpl_inv;
+  assign cpl_inv = cpl_inv_i[cpl_sel * 32 +: 32];
   wire cq_push;
   assign cq_push = ovf_push | cpl_take;
-  wire [116:0] cq_in;
-  assign cq_in = ovf_push ? {1'b1, 32'd0, w3_q[31:0], d_y, d_x, dt_q} : {1'b0, cpl_len, seq_next[cpl_sel], seq_y[cpl_sel], seq_x[cpl_sel], seq_t[cpl_sel]};
+  wire [148:0] cq_in;
+  assign cq_in = ovf_push ? {32'd0, 1'b1, 32'd0, w3_q[31:0], d_y, d_x, dt_q} : {cpl_inv, 1'b0, cpl_len, seq_next[cpl_sel], seq_y[cpl_sel], seq_x[cpl_sel], seq_t[cpl_sel]};
   always @(posedge clk_i) begin
     if (cq_push) begin
       cq[cq_wp_q[1:0]] <= cq_in;
     end
   end
   // The head entry.
-  wire [116:0] cq_head;
+  wire [148:0] cq_head;
   assign cq_head = cq[cq_rp_q[1:0]];
   wire [31:0] h_t;
   assign h_t = cq_head[31:0];
@@ -376,60 +589,37 @@ module neo_frame_ctrl (
   assign h_len = cq_head[115:84];
   wire h_ovf;
   assign h_ovf = cq_head[116];
+  wire [31:0] h_inv;
+  assign h_inv = cq_head[148:117];
 
-  // Head of the queue: its result write (AW and W, at most axi_outstanding without B) and its raster command.
-  reg  aw_sent_q;
-  reg  w_sent_q;
-  reg  ras_sent_q;
-  reg  [3:0] wr_out_q;
+  // Raster dispatch of the queue's head (first_free over 4 cores; a core whose result is not written waits).
   reg  [1:0] rrr_q;
-  wire wr_room;
-  assign wr_room = wr_out_q != 4'd8;
-  assign m_axi_awvalid_o = ~cq_empty & ~aw_sent_q & wr_room;
-  assign m_axi_awid_o = 4'd0;
-  assign m_axi_awaddr_o = result_base_i + {h_t[28:0], 3'd0};
-  assign m_axi_awlen_o = 8'd0;
-  assign m_axi_awsize_o = 3'd3;
-  assign m_axi_awburst_o = 2'd1;
-  assign m_axi_wvalid_o = ~cq_empty & ~w_sent_q & (aw_sent_q | wr_room);
-  assign m_axi_wdata_o = {31'd0, h_ovf, h_len};
-  assign m_axi_wstrb_o = {8{1'b1}};
-  assign m_axi_wlast_o = 1'b1;
-  assign m_axi_bready_o = 1'b1;
-  wire aw_fire;
-  assign aw_fire = m_axi_awvalid_o & m_axi_awready_i;
-  wire w_fire;
-  assign w_fire = m_axi_wvalid_o & m_axi_wready_i;
-  wire b_fire;
-  assign b_fire = m_axi_bvalid_i;
-  wire unused_b;
-  assign unused_b = ^{m_axi_bid_i, m_axi_bresp_i};
-  assign ev_result_written_o = b_fire;
-  // Raster dispatch (first_free over 4 cores).
+  wire [3:0] ras_free;
+  assign ras_free = ras_ready_i & ~rp_q & ~ras_done_i;
   wire [1:0] ras_sel;
   wire ras_any;
   reg  [1:0] ras_sel_c;
   always @* begin
     ras_sel_c = 2'd0;
-    if (ras_ready_i[3]) begin
+    if (ras_free[3]) begin
       ras_sel_c = 2'd3;
     end
-    if (ras_ready_i[2]) begin
+    if (ras_free[2]) begin
       ras_sel_c = 2'd2;
     end
-    if (ras_ready_i[1]) begin
+    if (ras_free[1]) begin
       ras_sel_c = 2'd1;
     end
-    if (ras_ready_i[0]) begin
+    if (ras_free[0]) begin
       ras_sel_c = 2'd0;
     end
   end
   assign ras_sel = ras_sel_c;
-  assign ras_any = |ras_ready_i;
+  assign ras_any = |ras_free;
   wire ras_offer;
-  assign ras_offer = ~cq_empty & ~ras_sent_q;
+  assign ras_offer = ~cq_empty & ~(rp_q[ras_sel] | ras_done_i[ras_sel]);
   wire ras_fire;
-  assign ras_fire = ras_offer & ras_any;
+  assign ras_fire = ~cq_empty & ras_any;
   assign ras_valid_o = ras_offer ? (4'd1 << ras_sel) : 4'd0;
   assign ras_tile_x_o = h_x;
   assign ras_tile_y_o = h_y;
@@ -442,21 +632,15 @@ module neo_frame_ctrl (
   assign pix_off = h_t << 12;
   assign ras_pix_o = {2'd0, fb_base_i[31:2]} + pix_off;
   assign ev_entries_rastered_o = ras_fire ? h_len : 32'd0;
-  wire aw_done;
-  assign aw_done = aw_sent_q | aw_fire;
-  wire w_done;
-  assign w_done = w_sent_q | w_fire;
-  wire ras_done;
-  assign ras_done = ras_sent_q | ras_fire;
   wire cq_pop;
-  assign cq_pop = ~cq_empty & aw_done & w_done & ras_done;
+  assign cq_pop = ras_fire;
 
   // End of the frame: every tile rastered, every B back, every bridge idle.
   wire [31:0] ras_done_cnt;
   assign ras_done_cnt = {31'd0, ras_done_i[0]} + {31'd0, ras_done_i[1]} + {31'd0, ras_done_i[2]} + {31'd0, ras_done_i[3]};
   assign ev_tile_rastered_o = ras_done_cnt[2:0];
   wire finish;
-  assign finish = busy_q & ~start & ~more & ~dv_q & ~ar_q & ~rd_q & cq_empty & (rastered_q == tiles_i) & (wr_out_q == 4'd0) & (&idle_i);
+  assign finish = busy_q & ~start & ~more & ~dv_q & ~ar_q & ~rd_q & ~scan_q & ~cap_q & ~res_pend_q & cq_empty & (rastered_q == tiles_i) & ~(|rp_q) & ~rw_act_q & (wr_out_q == 4'd0) & (&idle_i);
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin
       cq_wp_q <= 3'd0;
@@ -468,10 +652,6 @@ module neo_frame_ctrl (
       rastered_q <= 32'd0;
       dv_q <= 1'b0;
       rr_q <= 4'd0;
-      aw_sent_q <= 1'b0;
-      w_sent_q <= 1'b0;
-      ras_sent_q <= 1'b0;
-      wr_out_q <= 4'd0;
       rrr_q <= 2'd0;
     end else begin
       if (start) begin
@@ -486,7 +666,7 @@ module neo_frame_ctrl (
         busy_q <= 1'b0;
         done_q <= 1'b1;
       end
-      if (desc_in) begin
+      if (dv_in) begin
         dv_q <= 1'b1;
       end
       if (ovf_push | job_fire) begin
@@ -509,30 +689,131 @@ module neo_frame_ctrl (
       end
       if (cq_pop) begin
         cq_rp_q <= cq_rp_q + 3'd1;
-        aw_sent_q <= 1'b0;
-        w_sent_q <= 1'b0;
-        ras_sent_q <= 1'b0;
-      end else begin
-        if (aw_fire) begin
-          aw_sent_q <= 1'b1;
-        end
-        if (w_fire) begin
-          w_sent_q <= 1'b1;
-        end
-        if (ras_fire) begin
-          ras_sent_q <= 1'b1;
-        end
-      end
-      if (aw_fire & ~b_fire) begin
-        wr_out_q <= wr_out_q + 4'd1;
-      end else if (~aw_fire & b_fire) begin
-        wr_out_q <= wr_out_q - 4'd1;
       end
       if (ras_done_cnt != 32'd0) begin
         rastered_q <= rastered_q + ras_done_cnt;
       end
       if (start) begin
         rastered_q <= 32'd0;
+      end
+    end
+  end
+
+  // Result records: the dispatched head's fields per raster core, completed by its done pulse.
+  reg  [31:0] rc_t [0:3];
+  reg  [31:0] rc_len [0:3];
+  reg  rc_ovf [0:3];
+  reg  [31:0] rc_inv [0:3];
+  reg  [31:0] rc_wbl [0:3];
+  reg  [31:0] rc_reach [0:3];
+  reg  [3:0] rp_q;
+  always @(posedge clk_i) begin
+    if (ras_fire) begin
+      rc_t[ras_sel] <= h_t;
+      rc_len[ras_sel] <= h_len;
+      rc_ovf[ras_sel] <= h_ovf;
+      rc_inv[ras_sel] <= h_inv;
+    end
+    if (ras_done_i[0]) begin
+      rc_wbl[0] <= ras_wb_len_i[0*32 +: 32];
+      rc_reach[0] <= ras_wb_reach_i[0*32 +: 32];
+    end
+    if (ras_done_i[1]) begin
+      rc_wbl[1] <= ras_wb_len_i[1*32 +: 32];
+      rc_reach[1] <= ras_wb_reach_i[1*32 +: 32];
+    end
+    if (ras_done_i[2]) begin
+      rc_wbl[2] <= ras_wb_len_i[2*32 +: 32];
+      rc_reach[2] <= ras_wb_reach_i[2*32 +: 32];
+    end
+    if (ras_done_i[3]) begin
+      rc_wbl[3] <= ras_wb_len_i[3*32 +: 32];
+      rc_reach[3] <= ras_wb_reach_i[3*32 +: 32];
+    end
+  end
+
+  // Result writer: the lowest complete record, one 2-beat burst at RESULT_BASE + 16 t (golden TileResult).
+  reg  rw_act_q;
+  reg  [1:0] rw_idx_q;
+  reg  rw_aw_q;
+  reg  [1:0] rw_beat_q;
+  reg  [3:0] wr_out_q;
+  reg  [1:0] rw_pick;
+  always @* begin
+    rw_pick = 2'd0;
+    if (rp_q[3]) begin
+      rw_pick = 2'd3;
+    end
+    if (rp_q[2]) begin
+      rw_pick = 2'd2;
+    end
+    if (rp_q[1]) begin
+      rw_pick = 2'd1;
+    end
+    if (rp_q[0]) begin
+      rw_pick = 2'd0;
+    end
+  end
+  wire wr_room;
+  assign wr_room = wr_out_q != 4'd8;
+  assign m_axi_awvalid_o = rw_act_q & ~rw_aw_q & wr_room;
+  assign m_axi_awid_o = 4'd0;
+  assign m_axi_awaddr_o = result_base_i + {rc_t[rw_idx_q][27:0], 4'd0};
+  assign m_axi_awlen_o = 8'd1;
+  assign m_axi_awsize_o = 3'd3;
+  assign m_axi_awburst_o = 2'd1;
+  assign m_axi_wvalid_o = rw_act_q & ~rw_beat_q[1] & (rw_aw_q | wr_room);
+  wire [23:0] rw_inv;
+  assign rw_inv = (rc_inv[rw_idx_q] > 32'd16777215) ? 24'd16777215 : rc_inv[rw_idx_q][23:0];
+  wire [63:0] rw_word0;
+  assign rw_word0 = {rw_inv, 7'd0, rc_ovf[rw_idx_q], rc_len[rw_idx_q]};
+  wire [63:0] rw_word1;
+  assign rw_word1 = {rc_reach[rw_idx_q], rc_wbl[rw_idx_q]};
+  assign m_axi_wdata_o = (rw_beat_q[0] ? rw_word1 : rw_word0);
+  assign m_axi_wstrb_o = {8{1'b1}};
+  assign m_axi_wlast_o = rw_beat_q[0];
+  assign m_axi_bready_o = 1'b1;
+  wire aw_fire;
+  assign aw_fire = m_axi_awvalid_o & m_axi_awready_i;
+  wire w_fire;
+  assign w_fire = m_axi_wvalid_o & m_axi_wready_i;
+  wire b_fire;
+  assign b_fire = m_axi_bvalid_i;
+  wire unused_b;
+  assign unused_b = ^{m_axi_bid_i, m_axi_bresp_i};
+  assign ev_result_written_o = b_fire;
+  wire rw_end;
+  assign rw_end = rw_act_q & (rw_aw_q | aw_fire) & (rw_beat_q[1] | (w_fire & rw_beat_q[0]));
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      rp_q <= 4'd0;
+      rw_act_q <= 1'b0;
+      rw_idx_q <= 2'd0;
+      rw_aw_q <= 1'b0;
+      rw_beat_q <= 2'd0;
+      wr_out_q <= 4'd0;
+    end else begin
+      rp_q <= (rp_q | ras_done_i) & ~((rw_end ? 4'd1 : 4'd0) << rw_idx_q);
+      if (rw_end) begin
+        rw_act_q <= 1'b0;
+        rw_aw_q <= 1'b0;
+        rw_beat_q <= 2'd0;
+      end else begin
+        if (~rw_act_q & (|rp_q)) begin
+          rw_act_q <= 1'b1;
+          rw_idx_q <= rw_pick;
+        end
+        if (aw_fire) begin
+          rw_aw_q <= 1'b1;
+        end
+        if (w_fire) begin
+          rw_beat_q <= rw_beat_q + 2'd1;
+        end
+      end
+      if (aw_fire & ~b_fire) begin
+        wr_out_q <= wr_out_q + 4'd1;
+      end else if (~aw_fire & b_fire) begin
+        wr_out_q <= wr_out_q - 4'd1;
       end
     end
   end

@@ -20,7 +20,8 @@ module neo_msu (
   input  wire        out_ready_i,
   output wire [47:0] out_data_o,
   output wire        out_last_o,
-  output wire        out_empty_o      // beat carries no entry (only as the single beat of an empty merge)
+  output wire        out_empty_o,     // beat carries no entry (only as the single beat of an empty merge)
+  output wire [31:0] a_inv_o          // boundary inversions of A in the last finished merge
 );
 
   reg  a_done_q;
@@ -78,6 +79,39 @@ module neo_msu (
   assign shift_out = fire & pend_valid_q;
   assign a_ready_o = a_pop;
   assign b_ready_o = b_pop;
+
+  // Boundary inversions of A: an entry selected from A that precedes the previous one selected from A.
+  reg  last_a_valid_q;
+  reg  [46:0] last_a_rank_q;
+  reg  [31:0] inv_q;
+  reg  [31:0] a_inv_q;
+  wire a_descent;
+  assign a_descent = fire & take_a & last_a_valid_q & (a_rank < last_a_rank_q);
+  wire inv_full;
+  assign inv_full = inv_q == {32{1'b1}};
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      last_a_valid_q <= 1'b0;
+      last_a_rank_q <= 47'd0;
+      inv_q <= 32'd0;
+      a_inv_q <= 32'd0;
+    end else begin
+      if (flush) begin
+        last_a_valid_q <= 1'b0;
+        inv_q <= 32'd0;
+        a_inv_q <= inv_q;
+      end else begin
+        if (fire & take_a) begin
+          last_a_valid_q <= 1'b1;
+          last_a_rank_q <= a_rank;
+        end
+        if (a_descent & ~inv_full) begin
+          inv_q <= inv_q + 32'd1;
+        end
+      end
+    end
+  end
+  assign a_inv_o = a_inv_q;
 
   always @(posedge clk_i or negedge rst_ni) begin
     if (!rst_ni) begin

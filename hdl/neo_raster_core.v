@@ -16,6 +16,8 @@ module neo_raster_core (
   input  wire [31:0]  cmd_feat_i,       // feature base address (feature words; word = base + id)
   input  wire [31:0]  cmd_pix_i,        // pixel address of the tile's first pixel; pixel (x, y) at + y * tile + x
   output wire         done_o,           // one-cycle pulse: tile finished, every write taken
+  output wire [31:0]  done_wb_len_o,    // write-back signals (valid with done_o, held): valid entries written back
+  output wire [31:0]  done_wb_reach_o,  // ... and the reach (golden adaptive::writeback_signals)
   output wire         mem_req_valid_o,  // request offered
   input  wire         mem_req_ready_i,  // request taken
   output wire         mem_req_write_o,  // 1: write; 0: read
@@ -629,6 +631,66 @@ module neo_raster_core (
       wb_bank_q <= wb_bank_d;
     end
   end
+
+  // Write-back signals: valid entries, running maximum {key, id} and its position, reach.
+  reg  [31:0] wbs_len_q;
+  reg  [46:0] wbs_max_q;
+  reg  [31:0] wbs_at_q;
+  reg  wbs_any_q;
+  reg  [31:0] wbs_reach_q;
+  wire wbs_live;
+  assign wbs_live = wb_grant & wb_present & hbuf[wb_idx];
+  wire [46:0] wbs_rank;
+  assign wbs_rank = {wb_key, wb_id};
+  wire wbs_behind;
+  assign wbs_behind = wbs_any_q & (wbs_rank < wbs_max_q);
+  wire [31:0] wbs_dist;
+  assign wbs_dist = wbs_len_q - wbs_at_q;
+  reg  [31:0] wbs_len_d;
+  reg  wbs_any_d;
+  reg  [31:0] wbs_reach_d;
+  reg  [46:0] wbs_max_d;
+  reg  [31:0] wbs_at_d;
+  always @* begin
+    wbs_len_d = wbs_len_q;
+    wbs_any_d = wbs_any_q;
+    wbs_reach_d = wbs_reach_q;
+    wbs_max_d = wbs_max_q;
+    wbs_at_d = wbs_at_q;
+    if (cmd_fire) begin
+      wbs_len_d = 32'd0;
+      wbs_any_d = 1'b0;
+      wbs_reach_d = 32'd0;
+    end else if (wbs_live) begin
+      wbs_len_d = wbs_len_q + 32'd1;
+      if (wbs_behind) begin
+        if (wbs_dist > wbs_reach_q) begin
+          wbs_reach_d = wbs_dist;
+        end
+      end else begin
+        wbs_max_d = wbs_rank;
+        wbs_at_d = wbs_len_q;
+        wbs_any_d = 1'b1;
+      end
+    end
+  end
+  always @(posedge clk_i or negedge rst_ni) begin
+    if (!rst_ni) begin
+      wbs_len_q <= 32'd0;
+      wbs_max_q <= 47'd0;
+      wbs_at_q <= 32'd0;
+      wbs_any_q <= 1'b0;
+      wbs_reach_q <= 32'd0;
+    end else begin
+      wbs_len_q <= wbs_len_d;
+      wbs_any_q <= wbs_any_d;
+      wbs_reach_q <= wbs_reach_d;
+      wbs_max_q <= wbs_max_d;
+      wbs_at_q <= wbs_at_d;
+    end
+  end
+  assign done_wb_len_o = wbs_len_q;
+  assign done_wb_reach_o = wbs_reach_q;
 
   // The granted request.
   assign mem_req_write_o = pix_valid | wb_valid;

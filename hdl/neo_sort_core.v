@@ -15,6 +15,7 @@ module neo_sort_core (
   input  wire [31:0] cmd_dst_i,        // entry address of the output
   output wire        done_o,           // one-cycle pulse: the oldest command finished
   output wire [31:0] done_len_o,       // entries written by the last finished command
+  output wire [31:0] done_inv_o,       // boundary inversions of A in the last finished command (merges; else 0)
   output wire        mem_req_valid_o,  // a read request (burst) is offered
   input  wire        mem_req_ready_i,  // the memory takes the read request
   output wire [31:0] mem_req_addr_o,   // entry address of the burst
@@ -52,6 +53,8 @@ module neo_sort_core (
   reg  [8:0] bk_len_q;
   reg  [31:0] ocnt_q;
   reg  [31:0] done_len_q;
+  reg  mrg_q;
+  reg  [31:0] done_inv_q;
   // Read issuer: next address and entries left to request per stream, reservations.
   reg  [31:0] rd_a_addr_q;
   reg  [31:0] rd_a_left_q;
@@ -162,6 +165,7 @@ module neo_sort_core (
   wire [47:0] o_data;
   wire o_last;
   wire o_empty;
+  wire [31:0] o_a_inv;
   neo_msu u_msu (
     .clk_i(clk_i),
     .rst_ni(rst_ni),
@@ -180,7 +184,8 @@ module neo_sort_core (
     .out_ready_i(o_ready),
     .out_data_o(o_data),
     .out_last_o(o_last),
-    .out_empty_o(o_empty)
+    .out_empty_o(o_empty),
+    .a_inv_o(o_a_inv)
   );
 
   // Chunk buffers: input buffers (loads, merge FIFOs A and B), work buffers (passes).
@@ -462,6 +467,10 @@ module neo_sort_core (
   assign ib_clr = (pass_end & first_q) | bk_start_empty;
   assign done_o = st_finish;
   assign done_len_o = st_finish ? ocnt_q : done_len_q;
+  // A merge command's inversions: the MSU+ holds its last merge's count from that merge's end.
+  wire [31:0] fin_inv;
+  assign fin_inv = mrg_q ? o_a_inv : 32'd0;
+  assign done_inv_o = st_finish ? fin_inv : done_inv_q;
 
   always @(posedge clk_i) begin
     if (rd_fire) begin
@@ -485,6 +494,8 @@ module neo_sort_core (
       bk_len_q <= 9'd0;
       ocnt_q <= 32'd0;
       done_len_q <= 32'd0;
+      mrg_q <= 1'b0;
+      done_inv_q <= 32'd0;
       rd_a_addr_q <= 32'd0;
       rd_a_left_q <= 32'd0;
       rd_b_addr_q <= 32'd0;
@@ -548,6 +559,7 @@ module neo_sort_core (
           if (take_merge) begin
             drop_q <= cmd_mode_i == 2'd2;
             bk_dst_q <= cmd_dst_i;
+            mrg_q <= 1'b1;
             ocnt_q <= 32'd0;
             rd_a_addr_q <= cmd_src_a_i;
             rd_b_addr_q <= cmd_src_b_i;
@@ -567,6 +579,7 @@ module neo_sort_core (
             state_q <= S_MERGE;
           end else if (bk_start) begin
             drop_q <= 1'b0;
+            mrg_q <= 1'b0;
             bk_len_q <= bk_len_in;
             bk_dst_q <= bk_sel_q ? ib1_dst_q : ib0_dst_q;
             ocnt_q <= 32'd0;
@@ -603,6 +616,7 @@ module neo_sort_core (
         end
         S_FINISH: begin
           done_len_q <= ocnt_q;
+          done_inv_q <= fin_inv;
           state_q <= S_IDLE;
         end
         default: begin

@@ -25,10 +25,12 @@ module neo_sort_seq (
   output wire [31:0] cmd_dst_o,           // 
   input  wire        done_i,              // from neo_sort_core: a command finished
   input  wire [31:0] done_len_i,          // ... entries it wrote
+  input  wire [31:0] done_inv_i,          // ... boundary inversions of A (merges)
   input  wire        idle_i,              // the core's memory bridge is idle (writes acknowledged)
   output wire        cpl_valid_o,         // the tile is sorted
   input  wire        cpl_ready_i,         // 
-  output wire [31:0] cpl_len_o            // next_len
+  output wire [31:0] cpl_len_o,           // next_len
+  output wire [31:0] cpl_inv_o            // the MERGE_DELETE's boundary inversions of the reused table (0 from scratch)
 );
 
 
@@ -61,6 +63,8 @@ module neo_sort_seq (
   reg  [8:0] out_q;
   reg  [31:0] dlen_q;
   reg  [31:0] cpl_len_q;
+  reg  [31:0] dinv_q;
+  reg  [31:0] cpl_inv_q;
 
   // The current command.
   wire [31:0] scr1;
@@ -113,6 +117,7 @@ module neo_sort_seq (
   assign job_ready_o = state_q == S_IDLE;
   assign cpl_valid_o = state_q == S_CPL;
   assign cpl_len_o = cpl_len_q;
+  assign cpl_inv_o = cpl_inv_q;
 
   // Commands in flight: +1 per command taken, -1 per done_i.
   wire take;
@@ -123,6 +128,7 @@ module neo_sort_seq (
     if (!rst_ni) begin
       out_q <= 9'd0;
       dlen_q <= 32'd0;
+      dinv_q <= 32'd0;
     end else begin
       if (take & ~done_i) begin
         out_q <= out_q + 9'd1;
@@ -131,6 +137,7 @@ module neo_sort_seq (
       end
       if (done_i) begin
         dlen_q <= done_len_i;
+        dinv_q <= done_inv_i;
       end
     end
   end
@@ -156,6 +163,7 @@ module neo_sort_seq (
       buf_q <= 1'b0;
       pass_q <= 4'd0;
       cpl_len_q <= 32'd0;
+      cpl_inv_q <= 32'd0;
     end else begin
       case (state_q)
         S_IDLE: begin
@@ -178,6 +186,7 @@ module neo_sort_seq (
               state_q <= S_ISSUE;
             end else if (job_from_scratch_i) begin
               cpl_len_q <= 32'd0;
+              cpl_inv_q <= 32'd0;
               state_q <= S_CPL;
             end else if ((job_prev_len_i != 32'd0) & (job_dps_passes_i != 4'd0)) begin
               mode_q <= M_DPS;
@@ -215,12 +224,14 @@ module neo_sort_seq (
               end
               M_MD: begin
                 cpl_len_q <= dlen_q;
+                cpl_inv_q <= dinv_q;
                 state_q <= S_CPL;
               end
               default: begin
                 if (fin) begin
                   if (fs_q) begin
                     cpl_len_q <= n_q;
+                    cpl_inv_q <= 32'd0;
                     state_q <= S_CPL;
                   end else if ((plen_q != 32'd0) & (passes_q != 4'd0)) begin
                     mode_q <= M_DPS;

@@ -3,8 +3,8 @@
 //! pixels, the registers and the golden counters, for every whole-frame case.
 
 use neo_golden::engine::{
-    execute_frame, CaseScene, Counter, EngineCase, EngineConfig, EngineSession, HostMode, Memory, Place,
-    TileDescriptor,
+    execute_frame, execute_frame_traced, CaseScene, Counter, EngineCase, EngineConfig, EngineSession,
+    HostMode, Memory, Place, TileDescriptor,
 };
 use neo_golden::scene::Scene;
 use neo_golden::shared::shared_file_for_test;
@@ -27,6 +27,12 @@ struct Seen {
     /// Scene mode: incoming entries the engine listed, and its preprocessing reads.
     incoming: u64,
     pre_read: u64,
+    /// Summed over reuse frames' results: the MERGE_DELETEs' boundary inversions and the
+    /// write-backs' reach (the disorder counters).
+    inversions: u64,
+    reach: u64,
+    /// Reuse tiles by the DPS passes the engine planned itself (`ADAPT_CTRL`).
+    engine_passes: [usize; 16],
 }
 
 /// Runs every frame of `session` through `execute_frame` and checks it against the plan.
@@ -34,14 +40,25 @@ fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
     let mut mem = Memory::new();
     let mut seen = Seen { tiles: session.tiles(), ..Seen::default() };
     while let Some(plan) = session.next_frame(&mut mem).expect("host frame") {
-        let out = execute_frame(cfg, &plan.regs, &mut mem).expect("reference frame");
+        let (out, trace) = execute_frame_traced(cfg, &plan.regs, &mut mem).expect("reference frame");
         if let Some(m) = plan.expected.compare(&mem) {
             panic!("frame {}: {m}", plan.frame);
         }
         if let Some(m) = plan.expected.compare_outcome(&out) {
             panic!("frame {}: {m}", plan.frame);
         }
+        if plan.regs.adapt.enabled() {
+            for (d, t) in plan.expected.descriptors.iter().zip(&trace.tiles) {
+                if !d.from_scratch && d.prev_len > 0 {
+                    seen.engine_passes[t.plan.dps_passes()] += 1;
+                }
+            }
+        }
         assert_eq!(out.results, plan.expected.outcome.results, "frame {}", plan.frame);
+        if !plan.from_scratch {
+            seen.inversions += out.results.iter().map(|r| r.merge_inversions as u64).sum::<u64>();
+            seen.reach += out.results.iter().map(|r| r.wb_reach as u64).sum::<u64>();
+        }
         if let Some(pre) = &plan.expected.pre {
             seen.incoming += pre.lists.iter().map(|l| l.len() as u64).sum::<u64>();
             seen.pre_read += out.counters.get(Counter::RdPre);
@@ -80,7 +97,7 @@ fn case(
     mode: HostMode,
 ) -> Seen {
     let (traj, cfg) = c.setup(scene, how, frames, res, base).expect("case setup");
-    let mut s = EngineSession::with_strategy(scene, traj, &cfg, mode, c.strategy()).expect("session");
+    let mut s = EngineSession::with_options(scene, traj, &cfg, c.options(mode)).expect("session");
     let seen = run(&mut s, &cfg);
     assert_eq!(seen.frames, frames, "{} ({mode:?})", c.name());
     if mode == HostMode::Scene {
@@ -105,12 +122,25 @@ fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
             assert!(s.partial_tiles > 0 && s.empty_tiles > 0, "{name}: {s:?}");
         }
         EngineCase::ManyCores => assert!(s.tiles < cfg.sort_cores && s.tiles < cfg.raster_cores, "{name}"),
-        EngineCase::Turn => assert!(!s.from_scratch[1], "{name}: frame 1 reuses the tables: {s:?}"),
+        EngineCase::Turn => {
+            assert!(!s.from_scratch[1], "{name}: frame 1 reuses the tables: {s:?}");
+            assert!(s.reach > 0, "{name}: a turn leaves disorder: {s:?}");
+        }
         EngineCase::Adaptive => {
             assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
             let more = s.passes[2..].iter().sum::<usize>();
             assert!(s.passes[1] > 0 && more > 0, "{name}: tiles with one and with more DPS passes: {s:?}");
             assert_eq!(s.resorted, 0, "{name}: no re-sort without resort=1");
+            assert!(s.inversions > 0 && s.reach > 0, "{name}: fast motion leaves disorder: {s:?}");
+        }
+        EngineCase::AdaptiveEngine => {
+            assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
+            // The host wrote no passes into the reuse descriptors: the engine planned them.
+            assert!(s.passes[0] > 0 && s.passes[1..].iter().sum::<usize>() == 0, "{name}: {s:?}");
+            assert!(
+                s.engine_passes[1] > 0 && s.engine_passes[2..].iter().sum::<usize>() > 0,
+                "{name}: {s:?}"
+            );
         }
         EngineCase::AdaptiveResort => {
             assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
@@ -124,6 +154,7 @@ fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
             );
             assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
             assert!(s.reused_entries > 0, "{name}: tables reused");
+            assert!(s.reach > 0, "{name}: the keys moved under the reused order: {s:?}");
             assert!(s.overflows.iter().all(|&o| o == 0), "{name}: no overflow");
         }
     }
@@ -179,7 +210,7 @@ fn reference_preprocessing_reads_half_sh_records_at_every_degree() {
         let c = [EngineCase::Orbit, EngineCase::Cut][degree as usize % 2];
         let base = EngineConfig { pre_units: 2, ..small_config() };
         let (traj, cfg) = c.setup(&scene, &how, 3, [128, 128], &base).expect("case setup");
-        let opts = SessionOptions { mode: HostMode::Scene, strategy: c.strategy(), sh: ShPrecision::F16 };
+        let opts = SessionOptions { sh: ShPrecision::F16, ..c.options(HostMode::Scene) };
         let mut s = EngineSession::with_options(&scene, traj, &cfg, opts).expect("session");
         let mut mem = Memory::new();
         let mut frames = 0;
@@ -278,6 +309,14 @@ fn compare_names_the_first_corruption() {
     bad.write_u32(px, bad.read_u32(px) ^ 0x0100_0000);
     let m = plan.expected.compare(&bad).expect("a mismatch");
     assert_eq!((m.place, m.field), (Place::Pixel(1, 1), "word"));
+    let ra = plan.regs.result_base + 16 * t as u64;
+    for (addr, bit, field) in [(ra, 41, "merge_inversions"), (ra + 8, 3, "wb_len"), (ra + 8, 35, "wb_reach")]
+    {
+        let mut bad = mem.clone();
+        bad.write_u64(addr, bad.read_u64(addr) ^ (1 << bit));
+        let m = plan.expected.compare(&bad).expect("a result mismatch");
+        assert_eq!((m.tile, m.place, m.field), (Some(t as u64), Place::Result, field));
+    }
     let mut wrong = out.clone();
     wrong.counters.0[11] += 32;
     let m = plan.expected.compare_outcome(&wrong).expect("a counter mismatch");

@@ -23,12 +23,15 @@
 //! - **Preprocessing** (scene mode, [`EngineFrameModel::predict_frame`]): the Preprocessing
 //!   Engine's phase comes before the tile walk ([`EngineFrameModel::pre_cycles`]: its busiest
 //!   port's traffic, charged client by client).
+//! - **Planned frames** (`ADAPT_CTRL`, golden `engine::adapt`): the frame controller first reads
+//!   every tile's previous result (one 2-beat read at a time, [`EngineFrameModel::scan_cycles`]),
+//!   then reads each again after its descriptor.
 //! - **Scheduling.** Tiles in index order; a descriptor read (4 beats) per tile into a
 //!   one-descriptor buffer; `first_free` (the lowest-numbered free core) or `round_robin`; a
 //!   tile's raster after its sort, in completion order; the frame ends with the last raster and
 //!   its writes' responses.
 
-use neo_golden::engine::memory::{ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
+use neo_golden::engine::memory::{DPS_PASSES_BITS, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES};
 use neo_golden::engine::pre::{beats_spanned, pre_transfers, PrePart, PreRecords, PreWork};
 use neo_golden::engine::{
     execute_frame_traced, EngineConfig, FrameError, FrameRegs, FrameTrace, Memory, MemoryClient,
@@ -374,6 +377,9 @@ impl<'a> EngineFrameModel<'a> {
             p.pre_busy = self.pre_cycles(regs, pre);
             p.cycles += p.pre_busy;
         }
+        if trace.planned {
+            p.cycles += self.scan_cycles(trace.tiles.len());
+        }
         Ok(p)
     }
 
@@ -450,7 +456,7 @@ impl<'a> EngineFrameModel<'a> {
         let traffic: Vec<[Traffic; 2]> =
             tiles.iter().map(|t| [self.sort_traffic(t), self.raster_traffic(t)]).collect();
         let mut dur = alone.clone();
-        let mut sched = self.schedule(tiles, &dur);
+        let mut sched = self.schedule(tiles, &dur, trace.planned);
         for _ in 0..CONTENTION_ROUNDS {
             let mut next = alone.clone();
             for a in &sched.jobs {
@@ -471,14 +477,26 @@ impl<'a> EngineFrameModel<'a> {
                 next[a.tile][a.engine] = 0.5 * (dur[a.tile][a.engine] + want);
             }
             dur = next;
-            sched = self.schedule(tiles, &dur);
+            sched = self.schedule(tiles, &dur, trace.planned);
         }
         sched.prediction()
     }
 
-    /// Tiles in order on the cores by the scheduler policy, with `dur[t] = [sort, raster]`.
-    fn schedule(&self, tiles: &[TileTrace], dur: &[[f64; 2]]) -> Schedule {
-        let desc = self.round_trip() + self.beats(4) + 2.0;
+    /// One read of `beats` beats by the frame controller (one burst in flight).
+    fn ctrl_read(&self, beats: u64) -> f64 {
+        self.round_trip() + self.beats(beats) + 2.0
+    }
+
+    /// The frame controller's scan of the previous results before a planned frame's walk
+    /// (golden `engine::adapt`): one 2-beat read per tile, then the cap (a cycle per level).
+    pub fn scan_cycles(&self, tiles: usize) -> f64 {
+        tiles as f64 * self.ctrl_read(2) + (1 << DPS_PASSES_BITS) as f64
+    }
+
+    /// Tiles in order on the cores by the scheduler policy, with `dur[t] = [sort, raster]`;
+    /// `planned`: each descriptor read is followed by the tile's previous result.
+    fn schedule(&self, tiles: &[TileTrace], dur: &[[f64; 2]], planned: bool) -> Schedule {
+        let desc = self.ctrl_read(4) + if planned { self.ctrl_read(2) } else { 0.0 };
         let mut s = Scheduling::new(self.cfg, dur);
         let mut t_ctrl = 0.0f64;
         for (i, t) in tiles.iter().enumerate() {

@@ -10,7 +10,7 @@ use crate::engine_run;
 use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use indicatif::ProgressBar;
-use neo_golden::engine::{Counter, SessionOptions};
+use neo_golden::engine::{Counter, Planner, SessionOptions};
 use neo_golden::hwpre::ShPrecision;
 use neo_golden::pipeline::Strategy;
 use neo_golden::source;
@@ -68,6 +68,11 @@ pub struct CosimArgs {
     /// (a re-sorted tile's descriptor says from scratch, the host writes its whole list).
     #[arg(long, default_value = "neo")]
     pub sort: String,
+    /// Who plans the `adaptive` DPS passes: `host` (written into the descriptors) or `engine`
+    /// (the frame controller plans them from the previous frame's results, `ADAPT_CTRL`;
+    /// `adaptive` with `wide=1,resort=0,max<=15`).
+    #[arg(long, default_value = "host", value_parser = parse_planner)]
+    pub planner: Planner,
     /// Print one JSON record per frame instead of text.
     #[arg(long)]
     pub json: bool,
@@ -76,6 +81,15 @@ pub struct CosimArgs {
     pub latency: PathBuf,
     #[command(flatten)]
     pub strict: StrictArg,
+}
+
+/// Parses `--planner`.
+fn parse_planner(s: &str) -> Result<Planner, String> {
+    match s {
+        "host" => Ok(Planner::Host),
+        "engine" => Ok(Planner::Engine),
+        _ => Err(format!("unknown planner {s:?}: expected host or engine")),
+    }
 }
 
 /// Runs `neo cosim`.
@@ -94,7 +108,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
     let (scene, _) = source::load_scene(&a.scene.scene, a.strict.strict)?;
     let traj = engine_run::trajectory_at(&a.trajectory.trajectory, &scene, a.frames, a.res)?;
     let strategy: Strategy = a.sort.parse().map_err(|e| anyhow!("--sort {:?}: {e}", a.sort))?;
-    let opts = SessionOptions { mode, strategy, sh: a.sh };
+    let opts = SessionOptions { mode, strategy, sh: a.sh, planner: a.planner };
     let mut session = engine_run::session(&scene, traj, &cfg, opts)?;
     eprintln!(
         "neo cosim: {} Gaussians, {} tiles, {} frames, engine {} + {} cores, {} ports, seed 0x{seed:016x}",

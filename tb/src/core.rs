@@ -81,6 +81,8 @@ pub struct CmdResult {
     pub done_at: u64,
     /// `done_len_o`.
     pub done_len: u64,
+    /// `done_inv_o`.
+    pub done_inv: u64,
     /// Read requests issued for the command.
     pub read_bursts: u64,
     /// Entries read for the command.
@@ -369,6 +371,7 @@ impl Core {
                     accepted_at: f.accepted_at,
                     done_at: c,
                     done_len,
+                    done_inv: self.dut.done_inv_o(),
                     read_bursts: f.read_bursts,
                     entries_read: f.entries_read,
                     entries_written: f.entries_written,
@@ -501,6 +504,7 @@ pub fn sort_chunk_checked(
     });
     let (want, _) = neo_golden::sort::full_sort(entries, &cfg.sort_config());
     core.checker.value(core.dut.cycle(), "done_len_o", want.len() as u64, r.done_len);
+    core.checker.value(core.dut.cycle(), "done_inv_o (chunk command)", 0, r.done_inv);
     core.expect("sorted chunk", layout::DST, &want);
     r
 }
@@ -619,6 +623,11 @@ pub fn dps_pass_checked(
     (want, q.span)
 }
 
+/// Golden's boundary inversions of `a` in `merge2(a, b, drop_invalid)` (the MSU+'s count).
+pub fn a_inversions(a: &[SortEntry], b: &[SortEntry], drop_invalid: bool) -> u64 {
+    neo_golden::sort::merge2_into(a, b, drop_invalid, &mut Vec::new()).a_inversions as u64
+}
+
 /// (c) Merges sorted `a` and `b` (`MERGE_DELETE` when `drop_invalid`, else `MERGE`) and checks
 /// against golden `merge2`. Returns the command's cost.
 pub fn merge_checked(core: &mut Core, a: &[SortEntry], b: &[SortEntry], drop_invalid: bool) -> CmdResult {
@@ -635,6 +644,7 @@ pub fn merge_checked(core: &mut Core, a: &[SortEntry], b: &[SortEntry], drop_inv
     });
     let want = merge2(a, b, drop_invalid);
     core.checker.value(core.dut.cycle(), "done_len_o", want.len() as u64, r.done_len);
+    core.checker.value(core.dut.cycle(), "done_inv_o", a_inversions(a, b, drop_invalid), r.done_inv);
     core.expect(if drop_invalid { "merge-delete" } else { "merge" }, layout::DST, &want);
     r
 }
@@ -666,6 +676,8 @@ pub struct CheckedCmd {
     pub cmd: Command,
     /// The golden output at `cmd.dst` (its length is the expected `done_len_o`).
     pub want: Vec<SortEntry>,
+    /// The expected `done_inv_o`: golden's boundary inversions of A (merges; 0 for chunks).
+    pub inversions: u64,
 }
 
 /// Entry addresses reserved per queue slot in each region (inputs of a slot never overlap).
@@ -701,6 +713,7 @@ pub fn chunk_cmd_at(
     CheckedCmd {
         cmd: Command { mode, src_a: src, len_a: entries.len() as u64, src_b: 0, len_b: 0, dst },
         want,
+        inversions: 0,
     }
 }
 
@@ -754,6 +767,7 @@ pub fn merge_cmd_at(
             dst: at.dst,
         },
         want: merge2(a, b, drop_invalid),
+        inversions: a_inversions(a, b, drop_invalid),
     }
 }
 
@@ -765,6 +779,7 @@ pub fn queue_checked(core: &mut Core, cmds: &[CheckedCmd]) -> QueueRun {
     for (k, (c, r)) in cmds.iter().zip(&q.results).enumerate() {
         let what = format!("command {k} ({:?}, len_a {}, len_b {})", c.cmd.mode, c.cmd.len_a, c.cmd.len_b);
         core.checker.value(r.done_at, &format!("done_len_o of {what}"), c.want.len() as u64, r.done_len);
+        core.checker.value(r.done_at, &format!("done_inv_o of {what}"), c.inversions, r.done_inv);
         core.expect(&format!("output of {what}"), c.cmd.dst, &c.want);
     }
     q

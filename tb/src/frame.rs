@@ -1,20 +1,27 @@
 //! The `neo_frame_ctrl` test bench. Rust plays everything around the frame controller:
-//! - AXI client 0's memory (a golden [`Memory`] holding the descriptors; random `arready`,
+//! - AXI client 0's memory (a golden [`Memory`] holding the descriptors and, in frames the
+//!   controller plans (`ADAPT_CTRL`, random fields), the previous results; random `arready`,
 //!   `rvalid` gaps, `awready`, `wready`, B latency);
 //! - the N sequencers: a job is taken when the sequencer is idle and a coin says so; it
-//!   completes after a random time with a `next_len` of its own choosing (a function of the
-//!   tile), held on `cpl_len_i[k]` until taken;
+//!   completes after a random time with a `next_len` and merge inversions of its own choosing
+//!   (functions of the tile; some inversions beyond the result's 24-bit field), held on
+//!   `cpl_len_i[k]` and `cpl_inv_i[k]` until taken;
 //! - the M raster cores: a command is taken when the core is idle (random), `ras_done_i` pulses
-//!   after a random time;
+//!   after a random time with the tile's write-back signals on `ras_wb_len_i[j]` and
+//!   `ras_wb_reach_i[j]` (random junk in other cycles);
 //! - the bridges' `idle_i`: random bits.
 //!
 //! The checker: every non-overflowing tile is handed to a sequencer exactly once, in tile
 //! order, with the descriptor's fields, the frame parity and that sequencer's scratch base, to
-//! the sequencer the scheduler policy names; overflowing tiles never; every tile is rastered
+//! the sequencer the scheduler policy names, with the descriptor's DPS passes or, in a planned
+//! frame, golden `engine_passes` of the previous results (reads: every result in tile order,
+//! then each tile's descriptor and result); overflowing tiles never; every tile is rastered
 //! exactly once, after its sort completed, with `len` = the sequencer's `next_len` (0 when it
 //! overflowed), `table = next`, its tile_x/y, `feat = FEAT_BASE/32`, `pix = FB_BASE/4 + t
-//! tile^2`; descriptor reads are 4-beat INCR bursts at `DESC_BASE + 32 t` in tile order; each
-//! result is written once (1 beat, all strobes) with the right value; `done_o` rises only after
+//! tile^2`, to the core the policy names among those whose last result is written; descriptor
+//! reads are 4-beat INCR bursts at `DESC_BASE + 32 t` in tile order; each result is written once
+//! (a 2-beat burst at `RESULT_BASE + 16 t`, all strobes) after the tile's raster, with the
+//! tile's `next_len`, overflow, saturated inversions and write-back signals; `done_o` rises only after
 //! all of that, with every B back and every `idle_i` high the cycle before; `FIRST_OVERFLOW` and
 //! `OVERFLOWS` equal golden's.
 
@@ -24,17 +31,52 @@ use crate::dut::Dut;
 use crate::models::NeoFrameCtrl;
 use crate::rng::Rng;
 use neo_gen::{EngineConfig, SchedulerPolicy};
-use neo_golden::engine::memory::MAX_DPS_PASSES;
-use neo_golden::engine::{FrameRegs, Memory, TileDescriptor, TileResult};
+use neo_golden::engine::adapt::{ADAPT_BUDGET_LSB, ADAPT_MAX_LSB};
+use neo_golden::engine::memory::{MAX_DPS_PASSES, RESULT_BYTES};
+use neo_golden::engine::{engine_passes, AdaptRegs, FrameRegs, Memory, TileDescriptor, TileResult};
+use neo_golden::pipeline::adaptive::WritebackSignals;
 use std::collections::VecDeque;
 
-/// One frame: the registers and the descriptors.
+/// One frame: the registers, the descriptors and the previous frame's results.
 #[derive(Clone, Debug)]
 pub struct FrameCase {
     /// Registers (`tiles` = `descs.len()`).
     pub regs: FrameRegs,
     /// Tile descriptors; `next` must be unique per tile (the bench identifies tiles by it).
     pub descs: Vec<TileDescriptor>,
+    /// The results in memory before the start (what a planned frame reads).
+    pub prev_results: Vec<TileResult>,
+}
+
+impl FrameCase {
+    /// Each tile's DPS passes as the controller must hand them to its sequencer: the
+    /// descriptor's, or golden [`engine_passes`] of the previous results in a planned frame.
+    pub fn passes(&self, cfg: &EngineConfig) -> Vec<u64> {
+        if self.regs.adapt.enabled() {
+            engine_passes(&self.regs.adapt, cfg.chunk as u32, &self.prev_results)
+                .into_iter()
+                .map(u64::from)
+                .collect()
+        } else {
+            self.descs.iter().map(TileDescriptor::passes).collect()
+        }
+    }
+
+    /// The reads the controller issues, in order: `(byte address, beats)`.
+    pub fn reads(&self) -> Vec<(u64, u64)> {
+        let (desc, res) = (self.regs.desc_base, self.regs.result_base);
+        let tiles = self.descs.len() as u64;
+        let planned = self.regs.adapt.enabled();
+        let mut v: Vec<(u64, u64)> =
+            if planned { (0..tiles).map(|t| (res + RESULT_BYTES * t, 2)).collect() } else { vec![] };
+        for t in 0..tiles {
+            v.push((desc + 32 * t, 4));
+            if planned {
+                v.push((res + RESULT_BYTES * t, 2));
+            }
+        }
+        v
+    }
 }
 
 /// What the frame took.
@@ -44,6 +86,23 @@ pub struct FrameRun {
     pub cycles: u64,
     /// Tiles that overflowed.
     pub overflows: u32,
+    /// Tiles handed out with more than one DPS pass planned by the controller.
+    pub planned_extra: u64,
+}
+
+/// The merge inversions the sequencer model reports for tile `t`: small counts, and for one tile
+/// in 7 a count beyond the result's 24-bit field (saturated there), within `len_bits`.
+pub fn model_inversions(t: u64, lw: u32) -> u64 {
+    if t % 7 == 3 {
+        ((1u64 << 24) + t * 0x9e37_79b9) & mask(lw)
+    } else {
+        (t * 131) % 5000
+    }
+}
+
+/// The write-back signals (len, reach) the raster-core model reports for tile `t`.
+pub fn model_wb_signals(t: u64, lw: u32) -> (u64, u64) {
+    ((t * 2_654_435_761) & mask(lw.min(32)), (t * 40_503 + 7) & mask(lw.min(32)))
 }
 
 /// The `next_len` the sequencer model reports for tile `t` with descriptor `d`: at most the
@@ -60,7 +119,7 @@ pub fn model_next_len(t: u64, d: &TileDescriptor, cap: u64) -> u64 {
 /// any 32-bit lengths), a few exactly at it, with the registers drawn over their whole range: width and height any 16-bit
 /// value, FEAT_BASE, FB_BASE and SCRATCH_BASE any 32-bit value (the controller uses their
 /// upper bits only), DESC_BASE (32-byte aligned: one 4-beat burst a descriptor) and RESULT_BASE
-/// (8-byte aligned: one beat a result) anywhere in the 32-bit address space with their regions
+/// (16-byte aligned: one 2-beat burst a result) anywhere in the 32-bit address space with their regions
 /// apart. Every tile's `next` is a distinct random 32-bit address.
 pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent: u32) -> FrameCase {
     let cap = cfg.table_capacity as u64;
@@ -99,14 +158,40 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent
             }
         })
         .collect();
-    let (desc_bytes, result_bytes) = (32 * tiles as u64, 8 * tiles as u64);
+    let (desc_bytes, result_bytes) = (32 * tiles as u64, RESULT_BYTES * tiles as u64);
     let desc_base = 32 * rng.below(((1u64 << 32) - desc_bytes) / 32 + 1);
     let result_base = loop {
-        let b = 8 * rng.below(((1u64 << 32) - result_bytes) / 8 + 1);
+        let b = 16 * rng.below(((1u64 << 32) - result_bytes) / 16 + 1);
         if b + result_bytes <= desc_base || desc_base + desc_bytes <= b {
             break b;
         }
     };
+    // Half of the frames planned by the controller, its fields over their whole range (and the
+    // reserved bits random), previous results with reaches of up to 6 chunks and some inversions.
+    let adapt = if rng.percent(50) {
+        let reserved = rng.next_u32() & !(0xF << ADAPT_MAX_LSB | 0x3FF << ADAPT_BUDGET_LSB | 1);
+        AdaptRegs {
+            ctrl: reserved
+                | 1
+                | (rng.below(1024) as u32) << ADAPT_BUDGET_LSB
+                | (rng.below(16) as u32) << ADAPT_MAX_LSB,
+        }
+    } else {
+        AdaptRegs { ctrl: rng.next_u32() & !1 }
+    };
+    let chunk = cfg.chunk as u64;
+    let prev_results = (0..tiles)
+        .map(|_| {
+            let wb_len = rng.below(4000) as u32;
+            TileResult {
+                next_len: rng.next_u32(),
+                overflow: rng.percent(5),
+                merge_inversions: if rng.percent(30) { rng.below(1 << 24) as u32 } else { 0 },
+                wb_len,
+                wb_reach: if rng.percent(40) { 0 } else { rng.below(6 * chunk) as u32 },
+            }
+        })
+        .collect();
     let regs = FrameRegs {
         frame: rng.next_u32(),
         tiles: tiles as u32,
@@ -118,8 +203,9 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent
         fb_base: rng.next_u32() as u64,
         scratch_base: rng.next_u32() as u64,
         pre: Default::default(),
+        adapt,
     };
-    FrameCase { regs, descs }
+    FrameCase { regs, descs, prev_results }
 }
 
 /// A sequencer model: the tile it sorts, when it completes, and the `next_len`.
@@ -128,6 +214,7 @@ struct SeqModel {
     tile: u64,
     due: u64,
     len: u64,
+    inv: u64,
 }
 
 /// The frame controller with its surroundings.
@@ -199,7 +286,11 @@ impl FrameBench {
         let mut mem = Memory::new();
         for (t, d) in case.descs.iter().enumerate() {
             mem.write_descriptor(regs.desc_base, t as u64, d);
+            mem.write_result(regs.result_base, t as u64, &case.prev_results[t]);
         }
+        let want_passes = case.passes(&cfg);
+        let mut planned_extra = 0;
+        let mut want_reads: VecDeque<(u64, u64)> = case.reads().into();
         let tile_of = |next: u64| case.descs.iter().position(|d| d.next as u64 == next);
         let ovf: Vec<bool> = case.descs.iter().map(|d| d.entries_in() > cap).collect();
         let want_first = ovf.iter().position(|&o| o).map_or(u32::MAX, |t| t as u32);
@@ -215,14 +306,18 @@ impl FrameBench {
             ("feat_base_i", regs.feat_base),
             ("fb_base_i", regs.fb_base),
             ("scratch_base_i", regs.scratch_base),
+            ("adapt_ctrl_i", regs.adapt.ctrl as u64),
         ] {
             self.set(p, v);
         }
         let start = self.dut.cycle();
-        let limit = start + 3000 + 300 * tiles as u64;
+        let limit = start + 3000 + 400 * tiles as u64;
         // Models' state.
         let mut seqs: Vec<Option<SeqModel>> = vec![None; n];
-        let mut rasters: Vec<Option<u64>> = vec![None; m];
+        // Per raster core: (due, tile) of its command; the tile whose result is not written yet.
+        let mut rasters: Vec<Option<(u64, u64)>> = vec![None; m];
+        let mut unwritten: Vec<Option<u64>> = vec![None; m];
+        let mut inversions = vec![0u64; tiles];
         let mut sorted = vec![false; tiles]; // job taken
         let mut sort_done: Vec<Option<u64>> = vec![None; tiles]; // completion taken: next_len
         let mut rastered = vec![false; tiles];
@@ -230,8 +325,9 @@ impl FrameBench {
         let (mut jobs, mut ras_cmds) = (0usize, 0usize);
         let mut next_fetch = 0u64;
         let mut r_beats: VecDeque<(u64, u64, bool)> = VecDeque::new(); // (due, data, last)
-        let mut aw_q: VecDeque<u64> = VecDeque::new();
-        let mut w_q: VecDeque<(u64, u64)> = VecDeque::new();
+                                                                       // The result write in progress: its address, its data beats.
+        let mut aw_cur: Option<u64> = None;
+        let mut w_cur: Vec<u64> = Vec::new();
         let mut b_due: VecDeque<u64> = VecDeque::new();
         let mut writes = vec![0u32; tiles];
         // Half of the frames stall the raster cores for 128 cycles in every 384 (the completion
@@ -252,13 +348,20 @@ impl FrameBench {
             // A lane without cpl_valid carries any 32-bit value (the controller must not take it).
             let cpl_len: Vec<u64> =
                 seqs.iter().map(|s| s.map_or(r.next_u64() & mask(lw), |s| s.len)).collect();
+            let cpl_inv: Vec<u64> =
+                seqs.iter().map(|s| s.map_or(r.next_u64() & mask(lw), |s| s.inv)).collect();
             let stalled = stall && (c / 128).is_multiple_of(3);
             let ras_ready: Vec<u64> =
                 rasters.iter().map(|s| (s.is_none() && !stalled && r.percent(60)) as u64).collect();
             let mut ras_done = vec![0u64; m];
+            let mut wb_len: Vec<u64> = (0..m).map(|_| r.next_u64() & mask(lw)).collect();
+            let mut wb_reach: Vec<u64> = (0..m).map(|_| r.next_u64() & mask(lw)).collect();
             for (j, s) in rasters.iter_mut().enumerate() {
-                if s.is_some_and(|due| due <= c) {
+                if let Some((due, t)) = s.filter(|s| s.0 <= c) {
+                    let _ = due;
                     ras_done[j] = 1;
+                    (wb_len[j], wb_reach[j]) = model_wb_signals(t, lw);
+                    unwritten[j] = Some(t);
                     *s = None;
                     ras_done_count += 1;
                 }
@@ -273,8 +376,11 @@ impl FrameBench {
             self.set_lanes("job_ready_i", &job_ready, 1);
             self.set_lanes("cpl_valid_i", &cpl_valid, 1);
             self.set_lanes("cpl_len_i", &cpl_len, lw);
+            self.set_lanes("cpl_inv_i", &cpl_inv, lw);
             self.set_lanes("ras_ready_i", &ras_ready, 1);
             self.set_lanes("ras_done_i", &ras_done, 1);
+            self.set_lanes("ras_wb_len_i", &wb_len, lw);
+            self.set_lanes("ras_wb_reach_i", &wb_reach, lw);
             self.set_lanes("idle_i", &idle, 1);
             self.set("m_axi_arready_i", arready as u64);
             self.set("m_axi_rvalid_i", rbeat.is_some() as u64);
@@ -300,69 +406,88 @@ impl FrameBench {
                 self.checker.protocol(c, done, "busy fell without done");
                 self.checker.protocol(c, prev_idle_all, "done with a bridge not idle in the deciding cycle");
                 self.checker.value(c, "tiles rastered at done", tiles as u64, ras_done_count as u64);
+                self.checker.value(c, "reads left at done", 0, want_reads.len() as u64);
                 self.checker.protocol(
                     c,
-                    b_due.is_empty() && aw_q.is_empty(),
+                    b_due.is_empty() && aw_cur.is_none() && w_cur.is_empty(),
                     "done with a result write in flight",
                 );
                 for t in 0..tiles {
                     self.checker.value(c, &format!("result {t} writes"), 1, writes[t] as u64);
+                    let (l, r) = model_wb_signals(t as u64, lw);
+                    let wb =
+                        WritebackSignals { len: l as u32, reach: r as u32, ..WritebackSignals::default() };
                     let want = match sort_done[t] {
-                        _ if ovf[t] => TileResult { next_len: 0, overflow: true },
-                        Some(l) => TileResult { next_len: l as u32, overflow: false },
+                        _ if ovf[t] => TileResult::new(0, true, 0, &wb),
+                        Some(l) => TileResult::new(l as u32, false, inversions[t], &wb),
                         None => self.checker.fail(c, &format!("tile {t}"), "sorted", "never completed"),
                     };
                     let got = mem.read_result(regs.result_base, t as u64);
-                    self.checker.value(c, &format!("result {t}"), want.to_word(), got.to_word());
+                    for (k, (w, g)) in want.to_words().into_iter().zip(got.to_words()).enumerate() {
+                        self.checker.value(c, &format!("result {t} word {k}"), w, g);
+                    }
                 }
                 self.checker.value(c, "first_overflow_o", want_first as u64, self.get("first_overflow_o"));
                 self.checker.value(c, "overflows_o", want_ovfs as u64, self.get("overflows_o"));
                 self.checker.value(c, "overflow_o", (want_ovfs > 0) as u64, self.get("overflow_o"));
                 self.dut.tick();
-                return FrameRun { cycles: c - start, overflows: want_ovfs };
+                return FrameRun { cycles: c - start, overflows: want_ovfs, planned_extra };
             } else if !start_pulse && c > start + 1 {
                 self.checker.protocol(c, busy, "busy fell");
             }
             was_busy = busy || start_pulse;
             prev_idle_all = idle_all;
 
-            // AXI reads.
+            // AXI reads: descriptors and previous results, in the planned order; the data from
+            // the memory when the request is taken.
             if arready && self.get("m_axi_arvalid_o") == 1 {
                 let addr = self.get("m_axi_araddr_o");
-                self.checker.value(c, "araddr", regs.desc_base + 32 * next_fetch, addr);
-                self.checker.value(c, "arlen", 3, self.get("m_axi_arlen_o"));
+                let Some((want_addr, beats)) = want_reads.pop_front() else {
+                    self.checker.fail(c, "m_axi_arvalid_o", "no more reads", &format!("a read at 0x{addr:x}"))
+                };
+                self.checker.value(c, &format!("read {next_fetch} araddr"), want_addr, addr);
+                self.checker.value(c, "arlen", beats - 1, self.get("m_axi_arlen_o"));
                 self.checker.value(c, "arsize", 3, self.get("m_axi_arsize_o"));
                 self.checker.value(c, "arburst", 1, self.get("m_axi_arburst_o"));
-                self.checker.protocol(c, (next_fetch as usize) < tiles, "descriptor read past TILES");
-                let words = case.descs[next_fetch as usize].to_words();
                 let due = c + 1 + self.rng.below(6);
-                for (i, w) in words.iter().enumerate() {
-                    r_beats.push_back((due, *w, i == 3));
+                for i in 0..beats {
+                    r_beats.push_back((due, mem.read_u64(addr + 8 * i), i + 1 == beats));
                 }
                 next_fetch += 1;
             }
             if rbeat.is_some() && self.get("m_axi_rready_o") == 1 {
                 r_beats.pop_front();
             }
-            // AXI writes.
+            // AXI writes: one result (AW and two W beats) at a time.
             if awready && self.get("m_axi_awvalid_o") == 1 {
-                self.checker.value(c, "awlen", 0, self.get("m_axi_awlen_o"));
+                self.checker.value(c, "awlen", 1, self.get("m_axi_awlen_o"));
                 self.checker.value(c, "awsize", 3, self.get("m_axi_awsize_o"));
-                aw_q.push_back(self.get("m_axi_awaddr_o"));
+                self.checker.value(c, "awburst", 1, self.get("m_axi_awburst_o"));
+                self.checker.protocol(c, aw_cur.is_none(), "a second AW before the result's last beat");
+                aw_cur = Some(self.get("m_axi_awaddr_o"));
             }
             if wready && self.get("m_axi_wvalid_o") == 1 {
                 self.checker.value(c, "wstrb", 0xff, self.get("m_axi_wstrb_o"));
-                self.checker.value(c, "wlast", 1, self.get("m_axi_wlast_o"));
-                w_q.push_back((self.get("m_axi_wdata_o"), c));
+                let last = w_cur.len() == 1;
+                self.checker.value(c, "wlast", last as u64, self.get("m_axi_wlast_o"));
+                w_cur.push(self.get("m_axi_wdata_o"));
             }
-            while !aw_q.is_empty() && !w_q.is_empty() {
-                let (a, (data, _)) = (aw_q.pop_front().unwrap(), w_q.pop_front().unwrap());
+            let mut written_now = None;
+            if let (Some(a), 2) = (aw_cur, w_cur.len()) {
                 let off = a.wrapping_sub(regs.result_base);
-                let t = (off / 8) as usize;
-                self.checker.protocol(c, off % 8 == 0 && t < tiles, &format!("result write at 0x{a:x}"));
-                mem.write_u64(a, data);
+                let t = (off / RESULT_BYTES) as usize;
+                self.checker.protocol(
+                    c,
+                    off % RESULT_BYTES == 0 && t < tiles,
+                    &format!("result write at 0x{a:x}"),
+                );
+                self.checker.protocol(c, rastered[t], &format!("result {t} written before its raster"));
+                mem.write_u64(a, w_cur[0]);
+                mem.write_u64(a + 8, w_cur[1]);
                 writes[t] += 1;
                 b_due.push_back(c + 1 + self.rng.below(60));
+                (aw_cur, written_now) = (None, Some(t as u64));
+                w_cur.clear();
             }
             if bvalid {
                 self.checker.protocol(c, self.get("m_axi_bready_o") == 1, "bready low");
@@ -395,7 +520,7 @@ impl FrameBench {
                     ("job_prev_len_o", d.prev_len as u64),
                     ("job_list_o", d.list as u64),
                     ("job_list_len_o", d.list_len as u64),
-                    ("job_dps_passes_o", d.passes()),
+                    ("job_dps_passes_o", want_passes[t]),
                     ("job_odd_o", (regs.frame & 1) as u64),
                 ];
                 for (f, w) in fields {
@@ -410,11 +535,13 @@ impl FrameBench {
                 );
                 sorted[t] = true;
                 jobs += 1;
+                planned_extra += (regs.adapt.enabled() && want_passes[t] > 1) as u64;
                 // Quick sorts and, half of the time, slow ones: then every sequencer gets busy (the
                 // high-index completions of the first-free scheduler are exercised too).
                 let slow = self.rng.percent(50);
                 let due = c + 1 + if slow { self.rng.below(1000) } else { self.rng.below(40) };
-                seqs[k] = Some(SeqModel { tile: t as u64, due, len: model_next_len(t as u64, d, cap) });
+                let (len, inv) = (model_next_len(t as u64, d, cap), model_inversions(t as u64, lw));
+                seqs[k] = Some(SeqModel { tile: t as u64, due, len, inv });
             }
             // Completions.
             for k in 0..n {
@@ -426,6 +553,7 @@ impl FrameBench {
                     );
                     let s = seqs[k].take().expect("valid implies a job");
                     sort_done[s.tile as usize] = Some(s.len);
+                    inversions[s.tile as usize] = s.inv;
                 }
             }
             // Raster commands.
@@ -445,10 +573,16 @@ impl FrameBench {
                         self.checker.fail(c, &format!("tile {t} raster"), "after its sort", "before")
                     })
                 };
+                let free = |i: usize| ras_ready[i] == 1 && unwritten[i].is_none();
                 let want_j = match cfg.scheduler {
                     SchedulerPolicy::RoundRobin => ras_cmds % m,
-                    SchedulerPolicy::FirstFree => (0..m).find(|&i| ras_ready[i] == 1).unwrap_or(m),
+                    SchedulerPolicy::FirstFree => (0..m).find(|&i| free(i)).unwrap_or(m),
                 };
+                self.checker.protocol(
+                    c,
+                    free(j),
+                    &format!("raster core {j} given a tile before its result was written"),
+                );
                 self.checker.value(c, "raster core", want_j as u64, j as u64);
                 let t2 = (cfg.tile * cfg.tile) as u64;
                 let fields = [
@@ -466,7 +600,13 @@ impl FrameBench {
                 rastered[t] = true;
                 ras_cmds += 1;
                 let due = c + 2 + self.rng.below(30);
-                rasters[j] = Some(if align { (due | 31) + 1 } else { due });
+                rasters[j] = Some((if align { (due | 31) + 1 } else { due }, t as u64));
+            }
+            // A written result frees its core from the next cycle.
+            if let Some(t) = written_now {
+                for u in unwritten.iter_mut().filter(|u| **u == Some(t)) {
+                    *u = None;
+                }
             }
             self.dut.tick();
         }

@@ -1,6 +1,7 @@
 //! The MSU+ test bench: sequences of merges through `neo_msu` (streams A and B with `last` and
 //! `empty` beats, random stalls on both inputs, random output backpressure), each output beat
-//! checked against golden `merge2`.
+//! checked against golden `merge2`, and each merge's boundary inversions of A (`a_inv_o`, with
+//! its last beat) against golden `MergeStats::a_inversions`.
 //!
 //! Stream encoding (docs in `gen/src/units/msu.rs`): `n >= 1` entries are `n` beats with `last`
 //! on the final one; an empty stream is one beat with `empty = 1, last = 1`; extra `empty` beats
@@ -14,7 +15,7 @@ use crate::models::NeoMsu;
 use crate::rng::Rng;
 use crate::stream::{Beat, Sink, Source};
 use neo_gen::EngineConfig;
-use neo_golden::sort::{merge2, SortEntry};
+use neo_golden::sort::{merge2, merge2_into, SortEntry};
 use std::collections::VecDeque;
 
 /// One merge: streams A (the reused table) and B (incoming) and the `drop_invalid_i` flag.
@@ -47,6 +48,11 @@ pub fn expected_beats(m: &Merge) -> Vec<OutBeat> {
     }
     let n = out.len();
     out.into_iter().enumerate().map(|(i, entry)| OutBeat { empty: false, last: i + 1 == n, entry }).collect()
+}
+
+/// Golden's boundary inversions of A in merge `m`.
+pub fn expected_inversions(m: &Merge) -> u64 {
+    merge2_into(&m.a, &m.b, m.drop_invalid, &mut Vec::new()).a_inversions as u64
 }
 
 /// Input beats of one stream, with `empty` filler beats inserted at probability `filler_pct`.
@@ -83,6 +89,8 @@ pub struct MsuRun {
     pub entries_out: usize,
     /// Cycles from the end of reset to the last output.
     pub cycles: u64,
+    /// Boundary inversions of A checked (summed over the merges).
+    pub inversions: u64,
 }
 
 /// Runs `merges` through the MSU+ in order and checks every output beat. Consecutive merges with
@@ -123,6 +131,7 @@ pub fn run_checked(
     dut.reset();
 
     let mut stats = MsuRun { merges: merges.len(), ..MsuRun::default() };
+    let inversions: Vec<u64> = merges.iter().map(expected_inversions).collect();
     let mut expected: VecDeque<(usize, usize, OutBeat)> = VecDeque::new();
     let mut i = 0;
     while i < merges.len() {
@@ -168,6 +177,10 @@ pub fn run_checked(
                 let what = format!("merge {mi} beat {k}");
                 checker.value(c, &format!("{what} out_empty_o"), want.empty as u64, beat[2][0] as u64);
                 checker.value(c, &format!("{what} out_last_o"), want.last as u64, beat[1][0] as u64);
+                if want.last {
+                    checker.value(c, &format!("merge {mi} a_inv_o"), inversions[mi], dut.a_inv_o());
+                    stats.inversions += inversions[mi];
+                }
                 if !want.empty {
                     let got = fmt.unpack(get_bits(&beat[0], 0, w));
                     checker.entry(c, &format!("{what} out_data_o"), &want.entry, &got);
@@ -197,7 +210,9 @@ pub fn run_checked(
 }
 
 /// `count` random merges (lengths `0..=max_len`, random valid densities, ties and duplicates
-/// across A and B, both drop settings, empty streams).
+/// across A and B, both drop settings, empty streams). A quarter of the A streams are out of
+/// order as a reused table after a DPS pass is: sorted runs in reversed order (boundary
+/// inversions for `a_inv_o`).
 pub fn random_merges(cfg: &EngineConfig, rng: &mut Rng, count: usize, max_len: usize) -> Vec<Merge> {
     use crate::stimulus::sorted_stream;
     let fmt = cfg.format();
@@ -217,6 +232,11 @@ pub fn random_merges(cfg: &EngineConfig, rng: &mut Rng, count: usize, max_len: u
             if rng.percent(10) {
                 // B shares A's (key, id)s with flipped valid bits: the tie rule decides the order.
                 b = a.iter().map(|e| e.with_valid(!e.valid)).collect();
+            }
+            let mut a = a;
+            if rng.percent(25) && a.len() > 1 {
+                let run = rng.range(1, a.len() as u64) as usize;
+                a = a.chunks(run).rev().flatten().copied().collect();
             }
             Merge { a, b, drop_invalid: rng.percent(50) }
         })

@@ -84,6 +84,8 @@ pub struct TileRun {
     pub pixel_writes: u64,
     /// Cycles from the command to the last read request taken (the end of the last LOAD).
     pub last_read: u64,
+    /// `done_wb_reach_o` (checked against golden).
+    pub wb_reach: u64,
 }
 
 /// Addresses of the three spaces for one tile.
@@ -148,6 +150,8 @@ struct Ports {
     /// `cmd_feat_i`, `cmd_pix_i`.
     cmd: [usize; 8],
     done: usize,
+    /// `done_wb_len_o`, `done_wb_reach_o`.
+    wb_signals: [usize; 2],
 }
 
 impl Ports {
@@ -178,6 +182,7 @@ impl Ports {
             ]
             .map(p),
             done: p("done_o"),
+            wb_signals: [p("done_wb_len_o"), p("done_wb_reach_o")],
         }
     }
 }
@@ -445,6 +450,7 @@ impl<M: Clocked> RasterCore<M> {
             writebacks: self.mem.written.len() as u64,
             pixel_writes: self.mem.pixels.len() as u64 / self.rc.subtile as u64,
             last_read: self.mem.last_read.saturating_sub(start),
+            wb_reach: self.dut.io_get(p.wb_signals[1]),
         };
         self.check(c, case, want, &b);
         self.step(&b, len);
@@ -491,6 +497,13 @@ impl<M: Clocked> RasterCore<M> {
             let got = self.sort.unpack(self.mem.table[&a]);
             self.checker.entry(at, &format!("table[{i}]"), w, &got);
         }
+        // The write-back's disorder signals, of the entries as written (the key field's width).
+        let written: Vec<SortEntry> =
+            want.table.iter().map(|e| self.sort.unpack(self.sort.pack(e))).collect();
+        let wb = neo_golden::pipeline::adaptive::writeback_signals(&written);
+        let [len, reach] = self.ports.wb_signals.map(|p| self.dut.io_get(p));
+        self.checker.value(done, "done_wb_len_o", wb.len as u64, len);
+        self.checker.value(done, "done_wb_reach_o", wb.reach as u64, reach);
     }
 }
 

@@ -3,7 +3,8 @@
 //! - the Sorting Core model takes commands when it chooses (random `cmd_ready_i`), executes
 //!   each one on a golden [`Memory`] with golden [`run_command`] (`sort_chunk` / `merge2`) and
 //!   answers with `done_i` pulses in order, at least two cycles apart, after a random latency,
-//!   `done_len_i` = the entries written, held between pulses (as `neo_sort_core` does);
+//!   `done_len_i` = the entries written, held between pulses (as `neo_sort_core` does), and
+//!   `done_inv_i` a random count per pulse (the completion must forward the MERGE_DELETE's);
 //! - the bridge model raises `idle_i` now and then while commands are in flight (between their
 //!   bursts), and holds it low for a random time after each `done_i` (its writes draining);
 //! - the completion sink takes `cpl_valid_o` under random backpressure.
@@ -12,7 +13,8 @@
 //! copy of the memory (the tile's `next_len`). The checker compares every command taken with
 //! the plan's next one field by field, checks the barrier before every stage after the first
 //! and before the completion (every earlier command done, then `idle_i` high in a later cycle),
-//! the completion's `cpl_len_o`, and the handshakes (an offered command held until taken).
+//! the completion's `cpl_len_o` and `cpl_inv_o` (the MERGE_DELETE's `done_inv_i`, 0 from
+//! scratch), and the handshakes (an offered command held until taken).
 
 use crate::bits::mask;
 use crate::check::Checker;
@@ -135,10 +137,11 @@ pub struct SeqBench {
     timing: SeqTiming,
     rng: Rng,
     done_len: u64,
+    done_inv: u64,
 }
 
-/// A command taken by the core model and not yet done: (due cycle, done_len).
-type Pending = VecDeque<(u64, u64)>;
+/// A command taken by the core model and not yet done: (due cycle, done_len, done_inv).
+type Pending = VecDeque<(u64, u64, u64)>;
 
 impl SeqBench {
     /// A reset sequencer whose surroundings follow `timing`.
@@ -159,6 +162,7 @@ impl SeqBench {
             timing,
             rng: Rng::new(seed).fork(7),
             done_len: 0,
+            done_inv: 0,
         }
     }
 
@@ -223,6 +227,7 @@ impl SeqBench {
         let mut held: Option<TileCmd> = None;
         let mut issued = Vec::new();
         let mut max_in_flight = 0;
+        let mut md_inv = 0;
         loop {
             let c = self.dut.cycle();
             self.checker.protocol(c, c < limit, &format!("timeout: tile {:?} not completed", job.desc));
@@ -232,17 +237,19 @@ impl SeqBench {
             self.drive_job(offer_job.then_some(job));
             // Core model: done pulses in order, two cycles apart at least.
             let pulse = match (pending.front(), last_done) {
-                (Some(&(due, _)), l) if due <= c && l.is_none_or(|l| c >= l + 2) => pending.pop_front(),
+                (Some(&(due, ..)), l) if due <= c && l.is_none_or(|l| c >= l + 2) => pending.pop_front(),
                 _ => None,
             };
-            if let Some((_, len)) = pulse {
+            if let Some((_, len, inv)) = pulse {
                 self.done_len = len;
+                self.done_inv = inv;
                 last_done = Some(c);
                 busy_until = c + 1 + self.rng.below(t.max_drain + 1);
                 idle_since_done = false;
             }
             self.dut.set_done_i(pulse.is_some());
             self.dut.set_done_len_i(self.done_len);
+            self.dut.set_done_inv_i(self.done_inv);
             // Bridge model: idle now and then while commands run (between their bursts), and
             // for sure only once they are done and their writes drained.
             let idle = if pending.is_empty() { c >= busy_until } else { self.rng.percent(t.idle_busy_pct) };
@@ -301,7 +308,13 @@ impl SeqBench {
                         self.checker.fail(c, "command data", "no reserved id", &format!("0x{a:x}"))
                     });
                     let due = c + self.rng.range(t.min_done, t.max_done);
-                    pending.push_back((due.max(pending.back().map_or(0, |p| p.0)), e.written));
+                    // Every command reports some count (the core's are 0 for chunks): the
+                    // completion must carry the MERGE_DELETE's.
+                    let inv = self.rng.below(1 << 20);
+                    if got.mode == SortMode::MergeDelete {
+                        md_inv = inv;
+                    }
+                    pending.push_back((due.max(pending.back().map_or(0, |p| p.0)), e.written, inv));
                     max_in_flight = max_in_flight.max(pending.len());
                     taken += 1;
                 }
@@ -315,6 +328,12 @@ impl SeqBench {
                 );
                 barrier(&self.checker, c, "before the completion", &pending, idle_since_done);
                 self.checker.value(c, "cpl_len_o", want.next_len, self.dut.cpl_len_o());
+                self.checker.value(
+                    c,
+                    "cpl_inv_o (the MERGE_DELETE's done_inv_i)",
+                    md_inv,
+                    self.dut.cpl_inv_o(),
+                );
                 if cpl_ready {
                     self.dut.tick();
                     let start = accepted_at.expect("a completion follows a job");

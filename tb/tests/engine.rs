@@ -153,7 +153,7 @@ fn run_case_full(
     seed: u64,
 ) -> Vec<FrameCheck> {
     let (traj, cfg) = c.setup(scene, how, frames, res, base).expect("case setup");
-    let opts_session = SessionOptions { mode, strategy: c.strategy(), sh };
+    let opts_session = SessionOptions { sh, ..c.options(mode) };
     let mut session = EngineSession::with_options(scene, traj, &cfg, opts_session).expect("session");
     let format = neo_tb::waves::requested_format();
     let waves = format.map(|f| {
@@ -246,13 +246,14 @@ fn synthetic() -> Scene {
 /// parallel; libtest starts tests in name order, so the two are named to start after the biker
 /// check and before the overflow, which keeps both threads busy to the end); the seeds are one
 /// split, named after the first test, so each case's seed is the same whichever test runs it.
-const SYNTHETIC_CASES: [EngineCase; 6] = [
+const SYNTHETIC_CASES: [EngineCase; 7] = [
     EngineCase::Orbit,
     EngineCase::Cut,
     EngineCase::Turn,
     EngineCase::EdgeTiles,
     EngineCase::Adaptive,
     EngineCase::AdaptiveResort,
+    EngineCase::AdaptiveEngine,
 ];
 
 /// Runs `SYNTHETIC_CASES[range]`, 3 frames each at 128x128 behind the hostile memory.
@@ -276,10 +277,11 @@ fn synthetic_orbit_cut_and_turn_are_bit_exact_over_reuse_frames() {
 
 /// Reuse frames on the CI engine: partial tiles at the frame's edges, and the adaptive cases
 /// (per-tile DPS passes from the descriptors; with `resort=1`, single tiles sorted from scratch
-/// in a reuse frame, the host writing their whole lists).
+/// in a reuse frame, the host writing their whole lists; and the passes planned by the frame
+/// controller itself from the previous frame's results, `ADAPT_CTRL`).
 #[test]
 fn synthetic_orbit_with_edge_tiles_and_adaptive_passes_is_bit_exact_over_reuse_frames() {
-    synthetic_cases(3..6);
+    synthetic_cases(3..7);
 }
 
 /// What a case's reuse frames hold (golden host only): tiles whose previous table has 1 to

@@ -26,7 +26,7 @@ mod cosim {
             let mut rng = Rng::new(seed);
             let mut b = FrameBench::new(&cfg, seed);
             maybe_trace(&mut b.dut, name);
-            let mut total = (0, 0, 0);
+            let (mut total, mut planned) = ((0, 0, 0), 0);
             // 4095 tiles, most of them overflowing: TILES, the tile counters and OVERFLOWS run
             // through their low 12 bits.
             for tiles in [0usize, 1, 2, 7, 40, 4095, 100, 3, 64] {
@@ -34,9 +34,11 @@ mod cosim {
                 let case = random_case(&cfg, &mut rng, tiles, huge);
                 let r = b.run(&case);
                 total = (total.0 + tiles, total.1 + r.overflows, total.2 + r.cycles);
+                planned += r.planned_extra;
             }
             println!("{} tiles ({} overflowed) in {} cycles", total.0, total.1, total.2);
             assert!(total.1 > 0, "the random frames had no overflowing tile");
+            assert!(planned > 0, "the controller planned more than one pass for some tile");
         });
     }
 }

@@ -26,7 +26,7 @@ mod cosim {
             maybe_trace(&mut dut, name);
             // (stall %, ready %, filler %) per batch.
             let mixes = [(0, 100, 0), (30, 70, 5), (60, 100, 0), (0, 30, 10), (50, 50, 20)];
-            let (mut entries, mut merges, mut k) = (0, 0, 0);
+            let (mut entries, mut merges, mut k, mut inversions) = (0, 0, 0, 0);
             // 12k entries over the seeds together (each seed its share: the same with NEO_SEED).
             let share = neo_tb::rng::seed_share(12_000);
             while entries < share || k < mixes.len() {
@@ -36,10 +36,14 @@ mod cosim {
                     run_checked(&mut dut, &cfg, seed.wrapping_add(k as u64), &batch, stall, ready, filler);
                 entries += run.entries_in;
                 merges += run.merges;
+                inversions += run.inversions;
                 k += 1;
             }
-            println!("{name}: {merges} merges, {entries} input entries checked");
+            println!(
+                "{name}: {merges} merges, {entries} input entries, {inversions} inversions of A checked"
+            );
             assert!(entries >= share);
+            assert!(inversions > 0, "out-of-order A streams were merged");
         });
     }
 

@@ -185,6 +185,15 @@ mod cosim {
                 vec![SortEntry { key: 1, id: 1, valid: false }, SortEntry { key: 2, id: 2, valid: false }];
             let r = merge_checked(&mut c, &dead, &dead[1..], true);
             assert_eq!(r.done_len, 0);
+            // A reused table out of order as DPS leaves it (sorted runs, reversed): the MSU+
+            // counts its boundary inversions (`done_inv_o`), after the chunk command's 0.
+            let sorted = merge_stream(&fmt, &mut rng, 300, 80, false);
+            let runs: Vec<SortEntry> = sorted.chunks(64).rev().flatten().copied().collect();
+            let b = merge_stream(&fmt, &mut rng, 100, 100, false);
+            for drop in [true, false] {
+                let r = merge_checked(&mut c, &runs, &b, drop);
+                assert!(r.done_inv > 0, "out-of-order A counts inversions: {r:?}");
+            }
             println!("{name}: {entries} entries merged");
         });
     }

@@ -231,6 +231,7 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.wire("frame_busy", 1).wire("frame_done", 1).wire("frame_overflow", 1);
     m.wire("first_overflow", 32).wire("overflows", 32);
     m.wire("counters", 64 * COUNTERS as u32);
+    m.wire("adapt_ctrl", 32);
     let mut c: Vec<(String, String)> = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
     c.extend(
         ports_of(&engine_regs::module(cfg), "s_axil_").into_iter().map(|(name, _, _)| (name.clone(), name)),
@@ -241,6 +242,7 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     }
     c.extend(BASES.iter().map(|b| (format!("{b}_base_o"), format!("{b}_base"))));
     c.extend(pre_registers(m, cfg));
+    c.push(pair("adapt_ctrl_o", "adapt_ctrl"));
     for s in ["busy", "done", "overflow"] {
         c.push((format!("{s}_i"), format!("frame_{s}")));
     }
@@ -276,8 +278,9 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         .wire("job_dps_passes", DPS_PASSES_BITS)
         .wire("job_odd", 1)
         .wire("job_scratch", n * aw);
-    m.wire("cpl_valid", n).wire("cpl_ready", n).wire("cpl_len", n * lw);
+    m.wire("cpl_valid", n).wire("cpl_ready", n).wire("cpl_len", n * lw).wire("cpl_inv", n * lw);
     m.wire("ras_valid", mm).wire("ras_ready", mm).wire("ras_done", mm);
+    m.wire("ras_wb_len", mm * lw).wire("ras_wb_reach", mm * lw);
     m.wire("ras_tile_x", cfg.tile_bits).wire("ras_tile_y", cfg.tile_bits);
     m.wire("ras_width", 16).wire("ras_height", 16);
     m.wire("ras_table", aw).wire("ras_len", lw).wire("ras_feat", aw).wire("ras_pix", aw);
@@ -295,6 +298,7 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         c.push((format!("{r}_i"), r.to_string()));
     }
     c.extend(BASES.iter().map(|b| (format!("{b}_base_i"), format!("{b}_base"))));
+    c.push(pair("adapt_ctrl_i", "adapt_ctrl"));
     c.push(pair("busy_o", "ctrl_busy"));
     c.push(pair("done_o", "ctrl_done"));
     c.push(pair("overflow_o", "frame_overflow"));
@@ -312,7 +316,10 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     for s in ["ras_tile_y", "ras_width", "ras_height", "ras_table", "ras_len", "ras_feat", "ras_pix"] {
         c.push((format!("{s}_o"), s.to_string()));
     }
-    for s in ["job_ready", "cpl_valid", "cpl_len", "ras_ready", "ras_done", "idle"] {
+    for s in ["job_ready", "cpl_valid", "cpl_len", "cpl_inv", "ras_ready", "ras_done", "ras_wb_len"] {
+        c.push((format!("{s}_i"), s.to_string()));
+    }
+    for s in ["ras_wb_reach", "idle"] {
         c.push((format!("{s}_i"), s.to_string()));
     }
     c.extend(events.iter().map(|(e, _, _)| (e.clone(), wire_of(e).to_string())));
@@ -486,10 +493,12 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     }
     seq.push(pair("done_i", "done"));
     seq.push(pair("done_len_i", "done_len"));
+    seq.push(pair("done_inv_i", "done_inv"));
     seq.push(pair("idle_i", "idle[i]"));
     seq.push(pair("cpl_valid_o", "cpl_valid[i]"));
     seq.push(pair("cpl_ready_i", "cpl_ready[i]"));
     seq.push(pair("cpl_len_o", &format!("cpl_len[i*{lw} +: {lw}]")));
+    seq.push(pair("cpl_inv_o", &format!("cpl_inv[i*{lw} +: {lw}]")));
     items.push(inst(sort_seq::NAME, "u_seq", seq));
     let mut core = vec![pair("clk_i", "core_clk"), pair("rst_ni", "rst_ni")];
     core.extend(core_ports.iter().map(|(p, _, _)| (p.clone(), wire_of(p).to_string())));
@@ -509,7 +518,7 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
 /// is idle with no command offered and its done pulse given: it runs from the cycle a command is
 /// offered to the cycle after its done.
 fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
-    let (n, mm) = (cl.sort, cl.raster as u32);
+    let (n, mm, lw) = (cl.sort, cl.raster as u32, cfg.len_bits);
     m.blank();
     m.comment("Raster bridges' events (one bit per core).");
     for e in ["ras_rd_table", "ras_rd_feat", "ras_wr_table", "ras_wr_pixels"] {
@@ -528,6 +537,8 @@ fn raster_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
         core.push((format!("cmd_{s}_i"), format!("ras_{s}")));
     }
     core.push(pair("done_o", "ras_done[j]"));
+    core.push(pair("done_wb_len_o", &format!("ras_wb_len[j*{lw} +: {lw}]")));
+    core.push(pair("done_wb_reach_o", &format!("ras_wb_reach[j*{lw} +: {lw}]")));
     core.extend(core_ports.iter().map(|(p, _, _)| (p.clone(), wire_of(p).to_string())));
     items.push(inst(raster_core::NAME, "u_core", core));
     let mut br = vec![pair("clk_i", "clk_i"), pair("rst_ni", "rst_ni")];
@@ -654,6 +665,7 @@ fn counters(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
             Counter::PreBusy => format!("{{{}, pre_busy}}", lit(iw - 1, 0)),
             Counter::RdPre => bytes("pre_r_beat", q, beat),
             Counter::WrPre => bytes("pre_w_beat", q, beat),
+            Counter::RdResult => bytes(&ev("result_read"), 1, RESULT_BYTES),
         };
         m.assign(format!("inc[{}*{iw} +: {iw}]", c.index()), rhs);
     }

@@ -130,6 +130,7 @@ fn outputs(cfg: &EngineConfig) -> Vec<(String, u32, String)> {
     for c in CameraWord::all() {
         out.push((camera_port(c), DATA_BITS, storage(Reg::Camera(c))));
     }
+    out.push(("adapt_ctrl_o".into(), DATA_BITS, storage(Reg::AdaptCtrl)));
     out
 }
 

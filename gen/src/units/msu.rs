@@ -29,6 +29,14 @@
 //!
 //! `a_ready_o`/`b_ready_o` depend combinationally on both inputs' `valid`/`data` and on
 //! `out_ready_i` (never the other way round); `out_valid_o` is registered.
+//!
+//! # Boundary inversions of A
+//! One comparator on the entries selected from A counts those that precede the previous entry
+//! selected from A in the same merge ([`neo_golden::sort::MergeStats::a_inversions`]: what the
+//! DPS passes left unsorted in the reused table; dropped entries are not selected, so with
+//! `drop_invalid_i` only kept entries count). `a_inv_o` is the count of the last finished merge:
+//! it is updated at the end-of-merge flush, so it is valid with `out_last_o` and holds until the
+//! next merge ends. The count saturates at its all-ones value.
 
 use crate::emit::expr::{lit, slice};
 use crate::emit::{if_, if_else, set, Module};
@@ -59,6 +67,8 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.output("out_data_o", w);
     m.output("out_last_o", 1);
     m.output_c("out_empty_o", 1, "beat carries no entry (only as the single beat of an empty merge)");
+    let lw = cfg.len_bits;
+    m.output_c("a_inv_o", lw, "boundary inversions of A in the last finished merge");
 
     m.reg("a_done_q", 1).reg("b_done_q", 1).reg("pend_valid_q", 1).reg("pend_data_q", w);
     m.reg("out_valid_q", 1).reg("out_data_q", w).reg("out_last_q", 1).reg("out_empty_q", 1);
@@ -91,6 +101,30 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.wire_assign("shift_out", 1, "fire & pend_valid_q");
     m.assign("a_ready_o", "a_pop");
     m.assign("b_ready_o", "b_pop");
+    m.blank();
+    m.comment(
+        "Boundary inversions of A: an entry selected from A that precedes the previous one selected from A.",
+    );
+    m.reg("last_a_valid_q", 1).reg("last_a_rank_q", c).reg("inv_q", lw).reg("a_inv_q", lw);
+    m.wire_assign("a_descent", 1, "fire & take_a & last_a_valid_q & (a_rank < last_a_rank_q)");
+    m.wire_assign("inv_full", 1, format!("inv_q == {{{lw}{{1'b1}}}}"));
+    m.seq(
+        vec![
+            set("last_a_valid_q", lit(1, 0)),
+            set("last_a_rank_q", lit(c, 0)),
+            set("inv_q", lit(lw, 0)),
+            set("a_inv_q", lit(lw, 0)),
+        ],
+        vec![if_else(
+            "flush",
+            vec![set("last_a_valid_q", lit(1, 0)), set("inv_q", lit(lw, 0)), set("a_inv_q", "inv_q")],
+            vec![
+                if_("fire & take_a", vec![set("last_a_valid_q", lit(1, 1)), set("last_a_rank_q", "a_rank")]),
+                if_("a_descent & ~inv_full", vec![set("inv_q", format!("inv_q + {}", lit(lw, 1)))]),
+            ],
+        )],
+    );
+    m.assign("a_inv_o", "a_inv_q");
     m.blank();
     m.seq(
         vec![

@@ -12,7 +12,8 @@
 //!
 //! Commands complete in the order they were accepted; `done_o` pulses for one cycle per
 //! command once its last write has been accepted by the memory, with `done_len_o` = the
-//! entries it wrote (held until the next `done_o`).
+//! entries it wrote and `done_inv_o` = the MSU+'s boundary inversions of stream A in a merge
+//! command (0 for a chunk command), both held until the next `done_o`.
 //!
 //! # Buffers and overlap
 //! Four chunk buffers: two input buffers `u_in0`, `u_in1` (ping-pong between consecutive chunk
@@ -243,6 +244,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, k: &Dims) {
     m.input_c("cmd_dst_i", aw, "entry address of the output");
     m.output_c("done_o", 1, "one-cycle pulse: the oldest command finished");
     m.output_c("done_len_o", lw, "entries written by the last finished command");
+    m.output_c("done_inv_o", lw, "boundary inversions of A in the last finished command (merges; else 0)");
     m.output_c("mem_req_valid_o", 1, "a read request (burst) is offered");
     m.input_c("mem_req_ready_i", 1, "the memory takes the read request");
     m.output_c("mem_req_addr_o", aw, "entry address of the burst");
@@ -272,7 +274,7 @@ fn registers(m: &mut Module, k: &Dims) {
     m.reg("ib_full_q", 2).reg("ib0_len_q", dc).reg("ib0_dst_q", aw).reg("ib1_len_q", dc).reg("ib1_dst_q", aw);
     m.comment("PASS engine: state, input buffer of the next command, command, outputs, last done length.");
     m.reg("state_q", 2).reg("bk_sel_q", 1).reg("drop_q", 1).reg("bk_dst_q", aw).reg("bk_len_q", dc);
-    m.reg("ocnt_q", lw).reg("done_len_q", lw);
+    m.reg("ocnt_q", lw).reg("done_len_q", lw).reg("mrg_q", 1).reg("done_inv_q", lw);
     m.comment("Read issuer: next address and entries left to request per stream, reservations.");
     m.reg("rd_a_addr_q", aw).reg("rd_a_left_q", lw).reg("rd_b_addr_q", aw).reg("rd_b_left_q", lw);
     m.reg("a_resv_q", dc + 1).reg("b_resv_q", dc + 1).reg("rr_q", 1);
@@ -356,6 +358,7 @@ fn instances(m: &mut Module, k: &Dims) {
         m.wire(format!("{s}_last"), 1).wire(format!("{s}_empty"), 1);
     }
     m.wire("o_valid", 1).wire("o_ready", 1).wire("o_data", w).wire("o_last", 1).wire("o_empty", 1);
+    m.wire("o_a_inv", k.lw);
     m.instance(
         "neo_msu",
         "u_msu",
@@ -378,6 +381,7 @@ fn instances(m: &mut Module, k: &Dims) {
             ("out_data_o", "o_data".into()),
             ("out_last_o", "o_last".into()),
             ("out_empty_o", "o_empty".into()),
+            ("a_inv_o", "o_a_inv".into()),
         ]),
     );
     m.blank();
@@ -589,6 +593,9 @@ fn pass_control(m: &mut Module, k: &Dims) {
     m.wire_assign("ib_clr", 1, "(pass_end & first_q) | bk_start_empty");
     m.assign("done_o", "st_finish");
     m.assign("done_len_o", "st_finish ? ocnt_q : done_len_q");
+    m.comment("A merge command's inversions: the MSU+ holds its last merge's count from that merge's end.");
+    m.wire_assign("fin_inv", lw, format!("mrg_q ? o_a_inv : {}", z(lw)));
+    m.assign("done_inv_o", "st_finish ? fin_inv : done_inv_q");
 }
 
 /// The control registers: one clocked block (every `_q` register resets to zero, the state
@@ -655,6 +662,7 @@ fn seq_pass(body: &mut Vec<Stmt>, k: &Dims) {
                             format!("cmd_mode_i == {}", lit(SortMode::BITS, SortMode::MergeDelete.code())),
                         ),
                         set("bk_dst_q", "cmd_dst_i"),
+                        set("mrg_q", one(1)),
                         set("ocnt_q", z(lw)),
                         set("rd_a_addr_q", "cmd_src_a_i"),
                         set("rd_b_addr_q", "cmd_src_b_i"),
@@ -677,6 +685,7 @@ fn seq_pass(body: &mut Vec<Stmt>, k: &Dims) {
                         "bk_start",
                         vec![
                             set("drop_q", z(1)),
+                            set("mrg_q", z(1)),
                             set("bk_len_q", "bk_len_in"),
                             set("bk_dst_q", "bk_sel_q ? ib1_dst_q : ib0_dst_q"),
                             set("ocnt_q", z(lw)),
@@ -711,7 +720,10 @@ fn seq_pass(body: &mut Vec<Stmt>, k: &Dims) {
                 )],
             ),
             ("S_MERGE".into(), vec![if_("merge_end", vec![set("state_q", "S_FINISH")])]),
-            ("S_FINISH".into(), vec![set("done_len_q", "ocnt_q"), set("state_q", "S_IDLE")]),
+            (
+                "S_FINISH".into(),
+                vec![set("done_len_q", "ocnt_q"), set("done_inv_q", "fin_inv"), set("state_q", "S_IDLE")],
+            ),
         ],
         vec![set("state_q", "S_IDLE")],
     ));
@@ -887,6 +899,7 @@ mod tests {
             ("cmd_dst_i", Dir::In, 32),
             ("done_o", Dir::Out, 1),
             ("done_len_o", Dir::Out, 32),
+            ("done_inv_o", Dir::Out, 32),
             ("mem_req_valid_o", Dir::Out, 1),
             ("mem_req_ready_i", Dir::In, 1),
             ("mem_req_addr_o", Dir::Out, 32),

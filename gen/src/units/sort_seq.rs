@@ -22,7 +22,8 @@
 //! has its `done_i` pulse (a count of commands in flight) and then for `idle_i` (the core's
 //! memory bridge has every write acknowledged) before it issues the next stage or completes.
 //! Completion: `cpl_len_o` = `list_len` (from scratch) or the `done_len_i` of the
-//! `MERGE_DELETE`.
+//! `MERGE_DELETE`; `cpl_inv_o` = that `MERGE_DELETE`'s `done_inv_i` (the MSU+'s boundary
+//! inversions of the reused table), 0 from scratch.
 
 use crate::emit::expr::{bits_for, lit, resize};
 use crate::emit::{if_, if_else, set, Module, Stmt};
@@ -83,6 +84,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.reg("state_q", 2).reg("mode_q", SortMode::BITS).reg("pos_q", d.lw).reg("half_q", d.lw).reg("buf_q", 1);
     m.reg("pass_q", DPS_PASSES_BITS);
     m.reg("out_q", d.ow).reg("dlen_q", d.lw).reg("cpl_len_q", d.lw);
+    m.reg("dinv_q", d.lw).reg("cpl_inv_q", d.lw);
     command(&mut m, cfg, &d);
     control(&mut m, cfg, &d);
     m
@@ -112,10 +114,16 @@ fn ports(m: &mut Module, d: &Dims) {
     m.output_c("cmd_dst_o", aw, "");
     m.input_c("done_i", 1, "from neo_sort_core: a command finished");
     m.input_c("done_len_i", lw, "... entries it wrote");
+    m.input_c("done_inv_i", lw, "... boundary inversions of A (merges)");
     m.input_c("idle_i", 1, "the core's memory bridge is idle (writes acknowledged)");
     m.output_c("cpl_valid_o", 1, "the tile is sorted");
     m.input_c("cpl_ready_i", 1, "");
     m.output_c("cpl_len_o", lw, "next_len");
+    m.output_c(
+        "cpl_inv_o",
+        lw,
+        "the MERGE_DELETE's boundary inversions of the reused table (0 from scratch)",
+    );
 }
 
 /// The current command, computed from the plan state.
@@ -171,6 +179,7 @@ fn command(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.assign("job_ready_o", "state_q == S_IDLE");
     m.assign("cpl_valid_o", "state_q == S_CPL");
     m.assign("cpl_len_o", "cpl_len_q");
+    m.assign("cpl_inv_o", "cpl_inv_q");
 }
 
 fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
@@ -182,14 +191,14 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire_assign("take", 1, "(state_q == S_ISSUE) & cmd_ready_i");
     m.wire_assign("barrier_ok", 1, format!("(out_q == {}) & idle_i", lit(ow, 0)));
     m.seq(
-        vec![set("out_q", lit(ow, 0)), set("dlen_q", lit(lw, 0))],
+        vec![set("out_q", lit(ow, 0)), set("dlen_q", lit(lw, 0)), set("dinv_q", lit(lw, 0))],
         vec![
             if_else(
                 "take & ~done_i",
                 vec![set("out_q", format!("out_q + {}", lit(ow, 1)))],
                 vec![if_("~take & done_i", vec![set("out_q", format!("out_q - {}", lit(ow, 1)))])],
             ),
-            if_("done_i", vec![set("dlen_q", "done_len_i")]),
+            if_("done_i", vec![set("dlen_q", "done_len_i"), set("dinv_q", "done_inv_i")]),
         ],
     );
     m.blank();
@@ -201,7 +210,8 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let reuse_next =
         || vec![if_else(format!("(plen_q != {z}) & (passes_q != {pz})"), issue("M_DPS"), issue("M_MD"))];
     m.wire_assign("pass_next", DPS_PASSES_BITS, format!("pass_q + {}", lit(DPS_PASSES_BITS, 1)));
-    let complete = |len: &str| vec![set("cpl_len_q", len), set("state_q", "S_CPL")];
+    let complete =
+        |len: &str, inv: &str| vec![set("cpl_len_q", len), set("cpl_inv_q", inv), set("state_q", "S_CPL")];
     let start = vec![
         set("fs_q", "job_from_scratch_i"),
         set("odd_q", "job_odd_i"),
@@ -220,7 +230,7 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
             issue("M_SORT"),
             vec![if_else(
                 "job_from_scratch_i",
-                complete(&z),
+                complete(&z, &z),
                 vec![if_else(
                     format!("(job_prev_len_i != {z}) & (job_dps_passes_i != {pz})"),
                     issue("M_DPS"),
@@ -241,9 +251,9 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     )];
     let after_stage = Stmt::Case(
         "mode_q".into(),
-        vec![("M_DPS".into(), after_dps), ("M_MD".into(), complete("dlen_q"))],
+        vec![("M_DPS".into(), after_dps), ("M_MD".into(), complete("dlen_q", "dinv_q"))],
         // SORT or a MERGE pass.
-        vec![if_else("fin", vec![if_else("fs_q", complete("n_q"), reuse_next())], {
+        vec![if_else("fin", vec![if_else("fs_q", complete("n_q", &z), reuse_next())], {
             let mut v = issue("M_MERGE");
             v.push(set("buf_q", "~buf_q"));
             v.push(if_("is_merge", vec![set("half_q", format!("half_q << {}", lit(lw, 1)))]));
@@ -251,7 +261,7 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         })],
     );
     let mut reset = m.q_resets(&[("state_q", "S_IDLE"), ("mode_q", "M_SORT"), ("half_q", &lit(lw, c))]);
-    reset.retain(|s| !matches!(s, Stmt::Set(n, _) if n == "out_q" || n == "dlen_q"));
+    reset.retain(|s| !matches!(s, Stmt::Set(n, _) if ["out_q", "dlen_q", "dinv_q"].contains(&n.as_str())));
     m.seq(
         reset,
         vec![Stmt::Case(

@@ -12,8 +12,9 @@
 //! | `many_cores` | one tile, more cores (3 + 2) than busy tiles |
 //! | `adaptive` | the orbit 4x faster, sorted by `adaptive:wide=1,resort=0`: per-tile DPS passes (1 to 4) from the descriptors |
 //! | `adaptive_resort` | the orbit 16x faster, `adaptive:wide=1,resort=1,max=2,budget=1000`: passes and single tiles re-sorted from scratch in reuse frames (lists mode only) |
+//! | `adaptive_engine` | the `adaptive` orbit and strategy, planned by the frame controller from the previous frame's results ([`Planner::Engine`]; `ADAPT_CTRL`) |
 
-use super::host::{pipeline_for, EngineSession, HostMode, SessionError};
+use super::host::{pipeline_for, EngineSession, HostMode, Planner, SessionError, SessionOptions};
 use super::EngineConfig;
 use crate::pipeline::adaptive::AdaptiveParams;
 use crate::pipeline::{Preprocessing, Strategy};
@@ -44,6 +45,8 @@ pub enum EngineCase {
     /// `resort=1`, without the wide chunk): a re-sorted tile's descriptor says from scratch and
     /// its list is the tile's whole list (lists mode only).
     AdaptiveResort,
+    /// [`EngineCase::Adaptive`] planned by the frame controller itself ([`Planner::Engine`]).
+    AdaptiveEngine,
 }
 
 /// How to film a scene for the cases: orbit keys (`radius`, `height`, `target`, `fov`; no
@@ -88,7 +91,7 @@ impl CaseScene {
 
 impl EngineCase {
     /// Every case.
-    pub const ALL: [EngineCase; 9] = [
+    pub const ALL: [EngineCase; 10] = [
         EngineCase::Orbit,
         EngineCase::Cut,
         EngineCase::Turn,
@@ -98,6 +101,7 @@ impl EngineCase {
         EngineCase::ManyCores,
         EngineCase::Adaptive,
         EngineCase::AdaptiveResort,
+        EngineCase::AdaptiveEngine,
     ];
 
     /// The case's name.
@@ -112,13 +116,14 @@ impl EngineCase {
             EngineCase::ManyCores => "many_cores",
             EngineCase::Adaptive => "adaptive",
             EngineCase::AdaptiveResort => "adaptive_resort",
+            EngineCase::AdaptiveEngine => "adaptive_engine",
         }
     }
 
     /// The sorting strategy of the case's pipeline (the host's per-tile DPS passes follow it).
     pub fn strategy(self) -> Strategy {
         match self {
-            EngineCase::Adaptive => {
+            EngineCase::Adaptive | EngineCase::AdaptiveEngine => {
                 Strategy::Adaptive(AdaptiveParams { resort: false, wide: 1, ..AdaptiveParams::default() })
             }
             // At most 2 passes and the whole budget: a tile whose reach asks for a third pass is
@@ -127,6 +132,24 @@ impl EngineCase {
                 Strategy::Adaptive(AdaptiveParams { resort: true, wide: 1, max_passes: 2, budget: 1000 })
             }
             _ => Strategy::Neo,
+        }
+    }
+
+    /// Who plans the case's DPS passes.
+    pub fn planner(self) -> Planner {
+        match self {
+            EngineCase::AdaptiveEngine => Planner::Engine,
+            _ => Planner::Host,
+        }
+    }
+
+    /// The session options of the case in `mode` (its strategy and planner).
+    pub fn options(self, mode: HostMode) -> SessionOptions {
+        SessionOptions {
+            mode,
+            strategy: self.strategy(),
+            planner: self.planner(),
+            ..SessionOptions::default()
         }
     }
 
@@ -158,7 +181,7 @@ impl EngineCase {
                 res = [64, 64];
                 (cfg.sort_cores, cfg.raster_cores) = (3, 2);
             }
-            EngineCase::Adaptive => extra = format!("speed={}", 4.0 * how.speed),
+            EngineCase::Adaptive | EngineCase::AdaptiveEngine => extra = format!("speed={}", 4.0 * how.speed),
             EngineCase::AdaptiveResort => extra = format!("speed={}", RESORT_SPEED * how.speed),
         }
         let sep = if keys.is_empty() { "" } else { "," };
@@ -182,7 +205,7 @@ impl EngineCase {
         base: &EngineConfig,
     ) -> Result<EngineSession<'s>, SessionError> {
         let (traj, cfg) = self.setup(scene, how, frames, res, base)?;
-        EngineSession::with_strategy(scene, traj, &cfg, HostMode::Lists, self.strategy())
+        EngineSession::with_options(scene, traj, &cfg, self.options(HostMode::Lists))
     }
 }
 

@@ -4,7 +4,7 @@
 
 use super::memory::{
     entry_to_u64, pixel_to_u32, Memory, TileDescriptor, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
-    PIXEL_BYTES,
+    PIXEL_BYTES, RESULT_BYTES,
 };
 use super::reference::FrameOutcome;
 use super::regs::{Counter, FrameRegs};
@@ -251,14 +251,18 @@ impl Expected {
 
     fn compare_result(&self, mem: &Memory, t: u64) -> Option<Mismatch> {
         let want = self.outcome.results[t as usize];
-        let addr = self.regs.result_base + 8 * t;
+        let addr = self.regs.result_base + RESULT_BYTES * t;
         let got = mem.read_result(self.regs.result_base, t);
-        let raw = mem.read_u64(addr);
-        self.at(t, Place::Result, addr, "next_len", want.next_len as u64, got.next_len as u64)
+        let at = |field, w: u32, g: u32| self.at(t, Place::Result, addr, field, w as u64, g as u64);
+        at("next_len", want.next_len, got.next_len)
+            .or_else(|| at("overflow", want.overflow as u32, got.overflow as u32))
+            .or_else(|| at("merge_inversions", want.merge_inversions, got.merge_inversions))
+            .or_else(|| at("wb_len", want.wb_len, got.wb_len))
+            .or_else(|| at("wb_reach", want.wb_reach, got.wb_reach))
             .or_else(|| {
-                self.at(t, Place::Result, addr, "overflow", want.overflow as u64, got.overflow as u64)
+                let words = want.to_words().into_iter().zip([addr, addr + 8]);
+                words.into_iter().find_map(|(w, a)| self.at(t, Place::Result, a, "word", w, mem.read_u64(a)))
             })
-            .or_else(|| self.at(t, Place::Result, addr, "word", want.to_word(), raw))
     }
 
     fn compare_table(&self, mem: &Memory, t: u64) -> Option<Mismatch> {

@@ -51,6 +51,7 @@
 //! overflowing tile's next region is filled with a canary and must be left as it is, its
 //! previous table too ([`super::expected::Untouched`]).
 
+use super::adapt::AdaptRegs;
 use super::expected::{Expected, Untouched};
 use super::memory::{
     entry_to_u64, Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES,
@@ -60,6 +61,7 @@ use super::reference::{add_raster_traffic, sort_traffic, FrameOutcome};
 use super::regs::{Counter, FrameRegs, PreRegs, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
 use crate::hwpre::ShPrecision;
+use crate::pipeline::adaptive::CameraMotion;
 use crate::pipeline::{Formats, FrameOutput, Pipeline, PipelineConfig, Preprocessing, Strategy};
 use crate::scene::Scene;
 use crate::sort::{DepthKeyCodec, SortEntry};
@@ -91,6 +93,9 @@ pub enum SessionError {
     /// Scene mode on an engine without a Preprocessing Engine.
     #[error("scene mode needs a Preprocessing Engine: the configuration has pre_units 0 (use lists mode)")]
     NoPreprocessing,
+    /// The engine cannot plan the passes of this strategy itself ([`Planner::Engine`]).
+    #[error("the engine's own plan: {0}")]
+    Planner(String),
     /// A sorting strategy the engine does not run.
     #[error(
         "strategy {0}: the engine runs `neo` and `adaptive` with wide=1 (DPS passes per tile; re-sorts of single tiles with resort=1 in lists mode only, where the host writes a re-sorted tile's whole list)"
@@ -107,6 +112,20 @@ pub enum HostMode {
     Lists,
     /// The host writes the baked scene once; the engine preprocesses every frame.
     Scene,
+}
+
+/// Who plans each tile's DPS passes (`adaptive`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Planner {
+    /// The host: each descriptor carries the pipeline's passes.
+    #[default]
+    Host,
+    /// The frame controller, from the previous frame's results (`ADAPT_CTRL`,
+    /// [`super::adapt`]): the host enables it on every frame that reuses the tables with the
+    /// camera moving, and writes 0 passes into those frames' descriptors (a canary: an engine
+    /// that read them would run no DPS pass). A still camera or a shot start is planned by the
+    /// host, as the pipeline does.
+    Engine,
 }
 
 /// The regions of scene mode (byte addresses, 4 KiB aligned).
@@ -243,11 +262,18 @@ pub struct SessionOptions {
     pub strategy: Strategy,
     /// The baked SH records' precision (scene mode: what the engine reads, [`super::PRE_SH_HALF`]).
     pub sh: ShPrecision,
+    /// Who plans the DPS passes (`adaptive` without re-sorts and the wide chunk).
+    pub planner: Planner,
 }
 
 impl Default for SessionOptions {
     fn default() -> Self {
-        SessionOptions { mode: HostMode::Lists, strategy: Strategy::Neo, sh: Preprocessing::DEFAULT_SH }
+        SessionOptions {
+            mode: HostMode::Lists,
+            strategy: Strategy::Neo,
+            sh: Preprocessing::DEFAULT_SH,
+            planner: Planner::Host,
+        }
     }
 }
 
@@ -285,6 +311,10 @@ pub struct EngineSession<'s> {
     force_cut: bool,
     mode: HostMode,
     scene_written: bool,
+    /// `ADAPT_CTRL` when the engine plans ([`Planner::Engine`]).
+    adapt: Option<AdaptRegs>,
+    /// Whether the frame being written is planned by the engine.
+    engine_plans: bool,
 }
 
 impl<'s> EngineSession<'s> {
@@ -329,8 +359,17 @@ impl<'s> EngineSession<'s> {
         cfg: &EngineConfig,
         opts: SessionOptions,
     ) -> Result<Self, SessionError> {
-        let SessionOptions { mode, strategy, sh } = opts;
+        let SessionOptions { mode, strategy, sh, planner } = opts;
         cfg.validate()?;
+        let adapt = match (planner, strategy) {
+            (Planner::Host, _) => None,
+            (Planner::Engine, Strategy::Adaptive(p)) => {
+                Some(AdaptRegs::deciding(&p).map_err(SessionError::Planner)?)
+            }
+            (Planner::Engine, s) => {
+                return Err(SessionError::Planner(format!("{s} is not adaptive: there is nothing to plan")))
+            }
+        };
         let runs = match strategy {
             Strategy::Neo => true,
             Strategy::Adaptive(p) => {
@@ -373,6 +412,8 @@ impl<'s> EngineSession<'s> {
             force_cut: false,
             mode,
             scene_written: false,
+            adapt,
+            engine_plans: false,
         };
         // The bases are the same every frame: refuse a map the engine cannot use up front.
         let cam = session.traj.frames[0].clone();
@@ -421,8 +462,15 @@ impl<'s> EngineSession<'s> {
                 out.stats.from_scratch
             )));
         }
-        let regs = self.regs(f, &cam, cut);
+        let mut regs = self.regs(f, &cam, cut);
         regs.check(&self.cfg).map_err(|e| SessionError::Layout(e.to_string()))?;
+        // The engine plans a reuse frame with the camera moving (the pipeline plans the others
+        // as a still camera or a shot start).
+        let moving = out.stats.camera != CameraMotion::default();
+        self.engine_plans = self.adapt.is_some() && !cut && moving;
+        if let (true, Some(a)) = (self.engine_plans, self.adapt) {
+            regs.adapt = a;
+        }
         let scratch: Vec<bool> =
             (0..self.prev.len()).map(|t| cut || out.tiles.from_scratch[t] != 0).collect();
         let lists = self.incoming_lists(&scratch, &prev_tables);
@@ -430,7 +478,7 @@ impl<'s> EngineSession<'s> {
             HostMode::Lists => {
                 let descriptors = self.write_lists(mem, f, &scratch, &lists, &out)?;
                 for (t, d) in descriptors.iter().enumerate() {
-                    mem.write_descriptor(regs.desc_base, t as u64, d);
+                    mem.write_descriptor(regs.desc_base, t as u64, &self.as_written(d));
                 }
                 self.write_features(mem);
                 self.expected(mem, regs, descriptors, &prev_tables, &out)
@@ -460,7 +508,13 @@ impl<'s> EngineSession<'s> {
             fb_base: l.fb_base,
             scratch_base: l.scratch_base,
             pre: PreRegs::default(),
+            adapt: AdaptRegs::default(),
         }
+    }
+
+    /// A descriptor as the host writes it: without DPS passes when the engine plans them.
+    pub(super) fn as_written(&self, d: &TileDescriptor) -> TileDescriptor {
+        TileDescriptor { dps_passes: if self.engine_plans { 0 } else { d.dps_passes }, ..*d }
     }
 
     /// Every tile's incoming list of the frame the pipeline just rendered: its current list
@@ -554,7 +608,8 @@ impl<'s> EngineSession<'s> {
         let mut o =
             FrameOutcome { status: STATUS_DONE, first_overflow: NO_OVERFLOW, ..FrameOutcome::default() };
         let (mut tables, mut untouched, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
-        for ((t, d), table) in descriptors.iter().enumerate().zip(self.pipeline.tables()) {
+        let tiles = descriptors.iter().enumerate().zip(self.pipeline.tables().zip(self.pipeline.disorder()));
+        for ((t, d), (table, (inversions, wb))) in tiles {
             let t64 = t as u64;
             let overflow = d.entries_in() > cap;
             let table = if overflow { Vec::new() } else { table.to_vec() };
@@ -573,7 +628,10 @@ impl<'s> EngineSession<'s> {
                 o.counters.add(Counter::WrSort, ENTRY_BYTES * wr);
             }
             add_raster_traffic(&mut o.counters, table.len() as u64, (rc.tile * rc.tile) as u64);
-            o.results.push(TileResult { next_len: table.len() as u32, overflow });
+            o.results.push(match overflow {
+                true => TileResult::overflowed(),
+                false => TileResult::new(table.len() as u32, false, inversions as u64, &wb),
+            });
             pixels.push(if overflow {
                 vec![[0; 3]; (rc.tile * rc.tile) as usize]
             } else {
@@ -584,6 +642,11 @@ impl<'s> EngineSession<'s> {
         let tiles = descriptors.len() as u64;
         o.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES * tiles);
         o.counters.add(Counter::WrResult, RESULT_BYTES * tiles);
+        if self.engine_plans {
+            // The previous results, read in the scan and again in the walk.
+            o.counters.add(Counter::RdResult, 2 * RESULT_BYTES * tiles);
+        }
+        let descriptors = descriptors.iter().map(|d| self.as_written(d)).collect();
         Expected {
             regs,
             descriptors,
@@ -686,7 +749,7 @@ mod tests {
         let bases = [l.desc_base, l.result_base, l.fb_base, l.feat_base, l.scratch_base, l.table_bases[0]];
         assert!(bases.windows(2).all(|w| w[0] < w[1]));
         assert!(bases.iter().all(|b| b % PAGE == 0 && *b > 0));
-        assert_eq!(l.fb_base - l.result_base, PAGE, "80 results fit a page");
+        assert_eq!(l.fb_base - l.result_base, PAGE, "80 results (16 bytes each) fit a page");
         assert_eq!(l.table_bases[1] - l.table_bases[0], 80 * 65536 * 8);
         assert_eq!(l.list_base + l.list_bytes, 1 << 32);
     }

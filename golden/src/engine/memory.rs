@@ -8,9 +8,10 @@
 //! | feature word `{present, entry}` (low bits of 32 bytes) | 32 | word `w` | `32 w` |
 //! | pixel `{b, g, r}` (low bits of a u32: `0x00BBGGRR`) | 4 | pixel `p` | `4 p` |
 //! | tile descriptor ([`TileDescriptor`], 4 u64) | 32 | | `DESC_BASE + 32 t` |
-//! | tile result ([`TileResult`], 1 u64) | 8 | | `RESULT_BASE + 8 t` |
+//! | tile result ([`TileResult`], 2 u64) | 16 | | `RESULT_BASE + 16 t` |
 
 use crate::formats::feature::{FeatureEntry, FeatureFormat};
+use crate::pipeline::adaptive::WritebackSignals;
 use crate::sort::{SortEntry, SortFormat};
 use std::collections::HashMap;
 
@@ -22,8 +23,12 @@ pub const FEATURE_BYTES: u64 = 32;
 pub const PIXEL_BYTES: u64 = 4;
 /// Bytes of a tile descriptor.
 pub const DESCRIPTOR_BYTES: u64 = 32;
-/// Bytes of a tile result.
-pub const RESULT_BYTES: u64 = 8;
+/// Bytes of a tile result (two u64 words).
+pub const RESULT_BYTES: u64 = 16;
+/// Bit of the result's word 0 where the merge inversions start.
+pub const INVERSIONS_LSB: u32 = 40;
+/// Bits of the result's merge-inversion field (the count saturates at its largest value).
+pub const INVERSIONS_BITS: u32 = 24;
 
 /// One tile's descriptor: 4 little-endian u64 words at `DESC_BASE + 32 t`.
 ///
@@ -126,25 +131,69 @@ impl TileDescriptor {
     }
 }
 
-/// One tile's result: one little-endian u64 at `RESULT_BASE + 8 t`: `[31:0]` next_len,
-/// `[32]` overflow, `[63:33]` 0 (ignored when decoding).
+/// One tile's result: two little-endian u64 words at `RESULT_BASE + 16 t`, written once the
+/// tile is rastered (one 2-beat burst):
+///
+/// - word 0: `[31:0]` next_len, `[32]` overflow, `[63:40]` merge_inversions (saturating)
+/// - word 1: `[31:0]` wb_len, `[63:32]` wb_reach
+///
+/// The counters are the disorder signals of `pipeline::adaptive` the hardware counts for free
+/// (issue 14): the MSU+ boundary inversions of the reused table in the tile's MERGE_DELETE
+/// ([`crate::sort::MergeStats::a_inversions`]; 0 from scratch or on overflow), and the
+/// write-back's valid entries and reach ([`crate::pipeline::adaptive::writeback_signals`] of
+/// the table as rastered and written back). Decoding ignores bits `[39:33]`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct TileResult {
     /// Entries of the next table (0 when overflowed).
     pub next_len: u32,
     /// The tile did not fit the table capacity and was not sorted.
     pub overflow: bool,
+    /// MSU+ boundary inversions of the reused table (at most `2^24 - 1`: saturating).
+    pub merge_inversions: u32,
+    /// Valid entries of the table after the write-back.
+    pub wb_len: u32,
+    /// Write-back reach: the largest distance from the running maximum to a later valid entry
+    /// that precedes it.
+    pub wb_reach: u32,
 }
 
 impl TileResult {
-    /// The result word.
-    pub fn to_word(&self) -> u64 {
-        self.next_len as u64 | (self.overflow as u64) << 32
+    /// The result of a tile with these counters (the inversions saturate at the field).
+    pub fn new(next_len: u32, overflow: bool, merge_inversions: u64, wb: &WritebackSignals) -> Self {
+        let max = (1u64 << INVERSIONS_BITS) - 1;
+        TileResult {
+            next_len,
+            overflow,
+            merge_inversions: merge_inversions.min(max) as u32,
+            wb_len: wb.len,
+            wb_reach: wb.reach,
+        }
     }
 
-    /// Decodes a result word.
-    pub fn from_word(w: u64) -> TileResult {
-        TileResult { next_len: w as u32, overflow: (w >> 32) & 1 == 1 }
+    /// The result of an overflowing tile: nothing sorted, rastered empty.
+    pub fn overflowed() -> Self {
+        TileResult { overflow: true, ..TileResult::default() }
+    }
+
+    /// The result's two words.
+    pub fn to_words(&self) -> [u64; 2] {
+        let max = (1u64 << INVERSIONS_BITS) - 1;
+        let inv = (self.merge_inversions as u64).min(max);
+        [
+            self.next_len as u64 | (self.overflow as u64) << 32 | inv << INVERSIONS_LSB,
+            self.wb_len as u64 | (self.wb_reach as u64) << 32,
+        ]
+    }
+
+    /// Decodes a result's words.
+    pub fn from_words(w: &[u64; 2]) -> TileResult {
+        TileResult {
+            next_len: w[0] as u32,
+            overflow: (w[0] >> 32) & 1 == 1,
+            merge_inversions: (w[0] >> INVERSIONS_LSB) as u32 & ((1 << INVERSIONS_BITS) - 1),
+            wb_len: w[1] as u32,
+            wb_reach: (w[1] >> 32) as u32,
+        }
     }
 }
 
@@ -353,12 +402,15 @@ impl Memory {
 
     /// Result `t` of the table at byte address `base`.
     pub fn read_result(&self, base: u64, t: u64) -> TileResult {
-        TileResult::from_word(self.read_u64(base + RESULT_BYTES * t))
+        let a = base + RESULT_BYTES * t;
+        TileResult::from_words(&[self.read_u64(a), self.read_u64(a + 8)])
     }
 
     /// Writes result `t` of the table at byte address `base`.
     pub fn write_result(&mut self, base: u64, t: u64, r: &TileResult) {
-        self.write_u64(base + RESULT_BYTES * t, r.to_word());
+        let [w0, w1] = r.to_words();
+        self.write_u64(base + RESULT_BYTES * t, w0);
+        self.write_u64(base + RESULT_BYTES * t + 8, w1);
     }
 }
 
@@ -392,8 +444,17 @@ mod tests {
 
     #[test]
     fn result_and_pixel_layouts() {
-        assert_eq!(TileResult { next_len: 5, overflow: true }.to_word(), 0x1_0000_0005);
-        assert_eq!(TileResult::from_word(0xFFFF_FFFE_0000_0003), TileResult { next_len: 3, overflow: false });
+        let r = TileResult { next_len: 5, overflow: true, merge_inversions: 0xAB, wb_len: 7, wb_reach: 2 };
+        assert_eq!(r.to_words(), [0xAB01_0000_0005, 2 << 32 | 7]);
+        // Bits 39:33 are ignored; the inversions saturate at 24 bits.
+        let w = [0xFFFF_FFFE_0000_0003, 0];
+        assert_eq!(
+            TileResult::from_words(&w),
+            TileResult { next_len: 3, merge_inversions: 0xFF_FFFF, ..TileResult::default() }
+        );
+        let wb = WritebackSignals { len: 9, reach: 4, ..WritebackSignals::default() };
+        let big = TileResult::new(9, false, 1 << 30, &wb);
+        assert_eq!((big.merge_inversions, big.wb_len, big.wb_reach), (0xFF_FFFF, 9, 4));
         assert_eq!(pixel_to_u32([0x11, 0x22, 0x33]), 0x0033_2211);
         assert_eq!(pixel_from_u32(0xFF33_2211), [0x11, 0x22, 0x33]);
     }
@@ -448,10 +509,17 @@ mod tests {
         }
 
         #[test]
-        fn result_round_trip(n in any::<u32>(), o in any::<bool>()) {
-            let r = TileResult { next_len: n, overflow: o };
-            prop_assert_eq!(TileResult::from_word(r.to_word()), r);
-            prop_assert_eq!(r.to_word() >> 33, 0);
+        fn result_round_trip(
+            n in any::<u32>(), o in any::<bool>(), inv in 0u32..1 << 24, l in any::<u32>(), r in any::<u32>()
+        ) {
+            let r = TileResult { next_len: n, overflow: o, merge_inversions: inv, wb_len: l, wb_reach: r };
+            prop_assert_eq!(TileResult::from_words(&r.to_words()), r);
+            prop_assert_eq!(r.to_words()[0] >> 33 & 0x7F, 0, "bits 39:33 stay 0");
+            let mut m = Memory::new();
+            m.write_result(0x100, 2, &r);
+            prop_assert_eq!(m.read_result(0x100, 2), r);
+            prop_assert_eq!(m.read_u64(0x100 + 48), 0, "a result is 16 bytes");
+            prop_assert_eq!(m.read_u64(0x100 + 24), 0, "a result is 16 bytes");
         }
 
         #[test]

@@ -4,6 +4,7 @@
 //! memory-level reference of a frame ([`mod@reference`]), and the host side of a whole-frame
 //! cosimulation ([`host`], [`expected`], [`cases`]).
 
+pub mod adapt;
 pub mod cases;
 mod clients;
 mod config;
@@ -16,6 +17,7 @@ mod pre_regs;
 pub mod reference;
 pub mod regs;
 
+pub use adapt::{engine_passes, AdaptRegs, ADAPT_ENABLE};
 pub use cases::{CaseScene, EngineCase};
 pub use clients::{client_port_slot, port_slot_client, port_slots, MemoryClient};
 pub use config::{
@@ -23,7 +25,9 @@ pub use config::{
     MUX_W_FIFO_DEPTH, ROUTING_FIFO_DEPTH,
 };
 pub use expected::{Expected, Mismatch, Place, PreExpected};
-pub use host::{EngineSession, FramePlan, HostMode, MemoryLayout, SceneLayout, SessionError, SessionOptions};
+pub use host::{
+    EngineSession, FramePlan, HostMode, MemoryLayout, Planner, SceneLayout, SessionError, SessionOptions,
+};
 pub use memory::{Memory, TileDescriptor, TileResult};
 pub use plan::{run_command, tile_plan, tile_steps, TileCmd, TilePlan, TileRegion, TileShape, TileStep};
 pub use pre::{

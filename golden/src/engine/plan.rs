@@ -25,7 +25,7 @@ use super::memory::{Memory, TileDescriptor, ENTRY_BYTES};
 use super::regs::FrameRegs;
 use super::EngineConfig;
 use crate::sort::{
-    conventional_sort_plan, merge2, merge_pass_count, ChunkWork, Parity, SortBuffer, SortMode, Sorter,
+    conventional_sort_plan, merge2_into, merge_pass_count, ChunkWork, Parity, SortBuffer, SortMode, Sorter,
 };
 
 /// One Sorting Core command at entry addresses (the fields of `neo_sort_core`'s cmd port).
@@ -58,6 +58,11 @@ impl TilePlan {
     /// Every command in issue order.
     pub fn commands(&self) -> impl Iterator<Item = &TileCmd> {
         self.stages.iter().flatten()
+    }
+
+    /// The DPS passes of the plan (its DPS stages).
+    pub fn dps_passes(&self) -> usize {
+        self.stages.iter().filter(|s| s.first().is_some_and(|c| c.mode == SortMode::Dps)).count()
     }
 }
 
@@ -221,10 +226,12 @@ pub struct CmdEffect {
     pub read: u64,
     /// Entries written (the core's `done_len`).
     pub written: u64,
+    /// MSU+ boundary inversions of stream A (merges; 0 for chunk commands).
+    pub a_inversions: u64,
 }
 
 /// Executes one command on `mem` as the Sorting Core does (golden `sort_chunk` for `SORT` /
-/// `DPS` of `min(len_a, chunk)` entries, [`merge2`] for the merges). Returns the entries moved,
+/// `DPS` of `min(len_a, chunk)` entries, [`merge2_into`] for the merges). Returns the entries moved,
 /// or the address of an entry carrying the reserved id (`id_max`), which a chunk command
 /// refuses.
 pub fn run_command(sorter: &mut Sorter, mem: &mut Memory, c: &TileCmd) -> Result<CmdEffect, u64> {
@@ -237,13 +244,18 @@ pub fn run_command(sorter: &mut Sorter, mem: &mut Memory, c: &TileCmd) -> Result
         }
         sorter.sort_chunk(&mut chunk, &mut ChunkWork::default());
         mem.write_entries(&fmt, c.dst, &chunk);
-        return Ok(CmdEffect { read: len, written: len });
+        return Ok(CmdEffect { read: len, written: len, a_inversions: 0 });
     }
     let a = mem.read_entries(&fmt, c.src_a, c.len_a as usize);
     let b = mem.read_entries(&fmt, c.src_b, c.len_b as usize);
-    let out = merge2(&a, &b, c.mode.drops_invalid());
+    let mut out = Vec::new();
+    let stats = merge2_into(&a, &b, c.mode.drops_invalid(), &mut out);
     mem.write_entries(&fmt, c.dst, &out);
-    Ok(CmdEffect { read: c.len_a + c.len_b, written: out.len() as u64 })
+    Ok(CmdEffect {
+        read: c.len_a + c.len_b,
+        written: out.len() as u64,
+        a_inversions: stats.a_inversions as u64,
+    })
 }
 
 #[cfg(test)]

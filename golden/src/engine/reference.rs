@@ -2,8 +2,9 @@
 //! contract's per-tile sequence does (docs/formats.md "Engine memory"): it reads the descriptors,
 //! lists, tables and feature words from a [`Memory`], issues the Sorting Core's commands (SORT,
 //! MERGE, DPS, MERGE_DELETE) on data read from it with golden's sort functions, writes every
-//! command's output back, writes the tile results, rasterises every tile with golden
-//! [`raster_tile`] and writes the pixels (tile-major) and the table write-back.
+//! command's output back, rasterises every tile with golden [`raster_tile`], writes the pixels
+//! (tile-major) and the table write-back, then the tile's result with its disorder counters
+//! (the MERGE_DELETE's boundary inversions, the write-back's length and reach).
 //!
 //! It also counts the performance counters golden knows exactly ([`Counter::is_golden`]), from
 //! the elements each command (of [`tile_plan`](super::plan::tile_plan)) and each raster tile
@@ -14,7 +15,11 @@
 //!   each segment is loaded once), one feature word per entry, writes `len` entries back and
 //!   all `tile * tile` pixels (`tile * tile / subtile` writes of `subtile` pixels), empty tiles
 //!   and pixels outside the image (black) included;
-//! - a descriptor read (32 bytes) and a result write (8 bytes) per tile.
+//! - a descriptor read (32 bytes) and a result write (16 bytes) per tile.
+//!
+//! With [`ADAPT_ENABLE`](super::ADAPT_ENABLE) the frame controller plans every tile's DPS passes
+//! from the previous frame's results ([`super::adapt`], `RD_RESULT`); the descriptors' passes are
+//! ignored.
 //!
 //! With [`PRE_ENABLE`](super::PRE_ENABLE) the frame first runs the Preprocessing Engine
 //! ([`super::pre::preprocess_frame`]: feature words, incoming lists and their lengths, the
@@ -25,6 +30,7 @@
 //! `t mod N` (the round-robin schedule) for tile `t`; the scratch contents are not part of the
 //! outcome.
 
+use super::adapt::engine_passes;
 use super::memory::{
     Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES,
     RESULT_BYTES,
@@ -33,6 +39,7 @@ use super::plan::{run_command, tile_plan, TilePlan};
 use super::pre::{preprocess_frame, PreWork};
 use super::regs::{Counter, Counters, FrameRegs, Reg, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
+use crate::pipeline::adaptive::{writeback_signals, WritebackSignals};
 use crate::raster::{raster_tile, SubtileWork};
 use crate::sort::{merge_pass_count, SortEntry, SortMode, Sorter};
 
@@ -129,19 +136,39 @@ pub fn execute_frame_traced(
     if regs.pre.enabled() && cfg.has_preprocessing() {
         trace.pre = Some(preprocess_frame(cfg, regs, mem, &mut run.out.counters)?);
     }
+    let planned = regs.adapt.enabled().then(|| engine_plan(cfg, regs, mem, &mut run.out.counters));
+    trace.planned = planned.is_some();
     for t in 0..regs.tiles as u64 {
-        let d = mem.read_descriptor(regs.desc_base, t);
+        let mut d = mem.read_descriptor(regs.desc_base, t);
         run.out.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES);
-        let (result, plan) = run.sort_tile(mem, t, &d)?;
+        if let Some(passes) = &planned {
+            // The walk reads the tile's previous result again and plans its passes.
+            d.dps_passes = passes[t as usize] as u8;
+            run.out.counters.add(Counter::RdResult, RESULT_BYTES);
+        }
+        let (sorted, plan) = run.sort_tile(mem, t, &d)?;
+        let (raster, wb) = run.raster_tile(mem, t, &d, sorted.next_len);
+        let result = match sorted.overflow {
+            true => TileResult::overflowed(),
+            false => TileResult::new(sorted.next_len as u32, false, sorted.merge_inversions, &wb),
+        };
         mem.write_result(regs.result_base, t, &result);
         run.out.counters.add(Counter::WrResult, RESULT_BYTES);
         run.out.results.push(result);
-        let raster = run.raster_tile(mem, t, &d, result.next_len as u64);
-        trace.tiles.push(TileTrace { plan, next_len: result.next_len as u64, raster });
+        trace.tiles.push(TileTrace { plan, next_len: sorted.next_len, raster });
     }
     let o = &mut run.out;
     o.status = STATUS_DONE | if o.overflows > 0 { STATUS_OVERFLOW } else { 0 };
     Ok((run.out, trace))
+}
+
+/// The frame controller's own plan ([`super::adapt`]): every tile's previous result read (the
+/// scan) and the passes golden's policy grants.
+fn engine_plan(cfg: &EngineConfig, regs: &FrameRegs, mem: &Memory, counters: &mut Counters) -> Vec<u32> {
+    let prev: Vec<TileResult> =
+        (0..regs.tiles as u64).map(|t| mem.read_result(regs.result_base, t)).collect();
+    counters.add(Counter::RdResult, RESULT_BYTES * prev.len() as u64);
+    engine_passes(&regs.adapt, cfg.chunk as u32, &prev)
 }
 
 /// The work of one frame, tile by tile in descriptor order ([`execute_frame_traced`]).
@@ -149,6 +176,9 @@ pub fn execute_frame_traced(
 pub struct FrameTrace {
     /// The Preprocessing Engine's work, when it ran ([`super::PreRegs::enabled`]).
     pub pre: Option<PreWork>,
+    /// Whether the frame controller planned the DPS passes ([`super::AdaptRegs::enabled`]: it
+    /// read every previous result before the walk, and each again with its descriptor).
+    pub planned: bool,
     /// One record per tile.
     pub tiles: Vec<TileTrace>,
 }
@@ -242,7 +272,7 @@ impl<'c> FrameRun<'c> {
         mem: &mut Memory,
         t: u64,
         d: &TileDescriptor,
-    ) -> Result<(TileResult, TilePlan), FrameError> {
+    ) -> Result<(SortedTile, TilePlan), FrameError> {
         let core = t % self.cfg.sort_cores as u64;
         let plan = tile_plan(self.cfg, &self.regs, d, core);
         if plan.overflow {
@@ -250,9 +280,10 @@ impl<'c> FrameRun<'c> {
                 self.out.first_overflow = t as u32;
             }
             self.out.overflows += 1;
-            return Ok((TileResult { next_len: 0, overflow: true }, plan));
+            return Ok((SortedTile { overflow: true, ..SortedTile::default() }, plan));
         }
         let mut next_len = d.list_len as u64;
+        let mut merge_inversions = 0;
         for c in plan.commands() {
             let e = run_command(&mut self.sorter, mem, c).map_err(|at| FrameError {
                 tile: t,
@@ -265,15 +296,23 @@ impl<'c> FrameRun<'c> {
             self.out.counters.add(Counter::WrSort, ENTRY_BYTES * e.written);
             if c.mode == SortMode::MergeDelete {
                 next_len = e.written;
+                merge_inversions = e.a_inversions;
             }
         }
         self.out.counters.add(Counter::TilesSorted, 1);
         self.out.counters.add(Counter::EntriesSorted, d.entries_in());
-        Ok((TileResult { next_len: next_len as u32, overflow: false }, plan))
+        Ok((SortedTile { next_len, overflow: false, merge_inversions }, plan))
     }
 
-    /// The tile's raster: table `next` of `len` entries, write-back in place, pixels tile-major.
-    fn raster_tile(&mut self, mem: &mut Memory, t: u64, d: &TileDescriptor, len: u64) -> RasterTrace {
+    /// The tile's raster: table `next` of `len` entries, write-back in place, pixels tile-major;
+    /// with the write-back's disorder signals.
+    fn raster_tile(
+        &mut self,
+        mem: &mut Memory,
+        t: u64,
+        d: &TileDescriptor,
+        len: u64,
+    ) -> (RasterTrace, WritebackSignals) {
         let (sfmt, ffmt, rc) = (self.cfg.format(), self.cfg.feature_format(), self.cfg.raster_config());
         let table = mem.read_entries(&sfmt, d.next as u64, len as usize);
         let feat_word = self.regs.feat_base / FEATURE_BYTES;
@@ -294,6 +333,8 @@ impl<'c> FrameRun<'c> {
             })
             .collect();
         mem.write_entries(&sfmt, d.next as u64, &back);
+        // The signals of the entries as written (the key field's width).
+        let wb = writeback_signals(&mem.read_entries(&sfmt, d.next as u64, back.len()));
         let pixels = (rc.tile * rc.tile) as u64;
         let base = self.regs.fb_base / PIXEL_BYTES + t * pixels;
         for (k, p) in r.pixels.iter().enumerate() {
@@ -302,8 +343,19 @@ impl<'c> FrameRun<'c> {
         add_raster_traffic(&mut self.out.counters, len, pixels);
         let index: Vec<bool> = feats.iter().map(Option::is_some).collect();
         let segments = segment_work(&index, &r.bitmaps, &r.work, self.cfg.raster_feature_buffer);
-        RasterTrace { len, present: present.len() as u64, subtiles: r.work, segments }
+        (RasterTrace { len, present: present.len() as u64, subtiles: r.work, segments }, wb)
     }
+}
+
+/// What a tile's sort left for its result.
+#[derive(Clone, Copy, Debug, Default)]
+struct SortedTile {
+    /// Entries of the next table.
+    next_len: u64,
+    /// The tile overflowed (not sorted).
+    overflow: bool,
+    /// The MERGE_DELETE's boundary inversions of the reused table.
+    merge_inversions: u64,
 }
 
 #[cfg(test)]
@@ -358,7 +410,8 @@ mod tests {
         let mut mem = Memory::new();
         let regs = one_tile(&mut mem, &list);
         let out = execute_frame(&cfg, &regs, &mut mem).expect("frame");
-        assert_eq!(out.results, vec![TileResult { next_len: 600, overflow: false }]);
+        // No entry is valid after the write-back: no write-back signal; from scratch, no merge.
+        assert_eq!(out.results, vec![TileResult { next_len: 600, ..TileResult::default() }]);
         let table = mem.read_entries(&SortFormat::ARTIFACT, 0x9000, 600);
         let mut want = list.clone();
         want.sort_by_key(|e| e.order_key());
@@ -403,7 +456,8 @@ mod tests {
     fn read_back_assembles_registers_and_results() {
         let mut mem = Memory::new();
         let regs = FrameRegs { tiles: 2, result_base: 0x100, ..FrameRegs::default() };
-        mem.write_result(0x100, 1, &TileResult { next_len: 9, overflow: true });
+        let r = TileResult { next_len: 9, overflow: true, merge_inversions: 3, wb_len: 4, wb_reach: 5 };
+        mem.write_result(0x100, 1, &r);
         let out = FrameOutcome::read_back(&regs, &mem, |a| match a {
             0x004 => 6,
             0x040 => 1,
@@ -411,7 +465,7 @@ mod tests {
             a if a == Counter::WrPixel.offset() + 4 => 2,
             _ => 0,
         });
-        assert_eq!(out.results[1], TileResult { next_len: 9, overflow: true });
+        assert_eq!(out.results[1], r);
         assert_eq!((out.status, out.first_overflow, out.overflows), (6, 1, 1));
         assert_eq!(out.counters.get(Counter::WrPixel), 2 << 32);
     }

@@ -12,8 +12,9 @@
 //! counter word) reads 0 and ignores writes. Every response is OKAY: the port never answers
 //! SLVERR or DECERR, so a host that writes a wrong address learns it only from the read-back.
 
+use super::adapt::AdaptRegs;
 use super::config::EngineConfig;
-use super::memory::PIXEL_BYTES;
+use super::memory::{PIXEL_BYTES, RESULT_BYTES};
 pub use super::pre_regs::{CameraWord, PreRegs, CAMERA_WORDS, PRE_ENABLE, PRE_FRESH, PRE_SH_HALF};
 use serde::{Deserialize, Serialize};
 
@@ -112,11 +113,14 @@ pub enum Reg {
     ListBaseHi,
     /// 0x074 + 4 k: camera word `k` ([`CameraWord`]).
     Camera(CameraWord),
+    /// 0x0D0: the frame controller's own `adaptive` decision ([`AdaptRegs`]:
+    /// [`super::adapt::ADAPT_ENABLE`], budget, most passes).
+    AdaptCtrl,
 }
 
 impl Reg {
     /// Every register, in address order.
-    pub const ALL: [Reg; 18 + 11 + CAMERA_WORDS] = [
+    pub const ALL: [Reg; 18 + 11 + CAMERA_WORDS + 1] = [
         Reg::Ctrl,
         Reg::Status,
         Reg::Frame,
@@ -169,6 +173,7 @@ impl Reg {
         Reg::Camera(CameraWord(20)),
         Reg::Camera(CameraWord(21)),
         Reg::Camera(CameraWord(22)),
+        Reg::AdaptCtrl,
     ];
 
     /// Byte address on the control port.
@@ -214,6 +219,7 @@ impl Reg {
             Reg::ListBaseLo => 27,
             Reg::ListBaseHi => 28,
             Reg::Camera(CameraWord(k)) => 29 + k as u32,
+            Reg::AdaptCtrl => 29 + CAMERA_WORDS as u32,
         }
     }
 
@@ -250,6 +256,7 @@ impl Reg {
             Reg::ListBaseLo => "LIST_BASE_LO",
             Reg::ListBaseHi => "LIST_BASE_HI",
             Reg::Camera(w) => w.name(),
+            Reg::AdaptCtrl => "ADAPT_CTRL",
         }
     }
 
@@ -271,7 +278,7 @@ impl Reg {
 /// A 64-bit performance counter, read as two words at [`Counter::offset`] (low) and `+ 4`
 /// (high). Every counter is reset by a start; the byte counters up to `WR_RESULT` count the bytes of the elements
 /// the cores' bridges deliver or accept (entries 8, feature words 32, pixels 4, descriptors 32,
-/// results 8).
+/// results 16), `RD_RESULT` the previous results the frame controller reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum Counter {
     /// 0: cycles from start to done.
@@ -312,10 +319,13 @@ pub enum Counter {
     /// 17: bytes the Preprocessing Engine wrote (write beats times the beat bytes: feature
     /// words, list lines, list lengths).
     WrPre,
+    /// 18: bytes of previous tile results the frame controller read (its own `adaptive`
+    /// decision: 16 per tile in its scan and again in its walk, [`super::adapt`]).
+    RdResult,
 }
 
 /// Number of performance counters.
-pub const COUNTERS: usize = 18;
+pub const COUNTERS: usize = 19;
 
 /// Byte address of counter 0's low word.
 pub const COUNTER_BASE: u32 = 0x100;
@@ -341,6 +351,7 @@ impl Counter {
         Counter::PreBusy,
         Counter::RdPre,
         Counter::WrPre,
+        Counter::RdResult,
     ];
 
     /// The counter's index `k`.
@@ -374,6 +385,7 @@ impl Counter {
             Counter::PreBusy => "PRE_BUSY",
             Counter::RdPre => "RD_PRE",
             Counter::WrPre => "WR_PRE",
+            Counter::RdResult => "RD_RESULT",
         }
     }
 
@@ -397,6 +409,7 @@ impl Counter {
                 | Counter::WrResult
                 | Counter::RdPre
                 | Counter::WrPre
+                | Counter::RdResult
         )
     }
 }
@@ -451,6 +464,8 @@ pub struct FrameRegs {
     pub scratch_base: u64,
     /// The Preprocessing Engine's registers (disabled by default).
     pub pre: PreRegs,
+    /// `ADAPT_CTRL`: the frame controller's own `adaptive` decision (disabled by default).
+    pub adapt: AdaptRegs,
 }
 
 /// A base register the engine cannot use: not a multiple of the alignment its data needs.
@@ -481,7 +496,7 @@ impl FrameRegs {
     pub fn base_alignments(&self, cfg: &EngineConfig) -> Vec<(&'static str, u64, u64, &'static str)> {
         let mut v = vec![
             ("DESC_BASE", self.desc_base, 32, "a descriptor is one 32-byte burst"),
-            ("RESULT_BASE", self.result_base, 8, "a result is one 8-byte beat"),
+            ("RESULT_BASE", self.result_base, RESULT_BYTES, "a result is one 16-byte burst"),
             ("FEAT_BASE", self.feat_base, 32, "a feature word is 32 bytes"),
             (
                 "FB_BASE",
@@ -537,12 +552,13 @@ impl FrameRegs {
                 list_base: pair(Reg::ListBaseLo, Reg::ListBaseHi),
                 camera,
             },
+            adapt: AdaptRegs { ctrl: get(Reg::AdaptCtrl) },
         }
     }
 
     /// The register writes that program this frame, in address order (`CTRL` not included).
-    /// `PRE_CTRL` is always written; the other preprocessing registers only when it enables
-    /// the Preprocessing Engine.
+    /// `PRE_CTRL` and `ADAPT_CTRL` are always written; the other preprocessing registers only
+    /// when `PRE_CTRL` enables the Preprocessing Engine.
     pub fn writes(&self) -> Vec<(Reg, u32)> {
         let split = |lo: Reg, hi: Reg, v: u64| [(lo, v as u32), (hi, (v >> 32) as u32)];
         let mut w = vec![
@@ -567,6 +583,7 @@ impl FrameRegs {
             w.extend(split(Reg::ListBaseLo, Reg::ListBaseHi, p.list_base));
             w.extend(CameraWord::all().map(|c| (Reg::Camera(c), p.camera[c.0 as usize])));
         }
+        w.push((Reg::AdaptCtrl, self.adapt.ctrl));
         w
     }
 }
@@ -600,7 +617,9 @@ mod tests {
         assert_eq!(Reg::at(0x070), Some(Reg::ListBaseHi));
         assert_eq!(Reg::at(0x074), Some(Reg::Camera(CameraWord(0))));
         assert_eq!(Reg::at(0x074 + 4 * 22), Some(Reg::Camera(CameraWord(22))));
-        assert_eq!(Reg::at(0x074 + 4 * 23), None);
+        assert_eq!(Reg::at(0x074 + 4 * 23), Some(Reg::AdaptCtrl));
+        assert_eq!(Reg::AdaptCtrl.offset(), 0x0D0);
+        assert_eq!(Reg::at(0x0D4), None);
         assert_eq!(Reg::Camera(CameraWord(21)).name(), "GRID_X");
         let offsets: Vec<u32> = Reg::ALL.iter().map(|r| r.offset()).collect();
         assert!(offsets.windows(2).all(|w| w[1] == w[0] + 4), "dense, in address order");
@@ -640,7 +659,7 @@ mod tests {
         assert_eq!(align, PIXEL_BYTES * cfg.raster_config().subtile as u64);
         let ok = FrameRegs {
             desc_base: 0x1000,
-            result_base: 0x2008,
+            result_base: 0x2010,
             feat_base: 0x3020,
             fb_base: 0x4000 + 3 * align,
             scratch_base: 0x5008,
@@ -662,21 +681,25 @@ mod tests {
         assert_eq!(half.check(&wide).map_err(|e| (e.field, e.align)), Err(("FB_BASE", 2 * align)));
         let e = FrameRegs { feat_base: 0x3010, ..ok }.check(&cfg).unwrap_err();
         assert_eq!((e.field, e.align), ("FEAT_BASE", 32));
+        // A result is a 2-beat burst: an 8-byte-aligned base could cross a 4 KiB page.
+        let e = FrameRegs { result_base: 0x2008, ..ok }.check(&cfg).unwrap_err();
+        assert_eq!((e.field, e.align), ("RESULT_BASE", 16));
     }
 
     #[test]
     fn frame_writes_split_the_bases() {
         let r = FrameRegs { frame: 3, fb_base: 0x1_2345_6780, ..FrameRegs::default() };
         let w = r.writes();
-        assert_eq!(w.len(), 15);
+        assert_eq!(w.len(), 16);
         assert_eq!(w[14], (Reg::PreCtrl, 0), "a disabled Preprocessing Engine is written as such");
+        assert_eq!(w[15], (Reg::AdaptCtrl, 0), "the descriptors' passes are written as such");
         assert_eq!(w[0], (Reg::Frame, 3));
         assert!(w.contains(&(Reg::FbBaseLo, 0x2345_6780)));
         assert!(w.contains(&(Reg::FbBaseHi, 1)));
         assert!(w.iter().all(|(r, _)| r.access() == Access::RW));
         let pre = PreRegs { ctrl: PRE_ENABLE, list_base: 0x7_0000_0040, ..PreRegs::default() };
         let w = FrameRegs { pre, ..r }.writes();
-        assert_eq!(w.len(), 15 + 10 + CAMERA_WORDS);
+        assert_eq!(w.len(), 16 + 10 + CAMERA_WORDS);
         assert!(w.contains(&(Reg::ListBaseHi, 7)) && w.contains(&(Reg::ListBaseLo, 0x40)));
         let regs: Vec<Reg> = w.iter().map(|(r, _)| *r).collect();
         let mut sorted = regs.clone();

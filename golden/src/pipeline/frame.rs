@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::adaptive::{self, angle_deg, writeback_signals, CameraMotion, TilePlan};
+use super::adaptive::{self, angle_deg, writeback_signals, CameraMotion, TilePlan, WritebackSignals};
 use super::config::{Formats, PipelineConfig, PipelineError};
 use super::order::{compare_orders, TileOrder};
 use super::stats::{
@@ -297,6 +297,12 @@ impl<'s> Pipeline<'s> {
     /// tables.
     pub fn tables(&self) -> impl Iterator<Item = &[SortEntry]> {
         self.states.iter().map(|s| s.table.as_slice())
+    }
+
+    /// Every tile's disorder counters of the last frame (row-major tiles): the MSU+ boundary
+    /// inversions of its reuse merge (0 without one) and the write-back signals of its table.
+    pub fn disorder(&self) -> impl Iterator<Item = (u32, WritebackSignals)> + '_ {
+        self.states.iter().map(|s| (s.merge_inversions, s.writeback))
     }
 
     /// The current list of every tile in the last frame (ascending ids, current keys).

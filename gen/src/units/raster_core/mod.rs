@@ -247,6 +247,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     scus(&mut m, cfg, &d);
     writer::pixels(&mut m, &d);
     writer::write_back(&mut m, cfg, &d);
+    writer::wb_signals(&mut m, &d);
     writer::requests(&mut m, &d);
     control(&mut m, &d);
     walker::walk_state(&mut m, &d);
@@ -266,6 +267,12 @@ fn ports(m: &mut Module, d: &Dims) {
     m.input_c("cmd_feat_i", d.aw, "feature base address (feature words; word = base + id)");
     m.input_c("cmd_pix_i", d.aw, "pixel address of the tile's first pixel; pixel (x, y) at + y * tile + x");
     m.output_c("done_o", 1, "one-cycle pulse: tile finished, every write taken");
+    m.output_c(
+        "done_wb_len_o",
+        d.lw,
+        "write-back signals (valid with done_o, held): valid entries written back",
+    );
+    m.output_c("done_wb_reach_o", d.lw, "... and the reach (golden adaptive::writeback_signals)");
     m.output_c("mem_req_valid_o", 1, "request offered");
     m.input_c("mem_req_ready_i", 1, "request taken");
     m.output_c("mem_req_write_o", 1, "1: write; 0: read");

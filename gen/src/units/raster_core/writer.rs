@@ -143,6 +143,57 @@ pub(super) fn write_back(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     );
 }
 
+/// The write-back's disorder signals (golden `adaptive::writeback_signals`, issue 14): over the
+/// entries written back in table order, the valid ones are counted (`wbs_len_q`), a running
+/// maximum of `{key, id}` and its position are kept, and a valid entry below the maximum
+/// raises the reach to its distance from the maximum's position. Cleared by a command; the
+/// counts are final with `done_o` and hold until the next command.
+pub(super) fn wb_signals(m: &mut Module, d: &Dims) {
+    let (lw, kb, ib) = (d.lw, d.kb, d.ib);
+    let rank = kb + ib;
+    m.blank();
+    m.comment("Write-back signals: valid entries, running maximum {key, id} and its position, reach.");
+    m.reg("wbs_len_q", lw)
+        .reg("wbs_max_q", rank)
+        .reg("wbs_at_q", lw)
+        .reg("wbs_any_q", 1)
+        .reg("wbs_reach_q", lw);
+    m.wire_assign("wbs_live", 1, "wb_grant & wb_present & hbuf[wb_idx]");
+    m.wire_assign("wbs_rank", rank, "{wb_key, wb_id}");
+    m.wire_assign("wbs_behind", 1, "wbs_any_q & (wbs_rank < wbs_max_q)");
+    m.wire_assign("wbs_dist", lw, "wbs_len_q - wbs_at_q");
+    m.seq_d(
+        Some(vec![
+            set("wbs_len_q", lit(lw, 0)),
+            set("wbs_max_q", lit(rank, 0)),
+            set("wbs_at_q", lit(lw, 0)),
+            set("wbs_any_q", lit(1, 0)),
+            set("wbs_reach_q", lit(lw, 0)),
+        ]),
+        vec![if_else(
+            "cmd_fire",
+            vec![set("wbs_len_q", lit(lw, 0)), set("wbs_any_q", lit(1, 0)), set("wbs_reach_q", lit(lw, 0))],
+            vec![if_(
+                "wbs_live",
+                vec![
+                    set("wbs_len_q", format!("wbs_len_q + {}", lit(lw, 1))),
+                    if_else(
+                        "wbs_behind",
+                        vec![if_("wbs_dist > wbs_reach_q", vec![set("wbs_reach_q", "wbs_dist")])],
+                        vec![
+                            set("wbs_max_q", "wbs_rank"),
+                            set("wbs_at_q", "wbs_len_q"),
+                            set("wbs_any_q", lit(1, 1)),
+                        ],
+                    ),
+                ],
+            )],
+        )],
+    );
+    m.assign("done_wb_len_o", "wbs_len_q");
+    m.assign("done_wb_reach_o", "wbs_reach_q");
+}
+
 /// The request multiplexer.
 pub(super) fn requests(m: &mut Module, d: &Dims) {
     let bl = d.bl;

@@ -103,6 +103,7 @@ impl EngineSession<'_> {
                 list_base: l.list_base,
                 camera: CameraWord::values(cam, self.cfg.tile),
             },
+            adapt: Default::default(),
         }
     }
 
@@ -154,7 +155,7 @@ impl EngineSession<'_> {
             mem.write_descriptor(
                 regs.desc_base,
                 t as u64,
-                &TileDescriptor { list_len: LIST_LEN_CANARY, ..*d },
+                &TileDescriptor { list_len: LIST_LEN_CANARY, ..self.as_written(d) },
             );
         }
         let mut e = self.expected(mem, regs, descriptors, prev_tables, out);
