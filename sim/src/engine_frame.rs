@@ -207,7 +207,7 @@ fn rational(x: f64) -> (usize, usize) {
 }
 
 /// The model's prediction of one frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct FramePrediction {
     /// Cycles from start to done.
     pub cycles: f64,
@@ -218,6 +218,12 @@ pub struct FramePrediction {
     /// Cycles of the Preprocessing Engine's phase before the tile walk (0 when it does not run;
     /// [`EngineFrameModel::pre_cycles`]); part of `cycles`.
     pub pre_busy: f64,
+    /// Cycles of the frame controller's scan of the previous results (0 unless it plans the
+    /// passes, [`EngineFrameModel::scan_cycles`]); part of `cycles`.
+    pub scan: f64,
+    /// Every tile's DPS passes in golden's reference (the descriptors', or the engine's own
+    /// plan: [`FrameTrace::planned`]).
+    pub dps_passes: Vec<usize>,
 }
 
 /// The engine-level model for one configuration, unit timing and memory timing.
@@ -378,8 +384,10 @@ impl<'a> EngineFrameModel<'a> {
             p.cycles += p.pre_busy;
         }
         if trace.planned {
-            p.cycles += self.scan_cycles(trace.tiles.len());
+            p.scan = self.scan_cycles(trace.tiles.len());
+            p.cycles += p.scan;
         }
+        p.dps_passes = trace.tiles.iter().map(|t| t.plan.dps_passes()).collect();
         Ok(p)
     }
 
@@ -673,7 +681,14 @@ impl Schedule {
                 self.jobs.iter().filter(|j| j.engine == e).map(|j| (j.start, j.end)).collect();
             union(&mut v)
         };
-        FramePrediction { cycles: self.end, sort_busy: spans(0), raster_busy: spans(1), pre_busy: 0.0 }
+        FramePrediction {
+            cycles: self.end,
+            sort_busy: spans(0),
+            raster_busy: spans(1),
+            pre_busy: 0.0,
+            scan: 0.0,
+            dps_passes: Vec::new(),
+        }
     }
 }
 

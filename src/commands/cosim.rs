@@ -194,6 +194,10 @@ fn print_frame(
             "rtl_raster_busy": raster_busy,
             "model_raster_busy": p.raster_busy.round(),
             "raster_busy_error_pct": error_pct(p.raster_busy, raster_busy),
+            "planned_by_engine": p.scan > 0.0,
+            "dps_passes": &p.dps_passes,
+            "rtl_result_read_bytes": r.counters.get(Counter::RdResult),
+            "model_scan_cycles": p.scan.round(),
             "mismatch": mismatch,
             "overflowing_tiles": overflowing,
             "wall_seconds": took.as_secs_f64(),
@@ -239,5 +243,14 @@ fn print_frame(
     bar.suspend(|| println!("{line}"));
     if !overflowing.is_empty() {
         bar.suspend(|| println!("  tiles over the table capacity (reported, not sorted): {overflowing:?}"));
+    }
+    if p.scan > 0.0 {
+        let plan = format!(
+            "  planned by the engine (ADAPT_CTRL): DPS passes per tile {:?}, {} B of previous results read, scan {:.0} cycles in the model",
+            p.dps_passes,
+            r.counters.get(Counter::RdResult),
+            p.scan
+        );
+        bar.suspend(|| println!("{plan}"));
     }
 }
