@@ -282,64 +282,13 @@ module neo_frame_ctrl (
   // Scan: S (every cost) and hist[l - 2] (costs of requests of at least l passes), l = 2..15.
   reg  [63:0] sum_q;
   reg  [63:0] hist [0:13];
+  integer l;
   always @(posedge clk_i) begin
-    if (start) begin
-      hist[0] <= 64'd0;
-      hist[1] <= 64'd0;
-      hist[2] <= 64'd0;
-      hist[3] <= 64'd0;
-      hist[4] <= 64'd0;
-      hist[5] <= 64'd0;
-      hist[6] <= 64'd0;
-      hist[7] <= 64'd0;
-      hist[8] <= 64'd0;
-      hist[9] <= 64'd0;
-      hist[10] <= 64'd0;
-      hist[11] <= 64'd0;
-      hist[12] <= 64'd0;
-      hist[13] <= 64'd0;
-    end else if (res_in & scan_q) begin
-      if (rq_pass >= 4'd2) begin
-        hist[0] <= hist[0] + rq_cost;
-      end
-      if (rq_pass >= 4'd3) begin
-        hist[1] <= hist[1] + rq_cost;
-      end
-      if (rq_pass >= 4'd4) begin
-        hist[2] <= hist[2] + rq_cost;
-      end
-      if (rq_pass >= 4'd5) begin
-        hist[3] <= hist[3] + rq_cost;
-      end
-      if (rq_pass >= 4'd6) begin
-        hist[4] <= hist[4] + rq_cost;
-      end
-      if (rq_pass >= 4'd7) begin
-        hist[5] <= hist[5] + rq_cost;
-      end
-      if (rq_pass >= 4'd8) begin
-        hist[6] <= hist[6] + rq_cost;
-      end
-      if (rq_pass >= 4'd9) begin
-        hist[7] <= hist[7] + rq_cost;
-      end
-      if (rq_pass >= 4'd10) begin
-        hist[8] <= hist[8] + rq_cost;
-      end
-      if (rq_pass >= 4'd11) begin
-        hist[9] <= hist[9] + rq_cost;
-      end
-      if (rq_pass >= 4'd12) begin
-        hist[10] <= hist[10] + rq_cost;
-      end
-      if (rq_pass >= 4'd13) begin
-        hist[11] <= hist[11] + rq_cost;
-      end
-      if (rq_pass >= 4'd14) begin
-        hist[12] <= hist[12] + rq_cost;
-      end
-      if (rq_pass >= 4'd15) begin
-        hist[13] <= hist[13] + rq_cost;
+    for (l = 0; l < 14; l = l + 1) begin
+      if (start) begin
+        hist[l] <= 64'd0;
+      end else if (res_in & scan_q & (rq_pass >= (l[3:0] + 4'd2))) begin
+        hist[l] <= hist[l] + rq_cost;
       end
     end
   end
@@ -707,6 +656,7 @@ module neo_frame_ctrl (
   reg  [31:0] rc_wbl [0:3];
   reg  [31:0] rc_reach [0:3];
   reg  [3:0] rp_q;
+  integer j;
   always @(posedge clk_i) begin
     if (ras_fire) begin
       rc_t[ras_sel] <= h_t;
@@ -714,21 +664,11 @@ module neo_frame_ctrl (
       rc_ovf[ras_sel] <= h_ovf;
       rc_inv[ras_sel] <= h_inv;
     end
-    if (ras_done_i[0]) begin
-      rc_wbl[0] <= ras_wb_len_i[0*32 +: 32];
-      rc_reach[0] <= ras_wb_reach_i[0*32 +: 32];
-    end
-    if (ras_done_i[1]) begin
-      rc_wbl[1] <= ras_wb_len_i[1*32 +: 32];
-      rc_reach[1] <= ras_wb_reach_i[1*32 +: 32];
-    end
-    if (ras_done_i[2]) begin
-      rc_wbl[2] <= ras_wb_len_i[2*32 +: 32];
-      rc_reach[2] <= ras_wb_reach_i[2*32 +: 32];
-    end
-    if (ras_done_i[3]) begin
-      rc_wbl[3] <= ras_wb_len_i[3*32 +: 32];
-      rc_reach[3] <= ras_wb_reach_i[3*32 +: 32];
+    for (j = 0; j < 4; j = j + 1) begin
+      if (ras_done_i[j]) begin
+        rc_wbl[j] <= ras_wb_len_i[j*32 +: 32];
+        rc_reach[j] <= ras_wb_reach_i[j*32 +: 32];
+      end
     end
   end
 

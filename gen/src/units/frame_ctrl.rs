@@ -30,7 +30,7 @@
 //! result's B).
 
 use crate::emit::expr::{bits_for, lit, resize, zext};
-use crate::emit::{if_, if_else, set, Module, Stmt};
+use crate::emit::{for_, if_, if_else, set, Module, Stmt};
 use neo_golden::engine::adapt::{
     ADAPT_BUDGET_BITS, ADAPT_BUDGET_LSB, ADAPT_ENABLE, ADAPT_MAX_BITS, ADAPT_MAX_LSB,
 };
@@ -412,17 +412,17 @@ fn adapt(m: &mut Module, cfg: &EngineConfig) {
     m.comment(format!(
         "Scan: S (every cost) and hist[l - 2] (costs of requests of at least l passes), l = 2..{top}."
     ));
-    m.reg("sum_q", ACC_BITS).mem("hist", ACC_BITS, levels);
-    let mut scan = vec![];
-    let mut clear = vec![];
-    for k in 0..levels {
-        scan.push(if_(
-            format!("rq_pass >= {}", lit(pb, k as u64 + 2)),
-            vec![set(format!("hist[{k}]"), format!("hist[{k}] + rq_cost"))],
-        ));
-        clear.push(set(format!("hist[{k}]"), lit(ACC_BITS, 0)));
-    }
-    m.seq_noreset(vec![if_else("start", clear, vec![if_("res_in & scan_q", scan)])]);
+    m.reg("sum_q", ACC_BITS).mem("hist", ACC_BITS, levels).integer("l");
+    let at_least = format!("rq_pass >= (l[{}:0] + {})", pb - 1, lit(pb, 2));
+    m.seq_noreset(vec![for_(
+        "l",
+        levels.to_string(),
+        vec![if_else(
+            "start",
+            vec![set("hist[l]", lit(ACC_BITS, 0))],
+            vec![if_(format!("res_in & scan_q & ({at_least})"), vec![set("hist[l]", "hist[l] + rq_cost")])],
+        )],
+    )]);
     m.wire_assign("scan_done", 1, "scan_q & (scan_t_q == tiles_i)");
     m.comment(format!(
         "Cap: the largest c with 100 (hist[0] + ... + hist[c - 2]) <= S x budget (c = 1..{top})."
@@ -760,16 +760,16 @@ fn results(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
             set("rc_inv[ras_sel]", "h_inv"),
         ],
     )];
-    for j in 0..mm {
-        let part = |v: &str| format!("{v}[{j}*{lw} +: {lw}]");
-        rec.push(if_(
-            pick("ras_done_i", &j.to_string(), mm),
-            vec![
-                set(format!("rc_wbl[{j}]"), part("ras_wb_len_i")),
-                set(format!("rc_reach[{j}]"), part("ras_wb_reach_i")),
-            ],
-        ));
-    }
+    m.integer("j");
+    let part = |v: &str| format!("{v}[j*{lw} +: {lw}]");
+    rec.push(for_(
+        "j",
+        mm.to_string(),
+        vec![if_(
+            "ras_done_i[j]",
+            vec![set("rc_wbl[j]", part("ras_wb_len_i")), set("rc_reach[j]", part("ras_wb_reach_i"))],
+        )],
+    ));
     m.seq_noreset(rec);
     m.blank();
     m.comment("Result writer: the lowest complete record, one 2-beat burst at RESULT_BASE + 16 t (golden TileResult).");
