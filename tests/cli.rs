@@ -330,3 +330,19 @@ fn cosim_refuses_an_unknown_input_mode_before_any_work() {
         "{err}"
     );
 }
+
+#[test]
+fn cosim_refuses_a_plan_the_engine_cannot_make_before_any_work() {
+    let scene = ["cosim", "--scene", "synthetic:blobs?gaussians=100&seed=1", "--frames", "1"];
+    // Neo has no plan to make; the default adaptive needs re-sorts and the wide chunk.
+    for (sort, want) in [("neo", "neo is not adaptive"), ("adaptive", "resort=0,wide=1")] {
+        let o = neo(&[&scene[..], &["--sort", sort, "--planner", "engine"]].concat());
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "--sort {sort}: stderr:\n{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(err.contains("the engine's own plan") && err.contains(want), "--sort {sort}: {err}");
+    }
+    let o = neo(&[&scene[..], &["--planner", "firmware"]].concat());
+    assert_eq!(o.status.code(), Some(2), "a usage error");
+    assert!(stderr(&o).contains("unknown planner \"firmware\": expected host or engine"), "{}", stderr(&o));
+}

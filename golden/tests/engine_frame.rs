@@ -380,3 +380,34 @@ fn compare_names_preprocessing_corruption() {
     let m = plan.expected.compare_outcome(&wrong).expect("a counter mismatch");
     assert_eq!(m.field, "RD_PRE");
 }
+
+/// The engine plans `adaptive` without re-sorts and the wide chunk, at most 15 passes: anything
+/// else is refused by name before a frame is rendered.
+#[test]
+fn the_engine_plans_only_what_it_can_run() {
+    use neo_golden::engine::{Planner, SessionOptions};
+    use neo_golden::pipeline::adaptive::AdaptiveParams;
+    use neo_golden::pipeline::Strategy;
+    let (scene, _) = load_scene("synthetic:blobs?gaussians=200&seed=1", false).expect("synthetic scene");
+    let (traj, cfg) = EngineCase::Orbit
+        .setup(&scene, &CaseScene::synthetic(), 1, [64, 64], &small_config())
+        .expect("setup");
+    let ok = AdaptiveParams { resort: false, wide: 1, ..AdaptiveParams::default() };
+    for (strategy, want) in [
+        (Strategy::Neo, "neo is not adaptive"),
+        (Strategy::Adaptive(AdaptiveParams::default()), "resort=0,wide=1"),
+        (Strategy::Adaptive(AdaptiveParams { wide: 4, ..ok }), "resort=0,wide=1"),
+        (Strategy::Adaptive(AdaptiveParams { max_passes: 16, ..ok }), "at most 15 passes"),
+    ] {
+        let opts = SessionOptions { strategy, planner: Planner::Engine, ..SessionOptions::default() };
+        let e = EngineSession::with_options(&scene, traj.clone(), &cfg, opts).err().expect("refused");
+        let msg = e.to_string();
+        assert!(msg.contains("the engine's own plan") && msg.contains(want), "{strategy}: {msg}");
+    }
+    let opts = SessionOptions {
+        strategy: Strategy::Adaptive(ok),
+        planner: Planner::Engine,
+        ..SessionOptions::default()
+    };
+    assert!(EngineSession::with_options(&scene, traj, &cfg, opts).is_ok());
+}

@@ -100,9 +100,11 @@ pub fn model_inversions(t: u64, lw: u32) -> u64 {
     }
 }
 
-/// The write-back signals (len, reach) the raster-core model reports for tile `t`.
+/// The write-back signals (len, reach) the raster-core model reports for tile `t`: 32-bit
+/// hashes of it (every bit of the record's fields), within `len_bits`.
 pub fn model_wb_signals(t: u64, lw: u32) -> (u64, u64) {
-    ((t * 2_654_435_761) & mask(lw.min(32)), (t * 40_503 + 7) & mask(lw.min(32)))
+    let h = neo_golden::synthetic::rng::mix64(t);
+    (h & mask(lw.min(32)), (h >> 32) & mask(lw.min(32)))
 }
 
 /// The `next_len` the sequencer model reports for tile `t` with descriptor `d`: at most the
@@ -180,15 +182,22 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent
         AdaptRegs { ctrl: rng.next_u32() & !1 }
     };
     let chunk = cfg.chunk as u64;
+    // Tables of any 32-bit length and reach in one frame in 8 (sums of up to 2^45 in the
+    // frames of 4095 tiles), else up to 4000 entries and 6 chunks.
+    let huge_tables = rng.percent(12);
     let prev_results = (0..tiles)
         .map(|_| {
-            let wb_len = rng.below(4000) as u32;
+            let huge = huge_tables && rng.percent(50);
             TileResult {
                 next_len: rng.next_u32(),
                 overflow: rng.percent(5),
                 merge_inversions: if rng.percent(30) { rng.below(1 << 24) as u32 } else { 0 },
-                wb_len,
-                wb_reach: if rng.percent(40) { 0 } else { rng.below(6 * chunk) as u32 },
+                wb_len: if huge { rng.next_u32() } else { rng.below(4000) as u32 },
+                wb_reach: match (huge, rng.percent(40)) {
+                    (true, _) => rng.next_u32(),
+                    (false, true) => 0,
+                    (false, false) => rng.below(6 * chunk) as u32,
+                },
             }
         })
         .collect();

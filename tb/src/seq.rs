@@ -310,7 +310,7 @@ impl SeqBench {
                     let due = c + self.rng.range(t.min_done, t.max_done);
                     // Every command reports some count (the core's are 0 for chunks): the
                     // completion must carry the MERGE_DELETE's.
-                    let inv = self.rng.below(1 << 20);
+                    let inv = self.rng.next_u32() as u64;
                     if got.mode == SortMode::MergeDelete {
                         md_inv = inv;
                     }

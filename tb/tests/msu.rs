@@ -110,6 +110,18 @@ mod cosim {
             let all: Vec<Merge> = cases.into_iter().map(|(_, m)| m).collect();
             let run = run_checked(&mut dut, &cfg, seed, &all, 30, 60, 10);
             assert_eq!(run.merges, all.len());
+            // Descending A streams of 2^k entries (2^k - 1 boundary inversions), each followed by
+            // a sorted one (none): every bit of the count up to 2^12 rises and falls.
+            let mut rng = neo_tb::rng::Rng::new(seed);
+            let mut steps = Vec::new();
+            for k in [1, 2, 3, 5, 8, 11, 12] {
+                let sorted = neo_tb::stimulus::sorted_stream(&fmt, &mut rng, 1 << k, 100, false);
+                let desc: Vec<SortEntry> = sorted.iter().rev().copied().collect();
+                steps.push(Merge { a: desc, b: vec![], drop_invalid: false });
+                steps.push(Merge { a: sorted, b: vec![], drop_invalid: false });
+            }
+            let run = run_checked(&mut dut, &cfg, seed, &steps, 0, 100, 0);
+            assert_eq!(run.inversions, [1, 2, 3, 5, 8, 11, 12].iter().map(|k| (1u64 << k) - 1).sum::<u64>());
         });
     }
 }

@@ -194,6 +194,16 @@ mod cosim {
                 let r = merge_checked(&mut c, &runs, &b, drop);
                 assert!(r.done_inv > 0, "out-of-order A counts inversions: {r:?}");
             }
+            // A descending A of 2^k entries has 2^k - 1 inversions: each count's bits rise, and
+            // fall again with the sorted A after it.
+            for k in [1, 3, 6, 9, 12] {
+                let desc: Vec<SortEntry> =
+                    merge_stream(&fmt, &mut rng, 1 << k, 100, false).into_iter().rev().collect();
+                let r = merge_checked(&mut c, &desc, &[], false);
+                assert_eq!(r.done_inv, (1 << k) - 1, "descending A of 2^{k}");
+                let r = merge_checked(&mut c, &sorted, &[], false);
+                assert_eq!(r.done_inv, 0);
+            }
             println!("{name}: {entries} entries merged");
         });
     }
