@@ -170,31 +170,40 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent
     };
     // Half of the frames planned by the controller, its fields over their whole range (and the
     // reserved bits random), previous results with reaches of up to 6 chunks and some inversions.
-    let adapt = if rng.percent(50) {
+    let adapt = if tiles > 1000 || rng.percent(50) {
         let reserved = rng.next_u32() & !(0xF << ADAPT_MAX_LSB | 0x3FF << ADAPT_BUDGET_LSB | 1);
+        // The large frames at the field's largest budget (1023: products up to 2^54).
+        let budget = if tiles > 1000 { 1023 } else { rng.below(1024) as u32 };
         AdaptRegs {
-            ctrl: reserved
-                | 1
-                | (rng.below(1024) as u32) << ADAPT_BUDGET_LSB
-                | (rng.below(16) as u32) << ADAPT_MAX_LSB,
+            ctrl: reserved | 1 | budget << ADAPT_BUDGET_LSB | (rng.below(16) as u32) << ADAPT_MAX_LSB,
         }
     } else {
         AdaptRegs { ctrl: rng.next_u32() & !1 }
     };
     let chunk = cfg.chunk as u64;
-    // Tables of any 32-bit length and reach in one frame in 8 (sums of up to 2^45 in the
-    // frames of 4095 tiles), else up to 4000 entries and 6 chunks.
-    let huge_tables = rng.percent(12);
+    // Tables of any 32-bit length and reach in the large frames (all of them: the frame
+    // controller's sums reach 2^44 over 4095 tiles) and in half the tiles of one small frame in
+    // 4, the largest reach among them; else up to 4000 entries (a tenth empty: a cost of 1) and
+    // 6 chunks.
+    let huge_tables = tiles > 1000 || rng.percent(25);
     let prev_results = (0..tiles)
         .map(|_| {
-            let huge = huge_tables && rng.percent(50);
+            let huge = huge_tables && (tiles > 1000 || rng.percent(50));
+            let wb_len = match (huge, rng.percent(10)) {
+                (_, true) => 0,
+                // The large frames' tables from 2^31 up: their sums pass 2^44.
+                (true, false) if tiles > 1000 => rng.next_u32() | 1 << 31,
+                (true, false) => rng.next_u32(),
+                (false, false) => rng.below(4000) as u32,
+            };
             TileResult {
                 next_len: rng.next_u32(),
                 overflow: rng.percent(5),
                 merge_inversions: if rng.percent(30) { rng.below(1 << 24) as u32 } else { 0 },
-                wb_len: if huge { rng.next_u32() } else { rng.below(4000) as u32 },
+                wb_len,
                 wb_reach: match (huge, rng.percent(40)) {
-                    (true, _) => rng.next_u32(),
+                    (true, true) => u32::MAX,
+                    (true, false) => rng.next_u32(),
                     (false, true) => 0,
                     (false, false) => rng.below(6 * chunk) as u32,
                 },
