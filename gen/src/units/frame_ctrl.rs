@@ -509,12 +509,7 @@ fn dispatch(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         m.assign("job_sel", "rr_q");
         m.assign("job_any", pick("job_ready_i", "rr_q", n));
     } else {
-        let mut body = vec![set("job_sel_c", lit(nb, 0))];
-        for k in (0..n).rev() {
-            body.push(if_(pick("job_ready_i", &k.to_string(), n), vec![set("job_sel_c", lit(nb, k as u64))]));
-        }
-        m.reg("job_sel_c", nb);
-        m.comb(body);
+        lowest_set(m, "job_sel_c", nb, "job_ready_i", n);
         m.assign("job_sel", "job_sel_c");
         m.assign("job_any", "|job_ready_i");
     }
@@ -552,6 +547,18 @@ fn dispatch(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     )]);
 }
 
+/// `reg` (`bits` wide, combinational): the index of the lowest set bit of the `count`-bit
+/// `vector`, 0 when none is set (a priority encoder: the first-free scheduler, the completion
+/// and result pickers).
+fn lowest_set(m: &mut Module, reg: &str, bits: u32, vector: &str, count: u32) {
+    let mut body = vec![set(reg, lit(bits, 0))];
+    for k in (0..count).rev() {
+        body.push(if_(pick(vector, &k.to_string(), count), vec![set(reg, lit(bits, k as u64))]));
+    }
+    m.reg(reg, bits);
+    m.comb(body);
+}
+
 /// Bit `index` of the `count`-bit signal `name` (the signal itself when it has one bit).
 fn pick(name: &str, index: &str, count: u32) -> String {
     if count == 1 {
@@ -580,12 +587,7 @@ fn completions(m: &mut Module, d: &Dims) {
     let fields = cq_fields(d);
     let ew: u32 = fields.iter().map(|f| f.1).sum();
     m.mem("cq", ew, qd);
-    let mut body = vec![set("cpl_sel", lit(nb, 0))];
-    for k in (0..n).rev() {
-        body.push(if_(pick("cpl_valid_i", &k.to_string(), n), vec![set("cpl_sel", lit(nb, k as u64))]));
-    }
-    m.reg("cpl_sel", nb);
-    m.comb(body);
+    lowest_set(m, "cpl_sel", nb, "cpl_valid_i", n);
     m.wire_assign("cpl_take", 1, "(|cpl_valid_i) & cq_space & ~ovf_push");
     m.assign("cpl_ready_o", format!("cpl_take ? ({} << cpl_sel) : {}", lit(n, 1), lit(n, 0)));
     m.wire_assign("cpl_len", lw, format!("cpl_len_i[cpl_sel * {lw} +: {lw}]"));
@@ -623,12 +625,7 @@ fn head(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         m.assign("ras_sel", "rrr_q");
         m.assign("ras_any", pick("ras_free", "rrr_q", mm));
     } else {
-        let mut body = vec![set("ras_sel_c", lit(mb, 0))];
-        for k in (0..mm).rev() {
-            body.push(if_(pick("ras_free", &k.to_string(), mm), vec![set("ras_sel_c", lit(mb, k as u64))]));
-        }
-        m.reg("ras_sel_c", mb);
-        m.comb(body);
+        lowest_set(m, "ras_sel_c", mb, "ras_free", mm);
         m.assign("ras_sel", "ras_sel_c");
         m.assign("ras_any", "|ras_free");
     }
@@ -774,12 +771,7 @@ fn results(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.blank();
     m.comment("Result writer: the lowest complete record, one 2-beat burst at RESULT_BASE + 16 t (golden TileResult).");
     m.reg("rw_act_q", 1).reg("rw_idx_q", mb).reg("rw_aw_q", 1).reg("rw_beat_q", 2).reg("wr_out_q", ob);
-    let mut body = vec![set("rw_pick", lit(mb, 0))];
-    for k in (0..mm).rev() {
-        body.push(if_(pick("rp_q", &k.to_string(), mm), vec![set("rw_pick", lit(mb, k as u64))]));
-    }
-    m.reg("rw_pick", mb);
-    m.comb(body);
+    lowest_set(m, "rw_pick", mb, "rp_q", mm);
     m.wire_assign("wr_room", 1, format!("wr_out_q != {}", lit(ob, o)));
     m.assign("m_axi_awvalid_o", "rw_act_q & ~rw_aw_q & wr_room");
     m.assign("m_axi_awid_o", lit(xi, 0));
