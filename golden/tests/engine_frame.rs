@@ -411,3 +411,37 @@ fn the_engine_plans_only_what_it_can_run() {
     };
     assert!(EngineSession::with_options(&scene, traj, &cfg, opts).is_ok());
 }
+
+/// The engine's own plan stops with the camera: on a frame whose pose repeats the last one the
+/// host leaves ADAPT_CTRL off and every reuse tile gets Neo's single pass (the pipeline's still
+/// camera rule), so the cost is Neo's at once; the frame before, still moving, is the engine's.
+#[test]
+fn the_engine_plan_stops_with_the_camera() {
+    use neo_golden::engine::{Planner, SessionOptions};
+    let (scene, _) = load_scene(CaseScene::SYNTHETIC, false).expect("synthetic scene");
+    let c = EngineCase::AdaptiveEngine;
+    let (mut traj, cfg) =
+        c.setup(&scene, &CaseScene::synthetic(), 3, [128, 128], &small_config()).expect("setup");
+    let last = traj.frames.last().expect("frames").clone();
+    traj.frames.push(last);
+    let opts = SessionOptions { planner: Planner::Engine, ..c.options(HostMode::Lists) };
+    let mut s = EngineSession::with_options(&scene, traj, &cfg, opts).expect("session");
+    let mut mem = Memory::new();
+    let mut planned = Vec::new();
+    while let Some(plan) = s.next_frame(&mut mem).expect("host frame") {
+        let out = execute_frame(&cfg, &plan.regs, &mut mem).expect("reference frame");
+        assert_eq!(plan.expected.compare(&mem), None, "frame {}", plan.frame);
+        assert_eq!(plan.expected.compare_outcome(&out), None, "frame {}", plan.frame);
+        planned.push(plan.regs.adapt.enabled());
+        if plan.frame == 3 {
+            let reuse = plan.expected.descriptors.iter().filter(|d| !d.from_scratch && d.prev_len > 0);
+            assert!(
+                reuse.clone().count() > 0 && reuse.clone().all(|d| d.dps_passes == 1),
+                "Neo's single pass"
+            );
+            assert_eq!(out.counters.get(Counter::RdResult), 0, "no result read");
+        }
+    }
+    // Frame 0 from scratch, 1 and 2 moving (the engine plans), 3 still (the host's single pass).
+    assert_eq!(planned, [false, true, true, false]);
+}
