@@ -298,14 +298,13 @@ module neo_frame_ctrl (
   reg  cap_q;
   reg  [3:0] lvl_q;
   reg  [3:0] c_q;
-  reg  [63:0] acc_q;
   reg  [63:0] spent_q;
   wire [73:0] sb;
   assign sb = {10'd0, sum_q} * {64'd0, ad_budget};
   wire [3:0] lvl_idx;
   assign lvl_idx = lvl_q - 4'd2;
   wire [63:0] cap_next;
-  assign cap_next = acc_q + hist[lvl_idx];
+  assign cap_next = spent_q + hist[lvl_idx];
   wire cap_fits;
   assign cap_fits = ({10'd0, cap_next} * 74'd100) <= sb;
   // Walk: min(p, c), or c + 1 when p > c and 100 (spent + cost) <= S x budget (then spent += cost).
@@ -320,7 +319,6 @@ module neo_frame_ctrl (
       cap_q <= 1'b0;
       lvl_q <= 4'd2;
       c_q <= 4'd1;
-      acc_q <= 64'd0;
       spent_q <= 64'd0;
       sum_q <= 64'd0;
     end else begin
@@ -328,7 +326,6 @@ module neo_frame_ctrl (
         cap_q <= 1'b0;
         lvl_q <= 4'd2;
         c_q <= 4'd1;
-        acc_q <= 64'd0;
         spent_q <= 64'd0;
         sum_q <= 64'd0;
       end else begin
@@ -341,7 +338,6 @@ module neo_frame_ctrl (
         if (cap_q) begin
           if (cap_fits) begin
             c_q <= lvl_q;
-            acc_q <= cap_next;
             spent_q <= cap_next;
             if (lvl_q == 4'd15) begin
               cap_q <= 1'b0;

@@ -34,7 +34,9 @@ use crate::emit::{for_, if_, if_else, set, Module, Stmt};
 use neo_golden::engine::adapt::{
     ADAPT_BUDGET_BITS, ADAPT_BUDGET_LSB, ADAPT_ENABLE, ADAPT_MAX_BITS, ADAPT_MAX_LSB,
 };
-use neo_golden::engine::memory::{DPS_PASSES_BITS, DPS_PASSES_LSB, INVERSIONS_BITS, INVERSIONS_LSB};
+use neo_golden::engine::memory::{
+    DPS_PASSES_BITS, DPS_PASSES_LSB, INVERSIONS_BITS, INVERSIONS_LSB, INVERSIONS_MAX,
+};
 use neo_golden::engine::{EngineConfig, SchedulerPolicy};
 
 /// Module name.
@@ -427,7 +429,8 @@ fn adapt(m: &mut Module, cfg: &EngineConfig) {
     m.comment(format!(
         "Cap: the largest c with 100 (hist[0] + ... + hist[c - 2]) <= S x budget (c = 1..{top})."
     ));
-    m.reg("cap_q", 1).reg("lvl_q", pb).reg("c_q", pb).reg("acc_q", ACC_BITS).reg("spent_q", ACC_BITS);
+    // spent_q: during the cap, the extra cost of the cap so far; in the walk, plus the raises.
+    m.reg("cap_q", 1).reg("lvl_q", pb).reg("c_q", pb).reg("spent_q", ACC_BITS);
     m.wire_assign(
         "sb",
         CMP_BITS,
@@ -435,7 +438,7 @@ fn adapt(m: &mut Module, cfg: &EngineConfig) {
     );
     let ib = bits_for(levels as u64 - 1);
     m.wire_assign("lvl_idx", pb, format!("lvl_q - {}", lit(pb, 2)));
-    m.wire_assign("cap_next", ACC_BITS, format!("acc_q + hist[{}]", resize("lvl_idx", pb, ib)));
+    m.wire_assign("cap_next", ACC_BITS, format!("spent_q + hist[{}]", resize("lvl_idx", pb, ib)));
     let hundred = |v: &str| format!("({} * {})", zext(v, ACC_BITS, CMP_BITS), lit(CMP_BITS, 100));
     m.wire_assign("cap_fits", 1, format!("{} <= sb", hundred("cap_next")));
     m.comment(
@@ -452,7 +455,6 @@ fn adapt(m: &mut Module, cfg: &EngineConfig) {
         set("cap_q", "1'b0"),
         set("lvl_q", lit(pb, 2)),
         set("c_q", lit(pb, 1)),
-        set("acc_q", lit(ACC_BITS, 0)),
         set("spent_q", lit(ACC_BITS, 0)),
         set("sum_q", lit(ACC_BITS, 0)),
     ];
@@ -470,7 +472,6 @@ fn adapt(m: &mut Module, cfg: &EngineConfig) {
                         "cap_fits",
                         vec![
                             set("c_q", "lvl_q"),
-                            set("acc_q", "cap_next"),
                             set("spent_q", "cap_next"),
                             if_else(
                                 format!("lvl_q == {}", lit(pb, top as u64)),
@@ -699,7 +700,6 @@ fn control(m: &mut Module, d: &Dims) {
         "cap_q",
         "lvl_q",
         "c_q",
-        "acc_q",
         "spent_q",
     ];
     finish(m, d);
@@ -781,7 +781,7 @@ fn results(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.assign("m_axi_awburst_o", lit(2, 1));
     m.assign("m_axi_wvalid_o", "rw_act_q & ~rw_beat_q[1] & (rw_aw_q | wr_room)");
     // The inversions saturate at the field's all-ones value (golden TileResult::new).
-    let sat = (1u64 << INVERSIONS_BITS) - 1;
+    let sat = INVERSIONS_MAX as u64;
     let inv = if lw > INVERSIONS_BITS {
         format!(
             "(rc_inv[rw_idx_q] > {}) ? {} : rc_inv[rw_idx_q][{}:0]",

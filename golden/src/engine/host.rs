@@ -313,8 +313,6 @@ pub struct EngineSession<'s> {
     scene_written: bool,
     /// `ADAPT_CTRL` when the engine plans ([`Planner::Engine`]).
     adapt: Option<AdaptRegs>,
-    /// Whether the frame being written is planned by the engine.
-    engine_plans: bool,
 }
 
 impl<'s> EngineSession<'s> {
@@ -413,7 +411,6 @@ impl<'s> EngineSession<'s> {
             mode,
             scene_written: false,
             adapt,
-            engine_plans: false,
         };
         // The bases are the same every frame: refuse a map the engine cannot use up front.
         let cam = session.traj.frames[0].clone();
@@ -467,8 +464,7 @@ impl<'s> EngineSession<'s> {
         // The engine plans a reuse frame with the camera moving (the pipeline plans the others
         // as a still camera or a shot start).
         let moving = out.stats.camera != CameraMotion::default();
-        self.engine_plans = self.adapt.is_some() && !cut && moving;
-        if let (true, Some(a)) = (self.engine_plans, self.adapt) {
+        if let (false, true, Some(a)) = (cut, moving, self.adapt) {
             regs.adapt = a;
         }
         let scratch: Vec<bool> =
@@ -478,7 +474,7 @@ impl<'s> EngineSession<'s> {
             HostMode::Lists => {
                 let descriptors = self.write_lists(mem, f, &scratch, &lists, &out)?;
                 for (t, d) in descriptors.iter().enumerate() {
-                    mem.write_descriptor(regs.desc_base, t as u64, &self.as_written(d));
+                    mem.write_descriptor(regs.desc_base, t as u64, &as_written(&regs, d));
                 }
                 self.write_features(mem);
                 self.expected(mem, regs, descriptors, &prev_tables, &out)
@@ -510,11 +506,6 @@ impl<'s> EngineSession<'s> {
             pre: PreRegs::default(),
             adapt: AdaptRegs::default(),
         }
-    }
-
-    /// A descriptor as the host writes it: without DPS passes when the engine plans them.
-    pub(super) fn as_written(&self, d: &TileDescriptor) -> TileDescriptor {
-        TileDescriptor { dps_passes: if self.engine_plans { 0 } else { d.dps_passes }, ..*d }
     }
 
     /// Every tile's incoming list of the frame the pipeline just rendered: its current list
@@ -642,11 +633,11 @@ impl<'s> EngineSession<'s> {
         let tiles = descriptors.len() as u64;
         o.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES * tiles);
         o.counters.add(Counter::WrResult, RESULT_BYTES * tiles);
-        if self.engine_plans {
+        if regs.adapt.enabled() {
             // The previous results, read in the scan and again in the walk.
             o.counters.add(Counter::RdResult, 2 * RESULT_BYTES * tiles);
         }
-        let descriptors = descriptors.iter().map(|d| self.as_written(d)).collect();
+        let descriptors = descriptors.iter().map(|d| as_written(&regs, d)).collect();
         Expected {
             regs,
             descriptors,
@@ -681,6 +672,12 @@ impl<'s> EngineSession<'s> {
         }
         v
     }
+}
+
+/// A descriptor as the host writes it for a frame of `regs`: without DPS passes when the engine
+/// plans them (`ADAPT_CTRL`).
+pub(super) fn as_written(regs: &FrameRegs, d: &TileDescriptor) -> TileDescriptor {
+    TileDescriptor { dps_passes: if regs.adapt.enabled() { 0 } else { d.dps_passes }, ..*d }
 }
 
 /// The DPS passes the pipeline ran on tile `t` this frame (0 for a sort from scratch), as a

@@ -29,6 +29,8 @@ pub const RESULT_BYTES: u64 = 16;
 pub const INVERSIONS_LSB: u32 = 40;
 /// Bits of the result's merge-inversion field (the count saturates at its largest value).
 pub const INVERSIONS_BITS: u32 = 24;
+/// The largest merge-inversion count a result holds: larger counts saturate to it.
+pub const INVERSIONS_MAX: u32 = (1 << INVERSIONS_BITS) - 1;
 
 /// One tile's descriptor: 4 little-endian u64 words at `DESC_BASE + 32 t`.
 ///
@@ -160,11 +162,10 @@ pub struct TileResult {
 impl TileResult {
     /// The result of a tile with these counters (the inversions saturate at the field).
     pub fn new(next_len: u32, overflow: bool, merge_inversions: u64, wb: &WritebackSignals) -> Self {
-        let max = (1u64 << INVERSIONS_BITS) - 1;
         TileResult {
             next_len,
             overflow,
-            merge_inversions: merge_inversions.min(max) as u32,
+            merge_inversions: merge_inversions.min(INVERSIONS_MAX as u64) as u32,
             wb_len: wb.len,
             wb_reach: wb.reach,
         }
@@ -177,8 +178,7 @@ impl TileResult {
 
     /// The result's two words.
     pub fn to_words(&self) -> [u64; 2] {
-        let max = (1u64 << INVERSIONS_BITS) - 1;
-        let inv = (self.merge_inversions as u64).min(max);
+        let inv = self.merge_inversions.min(INVERSIONS_MAX) as u64;
         [
             self.next_len as u64 | (self.overflow as u64) << 32 | inv << INVERSIONS_LSB,
             self.wb_len as u64 | (self.wb_reach as u64) << 32,
@@ -190,7 +190,7 @@ impl TileResult {
         TileResult {
             next_len: w[0] as u32,
             overflow: (w[0] >> 32) & 1 == 1,
-            merge_inversions: (w[0] >> INVERSIONS_LSB) as u32 & ((1 << INVERSIONS_BITS) - 1),
+            merge_inversions: (w[0] >> INVERSIONS_LSB) as u32 & INVERSIONS_MAX,
             wb_len: w[1] as u32,
             wb_reach: (w[1] >> 32) as u32,
         }

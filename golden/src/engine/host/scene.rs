@@ -155,7 +155,7 @@ impl EngineSession<'_> {
             mem.write_descriptor(
                 regs.desc_base,
                 t as u64,
-                &TileDescriptor { list_len: LIST_LEN_CANARY, ..self.as_written(d) },
+                &TileDescriptor { list_len: LIST_LEN_CANARY, ..super::as_written(&regs, d) },
             );
         }
         let mut e = self.expected(mem, regs, descriptors, prev_tables, out);
