@@ -8,6 +8,7 @@ use neo_golden::engine::{
 };
 use neo_golden::scene::Scene;
 use neo_golden::shared::shared_file_for_test;
+use neo_golden::sort::SortMode;
 use neo_golden::source::load_scene;
 
 /// What a run saw, for the case-specific assertions.
@@ -33,6 +34,10 @@ struct Seen {
     reach: u64,
     /// Reuse tiles by the DPS passes the engine planned itself (`ADAPT_CTRL`).
     engine_passes: [usize; 16],
+    /// Reuse tiles whose descriptor asks for the wide chunk, and their DPS commands longer
+    /// than a chunk.
+    wide: usize,
+    wide_cmds: usize,
 }
 
 /// Runs every frame of `session` through `execute_frame` and checks it against the plan.
@@ -75,6 +80,11 @@ fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
                 seen.passes[d.dps_passes as usize] += 1;
             }
             seen.resorted += (d.from_scratch && !plan.from_scratch) as usize;
+            seen.wide += (!d.from_scratch && d.prev_len > 0 && d.dps_wide) as usize;
+        }
+        for t in &trace.tiles {
+            let dps = t.plan.commands().filter(|c| c.mode == SortMode::Dps);
+            seen.wide_cmds += dps.filter(|c| c.len_a > cfg.chunk as u64).count();
         }
         if std::env::var_os("ENGINE_DEBUG").is_some() {
             let v: Vec<u64> = plan.expected.descriptors.iter().map(|d| d.entries_in()).collect();
@@ -141,6 +151,11 @@ fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
                 s.engine_passes[1] > 0 && s.engine_passes[2..].iter().sum::<usize>() > 0,
                 "{name}: {s:?}"
             );
+        }
+        EngineCase::AdaptiveWide => {
+            assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
+            assert!(s.wide > 0 && s.wide_cmds > 0, "{name}: DPS in wide chunks: {s:?}");
+            assert!(s.passes[1] > s.wide, "{name}: and in chunks: {s:?}");
         }
         EngineCase::AdaptiveResort => {
             assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");

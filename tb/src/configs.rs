@@ -99,6 +99,24 @@ pub fn raster_core() -> Vec<UnitConfig> {
     ]
 }
 
+/// The Sorting Core's and its sequencer's configurations with a wide DPS chunk: the buffer
+/// (`chunk * dps_wide`) and the sequencer's DPS chunks.
+pub fn sort_wide() -> Vec<UnitConfig> {
+    let d = EngineConfig::default();
+    vec![
+        UnitConfig {
+            name: "sort-wide-4",
+            why: "the adaptive_wide case's engine: a wide chunk of 4 x 256 (1024-entry buffers)",
+            cfg: EngineConfig { dps_wide: 4, ..d.clone() },
+        },
+        UnitConfig {
+            name: "sort-wide-64",
+            why: "the widest multiple: 64 x a 32-entry chunk (2048-entry buffers, 7 more merge passes)",
+            cfg: EngineConfig { chunk: 32, dps_wide: 64, ..d },
+        },
+    ]
+}
+
 /// True in a coverage run (`NEO_COVERAGE=1`, `scripts/coverage`), after printing why test
 /// `test` does not run there: coverage counts the configuration the crate was built with, and
 /// another configuration's Verilog has other lines under the same module names, which would
@@ -165,7 +183,7 @@ mod tests {
     /// and the names are distinct.
     #[test]
     fn the_configurations_are_valid_and_not_the_default() {
-        let all: Vec<UnitConfig> = [itu(), scu(), raster_core()].concat();
+        let all: Vec<UnitConfig> = [itu(), scu(), raster_core(), sort_wide()].concat();
         for u in &all {
             u.cfg.validate().unwrap_or_else(|e| panic!("{}: {e}", u.name));
             assert_ne!(u.cfg, EngineConfig::default(), "{}", u.name);
@@ -187,6 +205,9 @@ mod tests {
         }
         for u in raster_core() {
             assert_ne!(u.cfg.raster_itus, d.raster_itus, "{}", u.name);
+        }
+        for u in sort_wide() {
+            assert!(u.cfg.dps_wide > 1, "{}", u.name);
         }
     }
 }

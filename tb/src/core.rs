@@ -21,6 +21,8 @@
 //! ready or changes before it is taken ([`Handshake`]) are protocol errors.
 
 use crate::check::{Checker, WriteOnce};
+use crate::dut::Clocked;
+use crate::dynmodel::DynModel;
 use crate::models::NeoSortCore;
 use crate::rng::Rng;
 use crate::stream::Handshake;
@@ -153,10 +155,61 @@ struct Memory {
     inflight: VecDeque<InFlight>,
 }
 
-/// The Sorting Core with its memory, command driver and checker.
-pub struct Core {
+/// The Sorting Core's ports (indices into the model's).
+struct Ports {
+    cmd_valid: usize,
+    cmd_ready: usize,
+    /// `cmd_mode_i`, `cmd_src_a_i`, `cmd_len_a_i`, `cmd_src_b_i`, `cmd_len_b_i`, `cmd_dst_i`.
+    cmd: [usize; 6],
+    done: usize,
+    done_len: usize,
+    done_inv: usize,
+    req_valid: usize,
+    req_ready: usize,
+    req_addr: usize,
+    req_len: usize,
+    rsp_valid: usize,
+    rsp_ready: usize,
+    rsp_data: usize,
+    wr_valid: usize,
+    wr_ready: usize,
+    wr_addr: usize,
+    wr_data: usize,
+}
+
+impl Ports {
+    fn of<M: Clocked>(dut: &M) -> Self {
+        let p = |n: &str| dut.pin(n);
+        Ports {
+            cmd_valid: p("cmd_valid_i"),
+            cmd_ready: p("cmd_ready_o"),
+            cmd: ["cmd_mode_i", "cmd_src_a_i", "cmd_len_a_i", "cmd_src_b_i", "cmd_len_b_i", "cmd_dst_i"]
+                .map(p),
+            done: p("done_o"),
+            done_len: p("done_len_o"),
+            done_inv: p("done_inv_o"),
+            req_valid: p("mem_req_valid_o"),
+            req_ready: p("mem_req_ready_i"),
+            req_addr: p("mem_req_addr_o"),
+            req_len: p("mem_req_len_o"),
+            rsp_valid: p("mem_rsp_valid_i"),
+            rsp_ready: p("mem_rsp_ready_o"),
+            rsp_data: p("mem_rsp_data_i"),
+            wr_valid: p("mem_wr_valid_o"),
+            wr_ready: p("mem_wr_ready_i"),
+            wr_addr: p("mem_wr_addr_o"),
+            wr_data: p("mem_wr_data_o"),
+        }
+    }
+}
+
+/// The Sorting Core with its memory, command driver and checker, on the statically linked model
+/// of the crate's configuration ([`Core::new`]) or on one built for any configuration
+/// ([`Core::build`]).
+pub struct Core<M: Clocked = NeoSortCore> {
     /// The model.
-    pub dut: NeoSortCore,
+    pub dut: M,
+    ports: Ports,
     mem: Memory,
     /// Mismatch reporting.
     pub checker: Checker,
@@ -167,33 +220,50 @@ pub struct Core {
     last_done_len: Option<u64>,
 }
 
-impl Core {
-    /// A reset core whose memory follows `timing`.
-    pub fn new(cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Core {
+impl Core<NeoSortCore> {
+    /// A reset core (the static model of [`crate::config`]) whose memory follows `timing`.
+    pub fn new(cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Self {
+        Core::with_model(NeoSortCore::new(), cfg, seed, timing)
+    }
+}
+
+impl Core<DynModel> {
+    /// A reset core of any configuration `cfg` (`neo_sort_core` built at run time, or loaded
+    /// from the cache: [`crate::configs::build`]) whose memory follows `timing`.
+    pub fn build(cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Result<Self, String> {
+        let dut = crate::configs::build(cfg, "neo_sort_core")?;
+        Ok(Core::with_model(dut, cfg, seed, timing))
+    }
+}
+
+impl<M: Clocked> Core<M> {
+    /// A reset core on model `dut` (`neo_sort_core` generated from `cfg`) whose memory follows
+    /// `timing`.
+    pub fn with_model(mut dut: M, cfg: &EngineConfig, seed: u64, timing: MemTiming) -> Self {
         let mut rng = Rng::new(seed);
-        let mut dut = NeoSortCore::new();
-        dut.set_cmd_valid_i(false);
-        dut.set_mem_req_ready_i(false);
-        dut.set_mem_rsp_valid_i(false);
-        dut.reset();
+        let ports = Ports::of(&dut);
+        for p in [ports.cmd_valid, ports.req_ready, ports.rsp_valid] {
+            dut.io_set(p, 0);
+        }
+        dut.io_reset();
         // docs/rtl.md "Memory protocol": an offered read request that is not taken may change
         // or be withdrawn, so only "valid does not depend on ready" applies to it; a write holds
         // with its data until taken.
-        let mut req_hs = Handshake::new::<NeoSortCore>(
+        let bind = |what: &str, valid: &str, ready: &str, data: &[&str]| {
+            Handshake::bind(&dut, what, valid, ready, data).unwrap_or_else(|e| panic!("{e}"))
+        };
+        let mut req_hs = bind(
             "read-request port",
             "mem_req_valid_o",
             "mem_req_ready_i",
             &["mem_req_addr_o", "mem_req_len_o"],
         );
         req_hs.check_stable = false;
+        let wr_hs =
+            bind("write port", "mem_wr_valid_o", "mem_wr_ready_i", &["mem_wr_addr_o", "mem_wr_data_o"]);
         let mem = Memory {
             req_hs,
-            wr_hs: Handshake::new::<NeoSortCore>(
-                "write port",
-                "mem_wr_valid_o",
-                "mem_wr_ready_i",
-                &["mem_wr_addr_o", "mem_wr_data_o"],
-            ),
+            wr_hs,
             words: HashMap::new(),
             timing,
             rng: rng.fork(1),
@@ -201,16 +271,27 @@ impl Core {
             offering: false,
             inflight: VecDeque::new(),
         };
+        let checker = Checker::new(dut.top(), seed);
         Core {
             dut,
+            ports,
             mem,
-            checker: Checker::new(NeoSortCore::NAME, seed),
+            checker,
             fmt: cfg.format(),
             burst: cfg.burst as u64,
             rng: rng.fork(2),
             cmd_gap: 2,
             last_done_len: None,
         }
+    }
+
+    /// Restarts the bench's random streams (memory timing, command gaps) and its checker's seed
+    /// from `seed`, as a core made with `seed` has them (the memory keeps its words).
+    pub fn reseed(&mut self, seed: u64) {
+        let mut rng = Rng::new(seed);
+        self.mem.rng = rng.fork(1);
+        self.rng = rng.fork(2);
+        self.checker = Checker::new(self.dut.top(), seed);
     }
 
     /// Changes the memory timing.
@@ -248,33 +329,33 @@ impl Core {
     /// oldest command in flight (commands complete in order), reads in the sources of one in
     /// flight.
     fn step(&mut self) {
-        let c = self.dut.cycle();
+        let c = self.dut.io_cycle();
         let ready = self.mem.rng.percent(self.mem.timing.req_ready_pct);
-        self.dut.set_mem_req_ready_i(ready);
+        self.dut.io_set(self.ports.req_ready, ready as u64);
         let wr_ready = self.mem.rng.percent(self.mem.timing.wr_ready_pct);
-        self.dut.set_mem_wr_ready_i(wr_ready);
+        self.dut.io_set(self.ports.wr_ready, wr_ready as u64);
         if !self.mem.offering {
             if let Some(&(due, data)) = self.mem.rsp.front() {
                 if due <= c && !self.mem.rng.percent(self.mem.timing.rsp_gap_pct) {
                     self.mem.offering = true;
-                    self.dut.set_mem_rsp_data_i(data);
+                    self.dut.io_set(self.ports.rsp_data, data);
                 }
             }
         }
         if !self.mem.offering {
-            self.dut.set_mem_rsp_data_i(self.mem.rng.next_u64());
+            self.dut.io_set(self.ports.rsp_data, self.mem.rng.next_u64());
         }
-        self.dut.set_mem_rsp_valid_i(self.mem.offering);
-        self.dut.eval();
+        self.dut.io_set(self.ports.rsp_valid, self.mem.offering as u64);
+        self.dut.io_eval();
         self.mem.wr_hs.check(&mut self.dut, wr_ready, &self.checker);
         self.mem.req_hs.check(&mut self.dut, ready, &self.checker);
 
-        if self.mem.offering && self.dut.mem_rsp_ready_o() {
+        if self.mem.offering && self.dut.flag(self.ports.rsp_ready) {
             self.mem.rsp.pop_front();
             self.mem.offering = false;
         }
-        if wr_ready && self.dut.mem_wr_valid_o() {
-            let addr = self.dut.mem_wr_addr_o();
+        if wr_ready && self.dut.flag(self.ports.wr_valid) {
+            let addr = self.dut.io_get(self.ports.wr_addr);
             let ok = self.mem.inflight.front().map(|f| f.write.contains(&addr));
             self.checker.protocol(
                 c,
@@ -284,14 +365,14 @@ impl Core {
                     self.mem.inflight.front().map(|f| f.write.clone())
                 ),
             );
-            self.mem.words.insert(addr, self.dut.mem_wr_data_o());
+            self.mem.words.insert(addr, self.dut.io_get(self.ports.wr_data));
             let f = &mut self.mem.inflight[0];
             f.entries_written += 1;
             f.written.record(&self.checker, c, "entry", addr);
         }
-        if ready && self.dut.mem_req_valid_o() {
-            let addr = self.dut.mem_req_addr_o();
-            let len = self.dut.mem_req_len_o();
+        if ready && self.dut.flag(self.ports.req_valid) {
+            let addr = self.dut.io_get(self.ports.req_addr);
+            let len = self.dut.io_get(self.ports.req_len);
             self.checker.protocol(
                 c,
                 (1..=self.burst).contains(&len),
@@ -322,7 +403,7 @@ impl Core {
             f.read_bursts += 1;
             f.entries_read += len;
         }
-        self.dut.tick();
+        self.dut.io_tick();
     }
 
     /// Runs `cmds` back to back (each offered as soon as the previous one was taken, after a
@@ -335,13 +416,13 @@ impl Core {
     pub fn run_queue(&mut self, cmds: &[Command]) -> QueueRun {
         let mut results: Vec<Option<CmdResult>> = vec![None; cmds.len()];
         let budget: u64 = cmds.iter().map(|c| 2000 + 400 * (c.len_a + c.len_b)).sum();
-        let limit = self.dut.cycle() + budget;
+        let limit = self.dut.io_cycle() + budget;
         let mut next = 0;
         let mut gap = self.rng.below(self.cmd_gap + 1);
         let mut offered = false;
         let mut first_accept = None;
         loop {
-            let c = self.dut.cycle();
+            let c = self.dut.io_cycle();
             if !offered && next < cmds.len() {
                 let waits = reads(&cmds[next])
                     .iter()
@@ -350,28 +431,26 @@ impl Core {
                     gap -= 1;
                 } else if !waits {
                     let cmd = cmds[next];
-                    self.dut.set_cmd_mode_i(cmd.mode as u64);
-                    self.dut.set_cmd_src_a_i(cmd.src_a);
-                    self.dut.set_cmd_len_a_i(cmd.len_a);
-                    self.dut.set_cmd_src_b_i(cmd.src_b);
-                    self.dut.set_cmd_len_b_i(cmd.len_b);
-                    self.dut.set_cmd_dst_i(cmd.dst);
-                    self.dut.set_cmd_valid_i(true);
+                    let fields = [cmd.mode as u64, cmd.src_a, cmd.len_a, cmd.src_b, cmd.len_b, cmd.dst];
+                    for (&p, v) in self.ports.cmd.iter().zip(fields) {
+                        self.dut.io_set(p, v);
+                    }
+                    self.dut.io_set(self.ports.cmd_valid, 1);
                     offered = true;
                 }
             }
-            self.dut.eval();
-            if self.dut.done_o() {
+            self.dut.io_eval();
+            if self.dut.flag(self.ports.done) {
                 let f = self.mem.inflight.pop_front();
                 self.checker.protocol(c, f.is_some(), "done_o while no command is running");
                 let f = f.expect("checked");
-                let done_len = self.dut.done_len_o();
+                let done_len = self.dut.io_get(self.ports.done_len);
                 results[f.index] = Some(CmdResult {
                     cycles: c - f.accepted_at,
                     accepted_at: f.accepted_at,
                     done_at: c,
                     done_len,
-                    done_inv: self.dut.done_inv_o(),
+                    done_inv: self.dut.io_get(self.ports.done_inv),
                     read_bursts: f.read_bursts,
                     entries_read: f.entries_read,
                     entries_written: f.entries_written,
@@ -385,9 +464,14 @@ impl Core {
                     );
                 }
             } else if let Some(l) = self.last_done_len {
-                self.checker.value(c, "done_len_o (held between done_o pulses)", l, self.dut.done_len_o());
+                self.checker.value(
+                    c,
+                    "done_len_o (held between done_o pulses)",
+                    l,
+                    self.dut.io_get(self.ports.done_len),
+                );
             }
-            let accepted = offered && self.dut.cmd_ready_o();
+            let accepted = offered && self.dut.flag(self.ports.cmd_ready);
             if accepted {
                 let cmd = cmds[next];
                 self.mem.inflight.push_back(InFlight {
@@ -404,10 +488,10 @@ impl Core {
             }
             self.step();
             if accepted {
-                self.dut.set_cmd_valid_i(false);
+                self.dut.io_set(self.ports.cmd_valid, 0);
                 // Random garbage on the idle command fields.
-                self.dut.set_cmd_src_a_i(self.rng.next_u64());
-                self.dut.set_cmd_len_a_i(self.rng.next_u64());
+                self.dut.io_set(self.ports.cmd[1], self.rng.next_u64());
+                self.dut.io_set(self.ports.cmd[2], self.rng.next_u64());
                 offered = false;
                 next += 1;
                 gap = self.rng.below(self.cmd_gap + 1);
@@ -415,10 +499,10 @@ impl Core {
             if next == cmds.len() && self.mem.inflight.is_empty() {
                 break;
             }
-            if self.dut.cycle() > limit {
+            if self.dut.io_cycle() > limit {
                 let what = if offered { "cmd_ready_o" } else { "done_o" };
                 self.checker.fail(
-                    self.dut.cycle(),
+                    self.dut.io_cycle(),
                     what,
                     "progress",
                     &format!(
@@ -440,13 +524,21 @@ impl Core {
     /// # Panics
     /// On a timeout, a protocol violation, or `done_o` at the wrong time.
     pub fn run(&mut self, cmd: Command) -> CmdResult {
-        self.checker.protocol(self.dut.cycle(), self.mem.inflight.is_empty(), "run with commands in flight");
-        let r = self.run_queue(&[cmd]).results[0];
-        self.dut.eval();
-        self.checker.protocol(self.dut.cycle(), !self.dut.done_o(), "done_o longer than one cycle");
         self.checker.protocol(
-            self.dut.cycle(),
-            self.dut.cmd_ready_o(),
+            self.dut.io_cycle(),
+            self.mem.inflight.is_empty(),
+            "run with commands in flight",
+        );
+        let r = self.run_queue(&[cmd]).results[0];
+        self.dut.io_eval();
+        self.checker.protocol(
+            self.dut.io_cycle(),
+            !self.dut.flag(self.ports.done),
+            "done_o longer than one cycle",
+        );
+        self.checker.protocol(
+            self.dut.io_cycle(),
+            self.dut.flag(self.ports.cmd_ready),
             "cmd_ready_o low the cycle after the only command's done_o",
         );
         r
@@ -458,7 +550,7 @@ impl Core {
         let got = self.read_entries(addr, want.len());
         for (i, (w, g)) in want.iter().zip(&got).enumerate() {
             self.checker.entry(
-                self.dut.cycle(),
+                self.dut.io_cycle(),
                 &format!("{what}[{i}] (memory 0x{:x})", addr + i as u64),
                 w,
                 g,
@@ -483,15 +575,16 @@ pub mod layout {
     pub const REGION: u64 = 0x000F_0000;
 }
 
-/// (a) Sorts one chunk (`entries.len() <= C`) with `SORT` and checks it against golden
-/// `full_sort` (one chunk: BSU vectors plus in-chunk merges). Returns the command's cost.
-pub fn sort_chunk_checked(
-    core: &mut Core,
+/// (a) Sorts one chunk (`entries.len() <= B`, the core's buffer: the chunk `C`, or the wide
+/// chunk) with `mode` and checks it against golden `full_sort` (one chunk: BSU vectors plus
+/// in-chunk merges). Returns the command's cost.
+pub fn sort_chunk_checked<M: Clocked>(
+    core: &mut Core<M>,
     cfg: &EngineConfig,
     entries: &[SortEntry],
     mode: Mode,
 ) -> CmdResult {
-    assert!(entries.len() <= cfg.chunk, "one chunk at most");
+    assert!(entries.len() <= cfg.sort_buffer(), "one buffer at most");
     core.write_entries(layout::SRC, entries);
     core.clear(layout::DST..layout::DST + layout::REGION);
     let r = core.run(Command {
@@ -502,17 +595,17 @@ pub fn sort_chunk_checked(
         len_b: 0,
         dst: layout::DST,
     });
-    let (want, _) = neo_golden::sort::full_sort(entries, &cfg.sort_config());
-    core.checker.value(core.dut.cycle(), "done_len_o", want.len() as u64, r.done_len);
-    core.checker.value(core.dut.cycle(), "done_inv_o (chunk command)", 0, r.done_inv);
+    let (want, _) = neo_golden::sort::full_sort(entries, &cfg.buffer_sort_config());
+    core.checker.value(core.dut.io_cycle(), "done_len_o", want.len() as u64, r.done_len);
+    core.checker.value(core.dut.io_cycle(), "done_inv_o (chunk command)", 0, r.done_inv);
     core.expect("sorted chunk", layout::DST, &want);
     r
 }
 
 /// (a) Sorts several chunks (each `<= C` entries; chunk `k` read from `SRC + k C`, written to
 /// `DST + k C`) with `mode` commands issued back to back, and checks every one against golden.
-pub fn sort_chunks_checked(
-    core: &mut Core,
+pub fn sort_chunks_checked<M: Clocked>(
+    core: &mut Core<M>,
     cfg: &EngineConfig,
     chunks: &[Vec<SortEntry>],
     mode: Mode,
@@ -537,7 +630,7 @@ pub fn sort_chunks_checked(
     for (k, v) in chunks.iter().enumerate() {
         let (want, _) = neo_golden::sort::full_sort(v, &cfg.sort_config());
         core.checker.value(
-            core.dut.cycle(),
+            core.dut.io_cycle(),
             &format!("done_len_o (chunk {k})"),
             want.len() as u64,
             q.results[k].done_len,
@@ -552,7 +645,7 @@ pub fn sort_chunks_checked(
 /// with an empty B), all issued as one back-to-back queue (the chunk SORTs overlap; each MERGE
 /// waits for the commands whose output it reads). Checks the result and returns the cycles from
 /// the first command's acceptance to the last `done_o`.
-pub fn full_sort_checked(core: &mut Core, cfg: &EngineConfig, entries: &[SortEntry]) -> u64 {
+pub fn full_sort_checked<M: Clocked>(core: &mut Core<M>, cfg: &EngineConfig, entries: &[SortEntry]) -> u64 {
     let c = cfg.chunk;
     let len = entries.len() as u64;
     core.write_entries(layout::SRC, entries);
@@ -574,7 +667,7 @@ pub fn full_sort_checked(core: &mut Core, cfg: &EngineConfig, entries: &[SortEnt
     let q = core.run_queue(&cmds);
     for (k, (r, w)) in q.results.iter().zip(&want_len).enumerate() {
         core.checker.value(
-            core.dut.cycle(),
+            core.dut.io_cycle(),
             &format!("done_len_o (command {k}: {:?})", cmds[k].mode),
             *w,
             r.done_len,
@@ -588,8 +681,8 @@ pub fn full_sort_checked(core: &mut Core, cfg: &EngineConfig, entries: &[SortEnt
 /// (b) One DPS pass over `table` with `parity`: a `DPS` command per chunk of the parity's
 /// boundaries, issued back to back, checked against golden `dps_pass`. Returns the sorted table
 /// and the cycles from the first command's acceptance to the last `done_o`.
-pub fn dps_pass_checked(
-    core: &mut Core,
+pub fn dps_pass_checked<M: Clocked>(
+    core: &mut Core<M>,
     cfg: &EngineConfig,
     table: &[SortEntry],
     parity: Parity,
@@ -611,7 +704,7 @@ pub fn dps_pass_checked(
     let q = core.run_queue(&cmds);
     for (r, res) in ranges.iter().zip(&q.results) {
         core.checker.value(
-            core.dut.cycle(),
+            core.dut.io_cycle(),
             &format!("done_len_o (DPS chunk {r:?})"),
             r.len() as u64,
             res.done_len,
@@ -630,7 +723,12 @@ pub fn a_inversions(a: &[SortEntry], b: &[SortEntry], drop_invalid: bool) -> u64
 
 /// (c) Merges sorted `a` and `b` (`MERGE_DELETE` when `drop_invalid`, else `MERGE`) and checks
 /// against golden `merge2`. Returns the command's cost.
-pub fn merge_checked(core: &mut Core, a: &[SortEntry], b: &[SortEntry], drop_invalid: bool) -> CmdResult {
+pub fn merge_checked<M: Clocked>(
+    core: &mut Core<M>,
+    a: &[SortEntry],
+    b: &[SortEntry],
+    drop_invalid: bool,
+) -> CmdResult {
     core.write_entries(layout::SRC, a);
     core.write_entries(layout::SRC_B, b);
     core.clear(layout::DST..layout::DST + layout::REGION);
@@ -643,8 +741,8 @@ pub fn merge_checked(core: &mut Core, a: &[SortEntry], b: &[SortEntry], drop_inv
         dst: layout::DST,
     });
     let want = merge2(a, b, drop_invalid);
-    core.checker.value(core.dut.cycle(), "done_len_o", want.len() as u64, r.done_len);
-    core.checker.value(core.dut.cycle(), "done_inv_o", a_inversions(a, b, drop_invalid), r.done_inv);
+    core.checker.value(core.dut.io_cycle(), "done_len_o", want.len() as u64, r.done_len);
+    core.checker.value(core.dut.io_cycle(), "done_inv_o", a_inversions(a, b, drop_invalid), r.done_inv);
     core.expect(if drop_invalid { "merge-delete" } else { "merge" }, layout::DST, &want);
     r
 }
@@ -652,8 +750,8 @@ pub fn merge_checked(core: &mut Core, a: &[SortEntry], b: &[SortEntry], drop_inv
 /// The per-tile update composed from the three modes (DPS pass of the frame's parity on `prev`,
 /// conventional sort of `incoming`, `MERGE_DELETE`), checked against golden `update_tile` with
 /// an unlimited capacity. Returns the new table.
-pub fn update_checked(
-    core: &mut Core,
+pub fn update_checked<M: Clocked>(
+    core: &mut Core<M>,
     cfg: &EngineConfig,
     prev: &[SortEntry],
     incoming: &[SortEntry],
@@ -684,9 +782,10 @@ pub struct CheckedCmd {
 pub const SLOT: u64 = 0x1000;
 
 /// Places `entries` in slot `slot` and returns a chunk command (`mode` SORT or DPS) with its
-/// golden output (golden `sort_chunk` of the first `min(len, C)` entries: the core clamps).
-pub fn chunk_cmd(
-    core: &mut Core,
+/// golden output (golden `sort_chunk` of the first `min(len, B)` entries, `B` the core's
+/// buffer: the core clamps).
+pub fn chunk_cmd<M: Clocked>(
+    core: &mut Core<M>,
     cfg: &EngineConfig,
     slot: u64,
     entries: &[SortEntry],
@@ -698,8 +797,8 @@ pub fn chunk_cmd(
 
 /// [`chunk_cmd`] with `entries` at entry address `src` and the output at `dst` (the caller keeps
 /// the commands' regions apart).
-pub fn chunk_cmd_at(
-    core: &mut Core,
+pub fn chunk_cmd_at<M: Clocked>(
+    core: &mut Core<M>,
     cfg: &EngineConfig,
     src: u64,
     dst: u64,
@@ -708,8 +807,8 @@ pub fn chunk_cmd_at(
 ) -> CheckedCmd {
     core.write_entries(src, entries);
     core.clear(dst..dst + SLOT);
-    let n = entries.len().min(cfg.chunk);
-    let (want, _) = neo_golden::sort::full_sort(&entries[..n], &cfg.sort_config());
+    let n = entries.len().min(cfg.sort_buffer());
+    let (want, _) = neo_golden::sort::full_sort(&entries[..n], &cfg.buffer_sort_config());
     CheckedCmd {
         cmd: Command { mode, src_a: src, len_a: entries.len() as u64, src_b: 0, len_b: 0, dst },
         want,
@@ -719,8 +818,8 @@ pub fn chunk_cmd_at(
 
 /// Places sorted `a` and `b` in slot `slot` and returns a MERGE (`drop_invalid` false) or
 /// MERGE_DELETE command with its golden output (`merge2`).
-pub fn merge_cmd(
-    core: &mut Core,
+pub fn merge_cmd<M: Clocked>(
+    core: &mut Core<M>,
     slot: u64,
     a: &[SortEntry],
     b: &[SortEntry],
@@ -747,8 +846,8 @@ pub struct MergeAt {
 
 /// [`merge_cmd`] at the addresses `at` (the caller keeps the commands' regions apart; the
 /// output's region, `max(SLOT, len_a + len_b)` entries, is cleared first).
-pub fn merge_cmd_at(
-    core: &mut Core,
+pub fn merge_cmd_at<M: Clocked>(
+    core: &mut Core<M>,
     at: MergeAt,
     a: &[SortEntry],
     b: &[SortEntry],
@@ -773,7 +872,7 @@ pub fn merge_cmd_at(
 
 /// Runs `cmds` back to back ([`Core::run_queue`]) and checks every command's `done_len_o` and
 /// output against its golden result.
-pub fn queue_checked(core: &mut Core, cmds: &[CheckedCmd]) -> QueueRun {
+pub fn queue_checked<M: Clocked>(core: &mut Core<M>, cmds: &[CheckedCmd]) -> QueueRun {
     let plain: Vec<Command> = cmds.iter().map(|c| c.cmd).collect();
     let q = core.run_queue(&plain);
     for (k, (c, r)) in cmds.iter().zip(&q.results).enumerate() {

@@ -157,6 +157,7 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent
                 list_len,
                 next,
                 dps_passes: rng.below(MAX_DPS_PASSES as u64 + 1) as u8,
+                dps_wide: rng.percent(50),
             }
         })
         .collect();
@@ -539,6 +540,7 @@ impl FrameBench {
                     ("job_list_o", d.list as u64),
                     ("job_list_len_o", d.list_len as u64),
                     ("job_dps_passes_o", want_passes[t]),
+                    ("job_dps_wide_o", d.dps_wide as u64),
                     ("job_odd_o", (regs.frame & 1) as u64),
                 ];
                 for (f, w) in fields {

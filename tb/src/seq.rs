@@ -18,6 +18,8 @@
 
 use crate::bits::mask;
 use crate::check::Checker;
+use crate::dut::Clocked;
+use crate::dynmodel::DynModel;
 use crate::models::NeoSortSeq;
 use crate::rng::Rng;
 use crate::stimulus::entry_space;
@@ -111,7 +113,7 @@ impl Expected {
         let plan = tile_plan(cfg, &job.regs, &job.desc, job.core);
         assert!(!plan.overflow, "the bench only sends tiles that fit: {:?}", job.desc);
         let mut copy = mem.clone();
-        let mut sorter = Sorter::new(cfg.sort_config());
+        let mut sorter = Sorter::new(cfg.buffer_sort_config());
         let mut next_len = job.desc.list_len as u64;
         for c in plan.commands() {
             let e = run_command(&mut sorter, &mut copy, c).expect("bench data has no reserved id");
@@ -124,14 +126,72 @@ impl Expected {
     }
 }
 
-/// The sequencer with its surroundings.
-pub struct SeqBench {
+/// The sequencer's ports (indices into the model's).
+struct Ports {
+    job_valid: usize,
+    job_ready: usize,
+    /// `job_from_scratch_i`, `job_prev_i`, `job_prev_len_i`, `job_list_i`, `job_list_len_i`,
+    /// `job_next_i`, `job_dps_passes_i`, `job_dps_wide_i`, `job_odd_i`, `job_scratch_i`.
+    job: [usize; 10],
+    cmd_valid: usize,
+    cmd_ready: usize,
+    /// `cmd_mode_o`, `cmd_src_a_o`, `cmd_len_a_o`, `cmd_src_b_o`, `cmd_len_b_o`, `cmd_dst_o`.
+    cmd: [usize; 6],
+    done: usize,
+    done_len: usize,
+    done_inv: usize,
+    idle: usize,
+    cpl_valid: usize,
+    cpl_ready: usize,
+    cpl_len: usize,
+    cpl_inv: usize,
+}
+
+impl Ports {
+    fn of<M: Clocked>(dut: &M) -> Self {
+        let p = |n: &str| dut.pin(n);
+        Ports {
+            job_valid: p("job_valid_i"),
+            job_ready: p("job_ready_o"),
+            job: [
+                "job_from_scratch_i",
+                "job_prev_i",
+                "job_prev_len_i",
+                "job_list_i",
+                "job_list_len_i",
+                "job_next_i",
+                "job_dps_passes_i",
+                "job_dps_wide_i",
+                "job_odd_i",
+                "job_scratch_i",
+            ]
+            .map(p),
+            cmd_valid: p("cmd_valid_o"),
+            cmd_ready: p("cmd_ready_i"),
+            cmd: ["cmd_mode_o", "cmd_src_a_o", "cmd_len_a_o", "cmd_src_b_o", "cmd_len_b_o", "cmd_dst_o"]
+                .map(p),
+            done: p("done_i"),
+            done_len: p("done_len_i"),
+            done_inv: p("done_inv_i"),
+            idle: p("idle_i"),
+            cpl_valid: p("cpl_valid_o"),
+            cpl_ready: p("cpl_ready_i"),
+            cpl_len: p("cpl_len_o"),
+            cpl_inv: p("cpl_inv_o"),
+        }
+    }
+}
+
+/// The sequencer with its surroundings, on the statically linked model of the crate's
+/// configuration ([`SeqBench::new`]) or on one built for any configuration ([`SeqBench::build`]).
+pub struct SeqBench<M: Clocked = NeoSortSeq> {
     /// The model.
-    pub dut: NeoSortSeq,
+    pub dut: M,
     /// Mismatch reporting.
     pub checker: Checker,
     /// The memory the core model works on.
     pub mem: Memory,
+    ports: Ports,
     cfg: EngineConfig,
     sorter: Sorter,
     timing: SeqTiming,
@@ -143,27 +203,52 @@ pub struct SeqBench {
 /// A command taken by the core model and not yet done: (due cycle, done_len, done_inv).
 type Pending = VecDeque<(u64, u64, u64)>;
 
-impl SeqBench {
-    /// A reset sequencer whose surroundings follow `timing`.
-    pub fn new(cfg: &EngineConfig, seed: u64, timing: SeqTiming) -> SeqBench {
-        let mut dut = NeoSortSeq::new();
-        dut.set_job_valid_i(false);
-        dut.set_cmd_ready_i(false);
-        dut.set_done_i(false);
-        dut.set_idle_i(true);
-        dut.set_cpl_ready_i(false);
-        dut.reset();
+impl SeqBench<NeoSortSeq> {
+    /// A reset sequencer (the static model of [`crate::config`]) whose surroundings follow
+    /// `timing`.
+    pub fn new(cfg: &EngineConfig, seed: u64, timing: SeqTiming) -> Self {
+        SeqBench::with_model(NeoSortSeq::new(), cfg, seed, timing)
+    }
+}
+
+impl SeqBench<DynModel> {
+    /// A reset sequencer of any configuration `cfg` (`neo_sort_seq` built at run time, or
+    /// loaded from the cache: [`crate::configs::build`]).
+    pub fn build(cfg: &EngineConfig, seed: u64, timing: SeqTiming) -> Result<Self, String> {
+        let dut = crate::configs::build(cfg, "neo_sort_seq")?;
+        Ok(SeqBench::with_model(dut, cfg, seed, timing))
+    }
+}
+
+impl<M: Clocked> SeqBench<M> {
+    /// A reset sequencer on model `dut` (`neo_sort_seq` generated from `cfg`).
+    pub fn with_model(mut dut: M, cfg: &EngineConfig, seed: u64, timing: SeqTiming) -> Self {
+        let ports = Ports::of(&dut);
+        for p in [ports.job_valid, ports.cmd_ready, ports.done, ports.cpl_ready] {
+            dut.io_set(p, 0);
+        }
+        dut.io_set(ports.idle, 1);
+        dut.io_reset();
+        let checker = Checker::new(dut.top(), seed);
         SeqBench {
             dut,
-            checker: Checker::new(NeoSortSeq::NAME, seed),
+            checker,
             mem: Memory::new(),
+            ports,
             cfg: cfg.clone(),
-            sorter: Sorter::new(cfg.sort_config()),
+            sorter: Sorter::new(cfg.buffer_sort_config()),
             timing,
             rng: Rng::new(seed).fork(7),
             done_len: 0,
             done_inv: 0,
         }
+    }
+
+    /// Restarts the bench's random stream and its checker's seed from `seed`, as a bench made
+    /// with `seed` has them.
+    pub fn reseed(&mut self, seed: u64) {
+        self.rng = Rng::new(seed).fork(7);
+        self.checker = Checker::new(self.dut.top(), seed);
     }
 
     /// Changes the timing.
@@ -183,30 +268,28 @@ impl SeqBench {
                 (false, TileDescriptor::from_words(&w), r.percent(50), r.next_u64())
             }
         };
-        let dut = &mut self.dut;
-        dut.set_job_valid_i(valid);
-        dut.set_job_from_scratch_i(d.from_scratch);
-        dut.set_job_prev_i(d.prev as u64);
-        dut.set_job_prev_len_i(d.prev_len as u64);
-        dut.set_job_list_i(d.list as u64);
-        dut.set_job_list_len_i(d.list_len as u64);
-        dut.set_job_next_i(d.next as u64);
-        dut.set_job_dps_passes_i(d.passes());
-        dut.set_job_odd_i(odd);
-        dut.set_job_scratch_i(scratch & mask(self.cfg.addr_bits));
+        let fields = [
+            d.from_scratch as u64,
+            d.prev as u64,
+            d.prev_len as u64,
+            d.list as u64,
+            d.list_len as u64,
+            d.next as u64,
+            d.passes(),
+            d.dps_wide as u64,
+            odd as u64,
+            scratch & mask(self.cfg.addr_bits),
+        ];
+        self.dut.io_set(self.ports.job_valid, valid as u64);
+        for (&p, v) in self.ports.job.iter().zip(fields) {
+            self.dut.io_set(p, v);
+        }
     }
 
     fn offered(&self) -> TileCmd {
-        let d = &self.dut;
-        let mode = SortMode::ALL.into_iter().find(|m| m.code() == d.cmd_mode_o()).expect("2-bit mode");
-        TileCmd {
-            mode,
-            src_a: d.cmd_src_a_o(),
-            len_a: d.cmd_len_a_o(),
-            src_b: d.cmd_src_b_o(),
-            len_b: d.cmd_len_b_o(),
-            dst: d.cmd_dst_o(),
-        }
+        let [mode, src_a, len_a, src_b, len_b, dst] = self.ports.cmd.map(|p| self.dut.io_get(p));
+        let mode = SortMode::ALL.into_iter().find(|m| m.code() == mode).expect("2-bit mode");
+        TileCmd { mode, src_a, len_a, src_b, len_b, dst }
     }
 
     /// Runs one tile job to its completion and checks it (see the module docs).
@@ -216,7 +299,7 @@ impl SeqBench {
     pub fn run(&mut self, job: &SeqJob) -> SeqRun {
         let want = Expected::new(&self.cfg, job, &self.mem);
         let work: u64 = want.cmds.iter().map(|(_, c)| c.len_a + c.len_b).sum();
-        let limit = self.dut.cycle() + 2000 + 200 * want.cmds.len() as u64 + work / 4;
+        let limit = self.dut.io_cycle() + 2000 + 200 * want.cmds.len() as u64 + work / 4;
         let t = self.timing;
         let mut gap = self.rng.below(t.max_job_gap + 1);
         let (mut accepted_at, mut taken) = (None, 0usize);
@@ -229,7 +312,7 @@ impl SeqBench {
         let mut max_in_flight = 0;
         let mut md_inv = 0;
         loop {
-            let c = self.dut.cycle();
+            let c = self.dut.io_cycle();
             self.checker.protocol(c, c < limit, &format!("timeout: tile {:?} not completed", job.desc));
             // Job driver.
             let offer_job = accepted_at.is_none() && gap == 0;
@@ -247,27 +330,27 @@ impl SeqBench {
                 busy_until = c + 1 + self.rng.below(t.max_drain + 1);
                 idle_since_done = false;
             }
-            self.dut.set_done_i(pulse.is_some());
-            self.dut.set_done_len_i(self.done_len);
-            self.dut.set_done_inv_i(self.done_inv);
+            self.dut.io_set(self.ports.done, pulse.is_some() as u64);
+            self.dut.io_set(self.ports.done_len, self.done_len);
+            self.dut.io_set(self.ports.done_inv, self.done_inv);
             // Bridge model: idle now and then while commands run (between their bursts), and
             // for sure only once they are done and their writes drained.
             let idle = if pending.is_empty() { c >= busy_until } else { self.rng.percent(t.idle_busy_pct) };
-            self.dut.set_idle_i(idle);
+            self.dut.io_set(self.ports.idle, idle as u64);
             if idle && pulse.is_none() {
                 idle_since_done = true;
             }
             let ready = self.rng.percent(t.cmd_ready_pct);
-            self.dut.set_cmd_ready_i(ready);
+            self.dut.io_set(self.ports.cmd_ready, ready as u64);
             let cpl_ready = self.rng.percent(t.cpl_ready_pct);
-            self.dut.set_cpl_ready_i(cpl_ready);
-            self.dut.eval();
+            self.dut.io_set(self.ports.cpl_ready, cpl_ready as u64);
+            self.dut.io_eval();
 
             // Checker.
-            if offer_job && self.dut.job_ready_o() {
+            if offer_job && self.dut.flag(self.ports.job_ready) {
                 accepted_at = Some(c);
             }
-            let valid = self.dut.cmd_valid_o();
+            let valid = self.dut.flag(self.ports.cmd_valid);
             if let Some(h) = held {
                 self.checker.protocol(c, valid, "cmd_valid_o dropped before the command was taken");
                 self.checker.protocol(
@@ -319,7 +402,7 @@ impl SeqBench {
                     taken += 1;
                 }
             }
-            if self.dut.cpl_valid_o() {
+            if self.dut.flag(self.ports.cpl_valid) {
                 self.checker.value(
                     c,
                     "commands issued before the completion",
@@ -327,15 +410,15 @@ impl SeqBench {
                     taken as u64,
                 );
                 barrier(&self.checker, c, "before the completion", &pending, idle_since_done);
-                self.checker.value(c, "cpl_len_o", want.next_len, self.dut.cpl_len_o());
+                self.checker.value(c, "cpl_len_o", want.next_len, self.dut.io_get(self.ports.cpl_len));
                 self.checker.value(
                     c,
                     "cpl_inv_o (the MERGE_DELETE's done_inv_i)",
                     md_inv,
-                    self.dut.cpl_inv_o(),
+                    self.dut.io_get(self.ports.cpl_inv),
                 );
                 if cpl_ready {
-                    self.dut.tick();
+                    self.dut.io_tick();
                     let start = accepted_at.expect("a completion follows a job");
                     return SeqRun {
                         commands: taken,
@@ -347,7 +430,7 @@ impl SeqBench {
                     };
                 }
             }
-            self.dut.tick();
+            self.dut.io_tick();
         }
     }
 }
@@ -390,17 +473,22 @@ pub fn fill(cfg: &EngineConfig, rng: &mut Rng, mem: &mut Memory, d: &TileDescrip
 }
 
 /// A random descriptor: list and previous lengths drawn from the edge cases (0, 1, `C - 1`, `C`,
-/// `C + 1`) or up to `max_chunks` chunks, and now and then a table or a list as long as what is
+/// `C + 1`, and `W / 2`, `W`, `W + 1` of the wide chunk) or up to `max_chunks` chunks, and now and then a table or a list as long as what is
 /// left of the table capacity; its previous table, list and next table in three consecutive
 /// regions of 2^17 entries at a random place in one half of the entry space below 2^29 (the
 /// entry addresses' upper bits toggle; [`random_scratch_base`] puts the scratch regions in the
-/// other half); mostly Neo's single DPS pass, else 0, 2, 3, 8 or 15 passes.
+/// other half); mostly Neo's single DPS pass, else 0, 2, 3, 8 or 15 passes; 30% in the wide
+/// chunk.
 pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDescriptor {
     let c = cfg.chunk as u64;
     let len = |rng: &mut Rng| -> u32 {
+        let w = cfg.sort_buffer() as u64;
         let edge = [0, 1, c / 2 - 1, c / 2, c / 2 + 1, c - 1, c, c + 1, 2 * c, 2 * c + 1, 4 * c + 1];
+        let wide_edge = [w / 2 - 1, w / 2 + 1, w, w + 1, 2 * w + 1];
         if rng.percent(40) {
             *rng.pick(&edge) as u32
+        } else if rng.percent(15) {
+            *rng.pick(&wide_edge) as u32
         } else {
             rng.range(0, max_chunks * c) as u32
         }
@@ -425,6 +513,7 @@ pub fn random_desc(cfg: &EngineConfig, rng: &mut Rng, max_chunks: u64) -> TileDe
         list_len,
         next: at(2, rng),
         dps_passes: if rng.percent(60) { 1 } else { *rng.pick(&[0u8, 2, 3, 8, 15]) },
+        dps_wide: rng.percent(30),
     }
 }
 

@@ -354,6 +354,70 @@ mod cosim {
         });
     }
 
+    /// Engines with a wide DPS chunk (`dps_wide` > 1), whose buffers hold `W = dps_wide x C`
+    /// entries: chunk commands at the buffer's edges (`C`, `C + 1`, `W / 2`, `W - 1`, `W`, and
+    /// `W + 1`, clamped to `W`), a DPS-like wide chunk (a sorted table displaced by up to
+    /// `W / 2`), back-to-back queues of chunks up to `W` and merges whose streams fill the
+    /// `W`-entry FIFOs, and a conventional sort across several wide chunks, behind the hostile
+    /// memory.
+    #[test]
+    fn core_wide_chunks_in_other_configurations() {
+        let name = "core_wide_chunks_in_other_configurations";
+        neo_tb::configs::run_in_other_configurations(
+            name,
+            neo_tb::configs::sort_wide(),
+            |cfg| Core::build(cfg, 0, MemTiming::RANDOM),
+            |c| &mut c.dut,
+            |c, cfg, seed| {
+                c.reseed(seed);
+                c.set_timing(MemTiming::RANDOM);
+                let fmt = cfg.format();
+                let (ch, w) = (cfg.chunk, cfg.sort_buffer());
+                let mut rng = Rng::new(seed).fork(5);
+                for n in [ch, ch + 1, w / 2, w - 1, w] {
+                    let v = tile_entries(&fmt, &mut rng, n, n % 2 == 0, 80);
+                    sort_chunk_checked(c, cfg, &v, if n % 2 == 0 { Mode::Dps } else { Mode::Sort });
+                }
+                let sorted = tile_entries(&fmt, &mut rng, w, false, 70);
+                let table = nearly_sorted(sorted, &mut rng, w / 2, w / 8);
+                sort_chunk_checked(c, cfg, &table, Mode::Dps);
+                let v = tile_entries(&fmt, &mut rng, w + 1, false, 100);
+                let clamped = chunk_cmd(c, cfg, 0, &v, Mode::Sort);
+                assert_eq!(clamped.want.len(), w, "a chunk command sorts one buffer");
+                queue_checked(c, &[clamped]);
+                for gap in [0, 3] {
+                    c.set_cmd_gap(gap);
+                    let jobs: Vec<CheckedCmd> = (0..6)
+                        .map(|slot| {
+                            if rng.percent(70) {
+                                let n = rng.range(1, w as u64 + 1) as usize;
+                                let ties = rng.percent(30);
+                                let v = tile_entries(&fmt, &mut rng, n, ties, 80);
+                                chunk_cmd(
+                                    c,
+                                    cfg,
+                                    slot,
+                                    &v,
+                                    if rng.percent(50) { Mode::Sort } else { Mode::Dps },
+                                )
+                            } else {
+                                let (la, lb) = (rng.range(0, w as u64 + 1), rng.range(0, w as u64 + 1));
+                                let a = merge_stream(&fmt, &mut rng, la as usize, 75, true);
+                                let b = merge_stream(&fmt, &mut rng, lb as usize, 75, false);
+                                merge_cmd(c, slot, &a, &b, rng.percent(50))
+                            }
+                        })
+                        .collect();
+                    queue_checked(c, &jobs);
+                }
+                c.set_cmd_gap(2);
+                let v = tile_entries(&fmt, &mut rng, 2 * w + 5, true, 80);
+                full_sort_checked(c, cfg, &v);
+                println!("{name}: chunks of up to {w} entries sorted, merged and queued");
+            },
+        );
+    }
+
     /// Random commands for a mixed queue: mostly chunks (SORT / DPS of 0..=C entries, some
     /// clamped), some merges of two sorted streams (with and without delete).
     fn random_queue(c: &mut Core, rng: &mut Rng, len: usize) -> Vec<CheckedCmd> {

@@ -17,8 +17,10 @@ fn sort_seq_skipped_without_verilator() {
 
 #[cfg(neo_has_verilator)]
 mod cosim {
-    use neo_golden::engine::{FrameRegs, TileDescriptor};
+    use neo_golden::engine::{EngineConfig, FrameRegs, TileDescriptor};
     use neo_golden::sort::SortMode;
+    use neo_tb::configs::run_in_other_configurations;
+    use neo_tb::dut::Clocked;
     use neo_tb::rng::{for_each_seed, Rng};
     use neo_tb::seq::{fill, random_desc, random_scratch_base, SeqBench, SeqJob, SeqTiming};
     use neo_tb::waves::maybe_trace;
@@ -30,11 +32,11 @@ mod cosim {
     }
 
     fn regs(frame: u32, d: &TileDescriptor, rng: &mut Rng) -> FrameRegs {
-        FrameRegs {
-            frame,
-            scratch_base: random_scratch_base(&neo_tb::config(), rng, d),
-            ..FrameRegs::default()
-        }
+        regs_of(&neo_tb::config(), frame, d, rng)
+    }
+
+    fn regs_of(cfg: &EngineConfig, frame: u32, d: &TileDescriptor, rng: &mut Rng) -> FrameRegs {
+        FrameRegs { frame, scratch_base: random_scratch_base(cfg, rng, d), ..FrameRegs::default() }
     }
 
     #[test]
@@ -62,6 +64,7 @@ mod cosim {
                                 list_len: n,
                                 next: 0x30_0000 + 8 * p,
                                 dps_passes: 1,
+                                dps_wide: false,
                             };
                             fill(&cfg, &mut rng, &mut b.mem, &d);
                             let job = SeqJob {
@@ -95,61 +98,130 @@ mod cosim {
         cuts.windows(2).filter(|w| w[1] > w[0]).map(|w| (w[0], w[1] - w[0])).collect()
     }
 
-    /// Every DPS chunk boundary position on both parities: previous tables whose length ends
-    /// one before, on and one after every boundary of either parity up to 4 chunks; the DPS
-    /// commands the sequencer issues (offset from the table, length) must be the plainly
-    /// restated chunks.
+    /// Every DPS chunk boundary position on both parities, for a descriptor asking for the DPS
+    /// chunk `D` of `wide` (the wide chunk `W` or the chunk `C`, [`EngineConfig::dps_chunk`]):
+    /// previous tables whose length ends one before, on and one after every boundary of either
+    /// parity up to 4 chunks of `D`; the DPS commands the sequencer issues (offset from the
+    /// table, length) must be the plainly restated chunks.
+    fn dps_boundaries<M: Clocked>(b: &mut SeqBench<M>, cfg: &EngineConfig, seed: u64, wide: bool) -> usize {
+        let c = cfg.dps_chunk(wide) as u64;
+        let mut rng = Rng::new(seed);
+        let mut lens = vec![0u64, 1, 2];
+        for k in 1..=8 {
+            let boundary = k * c / 2;
+            lens.extend([boundary - 1, boundary, boundary + 1]);
+        }
+        let mut checked = 0;
+        for frame in [10u32, 11] {
+            for &p in &lens {
+                let d = TileDescriptor {
+                    tile_x: 1,
+                    tile_y: 2,
+                    from_scratch: false,
+                    prev: 0x10_0000,
+                    prev_len: p as u32,
+                    list: 0x20_0000,
+                    list_len: rng.below(3) as u32,
+                    next: 0x30_0000,
+                    dps_passes: 1,
+                    dps_wide: wide,
+                };
+                fill(cfg, &mut rng, &mut b.mem, &d);
+                let job = SeqJob { desc: d, regs: regs_of(cfg, frame, &d, &mut rng), core: 0 };
+                let r = b.run(&job);
+                let got: Vec<(u64, u64)> = r
+                    .cmds
+                    .iter()
+                    .filter(|x| x.mode == SortMode::Dps)
+                    .map(|x| {
+                        assert_eq!(x.dst, x.src_a, "DPS sorts in place");
+                        (x.src_a - d.prev as u64, x.len_a)
+                    })
+                    .collect();
+                let want = restated_dps_chunks(p, c, frame % 2 == 1);
+                assert_eq!(
+                    got, want,
+                    "DPS chunks (wide: {wide}) of a {p}-entry table, frame {frame} (seed 0x{seed:016x})"
+                );
+                checked += 1;
+            }
+        }
+        checked
+    }
+
+    /// [`dps_boundaries`] on the crate's configuration: chunks of `C`, and the wide bit, which
+    /// an engine without a wide chunk (`dps_wide` 1) ignores.
     #[test]
     fn seq_dps_chunks_at_every_boundary_on_both_parities() {
         let name = "seq_dps_chunks_at_every_boundary_on_both_parities";
         for_each_seed(name, |seed| {
             let cfg = neo_tb::config();
-            let c = cfg.chunk as u64;
-            let mut rng = Rng::new(seed);
             let mut b = bench(name, seed, SeqTiming::FAST);
-            let mut lens = vec![0u64, 1, 2];
-            for k in 1..=8 {
-                let boundary = k * c / 2;
-                lens.extend([boundary - 1, boundary, boundary + 1]);
-            }
-            let mut checked = 0;
-            for frame in [10u32, 11] {
-                for &p in &lens {
+            let checked = dps_boundaries(&mut b, &cfg, seed, false);
+            assert_eq!(cfg.dps_chunk(true), cfg.dps_chunk(false), "the crate's engine has no wide chunk");
+            let wide = dps_boundaries(&mut b, &cfg, seed, true);
+            assert_eq!(restated_dps_chunks(600, 256, false), [(0, 256), (256, 256), (512, 88)]);
+            assert_eq!(restated_dps_chunks(600, 256, true), [(0, 128), (128, 256), (384, 216)]);
+            println!("{name}: {checked} + {wide} tiles");
+        });
+    }
+
+    /// Engines with a wide DPS chunk (`dps_wide` > 1): every boundary of the wide chunk and of
+    /// the chunk on both parities, several passes of either, and random tiles back to back
+    /// (lengths at the wide chunk's edges too) under random timing.
+    #[test]
+    fn seq_wide_chunks_in_other_configurations() {
+        let name = "seq_wide_chunks_in_other_configurations";
+        run_in_other_configurations(
+            name,
+            neo_tb::configs::sort_wide(),
+            |cfg| SeqBench::build(cfg, 0, SeqTiming::FAST),
+            |b| &mut b.dut,
+            |b, cfg, seed| {
+                b.reseed(seed);
+                b.set_timing(SeqTiming::FAST);
+                let n = dps_boundaries(b, cfg, seed, true) + dps_boundaries(b, cfg, seed, false);
+                let w = cfg.sort_buffer() as u64;
+                let mut rng = Rng::new(seed).fork(3);
+                for (frame, passes) in [(4u32, 2u8), (7, 3)] {
+                    let p = 2 * w + 3;
                     let d = TileDescriptor {
-                        tile_x: 1,
-                        tile_y: 2,
-                        from_scratch: false,
                         prev: 0x10_0000,
                         prev_len: p as u32,
                         list: 0x20_0000,
                         list_len: rng.below(3) as u32,
                         next: 0x30_0000,
-                        dps_passes: 1,
+                        dps_passes: passes,
+                        dps_wide: true,
+                        ..TileDescriptor::default()
                     };
-                    fill(&cfg, &mut rng, &mut b.mem, &d);
-                    let job = SeqJob { desc: d, regs: regs(frame, &d, &mut rng), core: 0 };
-                    let r = b.run(&job);
+                    fill(cfg, &mut rng, &mut b.mem, &d);
+                    let r = b.run(&SeqJob { desc: d, regs: regs_of(cfg, frame, &d, &mut rng), core: 0 });
                     let got: Vec<(u64, u64)> = r
                         .cmds
                         .iter()
                         .filter(|x| x.mode == SortMode::Dps)
-                        .map(|x| {
-                            assert_eq!(x.dst, x.src_a, "DPS sorts in place");
-                            (x.src_a - d.prev as u64, x.len_a)
-                        })
+                        .map(|x| (x.src_a - 0x10_0000, x.len_a))
                         .collect();
-                    let want = restated_dps_chunks(p, c, frame % 2 == 1);
-                    assert_eq!(
-                        got, want,
-                        "DPS chunks of a {p}-entry table, frame {frame} (seed 0x{seed:016x})"
-                    );
-                    checked += 1;
+                    let want: Vec<(u64, u64)> = (0..passes as u32)
+                        .flat_map(|k| restated_dps_chunks(p, w, (frame + k) % 2 == 1))
+                        .collect();
+                    assert_eq!(got, want, "{passes} wide passes, frame {frame} (seed 0x{seed:016x})");
                 }
-            }
-            assert_eq!(restated_dps_chunks(600, 256, false), [(0, 256), (256, 256), (512, 88)]);
-            assert_eq!(restated_dps_chunks(600, 256, true), [(0, 128), (128, 256), (384, 216)]);
-            println!("{name}: {checked} tiles");
-        });
+                b.set_timing(SeqTiming::RANDOM);
+                for _ in 0..40 {
+                    let d = random_desc(cfg, &mut rng, 3 * cfg.dps_wide as u64);
+                    fill(cfg, &mut rng, &mut b.mem, &d);
+                    let job = SeqJob {
+                        desc: d,
+                        regs: regs_of(cfg, rng.next_u32(), &d, &mut rng),
+                        core: rng.below(cfg.sort_cores as u64),
+                    };
+                    b.run(&job);
+                }
+                println!("{name}: {n} boundary tiles, 2 multi-pass tiles, 40 random tiles");
+            },
+        );
     }
 
     /// Several DPS passes: pass `k` of frame `f` cuts with the parity of `f + k` (restated

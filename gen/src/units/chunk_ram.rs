@@ -1,4 +1,4 @@
-//! `neo_chunk_ram`: one on-chip chunk buffer (`chunk` entries), one synchronous write port and
+//! `neo_chunk_ram`: one on-chip chunk buffer (`chunk * dps_wide` entries, the wide DPS chunk), one synchronous write port and
 //! two asynchronous (combinational) read ports, register-file style. An SRAM macro with
 //! registered reads would need a one-entry prefetch in front of each read port.
 
@@ -12,7 +12,7 @@ pub const NAME: &str = "neo_chunk_ram";
 /// The chunk buffer for `cfg`.
 pub fn module(cfg: &EngineConfig) -> Module {
     let w = cfg.entry_bits();
-    let depth = cfg.chunk as u32;
+    let depth = cfg.sort_buffer() as u32;
     let aw = bits_for(depth as u64 - 1);
     let mut m = Module::new(NAME);
     m.doc(format!("Chunk buffer: {depth} entries of {w} bits, 1 write port, 2 combinational read ports."));

@@ -276,6 +276,7 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     m.wire("job_prev", aw).wire("job_prev_len", lw).wire("job_list", aw).wire("job_list_len", lw);
     m.wire("job_next", aw)
         .wire("job_dps_passes", DPS_PASSES_BITS)
+        .wire("job_dps_wide", 1)
         .wire("job_odd", 1)
         .wire("job_scratch", n * aw);
     m.wire("cpl_valid", n).wire("cpl_ready", n).wire("cpl_len", n * lw).wire("cpl_inv", n * lw);
@@ -309,8 +310,16 @@ fn control(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     for s in ["job_valid", "job_from_scratch", "job_prev", "job_prev_len", "job_list", "job_list_len"] {
         c.push((format!("{s}_o"), s.to_string()));
     }
-    for s in ["job_next", "job_dps_passes", "job_odd", "job_scratch", "cpl_ready", "ras_valid", "ras_tile_x"]
-    {
+    for s in [
+        "job_next",
+        "job_dps_passes",
+        "job_dps_wide",
+        "job_odd",
+        "job_scratch",
+        "cpl_ready",
+        "ras_valid",
+        "ras_tile_x",
+    ] {
         c.push((format!("{s}_o"), s.to_string()));
     }
     for s in ["ras_tile_y", "ras_width", "ras_height", "ras_table", "ras_len", "ras_feat", "ras_pix"] {
@@ -484,7 +493,8 @@ fn sort_cores(m: &mut Module, cfg: &EngineConfig, cl: &Clients) {
     let mut seq = vec![pair("clk_i", "core_clk"), pair("rst_ni", "rst_ni")];
     seq.push(pair("job_valid_i", "job_valid[i]"));
     seq.push(pair("job_ready_o", "job_ready[i]"));
-    for s in ["from_scratch", "prev", "prev_len", "list", "list_len", "next", "dps_passes", "odd"] {
+    for s in ["from_scratch", "prev", "prev_len", "list", "list_len", "next", "dps_passes", "dps_wide", "odd"]
+    {
         seq.push((format!("job_{s}_i"), format!("job_{s}")));
     }
     seq.push(pair("job_scratch_i", &format!("job_scratch[i*{aw} +: {aw}]")));

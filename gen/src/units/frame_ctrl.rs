@@ -35,7 +35,7 @@ use neo_golden::engine::adapt::{
     ADAPT_BUDGET_BITS, ADAPT_BUDGET_LSB, ADAPT_ENABLE, ADAPT_MAX_BITS, ADAPT_MAX_LSB,
 };
 use neo_golden::engine::memory::{
-    DPS_PASSES_BITS, DPS_PASSES_LSB, INVERSIONS_BITS, INVERSIONS_LSB, INVERSIONS_MAX,
+    DPS_PASSES_BITS, DPS_PASSES_LSB, DPS_WIDE_BIT, INVERSIONS_BITS, INVERSIONS_LSB, INVERSIONS_MAX,
 };
 use neo_golden::engine::{EngineConfig, SchedulerPolicy};
 
@@ -154,6 +154,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.output("job_list_len_o", lw);
     m.output("job_next_o", aw);
     m.output_c("job_dps_passes_o", DPS_PASSES_BITS, "descriptor: DPS passes");
+    m.output_c("job_dps_wide_o", 1, "descriptor: DPS in wide chunks");
     m.output_c("job_odd_o", 1, "FRAME[0]");
     m.output_c("job_scratch_o", d.n * aw, "sequencer k's scratch entry base at [k*AW +: AW]");
     m.input_c("cpl_valid_i", d.n, "per sequencer: tile sorted");
@@ -219,6 +220,7 @@ fn fetch(m: &mut Module, d: &Dims) {
     m.reg("kind_q", 1).reg("res_pend_q", 1).reg("scan_q", 1).reg("scan_t_q", 32);
     m.reg("w0_q", 1 + 2 * d.tb)
         .reg("passes_q", DPS_PASSES_BITS)
+        .reg("wide_q", 1)
         .reg("w1_q", 64)
         .reg("w2_q", 64)
         .reg("w3_q", 32);
@@ -337,7 +339,14 @@ fn fetch(m: &mut Module, d: &Dims) {
             vec![Stmt::Case(
                 "beat_q".into(),
                 vec![
-                    ("2'd0".into(), vec![set("w0_q", w0), set("passes_q", passes)]),
+                    (
+                        "2'd0".into(),
+                        vec![
+                            set("w0_q", w0),
+                            set("passes_q", passes),
+                            set("wide_q", format!("r_word[{DPS_WIDE_BIT}]")),
+                        ],
+                    ),
                     ("2'd1".into(), vec![set("w1_q", "r_word")]),
                     ("2'd2".into(), vec![set("w2_q", "r_word")]),
                 ],
@@ -525,6 +534,7 @@ fn dispatch(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.assign("job_list_len_o", resize_part("w2_q", 63, 32, lw));
     m.assign("job_next_o", resize_part("w3_q", 31, 0, aw));
     m.assign("job_dps_passes_o", "passes_q");
+    m.assign("job_dps_wide_o", "wide_q");
     m.assign("job_odd_o", "frame_i[0]");
     m.wire_assign("scratch_entry", aw, resize_part("scratch_base_i", d.xa - 1, 3, aw));
     let scr: Vec<String> =
@@ -688,6 +698,7 @@ fn control(m: &mut Module, d: &Dims) {
         "dt_q",
         "w0_q",
         "passes_q",
+        "wide_q",
         "w1_q",
         "w2_q",
         "w3_q",

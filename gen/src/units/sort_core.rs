@@ -3,8 +3,10 @@
 //! `docs/rtl.md`.
 //!
 //! # Commands (`cmd_mode_i`)
-//! - `0` SORT: sort the chunk `src_a[0 .. min(len_a, chunk))` into `dst` (conventional sort of
-//!   one chunk: BSU vectors of `n` with padding, then MSU+ merge passes, no dropping);
+//! - `0` SORT: sort the chunk `src_a[0 .. min(len_a, B))` into `dst`, with `B` the buffer
+//!   (`chunk * dps_wide`, the wide DPS chunk; the chunk without one) (conventional sort of one
+//!   chunk: BSU vectors of `n` with padding, then MSU+ merge passes, no dropping; the sequencer
+//!   gives a SORT at most a chunk, a DPS at most a chunk or, for a wide tile, the wide chunk);
 //! - `1` DPS: the same datapath (a DPS pass is a chunk sort of the reused table);
 //! - `2` MERGE_DELETE: merge the sorted streams `A = src_a[0..len_a)` and `B = src_b[0..len_b)`
 //!   into `dst`, dropping entries whose valid bit is 0 (golden `merge2(a, b, true)`);
@@ -87,7 +89,7 @@ struct Dims {
     n: u32,
     /// Entry bits.
     w: u32,
-    /// Chunk entries.
+    /// Buffer entries (the wide DPS chunk, or the chunk).
     d: u64,
     /// Buffer address bits.
     da: u32,
@@ -121,7 +123,7 @@ impl Dims {
     fn new(cfg: &EngineConfig) -> Self {
         let n = cfg.bsu_width as u32;
         let w = cfg.entry_bits();
-        let d = cfg.chunk as u64;
+        let d = cfg.sort_buffer() as u64;
         let dc = bits_for(d);
         let mo = cfg.max_outstanding as u64;
         Dims {
@@ -238,7 +240,7 @@ fn ports(m: &mut Module, cfg: &EngineConfig, k: &Dims) {
     m.output_c("cmd_ready_o", 1, "the core takes the offered command (depends on cmd_mode_i)");
     m.input_c("cmd_mode_i", SortMode::BITS, "0 sort, 1 dps, 2 merge-delete, 3 merge");
     m.input_c("cmd_src_a_i", aw, "entry address of the chunk / stream A");
-    m.input_c("cmd_len_a_i", lw, "entries of the chunk (<= chunk size) / stream A");
+    m.input_c("cmd_len_a_i", lw, "entries of the chunk (<= buffer size) / stream A");
     m.input_c("cmd_src_b_i", aw, "entry address of stream B (merge modes)");
     m.input_c("cmd_len_b_i", lw, "entries of stream B (merge modes)");
     m.input_c("cmd_dst_i", aw, "entry address of the output");

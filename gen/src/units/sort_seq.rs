@@ -13,8 +13,10 @@
 //! - stage outputs ping-pong between the scratch regions `S0 = job_scratch_i` and `S1 = S0 +
 //!   table_capacity` (`buf_q` = the region written), reading the list first; the last stage of a
 //!   from-scratch tile writes `next`;
-//! - reuse tiles then: `dps_passes` DPS stages (when `prev_len > 0`), chunks of `C` over `prev`
-//!   in place, the first one `C/2` when `frame + pass` is odd (`odd_q ^ pass_q[0]`); and one
+//! - reuse tiles then: `dps_passes` DPS stages (when `prev_len > 0`), chunks of `D` over `prev`
+//!   in place, the first one `D/2` when `frame + pass` is odd (`odd_q ^ pass_q[0]`), with `D`
+//!   the wide chunk `W = dps_wide * C` when the job's `dps_wide` is set (`wide_q`), else `C`;
+//!   and one
 //!   `MERGE_DELETE` of `prev` (A) and the sorted list (B, in `S[buf_q]`) into `next`.
 //!
 //! # Barrier
@@ -79,6 +81,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
     m.comment("The job (descriptor fields, parity, scratch base).");
     m.reg("fs_q", 1).reg("odd_q", 1).reg("prev_q", d.aw).reg("plen_q", d.lw).reg("list_q", d.aw);
     m.reg("n_q", d.lw).reg("next_q", d.aw).reg("scr0_q", d.aw).reg("passes_q", DPS_PASSES_BITS);
+    m.reg("wide_q", 1);
     m.comment("Plan state: stage mode, offset in the stage, input run of a merge pass, scratch written,");
     m.comment("DPS pass.");
     m.reg("state_q", 2).reg("mode_q", SortMode::BITS).reg("pos_q", d.lw).reg("half_q", d.lw).reg("buf_q", 1);
@@ -102,6 +105,7 @@ fn ports(m: &mut Module, d: &Dims) {
     m.input_c("job_list_len_i", lw, "descriptor: its entries");
     m.input_c("job_next_i", aw, "descriptor: next table (entry address)");
     m.input_c("job_dps_passes_i", DPS_PASSES_BITS, "descriptor: DPS passes of a reuse tile (0: none)");
+    m.input_c("job_dps_wide_i", 1, "descriptor: those passes in wide chunks (dps_wide x C)");
     m.input_c("job_odd_i", 1, "frame parity (FRAME[0]): DPS chunks shifted by C/2 on odd frame + pass");
     m.input_c("job_scratch_i", aw, "this core's first scratch region (entry address)");
     m.output_c("cmd_valid_o", 1, "to neo_sort_core: command");
@@ -139,15 +143,21 @@ fn command(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire_assign("is_md", 1, "mode_q == M_MD");
     m.wire_assign("total", lw, "is_dps ? plen_q : n_q");
     m.wire_assign("rem", lw, "total - pos_q");
-    m.comment("Longest A: a chunk; C/2 for the first DPS chunk of an odd frame + pass; a run for a pass.");
+    m.comment("Longest A: a chunk; D/2 for the first DPS chunk of an odd frame + pass; a run for a pass");
+    m.comment("(D: the DPS chunk, wide or not).");
     m.wire_assign("dps_odd", 1, "odd_q ^ pass_q[0]");
+    let wc = cfg.sort_buffer() as u64;
+    if cfg.dps_wide == 1 {
+        m.comment("This engine has no wide chunk (dps_wide 1): D is C either way.");
+    }
+    m.wire_assign("dps_c", lw, format!("wide_q ? {} : {}", lit(lw, wc), lit(lw, c)));
+    m.wire_assign("dps_h", lw, format!("wide_q ? {} : {}", lit(lw, wc / 2), lit(lw, c / 2)));
     m.wire_assign(
         "lim",
         lw,
         format!(
-            "is_merge ? half_q : ((is_dps & dps_odd & (pos_q == {z})) ? {h} : {c})",
+            "is_merge ? half_q : (is_dps ? ((dps_odd & (pos_q == {z})) ? dps_h : dps_c) : {c})",
             z = lit(lw, 0),
-            h = lit(lw, c / 2),
             c = lit(lw, c)
         ),
     );
@@ -222,6 +232,7 @@ fn control(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         set("next_q", "job_next_i"),
         set("scr0_q", "job_scratch_i"),
         set("passes_q", "job_dps_passes_i"),
+        set("wide_q", "job_dps_wide_i"),
         set("pass_q", pz.clone()),
         set("half_q", lit(lw, c)),
         set("buf_q", "1'b0"),

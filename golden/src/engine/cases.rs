@@ -12,6 +12,7 @@
 //! | `many_cores` | one tile, more cores (3 + 2) than busy tiles |
 //! | `adaptive` | the orbit 4x faster, sorted by `adaptive:wide=1,resort=0`: per-tile DPS passes (1 to 4) from the descriptors |
 //! | `adaptive_resort` | the orbit 16x faster, `adaptive:wide=1,resort=1,max=2,budget=1000`: passes and single tiles re-sorted from scratch in reuse frames (lists mode only) |
+//! | `adaptive_wide` | the orbit 16x faster on an engine with a wide DPS chunk (`dps_wide` 4), `adaptive:wide=4,resort=0`: per-tile DPS passes in chunks or wide chunks from the descriptors |
 //! | `adaptive_engine` | the `adaptive` orbit and strategy, planned by the frame controller from the previous frame's results ([`Planner::Engine`]; `ADAPT_CTRL`) |
 
 use super::host::{pipeline_for, EngineSession, HostMode, Planner, SessionError, SessionOptions};
@@ -47,7 +48,15 @@ pub enum EngineCase {
     AdaptiveResort,
     /// [`EngineCase::Adaptive`] planned by the frame controller itself ([`Planner::Engine`]).
     AdaptiveEngine,
+    /// A faster orbit with per-tile DPS passes, some in the wide chunk (`adaptive` with
+    /// `wide` = [`WIDE_CASE`], `resort=0`), on an engine whose `dps_wide` is that.
+    AdaptiveWide,
 }
+
+/// The wide chunk (a multiple of the chunk) of the `adaptive_wide` case: four chunks, so the
+/// CI scenes' tables span one to a few wide chunks and the odd parity's first chunk (`2 C`)
+/// differs from a chunk.
+pub const WIDE_CASE: u32 = 4;
 
 /// How to film a scene for the cases: orbit keys (`radius`, `height`, `target`, `fov`; no
 /// `start`, `rate`, `speed`, `frames`, `res` or `cut`, which the cases set), the same for a
@@ -91,7 +100,7 @@ impl CaseScene {
 
 impl EngineCase {
     /// Every case.
-    pub const ALL: [EngineCase; 10] = [
+    pub const ALL: [EngineCase; 11] = [
         EngineCase::Orbit,
         EngineCase::Cut,
         EngineCase::Turn,
@@ -102,6 +111,7 @@ impl EngineCase {
         EngineCase::Adaptive,
         EngineCase::AdaptiveResort,
         EngineCase::AdaptiveEngine,
+        EngineCase::AdaptiveWide,
     ];
 
     /// The case's name.
@@ -117,6 +127,7 @@ impl EngineCase {
             EngineCase::Adaptive => "adaptive",
             EngineCase::AdaptiveResort => "adaptive_resort",
             EngineCase::AdaptiveEngine => "adaptive_engine",
+            EngineCase::AdaptiveWide => "adaptive_wide",
         }
     }
 
@@ -131,6 +142,11 @@ impl EngineCase {
             EngineCase::AdaptiveResort => {
                 Strategy::Adaptive(AdaptiveParams { resort: true, wide: 1, max_passes: 2, budget: 1000 })
             }
+            EngineCase::AdaptiveWide => Strategy::Adaptive(AdaptiveParams {
+                resort: false,
+                wide: WIDE_CASE,
+                ..AdaptiveParams::default()
+            }),
             _ => Strategy::Neo,
         }
     }
@@ -183,6 +199,10 @@ impl EngineCase {
             }
             EngineCase::Adaptive | EngineCase::AdaptiveEngine => extra = format!("speed={}", 4.0 * how.speed),
             EngineCase::AdaptiveResort => extra = format!("speed={}", RESORT_SPEED * how.speed),
+            EngineCase::AdaptiveWide => {
+                extra = format!("speed={}", RESORT_SPEED * how.speed);
+                cfg.dps_wide = WIDE_CASE as usize;
+            }
         }
         let sep = if keys.is_empty() { "" } else { "," };
         let spec = format!("orbit:{keys}{sep}start=0,{extra},frames={frames},res={}x{}", res[0], res[1]);

@@ -93,8 +93,15 @@ pub struct EngineConfig {
     pub key_bits: u8,
     /// Id field width (golden [`SortFormat`]).
     pub id_bits: u8,
-    /// Chunk size `C` of the Sorting Core's buffers (entries): `n` times a power of two.
+    /// Chunk size `C` of the conventional sort and of Neo's DPS (entries): `n` times a power
+    /// of two.
     pub chunk: usize,
+    /// The wide DPS chunk `W = dps_wide * C` as a multiple of the chunk (a power of two in
+    /// 1..=64; 1: none, the paper's engine). The Sorting Core's four buffers hold `W` entries
+    /// ([`EngineConfig::sort_buffer`]), and a tile descriptor's `dps_wide` bit runs its DPS
+    /// passes in chunks of `W` (golden `adaptive` with `wide` = this value). Area: the buffers
+    /// grow `dps_wide` times (24 KiB a buffer at 16 and 48-bit entries).
+    pub dps_wide: usize,
     /// Width of memory entry addresses and command addresses.
     pub addr_bits: u32,
     /// Width of command lengths and `done_len_o`.
@@ -177,6 +184,7 @@ impl Default for EngineConfig {
             key_bits: f.key_bits(),
             id_bits: f.id_bits(),
             chunk: SortConfig::DEFAULT_CHUNK,
+            dps_wide: 1,
             addr_bits: 32,
             len_bits: 32,
             burst: 16,
@@ -299,6 +307,7 @@ impl EngineConfig {
         if (self.chunk as u64) >= 1u64 << self.len_bits {
             return err(format!("chunk {} does not fit len_bits {}", self.chunk, self.len_bits));
         }
+        self.validate_dps_wide()?;
         if !self.burst.is_power_of_two() || self.burst > self.chunk {
             return err(format!("burst {} is not a power of two <= chunk {}", self.burst, self.chunk));
         }
@@ -325,6 +334,44 @@ impl EngineConfig {
         self.validate_raster_core()?;
         self.validate_engine()?;
         Ok(())
+    }
+
+    /// The wide DPS chunk: a power of two in 1..=64 whose buffer fits 65536 entries, `len_bits`
+    /// and the table capacity.
+    fn validate_dps_wide(&self) -> Result<(), ConfigError> {
+        let w = self.dps_wide;
+        if !w.is_power_of_two() || w > 64 {
+            return Err(ConfigError(format!("dps_wide {w} is not a power of two in 1..=64")));
+        }
+        let b = self.chunk.saturating_mul(w);
+        if w > 1 && (b > 1 << 16 || (b as u64) >= 1u64 << self.len_bits || b > self.table_capacity) {
+            return Err(ConfigError(format!(
+                "dps_wide {w}: the wide chunk of {b} entries (chunk {} x {w}) exceeds 65536 entries, len_bits {} or table_capacity {}",
+                self.chunk, self.len_bits, self.table_capacity
+            )));
+        }
+        Ok(())
+    }
+
+    /// Entries of each Sorting Core buffer: the wide DPS chunk `dps_wide * chunk` (the chunk
+    /// without one). A chunk command sorts at most this many entries.
+    pub fn sort_buffer(&self) -> usize {
+        self.chunk * self.dps_wide
+    }
+
+    /// The DPS chunk of a tile whose descriptor's `dps_wide` bit is `wide`.
+    pub fn dps_chunk(&self, wide: bool) -> usize {
+        if wide {
+            self.sort_buffer()
+        } else {
+            self.chunk
+        }
+    }
+
+    /// A golden Sorting Core whose chunk is the buffer ([`EngineConfig::sort_buffer`]): what
+    /// one chunk command of the RTL does.
+    pub fn buffer_sort_config(&self) -> SortConfig {
+        SortConfig::new(self.format(), self.sort_buffer(), self.network()).expect("validated sort buffer")
     }
 
     /// The engine's constraints: counts, the table region and the AXI4 ports.
@@ -665,16 +712,18 @@ mod tests {
             subtile in 0u32..40, lanes in 0usize..80, scus in 0usize..40, itus in 0usize..20,
             fbuf in 0usize..5000, cores in 0usize..70, cap in 0usize..70000, data in 0u32..2000,
             key in 0u8..40, id in 0u8..40, topo in 0usize..3, lines in 0usize..3000,
-            outstanding in 0usize..300,
+            outstanding in 0usize..300, wide_log in 0u32..8,
         ) {
             let c = EngineConfig {
                 topology: Topology::ALL[topo], bsu_width: bsu, chunk, burst, tile, subtile,
                 scu_lanes: lanes, raster_scus: scus, raster_itus: itus, raster_feature_buffer: fbuf,
                 sort_cores: cores, table_capacity: cap, axi_data_bits: data, key_bits: key,
-                id_bits: id, pre_read_lines: lines, pre_outstanding: outstanding, ..EngineConfig::default()
+                id_bits: id, pre_read_lines: lines, pre_outstanding: outstanding, dps_wide: 1 << wide_log,
+                ..EngineConfig::default()
             };
             if c.validate().is_ok() {
                 let _ = (c.format(), c.network(), c.sort_config(), c.raster_config(), c.bsu_latency());
+                let _ = c.buffer_sort_config();
                 let (window, burst) = (c.pre_window_beats(), c.pre_burst_beats());
                 proptest::prop_assert!((1..=256).contains(&burst) && burst * c.pre_outstanding == window);
                 proptest::prop_assert!(c.raster_config().subtiles_per_tile() <= 64);

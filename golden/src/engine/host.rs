@@ -98,7 +98,7 @@ pub enum SessionError {
     Planner(String),
     /// A sorting strategy the engine does not run.
     #[error(
-        "strategy {0}: the engine runs `neo` and `adaptive` with wide=1 (DPS passes per tile; re-sorts of single tiles with resort=1 in lists mode only, where the host writes a re-sorted tile's whole list)"
+        "strategy {0}: the engine runs `neo` and `adaptive` with wide=1 or wide = its dps_wide (DPS passes per tile, in chunks or wide chunks; re-sorts of single tiles with resort=1 in lists mode only, where the host writes a re-sorted tile's whole list)"
     )]
     Strategy(String),
 }
@@ -371,12 +371,17 @@ impl<'s> EngineSession<'s> {
         let runs = match strategy {
             Strategy::Neo => true,
             Strategy::Adaptive(p) => {
-                p.wide == 1 && (!p.resort || mode == HostMode::Lists) && p.max_passes <= MAX_DPS_PASSES as u32
+                (p.wide == 1 || p.wide as usize == cfg.dps_wide)
+                    && (!p.resort || mode == HostMode::Lists)
+                    && p.max_passes <= MAX_DPS_PASSES as u32
             }
             _ => false,
         };
         if !runs {
-            return Err(SessionError::Strategy(strategy.to_string()));
+            return Err(SessionError::Strategy(format!(
+                "{strategy} on an engine with dps_wide {}",
+                cfg.dps_wide
+            )));
         }
         if mode == HostMode::Scene && !cfg.has_preprocessing() {
             return Err(SessionError::NoPreprocessing);
@@ -562,6 +567,7 @@ impl<'s> EngineSession<'s> {
                 list_len: list.len() as u32,
                 next: next_at as u32,
                 dps_passes: dps_passes(frame, t)?,
+                dps_wide: frame.tiles.dps_wide[t] == 1,
             };
             list_at += list.len() as u64;
             next_at += (prev.len as u64 + list.len() as u64).min(cap);

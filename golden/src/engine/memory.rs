@@ -34,7 +34,8 @@ pub const INVERSIONS_MAX: u32 = (1 << INVERSIONS_BITS) - 1;
 
 /// One tile's descriptor: 4 little-endian u64 words at `DESC_BASE + 32 t`.
 ///
-/// - word 0: `[15:0]` tile_x, `[31:16]` tile_y, `[32]` from_scratch, `[43:40]` dps_passes
+/// - word 0: `[15:0]` tile_x, `[31:16]` tile_y, `[32]` from_scratch, `[43:40]` dps_passes,
+///   `[44]` dps_wide
 /// - word 1: `[31:0]` prev table entry address, `[63:32]` prev_len
 /// - word 2: `[31:0]` incoming list entry address, `[63:32]` list_len
 /// - word 3: `[31:0]` next table entry address, `[63:32]` reserved 0
@@ -64,7 +65,16 @@ pub struct TileDescriptor {
     /// is merged as it is); at most [`MAX_DPS_PASSES`] (a larger value is truncated to its
     /// [`DPS_PASSES_BITS`] bits, as the RTL reads it).
     pub dps_passes: u8,
+    /// The DPS passes sort chunks of the wide chunk ([`EngineConfig::sort_buffer`]) instead
+    /// of the chunk (golden `adaptive` with `wide`; no effect on an engine without one,
+    /// `dps_wide` 1, whose wide chunk is the chunk).
+    ///
+    /// [`EngineConfig::sort_buffer`]: crate::engine::EngineConfig::sort_buffer
+    pub dps_wide: bool,
 }
+
+/// The bit of `dps_wide` in descriptor word 0.
+pub const DPS_WIDE_BIT: u32 = 44;
 
 /// Bits of a descriptor's `dps_passes` field.
 pub const DPS_PASSES_BITS: u32 = 4;
@@ -86,6 +96,7 @@ impl Default for TileDescriptor {
             list_len: 0,
             next: 0,
             dps_passes: 1,
+            dps_wide: false,
         }
     }
 }
@@ -104,7 +115,8 @@ impl TileDescriptor {
             self.tile_x as u64
                 | (self.tile_y as u64) << 16
                 | (self.from_scratch as u64) << 32
-                | passes << DPS_PASSES_LSB,
+                | passes << DPS_PASSES_LSB
+                | (self.dps_wide as u64) << DPS_WIDE_BIT,
             self.prev as u64 | (self.prev_len as u64) << 32,
             self.list as u64 | (self.list_len as u64) << 32,
             self.next as u64,
@@ -123,6 +135,7 @@ impl TileDescriptor {
             list_len: (w[2] >> 32) as u32,
             next: w[3] as u32,
             dps_passes: (w[0] >> DPS_PASSES_LSB) as u8 & MAX_DPS_PASSES,
+            dps_wide: (w[0] >> DPS_WIDE_BIT) & 1 == 1,
         }
     }
 
@@ -431,13 +444,14 @@ mod tests {
             list_len: 9,
             next: 0x3000,
             dps_passes: 3,
+            dps_wide: true,
         };
-        assert_eq!(d.to_words(), [0x301_0034_0012, 7 << 32 | 0x1000, 9 << 32 | 0x2000, 0x3000]);
+        assert_eq!(d.to_words(), [0x1301_0034_0012, 7 << 32 | 0x1000, 9 << 32 | 0x2000, 0x3000]);
         assert_eq!(d.entries_in(), 9);
         assert_eq!(TileDescriptor { from_scratch: false, ..d }.entries_in(), 16);
         // Reserved bits are ignored.
         let mut w = d.to_words();
-        w[0] |= 0xFFFF_F0FE << 32;
+        w[0] |= 0xFFFF_E0FE << 32;
         w[3] |= 0xABCD << 32;
         assert_eq!(TileDescriptor::from_words(&w), d);
     }
@@ -499,8 +513,8 @@ mod tests {
 
     proptest! {
         #[test]
-        fn descriptor_round_trip(x in any::<u16>(), y in any::<u16>(), s in any::<bool>(), v in any::<[u32; 5]>(), p in 0..=MAX_DPS_PASSES) {
-            let d = TileDescriptor { tile_x: x, tile_y: y, from_scratch: s, prev: v[0], prev_len: v[1], list: v[2], list_len: v[3], next: v[4], dps_passes: p };
+        fn descriptor_round_trip(x in any::<u16>(), y in any::<u16>(), s in any::<bool>(), v in any::<[u32; 5]>(), p in 0..=MAX_DPS_PASSES, wide in any::<bool>()) {
+            let d = TileDescriptor { tile_x: x, tile_y: y, from_scratch: s, prev: v[0], prev_len: v[1], list: v[2], list_len: v[3], next: v[4], dps_passes: p, dps_wide: wide };
             prop_assert_eq!(TileDescriptor::from_words(&d.to_words()), d);
             let mut m = Memory::new();
             m.write_descriptor(0x40, 3, &d);

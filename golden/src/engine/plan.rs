@@ -14,7 +14,8 @@
 //!   except the last (`s = P`) of a from-scratch tile, which writes `next`;
 //! - a reuse tile (not from scratch) then has one DPS stage per pass `p` of its descriptor's
 //!   `dps_passes` (when `prev_len > 0`): one `DPS` per chunk of parity `Parity::of(frame, p)`
-//!   (golden [`Parity::chunks`]) over the previous table in place, and a last stage: one
+//!   (golden [`Parity::chunks`], of the wide chunk `W` when the descriptor's `dps_wide` is set,
+//!   [`EngineConfig::dps_chunk`]) over the previous table in place, and a last stage: one
 //!   `MERGE_DELETE` of A = the previous table and B = the sorted list (`S[P % 2]`, `n`
 //!   entries) into `next`.
 //!
@@ -205,7 +206,7 @@ pub fn tile_plan(cfg: &EngineConfig, regs: &FrameRegs, d: &TileDescriptor, core:
         dps_passes: d.passes(),
         frame: regs.frame as u64,
         chunk: cfg.chunk as u64,
-        dps_chunk: cfg.chunk as u64,
+        dps_chunk: cfg.dps_chunk(d.dps_wide) as u64,
     };
     let s0 = scratch_entry_base(cfg, regs, core);
     let base = |region| match region {
@@ -231,7 +232,8 @@ pub struct CmdEffect {
 }
 
 /// Executes one command on `mem` as the Sorting Core does (golden `sort_chunk` for `SORT` /
-/// `DPS` of `min(len_a, chunk)` entries, [`merge2_into`] for the merges). Returns the entries moved,
+/// `DPS` of `min(len_a, chunk)` entries, with `sorter`'s chunk the core's buffer,
+/// [`EngineConfig::buffer_sort_config`]; [`merge2_into`] for the merges). Returns the entries moved,
 /// or the address of an entry carrying the reserved id (`id_max`), which a chunk command
 /// refuses.
 pub fn run_command(sorter: &mut Sorter, mem: &mut Memory, c: &TileCmd) -> Result<CmdEffect, u64> {

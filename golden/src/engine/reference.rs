@@ -263,7 +263,7 @@ struct FrameRun<'c> {
 impl<'c> FrameRun<'c> {
     fn new(cfg: &'c EngineConfig, regs: &FrameRegs) -> Self {
         let out = FrameOutcome { first_overflow: NO_OVERFLOW, ..FrameOutcome::default() };
-        FrameRun { cfg, regs: *regs, sorter: Sorter::new(cfg.sort_config()), out }
+        FrameRun { cfg, regs: *regs, sorter: Sorter::new(cfg.buffer_sort_config()), out }
     }
 
     /// The tile's sort (or its overflow): [`tile_plan`] executed command by command.

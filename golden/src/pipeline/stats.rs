@@ -298,6 +298,8 @@ pub struct TileColumns {
     pub inversions: Vec<u64>,
     /// DPS passes run on the tile.
     pub dps_passes: Vec<u32>,
+    /// Those passes used the wide chunk (1) or the chunk (0).
+    pub dps_wide: Vec<u8>,
     /// Sorted from scratch (1) or reused (0).
     pub from_scratch: Vec<u8>,
     /// MSU+ boundary inversions of the reused stream.
@@ -336,6 +338,7 @@ impl TileColumns {
             dps_chunks: col(|c| c.dps_chunks),
             inversions: inversions.to_vec(),
             dps_passes: col(|c| c.dps_passes),
+            dps_wide: counts.iter().map(|c| c.dps_wide as u8).collect(),
             from_scratch: from_scratch.iter().map(|&b| b as u8).collect(),
             merge_inversions: col(|c| c.merge_inversions),
             wb_descents: col(|c| c.wb_descents),

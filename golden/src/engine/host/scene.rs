@@ -148,6 +148,7 @@ impl EngineSession<'_> {
                     list_len: list.len() as u32,
                     next: (next_base + t as u64 * cap) as u32,
                     dps_passes: super::dps_passes(out, t)?,
+                    dps_wide: out.tiles.dps_wide[t] == 1,
                 })
             })
             .collect::<Result<_, SessionError>>()?;
