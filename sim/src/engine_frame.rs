@@ -241,7 +241,11 @@ impl<'a> EngineFrameModel<'a> {
     /// The model of `cfg` with the unit timing `lat`, over ports of timing `mem`. Refuses unit
     /// timing measured on cores of another configuration (the engine's counts may differ: they
     /// do not change a core's timing; the Preprocessing Engine's lane count is one of them, the
-    /// frame model covers the tile walk).
+    /// frame model covers the tile walk). The wide DPS chunk (`dps_wide`) may differ too: it
+    /// deepens the Sorting Core's buffers without changing its datapath, so chunks of up to
+    /// `C` entries take the measured time, and a wide chunk of `n > C` entries is timed as any
+    /// chunk between measured points ([`Latency::chunk_cycles`]: the MSU+ passes of `n` entries
+    /// at the measured rate plus the measured remainder, extrapolated from the largest points).
     pub fn new(cfg: &'a EngineConfig, lat: &'a Latency, mem: PortTiming) -> Result<Self, String> {
         cfg.validate().map_err(|e| e.to_string())?;
         let same_cores = EngineConfig {
@@ -252,6 +256,7 @@ impl<'a> EngineFrameModel<'a> {
             table_capacity: lat.config.table_capacity,
             axi_id_bits: lat.config.axi_id_bits,
             pre_units: lat.config.pre_units,
+            dps_wide: lat.config.dps_wide,
             ..cfg.clone()
         };
         if let Some((field, ours, measured)) = same_cores.first_difference(&lat.config) {
