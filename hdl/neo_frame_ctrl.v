@@ -244,6 +244,7 @@ module neo_frame_ctrl (
     end
     if (res_in & ~scan_q) begin
       passes_q <= ad_plan;
+      wide_q <= rq_wide;
     end
   end
   // Decoded descriptor and its overflow check.
@@ -272,9 +273,12 @@ module neo_frame_ctrl (
   assign ad_max = (ad_max_f == 4'd0) ? 4'd1 : ad_max_f;
   wire [31:0] rq_len;
   assign rq_len = r_word[31:0];
+  // This engine has no wide chunk (dps_wide 1): ADAPT_CTRL's wide bit is ignored.
+  wire rq_wide;
+  assign rq_wide = 1'b0;
   wire [31:0] rq_steps;
   assign rq_steps = r_word[63:32] >> 8;
-  // p = 1 + reach / C, plus one when p > 1 and the merge saw inversions, at most max.
+  // p = 1 + reach / U, plus one when p > 1 and the merge saw inversions, at most max.
   wire [33:0] rq_p;
   assign rq_p = {2'd0, rq_steps} + 34'd1 + {33'd0, (rq_steps != 32'd0) & rinv_q};
   wire [3:0] rq_pass;

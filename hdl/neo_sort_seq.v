@@ -85,6 +85,7 @@ module neo_sort_seq (
   // (D: the DPS chunk, wide or not).
   wire dps_odd;
   assign dps_odd = odd_q ^ pass_q[0];
+  // This engine has no wide chunk (dps_wide 1): D is C either way.
   wire [31:0] dps_c;
   assign dps_c = wide_q ? 32'd256 : 32'd256;
   wire [31:0] dps_h;

@@ -4,7 +4,7 @@
 
 use neo_golden::engine::{
     execute_frame, execute_frame_traced, CaseScene, Counter, EngineCase, EngineConfig, EngineSession,
-    HostMode, Memory, Place, TileDescriptor,
+    HostMode, Memory, Place, TileCmd, TileDescriptor,
 };
 use neo_golden::scene::Scene;
 use neo_golden::shared::shared_file_for_test;
@@ -32,8 +32,10 @@ struct Seen {
     /// write-backs' reach (the disorder counters).
     inversions: u64,
     reach: u64,
-    /// Reuse tiles by the DPS passes the engine planned itself (`ADAPT_CTRL`).
+    /// Reuse tiles by the DPS passes the engine planned itself (`ADAPT_CTRL`), and those it
+    /// planned in the wide chunk.
     engine_passes: [usize; 16],
+    engine_wide: usize,
     /// Reuse tiles whose descriptor asks for the wide chunk, and their DPS commands longer
     /// than a chunk.
     wide: usize,
@@ -56,6 +58,8 @@ fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
             for (d, t) in plan.expected.descriptors.iter().zip(&trace.tiles) {
                 if !d.from_scratch && d.prev_len > 0 {
                     seen.engine_passes[t.plan.dps_passes()] += 1;
+                    let wide = |c: &&TileCmd| c.mode == SortMode::Dps && c.len_a > cfg.chunk as u64;
+                    seen.engine_wide += t.plan.commands().any(|c| wide(&c)) as usize;
                 }
             }
         }
@@ -151,6 +155,11 @@ fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
                 s.engine_passes[1] > 0 && s.engine_passes[2..].iter().sum::<usize>() > 0,
                 "{name}: {s:?}"
             );
+        }
+        EngineCase::AdaptiveEngineWide => {
+            assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
+            assert!(s.passes[0] > 0 && s.wide == 0, "{name}: the host wrote no plan: {s:?}");
+            assert!(s.engine_wide > 0 && s.engine_passes[1] > s.engine_wide, "{name}: {s:?}");
         }
         EngineCase::AdaptiveWide => {
             assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
@@ -396,8 +405,8 @@ fn compare_names_preprocessing_corruption() {
     assert_eq!(m.field, "RD_PRE");
 }
 
-/// The engine plans `adaptive` without re-sorts and the wide chunk, at most 15 passes: anything
-/// else is refused by name before a frame is rendered.
+/// The engine plans `adaptive` without re-sorts, with its own wide chunk or none, at most 15
+/// passes: anything else is refused by name before a frame is rendered.
 #[test]
 fn the_engine_plans_only_what_it_can_run() {
     use neo_golden::engine::{Planner, SessionOptions};
@@ -410,8 +419,8 @@ fn the_engine_plans_only_what_it_can_run() {
     let ok = AdaptiveParams { resort: false, wide: 1, ..AdaptiveParams::default() };
     for (strategy, want) in [
         (Strategy::Neo, "neo is not adaptive"),
-        (Strategy::Adaptive(AdaptiveParams::default()), "resort=0,wide=1"),
-        (Strategy::Adaptive(AdaptiveParams { wide: 4, ..ok }), "resort=0,wide=1"),
+        (Strategy::Adaptive(AdaptiveParams::default()), "without re-sorts"),
+        (Strategy::Adaptive(AdaptiveParams { wide: 4, ..ok }), "wide = its dps_wide (1)"),
         (Strategy::Adaptive(AdaptiveParams { max_passes: 16, ..ok }), "at most 15 passes"),
     ] {
         let opts = SessionOptions { strategy, planner: Planner::Engine, ..SessionOptions::default() };
@@ -424,7 +433,10 @@ fn the_engine_plans_only_what_it_can_run() {
         planner: Planner::Engine,
         ..SessionOptions::default()
     };
-    assert!(EngineSession::with_options(&scene, traj, &cfg, opts).is_ok());
+    assert!(EngineSession::with_options(&scene, traj.clone(), &cfg, opts.clone()).is_ok());
+    let wide = EngineConfig { dps_wide: 4, ..cfg };
+    let opts4 = SessionOptions { strategy: Strategy::Adaptive(AdaptiveParams { wide: 4, ..ok }), ..opts };
+    assert!(EngineSession::with_options(&scene, traj, &wide, opts4).is_ok(), "its own wide chunk");
 }
 
 /// The engine's own plan stops with the camera: on a frame whose pose repeats the last one the

@@ -63,14 +63,16 @@ pub struct CosimArgs {
     #[arg(long, default_value = "f32", value_parser = super::scene::parse_sh)]
     pub sh: ShPrecision,
     /// The sorting strategy the host plans and the engine runs: `neo` (one DPS pass per reuse
-    /// tile) or `adaptive:wide=1,resort=0[,budget=B,max=P]` (the per-tile DPS passes of golden's
-    /// adaptive policy, written into the descriptors); with `--input lists` also `resort=1`
-    /// (a re-sorted tile's descriptor says from scratch, the host writes its whole list).
+    /// tile) or `adaptive:wide=W,resort=0[,budget=B,max=P]` (the per-tile DPS passes of golden's
+    /// adaptive policy and whether they use the wide chunk, written into the descriptors; `W` 1 or
+    /// the engine's `dps_wide`: a `--config` file with `"dps_wide": 16` for `wide=16`); with
+    /// `--input lists` also `resort=1` (a re-sorted tile's descriptor says from scratch, the host
+    /// writes its whole list).
     #[arg(long, default_value = "neo")]
     pub sort: String,
     /// Who plans the `adaptive` DPS passes: `host` (written into the descriptors) or `engine`
     /// (the frame controller plans them from the previous frame's results, `ADAPT_CTRL`;
-    /// `adaptive` with `wide=1,resort=0,max<=15`).
+    /// `adaptive` with `resort=0,max<=15` and `wide` 1 or the engine's `dps_wide`).
     #[arg(long, default_value = "host", value_parser = parse_planner)]
     pub planner: Planner,
     /// Print one JSON record per frame instead of text.

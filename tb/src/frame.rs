@@ -27,7 +27,8 @@
 
 use crate::bits::mask;
 use crate::check::Checker;
-use crate::dut::Dut;
+use crate::dut::Clocked;
+use crate::dynmodel::DynModel;
 use crate::models::NeoFrameCtrl;
 use crate::rng::Rng;
 use neo_gen::{EngineConfig, SchedulerPolicy};
@@ -49,16 +50,16 @@ pub struct FrameCase {
 }
 
 impl FrameCase {
-    /// Each tile's DPS passes as the controller must hand them to its sequencer: the
-    /// descriptor's, or golden [`engine_passes`] of the previous results in a planned frame.
-    pub fn passes(&self, cfg: &EngineConfig) -> Vec<u64> {
+    /// Each tile's DPS passes and wide bit as the controller must hand them to its sequencer:
+    /// the descriptor's, or golden [`engine_passes`] of the previous results in a planned frame.
+    pub fn plans(&self, cfg: &EngineConfig) -> Vec<(u64, bool)> {
         if self.regs.adapt.enabled() {
-            engine_passes(&self.regs.adapt, cfg.chunk as u32, &self.prev_results)
+            engine_passes(&self.regs.adapt, cfg, &self.prev_results)
                 .into_iter()
-                .map(u64::from)
+                .map(|p| (u64::from(p.passes), p.wide))
                 .collect()
         } else {
-            self.descs.iter().map(TileDescriptor::passes).collect()
+            self.descs.iter().map(|d| (d.passes(), d.dps_wide)).collect()
         }
     }
 
@@ -88,6 +89,8 @@ pub struct FrameRun {
     pub overflows: u32,
     /// Tiles handed out with more than one DPS pass planned by the controller.
     pub planned_extra: u64,
+    /// Tiles handed out with the wide chunk planned by the controller.
+    pub planned_wide: u64,
 }
 
 /// The merge inversions the sequencer model reports for tile `t`: small counts, and for one tile
@@ -185,7 +188,7 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent
     // Tables of any 32-bit length and reach in the large frames (all of them: the frame
     // controller's sums reach 2^44 over 4095 tiles) and in half the tiles of one small frame in
     // 4, the largest reach among them; else up to 4000 entries (a tenth empty: a cost of 1) and
-    // 6 chunks.
+    // 6 chunks (half of the tiles 6 wide chunks, in an engine with one).
     let huge_tables = tiles > 1000 || rng.percent(25);
     let prev_results = (0..tiles)
         .map(|_| {
@@ -206,7 +209,14 @@ pub fn random_case(cfg: &EngineConfig, rng: &mut Rng, tiles: usize, huge_percent
                     (true, true) => u32::MAX,
                     (true, false) => rng.next_u32(),
                     (false, true) => 0,
-                    (false, false) => rng.below(6 * chunk) as u32,
+                    (false, false) => {
+                        let unit = if cfg.dps_wide > 1 && rng.percent(50) {
+                            cfg.sort_buffer() as u64
+                        } else {
+                            chunk
+                        };
+                        rng.below(6 * unit) as u32
+                    }
                 },
             }
         })
@@ -236,50 +246,73 @@ struct SeqModel {
     inv: u64,
 }
 
-/// The frame controller with its surroundings.
-pub struct FrameBench {
+/// The frame controller with its surroundings, on the statically linked model of the crate's
+/// configuration ([`FrameBench::new`]) or on one built for any configuration
+/// ([`FrameBench::build`]).
+pub struct FrameBench<M: Clocked = NeoFrameCtrl> {
     /// The model.
-    pub dut: NeoFrameCtrl,
+    pub dut: M,
     /// Mismatch reporting.
     pub checker: Checker,
     cfg: EngineConfig,
     rng: Rng,
 }
 
-impl FrameBench {
-    /// A reset frame controller.
-    pub fn new(cfg: &EngineConfig, seed: u64) -> FrameBench {
-        let mut dut = NeoFrameCtrl::new();
-        dut.reset();
-        FrameBench {
-            dut,
-            checker: Checker::new(NeoFrameCtrl::NAME, seed),
-            cfg: cfg.clone(),
-            rng: Rng::new(seed).fork(9),
-        }
+impl FrameBench<NeoFrameCtrl> {
+    /// A reset frame controller (the static model of [`crate::config`]).
+    pub fn new(cfg: &EngineConfig, seed: u64) -> Self {
+        FrameBench::with_model(NeoFrameCtrl::new(), cfg, seed)
+    }
+}
+
+impl FrameBench<DynModel> {
+    /// A reset frame controller of any configuration `cfg` (`neo_frame_ctrl` built at run
+    /// time, or loaded from the cache: [`crate::configs::build`]).
+    pub fn build(cfg: &EngineConfig, seed: u64) -> Result<Self, String> {
+        Ok(FrameBench::with_model(crate::configs::build(cfg, "neo_frame_ctrl")?, cfg, seed))
+    }
+}
+
+impl<M: Clocked> FrameBench<M> {
+    /// A reset frame controller on model `dut` (`neo_frame_ctrl` generated from `cfg`).
+    pub fn with_model(mut dut: M, cfg: &EngineConfig, seed: u64) -> Self {
+        dut.io_reset();
+        let checker = Checker::new(dut.top(), seed);
+        FrameBench { dut, checker, cfg: cfg.clone(), rng: Rng::new(seed).fork(9) }
+    }
+
+    /// Restarts the bench's random stream and its checker's seed from `seed`, as a bench made
+    /// with `seed` has them.
+    pub fn reseed(&mut self, seed: u64) {
+        self.rng = Rng::new(seed).fork(9);
+        self.checker = Checker::new(self.dut.top(), seed);
     }
 
     fn set(&mut self, name: &str, v: u64) {
-        let p = NeoFrameCtrl::port(name);
-        self.dut.set_words(p, &[v as u32, (v >> 32) as u32]);
+        let p = self.dut.pin(name);
+        self.dut.io_set_words(p, &[v as u32, (v >> 32) as u32]);
     }
 
     fn get(&self, name: &str) -> u64 {
-        self.dut.get_u64(NeoFrameCtrl::port(name))
+        self.dut.io_get(self.dut.pin(name))
+    }
+
+    fn words(&self, p: usize) -> Vec<u32> {
+        vec![0u32; self.dut.io_width(p).div_ceil(32) as usize]
     }
 
     fn get_lane(&self, name: &str, k: usize, width: u32) -> u64 {
-        let p = NeoFrameCtrl::port(name);
-        let mut w = vec![0u32; NeoFrameCtrl::PORTS[p].words()];
-        self.dut.get_words(p, &mut w);
+        let p = self.dut.pin(name);
+        let mut w = self.words(p);
+        self.dut.io_get_words(p, &mut w);
         let lo = k as u32 * width;
         (0..width)
             .fold(0, |acc, b| acc | (((w[((lo + b) / 32) as usize] >> ((lo + b) % 32)) & 1) as u64) << b)
     }
 
     fn set_lanes(&mut self, name: &str, vals: &[u64], width: u32) {
-        let p = NeoFrameCtrl::port(name);
-        let mut w = vec![0u32; NeoFrameCtrl::PORTS[p].words()];
+        let p = self.dut.pin(name);
+        let mut w = self.words(p);
         for (k, v) in vals.iter().enumerate() {
             for b in 0..width {
                 if (v >> b) & 1 == 1 {
@@ -288,7 +321,7 @@ impl FrameBench {
                 }
             }
         }
-        self.dut.set_words(p, &w);
+        self.dut.io_set_words(p, &w);
     }
 
     /// Runs one frame from `start_i` to `done_o` and checks it (see the module docs).
@@ -307,8 +340,8 @@ impl FrameBench {
             mem.write_descriptor(regs.desc_base, t as u64, d);
             mem.write_result(regs.result_base, t as u64, &case.prev_results[t]);
         }
-        let want_passes = case.passes(&cfg);
-        let mut planned_extra = 0;
+        let want_plans = case.plans(&cfg);
+        let (mut planned_extra, mut planned_wide) = (0, 0);
         let mut want_reads: VecDeque<(u64, u64)> = case.reads().into();
         let tile_of = |next: u64| case.descs.iter().position(|d| d.next as u64 == next);
         let ovf: Vec<bool> = case.descs.iter().map(|d| d.entries_in() > cap).collect();
@@ -329,7 +362,7 @@ impl FrameBench {
         ] {
             self.set(p, v);
         }
-        let start = self.dut.cycle();
+        let start = self.dut.io_cycle();
         let limit = start + 3000 + 400 * tiles as u64;
         // Models' state.
         let mut seqs: Vec<Option<SeqModel>> = vec![None; n];
@@ -357,7 +390,7 @@ impl FrameBench {
         let mut was_busy = false;
         let mut started = false;
         loop {
-            let c = self.dut.cycle();
+            let c = self.dut.io_cycle();
             self.checker.protocol(c, c < limit, "timeout: the frame did not finish");
             let r = &mut self.rng;
             // Inputs.
@@ -413,7 +446,7 @@ impl FrameBench {
             self.set("m_axi_bvalid_i", bvalid as u64);
             self.set("m_axi_bid_i", 0);
             self.set("m_axi_bresp_i", 0);
-            self.dut.eval();
+            self.dut.io_eval();
             started = true;
 
             // Checker: status.
@@ -449,8 +482,8 @@ impl FrameBench {
                 self.checker.value(c, "first_overflow_o", want_first as u64, self.get("first_overflow_o"));
                 self.checker.value(c, "overflows_o", want_ovfs as u64, self.get("overflows_o"));
                 self.checker.value(c, "overflow_o", (want_ovfs > 0) as u64, self.get("overflow_o"));
-                self.dut.tick();
-                return FrameRun { cycles: c - start, overflows: want_ovfs, planned_extra };
+                self.dut.io_tick();
+                return FrameRun { cycles: c - start, overflows: want_ovfs, planned_extra, planned_wide };
             } else if !start_pulse && c > start + 1 {
                 self.checker.protocol(c, busy, "busy fell");
             }
@@ -539,8 +572,8 @@ impl FrameBench {
                     ("job_prev_len_o", d.prev_len as u64),
                     ("job_list_o", d.list as u64),
                     ("job_list_len_o", d.list_len as u64),
-                    ("job_dps_passes_o", want_passes[t]),
-                    ("job_dps_wide_o", d.dps_wide as u64),
+                    ("job_dps_passes_o", want_plans[t].0),
+                    ("job_dps_wide_o", want_plans[t].1 as u64),
                     ("job_odd_o", (regs.frame & 1) as u64),
                 ];
                 for (f, w) in fields {
@@ -555,7 +588,8 @@ impl FrameBench {
                 );
                 sorted[t] = true;
                 jobs += 1;
-                planned_extra += (regs.adapt.enabled() && want_passes[t] > 1) as u64;
+                planned_extra += (regs.adapt.enabled() && want_plans[t].0 > 1) as u64;
+                planned_wide += (regs.adapt.enabled() && want_plans[t].1) as u64;
                 // Quick sorts and, half of the time, slow ones: then every sequencer gets busy (the
                 // high-index completions of the first-free scheduler are exercised too).
                 let slow = self.rng.percent(50);
@@ -628,7 +662,7 @@ impl FrameBench {
                     *u = None;
                 }
             }
-            self.dut.tick();
+            self.dut.io_tick();
         }
     }
 }

@@ -246,7 +246,7 @@ fn synthetic() -> Scene {
 /// parallel; libtest starts tests in name order, so the two are named to start after the biker
 /// check and before the overflow, which keeps both threads busy to the end); the seeds are one
 /// split, named after the first test, so each case's seed is the same whichever test runs it.
-const SYNTHETIC_CASES: [EngineCase; 8] = [
+const SYNTHETIC_CASES: [EngineCase; 9] = [
     EngineCase::Orbit,
     EngineCase::Cut,
     EngineCase::Turn,
@@ -255,6 +255,7 @@ const SYNTHETIC_CASES: [EngineCase; 8] = [
     EngineCase::AdaptiveResort,
     EngineCase::AdaptiveEngine,
     EngineCase::AdaptiveWide,
+    EngineCase::AdaptiveEngineWide,
 ];
 
 /// Runs `SYNTHETIC_CASES[range]`, 3 frames each at 128x128 behind the hostile memory.
@@ -286,10 +287,11 @@ fn synthetic_orbit_with_edge_tiles_and_adaptive_passes_is_bit_exact_over_reuse_f
 }
 
 /// Reuse frames on the CI engine with a wide DPS chunk (`dps_wide` 4): per-tile DPS passes in
-/// chunks of 256 or of 1024 entries, as the descriptors say (`adaptive:wide=4`).
+/// chunks of 256 or of 1024 entries (`adaptive:wide=4`), as the descriptors say and as the frame
+/// controller plans them itself (`ADAPT_CTRL` with its wide bit).
 #[test]
 fn synthetic_orbit_with_wide_dps_chunks_is_bit_exact_over_reuse_frames() {
-    synthetic_cases(7..8);
+    synthetic_cases(7..9);
 }
 
 /// What a case's reuse frames hold (golden host only): tiles whose previous table has 1 to

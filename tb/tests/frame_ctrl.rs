@@ -14,6 +14,7 @@ fn frame_ctrl_skipped_without_verilator() {
 
 #[cfg(neo_has_verilator)]
 mod cosim {
+    use neo_golden::engine::adapt::{ADAPT_ENABLE, ADAPT_WIDE};
     use neo_tb::frame::{random_case, FrameBench};
     use neo_tb::rng::{for_each_seed, Rng};
     use neo_tb::waves::maybe_trace;
@@ -40,5 +41,39 @@ mod cosim {
             assert!(total.1 > 0, "the random frames had no overflowing tile");
             assert!(planned > 0, "the controller planned more than one pass for some tile");
         });
+    }
+
+    /// Engines with a wide DPS chunk: the descriptors' wide bit is handed on, and in planned
+    /// frames (`ADAPT_CTRL`'s wide bit random) each tile's passes and wide bit are golden
+    /// `engine_passes` of its previous result, reaches drawn up to 6 wide chunks.
+    #[test]
+    fn frame_ctrl_wide_plans_in_other_configurations() {
+        let name = "frame_ctrl_wide_plans_in_other_configurations";
+        neo_tb::configs::run_in_other_configurations(
+            name,
+            neo_tb::configs::sort_wide(),
+            |cfg| FrameBench::build(cfg, 0),
+            |b| &mut b.dut,
+            |b, cfg, seed| {
+                b.reseed(seed);
+                let mut rng = Rng::new(seed);
+                let (mut planned, mut wide) = (0, 0);
+                for (k, tiles) in [1usize, 40, 100, 64, 7, 200, 33, 90].into_iter().enumerate() {
+                    // A third of the frames as drawn, a third planned with the wide bit, a third
+                    // planned without it.
+                    let mut case = random_case(cfg, &mut rng, tiles, 4);
+                    let ctrl = &mut case.regs.adapt.ctrl;
+                    match k % 3 {
+                        1 => *ctrl |= ADAPT_ENABLE | ADAPT_WIDE,
+                        2 => *ctrl = (*ctrl | ADAPT_ENABLE) & !ADAPT_WIDE,
+                        _ => {}
+                    }
+                    let r = b.run(&case);
+                    (planned, wide) = (planned + r.planned_extra, wide + r.planned_wide);
+                }
+                println!("{name}: {planned} tiles planned more than one pass, {wide} the wide chunk");
+                assert!(planned > 0 && wide > 0, "the controller planned more passes and the wide chunk");
+            },
+        );
     }
 }

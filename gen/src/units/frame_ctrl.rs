@@ -32,7 +32,7 @@
 use crate::emit::expr::{bits_for, lit, resize, zext};
 use crate::emit::{for_, if_, if_else, set, Module, Stmt};
 use neo_golden::engine::adapt::{
-    ADAPT_BUDGET_BITS, ADAPT_BUDGET_LSB, ADAPT_ENABLE, ADAPT_MAX_BITS, ADAPT_MAX_LSB,
+    ADAPT_BUDGET_BITS, ADAPT_BUDGET_LSB, ADAPT_ENABLE, ADAPT_MAX_BITS, ADAPT_MAX_LSB, ADAPT_WIDE,
 };
 use neo_golden::engine::memory::{
     DPS_PASSES_BITS, DPS_PASSES_LSB, DPS_WIDE_BIT, INVERSIONS_BITS, INVERSIONS_LSB, INVERSIONS_MAX,
@@ -353,7 +353,7 @@ fn fetch(m: &mut Module, d: &Dims) {
                 vec![set("w3_q", "r_word[31:0]")],
             )],
         ),
-        if_("res_in & ~scan_q", vec![set("passes_q", "ad_plan")]),
+        if_("res_in & ~scan_q", vec![set("passes_q", "ad_plan"), set("wide_q", "rq_wide")]),
     ]);
     m.comment("Decoded descriptor and its overflow check.");
     m.wire_assign("d_fs", 1, format!("w0_q[{}]", 2 * tb));
@@ -397,8 +397,30 @@ fn adapt(m: &mut Module, cfg: &EngineConfig) {
     m.comment("A max of 0 grants one pass (golden: every plan has at least one).");
     m.wire_assign("ad_max", pb, format!("(ad_max_f == {}) ? {} : ad_max_f", lit(pb, 0), lit(pb, 1)));
     m.wire_assign("rq_len", 32, "r_word[31:0]");
-    m.wire_assign("rq_steps", 32, format!("r_word[63:32] >> {cb}"));
-    m.comment("p = 1 + reach / C, plus one when p > 1 and the merge saw inversions, at most max.");
+    let wb = (cfg.dps_wide as u64).trailing_zeros();
+    if wb == 0 {
+        m.comment("This engine has no wide chunk (dps_wide 1): ADAPT_CTRL's wide bit is ignored.");
+        m.wire_assign("rq_wide", 1, "1'b0");
+        m.wire_assign("rq_steps", 32, format!("r_word[63:32] >> {cb}"));
+    } else {
+        m.comment("Wide (ADAPT_CTRL's wide bit and a reach of a chunk at least): U = W, else U = C.");
+        m.wire_assign(
+            "rq_wide",
+            1,
+            format!(
+                "adapt_ctrl_i[{}] & (r_word[63:{}] != {})",
+                ADAPT_WIDE.trailing_zeros(),
+                32 + cb,
+                lit(32 - cb, 0)
+            ),
+        );
+        m.wire_assign(
+            "rq_steps",
+            32,
+            format!("rq_wide ? (r_word[63:32] >> {}) : (r_word[63:32] >> {cb})", cb + wb),
+        );
+    }
+    m.comment("p = 1 + reach / U, plus one when p > 1 and the merge saw inversions, at most max.");
     m.wire_assign(
         "rq_p",
         34,

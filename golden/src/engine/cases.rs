@@ -13,6 +13,7 @@
 //! | `adaptive` | the orbit 4x faster, sorted by `adaptive:wide=1,resort=0`: per-tile DPS passes (1 to 4) from the descriptors |
 //! | `adaptive_resort` | the orbit 16x faster, `adaptive:wide=1,resort=1,max=2,budget=1000`: passes and single tiles re-sorted from scratch in reuse frames (lists mode only) |
 //! | `adaptive_wide` | the orbit 16x faster on an engine with a wide DPS chunk (`dps_wide` 4), `adaptive:wide=4,resort=0`: per-tile DPS passes in chunks or wide chunks from the descriptors |
+//! | `adaptive_engine_wide` | the `adaptive_wide` orbit, engine and strategy, planned by the frame controller (`ADAPT_CTRL` with its wide bit) |
 //! | `adaptive_engine` | the `adaptive` orbit and strategy, planned by the frame controller from the previous frame's results ([`Planner::Engine`]; `ADAPT_CTRL`) |
 
 use super::host::{pipeline_for, EngineSession, HostMode, Planner, SessionError, SessionOptions};
@@ -51,6 +52,8 @@ pub enum EngineCase {
     /// A faster orbit with per-tile DPS passes, some in the wide chunk (`adaptive` with
     /// `wide` = [`WIDE_CASE`], `resort=0`), on an engine whose `dps_wide` is that.
     AdaptiveWide,
+    /// [`EngineCase::AdaptiveWide`] planned by the frame controller itself ([`Planner::Engine`]).
+    AdaptiveEngineWide,
 }
 
 /// The wide chunk (a multiple of the chunk) of the `adaptive_wide` case: four chunks, so the
@@ -100,7 +103,7 @@ impl CaseScene {
 
 impl EngineCase {
     /// Every case.
-    pub const ALL: [EngineCase; 11] = [
+    pub const ALL: [EngineCase; 12] = [
         EngineCase::Orbit,
         EngineCase::Cut,
         EngineCase::Turn,
@@ -112,6 +115,7 @@ impl EngineCase {
         EngineCase::AdaptiveResort,
         EngineCase::AdaptiveEngine,
         EngineCase::AdaptiveWide,
+        EngineCase::AdaptiveEngineWide,
     ];
 
     /// The case's name.
@@ -128,6 +132,7 @@ impl EngineCase {
             EngineCase::AdaptiveResort => "adaptive_resort",
             EngineCase::AdaptiveEngine => "adaptive_engine",
             EngineCase::AdaptiveWide => "adaptive_wide",
+            EngineCase::AdaptiveEngineWide => "adaptive_engine_wide",
         }
     }
 
@@ -142,7 +147,7 @@ impl EngineCase {
             EngineCase::AdaptiveResort => {
                 Strategy::Adaptive(AdaptiveParams { resort: true, wide: 1, max_passes: 2, budget: 1000 })
             }
-            EngineCase::AdaptiveWide => Strategy::Adaptive(AdaptiveParams {
+            EngineCase::AdaptiveWide | EngineCase::AdaptiveEngineWide => Strategy::Adaptive(AdaptiveParams {
                 resort: false,
                 wide: WIDE_CASE,
                 ..AdaptiveParams::default()
@@ -154,7 +159,7 @@ impl EngineCase {
     /// Who plans the case's DPS passes.
     pub fn planner(self) -> Planner {
         match self {
-            EngineCase::AdaptiveEngine => Planner::Engine,
+            EngineCase::AdaptiveEngine | EngineCase::AdaptiveEngineWide => Planner::Engine,
             _ => Planner::Host,
         }
     }
@@ -199,7 +204,7 @@ impl EngineCase {
             }
             EngineCase::Adaptive | EngineCase::AdaptiveEngine => extra = format!("speed={}", 4.0 * how.speed),
             EngineCase::AdaptiveResort => extra = format!("speed={}", RESORT_SPEED * how.speed),
-            EngineCase::AdaptiveWide => {
+            EngineCase::AdaptiveWide | EngineCase::AdaptiveEngineWide => {
                 extra = format!("speed={}", RESORT_SPEED * how.speed);
                 cfg.dps_wide = WIDE_CASE as usize;
             }

@@ -362,7 +362,7 @@ impl<'s> EngineSession<'s> {
         let adapt = match (planner, strategy) {
             (Planner::Host, _) => None,
             (Planner::Engine, Strategy::Adaptive(p)) => {
-                Some(AdaptRegs::deciding(&p).map_err(SessionError::Planner)?)
+                Some(AdaptRegs::deciding(&p, cfg.dps_wide).map_err(SessionError::Planner)?)
             }
             (Planner::Engine, s) => {
                 return Err(SessionError::Planner(format!("{s} is not adaptive: there is nothing to plan")))
@@ -680,10 +680,13 @@ impl<'s> EngineSession<'s> {
     }
 }
 
-/// A descriptor as the host writes it for a frame of `regs`: without DPS passes when the engine
-/// plans them (`ADAPT_CTRL`).
+/// A descriptor as the host writes it for a frame of `regs`: without DPS passes (0, not wide)
+/// when the engine plans them (`ADAPT_CTRL`).
 pub(super) fn as_written(regs: &FrameRegs, d: &TileDescriptor) -> TileDescriptor {
-    TileDescriptor { dps_passes: if regs.adapt.enabled() { 0 } else { d.dps_passes }, ..*d }
+    match regs.adapt.enabled() {
+        true => TileDescriptor { dps_passes: 0, dps_wide: false, ..*d },
+        false => *d,
+    }
 }
 
 /// The DPS passes the pipeline ran on tile `t` this frame (0 for a sort from scratch), as a

@@ -17,7 +17,7 @@ mod pre_regs;
 pub mod reference;
 pub mod regs;
 
-pub use adapt::{engine_passes, AdaptRegs, ADAPT_ENABLE};
+pub use adapt::{engine_passes, AdaptRegs, EnginePlan, ADAPT_ENABLE};
 pub use cases::{CaseScene, EngineCase};
 pub use clients::{client_port_slot, port_slot_client, port_slots, MemoryClient};
 pub use config::{

@@ -30,7 +30,7 @@
 //! `t mod N` (the round-robin schedule) for tile `t`; the scratch contents are not part of the
 //! outcome.
 
-use super::adapt::engine_passes;
+use super::adapt::{engine_passes, EnginePlan};
 use super::memory::{
     Memory, TileDescriptor, TileResult, DESCRIPTOR_BYTES, ENTRY_BYTES, FEATURE_BYTES, PIXEL_BYTES,
     RESULT_BYTES,
@@ -141,9 +141,10 @@ pub fn execute_frame_traced(
     for t in 0..regs.tiles as u64 {
         let mut d = mem.read_descriptor(regs.desc_base, t);
         run.out.counters.add(Counter::RdDesc, DESCRIPTOR_BYTES);
-        if let Some(passes) = &planned {
+        if let Some(plans) = &planned {
             // The walk reads the tile's previous result again and plans its passes.
-            d.dps_passes = passes[t as usize] as u8;
+            let p = plans[t as usize];
+            (d.dps_passes, d.dps_wide) = (p.passes as u8, p.wide);
             run.out.counters.add(Counter::RdResult, RESULT_BYTES);
         }
         let (sorted, plan) = run.sort_tile(mem, t, &d)?;
@@ -164,11 +165,16 @@ pub fn execute_frame_traced(
 
 /// The frame controller's own plan ([`super::adapt`]): every tile's previous result read (the
 /// scan) and the passes golden's policy grants.
-fn engine_plan(cfg: &EngineConfig, regs: &FrameRegs, mem: &Memory, counters: &mut Counters) -> Vec<u32> {
+fn engine_plan(
+    cfg: &EngineConfig,
+    regs: &FrameRegs,
+    mem: &Memory,
+    counters: &mut Counters,
+) -> Vec<EnginePlan> {
     let prev: Vec<TileResult> =
         (0..regs.tiles as u64).map(|t| mem.read_result(regs.result_base, t)).collect();
     counters.add(Counter::RdResult, RESULT_BYTES * prev.len() as u64);
-    engine_passes(&regs.adapt, cfg.chunk as u32, &prev)
+    engine_passes(&regs.adapt, cfg, &prev)
 }
 
 /// The work of one frame, tile by tile in descriptor order ([`execute_frame_traced`]).
