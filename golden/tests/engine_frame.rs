@@ -433,7 +433,7 @@ fn the_engine_plans_only_what_it_can_run() {
         planner: Planner::Engine,
         ..SessionOptions::default()
     };
-    assert!(EngineSession::with_options(&scene, traj.clone(), &cfg, opts.clone()).is_ok());
+    assert!(EngineSession::with_options(&scene, traj.clone(), &cfg, opts).is_ok());
     let wide = EngineConfig { dps_wide: 4, ..cfg };
     let opts4 = SessionOptions { strategy: Strategy::Adaptive(AdaptiveParams { wide: 4, ..ok }), ..opts };
     assert!(EngineSession::with_options(&scene, traj, &wide, opts4).is_ok(), "its own wide chunk");
