@@ -334,8 +334,13 @@ fn cosim_refuses_an_unknown_input_mode_before_any_work() {
 #[test]
 fn cosim_refuses_a_plan_the_engine_cannot_make_before_any_work() {
     let scene = ["cosim", "--scene", "synthetic:blobs?gaussians=100&seed=1", "--frames", "1"];
-    // Neo has no plan to make; the default adaptive needs re-sorts and the wide chunk.
-    for (sort, want) in [("neo", "neo is not adaptive"), ("adaptive", "resort=0,wide=1")] {
+    // Neo has no plan to make; the default adaptive needs re-sorts, and its wide chunk of 16 an
+    // engine with that buffer (the default engine has none).
+    for (sort, want) in [
+        ("neo", "neo is not adaptive"),
+        ("adaptive", "without re-sorts"),
+        ("adaptive:resort=0", "wide = its dps_wide (1)"),
+    ] {
         let o = neo(&[&scene[..], &["--sort", sort, "--planner", "engine"]].concat());
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "--sort {sort}: stderr:\n{err}");

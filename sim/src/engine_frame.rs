@@ -224,6 +224,8 @@ pub struct FramePrediction {
     /// Every tile's DPS passes in golden's reference (the descriptors', or the engine's own
     /// plan: [`FrameTrace::planned`]).
     pub dps_passes: Vec<usize>,
+    /// Whether each tile's DPS passes use the wide chunk.
+    pub dps_wide: Vec<bool>,
 }
 
 /// The engine-level model for one configuration, unit timing and memory timing.
@@ -393,6 +395,7 @@ impl<'a> EngineFrameModel<'a> {
             p.cycles += p.scan;
         }
         p.dps_passes = trace.tiles.iter().map(|t| t.plan.dps_passes()).collect();
+        p.dps_wide = trace.tiles.iter().map(|t| t.plan.wide && t.plan.dps_passes() > 0).collect();
         Ok(p)
     }
 
@@ -693,6 +696,7 @@ impl Schedule {
             pre_busy: 0.0,
             scan: 0.0,
             dps_passes: Vec::new(),
+            dps_wide: Vec::new(),
         }
     }
 }
@@ -772,7 +776,7 @@ mod tests {
             })
             .collect();
         TileTrace {
-            plan: TilePlan { overflow: false, stages: vec![cmds] },
+            plan: TilePlan { overflow: false, stages: vec![cmds], wide: false },
             next_len: n,
             raster: RasterTrace { len: 0, present: 0, subtiles: Vec::new(), segments: Vec::new() },
         }

@@ -198,6 +198,7 @@ fn print_frame(
             "raster_busy_error_pct": error_pct(p.raster_busy, raster_busy),
             "planned_by_engine": p.scan > 0.0,
             "dps_passes": &p.dps_passes,
+            "dps_wide": &p.dps_wide,
             "rtl_result_read_bytes": r.counters.get(Counter::RdResult),
             "model_scan_cycles": p.scan.round(),
             "mismatch": mismatch,
@@ -246,13 +247,27 @@ fn print_frame(
     if !overflowing.is_empty() {
         bar.suspend(|| println!("  tiles over the table capacity (reported, not sorted): {overflowing:?}"));
     }
+    let wide = p.dps_wide.iter().filter(|&&w| w).count();
     if p.scan > 0.0 {
         let plan = format!(
-            "  planned by the engine (ADAPT_CTRL): DPS passes per tile {:?}, {} B of previous results read, scan {:.0} cycles in the model",
-            p.dps_passes,
+            "  planned by the engine (ADAPT_CTRL): DPS passes per tile {}, {} B of previous results read, scan {:.0} cycles in the model",
+            passes_text(&p.dps_passes, &p.dps_wide),
             r.counters.get(Counter::RdResult),
             p.scan
         );
         bar.suspend(|| println!("{plan}"));
+    } else if wide > 0 {
+        let plan = format!("  DPS passes per tile {}", passes_text(&p.dps_passes, &p.dps_wide));
+        bar.suspend(|| println!("{plan}"));
     }
+}
+
+/// Each tile's DPS passes, `w` after those in the wide chunk: `[1, 2w, 0, ...]`.
+fn passes_text(passes: &[usize], wide: &[bool]) -> String {
+    let v: Vec<String> = passes
+        .iter()
+        .zip(wide.iter().chain(std::iter::repeat(&false)))
+        .map(|(p, &w)| format!("{p}{}", if w { "w" } else { "" }))
+        .collect();
+    format!("[{}]", v.join(", "))
 }

@@ -53,6 +53,8 @@ pub struct TilePlan {
     pub overflow: bool,
     /// The stages in order, none empty; a barrier separates two stages.
     pub stages: Vec<Vec<TileCmd>>,
+    /// The DPS passes use the wide chunk (the descriptor's `dps_wide`, in an engine with one).
+    pub wide: bool,
 }
 
 impl TilePlan {
@@ -197,7 +199,7 @@ pub fn tile_steps(shape: &TileShape) -> Vec<Vec<TileStep>> {
 pub fn tile_plan(cfg: &EngineConfig, regs: &FrameRegs, d: &TileDescriptor, core: u64) -> TilePlan {
     let cap = cfg.table_capacity as u64;
     if d.entries_in() > cap {
-        return TilePlan { overflow: true, stages: Vec::new() };
+        return TilePlan { overflow: true, ..TilePlan::default() };
     }
     let shape = TileShape {
         from_scratch: d.from_scratch,
@@ -217,7 +219,7 @@ pub fn tile_plan(cfg: &EngineConfig, regs: &FrameRegs, d: &TileDescriptor, core:
     };
     let stages =
         tile_steps(&shape).iter().map(|stage| stage.iter().map(|s| s.place(base)).collect()).collect();
-    TilePlan { overflow: false, stages }
+    TilePlan { overflow: false, stages, wide: d.dps_wide && cfg.dps_wide > 1 }
 }
 
 /// What one executed command moved.
