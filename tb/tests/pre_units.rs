@@ -161,6 +161,7 @@ neo_tb::with_models! {
                 bench.run(frame, &items, &mut rng, [(100, 100), (60, 50), (90, 40)][k % 3], &check);
             }
             // Hits in the upper half of the index range on both axes (tile index bit 9).
+            println!("{name}: hits beyond tile {half}: {far:?}");
             assert!(far[0] > 0 && far[1] > 0, "hits beyond tile {half}: {far:?}");
         });
     }
