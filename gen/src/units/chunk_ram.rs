@@ -1,6 +1,7 @@
-//! `neo_chunk_ram`: one on-chip chunk buffer (`chunk * dps_wide` entries, the wide DPS chunk), one synchronous write port and
-//! two asynchronous (combinational) read ports, register-file style. An SRAM macro with
-//! registered reads would need a one-entry prefetch in front of each read port.
+//! `neo_chunk_ram`: one on-chip chunk buffer (`chunk * dps_wide` entries: the wide DPS chunk, or
+//! the chunk without one), one synchronous write port and two asynchronous (combinational) read
+//! ports, register-file style. An SRAM macro with registered reads would need a one-entry
+//! prefetch in front of each read port.
 
 use crate::emit::expr::bits_for;
 use crate::emit::{if_, set, Module};
