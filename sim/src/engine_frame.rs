@@ -243,11 +243,10 @@ impl<'a> EngineFrameModel<'a> {
     /// The model of `cfg` with the unit timing `lat`, over ports of timing `mem`. Refuses unit
     /// timing measured on cores of another configuration (the engine's counts may differ: they
     /// do not change a core's timing; the Preprocessing Engine's lane count is one of them, the
-    /// frame model covers the tile walk). The wide DPS chunk (`dps_wide`) may differ too: it
-    /// deepens the Sorting Core's buffers without changing its datapath, so chunks of up to
-    /// `C` entries take the measured time, and a wide chunk of `n > C` entries is timed as any
-    /// chunk between measured points ([`Latency::chunk_cycles`]: the MSU+ passes of `n` entries
-    /// at the measured rate plus the measured remainder, extrapolated from the largest points).
+    /// frame model covers the tile walk). The wide DPS chunk may differ too
+    /// ([`Latency::check_engine`]): a wide chunk of `n > C` entries is timed as any chunk between
+    /// measured points ([`Latency::chunk_cycles`]: the MSU+ passes of `n` entries at the measured
+    /// rate plus the measured remainder, extrapolated from the largest points).
     pub fn new(cfg: &'a EngineConfig, lat: &'a Latency, mem: PortTiming) -> Result<Self, String> {
         cfg.validate().map_err(|e| e.to_string())?;
         let same_cores = EngineConfig {
@@ -258,15 +257,9 @@ impl<'a> EngineFrameModel<'a> {
             table_capacity: lat.config.table_capacity,
             axi_id_bits: lat.config.axi_id_bits,
             pre_units: lat.config.pre_units,
-            dps_wide: lat.config.dps_wide,
             ..cfg.clone()
         };
-        if let Some((field, ours, measured)) = same_cores.first_difference(&lat.config) {
-            return Err(format!(
-                "{}: measured on cores with {field} = {measured}, the engine has {field} = {ours}",
-                lat.source.display()
-            ));
-        }
+        lat.check_engine(&same_cores).map_err(|e| e.to_string())?;
         if !(mem.bandwidth > 0.0 && mem.ready > 0.0 && mem.latency >= 0.0) {
             return Err(format!(
                 "memory timing {mem:?}: bandwidth and ready must be positive, latency not negative"
@@ -895,6 +888,8 @@ mod tests {
         assert!(e.contains("bsu_width"), "{e}");
         let counts = EngineConfig { sort_cores: 3, raster_cores: 2, mem_channels: 1, ..lat.config.clone() };
         assert!(EngineFrameModel::new(&counts, &lat, PortTiming::IDEAL).is_ok());
+        let buffers = EngineConfig { dps_wide: 4, ..lat.config.clone() };
+        assert!(EngineFrameModel::new(&buffers, &lat, PortTiming::IDEAL).is_ok(), "the wide chunk");
         let bad = PortTiming { bandwidth: 0.0, ..PortTiming::IDEAL };
         assert!(EngineFrameModel::new(&lat.config, &lat, bad).is_err());
     }

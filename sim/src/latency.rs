@@ -320,7 +320,11 @@ impl Latency {
 
     /// Refuses to time `engine` with these measurements when they were made on another
     /// configuration: the error names the file, the first field that differs and both values.
+    /// The wide DPS chunk (`dps_wide`) may differ: it deepens the sorting core's buffers, not
+    /// its datapath, and a chunk longer than the measured points is timed as any unmeasured
+    /// length ([`Latency::chunk_cycles`]).
     pub fn check_engine(&self, engine: &EngineConfig) -> InputResult<()> {
+        let engine = EngineConfig { dps_wide: self.config.dps_wide, ..engine.clone() };
         match engine.first_difference(&self.config) {
             None => Ok(()),
             Some((field, ours, measured)) => Err(InputError::new(
@@ -574,6 +578,8 @@ mod tests {
         let other = EngineConfig { sort_cores: 8, ..EngineConfig::default() };
         let e = l.check_engine(&other).unwrap_err().to_string();
         assert!(e.contains("sort_cores = 16") && e.contains("engine.sort_cores = 8"), "{e}");
+        let wide = EngineConfig { dps_wide: 16, ..EngineConfig::default() };
+        l.check_engine(&wide).expect("the wide chunk keeps the measured datapath");
     }
 
     #[test]
