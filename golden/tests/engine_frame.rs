@@ -42,6 +42,11 @@ struct Seen {
     wide_cmds: usize,
 }
 
+/// A DPS command over more than a chunk: one of the wide chunk.
+fn longer_than_a_chunk(cfg: &EngineConfig, c: &TileCmd) -> bool {
+    c.mode == SortMode::Dps && c.len_a > cfg.chunk as u64
+}
+
 /// Runs every frame of `session` through `execute_frame` and checks it against the plan.
 fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
     let mut mem = Memory::new();
@@ -58,8 +63,7 @@ fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
             for (d, t) in plan.expected.descriptors.iter().zip(&trace.tiles) {
                 if !d.from_scratch && d.prev_len > 0 {
                     seen.engine_passes[t.plan.dps_passes()] += 1;
-                    let wide = |c: &&TileCmd| c.mode == SortMode::Dps && c.len_a > cfg.chunk as u64;
-                    seen.engine_wide += t.plan.commands().any(|c| wide(&c)) as usize;
+                    seen.engine_wide += t.plan.commands().any(|c| longer_than_a_chunk(cfg, c)) as usize;
                 }
             }
         }
@@ -87,8 +91,7 @@ fn run(session: &mut EngineSession, cfg: &EngineConfig) -> Seen {
             seen.wide += (!d.from_scratch && d.prev_len > 0 && d.dps_wide) as usize;
         }
         for t in &trace.tiles {
-            let dps = t.plan.commands().filter(|c| c.mode == SortMode::Dps);
-            seen.wide_cmds += dps.filter(|c| c.len_a > cfg.chunk as u64).count();
+            seen.wide_cmds += t.plan.commands().filter(|c| longer_than_a_chunk(cfg, c)).count();
         }
         if std::env::var_os("ENGINE_DEBUG").is_some() {
             let v: Vec<u64> = plan.expected.descriptors.iter().map(|d| d.entries_in()).collect();
