@@ -122,8 +122,8 @@ struct JobRun {
     left: AtomicUsize,
 }
 
-/// Groups of the jobs sharing their cameras (indices into `jobs`), in the order of their first
-/// job.
+/// Groups of the jobs sharing their cameras (indices into `jobs`), the largest first (pixels
+/// times frames), else in the order of their first job.
 fn camera_groups(jobs: &[PointJob]) -> Vec<Vec<usize>> {
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (k, j) in jobs.iter().enumerate() {
@@ -132,7 +132,16 @@ fn camera_groups(jobs: &[PointJob]) -> Vec<Vec<usize>> {
             None => groups.push(vec![k]),
         }
     }
+    // The largest first: its simulations are the longest, and the smaller groups' generation
+    // and simulations fill the cores while they run (a set's last job ends sooner).
+    groups.sort_by_key(|g| std::cmp::Reverse(group_cost(&jobs[g[0]].point)));
     groups
+}
+
+/// Pixels times frames of `point` (0 for an unknown resolution): what its workload generation
+/// and its simulations grow with.
+fn group_cost(point: &Point) -> u64 {
+    suite::parse_res(&point.res).map_or(0, |(_, w, h)| w as u64 * h as u64 * point.frames as u64)
 }
 
 /// The distinct workloads of `group` (jobs with the same point and golden raster share one):
@@ -224,7 +233,7 @@ impl<'a> JobSet<'a> {
 }
 
 /// Runs `jobs` on the machine's cores: the workloads of jobs that share their cameras are
-/// generated together ([`suite::workloads`]), group after group (jobs with the same point and
+/// generated together ([`suite::workloads`]), group after group, the largest first (jobs with the same point and
 /// golden raster share one), and each job's architectures run on its workload
 /// ([`suite::evaluate`]) while the next groups generate; in a set with throughput runs
 /// (`headline`), the other jobs' simulations are queued after all of theirs. One progress bar
