@@ -138,10 +138,9 @@ fn camera_groups(jobs: &[PointJob]) -> Vec<Vec<usize>> {
     groups
 }
 
-/// Pixels times frames of `point` (0 for an unknown resolution): what its workload generation
-/// and its simulations grow with.
+/// Pixels times frames of `point`: what its workload generation and its simulations grow with.
 fn group_cost(point: &Point) -> u64 {
-    suite::parse_res(&point.res).map_or(0, |(_, w, h)| w as u64 * h as u64 * point.frames as u64)
+    point.width as u64 * point.height as u64 * point.frames as u64
 }
 
 /// The distinct workloads of `group` (jobs with the same point and golden raster share one):
@@ -363,5 +362,38 @@ impl PointRunner for ProgressRunner<'_> {
         };
         run_jobs(&mut self.scenes, jobs, self.cfg, self.lat, raster_sample, what, &log)
             .map_err(|e| format!("{e:#}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn job(res: &str, (width, height): (u32, u32), strategy: &str) -> PointJob {
+        let point = Point {
+            scene: "synthetic:outdoor".into(),
+            trajectory: "orbit".into(),
+            speed: 1.0,
+            frames: 8,
+            res: res.into(),
+            width,
+            height,
+            strategy: strategy.into(),
+            chunk: 256,
+            passes: 1,
+        };
+        PointJob { point, archs: vec![Arch::Neo], golden: GoldenRaster::Off, headline: false }
+    }
+
+    #[test]
+    fn camera_groups_come_largest_first_and_keep_their_order_on_ties() {
+        let jobs = [
+            job("hd", (1280, 720), "neo"),
+            job("a", (640, 360), "neo"),
+            job("qhd", (2560, 1440), "neo"),
+            job("hd", (1280, 720), "periodic:4"),
+            job("b", (360, 640), "neo"),
+        ];
+        assert_eq!(camera_groups(&jobs), [vec![2], vec![0, 3], vec![1], vec![4]]);
     }
 }

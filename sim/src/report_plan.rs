@@ -329,9 +329,9 @@ impl ReportPlan {
 /// Runs `jobs` in two sets: first the throughput runs (`headline`) with the jobs that run on
 /// their workloads (same point and golden raster), then the others, so that the throughput runs
 /// are not slowed by the generation of other workloads (not even of those sharing their
-/// cameras: a timeline's strategy pipeline costs more than the frames' preprocessing it shares). Returns, in the order
-/// of `jobs`, each result and the seconds from the first set's start to its end (the second set
-/// starting when the first's last job ends).
+/// cameras: a timeline's strategy pipeline costs more than the frames' preprocessing it
+/// shares). Returns, in the order of `jobs`, each result and the seconds from the first set's
+/// start to its end (the second set starting when the first's last job ends).
 fn run_headline_first(
     runner: &mut dyn PointRunner,
     jobs: &[PointJob],
