@@ -77,40 +77,6 @@ impl Scenes {
     }
 }
 
-/// Generates the workload of `point` (with a progress bar) and runs `archs` on it.
-#[allow(clippy::too_many_arguments)]
-pub fn run_point(
-    scenes: &mut Scenes,
-    point: &Point,
-    cfg: &SimConfig,
-    lat: &Latency,
-    archs: &[Arch],
-    golden: GoldenRaster,
-    raster_sample: u32,
-    label: &str,
-) -> Result<PointResult> {
-    let scene = scenes.get(&point.scene)?;
-    let bar = ProgressBar::new(point.frames as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{prefix} {bar:24} {pos}/{len} frames [{elapsed} < {eta}] {msg}")
-            .expect("valid template"),
-    );
-    bar.set_prefix(label.to_string());
-    bar.set_message(format!(
-        "workload {} {} {}",
-        point.res,
-        point.strategy,
-        if golden == GoldenRaster::Off { "" } else { "(golden raster)" }
-    ));
-    bar.enable_steady_tick(Duration::from_millis(200));
-    let wl =
-        suite::workload(scene, point, cfg, golden, raster_sample, |_| bar.inc(1)).map_err(|e| anyhow!(e))?;
-    bar.set_message(format!("model: {}", archs.iter().map(Arch::name).collect::<Vec<_>>().join(", ")));
-    let r = suite::evaluate(point, &wl, cfg, lat, archs).map_err(|e| anyhow!(e))?;
-    bar.finish_and_clear();
-    Ok(r)
-}
-
 /// A job's result and the seconds from the start to its end.
 type Timed = (PointResult, f64);
 
@@ -313,23 +279,22 @@ pub struct ProgressRunner<'a> {
     pub started: Instant,
 }
 
-impl ProgressRunner<'_> {
-    /// One log line about a finished point.
-    fn log(started: Instant, r: &PointResult, label: &str) {
-        let fps: Vec<String> = r.archs.iter().map(|a| format!("{} {:.1}", a.arch, a.fps)).collect();
-        eprintln!(
-            "{label} {} {} {} c{} p{} {}x: FPS {} (workload {:.1} s; {:.0} s elapsed)",
-            r.point.res,
-            r.point.strategy,
-            r.point.frames,
-            r.point.chunk,
-            r.point.passes,
-            r.point.speed,
-            fps.join(", "),
-            r.workload.generation_s,
-            started.elapsed().as_secs_f64()
-        );
-    }
+/// One log line (stderr) about a finished point: its FPS per architecture, its workload's
+/// generation time and the seconds since `started`.
+pub fn log_point(started: Instant, r: &PointResult, label: &str) {
+    let fps: Vec<String> = r.archs.iter().map(|a| format!("{} {:.1}", a.arch, a.fps)).collect();
+    eprintln!(
+        "{label} {} {} {} c{} p{} {}x: FPS {} (workload {:.1} s; {:.0} s elapsed)",
+        r.point.res,
+        r.point.strategy,
+        r.point.frames,
+        r.point.chunk,
+        r.point.passes,
+        r.point.speed,
+        fps.join(", "),
+        r.workload.generation_s,
+        started.elapsed().as_secs_f64()
+    );
 }
 
 impl PointRunner for ProgressRunner<'_> {
@@ -345,7 +310,7 @@ impl PointRunner for ProgressRunner<'_> {
         let n_headline = jobs.iter().filter(|j| j.headline).count();
         let headline = Mutex::new(Vec::new());
         let log = move |j: &PointJob, r: &PointResult, label: &str| {
-            Self::log(started, r, label);
+            log_point(started, r, label);
             if !j.headline {
                 return;
             }

@@ -2,16 +2,24 @@
 //! options (`--res`, `--sort`, `--chunk`, `--passes`, `--speed`) is one point: one workload,
 //! evaluated on every `--arch`. `--shard i/n` runs only the points whose index is `i mod n`, so
 //! a sweep runs as independent jobs (Slurm arrays, GNU parallel), each writing its own JSON.
+//! The points run as `neo report`'s jobs do ([`run_jobs`]): those that share their cameras (one
+//! resolution and speed; any strategies, chunks and passes) generate their workloads in one pass
+//! over the frames, and the architectures run while the next workloads are generated; every
+//! result is the one the point has alone. The tables are printed in the points' order at the end.
 
 use crate::args::{resolution, FramesArg, ModelArgs, SceneArg, TrajectoryArg};
-use crate::points::{load_config, load_latency, run_point, Scenes};
+use crate::points::{load_config, load_latency, log_point, run_jobs, Scenes};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
+use neo_sim::config::SimConfig;
 use neo_sim::driver::GoldenRaster;
+use neo_sim::latency::Latency;
 use neo_sim::report::point_table;
+use neo_sim::report_plan::PointJob;
 use neo_sim::run::Arch;
-use neo_sim::suite::{self, Grid, Point};
-use std::path::PathBuf;
+use neo_sim::suite::{self, Grid, Point, PointResult};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Arguments of `neo simulate`.
 #[derive(Args)]
@@ -137,36 +145,11 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         }
     }
     let mut scenes = Scenes::default();
-    let mut results = Vec::new();
-    for (k, p) in points.iter().enumerate() {
-        if let Some(dir) = &a.trace {
-            // Trace through the golden pipeline: generate with the driver's trace option.
-            let scene = scenes.get(&p.scene)?;
-            let (mut ws, traj) = suite::workload_spec(scene, p, &cfg, golden, a.model.raster_sample)
-                .map_err(|e| anyhow!(e))?;
-            ws.golden_raster = golden;
-            ws.trace = Some((dir.join(p.id()), a.trace_frames.clone()));
-            let (wl, _) = crate::progress::spin("golden pipeline with trace export", || {
-                neo_sim::driver::generate(scene, &traj.frames, &traj.cuts, &ws, |_| {})
-            });
-            let wl = wl?;
-            let r = suite::evaluate(p, &wl, &cfg, &lat, &archs).map_err(|e| anyhow!(e))?;
-            eprintln!("wrote poc.trace files into {}", dir.join(p.id()).display());
-            results.push(r);
-        } else {
-            let label = format!("[{}/{}]", k + 1, points.len());
-            results.push(run_point(
-                &mut scenes,
-                p,
-                &cfg,
-                &lat,
-                &archs,
-                golden,
-                a.model.raster_sample,
-                &label,
-            )?);
-        }
-        let r = results.last().expect("just pushed");
+    let results = match &a.trace {
+        Some(dir) => traced_points(&mut scenes, &points, (&cfg, &lat), &archs, golden, dir, &a)?,
+        None => shared_points(&mut scenes, &points, (&cfg, &lat), &archs, golden, &a)?,
+    };
+    for (p, r) in points.iter().zip(&results) {
         if let Some(dir) = &a.out {
             let path = dir.join(format!("{}.json", p.id()));
             let f =
@@ -186,6 +169,59 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&results)?);
     }
     Ok(())
+}
+
+/// The points' results, as `neo report` runs its jobs ([`run_jobs`]): points that share their
+/// cameras generate their workloads in one pass over the frames, and the architectures run
+/// while the next workloads are generated. Each finished point is logged unless `--json`.
+fn shared_points(
+    scenes: &mut Scenes,
+    points: &[Point],
+    (cfg, lat): (&SimConfig, &Latency),
+    archs: &[Arch],
+    golden: GoldenRaster,
+    a: &SimulateArgs,
+) -> Result<Vec<PointResult>> {
+    let jobs: Vec<PointJob> = points
+        .iter()
+        .map(|p| PointJob { point: p.clone(), archs: archs.to_vec(), golden, headline: false })
+        .collect();
+    let started = Instant::now();
+    let quiet = a.json;
+    let log = move |_: &PointJob, r: &PointResult, label: &str| {
+        if !quiet {
+            log_point(started, r, label);
+        }
+    };
+    let timed = run_jobs(scenes, &jobs, cfg, lat, a.model.raster_sample, "simulate", &log)?;
+    Ok(timed.into_iter().map(|(r, _)| r).collect())
+}
+
+/// The points' results through the golden pipeline with its trace export, one after the other.
+fn traced_points(
+    scenes: &mut Scenes,
+    points: &[Point],
+    (cfg, lat): (&SimConfig, &Latency),
+    archs: &[Arch],
+    golden: GoldenRaster,
+    dir: &Path,
+    a: &SimulateArgs,
+) -> Result<Vec<PointResult>> {
+    let mut results = Vec::with_capacity(points.len());
+    for p in points {
+        let scene = scenes.get(&p.scene)?;
+        let (mut ws, traj) =
+            suite::workload_spec(scene, p, cfg, golden, a.model.raster_sample).map_err(|e| anyhow!(e))?;
+        ws.golden_raster = golden;
+        ws.trace = Some((dir.join(p.id()), a.trace_frames.clone()));
+        let (wl, _) = crate::progress::spin("golden pipeline with trace export", || {
+            neo_sim::driver::generate(scene, &traj.frames, &traj.cuts, &ws, |_| {})
+        });
+        let wl = wl?;
+        results.push(suite::evaluate(p, &wl, cfg, lat, archs).map_err(|e| anyhow!(e))?);
+        eprintln!("wrote poc.trace files into {}", dir.join(p.id()).display());
+    }
+    Ok(results)
 }
 
 #[cfg(test)]
