@@ -393,8 +393,8 @@ impl<'a> EngineFrameModel<'a> {
     }
 
     /// Cycles of the Preprocessing Engine's phase (the tile walk starts at its `done`): the
-    /// busiest port's traffic, the lanes' own pace, the slowest client's read window, then the
-    /// pipeline fill and the lists' flush.
+    /// busiest port's traffic, the lanes' own pace, the slowest client's read window or fetch
+    /// assembly, then the pipeline fill and the lists' flush.
     ///
     /// - **Ports.** Every transfer of golden `pre_transfers` (geometry streams, one SH record
     ///   and previous word per visible Gaussian, feature words, list lines, lengths) is charged
@@ -405,6 +405,12 @@ impl<'a> EngineFrameModel<'a> {
     /// - **Lanes.** A lane takes one Gaussian a cycle at most (the units' measured II).
     /// - **Window.** A client's reads move at most its fetch unit's window
     ///   ([`EngineConfig::pre_window_beats`]) per round trip.
+    /// - **Assembly.** A fetch unit assembles at most a beat a cycle and loads each command in a
+    ///   cycle of its own (`neo_pre_fetch`: a command is taken only when the previous one is
+    ///   done): a client's reads take their beats plus one cycle per read transfer (one command
+    ///   each: a lane's geometry stream, every visible Gaussian's SH record and previous word).
+    ///   On a reuse frame of small records behind a fast memory this bounds the phase: biker's
+    ///   SH port, `(1 + 4) + (1 + 2)` = 8 cycles per Gaussian.
     /// - **Fill and flush.** The projection and colour units' measured latencies, a round trip
     ///   for the first read and one for the last write's response; then each tile's length (a
     ///   single write) after the lanes are done.
@@ -415,6 +421,7 @@ impl<'a> EngineFrameModel<'a> {
         let records = PreRecords::engine(p.sh_degree as u8, p.sh_precision());
         let id = |addr: u64, base: u64, bytes: u64| (addr - base) / bytes.max(1);
         let mut client_reads = vec![0u64; cfg.memory_clients()];
+        let mut client_commands = vec![0u64; cfg.memory_clients()];
         let mut port_beats = vec![[0u64; 2]; cfg.mem_channels];
         let lens = pre.lists.iter().map(Vec::len);
         pre_transfers(cfg, regs, pre.visible.iter().copied(), lens, |t| {
@@ -435,6 +442,7 @@ impl<'a> EngineFrameModel<'a> {
             port_beats[cfg.client_port(client)][t.part.is_write() as usize] += beats;
             if !t.part.is_write() {
                 client_reads[cfg.client_index(client)] += beats;
+                client_commands[cfg.client_index(client)] += 1;
             }
         });
         let port =
@@ -450,7 +458,9 @@ impl<'a> EngineFrameModel<'a> {
             as f64
             + 2.0 * self.round_trip();
         let flush = self.single_writes(pre.lists.len() as u64);
-        port.max(f64::from(lanes) * pace).max(windowed) + fill + flush
+        let assembly =
+            client_reads.iter().zip(&client_commands).map(|(r, c)| r + c).max().unwrap_or(0) as f64;
+        port.max(f64::from(lanes) * pace).max(windowed).max(assembly) + fill + flush
     }
 
     /// The prediction for one frame: the schedule with every job alone on its port, then
