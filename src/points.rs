@@ -114,7 +114,7 @@ fn group_cost(point: &Point) -> u64 {
 fn distinct_workloads(jobs: &[PointJob], group: &[usize]) -> (Vec<usize>, Vec<usize>) {
     let (mut unique, mut shared_by): (Vec<usize>, Vec<usize>) = (Vec::new(), Vec::new());
     for &k in group {
-        let same = |&u: &usize| jobs[u].point == jobs[k].point && jobs[u].golden == jobs[k].golden;
+        let same = |&u: &usize| jobs[u].shares_workload(&jobs[k]);
         shared_by.push(unique.iter().position(same).unwrap_or_else(|| {
             unique.push(k);
             unique.len() - 1
@@ -198,8 +198,8 @@ impl<'a> JobSet<'a> {
 }
 
 /// Runs `jobs` on the machine's cores: the workloads of jobs that share their cameras are
-/// generated together ([`suite::workloads`]), group after group, the largest first (jobs with the same point and
-/// golden raster share one), and each job's architectures run on its workload
+/// generated together ([`suite::workloads`]), group after group, the largest first (jobs with
+/// the same point and golden raster share one), and each job's architectures run on its workload
 /// ([`suite::evaluate`]) while the next groups generate; in a set with throughput runs
 /// (`headline`), the other jobs' simulations are queued after all of theirs. One progress bar
 /// over the work with its ETA; `log` reports each finished job. Returns, in the order of

@@ -87,6 +87,13 @@ pub struct PointJob {
     pub headline: bool,
 }
 
+impl PointJob {
+    /// True when `other` runs on the same workload: the same point and golden raster.
+    pub fn shares_workload(&self, other: &PointJob) -> bool {
+        self.point == other.point && self.golden == other.golden
+    }
+}
+
 /// Runs the plan's points.
 pub trait PointRunner {
     /// Runs `jobs`, their workloads generated with `raster_sample` (jobs sharing their cameras
@@ -337,9 +344,7 @@ fn run_headline_first(
     jobs: &[PointJob],
     sample: u32,
 ) -> Result<Vec<(PointResult, f64)>, String> {
-    let first_set = |j: &PointJob| {
-        j.headline || jobs.iter().any(|h| h.headline && h.point == j.point && h.golden == j.golden)
-    };
+    let first_set = |j: &PointJob| j.headline || jobs.iter().any(|h| h.headline && h.shares_workload(j));
     let (first, rest): (Vec<usize>, Vec<usize>) = (0..jobs.len()).partition(|&k| first_set(&jobs[k]));
     let pick = |ks: &[usize]| ks.iter().map(|&k| jobs[k].clone()).collect::<Vec<_>>();
     let mut out: Vec<Option<(PointResult, f64)>> = vec![None; jobs.len()];
