@@ -41,6 +41,7 @@ use neo_golden::sort::SortMode;
 
 use crate::arch::raster_tile_cycles_in_segments;
 use crate::latency::Latency;
+use crate::pre_writers::{pre_writer_cycles, WriterLoad};
 use crate::sortcmd::{batch_cycles, Cmd};
 
 /// Bytes of one AXI beat (the engine's data width, 64 bits).
@@ -183,11 +184,11 @@ const WRITE_PLAY_CYCLES: u64 = 200_000;
 const WRITE_PLAY_WARM_UP: u64 = 1_000;
 
 /// A xorshift64 generator: the fixed draws of [`PortTiming::single_write_rate`] (and its test).
-struct XorShift(u64);
+pub(crate) struct XorShift(pub(crate) u64);
 
 impl XorShift {
     /// A draw in `[0, 1)`.
-    fn unit(&mut self) -> f64 {
+    pub(crate) fn unit(&mut self) -> f64 {
         self.0 ^= self.0 << 13;
         self.0 ^= self.0 >> 7;
         self.0 ^= self.0 << 17;
@@ -197,7 +198,7 @@ impl XorShift {
 
 /// `x` (in `(0, 1]`) as `n / d`: the smallest `d <= 256` that gives it within `1e-9`, else the
 /// nearest `n / 256`.
-fn rational(x: f64) -> (usize, usize) {
+pub(crate) fn rational(x: f64) -> (usize, usize) {
     (1..=256usize)
         .find_map(|d| {
             let n = (x * d as f64).round();
@@ -423,6 +424,7 @@ impl<'a> EngineFrameModel<'a> {
         let mut client_reads = vec![0u64; cfg.memory_clients()];
         let mut client_commands = vec![0u64; cfg.memory_clients()];
         let mut port_beats = vec![[0u64; 2]; cfg.mem_channels];
+        let mut writes = vec![(0u64, 0u64); cfg.memory_clients()];
         let lens = pre.lists.iter().map(Vec::len);
         pre_transfers(cfg, regs, pre.visible.iter().copied(), lens, |t| {
             let client = match t.part {
@@ -443,8 +445,12 @@ impl<'a> EngineFrameModel<'a> {
             if !t.part.is_write() {
                 client_reads[cfg.client_index(client)] += beats;
                 client_commands[cfg.client_index(client)] += 1;
+            } else if t.part != PrePart::ListLen {
+                let w = &mut writes[cfg.client_index(client)];
+                *w = (w.0 + 1, w.1 + beats);
             }
         });
+        let writers = self.pre_writers(&writes);
         let port =
             port_beats.iter().map(|&[r, w]| self.beats(r).max(self.write_beats(w))).fold(0.0, f64::max);
         let ii = |u: Option<(f64, u64)>| u.map_or(1.0, |(ii, _)| ii);
@@ -460,7 +466,28 @@ impl<'a> EngineFrameModel<'a> {
         let flush = self.single_writes(pre.lists.len() as u64);
         let assembly =
             client_reads.iter().zip(&client_commands).map(|(r, c)| r + c).max().unwrap_or(0) as f64;
-        port.max(f64::from(lanes) * pace).max(windowed).max(assembly) + fill + flush
+        port.max(f64::from(lanes) * pace).max(windowed).max(assembly).max(writers) + fill + flush
+    }
+
+    /// The busiest port's burst writers ([`pre_writer_cycles`]): each memory client's
+    /// `(transfers, beats)` in `writes`; the list writer may have `pre_outstanding` writes
+    /// awaiting their B, a lane's feature writer `axi_outstanding`.
+    fn pre_writers(&self, writes: &[(u64, u64)]) -> f64 {
+        let cfg = self.cfg;
+        let list = cfg.client_index(MemoryClient::PreListWriter);
+        (0..cfg.mem_channels)
+            .map(|port| {
+                let loads: Vec<WriterLoad> = (0..writes.len())
+                    .filter(|&c| cfg.client_port_slot(c).0 == port && writes[c].0 > 0)
+                    .map(|c| WriterLoad {
+                        transfers: writes[c].0,
+                        beats: writes[c].1,
+                        outstanding: if c == list { cfg.pre_outstanding } else { cfg.axi_outstanding },
+                    })
+                    .collect();
+                pre_writer_cycles(&self.mem, &loads)
+            })
+            .fold(0.0, f64::max)
     }
 
     /// The prediction for one frame: the schedule with every job alone on its port, then
