@@ -395,7 +395,8 @@ impl<'a> EngineFrameModel<'a> {
 
     /// Cycles of the Preprocessing Engine's phase (the tile walk starts at its `done`): the
     /// busiest port's traffic, the lanes' own pace, the slowest client's read window or fetch
-    /// assembly, then the pipeline fill and the lists' flush.
+    /// assembly, or the busiest port's burst writers, then the pipeline fill and the lists'
+    /// flush.
     ///
     /// - **Ports.** Every transfer of golden `pre_transfers` (geometry streams, one SH record
     ///   and previous word per visible Gaussian, feature words, list lines, lengths) is charged
@@ -412,6 +413,11 @@ impl<'a> EngineFrameModel<'a> {
     ///   each: a lane's geometry stream, every visible Gaussian's SH record and previous word).
     ///   On a reuse frame of small records behind a fast memory this bounds the phase: biker's
     ///   SH port, `(1 + 4) + (1 + 2)` = 8 cycles per Gaussian.
+    /// - **Writers.** The feature writers and the list writer hold one transfer in flight each
+    ///   (AW, then its W beats, before the next), so a port's writes take the cycles
+    ///   [`pre_writer_cycles`] plays for them: behind the ideal memory a feature word takes 6
+    ///   cycles, not 4 beats, and every list line on the same port adds 6 more. This bounds a
+    ///   frame from scratch of small records (biker's: 7.1 cycles per Gaussian).
     /// - **Fill and flush.** The projection and colour units' measured latencies, a round trip
     ///   for the first read and one for the last write's response; then each tile's length (a
     ///   single write) after the lanes are done.
