@@ -126,12 +126,10 @@ impl PortTiming {
     /// random one 0.43 with every B on time and 0.29 with its late ones in order (the bridge's
     /// writes in flight wait behind a late B).
     pub fn single_write_rate(&self, outstanding: usize) -> f64 {
-        let (n, d) = rational(self.bandwidth.min(1.0));
-        let (n, d) = (n as u64, d as u64);
+        let (n, d) = self.credit();
         let mut draws = XorShift(0x2545_F491_4F6C_DD1D);
-        let ready = |d: &mut XorShift, p: f64| p >= 1.0 || d.unit() < p;
-        let late_mean = self.late_share * (self.late_max + 1.0) / 2.0;
-        let b_delay = ((self.latency - late_mean).round().max(1.0) + AXI_PATH_CYCLES) as u64;
+        let ready = |d: &mut XorShift, p: f64| d.ready(p);
+        let b_delay = self.b_delay();
         let mut last_due = 0u64;
         let (mut aw_v, mut w_slots, mut in_flight) = (false, 0u32, 0usize);
         let (mut mem_aw, mut w_fifo, mut credit) = (0u64, 0u32, 0u64);
@@ -152,11 +150,7 @@ impl PortTiming {
                 mem_aw -= 1;
                 credit -= d;
                 writes += u64::from(t >= WRITE_PLAY_WARM_UP);
-                let late = if self.late_share > 0.0 && draws.unit() < self.late_share {
-                    1 + (draws.unit() * self.late_max.max(1.0)) as u64
-                } else {
-                    0
-                };
+                let late = self.late_delay(&mut draws);
                 // One ID: a B never overtakes the one before it.
                 last_due = last_due.max(t + b_delay + late);
                 b_due.push_back(last_due);
@@ -177,16 +171,45 @@ impl PortTiming {
         }
         writes as f64 / (WRITE_PLAY_CYCLES - WRITE_PLAY_WARM_UP) as f64
     }
+
+    /// The channels' credit as `(n, d)`: `n / d` beats earned a cycle (`bandwidth`, at most 1;
+    /// [`rational`]), a beat costing `d`, at most `2 d` held.
+    pub(crate) fn credit(&self) -> (u64, u64) {
+        let (n, d) = rational(self.bandwidth.min(1.0));
+        (n as u64, d as u64)
+    }
+
+    /// Cycles from a write's last beat to its B when it is on time: `latency` less the late
+    /// responses' share of the mean, plus the path's [`AXI_PATH_CYCLES`].
+    pub(crate) fn b_delay(&self) -> u64 {
+        let late_mean = self.late_share * (self.late_max + 1.0) / 2.0;
+        ((self.latency - late_mean).round().max(1.0) + AXI_PATH_CYCLES) as u64
+    }
+
+    /// A response's extra delay, drawn: `1..=late_max` cycles for `late_share` of them, else 0.
+    pub(crate) fn late_delay(&self, draws: &mut XorShift) -> u64 {
+        if self.late_share > 0.0 && draws.unit() < self.late_share {
+            1 + (draws.unit() * self.late_max.max(1.0)) as u64
+        } else {
+            0
+        }
+    }
 }
 
 /// Cycles [`PortTiming::single_write_rate`] plays, and the first of them it does not count.
 const WRITE_PLAY_CYCLES: u64 = 200_000;
 const WRITE_PLAY_WARM_UP: u64 = 1_000;
 
-/// A xorshift64 generator: the fixed draws of [`PortTiming::single_write_rate`] (and its test).
+/// A xorshift64 generator: the fixed draws of [`PortTiming::single_write_rate`], of
+/// [`crate::pre_writers`] and of their tests.
 pub(crate) struct XorShift(pub(crate) u64);
 
 impl XorShift {
+    /// A draw that is true on a share `p` of them (always when `p >= 1`, drawing nothing).
+    pub(crate) fn ready(&mut self, p: f64) -> bool {
+        p >= 1.0 || self.unit() < p
+    }
+
     /// A draw in `[0, 1)`.
     pub(crate) fn unit(&mut self) -> f64 {
         self.0 ^= self.0 << 13;

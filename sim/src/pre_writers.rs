@@ -9,8 +9,8 @@
 //! ([`MUX_W_FIFO_DEPTH`]) has room, and forwards the W beats of the FIFO's head. The memory is
 //! the harness's (as in [`PortTiming::single_write_rate`]): it takes an AW on `ready` of its
 //! cycles, a W beat only for an AW it took, with a beat of credit and on `ready` of its cycles,
-//! and answers a write `latency` cycles (plus [`AXI_PATH_CYCLES`]) after its last beat, later
-//! by `1..=late_max` for `late_share` of them, in order per writer (its ID).
+//! and answers a write [`PortTiming::b_delay`] cycles after its last beat, later by
+//! [`PortTiming::late_delay`], in order per writer (its ID).
 //!
 //! Behind the ideal memory a lone writer of `b`-beat transfers takes `b + 2` cycles a transfer;
 //! another writer's burst on the same port fills two of those cycles and delays it by the rest.
@@ -22,7 +22,7 @@ use std::collections::VecDeque;
 
 use neo_golden::engine::MUX_W_FIFO_DEPTH;
 
-use crate::engine_frame::{rational, PortTiming, XorShift, AXI_PATH_CYCLES};
+use crate::engine_frame::{PortTiming, XorShift};
 
 /// The most transfers of the lead writer one play covers; a longer frame is played at this
 /// length, every writer's count scaled alike, and its cycles scaled back.
@@ -90,12 +90,10 @@ pub fn pre_writer_cycles(mem: &PortTiming, loads: &[WriterLoad]) -> f64 {
 /// Cycles until every transfer of `loads` is out (its last W beat taken), played from an idle
 /// port; `lead` paces the others.
 fn play(mem: &PortTiming, loads: &[WriterLoad], lead: usize) -> u64 {
-    let (n, d) = rational(mem.bandwidth.min(1.0));
-    let (n, d) = (n as u64, d as u64);
+    let (n, d) = mem.credit();
     let mut draws = XorShift(0x9E37_79B9_7F4A_7C15);
-    let ready = |x: &mut XorShift, p: f64| p >= 1.0 || x.unit() < p;
-    let late_mean = mem.late_share * (mem.late_max + 1.0) / 2.0;
-    let b_delay = ((mem.latency - late_mean).round().max(1.0) + AXI_PATH_CYCLES) as u64;
+    let ready = |x: &mut XorShift, p: f64| x.ready(p);
+    let b_delay = mem.b_delay();
     let mut writers: Vec<Writer> = loads.iter().map(|_| Writer::default()).collect();
     let mut w_order: VecDeque<usize> = VecDeque::new();
     let (mut mem_aw, mut credit, mut last_grant) = (0u64, 2 * d, loads.len().saturating_sub(1));
@@ -137,11 +135,7 @@ fn play(mem: &PortTiming, loads: &[WriterLoad], lead: usize) -> u64 {
             if w.w_left == 0 {
                 w_order.pop_front();
                 mem_aw -= 1;
-                let late = if mem.late_share > 0.0 && draws.unit() < mem.late_share {
-                    1 + (draws.unit() * mem.late_max.max(1.0)) as u64
-                } else {
-                    0
-                };
+                let late = mem.late_delay(&mut draws);
                 w.last_due = w.last_due.max(t + b_delay + late);
                 let due = w.last_due;
                 w.b_due.push_back(due);
