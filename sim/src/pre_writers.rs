@@ -40,10 +40,11 @@ pub struct WriterLoad {
 }
 
 impl WriterLoad {
-    /// The beats of transfer `i`: `beats` spread over the transfers as evenly as integers go.
+    /// The beats of transfer `i`: `beats` spread over the transfers as evenly as integers go,
+    /// at least one (a transfer without beats would never leave the mux's W order).
     fn beats_of(&self, i: u64) -> u64 {
         let n = self.transfers.max(1);
-        self.beats * (i + 1) / n - self.beats * i / n
+        (self.beats * (i + 1) / n - self.beats * i / n).max(1)
     }
 }
 
@@ -194,6 +195,13 @@ mod tests {
         let slow = pre_writer_cycles(&random, &loads);
         assert!(slow > ideal * 1.2, "{ideal} {slow}");
         assert!(slow >= (5000.0 * 4.0 + 800.0 * 8.0) / random.write_rate(), "{slow}");
+    }
+
+    #[test]
+    fn transfers_without_beats_still_finish() {
+        let empty = WriterLoad { transfers: 10, beats: 0, outstanding: 8 };
+        let cycles = pre_writer_cycles(&PortTiming::IDEAL, &[empty]);
+        assert!(cycles > 0.0 && cycles <= 70.0, "{cycles}");
     }
 
     #[test]
