@@ -128,12 +128,11 @@ impl PortTiming {
     pub fn single_write_rate(&self, outstanding: usize) -> f64 {
         let (n, d) = self.credit();
         let mut draws = XorShift(0x2545_F491_4F6C_DD1D);
-        let ready = |d: &mut XorShift, p: f64| d.ready(p);
         let b_delay = self.b_delay();
         let mut last_due = 0u64;
         let (mut aw_v, mut w_slots, mut in_flight) = (false, 0u32, 0usize);
         let (mut mem_aw, mut w_fifo, mut credit) = (0u64, 0u32, 0u64);
-        let (mut aw_ready, mut w_ready) = (ready(&mut draws, self.ready), false);
+        let (mut aw_ready, mut w_ready) = (draws.ready(self.ready), false);
         let mut b_due = std::collections::VecDeque::new();
         let mut writes = 0u64;
         for t in 0..WRITE_PLAY_CYCLES {
@@ -166,8 +165,8 @@ impl PortTiming {
                 in_flight += 1;
             }
             credit = (credit + n).min(2 * d);
-            aw_ready = ready(&mut draws, self.ready);
-            w_ready = mem_aw > 0 && credit >= d && ready(&mut draws, self.ready);
+            aw_ready = draws.ready(self.ready);
+            w_ready = mem_aw > 0 && credit >= d && draws.ready(self.ready);
         }
         writes as f64 / (WRITE_PLAY_CYCLES - WRITE_PLAY_WARM_UP) as f64
     }

@@ -93,12 +93,13 @@ pub fn pre_writer_cycles(mem: &PortTiming, loads: &[WriterLoad]) -> f64 {
 fn play(mem: &PortTiming, loads: &[WriterLoad], lead: usize) -> u64 {
     let (n, d) = mem.credit();
     let mut draws = XorShift(0x9E37_79B9_7F4A_7C15);
-    let ready = |x: &mut XorShift, p: f64| x.ready(p);
     let b_delay = mem.b_delay();
     let mut writers: Vec<Writer> = loads.iter().map(|_| Writer::default()).collect();
+    // The mux's W order: the writers of the AWs taken (by the memory too), until their last W.
     let mut w_order: VecDeque<usize> = VecDeque::new();
-    let (mut mem_aw, mut credit, mut last_grant) = (0u64, 2 * d, loads.len().saturating_sub(1));
-    let (mut aw_ready, mut w_ready) = (ready(&mut draws, mem.ready), false);
+    let (mut credit, mut last_grant) = (2 * d, loads.len().saturating_sub(1));
+    let (mut aw_ready, mut w_ready) = (draws.ready(mem.ready), false);
+    let mut takes = vec![false; loads.len()];
     let done = |ws: &[Writer]| {
         ws.iter().zip(loads).all(|(w, l)| w.taken == l.transfers && !w.aw_valid && w.w_left == 0)
     };
@@ -120,22 +121,17 @@ fn play(mem: &PortTiming, loads: &[WriterLoad], lead: usize) -> u64 {
             None
         };
         let lead_share = writers[lead].taken as f64 / loads[lead].transfers.max(1) as f64;
-        let takes: Vec<bool> = writers
-            .iter()
-            .zip(loads)
-            .enumerate()
-            .map(|(c, (w, l))| {
-                let due = c == lead || (w.taken as f64) < lead_share * l.transfers as f64;
-                !w.aw_valid && w.w_left == 0 && w.in_flight < l.outstanding && w.taken < l.transfers && due
-            })
-            .collect();
+        for (c, (w, l)) in writers.iter().zip(loads).enumerate() {
+            let due = c == lead || (w.taken as f64) < lead_share * l.transfers as f64;
+            takes[c] =
+                !w.aw_valid && w.w_left == 0 && w.in_flight < l.outstanding && w.taken < l.transfers && due;
+        }
         if let Some(c) = w_fire {
             let w = &mut writers[c];
             w.w_left -= 1;
             credit -= d;
             if w.w_left == 0 {
                 w_order.pop_front();
-                mem_aw -= 1;
                 let late = mem.late_delay(&mut draws);
                 w.last_due = w.last_due.max(t + b_delay + late);
                 let due = w.last_due;
@@ -145,10 +141,9 @@ fn play(mem: &PortTiming, loads: &[WriterLoad], lead: usize) -> u64 {
         if let Some(c) = aw_fire {
             writers[c].aw_valid = false;
             w_order.push_back(c);
-            mem_aw += 1;
             last_grant = c;
         }
-        for ((w, l), take) in writers.iter_mut().zip(loads).zip(takes) {
+        for ((w, l), &take) in writers.iter_mut().zip(loads).zip(&takes) {
             if take {
                 w.aw_valid = true;
                 w.w_left = l.beats_of(w.taken);
@@ -157,8 +152,8 @@ fn play(mem: &PortTiming, loads: &[WriterLoad], lead: usize) -> u64 {
             }
         }
         credit = (credit + n).min(2 * d);
-        aw_ready = ready(&mut draws, mem.ready);
-        w_ready = mem_aw > 0 && credit >= d && ready(&mut draws, mem.ready);
+        aw_ready = draws.ready(mem.ready);
+        w_ready = !w_order.is_empty() && credit >= d && draws.ready(mem.ready);
         t += 1;
     }
     t
