@@ -90,14 +90,15 @@ fn assert_model_matches(what: &str, frames: &[FrameCheck]) {
     }
 }
 
-/// The engine-level model's Preprocessing Engine phase (`EngineFrameModel::pre_cycles`: the
-/// busiest port's traffic) within 2% of the RTL's PRE_BUSY on every frame (measured: -0.1% to
-/// -0.2% behind the hostile memory, one and two lanes, binary32 and binary16 SH).
-fn assert_pre_model_matches(what: &str, frames: &[FrameCheck]) {
+/// The engine-level model's Preprocessing Engine phase (`EngineFrameModel::pre_cycles`) within
+/// `bound` percent of the RTL's PRE_BUSY on every frame. The synthetic scenes' bound is 2%
+/// (measured: -0.1% to -0.2% behind the hostile memory, one and two lanes, binary32 and
+/// binary16 SH), biker's 5% (the frame target; measured -2.2% and -0.0%).
+fn assert_pre_model_matches(what: &str, frames: &[FrameCheck], bound: f64) {
     for (k, f) in frames.iter().enumerate() {
         let e = f.pre_error();
         assert!(f.pre_busy > 0, "{what} frame {k}: the Preprocessing Engine ran");
-        assert!(e.abs() <= 2.0, "{what} frame {k}: model preprocessing {e:+.2}% off the RTL's PRE_BUSY");
+        assert!(e.abs() <= bound, "{what} frame {k}: model preprocessing {e:+.2}% off the RTL's PRE_BUSY");
     }
 }
 
@@ -399,7 +400,7 @@ fn engine_scene_orbit_and_cut_are_bit_exact() {
     for (k, (c, sh)) in [(EngineCase::Orbit, ShPrecision::F32), (EngineCase::Cut, ShPrecision::F16)].into_iter().enumerate() {
         let f = run_case_in(&scene, &how, c, (3, [128, 128]), (&base, HostMode::Scene, sh), case_seed(&seeds, k, c));
         assert!(f.iter().all(|f| f.rtl_cycles > 0));
-        assert_pre_model_matches(c.name(), &f);
+        assert_pre_model_matches(c.name(), &f, 2.0);
     }
 }
 
@@ -428,7 +429,7 @@ fn engine_scene_two_lanes_are_bit_exact() {
     let base = EngineConfig { pre_units: 2, ..ci_config() };
     let c = EngineCase::Orbit;
     let f = run_case_in(&scene, &how, c, (3, [128, 128]), (&base, HostMode::Scene, ShPrecision::F32), case_seed(&seeds, 0, c));
-    assert_pre_model_matches(c.name(), &f);
+    assert_pre_model_matches(c.name(), &f, 2.0);
 }
 
 /// Issue 11 item 5 in `neo cosim`'s default mode (scene mode: the engine preprocesses): biker
@@ -452,11 +453,7 @@ fn biker_scene_mode_cycle_model_matches_the_rtl() {
     let frames =
         run_case_full(&scene, &how, c, (2, [256, 256]), (&ci_config(), HostMode::Scene, ShPrecision::F32), opts, case_seed(&seeds, 0, c));
     assert_model_matches("biker scene mode", &frames);
-    for (k, f) in frames.iter().enumerate() {
-        let e = f.pre_error();
-        assert!(f.pre_busy > 0, "biker scene mode frame {k}: the Preprocessing Engine ran");
-        assert!(e.abs() <= 5.0, "biker scene mode frame {k}: model preprocessing {e:+.2}% off the RTL's PRE_BUSY");
-    }
+    assert_pre_model_matches("biker scene mode", &frames, 5.0);
 }
 
 /// Biker's orbit behind the hostile memory (about 5 minutes of simulation on two cores, the
