@@ -297,6 +297,11 @@ pub struct RasterTiming {
     /// Request-port cycles of one entry's write-back, beside the loads (the measured core: 1,
     /// one request port; 0 where the loads' read beats, not the requests, set the pace).
     pub write_back_cycles_per_entry: f64,
+    /// Cycles of a segment's write-back during which the loads' reads already in flight still
+    /// arrive (the write-back stops the read requests, not their data): 0 (the default, and
+    /// the unit bench's memory, which answers in a cycle); the engine model sets it from its
+    /// bridge's outstanding reads.
+    pub write_back_overlap: f64,
     /// Feature-buffer entries of a raster core: a longer table is reloaded and walked once per
     /// subtile group, segment by segment (the RTL's schedule); 0 (the assumed default) is
     /// unbounded.
@@ -319,6 +324,7 @@ impl Default for RasterTiming {
             load_cycles_per_entry: 0.0,
             pixel_write_cycles: 0,
             write_back_cycles_per_entry: 1.0,
+            write_back_overlap: 0.0,
             feature_buffer: 0,
             segment_overhead: 0.0,
         }

@@ -19,6 +19,7 @@ pub mod file_error;
 pub mod gpu;
 pub mod latency;
 pub mod plot;
+pub mod port_share;
 pub mod pre_writers;
 pub mod report;
 pub mod report_plan;

@@ -176,7 +176,8 @@ fn segment_pipeline(
             walker = leave;
         }
         let port = if s + 1 < t.segs {
-            rt.load_cycles_per_entry * n_of(s + 1) + rt.write_back_cycles_per_entry * n
+            rt.load_cycles_per_entry * n_of(s + 1)
+                + (rt.write_back_cycles_per_entry * n - rt.write_back_overlap).max(0.0)
         } else {
             n
         };
@@ -295,6 +296,7 @@ mod tests {
             load_cycles_per_entry: 0.0,
             pixel_write_cycles: 0,
             write_back_cycles_per_entry: 1.0,
+            write_back_overlap: 0.0,
             feature_buffer: 0,
             segment_overhead: 0.0,
         }
