@@ -837,7 +837,8 @@ fn union(spans: &mut [(f64, f64)]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use neo_golden::engine::{RasterTrace, TileCmd, TilePlan};
+    use neo_golden::engine::{RasterTrace, SegmentWork, TileCmd, TilePlan};
+    use neo_golden::raster::SubtileWork;
     use std::path::PathBuf;
 
     fn latency() -> Latency {
@@ -860,6 +861,44 @@ mod tests {
             plan: TilePlan { overflow: false, stages: vec![cmds], wide: false },
             next_len: n,
             raster: RasterTrace { len: 0, present: 0, subtiles: Vec::new(), segments: Vec::new() },
+        }
+    }
+
+    /// A tile from scratch of `n` entries whose sort is the conventional one (chunks, then merge
+    /// passes) and whose raster routes every entry to an eighth of the subtiles.
+    fn merge_tile(n: u64) -> TileTrace {
+        let mut stages: Vec<Vec<TileCmd>> = Vec::new();
+        for c in neo_golden::sort::conventional_sort_plan(n, 256) {
+            if stages.len() as u64 == c.stage {
+                stages.push(Vec::new());
+            }
+            let (src_a, src_b) = (c.start, c.start_b());
+            stages[c.stage as usize].push(TileCmd {
+                mode: c.mode,
+                src_a,
+                len_a: c.len_a,
+                src_b,
+                len_b: c.len_b,
+                dst: c.start,
+            });
+        }
+        TileTrace { plan: TilePlan { overflow: false, stages, wide: false }, ..raster_tile(n) }
+    }
+
+    /// A tile of `n` entries, no sort, each entry routed to 8 of the 64 subtiles.
+    fn raster_tile(n: u64) -> TileTrace {
+        let share = |e: u64| (e / 8) as u32;
+        let segments = (0..n.div_ceil(256))
+            .map(|k| {
+                let e = (n - 256 * k).min(256);
+                SegmentWork { entries: e as u32, routed: vec![share(e); 64], processed: vec![share(e); 64] }
+            })
+            .collect();
+        let sub = SubtileWork { routed: share(n), processed: share(n), ..SubtileWork::default() };
+        TileTrace {
+            plan: TilePlan { overflow: false, stages: Vec::new(), wide: false },
+            next_len: n,
+            raster: RasterTrace { len: n, present: n, subtiles: vec![sub; 64], segments },
         }
     }
 
@@ -912,6 +951,75 @@ mod tests {
         let slow = PortTiming { bandwidth: 0.1, ..PortTiming::IDEAL };
         let slow = EngineFrameModel::new(&cfg, &lat, slow).unwrap().sort_cycles(&merge);
         assert!(alone < 6000.0 && (slow - (6000.0 + m.round_trip())).abs() < 1e-6, "{alone} {slow}");
+    }
+
+    #[test]
+    fn a_held_completion_waits_while_a_lower_sequencer_keeps_taking_the_queue() {
+        // neo_frame_ctrl: when the completion queue takes one, the lowest sequencer's wins,
+        // whatever finished first. Tile 0's long raster keeps the queue full (its short sort
+        // frees sequencer 0 before tile 1's descriptor arrives). Sequencer 0 sorts tile 1
+        // (long), so sequencer 1 takes tiles 2 to 6; tile 6 finishes first but waits:
+        // tile 1 takes the next slot, then sequencer 0's tiles 7 and 8 (finishing before each
+        // slot frees) take theirs. Earliest-first would raster 6 before 1, 7 and 8.
+        let lat = latency();
+        let cfg = EngineConfig { sort_cores: 2, raster_cores: 1, ..lat.config.clone() };
+        let m = EngineFrameModel::new(&cfg, &lat, PortTiming::IDEAL).unwrap();
+        let tiles: Vec<TileTrace> = (0..9).map(|_| sort_tile(0)).collect();
+        let mut dur = vec![[10.0, 100.0]; 9];
+        dur[0] = [2.0, 100_000.0];
+        dur[1] = [2_000.0, 100.0];
+        let sched = m.schedule(&tiles, &dur, false);
+        let mut rasters: Vec<&Job> = sched.jobs.iter().filter(|j| j.engine == 1).collect();
+        rasters.sort_by(|a, b| a.start.total_cmp(&b.start));
+        let order: Vec<usize> = rasters.iter().map(|j| j.tile).collect();
+        assert_eq!(order, [0, 2, 3, 4, 5, 1, 7, 8, 6]);
+    }
+
+    #[test]
+    fn a_descriptor_read_costs_the_latency_its_beats_and_two_cycles() {
+        // The RTL's descriptor reads follow each other every 7 cycles behind the ideal memory.
+        let lat = latency();
+        let m = EngineFrameModel::new(&lat.config, &lat, PortTiming::IDEAL).unwrap();
+        assert_eq!(m.ctrl_read(4), 7.0);
+        let slow = PortTiming { latency: 9.75, bandwidth: 0.75, ..PortTiming::IDEAL };
+        let m = EngineFrameModel::new(&lat.config, &lat, slow).unwrap();
+        assert!((m.ctrl_read(4) - (9.75 + 4.0 / 0.75 + 2.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_sort_beside_a_raster_on_its_port_slows_only_in_its_merges() {
+        // One sort core and one raster core on one port: tile 1's sort (its chunk stage light on
+        // the port, its merges heavy) runs beside tile 0's raster. The raster is slowed
+        // throughout; the sort's chunk stage is not.
+        let lat = latency();
+        let one_port = EngineConfig { sort_cores: 1, raster_cores: 1, mem_channels: 1, ..lat.config.clone() };
+        let two_ports = EngineConfig { mem_channels: 2, ..one_port.clone() };
+        let m1 = EngineFrameModel::new(&one_port, &lat, PortTiming::IDEAL).unwrap();
+        let m2 = EngineFrameModel::new(&two_ports, &lat, PortTiming::IDEAL).unwrap();
+        assert_ne!(
+            two_ports.client_port(MemoryClient::SortCore(0)),
+            two_ports.client_port(MemoryClient::RasterCore(0)),
+            "two ports: each core alone"
+        );
+        let raster = m1.raster_job(&raster_tile(20_000));
+        let sort = m1.sort_job(&merge_tile(20_000));
+        assert!(sort.phases.len() > 2 && sort.phases[0].read < 0.5 && sort.phases[1].read > 0.6, "{sort:?}");
+        let played = port_share::play(&[
+            FluidJob { start: 0.0, ..raster.clone() },
+            FluidJob { start: 0.0, ..sort.clone() },
+        ]);
+        let alone = |j: &FluidJob| j.phases.iter().map(|p| p.alone).collect::<Vec<f64>>();
+        assert!(played[0][0] > 1.2 * alone(&raster)[0], "the raster waits behind the merges: {played:?}");
+        assert!(
+            (played[1][0] - alone(&sort)[0]).abs() < 0.02 * alone(&sort)[0],
+            "the chunk stage: {played:?}"
+        );
+        assert!(played[1][1] > 1.1 * alone(&sort)[1], "the first merge pass: {played:?}");
+        // And in the frame: the same two tiles cost more on one port than on two.
+        let trace =
+            FrameTrace { tiles: vec![raster_tile(20_000), merge_tile(20_000)], ..FrameTrace::default() };
+        let (p1, p2) = (m1.predict(&trace), m2.predict(&trace));
+        assert!(p1.raster_busy > 1.1 * p2.raster_busy && p1.cycles > p2.cycles, "{p1:?} vs {p2:?}");
     }
 
     #[test]
