@@ -11,6 +11,7 @@ use neo_golden::engine::{EngineConfig, EngineSession, HostMode, SessionOptions};
 use neo_golden::scene::Scene;
 use neo_golden::source;
 use neo_golden::trajectory::{parse_trajectory, Trajectory};
+use neo_tb::axi::AddrRecord;
 use neo_tb::engine::{EngineModel, EngineRig, FrameReport};
 use neo_tb::waves::WaveFormat;
 use std::path::Path;
@@ -83,6 +84,9 @@ pub struct FrameRun<T> {
     pub overflowing: Vec<usize>,
     /// What `before` returned for this frame.
     pub before: T,
+    /// Every AR and AW of the frame with its memory client, when the rig records them
+    /// ([`EngineRig::record_transfers`]; else empty).
+    pub transfers: Vec<(AddrRecord, String)>,
 }
 
 /// Runs the remaining frames of `session` on `rig`. `before(plan, memory)` runs after the host
@@ -110,7 +114,8 @@ pub fn run_frames<T>(
         let report = rig.run_frame(&plan).map_err(|e| anyhow!(e))?;
         let took = t0.elapsed();
         let failed = report.mismatch.is_some().then_some(report.frame);
-        after(FrameRun { report, took, overflowing, before: b });
+        let transfers = rig.take_transfers();
+        after(FrameRun { report, took, overflowing, before: b, transfers });
         if failed.is_some() {
             return Ok(failed);
         }

@@ -332,6 +332,19 @@ fn cosim_refuses_an_unknown_input_mode_before_any_work() {
 }
 
 #[test]
+fn cosim_refuses_an_axi_log_it_cannot_write_before_any_work() {
+    let dir = std::env::temp_dir().join(format!("neo-cli-axi-log-{}", std::process::id()));
+    let path = dir.join("missing").join("log.csv");
+    let p = path.to_str().expect("utf-8 path");
+    let o =
+        neo(&["cosim", "--scene", "synthetic:blobs?gaussians=100&seed=1", "--frames", "1", "--axi-log", p]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "stderr:\n{err}");
+    assert!(!err.contains("panicked") && err.contains(&format!("--axi-log {p}")), "{err}");
+    assert!(!err.contains("engine model:"), "refused before the engine's build: {err}");
+}
+
+#[test]
 fn cosim_refuses_a_plan_the_engine_cannot_make_before_any_work() {
     let scene = ["cosim", "--scene", "synthetic:blobs?gaussians=100&seed=1", "--frames", "1"];
     // Neo has no plan to make; the default adaptive needs re-sorts, and its wide chunk of 16 an

@@ -7,9 +7,10 @@
 
 use crate::args::{SceneArg, StrictArg, TrajectoryArg};
 use crate::engine_run;
-use anyhow::{anyhow, bail, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use indicatif::ProgressBar;
+use neo_golden::engine::host::MemoryLayout;
 use neo_golden::engine::{Counter, Planner, SessionOptions};
 use neo_golden::hwpre::ShPrecision;
 use neo_golden::pipeline::Strategy;
@@ -17,10 +18,10 @@ use neo_golden::source;
 use neo_golden::trajectory::parse_resolution;
 use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
 use neo_sim::latency;
-use neo_tb::axi::AxiTiming;
+use neo_tb::axi::{AddrRecord, AxiTiming};
 use neo_tb::engine::{EngineRig, FrameReport, RunOptions};
 use neo_tb::waves::WaveFormat;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// Arguments of `neo cosim`.
@@ -78,6 +79,11 @@ pub struct CosimArgs {
     /// Print one JSON record per frame instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Write every AXI4 address handshake (AR, AW) of the run to this CSV file: frame, cycle,
+    /// port, memory client, kind, byte address, beats; the memory map in its header. Lighter
+    /// than `--waves` for finding when each tile's traffic ran on which port.
+    #[arg(long)]
+    pub axi_log: Option<PathBuf>,
     /// Measured unit timing for the cycle model's prediction.
     #[arg(long, default_value = latency::DEFAULT_PATH)]
     pub latency: PathBuf,
@@ -121,6 +127,11 @@ pub fn run(a: CosimArgs) -> Result<()> {
         cfg.raster_cores,
         cfg.mem_channels
     );
+    // Before the engine's build: a path that cannot be written fails at once.
+    let mut log = match &a.axi_log {
+        Some(path) => Some(TransferLog::create(path, session.layout())?),
+        None => None,
+    };
     let format = a.waves.as_deref().map(WaveFormat::of_path);
     let engine = engine_run::build_engine(&cfg, format, 1)?;
     let b = &engine.build;
@@ -132,21 +143,95 @@ pub fn run(a: CosimArgs) -> Result<()> {
     if let Some(w) = &a.waves {
         eprintln!("waves: {}\nwaves: gtkwave {}", w.display(), neo_tb::waves::gtkw_path(w).display());
     }
+    rig.record_transfers(log.is_some());
     let bar = engine_run::frame_bar(session.frames() as u64, a.json);
+    let mut log_error = None;
     let failed = engine_run::run_frames(
         &mut session,
         &mut rig,
         |plan, mem| Ok(model.predict_frame(&plan.regs, mem)?),
         |f| {
             bar.inc(1);
+            if let Some(l) = log.as_mut().filter(|_| log_error.is_none()) {
+                log_error = l.write_frame(f.report.frame, &f.transfers).err();
+            }
             print_frame(&a, &f.report, &f.before, f.took, &f.overflowing, &bar);
         },
     );
     rig.finish();
     bar.finish_and_clear();
+    if let Some(e) = log_error {
+        return Err(e);
+    }
+    if let Some(l) = log {
+        l.finish()?;
+    }
     match failed? {
         Some(f) => bail!("frame {f} is not bit-exact (seed 0x{seed:016x}; replay with --seed 0x{seed:016x})"),
         None => Ok(()),
+    }
+}
+
+/// The `--axi-log` file: a CSV of every AR and AW, frame by frame.
+struct TransferLog {
+    path: PathBuf,
+    out: std::io::BufWriter<std::fs::File>,
+}
+
+impl TransferLog {
+    /// Creates `path` and writes its header: the memory map, then the columns.
+    fn create(path: &Path, layout: &MemoryLayout) -> Result<TransferLog> {
+        let file = std::fs::File::create(path).with_context(|| format!("--axi-log {}", path.display()))?;
+        let mut log = TransferLog { path: path.to_path_buf(), out: std::io::BufWriter::new(file) };
+        let l = layout;
+        let mut header = vec![
+            "# neo cosim: every AXI4 address handshake (AR, AW) the harness's memory took".to_string(),
+            "# cycle: the port's clock since the memory was created; client: the memory client on that port"
+                .into(),
+            format!(
+                "# desc_base 0x{:x} result_base 0x{:x} fb_base 0x{:x}",
+                l.desc_base, l.result_base, l.fb_base
+            ),
+            format!(
+                "# feat_base 0x{:x} scratch_base 0x{:x} list_base 0x{:x}",
+                l.feat_base, l.scratch_base, l.list_base
+            ),
+            format!("# table_bases 0x{:x} 0x{:x}", l.table_bases[0], l.table_bases[1]),
+        ];
+        if let Some(s) = &l.scene {
+            header.push(format!(
+                "# geo_base 0x{:x} sh_base 0x{:x} feat_bases 0x{:x} 0x{:x}",
+                s.geo_base, s.sh_base, s.feat_bases[0], s.feat_bases[1]
+            ));
+        }
+        header.push("frame,cycle,port,client,kind,addr,beats".into());
+        log.write_lines(header.iter().map(String::as_str))?;
+        Ok(log)
+    }
+
+    /// Appends frame `frame`'s transfers.
+    fn write_frame(&mut self, frame: usize, transfers: &[(AddrRecord, String)]) -> Result<()> {
+        let lines = transfers.iter().map(|(r, client)| {
+            let kind = if r.write { "AW" } else { "AR" };
+            let client = client.replace('"', "\"\"");
+            format!("{frame},{},{},\"{client}\",{kind},0x{:x},{}", r.cycle, r.port, r.addr, r.beats)
+        });
+        let lines: Vec<String> = lines.collect();
+        self.write_lines(lines.iter().map(String::as_str))
+    }
+
+    fn write_lines<'a>(&mut self, lines: impl Iterator<Item = &'a str>) -> Result<()> {
+        use std::io::Write;
+        for line in lines {
+            writeln!(self.out, "{line}").with_context(|| format!("--axi-log {}", self.path.display()))?;
+        }
+        Ok(())
+    }
+
+    /// Flushes the file.
+    fn finish(mut self) -> Result<()> {
+        use std::io::Write;
+        self.out.flush().with_context(|| format!("--axi-log {}", self.path.display()))
     }
 }
 

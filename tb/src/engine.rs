@@ -13,7 +13,8 @@
 //! time for any configuration ([`EngineModel::build`]) and cached by content hash.
 
 use crate::axi::{
-    AxiBinding, AxiChecker, AxiMemory, AxiTiming, HazardChecker, ManagerSignals, SubordinateSignals,
+    AddrRecord, AxiBinding, AxiChecker, AxiMemory, AxiTiming, HazardChecker, ManagerSignals,
+    SubordinateSignals,
 };
 use crate::axil::{AxilManager, AxilOp};
 use crate::check::Checker;
@@ -281,6 +282,29 @@ impl EngineRig {
     /// The engine's configuration.
     pub fn config(&self) -> &EngineConfig {
         &self.engine.cfg
+    }
+
+    /// Starts (`true`) or stops recording every AR and AW the memory takes: a transfer log
+    /// ([`EngineRig::take_transfers`]), lighter than a trace for finding when each tile's
+    /// traffic ran on which port.
+    pub fn record_transfers(&mut self, on: bool) {
+        self.mem.record_addresses(on);
+    }
+
+    /// The transfers recorded since the last call, each with its memory client's name
+    /// ([`client_name`]: the port mux's ID is the client's slot on its port).
+    pub fn take_transfers(&mut self) -> Vec<(AddrRecord, String)> {
+        let cfg = &self.engine.cfg;
+        self.mem
+            .take_addresses()
+            .into_iter()
+            .map(|r| (r, client_name(cfg, cfg.port_slot_client(r.port, r.id as usize))))
+            .collect()
+    }
+
+    /// Read and write data beats each port has moved so far.
+    pub fn port_beats(&self) -> Vec<(u64, u64)> {
+        (0..self.engine.cfg.mem_channels).map(|k| self.mem.beats(k)).collect()
     }
 
     /// The trace being written (VCD or FST), if any.

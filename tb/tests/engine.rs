@@ -173,11 +173,14 @@ fn run_case_full(
     let mem = PortTiming { latency, bandwidth, ready, late_share, late_max };
     let model = EngineFrameModel::new(&cfg, &lat, mem).expect("cycle model");
     let t0 = std::time::Instant::now();
+    rig.record_transfers(true);
     while let Some(plan) = session.next_frame(rig.memory_mut()).expect("host frame") {
         let p = model.predict_frame(&plan.regs, rig.memory_mut()).expect("golden reference");
+        let beats_before = rig.port_beats();
         let r = rig
             .run_frame(&plan)
             .unwrap_or_else(|e| panic!("case {}: {e} (seed = 0x{seed:016x}; reproduce with NEO_SEED=0x{seed:016x})", c.name()));
+        assert_transfers_account_for_the_beats(&mut rig, &beats_before, &format!("case {} frame {}", c.name(), r.frame));
         println!(
             "case {} frame {}: {} tiles, {} cycles (harness {}), from scratch {} ({} tiles from scratch); cycle model {:.0} ({:+.1}%), busy sort {:+.1}%, raster {:+.1}%",
             c.name(),
@@ -237,6 +240,27 @@ fn run_case_full(
     println!("case {}: {frames} frames in {:.1} s", c.name(), t0.elapsed().as_secs_f64());
     assert_eq!(cycles.len(), frames);
     cycles
+}
+
+/// The transfer log (`neo cosim --axi-log`) of the frame just run: its bursts' beats, per port
+/// and direction, are the data beats the memory moved in the frame (`before`: the ports'
+/// beats when the frame started), and each transfer names one of the engine's clients.
+fn assert_transfers_account_for_the_beats(rig: &mut EngineRig, before: &[(u64, u64)], what: &str) {
+    let after = rig.port_beats();
+    let transfers = rig.take_transfers();
+    let mut logged = vec![(0u64, 0u64); after.len()];
+    for (t, client) in &transfers {
+        let l = &mut logged[t.port];
+        if t.write {
+            l.1 += u64::from(t.beats);
+        } else {
+            l.0 += u64::from(t.beats);
+        }
+        assert!(!client.starts_with("no client"), "{what}: {t:?} from {client}");
+    }
+    let moved: Vec<(u64, u64)> = after.iter().zip(before).map(|(a, b)| (a.0 - b.0, a.1 - b.1)).collect();
+    assert_eq!(logged, moved, "{what}: logged (read, write) beats per port against the beats moved");
+    assert!(!transfers.is_empty(), "{what}: no transfer logged");
 }
 
 fn synthetic() -> Scene {

@@ -110,6 +110,23 @@ struct Port {
     w_beats: u64,
 }
 
+/// One address handshake a port took (an AR or an AW): a line of a transfer log.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AddrRecord {
+    /// The port.
+    pub port: usize,
+    /// The port's cycle (counted from the memory's creation).
+    pub cycle: u64,
+    /// An AW (else an AR).
+    pub write: bool,
+    /// Byte address.
+    pub addr: u64,
+    /// The ID on the port (the port mux's client slot).
+    pub id: u32,
+    /// Data beats of the burst.
+    pub beats: u32,
+}
+
 /// K AXI4 subordinate ports over one [`Memory`] (see the module docs).
 #[derive(Clone, Debug)]
 pub struct AxiMemory {
@@ -117,6 +134,8 @@ pub struct AxiMemory {
     timing: AxiTiming,
     ports: Vec<Port>,
     rngs: Vec<Rng>,
+    /// Every AR and AW taken, while recording ([`AxiMemory::record_addresses`]).
+    log: Option<Vec<AddrRecord>>,
 }
 
 impl AxiMemory {
@@ -124,7 +143,24 @@ impl AxiMemory {
     pub fn new(ports: usize, mem: Memory, timing: AxiTiming, seed: u64) -> AxiMemory {
         let mut root = Rng::new(seed ^ 0xa11_0a11);
         let rngs = (0..ports).map(|k| root.fork(k as u64)).collect();
-        AxiMemory { mem, timing, ports: vec![Port::default(); ports], rngs }
+        AxiMemory { mem, timing, ports: vec![Port::default(); ports], rngs, log: None }
+    }
+
+    /// Starts (`true`) or stops recording every AR and AW taken ([`AddrRecord`]).
+    pub fn record_addresses(&mut self, on: bool) {
+        self.log = on.then(|| self.log.take().unwrap_or_default());
+    }
+
+    /// The records since the last call (empty when not recording).
+    pub fn take_addresses(&mut self) -> Vec<AddrRecord> {
+        self.log.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
+    fn record(&mut self, k: usize, write: bool, a: &Addr) {
+        if let Some(log) = &mut self.log {
+            let cycle = self.ports[k].now;
+            log.push(AddrRecord { port: k, cycle, write, addr: a.addr, id: a.id, beats: a.beats() });
+        }
     }
 
     /// The backing memory.
@@ -175,6 +211,7 @@ impl AxiMemory {
         let out = self.ports[k].out;
         // AR.
         if let (true, Some(a)) = (out.arready, m.ar) {
+            self.record(k, false, &a);
             let ready_at = self.ports[k].now + self.delay(k);
             self.ports[k].reads.push(ReadBurst { a, ready_at, sent: 0 });
         }
@@ -192,6 +229,7 @@ impl AxiMemory {
         }
         // AW.
         if let (true, Some(a)) = (out.awready, m.aw) {
+            self.record(k, true, &a);
             self.ports[k].aw.push_back(a);
         }
         // W.

@@ -21,7 +21,7 @@ pub mod mux;
 
 pub use checker::{AxiChecker, Violation};
 pub use hazard::{Hazard, HazardChecker, HazardKind};
-pub use memory::{AxiMemory, AxiTiming};
+pub use memory::{AddrRecord, AxiMemory, AxiTiming};
 
 use crate::dut::{Dut, PortIo};
 
