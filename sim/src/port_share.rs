@@ -23,8 +23,8 @@
 //! Between two events (a job starting, a phase ending) the rates are constant, so the play is
 //! exact for this fluid model and costs a few operations per phase.
 
-/// One phase of a job: its cycles alone and its demand on each channel (beats per cycle, at
-/// most 1: the channel's capacity).
+/// One phase of a job: its cycles alone and its demand on each channel (the share of the
+/// channel's capacity it keeps busy alone, at most 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FluidPhase {
     /// Cycles alone on the port.
