@@ -151,6 +151,55 @@ mod tests {
         }
     }
 
+    fn arb_job() -> impl proptest::strategy::Strategy<Value = FluidJob> {
+        use proptest::prelude::*;
+        let phase = (0.0..2000.0f64, 0.0..=1.0f64, 0.0..=1.0f64)
+            .prop_map(|(alone, read, write)| FluidPhase { alone, read, write });
+        (0.0..3000.0f64, proptest::collection::vec(phase, 0..6), 0.5..100.0f64, 0.5..20.0f64, any::<bool>())
+            .prop_map(|(start, phases, read_weight, write_weight, latency_bound)| FluidJob {
+                start,
+                phases,
+                read_weight,
+                write_weight,
+                latency_bound,
+            })
+    }
+
+    proptest::proptest! {
+        /// Every phase ends, never sooner than alone; a job alone on its port takes its time
+        /// alone; a phase that uses neither channel is never slowed; and no channel carries
+        /// more than its capacity (the work done over the play fits in it).
+        #[test]
+        fn sharing_only_ever_slows_and_conserves_the_channels(
+            jobs in proptest::collection::vec(arb_job(), 1..5)
+        ) {
+            let d = play(&jobs);
+            proptest::prop_assert_eq!(d.len(), jobs.len());
+            for (j, dj) in jobs.iter().zip(&d) {
+                proptest::prop_assert_eq!(dj.len(), j.phases.len());
+                for (p, &x) in j.phases.iter().zip(dj) {
+                    proptest::prop_assert!(x >= p.alone - 1e-6 * (1.0 + p.alone), "{x} < {}", p.alone);
+                    if p.read == 0.0 && p.write == 0.0 {
+                        proptest::prop_assert!((x - p.alone).abs() <= 1e-6 * (1.0 + p.alone), "{x} vs {}", p.alone);
+                    }
+                }
+            }
+            let alone = play(&jobs[..1]);
+            for (x, p) in alone[0].iter().zip(&jobs[0].phases) {
+                proptest::prop_assert!((x - p.alone).abs() <= 1e-6 * (1.0 + p.alone), "alone: {x} vs {}", p.alone);
+            }
+            // The beats a channel moved (demand times time alone, summed) fit in its capacity
+            // over the span of the play.
+            let start = jobs.iter().map(|j| j.start).fold(f64::INFINITY, f64::min);
+            let end = jobs.iter().zip(&d).map(|(j, dj)| j.start + dj.iter().sum::<f64>()).fold(start, f64::max);
+            let work = |f: fn(&FluidPhase) -> f64| -> f64 {
+                jobs.iter().flat_map(|j| j.phases.iter().map(move |p| f(p) * p.alone)).sum()
+            };
+            proptest::prop_assert!(work(|p| p.read) <= (end - start) + 1e-6 * (1.0 + end - start));
+            proptest::prop_assert!(work(|p| p.write) <= (end - start) + 1e-6 * (1.0 + end - start));
+        }
+    }
+
     #[test]
     fn fair_shares_follow_weights_and_demands() {
         let a = max_min_fair(&[(1.0, 64.0), (0.9, 37.6)]);
