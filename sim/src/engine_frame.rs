@@ -357,7 +357,6 @@ impl<'a> EngineFrameModel<'a> {
             .collect();
         let burst = self.cfg.burst as f64;
         FluidJob {
-            start: 0.0,
             phases,
             read_weight: burst * self.cfg.max_outstanding as f64,
             write_weight: 1.0,
@@ -425,7 +424,6 @@ impl<'a> EngineFrameModel<'a> {
         let alone = self.raster_cycles(t);
         let demand = |cycles: f64| if alone > 0.0 { cycles / alone } else { 0.0 };
         FluidJob {
-            start: 0.0,
             phases: vec![FluidPhase {
                 alone,
                 read: demand(self.beats(RASTER_ENTRY_BEATS * t.raster.len)),
@@ -586,11 +584,11 @@ impl<'a> EngineFrameModel<'a> {
         let mut out = vec![Vec::new(); sched.jobs.len()];
         for port in 0..self.cfg.mem_channels {
             let on: Vec<usize> = (0..sched.jobs.len()).filter(|&i| sched.jobs[i].port == port).collect();
-            let fluid: Vec<FluidJob> = on
+            let fluid: Vec<(f64, &FluidJob)> = on
                 .iter()
                 .map(|&i| {
                     let j = &sched.jobs[i];
-                    FluidJob { start: j.start, ..jobs[j.tile][j.engine].clone() }
+                    (j.start, &jobs[j.tile][j.engine])
                 })
                 .collect();
             for (&i, d) in on.iter().zip(port_share::play(&fluid)) {
@@ -1004,10 +1002,7 @@ mod tests {
         let raster = m1.raster_job(&raster_tile(20_000));
         let sort = m1.sort_job(&merge_tile(20_000));
         assert!(sort.phases.len() > 2 && sort.phases[0].read < 0.5 && sort.phases[1].read > 0.6, "{sort:?}");
-        let played = port_share::play(&[
-            FluidJob { start: 0.0, ..raster.clone() },
-            FluidJob { start: 0.0, ..sort.clone() },
-        ]);
+        let played = port_share::play(&[(0.0, &raster), (0.0, &sort)]);
         let alone = |j: &FluidJob| j.phases.iter().map(|p| p.alone).collect::<Vec<f64>>();
         assert!(played[0][0] > 1.2 * alone(&raster)[0], "the raster waits behind the merges: {played:?}");
         assert!(

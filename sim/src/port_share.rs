@@ -35,11 +35,9 @@ pub struct FluidPhase {
     pub write: f64,
 }
 
-/// A job on a port: when it starts, its phases, and its weights on the R and W channels.
+/// A job on a port: its phases, and its weights on the R and W channels.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FluidJob {
-    /// Start (cycles).
-    pub start: f64,
     /// Its phases, in order.
     pub phases: Vec<FluidPhase>,
     /// Weight on the R channel: the beats it keeps in flight.
@@ -51,31 +49,29 @@ pub struct FluidJob {
     pub latency_bound: bool,
 }
 
-/// Each job's phase durations when `jobs` share one port.
-pub fn play(jobs: &[FluidJob]) -> Vec<Vec<f64>> {
-    let mut out: Vec<Vec<f64>> = jobs.iter().map(|j| Vec::with_capacity(j.phases.len())).collect();
+/// Each job's phase durations when `jobs` (each with its start, in cycles) share one port.
+pub fn play(jobs: &[(f64, &FluidJob)]) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = jobs.iter().map(|(_, j)| Vec::with_capacity(j.phases.len())).collect();
     // Per job: the phase it is in, the progress left in it (cycles alone), and when it began.
     let mut at: Vec<usize> = vec![0; jobs.len()];
-    let mut left: Vec<f64> = jobs.iter().map(|j| j.phases.first().map_or(0.0, |p| p.alone)).collect();
-    let mut began: Vec<f64> = jobs.iter().map(|j| j.start).collect();
-    let mut t = jobs.iter().map(|j| j.start).fold(f64::INFINITY, f64::min);
+    let mut left: Vec<f64> = jobs.iter().map(|(_, j)| j.phases.first().map_or(0.0, |p| p.alone)).collect();
+    let mut began: Vec<f64> = jobs.iter().map(|&(start, _)| start).collect();
+    let mut t = jobs.iter().map(|&(start, _)| start).fold(f64::INFINITY, f64::min);
     loop {
         // Phases without work end where they begin.
-        for (i, j) in jobs.iter().enumerate() {
-            while at[i] < j.phases.len() && j.start <= t && left[i] <= 0.0 {
+        for (i, &(start, j)) in jobs.iter().enumerate() {
+            while at[i] < j.phases.len() && start <= t && left[i] <= 0.0 {
                 out[i].push(t.max(began[i]) - began[i]);
                 at[i] += 1;
-                began[i] = t.max(j.start);
+                began[i] = t.max(start);
                 left[i] = j.phases.get(at[i]).map_or(0.0, |p| p.alone);
             }
         }
-        let active: Vec<usize> =
-            (0..jobs.len()).filter(|&i| at[i] < jobs[i].phases.len() && jobs[i].start <= t).collect();
-        let next_start = jobs
-            .iter()
-            .enumerate()
-            .filter(|&(i, j)| at[i] < j.phases.len() && j.start > t)
-            .map(|(_, j)| j.start)
+        let unfinished = |i: usize| at[i] < jobs[i].1.phases.len();
+        let active: Vec<usize> = (0..jobs.len()).filter(|&i| unfinished(i) && jobs[i].0 <= t).collect();
+        let next_start = (0..jobs.len())
+            .filter(|&i| unfinished(i) && jobs[i].0 > t)
+            .map(|i| jobs[i].0)
             .fold(f64::INFINITY, f64::min);
         if active.is_empty() {
             if next_start.is_infinite() {
@@ -84,8 +80,8 @@ pub fn play(jobs: &[FluidJob]) -> Vec<Vec<f64>> {
             t = next_start;
             continue;
         }
-        let phase = |i: usize| jobs[i].phases[at[i]];
-        let rates = progress_rates(&active.iter().map(|&i| (phase(i), &jobs[i])).collect::<Vec<_>>());
+        let phase = |i: usize| jobs[i].1.phases[at[i]];
+        let rates = progress_rates(&active.iter().map(|&i| (phase(i), jobs[i].1)).collect::<Vec<_>>());
         let first_end = active.iter().zip(&rates).map(|(&i, &r)| left[i] / r).fold(f64::INFINITY, f64::min);
         let dt = first_end.min(next_start - t);
         for (&i, &r) in active.iter().zip(&rates) {
@@ -141,27 +137,28 @@ pub fn max_min_fair(claims: &[(f64, f64)]) -> Vec<f64> {
 mod tests {
     use super::*;
 
-    fn job(start: f64, phases: &[(f64, f64, f64)], read_weight: f64) -> FluidJob {
-        FluidJob {
-            start,
+    fn job(start: f64, phases: &[(f64, f64, f64)], read_weight: f64) -> (f64, FluidJob) {
+        let job = FluidJob {
             phases: phases.iter().map(|&(alone, read, write)| FluidPhase { alone, read, write }).collect(),
             read_weight,
             write_weight: 1.0,
             latency_bound: false,
-        }
+        };
+        (start, job)
     }
 
-    fn arb_job() -> impl proptest::strategy::Strategy<Value = FluidJob> {
+    /// [`play`] on jobs held with their starts.
+    fn play_owned(jobs: &[(f64, FluidJob)]) -> Vec<Vec<f64>> {
+        play(&jobs.iter().map(|(start, j)| (*start, j)).collect::<Vec<_>>())
+    }
+
+    fn arb_job() -> impl proptest::strategy::Strategy<Value = (f64, FluidJob)> {
         use proptest::prelude::*;
         let phase = (0.0..2000.0f64, 0.0..=1.0f64, 0.0..=1.0f64)
             .prop_map(|(alone, read, write)| FluidPhase { alone, read, write });
         (0.0..3000.0f64, proptest::collection::vec(phase, 0..6), 0.5..100.0f64, 0.5..20.0f64, any::<bool>())
-            .prop_map(|(start, phases, read_weight, write_weight, latency_bound)| FluidJob {
-                start,
-                phases,
-                read_weight,
-                write_weight,
-                latency_bound,
+            .prop_map(|(start, phases, read_weight, write_weight, latency_bound)| {
+                (start, FluidJob { phases, read_weight, write_weight, latency_bound })
             })
     }
 
@@ -173,9 +170,9 @@ mod tests {
         fn sharing_only_ever_slows_and_conserves_the_channels(
             jobs in proptest::collection::vec(arb_job(), 1..5)
         ) {
-            let d = play(&jobs);
+            let d = play_owned(&jobs);
             proptest::prop_assert_eq!(d.len(), jobs.len());
-            for (j, dj) in jobs.iter().zip(&d) {
+            for ((_, j), dj) in jobs.iter().zip(&d) {
                 proptest::prop_assert_eq!(dj.len(), j.phases.len());
                 for (p, &x) in j.phases.iter().zip(dj) {
                     proptest::prop_assert!(x >= p.alone - 1e-6 * (1.0 + p.alone), "{x} < {}", p.alone);
@@ -184,16 +181,16 @@ mod tests {
                     }
                 }
             }
-            let alone = play(&jobs[..1]);
-            for (x, p) in alone[0].iter().zip(&jobs[0].phases) {
+            let alone = play_owned(&jobs[..1]);
+            for (x, p) in alone[0].iter().zip(&jobs[0].1.phases) {
                 proptest::prop_assert!((x - p.alone).abs() <= 1e-6 * (1.0 + p.alone), "alone: {x} vs {}", p.alone);
             }
             // The beats a channel moved (demand times time alone, summed) fit in its capacity
             // over the span of the play.
-            let start = jobs.iter().map(|j| j.start).fold(f64::INFINITY, f64::min);
-            let end = jobs.iter().zip(&d).map(|(j, dj)| j.start + dj.iter().sum::<f64>()).fold(start, f64::max);
+            let start = jobs.iter().map(|(s, _)| *s).fold(f64::INFINITY, f64::min);
+            let end = jobs.iter().zip(&d).map(|((s, _), dj)| s + dj.iter().sum::<f64>()).fold(start, f64::max);
             let work = |f: fn(&FluidPhase) -> f64| -> f64 {
-                jobs.iter().flat_map(|j| j.phases.iter().map(move |p| f(p) * p.alone)).sum()
+                jobs.iter().flat_map(|(_, j)| j.phases.iter().map(move |p| f(p) * p.alone)).sum()
             };
             proptest::prop_assert!(work(|p| p.read) <= (end - start) + 1e-6 * (1.0 + end - start));
             proptest::prop_assert!(work(|p| p.write) <= (end - start) + 1e-6 * (1.0 + end - start));
@@ -214,14 +211,14 @@ mod tests {
 
     #[test]
     fn a_lone_job_takes_its_phases_alone() {
-        let d = play(&[job(5.0, &[(10.0, 0.5, 0.5), (0.0, 1.0, 0.0), (20.0, 1.0, 1.0)], 1.0)]);
+        let d = play_owned(&[job(5.0, &[(10.0, 0.5, 0.5), (0.0, 1.0, 0.0), (20.0, 1.0, 1.0)], 1.0)]);
         assert_eq!(d, vec![vec![10.0, 0.0, 20.0]]);
     }
 
     #[test]
     fn two_saturating_jobs_share_the_channel_by_weight() {
         // Both read a beat a cycle alone; weights 3 and 1: while both run, a gets 3/4 of R.
-        let d = play(&[job(0.0, &[(300.0, 1.0, 0.0)], 3.0), job(0.0, &[(100.0, 1.0, 0.0)], 1.0)]);
+        let d = play_owned(&[job(0.0, &[(300.0, 1.0, 0.0)], 3.0), job(0.0, &[(100.0, 1.0, 0.0)], 1.0)]);
         // b: 100 cycles of work at 1/4 -> 400 cycles; a does 300 in those 400 cycles.
         assert!((d[1][0] - 400.0).abs() < 1e-9, "{d:?}");
         assert!((d[0][0] - 400.0).abs() < 1e-9, "{d:?}");
@@ -232,7 +229,7 @@ mod tests {
         // a: a light phase (0.25 a cycle) then a heavy one; b reads 0.9 a cycle throughout.
         let a = job(0.0, &[(100.0, 0.25, 0.0), (100.0, 1.0, 0.0)], 64.0);
         let b = job(0.0, &[(1000.0, 0.9, 0.0)], 36.0);
-        let d = play(&[a, b]);
+        let d = play_owned(&[a, b]);
         assert!((d[0][0] - 100.0).abs() < 1e-9, "the light phase fits beside b: {d:?}");
         // Then a gets 64% of R (its share), so its heavy phase takes 100 / 0.64.
         assert!((d[0][1] - 100.0 / 0.64).abs() < 1e-9, "{d:?}");
@@ -245,20 +242,21 @@ mod tests {
     fn a_latency_bound_reader_waits_behind_the_others_reads() {
         // The channel has room (0.6 + 0.3), but the raster's reads wait behind the sort's: it
         // reads 0.6 (1 - 0.3) a cycle; the sort is not slowed.
-        let raster = FluidJob { latency_bound: true, ..job(0.0, &[(100.0, 0.6, 0.1)], 37.6) };
+        let (start, raster) = job(0.0, &[(100.0, 0.6, 0.1)], 37.6);
+        let raster = (start, FluidJob { latency_bound: true, ..raster });
         let sort = job(0.0, &[(1000.0, 0.3, 0.3)], 64.0);
-        let d = play(&[raster.clone(), sort.clone()]);
+        let d = play_owned(&[raster.clone(), sort.clone()]);
         assert!((d[0][0] - 100.0 / 0.7).abs() < 1e-9, "{d:?}");
         assert!((d[1][0] - 1000.0).abs() < 1e-9, "{d:?}");
         // Not latency-bound, the same reader fits beside the sort.
-        let d = play(&[FluidJob { latency_bound: false, ..raster }, sort]);
+        let d = play_owned(&[(start, FluidJob { latency_bound: false, ..raster.1 }), sort]);
         assert!((d[0][0] - 100.0).abs() < 1e-9, "{d:?}");
     }
 
     #[test]
     fn the_slower_channel_sets_the_pace() {
         // Both write a beat a cycle with equal weights: half each, whatever the reads.
-        let d = play(&[job(0.0, &[(50.0, 0.1, 1.0)], 1.0), job(0.0, &[(50.0, 0.1, 1.0)], 1.0)]);
+        let d = play_owned(&[job(0.0, &[(50.0, 0.1, 1.0)], 1.0), job(0.0, &[(50.0, 0.1, 1.0)], 1.0)]);
         assert!((d[0][0] - 100.0).abs() < 1e-9 && (d[1][0] - 100.0).abs() < 1e-9, "{d:?}");
     }
 }
