@@ -84,9 +84,9 @@ pub struct FrameRun<T> {
     pub overflowing: Vec<usize>,
     /// What `before` returned for this frame.
     pub before: T,
-    /// Every AR and AW of the frame with its memory client, when the rig records them
+    /// Every AR and AW of the frame with its memory client's index, when the rig records them
     /// ([`EngineRig::record_transfers`]; else empty).
-    pub transfers: Vec<(AddrRecord, String)>,
+    pub transfers: Vec<(AddrRecord, usize)>,
 }
 
 /// Runs the remaining frames of `session` on `rig`. `before(plan, memory)` runs after the host

@@ -11,7 +11,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use indicatif::ProgressBar;
 use neo_golden::engine::host::MemoryLayout;
-use neo_golden::engine::{Counter, Planner, SessionOptions};
+use neo_golden::engine::{Counter, EngineConfig, Planner, SessionOptions};
 use neo_golden::hwpre::ShPrecision;
 use neo_golden::pipeline::Strategy;
 use neo_golden::source;
@@ -19,7 +19,7 @@ use neo_golden::trajectory::parse_resolution;
 use neo_sim::engine_frame::{error_pct, EngineFrameModel, FramePrediction, PortTiming};
 use neo_sim::latency;
 use neo_tb::axi::{AddrRecord, AxiTiming};
-use neo_tb::engine::{EngineRig, FrameReport, RunOptions};
+use neo_tb::engine::{client_name, EngineRig, FrameReport, RunOptions};
 use neo_tb::waves::WaveFormat;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -129,7 +129,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
     );
     // Before the engine's build: a path that cannot be written fails at once.
     let mut log = match &a.axi_log {
-        Some(path) => Some(TransferLog::create(path, session.layout())?),
+        Some(path) => Some(TransferLog::create(path, session.layout(), &cfg)?),
         None => None,
     };
     let format = a.waves.as_deref().map(WaveFormat::of_path);
@@ -176,13 +176,16 @@ pub fn run(a: CosimArgs) -> Result<()> {
 struct TransferLog {
     path: PathBuf,
     out: std::io::BufWriter<std::fs::File>,
+    /// Each memory client's name as a CSV field (quoted: names hold commas).
+    clients: Vec<String>,
 }
 
 impl TransferLog {
     /// Creates `path` and writes its header: the memory map, then the columns.
-    fn create(path: &Path, layout: &MemoryLayout) -> Result<TransferLog> {
+    fn create(path: &Path, layout: &MemoryLayout, cfg: &EngineConfig) -> Result<TransferLog> {
         let file = std::fs::File::create(path).with_context(|| format!("--axi-log {}", path.display()))?;
-        let mut log = TransferLog { path: path.to_path_buf(), out: std::io::BufWriter::new(file) };
+        let clients = (0..cfg.memory_clients()).map(|c| csv_field(&client_name(cfg, c))).collect();
+        let mut log = TransferLog { path: path.to_path_buf(), out: std::io::BufWriter::new(file), clients };
         let l = layout;
         let mut header = vec![
             "# neo cosim: every AXI4 address handshake (AR, AW) the harness's memory took".to_string(),
@@ -205,27 +208,37 @@ impl TransferLog {
             ));
         }
         header.push("frame,cycle,port,client,kind,addr,beats".into());
-        log.write_lines(header.iter().map(String::as_str))?;
+        for line in &header {
+            Self::write_line(&mut log.out, &log.path, format_args!("{line}"))?;
+        }
         Ok(log)
     }
 
     /// Appends frame `frame`'s transfers.
-    fn write_frame(&mut self, frame: usize, transfers: &[(AddrRecord, String)]) -> Result<()> {
-        let lines = transfers.iter().map(|(r, client)| {
+    fn write_frame(&mut self, frame: usize, transfers: &[(AddrRecord, usize)]) -> Result<()> {
+        for &(r, c) in transfers {
             let kind = if r.write { "AW" } else { "AR" };
-            let client = client.replace('"', "\"\"");
-            format!("{frame},{},{},\"{client}\",{kind},0x{:x},{}", r.cycle, r.port, r.addr, r.beats)
-        });
-        let lines: Vec<String> = lines.collect();
-        self.write_lines(lines.iter().map(String::as_str))
-    }
-
-    fn write_lines<'a>(&mut self, lines: impl Iterator<Item = &'a str>) -> Result<()> {
-        use std::io::Write;
-        for line in lines {
-            writeln!(self.out, "{line}").with_context(|| format!("--axi-log {}", self.path.display()))?;
+            let client = match self.clients.get(c) {
+                Some(name) => std::borrow::Cow::Borrowed(name.as_str()),
+                None => std::borrow::Cow::Owned(csv_field(&format!("no client ({c})"))),
+            };
+            Self::write_line(
+                &mut self.out,
+                &self.path,
+                format_args!("{frame},{},{},{client},{kind},0x{:x},{}", r.cycle, r.port, r.addr, r.beats),
+            )?;
         }
         Ok(())
+    }
+
+    /// One line of the file at `path` into `out`.
+    fn write_line(
+        out: &mut std::io::BufWriter<std::fs::File>,
+        path: &Path,
+        line: std::fmt::Arguments,
+    ) -> Result<()> {
+        use std::io::Write;
+        writeln!(out, "{line}").with_context(|| format!("--axi-log {}", path.display()))
     }
 
     /// Flushes the file.
@@ -233,6 +246,11 @@ impl TransferLog {
         use std::io::Write;
         self.out.flush().with_context(|| format!("--axi-log {}", self.path.display()))
     }
+}
+
+/// `s` as a quoted CSV field.
+fn csv_field(s: &str) -> String {
+    format!("\"{}\"", s.replace('"', "\"\""))
 }
 
 /// The cycle model's timing of the harness's memory (its means).

@@ -291,14 +291,14 @@ impl EngineRig {
         self.mem.record_addresses(on);
     }
 
-    /// The transfers recorded since the last call, each with its memory client's name
-    /// ([`client_name`]: the port mux's ID is the client's slot on its port).
-    pub fn take_transfers(&mut self) -> Vec<(AddrRecord, String)> {
+    /// The transfers recorded since the last call, each with its memory client's index
+    /// (name it with [`client_name`]; the port mux's ID is the client's slot on its port).
+    pub fn take_transfers(&mut self) -> Vec<(AddrRecord, usize)> {
         let cfg = &self.engine.cfg;
         self.mem
             .take_addresses()
             .into_iter()
-            .map(|r| (r, client_name(cfg, cfg.port_slot_client(r.port, r.id as usize))))
+            .map(|r| (r, cfg.port_slot_client(r.port, r.id as usize)))
             .collect()
     }
 
