@@ -262,8 +262,11 @@ module neo_sort_core (
   assign req_b_ok = (rd_b_left_q != 32'd0) & st_merge & ((b_resv_q + {5'd0, len_b_next}) <= 10'd256);
   wire tag_free;
   assign tag_free = tag_cnt_q != 3'd4;
+  // Both streams ready: the one with fewer entries reserved (the one the merge drains), ties alternate.
+  wire b_drained;
+  assign b_drained = (b_resv_q < a_resv_q) | ((b_resv_q == a_resv_q) & rr_q);
   wire rd_pick_b;
-  assign rd_pick_b = req_b_ok & (~req_a_ok | rr_q);
+  assign rd_pick_b = req_b_ok & (~req_a_ok | b_drained);
   wire rd_want;
   assign rd_want = (req_a_ok | req_b_ok) & tag_free;
   wire to_mem;

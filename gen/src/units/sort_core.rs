@@ -437,7 +437,11 @@ fn read_issuer(m: &mut Module, k: &Dims) {
     );
     m.wire_assign("req_b_ok", 1, format!("(rd_b_left_q != {}) & st_merge & ({})", z(lw), fits("b")));
     m.wire_assign("tag_free", 1, format!("tag_cnt_q != {}", lit(tc, mo)));
-    m.wire_assign("rd_pick_b", 1, "req_b_ok & (~req_a_ok | rr_q)");
+    m.comment(
+        "Both streams ready: the one with fewer entries reserved (the one the merge drains), ties alternate.",
+    );
+    m.wire_assign("b_drained", 1, "(b_resv_q < a_resv_q) | ((b_resv_q == a_resv_q) & rr_q)");
+    m.wire_assign("rd_pick_b", 1, "req_b_ok & (~req_a_ok | b_drained)");
     m.wire_assign("rd_want", 1, "(req_a_ok | req_b_ok) & tag_free");
     m.wire_assign("to_mem", 1, "st_merge | (st_pass & final_pass)");
     m.wire_assign("wr_want", 1, "to_mem & o_valid & ~o_empty");
