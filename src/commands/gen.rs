@@ -4,7 +4,10 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use neo_gen::output::{check_dir, write_dir};
-use neo_gen::report::{table, topology_reports, tree, unit_reports, SynthReport, YOSYS_COMMAND};
+use neo_gen::report::{
+    table, topology_reports, tree, unit_reports, SynthReport, TopologyReport, UnitReport, YOSYS_COMMAND,
+};
+use neo_gen::units::bsu;
 use neo_gen::EngineConfig;
 use std::path::PathBuf;
 
@@ -76,7 +79,11 @@ pub fn run(a: GenArgs) -> Result<()> {
         };
         let units = unit_reports(&cfg, previous.as_ref(), &progress)?;
         eprintln!("synthesis: {:.0} s", t0.elapsed().as_secs_f64());
-        let bsu_topologies = if a.all_topologies { topology_reports(&cfg)? } else { Vec::new() };
+        let bsu_topologies = if a.all_topologies {
+            topology_reports(&cfg)?
+        } else {
+            kept_topologies(previous.as_ref(), &units)
+        };
         let report = SynthReport { config: cfg, command: YOSYS_COMMAND.to_string(), units, bsu_topologies };
         print!("{}", table(&report));
         println!();
@@ -89,4 +96,42 @@ pub fn run(a: GenArgs) -> Result<()> {
         println!("report: {}", a.report.display());
     }
     Ok(())
+}
+
+/// Without `--all-topologies`: the previous report's BSU topologies, kept when its BSU's
+/// Verilog is the same as now (same configuration, same generator), else none (with a note to
+/// synthesize them again).
+fn kept_topologies(previous: Option<&SynthReport>, units: &[UnitReport]) -> Vec<TopologyReport> {
+    let Some(prev) = previous.filter(|p| !p.bsu_topologies.is_empty()) else { return Vec::new() };
+    let bsu_hash =
+        |us: &[UnitReport]| us.iter().find(|u| u.unit == bsu::NAME).map(|u| u.verilog_hash.clone());
+    if bsu_hash(&prev.units).is_some() && bsu_hash(&prev.units) == bsu_hash(units) {
+        eprintln!("  {:<24} the BSU is unchanged: kept from the previous report", "BSU topologies");
+        prev.bsu_topologies.clone()
+    } else {
+        eprintln!("  {:<24} the BSU changed: dropped (--all-topologies synthesizes them)", "BSU topologies");
+        Vec::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `neo gen --stats` without `--all-topologies` keeps the committed report's topologies
+    /// while the BSU is unchanged, and drops them when it changed.
+    #[test]
+    fn topologies_are_kept_only_while_the_bsu_is_unchanged() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/reports/synth.json");
+        let text = std::fs::read_to_string(path).expect("reports/synth.json");
+        let prev: SynthReport = serde_json::from_str(&text).expect("a synthesis report");
+        assert!(!prev.bsu_topologies.is_empty(), "the committed report has the BSU topologies");
+        let kept = kept_topologies(Some(&prev), &prev.units);
+        assert_eq!(kept.len(), prev.bsu_topologies.len());
+        let mut units = prev.units.clone();
+        let bsu = units.iter_mut().find(|u| u.unit == bsu::NAME).expect("the BSU's row");
+        bsu.verilog_hash.push('x');
+        assert!(kept_topologies(Some(&prev), &units).is_empty());
+        assert!(kept_topologies(None, &prev.units).is_empty());
+    }
 }
