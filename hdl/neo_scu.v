@@ -4,7 +4,7 @@
 // origin/cols/rows are taken from a list's first beat. One out beat per list: pixel k at out_rgb_o[24k +: 24]
 // = {blue, green, red}. term_o: every pixel of the list being accepted is done. See docs/rtl.md.
 // Submodules: g_lane[l].u_lane (neo_scu_lane, S0..S5), g_lane[l].u_blend (neo_scu_blend),
-// g_pixel[k].u_pixel (neo_scu_pixel: state, saved states, output colour).
+// g_lane[l].u_pixels (neo_scu_pixels: the lane's pixels' states, saved states, output colours).
 module neo_scu (
   input  wire          clk_i,           // clock
   input  wire          rst_ni,          // asynchronous reset, active low
@@ -120,9 +120,8 @@ module neo_scu (
   // Subtile termination: every pixel of list term_lid_q is done.
   reg  term_q;
   reg  [2:0] term_lid_q;
-  // Output register: the finished subtile's colours.
+  // Output register: a finished subtile's colours are offered (they sit in the lanes' u_pixels).
   reg  out_valid_q;
-  reg  [1535:0] out_rgb_q;
   // The pass in S5.
   wire [1:0] pass5;
   assign pass5 = d5_q[BEAT_PASS +: BEAT_PASS_W];
@@ -237,39 +236,31 @@ module neo_scu (
     end
   end
 
-  // Every pixel's state (pixel k at [k*W +: W]), its saved state, the next done bits and colours.
-  wire [1087:0] pix_t;
-  wire [1087:0] pix_saved_t;
-  wire [5375:0] pix_c;
-  wire [5375:0] pix_saved_c;
-  wire [63:0] pix_done;
-  wire [63:0] pix_saved_done;
+  // Pixel k = p*L + l is written by lane l when pass p is blended in S5.
+  wire wr5;
+  assign wr5 = v5_q & ~d5_q[BEAT_NOP];
+  // save: a piece that does not end its subtile ends in S5; its pixels' states go to its slot.
+  wire save;
+  assign save = fin_b & ~d5_q[BEAT_FINAL];
+  // Every lane's next done bits (lane l at [l*P +: P]) and output colours (at [l*P*24 +: P*24]).
   wire [63:0] done_d;
-  wire [1535:0] out_rgb_d;
-  // The state of the pass's pixels in S5 (pixel p*L + l to lane l), now and as saved in the slot.
-  wire [271:0] pass_t;
-  wire [271:0] pass_saved_t;
-  assign pass_t = (pass5 == 2'd0) ? pix_t[271:0] : (pass5 == 2'd1) ? pix_t[543:272] : (pass5 == 2'd2) ? pix_t[815:544] : pix_t[1087:816];
-  assign pass_saved_t = (pass5 == 2'd0) ? pix_saved_t[271:0] : (pass5 == 2'd1) ? pix_saved_t[543:272] : (pass5 == 2'd2) ? pix_saved_t[815:544] : pix_saved_t[1087:816];
-  wire [1343:0] pass_c;
-  wire [1343:0] pass_saved_c;
-  assign pass_c = (pass5 == 2'd0) ? pix_c[1343:0] : (pass5 == 2'd1) ? pix_c[2687:1344] : (pass5 == 2'd2) ? pix_c[4031:2688] : pix_c[5375:4032];
-  assign pass_saved_c = (pass5 == 2'd0) ? pix_saved_c[1343:0] : (pass5 == 2'd1) ? pix_saved_c[2687:1344] : (pass5 == 2'd2) ? pix_saved_c[4031:2688] : pix_saved_c[5375:4032];
-  wire [15:0] pass_done;
-  wire [15:0] pass_saved_done;
-  assign pass_done = (pass5 == 2'd0) ? pix_done[15:0] : (pass5 == 2'd1) ? pix_done[31:16] : (pass5 == 2'd2) ? pix_done[47:32] : pix_done[63:48];
-  assign pass_saved_done = (pass5 == 2'd0) ? pix_saved_done[15:0] : (pass5 == 2'd1) ? pix_saved_done[31:16] : (pass5 == 2'd2) ? pix_saved_done[47:32] : pix_saved_done[63:48];
-  // The lanes' new states of those pixels.
-  wire [271:0] new_t;
-  wire [1343:0] new_c;
-  wire [15:0] new_done;
-  // Lane l evaluates pixel p*L + l in pass p, S0 -> S5, and blends it.
+  wire [1535:0] lane_rgb;
+  // Lane l evaluates pixel p*L + l in pass p, S0 -> S5, blends it and keeps its state.
   genvar l;
   generate
     for (l = 0; l < 16; l = l + 1) begin : g_lane
       localparam [3:0] LANE = l;
       wire [11:0] alpha;
       wire blend;
+      wire [16:0] cur_t;
+      wire [16:0] saved_t;
+      wire [16:0] new_t;
+      wire [83:0] cur_c;
+      wire [83:0] saved_c;
+      wire [83:0] new_c;
+      wire cur_done;
+      wire saved_done;
+      wire new_done;
       neo_scu_lane u_lane (
         .clk_i(clk_i),
         .en_i(en),
@@ -298,50 +289,44 @@ module neo_scu (
         .blue_i(d5_q[BEAT_BLUE +: BEAT_BLUE_W]),
         .alpha_i(alpha),
         .blend_i(blend),
-        .t_i(pass_t[l*17 +: 17]),
-        .saved_t_i(pass_saved_t[l*17 +: 17]),
-        .c_i(pass_c[l*84 +: 84]),
-        .saved_c_i(pass_saved_c[l*84 +: 84]),
-        .done_i(pass_done[l]),
-        .saved_done_i(pass_saved_done[l]),
-        .t_o(new_t[l*17 +: 17]),
-        .c_o(new_c[l*84 +: 84]),
-        .done_o(new_done[l])
+        .t_i(cur_t),
+        .saved_t_i(saved_t),
+        .t_o(new_t),
+        .c_i(cur_c),
+        .saved_c_i(saved_c),
+        .c_o(new_c),
+        .done_i(cur_done),
+        .saved_done_i(saved_done),
+        .done_o(new_done)
       );
-    end
-  endgenerate
-
-  // Pixel k = p*L + l is written by lane l when pass p is blended in S5.
-  wire [3:0] pass_wr;
-  assign pass_wr[0] = v5_q & ~d5_q[BEAT_NOP] & (pass5 == 2'd0);
-  assign pass_wr[1] = v5_q & ~d5_q[BEAT_NOP] & (pass5 == 2'd1);
-  assign pass_wr[2] = v5_q & ~d5_q[BEAT_NOP] & (pass5 == 2'd2);
-  assign pass_wr[3] = v5_q & ~d5_q[BEAT_NOP] & (pass5 == 2'd3);
-  // save: a piece that does not end its subtile ends in S5; its pixels' states go to its slot.
-  wire save;
-  assign save = fin_b & ~d5_q[BEAT_FINAL];
-  genvar k;
-  generate
-    for (k = 0; k < 64; k = k + 1) begin : g_pixel
-      neo_scu_pixel u_pixel (
+      neo_scu_pixels u_pixels (
         .clk_i(clk_i),
         .rst_ni(rst_ni),
         .en_i(en),
-        .wr_i(pass_wr[k / 16]),
-        .t_i(new_t[(k % 16)*17 +: 17]),
-        .c_i(new_c[(k % 16)*84 +: 84]),
-        .done_i(new_done[k % 16]),
+        .wr_i(wr5),
+        .pass_i(pass5),
+        .t_i(new_t),
+        .c_i(new_c),
+        .done_i(new_done),
         .save_i(save),
         .slot_i(d5_q[BEAT_SUB +: BEAT_SUB_W]),
-        .t_o(pix_t[k*17 +: 17]),
-        .c_o(pix_c[k*84 +: 84]),
-        .done_o(pix_done[k]),
-        .saved_t_o(pix_saved_t[k*17 +: 17]),
-        .saved_c_o(pix_saved_c[k*84 +: 84]),
-        .saved_done_o(pix_saved_done[k]),
-        .done_d_o(done_d[k]),
-        .rgb_o(out_rgb_d[k*24 +: 24])
+        .out_i(en & fin_out),
+        .t_o(cur_t),
+        .c_o(cur_c),
+        .done_o(cur_done),
+        .saved_t_o(saved_t),
+        .saved_c_o(saved_c),
+        .saved_done_o(saved_done),
+        .done_d_o(done_d[l*4 +: 4]),
+        .rgb_o(lane_rgb[l*96 +: 96])
       );
+    end
+  endgenerate
+  // Output pixel k = p*L + l: lane l's pixel p.
+  genvar k;
+  generate
+    for (k = 0; k < 64; k = k + 1) begin : g_out
+      assign out_rgb_o[k*24 +: 24] = lane_rgb[((k % 16)*4 + k / 16)*24 +: 24];
     end
   endgenerate
 
@@ -376,13 +361,7 @@ module neo_scu (
       end
     end
   end
-  always @(posedge clk_i) begin
-    if (en & fin_out) begin
-      out_rgb_q <= out_rgb_d;
-    end
-  end
   assign out_valid_o = out_valid_q;
-  assign out_rgb_o = out_rgb_q;
 
 `ifdef VERILATOR
   // Named cover points (Verilator --coverage-user: scripts/coverage).

@@ -11,7 +11,7 @@
 //! | `neo_scu_exp`   | SCU exp unit: ROM over one octave + interpolation       | no        |
 //! | `neo_scu_lane`  | SCU pixel lane: S0..S5, quadratic form, exp, alpha      | no        |
 //! | `neo_scu_blend` | SCU lane blend: a pixel's new T, colour, done bit       | no        |
-//! | `neo_scu_pixel` | SCU pixel: state, saved states, output colour           | no        |
+//! | `neo_scu_pixels` | SCU lane pixels: states, saved states, output colours  | no        |
 //! | `neo_scu`       | Subtile Compute Unit: alpha blending of one subtile     | yes       |
 //! | `neo_raster_loader` | raster core LOAD: table bursts, then feature reads  | no        |
 //! | `neo_raster_feeder` | raster core: one SCU's routing FIFO and feeder      | no        |

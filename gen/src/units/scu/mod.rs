@@ -8,7 +8,7 @@
 //! | `neo_scu_lane`  | `lane.rs`   | one pixel lane, S0..S5: quadratic form, exp, alpha        |
 //! | `neo_scu_exp`   | `exp.rs`    | the exp unit (golden `ExpTable`, ROM from `ExpTable::table`) |
 //! | `neo_scu_blend` | `blend.rs`  | one lane's blend: a pixel's new T, colour and done bit    |
-//! | `neo_scu_pixel` | `pixel.rs`  | one pixel's state, its saved states and its output colour |
+//! | `neo_scu_pixels` | `pixel.rs` | one lane's pixels: states, saved states, output colours   |
 //!
 //! The beat bundle carried down the pipeline is laid out in `beat.rs`; its fields are named by
 //! `localparam` offsets in the emitted Verilog.

@@ -1,10 +1,10 @@
 //! `neo_scu` itself: the ports, list tracking and the issue stage (S0), the beat pipeline
-//! (S1..S5), the `L` lanes (`g_lane[l]`: `neo_scu_lane` and `neo_scu_blend`), the `S*S` pixels
-//! (`g_pixel[k]`: `neo_scu_pixel`), subtile termination and the output register.
+//! (S1..S5), the `L` lanes (`g_lane[l]`: `neo_scu_lane`, `neo_scu_blend` and `neo_scu_pixels`,
+//! the states of the lane's `P` pixels), subtile termination and the output register.
 
 use super::beat::Beat;
 use super::{blend, gaussian_port, lane, pixel, ScuWidths, GAUSSIAN_FIELDS, LID_BITS, NAME, STAGES};
-use crate::emit::expr::{bits_for, lane as part, lit};
+use crate::emit::expr::{bits_for, lit};
 use crate::emit::{if_, if_else, set, Instance, Item, Module};
 use neo_golden::engine::EngineConfig;
 use neo_golden::raster::RGB_BITS;
@@ -19,7 +19,6 @@ pub fn module(cfg: &EngineConfig) -> Module {
     issue(&mut m, &w, &beat);
     pipeline(&mut m);
     lanes(&mut m, &w, &beat);
-    pixels(&mut m, &w, &beat);
     termination_and_output(&mut m, &w, &beat);
     covers(&mut m, &beat);
     m
@@ -73,7 +72,7 @@ fn ports(m: &mut Module, w: &ScuWidths) {
     ));
     m.doc("= {blue, green, red}. term_o: every pixel of the list being accepted is done. See docs/rtl.md.");
     m.doc("Submodules: g_lane[l].u_lane (neo_scu_lane, S0..S5), g_lane[l].u_blend (neo_scu_blend),");
-    m.doc("g_pixel[k].u_pixel (neo_scu_pixel: state, saved states, output colour).");
+    m.doc("g_lane[l].u_pixels (neo_scu_pixels: the lane's pixels' states, saved states, output colours).");
     m.clock_reset();
     m.input_c("in_valid_i", 1, "a Gaussian beat is offered");
     m.output_c("in_ready_o", 1, "taken when in_valid_i & in_ready_o");
@@ -140,8 +139,8 @@ fn issue(m: &mut Module, w: &ScuWidths, beat: &Beat) {
     }
     m.comment("Subtile termination: every pixel of list term_lid_q is done.");
     m.reg("term_q", 1).reg("term_lid_q", LID_BITS);
-    m.comment("Output register: the finished subtile's colours.");
-    m.reg("out_valid_q", 1).reg("out_rgb_q", RGB_BITS * w.pixels());
+    m.comment("Output register: a finished subtile's colours are offered (they sit in the lanes' u_pixels).");
+    m.reg("out_valid_q", 1);
     if w.passes > 1 {
         m.comment("The pass in S5.");
         m.wire_assign("pass5", w.pass_bits(), f5("pass"));
@@ -266,29 +265,19 @@ fn lane_pixel(w: &ScuWidths, beat: &Beat, reg: &str) -> String {
     }
 }
 
-/// The per-lane vectors (lane `l` at `[l*W +: W]`), the pass muxes and the `g_lane` block.
+/// The `g_lane` block: lane `l`'s pipeline (`u_lane`), its blend (`u_blend`) and its pixels
+/// (`u_pixels`: the states of pixels `p*L + l`, their saved states and output colours).
 fn lanes(m: &mut Module, w: &ScuWidths, beat: &Beat) {
-    let (l_n, t, c3) = (w.lanes, w.t, 3 * w.c);
+    let (l_n, p_n, t, c3) = (w.lanes, w.passes, w.t, 3 * w.c);
     let lane_bits = bits_for(l_n as u64 - 1);
     let n = w.pixels();
     m.blank();
-    m.comment(
-        "Every pixel's state (pixel k at [k*W +: W]), its saved state, the next done bits and colours.",
-    );
-    for (v, width) in [("t", t), ("c", c3), ("done", 1)] {
-        m.wire(format!("pix_{v}"), n * width).wire(format!("pix_saved_{v}"), n * width);
-    }
-    m.wire("done_d", n).wire("out_rgb_d", RGB_BITS * n);
-    m.comment(
-        "The state of the pass's pixels in S5 (pixel p*L + l to lane l), now and as saved in the slot.",
-    );
-    for (v, width) in [("t", t), ("c", c3), ("done", 1)] {
-        m.wire(format!("pass_{v}"), l_n * width).wire(format!("pass_saved_{v}"), l_n * width);
-        m.assign(format!("pass_{v}"), pass_mux(w, &format!("pix_{v}"), l_n * width));
-        m.assign(format!("pass_saved_{v}"), pass_mux(w, &format!("pix_saved_{v}"), l_n * width));
-    }
-    m.comment("The lanes' new states of those pixels.");
-    m.wire("new_t", l_n * t).wire("new_c", l_n * c3).wire("new_done", l_n);
+    m.comment("Pixel k = p*L + l is written by lane l when pass p is blended in S5.");
+    m.wire_assign("wr5", 1, format!("v{STAGES}_q & ~{}", beat.get("d5_q", "nop")));
+    m.comment("save: a piece that does not end its subtile ends in S5; its pixels' states go to its slot.");
+    m.wire_assign("save", 1, format!("fin_b & ~{}", beat.get("d5_q", "final")));
+    m.comment("Every lane's next done bits (lane l at [l*P +: P]) and output colours (at [l*P*24 +: P*24]).");
+    m.wire("done_d", n).wire("lane_rgb", RGB_BITS * n);
     let f = |reg: &str, n: &str| beat.get(reg, n);
     let lane_conns = named(vec![
         ("clk_i", "clk_i".to_string()),
@@ -312,108 +301,69 @@ fn lanes(m: &mut Module, w: &ScuWidths, beat: &Beat) {
         blend_conns.push((format!("{n}_i"), f("d5_q", n)));
     }
     blend_conns.extend(named(vec![("alpha_i", "alpha".to_string()), ("blend_i", "blend".into())]));
-    let mut outs = Vec::new();
-    for (v, width) in [("t", t), ("c", c3), ("done", 1)] {
-        let at =
-            |vec: &str| if width == 1 { format!("{vec}[l]") } else { format!("{vec}[l*{width} +: {width}]") };
-        blend_conns.push((format!("{v}_i"), at(&format!("pass_{v}"))));
-        blend_conns.push((format!("saved_{v}_i"), at(&format!("pass_saved_{v}"))));
-        outs.push((format!("{v}_o"), at(&format!("new_{v}"))));
+    let mut pixel_conns = named(vec![
+        ("clk_i", "clk_i".to_string()),
+        ("rst_ni", "rst_ni".into()),
+        ("en_i", "en".into()),
+        ("wr_i", "wr5".into()),
+    ]);
+    if w.passes > 1 {
+        pixel_conns.push(("pass_i".into(), "pass5".into()));
     }
-    blend_conns.extend(outs);
-    let body = vec![
+    let mut lane_wires = Vec::new();
+    for (v, width) in [("t", t), ("c", c3), ("done", 1)] {
+        lane_wires.push(Item::Wire { name: format!("cur_{v}"), width });
+        lane_wires.push(Item::Wire { name: format!("saved_{v}"), width });
+        lane_wires.push(Item::Wire { name: format!("new_{v}"), width });
+        blend_conns.push((format!("{v}_i"), format!("cur_{v}")));
+        blend_conns.push((format!("saved_{v}_i"), format!("saved_{v}")));
+        blend_conns.push((format!("{v}_o"), format!("new_{v}")));
+        pixel_conns.push((format!("{v}_i"), format!("new_{v}")));
+    }
+    pixel_conns.extend(named(vec![
+        ("save_i", "save".to_string()),
+        ("slot_i", f("d5_q", "sub")),
+        ("out_i", "en & fin_out".into()),
+        ("t_o", "cur_t".into()),
+        ("c_o", "cur_c".into()),
+        ("done_o", "cur_done".into()),
+        ("saved_t_o", "saved_t".into()),
+        ("saved_c_o", "saved_c".into()),
+        ("saved_done_o", "saved_done".into()),
+        ("done_d_o", format!("done_d[l*{p_n} +: {p_n}]")),
+        ("rgb_o", format!("lane_rgb[l*{} +: {}]", RGB_BITS * p_n, RGB_BITS * p_n)),
+    ]));
+    let mut body = vec![
         Item::LocalParam { name: "LANE".into(), width: lane_bits, value: "l".into() },
         Item::Wire { name: "alpha".into(), width: w.alpha_frac },
         Item::Wire { name: "blend".into(), width: 1 },
-        Item::Instance(Instance {
-            module: lane::NAME.into(),
-            name: "u_lane".into(),
-            params: Vec::new(),
-            conns: lane_conns,
-        }),
-        Item::Instance(Instance {
-            module: blend::NAME.into(),
-            name: "u_blend".into(),
-            params: Vec::new(),
-            conns: blend_conns,
-        }),
     ];
-    m.comment("Lane l evaluates pixel p*L + l in pass p, S0 -> S5, and blends it.");
+    body.extend(lane_wires);
+    for (module, name, conns) in [
+        (lane::NAME, "u_lane", lane_conns),
+        (blend::NAME, "u_blend", blend_conns),
+        (pixel::NAME, "u_pixels", pixel_conns),
+    ] {
+        body.push(Item::Instance(Instance {
+            module: module.into(),
+            name: name.into(),
+            params: Vec::new(),
+            conns,
+        }));
+    }
+    m.comment("Lane l evaluates pixel p*L + l in pass p, S0 -> S5, blends it and keeps its state.");
     m.gen_for("l", l_n, "g_lane", body);
+    m.comment("Output pixel k = p*L + l: lane l's pixel p.");
+    let out = Item::Assign {
+        lhs: format!("out_rgb_o[k*{RGB_BITS} +: {RGB_BITS}]"),
+        rhs: format!("lane_rgb[((k % {l_n})*{p_n} + k / {l_n})*{RGB_BITS} +: {RGB_BITS}]"),
+    };
+    m.gen_for("k", n, "g_out", vec![out]);
 }
 
 /// Named connections `(port, expression)` with owned port names.
 fn named(pairs: Vec<(&str, String)>) -> Vec<(String, String)> {
     pairs.into_iter().map(|(p, e)| (p.to_string(), e)).collect()
-}
-
-/// The `L`-pixel slice of pixel vector `vec` (`width` bits per pass) for S5's pass.
-fn pass_mux(w: &ScuWidths, vec: &str, width: u32) -> String {
-    let pass = "pass5";
-    let mut e = part(vec, w.passes - 1, width);
-    for g in (0..w.passes - 1).rev() {
-        e = format!("({pass} == {}) ? {} : {e}", lit(w.pass_bits(), g as u64), part(vec, g, width));
-    }
-    e
-}
-
-/// The `g_pixel` block: every pixel's state, saved states and output colour.
-fn pixels(m: &mut Module, w: &ScuWidths, beat: &Beat) {
-    let (l_n, p_n, n, t, c3) = (w.lanes, w.passes, w.pixels(), w.t, 3 * w.c);
-    m.blank();
-    m.comment("Pixel k = p*L + l is written by lane l when pass p is blended in S5.");
-    m.wire("pass_wr", p_n);
-    let wr = format!("v{STAGES}_q & ~{}", beat.get("d5_q", "nop"));
-    if p_n == 1 {
-        m.assign("pass_wr", wr);
-    } else {
-        for g in 0..p_n {
-            m.assign(format!("pass_wr[{g}]"), format!("{wr} & (pass5 == {})", lit(w.pass_bits(), g as u64)));
-        }
-    }
-    m.comment("save: a piece that does not end its subtile ends in S5; its pixels' states go to its slot.");
-    m.wire_assign("save", 1, format!("fin_b & ~{}", beat.get("d5_q", "final")));
-    let lane_of = |v: &str, width: u32| {
-        if width == 1 {
-            format!("new_{v}[k % {l_n}]")
-        } else {
-            format!("new_{v}[(k % {l_n})*{width} +: {width}]")
-        }
-    };
-    let at = |vec: &str, width: u32| {
-        if width == 1 {
-            format!("{vec}[k]")
-        } else {
-            format!("{vec}[k*{width} +: {width}]")
-        }
-    };
-    let wr_k = if p_n == 1 { "pass_wr".to_string() } else { format!("pass_wr[k / {l_n}]") };
-    let pc = named(vec![
-        ("clk_i", "clk_i".to_string()),
-        ("rst_ni", "rst_ni".into()),
-        ("en_i", "en".into()),
-        ("wr_i", wr_k),
-        ("t_i", lane_of("t", t)),
-        ("c_i", lane_of("c", c3)),
-        ("done_i", lane_of("done", 1)),
-        ("save_i", "save".into()),
-        ("slot_i", beat.get("d5_q", "sub")),
-        ("t_o", at("pix_t", t)),
-        ("c_o", at("pix_c", c3)),
-        ("done_o", at("pix_done", 1)),
-        ("saved_t_o", at("pix_saved_t", t)),
-        ("saved_c_o", at("pix_saved_c", c3)),
-        ("saved_done_o", at("pix_saved_done", 1)),
-        ("done_d_o", at("done_d", 1)),
-        ("rgb_o", at("out_rgb_d", RGB_BITS)),
-    ]);
-    let body = vec![Item::Instance(Instance {
-        module: pixel::NAME.into(),
-        name: "u_pixel".into(),
-        params: Vec::new(),
-        conns: pc,
-    })];
-    m.gen_for("k", n, "g_pixel", body);
 }
 
 /// Subtile termination (`term_q`) and the output register.
@@ -443,9 +393,7 @@ fn termination_and_output(m: &mut Module, w: &ScuWidths, beat: &Beat) {
             vec![if_("out_ready_i", vec![set("out_valid_q", lit(1, 0))])],
         )],
     );
-    m.seq_noreset(vec![if_("en & fin_out", vec![set("out_rgb_q", "out_rgb_d")])]);
     m.assign("out_valid_o", "out_valid_q");
-    m.assign("out_rgb_o", "out_rgb_q");
 }
 
 #[cfg(test)]
@@ -464,7 +412,8 @@ mod tests {
                     v.contains(&format!("for (l = 0; l < {lanes}; l = l + 1) begin : g_lane")),
                     "{lanes}"
                 );
-                assert!(v.contains("for (k = 0; k < 64; k = k + 1) begin : g_pixel"), "{lanes}");
+                assert!(v.contains("for (k = 0; k < 64; k = k + 1) begin : g_out"), "{lanes}");
+                assert_eq!(v.matches("neo_scu_pixels u_pixels").count(), 1, "{lanes}");
                 assert_eq!(v.matches("neo_scu_lane u_lane").count(), 1, "{lanes}");
             }
         }
