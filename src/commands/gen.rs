@@ -103,9 +103,10 @@ pub fn run(a: GenArgs) -> Result<()> {
 /// synthesize them again).
 fn kept_topologies(previous: Option<&SynthReport>, units: &[UnitReport]) -> Vec<TopologyReport> {
     let Some(prev) = previous.filter(|p| !p.bsu_topologies.is_empty()) else { return Vec::new() };
-    let bsu_hash =
-        |us: &[UnitReport]| us.iter().find(|u| u.unit == bsu::NAME).map(|u| u.verilog_hash.clone());
-    if bsu_hash(&prev.units).is_some() && bsu_hash(&prev.units) == bsu_hash(units) {
+    fn bsu_hash(units: &[UnitReport]) -> Option<&str> {
+        units.iter().find(|u| u.unit == bsu::NAME).map(|u| u.verilog_hash.as_str())
+    }
+    if matches!((bsu_hash(&prev.units), bsu_hash(units)), (Some(a), Some(b)) if a == b) {
         eprintln!("  {:<24} the BSU is unchanged: kept from the previous report", "BSU topologies");
         prev.bsu_topologies.clone()
     } else {

@@ -268,8 +268,7 @@ fn lane_pixel(w: &ScuWidths, beat: &Beat, reg: &str) -> String {
 /// The `g_lane` block: lane `l`'s pipeline (`u_lane`), its blend (`u_blend`) and its pixels
 /// (`u_pixels`: the states of pixels `p*L + l`, their saved states and output colours).
 fn lanes(m: &mut Module, w: &ScuWidths, beat: &Beat) {
-    let (l_n, p_n, t, c3) = (w.lanes, w.passes, w.t, 3 * w.c);
-    let lane_bits = bits_for(l_n as u64 - 1);
+    let (l_n, p_n) = (w.lanes, w.passes);
     let n = w.pixels();
     m.blank();
     m.comment("Pixel k = p*L + l is written by lane l when pass p is blended in S5.");
@@ -278,71 +277,20 @@ fn lanes(m: &mut Module, w: &ScuWidths, beat: &Beat) {
     m.wire_assign("save", 1, format!("fin_b & ~{}", beat.get("d5_q", "final")));
     m.comment("Every lane's next done bits (lane l at [l*P +: P]) and output colours (at [l*P*24 +: P*24]).");
     m.wire("done_d", n).wire("lane_rgb", RGB_BITS * n);
-    let f = |reg: &str, n: &str| beat.get(reg, n);
-    let lane_conns = named(vec![
-        ("clk_i", "clk_i".to_string()),
-        ("en_i", "en".into()),
-        ("pixel_i", lane_pixel(w, beat, "d1_d")),
-        ("mean_x_i", f("d1_d", "mean_x")),
-        ("mean_y_i", f("d1_d", "mean_y")),
-        ("origin_x_i", f("d1_d", "origin_x")),
-        ("origin_y_i", f("d1_d", "origin_y")),
-        ("conic_a_i", f("d1_q", "conic_a")),
-        ("conic_b_i", f("d1_q", "conic_b")),
-        ("conic_c_i", f("d1_q", "conic_c")),
-        ("conic_exp_i", f("d2_q", "conic_exp")),
-        ("empty_i", f("d2_q", "empty")),
-        ("opacity_i", f("d4_q", "opacity")),
-        ("alpha_o", "alpha".into()),
-        ("blend_o", "blend".into()),
-    ]);
-    let mut blend_conns = vec![("pixel_i".to_string(), lane_pixel(w, beat, "d5_q"))];
-    for n in ["cols", "rows", "first", "resume"].into_iter().chain(blend::CHANNELS) {
-        blend_conns.push((format!("{n}_i"), f("d5_q", n)));
-    }
-    blend_conns.extend(named(vec![("alpha_i", "alpha".to_string()), ("blend_i", "blend".into())]));
-    let mut pixel_conns = named(vec![
-        ("clk_i", "clk_i".to_string()),
-        ("rst_ni", "rst_ni".into()),
-        ("en_i", "en".into()),
-        ("wr_i", "wr5".into()),
-    ]);
-    if w.passes > 1 {
-        pixel_conns.push(("pass_i".into(), "pass5".into()));
-    }
-    let mut lane_wires = Vec::new();
-    for (v, width) in [("t", t), ("c", c3), ("done", 1)] {
-        lane_wires.push(Item::Wire { name: format!("cur_{v}"), width });
-        lane_wires.push(Item::Wire { name: format!("saved_{v}"), width });
-        lane_wires.push(Item::Wire { name: format!("new_{v}"), width });
-        blend_conns.push((format!("{v}_i"), format!("cur_{v}")));
-        blend_conns.push((format!("saved_{v}_i"), format!("saved_{v}")));
-        blend_conns.push((format!("{v}_o"), format!("new_{v}")));
-        pixel_conns.push((format!("{v}_i"), format!("new_{v}")));
-    }
-    pixel_conns.extend(named(vec![
-        ("save_i", "save".to_string()),
-        ("slot_i", f("d5_q", "sub")),
-        ("out_i", "en & fin_out".into()),
-        ("t_o", "cur_t".into()),
-        ("c_o", "cur_c".into()),
-        ("done_o", "cur_done".into()),
-        ("saved_t_o", "saved_t".into()),
-        ("saved_c_o", "saved_c".into()),
-        ("saved_done_o", "saved_done".into()),
-        ("done_d_o", format!("done_d[l*{p_n} +: {p_n}]")),
-        ("rgb_o", format!("lane_rgb[l*{} +: {}]", RGB_BITS * p_n, RGB_BITS * p_n)),
-    ]));
     let mut body = vec![
-        Item::LocalParam { name: "LANE".into(), width: lane_bits, value: "l".into() },
+        Item::LocalParam { name: "LANE".into(), width: bits_for(l_n as u64 - 1), value: "l".into() },
         Item::Wire { name: "alpha".into(), width: w.alpha_frac },
         Item::Wire { name: "blend".into(), width: 1 },
     ];
-    body.extend(lane_wires);
+    for (v, width) in state_fields(w) {
+        for wire in [format!("cur_{v}"), format!("saved_{v}"), format!("new_{v}")] {
+            body.push(Item::Wire { name: wire, width });
+        }
+    }
     for (module, name, conns) in [
-        (lane::NAME, "u_lane", lane_conns),
-        (blend::NAME, "u_blend", blend_conns),
-        (pixel::NAME, "u_pixels", pixel_conns),
+        (lane::NAME, "u_lane", lane_conns(w, beat)),
+        (blend::NAME, "u_blend", blend_conns(w, beat)),
+        (pixel::NAME, "u_pixels", pixel_conns(w, beat)),
     ] {
         body.push(Item::Instance(Instance {
             module: module.into(),
@@ -359,6 +307,85 @@ fn lanes(m: &mut Module, w: &ScuWidths, beat: &Beat) {
         rhs: format!("lane_rgb[((k % {l_n})*{p_n} + k / {l_n})*{RGB_BITS} +: {RGB_BITS}]"),
     };
     m.gen_for("k", n, "g_out", vec![out]);
+}
+
+/// A pixel's state fields and their widths: transmittance, colour accumulators, done. Lane
+/// `l` carries each as `cur_*` (the pass's pixel), `saved_*` (as saved in the slot) and `new_*`
+/// (blended).
+fn state_fields(w: &ScuWidths) -> [(&'static str, u32); 3] {
+    [("t", w.t), ("c", 3 * w.c), ("done", 1)]
+}
+
+/// `u_lane`'s connections: S1..S5 of the pixel of the beat's pass.
+fn lane_conns(w: &ScuWidths, beat: &Beat) -> Vec<(String, String)> {
+    let f = |reg: &str, n: &str| beat.get(reg, n);
+    named(vec![
+        ("clk_i", "clk_i".to_string()),
+        ("en_i", "en".into()),
+        ("pixel_i", lane_pixel(w, beat, "d1_d")),
+        ("mean_x_i", f("d1_d", "mean_x")),
+        ("mean_y_i", f("d1_d", "mean_y")),
+        ("origin_x_i", f("d1_d", "origin_x")),
+        ("origin_y_i", f("d1_d", "origin_y")),
+        ("conic_a_i", f("d1_q", "conic_a")),
+        ("conic_b_i", f("d1_q", "conic_b")),
+        ("conic_c_i", f("d1_q", "conic_c")),
+        ("conic_exp_i", f("d2_q", "conic_exp")),
+        ("empty_i", f("d2_q", "empty")),
+        ("opacity_i", f("d4_q", "opacity")),
+        ("alpha_o", "alpha".into()),
+        ("blend_o", "blend".into()),
+    ])
+}
+
+/// `u_blend`'s connections: S5's beat and alpha, the pixel's state now and as saved, its new
+/// state.
+fn blend_conns(w: &ScuWidths, beat: &Beat) -> Vec<(String, String)> {
+    let mut conns = vec![("pixel_i".to_string(), lane_pixel(w, beat, "d5_q"))];
+    for n in ["cols", "rows", "first", "resume"].into_iter().chain(blend::CHANNELS) {
+        conns.push((format!("{n}_i"), beat.get("d5_q", n)));
+    }
+    conns.extend(named(vec![("alpha_i", "alpha".to_string()), ("blend_i", "blend".into())]));
+    for (v, _) in state_fields(w) {
+        conns.push((format!("{v}_i"), format!("cur_{v}")));
+        conns.push((format!("saved_{v}_i"), format!("saved_{v}")));
+        conns.push((format!("{v}_o"), format!("new_{v}")));
+    }
+    conns
+}
+
+/// `u_pixels`' connections: the write of S5's pass, the save, the output register's load; the
+/// pass's pixel's state now and as saved, the lane's next done bits and output colours.
+fn pixel_conns(w: &ScuWidths, beat: &Beat) -> Vec<(String, String)> {
+    let p_n = w.passes;
+    let mut conns = named(vec![
+        ("clk_i", "clk_i".to_string()),
+        ("rst_ni", "rst_ni".into()),
+        ("en_i", "en".into()),
+        ("wr_i", "wr5".into()),
+    ]);
+    if p_n > 1 {
+        conns.push(("pass_i".into(), "pass5".into()));
+    }
+    for (v, _) in state_fields(w) {
+        conns.push((format!("{v}_i"), format!("new_{v}")));
+    }
+    conns.extend(named(vec![
+        ("save_i", "save".to_string()),
+        ("slot_i", beat.get("d5_q", "sub")),
+        ("out_i", "en & fin_out".into()),
+    ]));
+    for (v, _) in state_fields(w) {
+        conns.push((format!("{v}_o"), format!("cur_{v}")));
+    }
+    for (v, _) in state_fields(w) {
+        conns.push((format!("saved_{v}_o"), format!("saved_{v}")));
+    }
+    conns.extend(named(vec![
+        ("done_d_o", format!("done_d[l*{p_n} +: {p_n}]")),
+        ("rgb_o", format!("lane_rgb[l*{} +: {}]", RGB_BITS * p_n, RGB_BITS * p_n)),
+    ]));
+    conns
 }
 
 /// Named connections `(port, expression)` with owned port names.
