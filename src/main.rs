@@ -33,6 +33,9 @@ enum Command {
     Bench(commands::bench::BenchArgs),
     /// Run the bit-exact golden pipeline along a trajectory with a sorting strategy; write stats.json.
     Frames(commands::frames::FramesArgs),
+    /// Rank correlation of each per-tile disorder signal with the tile's error, from `neo
+    /// frames --tile-stats` runs.
+    Signals(commands::signals::SignalsArgs),
     /// The main job: the cycle-model report (throughput, DRAM traffic, strategy timelines, speed
     /// against error) written to reports/index.md.
     Report(commands::report::ReportArgs),
@@ -61,6 +64,7 @@ fn main() -> ExitCode {
         Command::Trajectory(a) => commands::trajectory::run(a),
         Command::Bench(a) => commands::bench::run(a),
         Command::Frames(a) => commands::frames::run(a),
+        Command::Signals(a) => commands::signals::run(a),
         Command::Report(a) => commands::report::run(a),
         Command::Simulate(a) => commands::simulate::run(a),
         Command::Dram(a) => commands::dram::run(a),

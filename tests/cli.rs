@@ -364,3 +364,52 @@ fn cosim_refuses_a_plan_the_engine_cannot_make_before_any_work() {
     assert_eq!(o.status.code(), Some(2), "a usage error");
     assert!(stderr(&o).contains("unknown planner \"firmware\": expected host or engine"), "{}", stderr(&o));
 }
+
+/// `neo signals` reads the `tiles.jsonl` of `neo frames --tile-stats` and prints one row per
+/// run, lag and target; a damaged file is an error naming its line.
+#[test]
+fn signals_rank_the_tile_stats_of_a_frames_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("neo16");
+    ok(&[
+        "frames",
+        "--scene",
+        "synthetic:outdoor?gaussians=3000&seed=3",
+        "--trajectory",
+        "orbit:speed=16",
+        "--frames",
+        "4",
+        "--res",
+        "128x128",
+        "--sort",
+        "neo",
+        "--tile-stats",
+        "--no-float",
+        "--no-ssim",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    let out = ok(&["signals", run.to_str().unwrap()]);
+    let rows: Vec<&str> = out.lines().filter(|l| l.starts_with("| neo16 (")).collect();
+    assert_eq!(rows.len(), 4, "{out}");
+    for (row, want) in rows.iter().zip(["(same) ", "(same) ", "(next) ", "(next) "]) {
+        assert!(row.contains(want), "{row}");
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert!(cells[2].parse::<usize>().unwrap() > 0, "samples: {row}");
+        for c in &cells[4..10] {
+            assert!(*c == "-" || c.parse::<f64>().is_ok_and(|r| (-1.0..=1.0).contains(&r)), "{row}");
+        }
+    }
+    let tiles = run.join("tiles.jsonl");
+    let text = std::fs::read_to_string(&tiles).unwrap();
+    let second = text.lines().nth(1).unwrap().replacen("\"wb_reach\":[", "\"wb_reach\":[7,", 1);
+    let damaged: Vec<String> =
+        text.lines().enumerate().map(|(i, l)| if i == 1 { second.clone() } else { l.into() }).collect();
+    std::fs::write(&tiles, damaged.join("\n")).unwrap();
+    fails_cleanly(&["signals", run.to_str().unwrap()], &tiles, ":2: column `wb_reach` has");
+    fails_cleanly(
+        &["signals", dir.path().to_str().unwrap()],
+        &dir.path().join("tiles.jsonl"),
+        "No such file",
+    );
+}

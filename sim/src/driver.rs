@@ -260,6 +260,7 @@ impl<'s> WorkDriver<'s> {
             golden,
             quality: None,
             tiles,
+            golden_tiles: None,
         }
     }
 }
@@ -467,6 +468,7 @@ impl<'s> InMaking<'s> {
                 exact_psnr_vs_float: s.exact_psnr_vs_float,
                 identical_to_exact: s.identical_to_exact,
             });
+            fw.golden_tiles = Some(out.tiles);
             if let Some((dir, which)) = &self.spec.trace {
                 if which.is_empty() || which.contains(&i) {
                     let path = dir.join(format!("frame_{i:05}.poc.trace"));

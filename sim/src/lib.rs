@@ -24,6 +24,7 @@ pub mod pre_writers;
 pub mod report;
 pub mod report_plan;
 pub mod run;
+pub mod signals;
 pub mod sortcmd;
 pub mod suite;
 pub mod traffic;

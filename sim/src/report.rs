@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 
 use crate::plot::{self, HLine};
 use crate::run::ArchResult;
+use crate::signals::{Signal, SignalSummary};
 use crate::suite::PointResult;
 use crate::traffic::Stage;
 
@@ -721,6 +722,82 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
             );
         }
         md.push('\n');
+        signals_section(&mut md, &mut svgs, &d.sweep, &speeds)?;
     }
     Ok((md, svgs))
+}
+
+/// Section 5: how well the disorder signals rank the tiles by their error, from the sweep's
+/// `neo` points (chunk 256 where swept, one DPS pass), one row per camera speed, and the
+/// previous frame's reach against the error (issue 14; docs/adaptive.md section 1).
+fn signals_section(
+    md: &mut String,
+    svgs: &mut Vec<(String, String)>,
+    sweep: &[PointResult],
+    speeds: &[f64],
+) -> Result<(), String> {
+    let chunk = sweep.iter().map(|r| r.point.chunk).find(|&c| c == 256).unwrap_or(sweep[0].point.chunk);
+    let rows: Vec<(f64, &SignalSummary)> = speeds
+        .iter()
+        .filter_map(|&sp| {
+            sweep
+                .iter()
+                .find(|r| {
+                    r.point.strategy == "neo"
+                        && r.point.speed == sp
+                        && r.point.chunk == chunk
+                        && r.point.passes == 1
+                })
+                .and_then(|r| r.signals.as_ref())
+                .map(|s| (sp, s))
+        })
+        .collect();
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let _ = writeln!(
+        md,
+        "## 5. Disorder signals against the per-tile error
+"
+    );
+    let _ = writeln!(
+        md,
+        "Spearman rank correlation over the tiles and frames of the sweep's `neo` points (chunk {chunk}, one DPS pass) between each signal the hardware counts and the tile's error (sum of |neo - exact order| over its pixels and channels). Tiles without Gaussians, tiles sorted from scratch and shot starts are left out. Each cell: the frame's own signal / the previous frame's (what the frame controller has before it sorts; the merge counter and the shares are always the frame's own). docs/adaptive.md section 1 has the same on biker.\n"
+    );
+    let _ = write!(md, "| speed | tiles (with error) |");
+    for s in Signal::ALL {
+        let _ = write!(md, " {} |", s.name());
+    }
+    let _ = write!(md, "\n| --- | ---: |");
+    for _ in Signal::ALL {
+        md.push_str(" ---: |");
+    }
+    md.push('\n');
+    let rho = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.2}"));
+    for (sp, s) in &rows {
+        let _ = write!(md, "| {sp}x | {} ({}) |", s.samples, s.with_error);
+        for sig in Signal::ALL {
+            let c = s.get(sig);
+            let _ = write!(md, " {} / {} |", rho(c.and_then(|c| c.same)), rho(c.and_then(|c| c.next)));
+        }
+        md.push('\n');
+    }
+    let lg = |v: f64| (1.0 + v).log10();
+    let groups: Vec<(String, Vec<(f64, f64)>)> = rows
+        .iter()
+        .map(|(sp, s)| (format!("{sp}x"), s.reach_vs_error.iter().map(|&(x, y)| (lg(x), lg(y))).collect()))
+        .collect();
+    let file = "signals_reach_error.svg".to_string();
+    svgs.push((
+        file.clone(),
+        plot::scatter_front(
+            "Previous frame's write-back reach against the tile's error",
+            "log10(1 + reach)",
+            "log10(1 + error)",
+            &groups,
+            &[],
+        )?,
+    ));
+    let _ = writeln!(md, "\n![reach against error]({file})\n");
+    Ok(())
 }

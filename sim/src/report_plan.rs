@@ -408,6 +408,7 @@ mod tests {
                 point: j.point.clone(),
                 workload: Default::default(),
                 quality: Default::default(),
+                signals: None,
                 archs: j
                     .archs
                     .iter()

@@ -283,6 +283,9 @@ pub struct PointResult {
     pub quality: QualitySummary,
     /// One result per architecture.
     pub archs: Vec<ArchResult>,
+    /// The disorder signals against the per-tile error (with the golden raster; issue 14).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signals: Option<crate::signals::SignalSummary>,
 }
 
 impl PointResult {
@@ -426,6 +429,10 @@ pub fn point_result(point: &Point, wl: &Workload, results: Vec<ArchResult>) -> R
         },
         quality: QualitySummary::of(wl, strategy),
         archs: results,
+        signals: {
+            let cols: Option<Vec<_>> = wl.frames.iter().map(|f| f.golden_tiles.as_ref()).collect();
+            cols.and_then(|c| crate::signals::SignalSummary::of(&c))
+        },
     })
 }
 

@@ -138,6 +138,10 @@ pub struct FrameWork {
     pub quality: Option<Quality>,
     /// Tiles, row-major.
     pub tiles: Vec<TileWork>,
+    /// The golden pipeline's per-tile columns (disorder signals, error against the exact order),
+    /// when it ran beside the work-only generation (`None` otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub golden_tiles: Option<neo_golden::pipeline::stats::TileColumns>,
 }
 
 impl FrameWork {

@@ -100,8 +100,9 @@ fn the_speed_table_gives_fps_and_quality_per_camera_speed() {
             sweep.push(evaluate(&point, &wl, &cfg, &lat, &[Arch::Neo]).unwrap());
         }
     }
-    let data = ReportData { sweep, ..ReportData::default() };
-    let (md, _) = render(&data).unwrap();
+    let data = ReportData { sweep: sweep.clone(), ..ReportData::default() };
+    let (md, svgs) = render(&data).unwrap();
+    signal_rows_come_from_the_neo_points(&md, &svgs, &sweep);
     let lines: Vec<&str> = md.lines().collect();
     let at = lines.iter().position(|l| *l == "| strategy | 1x | 16x |").expect("the speed table");
     let neo: Vec<&str> = lines[at + 2].split('|').map(str::trim).collect();
@@ -115,4 +116,30 @@ fn the_speed_table_gives_fps_and_quality_per_camera_speed() {
     let hier: Vec<&str> = lines[at + 3].split('|').map(str::trim).collect();
     assert_eq!(hier[1], "hierarchical");
     assert!(hier[2].ends_with(" / exact") && hier[3].ends_with(" / exact"), "{}", lines[at + 3]);
+}
+
+/// Section 5: one row per camera speed from the `neo` point's signal summary (samples, tiles
+/// with an error, a same / next cell per signal), and the reach-against-error scatter.
+fn signal_rows_come_from_the_neo_points(
+    md: &str,
+    svgs: &[(String, String)],
+    sweep: &[neo_sim::suite::PointResult],
+) {
+    use neo_sim::signals::Signal;
+    let lines: Vec<&str> = md.lines().collect();
+    let at =
+        lines.iter().position(|l| l.starts_with("| speed | tiles (with error) |")).expect("signal table");
+    for (k, speed) in [1.0, 16.0].into_iter().enumerate() {
+        let r = sweep.iter().find(|r| r.point.strategy == "neo" && r.point.speed == speed).unwrap();
+        let s = r.signals.as_ref().expect("the golden raster ran: signals");
+        let cells: Vec<&str> = lines[at + 2 + k].split('|').map(str::trim).collect();
+        assert_eq!(cells[1], format!("{speed}x"));
+        assert_eq!(cells[2], format!("{} ({})", s.samples, s.with_error));
+        assert_eq!(cells.len(), 3 + Signal::ALL.len() + 1, "{}", lines[at + 2 + k]);
+        for c in &cells[3..3 + Signal::ALL.len()] {
+            assert_eq!(c.split(" / ").count(), 2, "{c}");
+        }
+    }
+    let svg = svgs.iter().find(|(n, _)| n == "signals_reach_error.svg").expect("the scatter");
+    assert!(svg.1.starts_with("<svg") && svg.1.contains("16x"));
 }

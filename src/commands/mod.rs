@@ -12,5 +12,6 @@ pub mod gen;
 pub mod render;
 pub mod report;
 pub mod scene;
+pub mod signals;
 pub mod simulate;
 pub mod trajectory;

@@ -5,7 +5,7 @@
 //! `identical_to_exact` says so); a comparison that was not computed is `null` too (the
 //! `config` block says which comparisons were enabled).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::order::percentile_u32;
 use super::tile::TileCounts;
@@ -272,7 +272,7 @@ pub struct FrameStats {
 }
 
 /// Per-tile columns of one frame (one line of `tiles.jsonl`); index = row-major tile index.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct TileColumns {
     /// Frame index.
     pub frame: usize,
