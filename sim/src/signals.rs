@@ -215,10 +215,10 @@ pub struct SignalSummary {
 impl SignalSummary {
     /// The summary of a run's frames; `None` without frames.
     pub fn of(frames: &[&TileColumns]) -> Option<Self> {
-        let base = samples(frames, Signal::WbReach, Lag::Same);
         if frames.is_empty() {
             return None;
         }
+        let base = samples(frames, Signal::WbReach, Lag::Same);
         let correlations = Signal::ALL
             .iter()
             .map(|&s| SignalCorrelation {
