@@ -158,11 +158,31 @@ pub fn frame_table(a: &ArchResult) -> String {
     s
 }
 
+/// The chunk of the per-speed tables: Neo's 256 where the sweep has it, else its first point's.
+fn speed_chunk(sweep: &[PointResult]) -> usize {
+    sweep.iter().map(|r| r.point.chunk).find(|&c| c == 256).unwrap_or(sweep[0].point.chunk)
+}
+
+/// The sweep's point of `strategy` at camera speed `speed`, chunk `chunk` and one DPS pass.
+fn speed_point<'a>(
+    sweep: &'a [PointResult],
+    strategy: &str,
+    speed: f64,
+    chunk: usize,
+) -> Option<&'a PointResult> {
+    sweep.iter().find(|r| {
+        r.point.strategy == strategy
+            && r.point.speed == speed
+            && r.point.chunk == chunk
+            && r.point.passes == 1
+    })
+}
+
 /// FPS and quality against camera speed (the paper's Fig. 17(b), which shows FPS only), per
 /// strategy at the sweep's default chunk and one DPS pass: FPS, worst-frame and mean PSNR
 /// against the exact order ("exact" for exact strategies; "-" when every frame matched it).
 fn speed_table(md: &mut String, sweep: &[PointResult], speeds: &[f64]) {
-    let chunk = sweep.iter().map(|r| r.point.chunk).find(|&c| c == 256).unwrap_or(sweep[0].point.chunk);
+    let chunk = speed_chunk(sweep);
     let mut strategies: Vec<&str> = Vec::new();
     for r in sweep {
         if !strategies.contains(&r.point.strategy.as_str()) {
@@ -185,9 +205,7 @@ fn speed_table(md: &mut String, sweep: &[PointResult], speeds: &[f64]) {
     for st in strategies {
         let _ = write!(md, "| {st} |");
         for &sp in speeds {
-            let r = sweep.iter().find(|r| {
-                r.point.strategy == st && r.point.speed == sp && r.point.chunk == chunk && r.point.passes == 1
-            });
+            let r = speed_point(sweep, st, sp, chunk);
             let cell = match r.and_then(|r| r.arch("neo").map(|a| (r, a))) {
                 None => "".to_string(),
                 Some((r, a)) if r.quality.is_exact() => format!("{} / exact", f1(a.fps)),
@@ -736,30 +754,17 @@ fn signals_section(
     sweep: &[PointResult],
     speeds: &[f64],
 ) -> Result<(), String> {
-    let chunk = sweep.iter().map(|r| r.point.chunk).find(|&c| c == 256).unwrap_or(sweep[0].point.chunk);
+    let chunk = speed_chunk(sweep);
     let rows: Vec<(f64, &SignalSummary)> = speeds
         .iter()
         .filter_map(|&sp| {
-            sweep
-                .iter()
-                .find(|r| {
-                    r.point.strategy == "neo"
-                        && r.point.speed == sp
-                        && r.point.chunk == chunk
-                        && r.point.passes == 1
-                })
-                .and_then(|r| r.signals.as_ref())
-                .map(|s| (sp, s))
+            speed_point(sweep, "neo", sp, chunk).and_then(|r| r.signals.as_ref()).map(|s| (sp, s))
         })
         .collect();
     if rows.is_empty() {
         return Ok(());
     }
-    let _ = writeln!(
-        md,
-        "## 5. Disorder signals against the per-tile error
-"
-    );
+    let _ = writeln!(md, "## 5. Disorder signals against the per-tile error\n");
     let _ = writeln!(
         md,
         "Spearman rank correlation over the tiles and frames of the sweep's `neo` points (chunk {chunk}, one DPS pass) between each signal the hardware counts and the tile's error (sum of |neo - exact order| over its pixels and channels). Tiles without Gaussians, tiles sorted from scratch and shot starts are left out. Each cell: the frame's own signal / the previous frame's (what the frame controller has before it sorts; the merge counter and the shares are always the frame's own). docs/adaptive.md section 1 has the same on biker.\n"

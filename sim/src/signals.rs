@@ -212,26 +212,46 @@ pub struct SignalSummary {
     pub reach_vs_error: Vec<(f64, f64)>,
 }
 
+/// One row of a correlation table: Spearman's rho of every signal of [`Signal::ALL`] against
+/// `target` at `lag`, with the write-back reach's samples (the row's sample count).
+pub fn correlation_row(
+    frames: &[&TileColumns],
+    lag: Lag,
+    target: Target,
+) -> (Vec<(f64, f64)>, Vec<Option<f64>>) {
+    let mut reach = Vec::new();
+    let rhos = Signal::ALL
+        .iter()
+        .map(|&s| {
+            let pairs = samples_of(frames, s, lag, target);
+            let rho = spearman(&pairs);
+            if s == Signal::WbReach {
+                reach = pairs;
+            }
+            rho
+        })
+        .collect();
+    (reach, rhos)
+}
+
 impl SignalSummary {
     /// The summary of a run's frames; `None` without frames.
     pub fn of(frames: &[&TileColumns]) -> Option<Self> {
         if frames.is_empty() {
             return None;
         }
-        let base = samples(frames, Signal::WbReach, Lag::Same);
+        let (same_reach, same) = correlation_row(frames, Lag::Same, Target::AbsError);
+        let (next_reach, next) = correlation_row(frames, Lag::Next, Target::AbsError);
         let correlations = Signal::ALL
             .iter()
-            .map(|&s| SignalCorrelation {
-                signal: s.name().to_string(),
-                same: spearman(&samples(frames, s, Lag::Same)),
-                next: spearman(&samples(frames, s, Lag::Next)),
-            })
+            .zip(same.into_iter().zip(next))
+            .map(|(s, (same, next))| SignalCorrelation { signal: s.name().to_string(), same, next })
             .collect();
         Some(SignalSummary {
-            samples: base.len(),
-            with_error: base.iter().filter(|p| p.1 > 0.0).count(),
+            samples: same_reach.len(),
+            with_error: same_reach.iter().filter(|p| p.1 > 0.0).count(),
             correlations,
-            reach_vs_error: thin(samples(frames, Signal::WbReach, Lag::Next), MAX_SCATTER),
+            reach_vs_error: thin(next_reach, MAX_SCATTER),
         })
     }
 

@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use neo_sim::signals::{read_tiles, samples_of, spearman, Lag, Signal, Target};
+use neo_sim::signals::{correlation_row, read_tiles, Lag, Signal, Target};
 use std::path::PathBuf;
 
 /// Arguments of `neo signals`.
@@ -28,14 +28,15 @@ pub fn run(a: SignalsArgs) -> Result<()> {
             dir.file_name().map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into_owned());
         for (lag, lag_name) in [(Lag::Same, "same"), (Lag::Next, "next")] {
             for target in [Target::AbsError, Target::Inversions] {
-                let n = samples_of(&refs, Signal::WbReach, lag, target).len();
-                let cells: Vec<String> = Signal::ALL
-                    .iter()
-                    .map(|&s| {
-                        spearman(&samples_of(&refs, s, lag, target)).map_or("-".into(), |r| format!("{r:.2}"))
-                    })
-                    .collect();
-                println!("| {run} ({lag_name}) | {n} | {} | {} |", target.name(), cells.join(" | "));
+                let (reach, rhos) = correlation_row(&refs, lag, target);
+                let cells: Vec<String> =
+                    rhos.iter().map(|r| r.map_or("-".into(), |r| format!("{r:.2}"))).collect();
+                println!(
+                    "| {run} ({lag_name}) | {} | {} | {} |",
+                    reach.len(),
+                    target.name(),
+                    cells.join(" | ")
+                );
             }
         }
     }
