@@ -413,3 +413,55 @@ fn signals_rank_the_tile_stats_of_a_frames_run() {
         "No such file",
     );
 }
+
+/// `neo frames --raster-window W` records the window and renders closer to the exact order; a
+/// window of 0, or one under a strategy with frozen keys, is refused before any work.
+#[test]
+fn frames_runs_the_raster_window_and_refuses_bad_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |window: &str, sort: &str, name: &str| {
+        let out = dir.path().join(name);
+        let args = [
+            "frames",
+            "--scene",
+            "synthetic:outdoor?gaussians=3000&seed=3",
+            "--trajectory",
+            "orbit:speed=16",
+            "--frames",
+            "3",
+            "--res",
+            "128x128",
+            "--chunk",
+            "32",
+            "--sort",
+            sort,
+            "--raster-window",
+            window,
+            "--no-float",
+            "--no-ssim",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        (neo(&args), out.join("stats.json"))
+    };
+    let stats =
+        |p: &Path| -> serde_json::Value { serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap() };
+    let (o, plain) = run("1", "neo", "plain");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (o, wide) = run("65536", "neo", "wide");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (plain, wide) = (stats(&plain), stats(&wide));
+    assert_eq!(wide["config"]["raster_window"], 65536);
+    assert_eq!(plain["config"]["raster_window"], 1);
+    for f in wide["frames"].as_array().unwrap() {
+        assert_eq!(f["identical_to_exact"], true, "{f}");
+    }
+    assert!(plain["frames"].as_array().unwrap().iter().any(|f| f["identical_to_exact"] == false));
+    for (window, sort, phrase) in [("0", "neo", "raster window 0"), ("8", "periodic:4", "frozen")] {
+        let (o, st) = run(window, sort, "bad");
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("--raster-window") && err.contains(phrase), "{err}");
+        assert!(!st.exists(), "a refused run wrote {}", st.display());
+    }
+}

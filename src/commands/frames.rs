@@ -55,6 +55,11 @@ pub struct FramesArgs {
     /// DPS passes per frame.
     #[arg(long, default_value_t = 1)]
     pub passes: usize,
+    /// Entries in the raster core's reorder window, which blends and writes back each tile in
+    /// the order of the current depth keys within that reach (1: none, the paper's engine;
+    /// docs/adaptive.md section 7).
+    #[arg(long, default_value_t = 1)]
+    pub raster_window: usize,
     /// Largest table per tile (default: unbounded).
     #[arg(long)]
     pub capacity: Option<usize>,
@@ -111,6 +116,7 @@ pub fn run(a: FramesArgs) -> Result<()> {
         strategy,
         chunk: a.chunk,
         dps_passes: a.passes,
+        raster_window: a.raster_window,
         capacity: a.capacity,
         compare_exact: !a.no_exact,
         compare_float: !a.no_float,
@@ -120,6 +126,7 @@ pub fn run(a: FramesArgs) -> Result<()> {
     };
     cfg.raster.tile = a.tile;
     cfg.raster.subtile = a.subtile;
+    cfg.check_window().context("--raster-window")?;
     let (formats, _) = spin("choosing number formats", || formats_for(&scene, &traj.frames, &cfg, a.fitted));
     let formats = formats?;
     fs::create_dir_all(&a.out)

@@ -714,6 +714,8 @@ pub(crate) fn pipeline_for<'s>(
         raster: cfg.raster_config(),
         chunk: cfg.chunk,
         dps_passes: 1,
+        // The engine's raster cores have no reorder window.
+        raster_window: 1,
         capacity: None,
         compare_exact: false,
         compare_float: false,

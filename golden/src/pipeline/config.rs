@@ -22,6 +22,9 @@ pub struct PipelineConfig {
     pub chunk: usize,
     /// DPS passes per frame (1).
     pub dps_passes: usize,
+    /// Entries in the raster core's reorder window ([`crate::raster::window`]); 1 (the paper's
+    /// engine) reorders nothing. Needs a strategy that writes keys back.
+    pub raster_window: usize,
     /// Largest table per tile; `None` is unbounded.
     pub capacity: Option<usize>,
     /// Render the exact-order frame and compare against it (PSNR/SSIM vs exact).
@@ -74,6 +77,7 @@ impl Default for PipelineConfig {
             raster: RasterConfig::default(),
             chunk: SortConfig::DEFAULT_CHUNK,
             dps_passes: 1,
+            raster_window: 1,
             capacity: None,
             compare_exact: true,
             compare_float: true,
@@ -88,6 +92,21 @@ impl PipelineConfig {
     /// The table capacity as a number (`usize::MAX` when unbounded).
     pub fn capacity_or_max(&self) -> usize {
         self.capacity.unwrap_or(usize::MAX)
+    }
+
+    /// Checks the reorder window: its size, and that the strategy writes the current keys back
+    /// (the window writes the table back in the order it emits, so a table whose keys stay
+    /// frozen, `periodic` and `motion`, would no longer be sorted by them).
+    pub fn check_window(&self) -> Result<(), PipelineError> {
+        crate::raster::window::check_window(self.raster_window).map_err(PipelineError::Other)?;
+        if self.raster_window > 1 && !self.strategy.writes_back_keys() {
+            return Err(PipelineError::Other(format!(
+                "raster window {}: strategy {} keeps its keys frozen, and the window would write its \
+                 table back out of their order (use a window of 1)",
+                self.raster_window, self.strategy
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -204,6 +223,8 @@ pub struct ConfigRecord {
     pub chunk: usize,
     /// DPS passes per frame.
     pub dps_passes: usize,
+    /// Entries in the raster core's reorder window (1: none).
+    pub raster_window: usize,
     /// Table capacity (`null`: unbounded).
     pub capacity: Option<usize>,
     /// Whether the formats were fitted to the run.
@@ -266,6 +287,7 @@ impl ConfigRecord {
             subtile: cfg.raster.subtile,
             chunk: cfg.chunk,
             dps_passes: cfg.dps_passes,
+            raster_window: cfg.raster_window,
             capacity: cfg.capacity,
             fitted,
             key_codec: format!("{:?}", f.key),

@@ -32,6 +32,7 @@ use crate::formats::FeatureEntry;
 use crate::hwpre::Baked;
 use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
+use crate::raster::window::window_order;
 use crate::raster::{raster_tile_into, TileRaster};
 use crate::render;
 use crate::scene::Scene;
@@ -70,6 +71,42 @@ struct TileSlot {
     raster_work: RasterWork,
     order: TileOrder,
     displacements: Vec<u32>,
+    window: WindowScratch,
+}
+
+/// Buffers of [`reorder_in_window`].
+#[derive(Clone, Debug, Default)]
+struct WindowScratch {
+    keys: Vec<u64>,
+    order: Vec<u32>,
+    table: Vec<SortEntry>,
+}
+
+/// Puts `table` in the order the raster core's reorder window of `window` entries emits it
+/// ([`crate::raster::window`]): by each entry's current `{depth_key, id}` where the Gaussian has
+/// a feature entry this frame, by its table key where it has none (culled: the raster reads no
+/// feature for it). The raster blends and writes the table back in this order.
+fn reorder_in_window(
+    table: &mut Vec<SortEntry>,
+    window: usize,
+    inp: &FrameInputs,
+    scratch: &mut WindowScratch,
+) {
+    if window <= 1 {
+        return;
+    }
+    scratch.keys.clear();
+    scratch.keys.extend(table.iter().map(|e| {
+        let key = match inp.feature_of[e.id as usize] {
+            CULLED => e.key,
+            f => inp.features[f as usize].depth_key,
+        };
+        SortEntry::new(key, e.id).order_key()
+    }));
+    window_order(&scratch.keys, window, &mut scratch.order);
+    scratch.table.clear();
+    scratch.table.extend(scratch.order.iter().map(|&i| table[i as usize]));
+    std::mem::swap(table, &mut scratch.table);
 }
 
 /// A pool of per-thread buffers.
@@ -188,6 +225,7 @@ impl<'s> Pipeline<'s> {
         height: u32,
     ) -> Result<Self, PipelineError> {
         formats.check(&cfg.raster, scene.len())?;
+        cfg.check_window()?;
         if width == 0 || height == 0 {
             return Err(PipelineError::Other(format!("image size {width}x{height} is empty")));
         }
@@ -510,9 +548,11 @@ impl<'s> Pipeline<'s> {
         let (fmt, cfg, w, h, gx) =
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let subtiles = cfg.subtiles_per_tile() as u64;
+        let window = self.cfg.raster_window;
         self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each(
             |(ti, (state, slot))| {
                 let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
+                reorder_in_window(&mut state.table, window, inp, &mut slot.window);
                 slot.feats.clear();
                 for e in &state.table {
                     let f = feature_of[e.id as usize];

@@ -10,6 +10,8 @@
 //!   subtile, in table order, with early termination;
 //! - [`tile`]: the tile driver: [`tile::raster_tile`] routes a tile's table to its subtiles and
 //!   renders the tile with the SCU;
+//! - [`window`]: the reorder window between the feature gather and the ITUs (off in the
+//!   paper's engine);
 //! - [`synth`]: hand-made preprocessed Gaussians for tests.
 //!
 //! Pixel centres are at integer coordinates. A subtile whose pixel columns are `x0..x0+S-1`
@@ -20,6 +22,7 @@ pub mod itu;
 pub mod scu;
 pub mod synth;
 pub mod tile;
+pub mod window;
 
 pub use exp::{ExpError, ExpTable};
 pub use itu::{candidate_tiles, intersects_rect, subtile_bitmap, touches_tile};

@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::{record_writeback, FrameInputs, Pipeline, CULLED};
+use super::{record_writeback, reorder_in_window, FrameInputs, Pipeline, CULLED};
 use crate::camera::Camera;
 use crate::pipeline::hierarchical::{hierarchical_sort, HierWork};
 use crate::pipeline::prefetch::prefetch;
@@ -134,6 +134,7 @@ impl Pipeline<'_> {
         let (fmt, rcfg, w, h, gx) =
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let write_keys = self.cfg.strategy.writes_back_keys();
+        let window = self.cfg.raster_window;
         let (n, s) = (rcfg.subtiles_per_side(), rcfg.subtile);
         let pool = &self.pool;
         self.states
@@ -162,6 +163,7 @@ impl Pipeline<'_> {
                     let sampled = opts.raster_sample > 0 && (ti as u32).is_multiple_of(opts.raster_sample);
                     let mut routed = vec![0u32; (n * n) as usize];
                     let mut raster_entries = 0u32;
+                    reorder_in_window(&mut state.table, window, inp, &mut slot.window);
                     slot.feats.clear();
                     // Table order is depth order: the feature look-ups are random gathers,
                     // prefetched ahead (the id map two steps before the entry it names).

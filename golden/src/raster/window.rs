@@ -1,0 +1,122 @@
+//! The raster core's reorder window: the table's entries, in table order, pass through a
+//! buffer of `W` entries on their way from the feature gather to the ITUs; whenever the buffer
+//! holds `W` entries it emits the smallest by the entry's **current** order key `{depth_key,
+//! id}` (the key its feature entry carries this frame), and at the table's end it drains
+//! smallest first. The emitted order is the order the tile is blended in and the order the
+//! table is written back in.
+//!
+//! Why: a reused table is sorted by the keys the previous frame wrote back. When the camera
+//! moves fast those keys are a frame stale, and no sorting pass over them can recover the
+//! current order (docs/adaptive.md section 4). The window sorts by the current keys, on chip,
+//! at no DRAM traffic: an entry that belongs up to `W - 1` places earlier than where the table
+//! holds it is emitted in its place. A table already in the current order passes unchanged, and
+//! `W = 1` is no window at all (each entry is emitted as it enters).
+//!
+//! In hardware it is a `W`-entry priority queue (one insert and one extract of the minimum per
+//! cycle, e.g. a shift-register queue of `W` compare-and-hold cells), beside a `W`-entry store of
+//! the feature entries it holds.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// The largest window (entries); larger tables pass through it in several refills.
+pub const MAX_WINDOW: usize = 1 << 16;
+
+/// Checks a window size: `1` (no window) to [`MAX_WINDOW`] entries.
+pub fn check_window(window: usize) -> Result<(), String> {
+    match window {
+        0 => Err("raster window 0: a window holds at least 1 entry (1: no reordering)".into()),
+        w if w > MAX_WINDOW => Err(format!("raster window {w} is above {MAX_WINDOW} entries")),
+        _ => Ok(()),
+    }
+}
+
+/// The emission order of a window of `window` entries over a stream whose `i`-th entry has the
+/// order key `keys[i]` (unique per stream, as `{key, id}` is within a tile): `out` receives the
+/// stream's indices in the order the window emits them. `window <= 1` is the identity.
+pub fn window_order(keys: &[u64], window: usize, out: &mut Vec<u32>) {
+    out.clear();
+    if window <= 1 {
+        out.extend(0..keys.len() as u32);
+        return;
+    }
+    let mut held: BinaryHeap<Reverse<(u64, u32)>> = BinaryHeap::with_capacity(window);
+    for (i, &k) in keys.iter().enumerate() {
+        held.push(Reverse((k, i as u32)));
+        if held.len() == window {
+            out.extend(held.pop().map(|Reverse((_, j))| j));
+        }
+    }
+    while let Some(Reverse((_, j))) = held.pop() {
+        out.push(j);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn order(keys: &[u64], w: usize) -> Vec<u32> {
+        let mut out = Vec::new();
+        window_order(keys, w, &mut out);
+        out
+    }
+
+    #[test]
+    fn one_entry_is_no_window() {
+        assert_eq!(order(&[5, 1, 4, 2], 1), vec![0, 1, 2, 3]);
+        assert_eq!(order(&[5, 1, 4, 2], 0), vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn a_window_of_two_swaps_neighbours() {
+        // Enters 5, 1: emits 1; enters 4: emits 4; enters 2: emits 2; drains 5.
+        assert_eq!(order(&[5, 1, 4, 2], 2), vec![1, 2, 3, 0]);
+    }
+
+    #[test]
+    fn an_entry_late_by_less_than_the_window_is_put_in_place() {
+        // 0 is 3 places late: a window of 4 emits it first, a window of 3 cannot.
+        assert_eq!(order(&[10, 20, 30, 0, 40], 4), vec![3, 0, 1, 2, 4]);
+        assert_eq!(order(&[10, 20, 30, 0, 40], 3), vec![0, 3, 1, 2, 4]);
+    }
+
+    #[test]
+    fn checks_the_size() {
+        assert!(check_window(0).unwrap_err().contains("at least 1"));
+        assert!(check_window(MAX_WINDOW + 1).unwrap_err().contains("above"));
+        assert!(check_window(1).is_ok() && check_window(MAX_WINDOW).is_ok());
+    }
+
+    proptest! {
+        #[test]
+        fn emits_a_permutation_that_sorts_within_reach(
+            mut keys in proptest::collection::vec(any::<u32>(), 0..300),
+            w in 1usize..64,
+        ) {
+            keys.sort_unstable();
+            keys.dedup();
+            // Displace the sorted stream: one entry in every `w` moves `w - 1` places early, so
+            // none is more than one place late.
+            let sorted: Vec<u64> = keys.iter().map(|&k| k as u64).collect();
+            let mut stream = sorted.clone();
+            for i in (1..stream.len()).step_by(w.max(2)) {
+                let j = i.saturating_sub(w - 1);
+                let e = stream.remove(i);
+                stream.insert(j, e);
+            }
+            let out = order(&stream, w);
+            let mut seen = out.clone();
+            seen.sort_unstable();
+            prop_assert_eq!(seen, (0..stream.len() as u32).collect::<Vec<_>>());
+            let emitted: Vec<u64> = out.iter().map(|&i| stream[i as usize]).collect();
+            prop_assert_eq!(&emitted, &sorted);
+            // A window as long as the stream sorts any order.
+            let mut rev = sorted.clone();
+            rev.reverse();
+            let full: Vec<u64> = order(&rev, rev.len().max(1)).iter().map(|&i| rev[i as usize]).collect();
+            prop_assert_eq!(full, sorted);
+        }
+    }
+}
