@@ -365,30 +365,36 @@ fn cosim_refuses_a_plan_the_engine_cannot_make_before_any_work() {
     assert!(stderr(&o).contains("unknown planner \"firmware\": expected host or engine"), "{}", stderr(&o));
 }
 
-/// `neo signals` reads the `tiles.jsonl` of `neo frames --tile-stats` and prints one row per
-/// run, lag and target; a damaged file is an error naming its line.
-#[test]
-fn signals_rank_the_tile_stats_of_a_frames_run() {
-    let dir = tempfile::tempdir().unwrap();
-    let run = dir.path().join("neo16");
-    ok(&[
+/// `neo frames` of `frames` frames of a 3000-Gaussian scene on a 16x orbit at 128x128 into `out`,
+/// without the float reference and SSIM, with `extra` arguments.
+fn small_frames(frames: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
         "frames",
         "--scene",
         "synthetic:outdoor?gaussians=3000&seed=3",
         "--trajectory",
         "orbit:speed=16",
         "--frames",
-        "4",
+        frames,
         "--res",
         "128x128",
-        "--sort",
-        "neo",
-        "--tile-stats",
         "--no-float",
         "--no-ssim",
         "--out",
-        run.to_str().unwrap(),
-    ]);
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    neo(&args)
+}
+
+/// `neo signals` reads the `tiles.jsonl` of `neo frames --tile-stats` and prints one row per
+/// run, lag and target; a damaged file is an error naming its line.
+#[test]
+fn signals_rank_the_tile_stats_of_a_frames_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("neo16");
+    let o = small_frames("4", &run, &["--sort", "neo", "--tile-stats"]);
+    assert!(o.status.success(), "{}", stderr(&o));
     let out = ok(&["signals", run.to_str().unwrap()]);
     let rows: Vec<&str> = out.lines().filter(|l| l.starts_with("| neo16 (")).collect();
     assert_eq!(rows.len(), 4, "{out}");
@@ -421,28 +427,8 @@ fn frames_runs_the_raster_window_and_refuses_bad_ones() {
     let dir = tempfile::tempdir().unwrap();
     let run = |window: &str, sort: &str, name: &str| {
         let out = dir.path().join(name);
-        let args = [
-            "frames",
-            "--scene",
-            "synthetic:outdoor?gaussians=3000&seed=3",
-            "--trajectory",
-            "orbit:speed=16",
-            "--frames",
-            "3",
-            "--res",
-            "128x128",
-            "--chunk",
-            "32",
-            "--sort",
-            sort,
-            "--raster-window",
-            window,
-            "--no-float",
-            "--no-ssim",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        (neo(&args), out.join("stats.json"))
+        let o = small_frames("3", &out, &["--chunk", "32", "--sort", sort, "--raster-window", window]);
+        (o, out.join("stats.json"))
     };
     let stats =
         |p: &Path| -> serde_json::Value { serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap() };

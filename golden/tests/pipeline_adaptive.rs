@@ -14,7 +14,7 @@ use neo_golden::camera::Camera;
 use neo_golden::pipeline::adaptive::AdaptiveParams;
 use neo_golden::pipeline::{FrameStats, PipelineConfig, Strategy, WorkOptions};
 use neo_golden::{source, trajectory};
-use pipeline_common::{check_tables, config, run_frames};
+use pipeline_common::{check_tables, config, dram, min_psnr, pooled_psnr, psnr, run_frames};
 
 /// Chunk of these tests: tables of a few hundred entries span many chunks.
 const CHUNK: usize = 32;
@@ -45,25 +45,6 @@ fn cfg(strategy: Strategy) -> PipelineConfig {
 
 fn run(s: &neo_golden::scene::Scene, cams: &[Camera], cuts: &[usize], strategy: Strategy) -> Vec<FrameStats> {
     run_frames(s, cams, cuts, cfg(strategy), check_tables)
-}
-
-fn dram(fs: &[FrameStats]) -> u64 {
-    fs.iter().map(|f| f.work.dram_read + f.work.dram_written).sum()
-}
-
-/// PSNR vs exact of a frame; identical frames count as infinite.
-fn psnr(f: &FrameStats) -> f64 {
-    f.psnr_vs_exact.unwrap_or(f64::INFINITY)
-}
-
-fn min_psnr(fs: &[FrameStats]) -> f64 {
-    fs.iter().map(psnr).fold(f64::INFINITY, f64::min)
-}
-
-/// PSNR of the mean squared error over all frames (from each frame's PSNR).
-fn pooled_psnr(fs: &[FrameStats]) -> f64 {
-    let mse: f64 = fs.iter().map(|f| 10f64.powf(-psnr(f) / 10.0)).sum::<f64>() / fs.len() as f64;
-    -10.0 * mse.log10()
 }
 
 /// Runs neo and adaptive on `cams`; asserts adaptive's floor (its worst frame no worse than

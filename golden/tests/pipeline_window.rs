@@ -19,7 +19,7 @@ use neo_golden::pipeline::{
 };
 use neo_golden::raster::window::MAX_WINDOW;
 use neo_golden::{source, trajectory};
-use pipeline_common::{check_tables, config, run_frames};
+use pipeline_common::{check_tables, config, dram, min_psnr, pooled_psnr, psnr, run_frames};
 
 /// Chunk of these tests (tables of a few thousand entries span many chunks).
 const CHUNK: usize = 32;
@@ -41,25 +41,6 @@ fn cfg(strategy: Strategy, window: usize) -> PipelineConfig {
 
 fn run(s: &neo_golden::scene::Scene, cams: &[Camera], strategy: Strategy, window: usize) -> Vec<FrameStats> {
     run_frames(s, cams, &[], cfg(strategy, window), check_tables)
-}
-
-fn dram(fs: &[FrameStats]) -> u64 {
-    fs.iter().map(|f| f.work.dram_read + f.work.dram_written).sum()
-}
-
-/// PSNR vs exact of a frame; identical frames count as infinite.
-fn psnr(f: &FrameStats) -> f64 {
-    f.psnr_vs_exact.unwrap_or(f64::INFINITY)
-}
-
-fn min_psnr(fs: &[FrameStats]) -> f64 {
-    fs.iter().map(psnr).fold(f64::INFINITY, f64::min)
-}
-
-/// PSNR of the mean squared error over all frames.
-fn pooled_psnr(fs: &[FrameStats]) -> f64 {
-    let mse: f64 = fs.iter().map(|f| 10f64.powf(-psnr(f) / 10.0)).sum::<f64>() / fs.len() as f64;
-    -10.0 * mse.log10()
 }
 
 #[test]

@@ -131,6 +131,27 @@ pub fn check_tables(p: &Pipeline, o: &FrameOutput) {
     }
 }
 
+/// Sorting DRAM traffic (bytes read and written) of a run.
+pub fn dram(fs: &[FrameStats]) -> u64 {
+    fs.iter().map(|f| f.work.dram_read + f.work.dram_written).sum()
+}
+
+/// PSNR vs exact of a frame; identical frames count as infinite.
+pub fn psnr(f: &FrameStats) -> f64 {
+    f.psnr_vs_exact.unwrap_or(f64::INFINITY)
+}
+
+/// The worst frame's PSNR vs exact.
+pub fn min_psnr(fs: &[FrameStats]) -> f64 {
+    fs.iter().map(psnr).fold(f64::INFINITY, f64::min)
+}
+
+/// PSNR of the mean squared error over all frames (from each frame's PSNR).
+pub fn pooled_psnr(fs: &[FrameStats]) -> f64 {
+    let mse: f64 = fs.iter().map(|f| 10f64.powf(-psnr(f) / 10.0)).sum::<f64>() / fs.len() as f64;
+    -10.0 * mse.log10()
+}
+
 /// True when `t` is in THE ORDER.
 pub fn is_sorted(t: &[SortEntry]) -> bool {
     t.windows(2).all(|w| w[0].order_key() < w[1].order_key())
