@@ -104,6 +104,41 @@ fn a_4096_entry_window_holds_45_db_on_biker_at_16x() {
     assert_eq!(dram(&win), dram(&neo), "the window moves no DRAM traffic");
 }
 
+/// `order.window_needed` is the smallest window that blends the frame exactly: every frame that
+/// needed no more than the run's window is identical to the exact order, and an exact strategy
+/// needs none.
+#[test]
+fn a_frame_that_needs_no_more_than_the_window_is_exact() {
+    let s = scene();
+    let cams = fast_orbit(&s, 12);
+    for window in [1, 64, 512, 4096] {
+        let run = run(&s, &cams, Strategy::Neo, window);
+        for f in &run {
+            let needed = f.order.window_needed as usize;
+            assert!(needed >= 1, "window {window}, frame {}: not measured", f.frame);
+            if needed <= window {
+                assert_eq!(
+                    f.identical_to_exact,
+                    Some(true),
+                    "window {window}, frame {} needs {needed}",
+                    f.frame
+                );
+            }
+        }
+        assert_eq!(run[0].order.window_needed, 1, "a shot start is sorted from scratch");
+        if window == 1 {
+            assert!(run.iter().any(|f| f.order.window_needed > 4096), "the premise: neo falls far behind");
+        }
+        if window == 4096 {
+            let within = run.iter().skip(1).filter(|f| f.order.window_needed as usize <= window).count();
+            assert!(within > 0, "the premise: some reuse frame needs no more than the window");
+        }
+    }
+    for f in run(&s, &cams[..3], Strategy::Full, 1) {
+        assert_eq!(f.order.window_needed, 1, "frame {}", f.frame);
+    }
+}
+
 #[test]
 fn an_exact_table_passes_the_window_unchanged() {
     let s = scene();

@@ -32,7 +32,7 @@ use crate::formats::FeatureEntry;
 use crate::hwpre::Baked;
 use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
-use crate::raster::window::window_order;
+use crate::raster::window::{window_for_sorted, window_order};
 use crate::raster::{raster_tile_into, TileRaster};
 use crate::render;
 use crate::scene::Scene;
@@ -72,12 +72,16 @@ struct TileSlot {
     order: TileOrder,
     displacements: Vec<u32>,
     window: WindowScratch,
+    /// The smallest reorder window that would have blended the tile in the exact order (0: not
+    /// measured).
+    window_needed: u32,
 }
 
 /// Buffers of [`reorder_in_window`].
 #[derive(Clone, Debug, Default)]
 struct WindowScratch {
     keys: Vec<u64>,
+    sorted: Vec<(u64, u32)>,
     order: Vec<u32>,
     table: Vec<SortEntry>,
 }
@@ -85,15 +89,18 @@ struct WindowScratch {
 /// Puts `table` in the order the raster core's reorder window of `window` entries emits it
 /// ([`crate::raster::window`]): by each entry's current `{depth_key, id}` where the Gaussian has
 /// a feature entry this frame, by its table key where it has none (culled: the raster reads no
-/// feature for it). The raster blends and writes the table back in this order.
+/// feature for it). The raster blends and writes the table back in this order. With `measure`,
+/// returns the smallest window that would have emitted the table in that order exactly
+/// ([`window_for_sorted`]); else 0.
 fn reorder_in_window(
     table: &mut Vec<SortEntry>,
     window: usize,
     inp: &FrameInputs,
     scratch: &mut WindowScratch,
-) {
-    if window <= 1 {
-        return;
+    measure: bool,
+) -> u32 {
+    if window <= 1 && !measure {
+        return 0;
     }
     scratch.keys.clear();
     scratch.keys.extend(table.iter().map(|e| {
@@ -103,10 +110,14 @@ fn reorder_in_window(
         };
         SortEntry::new(key, e.id).order_key()
     }));
-    window_order(&scratch.keys, window, &mut scratch.order);
-    scratch.table.clear();
-    scratch.table.extend(scratch.order.iter().map(|&i| table[i as usize]));
-    std::mem::swap(table, &mut scratch.table);
+    let needed = if measure { window_for_sorted(&scratch.keys, &mut scratch.sorted) as u32 } else { 0 };
+    if window > 1 {
+        window_order(&scratch.keys, window, &mut scratch.order);
+        scratch.table.clear();
+        scratch.table.extend(scratch.order.iter().map(|&i| table[i as usize]));
+        std::mem::swap(table, &mut scratch.table);
+    }
+    needed
 }
 
 /// A pool of per-thread buffers.
@@ -548,11 +559,12 @@ impl<'s> Pipeline<'s> {
         let (fmt, cfg, w, h, gx) =
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let subtiles = cfg.subtiles_per_tile() as u64;
-        let window = self.cfg.raster_window;
+        let (window, measure) = (self.cfg.raster_window, self.cfg.compare_exact);
         self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each(
             |(ti, (state, slot))| {
                 let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
-                reorder_in_window(&mut state.table, window, inp, &mut slot.window);
+                slot.window_needed =
+                    reorder_in_window(&mut state.table, window, inp, &mut slot.window, measure);
                 slot.feats.clear();
                 for e in &state.table {
                     let f = feature_of[e.id as usize];
@@ -720,7 +732,8 @@ impl<'s> Pipeline<'s> {
         let mut disp: Vec<u32> = self.slots.iter().flat_map(|s| s.displacements.iter().copied()).collect();
         let inversions = self.slots.iter().map(|s| s.order.inversions).sum();
         let with_inv = self.slots.iter().filter(|s| s.order.inversions > 0).count() as u64;
-        let order = OrderStats::from_displacements(&mut disp, inversions, with_inv);
+        let mut order = OrderStats::from_displacements(&mut disp, inversions, with_inv);
+        order.window_needed = self.slots.iter().map(|s| s.window_needed).max().unwrap_or(0);
 
         let counts: Vec<_> = self.slots.iter().map(|s| s.sort.counts).collect();
         let from_scratch = self.slots.iter().filter(|s| s.sort.from_scratch).count() as u64;

@@ -102,11 +102,16 @@ pub struct OrderStats {
     pub inversions: u64,
     /// Tiles with at least one inversion.
     pub tiles_with_inversions: u64,
+    /// The smallest raster reorder window (`--raster-window`, [`crate::raster::window`]) that
+    /// would have blended every tile of the frame in the exact order, from the tables as the
+    /// sort left them: the most places an entry is later than its place in the current order,
+    /// plus one (1: already exact; 0: not measured, without `compare_exact`).
+    pub window_needed: u32,
 }
 
 impl OrderStats {
     /// From all displacements of the frame (reordered), the inversion total and the number of
-    /// tiles with inversions.
+    /// tiles with inversions (`window_needed` 0: set by the pipeline).
     pub fn from_displacements(d: &mut [u32], inversions: u64, tiles_with_inversions: u64) -> Self {
         let sum: u64 = d.iter().map(|&x| x as u64).sum();
         OrderStats {
@@ -118,6 +123,7 @@ impl OrderStats {
             displacement_max: d.iter().copied().max().unwrap_or(0),
             inversions,
             tiles_with_inversions,
+            window_needed: 0,
         }
     }
 }

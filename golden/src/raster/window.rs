@@ -52,6 +52,19 @@ pub fn window_order(keys: &[u64], window: usize, out: &mut Vec<u32>) {
     }
 }
 
+/// The smallest window whose emission order of `keys` (unique) is sorted: one more than the
+/// largest `position - rank` of an entry (how many places later than its sorted place the stream
+/// holds it). At step `t` the window has seen the stream's first `t + W` entries and must emit
+/// the entry of rank `t`, so the output is sorted exactly when no entry is more than `W - 1`
+/// places late. `sorted` is scratch. 1 for a sorted or empty stream.
+pub fn window_for_sorted(keys: &[u64], sorted: &mut Vec<(u64, u32)>) -> usize {
+    sorted.clear();
+    sorted.extend(keys.iter().enumerate().map(|(pos, &k)| (k, pos as u32)));
+    sorted.sort_unstable();
+    let late = sorted.iter().enumerate().map(|(rank, &(_, pos))| (pos as usize).saturating_sub(rank));
+    late.max().unwrap_or(0) + 1
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,7 +102,28 @@ mod tests {
         assert!(check_window(1).is_ok() && check_window(MAX_WINDOW).is_ok());
     }
 
+    #[test]
+    fn the_window_for_sorted_is_the_lateness_plus_one() {
+        let mut scratch = Vec::new();
+        assert_eq!(window_for_sorted(&[], &mut scratch), 1);
+        assert_eq!(window_for_sorted(&[1, 2, 3], &mut scratch), 1);
+        // 0 is 3 places late; 40 is early (no window needed for it).
+        assert_eq!(window_for_sorted(&[10, 20, 30, 0, 40], &mut scratch), 4);
+        assert_eq!(window_for_sorted(&[40, 10, 20, 30], &mut scratch), 2);
+    }
+
     proptest! {
+        #[test]
+        fn the_window_for_sorted_is_the_smallest_that_sorts(
+            keys in proptest::collection::hash_set(any::<u32>(), 0..200),
+        ) {
+            let keys: Vec<u64> = keys.into_iter().map(u64::from).collect();
+            let w = window_for_sorted(&keys, &mut Vec::new());
+            let sorts = |w: usize| order(&keys, w).windows(2).all(|p| keys[p[0] as usize] < keys[p[1] as usize]);
+            prop_assert!(sorts(w), "window {w} does not sort");
+            prop_assert!(w == 1 || !sorts(w - 1), "window {} already sorts", w - 1);
+        }
+
         #[test]
         fn emits_a_permutation_that_sorts_within_reach(
             mut keys in proptest::collection::vec(any::<u32>(), 0..300),

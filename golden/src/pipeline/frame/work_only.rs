@@ -163,7 +163,7 @@ impl Pipeline<'_> {
                     let sampled = opts.raster_sample > 0 && (ti as u32).is_multiple_of(opts.raster_sample);
                     let mut routed = vec![0u32; (n * n) as usize];
                     let mut raster_entries = 0u32;
-                    reorder_in_window(&mut state.table, window, inp, &mut slot.window);
+                    reorder_in_window(&mut state.table, window, inp, &mut slot.window, false);
                     slot.feats.clear();
                     // Table order is depth order: the feature look-ups are random gathers,
                     // prefetched ahead (the id map two steps before the entry it names).
