@@ -17,7 +17,7 @@
 //! - **Sorting.** A stage's commands run back to back ([`crate::sortcmd::batch_cycles`]: the
 //!   first command's latency, then the measured intervals), or at the port's pace; the stage
 //!   ends with the barrier: the last write's response ([`EngineFrameModel::sort_cycles`]).
-//! - **Raster.** [`raster_tile_cycles`] with the engine's load rate: a table entry is one beat
+//! - **Raster.** [`raster_tile_cycles`](crate::arch::raster_tile_cycles) with the engine's load rate: a table entry is one beat
 //!   and its feature word `FEATURE_BYTES / 8` beats on the port; the pixels `tile^2 * 4 / 8`
 //!   write beats, the write-back one beat per entry.
 //! - **Sharing a port.** The jobs of one port (a sort's stages, a raster) are played together

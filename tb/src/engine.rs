@@ -1,16 +1,18 @@
 //! Whole-frame cosimulation of `neo_engine` (issue 11): the golden host session
-//! ([`EngineSession`]) writes each frame's inputs into memory, the harness programs the control
-//! port through an AXI4-Lite driver, an [`AxiMemory`] serves the engine's AXI4 ports (with its
-//! latency, bandwidth, random delays and reordering across IDs) under an [`AxiChecker`] per
-//! port and a [`HazardChecker`] over all ports (no RAW, WAR or WAW between transactions in
-//! flight at once; nothing in flight when `done` rises), and after `done` the frame buffer,
-//! every tile's next table, the results, the status registers and the golden counters are
-//! compared with [`Expected`]. A frame is declared hung after [`quiet_limit`] cycles without a
-//! handshake on any port, or after its [`frame_cycle_bound`] (from its work).
+//! ([`EngineSession`](neo_golden::engine::host::EngineSession)) writes each frame's inputs into
+//! memory, the harness programs the control port through an AXI4-Lite driver, an [`AxiMemory`]
+//! serves the engine's AXI4 ports (with its latency, bandwidth, random delays and reordering across
+//! IDs) under an [`AxiChecker`] per port and a [`HazardChecker`] over all ports (no RAW, WAR or WAW
+//! between transactions in flight at once; nothing in flight when `done` rises), and after `done`
+//! the frame buffer, every tile's next table, the results, the status registers and the golden
+//! counters are compared with [`Expected`](neo_golden::engine::expected::Expected). A frame is
+//! declared hung after [`quiet_limit`] cycles without a handshake on any port, or after its
+//! [`frame_cycle_bound`] (from its work).
 //!
-//! Driver (AXI4-Lite manager, memory ports), golden model (the session's [`Expected`]) and
-//! checker (`Expected::compare`, the AXI checkers) are apart. The engine model is built at run
-//! time for any configuration ([`EngineModel::build`]) and cached by content hash.
+//! Driver (AXI4-Lite manager, memory ports), golden model (the session's
+//! [`Expected`](neo_golden::engine::expected::Expected)) and checker (`Expected::compare`, the AXI
+//! checkers) are apart. The engine model is built at run time for any configuration
+//! ([`EngineModel::build`]) and cached by content hash.
 
 use crate::axi::{
     AddrRecord, AxiBinding, AxiChecker, AxiMemory, AxiTiming, HazardChecker, ManagerSignals,

@@ -7,7 +7,7 @@
 //! (the MERGE_DELETE's boundary inversions, the write-back's length and reach).
 //!
 //! It also counts the performance counters golden knows exactly ([`Counter::is_golden`]), from
-//! the elements each command (of [`tile_plan`](super::plan::tile_plan)) and each raster tile
+//! the elements each command (of [`tile_plan`]) and each raster tile
 //! actually moves:
 //! - a SORT / DPS of `L` entries reads and writes `L` entries; a MERGE reads and writes
 //!   `len_a + len_b`; a MERGE_DELETE reads `len_a + len_b` and writes the entries it keeps;

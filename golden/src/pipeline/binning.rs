@@ -1,6 +1,6 @@
 //! Binning: the current list of every tile, from the feature table and the ITU.
 //!
-//! A Gaussian belongs to tile `t` when [`touches_tile`] (its subtile bitmap in `t` is not
+//! A Gaussian belongs to tile `t` when [`touches_tile`](crate::raster::touches_tile) (its subtile bitmap in `t` is not
 //! empty); only the tiles of [`candidate_tiles`] are tested. Each tile's list holds `{key =
 //! depth key of the feature entry, id = Gaussian index in the scene, valid = 1}` in ascending id
 //! order (the feature table is in Gaussian order). Each entry's subtile bitmap in its tile,

@@ -32,7 +32,7 @@
 //! are never blended: they start done and come out black.
 //!
 //! # How this model evaluates it (speed only; the bits are those of the steps above)
-//! [`raster_tile`](super::raster_tile) walks entry by entry over a subtile's pixels (the hardware's order). Since
+//! [`raster_tile`] walks entry by entry over a subtile's pixels (the hardware's order). Since
 //! `alpha` is non-increasing in `np`, `alpha >= min_alpha` is exactly `q < q_cut` for a
 //! per-entry integer `q_cut`; for a positive definite conic `q` is convex along a row, so those
 //! pixels form one run around the row's minimum, which is found and walked with exact integer
@@ -356,7 +356,7 @@ pub struct PixelShade {
 }
 
 /// Blends every entry of `entries` (no ITU filtering) at pixel `(px, py)` with the SCU
-/// arithmetic. Inside a tile, [`raster_tile`](super::raster_tile) gives the same pixel whenever the ITU routes
+/// arithmetic. Inside a tile, [`raster_tile`] gives the same pixel whenever the ITU routes
 /// every entry that can reach `alpha >= 1/255` at the pixel.
 pub fn shade_pixel(
     entries: &[FeatureEntry],

@@ -12,14 +12,15 @@
 //! holds it is emitted in its place. A table already in the current order passes unchanged, and
 //! `W = 1` is no window at all (each entry is emitted as it enters).
 //!
-//! In hardware it is a `W`-entry priority queue (one insert and one extract of the minimum per
-//! cycle, e.g. a shift-register queue of `W` compare-and-hold cells), beside a `W`-entry store of
-//! the feature entries it holds.
+//! In hardware it is a priority queue of the `W - 1` entries it holds plus the arriving one (one
+//! insert and one extract of the minimum per entry: a shift-register queue of compare-and-hold
+//! cells for small `W`, a pipelined heap for large), beside a store of the feature entries it
+//! holds. Not built in the RTL yet (docs/adaptive.md section 7).
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-/// The largest window (entries); larger tables pass through it in several refills.
+/// The largest window (entries).
 pub const MAX_WINDOW: usize = 1 << 16;
 
 /// Checks a window size: `1` (no window) to [`MAX_WINDOW`] entries.

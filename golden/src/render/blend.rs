@@ -104,7 +104,7 @@ pub fn may_touch(p: &Projected, x0: u32, x1: u32, y0: u32, y1: u32) -> bool {
 /// Renders the image from the binned Gaussians: every pixel blends its tile's list.
 /// `tile_size` must be the one the bins were made with.
 ///
-/// Before blending a tile, Gaussians that [`may_touch`] none of its pixels are dropped from its
+/// Before blending a tile, Gaussians that `may_touch` none of its pixels are dropped from its
 /// list; this only saves time.
 pub fn blend(projected: &[Projected], bins: &TileBins, width: u32, height: u32, tile_size: u32) -> Image {
     let mut image = Image::new(width, height);
