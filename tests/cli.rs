@@ -434,9 +434,17 @@ fn frames_runs_the_raster_window_and_refuses_bad_ones() {
         |p: &Path| -> serde_json::Value { serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap() };
     let (o, plain) = run("1", "neo", "plain");
     assert!(o.status.success(), "{}", stderr(&o));
+    let plain_out = stdout(&o);
+    assert!(!plain_out.lines().next().unwrap_or("").contains("raster window"), "{plain_out}");
     let (o, wide) = run("65536", "neo", "wide");
     assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("sort neo, raster window 65536,"), "{out}");
     let (plain, wide) = (stats(&plain), stats(&wide));
+    let needed = plain["summary"]["window_needed_max"].as_u64().unwrap();
+    assert!(needed > 1, "the premise: neo at 16x is not exact");
+    assert!(plain_out.contains(&format!("exact with a raster window of {needed})")), "{plain_out}");
+    assert!(wide["summary"]["window_needed_max"].as_u64().unwrap() >= 1);
     assert_eq!(wide["config"]["raster_window"], 65536);
     assert_eq!(plain["config"]["raster_window"], 1);
     for f in wide["frames"].as_array().unwrap() {

@@ -153,8 +153,10 @@ pub fn run(a: FramesArgs) -> Result<()> {
         fitted: a.fitted,
     };
     let record = ConfigRecord::new(&run, &cfg, &formats);
+    let window =
+        if a.raster_window > 1 { format!(", raster window {}", a.raster_window) } else { String::new() };
     println!(
-        "neo frames: {} Gaussians, {n} frames at {w}x{h}, sort {strategy}, {} threads -> {}",
+        "neo frames: {} Gaussians, {n} frames at {w}x{h}, sort {strategy}{window}, {} threads -> {}",
         scene.len(),
         rayon::current_num_threads(),
         a.out.display()
@@ -201,12 +203,13 @@ pub fn run(a: FramesArgs) -> Result<()> {
     serde_json::to_writer_pretty(BufWriter::new(file), &stats)?;
     let s = &stats.summary;
     println!(
-        "{} frames: psnr vs exact mean {} min {} dB ({} identical), vs float {} (exact {}), retention {}, \
-         sort DRAM {:.1} MB, dropped (capacity) {}",
+        "{} frames: psnr vs exact mean {} min {} dB ({} identical; exact with a raster window of {}), vs float {} \
+         (exact {}), retention {}, sort DRAM {:.1} MB, dropped (capacity) {}",
         s.frames,
         opt(s.psnr_vs_exact_mean),
         opt(s.psnr_vs_exact_min),
         s.frames_identical_to_exact,
+        if s.window_needed_max == 0 { "-".to_string() } else { s.window_needed_max.to_string() },
         opt(s.psnr_vs_float_mean),
         opt(s.exact_psnr_vs_float_mean),
         s.retention_pooled.map_or("-".into(), |r| format!("{:.3}", r)),

@@ -400,6 +400,9 @@ pub struct Summary {
     pub inversions_max: u64,
     /// Largest displacement seen.
     pub displacement_max: u32,
+    /// Largest `order.window_needed` over the frames: the raster reorder window that would have
+    /// made every frame exact (0: not measured).
+    pub window_needed_max: u32,
     /// For every shot start after frame 0 (a cut): frames until the order was exact again.
     pub recovery: Vec<Recovery>,
     /// Work summed over the frames.
@@ -473,6 +476,7 @@ impl Summary {
             retention_pooled: (cur > 0).then(|| ret as f64 / cur as f64),
             inversions_max: frames.iter().map(|f| f.order.inversions).max().unwrap_or(0),
             displacement_max: frames.iter().map(|f| f.order.displacement_max).max().unwrap_or(0),
+            window_needed_max: frames.iter().map(|f| f.order.window_needed).max().unwrap_or(0),
             recovery,
             sort_dram_bytes: (work.dram_read
                 + work.dram_written
