@@ -137,6 +137,14 @@ fn a_frame_that_needs_no_more_than_the_window_is_exact() {
     for f in run(&s, &cams[..3], Strategy::Full, 1) {
         assert_eq!(f.order.window_needed, 1, "frame {}", f.frame);
     }
+    // Switched off (the cycle model's golden runs): not measured, and the frames are the same.
+    let off = PipelineConfig { window_needed: false, ..cfg(Strategy::Neo, 64) };
+    let unmeasured = run_frames(&s, &cams[..3], &[], off, check_tables);
+    let measured = run(&s, &cams[..3], Strategy::Neo, 64);
+    for (u, m) in unmeasured.iter().zip(&measured) {
+        assert_eq!(u.order.window_needed, 0, "frame {}", u.frame);
+        assert_eq!(u.psnr_vs_exact, m.psnr_vs_exact, "frame {}", u.frame);
+    }
 }
 
 #[test]

@@ -118,6 +118,8 @@ pub fn pipeline_config(strategy: Strategy, p: &PipelineParams, raster: GoldenRas
         compare_exact: raster != GoldenRaster::Off,
         compare_float: raster == GoldenRaster::Full,
         ssim: false,
+        // The report does not show it.
+        window_needed: false,
         ..PipelineConfig::default()
     };
     cfg.raster.tile = p.tile;

@@ -720,6 +720,7 @@ pub(crate) fn pipeline_for<'s>(
         compare_exact: false,
         compare_float: false,
         ssim: false,
+        window_needed: false,
         exact_shortcut: true,
         preprocess: Preprocessing::Hardware(sh),
     };

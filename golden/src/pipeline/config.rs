@@ -33,6 +33,8 @@ pub struct PipelineConfig {
     pub compare_float: bool,
     /// Compute SSIM as well as PSNR.
     pub ssim: bool,
+    /// With `compare_exact`, measure each frame's `order.window_needed` (one more sort per tile).
+    pub window_needed: bool,
     /// Skip the exact-order raster of a tile whose table, restricted to the Gaussians touching
     /// it, is already in the exact order (its pixels are then the same: entries that do not
     /// touch a tile have empty subtile bitmaps and are never blended). Only saves time.
@@ -82,6 +84,7 @@ impl Default for PipelineConfig {
             compare_exact: true,
             compare_float: true,
             ssim: true,
+            window_needed: true,
             exact_shortcut: true,
             preprocess: Preprocessing::Hardware(Preprocessing::DEFAULT_SH),
         }

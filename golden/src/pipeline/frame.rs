@@ -559,7 +559,7 @@ impl<'s> Pipeline<'s> {
         let (fmt, cfg, w, h, gx) =
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let subtiles = cfg.subtiles_per_tile() as u64;
-        let (window, measure) = (self.cfg.raster_window, self.cfg.compare_exact);
+        let (window, measure) = (self.cfg.raster_window, self.cfg.compare_exact && self.cfg.window_needed);
         self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each(
             |(ti, (state, slot))| {
                 let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);

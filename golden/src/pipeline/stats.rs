@@ -105,7 +105,8 @@ pub struct OrderStats {
     /// The smallest raster reorder window (`--raster-window`, [`crate::raster::window`]) that
     /// would have blended every tile of the frame in the exact order, from the tables as the
     /// sort left them: the most places an entry is later than its place in the current order,
-    /// plus one (1: already exact; 0: not measured, without `compare_exact`).
+    /// plus one (1: already exact; 0: not measured, without `compare_exact` or
+    /// `PipelineConfig::window_needed`).
     pub window_needed: u32,
 }
 
