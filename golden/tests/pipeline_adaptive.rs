@@ -14,7 +14,9 @@ use neo_golden::camera::Camera;
 use neo_golden::pipeline::adaptive::AdaptiveParams;
 use neo_golden::pipeline::{FrameStats, PipelineConfig, Strategy, WorkOptions};
 use neo_golden::{source, trajectory};
-use pipeline_common::{check_tables, config, dram, min_psnr, pooled_psnr, psnr, run_frames};
+use pipeline_common::{
+    check_tables, config, dram, fast_motion_scene, min_psnr, pooled_psnr, psnr, run_frames,
+};
 
 /// Chunk of these tests: tables of a few hundred entries span many chunks.
 const CHUNK: usize = 32;
@@ -26,10 +28,6 @@ const FLOOR_DB: f64 = 45.0;
 const TOLERANCE_DB: f64 = 0.5;
 /// Most sorting traffic `adaptive` may spend, relative to single-pass Neo on the same frames.
 const TRAFFIC_RATIO: f64 = 1.5;
-
-fn scene() -> neo_golden::scene::Scene {
-    source::load_scene("synthetic:outdoor?gaussians=20000&seed=3", false).unwrap().0
-}
 
 fn traj(s: &neo_golden::scene::Scene, spec: &str, frames: usize) -> trajectory::Trajectory {
     trajectory::parse_trajectory(spec, source::robust_bounds(s), frames).unwrap()
@@ -51,7 +49,7 @@ fn run(s: &neo_golden::scene::Scene, cams: &[Camera], cuts: &[usize], strategy: 
 /// Neo's worst, less the tolerance; its pooled PSNR no worse than Neo's) and the traffic ratio;
 /// returns both.
 fn check_case(name: &str, cams: &[Camera], cuts: &[usize]) -> (Vec<FrameStats>, Vec<FrameStats>) {
-    let s = scene();
+    let s = fast_motion_scene();
     let neo = run(&s, cams, cuts, Strategy::Neo);
     let ada = run(&s, cams, cuts, adaptive());
     let (an, nn) = (min_psnr(&ada), min_psnr(&neo));
@@ -84,7 +82,7 @@ fn fast_orbit_on_biker_holds_45_db_where_neo_does_not() {
 
 #[test]
 fn fast_orbit_never_does_worse_than_neo() {
-    let s = scene();
+    let s = fast_motion_scene();
     let t = traj(&s, "orbit:res=256x192,speed=16", 12);
     let (neo, ada) = check_case("orbit 16x", &t.frames, &t.cuts);
     assert!(min_psnr(&ada) >= min_psnr(&neo), "{:.2} < {:.2}", min_psnr(&ada), min_psnr(&neo));
@@ -97,7 +95,7 @@ fn fast_orbit_never_does_worse_than_neo() {
 
 #[test]
 fn a_180_degree_turn_in_one_frame() {
-    let s = scene();
+    let s = fast_motion_scene();
     let t = traj(&s, "orbit:res=256x192", 8);
     // Frames 4.. look the opposite way from the same positions.
     let cams: Vec<Camera> = t
@@ -122,7 +120,7 @@ fn a_180_degree_turn_in_one_frame() {
 
 #[test]
 fn a_scene_cut_restarts_from_scratch() {
-    let s = scene();
+    let s = fast_motion_scene();
     let t = traj(&s, "orbit:res=256x192,speed=16,cut=5", 9);
     let (_, ada) = check_case("cut", &t.frames, &t.cuts);
     assert!(ada[5].cut && ada[5].from_scratch);
@@ -131,7 +129,7 @@ fn a_scene_cut_restarts_from_scratch() {
 
 #[test]
 fn stopping_after_16x_falls_back_to_neo_cost() {
-    let s = scene();
+    let s = fast_motion_scene();
     let t = traj(&s, "orbit:res=256x192,speed=16", 6);
     let mut cams = t.frames.clone();
     cams.extend(std::iter::repeat_n(t.frames[5].clone(), 6));
@@ -151,7 +149,7 @@ fn stopping_after_16x_falls_back_to_neo_cost() {
 
 #[test]
 fn shake_and_walk_hold_the_floor() {
-    let s = scene();
+    let s = fast_motion_scene();
     for spec in ["shake:res=256x192,amp=8", "walk:res=256x192,speed=16"] {
         let t = traj(&s, spec, 10);
         check_case(spec, &t.frames, &t.cuts);
@@ -161,7 +159,7 @@ fn shake_and_walk_hold_the_floor() {
 #[test]
 fn slow_orbit_costs_what_neo_costs() {
     // With the default chunk (256): at 1x the reach stays below a chunk.
-    let s = scene();
+    let s = fast_motion_scene();
     let t = traj(&s, "orbit:res=256x192", 10);
     let c = |st: Strategy| PipelineConfig { compare_float: false, ..config(st) };
     let neo = run_frames(&s, &t.frames, &[], c(Strategy::Neo), check_tables);
@@ -173,7 +171,7 @@ fn slow_orbit_costs_what_neo_costs() {
 
 #[test]
 fn motion_threshold_resorts_when_the_view_turned() {
-    let s = scene();
+    let s = fast_motion_scene();
     let t = traj(&s, "orbit:res=256x192,speed=16", 8);
     // 12 degrees/s x 16 / 30 fps = 6.4 degrees per frame: motion:10 re-sorts every second frame.
     let st = run(&s, &t.frames, &[], Strategy::Motion(10_000));
@@ -189,7 +187,7 @@ fn motion_threshold_resorts_when_the_view_turned() {
 
 #[test]
 fn work_only_mode_sorts_the_same_tables() {
-    let s = scene();
+    let s = fast_motion_scene();
     let t = traj(&s, "orbit:res=256x192,speed=16", 5);
     let formats = neo_golden::pipeline::Formats::artifact(CHUNK).unwrap();
     let c = cfg(adaptive());

@@ -19,14 +19,12 @@ use neo_golden::pipeline::{
 };
 use neo_golden::raster::window::MAX_WINDOW;
 use neo_golden::{source, trajectory};
-use pipeline_common::{check_tables, config, dram, min_psnr, pooled_psnr, psnr, run_frames};
+use pipeline_common::{
+    check_tables, config, dram, fast_motion_scene, min_psnr, pooled_psnr, psnr, run_frames,
+};
 
 /// Chunk of these tests (tables of a few thousand entries span many chunks).
 const CHUNK: usize = 32;
-
-fn scene() -> neo_golden::scene::Scene {
-    source::load_scene("synthetic:outdoor?gaussians=20000&seed=3", false).unwrap().0
-}
 
 /// A 16x orbit of `frames` frames at 256x192.
 fn fast_orbit(s: &neo_golden::scene::Scene, frames: usize) -> Vec<Camera> {
@@ -45,7 +43,7 @@ fn run(s: &neo_golden::scene::Scene, cams: &[Camera], strategy: Strategy, window
 
 #[test]
 fn a_window_as_long_as_the_tables_renders_the_exact_order() {
-    let s = scene();
+    let s = fast_motion_scene();
     let cams = fast_orbit(&s, 8);
     let neo = run(&s, &cams, Strategy::Neo, 1);
     assert!(neo.iter().skip(1).all(|f| f.identical_to_exact == Some(false)), "the premise: neo is not exact");
@@ -57,7 +55,7 @@ fn a_window_as_long_as_the_tables_renders_the_exact_order() {
 
 #[test]
 fn a_512_entry_window_lifts_neo_at_16x_at_the_same_traffic() {
-    let s = scene();
+    let s = fast_motion_scene();
     let cams = fast_orbit(&s, 12);
     let neo = run(&s, &cams, Strategy::Neo, 1);
     let win = run(&s, &cams, Strategy::Neo, 512);
@@ -109,7 +107,7 @@ fn a_4096_entry_window_holds_45_db_on_biker_at_16x() {
 /// needs none.
 #[test]
 fn a_frame_that_needs_no_more_than_the_window_is_exact() {
-    let s = scene();
+    let s = fast_motion_scene();
     let cams = fast_orbit(&s, 12);
     for window in [1, 64, 512, 4096] {
         let run = run(&s, &cams, Strategy::Neo, window);
@@ -149,7 +147,7 @@ fn a_frame_that_needs_no_more_than_the_window_is_exact() {
 
 #[test]
 fn an_exact_table_passes_the_window_unchanged() {
-    let s = scene();
+    let s = fast_motion_scene();
     let cams = fast_orbit(&s, 4);
     let formats = Formats::artifact(CHUNK).unwrap();
     let mut a = Pipeline::new(&s, cfg(Strategy::Full, 1), formats.clone(), 256, 192).unwrap();
@@ -164,7 +162,7 @@ fn an_exact_table_passes_the_window_unchanged() {
 
 #[test]
 fn work_only_mode_writes_back_the_same_tables_through_the_window() {
-    let s = scene();
+    let s = fast_motion_scene();
     let cams = fast_orbit(&s, 5);
     let formats = Formats::artifact(CHUNK).unwrap();
     let c = cfg(Strategy::Adaptive(AdaptiveParams::default()), 64);
@@ -186,7 +184,7 @@ fn work_only_mode_writes_back_the_same_tables_through_the_window() {
 
 #[test]
 fn bad_windows_are_refused_by_name() {
-    let s = scene();
+    let s = fast_motion_scene();
     let formats = || Formats::artifact(CHUNK).unwrap();
     let err = |c: PipelineConfig| match Pipeline::new(&s, c, formats(), 64, 64) {
         Err(PipelineError::Other(m)) => m,

@@ -732,8 +732,8 @@ impl<'s> Pipeline<'s> {
         let mut disp: Vec<u32> = self.slots.iter().flat_map(|s| s.displacements.iter().copied()).collect();
         let inversions = self.slots.iter().map(|s| s.order.inversions).sum();
         let with_inv = self.slots.iter().filter(|s| s.order.inversions > 0).count() as u64;
-        let mut order = OrderStats::from_displacements(&mut disp, inversions, with_inv);
-        order.window_needed = self.slots.iter().map(|s| s.window_needed).max().unwrap_or(0);
+        let window_needed = self.slots.iter().map(|s| s.window_needed).max().unwrap_or(0);
+        let order = OrderStats::from_displacements(&mut disp, inversions, with_inv, window_needed);
 
         let counts: Vec<_> = self.slots.iter().map(|s| s.sort.counts).collect();
         let from_scratch = self.slots.iter().filter(|s| s.sort.from_scratch).count() as u64;

@@ -111,9 +111,14 @@ pub struct OrderStats {
 }
 
 impl OrderStats {
-    /// From all displacements of the frame (reordered), the inversion total and the number of
-    /// tiles with inversions (`window_needed` 0: set by the pipeline).
-    pub fn from_displacements(d: &mut [u32], inversions: u64, tiles_with_inversions: u64) -> Self {
+    /// From all displacements of the frame (reordered), the inversion total, the number of
+    /// tiles with inversions and the largest window a tile needed (0: not measured).
+    pub fn from_displacements(
+        d: &mut [u32],
+        inversions: u64,
+        tiles_with_inversions: u64,
+        window_needed: u32,
+    ) -> Self {
         let sum: u64 = d.iter().map(|&x| x as u64).sum();
         OrderStats {
             compared: d.len() as u64,
@@ -124,7 +129,7 @@ impl OrderStats {
             displacement_max: d.iter().copied().max().unwrap_or(0),
             inversions,
             tiles_with_inversions,
-            window_needed: 0,
+            window_needed,
         }
     }
 }

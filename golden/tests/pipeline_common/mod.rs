@@ -26,6 +26,12 @@ impl G {
     }
 }
 
+/// The small synthetic scene of the fast-motion tests (`pipeline_adaptive`, `pipeline_window`):
+/// 20 000 large splats, so tables of a few thousand entries span many chunks of 32.
+pub fn fast_motion_scene() -> Scene {
+    neo_golden::source::load_scene("synthetic:outdoor?gaussians=20000&seed=3", false).unwrap().0
+}
+
 /// A degree-0 scene of the given Gaussians.
 pub fn scene_of(gs: &[G]) -> Scene {
     Scene {
