@@ -222,7 +222,8 @@ fn yosys_script_stat(files: &[VerilogFile], top: &str, script: &str) -> Result<S
 /// Parses the output of Yosys `stat -json` (the `design` totals).
 pub fn parse_stat_json(top: &str, text: &str) -> Result<SynthStats, ToolError> {
     let bad = |why: &str| ToolError::Failed { tool: "yosys".into(), top: top.into(), output: why.into() };
-    let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(&format!("stat JSON: {e}")))?;
+    let text = without_hierarchy_lines(text);
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(&format!("stat JSON: {e}")))?;
     let design = v.get("design").ok_or_else(|| bad("stat JSON has no design"))?;
     let cells = design.get("num_cells").and_then(|c| c.as_u64()).ok_or_else(|| bad("no num_cells"))?;
     let mut by_type = BTreeMap::new();
@@ -234,6 +235,18 @@ pub fn parse_stat_json(top: &str, text: &str) -> Result<SynthStats, ToolError> {
     let flip_flops = by_type.iter().filter(|(k, _)| is_flip_flop(k)).map(|(_, n)| n).sum();
     let latches = by_type.iter().filter(|(k, _)| is_latch(k)).map(|(_, n)| n).sum();
     Ok(SynthStats { top: top.into(), cells, flip_flops, latches, cells_by_type: by_type })
+}
+
+/// `text` without the lines of the text hierarchy tree (`name count`, no quotes) that Yosys 0.23
+/// writes into `stat -json` when the design has more than two levels of modules (the raster core,
+/// its window loader, the window, its cells): they are not JSON.
+fn without_hierarchy_lines(text: &str) -> String {
+    let tree_line = |l: &str| {
+        let mut words = l.split_whitespace();
+        matches!((words.next(), words.next(), words.next()), (Some(name), Some(n), None)
+            if !name.starts_with('"') && n.parse::<u64>().is_ok())
+    };
+    text.lines().filter(|l| !tree_line(l)).collect::<Vec<_>>().join("\n")
 }
 
 /// `verilator --lint-only -Wall [vlt] FILES --top-module TOP`; `Ok` when it prints nothing and
@@ -404,5 +417,14 @@ mod tests {
         assert_eq!((s.cells, s.flip_flops, s.latches), (10, 4, 1));
         assert!(parse_stat_json("t", "{}").is_err());
         assert!(parse_stat_json("t", "garbage").is_err());
+    }
+
+    /// Yosys 0.23 writes the text hierarchy tree into `stat -json` for designs three modules
+    /// deep; the totals are still read.
+    #[test]
+    fn stat_json_with_hierarchy_lines_is_parsed() {
+        let text = "{\n \"modules\": {\"\\\\a\": {\"num_cells\": 2}},\n       neo_raster_window             1\n         neo_raster_window_cell     31\n \"design\": {\"num_cells\": 7, \"num_cells_by_type\": {\"$_DFF_P_\": 3}}\n}";
+        let s = parse_stat_json("t", text).unwrap();
+        assert_eq!((s.cells, s.flip_flops), (7, 3));
     }
 }

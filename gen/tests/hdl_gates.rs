@@ -33,7 +33,8 @@ fn other_configs() -> Vec<(String, EngineConfig)> {
             EngineConfig { topology: Topology::Best16, register_every: 1, ..base.clone() },
         ),
         (
-            "bitonic n=8 k=10 chunk=64 narrow scu_lanes=4, raster 2 ITUs 8 SCUs 4 banks of 16".into(),
+            "bitonic n=8 k=10 chunk=64 narrow scu_lanes=4, raster 2 ITUs 8 SCUs 4 banks of 16, window 32"
+                .into(),
             EngineConfig {
                 bsu_width: 8,
                 register_every: 10,
@@ -52,6 +53,7 @@ fn other_configs() -> Vec<(String, EngineConfig)> {
                 raster_scus: 8,
                 raster_feature_buffer: 16,
                 raster_feature_banks: 4,
+                raster_window: 32,
                 ..base
             },
         ),

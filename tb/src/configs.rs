@@ -93,10 +93,30 @@ pub fn raster_core() -> Vec<UnitConfig> {
                 scu_lanes: 2,
                 raster_feature_buffer: 32,
                 raster_feature_banks: 8,
+                ..d.clone()
+            },
+        },
+        UnitConfig {
+            name: "raster-window-4",
+            why: "the smallest reorder window (4 entries: 3 cells) on 4 ITUs and 2 SCUs, banks of 8 entries",
+            cfg: EngineConfig {
+                raster_scus: 2,
+                scu_lanes: 2,
+                raster_feature_buffer: 8,
+                raster_window: 4,
                 ..d
             },
         },
     ]
+}
+
+/// The raster core with a reorder window that the window benches run on (and whose Verilog
+/// `scripts/mutate-check`'s `win:` mutants mutate): the smallest core (one ITU, one SCU of 2
+/// lanes, 2 banks of 4 entries) with a window of 16, four segments, twice what the banks hold
+/// (`tb/raster_window.json`).
+pub fn raster_window() -> EngineConfig {
+    serde_json::from_str(include_str!("../raster_window.json"))
+        .expect("tb/raster_window.json is an engine configuration")
 }
 
 /// The Sorting Core's and its sequencer's configurations with a wide DPS chunk: the buffer
@@ -163,10 +183,7 @@ pub fn run_in_other_configurations<B>(
 pub fn build(cfg: &EngineConfig, top: &str) -> Result<DynModel, String> {
     cfg.validate().map_err(|e| e.to_string())?;
     let (files, vlt) = crate::dynmodel::generated_files(cfg, top)?;
-    let iface = neo_gen::tops(cfg)
-        .into_iter()
-        .find(|i| i.name == top)
-        .ok_or_else(|| format!("the generator has no top {top}"))?;
+    let iface = crate::dynmodel::generated_interface(cfg, top)?;
     let format = crate::waves::try_requested_format()?;
     let (model, info) = DynModel::build_for_short_runs(&iface, &files, Some(&vlt), format)?;
     if !info.cached {

@@ -50,6 +50,7 @@ pub mod seq;
 pub mod stimulus;
 pub mod stream;
 pub mod waves;
+pub mod window;
 pub mod xinit;
 
 /// The Verilated models, one struct per top (generated; absent without Verilator).

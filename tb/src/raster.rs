@@ -24,6 +24,7 @@ use neo_gen::units::raster_core::{feature_word_bits, space};
 use neo_gen::EngineConfig;
 use neo_golden::formats::feature::{FeatureEntry, FeatureFormat};
 use neo_golden::formats::latency::GridPoint;
+use neo_golden::raster::window::{current_order_key, window_order};
 use neo_golden::raster::{raster_tile, RasterConfig, RGB_BITS};
 use neo_golden::sort::{SortEntry, SortFormat};
 use std::collections::{HashMap, VecDeque};
@@ -51,14 +52,16 @@ pub struct Expected {
     pub table: Vec<SortEntry>,
 }
 
-/// Golden: [`raster_tile`] on the table's feature entries and the frame pipeline's write-back.
-pub fn golden(case: &TileCase, fmt: &FeatureFormat, rc: &RasterConfig) -> Expected {
-    let feats: Vec<FeatureEntry> =
-        case.table.iter().filter_map(|e| case.features.get(&e.id).copied()).collect();
-    let r = raster_tile(&feats, fmt, case.tile[0], case.tile[1], case.size[0], case.size[1], rc);
+/// Golden: [`raster_tile`] on the table's feature entries and the frame pipeline's write-back,
+/// both in the order of `cfg`'s reorder window ([`neo_golden::raster::window`]; table order
+/// without one).
+pub fn golden(case: &TileCase, cfg: &EngineConfig) -> Expected {
+    let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
+    let order = window_order_of(case, cfg.raster_window);
+    let feats: Vec<FeatureEntry> = order.iter().filter_map(|e| case.features.get(&e.id).copied()).collect();
+    let r = raster_tile(&feats, &fmt, case.tile[0], case.tile[1], case.size[0], case.size[1], &rc);
     let mut j = 0;
-    let table = case
-        .table
+    let table = order
         .iter()
         .map(|e| match case.features.get(&e.id) {
             None => SortEntry { valid: false, ..*e },
@@ -69,6 +72,19 @@ pub fn golden(case: &TileCase, fmt: &FeatureFormat, rc: &RasterConfig) -> Expect
         })
         .collect();
     Expected { pixels: r.pixels, table }
+}
+
+/// The case's table in the order a reorder window of `window` entries emits it (by each entry's
+/// current key: its feature's depth key, its table key when culled).
+pub fn window_order_of(case: &TileCase, window: usize) -> Vec<SortEntry> {
+    let keys: Vec<u64> = case
+        .table
+        .iter()
+        .map(|e| current_order_key(e, case.features.get(&e.id).map(|f| f.depth_key)))
+        .collect();
+    let mut order = Vec::with_capacity(keys.len());
+    window_order(&keys, window, &mut order);
+    order.iter().map(|&i| case.table[i as usize]).collect()
 }
 
 /// Counters of one tile.
@@ -683,7 +699,7 @@ pub fn measure_grid(cfg: &EngineConfig, seed: u64, lengths: &[u64], bits: &[u64]
             }
             let gs: Vec<FeatureEntry> = (0..len).map(|i| grid_gaussian(t, &rc, i, b)).collect();
             let case = case_of(t, [1024, 1024], &gs);
-            let want = golden(&case, &fmt, &rc);
+            let want = golden(&case, cfg);
             let r = raster_tile(&gs, &fmt, t[0], t[1], 1024, 1024, &rc);
             let set_bits = r.bitmaps.iter().map(|m| m.count_ones() as u64).sum();
             let routed: Vec<u64> = r.work.iter().map(|w| w.routed as u64).collect();

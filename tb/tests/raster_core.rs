@@ -20,7 +20,7 @@ mod cosim {
     use neo_golden::{source, trajectory};
     use neo_tb::core::MemTiming;
     use neo_tb::dut::Clocked;
-    use neo_tb::raster::{at, case_of, g, golden, random_case, RasterCore, TileCase};
+    use neo_tb::raster::{at, case_of, g, golden, random_case, window_order_of, RasterCore, TileCase};
     use neo_tb::rng::{for_each_seed, seed_share, Rng, SeedSplit};
     use neo_tb::scu::gaussian_with_alpha;
     use neo_tb::waves::maybe_trace;
@@ -39,7 +39,7 @@ mod cosim {
 
     /// Runs and checks `case`; returns its cycles and its write-back reach.
     fn check_case<M: Clocked>(core: &mut RasterCore<M>, cfg: &EngineConfig, case: &TileCase) -> (u64, u64) {
-        let want = golden(case, &cfg.feature_format(), &cfg.raster_config());
+        let want = golden(case, cfg);
         let run = core.run(case, &want);
         (run.cycles, run.wb_reach)
     }
@@ -148,7 +148,7 @@ mod cosim {
             .expect("a Gaussian with alpha exactly 1/255");
         let one = case_of(t, size, &[exact]);
         let k = ((py - (t[1] * rc.tile) as i64) * rc.tile as i64 + px - (t[0] * rc.tile) as i64) as usize;
-        assert_ne!(golden(&one, &fmt, &rc).pixels[k], [0; 3], "alpha 1/255 is blended");
+        assert_ne!(golden(&one, cfg).pixels[k], [0; 3], "alpha 1/255 is blended");
         cases.push(("alpha exactly 1/255", one));
         // Culled Gaussians in the table (no feature entry): valid cleared, key kept.
         let mut culled = case_of(
@@ -228,6 +228,34 @@ mod cosim {
                 longer_tables(core, cfg, seed);
             },
         );
+    }
+
+    /// The same benches on a core with a reorder window ([`neo_tb::configs::raster_window`]: 16
+    /// entries over banks of 4): the tile blended, and its table written back, in the order the
+    /// window emits (golden `raster::window`). The random tables' current keys are random, so the
+    /// window reorders every one longer than a few entries.
+    #[test]
+    fn raster_core_with_a_reorder_window() {
+        let name = "raster_core_with_a_reorder_window";
+        if neo_tb::configs::excluded_from_coverage(name) {
+            return;
+        }
+        let cfg = neo_tb::configs::raster_window();
+        for_each_seed(name, |seed| {
+            let mut core =
+                RasterCore::build(&cfg, seed, MemTiming::IDEAL).unwrap_or_else(|e| panic!("{name}: {e}"));
+            maybe_trace(&mut core.dut, name);
+            let mut rng = Rng::new(seed);
+            let case = random_case(&mut rng, &cfg, [2, 3], [640, 480], 40, 5);
+            assert_ne!(
+                window_order_of(&case, cfg.raster_window),
+                case.table,
+                "the window reorders a random table"
+            );
+            random_tiles(&mut core, &cfg, seed, 600, 80);
+            directed(&mut core, &cfg, 1);
+            longer_tables(&mut core, &cfg, seed);
+        });
     }
 
     #[test]

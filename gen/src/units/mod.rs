@@ -166,6 +166,11 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         axi::sort_bridge::module(cfg),
         axi::raster_bridge::module(cfg),
     ];
+    if cfg.raster_window > 1 {
+        all.push(raster_core::window::cell_module(cfg));
+        all.push(raster_core::window::module(cfg));
+        all.push(raster_core::window_loader::module(cfg));
+    }
     all.push(axi::rr_arb::module(cfg));
     all.push(axi::mux::module(cfg)?);
     all.push(engine::module(cfg));

@@ -75,6 +75,15 @@ pub const MUX_W_FIFO_DEPTH: u32 = 4;
 /// the mux while the next write's AW goes out.
 pub const BRIDGE_W_SLOTS: u32 = 2;
 
+/// The largest raster reorder window the generator builds ([`EngineConfig::raster_window`]):
+/// its cells compare in parallel, one comparator per entry.
+pub const MAX_RASTER_WINDOW: usize = 4096;
+
+/// `true` for a raster window of 1 (no window): the field is left out of the JSON.
+fn is_no_window(w: &usize) -> bool {
+    *w == 1
+}
+
 /// Parameters of the generated RTL. [`EngineConfig::default`] is the paper's configuration.
 ///
 /// JSON: an object with any subset of these fields (missing ones take the default), e.g.
@@ -136,6 +145,14 @@ pub struct EngineConfig {
     /// Raster core: feature-buffer banks (a power of two in 2..=8): the loader fills the next
     /// banks while the walk and the SCUs use the oldest.
     pub raster_feature_banks: usize,
+    /// Raster core: entries of the reorder window between the feature reads and the buffer
+    /// banks (golden [`crate::raster::window`], docs/adaptive.md section 7): 1 (the default, the
+    /// paper's core: no window, nothing of it is generated) or a power of two in
+    /// 4..=[`MAX_RASTER_WINDOW`]. The core blends, and writes the table back, in the window's
+    /// order. Left out of the JSON (and so of [`EngineConfig::hash`]) when 1, so every
+    /// configuration written before the field keeps its hash.
+    #[serde(skip_serializing_if = "is_no_window")]
+    pub raster_window: usize,
     /// Engine: Sorting Cores (`neo_sort_core` instances). 16 in the paper (Table 1).
     pub sort_cores: usize,
     /// Engine: Rasterization Cores (`neo_raster_core` instances). 4 in the paper.
@@ -198,6 +215,7 @@ impl Default for EngineConfig {
             raster_scus: 4,
             raster_feature_buffer: 256,
             raster_feature_banks: 2,
+            raster_window: 1,
             sort_cores: 16,
             raster_cores: 4,
             scheduler: SchedulerPolicy::FirstFree,
@@ -539,6 +557,12 @@ impl EngineConfig {
         if (f as u64) >= 1u64 << self.len_bits {
             return err(format!("raster_feature_buffer {f} does not fit len_bits {}", self.len_bits));
         }
+        let w = self.raster_window;
+        if w != 1 && (!w.is_power_of_two() || !(4..=MAX_RASTER_WINDOW).contains(&w)) {
+            return err(format!(
+                "raster_window {w} is neither 1 (no window) nor a power of two in 4..={MAX_RASTER_WINDOW}"
+            ));
+        }
         Ok(())
     }
 
@@ -588,6 +612,7 @@ mod tests {
             EngineConfig { pre_read_lines: 64, ..base.clone() },
             EngineConfig { pre_outstanding: 32, ..base.clone() },
             EngineConfig { pre_max_tiles: 1024, ..base.clone() },
+            EngineConfig { raster_window: 16, ..base.clone() },
         ];
         for v in &variants {
             assert_ne!(v.hash(), base.hash(), "{v:?}");
@@ -613,6 +638,23 @@ mod tests {
         assert_eq!(c.sort_config(), SortConfig::artifact());
         assert_eq!(c.network().comparator_count(), 80);
         assert_eq!(c.bsu_latency(), 5);
+    }
+
+    /// The window is left out of the JSON at 1, so the hash of every configuration written
+    /// before the field is unchanged; any other accepted value is written and read back.
+    #[test]
+    fn the_raster_window_is_written_only_when_there_is_one() {
+        let base = EngineConfig::default();
+        assert!(!serde_json::to_string(&base).unwrap().contains("raster_window"));
+        for w in [4, 64, MAX_RASTER_WINDOW] {
+            let c = EngineConfig { raster_window: w, ..base.clone() };
+            c.validate().unwrap();
+            let text = serde_json::to_string(&c).unwrap();
+            assert!(text.contains(&format!("\"raster_window\":{w}")), "{text}");
+            assert_eq!(serde_json::from_str::<EngineConfig>(&text).unwrap(), c);
+        }
+        let e = EngineConfig { raster_window: 24, ..base }.validate().unwrap_err().to_string();
+        assert!(e.contains("raster_window 24"), "{e}");
     }
 
     #[test]
@@ -660,6 +702,10 @@ mod tests {
             EngineConfig { pre_read_lines: 64, pre_outstanding: 1, ..EngineConfig::default() },
             EngineConfig { pre_outstanding: 48, ..EngineConfig::default() },
             EngineConfig { pre_max_tiles: 1000, ..EngineConfig::default() },
+            EngineConfig { raster_window: 0, ..EngineConfig::default() },
+            EngineConfig { raster_window: 2, ..EngineConfig::default() },
+            EngineConfig { raster_window: 24, ..EngineConfig::default() },
+            EngineConfig { raster_window: 2 * MAX_RASTER_WINDOW, ..EngineConfig::default() },
         ];
         for c in bad {
             assert!(c.validate().is_err(), "{c:?}");
@@ -712,13 +758,14 @@ mod tests {
             subtile in 0u32..40, lanes in 0usize..80, scus in 0usize..40, itus in 0usize..20,
             fbuf in 0usize..5000, cores in 0usize..70, cap in 0usize..70000, data in 0u32..2000,
             key in 0u8..40, id in 0u8..40, topo in 0usize..3, lines in 0usize..3000,
-            outstanding in 0usize..300, wide_log in 0u32..8,
+            outstanding in 0usize..300, wide_log in 0u32..8, window in 0usize..10_000,
         ) {
             let c = EngineConfig {
                 topology: Topology::ALL[topo], bsu_width: bsu, chunk, burst, tile, subtile,
                 scu_lanes: lanes, raster_scus: scus, raster_itus: itus, raster_feature_buffer: fbuf,
                 sort_cores: cores, table_capacity: cap, axi_data_bits: data, key_bits: key,
                 id_bits: id, pre_read_lines: lines, pre_outstanding: outstanding, dps_wide: 1 << wide_log,
+                raster_window: window,
                 ..EngineConfig::default()
             };
             if c.validate().is_ok() {

@@ -714,8 +714,7 @@ pub(crate) fn pipeline_for<'s>(
         raster: cfg.raster_config(),
         chunk: cfg.chunk,
         dps_passes: 1,
-        // The engine's raster cores have no reorder window.
-        raster_window: 1,
+        raster_window: cfg.raster_window,
         capacity: None,
         compare_exact: false,
         compare_float: false,

@@ -3,7 +3,8 @@
 //! lists, tables and feature words from a [`Memory`], issues the Sorting Core's commands (SORT,
 //! MERGE, DPS, MERGE_DELETE) on data read from it with golden's sort functions, writes every
 //! command's output back, rasterises every tile with golden [`raster_tile`], writes the pixels
-//! (tile-major) and the table write-back, then the tile's result with its disorder counters
+//! (tile-major) and the table write-back (both in the order of the raster core's reorder window
+//! when the configuration has one, [`crate::raster::window`]), then the tile's result with its disorder counters
 //! (the MERGE_DELETE's boundary inversions, the write-back's length and reach).
 //!
 //! It also counts the performance counters golden knows exactly ([`Counter::is_golden`]), from
@@ -40,6 +41,7 @@ use super::pre::{preprocess_frame, PreWork};
 use super::regs::{Counter, Counters, FrameRegs, Reg, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
 use crate::pipeline::adaptive::{writeback_signals, WritebackSignals};
+use crate::raster::window::{current_order_key, window_order};
 use crate::raster::{raster_tile, SubtileWork};
 use crate::sort::{merge_pass_count, SortEntry, SortMode, Sorter};
 
@@ -320,9 +322,19 @@ impl<'c> FrameRun<'c> {
         len: u64,
     ) -> (RasterTrace, WritebackSignals) {
         let (sfmt, ffmt, rc) = (self.cfg.format(), self.cfg.feature_format(), self.cfg.raster_config());
-        let table = mem.read_entries(&sfmt, d.next as u64, len as usize);
+        let mut table = mem.read_entries(&sfmt, d.next as u64, len as usize);
         let feat_word = self.regs.feat_base / FEATURE_BYTES;
-        let feats: Vec<_> = table.iter().map(|e| mem.read_feature(&ffmt, feat_word + e.id as u64)).collect();
+        let mut feats: Vec<_> =
+            table.iter().map(|e| mem.read_feature(&ffmt, feat_word + e.id as u64)).collect();
+        if self.cfg.raster_window > 1 {
+            // The reorder window: blended and written back in the order it emits.
+            let keys: Vec<u64> =
+                table.iter().zip(&feats).map(|(e, f)| current_order_key(e, f.map(|f| f.depth_key))).collect();
+            let mut order = Vec::with_capacity(keys.len());
+            window_order(&keys, self.cfg.raster_window, &mut order);
+            table = order.iter().map(|&i| table[i as usize]).collect();
+            feats = order.iter().map(|&i| feats[i as usize]).collect();
+        }
         let present: Vec<_> = feats.iter().flatten().copied().collect();
         let (w, h) = (self.regs.width, self.regs.height);
         let r = raster_tile(&present, &ffmt, d.tile_x as u32, d.tile_y as u32, w, h, &rc);

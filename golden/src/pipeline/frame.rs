@@ -32,7 +32,7 @@ use crate::formats::FeatureEntry;
 use crate::hwpre::Baked;
 use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
-use crate::raster::window::{window_for_sorted, window_order};
+use crate::raster::window::{current_order_key, window_for_sorted, window_order};
 use crate::raster::{raster_tile_into, TileRaster};
 use crate::render;
 use crate::scene::Scene;
@@ -104,11 +104,11 @@ fn reorder_in_window(
     }
     scratch.keys.clear();
     scratch.keys.extend(table.iter().map(|e| {
-        let key = match inp.feature_of[e.id as usize] {
-            CULLED => e.key,
-            f => inp.features[f as usize].depth_key,
+        let current = match inp.feature_of[e.id as usize] {
+            CULLED => None,
+            f => Some(inp.features[f as usize].depth_key),
         };
-        SortEntry::new(key, e.id).order_key()
+        current_order_key(e, current)
     }));
     let needed = if measure { window_for_sorted(&scratch.keys, &mut scratch.sorted) as u32 } else { 0 };
     if window > 1 {

@@ -15,8 +15,10 @@
 //! In hardware it is a priority queue of the `W - 1` entries it holds plus the arriving one (one
 //! insert and one extract of the minimum per entry: a shift-register queue of compare-and-hold
 //! cells for small `W`, a pipelined heap for large), beside a store of the feature entries it
-//! holds. Not built in the RTL yet (docs/adaptive.md section 7).
+//! holds. In the RTL: `neo_raster_window` (a shift-register queue of compare-and-hold cells),
+//! when the engine configuration's `raster_window` is above 1 (docs/adaptive.md section 7).
 
+use crate::sort::SortEntry;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -30,6 +32,13 @@ pub fn check_window(window: usize) -> Result<(), String> {
         w if w > MAX_WINDOW => Err(format!("raster window {w} is above {MAX_WINDOW} entries")),
         _ => Ok(()),
     }
+}
+
+/// The order key the window sorts a table entry by: `{current_key, id}` where the raster reads
+/// a feature entry for the Gaussian this frame (`current_key`: that entry's depth key), the
+/// entry's own `{key, id}` where it has none (culled).
+pub fn current_order_key(entry: &SortEntry, current_key: Option<u32>) -> u64 {
+    SortEntry::new(current_key.unwrap_or(entry.key), entry.id).order_key()
 }
 
 /// The emission order of a window of `window` entries over a stream whose `i`-th entry has the

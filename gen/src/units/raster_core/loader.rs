@@ -55,11 +55,21 @@ fn ports(m: &mut Module, d: &Dims) {
 }
 
 fn segments(m: &mut Module, d: &Dims) {
+    m.blank();
+    m.comment(format!("Segments of at most {} entries.", d.f));
+    command_segments(m, d);
+    next_segment(m, d, "", "start_q");
+    m.assign("bank_o", "bank_q");
+    m.assign("start_o", "start_q");
+    m.assign("seg_len_o", "seg_len_q");
+}
+
+/// `cmd_seg_len` and `cmd_segs`: the first segment's length and the segments of the command's
+/// table (`cmd_len_i`; one empty segment for an empty table).
+pub(super) fn command_segments(m: &mut Module, d: &Dims) {
     let (lw, sl) = (d.lw, d.sl);
     let flit = |wi: u32| lit(wi, d.f as u64);
     let fl = d.f.trailing_zeros();
-    m.blank();
-    m.comment(format!("Segments of at most {} entries.", d.f));
     m.wire_assign(
         "cmd_seg_len",
         sl,
@@ -74,16 +84,21 @@ fn segments(m: &mut Module, d: &Dims) {
             one = lit(lw, 1)
         ),
     );
-    m.wire_assign("next_start", lw, format!("start_q + {}", flit(lw)));
-    m.wire_assign("rem_next", lw, "len_i - next_start");
+}
+
+/// `{prefix}next_start` and `{prefix}next_seg_len`: the first entry and the length of the
+/// segment after the one starting at register `start` (of the table of `len_i` entries).
+pub(super) fn next_segment(m: &mut Module, d: &Dims, prefix: &str, start: &str) {
+    let (lw, sl) = (d.lw, d.sl);
+    let flit = |wi: u32| lit(wi, d.f as u64);
+    m.wire_assign(format!("{prefix}next_start"), lw, format!("{start} + {}", flit(lw)));
+    m.wire_assign(format!("{prefix}rem_next"), lw, format!("len_i - {prefix}next_start"));
+    let rem = format!("{prefix}rem_next");
     m.wire_assign(
-        "next_seg_len",
+        format!("{prefix}next_seg_len"),
         sl,
-        format!("(rem_next > {}) ? {} : {}", flit(lw), flit(sl), resize("rem_next", lw, sl)),
+        format!("({rem} > {}) ? {} : {}", flit(lw), flit(sl), resize(&rem, lw, sl)),
     );
-    m.assign("bank_o", "bank_q");
-    m.assign("start_o", "start_q");
-    m.assign("seg_len_o", "seg_len_q");
 }
 
 fn reads(m: &mut Module, cfg: &EngineConfig, d: &Dims) {

@@ -36,6 +36,8 @@
 pub mod feeder;
 pub mod loader;
 mod walker;
+pub mod window;
+pub mod window_loader;
 mod writer;
 
 use crate::emit::bundle::{Bundle, Field};
@@ -240,7 +242,11 @@ pub fn module(cfg: &EngineConfig) -> Module {
     command(&mut m, &d);
     buffers(&mut m, cfg, &d);
     writer::arbitration(&mut m, &d);
-    load(&mut m, &d);
+    if cfg.raster_window > 1 {
+        load_through_window(&mut m, &d);
+    } else {
+        load(&mut m, &d);
+    }
     walker::walk(&mut m, &d);
     walker::itus(&mut m, cfg, &d);
     walker::results(&mut m, &d);
@@ -326,7 +332,10 @@ fn buffers(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     );
     m.comment("this core reads (ITU_MEAN / ITU_GEOM: the runs of fields the ITUs take whole).");
     let tw = table_word(d);
-    tw.declare_bits(m);
+    if cfg.raster_window == 1 {
+        // The loader's responses are cut to it (the window's loader writes whole table words).
+        tw.declare_bits(m);
+    }
     tw.declare(m);
     feature_word(cfg, d).declare(m);
     m.mem("tbuf", d.tw, n).mem("fbuf", d.fw, n).mem("hbuf", 1, n);
@@ -383,6 +392,52 @@ fn load(m: &mut Module, d: &Dims) {
             vec![set("tbuf[ld_rcv_idx]", table_word(d).low_of("mem_rsp_data_i"))],
             vec![set("fbuf[ld_rcv_idx]", "mem_rsp_data_i")],
         )],
+    )]);
+}
+
+/// The loader with a reorder window ([`window_loader`], `raster_window` above 1) and the buffer
+/// writes of its emissions.
+fn load_through_window(m: &mut Module, d: &Dims) {
+    m.blank();
+    m.comment("LOAD: table bursts and feature reads through the reorder window; its emissions fill the banks in order.");
+    m.wire("ld_bank", d.bkb).wire("ld_start", d.lw).wire("ld_seg_len", d.sl).wire("ld_done", 1);
+    m.wire("rd_table", 1).wire("rd_addr", d.aw).wire("rd_len", d.bl);
+    m.wire("ld_wr_valid", 1).wire("ld_wr_idx", d.fx).wire("ld_wr_table", d.tw).wire("ld_wr_feat", d.fw);
+    m.wire_assign("ld_bank_free", 1, "~bank_full_q[ld_bank]");
+    let c = |p: &str, e: &str| (p.to_string(), e.to_string());
+    m.instance(
+        window_loader::NAME,
+        "u_loader",
+        vec![
+            c("clk_i", "clk_i"),
+            c("rst_ni", "rst_ni"),
+            c("clear_i", "cmd_fire"),
+            c("cmd_len_i", "cmd_len_i"),
+            c("len_i", "len_q"),
+            c("run_i", "running"),
+            c("bank_free_i", "ld_bank_free"),
+            c("table_i", "table_q"),
+            c("feat_i", "feat_base_q"),
+            c("bank_o", "ld_bank"),
+            c("start_o", "ld_start"),
+            c("seg_len_o", "ld_seg_len"),
+            c("done_o", "ld_done"),
+            c("rd_valid_o", "rd_valid"),
+            c("rd_grant_i", "rd_grant"),
+            c("rd_table_o", "rd_table"),
+            c("rd_addr_o", "rd_addr"),
+            c("rd_len_o", "rd_len"),
+            c("rsp_valid_i", "mem_rsp_valid_i"),
+            c("rsp_data_i", "mem_rsp_data_i"),
+            c("wr_valid_o", "ld_wr_valid"),
+            c("wr_idx_o", "ld_wr_idx"),
+            c("wr_table_o", "ld_wr_table"),
+            c("wr_feat_o", "ld_wr_feat"),
+        ],
+    );
+    m.seq_noreset(vec![if_(
+        "ld_wr_valid",
+        vec![set("tbuf[ld_wr_idx]", "ld_wr_table"), set("fbuf[ld_wr_idx]", "ld_wr_feat")],
     )]);
 }
 
