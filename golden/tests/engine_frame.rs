@@ -187,6 +187,26 @@ fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
     }
 }
 
+/// The `window` case's reorder window is at work: the same trajectory on the same engine
+/// without the window writes back tables further out of the current order (the write-back's
+/// reach, summed over the reuse frames, is larger), and the reference matches the pipeline in
+/// both.
+#[test]
+fn the_window_case_writes_back_better_ordered_tables() {
+    let (scene, _) = load_scene(CaseScene::SYNTHETIC, false).expect("synthetic scene");
+    let how = CaseScene::synthetic();
+    let c = EngineCase::Window;
+    let (traj, cfg) = c.setup(&scene, &how, 3, [128, 128], &small_config()).expect("case setup");
+    assert_eq!(cfg.raster_window, neo_golden::engine::WINDOW_CASE);
+    let reach = |cfg: &EngineConfig| {
+        let mut s = EngineSession::with_options(&scene, traj.clone(), cfg, c.options(HostMode::Lists)).expect("session");
+        run(&mut s, cfg).reach
+    };
+    let (with, without) = (reach(&cfg), reach(&EngineConfig { raster_window: 1, ..cfg.clone() }));
+    println!("window case: write-back reach {with} with the window, {without} without");
+    assert!(with < without, "reach with the window {with}, without {without}");
+}
+
 /// A small CI engine: 2 sorting cores, 2 raster cores, chunk 256.
 fn small_config() -> EngineConfig {
     EngineConfig { sort_cores: 2, raster_cores: 2, ..EngineConfig::default() }

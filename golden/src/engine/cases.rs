@@ -15,6 +15,7 @@
 //! | `adaptive_wide` | the orbit 16x faster on an engine with a wide DPS chunk (`dps_wide` 4), `adaptive:wide=4,resort=0`: per-tile DPS passes in chunks or wide chunks from the descriptors |
 //! | `adaptive_engine_wide` | the `adaptive_wide` orbit, engine and strategy, planned by the frame controller (`ADAPT_CTRL` with its wide bit) |
 //! | `adaptive_engine` | the `adaptive` orbit and strategy, planned by the frame controller from the previous frame's results ([`Planner::Engine`]; `ADAPT_CTRL`) |
+//! | `window` | the `adaptive` orbit (4x faster) sorted by `neo` on an engine whose raster cores have a reorder window of [`WINDOW_CASE`] entries (`raster_window`): tiles blended and written back in the window's order |
 
 use super::host::{pipeline_for, EngineSession, HostMode, Planner, SessionError, SessionOptions};
 use super::EngineConfig;
@@ -54,7 +55,14 @@ pub enum EngineCase {
     AdaptiveWide,
     /// [`EngineCase::AdaptiveWide`] planned by the frame controller itself ([`Planner::Engine`]).
     AdaptiveEngineWide,
+    /// A fast orbit on an engine whose raster cores reorder through a window of
+    /// [`WINDOW_CASE`] entries (`raster_window`), sorted by `neo`.
+    Window,
 }
+
+/// The reorder window of the `window` case's raster cores: a quarter of a 256-entry segment, so
+/// the CI scenes' tables (hundreds of entries) go through it several times over.
+pub const WINDOW_CASE: usize = 64;
 
 /// The wide chunk (a multiple of the chunk) of the `adaptive_wide` case: four chunks, so the
 /// CI scenes' tables span one to a few wide chunks and the odd parity's first chunk (`2 C`)
@@ -103,7 +111,7 @@ impl CaseScene {
 
 impl EngineCase {
     /// Every case.
-    pub const ALL: [EngineCase; 12] = [
+    pub const ALL: [EngineCase; 13] = [
         EngineCase::Orbit,
         EngineCase::Cut,
         EngineCase::Turn,
@@ -116,6 +124,7 @@ impl EngineCase {
         EngineCase::AdaptiveEngine,
         EngineCase::AdaptiveWide,
         EngineCase::AdaptiveEngineWide,
+        EngineCase::Window,
     ];
 
     /// The case's name.
@@ -133,6 +142,7 @@ impl EngineCase {
             EngineCase::AdaptiveEngine => "adaptive_engine",
             EngineCase::AdaptiveWide => "adaptive_wide",
             EngineCase::AdaptiveEngineWide => "adaptive_engine_wide",
+            EngineCase::Window => "window",
         }
     }
 
@@ -207,6 +217,10 @@ impl EngineCase {
             EngineCase::AdaptiveWide | EngineCase::AdaptiveEngineWide => {
                 extra = format!("speed={}", RESORT_SPEED * how.speed);
                 cfg.dps_wide = WIDE_CASE as usize;
+            }
+            EngineCase::Window => {
+                extra = format!("speed={}", 4.0 * how.speed);
+                cfg.raster_window = WINDOW_CASE;
             }
         }
         let sep = if keys.is_empty() { "" } else { "," };

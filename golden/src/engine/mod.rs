@@ -18,7 +18,7 @@ pub mod reference;
 pub mod regs;
 
 pub use adapt::{engine_passes, AdaptRegs, EnginePlan, ADAPT_ENABLE};
-pub use cases::{CaseScene, EngineCase};
+pub use cases::{CaseScene, EngineCase, WINDOW_CASE};
 pub use clients::{client_port_slot, port_slot_client, port_slots, MemoryClient};
 pub use config::{
     ConfigError, EngineConfig, SchedulerPolicy, Topology, BRIDGE_W_SLOTS, COMPLETION_QUEUE_DEPTH,
