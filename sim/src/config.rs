@@ -310,6 +310,10 @@ pub struct RasterTiming {
     /// handshakes, the ITU latency and the drain of the SCUs' FIFOs before the buffer is
     /// reused).
     pub segment_overhead: f64,
+    /// Entries of the raster core's reorder window (the engine's `raster_window`; 0 or 1: none).
+    /// The window holds `window - 1` entries back, so a tile's first segment is complete, and
+    /// its walk starts, that many loads later ([`crate::arch::raster_tile_cycles`]).
+    pub window: u64,
 }
 
 impl Default for RasterTiming {
@@ -327,6 +331,7 @@ impl Default for RasterTiming {
             write_back_overlap: 0.0,
             feature_buffer: 0,
             segment_overhead: 0.0,
+            window: 0,
         }
     }
 }

@@ -389,6 +389,7 @@ impl<'a> EngineFrameModel<'a> {
         let in_flight = bursts.min(self.cfg.axi_outstanding as f64) * self.cfg.burst as f64;
         rt.write_back_overlap = self.beats(1) * in_flight;
         rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.write_beats(self.pixel_beats()).ceil() as u64);
+        rt.window = self.cfg.raster_window as u64;
         let writes = self.raster_writes(t);
         let (cycles, _) = raster_tile_cycles_in_segments(
             &routed,

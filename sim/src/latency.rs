@@ -322,9 +322,16 @@ impl Latency {
     /// configuration: the error names the file, the first field that differs and both values.
     /// The wide DPS chunk (`dps_wide`) may differ: it deepens the sorting core's buffers, not
     /// its datapath, and a chunk longer than the measured points is timed as any unmeasured
-    /// length ([`Latency::chunk_cycles`]).
+    /// length ([`Latency::chunk_cycles`]). So may the raster core's reorder window
+    /// (`raster_window`): it delays a tile's loads by the entries it holds, timed at the
+    /// measured load rate ([`crate::arch::raster_tile_cycles`]; checked against the RTL by the
+    /// engine benches' window cases).
     pub fn check_engine(&self, engine: &EngineConfig) -> InputResult<()> {
-        let engine = EngineConfig { dps_wide: self.config.dps_wide, ..engine.clone() };
+        let engine = EngineConfig {
+            dps_wide: self.config.dps_wide,
+            raster_window: self.config.raster_window,
+            ..engine.clone()
+        };
         match engine.first_difference(&self.config) {
             None => Ok(()),
             Some((field, ours, measured)) => Err(InputError::new(

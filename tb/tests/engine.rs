@@ -178,12 +178,7 @@ fn run_case_full(
         .expect("reports/latency.json");
     let (late_share, late_max) = opts.timing.late();
     let mem = PortTiming { latency, bandwidth, ready, late_share, late_max };
-    // The latencies are measured on raster cores without a reorder window: a case with one is
-    // checked bit-exactly but not timed.
-    let model = (cfg.raster_window == 1).then(|| EngineFrameModel::new(&cfg, &lat, mem).expect("cycle model"));
-    if model.is_none() {
-        println!("case {}: not timed by the cycle model (raster_window {}: reports/latency.json has no reorder window)", c.name(), cfg.raster_window);
-    }
+    let model = Some(EngineFrameModel::new(&cfg, &lat, mem).expect("cycle model"));
     let t0 = std::time::Instant::now();
     rig.record_transfers(true);
     while let Some(plan) = session.next_frame(rig.memory_mut()).expect("host frame") {
@@ -542,6 +537,11 @@ fn biker_orbit_with_a_raster_window_is_bit_exact() {
     let c = EngineCase::Window;
     let frames = run_case_with(&scene, &CaseScene::biker(), c, 3, [128, 128], opts, case_seed(&seeds, 0, c));
     assert!(frames[1..].iter().all(|f| !f.from_scratch), "reuse after frame 0");
+    // Not held to issue 11's bounds: the cycle model times the window by the loads it holds back
+    // only, and is 3 to 5% short of the RTL here (docs/cycle-model.md, "Reorder window").
+    for (k, f) in frames.iter().enumerate() {
+        println!("{name}: frame {k}: cycle model {:+.1}% (frame), {:+.1}% (sort busy), {:+.1}% (raster busy)", f.errors()[0], f.errors()[1], f.errors()[2]);
+    }
 }
 
 /// Issue 11 item 5: on biker at 256x256, 3 orbit frames, behind a memory of fixed timing (one

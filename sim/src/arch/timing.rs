@@ -31,7 +31,9 @@ use neo_golden::engine::{SegmentWork, ROUTING_FIFO_DEPTH};
 /// - the request port: the segment's write-back plus the next segment's loads or, after the last
 ///   segment (which finishes every subtile), the pixel writes.
 ///
-/// `tile_overhead` (the empty tile beyond its pixel writes) adds the latencies. Returns (total,
+/// A reorder window (`rt.window` above 1) delays the first segment by the entries it holds
+/// back ([`window_fill`]). `tile_overhead` (the empty tile beyond its pixel writes) adds the
+/// latencies. Returns (total,
 /// tail after the last input arrives).
 #[allow(clippy::too_many_arguments)]
 pub fn raster_tile_cycles(
@@ -99,9 +101,19 @@ pub fn raster_tile_cycles_in_segments(
         let seg_overhead = if segs > 1 { segs as f64 * rt.segment_overhead } else { 0.0 };
         let shape = TileShape { routed, segments, len: len as f64, f: f as f64, segs, itus, scus };
         let body = segment_pipeline(&shape, rt, &cost, &walk_of);
-        body + seg_overhead + rt.tile_overhead as f64
+        body + seg_overhead + window_fill(len, rt) + rt.tile_overhead as f64
     };
     (total, tail.min(total))
+}
+
+/// The loads a reorder window of `rt.window` entries adds before a tile of `len` entries can
+/// start its walk: the window holds `window - 1` entries back (all of a shorter table), so the
+/// first segment is complete that many loads later, at the measured load rate; the later
+/// segments follow at the same offset, and the drain at the end emits into banks the walk frees
+/// at its own pace.
+fn window_fill(len: u32, rt: &RasterTiming) -> f64 {
+    let held = rt.window.saturating_sub(1).min(u64::from(len));
+    held as f64 * rt.load_cycles_per_entry
 }
 
 /// A tile's work as [`segment_pipeline`] sees it.
@@ -299,6 +311,7 @@ mod tests {
             write_back_overlap: 0.0,
             feature_buffer: 0,
             segment_overhead: 0.0,
+            window: 0,
         }
     }
 

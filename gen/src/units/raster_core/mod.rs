@@ -404,6 +404,7 @@ fn load_through_window(m: &mut Module, d: &Dims) {
     m.wire("rd_table", 1).wire("rd_addr", d.aw).wire("rd_len", d.bl);
     m.wire("ld_wr_valid", 1).wire("ld_wr_idx", d.fx).wire("ld_wr_table", d.tw).wire("ld_wr_feat", d.fw);
     m.wire_assign("ld_bank_free", 1, "~bank_full_q[ld_bank]");
+    m.wire_assign("ld_next_free", 1, format!("~bank_full_q[ld_bank + {}]", lit(d.bkb, 1)));
     let c = |p: &str, e: &str| (p.to_string(), e.to_string());
     m.instance(
         window_loader::NAME,
@@ -416,6 +417,7 @@ fn load_through_window(m: &mut Module, d: &Dims) {
             c("len_i", "len_q"),
             c("run_i", "running"),
             c("bank_free_i", "ld_bank_free"),
+            c("next_free_i", "ld_next_free"),
             c("table_i", "table_q"),
             c("feat_i", "feat_base_q"),
             c("bank_o", "ld_bank"),

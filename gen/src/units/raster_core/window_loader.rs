@@ -63,6 +63,7 @@ fn ports(m: &mut Module, d: &Dims) {
     m.input_c("len_i", d.lw, "the current command's table entries");
     m.input_c("run_i", 1, "the core is running");
     m.input_c("bank_free_i", 1, "bank bank_o is free");
+    m.input_c("next_free_i", 1, "bank bank_o + 1 is free (taken ahead for the next segment)");
     m.input_c("table_i", d.aw, "table address");
     m.input_c("feat_i", d.aw, "feature base address");
     m.output_c("bank_o", d.bkb, "bank being filled");
@@ -82,16 +83,21 @@ fn ports(m: &mut Module, d: &Dims) {
     m.output_c("wr_feat_o", d.fw, "its feature word");
 }
 
-/// The reader: a segment's table bursts into the staging buffer, then its feature reads, each
-/// response pushed into the window.
+/// The reader: a segment's table bursts into one half of the staging buffer, then its feature
+/// reads, each response pushed into the window. The next segment's table bursts go out as soon
+/// as this one's feature reads are all issued, into the other half: responses come in request
+/// order, so while a feature read is outstanding every response is a feature word.
 fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
-    let (sl, lw, bl, aw) = (d.sl, d.lw, d.bl, d.aw);
+    let (sl, lw, bl, aw, fa) = (d.sl, d.lw, d.bl, d.aw, d.fa);
     let tw = table_word(d);
     m.blank();
-    m.comment("Reader: a segment's table entries into the staging buffer, then one feature read per entry.");
-    m.reg("rstate_q", 2).reg("rstart_q", lw).reg("rlen_q", sl).reg("rsegs_left_q", lw);
-    m.reg("issued_q", sl).reg("received_q", sl).reg("pushed_q", lw);
-    m.mem("sbuf", d.tw, d.f);
+    m.comment("Reader: a segment's table entries into a half of the staging buffer, then one feature read per");
+    m.comment("entry; the next segment's table bursts follow its last feature read (before the responses).");
+    m.reg("rstate_q", 2).reg("rstart_q", lw).reg("rlen_q", sl).reg("rhalf_q", 1).reg("rsegs_left_q", lw);
+    m.reg("issued_q", sl).reg("table_rcv_q", sl);
+    m.comment("The segment whose feature reads are in flight: its staging half, length and responses.");
+    m.reg("fhalf_q", 1).reg("flen_q", sl).reg("frcv_q", sl).reg("pushed_q", lw);
+    m.mem("sbuf", d.tw, 2 * d.f);
     next_segment(m, d, "r_", "rstart_q");
     let bur = cfg.burst as u64;
     m.wire_assign("left", sl, "rlen_q - issued_q");
@@ -112,8 +118,7 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     );
     m.assign("rd_table_o", "rd_table");
     m.assign("rd_valid_o", "(rstate_q != L_IDLE) & (issued_q != rlen_q) & (rd_table | feat_room)");
-    let fa = d.fa;
-    m.wire_assign("iss_id", d.ib, tw.get(&format!("sbuf[{}]", resize("issued_q", sl, fa)), "id"));
+    m.wire_assign("iss_id", d.ib, tw.get(&format!("sbuf[{{rhalf_q, {}}}]", resize("issued_q", sl, fa)), "id"));
     m.assign(
         "rd_addr_o",
         format!(
@@ -125,12 +130,14 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     );
     m.wire_assign("rd_len", bl, format!("rd_table ? table_len : {}", lit(bl, 1)));
     m.assign("rd_len_o", "rd_len");
-    m.wire_assign("loaded", 1, "(issued_q == rlen_q) & (received_q == rlen_q)");
-    m.comment(
-        "A feature response: the entry's current key (culled: its table key) and id go into the window.",
-    );
-    m.wire_assign("rcv_word", d.tw, format!("sbuf[{}]", resize("received_q", sl, fa)));
-    m.wire_assign("push", 1, "rsp_valid_i & ~rd_table");
+    m.wire_assign("all_issued", 1, "issued_q == rlen_q");
+    m.wire_assign("table_in", 1, "all_issued & (table_rcv_q == rlen_q)");
+    m.comment("A response is a feature word while a feature read is outstanding, else a table entry.");
+    m.wire_assign("feat_out", 1, "frcv_q != flen_q");
+    m.wire_assign("push", 1, "rsp_valid_i & feat_out");
+    m.wire_assign("table_rsp", 1, "rsp_valid_i & ~feat_out");
+    m.comment("A feature response: the entry's current key (culled: its table key) and id go into the window.");
+    m.wire_assign("rcv_word", d.tw, format!("sbuf[{{fhalf_q, {}}}]", resize("frcv_q", sl, fa)));
     let fw = feature_word(cfg, d);
     let dkw = fw.width_of("depth_key");
     m.wire_assign(
@@ -144,40 +151,68 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         ),
     );
     m.seq_noreset(vec![if_(
-        "rsp_valid_i & rd_table",
-        vec![set(format!("sbuf[{}]", resize("received_q", sl, fa)), tw.low_of("rsp_data_i"))],
+        "table_rsp",
+        vec![set(format!("sbuf[{{rhalf_q, {}}}]", resize("table_rcv_q", sl, fa)), tw.low_of("rsp_data_i"))],
     )]);
-    let phase =
-        |st: &str| vec![set("rstate_q", st), set("issued_q", lit(sl, 0)), set("received_q", lit(sl, 0))];
+    reader_control(m, d);
+}
+
+/// The reader's phases: IDLE -> TABLE -> FEAT -> TABLE (next segment) ... -> IDLE.
+fn reader_control(m: &mut Module, d: &Dims) {
+    let (sl, lw, bl) = (d.sl, d.lw, d.bl);
+    let zero = lit(sl, 0);
+    let table = |start: &str, len: &str, half: &str| {
+        vec![
+            set("rstate_q", "L_TABLE"),
+            set("rstart_q", start),
+            set("rlen_q", len),
+            set("rhalf_q", half),
+            set("issued_q", zero.clone()),
+            set("table_rcv_q", zero.clone()),
+        ]
+    };
     let clear = vec![
         set("rstate_q", "L_IDLE"),
         set("rstart_q", lit(lw, 0)),
         set("rlen_q", "cmd_seg_len"),
+        set("rhalf_q", lit(1, 0)),
         set("rsegs_left_q", "cmd_segs"),
-        set("issued_q", lit(sl, 0)),
-        set("received_q", lit(sl, 0)),
+        set("issued_q", zero.clone()),
+        set("table_rcv_q", zero.clone()),
+        set("flen_q", zero.clone()),
+        set("frcv_q", zero.clone()),
         set("pushed_q", lit(lw, 0)),
     ];
+    let mut next = vec![set("rsegs_left_q", format!("rsegs_left_q - {}", lit(lw, 1)))];
+    next.push(crate::emit::if_else(
+        format!("rsegs_left_q == {}", lit(lw, 1)),
+        vec![set("rstate_q", "L_IDLE")],
+        table("r_next_start", "r_next_seg_len", "~rhalf_q"),
+    ));
     let states = Stmt::Case(
         "rstate_q".into(),
         vec![
             (
                 "L_IDLE".into(),
-                vec![if_(format!("run_i & (rsegs_left_q != {})", lit(lw, 0)), phase("L_TABLE"))],
-            ),
-            ("L_TABLE".into(), vec![if_("loaded", phase("L_FEAT"))]),
-            (
-                "L_FEAT".into(),
                 vec![if_(
-                    "loaded",
+                    format!("run_i & (rsegs_left_q != {})", lit(lw, 0)),
+                    vec![set("rstate_q", "L_TABLE"), set("issued_q", zero.clone()), set("table_rcv_q", zero.clone())],
+                )],
+            ),
+            (
+                "L_TABLE".into(),
+                vec![if_(
+                    "table_in",
                     vec![
-                        set("rstate_q", "L_IDLE"),
-                        set("rstart_q", "r_next_start"),
-                        set("rlen_q", "r_next_seg_len"),
-                        set("rsegs_left_q", format!("rsegs_left_q - {}", lit(lw, 1))),
+                        set("rstate_q", "L_FEAT"),
+                        set("issued_q", zero.clone()),
+                        set("fhalf_q", "rhalf_q"),
+                        set("flen_q", "rlen_q"),
+                        set("frcv_q", zero.clone()),
                     ],
                 )],
             ),
+            ("L_FEAT".into(), vec![if_("all_issued", next)]),
         ],
         vec![set("rstate_q", "L_IDLE")],
     );
@@ -185,7 +220,8 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
         Some(m.q_resets(&[])),
         vec![
             if_("rd_grant_i", vec![set("issued_q", format!("issued_q + {}", resize("rd_len", bl, sl)))]),
-            if_("rsp_valid_i", vec![set("received_q", format!("received_q + {}", lit(sl, 1)))]),
+            if_("table_rsp", vec![set("table_rcv_q", format!("table_rcv_q + {}", lit(sl, 1)))]),
+            if_("push", vec![set("frcv_q", format!("frcv_q + {}", lit(sl, 1)))]),
             if_("push", vec![set("pushed_q", format!("pushed_q + {}", lit(lw, 1)))]),
             if_else("clear_i", clear, vec![states]),
         ],
@@ -200,15 +236,26 @@ fn filler(m: &mut Module, d: &Dims) {
         "Filler: the next free bank for the next segment, written with the window's emissions in order.",
     );
     m.reg("fstate_q", 1).reg("fbank_q", bkb).reg("fstart_q", lw).reg("fseg_len_q", sl);
-    m.reg("fsegs_left_q", lw).reg("fpos_q", sl).reg("wr_valid_q", 1);
+    m.reg("fsegs_left_q", lw).reg("fpos_q", sl).reg("fnext_q", 1).reg("wr_valid_q", 1);
     m.reg("wr_idx_q", d.fx).reg("wr_table_q", d.tw).reg("wr_feat_q", d.fw);
     next_segment(m, d, "f_", "fstart_q");
     m.wire_assign("filling", 1, "fstate_q == F_FILL");
     m.wire_assign("fill_end", lw, format!("fstart_q + {}", resize("fseg_len_q", sl, lw)));
-    m.assign("fill_limit", "filling ? fill_end : fstart_q");
-    m.wire_assign("seg_done", 1, "filling & (fpos_q == fseg_len_q)");
+    m.comment("The next segment's bank is taken as soon as it is free, so the reads run on across the");
+    m.comment("segment boundary; the emission after the segment's last goes to its first entry.");
+    m.wire_assign(
+        "next_ok",
+        1,
+        format!("filling & ~fnext_q & (fsegs_left_q > {}) & next_free_i", lit(lw, 1)),
+    );
+    m.assign(
+        "fill_limit",
+        format!("filling ? (fnext_q ? (fill_end + {}) : fill_end) : fstart_q", resize("f_next_seg_len", sl, lw)),
+    );
+    m.wire_assign("at_end", 1, "fpos_q == fseg_len_q");
+    m.wire_assign("seg_done", 1, "filling & at_end");
     m.comment("Every entry pushed: drain the window into the bank.");
-    m.wire_assign("drain", 1, "filling & (pushed_q == len_i) & (fpos_q != fseg_len_q)");
+    m.wire_assign("drain", 1, "filling & (pushed_q == len_i) & (~at_end | fnext_q)");
     m.assign("done_o", "seg_done");
     m.assign("bank_o", "fbank_q");
     m.assign("start_o", "fstart_q");
@@ -224,6 +271,7 @@ fn filler(m: &mut Module, d: &Dims) {
         set("fseg_len_q", "cmd_seg_len"),
         set("fsegs_left_q", "cmd_segs"),
         set("fpos_q", lit(sl, 0)),
+        set("fnext_q", lit(1, 0)),
     ];
     let states = Stmt::Case(
         "fstate_q".into(),
@@ -237,16 +285,21 @@ fn filler(m: &mut Module, d: &Dims) {
             ),
             (
                 "F_FILL".into(),
-                vec![if_(
-                    "seg_done",
-                    vec![
-                        set("fstate_q", "F_IDLE"),
-                        set("fbank_q", format!("fbank_q + {}", lit(bkb, 1))),
-                        set("fstart_q", "f_next_start"),
-                        set("fseg_len_q", "f_next_seg_len"),
-                        set("fsegs_left_q", format!("fsegs_left_q - {}", lit(lw, 1))),
-                    ],
-                )],
+                vec![
+                    if_("next_ok", vec![set("fnext_q", lit(1, 1))]),
+                    if_(
+                        "seg_done",
+                        vec![
+                            set("fstate_q", "fnext_q ? F_FILL : F_IDLE"),
+                            set("fbank_q", format!("fbank_q + {}", lit(bkb, 1))),
+                            set("fstart_q", "f_next_start"),
+                            set("fseg_len_q", "f_next_seg_len"),
+                            set("fsegs_left_q", format!("fsegs_left_q - {}", lit(lw, 1))),
+                            set("fnext_q", lit(1, 0)),
+                            set("fpos_q", format!("{{{}, win_emit}}", lit(sl - 1, 0))),
+                        ],
+                    ),
+                ],
             ),
         ],
         Vec::new(),
@@ -259,6 +312,7 @@ fn filler(m: &mut Module, d: &Dims) {
             set("fseg_len_q", lit(sl, 0)),
             set("fsegs_left_q", lit(lw, 0)),
             set("fpos_q", lit(sl, 0)),
+            set("fnext_q", lit(1, 0)),
             set("wr_valid_q", lit(1, 0)),
         ]),
         vec![
@@ -270,7 +324,10 @@ fn filler(m: &mut Module, d: &Dims) {
     m.seq_noreset(vec![if_(
         "win_emit",
         vec![
-            set("wr_idx_q", format!("{{fbank_q, {}}}", resize("fpos_q", sl, fa))),
+            set(
+                "wr_idx_q",
+                format!("at_end ? {{fbank_q + {}, {}}} : {{fbank_q, {}}}", lit(bkb, 1), lit(fa, 0), resize("fpos_q", sl, fa)),
+            ),
             set(table_word(d).get("wr_table_q", "key"), "win_key"),
             set(table_word(d).get("wr_table_q", "id"), "win_id"),
             set("wr_feat_q", "win_feat"),
