@@ -98,6 +98,53 @@ fn dram_runs_the_model_alone_on_a_request_stream() {
     fails_cleanly(&["dram", "--stream", missing.to_str().unwrap()], &missing, "missing.trace");
 }
 
+/// `neo simulate` with an engine configuration whose raster cores have a reorder window: the
+/// header says so, the frames are closer to the exact order, the DRAM traffic is the same and the
+/// window's held-back loads cost time; a workload of another window is refused by name.
+#[test]
+fn simulate_times_a_raster_window_from_the_engine_configuration() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("window.json");
+    std::fs::write(&cfg, r#"{"engine": {"raster_window": 1024}}"#).unwrap();
+    let args = |config: Option<&Path>| {
+        let mut a: Vec<String> = ["simulate", "--scene", "synthetic:outdoor?gaussians=20000&seed=3"]
+            .into_iter()
+            .chain(["--trajectory", "orbit:speed=16", "--frames", "4", "--res", "256x192", "--arch", "neo"])
+            .map(String::from)
+            .collect();
+        if let Some(c) = config {
+            a.extend(["--config".into(), c.display().to_string()]);
+        }
+        a
+    };
+    let run = |config: Option<&Path>| -> serde_json::Value {
+        let mut a = args(config);
+        a.push("--json".into());
+        let o = neo(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()[0].clone()
+    };
+    let (plain, window) = (run(None), run(Some(&cfg)));
+    let text = neo(&args(Some(&cfg)).iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(stderr(&text).contains("raster window 1024 entries"), "{}", stderr(&text));
+    let q = |v: &serde_json::Value| v["quality"]["psnr_vs_exact_min"].as_f64().unwrap();
+    assert!(
+        q(&window) > q(&plain) + 5.0,
+        "worst frame {} dB with the window, {} without",
+        q(&window),
+        q(&plain)
+    );
+    let arch = |v: &serde_json::Value, k: &str| v["archs"][0][k].clone();
+    assert_eq!(arch(&window, "traffic"), arch(&plain, "traffic"), "the window moves no DRAM traffic");
+    let ms = |v: &serde_json::Value| arch(v, "total_ms").as_f64().unwrap();
+    assert!(
+        ms(&window) > ms(&plain),
+        "the held-back loads cost time: {} ms against {} ms",
+        ms(&window),
+        ms(&plain)
+    );
+}
+
 #[test]
 fn synthetic_scene_survives_convert_and_reload() {
     let dir = tempfile::tempdir().unwrap();

@@ -199,7 +199,8 @@ fn the_window_case_writes_back_better_ordered_tables() {
     let (traj, cfg) = c.setup(&scene, &how, 3, [128, 128], &small_config()).expect("case setup");
     assert_eq!(cfg.raster_window, neo_golden::engine::WINDOW_CASE);
     let reach = |cfg: &EngineConfig| {
-        let mut s = EngineSession::with_options(&scene, traj.clone(), cfg, c.options(HostMode::Lists)).expect("session");
+        let mut s = EngineSession::with_options(&scene, traj.clone(), cfg, c.options(HostMode::Lists))
+            .expect("session");
         run(&mut s, cfg).reach
     };
     let (with, without) = (reach(&cfg), reach(&EngineConfig { raster_window: 1, ..cfg.clone() }));

@@ -95,6 +95,9 @@ pub struct PipelineParams {
     pub dps_passes: usize,
     /// Largest table per tile (`null`: unbounded).
     pub capacity: Option<usize>,
+    /// Entries of the raster cores' reorder window (the engine's `raster_window`; 1: none): the
+    /// golden pipeline blends and writes back in its order.
+    pub raster_window: usize,
 }
 
 impl PipelineParams {
@@ -106,6 +109,7 @@ impl PipelineParams {
             chunk: engine.chunk,
             dps_passes: update.dps_passes,
             capacity: update.capacity,
+            raster_window: engine.raster_window,
         }
     }
 }

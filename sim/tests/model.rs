@@ -42,6 +42,7 @@ fn scratch_workload(tiles: u32, n: u32) -> Workload {
             chunk: 256,
             dps_passes: 1,
             capacity: None,
+            raster_window: 1,
             sort_entry_bytes: 6,
             feature_entry_bytes: 31,
             sh_degree: 3,

@@ -143,6 +143,12 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         if cfg.sizes != neo_sim::config::DataSizes::default() {
             eprintln!("byte sizes (not neo's defaults): {:?}", cfg.sizes);
         }
+        if cfg.engine.raster_window > 1 {
+            eprintln!(
+                "raster window {} entries: Neo's tiles are blended and written back in its order; its cost is timed as the loads it holds back (docs/cycle-model.md: 3-5% short of the RTL)",
+                cfg.engine.raster_window
+            );
+        }
     }
     let mut scenes = Scenes::default();
     let results = match &a.trace {

@@ -147,6 +147,13 @@ impl<'a> Model<'a> {
                 wl.info.chunk, cfg.engine.chunk
             ));
         }
+        // 0 (a workload built in memory without the field) is no window, as 1.
+        if wl.info.raster_window.max(1) != cfg.engine.raster_window {
+            return Err(format!(
+                "workload raster_window {} differs from the configuration's engine.raster_window {}",
+                wl.info.raster_window, cfg.engine.raster_window
+            ));
+        }
         let line = cfg.dram.line_bytes as u64;
         let fb = cfg.sizes.feature_entry_bytes.unwrap_or(wl.info.feature_entry_bytes) as u64;
         let layout = Layout::new(cfg, wl, eb, fb, sort_cores);
@@ -163,6 +170,7 @@ impl<'a> Model<'a> {
         // (`raster.core.feature_buffer`); the RTL structure of the rest of the raster timing is
         // kept.
         let mut raster = lat.raster.clone();
+        raster.window = cfg.engine.raster_window as u64;
         if raster.feature_buffer > 0 {
             raster.feature_buffer = raster.feature_buffer.max(cfg.neo.raster_buffer_bytes / 2 / fb.max(1));
         }

@@ -368,6 +368,22 @@ mod tests {
         assert_eq!(w, 200.0 + 30.0 * 30.0 + 29.0 * 300.0 + 612.0 + 535.0);
     }
 
+    /// A reorder window holds `window - 1` entries back (all of a shorter table): the tile's
+    /// walk starts that many loads later; no window (0 or 1) changes nothing.
+    #[test]
+    fn a_reorder_window_delays_the_walk_by_the_loads_it_holds() {
+        let shaped =
+            RasterTiming { load_cycles_per_entry: 2.0, pixel_write_cycles: 512, feature_buffer: 100, ..rt() };
+        let cycles = |window: u64, len: u32| {
+            let r = RasterTiming { window, ..shaped.clone() };
+            raster_tile_cycles(&[50; 64], 1.0, len, len, &r, 4, 4, true).0
+        };
+        for len in [0, 20, 200, 3000] {
+            assert_eq!(cycles(0, len), cycles(1, len), "{len}");
+            assert_eq!(cycles(64, len) - cycles(1, len), 2.0 * f64::from(len.min(63)), "{len}");
+        }
+    }
+
     #[test]
     fn the_raster_core_fit_recovers_the_constants_of_a_grid_made_by_the_formula() {
         let truth = RasterTiming {

@@ -91,7 +91,9 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (sl, lw, bl, aw, fa) = (d.sl, d.lw, d.bl, d.aw, d.fa);
     let tw = table_word(d);
     m.blank();
-    m.comment("Reader: a segment's table entries into a half of the staging buffer, then one feature read per");
+    m.comment(
+        "Reader: a segment's table entries into a half of the staging buffer, then one feature read per",
+    );
     m.comment("entry; the next segment's table bursts follow its last feature read (before the responses).");
     m.reg("rstate_q", 2).reg("rstart_q", lw).reg("rlen_q", sl).reg("rhalf_q", 1).reg("rsegs_left_q", lw);
     m.reg("issued_q", sl).reg("table_rcv_q", sl);
@@ -118,7 +120,11 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     );
     m.assign("rd_table_o", "rd_table");
     m.assign("rd_valid_o", "(rstate_q != L_IDLE) & (issued_q != rlen_q) & (rd_table | feat_room)");
-    m.wire_assign("iss_id", d.ib, tw.get(&format!("sbuf[{{rhalf_q, {}}}]", resize("issued_q", sl, fa)), "id"));
+    m.wire_assign(
+        "iss_id",
+        d.ib,
+        tw.get(&format!("sbuf[{{rhalf_q, {}}}]", resize("issued_q", sl, fa)), "id"),
+    );
     m.assign(
         "rd_addr_o",
         format!(
@@ -136,7 +142,9 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.wire_assign("feat_out", 1, "frcv_q != flen_q");
     m.wire_assign("push", 1, "rsp_valid_i & feat_out");
     m.wire_assign("table_rsp", 1, "rsp_valid_i & ~feat_out");
-    m.comment("A feature response: the entry's current key (culled: its table key) and id go into the window.");
+    m.comment(
+        "A feature response: the entry's current key (culled: its table key) and id go into the window.",
+    );
     m.wire_assign("rcv_word", d.tw, format!("sbuf[{{fhalf_q, {}}}]", resize("frcv_q", sl, fa)));
     let fw = feature_word(cfg, d);
     let dkw = fw.width_of("depth_key");
@@ -196,7 +204,11 @@ fn reader_control(m: &mut Module, d: &Dims) {
                 "L_IDLE".into(),
                 vec![if_(
                     format!("run_i & (rsegs_left_q != {})", lit(lw, 0)),
-                    vec![set("rstate_q", "L_TABLE"), set("issued_q", zero.clone()), set("table_rcv_q", zero.clone())],
+                    vec![
+                        set("rstate_q", "L_TABLE"),
+                        set("issued_q", zero.clone()),
+                        set("table_rcv_q", zero.clone()),
+                    ],
                 )],
             ),
             (
@@ -250,7 +262,10 @@ fn filler(m: &mut Module, d: &Dims) {
     );
     m.assign(
         "fill_limit",
-        format!("filling ? (fnext_q ? (fill_end + {}) : fill_end) : fstart_q", resize("f_next_seg_len", sl, lw)),
+        format!(
+            "filling ? (fnext_q ? (fill_end + {}) : fill_end) : fstart_q",
+            resize("f_next_seg_len", sl, lw)
+        ),
     );
     m.wire_assign("at_end", 1, "fpos_q == fseg_len_q");
     m.wire_assign("seg_done", 1, "filling & at_end");
@@ -326,7 +341,12 @@ fn filler(m: &mut Module, d: &Dims) {
         vec![
             set(
                 "wr_idx_q",
-                format!("at_end ? {{fbank_q + {}, {}}} : {{fbank_q, {}}}", lit(bkb, 1), lit(fa, 0), resize("fpos_q", sl, fa)),
+                format!(
+                    "at_end ? {{fbank_q + {}, {}}} : {{fbank_q, {}}}",
+                    lit(bkb, 1),
+                    lit(fa, 0),
+                    resize("fpos_q", sl, fa)
+                ),
             ),
             set(table_word(d).get("wr_table_q", "key"), "win_key"),
             set(table_word(d).get("wr_table_q", "id"), "win_id"),
