@@ -159,6 +159,15 @@ fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
                 "{name}: {s:?}"
             );
         }
+        EngineCase::Window => {
+            assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
+            assert!(
+                s.passes[0] > 0 && s.passes[1..].iter().sum::<usize>() == 0,
+                "{name}: the engine plans: {s:?}"
+            );
+            assert!(s.engine_passes[1] > 0, "{name}: {s:?}");
+            assert!(s.reused_entries > 0 && s.overflows.iter().all(|&o| o == 0), "{name}: {s:?}");
+        }
         EngineCase::AdaptiveEngineWide => {
             assert!(s.from_scratch[1..].iter().all(|f| !f), "{name}: reuse after frame 0: {s:?}");
             assert!(s.passes[0] > 0 && s.wide == 0, "{name}: the host wrote no plan: {s:?}");
@@ -187,10 +196,10 @@ fn check_case(c: EngineCase, s: &Seen, cfg: &EngineConfig) {
     }
 }
 
-/// The `window` case's reorder window is at work: the same trajectory on the same engine
-/// without the window writes back tables further out of the current order (the write-back's
-/// reach, summed over the reuse frames, is larger), and the reference matches the pipeline in
-/// both.
+/// The `window` case's reorder window is at work: the same trajectory, strategy and planner on
+/// the same engine without the window writes back tables further out of the current order (the
+/// write-back's reach, summed over the reuse frames, is larger), and the reference matches the
+/// pipeline in both.
 #[test]
 fn the_window_case_writes_back_better_ordered_tables() {
     let (scene, _) = load_scene(CaseScene::SYNTHETIC, false).expect("synthetic scene");

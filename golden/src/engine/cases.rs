@@ -15,7 +15,7 @@
 //! | `adaptive_wide` | the orbit 16x faster on an engine with a wide DPS chunk (`dps_wide` 4), `adaptive:wide=4,resort=0`: per-tile DPS passes in chunks or wide chunks from the descriptors |
 //! | `adaptive_engine_wide` | the `adaptive_wide` orbit, engine and strategy, planned by the frame controller (`ADAPT_CTRL` with its wide bit) |
 //! | `adaptive_engine` | the `adaptive` orbit and strategy, planned by the frame controller from the previous frame's results ([`Planner::Engine`]; `ADAPT_CTRL`) |
-//! | `window` | the `adaptive` orbit (4x faster) sorted by `neo` on an engine whose raster cores have a reorder window of [`WINDOW_CASE`] entries (`raster_window`): tiles blended and written back in the window's order |
+//! | `window` | the `adaptive_engine` orbit (4x faster) and strategy, planned by the frame controller, on an engine whose raster cores have a reorder window of [`WINDOW_CASE`] entries (`raster_window`): tiles blended and written back in the window's order (issue 14's adaptive strategy with the window) |
 
 use super::host::{pipeline_for, EngineSession, HostMode, Planner, SessionError, SessionOptions};
 use super::EngineConfig;
@@ -55,8 +55,8 @@ pub enum EngineCase {
     AdaptiveWide,
     /// [`EngineCase::AdaptiveWide`] planned by the frame controller itself ([`Planner::Engine`]).
     AdaptiveEngineWide,
-    /// A fast orbit on an engine whose raster cores reorder through a window of
-    /// [`WINDOW_CASE`] entries (`raster_window`), sorted by `neo`.
+    /// [`EngineCase::AdaptiveEngine`] on an engine whose raster cores reorder through a window
+    /// of [`WINDOW_CASE`] entries (`raster_window`).
     Window,
 }
 
@@ -149,7 +149,7 @@ impl EngineCase {
     /// The sorting strategy of the case's pipeline (the host's per-tile DPS passes follow it).
     pub fn strategy(self) -> Strategy {
         match self {
-            EngineCase::Adaptive | EngineCase::AdaptiveEngine => {
+            EngineCase::Adaptive | EngineCase::AdaptiveEngine | EngineCase::Window => {
                 Strategy::Adaptive(AdaptiveParams { resort: false, wide: 1, ..AdaptiveParams::default() })
             }
             // At most 2 passes and the whole budget: a tile whose reach asks for a third pass is
@@ -169,7 +169,9 @@ impl EngineCase {
     /// Who plans the case's DPS passes.
     pub fn planner(self) -> Planner {
         match self {
-            EngineCase::AdaptiveEngine | EngineCase::AdaptiveEngineWide => Planner::Engine,
+            EngineCase::AdaptiveEngine | EngineCase::AdaptiveEngineWide | EngineCase::Window => {
+                Planner::Engine
+            }
             _ => Planner::Host,
         }
     }
