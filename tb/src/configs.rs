@@ -221,8 +221,12 @@ mod tests {
             assert_ne!(u.cfg.scu_lanes, d.scu_lanes, "{}", u.name);
         }
         for u in raster_core() {
-            assert_ne!(u.cfg.raster_itus, d.raster_itus, "{}", u.name);
+            let c = &u.cfg;
+            assert!(c.raster_itus != d.raster_itus || c.raster_window != d.raster_window, "{}", u.name);
         }
+        let w = raster_window();
+        w.validate().unwrap();
+        assert!(w.raster_window > 1 && w.raster_window > 2 * w.raster_feature_buffer, "{w:?}");
         for u in sort_wide() {
             assert!(u.cfg.dps_wide > 1, "{}", u.name);
         }

@@ -31,6 +31,16 @@ pub fn module(cfg: &EngineConfig) -> Module {
 }
 
 fn ports(m: &mut Module, d: &Dims) {
+    segment_ports(m, d);
+    m.output_c("iss_idx_o", d.fx, "buffer index of the next feature read's entry ...");
+    m.input_c("iss_id_i", d.ib, "... and its Gaussian id (table buffer)");
+    m.input_c("rsp_valid_i", 1, "a read response beat");
+    m.output_c("rcv_idx_o", d.fx, "its buffer index {bank, entry}");
+}
+
+/// The ports both loaders have ([`NAME`] and [`super::window_loader::NAME`]): the command, the
+/// segment being loaded and the read requests.
+pub(super) fn segment_ports(m: &mut Module, d: &Dims) {
     m.clock_reset();
     m.input_c("clear_i", 1, "command accepted: load the new table from its first segment");
     m.input_c("cmd_len_i", d.lw, "the command's table entries (with clear_i)");
@@ -48,10 +58,6 @@ fn ports(m: &mut Module, d: &Dims) {
     m.output_c("rd_table_o", 1, "1: table burst; 0: feature read");
     m.output_c("rd_addr_o", d.aw, "read address");
     m.output_c("rd_len_o", d.bl, "read length (elements)");
-    m.output_c("iss_idx_o", d.fx, "buffer index of the next feature read's entry ...");
-    m.input_c("iss_id_i", d.ib, "... and its Gaussian id (table buffer)");
-    m.input_c("rsp_valid_i", 1, "a read response beat");
-    m.output_c("rcv_idx_o", d.fx, "its buffer index {bank, entry}");
 }
 
 fn segments(m: &mut Module, d: &Dims) {

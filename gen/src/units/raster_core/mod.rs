@@ -350,41 +350,21 @@ fn buffers(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
 fn load(m: &mut Module, d: &Dims) {
     m.blank();
     m.comment("LOAD: table bursts into tbuf, then one feature read per entry into fbuf.");
-    m.wire("ld_bank", d.bkb).wire("ld_start", d.lw).wire("ld_seg_len", d.sl).wire("ld_done", 1);
-    m.wire("rd_table", 1).wire("rd_addr", d.aw).wire("rd_len", d.bl);
+    load_wires(m, d);
     m.wire("ld_iss_idx", d.fx).wire("ld_rcv_idx", d.fx);
     m.comment("The id of the next feature read's table entry.");
     m.wire_assign("ld_iss_id", d.ib, table_word(d).get("tbuf[ld_iss_idx]", "id"));
     m.wire_assign("ld_bank_free", 1, "~bank_full_q[ld_bank]");
-    let c = |p: &str, e: &str| (p.to_string(), e.to_string());
-    m.instance(
-        loader::NAME,
-        "u_loader",
-        vec![
-            c("clk_i", "clk_i"),
-            c("rst_ni", "rst_ni"),
-            c("clear_i", "cmd_fire"),
-            c("cmd_len_i", "cmd_len_i"),
-            c("len_i", "len_q"),
-            c("run_i", "running"),
-            c("bank_free_i", "ld_bank_free"),
-            c("table_i", "table_q"),
-            c("feat_i", "feat_base_q"),
-            c("bank_o", "ld_bank"),
-            c("start_o", "ld_start"),
-            c("seg_len_o", "ld_seg_len"),
-            c("done_o", "ld_done"),
-            c("rd_valid_o", "rd_valid"),
-            c("rd_grant_i", "rd_grant"),
-            c("rd_table_o", "rd_table"),
-            c("rd_addr_o", "rd_addr"),
-            c("rd_len_o", "rd_len"),
-            c("iss_idx_o", "ld_iss_idx"),
-            c("iss_id_i", "ld_iss_id"),
-            c("rsp_valid_i", "mem_rsp_valid_i"),
-            c("rcv_idx_o", "ld_rcv_idx"),
-        ],
-    );
+    let mut conns = loader_conns();
+    for (p, e) in [
+        ("iss_idx_o", "ld_iss_idx"),
+        ("iss_id_i", "ld_iss_id"),
+        ("rsp_valid_i", "mem_rsp_valid_i"),
+        ("rcv_idx_o", "ld_rcv_idx"),
+    ] {
+        conns.push((p.to_string(), e.to_string()));
+    }
+    m.instance(loader::NAME, "u_loader", conns);
     m.seq_noreset(vec![if_(
         "mem_rsp_valid_i",
         vec![if_else(
@@ -395,48 +375,61 @@ fn load(m: &mut Module, d: &Dims) {
     )]);
 }
 
+/// The wires of the ports both loaders have.
+fn load_wires(m: &mut Module, d: &Dims) {
+    m.wire("ld_bank", d.bkb).wire("ld_start", d.lw).wire("ld_seg_len", d.sl).wire("ld_done", 1);
+    m.wire("rd_table", 1).wire("rd_addr", d.aw).wire("rd_len", d.bl);
+}
+
+/// The connections of the ports both loaders have ([`loader::segment_ports`]).
+fn loader_conns() -> Vec<(String, String)> {
+    [
+        ("clk_i", "clk_i"),
+        ("rst_ni", "rst_ni"),
+        ("clear_i", "cmd_fire"),
+        ("cmd_len_i", "cmd_len_i"),
+        ("len_i", "len_q"),
+        ("run_i", "running"),
+        ("bank_free_i", "ld_bank_free"),
+        ("table_i", "table_q"),
+        ("feat_i", "feat_base_q"),
+        ("bank_o", "ld_bank"),
+        ("start_o", "ld_start"),
+        ("seg_len_o", "ld_seg_len"),
+        ("done_o", "ld_done"),
+        ("rd_valid_o", "rd_valid"),
+        ("rd_grant_i", "rd_grant"),
+        ("rd_table_o", "rd_table"),
+        ("rd_addr_o", "rd_addr"),
+        ("rd_len_o", "rd_len"),
+    ]
+    .iter()
+    .map(|(p, e)| (p.to_string(), e.to_string()))
+    .collect()
+}
+
 /// The loader with a reorder window ([`window_loader`], `raster_window` above 1) and the buffer
 /// writes of its emissions.
 fn load_through_window(m: &mut Module, d: &Dims) {
     m.blank();
     m.comment("LOAD: table bursts and feature reads through the reorder window; its emissions fill the banks in order.");
-    m.wire("ld_bank", d.bkb).wire("ld_start", d.lw).wire("ld_seg_len", d.sl).wire("ld_done", 1);
-    m.wire("rd_table", 1).wire("rd_addr", d.aw).wire("rd_len", d.bl);
+    load_wires(m, d);
     m.wire("ld_wr_valid", 1).wire("ld_wr_idx", d.fx).wire("ld_wr_table", d.tw).wire("ld_wr_feat", d.fw);
     m.wire_assign("ld_bank_free", 1, "~bank_full_q[ld_bank]");
     m.wire_assign("ld_next_free", 1, format!("~bank_full_q[ld_bank + {}]", lit(d.bkb, 1)));
-    let c = |p: &str, e: &str| (p.to_string(), e.to_string());
-    m.instance(
-        window_loader::NAME,
-        "u_loader",
-        vec![
-            c("clk_i", "clk_i"),
-            c("rst_ni", "rst_ni"),
-            c("clear_i", "cmd_fire"),
-            c("cmd_len_i", "cmd_len_i"),
-            c("len_i", "len_q"),
-            c("run_i", "running"),
-            c("bank_free_i", "ld_bank_free"),
-            c("next_free_i", "ld_next_free"),
-            c("table_i", "table_q"),
-            c("feat_i", "feat_base_q"),
-            c("bank_o", "ld_bank"),
-            c("start_o", "ld_start"),
-            c("seg_len_o", "ld_seg_len"),
-            c("done_o", "ld_done"),
-            c("rd_valid_o", "rd_valid"),
-            c("rd_grant_i", "rd_grant"),
-            c("rd_table_o", "rd_table"),
-            c("rd_addr_o", "rd_addr"),
-            c("rd_len_o", "rd_len"),
-            c("rsp_valid_i", "mem_rsp_valid_i"),
-            c("rsp_data_i", "mem_rsp_data_i"),
-            c("wr_valid_o", "ld_wr_valid"),
-            c("wr_idx_o", "ld_wr_idx"),
-            c("wr_table_o", "ld_wr_table"),
-            c("wr_feat_o", "ld_wr_feat"),
-        ],
-    );
+    let mut conns = loader_conns();
+    for (p, e) in [
+        ("next_free_i", "ld_next_free"),
+        ("rsp_valid_i", "mem_rsp_valid_i"),
+        ("rsp_data_i", "mem_rsp_data_i"),
+        ("wr_valid_o", "ld_wr_valid"),
+        ("wr_idx_o", "ld_wr_idx"),
+        ("wr_table_o", "ld_wr_table"),
+        ("wr_feat_o", "ld_wr_feat"),
+    ] {
+        conns.push((p.to_string(), e.to_string()));
+    }
+    m.instance(window_loader::NAME, "u_loader", conns);
     m.seq_noreset(vec![if_(
         "ld_wr_valid",
         vec![set("tbuf[ld_wr_idx]", "ld_wr_table"), set("fbuf[ld_wr_idx]", "ld_wr_feat")],

@@ -14,7 +14,7 @@
 //! filled (`n < W - 1 + fill limit`, the fill limit being the end of the segment the filler
 //! holds a bank for, or its start while it waits for one).
 
-use super::loader::{command_segments, next_segment};
+use super::loader::{command_segments, next_segment, segment_ports};
 use super::{feature_word, table_word, window, Dims, L_FEAT, L_IDLE, L_TABLE};
 use crate::emit::expr::{lit, resize, zext};
 use crate::emit::{if_, if_else, set, Module, Stmt};
@@ -57,24 +57,8 @@ pub fn module(cfg: &EngineConfig) -> Module {
 }
 
 fn ports(m: &mut Module, d: &Dims) {
-    m.clock_reset();
-    m.input_c("clear_i", 1, "command accepted: load the new table from its first segment");
-    m.input_c("cmd_len_i", d.lw, "the command's table entries (with clear_i)");
-    m.input_c("len_i", d.lw, "the current command's table entries");
-    m.input_c("run_i", 1, "the core is running");
-    m.input_c("bank_free_i", 1, "bank bank_o is free");
+    segment_ports(m, d);
     m.input_c("next_free_i", 1, "bank bank_o + 1 is free (taken ahead for the next segment)");
-    m.input_c("table_i", d.aw, "table address");
-    m.input_c("feat_i", d.aw, "feature base address");
-    m.output_c("bank_o", d.bkb, "bank being filled");
-    m.output_c("start_o", d.lw, "its segment's first entry");
-    m.output_c("seg_len_o", d.sl, "its segment's entries");
-    m.output_c("done_o", 1, "the segment is loaded (one cycle; its last write lands with it)");
-    m.output_c("rd_valid_o", 1, "a read is offered");
-    m.input_c("rd_grant_i", 1, "... and taken");
-    m.output_c("rd_table_o", 1, "1: table burst; 0: feature read");
-    m.output_c("rd_addr_o", d.aw, "read address");
-    m.output_c("rd_len_o", d.bl, "read length (elements)");
     m.input_c("rsp_valid_i", 1, "a read response beat");
     m.input_c("rsp_data_i", d.fw, "its table entry (low bits) or feature word");
     m.output_c("wr_valid_o", 1, "write an emitted entry into the bank");
