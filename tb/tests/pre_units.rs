@@ -285,10 +285,23 @@ neo_tb::with_models! {
             let check = Checker::new(PROJECT_NAME, seed);
             let base = on_axis_project_items(&mut rng, 400);
             let mut seen = node_bits_seen(&graph, &base);
-            let candidates = on_axis_project_items(&mut rng, 100_000);
-            let found = items_with_unseen_bits(&graph, &mut seen, candidates.into_iter(), 300);
-            println!("{name}: {} items drive bits the {} before them did not", found.len(), base.len());
-            assert!(found.len() >= 3, "the search found {} items", found.len());
+            // 100k candidates at a time until 3 are found or 400k are drawn. How many exist depends
+            // on how much the seed's 400 base items already drive: most seeds find 3 to 10 in the
+            // first 100k; seed 0x59949d2964ac8512 finds 2, and no more in 800k (measured
+            // 2026-12-06), so the premise is that the search finds some, not a count.
+            let mut found = Vec::new();
+            let mut drawn = 0;
+            while found.len() < 3 && drawn < 400_000 {
+                let candidates = on_axis_project_items(&mut rng, 100_000);
+                drawn += 100_000;
+                found.extend(items_with_unseen_bits(&graph, &mut seen, candidates.into_iter(), 300 - found.len()));
+            }
+            println!(
+                "{name}: {} items drive bits the {} before them did not ({drawn} candidates)",
+                found.len(),
+                base.len()
+            );
+            assert!(!found.is_empty(), "the search found no item in {drawn} candidates");
             let mut items = Vec::new();
             for (f, b) in found.iter().zip(base.iter().cycle()) {
                 items.push(b.clone());
