@@ -67,23 +67,22 @@ fn ports(m: &mut Module, d: &Dims) {
     m.output_c("wr_feat_o", d.fw, "its feature word");
 }
 
-/// The reader: a segment's table bursts into one half of the staging buffer, then its feature
-/// reads, each response pushed into the window. The next segment's table bursts go out as soon
-/// as this one's feature reads are all issued, into the other half: responses come in request
-/// order, so while a feature read is outstanding every response is a feature word.
+/// The reader: a segment's table bursts into the staging buffer, then its feature reads, each
+/// response pushed into the window. The next segment's table bursts go out as soon as this
+/// one's feature reads are all issued: responses come in request order, so while a feature read
+/// is outstanding every response is a feature word, and the next segment's table entries
+/// overwrite the staging buffer only after the last of them (one buffer is enough).
 fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (sl, lw, bl, aw, fa) = (d.sl, d.lw, d.bl, d.aw, d.fa);
     let tw = table_word(d);
     m.blank();
-    m.comment(
-        "Reader: a segment's table entries into a half of the staging buffer, then one feature read per",
-    );
+    m.comment("Reader: a segment's table entries into the staging buffer, then one feature read per");
     m.comment("entry; the next segment's table bursts follow its last feature read (before the responses).");
-    m.reg("rstate_q", 2).reg("rstart_q", lw).reg("rlen_q", sl).reg("rhalf_q", 1).reg("rsegs_left_q", lw);
+    m.reg("rstate_q", 2).reg("rstart_q", lw).reg("rlen_q", sl).reg("rsegs_left_q", lw);
     m.reg("issued_q", sl).reg("table_rcv_q", sl);
-    m.comment("The segment whose feature reads are in flight: its staging half, length and responses.");
-    m.reg("fhalf_q", 1).reg("flen_q", sl).reg("frcv_q", sl).reg("pushed_q", lw);
-    m.mem("sbuf", d.tw, 2 * d.f);
+    m.comment("The segment whose feature reads are in flight: its length and responses.");
+    m.reg("flen_q", sl).reg("frcv_q", sl).reg("pushed_q", lw);
+    m.mem("sbuf", d.tw, d.f);
     next_segment(m, d, "r_", "rstart_q");
     let bur = cfg.burst as u64;
     m.wire_assign("left", sl, "rlen_q - issued_q");
@@ -104,11 +103,7 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     );
     m.assign("rd_table_o", "rd_table");
     m.assign("rd_valid_o", "(rstate_q != L_IDLE) & (issued_q != rlen_q) & (rd_table | feat_room)");
-    m.wire_assign(
-        "iss_id",
-        d.ib,
-        tw.get(&format!("sbuf[{{rhalf_q, {}}}]", resize("issued_q", sl, fa)), "id"),
-    );
+    m.wire_assign("iss_id", d.ib, tw.get(&format!("sbuf[{}]", resize("issued_q", sl, fa)), "id"));
     m.assign(
         "rd_addr_o",
         format!(
@@ -129,7 +124,7 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.comment(
         "A feature response: the entry's current key (culled: its table key) and id go into the window.",
     );
-    m.wire_assign("rcv_word", d.tw, format!("sbuf[{{fhalf_q, {}}}]", resize("frcv_q", sl, fa)));
+    m.wire_assign("rcv_word", d.tw, format!("sbuf[{}]", resize("frcv_q", sl, fa)));
     let fw = feature_word(cfg, d);
     let dkw = fw.width_of("depth_key");
     m.wire_assign(
@@ -144,7 +139,7 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     );
     m.seq_noreset(vec![if_(
         "table_rsp",
-        vec![set(format!("sbuf[{{rhalf_q, {}}}]", resize("table_rcv_q", sl, fa)), tw.low_of("rsp_data_i"))],
+        vec![set(format!("sbuf[{}]", resize("table_rcv_q", sl, fa)), tw.low_of("rsp_data_i"))],
     )]);
     reader_control(m, d);
 }
@@ -153,12 +148,11 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
 fn reader_control(m: &mut Module, d: &Dims) {
     let (sl, lw, bl) = (d.sl, d.lw, d.bl);
     let zero = lit(sl, 0);
-    let table = |start: &str, len: &str, half: &str| {
+    let table = |start: &str, len: &str| {
         vec![
             set("rstate_q", "L_TABLE"),
             set("rstart_q", start),
             set("rlen_q", len),
-            set("rhalf_q", half),
             set("issued_q", zero.clone()),
             set("table_rcv_q", zero.clone()),
         ]
@@ -167,7 +161,6 @@ fn reader_control(m: &mut Module, d: &Dims) {
         set("rstate_q", "L_IDLE"),
         set("rstart_q", lit(lw, 0)),
         set("rlen_q", "cmd_seg_len"),
-        set("rhalf_q", lit(1, 0)),
         set("rsegs_left_q", "cmd_segs"),
         set("issued_q", zero.clone()),
         set("table_rcv_q", zero.clone()),
@@ -179,7 +172,7 @@ fn reader_control(m: &mut Module, d: &Dims) {
     next.push(crate::emit::if_else(
         format!("rsegs_left_q == {}", lit(lw, 1)),
         vec![set("rstate_q", "L_IDLE")],
-        table("r_next_start", "r_next_seg_len", "~rhalf_q"),
+        table("r_next_start", "r_next_seg_len"),
     ));
     let states = Stmt::Case(
         "rstate_q".into(),
@@ -202,7 +195,6 @@ fn reader_control(m: &mut Module, d: &Dims) {
                     vec![
                         set("rstate_q", "L_FEAT"),
                         set("issued_q", zero.clone()),
-                        set("fhalf_q", "rhalf_q"),
                         set("flen_q", "rlen_q"),
                         set("frcv_q", zero.clone()),
                     ],
