@@ -7,12 +7,14 @@
 //!   feature word's depth key, or the table key of a culled Gaussian, as golden's);
 //! - the **filler** takes the next free bank for the next segment of table positions and writes
 //!   the window's emissions into it in order (one register stage), and reports the segment
-//!   loaded once it holds the segment's entries. At the table's end it drains the window.
+//!   loaded once it holds the segment's entries. It takes the following segment's bank as soon
+//!   as that one is free, so the reads run on across the boundary. At the table's end it drains
+//!   the window.
 //!
 //! Responses are always taken: feature read `n` (of the table) is issued only when the window's
 //! emission it causes (`n - (W - 1)`, once the window is full) has a place in the bank being
-//! filled (`n < W - 1 + fill limit`, the fill limit being the end of the segment the filler
-//! holds a bank for, or its start while it waits for one).
+//! filled (`n < W - 1 + fill limit`, the fill limit being the end of the last segment the filler
+//! holds a bank for, or the next segment's start while it waits for one).
 
 use super::loader::{command_segments, next_segment, segment_ports};
 use super::{feature_word, table_word, window, Dims, L_FEAT, L_IDLE, L_TABLE};
