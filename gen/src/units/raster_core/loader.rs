@@ -70,6 +70,21 @@ fn segments(m: &mut Module, d: &Dims) {
     m.assign("seg_len_o", "seg_len_q");
 }
 
+/// `left` (entries of the segment of `len` entries not yet requested) and `table_len`, the next
+/// table burst's length: `burst` entries, never past the segment's end.
+pub(super) fn burst_len(m: &mut Module, cfg: &EngineConfig, d: &Dims, len: &str) {
+    let (sl, bl) = (d.sl, d.bl);
+    let bur = cfg.burst as u64;
+    m.wire_assign("left", sl, format!("{len} - issued_q"));
+    // With bursts as long as a bank, `left` fits.
+    let tlen = if bur >= d.f as u64 {
+        resize("left", sl, bl)
+    } else {
+        format!("(left > {}) ? {} : {}", lit(sl, bur), lit(bl, bur), resize("left", sl, bl))
+    };
+    m.wire_assign("table_len", bl, tlen);
+}
+
 /// `cmd_seg_len` and `cmd_segs`: the first segment's length and the segments of the command's
 /// table (`cmd_len_i`; one empty segment for an empty table).
 pub(super) fn command_segments(m: &mut Module, d: &Dims) {
@@ -111,15 +126,7 @@ fn reads(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     let (sl, bl, aw, fa) = (d.sl, d.bl, d.aw, d.fa);
     m.blank();
     m.comment("Reads: table bursts (never past the segment's end), then one feature word per entry.");
-    let bur = cfg.burst as u64;
-    m.wire_assign("left", sl, "seg_len_q - issued_q");
-    // With bursts as long as a bank, `left` fits.
-    let tlen = if bur >= d.f as u64 {
-        resize("left", sl, bl)
-    } else {
-        format!("(left > {}) ? {} : {}", lit(sl, bur), lit(bl, bur), resize("left", sl, bl))
-    };
-    m.wire_assign("table_len", bl, tlen);
+    burst_len(m, cfg, d, "seg_len_q");
     m.wire_assign("rd_table", 1, "state_q == L_TABLE");
     m.assign("rd_table_o", "rd_table");
     m.assign("rd_valid_o", "(state_q != L_IDLE) & (issued_q != seg_len_q)");

@@ -16,7 +16,7 @@
 //! filled (`n < W - 1 + fill limit`, the fill limit being the end of the last segment the filler
 //! holds a bank for, or the next segment's start while it waits for one).
 
-use super::loader::{command_segments, next_segment, segment_ports};
+use super::loader::{burst_len, command_segments, next_segment, segment_ports};
 use super::{feature_word, table_word, window, Dims, L_FEAT, L_IDLE, L_TABLE};
 use crate::emit::expr::{lit, resize, zext};
 use crate::emit::{if_, if_else, set, Module, Stmt};
@@ -86,14 +86,7 @@ fn reader(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
     m.reg("flen_q", sl).reg("frcv_q", sl).reg("pushed_q", lw);
     m.mem("sbuf", d.tw, d.f);
     next_segment(m, d, "r_", "rstart_q");
-    let bur = cfg.burst as u64;
-    m.wire_assign("left", sl, "rlen_q - issued_q");
-    let tlen = if bur >= d.f as u64 {
-        resize("left", sl, bl)
-    } else {
-        format!("(left > {}) ? {} : {}", lit(sl, bur), lit(bl, bur), resize("left", sl, bl))
-    };
-    m.wire_assign("table_len", bl, tlen);
+    burst_len(m, cfg, d, "rlen_q");
     m.wire_assign("rd_table", 1, "rstate_q == L_TABLE");
     m.comment("Feature read n (of the table) only when its emission has a place in the bank being filled.");
     let w1 = lit(lw + 1, cfg.raster_window as u64 - 1);
