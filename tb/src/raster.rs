@@ -24,7 +24,7 @@ use neo_gen::units::raster_core::{feature_word_bits, space};
 use neo_gen::EngineConfig;
 use neo_golden::formats::feature::{FeatureEntry, FeatureFormat};
 use neo_golden::formats::latency::GridPoint;
-use neo_golden::raster::window::{current_order_key, window_order};
+use neo_golden::raster::window::table_window_order;
 use neo_golden::raster::{raster_tile, RasterConfig, RGB_BITS};
 use neo_golden::sort::{SortEntry, SortFormat};
 use std::collections::{HashMap, VecDeque};
@@ -77,14 +77,9 @@ pub fn golden(case: &TileCase, cfg: &EngineConfig) -> Expected {
 /// The case's table in the order a reorder window of `window` entries emits it (by each entry's
 /// current key: its feature's depth key, its table key when culled).
 pub fn window_order_of(case: &TileCase, window: usize) -> Vec<SortEntry> {
-    let keys: Vec<u64> = case
-        .table
-        .iter()
-        .map(|e| current_order_key(e, case.features.get(&e.id).map(|f| f.depth_key)))
-        .collect();
-    let mut order = Vec::with_capacity(keys.len());
-    window_order(&keys, window, &mut order);
-    order.iter().map(|&i| case.table[i as usize]).collect()
+    let t = &case.table;
+    let order = table_window_order(t, window, |i| case.features.get(&t[i].id).map(|f| f.depth_key));
+    order.iter().map(|&i| t[i as usize]).collect()
 }
 
 /// Counters of one tile.

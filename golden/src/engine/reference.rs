@@ -41,7 +41,7 @@ use super::pre::{preprocess_frame, PreWork};
 use super::regs::{Counter, Counters, FrameRegs, Reg, NO_OVERFLOW, STATUS_DONE, STATUS_OVERFLOW};
 use super::EngineConfig;
 use crate::pipeline::adaptive::{writeback_signals, WritebackSignals};
-use crate::raster::window::{current_order_key, window_order};
+use crate::raster::window::table_window_order;
 use crate::raster::{raster_tile, SubtileWork};
 use crate::sort::{merge_pass_count, SortEntry, SortMode, Sorter};
 
@@ -328,10 +328,7 @@ impl<'c> FrameRun<'c> {
             table.iter().map(|e| mem.read_feature(&ffmt, feat_word + e.id as u64)).collect();
         if self.cfg.raster_window > 1 {
             // The reorder window: blended and written back in the order it emits.
-            let keys: Vec<u64> =
-                table.iter().zip(&feats).map(|(e, f)| current_order_key(e, f.map(|f| f.depth_key))).collect();
-            let mut order = Vec::with_capacity(keys.len());
-            window_order(&keys, self.cfg.raster_window, &mut order);
+            let order = table_window_order(&table, self.cfg.raster_window, |i| feats[i].map(|f| f.depth_key));
             table = order.iter().map(|&i| table[i as usize]).collect();
             feats = order.iter().map(|&i| feats[i as usize]).collect();
         }

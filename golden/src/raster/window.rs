@@ -41,6 +41,20 @@ pub fn current_order_key(entry: &SortEntry, current_key: Option<u32>) -> u64 {
     SortEntry::new(current_key.unwrap_or(entry.key), entry.id).order_key()
 }
 
+/// The emission order (indices into `table`) of a window of `window` entries over a tile's
+/// table, entry `i` keyed by [`current_order_key`] with `current(i)`, its Gaussian's depth key
+/// this frame (`None`: culled).
+pub fn table_window_order(
+    table: &[SortEntry],
+    window: usize,
+    current: impl Fn(usize) -> Option<u32>,
+) -> Vec<u32> {
+    let keys: Vec<u64> = table.iter().enumerate().map(|(i, e)| current_order_key(e, current(i))).collect();
+    let mut order = Vec::with_capacity(keys.len());
+    window_order(&keys, window, &mut order);
+    order
+}
+
 /// The emission order of a window of `window` entries over a stream whose `i`-th entry has the
 /// order key `keys[i]` (unique per stream, as `{key, id}` is within a tile): `out` receives the
 /// stream's indices in the order the window emits them. `window <= 1` is the identity.
