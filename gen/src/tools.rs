@@ -249,6 +249,37 @@ fn without_hierarchy_lines(text: &str) -> String {
     text.lines().filter(|l| !tree_line(l)).collect::<Vec<_>>().join("\n")
 }
 
+/// Verilator's default `--unroll-count`: it unrolls a generate loop of at most 16 times as many
+/// iterations (1024; "Loop unrolling took too long ... set --unroll-count above 1024").
+const VERILATOR_DEFAULT_UNROLL: u64 = 64;
+
+/// The iteration count of the longest generate loop with a literal bound in `texts`, as the
+/// emitter prints them (`for (i = 0; i < N; i = i + 1) begin : g_name`); 0 when there is none.
+pub fn largest_generate_loop<'a>(texts: impl IntoIterator<Item = &'a str>) -> u64 {
+    let bound = |line: &str| -> Option<u64> {
+        let rest = line.trim_start().strip_prefix("for (")?;
+        if !line.contains(") begin : ") {
+            return None;
+        }
+        let (_, after) = rest.split_once(" < ")?;
+        after.split_once(';')?.0.trim().parse().ok()
+    };
+    texts.into_iter().flat_map(str::lines).filter_map(bound).max().unwrap_or(0)
+}
+
+/// The Verilator arguments that let it unroll every generate loop of `texts`: none when the
+/// longest fits the default unroll count, else `--unroll-count` with 16 times that count above
+/// it (a raster core's reorder window of 4096 entries has a loop of 4095 cells).
+pub fn verilator_unroll_args<'a>(texts: impl IntoIterator<Item = &'a str>) -> Vec<String> {
+    let longest = largest_generate_loop(texts);
+    let count = longest / 16 + 1;
+    if count <= VERILATOR_DEFAULT_UNROLL {
+        Vec::new()
+    } else {
+        vec!["--unroll-count".into(), count.to_string()]
+    }
+}
+
 /// `verilator --lint-only -Wall [vlt] FILES --top-module TOP`; `Ok` when it prints nothing and
 /// succeeds, else the output.
 pub fn verilator_lint(files: &[VerilogFile], top: &str, vlt: Option<&Path>) -> Result<(), ToolError> {
@@ -265,6 +296,7 @@ pub fn verilator_lint_with(
     let tmp = TempFiles::write(files).map_err(|e| io_err("verilator", e))?;
     let mut cmd = Command::new("verilator");
     cmd.args(["--lint-only", "-Wall"]);
+    cmd.args(verilator_unroll_args(files.iter().map(|f| f.text.as_str())));
     cmd.args(params.iter().map(|(n, v)| format!("-G{n}={v}")));
     if let Some(v) = vlt {
         cmd.arg(v);
@@ -370,6 +402,26 @@ mod tests {
             name: name.into(),
             text: format!("// header\nmodule {name} (\n  input wire a_i\n);\n{body}endmodule\n"),
         }
+    }
+
+    #[test]
+    fn the_unroll_count_follows_the_longest_generate_loop_as_emitted() {
+        let with_window = |w: usize| {
+            let cfg = neo_golden::engine::EngineConfig { raster_window: w, ..Default::default() };
+            crate::units::generate(&cfg)
+        };
+        let texts = |files: &[VerilogFile]| files.iter().map(|f| f.text.clone()).collect::<Vec<_>>();
+        let small = texts(&with_window(1));
+        assert!(largest_generate_loop(small.iter().map(String::as_str)) < 1024);
+        assert!(
+            verilator_unroll_args(small.iter().map(String::as_str)).is_empty(),
+            "default flags for the paper's engine"
+        );
+        let big = texts(&with_window(4096));
+        assert_eq!(largest_generate_loop(big.iter().map(String::as_str)), 4095, "the window's g_cell loop");
+        assert_eq!(verilator_unroll_args(big.iter().map(String::as_str)), ["--unroll-count", "256"]);
+        let named = "    for (i = 0; i < PORTS; i = i + 1) begin : g_port\n    for (c = 0; c < 9000; c = c + 1) begin\n";
+        assert_eq!(largest_generate_loop([named]), 0, "a named bound and a procedural loop are not counted");
     }
 
     #[test]

@@ -384,10 +384,13 @@ impl<'a> EngineFrameModel<'a> {
         rt.write_back_cycles_per_entry = rt.write_back_cycles_per_entry.max(self.single_writes(1));
         // A segment's write-back stops the read requests (the core's one request port), but it
         // begins as the next segment's loads begin, with their table bursts: the bridge's
-        // `axi_outstanding` bursts of `burst` entries in flight still arrive while it lasts.
+        // `axi_outstanding` bursts of `burst` entries in flight still arrive while it lasts. A
+        // core with a reorder window issues the next segment's table bursts right after this
+        // segment's last feature read instead (`neo_raster_window_loader`): none are in flight
+        // by the write-back, which then stops the loads outright.
         let bursts = (rt.feature_buffer.max(1) as f64 / self.cfg.burst as f64).ceil();
         let in_flight = bursts.min(self.cfg.axi_outstanding as f64) * self.cfg.burst as f64;
-        rt.write_back_overlap = self.beats(1) * in_flight;
+        rt.write_back_overlap = if self.cfg.raster_window > 1 { 0.0 } else { self.beats(1) * in_flight };
         rt.pixel_write_cycles = rt.pixel_write_cycles.max(self.write_beats(self.pixel_beats()).ceil() as u64);
         rt.window = self.cfg.raster_window as u64;
         let writes = self.raster_writes(t);
@@ -1016,6 +1019,28 @@ mod tests {
             FrameTrace { tiles: vec![raster_tile(20_000), merge_tile(20_000)], ..FrameTrace::default() };
         let (p1, p2) = (m1.predict(&trace), m2.predict(&trace));
         assert!(p1.raster_busy > 1.1 * p2.raster_busy && p1.cycles > p2.cycles, "{p1:?} vs {p2:?}");
+    }
+
+    #[test]
+    fn a_window_core_holds_entries_back_and_its_write_back_stops_the_loads() {
+        // A tile of 8 segments behind a memory with latency: without the window, the bridge's
+        // table bursts in flight keep arriving during each write-back; with one, the table
+        // bursts went out after the last feature read, so each write-back stops the loads.
+        let lat = latency();
+        let mem = PortTiming { latency: 20.0, bandwidth: 0.75, ..PortTiming::IDEAL };
+        let plain = EngineFrameModel::new(&lat.config, &lat, mem).unwrap();
+        let w = 64;
+        let cfg = EngineConfig { raster_window: w, ..lat.config.clone() };
+        let windowed = EngineFrameModel::new(&cfg, &lat, mem).unwrap();
+        let tile = raster_tile(2048);
+        let (a, b) = (plain.raster_cycles(&tile), windowed.raster_cycles(&tile));
+        let rt = &lat.raster;
+        let held = (w - 1) as f64 * rt.load_cycles_per_entry.max(plain.beats(RASTER_ENTRY_BEATS));
+        assert!(b > a + held, "the window costs more than its held-back loads: {a} -> {b} (held {held})");
+        // A one-segment tile has no write-back between loads: only the held-back loads differ.
+        let short = raster_tile(200);
+        let d = windowed.raster_cycles(&short) - plain.raster_cycles(&short);
+        assert!((d - held).abs() < 1e-6, "{d} against {held}");
     }
 
     #[test]

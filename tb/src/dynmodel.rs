@@ -599,6 +599,9 @@ fn build_library(
         &tools,
     );
     let thread_flags = thread_flags(threads);
+    // Derived from the Verilog, which the key holds: a reorder window of 4096 entries has a
+    // generate loop above Verilator's default unroll count.
+    let unroll_flags = neo_gen::tools::verilator_unroll_args(files.iter().map(|(_, text)| text.as_str()));
     let lib_name = format!("libneo_{top}.so");
     let mut log = String::new();
     // One build at a time in a process: test threads building the same model would race on its
@@ -610,6 +613,7 @@ fn build_library(
     let (dir, cached) = cache::get_or_build(&cache_root(), &name, &key, &lib_name, |d| {
         let mut flags: Vec<&str> = flavour.flags.to_vec();
         flags.extend(thread_flags.iter().map(String::as_str));
+        flags.extend(unroll_flags.iter().map(String::as_str));
         log = compile(&v, &cxx, (flavour, opt_fast), &flags, top, files, vlt, &cpp, d)
             .map_err(|e| format!("{top}: {MODEL_DOES_NOT_BUILD}: {e}"))?;
         fs::write(d.join("build.log"), &log).map_err(|e| e.to_string())

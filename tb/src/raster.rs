@@ -683,8 +683,18 @@ fn grid_gaussian(t: [u32; 2], rc: &RasterConfig, i: u64, bits: u64) -> FeatureEn
 /// Gaussian, ideal memory (every output checked against golden), as the latency report's
 /// points.
 pub fn measure_grid(cfg: &EngineConfig, seed: u64, lengths: &[u64], bits: &[u64]) -> Vec<GridPoint> {
+    measure_grid_on(&mut RasterCore::new(cfg, seed, MemTiming::IDEAL), cfg, lengths, bits)
+}
+
+/// [`measure_grid`] on `core` (generated from `cfg`, ideal memory): a core of any
+/// configuration, such as one with a reorder window ([`RasterCore::build`]).
+pub fn measure_grid_on<M: Clocked>(
+    core: &mut RasterCore<M>,
+    cfg: &EngineConfig,
+    lengths: &[u64],
+    bits: &[u64],
+) -> Vec<GridPoint> {
     let (fmt, rc) = (cfg.feature_format(), cfg.raster_config());
-    let mut core = RasterCore::new(cfg, seed, MemTiming::IDEAL);
     let t = [4, 6];
     let mut out = Vec::new();
     for &b in bits {
