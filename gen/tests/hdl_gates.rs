@@ -288,6 +288,21 @@ fn lint_boxes_are_tops_linted_on_their_own() {
     assert!(!sort.iter().any(|b| b == "neo_bsu"), "a BSU of another topology is linted in full: {sort:?}");
 }
 
+/// The largest reorder window (4096 entries: a `g_cell` loop of 4095 cells, above Verilator's
+/// default unroll limit of 1024) lints clean: the lint, like the model builds, passes
+/// `--unroll-count` from the longest generate loop (`neo_gen::tools::verilator_unroll_args`).
+#[test]
+fn the_largest_reorder_window_verilates() {
+    if !require_for_test("verilator", "the_largest_reorder_window_verilates") {
+        return;
+    }
+    let cfg =
+        EngineConfig { raster_window: neo_golden::engine::MAX_RASTER_WINDOW, ..EngineConfig::default() };
+    let files = files_for(&cfg, "neo_raster_window");
+    let vlt = hdl_dir().join("lint.vlt");
+    verilator_lint(&files, "neo_raster_window", Some(&vlt)).unwrap_or_else(|e| panic!("{e}"));
+}
+
 #[test]
 fn lint_catches_a_problem() {
     if !require_for_test("verilator", "lint_catches_a_problem") {
