@@ -286,7 +286,7 @@ pub fn log_point(started: Instant, r: &PointResult, label: &str) {
     eprintln!(
         "{label} {} {} {} c{} p{} {}x: FPS {} (workload {:.1} s; {:.0} s elapsed)",
         r.point.res,
-        r.point.strategy,
+        r.point.strategy_label(),
         r.point.frames,
         r.point.chunk,
         r.point.passes,
@@ -346,6 +346,7 @@ mod tests {
             strategy: strategy.into(),
             chunk: 256,
             passes: 1,
+            raster_window: 1,
         };
         PointJob { point, archs: vec![Arch::Neo], golden: GoldenRaster::Off, headline: false }
     }

@@ -506,3 +506,19 @@ fn frames_runs_the_raster_window_and_refuses_bad_ones() {
         assert!(!st.exists(), "a refused run wrote {}", st.display());
     }
 }
+
+/// `neo report --sweep-window` refuses a window the raster core cannot have, by the option's
+/// name, before it runs or writes anything.
+#[test]
+fn report_refuses_a_bad_sweep_window_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for bad in ["24", "8192", "256,x"] {
+        let out = dir.path().join("rep");
+        let o = neo(&["report", "--sweep-window", bad, "--out", out.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "--sweep-window {bad}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(err.contains("--sweep-window") && err.contains("power of two in 4..=4096"), "{err}");
+        assert!(stdout(&o).is_empty() && !out.exists(), "--sweep-window {bad}: it ran");
+    }
+}

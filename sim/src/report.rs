@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use crate::plot::{self, HLine};
 use crate::run::ArchResult;
 use crate::signals::{Signal, SignalSummary};
-use crate::suite::PointResult;
+use crate::suite::{strategy_label, PointResult};
 use crate::traffic::Stage;
 
 /// Figures published in the paper, for comparison (its scenes differ from ours: compare
@@ -158,37 +158,59 @@ pub fn frame_table(a: &ArchResult) -> String {
     s
 }
 
-/// The chunk of the per-speed tables: Neo's 256 where the sweep has it, else its first point's.
+/// The chunk of the per-speed tables where the sweep has it (Neo's, Section 4.3).
+pub const SPEED_TABLE_CHUNK: usize = 256;
+
+/// The chunk of the per-speed tables: [`SPEED_TABLE_CHUNK`] where the sweep has it, else its
+/// first point's.
 fn speed_chunk(sweep: &[PointResult]) -> usize {
-    sweep.iter().map(|r| r.point.chunk).find(|&c| c == 256).unwrap_or(sweep[0].point.chunk)
+    sweep.iter().map(|r| r.point.chunk).find(|&c| c == SPEED_TABLE_CHUNK).unwrap_or(sweep[0].point.chunk)
 }
 
-/// The sweep's point of `strategy` at camera speed `speed`, chunk `chunk` and one DPS pass.
+/// A row of the per-speed tables: a strategy and the raster cores' reorder window (1: none).
+type SpeedRow<'a> = (&'a str, usize);
+
+/// The sweep's point of `row` at camera speed `speed`, chunk `chunk` and one DPS pass.
 fn speed_point<'a>(
     sweep: &'a [PointResult],
-    strategy: &str,
+    (strategy, window): SpeedRow,
     speed: f64,
     chunk: usize,
 ) -> Option<&'a PointResult> {
     sweep.iter().find(|r| {
         r.point.strategy == strategy
+            && r.point.raster_window == window
             && r.point.speed == speed
             && r.point.chunk == chunk
             && r.point.passes == 1
     })
 }
 
-/// FPS and quality against camera speed (the paper's Fig. 17(b), which shows FPS only), per
-/// strategy at the sweep's default chunk and one DPS pass: FPS, worst-frame and mean PSNR
-/// against the exact order ("exact" for exact strategies; "-" when every frame matched it).
-fn speed_table(md: &mut String, sweep: &[PointResult], speeds: &[f64]) {
-    let chunk = speed_chunk(sweep);
+/// The rows of the speed table: each strategy in the order of its first point, followed by its
+/// points with a reorder window, smallest window first.
+fn speed_rows(sweep: &[PointResult]) -> Vec<SpeedRow<'_>> {
     let mut strategies: Vec<&str> = Vec::new();
+    let mut rows: Vec<SpeedRow> = Vec::new();
     for r in sweep {
-        if !strategies.contains(&r.point.strategy.as_str()) {
-            strategies.push(&r.point.strategy);
+        let row = (r.point.strategy.as_str(), r.point.raster_window);
+        if !strategies.contains(&row.0) {
+            strategies.push(row.0);
+        }
+        if !rows.contains(&row) {
+            rows.push(row);
         }
     }
+    let rank = |s: &str| strategies.iter().position(|&x| x == s);
+    rows.sort_by_key(|&(s, w)| (rank(s), w));
+    rows
+}
+
+/// FPS and quality against camera speed (the paper's Fig. 17(b), which shows FPS only), per
+/// strategy (and per reorder window: `neo + window 256`) at the sweep's default chunk and one
+/// DPS pass: FPS, worst-frame and mean PSNR against the exact order ("exact" for exact
+/// strategies; "-" when every frame matched it).
+fn speed_table(md: &mut String, sweep: &[PointResult], speeds: &[f64]) {
+    let chunk = speed_chunk(sweep);
     let _ = writeln!(
         md,
         "FPS and quality against camera speed (Fig. 17(b) with the quality it does not show), chunk {chunk}, one DPS pass; each cell: FPS / worst-frame PSNR / mean PSNR (dB vs the exact order):\n"
@@ -202,10 +224,10 @@ fn speed_table(md: &mut String, sweep: &[PointResult], speeds: &[f64]) {
         md.push_str(" --- |");
     }
     md.push('\n');
-    for st in strategies {
-        let _ = write!(md, "| {st} |");
+    for row in speed_rows(sweep) {
+        let _ = write!(md, "| {} |", strategy_label(row.0, row.1));
         for &sp in speeds {
-            let r = speed_point(sweep, st, sp, chunk);
+            let r = speed_point(sweep, row, sp, chunk);
             let cell = match r.and_then(|r| r.arch("neo").map(|a| (r, a))) {
                 None => "".to_string(),
                 Some((r, a)) if r.quality.is_exact() => format!("{} / exact", f1(a.fps)),
@@ -229,7 +251,7 @@ pub fn point_table(r: &PointResult) -> String {
     let p = &r.point;
     let _ = writeln!(
         s,
-        "{} | {} x{} | {} ({}x{}) | {} frames | strategy {} | chunk {} | passes {}",
+        "{} | {} x{} | {} ({}x{}) | {} frames | strategy {} | chunk {} | passes {}{}",
         scene_name(&p.scene),
         p.trajectory,
         p.speed,
@@ -239,7 +261,8 @@ pub fn point_table(r: &PointResult) -> String {
         p.frames,
         p.strategy,
         p.chunk,
-        p.passes
+        p.passes,
+        if p.raster_window > 1 { format!(" | raster window {}", p.raster_window) } else { String::new() }
     );
     let w = &r.workload;
     let _ = writeln!(
@@ -643,6 +666,7 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
             p0.frames,
             p0.trajectory
         );
+        window_note(&mut md, &d.sweep);
         let finite: Vec<f64> = d.sweep.iter().filter_map(|r| r.quality.psnr_vs_exact_pooled).collect();
         let cap = finite.iter().copied().fold(30.0, f64::max).ceil() + 3.0;
         let y_of =
@@ -651,7 +675,7 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
         let mut all = Vec::new();
         for r in &d.sweep {
             let (Some(a), Some(y)) = (r.arch("neo"), y_of(r)) else { continue };
-            let key = r.point.strategy.clone();
+            let key = r.point.strategy_label();
             match by_strategy.iter_mut().find(|g| g.0 == key) {
                 Some(g) => g.1.push((a.fps, y)),
                 None => by_strategy.push((key, vec![(a.fps, y)])),
@@ -691,7 +715,7 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
                 let (Some(a), Some(y)) = (r.arch("neo"), min_of(r)) else { continue };
                 // Less traffic is better: the front takes the negated traffic as its x.
                 pts.push((-sort_gb(a), y));
-                let key = r.point.strategy.clone();
+                let key = r.point.strategy_label();
                 match groups.iter_mut().find(|g| g.0 == key) {
                     Some(g) => g.1.push((sort_gb(a), y)),
                     None => groups.push((key, vec![(sort_gb(a), y)])),
@@ -723,7 +747,7 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {}x | {} | {:.3} | {} | {} | {} | {} |",
-                r.point.strategy,
+                r.point.strategy_label(),
                 r.point.chunk,
                 r.point.passes,
                 r.point.speed,
@@ -745,6 +769,25 @@ pub fn render(d: &ReportData) -> Result<(String, Vec<(String, String)>), String>
     Ok((md, svgs))
 }
 
+/// The sentence of section 4 on its reorder-window points (`neo + window W`), when it has any.
+fn window_note(md: &mut String, sweep: &[PointResult]) {
+    let mut labels: Vec<String> = Vec::new();
+    for p in sweep.iter().map(|r| &r.point).filter(|p| p.raster_window > 1) {
+        let label = format!("`{}`", p.strategy_label());
+        if !labels.contains(&label) {
+            labels.push(label);
+        }
+    }
+    if labels.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "{}: the strategy with a W-entry reorder window in each raster core, which blends and writes back each tile in the current depth order within W entries; it is on chip (a feature store of about 32 W bytes per raster core), moves no DRAM traffic, and its held-back loads are in the FPS (docs/adaptive.md section 7).\n",
+        labels.join(", ")
+    );
+}
+
 /// Section 5: how well the disorder signals rank the tiles by their error, from the sweep's
 /// `neo` points (chunk 256 where swept, one DPS pass), one row per camera speed, and the
 /// previous frame's reach against the error (issue 14; docs/adaptive.md section 1).
@@ -758,7 +801,7 @@ fn signals_section(
     let rows: Vec<(f64, &SignalSummary)> = speeds
         .iter()
         .filter_map(|&sp| {
-            speed_point(sweep, "neo", sp, chunk).and_then(|r| r.signals.as_ref()).map(|s| (sp, s))
+            speed_point(sweep, ("neo", 1), sp, chunk).and_then(|r| r.signals.as_ref()).map(|s| (sp, s))
         })
         .collect();
     if rows.is_empty() {
@@ -805,4 +848,113 @@ fn signals_section(
     ));
     let _ = writeln!(md, "\n![reach against error]({file})\n");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::suite::{Point, QualitySummary};
+
+    /// A sweep point's result with made-up figures that differ per point (`k`).
+    fn result(strategy: &str, window: usize, speed: f64, chunk: usize, k: usize) -> PointResult {
+        let point = Point {
+            scene: "synthetic:outdoor?gaussians=10k".into(),
+            trajectory: "orbit".into(),
+            speed,
+            frames: 4,
+            res: "128x64".into(),
+            width: 128,
+            height: 64,
+            strategy: strategy.into(),
+            chunk,
+            passes: 1,
+            raster_window: window,
+        };
+        let x = k as f64;
+        PointResult {
+            point,
+            workload: Default::default(),
+            quality: QualitySummary {
+                frames: 4,
+                psnr_vs_exact_mean: Some(40.0 + 1.5 * x),
+                psnr_vs_exact_pooled: Some(38.0 + 1.5 * x),
+                psnr_vs_exact_min: Some(30.0 + 1.25 * x),
+                ..QualitySummary::default()
+            },
+            archs: vec![ArchResult { arch: "neo".into(), fps: 100.0 + 7.0 * x, ..ArchResult::default() }],
+            signals: None,
+        }
+    }
+
+    /// Neo and periodic at 1x and 16x, one Neo point at another chunk, and Neo with a 256-entry
+    /// window when `window`.
+    fn sweep(window: bool) -> Vec<PointResult> {
+        let mut v = Vec::new();
+        let mut rows = vec![("neo", 1), ("periodic:4", 1)];
+        if window {
+            rows.push(("neo", 256));
+        }
+        for (strategy, w) in rows {
+            for speed in [1.0, 16.0] {
+                v.push(result(strategy, w, speed, 256, v.len()));
+            }
+        }
+        v.push(result("neo", 1, 1.0, 64, v.len()));
+        v
+    }
+
+    /// The speed table's cell of `r`, from its figures.
+    fn cell(r: &PointResult) -> String {
+        let q = &r.quality;
+        let fps = f1(r.arch("neo").unwrap().fps);
+        format!("{fps} / {} / {}", f2(q.psnr_vs_exact_min.unwrap()), f2(q.psnr_vs_exact_mean.unwrap()))
+    }
+
+    #[test]
+    fn the_window_points_get_their_own_rows_labels_and_series() {
+        let sweep = sweep(true);
+        let (md, svgs) = render(&ReportData { sweep: sweep.clone(), ..ReportData::default() }).unwrap();
+        let lines: Vec<&str> = md.lines().collect();
+        let at = lines.iter().position(|l| *l == "| strategy | 1x | 16x |").expect("the speed table");
+        // The window's row follows its strategy's, each row from its own points.
+        for (k, (strategy, w)) in [("neo", 1), ("neo", 256), ("periodic:4", 1)].into_iter().enumerate() {
+            let cells: Vec<&str> = lines[at + 2 + k].split('|').map(str::trim).collect();
+            assert_eq!(cells[1], strategy_label(strategy, w), "{}", lines[at + 2 + k]);
+            for (c, speed) in [1.0, 16.0].into_iter().enumerate() {
+                let r = sweep
+                    .iter()
+                    .find(|r| {
+                        let p = &r.point;
+                        (p.strategy.as_str(), p.raster_window, p.speed, p.chunk) == (strategy, w, speed, 256)
+                    })
+                    .unwrap();
+                assert_eq!(cells[2 + c], cell(r), "{strategy} window {w} at {speed}x");
+            }
+        }
+        assert!(!lines[at + 5].starts_with('|'), "three rows: {}", lines[at + 5]);
+        // The big table names the window in the strategy cell.
+        let big = lines.iter().filter(|l| l.starts_with("| neo + window 256 | 256 | 1 |")).count();
+        assert_eq!(big, 2, "{md}");
+        // The figures draw the window points as a series of their own, and the text says what it is.
+        for (name, svg) in svgs.iter().filter(|(n, _)| n.starts_with("sweep_")) {
+            assert!(svg.contains("neo + window 256"), "{name}");
+        }
+        assert!(svgs.iter().filter(|(n, _)| n.starts_with("sweep_traffic_min_psnr_")).count() == 2);
+        let note = lines.iter().find(|l| l.starts_with("`neo + window 256`")).expect("the window note");
+        assert!(note.contains("reorder window") && note.contains("docs/adaptive.md section 7"), "{note}");
+    }
+
+    #[test]
+    fn a_sweep_without_windows_renders_as_before() {
+        let (md, svgs) = render(&ReportData { sweep: sweep(false), ..ReportData::default() }).unwrap();
+        assert!(!md.contains("window"), "{md}");
+        assert!(svgs.iter().all(|(_, svg)| !svg.contains("window")));
+        // The same points with windows added: the rest of the speed table is unchanged.
+        let (with, _) = render(&ReportData { sweep: sweep(true), ..ReportData::default() }).unwrap();
+        let row =
+            |md: &str, s: &str| md.lines().find(|l| l.starts_with(&format!("| {s} | "))).map(String::from);
+        for s in ["neo", "periodic:4"] {
+            assert_eq!(row(&md, s), row(&with, s), "{s}");
+        }
+    }
 }

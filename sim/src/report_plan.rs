@@ -6,7 +6,8 @@
 //! 2. strategy timelines (Fig. 19): Neo's run (taken from step 1 when it matches the timeline
 //!    resolution) and the compared strategies on Neo's hardware;
 //! 3. the speed/error sweep over strategies, chunk sizes, DPS passes and camera speeds, with the
-//!    golden raster on for PSNR (or point results read from files).
+//!    golden raster on for PSNR (or point results read from files), and `neo` with each of the
+//!    raster cores' reorder windows asked for ([`SweepSpec::windows`]) at every speed.
 //!
 //! The steps run as jobs ([`PointJob`]) in two sets: the throughput runs (with the jobs that run
 //! on their workloads: Neo-S) first, so that their table is out early, then the rest. Within a
@@ -21,12 +22,13 @@
 
 use std::path::Path;
 
+use neo_golden::engine::MAX_RASTER_WINDOW;
 use neo_golden::synthetic;
 
 use crate::config::SimConfig;
 use crate::driver::GoldenRaster;
 use crate::latency::{self, Latency};
-use crate::report::{ReportData, ReportSettings};
+use crate::report::{ReportData, ReportSettings, SPEED_TABLE_CHUNK};
 use crate::run::Arch;
 use crate::suite::{parse_res, Grid, Point, PointResult};
 
@@ -71,6 +73,81 @@ pub struct SweepSpec {
     pub passes: Vec<usize>,
     /// Camera speeds.
     pub speeds: Vec<f64>,
+    /// Reorder windows of the raster cores (`--sweep-window`; docs/adaptive.md section 7): for
+    /// each, `neo` at the speed table's chunk ([`window_chunk`]), one DPS pass, every speed.
+    /// Empty: none.
+    pub windows: Vec<usize>,
+}
+
+/// Checks a `--sweep-window` entry: a power of two in `4..=4096`, the windows the engine is
+/// built with (`EngineConfig::raster_window`).
+pub fn check_sweep_window(w: usize) -> Result<(), String> {
+    if w.is_power_of_two() && (4..=MAX_RASTER_WINDOW).contains(&w) {
+        return Ok(());
+    }
+    Err(format!(
+        "--sweep-window {w}: a raster core's reorder window is a power of two in 4..={MAX_RASTER_WINDOW} entries (1: none)"
+    ))
+}
+
+/// Parses `--sweep-window`'s comma-separated list: an empty list or `1` is no window; every
+/// other entry must pass [`check_sweep_window`]. Repeated windows are kept once, in order.
+pub fn parse_sweep_windows(list: &str) -> Result<Vec<usize>, String> {
+    let mut windows = Vec::new();
+    for item in list.split(',').map(str::trim).filter(|x| !x.is_empty()) {
+        let w: usize = item
+            .parse()
+            .map_err(|_| format!("--sweep-window '{item}': expected a number of entries (power of two in 4..={MAX_RASTER_WINDOW}, or 1: none)"))?;
+        if w == 1 {
+            continue;
+        }
+        check_sweep_window(w)?;
+        if !windows.contains(&w) {
+            windows.push(w);
+        }
+    }
+    Ok(windows)
+}
+
+/// The chunk of the window points: the speed table's ([`SPEED_TABLE_CHUNK`]) when the sweep
+/// has it, else the sweep's first chunk (the table shows that one then), so that they are
+/// rows of that table.
+pub fn window_chunk(chunks: &[usize]) -> usize {
+    if chunks.contains(&SPEED_TABLE_CHUNK) {
+        SPEED_TABLE_CHUNK
+    } else {
+        chunks.first().copied().unwrap_or(SPEED_TABLE_CHUNK)
+    }
+}
+
+/// The sweep's points: the grid of `s` (on the engine's own window, `base_window`), then, for
+/// each of `s.windows`, `neo` at [`window_chunk`] and one DPS pass at every speed with that
+/// window (those already in the grid are not repeated).
+fn sweep_points(s: &SweepSpec, trajectory: &str, base_window: usize) -> Result<Vec<Point>, String> {
+    for &w in &s.windows {
+        check_sweep_window(w)?;
+    }
+    let grid = |strategies: Vec<String>, chunks: Vec<usize>, passes: Vec<usize>, raster_window| Grid {
+        scenes: vec![s.scene.clone()],
+        trajectory: trajectory.to_string(),
+        frames: s.frames,
+        res: vec![s.res.clone()],
+        strategies,
+        chunks,
+        passes,
+        speeds: s.speeds.clone(),
+        raster_window,
+    };
+    let mut points = grid(s.strategies.clone(), s.chunks.clone(), s.passes.clone(), base_window).points()?;
+    let chunk = window_chunk(&s.chunks);
+    for &w in &s.windows {
+        for p in grid(vec!["neo".into()], vec![chunk], vec![1], w).points()? {
+            if !points.contains(&p) {
+                points.push(p);
+            }
+        }
+    }
+    Ok(points)
 }
 
 /// A point of the plan and the architectures that run on its workload.
@@ -148,15 +225,15 @@ pub struct ReportTimes {
     pub sweep_s: f64,
 }
 
-/// A point of `frames` frames of `trajectory` at speed 1.
+/// A point of `frames` frames of `trajectory` at speed 1, on the engine `cfg` (its chunk, DPS
+/// passes and reorder window).
 fn point(
     scene: &str,
     traj: &str,
     frames: usize,
     res: &str,
     strategy: &str,
-    chunk: usize,
-    passes: usize,
+    cfg: &SimConfig,
 ) -> Result<Point, String> {
     let (label, w, h) = parse_res(res)?;
     Ok(Point {
@@ -168,8 +245,9 @@ fn point(
         width: w,
         height: h,
         strategy: strategy.to_string(),
-        chunk,
-        passes,
+        chunk: cfg.engine.chunk,
+        passes: cfg.pipeline.dps_passes,
+        raster_window: cfg.engine.raster_window,
     })
 }
 
@@ -196,28 +274,18 @@ impl ReportPlan {
         let mut headline = Vec::new();
         for s in &scenes {
             for r in &spec.res {
-                headline.push(point(s, traj, spec.frames, r, "neo", chunk, passes)?);
+                headline.push(point(s, traj, spec.frames, r, "neo", cfg)?);
             }
         }
         let (timeline_res, _, _) = parse_res(&spec.timeline_res)?;
         let timeline = |strategy: &str| {
-            point(synthetic::DEFAULT_SCENE, traj, spec.frames, &spec.timeline_res, strategy, chunk, passes)
+            point(synthetic::DEFAULT_SCENE, traj, spec.frames, &spec.timeline_res, strategy, cfg)
         };
         let timelines = spec.timeline_sort.iter().map(|s| timeline(s)).collect::<Result<Vec<_>, _>>()?;
         let neo_timeline = timeline("neo")?;
         let sweep = match &spec.sweep {
             None => Vec::new(),
-            Some(s) => Grid {
-                scenes: vec![s.scene.clone()],
-                trajectory: spec.trajectory.clone(),
-                frames: s.frames,
-                res: vec![s.res.clone()],
-                strategies: s.strategies.clone(),
-                chunks: s.chunks.clone(),
-                passes: s.passes.clone(),
-                speeds: s.speeds.clone(),
-            }
-            .points()?,
+            Some(s) => sweep_points(s, &spec.trajectory, cfg.engine.raster_window)?,
         };
         Ok(ReportPlan {
             spec,
@@ -436,9 +504,86 @@ mod tests {
                 chunks: vec![64, 128],
                 passes: vec![1],
                 speeds: vec![1.0],
+                windows: Vec::new(),
             }),
             raster_sample: 16,
         }
+    }
+
+    /// `spec()` with the sweep's chunks, speeds and windows.
+    fn sweep_spec(chunks: &[usize], speeds: &[f64], windows: &[usize]) -> ReportSpec {
+        let mut s = spec();
+        let sw = s.sweep.as_mut().expect("a sweep");
+        sw.strategies = vec!["neo".into(), "periodic:4".into()];
+        sw.chunks = chunks.to_vec();
+        sw.passes = vec![1, 2];
+        sw.speeds = speeds.to_vec();
+        sw.windows = windows.to_vec();
+        s
+    }
+
+    #[test]
+    fn window_points_are_neo_at_the_table_chunk_one_pass_every_speed() {
+        let speeds = [1.0, 4.0, 16.0];
+        let cfg = SimConfig::default();
+        let none = ReportPlan::new(sweep_spec(&[64, 256], &speeds, &[]), &cfg).unwrap().sweep;
+        assert!(none.iter().all(|p| p.raster_window == 1));
+        let plan = ReportPlan::new(sweep_spec(&[64, 256], &speeds, &[256, 1024]), &cfg).unwrap();
+        // The grid first, unchanged, then each window's points.
+        assert_eq!(plan.sweep[..none.len()], none[..]);
+        let extra = &plan.sweep[none.len()..];
+        assert_eq!(extra.len(), 2 * speeds.len());
+        for (k, p) in extra.iter().enumerate() {
+            let w = [256, 1024][k / speeds.len()];
+            assert_eq!((p.strategy.as_str(), p.chunk, p.passes), ("neo", 256, 1), "{p:?}");
+            assert_eq!((p.raster_window, p.speed), (w, speeds[k % speeds.len()]), "{p:?}");
+            assert_eq!((p.scene.as_str(), p.frames), (none[0].scene.as_str(), none[0].frames));
+        }
+        // Without chunk 256 the speed table shows the sweep's first chunk: so do the windows.
+        let plan = ReportPlan::new(sweep_spec(&[128, 512], &speeds, &[64]), &cfg).unwrap();
+        assert!(plan.sweep.iter().filter(|p| p.raster_window == 64).all(|p| p.chunk == 128));
+        // An engine configured with a window runs every point with it, and a window point the
+        // grid already has is not repeated.
+        let mut windowed = cfg.clone();
+        windowed.engine.raster_window = 256;
+        let plan = ReportPlan::new(sweep_spec(&[64, 256], &speeds, &[256]), &windowed).unwrap();
+        assert_eq!(plan.sweep.len(), none.len());
+        assert!(plan.sweep.iter().chain(&plan.headline).all(|p| p.raster_window == 256));
+    }
+
+    #[test]
+    fn bad_windows_are_refused_by_name() {
+        for w in [0, 2, 24, 8192] {
+            let e = ReportPlan::new(sweep_spec(&[256], &[1.0], &[w]), &SimConfig::default()).unwrap_err();
+            assert!(e.contains(&format!("--sweep-window {w}")), "{e}");
+            assert!(parse_sweep_windows(&w.to_string()).is_err(), "{w}");
+        }
+        assert_eq!(parse_sweep_windows("").unwrap(), Vec::<usize>::new());
+        assert_eq!(parse_sweep_windows("1").unwrap(), Vec::<usize>::new());
+        assert_eq!(parse_sweep_windows(" 256,1, 1024,256").unwrap(), [256, 1024]);
+        assert_eq!(parse_sweep_windows("4,4096").unwrap(), [4, MAX_RASTER_WINDOW]);
+        let e = parse_sweep_windows("256,big").unwrap_err();
+        assert!(e.contains("--sweep-window 'big'"), "{e}");
+    }
+
+    #[test]
+    fn a_window_point_has_a_workload_of_its_own() {
+        let plan = ReportPlan::new(sweep_spec(&[256], &[16.0], &[256]), &SimConfig::default()).unwrap();
+        let mut runner = Recorder::default();
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(latency::DEFAULT_PATH);
+        let lat = Latency::from_file(&file).expect("reports/latency.json");
+        let (data, _) = plan.run(&mut runner, &lat, Vec::new()).expect("runs");
+        let jobs: Vec<&PointJob> =
+            runner.0.iter().flatten().filter(|j| j.golden == GoldenRaster::Exact).collect();
+        let neo = |w: usize| {
+            jobs.iter()
+                .find(|j| j.point.strategy == "neo" && j.point.passes == 1 && j.point.raster_window == w)
+                .expect("a neo point")
+        };
+        let (plain, window) = (neo(1), neo(256));
+        assert_eq!(plain.point.camera_key(), window.point.camera_key(), "generated together");
+        assert!(!plain.shares_workload(window) && !window.shares_workload(plain));
+        assert_eq!(data.sweep.last().unwrap().point.raster_window, 256);
     }
 
     #[test]

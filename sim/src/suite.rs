@@ -40,6 +40,32 @@ pub struct Point {
     pub chunk: usize,
     /// DPS passes.
     pub passes: usize,
+    /// Entries of the raster cores' reorder window (1: none; docs/adaptive.md section 7): the
+    /// golden pipeline blends and writes back each tile in its order, and the model's engine
+    /// has it (`EngineConfig::raster_window`). Left out of the JSON when 1, so results written
+    /// before the field read as no window.
+    #[serde(default = "no_window", skip_serializing_if = "is_no_window")]
+    pub raster_window: usize,
+}
+
+/// A point's reorder window when its JSON has none: 1, no window.
+fn no_window() -> usize {
+    1
+}
+
+/// `true` for a window of 1 (no window): the field is left out of the JSON.
+fn is_no_window(w: &usize) -> bool {
+    *w == 1
+}
+
+/// A strategy with the raster cores' reorder window as the report names it: `neo` without
+/// one (`window` 1), `neo + window 256` with one.
+pub fn strategy_label(strategy: &str, window: usize) -> String {
+    if window > 1 {
+        format!("{strategy} + window {window}")
+    } else {
+        strategy.to_string()
+    }
 }
 
 /// `hd`, `fhd`, `qhd` or `WxH` to `(label, width, height)` (golden's
@@ -62,8 +88,9 @@ impl Point {
             .collect();
         let traj: String =
             self.trajectory.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect();
+        let window = if self.raster_window > 1 { format!("_w{}", self.raster_window) } else { String::new() };
         format!(
-            "{scene}_{traj}_{}_{}f_{}_c{}_p{}_s{}x",
+            "{scene}_{traj}_{}_{}f_{}_c{}_p{}{window}_s{}x",
             self.res,
             self.frames,
             self.strategy.replace(':', "-"),
@@ -71,6 +98,12 @@ impl Point {
             self.passes,
             self.speed
         )
+    }
+
+    /// The strategy as the report names it ([`strategy_label`]): `neo`, or `neo + window 256`
+    /// with a reorder window.
+    pub fn strategy_label(&self) -> String {
+        strategy_label(&self.strategy, self.raster_window)
     }
 
     /// The trajectory spec with the speed applied.
@@ -124,6 +157,8 @@ pub struct Grid {
     pub passes: Vec<usize>,
     /// Camera speeds.
     pub speeds: Vec<f64>,
+    /// The raster cores' reorder window of every point (1: none).
+    pub raster_window: usize,
 }
 
 impl Grid {
@@ -157,6 +192,7 @@ impl Grid {
                                     strategy: strategy.to_string(),
                                     chunk,
                                     passes: p,
+                                    raster_window: self.raster_window,
                                 });
                             }
                         }
@@ -301,7 +337,7 @@ pub fn load_scene(spec: &str) -> Result<Scene, String> {
 }
 
 /// What generating the workload of `point` takes: the spec (strategy, parameters of `cfg` with
-/// the point's chunk and passes, golden raster mode) and the camera trajectory.
+/// the point's chunk, passes and reorder window, golden raster mode) and the camera trajectory.
 pub fn workload_spec(
     scene: &Scene,
     point: &Point,
@@ -318,7 +354,12 @@ pub fn workload_spec(
     }
     let strategy = point.strategy()?;
     let mut ws = WorkloadSpec::new(&point.scene, &spec, strategy);
-    ws.params = PipelineParams { chunk: point.chunk, dps_passes: point.passes, ..cfg.pipeline_params() };
+    ws.params = PipelineParams {
+        chunk: point.chunk,
+        dps_passes: point.passes,
+        raster_window: point.raster_window,
+        ..cfg.pipeline_params()
+    };
     ws.golden_raster = if strategy.is_exact() { GoldenRaster::Off } else { golden };
     ws.raster_sample = raster_sample;
     Ok((ws, traj))
@@ -399,11 +440,13 @@ pub fn evaluate(
     point_result(point, wl, results)
 }
 
-/// The model configuration of `point`: `cfg` with the point's chunk and DPS passes.
+/// The model configuration of `point`: `cfg` with the point's chunk, DPS passes and reorder
+/// window (the engine's `raster_window`, which the timing of its raster cores adds).
 pub fn point_config(point: &Point, cfg: &SimConfig) -> SimConfig {
     let mut cfg = cfg.clone();
     cfg.engine.chunk = point.chunk;
     cfg.pipeline.dps_passes = point.passes;
+    cfg.engine.raster_window = point.raster_window;
     cfg
 }
 
@@ -450,6 +493,7 @@ mod tests {
             chunks: vec![64, 128, 256, 512],
             passes: vec![1, 2],
             speeds: vec![1.0, 2.0, 4.0, 8.0, 16.0],
+            raster_window: 1,
         }
     }
 
@@ -478,6 +522,72 @@ mod tests {
         for bad in ["5/5", "1", "a/2", "0/0", "-1/3"] {
             assert!(parse_shard(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn a_point_without_a_window_reads_and_writes_as_before() {
+        let plain = grid().points().unwrap().remove(0);
+        assert_eq!(plain.raster_window, 1);
+        let text = serde_json::to_string(&plain).unwrap();
+        assert!(!text.contains("raster_window"), "{text}");
+        assert_eq!(serde_json::from_str::<Point>(&text).unwrap(), plain);
+        let window = Point { raster_window: 256, ..plain.clone() };
+        let mut v = serde_json::to_value(&window).unwrap();
+        assert_eq!(v["raster_window"], 256);
+        assert_eq!(serde_json::from_value::<Point>(v.clone()).unwrap(), window);
+        // A result written before the field: no window.
+        v.as_object_mut().unwrap().remove("raster_window");
+        assert_eq!(serde_json::from_value::<Point>(v).unwrap().raster_window, 1);
+        // Labels: unchanged without a window, distinct with one.
+        assert!(!plain.id().contains("_w"), "{}", plain.id());
+        assert_eq!(window.id(), plain.id().replace("_p1_", "_p1_w256_"));
+        assert_eq!(
+            (plain.strategy_label(), window.strategy_label()),
+            ("neo".into(), "neo + window 256".into())
+        );
+    }
+
+    /// A point with a window: generated with its cameras' other points, its workload blends
+    /// through the window (closer to the exact order), and the model's engine has it (the
+    /// held-back loads cost time; the DRAM traffic is the same).
+    #[test]
+    fn a_window_point_blends_and_is_timed_through_its_window() {
+        let spec = "synthetic:outdoor?gaussians=3000&seed=2";
+        let scene = load_scene(spec).unwrap();
+        let plain = Point {
+            scene: spec.into(),
+            trajectory: "orbit".into(),
+            speed: 16.0,
+            frames: 3,
+            res: "128x64".into(),
+            width: 128,
+            height: 64,
+            strategy: "neo".into(),
+            chunk: 256,
+            passes: 1,
+            raster_window: 1,
+        };
+        let window = Point { raster_window: 256, ..plain.clone() };
+        let cfg = SimConfig::default();
+        let lat =
+            Latency::from_file(&neo_golden::shared::workspace_root().join(crate::latency::DEFAULT_PATH))
+                .expect("reports/latency.json");
+        let wls = workloads(&scene, &[&plain, &window], &cfg, GoldenRaster::Exact, 16, |_| {}).unwrap();
+        assert_eq!(wls.iter().map(|w| w.info.raster_window).collect::<Vec<_>>(), [1, 256]);
+        let r: Vec<PointResult> = [&plain, &window]
+            .iter()
+            .zip(&wls)
+            .map(|(p, wl)| evaluate(p, wl, &cfg, &lat, &[Arch::Neo]).unwrap())
+            .collect();
+        let (q0, q1) = (&r[0].quality, &r[1].quality);
+        assert!(!q0.is_exact(), "the premise: neo at 16x is not exact");
+        let pooled =
+            |q: &QualitySummary| if q.is_exact() { f64::INFINITY } else { q.psnr_vs_exact_pooled.unwrap() };
+        assert!(pooled(q1) > pooled(q0), "window {q1:?}, none {q0:?}");
+        let (a0, a1) = (r[0].arch("neo").unwrap(), r[1].arch("neo").unwrap());
+        assert_eq!(a1.traffic.total_bytes(), a0.traffic.total_bytes(), "the window moves no DRAM traffic");
+        assert!(a1.total_ms > a0.total_ms, "held-back loads: {} ms against {} ms", a1.total_ms, a0.total_ms);
+        assert_eq!(point_config(&window, &cfg).engine.raster_window, 256);
     }
 
     #[test]

@@ -26,6 +26,7 @@ fn published_constants_are_labelled_and_kept_apart() {
         strategy: "neo".into(),
         chunk: 256,
         passes: 1,
+        raster_window: 1,
     };
     let wl = workload(&scene, &point, &cfg, neo_sim::driver::GoldenRaster::Off, 16, |_| {}).unwrap();
     let r = evaluate(&point, &wl, &cfg, &lat, &[Arch::Neo, Arch::Gscore(16), Arch::NeoS(16)]).unwrap();
@@ -94,6 +95,7 @@ fn the_speed_table_gives_fps_and_quality_per_camera_speed() {
                 strategy: strategy.into(),
                 chunk: 256,
                 passes: 1,
+                raster_window: 1,
             };
             let wl =
                 workload(&scene, &point, &cfg, neo_sim::driver::GoldenRaster::Exact, 16, |_| {}).unwrap();

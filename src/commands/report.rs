@@ -2,7 +2,8 @@
 //! (plus any `--scene`) and writes `reports/index.md` with its SVG figures: throughput per
 //! resolution and architecture (paper Fig. 15), DRAM traffic by stage (Fig. 16), frame times of
 //! the sorting strategies on Neo's hardware (Fig. 19), and speed against error over strategies,
-//! chunk sizes, DPS passes and camera speeds with its Pareto front.
+//! chunk sizes, DPS passes and camera speeds with its Pareto front (and `neo` with the raster
+//! cores' reorder windows of `--sweep-window`).
 //!
 //! The plan (which points, in which order, the report data) is `neo_sim::report_plan`; this
 //! command parses its options, runs the plan with progress bars and writes the files.
@@ -12,7 +13,7 @@ use crate::points::{load_config, load_latency, ProgressRunner, Scenes};
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
 use neo_sim::report::render;
-use neo_sim::report_plan::{read_point_results, ReportPlan, ReportSpec, SweepSpec};
+use neo_sim::report_plan::{parse_sweep_windows, read_point_results, ReportPlan, ReportSpec, SweepSpec};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -65,6 +66,11 @@ pub struct ReportArgs {
     /// Camera speeds of the sweep.
     #[arg(long, default_value = "1,2,4,8,16", value_delimiter = ',')]
     pub sweep_speed: Vec<f64>,
+    /// Raster-core reorder windows of the sweep (entries, powers of two in 4..=4096): for each,
+    /// `neo` at chunk 256 and one DPS pass at every speed with that window (docs/adaptive.md
+    /// section 7); empty or 1: none.
+    #[arg(long, default_value = "256")]
+    pub sweep_window: String,
     /// Use the point results (`*.json` from `neo simulate --out DIR`) in this directory for the
     /// sweep instead of running it.
     #[arg(long)]
@@ -95,8 +101,9 @@ impl ReportArgs {
         given.unwrap_or(if self.full { default.1 } else { default.0 })
     }
 
-    /// The report's plan specification.
-    fn spec(&self) -> ReportSpec {
+    /// The report's plan specification; a bad `--sweep-window` is refused.
+    fn spec(&self) -> Result<ReportSpec> {
+        let windows = parse_sweep_windows(&self.sweep_window).map_err(|e| anyhow!(e))?;
         let sweep = (!self.no_sweep && self.sweep_results.is_none()).then(|| SweepSpec {
             scene: self.sweep_scene.clone(),
             res: self.sweep_res.clone(),
@@ -105,8 +112,9 @@ impl ReportArgs {
             chunks: self.sweep_chunk.clone(),
             passes: self.sweep_passes.clone(),
             speeds: self.sweep_speed.clone(),
+            windows,
         });
-        ReportSpec {
+        Ok(ReportSpec {
             scenes: self.scene.clone(),
             default_scene: !self.no_default_scene,
             trajectory: self.trajectory.trajectory.clone(),
@@ -116,7 +124,7 @@ impl ReportArgs {
             timeline_sort: self.timeline_sort.clone(),
             sweep,
             raster_sample: self.model.raster_sample,
-        }
+        })
     }
 }
 
@@ -130,9 +138,10 @@ fn peak_rss_mb() -> Option<f64> {
 /// Runs `neo report`.
 pub fn run(a: ReportArgs) -> Result<()> {
     let t0 = Instant::now();
+    let spec = a.spec()?;
     let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref(), a.model.sizes.as_deref())?;
     let lat = load_latency(&a.model.latency, &cfg)?;
-    let plan = ReportPlan::new(a.spec(), &cfg).map_err(|e| anyhow!(e))?;
+    let plan = ReportPlan::new(spec, &cfg).map_err(|e| anyhow!(e))?;
     let sweep_results = match &a.sweep_results {
         Some(dir) => read_point_results(dir).map_err(|e| anyhow!(e))?,
         None => Vec::new(),
@@ -188,7 +197,7 @@ mod tests {
         use clap::Parser;
         let argv = ["neo", "report"].into_iter().chain(args.iter().copied());
         let Top::Report(a) = Cli::try_parse_from(argv).expect("parses").command;
-        a.spec()
+        a.spec().expect("a valid spec")
     }
 
     #[test]
@@ -199,6 +208,15 @@ mod tests {
         assert_eq!(frames(spec_of(&["--full", "--frames", "7"])), (7, SWEEP_FRAMES.1));
         assert_eq!(frames(spec_of(&["--sweep-frames", "3"])), (FRAMES.0, 3));
         assert!(FRAMES.0 < FRAMES.1 && SWEEP_FRAMES.0 < SWEEP_FRAMES.1);
+    }
+
+    #[test]
+    fn sweep_window_defaults_to_256_and_empty_or_1_is_none() {
+        let windows = |args: &[&str]| spec_of(args).sweep.expect("a sweep").windows;
+        assert_eq!(windows(&[]), [256]);
+        assert_eq!(windows(&["--sweep-window", "1024,4096"]), [1024, 4096]);
+        assert!(windows(&["--sweep-window", ""]).is_empty());
+        assert!(windows(&["--sweep-window", "1"]).is_empty());
     }
 
     #[test]
@@ -219,6 +237,7 @@ mod tests {
             sweep_chunk: vec![64],
             sweep_passes: vec![1],
             sweep_speed: vec![1.0],
+            sweep_window: "64".into(),
             sweep_results: None,
             no_sweep: false,
             full: false,
@@ -243,6 +262,7 @@ mod tests {
             "periodic:2",
             "## 4. Speed against error",
             "hierarchical",
+            "| neo + window 64 | ",
         ] {
             assert!(md.contains(needle), "index.md lacks {needle}");
         }

@@ -111,6 +111,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         chunks: if a.chunk.is_empty() { vec![cfg.engine.chunk] } else { a.chunk.clone() },
         passes: if a.passes.is_empty() { vec![cfg.pipeline.dps_passes] } else { a.passes.clone() },
         speeds: a.speed.clone(),
+        raster_window: cfg.engine.raster_window,
     };
     if a.frames.frames == 0 {
         bail!("--frames must be at least 1");
@@ -246,6 +247,7 @@ mod tests {
             strategy: "neo".into(),
             chunk: 256,
             passes: 1,
+            raster_window: 1,
         }
     }
 

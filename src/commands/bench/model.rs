@@ -76,6 +76,7 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
         strategy: "neo".into(),
         chunk: cfg.engine.chunk,
         passes: cfg.pipeline.dps_passes,
+        raster_window: cfg.engine.raster_window,
     };
     let threads = rayon::current_num_threads();
     let (scene, cpu, wall) = timed(|| suite::load_scene(&spec));
