@@ -22,7 +22,7 @@
 
 use std::path::Path;
 
-use neo_golden::engine::MAX_RASTER_WINDOW;
+use neo_golden::engine::{check_raster_window, MAX_RASTER_WINDOW};
 use neo_golden::synthetic;
 
 use crate::config::SimConfig;
@@ -79,15 +79,10 @@ pub struct SweepSpec {
     pub windows: Vec<usize>,
 }
 
-/// Checks a `--sweep-window` entry: a power of two in `4..=4096`, the windows the engine is
-/// built with (`EngineConfig::raster_window`).
+/// Checks a `--sweep-window` entry as the engine's `raster_window` is checked
+/// ([`check_raster_window`]: a power of two in `4..=4096`, or 1 for none).
 pub fn check_sweep_window(w: usize) -> Result<(), String> {
-    if w.is_power_of_two() && (4..=MAX_RASTER_WINDOW).contains(&w) {
-        return Ok(());
-    }
-    Err(format!(
-        "--sweep-window {w}: a raster core's reorder window is a power of two in 4..={MAX_RASTER_WINDOW} entries (1: none)"
-    ))
+    check_raster_window(w).map_err(|e| format!("--sweep-window {e}"))
 }
 
 /// Parses `--sweep-window`'s comma-separated list: an empty list or `1` is no window; every

@@ -79,6 +79,16 @@ pub const BRIDGE_W_SLOTS: u32 = 2;
 /// its cells compare in parallel, one comparator per entry.
 pub const MAX_RASTER_WINDOW: usize = 4096;
 
+/// Checks a raster core's reorder window ([`EngineConfig::raster_window`]): 1 (no window) or a
+/// power of two in 4..=[`MAX_RASTER_WINDOW`]. The error starts with the window's value.
+pub fn check_raster_window(w: usize) -> Result<(), String> {
+    if w == 1 || (w.is_power_of_two() && (4..=MAX_RASTER_WINDOW).contains(&w)) {
+        Ok(())
+    } else {
+        Err(format!("{w} is neither 1 (no window) nor a power of two in 4..={MAX_RASTER_WINDOW}"))
+    }
+}
+
 /// `true` for a raster window of 1 (no window): the field is left out of the JSON.
 fn is_no_window(w: &usize) -> bool {
     *w == 1
@@ -557,13 +567,7 @@ impl EngineConfig {
         if (f as u64) >= 1u64 << self.len_bits {
             return err(format!("raster_feature_buffer {f} does not fit len_bits {}", self.len_bits));
         }
-        let w = self.raster_window;
-        if w != 1 && (!w.is_power_of_two() || !(4..=MAX_RASTER_WINDOW).contains(&w)) {
-            return err(format!(
-                "raster_window {w} is neither 1 (no window) nor a power of two in 4..={MAX_RASTER_WINDOW}"
-            ));
-        }
-        Ok(())
+        check_raster_window(self.raster_window).map_err(|e| ConfigError(format!("raster_window {e}")))
     }
 
     /// The feature-entry format of the Rasterization Engine (golden default).
