@@ -2,8 +2,9 @@
 //! ideal memory, every tile checked against golden) on the default core and on the same core
 //! with a reorder window of `W` entries, side by side (docs/cycle-model.md, "Reorder window").
 //!
-//! `cargo run --release -p neo-tb --example window_grid -- [W]` (default 64; a power of two in
-//! 4..=4096). The core with the window is built at run time (about 30 s at 64 entries).
+//! `cargo run --release -p neo-tb --example window_grid -- [W] [SEGMENTS]` (default 64 and 8;
+//! `W` a power of two in 4..=4096; the longest table holds `SEGMENTS` feature-buffer segments).
+//! The core with the window is built at run time (about 30 s at 64 entries).
 
 use neo_tb::core::MemTiming;
 use neo_tb::raster::{measure_grid, measure_grid_on, RasterCore};
@@ -21,8 +22,10 @@ fn run() -> Result<(), String> {
     let base = neo_gen::EngineConfig::default();
     let cfg = neo_gen::EngineConfig { raster_window: w, ..base.clone() };
     cfg.validate().map_err(|e| format!("window {w}: {e}"))?;
+    let segs_arg = std::env::args().nth(2).unwrap_or_else(|| "8".into());
+    let segs: u64 = segs_arg.parse().map_err(|_| format!("segments '{segs_arg}': not a number"))?;
     let f = base.raster_feature_buffer as u64;
-    let (lengths, bits) = ([0, 16, 64, f, 2 * f, 8 * f], [1, 4, 16, 64]);
+    let (lengths, bits) = ([0, 16, 64, f, 2 * f, segs.max(3) * f], [1, 4, 16, 64]);
     let plain = measure_grid(&base, 7, &lengths, &bits);
     let t0 = std::time::Instant::now();
     let mut core = RasterCore::build(&cfg, 7, MemTiming::IDEAL)?;
