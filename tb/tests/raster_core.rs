@@ -230,6 +230,58 @@ mod cosim {
         );
     }
 
+    /// The cycle model's cost of a reorder window against the RTL's: the default core with a
+    /// 64-entry window on the raster-core grid of `reports/latency.json` (ideal memory), for
+    /// tables of one to eight segments where the walk or the SCUs set the pace (4 and 16 subtile
+    /// bits per Gaussian). The RTL's cost is its cycles less those of the same point in the
+    /// report (the core without the window); the model's, `grid_point_cycles` with the window
+    /// less without (docs/cycle-model.md, "Reorder window"): within 8 cycles or 5%. Measured
+    /// 2026-12-07: 16 to 322 cycles more, the model 0 to 3 short.
+    #[test]
+    fn the_cycle_model_times_a_reorder_window_as_the_rtl_takes_it() {
+        let name = "the_cycle_model_times_a_reorder_window_as_the_rtl_takes_it";
+        if neo_tb::configs::excluded_from_coverage(name) {
+            return;
+        }
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../reports/latency.json");
+        let report =
+            neo_golden::formats::latency::LatencyReport::from_file(&path).expect("reports/latency.json");
+        let lat = neo_sim::latency::Latency::from_file(&path).expect("reports/latency.json");
+        let plain_core = report.raster.as_ref().and_then(|r| r.core.as_ref()).expect("raster.core");
+        let subtiles = report.raster.as_ref().and_then(|r| r.itu).expect("raster.itu").subtiles_per_job;
+        let w = 64;
+        let cfg = EngineConfig { raster_window: w, ..lat.config.clone() };
+        let f = cfg.raster_feature_buffer as u64;
+        let mut core = RasterCore::build(&cfg, 7, MemTiming::IDEAL).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let windowed = neo_tb::raster::measure_grid_on(&mut core, &cfg, &[16, 64, f, 2 * f, 8 * f], &[4, 16]);
+        let with_window = neo_sim::config::RasterTiming { window: w as u64, ..lat.raster.clone() };
+        for q in &windowed {
+            let p = plain_core
+                .grid
+                .iter()
+                .find(|p| (p.entries, p.bits_per_gaussian) == (q.entries, q.bits_per_gaussian))
+                .unwrap_or_else(|| {
+                    panic!(
+                        "{}: no point of {} entries, {} bits",
+                        path.display(),
+                        q.entries,
+                        q.bits_per_gaussian
+                    )
+                });
+            let rtl = q.cycles as f64 - p.cycles as f64;
+            let model = neo_sim::arch::grid_point_cycles(plain_core, p, subtiles, &with_window)
+                - neo_sim::arch::grid_point_cycles(plain_core, p, subtiles, &lat.raster);
+            println!("{name}: {} entries, {} bits: the window costs the RTL {rtl:+.0}, the model {model:+.0} cycles", q.entries, q.bits_per_gaussian);
+            assert!(rtl > 0.0, "{name}: a window costs cycles ({} entries)", q.entries);
+            assert!(
+                (model - rtl).abs() <= (0.05 * rtl).max(8.0),
+                "{name}: {} entries, {} bits: the model's window costs {model:+.0} cycles, the RTL's {rtl:+.0}",
+                q.entries,
+                q.bits_per_gaussian
+            );
+        }
+    }
+
     /// The same benches on a core with a reorder window ([`neo_tb::configs::raster_window`]: 16
     /// entries over banks of 4): the tile blended, and its table written back, in the order the
     /// window emits (golden `raster::window`). The random tables' current keys are random, so the

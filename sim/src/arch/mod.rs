@@ -56,7 +56,7 @@ use layout::Layout;
 use timing::round_ps;
 
 pub use scheduler::{FrameTimes, Sched};
-pub use timing::{fit_raster_core, raster_tile_cycles, raster_tile_cycles_in_segments};
+pub use timing::{fit_raster_core, grid_point_cycles, raster_tile_cycles, raster_tile_cycles_in_segments};
 
 /// Agent classes.
 pub const CLASS_PRE: u8 = 0;

@@ -1,7 +1,7 @@
 //! The raster core's timing: the cycles of one tile ([`raster_tile_cycles`]) and the fit of its
 //! measured constants to the grid of `reports/latency.json` ([`fit_raster_core`]).
 
-use neo_golden::formats::latency::RasterCore;
+use neo_golden::formats::latency::{GridPoint, RasterCore};
 
 use crate::config::RasterTiming;
 use crate::dram::Ps;
@@ -31,8 +31,8 @@ use neo_golden::engine::{SegmentWork, ROUTING_FIFO_DEPTH};
 /// - the request port: the segment's write-back plus the next segment's loads or, after the last
 ///   segment (which finishes every subtile), the pixel writes.
 ///
-/// A reorder window (`rt.window` above 1) delays the first segment by the entries it holds
-/// back ([`window_fill`]). `tile_overhead` (the empty tile beyond its pixel writes) adds the
+/// A reorder window (`rt.window` above 1) holds `W - 1` entries back: see [`segment_pipeline`].
+/// `tile_overhead` (the empty tile beyond its pixel writes) adds the
 /// latencies. Returns (total,
 /// tail after the last input arrives).
 #[allow(clippy::too_many_arguments)]
@@ -101,19 +101,28 @@ pub fn raster_tile_cycles_in_segments(
         let seg_overhead = if segs > 1 { segs as f64 * rt.segment_overhead } else { 0.0 };
         let shape = TileShape { routed, segments, len: len as f64, f: f as f64, segs, itus, scus };
         let body = segment_pipeline(&shape, rt, &cost, &walk_of);
-        body + seg_overhead + window_fill(len, rt) + rt.tile_overhead as f64
+        body + seg_overhead + rt.tile_overhead as f64
     };
     (total, tail.min(total))
 }
 
-/// The loads a reorder window of `rt.window` entries adds before a tile of `len` entries can
-/// start its walk: the window holds `window - 1` entries back (all of a shorter table), so the
-/// first segment is complete that many loads later, at the measured load rate; the later
-/// segments follow at the same offset, and the drain at the end emits into banks the walk frees
-/// at its own pace.
-fn window_fill(len: u32, rt: &RasterTiming) -> f64 {
-    let held = rt.window.saturating_sub(1).min(u64::from(len));
-    held as f64 * rt.load_cycles_per_entry
+/// The load cycles of a tile's first `c` entries (of `len`, in segments of `f`) at `rate` cycles
+/// an entry: whole segments at the rate; a segment loaded only in part (`k` of its entries, as
+/// a reorder window needs them) costs its whole table phase and `k` feature reads, each half the
+/// rate (an entry's table beat and its feature word).
+fn window_loads(c: f64, len: f64, f: f64, rate: f64) -> f64 {
+    let whole = (c / f).floor() * f;
+    let k = c - whole;
+    if k <= 0.0 {
+        return rate * c;
+    }
+    rate * whole + rate / 2.0 * ((len - whole).min(f) + k)
+}
+
+/// The entries a reorder window of `rt.window` entries holds back in a tile of `len` entries
+/// (all of a shorter table; 0 without a window).
+fn window_hold(len: f64, rt: &RasterTiming) -> f64 {
+    (rt.window.saturating_sub(1) as f64).min(len)
 }
 
 /// A tile's work as [`segment_pipeline`] sees it.
@@ -137,6 +146,12 @@ struct TileShape<'a> {
 /// moves on from a group once every SCU's FIFO has room, that is once each SCU is within a
 /// FIFO's worth of the end of its piece, so a busy SCU holds the others back only by what
 /// exceeds its FIFO. After the last segment, whose groups finish the subtiles, the pixel writes.
+///
+/// A reorder window holding `h` entries back ([`window_hold`]) emits segment `s`'s last entry
+/// only once the entries up to `h` past it are loaded: the loads run `h` entries ahead of the
+/// segments (the first segment waits for `F + h` loads, each later one for the next `F`), and
+/// the entries still held when the last load arrives drain one a cycle (measured on the unit
+/// bench: a one-segment table takes `h` cycles more; docs/cycle-model.md, "Reorder window").
 fn segment_pipeline(
     t: &TileShape,
     rt: &RasterTiming,
@@ -167,11 +182,22 @@ fn segment_pipeline(
     let fifo = f64::from(ROUTING_FIFO_DEPTH);
     let scus = t.scus.max(1) as usize;
     let mut scu_free = vec![0.0f64; scus];
-    let (mut walker, mut loaded) = (0.0f64, rt.load_cycles_per_entry * n_of(0));
+    // Entries loaded by the time segment `s` is complete (`cum`: its end in the table), and
+    // when the last entry still held after the last load has drained.
+    let hold = window_hold(t.len, rt);
+    let needed = |cum: f64| (cum + hold).min(t.len);
+    let loads = |c: f64| window_loads(c, t.len, t.f, rt.load_cycles_per_entry);
+    let drained = |cum: f64, last_load: f64| last_load + (cum - (t.len - hold)).max(0.0);
+    let mut cum = n_of(0);
+    let (mut walker, mut loaded) = (0.0f64, loads(needed(cum)));
+    let mut last_load = if needed(cum) >= t.len { loaded } else { f64::INFINITY };
     let mut end = 0.0f64;
     for s in 0..t.segs {
         let n = n_of(s);
         walker = walker.max(loaded);
+        if hold > 0.0 && last_load.is_finite() {
+            walker = walker.max(drained(cum, last_load));
+        }
         let seg_start = walker;
         for (g, walk) in walk_of(n).iter().enumerate() {
             let start = walker;
@@ -188,13 +214,18 @@ fn segment_pipeline(
             walker = leave;
         }
         let port = if s + 1 < t.segs {
-            rt.load_cycles_per_entry * n_of(s + 1)
+            let next = cum + n_of(s + 1);
+            loads(needed(next)) - loads(needed(cum))
                 + (rt.write_back_cycles_per_entry * n - rt.write_back_overlap).max(0.0)
         } else {
             n
         };
         if s + 1 < t.segs {
             loaded += port;
+            if !last_load.is_finite() && needed(cum + n_of(s + 1)) >= t.len {
+                last_load = loaded;
+            }
+            cum += n_of(s + 1);
         } else {
             let blended = scu_free.iter().copied().fold(walker, f64::max);
             end = blended.max(loaded.max(seg_start) + port + rt.pixel_write_cycles as f64);
@@ -263,28 +294,33 @@ pub fn fit_raster_core(
         segment_overhead: 0.0,
         ..base.clone()
     };
-    let groups = subtiles / scus;
     let per_segment: Vec<f64> = core
         .grid
         .iter()
         .filter(|p| p.entries > 2 * f && p.bits_per_gaussian < 16)
-        .map(|p| {
-            let routed: Vec<u32> = (0..subtiles)
-                .map(|s| {
-                    let g = s / scus;
-                    (p.group_max_routed / groups + u64::from(g < p.group_max_routed % groups))
-                        .min(u32::MAX.into()) as u32
-                })
-                .collect();
-            let n = p.entries as u32;
-            let (model, _) = raster_tile_cycles(&routed, 1.0, n, n, &rt, core.itus as u32, scus as u32, true);
-            (p.cycles as f64 - model) / p.entries.div_ceil(f) as f64
-        })
+        .map(|p| (p.cycles as f64 - grid_point_cycles(core, p, subtiles, &rt)) / p.entries.div_ceil(f) as f64)
         .collect();
     if !per_segment.is_empty() {
         rt.segment_overhead = (per_segment.iter().sum::<f64>() / per_segment.len() as f64).round().max(0.0);
     }
     Ok(rt)
+}
+
+/// [`raster_tile_cycles`] of grid point `p` of `core` (`subtiles` per tile) with timing `rt`: the
+/// point's routed counts rebuilt from its `group_max_routed`, every subtile of a group routing
+/// the group's share (the grid's Gaussians spread evenly).
+pub fn grid_point_cycles(core: &RasterCore, p: &GridPoint, subtiles: u64, rt: &RasterTiming) -> f64 {
+    let scus = core.scus.max(1);
+    let groups = (subtiles / scus).max(1);
+    let routed: Vec<u32> = (0..subtiles)
+        .map(|s| {
+            let g = s / scus;
+            (p.group_max_routed / groups + u64::from(g < p.group_max_routed % groups)).min(u32::MAX.into())
+                as u32
+        })
+        .collect();
+    let n = p.entries as u32;
+    raster_tile_cycles(&routed, 1.0, n, n, rt, core.itus as u32, scus as u32, true).0
 }
 
 /// `cycles` clock cycles of `cyc` picoseconds, in whole picoseconds.
@@ -372,16 +408,29 @@ mod tests {
     /// walk starts that many loads later; no window (0 or 1) changes nothing.
     #[test]
     fn a_reorder_window_delays_the_walk_by_the_loads_it_holds() {
+        // Segments of 100 entries, 2 load cycles an entry (a table beat and a feature word).
         let shaped =
             RasterTiming { load_cycles_per_entry: 2.0, pixel_write_cycles: 512, feature_buffer: 100, ..rt() };
-        let cycles = |window: u64, len: u32| {
+        let cycles = |window: u64, len: u32, routed: u32| {
             let r = RasterTiming { window, ..shaped.clone() };
-            raster_tile_cycles(&[50; 64], 1.0, len, len, &r, 4, 4, true).0
+            raster_tile_cycles(&[routed; 64], 1.0, len, len, &r, 4, 4, true).0
         };
-        for len in [0, 20, 200, 3000] {
-            assert_eq!(cycles(0, len), cycles(1, len), "{len}");
-            assert_eq!(cycles(64, len) - cycles(1, len), 2.0 * f64::from(len.min(63)), "{len}");
+        let extra = |window, len, routed| cycles(window, len, routed) - cycles(1, len, routed);
+        for len in [0, 20, 3000] {
+            assert_eq!(cycles(0, len, 50), cycles(1, len, 50), "{len}");
         }
+        // One segment: the held entries drain one a cycle after the last load.
+        for len in [0, 20, 100] {
+            assert_eq!(extra(64, len, 50), f64::from(len.min(63)), "{len}");
+        }
+        // Walk-bound (the SCUs' work dwarfs the loads): the first walk waits for the held loads.
+        // The held entries' whole segments at the load rate; the segment they end in, its whole
+        // table phase and their feature reads, a cycle each (its table bursts come first).
+        assert_eq!(extra(64, 3000, 20_000), 100.0 + 63.0);
+        assert_eq!(extra(1024, 3000, 20_000), 1000.0 * 2.0 + 100.0 + 23.0);
+        // Load-bound (little work): the loads run ahead, and only the drain at the end shows.
+        let light = extra(1024, 3000, 10);
+        assert!((0.0..=1023.0).contains(&light), "{light}");
     }
 
     #[test]
