@@ -396,6 +396,46 @@ fn cosim_refuses_an_axi_log_it_cannot_write_before_any_work() {
     assert!(!err.contains("engine model:"), "refused before the engine's build: {err}");
 }
 
+/// `neo cosim --model-only`: the cycle model's frames with golden's reference in the engine's
+/// place, without building the engine; one JSON record per frame (frame 0 sorted from scratch,
+/// frame 1 one DPS pass per reused tile); `--waves` makes no sense with it.
+#[test]
+fn cosim_model_only_predicts_frames_without_the_rtl() {
+    let config = neo_golden::shared::workspace_root().join("tb/engine_ci.json");
+    let args = [
+        "cosim",
+        "--scene",
+        "synthetic:blobs?gaussians=2000&seed=3",
+        "--frames",
+        "2",
+        "--res",
+        "128x64",
+        "--config",
+        config.to_str().expect("utf-8 path"),
+        "--model-only",
+        "--json",
+    ];
+    let o = neo(&args);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(!err.contains("engine model:"), "no engine built: {err}");
+    let frames: Vec<serde_json::Value> =
+        String::from_utf8_lossy(&o.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(frames.len(), 2, "{frames:?}");
+    for (k, f) in frames.iter().enumerate() {
+        assert_eq!(f["frame"], k);
+        let busy = f["model_sort_busy"].as_f64().unwrap() + f["model_raster_busy"].as_f64().unwrap();
+        assert!(f["model_cycles"].as_f64().unwrap() > 0.0 && busy > 0.0, "{f}");
+    }
+    let passes = |f: &serde_json::Value| -> Vec<u64> {
+        f["dps_passes"].as_array().unwrap().iter().map(|p| p.as_u64().unwrap()).collect()
+    };
+    assert!(passes(&frames[0]).iter().all(|&p| p == 0), "frame 0 from scratch: {}", frames[0]);
+    assert!(passes(&frames[1]).contains(&1), "frame 1 reuses its tables: {}", frames[1]);
+    let o = neo(&[&args[..], &["--waves", "w.vcd"]].concat());
+    assert_eq!(o.status.code(), Some(2), "a usage error: {}", stderr(&o));
+}
+
 #[test]
 fn cosim_refuses_a_plan_the_engine_cannot_make_before_any_work() {
     let scene = ["cosim", "--scene", "synthetic:blobs?gaussians=100&seed=1", "--frames", "1"];

@@ -3,7 +3,8 @@
 //!
 //! The engine of the configuration is generated, verilated and compiled on first use and cached
 //! by content hash (`neo_tb::dynmodel`); the golden host session writes each frame's inputs into
-//! the harness's AXI memory.
+//! the harness's AXI memory. `--model-only` prints the engine-level cycle model's prediction of
+//! each frame instead, with golden's reference in the engine's place.
 
 use crate::args::{SceneArg, StrictArg, TrajectoryArg};
 use crate::engine_run;
@@ -11,7 +12,9 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use indicatif::ProgressBar;
 use neo_golden::engine::host::MemoryLayout;
-use neo_golden::engine::{Counter, EngineConfig, Planner, SessionOptions};
+use neo_golden::engine::{
+    execute_frame, Counter, EngineConfig, EngineSession, Memory, Planner, SessionOptions,
+};
 use neo_golden::hwpre::ShPrecision;
 use neo_golden::pipeline::Strategy;
 use neo_golden::source;
@@ -87,6 +90,11 @@ pub struct CosimArgs {
     /// Measured unit timing for the cycle model's prediction.
     #[arg(long, default_value = latency::DEFAULT_PATH)]
     pub latency: PathBuf,
+    /// Print the engine-level cycle model's prediction of every frame without building or
+    /// running the RTL (golden's memory-level reference runs each frame in its place): seconds
+    /// where a large engine simulates for minutes or hours.
+    #[arg(long, conflicts_with_all = ["waves", "axi_log"])]
+    pub model_only: bool,
     #[command(flatten)]
     pub strict: StrictArg,
 }
@@ -111,7 +119,7 @@ pub fn run(a: CosimArgs) -> Result<()> {
     };
     let seed = match &a.seed {
         Some(s) => neo_tb::rng::parse_seed(s).ok_or_else(|| anyhow!("--seed {s:?} is not a number"))?,
-        None => neo_tb::rng::test_seed("neo cosim"),
+        None => neo_tb::rng::command_seed("neo cosim"),
     };
     let (scene, _) = source::load_scene(&a.scene.scene, a.strict.strict)?;
     let traj = engine_run::trajectory_at(&a.trajectory.trajectory, &scene, a.frames, a.res)?;
@@ -127,6 +135,9 @@ pub fn run(a: CosimArgs) -> Result<()> {
         cfg.raster_cores,
         cfg.mem_channels
     );
+    if a.model_only {
+        return model_only(&a, &cfg, &timing, &mut session);
+    }
     // Before the engine's build: a path that cannot be written fails at once.
     let mut log = match &a.axi_log {
         Some(path) => Some(TransferLog::create(path, session.layout(), &cfg)?),
@@ -170,6 +181,49 @@ pub fn run(a: CosimArgs) -> Result<()> {
         Some(f) => bail!("frame {f} is not bit-exact (seed 0x{seed:016x}; replay with --seed 0x{seed:016x})"),
         None => Ok(()),
     }
+}
+
+/// `--model-only`: the cycle model's prediction of every frame of `session`, golden's reference
+/// standing in for the engine (it leaves the memory as the RTL does, bit for bit).
+fn model_only(
+    a: &CosimArgs,
+    cfg: &EngineConfig,
+    timing: &AxiTiming,
+    session: &mut EngineSession,
+) -> Result<()> {
+    let lat = crate::points::latency_file(&a.latency)?;
+    let model = EngineFrameModel::new(cfg, &lat, port_timing(timing)).map_err(|e| anyhow!(e))?;
+    let mut mem = Memory::new();
+    let mut frame = 0;
+    while let Some(plan) = session.next_frame(&mut mem)? {
+        let p = model.predict_frame(&plan.regs, &mem)?;
+        execute_frame(cfg, &plan.regs, &mut mem)?;
+        if a.json {
+            let v = serde_json::json!({
+                "frame": frame,
+                "model_cycles": p.cycles.round(),
+                "model_preprocess_cycles": p.pre_busy.round(),
+                "model_sort_busy": p.sort_busy.round(),
+                "model_raster_busy": p.raster_busy.round(),
+                "planned_by_engine": p.scan > 0.0,
+                "dps_passes": &p.dps_passes,
+                "dps_wide": &p.dps_wide,
+            });
+            println!("{v}");
+        } else {
+            println!(
+                "frame {frame:>3}: model {:.0} cycles (busy sort {:.0}, raster {:.0}, preprocessing {:.0}); DPS passes per tile {:?}{}",
+                p.cycles,
+                p.sort_busy,
+                p.raster_busy,
+                p.pre_busy,
+                p.dps_passes,
+                if p.scan > 0.0 { " planned by the engine" } else { "" }
+            );
+        }
+        frame += 1;
+    }
+    Ok(())
 }
 
 /// The `--axi-log` file: a CSV of every AR and AW, frame by frame.

@@ -204,9 +204,26 @@ fn fresh_seed(test: &str) -> u64 {
 /// When `NEO_SEED` is set but not a number.
 pub fn test_seed(test: &str) -> u64 {
     let seed = replay_seed().unwrap_or_else(|| fresh_seed(test));
-    println!("{test}: seed = 0x{seed:016x} (reproduce with NEO_SEED=0x{seed:016x})");
+    println!("{}", seed_line(test, seed));
     crate::xinit::enter(test, seed);
     seed
+}
+
+/// [`test_seed`] for a command whose standard output is its data (`neo cosim --json`): the
+/// seed's line goes to standard error.
+///
+/// # Panics
+/// When `NEO_SEED` is set but not a number.
+pub fn command_seed(command: &str) -> u64 {
+    let seed = replay_seed().unwrap_or_else(|| fresh_seed(command));
+    eprintln!("{}", seed_line(command, seed));
+    crate::xinit::enter(command, seed);
+    seed
+}
+
+/// `NAME: seed = 0x... (reproduce with NEO_SEED=0x...)`.
+fn seed_line(name: &str, seed: u64) -> String {
+    format!("{name}: seed = 0x{seed:016x} (reproduce with NEO_SEED=0x{seed:016x})")
 }
 
 /// FNV-1a of a string (mixes the test name into fresh seeds).
