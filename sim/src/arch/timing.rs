@@ -190,13 +190,14 @@ fn segment_pipeline(
     let drained = |cum: f64, last_load: f64| last_load + (cum - (t.len - hold)).max(0.0);
     let mut cum = n_of(0);
     let (mut walker, mut loaded) = (0.0f64, loads(needed(cum)));
-    let mut last_load = if needed(cum) >= t.len { loaded } else { f64::INFINITY };
+    let mut last_load = (needed(cum) >= t.len).then_some(loaded);
     let mut end = 0.0f64;
     for s in 0..t.segs {
         let n = n_of(s);
         walker = walker.max(loaded);
-        if hold > 0.0 && last_load.is_finite() {
-            walker = walker.max(drained(cum, last_load));
+        if let Some(last) = last_load {
+            // Without a window, `last` is an earlier `loaded`: nothing changes.
+            walker = walker.max(drained(cum, last));
         }
         let seg_start = walker;
         for (g, walk) in walk_of(n).iter().enumerate() {
@@ -213,22 +214,17 @@ fn segment_pipeline(
             }
             walker = leave;
         }
-        let port = if s + 1 < t.segs {
-            let next = cum + n_of(s + 1);
-            loads(needed(next)) - loads(needed(cum))
-                + (rt.write_back_cycles_per_entry * n - rt.write_back_overlap).max(0.0)
-        } else {
-            n
-        };
         if s + 1 < t.segs {
-            loaded += port;
-            if !last_load.is_finite() && needed(cum + n_of(s + 1)) >= t.len {
-                last_load = loaded;
+            let next = cum + n_of(s + 1);
+            loaded += loads(needed(next)) - loads(needed(cum))
+                + (rt.write_back_cycles_per_entry * n - rt.write_back_overlap).max(0.0);
+            if last_load.is_none() && needed(next) >= t.len {
+                last_load = Some(loaded);
             }
-            cum += n_of(s + 1);
+            cum = next;
         } else {
             let blended = scu_free.iter().copied().fold(walker, f64::max);
-            end = blended.max(loaded.max(seg_start) + port + rt.pixel_write_cycles as f64);
+            end = blended.max(loaded.max(seg_start) + n + rt.pixel_write_cycles as f64);
         }
     }
     end
