@@ -44,18 +44,11 @@ pub struct Point {
     /// golden pipeline blends and writes back each tile in its order, and the model's engine
     /// has it (`EngineConfig::raster_window`). Left out of the JSON when 1, so results written
     /// before the field read as no window.
-    #[serde(default = "no_window", skip_serializing_if = "is_no_window")]
+    #[serde(
+        default = "neo_golden::raster::window::no_window",
+        skip_serializing_if = "neo_golden::raster::window::is_no_window"
+    )]
     pub raster_window: usize,
-}
-
-/// A point's reorder window when its JSON has none: 1, no window.
-fn no_window() -> usize {
-    1
-}
-
-/// `true` for a window of 1 (no window): the field is left out of the JSON.
-fn is_no_window(w: &usize) -> bool {
-    *w == 1
 }
 
 /// A strategy with the raster cores' reorder window as the report names it: `neo` without

@@ -189,7 +189,10 @@ pub struct WorkloadInfo {
     pub capacity: Option<usize>,
     /// The raster cores' reorder window the tables were blended and written back through (1:
     /// none; left out of the file then, and 1 when absent).
-    #[serde(default = "no_window", skip_serializing_if = "is_no_window")]
+    #[serde(
+        default = "neo_golden::raster::window::no_window",
+        skip_serializing_if = "neo_golden::raster::window::is_no_window"
+    )]
     pub raster_window: usize,
     /// Bytes per sort entry.
     pub sort_entry_bytes: u32,
@@ -252,14 +255,4 @@ impl Workload {
             })
             .sum()
     }
-}
-
-/// A workload without a raster window (older files).
-fn no_window() -> usize {
-    1
-}
-
-/// `true` for no raster window: the field is left out of the file.
-fn is_no_window(w: &usize) -> bool {
-    *w == 1
 }

@@ -7,6 +7,7 @@
 //! The core with the window is built at run time (about 30 s at 64 entries).
 
 use neo_tb::core::MemTiming;
+use neo_tb::latency::{raster_grid_lengths, RASTER_GRID_BITS};
 use neo_tb::raster::{measure_grid, measure_grid_on, RasterCore};
 
 fn main() {
@@ -25,7 +26,10 @@ fn run() -> Result<(), String> {
     let segs_arg = std::env::args().nth(2).unwrap_or_else(|| "8".into());
     let segs: u64 = segs_arg.parse().map_err(|_| format!("segments '{segs_arg}': not a number"))?;
     let f = base.raster_feature_buffer as u64;
-    let (lengths, bits) = ([0, 16, 64, f, 2 * f, segs.max(3) * f], [1, 4, 16, 64]);
+    // The latency report's grid, its longest table `segs` segments long.
+    let mut lengths = raster_grid_lengths(f);
+    *lengths.last_mut().expect("a longest table") = segs.max(3) * f;
+    let bits = RASTER_GRID_BITS;
     let plain = measure_grid(&base, 7, &lengths, &bits);
     let t0 = std::time::Instant::now();
     let mut core = RasterCore::build(&cfg, 7, MemTiming::IDEAL)?;

@@ -338,12 +338,21 @@ pub fn raster_section(cfg: &EngineConfig) -> Raster {
     Raster { itu: Some(itu), core: Some(raster_core_section(cfg)) }
 }
 
+/// The subtile bits per Gaussian of the `raster.core` grid.
+pub const RASTER_GRID_BITS: [u64; 4] = [1, 4, 16, 64];
+
+/// The table lengths of the `raster.core` grid for a feature buffer of `f` entries: empty,
+/// short, one segment, two and eight.
+pub fn raster_grid_lengths(f: u64) -> [u64; 6] {
+    [0, 16, 64, f, 2 * f, 8 * f]
+}
+
 /// The `raster.core` section: `neo_raster_core` cycles per tile (command to `done_o`, ideal
 /// memory) over a grid of table lengths x subtile bits per Gaussian, and the shape of the
 /// measured core. No fit: the cycle model fits its formula to the grid.
 pub fn raster_core_section(cfg: &EngineConfig) -> RasterCore {
     let f = cfg.raster_feature_buffer as u64;
-    let grid = crate::raster::measure_grid(cfg, SEED ^ 7, &[0, 16, 64, f, 2 * f, 8 * f], &[1, 4, 16, 64]);
+    let grid = crate::raster::measure_grid(cfg, SEED ^ 7, &raster_grid_lengths(f), &RASTER_GRID_BITS);
     let rc = cfg.raster_config();
     RasterCore {
         itus: cfg.raster_itus as u64,

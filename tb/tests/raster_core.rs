@@ -253,7 +253,9 @@ mod cosim {
         let cfg = EngineConfig { raster_window: w, ..lat.config.clone() };
         let f = cfg.raster_feature_buffer as u64;
         let mut core = RasterCore::build(&cfg, 7, MemTiming::IDEAL).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let windowed = neo_tb::raster::measure_grid_on(&mut core, &cfg, &[16, 64, f, 2 * f, 8 * f], &[4, 16]);
+        // The report's table lengths but the empty one, at the bits where the walk or SCUs lead.
+        let lengths = &neo_tb::latency::raster_grid_lengths(f)[1..];
+        let windowed = neo_tb::raster::measure_grid_on(&mut core, &cfg, lengths, &[4, 16]);
         let with_window = neo_sim::config::RasterTiming { window: w as u64, ..lat.raster.clone() };
         for q in &windowed {
             let p = plain_core

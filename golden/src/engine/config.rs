@@ -89,11 +89,6 @@ pub fn check_raster_window(w: usize) -> Result<(), String> {
     }
 }
 
-/// `true` for a raster window of 1 (no window): the field is left out of the JSON.
-fn is_no_window(w: &usize) -> bool {
-    *w == 1
-}
-
 /// Parameters of the generated RTL. [`EngineConfig::default`] is the paper's configuration.
 ///
 /// JSON: an object with any subset of these fields (missing ones take the default), e.g.
@@ -161,7 +156,7 @@ pub struct EngineConfig {
     /// 4..=[`MAX_RASTER_WINDOW`]. The core blends, and writes the table back, in the window's
     /// order. Left out of the JSON (and so of [`EngineConfig::hash`]) when 1, so every
     /// configuration written before the field keeps its hash.
-    #[serde(skip_serializing_if = "is_no_window")]
+    #[serde(skip_serializing_if = "crate::raster::window::is_no_window")]
     pub raster_window: usize,
     /// Engine: Sorting Cores (`neo_sort_core` instances). 16 in the paper (Table 1).
     pub sort_cores: usize,

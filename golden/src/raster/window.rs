@@ -25,6 +25,18 @@ use std::collections::BinaryHeap;
 /// The largest window (entries).
 pub const MAX_WINDOW: usize = 1 << 16;
 
+/// The window of 1 entry: no reordering (the serde default of a record written before its
+/// window field).
+pub fn no_window() -> usize {
+    1
+}
+
+/// `true` for a window of 1 (no window): records leave the field out then, so those written
+/// before it keep their text (and an engine configuration its hash).
+pub fn is_no_window(w: &usize) -> bool {
+    *w == 1
+}
+
 /// Checks a window size: `1` (no window) to [`MAX_WINDOW`] entries.
 pub fn check_window(window: usize) -> Result<(), String> {
     match window {
