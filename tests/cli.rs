@@ -398,7 +398,7 @@ fn cosim_refuses_an_axi_log_it_cannot_write_before_any_work() {
 
 /// `neo cosim --model-only`: the cycle model's frames with golden's reference in the engine's
 /// place, without building the engine; one JSON record per frame (frame 0 sorted from scratch,
-/// frame 1 one DPS pass per reused tile); `--waves` makes no sense with it.
+/// frame 1 one DPS pass per reused tile), and no harness seed; `--waves` makes no sense with it.
 #[test]
 fn cosim_model_only_predicts_frames_without_the_rtl() {
     let config = neo_golden::shared::workspace_root().join("tb/engine_ci.json");
@@ -419,6 +419,7 @@ fn cosim_model_only_predicts_frames_without_the_rtl() {
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert!(!err.contains("engine model:"), "no engine built: {err}");
+    assert!(!err.contains("seed"), "no harness, so no seed drawn or printed: {err}");
     let frames: Vec<serde_json::Value> =
         String::from_utf8_lossy(&o.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     assert_eq!(frames.len(), 2, "{frames:?}");

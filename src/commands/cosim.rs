@@ -117,27 +117,30 @@ pub fn run(a: CosimArgs) -> Result<()> {
         "ideal" => AxiTiming::IDEAL,
         other => bail!("--memory {other:?}: expected `random` or `ideal`"),
     };
-    let seed = match &a.seed {
-        Some(s) => neo_tb::rng::parse_seed(s).ok_or_else(|| anyhow!("--seed {s:?} is not a number"))?,
-        None => neo_tb::rng::command_seed("neo cosim"),
+    let given = match &a.seed {
+        Some(s) => Some(neo_tb::rng::parse_seed(s).ok_or_else(|| anyhow!("--seed {s:?} is not a number"))?),
+        None => None,
     };
+    // The harness's seed drives only the RTL run's memory: `--model-only` has none.
+    let seed = (!a.model_only).then(|| given.unwrap_or_else(|| neo_tb::rng::command_seed("neo cosim")));
     let (scene, _) = source::load_scene(&a.scene.scene, a.strict.strict)?;
     let traj = engine_run::trajectory_at(&a.trajectory.trajectory, &scene, a.frames, a.res)?;
     let strategy: Strategy = a.sort.parse().map_err(|e| anyhow!("--sort {:?}: {e}", a.sort))?;
     let opts = SessionOptions { mode, strategy, sh: a.sh, planner: a.planner };
     let mut session = engine_run::session(&scene, traj, &cfg, opts)?;
     eprintln!(
-        "neo cosim: {} Gaussians, {} tiles, {} frames, engine {} + {} cores, {} ports, seed 0x{seed:016x}",
+        "neo cosim: {} Gaussians, {} tiles, {} frames, engine {} + {} cores, {} ports{}",
         scene.len(),
         session.tiles(),
         session.frames(),
         cfg.sort_cores,
         cfg.raster_cores,
-        cfg.mem_channels
+        cfg.mem_channels,
+        seed.map_or(String::new(), |s| format!(", seed 0x{s:016x}"))
     );
-    if a.model_only {
+    let Some(seed) = seed else {
         return model_only(&a, &cfg, &timing, &mut session);
-    }
+    };
     // Before the engine's build: a path that cannot be written fails at once.
     let mut log = match &a.axi_log {
         Some(path) => Some(TransferLog::create(path, session.layout(), &cfg)?),
