@@ -3,7 +3,7 @@
 //! each workload's frames or each group's points.
 
 use anyhow::{anyhow, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use neo_golden::engine::EngineConfig;
 use neo_golden::{scene::Scene, shared};
 use neo_sim::config::SimConfig;
@@ -124,18 +124,17 @@ fn distinct_workloads(jobs: &[PointJob], group: &[usize]) -> (Vec<usize>, Vec<us
 }
 
 /// The progress bar of `jobs`: a unit per frame generated and per frame simulated on each
-/// accelerator (the GPU model is instant).
+/// accelerator (the GPU model is instant). Hidden until its set starts ([`JobSet::show`]).
 fn jobs_bar(jobs: &[PointJob], what: &str) -> ProgressBar {
     let model_units =
         |j: &PointJob| (j.point.frames * j.archs.iter().filter(|a| **a != Arch::Gpu).count()) as u64;
     let total: u64 = jobs.iter().map(|j| j.point.frames as u64 + model_units(j)).sum();
-    let bar = ProgressBar::new(total);
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
     bar.set_style(
         ProgressStyle::with_template("{prefix} {bar:24} {percent:>3}% [{elapsed} < {eta}] {msg}")
             .expect("valid template"),
     );
     bar.set_prefix(what.to_string());
-    bar.enable_steady_tick(Duration::from_millis(200));
     bar
 }
 
@@ -194,6 +193,77 @@ impl<'a> JobSet<'a> {
         }
         *self.slots[k].lock().expect("result slot") =
             Some(r.map(|r| (r, self.started.elapsed().as_secs_f64())));
+        if n == self.jobs.len() {
+            self.bar.finish_and_clear();
+        }
+    }
+
+    /// Shows the set's progress bar in `multi` (its set starts).
+    fn show(&self, multi: &MultiProgress) {
+        multi.add(self.bar.clone());
+        self.bar.enable_steady_tick(Duration::from_millis(200));
+    }
+
+    /// Generates the set's workloads, group after group (the largest first), and spawns each
+    /// job's simulations on its workload as soon as it is made; with throughput runs
+    /// (`headline`) in the set, the other jobs' simulations are spawned after all of theirs.
+    fn generate<'s>(&'s self, s: &rayon::ScopeFifo<'s>, scenes: &Scenes, raster_sample: u32) -> Result<()> {
+        let jobs = self.jobs;
+        let any_headline = jobs.iter().any(|j| j.headline);
+        let mut deferred = Vec::new();
+        for g in camera_groups(jobs) {
+            let (unique, shared_by) = distinct_workloads(jobs, &g);
+            let points: Vec<&Point> = unique.iter().map(|&k| &jobs[k].point).collect();
+            let first = points[0];
+            let scene = scenes.loaded(&first.scene).expect("loaded by run_job_sets");
+            let msg =
+                format!("generating {} workload(s) at {} ({} frames)", points.len(), first.res, first.frames);
+            self.bar.set_message(msg);
+            let golden: Vec<GoldenRaster> = unique.iter().map(|&k| jobs[k].golden).collect();
+            let wls = suite::workloads_with(scene, &points, &golden, self.cfg, raster_sample, |_| {
+                self.bar.inc(g.len() as u64)
+            })
+            .map_err(|e| anyhow!(e))?;
+            let wls: Vec<Arc<Workload>> = wls.into_iter().map(Arc::new).collect();
+            for (&k, &i) in g.iter().zip(&shared_by) {
+                if jobs[k].headline || !any_headline {
+                    self.spawn(s, k, wls[i].clone());
+                } else {
+                    deferred.push((k, wls[i].clone()));
+                }
+            }
+        }
+        for (k, wl) in deferred {
+            self.spawn(s, k, wl);
+        }
+        Ok(())
+    }
+}
+
+/// [`JobSet`]s running in order on one pool ([`run_job_sets`]).
+struct SetsRun<'a> {
+    sets: Vec<JobSet<'a>>,
+    scenes: &'a Scenes,
+    raster_sample: u32,
+    multi: MultiProgress,
+    /// The first generation error (the sets after it do not start).
+    failed: Mutex<Option<anyhow::Error>>,
+}
+
+impl SetsRun<'_> {
+    /// Starts set `i`: generates its workloads and spawns its simulations, then queues the next
+    /// set's start after them. The pool takes its tasks in order, so the next set starts once
+    /// every simulation of this one has: on the first core they leave free.
+    fn start<'s>(&'s self, s: &rayon::ScopeFifo<'s>, i: usize) {
+        let set = &self.sets[i];
+        set.show(&self.multi);
+        if let Err(e) = set.generate(s, self.scenes, self.raster_sample) {
+            self.failed.lock().expect("error slot").get_or_insert(e);
+            return;
+        }
+        if i + 1 < self.sets.len() {
+            s.spawn_fifo(move |s| self.start(s, i + 1));
+        }
     }
 }
 
@@ -214,56 +284,61 @@ pub fn run_jobs(
     what: &str,
     log: &(dyn Fn(&PointJob, &PointResult, &str) + Sync),
 ) -> Result<Vec<Timed>> {
-    for j in jobs {
+    let mut sets = run_job_sets(scenes, &[(jobs, what)], cfg, lat, raster_sample, log)?;
+    Ok(sets.pop().expect("one set"))
+}
+
+/// Runs `sets` of jobs (each with its name in progress messages) as [`run_jobs`] runs one, in
+/// order, on one pool: a set's generation starts once every simulation of the sets before it
+/// has started ([`SetsRun::start`]), and its simulations queue after theirs. So no core idles
+/// while a set's last simulations run, and a set's work never delays the earlier sets'
+/// simulations. A progress bar per set, shown while it runs. Returns, per set and in the order
+/// of its jobs, each result and the seconds from the start to its end.
+pub fn run_job_sets(
+    scenes: &mut Scenes,
+    sets: &[(&[PointJob], &str)],
+    cfg: &SimConfig,
+    lat: &Latency,
+    raster_sample: u32,
+    log: &(dyn Fn(&PointJob, &PointResult, &str) + Sync),
+) -> Result<Vec<Vec<Timed>>> {
+    for j in sets.iter().flat_map(|(jobs, _)| jobs.iter()) {
         scenes.get(&j.point.scene)?;
     }
     let scenes = &*scenes;
-    let set = JobSet {
-        jobs,
-        cfg,
-        lat,
-        what,
-        log,
-        bar: jobs_bar(jobs, what),
-        slots: jobs.iter().map(|_| Mutex::new(None)).collect(),
-        finished: AtomicUsize::new(0),
-        started: Instant::now(),
-    };
-    let any_headline = jobs.iter().any(|j| j.headline);
-    let generated: Result<()> = rayon::scope_fifo(|s| {
-        let mut deferred = Vec::new();
-        for g in camera_groups(jobs) {
-            let (unique, shared_by) = distinct_workloads(jobs, &g);
-            let points: Vec<&Point> = unique.iter().map(|&k| &jobs[k].point).collect();
-            let first = points[0];
-            let scene = scenes.loaded(&first.scene).expect("loaded above");
-            let msg =
-                format!("generating {} workload(s) at {} ({} frames)", points.len(), first.res, first.frames);
-            set.bar.set_message(msg);
-            let golden: Vec<GoldenRaster> = unique.iter().map(|&k| jobs[k].golden).collect();
-            let wls = suite::workloads_with(scene, &points, &golden, cfg, raster_sample, |_| {
-                set.bar.inc(g.len() as u64)
-            })
-            .map_err(|e| anyhow!(e))?;
-            let wls: Vec<Arc<Workload>> = wls.into_iter().map(Arc::new).collect();
-            for (&k, &i) in g.iter().zip(&shared_by) {
-                if jobs[k].headline || !any_headline {
-                    set.spawn(s, k, wls[i].clone());
-                } else {
-                    deferred.push((k, wls[i].clone()));
-                }
-            }
-        }
-        for (k, wl) in deferred {
-            set.spawn(s, k, wl);
-        }
-        Ok(())
-    });
-    set.bar.finish_and_clear();
-    generated?;
-    set.slots
+    let started = Instant::now();
+    let sets = sets
+        .iter()
+        .map(|&(jobs, what)| JobSet {
+            jobs,
+            cfg,
+            lat,
+            what,
+            log,
+            bar: jobs_bar(jobs, what),
+            slots: jobs.iter().map(|_| Mutex::new(None)).collect(),
+            finished: AtomicUsize::new(0),
+            started,
+        })
+        .collect();
+    let run = SetsRun { sets, scenes, raster_sample, multi: MultiProgress::new(), failed: Mutex::new(None) };
+    if !run.sets.is_empty() {
+        rayon::scope_fifo(|s| run.start(s, 0));
+    }
+    for set in &run.sets {
+        set.bar.finish_and_clear();
+    }
+    if let Some(e) = run.failed.into_inner().expect("error slot") {
+        return Err(e);
+    }
+    run.sets
         .into_iter()
-        .map(|m| m.into_inner().expect("result slot").expect("every spawned job is done"))
+        .map(|set| {
+            set.slots
+                .into_iter()
+                .map(|m| m.into_inner().expect("result slot").expect("every spawned job is done"))
+                .collect()
+        })
         .collect()
 }
 
@@ -298,16 +373,15 @@ pub fn log_point(started: Instant, r: &PointResult, label: &str) {
 }
 
 impl PointRunner for ProgressRunner<'_> {
-    fn run_many(
+    fn run_sets(
         &mut self,
-        jobs: &[PointJob],
+        sets: &[(&[PointJob], &str)],
         raster_sample: u32,
-        what: &str,
-    ) -> Result<Vec<(PointResult, f64)>, String> {
+    ) -> Result<Vec<Vec<(PointResult, f64)>>, String> {
         let started = self.started;
         // Throughput runs print their table as soon as they are done, and the last of them the
         // table of all.
-        let n_headline = jobs.iter().filter(|j| j.headline).count();
+        let n_headline = sets.iter().flat_map(|(jobs, _)| jobs.iter()).filter(|j| j.headline).count();
         let headline = Mutex::new(Vec::new());
         let log = move |j: &PointJob, r: &PointResult, label: &str| {
             log_point(started, r, label);
@@ -325,7 +399,7 @@ impl PointRunner for ProgressRunner<'_> {
                 );
             }
         };
-        run_jobs(&mut self.scenes, jobs, self.cfg, self.lat, raster_sample, what, &log)
+        run_job_sets(&mut self.scenes, sets, self.cfg, self.lat, raster_sample, &log)
             .map_err(|e| format!("{e:#}"))
     }
 }

@@ -10,7 +10,8 @@
 //!    raster cores' reorder windows asked for ([`SweepSpec::windows`]) at every speed.
 //!
 //! The steps run as jobs ([`PointJob`]) in two sets: the throughput runs (with the jobs that run
-//! on their workloads: Neo-S) first, so that their table is out early, then the rest. Within a
+//! on their workloads: Neo-S) first, so that their table is out early, then the rest, which
+//! starts as soon as the first set's last simulations have (no core waits for them). Within a
 //! set, the architectures of one point run while the next workloads are generated (the largest
 //! first), and points that share their cameras generate their workloads together, each frame
 //! preprocessed and binned once ([`crate::suite::workloads`]): the compared strategies'
@@ -168,16 +169,18 @@ impl PointJob {
 
 /// Runs the plan's points.
 pub trait PointRunner {
-    /// Runs `jobs`, their workloads generated with `raster_sample` (jobs sharing their cameras
-    /// together, [`crate::suite::workloads`]), and each job's architectures on its workload
-    /// ([`crate::suite::evaluate`]); `what` names the set in progress messages. Returns, in the
-    /// order of `jobs`, each result and the seconds from the call to its end.
-    fn run_many(
+    /// Runs `sets` of jobs (each with its name in progress messages), their workloads generated
+    /// with `raster_sample` (jobs sharing their cameras together, [`crate::suite::workloads`]),
+    /// and each job's architectures on its workload ([`crate::suite::evaluate`]). The sets run in
+    /// order: a set's generation starts once every simulation of the sets before it has started,
+    /// and its simulations queue after theirs (no core idles while a set's last simulations
+    /// run). Returns, per set and in the order of its jobs, each result and the seconds from the
+    /// call to its end.
+    fn run_sets(
         &mut self,
-        jobs: &[PointJob],
+        sets: &[(&[PointJob], &str)],
         raster_sample: u32,
-        what: &str,
-    ) -> Result<Vec<(PointResult, f64)>, String>;
+    ) -> Result<Vec<Vec<(PointResult, f64)>>, String>;
 }
 
 /// The points of a report.
@@ -400,8 +403,8 @@ impl ReportPlan {
 /// their workloads (same point and golden raster), then the others, so that the throughput runs
 /// are not slowed by the generation of other workloads (not even of those sharing their
 /// cameras: a timeline's strategy pipeline costs more than the frames' preprocessing it
-/// shares). Returns, in the order of `jobs`, each result and the seconds from the first set's
-/// start to its end (the second set starting when the first's last job ends).
+/// shares); the second set starts as the first's last simulations do ([`PointRunner::run_sets`]).
+/// Returns, in the order of `jobs`, each result and the seconds from the start to its end.
 fn run_headline_first(
     runner: &mut dyn PointRunner,
     jobs: &[PointJob],
@@ -409,20 +412,17 @@ fn run_headline_first(
 ) -> Result<Vec<(PointResult, f64)>, String> {
     let first_set = |j: &PointJob| j.headline || jobs.iter().any(|h| h.headline && h.shares_workload(j));
     let (first, rest): (Vec<usize>, Vec<usize>) = (0..jobs.len()).partition(|&k| first_set(&jobs[k]));
-    let pick = |ks: &[usize]| ks.iter().map(|&k| jobs[k].clone()).collect::<Vec<_>>();
+    let sets: Vec<(Vec<usize>, &str)> =
+        [(first, "throughput"), (rest, "report")].into_iter().filter(|(set, _)| !set.is_empty()).collect();
+    let picked: Vec<Vec<PointJob>> =
+        sets.iter().map(|(set, _)| set.iter().map(|&k| jobs[k].clone()).collect()).collect();
+    let named: Vec<(&[PointJob], &str)> =
+        picked.iter().zip(&sets).map(|(p, (_, what))| (&p[..], *what)).collect();
     let mut out: Vec<Option<(PointResult, f64)>> = vec![None; jobs.len()];
-    // The second set starts when the first's last job ends.
-    let mut offset = 0.0;
-    for (set, what) in [(first, "throughput"), (rest, "report")] {
-        if set.is_empty() {
-            continue;
+    for ((set, _), results) in sets.iter().zip(runner.run_sets(&named, sample)?) {
+        for (&k, r) in set.iter().zip(results) {
+            out[k] = Some(r);
         }
-        let mut end: f64 = 0.0;
-        for (k, (r, t)) in set.iter().zip(runner.run_many(&pick(&set), sample, what)?) {
-            out[*k] = Some((r, offset + t));
-            end = end.max(t);
-        }
-        offset += end;
     }
     Ok(out.into_iter().map(|r| r.expect("every job ran")).collect())
 }
@@ -454,19 +454,30 @@ mod tests {
     use super::*;
     use crate::run::ArchResult;
 
-    /// Records each set of jobs it is given and returns a result per job, ending 1 s after the
-    /// set's start.
+    /// Records each set of jobs it is given and returns a result per job, the `k`-th set's
+    /// ending `k + 1` seconds after the start.
     #[derive(Default)]
     struct Recorder(Vec<Vec<PointJob>>);
 
     impl PointRunner for Recorder {
-        fn run_many(
+        fn run_sets(
             &mut self,
-            jobs: &[PointJob],
+            sets: &[(&[PointJob], &str)],
             _: u32,
-            _: &str,
-        ) -> Result<Vec<(PointResult, f64)>, String> {
-            self.0.push(jobs.to_vec());
+        ) -> Result<Vec<Vec<(PointResult, f64)>>, String> {
+            let first = self.0.len();
+            self.0.extend(sets.iter().map(|(jobs, _)| jobs.to_vec()));
+            Ok(sets
+                .iter()
+                .enumerate()
+                .map(|(k, (jobs, _))| self.results(jobs, (first + k + 1) as f64))
+                .collect())
+        }
+    }
+
+    impl Recorder {
+        /// A result per job of `jobs`, each ending at `end` seconds.
+        fn results(&self, jobs: &[PointJob], end: f64) -> Vec<(PointResult, f64)> {
             let result = |j: &PointJob| PointResult {
                 point: j.point.clone(),
                 workload: Default::default(),
@@ -478,7 +489,7 @@ mod tests {
                     .map(|a| ArchResult { arch: a.name(), ..ArchResult::default() })
                     .collect(),
             };
-            Ok(jobs.iter().map(|j| (result(j), 1.0)).collect())
+            jobs.iter().map(|j| (result(j), end)).collect()
         }
     }
 
