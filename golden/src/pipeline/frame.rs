@@ -28,16 +28,16 @@ use super::strategy::Strategy;
 use super::tile::{exact_table, sort_tile, FramePos, TileCtx, TileSortOutput, TileState};
 use super::trace::write_trace;
 use crate::camera::Camera;
-use crate::formats::FeatureEntry;
+use crate::formats::{FeatureEntry, FeatureFormat};
 use crate::hwpre::Baked;
 use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
 use crate::raster::window::{current_order_key, window_for_sorted, window_order};
-use crate::raster::{raster_tile_into, TileRaster};
+use crate::raster::{raster_tile_into, RasterConfig, TileRaster};
 use crate::render;
 use crate::scene::Scene;
 use crate::sort::SortEntry;
-pub use inputs::{ExactPixels, FrameInputs, FramePrep};
+pub use inputs::{FrameInputs, FramePrep};
 pub use work_only::{
     gpu_duplication, gpu_duplication_of, FrameWork, SampledRaster, TileWork, WorkOptions, GPU_TILE,
 };
@@ -67,6 +67,8 @@ struct TileSlot {
     /// Sum of `|pixels - exact_pixels|` over the tile.
     abs_error: u64,
     raster: TileRaster,
+    /// The feature entries rastered last (indices into the feature table, in blend order).
+    entries: Vec<u32>,
     feats: Vec<FeatureEntry>,
     raster_work: RasterWork,
     order: TileOrder,
@@ -75,6 +77,43 @@ struct TileSlot {
     /// The smallest reorder window that would have blended the tile in the exact order (0: not
     /// measured).
     window_needed: u32,
+}
+
+/// Where a tile's raster is made: the formats, the tile and the image size.
+#[derive(Clone, Copy)]
+struct RasterGeometry<'a> {
+    fmt: &'a FeatureFormat,
+    cfg: &'a RasterConfig,
+    tile: (u32, u32),
+    size: (u32, u32),
+}
+
+/// Rasterises tile `ti` of `inp` from the feature entries `entries` (indices into its feature
+/// table, in blend order) into `out`. A raster depends only on its entries, the tile and the
+/// geometry, which the pipelines sharing `inp` have in common: the one another of them made of
+/// the same entries is taken when there is one; else it is made here (in `feats`' buffer) and,
+/// with `keep`, kept for them.
+fn raster_entries(
+    inp: &FrameInputs,
+    ti: usize,
+    entries: &[u32],
+    at: RasterGeometry,
+    keep: bool,
+    feats: &mut Vec<FeatureEntry>,
+    out: &mut TileRaster,
+) {
+    let kept = &inp.rasters[ti];
+    if let Some(k) = kept.find(entries) {
+        out.clone_from(&k.raster);
+        return;
+    }
+    feats.clear();
+    feats.extend(entries.iter().map(|&f| inp.features[f as usize]));
+    let ((tx, ty), (w, h)) = (at.tile, at.size);
+    raster_tile_into(feats, at.fmt, tx, ty, w, h, at.cfg, out);
+    if keep {
+        kept.keep(entries, out);
+    }
 }
 
 /// Buffers of [`reorder_in_window`].
@@ -560,22 +599,21 @@ impl<'s> Pipeline<'s> {
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let subtiles = cfg.subtiles_per_tile() as u64;
         let (window, measure) = (self.cfg.raster_window, self.cfg.compare_exact && self.cfg.window_needed);
+        // Kept for the other pipelines only when some share the inputs.
+        let keep = Arc::strong_count(&self.inputs) > 1;
         self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each(
             |(ti, (state, slot))| {
                 let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
                 slot.window_needed =
                     reorder_in_window(&mut state.table, window, inp, &mut slot.window, measure);
-                slot.feats.clear();
-                for e in &state.table {
-                    let f = feature_of[e.id as usize];
-                    if f != CULLED {
-                        slot.feats.push(features[f as usize]);
-                    }
-                }
-                raster_tile_into(&slot.feats, fmt, tx, ty, w, h, cfg, &mut slot.raster);
+                slot.entries.clear();
+                slot.entries
+                    .extend(state.table.iter().map(|e| feature_of[e.id as usize]).filter(|&f| f != CULLED));
+                let geometry = RasterGeometry { fmt, cfg, tile: (tx, ty), size: (w, h) };
+                raster_entries(inp, ti, &slot.entries, geometry, keep, &mut slot.feats, &mut slot.raster);
                 std::mem::swap(&mut slot.pixels, &mut slot.raster.pixels);
                 let current = binning.tile(ti);
-                let mut rw = RasterWork { entries: slot.feats.len() as u64, ..RasterWork::default() };
+                let mut rw = RasterWork { entries: slot.entries.len() as u64, ..RasterWork::default() };
                 rw.subtile_tests = rw.entries * subtiles;
                 slot.bitmaps.clear();
                 let mut j = 0;
@@ -618,12 +656,13 @@ impl<'s> Pipeline<'s> {
     /// error against it).
     fn reference_phase(&mut self) {
         let inp = &*self.inputs;
-        let (features, feature_of, binning) = (&inp.features, &inp.feature_of, &inp.binning);
+        let (feature_of, binning) = (&inp.feature_of, &inp.binning);
         let (fmt, cfg, w, h, gx) =
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let capacity = self.cfg.capacity_or_max();
         let exact_strategy = self.cfg.strategy.is_exact();
         let (compare, shortcut) = (self.cfg.compare_exact, self.cfg.exact_shortcut);
+        let keep = Arc::strong_count(&self.inputs) > 1;
         let pool = &self.pool;
         self.states.par_iter().zip(self.slots.par_iter_mut()).enumerate().for_each_init(
             || pool.take(),
@@ -652,21 +691,14 @@ impl<'s> Pipeline<'s> {
                     }
                 }
                 slot.exact_same = false;
-                // The exact raster depends on the exact table only: made once per tile for the
-                // pipelines sharing these inputs (with this capacity).
-                let cell = &inp.exact[ti];
-                if let Some(done) = cell.get().filter(|c| c.capacity == capacity) {
-                    slot.exact_pixels.clear();
-                    slot.exact_pixels.extend_from_slice(&done.pixels);
-                } else {
-                    slot.feats.clear();
-                    slot.feats
-                        .extend(slot.exact.iter().map(|e| features[feature_of[e.id as usize] as usize]));
-                    let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
-                    raster_tile_into(&slot.feats, fmt, tx, ty, w, h, cfg, &mut slot.raster);
-                    std::mem::swap(&mut slot.exact_pixels, &mut slot.raster.pixels);
-                    let _ = cell.set(ExactPixels { capacity, pixels: slot.exact_pixels.clone() });
-                }
+                // The exact table depends only on the current list and the capacity: its raster
+                // is made once per tile for the pipelines sharing these inputs.
+                slot.entries.clear();
+                slot.entries.extend(slot.exact.iter().map(|e| feature_of[e.id as usize]));
+                let tile = (ti as u32 % gx, ti as u32 / gx);
+                let geometry = RasterGeometry { fmt, cfg, tile, size: (w, h) };
+                raster_entries(inp, ti, &slot.entries, geometry, keep, &mut slot.feats, &mut slot.raster);
+                std::mem::swap(&mut slot.exact_pixels, &mut slot.raster.pixels);
                 slot.abs_error = slot
                     .pixels
                     .iter()

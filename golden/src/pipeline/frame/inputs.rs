@@ -9,11 +9,14 @@
 //! of each preprocessing and binning the frame again; the results are the same as with
 //! [`super::Pipeline::render_frame`], which makes its own.
 //!
-//! The inputs also keep, per tile, the exact-order raster once a pipeline has made it
-//! ([`FrameInputs::exact_pixels`]): the exact table depends only on the current list and the
-//! capacity, so pipelines of the same capacity sharing the inputs raster it once.
+//! The inputs also keep, per tile, the rasters the pipelines sharing them have made
+//! ([`TileRasters`]): a raster depends only on the feature entries it blends, in their order, the
+//! tile and the geometry, which sharing pipelines have in common. So a table another pipeline
+//! has already rastered this frame (the same order of the same entries: a sweep's strategies
+//! often agree on a tile, and every exact-order reference of one capacity is the same) is not
+//! rastered again.
 
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -24,17 +27,40 @@ use crate::formats::{quantize, FeatureEntry, FeatureFormat};
 use crate::hwpre::{preprocess_hw, Baked};
 use crate::pipeline::binning::Binning;
 use crate::pipeline::config::{Formats, Preprocessing};
-use crate::raster::RasterConfig;
+use crate::raster::{RasterConfig, TileRaster};
 use crate::render::{preprocess, Projected};
 use crate::scene::Scene;
 
-/// The exact-order pixels of one tile, for the capacity they were made with.
-#[derive(Clone, Debug)]
-pub struct ExactPixels {
-    /// Capacity of the exact table (`usize::MAX`: unbounded).
-    pub capacity: usize,
-    /// `tile * tile` pixels.
-    pub pixels: Vec<[u8; 3]>,
+/// Rasters kept per tile at most (a sweep's pipelines of one camera speed make a few distinct
+/// ones per tile; the cap bounds the memory of many pipelines that all differ).
+const KEPT_PER_TILE: usize = 16;
+
+/// The rasters of one tile made by the pipelines sharing a frame's inputs, each with the
+/// feature entries it blended.
+#[derive(Debug, Default)]
+pub(super) struct TileRasters(Mutex<Vec<Arc<KeptRaster>>>);
+
+/// A kept raster and the feature entries it blended: their indices into the feature table, in
+/// blend order.
+#[derive(Debug)]
+pub(super) struct KeptRaster {
+    pub(super) entries: Vec<u32>,
+    pub(super) raster: TileRaster,
+}
+
+impl TileRasters {
+    /// The raster of `entries` (indices into the feature table, in blend order), if kept.
+    pub(super) fn find(&self, entries: &[u32]) -> Option<Arc<KeptRaster>> {
+        self.0.lock().expect("tile rasters").iter().find(|k| k.entries == entries).cloned()
+    }
+
+    /// Keeps `raster`, made of `entries`, for the other pipelines (up to [`KEPT_PER_TILE`]).
+    pub(super) fn keep(&self, entries: &[u32], raster: &TileRaster) {
+        let mut kept = self.0.lock().expect("tile rasters");
+        if kept.len() < KEPT_PER_TILE && !kept.iter().any(|k| k.entries == entries) {
+            kept.push(Arc::new(KeptRaster { entries: entries.to_vec(), raster: raster.clone() }));
+        }
+    }
 }
 
 /// One frame's feature table and binning (see the module docs).
@@ -60,8 +86,8 @@ pub struct FrameInputs {
     pub(super) feature_s: (f64, f64),
     /// Seconds of the binning.
     pub(super) binning_s: f64,
-    /// Per tile, the exact-order raster once made.
-    pub(super) exact: Vec<OnceLock<ExactPixels>>,
+    /// Per tile, the rasters made by the pipelines sharing these inputs.
+    pub(super) rasters: Vec<TileRasters>,
 }
 
 impl FrameInputs {
@@ -135,8 +161,8 @@ impl<'s> FramePrep<'s> {
         let fmt = &self.formats.feature;
         inp.binning.run(&inp.features, &inp.feature_ids, fmt, &self.raster, self.width, self.height);
         inp.binning_s = t.elapsed().as_secs_f64();
-        inp.exact.clear();
-        inp.exact.resize_with(inp.binning.tiles(), OnceLock::new);
+        inp.rasters.clear();
+        inp.rasters.resize_with(inp.binning.tiles(), TileRasters::default);
     }
 
     /// Preprocessing into the feature table, and the GPU duplication of the projected
@@ -176,5 +202,42 @@ impl<'s> FramePrep<'s> {
             inp.feature_of[id as usize] = i as u32;
         }
         (preprocess_s, t.elapsed().as_secs_f64())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn raster(mark: u8) -> TileRaster {
+        TileRaster { pixels: vec![[mark; 3]; 4], valid: vec![true], bitmaps: vec![1], work: Vec::new() }
+    }
+
+    #[test]
+    fn a_kept_raster_is_found_by_exactly_its_entries_in_their_order() {
+        let kept = TileRasters::default();
+        assert!(kept.find(&[1, 2, 3]).is_none());
+        kept.keep(&[1, 2, 3], &raster(7));
+        kept.keep(&[3, 2, 1], &raster(9));
+        assert_eq!(kept.find(&[1, 2, 3]).expect("kept").raster, raster(7));
+        assert_eq!(kept.find(&[3, 2, 1]).expect("kept").raster, raster(9));
+        // Another order, a prefix, or more entries are other tables.
+        for other in [&[2, 1, 3][..], &[1, 2], &[1, 2, 3, 4], &[]] {
+            assert!(kept.find(other).is_none(), "{other:?}");
+        }
+        // The same entries again keep the first raster.
+        kept.keep(&[1, 2, 3], &raster(8));
+        assert_eq!(kept.find(&[1, 2, 3]).expect("kept").raster, raster(7));
+    }
+
+    #[test]
+    fn a_tile_keeps_at_most_its_cap_of_rasters() {
+        let kept = TileRasters::default();
+        for k in 0..KEPT_PER_TILE as u32 + 4 {
+            kept.keep(&[k], &raster(k as u8));
+        }
+        let last_kept = KEPT_PER_TILE as u32 - 1;
+        assert_eq!(kept.find(&[last_kept]).expect("within the cap").raster, raster(last_kept as u8));
+        assert!(kept.find(&[last_kept + 1]).is_none(), "beyond the cap");
     }
 }
