@@ -203,9 +203,8 @@ fn fresh_seed(test: &str) -> u64 {
 /// # Panics
 /// When `NEO_SEED` is set but not a number.
 pub fn test_seed(test: &str) -> u64 {
-    let seed = replay_seed().unwrap_or_else(|| fresh_seed(test));
+    let seed = draw_seed(test);
     println!("{}", seed_line(test, seed));
-    crate::xinit::enter(test, seed);
     seed
 }
 
@@ -215,9 +214,16 @@ pub fn test_seed(test: &str) -> u64 {
 /// # Panics
 /// When `NEO_SEED` is set but not a number.
 pub fn command_seed(command: &str) -> u64 {
-    let seed = replay_seed().unwrap_or_else(|| fresh_seed(command));
+    let seed = draw_seed(command);
     eprintln!("{}", seed_line(command, seed));
-    crate::xinit::enter(command, seed);
+    seed
+}
+
+/// `$NEO_SEED` when set, else a fresh seed for `name`; made this thread's bench seed
+/// ([`crate::xinit::enter`]).
+fn draw_seed(name: &str) -> u64 {
+    let seed = replay_seed().unwrap_or_else(|| fresh_seed(name));
+    crate::xinit::enter(name, seed);
     seed
 }
 

@@ -590,6 +590,12 @@ impl<'s> Pipeline<'s> {
         );
     }
 
+    /// True when other pipelines hold this frame's inputs too: only then are the rasters made
+    /// kept in them for the others ([`raster_entries`]).
+    fn inputs_shared(&self) -> bool {
+        Arc::strong_count(&self.inputs) > 1
+    }
+
     /// Rasterises every tile's table, fills the slots' bitmaps and pixels, and writes keys (when
     /// `write_keys`) and valid bits back into the tables.
     fn raster_phase(&mut self, write_keys: bool) {
@@ -599,8 +605,7 @@ impl<'s> Pipeline<'s> {
             (&self.formats.feature, &self.cfg.raster, self.width, self.height, self.grid[0]);
         let subtiles = cfg.subtiles_per_tile() as u64;
         let (window, measure) = (self.cfg.raster_window, self.cfg.compare_exact && self.cfg.window_needed);
-        // Kept for the other pipelines only when some share the inputs.
-        let keep = Arc::strong_count(&self.inputs) > 1;
+        let keep = self.inputs_shared();
         self.states.par_iter_mut().zip(self.slots.par_iter_mut()).enumerate().for_each(
             |(ti, (state, slot))| {
                 let (tx, ty) = (ti as u32 % gx, ti as u32 / gx);
@@ -662,7 +667,7 @@ impl<'s> Pipeline<'s> {
         let capacity = self.cfg.capacity_or_max();
         let exact_strategy = self.cfg.strategy.is_exact();
         let (compare, shortcut) = (self.cfg.compare_exact, self.cfg.exact_shortcut);
-        let keep = Arc::strong_count(&self.inputs) > 1;
+        let keep = self.inputs_shared();
         let pool = &self.pool;
         self.states.par_iter().zip(self.slots.par_iter_mut()).enumerate().for_each_init(
             || pool.take(),
