@@ -74,6 +74,32 @@ proptest! {
         }
     }
 
+    /// The tile's bitmap (stepped from subtile to subtile) is the rectangle test on each
+    /// subtile, on quantised Gaussians and on raw garbage entries alike, with 8- and 16-pixel
+    /// subtiles.
+    #[test]
+    fn bitmap_is_the_rectangle_test_of_each_subtile(
+        p in arb_near_tile(),
+        words in proptest::array::uniform4(any::<u64>()),
+        raw: bool,
+        subtile in prop_oneof![Just(8u32), Just(16)],
+        (tx, ty) in (0u32..6, 0u32..6),
+    ) {
+        let fmt = FeatureFormat::default();
+        let cfg = RasterConfig { subtile, ..RasterConfig::default() };
+        let e = if raw { FeatureEntry::unpack(&words, &fmt) } else { q(&p, &fmt) };
+        let (n, s) = (cfg.subtiles_per_side(), cfg.subtile as i64);
+        let mut want = 0u64;
+        for j in 0..n * n {
+            let x0 = (tx * cfg.tile + j % n * cfg.subtile) as i64;
+            let y0 = (ty * cfg.tile + j / n * cfg.subtile) as i64;
+            if intersects_rect(&e, &fmt, x0, y0, x0 + s - 1, y0 + s - 1) {
+                want |= 1 << j;
+            }
+        }
+        prop_assert_eq!(subtile_bitmap(&e, &fmt, tx, ty, &cfg), want, "tile ({}, {}) {:?}", tx, ty, e);
+    }
+
     #[test]
     fn never_drops_a_pixel_the_scu_blends(p in arb_near_tile()) {
         // Moderate anisotropy (the conic error grows with lambda_max / lambda_min, see

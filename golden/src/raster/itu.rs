@@ -128,12 +128,14 @@ pub fn subtile_bitmap(
     bitmap_of(&ItuGeom::new(f, fmt), tile_x, tile_y, cfg)
 }
 
-/// [`subtile_bitmap`] on precomputed operands.
+/// [`subtile_bitmap`] on precomputed operands. The x and y tests depend only on the column and
+/// the row; the U and V tests' projections `d . U`, `d . V` change by a constant from one
+/// subtile to the next (all subtiles have the same size, so the same supports), and are stepped
+/// in exact integer arithmetic: the same values as [`ItuGeom::overlaps`] on each subtile.
 pub(crate) fn bitmap_of(g: &ItuGeom, tile_x: u32, tile_y: u32, cfg: &RasterConfig) -> u64 {
     let n = cfg.subtiles_per_side() as i64;
     let s = cfg.subtile as i64;
     let (tx0, ty0) = (tile_x as i64 * cfg.tile as i64, tile_y as i64 * cfg.tile as i64);
-    // The x and y tests depend only on the column and the row.
     let mut cols = 0u64;
     for sx in 0..n {
         let x0 = tx0 + sx * s;
@@ -144,18 +146,27 @@ pub(crate) fn bitmap_of(g: &ItuGeom, tile_x: u32, tile_y: u32, cfg: &RasterConfi
     if cols == 0 {
         return 0;
     }
+    // Subtile (sx, sy): centre offset d = d00 - (sx, sy) step, half-sizes w = h = half.
+    let (step, half) = ((2 * s) << g.fm, (s - 1) << g.fm);
+    let [c, sn] = g.cs;
+    let (dx0, dy00) = (g.m[0] - ((2 * tx0 + s - 1) << g.fm), g.m[1] - ((2 * ty0 + s - 1) << g.fm));
+    let (tu, tv) = (g.h[0] + half * (c.abs() + sn.abs()), g.h[1] + half * (sn.abs() + c.abs()));
+    let (du, dv) = (step * c, step * sn);
     let mut bits = 0u64;
     for sy in 0..n {
         let y0 = ty0 + sy * s;
         if g.separated_y(y0, y0 + s - 1) {
             continue;
         }
+        let dy = dy00 - sy * step;
+        let (mut pu, mut pv) = (dx0 * c + dy * sn, dy * c - dx0 * sn);
+        let mut row = 0u64;
         for sx in 0..n {
-            let x0 = tx0 + sx * s;
-            if cols >> sx & 1 == 1 && !g.separated_uv(x0, y0, x0 + s - 1, y0 + s - 1) {
-                bits |= 1 << (sy * n + sx);
-            }
+            row |= (((pu.abs() <= tu) & (pv.abs() <= tv)) as u64) << sx;
+            pu -= du;
+            pv += dv;
         }
+        bits |= (row & cols) << (sy * n);
     }
     bits
 }

@@ -429,8 +429,9 @@ impl SubtileState {
     /// is `origin`, entry by entry over the subtile's pixels (the hardware's order; per pixel it
     /// is the same sequence as [`blend`]). Only the pixels of a row where `q < q_cut` can blend:
     /// for a positive definite conic they form one run around the row's minimum, found with
-    /// exact evaluations, so the others are skipped without changing any result.
-    pub(super) fn run(
+    /// exact evaluations, so the others are skipped without changing any result. Without
+    /// `COLOR` only the transmittance is blended: the same work counters, no colour.
+    pub(super) fn run<const COLOR: bool>(
         &mut self,
         list: &[Prep],
         k: &Consts,
@@ -479,7 +480,7 @@ impl SubtileState {
                 if !span {
                     for x in xs..=xe {
                         let np = g.np_of(k, g.q(k.fm, x, py));
-                        self.blend_at(g, k, lut, x - xs, ly, side, np, &mut remaining, &mut work);
+                        self.blend_at::<COLOR>(g, k, lut, x - xs, ly, side, np, &mut remaining, &mut work);
                     }
                     continue;
                 }
@@ -510,7 +511,7 @@ impl SubtileState {
                             None
                         };
                         if let Some((x, q, l)) = seed {
-                            self.blend_at(
+                            self.blend_at::<COLOR>(
                                 g,
                                 k,
                                 lut,
@@ -530,7 +531,17 @@ impl SubtileState {
                                     break;
                                 }
                                 let np = g.$np(k, ql);
-                                self.blend_at(g, k, lut, xl - xs, ly, side, np, &mut remaining, &mut work);
+                                self.blend_at::<COLOR>(
+                                    g,
+                                    k,
+                                    lut,
+                                    xl - xs,
+                                    ly,
+                                    side,
+                                    np,
+                                    &mut remaining,
+                                    &mut work,
+                                );
                             }
                             let (mut xr, mut qr, mut lr) = (x, q, l);
                             while xr < xe {
@@ -541,7 +552,17 @@ impl SubtileState {
                                     break;
                                 }
                                 let np = g.$np(k, qr);
-                                self.blend_at(g, k, lut, xr - xs, ly, side, np, &mut remaining, &mut work);
+                                self.blend_at::<COLOR>(
+                                    g,
+                                    k,
+                                    lut,
+                                    xr - xs,
+                                    ly,
+                                    side,
+                                    np,
+                                    &mut remaining,
+                                    &mut work,
+                                );
                             }
                         }
                     }};
@@ -562,10 +583,11 @@ impl SubtileState {
         work
     }
 
-    /// Steps 4-6 for entry `g` at pixel `(lx, ly)` of the subtile, given its `np`.
+    /// Steps 4-6 for entry `g` at pixel `(lx, ly)` of the subtile, given its `np` (step 6's
+    /// colour only with `COLOR`).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn blend_at(
+    fn blend_at<const COLOR: bool>(
         &mut self,
         g: &Prep,
         k: &Consts,
@@ -593,9 +615,11 @@ impl SubtileState {
             return;
         }
         p[0] = test_t;
-        p[1] += g.rgb[0] * w;
-        p[2] += g.rgb[1] * w;
-        p[3] += g.rgb[2] * w;
+        if COLOR {
+            p[1] += g.rgb[0] * w;
+            p[2] += g.rgb[1] * w;
+            p[3] += g.rgb[2] * w;
+        }
     }
 }
 

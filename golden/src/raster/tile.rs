@@ -50,27 +50,72 @@ pub fn raster_tile_into(
     cfg: &RasterConfig,
     out: &mut TileRaster,
 ) {
+    let t = cfg.tile as usize;
+    out.bitmaps.clear();
+    out.bitmaps.extend(entries.iter().map(|f| bitmap_of(&ItuGeom::new(f, fmt), tile_x, tile_y, cfg)));
+    out.valid.clear();
+    out.valid.extend(out.bitmaps.iter().map(|&b| b != 0));
+    out.pixels.clear();
+    out.pixels.resize(t * t, [0; 3]);
+    let tile = TileAt { tile_x, tile_y, width, height };
+    blend_tile::<true>(entries, &out.bitmaps, fmt, tile, cfg, &mut out.work, &mut out.pixels);
+}
+
+/// The SCUs' work counters of [`raster_tile`] (its `work`), without its pixels: the same
+/// routing and the same transmittance per pixel, so the same early termination, with no colour
+/// accumulated. `bitmaps` are the entries' subtile bitmaps in the tile ([`super::subtile_bitmap`],
+/// as the binning computed them; 0 for an entry that does not touch the tile).
+#[allow(clippy::too_many_arguments)]
+pub fn tile_work_into(
+    entries: &[FeatureEntry],
+    bitmaps: &[u64],
+    fmt: &FeatureFormat,
+    tile_x: u32,
+    tile_y: u32,
+    width: u32,
+    height: u32,
+    cfg: &RasterConfig,
+    work: &mut Vec<SubtileWork>,
+) {
+    let tile = TileAt { tile_x, tile_y, width, height };
+    blend_tile::<false>(entries, bitmaps, fmt, tile, cfg, work, &mut Vec::new());
+}
+
+/// A tile of an image: its grid position and the image's size.
+#[derive(Clone, Copy)]
+struct TileAt {
+    tile_x: u32,
+    tile_y: u32,
+    width: u32,
+    height: u32,
+}
+
+/// Routes `entries` (with their subtile `bitmaps`) to the tile's subtiles and blends each with
+/// the SCU, into `work` (per subtile) and, with `COLOR`, `pixels` (`tile * tile`, zeroed).
+fn blend_tile<const COLOR: bool>(
+    entries: &[FeatureEntry],
+    bitmaps: &[u64],
+    fmt: &FeatureFormat,
+    at: TileAt,
+    cfg: &RasterConfig,
+    work: &mut Vec<SubtileWork>,
+    pixels: &mut [[u8; 3]],
+) {
+    let TileAt { tile_x, tile_y, width, height } = at;
     let t = cfg.tile as i64;
     let s = cfg.subtile as i64;
     let n = cfg.subtiles_per_side() as i64;
     let (x0, y0) = (tile_x as i64 * t, tile_y as i64 * t);
     let k = Consts::new(fmt, &cfg.blend);
     let exp = ExpTable::new(&cfg.blend.exp, cfg.blend.power_frac);
-
-    out.bitmaps.clear();
-    out.bitmaps.extend(entries.iter().map(|f| bitmap_of(&ItuGeom::new(f, fmt), tile_x, tile_y, cfg)));
-    out.valid.clear();
-    out.valid.extend(out.bitmaps.iter().map(|&b| b != 0));
-    out.pixels.clear();
-    out.pixels.resize((t * t) as usize, [0; 3]);
-    out.work.clear();
-    out.work.resize((n * n) as usize, SubtileWork::default());
+    work.clear();
+    work.resize((n * n) as usize, SubtileWork::default());
 
     // Route entries to subtiles (a counting sort by subtile that keeps table order), and
     // prepare the operands of every routed entry once per tile.
     let nsub = (n * n) as usize;
     let mut offsets = [0u32; 65];
-    for &b in &out.bitmaps {
+    for &b in bitmaps {
         let mut m = b;
         while m != 0 {
             offsets[m.trailing_zeros() as usize + 1] += 1;
@@ -85,7 +130,7 @@ pub fn raster_tile_into(
     let rect = [x0, y0, x0 + t - 1, y0 + t - 1];
     let mut cuts = NpCutCache::new();
     let mut preps: Vec<Prep> = Vec::with_capacity(entries.len());
-    for (f, &b) in entries.iter().zip(&out.bitmaps) {
+    for (f, &b) in entries.iter().zip(bitmaps) {
         let i = preps.len() as u32;
         if b == 0 {
             continue;
@@ -110,12 +155,15 @@ pub fn raster_tile_into(
                 routed[offsets[j] as usize..offsets[j + 1] as usize].iter().map(|&i| preps[i as usize]),
             );
             let origin = [x0 + sx * s, y0 + sy * s];
-            out.work[j] = st.run(&list, &k, &lut, origin, s, [width as i64, height as i64]);
+            work[j] = st.run::<COLOR>(&list, &k, &lut, origin, s, [width as i64, height as i64]);
+            if !COLOR {
+                continue;
+            }
             for ly in 0..s {
                 for lx in 0..s {
                     let p = st.px[(ly * s + lx) as usize];
                     let c = [p[1], p[2], p[3]];
-                    out.pixels[((sy * s + ly) * t + sx * s + lx) as usize] = c.map(|c| to_u8(c, k.out_shift));
+                    pixels[((sy * s + ly) * t + sx * s + lx) as usize] = c.map(|c| to_u8(c, k.out_shift));
                 }
             }
         }

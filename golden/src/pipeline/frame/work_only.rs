@@ -7,7 +7,8 @@
 //! in the tile's current list (the binning uses the same ITU; the full pipeline's
 //! `itu_mismatch` counter asserts it), and its routed pairs are the subtile bitmaps
 //! ([`subtile_bitmap`]). Only the SCUs' early termination needs blending: it is measured with
-//! the golden raster on every [`WorkOptions::raster_sample`]-th tile.
+//! the golden raster's SCUs on every [`WorkOptions::raster_sample`]-th tile
+//! ([`tile_work_into`]: the binning's bitmaps, transmittance only, no pixels).
 
 use std::sync::Arc;
 
@@ -18,7 +19,7 @@ use crate::camera::Camera;
 use crate::pipeline::hierarchical::{hierarchical_sort, HierWork};
 use crate::pipeline::prefetch::prefetch;
 use crate::pipeline::tile::{FramePos, TileCtx, TileSortOutput};
-use crate::raster::raster_tile_into;
+use crate::raster::tile_work_into;
 use crate::render::Projected;
 
 /// How many table entries ahead the feature gathers are prefetched.
@@ -165,6 +166,7 @@ impl Pipeline<'_> {
                     let mut raster_entries = 0u32;
                     reorder_in_window(&mut state.table, window, inp, &mut slot.window, false);
                     slot.feats.clear();
+                    slot.bitmaps.clear();
                     // Table order is depth order: the feature look-ups are random gathers,
                     // prefetched ahead (the id map two steps before the entry it names).
                     let table = &mut state.table;
@@ -185,9 +187,6 @@ impl Pipeline<'_> {
                         }
                         let fe = &features[f as usize];
                         raster_entries += 1;
-                        if sampled {
-                            slot.feats.push(*fe);
-                        }
                         let at = current.binary_search_by_key(&e.id, |c| c.id);
                         e.valid = at.is_ok();
                         if write_keys {
@@ -196,6 +195,12 @@ impl Pipeline<'_> {
                         // The binning's bitmap of this Gaussian in this tile (the same feature
                         // entry's `subtile_bitmap`).
                         if let Ok(k) = at {
+                            if sampled {
+                                // The raster's routing: an entry outside the current list has
+                                // an empty bitmap (the ITU's OR is the list's membership).
+                                slot.feats.push(*fe);
+                                slot.bitmaps.push(bitmaps[k]);
+                            }
                             let mut b = bitmaps[k] & inside;
                             while b != 0 {
                                 routed[b.trailing_zeros() as usize] += 1;
@@ -205,7 +210,8 @@ impl Pipeline<'_> {
                     }
                     record_writeback(state, &mut slot.sort);
                     let sampled = sampled.then(|| {
-                        raster_tile_into(&slot.feats, fmt, tx, ty, w, h, rcfg, &mut slot.raster);
+                        let work = &mut slot.raster.work;
+                        tile_work_into(&slot.feats, &slot.bitmaps, fmt, tx, ty, w, h, rcfg, work);
                         let mut r = SampledRaster::default();
                         for (j, sw) in slot.raster.work.iter().enumerate() {
                             if inside >> j & 1 == 1 {
