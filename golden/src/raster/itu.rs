@@ -152,6 +152,8 @@ pub(crate) fn bitmap_of(g: &ItuGeom, tile_x: u32, tile_y: u32, cfg: &RasterConfi
     let (dx0, dy00) = (g.m[0] - ((2 * tx0 + s - 1) << g.fm), g.m[1] - ((2 * ty0 + s - 1) << g.fm));
     let (tu, tv) = (g.h[0] + half * (c.abs() + sn.abs()), g.h[1] + half * (sn.abs() + c.abs()));
     let (du, dv) = (step * c, step * sn);
+    // The columns the x test passes are one run (an interval of centres).
+    let (first, last) = (cols.trailing_zeros() as i64, 63 - cols.leading_zeros() as i64);
     let mut bits = 0u64;
     for sy in 0..n {
         let y0 = ty0 + sy * s;
@@ -159,9 +161,10 @@ pub(crate) fn bitmap_of(g: &ItuGeom, tile_x: u32, tile_y: u32, cfg: &RasterConfi
             continue;
         }
         let dy = dy00 - sy * step;
-        let (mut pu, mut pv) = (dx0 * c + dy * sn, dy * c - dx0 * sn);
+        let dx = dx0 - first * step;
+        let (mut pu, mut pv) = (dx * c + dy * sn, dy * c - dx * sn);
         let mut row = 0u64;
-        for sx in 0..n {
+        for sx in first..=last {
             row |= (((pu.abs() <= tu) & (pv.abs() <= tv)) as u64) << sx;
             pu -= du;
             pv += dv;
