@@ -568,3 +568,32 @@ fn report_refuses_a_bad_sweep_window_before_any_work() {
         assert!(stdout(&o).is_empty() && !out.exists(), "--sweep-window {bad}: it ran");
     }
 }
+
+/// `neo bench model` says where the CPU goes: the workload's phases and the model's engine and
+/// DRAM model, each with its share, the shares of a line adding up to the whole (sampled with
+/// `SIGPROF` in this process of its own).
+#[test]
+fn bench_model_splits_the_cpu_by_phase() {
+    let args = ["bench", "model", "--gaussians", "50000", "--res", "hd", "--frames", "3", "--arch", "neo"];
+    let o = neo(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    // The split's lines: the phase shares are the only percentages of the output.
+    let line = |head: &str| {
+        out.lines()
+            .find(|l| l.trim_start().starts_with(head) && l.contains('%'))
+            .unwrap_or_else(|| panic!("no {head:?} split line: {out}"))
+    };
+    let shares = |l: &str| -> f64 {
+        l.split('(').skip(1).map(|p| p.split('%').next().unwrap().parse::<f64>().unwrap()).sum()
+    };
+    let workload = line("workload");
+    for phase in ["preprocess", "binning", "sort", "tile work"] {
+        assert!(workload.contains(phase), "{phase}: {workload}");
+    }
+    let model = line("model neo");
+    assert!(model.contains("engine") && model.contains("DRAM model"), "{model}");
+    for l in [workload, model] {
+        assert!((97.0..=103.0).contains(&shares(l)), "shares {} of {l}", shares(l));
+    }
+}

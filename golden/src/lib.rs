@@ -15,6 +15,7 @@ pub mod image;
 pub mod metrics;
 pub mod pipeline;
 pub mod ply;
+pub mod profile;
 pub mod raster;
 pub mod render;
 pub mod scene;

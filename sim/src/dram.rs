@@ -38,6 +38,7 @@
 
 use std::collections::VecDeque;
 
+use neo_golden::profile::{self, Phase};
 use serde::{Deserialize, Serialize};
 
 use crate::config::DramConfig;
@@ -748,6 +749,7 @@ impl Dram {
     /// Queues a read of the line holding `addr`, issued at `t` (not before any earlier
     /// submission).
     pub fn submit_read(&mut self, t: Ps, addr: u64) -> Ticket {
+        let _phase = profile::enter(Phase::Dram);
         self.stats.reads += 1;
         let ticket = self.new_ticket();
         if let Some(l) = self.ideal {
@@ -765,6 +767,7 @@ impl Dram {
 
     /// Posts a write of the line holding `addr` at `t` (returns at once; served in write mode).
     pub fn write(&mut self, t: Ps, addr: u64) {
+        let _phase = profile::enter(Phase::Dram);
         self.stats.writes += 1;
         if self.ideal.is_some() {
             return;
@@ -834,6 +837,7 @@ impl Dram {
 
     /// When the data of `ticket` arrives (advancing its channel as far as needed).
     pub fn arrival(&mut self, ticket: Ticket) -> Ps {
+        let _phase = profile::enter(Phase::Dram);
         let k = ticket.0 as usize;
         let c = self.ticket_channel[k] as usize;
         while self.arrivals[k] == PENDING {
@@ -844,6 +848,7 @@ impl Dram {
 
     /// Returns a ticket whose arrival is no longer needed (it is still served if queued).
     pub fn release(&mut self, ticket: Ticket) {
+        let _phase = profile::enter(Phase::Dram);
         let k = ticket.0 as usize;
         if self.arrivals[k] == PENDING {
             self.arrival(ticket);
@@ -856,6 +861,7 @@ impl Dram {
     /// of requests still to come); else a time, after `now`, before which its data cannot
     /// arrive.
     pub fn poll(&mut self, ticket: Ticket, now: Ps) -> Result<Ps, Ps> {
+        let _phase = profile::enter(Phase::Dram);
         let k = ticket.0 as usize;
         if self.arrivals[k] == PENDING {
             let c = self.ticket_channel[k] as usize;
@@ -939,6 +945,7 @@ impl Dram {
     /// Serves every queued read and write (writes drain as at the end of Ramulator's run);
     /// returns when the last data has left (at least `t`).
     pub fn flush(&mut self, t: Ps) -> Ps {
+        let _phase = profile::enter(Phase::Dram);
         if self.ideal.is_some() {
             return t;
         }

@@ -22,6 +22,8 @@
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, VecDeque};
 
+use neo_golden::profile::{self, Phase};
+
 use crate::dram::{Dram, Ps, Ticket};
 use crate::traffic::{Dir, Stage, Traffic};
 
@@ -377,6 +379,7 @@ impl Engine {
     /// Runs until the scheduler has nothing left; returns the time the last job ended and the
     /// DRAM drained its writes.
     pub fn run(&mut self, sched: &mut dyn Scheduler) -> Ps {
+        let _phase = profile::enter(Phase::Engine);
         self.dispatch(sched, 0);
         while let Some(Reverse((t, _, ev))) = self.heap.pop() {
             self.now = t;

@@ -4,6 +4,7 @@
 
 mod engine;
 mod model;
+mod sampler;
 
 use crate::progress::spin;
 use anyhow::Result;

@@ -32,6 +32,7 @@ use crate::formats::{FeatureEntry, FeatureFormat};
 use crate::hwpre::Baked;
 use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
+use crate::profile::{self, Phase};
 use crate::raster::window::{current_order_key, window_for_sorted, window_order};
 use crate::raster::{raster_tile_into, RasterConfig, TileRaster};
 use crate::render;
@@ -572,6 +573,7 @@ impl<'s> Pipeline<'s> {
 
     /// The strategy's sorting step of every tile; records each tile's incoming ids.
     fn sort_phase(&mut self, pos: FramePos) {
+        let _phase = profile::enter(Phase::Sort);
         let strategy = self.cfg.strategy;
         let binning = &self.inputs.binning;
         let pool = &self.pool;
@@ -599,6 +601,7 @@ impl<'s> Pipeline<'s> {
     /// Rasterises every tile's table, fills the slots' bitmaps and pixels, and writes keys (when
     /// `write_keys`) and valid bits back into the tables.
     fn raster_phase(&mut self, write_keys: bool) {
+        let _phase = profile::enter(Phase::TileWork);
         let inp = &*self.inputs;
         let (features, feature_of, binning) = (&inp.features, &inp.feature_of, &inp.binning);
         let (fmt, cfg, w, h, gx) =

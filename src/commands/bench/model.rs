@@ -9,6 +9,7 @@
 //! 16th tile), on a synthetic scene of that size, and reads the process's CPU time (user +
 //! system, every thread) around each phase.
 
+use super::sampler::{split, Counts, Sampler};
 use super::verdict;
 use crate::args::ModelArgs;
 use crate::points::{load_config, load_latency};
@@ -53,6 +54,24 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, f64, f64) {
     (v, self_cpu() - c, t.elapsed().as_secs_f64())
 }
 
+/// Where the CPU of Neo's frames went (CPU seconds per frame), from the sampler: the workload's
+/// phases, then the model's.
+fn print_split(workload: &Counts, workload_cpu: f64, model: &Counts, model_cpu: f64) {
+    use neo_golden::profile::Phase::*;
+    println!(
+        "where it goes    CPU s/frame by phase ({} SIGPROF samples of the process's CPU time):",
+        workload.total() + model.total()
+    );
+    println!(
+        "  workload       {}",
+        split(workload, &[Preprocess, Binning, Sort, TileWork, Other], workload_cpu)
+    );
+    println!("  model neo      {}", split(model, &[Engine, Dram, Other], model_cpu));
+    println!(
+        "                 (tile work: write-back, sampled raster and hierarchical record; engine: event loop, jobs and address walks)"
+    );
+}
+
 /// Runs `neo bench model`.
 pub fn run(a: ModelBenchArgs) -> Result<()> {
     if a.frames == 0 {
@@ -88,6 +107,9 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
         width,
         height
     );
+    let sampler = Sampler::start().map_err(|e| eprintln!("neo bench model: no CPU split ({e})")).ok();
+    let samples = || sampler.as_ref().map(Sampler::counts).unwrap_or_default();
+    let at_start = samples();
     let bar = crate::engine_run::frame_bar(a.frames as u64, false);
     let (wl, gen_cpu, gen_wall) = timed(|| {
         suite::workload(&scene, &point, &cfg, GoldenRaster::Off, a.model.raster_sample, |_| bar.inc(1))
@@ -100,12 +122,15 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
         gen_cpu / n,
         gen_wall / n
     );
-    let mut neo_cpu = 0.0;
+    let (mut neo_cpu, mut workload_samples, mut neo_samples) = (0.0, samples().since(&at_start), None);
     for &arch in &archs {
+        let before = samples();
         let (r, cpu, wall) = timed(|| simulate(arch, &cfg, &lat, &wl, RunOptions::default()));
         let r = r.map_err(|e| anyhow!(e))?;
         if arch == Arch::Neo {
             neo_cpu = cpu;
+            neo_samples = Some(samples().since(&before));
+            workload_samples = before.since(&at_start);
         }
         println!(
             "model {:<9} {:>7.3} CPU s/frame ({:.3} s wall/frame; {:.1} FPS simulated, {:.2} M DRAM requests/frame)",
@@ -128,5 +153,8 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
         "                (issue 13 states {ARTIFACT_CPU_S_PER_FRAME} CPU s per QHD frame of a 500k-Gaussian real scene for the official artifact: {:.0}x that)",
         ARTIFACT_CPU_S_PER_FRAME / per_frame
     );
+    if let (Some(_), Some(model)) = (&sampler, neo_samples) {
+        print_split(&workload_samples, gen_cpu / n, &model, neo_cpu / n);
+    }
     Ok(())
 }

@@ -27,6 +27,7 @@ use crate::formats::{quantize, FeatureEntry, FeatureFormat};
 use crate::hwpre::{preprocess_hw, Baked};
 use crate::pipeline::binning::Binning;
 use crate::pipeline::config::{Formats, Preprocessing};
+use crate::profile::{self, Phase};
 use crate::raster::{RasterConfig, TileRaster};
 use crate::render::{preprocess, Projected};
 use crate::scene::Scene;
@@ -157,6 +158,7 @@ impl<'s> FramePrep<'s> {
         inp.raster = Some(self.raster);
         inp.feature = Some(self.formats.feature);
         inp.feature_s = self.feature_phase(cam, inp);
+        let _phase = profile::enter(Phase::Binning);
         let t = Instant::now();
         let fmt = &self.formats.feature;
         inp.binning.run(&inp.features, &inp.feature_ids, fmt, &self.raster, self.width, self.height);
@@ -169,6 +171,7 @@ impl<'s> FramePrep<'s> {
     /// Gaussians: the hardware's arithmetic on the baked scene, or the float preprocess and its
     /// quantisation. Returns the seconds of the two (the hardware's are one: all in the first).
     fn feature_phase(&self, cam: &Camera, inp: &mut FrameInputs) -> (f64, f64) {
+        let _phase = profile::enter(Phase::Preprocess);
         let t = Instant::now();
         let (fmt, key, tile) = (&self.formats.feature, &self.formats.key, self.raster.tile);
         let (w, h) = (self.width, self.height);

@@ -19,6 +19,7 @@ use crate::camera::Camera;
 use crate::pipeline::hierarchical::{hierarchical_sort, HierWork};
 use crate::pipeline::prefetch::prefetch;
 use crate::pipeline::tile::{FramePos, TileCtx, TileSortOutput};
+use crate::profile::{self, Phase};
 use crate::raster::tile_work_into;
 use crate::render::Projected;
 
@@ -130,6 +131,7 @@ impl Pipeline<'_> {
     /// Writes keys (when the strategy does) and valid bits back into every tile's table and
     /// counts the tile's work.
     fn work_phase(&mut self, opts: &WorkOptions) -> Vec<TileWork> {
+        let _phase = profile::enter(Phase::TileWork);
         let inp = &*self.inputs;
         let (features, feature_of, binning) = (&inp.features, &inp.feature_of, &inp.binning);
         let (fmt, rcfg, w, h, gx) =
