@@ -9,7 +9,7 @@
 //! - [`scu`]: the Subtile Compute Unit: per-pixel power, alpha, transmittance and colour, per
 //!   subtile, in table order, with early termination;
 //! - [`tile`]: the tile driver: [`tile::raster_tile`] routes a tile's table to its subtiles and
-//!   renders the tile with the SCU;
+//!   renders the tile with the SCU ([`tile::tile_work_into`]: its work counters alone);
 //! - [`window`]: the reorder window between the feature gather and the ITUs (off in the
 //!   paper's engine);
 //! - [`synth`]: hand-made preprocessed Gaussians for tests.

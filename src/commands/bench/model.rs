@@ -122,7 +122,8 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
         gen_cpu / n,
         gen_wall / n
     );
-    let (mut neo_cpu, mut workload_samples, mut neo_samples) = (0.0, samples().since(&at_start), None);
+    let workload_samples = samples().since(&at_start);
+    let (mut neo_cpu, mut neo_samples) = (0.0, None);
     for &arch in &archs {
         let before = samples();
         let (r, cpu, wall) = timed(|| simulate(arch, &cfg, &lat, &wl, RunOptions::default()));
@@ -130,7 +131,6 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
         if arch == Arch::Neo {
             neo_cpu = cpu;
             neo_samples = Some(samples().since(&before));
-            workload_samples = before.since(&at_start);
         }
         println!(
             "model {:<9} {:>7.3} CPU s/frame ({:.3} s wall/frame; {:.1} FPS simulated, {:.2} M DRAM requests/frame)",

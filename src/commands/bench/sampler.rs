@@ -42,7 +42,7 @@ impl Counts {
 pub struct Sampler(());
 
 impl Sampler {
-    /// Installs the `SIGPROF` handler and starts the timer; `None` (with the reason) if the
+    /// Installs the `SIGPROF` handler and starts the timer; an error naming the call if the
     /// system refuses either.
     pub fn start() -> Result<Sampler, String> {
         // SAFETY: a zeroed sigaction is valid; the handler only touches atomics.
