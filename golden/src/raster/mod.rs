@@ -27,7 +27,7 @@ pub mod window;
 pub use exp::{ExpError, ExpTable};
 pub use itu::{candidate_tiles, intersects_rect, subtile_bitmap, touches_tile};
 pub use scu::{pixel_alpha, shade_pixel, PixelShade, SubtileWork};
-pub use tile::{raster_tile, raster_tile_into, tile_work_into, TileRaster};
+pub use tile::{raster_tile, raster_tile_into, tile_work_into, TileAt, TileRaster};
 
 use crate::formats::blend::BlendFormat;
 use crate::formats::feature::FeatureFormat;

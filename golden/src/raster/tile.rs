@@ -65,29 +65,28 @@ pub fn raster_tile_into(
 /// routing and the same transmittance per pixel, so the same early termination, with no colour
 /// accumulated. `bitmaps` are the entries' subtile bitmaps in the tile ([`super::subtile_bitmap`],
 /// as the binning computed them; 0 for an entry that does not touch the tile).
-#[allow(clippy::too_many_arguments)]
 pub fn tile_work_into(
     entries: &[FeatureEntry],
     bitmaps: &[u64],
     fmt: &FeatureFormat,
-    tile_x: u32,
-    tile_y: u32,
-    width: u32,
-    height: u32,
+    at: TileAt,
     cfg: &RasterConfig,
     work: &mut Vec<SubtileWork>,
 ) {
-    let tile = TileAt { tile_x, tile_y, width, height };
-    blend_tile::<false>(entries, bitmaps, fmt, tile, cfg, work, &mut Vec::new());
+    blend_tile::<false>(entries, bitmaps, fmt, at, cfg, work, &mut Vec::new());
 }
 
-/// A tile of an image: its grid position and the image's size.
-#[derive(Clone, Copy)]
-struct TileAt {
-    tile_x: u32,
-    tile_y: u32,
-    width: u32,
-    height: u32,
+/// A tile of an image: its position in the tile grid and the image's size in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileAt {
+    /// Tile column.
+    pub tile_x: u32,
+    /// Tile row.
+    pub tile_y: u32,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
 }
 
 /// Routes `entries` (with their subtile `bitmaps`) to the tile's subtiles and blends each with

@@ -20,7 +20,7 @@ use crate::pipeline::hierarchical::{hierarchical_sort, HierWork};
 use crate::pipeline::prefetch::prefetch;
 use crate::pipeline::tile::{FramePos, TileCtx, TileSortOutput};
 use crate::profile::{self, Phase};
-use crate::raster::tile_work_into;
+use crate::raster::{tile_work_into, TileAt};
 use crate::render::Projected;
 
 /// How many table entries ahead the feature gathers are prefetched.
@@ -212,8 +212,8 @@ impl Pipeline<'_> {
                     }
                     record_writeback(state, &mut slot.sort);
                     let sampled = sampled.then(|| {
-                        let work = &mut slot.raster.work;
-                        tile_work_into(&slot.feats, &slot.bitmaps, fmt, tx, ty, w, h, rcfg, work);
+                        let at = TileAt { tile_x: tx, tile_y: ty, width: w, height: h };
+                        tile_work_into(&slot.feats, &slot.bitmaps, fmt, at, rcfg, &mut slot.raster.work);
                         let mut r = SampledRaster::default();
                         for (j, sw) in slot.raster.work.iter().enumerate() {
                             if inside >> j & 1 == 1 {
