@@ -42,8 +42,8 @@ impl Counts {
 pub struct Sampler(());
 
 impl Sampler {
-    /// Installs the `SIGPROF` handler and starts the timer; an error naming the call if the
-    /// system refuses either.
+    /// Turns the phase marks on, installs the `SIGPROF` handler and starts the timer; an error
+    /// naming the call if the system refuses either.
     pub fn start() -> Result<Sampler, String> {
         // SAFETY: a zeroed sigaction is valid; the handler only touches atomics.
         let mut act: libc::sigaction = unsafe { std::mem::zeroed() };
@@ -59,6 +59,7 @@ impl Sampler {
         if unsafe { libc::setitimer(libc::ITIMER_PROF, &timer, std::ptr::null_mut()) } != 0 {
             return Err(format!("setitimer(ITIMER_PROF): {}", std::io::Error::last_os_error()));
         }
+        profile::set_enabled(true);
         Ok(Sampler(()))
     }
 
@@ -76,6 +77,7 @@ impl Drop for Sampler {
         };
         // SAFETY: `off` is a valid itimerval; a zero value disarms the timer.
         unsafe { libc::setitimer(libc::ITIMER_PROF, &off, std::ptr::null_mut()) };
+        profile::set_enabled(false);
     }
 }
 
