@@ -3,7 +3,7 @@
 //!
 //! The mark is one process-wide value, so it names what the process does only while one phase
 //! runs at a time (the parallel threads of a stage all work on that stage), as in the bench.
-//! Marking is off unless a sampler turns it on ([`set_enabled`]): then a mark costs one relaxed
+//! Marking is off unless a sampler turns it on ([`set_enabled`]). Off, a mark costs one relaxed
 //! load; on, a load, a swap and a store.
 
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering::Relaxed};
