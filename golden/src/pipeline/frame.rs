@@ -34,7 +34,7 @@ use crate::image::Rgb8Image;
 use crate::metrics::{psnr, ssim, SSIM_WINDOW};
 use crate::profile::{self, Phase};
 use crate::raster::window::{current_order_key, window_for_sorted, window_order};
-use crate::raster::{raster_tile_into, RasterConfig, TileRaster};
+use crate::raster::{raster_tile_into, RasterConfig, TileAt, TileRaster};
 use crate::render;
 use crate::scene::Scene;
 use crate::sort::SortEntry;
@@ -85,8 +85,7 @@ struct TileSlot {
 struct RasterGeometry<'a> {
     fmt: &'a FeatureFormat,
     cfg: &'a RasterConfig,
-    tile: (u32, u32),
-    size: (u32, u32),
+    at: TileAt,
 }
 
 /// Rasterises tile `ti` of `inp` from the feature entries `entries` (indices into its feature
@@ -110,8 +109,8 @@ fn raster_entries(
     }
     feats.clear();
     feats.extend(entries.iter().map(|&f| inp.features[f as usize]));
-    let ((tx, ty), (w, h)) = (at.tile, at.size);
-    raster_tile_into(feats, at.fmt, tx, ty, w, h, at.cfg, out);
+    let TileAt { tile_x, tile_y, width, height } = at.at;
+    raster_tile_into(feats, at.fmt, tile_x, tile_y, width, height, at.cfg, out);
     if keep {
         kept.keep(entries, out);
     }
@@ -617,7 +616,8 @@ impl<'s> Pipeline<'s> {
                 slot.entries.clear();
                 slot.entries
                     .extend(state.table.iter().map(|e| feature_of[e.id as usize]).filter(|&f| f != CULLED));
-                let geometry = RasterGeometry { fmt, cfg, tile: (tx, ty), size: (w, h) };
+                let at = TileAt { tile_x: tx, tile_y: ty, width: w, height: h };
+                let geometry = RasterGeometry { fmt, cfg, at };
                 raster_entries(inp, ti, &slot.entries, geometry, keep, &mut slot.feats, &mut slot.raster);
                 std::mem::swap(&mut slot.pixels, &mut slot.raster.pixels);
                 let current = binning.tile(ti);
@@ -703,8 +703,8 @@ impl<'s> Pipeline<'s> {
                 // is made once per tile for the pipelines sharing these inputs.
                 slot.entries.clear();
                 slot.entries.extend(slot.exact.iter().map(|e| feature_of[e.id as usize]));
-                let tile = (ti as u32 % gx, ti as u32 / gx);
-                let geometry = RasterGeometry { fmt, cfg, tile, size: (w, h) };
+                let at = TileAt { tile_x: ti as u32 % gx, tile_y: ti as u32 / gx, width: w, height: h };
+                let geometry = RasterGeometry { fmt, cfg, at };
                 raster_entries(inp, ti, &slot.entries, geometry, keep, &mut slot.feats, &mut slot.raster);
                 std::mem::swap(&mut slot.exact_pixels, &mut slot.raster.pixels);
                 slot.abs_error = slot
