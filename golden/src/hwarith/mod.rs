@@ -21,7 +21,7 @@
 pub mod graph;
 mod native;
 
-pub use native::Native;
+pub use native::{canonical, Native, Relaxed};
 
 /// The one NaN arithmetic produces (sign 0, quiet bit set, payload 0).
 pub const CANONICAL_NAN: u32 = 0x7FC0_0000;

@@ -7,7 +7,7 @@
 //!   depth key, the feature entry's geometric fields);
 //! - [`color`]: the colour unit (SH of degree 0 to 3);
 //! - [`duplicate`]: the duplication unit's tile walk;
-//! - [`preprocess_hw`]: both evaluated with [`Native`] for every Gaussian of a baked scene, in
+//! - [`preprocess_hw`]: both evaluated with [`Relaxed`] (so [`crate::hwarith::Native`]'s results) for every Gaussian of a baked scene, in
 //!   parallel: what golden's bit-exact pipeline uses.
 
 pub mod bake;
@@ -20,12 +20,12 @@ use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::formats::{FeatureEntry, FeatureFormat, QuantConic};
-use crate::hwarith::{Arith, Native};
+use crate::hwarith::{canonical, Arith, Relaxed};
 use crate::render::{Projected, ViewParams, FOV_CLAMP};
 use crate::sort::DepthKeyCodec;
 pub use bake::{Baked, ShPrecision};
 use color::{ColorInputs, ColorView, COEFFS};
-use project::{CameraIn, GaussianIn, ProjectParams};
+use project::{CameraIn, GaussianIn, ProjectParams, Projection};
 
 /// One Gaussian that survived the hardware preprocessing.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,7 +59,7 @@ fn gaussian_in(baked: &Baked, i: usize) -> GaussianIn<f32> {
 
 /// The colour unit's SH inputs of Gaussian `i` (coefficients above the degree are zero: the
 /// unit does not read them and selects the scene's degree).
-fn sh_in(a: &mut Native, baked: &Baked, i: usize) -> [[f32; 3]; COEFFS] {
+fn sh_in(a: &mut Relaxed, baked: &Baked, i: usize) -> [[f32; 3]; COEFFS] {
     let words = baked.sh_of(i);
     let mut sh = [[0.0f32; 3]; COEFFS];
     for (k, &w) in words.iter().enumerate() {
@@ -71,6 +71,48 @@ fn sh_in(a: &mut Native, baked: &Baked, i: usize) -> [[f32; 3]; COEFFS] {
     sh
 }
 
+/// `p` with its float outputs' NaNs made canonical (the projection evaluated with [`Relaxed`]
+/// then equals [`crate::hwarith::Native`]'s bit for bit).
+fn canonical_outputs(p: Projection<f32, i32, bool>) -> Projection<f32, i32, bool> {
+    // Every field named, so that a new float output cannot be missed.
+    let Projection {
+        visible,
+        tile_min,
+        tile_max,
+        radius,
+        depth,
+        depth_key,
+        mean2d,
+        cov2d,
+        conic_f,
+        mean,
+        conic,
+        conic_exp,
+        opacity,
+        axis,
+        extent_uv,
+        extent_xy,
+    } = p;
+    Projection {
+        visible,
+        tile_min,
+        tile_max,
+        radius,
+        depth: canonical(depth),
+        depth_key,
+        mean2d: mean2d.map(canonical),
+        cov2d: cov2d.map(canonical),
+        conic_f: conic_f.map(canonical),
+        mean,
+        conic,
+        conic_exp,
+        opacity,
+        axis,
+        extent_uv,
+        extent_xy,
+    }
+}
+
 /// Preprocesses Gaussian `i` in the hardware's arithmetic; `None` when culled.
 pub fn preprocess_one(
     baked: &Baked,
@@ -80,14 +122,15 @@ pub fn preprocess_one(
     key: &DepthKeyCodec,
     i: usize,
 ) -> Option<HwProjected> {
-    let a = &mut Native;
-    let p = project::project(a, &gaussian_in(baked, i), cam, params);
+    // Relaxed, with the float outputs made canonical: Native's results, bit for bit.
+    let a = &mut Relaxed;
+    let p = canonical_outputs(project::project(a, &gaussian_in(baked, i), cam, params));
     if !p.visible {
         return None;
     }
     let g = ColorInputs { mean: baked.geometry[i].position, sh: sh_in(a, baked, i) };
     let view = ColorView { cam_pos, degree: baked.sh_degree as i32 };
-    let rgb = color::color(a, &g, &view);
+    let rgb = color::color(a, &g, &view).map(canonical);
     let fmt = &params.feature;
     let rgb_q = rgb.map(|v| quant::to_fixed(a, v, &fmt.color));
     // The RTL computes the FP16 key; other codecs (log, linear) are the host model's.
@@ -142,4 +185,90 @@ pub fn preprocess_hw(
         .with_min_len(4096)
         .filter_map(|i| preprocess_one(baked, &regs, cam_pos, &params, key, i))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hwarith::Native;
+    use proptest::prelude::*;
+
+    /// Every output of a projection, as bits.
+    fn bits(p: &Projection<f32, i32, bool>) -> Vec<u32> {
+        let floats = [p.depth].into_iter().chain(p.mean2d).chain(p.cov2d).chain(p.conic_f).map(f32::to_bits);
+        let ints = [p.visible as i32, p.radius, p.depth_key, p.conic_exp, p.opacity]
+            .into_iter()
+            .chain(p.tile_min)
+            .chain(p.tile_max)
+            .chain(p.mean)
+            .chain(p.conic)
+            .chain(p.axis)
+            .chain(p.extent_uv)
+            .chain(p.extent_xy)
+            .map(|v| v as u32);
+        floats.chain(ints).collect()
+    }
+
+    /// A float that is ordinary, special (zeros, infinities, NaNs with any payload, subnormals)
+    /// or any bit pattern.
+    fn value(lo: f32, hi: f32) -> impl Strategy<Value = f32> {
+        prop_oneof![
+            4 => lo..hi,
+            1 => prop::sample::select(vec![0.0, -0.0, f32::INFINITY, f32::NEG_INFINITY, 1e-40, -1e-42, f32::MAX]),
+            1 => any::<u32>().prop_map(|b| f32::from_bits(b | 0x7F80_0001)),
+            1 => any::<u32>().prop_map(f32::from_bits),
+        ]
+    }
+
+    fn gaussian() -> impl Strategy<Value = GaussianIn<f32>> {
+        (
+            prop::array::uniform3(value(-20.0, 20.0)),
+            prop::array::uniform6(value(-2.0, 2.0)),
+            value(0.0, 1.0),
+            value(0.0, 12.0),
+        )
+            .prop_map(|(position, cov3d, opacity, k2)| GaussianIn { position, cov3d, opacity, k2 })
+    }
+
+    fn camera() -> impl Strategy<Value = CameraIn<f32, i32>> {
+        (
+            prop::array::uniform9(value(-1.0, 1.0)),
+            prop::array::uniform3(value(-5.0, 5.0)),
+            value(100.0, 2000.0),
+        )
+            .prop_map(|(r, translation, focal)| CameraIn {
+                w2v: [[r[0], r[1], r[2]], [r[3], r[4], r[5]], [r[6], r[7], r[8]]],
+                translation,
+                focal: [focal, focal],
+                lim: [0.83, 0.62],
+                principal: [639.5, 359.5],
+                grid: [20, 12],
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        /// `preprocess_one`'s evaluation ([`Relaxed`], float outputs made canonical) is
+        /// [`Native`]'s bit for bit, NaNs and all.
+        #[test]
+        fn relaxed_projection_and_colour_are_native_bit_for_bit(
+            g in gaussian(),
+            cam in camera(),
+            sh in prop::array::uniform32(value(-1.0, 1.0)),
+            cam_pos in prop::array::uniform3(value(-5.0, 5.0)),
+            degree in 0i32..=3,
+        ) {
+            let params = ProjectParams { feature: FeatureFormat::default(), tile: 64 };
+            let want = project::project(&mut Native, &g, &cam, &params);
+            let got = canonical_outputs(project::project(&mut Relaxed, &g, &cam, &params));
+            prop_assert_eq!(bits(&got), bits(&want));
+            let sh: [[f32; 3]; COEFFS] = std::array::from_fn(|k| [0, 1, 2].map(|c| sh[(3 * k + c) % 32]));
+            let inputs = ColorInputs { mean: g.position, sh };
+            let view = ColorView { cam_pos, degree };
+            let want = color::color(&mut Native, &inputs, &view).map(f32::to_bits);
+            let got = color::color(&mut Relaxed, &inputs, &view).map(|v| canonical(v).to_bits());
+            prop_assert_eq!(got, want);
+        }
+    }
 }
