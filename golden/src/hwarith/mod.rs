@@ -2,7 +2,10 @@
 //! performs, defined once so that golden, the Verilog generator and the benches agree bit for bit.
 //!
 //! Algorithms are written once, generic over [`Arith`]:
-//! - [`Native`] evaluates them with Rust's `f32` (fast; golden's bit-exact pipeline uses it);
+//! - [`Native`] evaluates them with Rust's `f32`, every operation as specified;
+//! - [`Relaxed`] does the same but leaves a NaN result as the host made it, which is faster and
+//!   gives [`Native`]'s results once the program's float outputs pass through [`canonical`]
+//!   (golden's bit-exact preprocessing uses it so);
 //! - a tracing implementation records the same calls as a dataflow graph, from which `gen`
 //!   emits the pipelined Verilog (so the RTL performs exactly these operations, in this order).
 //!
