@@ -176,6 +176,21 @@ pub fn preprocess_hw(
     key: &DepthKeyCodec,
     tile: u32,
 ) -> Vec<HwProjected> {
+    preprocess_hw_par(baked, cam, fmt, key, tile).flatten().collect()
+}
+
+/// [`preprocess_hw`] as a parallel iterator over every Gaussian of `baked` (`None` when culled),
+/// for callers that keep only part of each survivor: the survivors are not gathered.
+///
+/// # Panics
+/// As [`preprocess_hw`].
+pub fn preprocess_hw_par<'a>(
+    baked: &'a Baked,
+    cam: &Camera,
+    fmt: &FeatureFormat,
+    key: &'a DepthKeyCodec,
+    tile: u32,
+) -> impl IndexedParallelIterator<Item = Option<HwProjected>> + 'a {
     assert_eq!(key.key_bits(), fmt.depth_key_bits, "depth key codec width differs from the feature format's");
     assert!(baked.matches(fmt), "the baked k2 was made for another cutoff or opacity format");
     let (regs, cam_pos) = camera_registers(cam, tile);
@@ -183,8 +198,7 @@ pub fn preprocess_hw(
     (0..baked.len())
         .into_par_iter()
         .with_min_len(4096)
-        .filter_map(|i| preprocess_one(baked, &regs, cam_pos, &params, key, i))
-        .collect()
+        .map(move |i| preprocess_one(baked, &regs, cam_pos, &params, key, i))
 }
 
 #[cfg(test)]

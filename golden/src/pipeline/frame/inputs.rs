@@ -21,10 +21,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::{gpu_duplication, gpu_duplication_of, CULLED, GPU_TILE};
+use super::{gpu_count, gpu_duplication, gpu_pairs, CULLED, GPU_TILE};
 use crate::camera::Camera;
 use crate::formats::{quantize, FeatureEntry, FeatureFormat};
-use crate::hwpre::{preprocess_hw, Baked};
+use crate::hwpre::{preprocess_hw_par, Baked};
 use crate::pipeline::binning::Binning;
 use crate::pipeline::config::{Formats, Preprocessing};
 use crate::profile::{self, Phase};
@@ -83,6 +83,9 @@ pub struct FrameInputs {
     pub(super) binning: Binning,
     /// The CUDA rasterizer's duplication over [`GPU_TILE`] tiles: (pairs, Gaussians).
     pub(super) gpu: (u64, u64),
+    /// Per Gaussian, its feature entry, id and GPU pairs, or `None` when culled (the hardware
+    /// preprocessing's buffer, kept from frame to frame).
+    outcomes: Vec<Option<(FeatureEntry, u32, u64)>>,
     /// Seconds of the preprocessing and the quantisation (the hardware's: all in the first).
     pub(super) feature_s: (f64, f64),
     /// Seconds of the binning.
@@ -178,15 +181,20 @@ impl<'s> FramePrep<'s> {
         let gpu = |p: &[Projected]| gpu_duplication(p, w, h, GPU_TILE);
         let (preprocess_s, t) = match &self.baked {
             Some(baked) => {
-                let hw = preprocess_hw(baked, cam, fmt, key, tile);
-                let preprocess_s = t.elapsed().as_secs_f64();
-                inp.gpu = gpu_duplication_of(&hw, |x| &x.projected, w, h, GPU_TILE);
-                let t = Instant::now();
+                // Each Gaussian's outcome in place (a buffer kept from frame to frame), then the
+                // survivors in order: no survivor list is gathered and no buffer is allocated.
+                preprocess_hw_par(baked, cam, fmt, key, tile)
+                    .map(|s| s.map(|s| (s.entry, s.projected.index, gpu_pairs(&s.projected, w, h, GPU_TILE))))
+                    .collect_into_vec(&mut inp.outcomes);
                 inp.features.clear();
-                inp.features.extend(hw.iter().map(|h| h.entry));
                 inp.feature_ids.clear();
-                inp.feature_ids.extend(hw.iter().map(|h| h.projected.index));
-                (preprocess_s, t)
+                inp.gpu = (0, 0);
+                for &(entry, id, pairs) in inp.outcomes.iter().flatten() {
+                    inp.features.push(entry);
+                    inp.feature_ids.push(id);
+                    inp.gpu = gpu_count(inp.gpu, pairs);
+                }
+                (t.elapsed().as_secs_f64(), Instant::now())
             }
             None => {
                 let projected = preprocess(self.scene, cam, tile);

@@ -241,34 +241,30 @@ impl Pipeline<'_> {
 /// `getRect(mean, radius)` clamped to the grid; returns (pairs, Gaussians with a non-empty
 /// rectangle and a positive radius).
 pub fn gpu_duplication(projected: &[Projected], width: u32, height: u32, tile: u32) -> (u64, u64) {
-    gpu_duplication_of(projected, |p| p, width, height, tile)
+    projected
+        .par_iter()
+        .map(|p| gpu_pairs(p, width, height, tile))
+        .fold(|| (0, 0), gpu_count)
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
-/// [`gpu_duplication`] of the [`Projected`] each of `items` holds (`proj` gives it), without
-/// gathering them into a slice of their own.
-pub fn gpu_duplication_of<T: Sync>(
-    items: &[T],
-    proj: impl Fn(&T) -> &Projected + Sync,
-    width: u32,
-    height: u32,
-    tile: u32,
-) -> (u64, u64) {
+/// `acc` (pairs, Gaussians with pairs) counting one more Gaussian with `pairs` pairs.
+pub fn gpu_count(acc: (u64, u64), pairs: u64) -> (u64, u64) {
+    (acc.0 + pairs, acc.1 + (pairs > 0) as u64)
+}
+
+/// The tile-Gaussian pairs of one Gaussian in [`gpu_duplication`]: its rectangle
+/// `getRect(mean, radius)` clamped to the grid of `tile`-pixel tiles (0 for a zero radius).
+pub fn gpu_pairs(p: &Projected, width: u32, height: u32, tile: u32) -> u64 {
+    if p.radius == 0 {
+        return 0;
+    }
     let (gx, gy) = (width.div_ceil(tile) as i64, height.div_ceil(tile) as i64);
     let t = tile as f32;
-    items
-        .par_iter()
-        .map(|item| {
-            let p = proj(item);
-            if p.radius == 0 {
-                return (0u64, 0u64);
-            }
-            let r = p.radius as f32;
-            let lo = |m: f32, g: i64| (((m - r) / t) as i64).clamp(0, g);
-            let hi = |m: f32, g: i64| (((m + r + t - 1.0) / t) as i64).clamp(0, g);
-            let nx = hi(p.mean2d[0], gx) - lo(p.mean2d[0], gx);
-            let ny = hi(p.mean2d[1], gy) - lo(p.mean2d[1], gy);
-            let pairs = (nx.max(0) * ny.max(0)) as u64;
-            (pairs, (pairs > 0) as u64)
-        })
-        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+    let r = p.radius as f32;
+    let lo = |m: f32, g: i64| (((m - r) / t) as i64).clamp(0, g);
+    let hi = |m: f32, g: i64| (((m + r + t - 1.0) / t) as i64).clamp(0, g);
+    let nx = hi(p.mean2d[0], gx) - lo(p.mean2d[0], gx);
+    let ny = hi(p.mean2d[1], gy) - lo(p.mean2d[1], gy);
+    (nx.max(0) * ny.max(0)) as u64
 }
