@@ -269,6 +269,46 @@ enum Ev {
     Done(usize),
 }
 
+/// An event in the heap, ordered by time, then by the order it was posted in: the time in the
+/// high 64 bits, then the post's sequence number (40 bits), the event's kind (2 bits) and its
+/// agent or write batch (22 bits). One `u128` compares in two instructions and moves in 16
+/// bytes, where `(time, sequence, Ev)` took 32.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct EvKey(u128);
+
+impl EvKey {
+    const INDEX_BITS: u32 = 22;
+    const SEQ_BITS: u32 = 40;
+
+    fn new(t: Ps, seq: u64, ev: Ev) -> Self {
+        let (kind, index) = match ev {
+            Ev::Issue(a) => (0, a),
+            Ev::Writes(w) => (1, w),
+            Ev::Done(a) => (2, a),
+        };
+        assert!(
+            index < 1 << Self::INDEX_BITS && seq < 1 << Self::SEQ_BITS,
+            "event key out of range: index {index}, sequence {seq}"
+        );
+        let low = seq << (Self::INDEX_BITS + 2) | (kind as u64) << Self::INDEX_BITS | index as u64;
+        EvKey((t as u128) << 64 | low as u128)
+    }
+
+    fn time(self) -> Ps {
+        (self.0 >> 64) as Ps
+    }
+
+    fn parts(self) -> (Ps, Ev) {
+        let index = (self.0 as u64 & ((1 << Self::INDEX_BITS) - 1)) as usize;
+        let ev = match (self.0 as u64 >> Self::INDEX_BITS) & 3 {
+            0 => Ev::Issue(index),
+            1 => Ev::Writes(index),
+            _ => Ev::Done(index),
+        };
+        (self.time(), ev)
+    }
+}
+
 #[derive(Debug, Default)]
 struct AgentState {
     job: Option<Job>,
@@ -313,7 +353,7 @@ pub struct Engine {
     line: u64,
     specs: Vec<AgentSpec>,
     agents: Vec<AgentState>,
-    heap: BinaryHeap<Reverse<(Ps, u64, Ev)>>,
+    heap: BinaryHeap<Reverse<EvKey>>,
     seq: u64,
     writes: Vec<Option<PendingWrites>>,
     free_writes: Vec<usize>,
@@ -366,7 +406,7 @@ impl Engine {
 
     fn push(&mut self, t: Ps, ev: Ev) {
         self.seq += 1;
-        self.heap.push(Reverse((t, self.seq, ev)));
+        self.heap.push(Reverse(EvKey::new(t, self.seq, ev)));
     }
 
     fn count(&mut self, frame: u32, stage: Stage, dir: Dir) {
@@ -381,7 +421,8 @@ impl Engine {
     pub fn run(&mut self, sched: &mut dyn Scheduler) -> Ps {
         let _phase = profile::enter(Phase::Engine);
         self.dispatch(sched, 0);
-        while let Some(Reverse((t, _, ev))) = self.heap.pop() {
+        while let Some(Reverse(key)) = self.heap.pop() {
+            let (t, ev) = key.parts();
             self.now = t;
             match ev {
                 Ev::Issue(a) => self.issue(a, t),
@@ -537,7 +578,7 @@ impl Engine {
             let st = &mut self.agents[a];
             st.inflight.push_back(ticket);
             let next = t + st.interval;
-            let top = self.heap.peek().map_or(Ps::MAX, |r| r.0 .0);
+            let top = self.heap.peek().map_or(Ps::MAX, |r| r.0.time());
             if next < top {
                 t = next;
                 self.now = t;
@@ -610,6 +651,34 @@ impl Engine {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    fn event(kind: u8, index: usize) -> Ev {
+        match kind % 3 {
+            0 => Ev::Issue(index),
+            1 => Ev::Writes(index),
+            _ => Ev::Done(index),
+        }
+    }
+
+    proptest! {
+        /// An event key gives back its time and event, and keys order as `(time, sequence)`.
+        #[test]
+        fn event_keys_keep_their_event_and_order_by_time_then_sequence(
+            a in (any::<u64>(), 0u64..1 << 40, any::<u8>(), 0usize..1 << 22),
+            b in (any::<u64>(), 0u64..1 << 40, any::<u8>(), 0usize..1 << 22),
+            near in any::<bool>(),
+        ) {
+            // Half the cases share their time, so the sequence decides.
+            let b = if near { (a.0, b.1, b.2, b.3) } else { b };
+            let (ka, kb) = (EvKey::new(a.0, a.1, event(a.2, a.3)), EvKey::new(b.0, b.1, event(b.2, b.3)));
+            prop_assert_eq!(ka.parts(), (a.0, event(a.2, a.3)));
+            prop_assert_eq!(kb.parts(), (b.0, event(b.2, b.3)));
+            if (a.0, a.1) != (b.0, b.1) {
+                prop_assert_eq!(ka.cmp(&kb), (a.0, a.1).cmp(&(b.0, b.1)));
+            }
+        }
+    }
 
     /// A run of transfers moves, transfer by transfer, the lines each touches: the count
     /// (period shortcut) and the cursor's walk agree with a transfer-by-transfer count.
