@@ -48,10 +48,10 @@ pub(crate) fn round_to_i32(a: f32, mode: Round) -> i32 {
     r.clamp(i32::MIN as f64, i32::MAX as f64) as i32
 }
 
-/// The exact binary32 value of binary16 bits `h` (low 16 bits), without branches (so that
-/// [`super::Lanes`] vectorises it): a normal half's fields move (the exponent rebiased from 15
-/// to 127, the mantissa widened by 13 bits); a subnormal half is its mantissa times 2^-24
-/// (exact: the mantissa has 10 bits); exponent 31 keeps its mantissa (infinity or NaN).
+/// The exact binary32 value of binary16 bits `h` (low 16 bits), by moving its fields (no
+/// `powi`): a normal half's exponent is rebiased from 15 to 127 and its mantissa widened by 13
+/// bits; a subnormal half is its mantissa times 2^-24 (exact: the mantissa has 10 bits);
+/// exponent 31 keeps its mantissa (infinity or NaN).
 fn half_to_f32(h: u32) -> f32 {
     let sign = (h & 0x8000) << 16;
     let (exp, mant) = ((h >> 10) & 0x1F, h & 0x3FF);
