@@ -40,7 +40,7 @@ use crate::scene::Scene;
 use crate::sort::SortEntry;
 pub use inputs::{FrameInputs, FramePrep};
 pub use work_only::{
-    gpu_count, gpu_duplication, gpu_pairs, FrameWork, SampledRaster, TileWork, WorkOptions, GPU_TILE,
+    gpu_count, gpu_duplication, FrameWork, GpuGrid, SampledRaster, TileWork, WorkOptions, GPU_TILE,
 };
 
 mod inputs;

@@ -21,7 +21,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::{gpu_count, gpu_duplication, gpu_pairs, CULLED, GPU_TILE};
+use super::{gpu_count, gpu_duplication, GpuGrid, CULLED, GPU_TILE};
 use crate::camera::Camera;
 use crate::formats::{quantize, FeatureEntry, FeatureFormat};
 use crate::hwpre::{preprocess_hw_par, Baked};
@@ -183,8 +183,9 @@ impl<'s> FramePrep<'s> {
             Some(baked) => {
                 // Each Gaussian's outcome in place (a buffer kept from frame to frame), then the
                 // survivors in order: no survivor list is gathered and no buffer is allocated.
+                let grid = GpuGrid::new(w, h, GPU_TILE);
                 preprocess_hw_par(baked, cam, fmt, key, tile)
-                    .map(|s| s.map(|s| (s.entry, s.projected.index, gpu_pairs(&s.projected, w, h, GPU_TILE))))
+                    .map(|s| s.map(|s| (s.entry, s.projected.index, grid.pairs(&s.projected))))
                     .collect_into_vec(&mut inp.outcomes);
                 inp.features.clear();
                 inp.feature_ids.clear();

@@ -241,9 +241,10 @@ impl Pipeline<'_> {
 /// `getRect(mean, radius)` clamped to the grid; returns (pairs, Gaussians with a non-empty
 /// rectangle and a positive radius).
 pub fn gpu_duplication(projected: &[Projected], width: u32, height: u32, tile: u32) -> (u64, u64) {
+    let grid = GpuGrid::new(width, height, tile);
     projected
         .par_iter()
-        .map(|p| gpu_pairs(p, width, height, tile))
+        .map(|p| grid.pairs(p))
         .fold(|| (0, 0), gpu_count)
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
@@ -253,18 +254,32 @@ pub fn gpu_count(acc: (u64, u64), pairs: u64) -> (u64, u64) {
     (acc.0 + pairs, acc.1 + (pairs > 0) as u64)
 }
 
-/// The tile-Gaussian pairs of one Gaussian in [`gpu_duplication`]: its rectangle
-/// `getRect(mean, radius)` clamped to the grid of `tile`-pixel tiles (0 for a zero radius).
-pub fn gpu_pairs(p: &Projected, width: u32, height: u32, tile: u32) -> u64 {
-    if p.radius == 0 {
-        return 0;
+/// The tile grid of [`gpu_duplication`], made once per frame: its size in tiles and the tile
+/// side.
+#[derive(Clone, Copy, Debug)]
+pub struct GpuGrid {
+    gx: i64,
+    gy: i64,
+    tile: f32,
+}
+
+impl GpuGrid {
+    /// The grid of `tile`-pixel tiles over a `width` x `height` image.
+    pub fn new(width: u32, height: u32, tile: u32) -> Self {
+        GpuGrid { gx: width.div_ceil(tile) as i64, gy: height.div_ceil(tile) as i64, tile: tile as f32 }
     }
-    let (gx, gy) = (width.div_ceil(tile) as i64, height.div_ceil(tile) as i64);
-    let t = tile as f32;
-    let r = p.radius as f32;
-    let lo = |m: f32, g: i64| (((m - r) / t) as i64).clamp(0, g);
-    let hi = |m: f32, g: i64| (((m + r + t - 1.0) / t) as i64).clamp(0, g);
-    let nx = hi(p.mean2d[0], gx) - lo(p.mean2d[0], gx);
-    let ny = hi(p.mean2d[1], gy) - lo(p.mean2d[1], gy);
-    (nx.max(0) * ny.max(0)) as u64
+
+    /// The tile-Gaussian pairs of one Gaussian: its rectangle `getRect(mean, radius)` clamped
+    /// to the grid (0 for a zero radius).
+    pub fn pairs(&self, p: &Projected) -> u64 {
+        if p.radius == 0 {
+            return 0;
+        }
+        let (t, r) = (self.tile, p.radius as f32);
+        let lo = |m: f32, g: i64| (((m - r) / t) as i64).clamp(0, g);
+        let hi = |m: f32, g: i64| (((m + r + t - 1.0) / t) as i64).clamp(0, g);
+        let nx = hi(p.mean2d[0], self.gx) - lo(p.mean2d[0], self.gx);
+        let ny = hi(p.mean2d[1], self.gy) - lo(p.mean2d[1], self.gy);
+        (nx.max(0) * ny.max(0)) as u64
+    }
 }
