@@ -7,8 +7,9 @@
 //!   depth key, the feature entry's geometric fields);
 //! - [`color`]: the colour unit (SH of degree 0 to 3);
 //! - [`duplicate`]: the duplication unit's tile walk;
-//! - [`preprocess_hw`]: both evaluated with [`Relaxed`] (so [`crate::hwarith::Native`]'s results) for every Gaussian of a baked scene, in
-//!   parallel: what golden's bit-exact pipeline uses.
+//! - [`preprocess_hw`]: both evaluated with [`Relaxed`] (so [`crate::hwarith::Native`]'s
+//!   results) for every Gaussian of a baked scene, in parallel: what golden's bit-exact pipeline
+//!   uses.
 
 pub mod bake;
 pub mod color;
