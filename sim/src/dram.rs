@@ -354,21 +354,20 @@ impl Channel {
     /// or write queue `q`.
     fn position(&self, q: Q, window: usize, seq: u64) -> usize {
         let queue = if q == Q::Read { &self.readq } else { &self.writeq };
-        // Mostly the oldest.
-        if queue[0].seq == seq {
+        // The queue is in `seq` order: the position is the count of older requests, found in
+        // the deque's two slices (mostly the oldest).
+        let (a, b) = queue.as_slices();
+        let a = &a[..a.len().min(window)];
+        let b = &b[..b.len().min(window - a.len())];
+        if a[0].seq == seq {
             return 0;
         }
-        let (mut lo, mut hi) = (1, queue.len().min(window));
-        while lo < hi {
-            let mid = (lo + hi) / 2;
-            if queue[mid].seq < seq {
-                lo = mid + 1;
-            } else {
-                hi = mid;
-            }
-        }
-        debug_assert_eq!(queue[lo].seq, seq, "an indexed request");
-        lo
+        let i = match a.last() {
+            Some(last) if last.seq >= seq => a.partition_point(|r| r.seq < seq),
+            _ => a.len() + b.partition_point(|r| r.seq < seq),
+        };
+        debug_assert!(i < window && queue[i].seq == seq, "an indexed request");
+        i
     }
 
     /// The refresh's next command and its clock.
