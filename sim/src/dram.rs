@@ -37,6 +37,7 @@
 //! per clock, data bus inversion, on-die ECC.
 
 use std::collections::VecDeque;
+use std::hint::select_unpredictable;
 
 use neo_golden::profile::{self, Phase};
 use serde::{Deserialize, Serialize};
@@ -170,13 +171,16 @@ struct Index {
     slots: Vec<Slot>,
     /// Bit set of the banks whose list is not empty (64 banks a word).
     live: Vec<u64>,
+    /// Bit set of the banks with a class to be found again (a `dirty` flag set).
+    dirty: Vec<u64>,
     /// The next request's `seq`.
     next_seq: u64,
 }
 
 impl Index {
     fn new(banks: usize) -> Self {
-        Index { slots: vec![Slot::default(); banks], live: vec![0; banks.div_ceil(64)], next_seq: 0 }
+        let words = banks.div_ceil(64);
+        Index { slots: vec![Slot::default(); banks], live: vec![0; words], dirty: vec![0; words], next_seq: 0 }
     }
 
     /// Request `(seq, bank, row)`, the youngest in the window, entered it.
@@ -205,14 +209,38 @@ impl Index {
         }
         if sl.hit == seq {
             sl.dirty_hit = true;
+            self.dirty[b / 64] |= 1 << (b % 64);
         } else if sl.other == seq {
             sl.dirty_other = true;
+            self.dirty[b / 64] |= 1 << (b % 64);
         }
     }
 
     /// Bank `b`'s open row changed: both its requests are to be found again.
     fn reopen(&mut self, b: usize) {
         self.slots[b].reopen();
+        self.dirty[b / 64] |= 1 << (b % 64);
+    }
+
+    /// Every bank's open row changed (all-bank precharge).
+    fn reopen_all(&mut self) {
+        self.slots.iter_mut().for_each(Slot::reopen);
+        self.dirty.iter_mut().for_each(|w| *w = !0);
+    }
+
+    /// Finds again the classes to be found (the window ends at request `bound`; `banks` gives
+    /// each bank's open row).
+    fn clean(&mut self, bound: u64, banks: &[Bank]) {
+        for w in 0..self.dirty.len() {
+            let mut bits = std::mem::take(&mut self.dirty[w]);
+            while bits != 0 {
+                let i = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                if let Some(sl) = self.slots.get_mut(i) {
+                    sl.clean(bound, banks[i].open);
+                }
+            }
+        }
     }
 }
 
@@ -327,25 +355,19 @@ impl Channel {
         let front_at = self.next_cmd(front);
         let bound = queue[queue.len().min(window) - 1].seq;
         let ix = &mut self.idx[q.index()];
+        ix.clean(bound, &self.banks);
         let col = if q == Q::Write { self.wr } else { self.rd };
         let write = q == Q::Write;
-        for w in 0..ix.live.len() {
-            let mut bits = ix.live[w];
-            while bits != 0 {
-                let i = w * 64 + bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                let b = &self.banks[i];
-                let sl = &mut ix.slots[i];
-                sl.clean(bound, b.open);
-                let (h, o) = (sl.hit, sl.other);
-                // A hit of a row past the cap can issue only as the oldest: not a candidate.
-                if h != NONE && !(b.open != CLOSED && b.hits > cap) {
-                    cands.add(if write { b.wr } else { b.rd }.max(col), h, 0);
-                }
-                if o != NONE {
-                    cands.add(if b.open == CLOSED { b.act.max(self.act) } else { b.pre.max(self.pre) }, o, 0);
-                }
-            }
+        // Every bank, without branches on the data (a bank with no request has no candidate:
+        // both classes `NONE`, ready `NEVER`): the banks' outcomes are too irregular to predict.
+        for (b, sl) in self.banks.iter().zip(&ix.slots) {
+            let closed = b.open == CLOSED;
+            // A hit of a row past the cap can issue only as the oldest: not a candidate.
+            let hit_ok = (sl.hit != NONE) & !(!closed & (b.hits > cap));
+            let hit_at = select_unpredictable(write, b.wr, b.rd).max(col);
+            cands.add(select_unpredictable(hit_ok, hit_at, NEVER), sl.hit, 0);
+            let other_at = select_unpredictable(closed, b.act.max(self.act), b.pre.max(self.pre));
+            cands.add(select_unpredictable(sl.other != NONE, other_at, NEVER), sl.other, 0);
         }
         front_at.1
     }
@@ -478,16 +500,13 @@ impl Oldest {
     /// older), ready from clock `at` (`NEVER`: not a candidate).
     #[inline]
     fn add(&mut self, at: Clk, key: u64, i: usize) {
-        if at <= self.floor {
-            if key < self.early.0 {
-                self.early = (key, i);
-            }
-        } else if at < self.late_at {
-            self.late_at = at;
-            self.late = (key, i);
-        } else if at == self.late_at && at != NEVER && key < self.late.0 {
-            self.late = (key, i);
-        }
+        let early = at <= self.floor;
+        let to_early = early & (key < self.early.0);
+        // `at == late_at` with both `NEVER` is no candidate.
+        let to_late = !early & ((at < self.late_at) | ((at == self.late_at) & (at != NEVER) & (key < self.late.0)));
+        self.early = select_unpredictable(to_early, (key, i), self.early);
+        self.late_at = select_unpredictable(to_late, at, self.late_at);
+        self.late = select_unpredictable(to_late, (key, i), self.late);
     }
 
     /// The earliest ready clock, or `floor` if a candidate is ready by then (the same plan
@@ -1285,7 +1304,7 @@ impl Dram {
                     bank.open = CLOSED;
                 }
                 for ix in ch.idx.iter_mut() {
-                    ix.slots.iter_mut().for_each(Slot::reopen);
+                    ix.reopen_all();
                 }
             }
             Cmd::Ref => {
