@@ -310,18 +310,12 @@ impl Channel {
     /// The next command of `r` and the clock from which it can issue.
     #[inline]
     fn next_cmd(&self, r: &Req) -> (Cmd, Clk) {
+        // Without branches on the data: which command a request needs next is irregular.
         let b = &self.banks[r.bank as usize];
-        if b.open == CLOSED {
-            (Cmd::Act, b.act.max(self.act))
-        } else if b.open == r.row {
-            if r.write {
-                (Cmd::Wr, b.wr.max(self.wr))
-            } else {
-                (Cmd::Rd, b.rd.max(self.rd))
-            }
-        } else {
-            (Cmd::Pre, b.pre.max(self.pre))
-        }
+        let closed = b.open == CLOSED;
+        let col = select_unpredictable(r.write, (Cmd::Wr, b.wr.max(self.wr)), (Cmd::Rd, b.rd.max(self.rd)));
+        let other = select_unpredictable(closed, (Cmd::Act, b.act.max(self.act)), (Cmd::Pre, b.pre.max(self.pre)));
+        select_unpredictable(!closed & (b.open == r.row), col, other)
     }
 
     /// The clock from which request `r` can issue its next command as a candidate of FR-FCFS
