@@ -470,59 +470,47 @@ enum Pick {
     Slow,
 }
 
-/// The oldest of a plan's candidates (by key `K`, smallest first) among those ready by the
-/// planned clock, found in one pass before that clock is known. The plan chooses a clock no
-/// earlier than `floor` (the channel's next clock): every candidate ready at or before `floor`
-/// is ready then, and a later plan clock is the earliest ready clock of all, so only the
-/// candidates ready at that clock are.
+/// The oldest of a plan's candidates (by key, smallest first) among those ready by the planned
+/// clock, found in one pass before that clock is known. The plan chooses a clock no earlier
+/// than `floor` (the channel's next clock): every candidate ready at or before `floor` is ready
+/// then, and a later plan clock is the earliest ready clock of all, so only the candidates ready
+/// at that clock are. So the pick is the least `(max(ready, floor), key)`, kept as one `u128`
+/// (updated without branches: which candidate wins is irregular).
 #[derive(Clone, Copy, Debug)]
 struct Oldest {
     floor: Clk,
-    /// The oldest candidate ready at or before `floor`: its key (`NONE` if none) and index.
-    early: (u64, usize),
-    /// The earliest ready clock after `floor`, and the oldest candidate ready then.
-    late_at: Clk,
-    late: (u64, usize),
+    /// `max(ready, floor) << 64 | key` of the least candidate (`u128::MAX`: none).
+    best: u128,
+    /// Its index.
+    index: usize,
 }
 
 impl Oldest {
     fn new(floor: Clk) -> Self {
-        Oldest { floor, early: (NONE, 0), late_at: NEVER, late: (NONE, 0) }
+        Oldest { floor, best: u128::MAX, index: 0 }
     }
 
     /// Candidate `i` with key `key` (below `NONE`; of equal keys the first added counts as
     /// older), ready from clock `at` (`NEVER`: not a candidate).
     #[inline]
     fn add(&mut self, at: Clk, key: u64, i: usize) {
-        let early = at <= self.floor;
-        let to_early = early & (key < self.early.0);
-        // `at == late_at` with both `NEVER` is no candidate.
-        let to_late = !early & ((at < self.late_at) | ((at == self.late_at) & (at != NEVER) & (key < self.late.0)));
-        self.early = select_unpredictable(to_early, (key, i), self.early);
-        self.late_at = select_unpredictable(to_late, at, self.late_at);
-        self.late = select_unpredictable(to_late, (key, i), self.late);
+        let v = ((at.max(self.floor) as u128) << 64) | key as u128;
+        let v = select_unpredictable(at == NEVER, u128::MAX, v);
+        let better = v < self.best;
+        self.best = select_unpredictable(better, v, self.best);
+        self.index = select_unpredictable(better, i, self.index);
     }
 
     /// The earliest ready clock, or `floor` if a candidate is ready by then (the same plan
-    /// clock either way).
+    /// clock either way; `NEVER` if there is no candidate).
     fn earliest(&self) -> Clk {
-        if self.early.0 != NONE {
-            self.floor
-        } else {
-            self.late_at
-        }
+        (self.best >> 64) as Clk
     }
 
     /// The oldest candidate ready at plan clock `at` (at least `floor`, and at most
     /// [`Oldest::earliest`] unless it is `floor`): its key and index.
     fn pick(&self, at: Clk) -> Option<(u64, usize)> {
-        if self.early.0 != NONE {
-            Some(self.early)
-        } else if self.late_at <= at && self.late.0 != NONE {
-            Some(self.late)
-        } else {
-            None
-        }
+        (self.best != u128::MAX && self.earliest() <= at).then_some((self.best as u64, self.index))
     }
 }
 
