@@ -26,9 +26,10 @@
 //! Time is simulated lazily: a channel advances to a request's issue time when the request is
 //! submitted, and further when a read's data time is asked for ([`Dram::arrival`]); clocks on
 //! which no command can issue are skipped (the next issue time is computed, not searched). The
-//! FR-FCFS pick of the read or write queue looks, per bank with queued requests, only at the
-//! oldest request of the window that hits the open row and the oldest that does not (their ready
-//! clocks are the bank's), kept up to date as requests come and go and rows open and close.
+//! FR-FCFS pick of the read or write queue looks, per bank, only at the oldest request of the
+//! window that hits the open row and the oldest that does not (their ready clocks are the
+//! bank's), kept up to date as requests come and go and rows open and close; the pick and the
+//! next command are chosen without branches on the data, which are too irregular to predict.
 //! Requests arrive in non-decreasing issue time; a request submitted after its channel has
 //! already advanced past its issue time (because an earlier read's time was needed) is queued
 //! at the channel's clock, its latency still counted from its issue.
