@@ -181,7 +181,12 @@ struct Index {
 impl Index {
     fn new(banks: usize) -> Self {
         let words = banks.div_ceil(64);
-        Index { slots: vec![Slot::default(); banks], live: vec![0; words], dirty: vec![0; words], next_seq: 0 }
+        Index {
+            slots: vec![Slot::default(); banks],
+            live: vec![0; words],
+            dirty: vec![0; words],
+            next_seq: 0,
+        }
     }
 
     /// Request `(seq, bank, row)`, the youngest in the window, entered it.
@@ -315,7 +320,8 @@ impl Channel {
         let b = &self.banks[r.bank as usize];
         let closed = b.open == CLOSED;
         let col = select_unpredictable(r.write, (Cmd::Wr, b.wr.max(self.wr)), (Cmd::Rd, b.rd.max(self.rd)));
-        let other = select_unpredictable(closed, (Cmd::Act, b.act.max(self.act)), (Cmd::Pre, b.pre.max(self.pre)));
+        let other =
+            select_unpredictable(closed, (Cmd::Act, b.act.max(self.act)), (Cmd::Pre, b.pre.max(self.pre)));
         select_unpredictable(!closed & (b.open == r.row), col, other)
     }
 
