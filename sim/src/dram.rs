@@ -170,9 +170,8 @@ impl Slot {
 struct Index {
     /// Per bank.
     slots: Vec<Slot>,
-    /// Bit set of the banks whose list is not empty (64 banks a word).
-    live: Vec<u64>,
-    /// Bit set of the banks with a class to be found again (a `dirty` flag set).
+    /// Bit set of the banks with a class to be found again (a `dirty` flag set; 64 banks a
+    /// word). A bank without requests has neither class once found again.
     dirty: Vec<u64>,
     /// The next request's `seq`.
     next_seq: u64,
@@ -181,12 +180,7 @@ struct Index {
 impl Index {
     fn new(banks: usize) -> Self {
         let words = banks.div_ceil(64);
-        Index {
-            slots: vec![Slot::default(); banks],
-            live: vec![0; words],
-            dirty: vec![0; words],
-            next_seq: 0,
-        }
+        Index { slots: vec![Slot::default(); banks], dirty: vec![0; words], next_seq: 0 }
     }
 
     /// Request `(seq, bank, row)`, the youngest in the window, entered it.
@@ -209,9 +203,6 @@ impl Index {
         } else {
             let p = sl.list.iter().position(|e| e.0 == seq).expect("an indexed request");
             sl.list.remove(p);
-        }
-        if sl.list.is_empty() {
-            self.live[b / 64] &= !(1 << (b % 64));
         }
         if sl.hit == seq {
             sl.dirty_hit = true;
@@ -815,7 +806,6 @@ impl Dram {
         r.seq = ix.next_seq;
         ix.next_seq += 1;
         ix.slots[r.bank as usize].list.push_back((r.seq, r.row));
-        ix.live[r.bank as usize / 64] |= 1 << (r.bank % 64);
         let queue = if q == Q::Read { &mut ch.readq } else { &mut ch.writeq };
         queue.push_back(r);
         if queue.len() <= window {
