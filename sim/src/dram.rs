@@ -1633,6 +1633,29 @@ mod tests {
         assert!(d.stats().reordered >= cfg.bypass_cap as u64);
     }
 
+    /// `Oldest` against its definition: among the candidates ready by the plan clock, the
+    /// oldest; the plan clock is the floor if one is ready by it, else the earliest ready clock;
+    /// of equal keys the first added; a candidate ready `NEVER` is none, even at clock `NEVER`.
+    #[test]
+    fn oldest_picks_the_oldest_ready_by_the_plan_clock_and_never_a_never() {
+        let floor = 100;
+        let mut o = Oldest::new(floor);
+        assert_eq!((o.earliest(), o.pick(NEVER)), (NEVER, None));
+        o.add(NEVER, 1, 0);
+        assert_eq!((o.earliest(), o.pick(NEVER)), (NEVER, None), "a NEVER candidate is none");
+        o.add(150, 9, 1);
+        o.add(120, 7, 2);
+        o.add(120, 5, 3);
+        o.add(120, 5, 4);
+        assert_eq!(o.earliest(), 120, "the earliest ready clock after the floor");
+        assert_eq!(o.pick(119), None);
+        assert_eq!(o.pick(120), Some((5, 3)), "the oldest ready then, the first of equal keys");
+        o.add(90, 8, 5);
+        o.add(100, 6, 6);
+        assert_eq!(o.earliest(), floor, "a candidate ready by the floor");
+        assert_eq!(o.pick(floor), Some((6, 6)), "the oldest ready by the floor, not the earliest");
+    }
+
     #[test]
     fn ideal_memory_answers_after_a_fixed_latency() {
         let mut d = Dram::ideal(64, 1000);
