@@ -74,44 +74,31 @@ fn sh_in(a: &mut Relaxed, baked: &Baked, i: usize) -> [[f32; 3]; COEFFS] {
 
 /// `p` with its float outputs' NaNs made canonical (the projection evaluated with [`Relaxed`]
 /// then equals [`crate::hwarith::Native`]'s bit for bit).
-fn canonical_outputs(p: Projection<f32, i32, bool>) -> Projection<f32, i32, bool> {
-    // Every field named, so that a new float output cannot be missed.
+fn canonical_outputs(mut p: Projection<f32, i32, bool>) -> Projection<f32, i32, bool> {
+    // Every field named (no `..`), so that a new float output cannot be missed.
     let Projection {
-        visible,
-        tile_min,
-        tile_max,
-        radius,
+        visible: _,
+        tile_min: _,
+        tile_max: _,
+        radius: _,
         depth,
-        depth_key,
+        depth_key: _,
         mean2d,
         cov2d,
         conic_f,
-        mean,
-        conic,
-        conic_exp,
-        opacity,
-        axis,
-        extent_uv,
-        extent_xy,
-    } = p;
-    Projection {
-        visible,
-        tile_min,
-        tile_max,
-        radius,
-        depth: canonical(depth),
-        depth_key,
-        mean2d: mean2d.map(canonical),
-        cov2d: cov2d.map(canonical),
-        conic_f: conic_f.map(canonical),
-        mean,
-        conic,
-        conic_exp,
-        opacity,
-        axis,
-        extent_uv,
-        extent_xy,
+        mean: _,
+        conic: _,
+        conic_exp: _,
+        opacity: _,
+        axis: _,
+        extent_uv: _,
+        extent_xy: _,
+    } = &mut p;
+    *depth = canonical(*depth);
+    for v in mean2d.iter_mut().chain(cov2d.iter_mut()).chain(conic_f.iter_mut()) {
+        *v = canonical(*v);
     }
+    p
 }
 
 /// Preprocesses Gaussian `i` in the hardware's arithmetic; `None` when culled.
