@@ -202,6 +202,29 @@ fn bad_scene_files_give_clear_errors() {
 }
 
 #[test]
+fn simulate_reports_a_bad_scene_before_anything_else() {
+    let spec = "synthetic:outdoor?gaussians=0";
+    let o = neo(&[
+        "simulate",
+        "--scene",
+        spec,
+        "--frames",
+        "1",
+        "--res",
+        "hd",
+        "--arch",
+        "neo",
+        "--quality",
+        "off",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "a bad scene must fail with exit 1, stderr:\n{err}");
+    assert!(!err.contains("panicked"), "panic instead of an error:\n{err}");
+    assert!(err.starts_with(&format!("error: {spec}: gaussians=0")), "the error must come first:\n{err}");
+    assert!(stdout(&o).is_empty(), "nothing on stdout for a bad scene:\n{}", stdout(&o));
+}
+
+#[test]
 fn bad_camera_selection_names_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let traj = dir.path().join("cams.json");

@@ -132,6 +132,11 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("{}: cannot create the directory", dir.display()))?;
     }
+    // The scenes first: a bad scene is reported before anything else is printed.
+    let mut scenes = Scenes::default();
+    for p in &points {
+        scenes.get(&p.scene)?;
+    }
     if !a.json {
         eprintln!(
             "neo simulate: {} of {} points, archs {}, golden raster {:?}, {}",
@@ -151,7 +156,6 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             );
         }
     }
-    let mut scenes = Scenes::default();
     let results = match &a.trace {
         Some(dir) => traced_points(&mut scenes, &points, (&cfg, &lat), &archs, golden, dir, &a)?,
         None => shared_points(&mut scenes, &points, (&cfg, &lat), &archs, golden, &a)?,
