@@ -366,6 +366,8 @@ pub struct Engine {
     pub frame_busy: Vec<Vec<Ps>>,
     jobs: Vec<u64>,
     now: Ps,
+    /// The write lines posted with one read ([`Engine::issue`]), kept to reuse its allocation.
+    wlines: Vec<(u64, Stage)>,
 }
 
 impl Engine {
@@ -386,6 +388,7 @@ impl Engine {
             frame_busy: vec![Vec::new(); frames],
             jobs: vec![0; n],
             now: 0,
+            wlines: Vec::new(),
         }
     }
 
@@ -509,7 +512,6 @@ impl Engine {
     fn issue(&mut self, a: usize, mut t: Ps) {
         let line = self.line;
         let window = self.specs[a].window.max(1) as usize;
-        let mut wlines: Vec<(u64, Stage)> = Vec::new();
         loop {
             // A full window waits for its oldest read's data.
             if self.agents[a].inflight.len() >= window {
@@ -551,7 +553,7 @@ impl Engine {
                 return;
             };
             // Writes in proportion to the reads.
-            wlines.clear();
+            self.wlines.clear();
             st.reads_done += 1;
             if !seg.writes_at_end && st.writes_est > 0.0 {
                 // Non-negative, so the truncating cast is the floor (without a libm call).
@@ -559,7 +561,7 @@ impl Engine {
                 while st.writes_done < due {
                     match st.wcursor.next(&seg.writes, line) {
                         Some(w) => {
-                            wlines.push(w);
+                            self.wlines.push(w);
                             st.writes_done += 1;
                         }
                         None => break,
@@ -568,7 +570,7 @@ impl Engine {
             }
             let ticket = self.dram.submit_read(t, addr);
             self.count(frame, stage, Dir::Read);
-            for &(w, ws) in &wlines {
+            for &(w, ws) in &self.wlines {
                 self.dram.write(t, w);
                 self.traffic.add(ws, Dir::Write, 1);
                 if let Some(f) = self.frame_traffic.get_mut(frame as usize) {
