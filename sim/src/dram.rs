@@ -560,12 +560,17 @@ impl DramStats {
 
     /// Fraction of requests that hit an open row.
     pub fn row_hit_rate(&self) -> f64 {
-        let n = self.row_hits + self.row_misses + self.row_conflicts;
-        if n == 0 {
-            0.0
-        } else {
-            self.row_hits as f64 / n as f64
-        }
+        row_hit_rate(self.row_hits, self.row_misses, self.row_conflicts)
+    }
+}
+
+/// Row hits over all requests, from the counts of the three row outcomes (0 without requests).
+pub fn row_hit_rate(hits: u64, misses: u64, conflicts: u64) -> f64 {
+    let n = hits + misses + conflicts;
+    if n == 0 {
+        0.0
+    } else {
+        hits as f64 / n as f64
     }
 }
 

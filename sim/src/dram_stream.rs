@@ -119,12 +119,7 @@ pub struct StreamRun {
 impl StreamRun {
     /// Row hits over requests.
     pub fn row_hit_rate(&self) -> f64 {
-        let n = self.row_hits + self.row_misses + self.row_conflicts;
-        if n == 0 {
-            0.0
-        } else {
-            self.row_hits as f64 / n as f64
-        }
+        crate::dram::row_hit_rate(self.row_hits, self.row_misses, self.row_conflicts)
     }
 }
 
