@@ -222,7 +222,10 @@ impl Index {
     /// Every bank's open row changed (all-bank precharge).
     fn reopen_all(&mut self) {
         self.slots.iter_mut().for_each(Slot::reopen);
-        self.dirty.iter_mut().for_each(|w| *w = !0);
+        // Exactly the banks' bits: the clean-up indexes a slot by every bit set.
+        for b in 0..self.slots.len() {
+            self.dirty[b / 64] |= 1 << (b % 64);
+        }
     }
 
     /// Finds again the classes to be found (the window ends at request `bound`; `banks` gives
@@ -233,9 +236,7 @@ impl Index {
             while bits != 0 {
                 let i = w * 64 + bits.trailing_zeros() as usize;
                 bits &= bits - 1;
-                if let Some(sl) = self.slots.get_mut(i) {
-                    sl.clean(bound, banks[i].open);
-                }
+                self.slots[i].clean(bound, banks[i].open);
             }
         }
     }
