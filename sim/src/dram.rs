@@ -206,26 +206,28 @@ impl Index {
         }
         if sl.hit == seq {
             sl.dirty_hit = true;
-            self.dirty[b / 64] |= 1 << (b % 64);
         } else if sl.other == seq {
             sl.dirty_other = true;
-            self.dirty[b / 64] |= 1 << (b % 64);
+        } else {
+            return;
         }
+        self.mark(b);
+    }
+
+    /// Bank `b` has a class to be found again.
+    fn mark(&mut self, b: usize) {
+        self.dirty[b / 64] |= 1 << (b % 64);
     }
 
     /// Bank `b`'s open row changed: both its requests are to be found again.
     fn reopen(&mut self, b: usize) {
         self.slots[b].reopen();
-        self.dirty[b / 64] |= 1 << (b % 64);
+        self.mark(b);
     }
 
     /// Every bank's open row changed (all-bank precharge).
     fn reopen_all(&mut self) {
-        self.slots.iter_mut().for_each(Slot::reopen);
-        // Exactly the banks' bits: the clean-up indexes a slot by every bit set.
-        for b in 0..self.slots.len() {
-            self.dirty[b / 64] |= 1 << (b % 64);
-        }
+        (0..self.slots.len()).for_each(|b| self.reopen(b));
     }
 
     /// Finds again the classes to be found (the window ends at request `bound`; `banks` gives
