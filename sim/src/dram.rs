@@ -71,6 +71,15 @@ struct Bank {
     wr: Clk,
 }
 
+impl Bank {
+    /// Its open row has served more than `cap` accesses: a hit of it can issue only as the
+    /// oldest request (FRFCFS_Cap).
+    #[inline]
+    fn past_cap(&self, cap: u32) -> bool {
+        (self.open != CLOSED) & (self.hits > cap)
+    }
+}
+
 impl Default for Bank {
     fn default() -> Self {
         Bank { open: CLOSED, hits: 0, act: 0, pre: 0, rd: 0, wr: 0 }
@@ -313,10 +322,22 @@ impl Channel {
         // Without branches on the data: which command a request needs next is irregular.
         let b = &self.banks[r.bank as usize];
         let closed = b.open == CLOSED;
-        let col = select_unpredictable(r.write, (Cmd::Wr, b.wr.max(self.wr)), (Cmd::Rd, b.rd.max(self.rd)));
-        let other =
-            select_unpredictable(closed, (Cmd::Act, b.act.max(self.act)), (Cmd::Pre, b.pre.max(self.pre)));
+        let col = (select_unpredictable(r.write, Cmd::Wr, Cmd::Rd), self.column_at(b, r.write));
+        let other = (select_unpredictable(closed, Cmd::Act, Cmd::Pre), self.opening_at(b));
         select_unpredictable(!closed & (b.open == r.row), col, other)
+    }
+
+    /// The clock from which bank `b` can take a column command (a write if `write`).
+    #[inline]
+    fn column_at(&self, b: &Bank, write: bool) -> Clk {
+        select_unpredictable(write, b.wr, b.rd).max(select_unpredictable(write, self.wr, self.rd))
+    }
+
+    /// The clock from which bank `b` can take the command it needs before it serves another
+    /// row: ACT if it is closed, else PRE.
+    #[inline]
+    fn opening_at(&self, b: &Bank) -> Clk {
+        select_unpredictable(b.open == CLOSED, b.act.max(self.act), b.pre.max(self.pre))
     }
 
     /// The clock from which request `r` can issue its next command as a candidate of FR-FCFS
@@ -326,17 +347,13 @@ impl Channel {
     fn ready(&self, r: &Req, cap: u32) -> Clk {
         let b = &self.banks[r.bank as usize];
         if b.open == r.row {
-            if b.open != CLOSED && b.hits > cap {
+            if b.past_cap(cap) {
                 NEVER
-            } else if r.write {
-                b.wr.max(self.wr)
             } else {
-                b.rd.max(self.rd)
+                self.column_at(b, r.write)
             }
-        } else if b.open == CLOSED {
-            b.act.max(self.act)
         } else {
-            b.pre.max(self.pre)
+            self.opening_at(b)
         }
     }
 
@@ -349,20 +366,15 @@ impl Channel {
         let Some(front) = queue.front() else { return NEVER };
         let front_at = self.next_cmd(front);
         let bound = queue[queue.len().min(window) - 1].seq;
-        let ix = &mut self.idx[q.index()];
-        ix.clean(bound, &self.banks);
-        let col = if q == Q::Write { self.wr } else { self.rd };
+        self.idx[q.index()].clean(bound, &self.banks);
         let write = q == Q::Write;
         // Every bank, without branches on the data (a bank with no request has no candidate:
         // both classes `NONE`, ready `NEVER`): the banks' outcomes are too irregular to predict.
-        for (b, sl) in self.banks.iter().zip(&ix.slots) {
-            let closed = b.open == CLOSED;
+        for (b, sl) in self.banks.iter().zip(&self.idx[q.index()].slots) {
             // A hit of a row past the cap can issue only as the oldest: not a candidate.
-            let hit_ok = (sl.hit != NONE) & !(!closed & (b.hits > cap));
-            let hit_at = select_unpredictable(write, b.wr, b.rd).max(col);
-            cands.add(select_unpredictable(hit_ok, hit_at, NEVER), sl.hit, 0);
-            let other_at = select_unpredictable(closed, b.act.max(self.act), b.pre.max(self.pre));
-            cands.add(select_unpredictable(sl.other != NONE, other_at, NEVER), sl.other, 0);
+            let hit_ok = (sl.hit != NONE) & !b.past_cap(cap);
+            cands.add(select_unpredictable(hit_ok, self.column_at(b, write), NEVER), sl.hit, 0);
+            cands.add(select_unpredictable(sl.other != NONE, self.opening_at(b), NEVER), sl.other, 0);
         }
         front_at.1
     }
