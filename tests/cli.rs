@@ -225,6 +225,18 @@ fn simulate_reports_a_bad_scene_before_anything_else() {
 }
 
 #[test]
+fn dram_refuses_an_address_beyond_the_address_space() {
+    let dir = tempfile::tempdir().unwrap();
+    let stream = dir.path().join("high.trace");
+    std::fs::write(&stream, "0x40 R\n0xffffffffffffffc0 R\n").unwrap();
+    fails_cleanly(
+        &["dram", "--stream", stream.to_str().unwrap()],
+        &stream,
+        ":2: address 0xffffffffffffffc0 is beyond",
+    );
+}
+
+#[test]
 fn bad_camera_selection_names_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let traj = dir.path().join("cams.json");

@@ -732,6 +732,13 @@ impl Dram {
         self.stats
     }
 
+    /// The bytes of the address space the model maps to distinct rows: every address below it
+    /// has a row below the closed-bank marker (at most `2^64`).
+    pub fn address_space(&self) -> u128 {
+        let shift = self.line_shift + self.ch_bits + self.bank_bits + self.col_bits;
+        ((CLOSED as u128) << shift.min(64)).min(1 << 64)
+    }
+
     /// `(channel, bank, row)` of the line holding byte `addr`. With `bank_xor` the bank index is
     /// XORed with the low row bits (permutation-based interleaving, as many memory controllers
     /// do), so streams whose bases are aligned alike do not all fall into the same bank.
@@ -798,6 +805,9 @@ impl Dram {
 
     /// A request of `addr` issued at `t`, its channel advanced to `t`.
     fn request(&mut self, t: Ps, addr: u64, write: bool, ticket: u32) -> Req {
+        // A row equal to the closed-bank marker would never be found open: its request would
+        // wait forever. Inputs are checked against the address space before they come here.
+        assert!((addr as u128) < self.address_space(), "address {addr:#x} beyond the DRAM's address space");
         let (c, b, r) = self.map(addr);
         if !write {
             self.ticket_channel[ticket as usize] = c as u32;

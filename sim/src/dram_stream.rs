@@ -89,6 +89,24 @@ pub fn read_stream(path: &Path) -> Result<Vec<StreamRequest>, StreamError> {
     parse_stream(&text, path)
 }
 
+/// Checks that every request of `reqs` (the stream `path`, one request a line) lies in the
+/// address space of the DRAM of `cfg` ([`Dram::address_space`]); the first that does not is an
+/// error naming its line.
+pub fn check_addresses(cfg: &DramConfig, reqs: &[StreamRequest], path: &Path) -> Result<(), StreamError> {
+    let space = Dram::new(cfg).address_space();
+    match reqs.iter().position(|r| r.addr as u128 >= space) {
+        None => Ok(()),
+        Some(i) => Err(StreamError {
+            path: path.to_path_buf(),
+            line: i + 1,
+            message: format!(
+                "address {:#x} is beyond the address space of DRAM '{}' ({space:#x} bytes)",
+                reqs[i].addr, cfg.name
+            ),
+        }),
+    }
+}
+
 /// The figures of one stream run, in Ramulator's terms.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StreamRun {
@@ -254,6 +272,25 @@ pub fn run_stream(cfg: &DramConfig, reqs: &[StreamRequest]) -> StreamRun {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The last line of the address space is served (its row is below the closed-bank marker);
+    /// the first address past it is an error naming its line, before any run.
+    #[test]
+    fn addresses_are_checked_against_the_address_space() {
+        let cfg = DramConfig::default();
+        let space = Dram::new(&cfg).address_space();
+        let line = cfg.line_bytes as u64;
+        let last = (space - line as u128) as u64;
+        let path = Path::new("s.trace");
+        let ok = [StreamRequest { addr: 0, write: false }, StreamRequest { addr: last, write: false }];
+        assert_eq!(check_addresses(&cfg, &ok, path), Ok(()));
+        let run = run_stream(&cfg, &ok);
+        assert_eq!((run.reads, run.row_misses), (2, 2));
+        let bad = [ok[0], StreamRequest { addr: last + line, write: true }];
+        let err = check_addresses(&cfg, &bad, path).unwrap_err();
+        assert_eq!((err.line, err.path.as_path()), (2, path));
+        assert!(err.message.contains(&format!("{:#x}", last + line)), "{}", err.message);
+    }
 
     #[test]
     fn lines_follow_ramulators_reading_rules() {

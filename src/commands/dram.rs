@@ -4,7 +4,7 @@
 use anyhow::Result;
 use clap::Args;
 use neo_sim::config::SimConfig;
-use neo_sim::dram_stream::{read_stream, run_stream};
+use neo_sim::dram_stream::{check_addresses, read_stream, run_stream};
 use std::path::PathBuf;
 
 /// Arguments of `neo dram`.
@@ -28,6 +28,7 @@ pub fn run(a: DramArgs) -> Result<()> {
         None => SimConfig::default(),
     };
     let reqs = read_stream(&a.stream)?;
+    check_addresses(&cfg.dram, &reqs, &a.stream)?;
     let r = run_stream(&cfg.dram, &reqs);
     if a.json {
         let mut v = serde_json::to_value(&r)?;
