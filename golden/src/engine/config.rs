@@ -169,7 +169,8 @@ pub struct EngineConfig {
     pub table_capacity: usize,
     /// Engine: AXI4 manager ports to memory (the memory channels).
     pub mem_channels: usize,
-    /// Engine: AXI4 data width in bits (a power of two in 64..=1024).
+    /// Engine: AXI4 data width in bits: [`AXI_DATA_BITS`], the only width the raster bridge is
+    /// generated for (the field names it in configurations and reports).
     pub axi_data_bits: u32,
     /// Engine: AXI4 byte-address width (32..=64).
     pub axi_addr_bits: u32,
@@ -226,7 +227,7 @@ impl Default for EngineConfig {
             scheduler: SchedulerPolicy::FirstFree,
             table_capacity: 1 << 16,
             mem_channels: 4,
-            axi_data_bits: 64,
+            axi_data_bits: AXI_DATA_BITS,
             axi_addr_bits: 32,
             axi_id_bits: 4,
             axi_outstanding: 8,
@@ -237,6 +238,9 @@ impl Default for EngineConfig {
         }
     }
 }
+
+/// The AXI4 data width of the engine's ports: the raster bridge packs two 32-bit pixels a beat.
+pub const AXI_DATA_BITS: u32 = 64;
 
 /// A configuration the generator cannot honour.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -412,12 +416,23 @@ impl EngineConfig {
                 self.table_capacity, self.chunk, self.len_bits
             ));
         }
+        // The frame controller places the cores' scratch regions, two of table_capacity entries
+        // per core, one after the other at addr_bits-bit entry addresses.
+        let scratch = 2 * self.sort_cores as u128 * self.table_capacity as u128;
+        if scratch > 1u128 << self.addr_bits {
+            return err(format!(
+                "table_capacity {} does not fit addr_bits {}: the scratch regions of sort_cores {} (2 x table_capacity entries each) need {scratch} entry addresses",
+                self.table_capacity, self.addr_bits, self.sort_cores
+            ));
+        }
         if !(1..=16).contains(&self.mem_channels) {
             return err(format!("mem_channels {} is outside 1..=16", self.mem_channels));
         }
         let d = self.axi_data_bits;
-        if !d.is_power_of_two() || !(64..=1024).contains(&d) {
-            return err(format!("axi_data_bits {d} is not a power of two in 64..=1024"));
+        if d != AXI_DATA_BITS {
+            return err(format!(
+                "axi_data_bits {d} is not {AXI_DATA_BITS}: the raster bridge packs two pixels a beat, so the engine is generated for {AXI_DATA_BITS}-bit data only"
+            ));
         }
         if !(32..=64).contains(&self.axi_addr_bits) {
             return err(format!("axi_addr_bits {} is outside 32..=64", self.axi_addr_bits));

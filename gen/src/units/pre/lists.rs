@@ -203,15 +203,12 @@ fn pushes(m: &mut Module, cfg: &EngineConfig) {
     m.wire_assign("n_kept", CNT_BITS, format!("in_cap ? cnt : {}", lit(CNT_BITS, cap)));
     m.wire_assign("partial", 1, "n_kept[2:0] != 3'd0");
     m.wire_assign("line_full", 1, "hit_take & in_cap & (slot == 3'd7)");
-    // A line: each slot 64 bits (an entry zero-extended); the full one with the new entry in slot 7,
-    // the partial one with the slots past the length zeroed.
-    let pad = 64 - eb;
+    // A line: each slot 64 bits (an entry zero-extended unless it fills the slot); the full one
+    // with the new entry in slot 7, the partial one with the slots past the length zeroed.
+    let slot = |e: String| if eb == 64 { e } else { format!("{}, {e}", lit(64 - eb, 0)) };
     let full: Vec<String> = (0..LINE)
         .rev()
-        .map(|s| {
-            let e = if s == LINE - 1 { "entry".to_string() } else { format!("slots[{} +: {eb}]", s * eb) };
-            format!("{}, {e}", lit(pad, 0))
-        })
+        .map(|s| slot(if s == LINE - 1 { "entry".to_string() } else { format!("slots[{} +: {eb}]", s * eb) }))
         .collect();
     m.wire_assign("line_with_new", lw, format!("{{{}}}", full.join(", ")));
     let part: Vec<String> = (0..LINE)
@@ -219,14 +216,9 @@ fn pushes(m: &mut Module, cfg: &EngineConfig) {
         .map(|s| {
             if s == LINE - 1 {
                 // A partial line has at most 7 entries.
-                format!("{}, {}", lit(pad, 0), lit(eb, 0))
+                slot(lit(eb, 0))
             } else {
-                format!(
-                    "{}, (n_kept[2:0] > 3'd{s}) ? slots[{} +: {eb}] : {}",
-                    lit(pad, 0),
-                    s * eb,
-                    lit(eb, 0)
-                )
+                slot(format!("(n_kept[2:0] > 3'd{s}) ? slots[{} +: {eb}] : {}", s * eb, lit(eb, 0)))
             }
         })
         .collect();
