@@ -55,7 +55,17 @@ enum Command {
     Gen(commands::gen::GenArgs),
 }
 
+/// Lets a closed standard output (`neo simulate --json | head`) end the process quietly, as it
+/// does other Unix tools: Rust ignores `SIGPIPE`, so `println!` would panic on the broken pipe.
+fn default_sigpipe() {
+    // SAFETY: setting a signal's disposition to its default, before any thread is started.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    default_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Scene(c) => commands::scene::run(c),
