@@ -18,6 +18,7 @@
 
 use crate::camera::Camera;
 use crate::error::{InputError, InputResult};
+use crate::trajectory::resolution::MAX_SIDE;
 use glam::{DMat3, DVec3};
 use serde_json::Value;
 use std::path::Path;
@@ -157,11 +158,18 @@ fn is_false(b: &bool) -> bool {
     !*b
 }
 
-/// Checks what a reader would check: finite numbers, positive size and focal lengths, an
-/// orthonormal right-handed rotation.
+/// Checks what a reader would check: finite numbers, a size of 1 to
+/// [`MAX_SIDE`](crate::trajectory::resolution::MAX_SIDE) pixels a side, positive focal lengths,
+/// a position within single precision (the renderers' own), an orthonormal right-handed rotation.
 pub fn check_camera(cam: &Camera) -> Result<(), String> {
     if cam.width == 0 || cam.height == 0 {
         return Err(format!("image size {}x{} is empty", cam.width, cam.height));
+    }
+    if cam.width > MAX_SIDE || cam.height > MAX_SIDE {
+        return Err(format!(
+            "image size {}x{} is too large (at most {MAX_SIDE} pixels a side)",
+            cam.width, cam.height
+        ));
     }
     for (name, f) in [("fx", cam.fx), ("fy", cam.fy)] {
         if !(f.is_finite() && f > 0.0) {
@@ -170,6 +178,13 @@ pub fn check_camera(cam: &Camera) -> Result<(), String> {
     }
     if !cam.position.is_finite() {
         return Err(format!("position {:?} is not finite", cam.position.to_array()));
+    }
+    if !cam.position.as_vec3().is_finite() {
+        return Err(format!(
+            "position {:?} is beyond single precision (each coordinate must be below {:e})",
+            cam.position.to_array(),
+            f32::MAX
+        ));
     }
     check_rotation(&cam.cam_to_world)
 }
@@ -298,6 +313,12 @@ mod tests {
             ("{}", "JSON array"),
             (r#"[{"width": 1}]"#, "missing field 'height'"),
             (&ONE.replace("\"width\": 4", "\"width\": 0"), "'width' is zero"),
+            (&ONE.replace("\"width\": 4", "\"width\": 100000"), "camera 0: image size 100000x2 is too large"),
+            (&ONE.replace("\"height\": 2", "\"height\": 4294967295"), "image size 4x4294967295 is too large"),
+            (
+                &ONE.replace("[1, 2, 3]", "[1e300, 2, 3]"),
+                "camera 0: position [1e300, 2.0, 3.0] is beyond single",
+            ),
             (&ONE.replace("\"fx\": 5", "\"fx\": \"5\""), "'fx' must be a finite number"),
             (&ONE.replace("[0, -1, 0]", "[0, -2, 0]"), "not orthonormal"),
             (&ONE.replace("[0, 0, 1]", "[0, 0, -1]"), "reflection"),

@@ -63,7 +63,8 @@ pub struct Rgb8Image {
     pub data: Vec<u8>,
 }
 
-/// Largest decoded image [`Rgb8Image::read_png`] accepts, in bytes (guards against bombs).
+/// Largest decoded image [`Rgb8Image::read_png`] accepts, in bytes (guards against bombs). It is
+/// checked against the size in the PNG header before any pixel buffer is allocated.
 pub const MAX_PNG_DECODED_BYTES: usize = 1 << 28;
 
 impl Rgb8Image {
@@ -99,6 +100,21 @@ impl Rgb8Image {
         decoder.set_transformations(png::Transformations::normalize_to_color8());
         decoder.set_limits(png::Limits { bytes: MAX_PNG_DECODED_BYTES });
         let mut reader = decoder.read_info().map_err(bad)?;
+        // The decoder's limit does not cover the output buffer allocated here, so check the
+        // header's size first: a tiny file may declare a gigapixel image.
+        let (width, height) = reader.info().size();
+        let (color, depth) = reader.output_color_type();
+        let bytes_per_pixel = (color.samples().max(3) * (depth as usize).div_ceil(8)) as u128;
+        let need = width as u128 * height as u128 * bytes_per_pixel;
+        if need > MAX_PNG_DECODED_BYTES as u128 {
+            return Err(InputError::new(
+                path,
+                format!(
+                    "PNG is {width}x{height}: decoding it needs {need} bytes, more than the limit of \
+                     {MAX_PNG_DECODED_BYTES} bytes"
+                ),
+            ));
+        }
         let mut buf = vec![0u8; reader.output_buffer_size()];
         let info = reader.next_frame(&mut buf).map_err(bad)?;
         if info.bit_depth != png::BitDepth::Eight {
@@ -182,6 +198,36 @@ mod tests {
         assert_eq!(quantize_channel(0.49 / 255.0), 0);
         assert_eq!(quantize_channel(100.6 / 255.0), 101);
         assert_eq!(quantize_channel(100.4 / 255.0), 100);
+    }
+
+    /// A tiny PNG whose header declares 100000x100000 pixels is an error naming the file, checked
+    /// before the 30 GB output buffer is allocated (it used to abort the process).
+    #[test]
+    fn huge_declared_size_is_an_error_before_allocating() {
+        let small = encode(1, 1, png::ColorType::Rgb, png::BitDepth::Eight, &[1, 2, 3]);
+        let mut huge = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut huge, 100_000, 100_000);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let wr = enc.write_header().unwrap();
+            std::mem::forget(wr); // keep only the signature and IHDR
+        }
+        // Signature (8) and IHDR (25) of the huge header, then the small image's IDAT and IEND.
+        huge.truncate(33);
+        huge.extend_from_slice(&small[33..]);
+        let e = Rgb8Image::decode_png(&huge[..], Path::new("huge.png")).unwrap_err().to_string();
+        assert!(e.starts_with("huge.png: PNG is 100000x100000: decoding it needs 30000000000 bytes"), "{e}");
+        // Widths whose byte count overflows 32 bits are caught too.
+        let mut wide = Vec::new();
+        {
+            let enc = png::Encoder::new(&mut wide, u32::MAX / 2, 1);
+            std::mem::forget(enc.write_header().unwrap());
+        }
+        wide.truncate(33);
+        wide.extend_from_slice(&small[33..]);
+        let e = Rgb8Image::decode_png(&wide[..], Path::new("wide.png")).unwrap_err().to_string();
+        assert!(e.starts_with("wide.png: "), "{e}");
     }
 
     #[test]

@@ -30,6 +30,7 @@ use super::resolution::MAX_SIDE;
 use super::shake::{self, ShakeParams};
 use super::walk::{self, WalkParams};
 use super::{Intrinsics, Shot, Trajectory};
+use crate::cameras_json::check_camera;
 use crate::error::{InputError, InputResult};
 use glam::DVec3;
 use std::path::Path;
@@ -49,6 +50,9 @@ const SHAKE_KEYS: [&str; 6] = ["seed", "amp", "radius", "height", "start", "targ
 pub fn parse_trajectory(spec: &str, bounds: ([f32; 3], [f32; 3]), frames: usize) -> InputResult<Trajectory> {
     let s = spec.trim();
     if let Some(path) = s.strip_prefix("file:") {
+        if path.trim().is_empty() {
+            return Err(err(spec, "the path after 'file:' is empty (expected file:PATH to a cameras.json)"));
+        }
         return Trajectory::read(Path::new(path));
     }
     let (kind, rest) = s.split_once(':').unwrap_or((s, ""));
@@ -69,8 +73,8 @@ pub fn parse_trajectory(spec: &str, bounds: ([f32; 3], [f32; 3]), frames: usize)
     };
     let keys = Keys::parse(spec, kind, rest, specific)?;
     let shot = keys.shot(frames)?;
-    match kind {
-        "orbit" => Ok(orbit::orbit(&keys.orbit(bounds, &shot.intrinsics)?, &shot)),
+    let traj = match kind {
+        "orbit" => orbit::orbit(&keys.orbit(bounds, &shot.intrinsics)?, &shot),
         "walk" => {
             let mut p = WalkParams::across(
                 bounds,
@@ -87,15 +91,32 @@ pub fn parse_trajectory(spec: &str, bounds: ([f32; 3], [f32; 3]), frames: usize)
             if let Some(v) = keys.number("pitch", |v| v.abs() < 89.0, "between -89 and 89")? {
                 p.pitch_deg = v;
             }
-            Ok(walk::walk(&p, &shot))
+            walk::walk(&p, &shot)
         }
         _ => {
             let o = keys.orbit(bounds, &shot.intrinsics)?;
             let seed = keys.uint("seed")?.unwrap_or(1);
             let amp = keys.number("amp", |v| v >= 0.0, "a number >= 0")?.unwrap_or(1.0);
-            Ok(shake::shake(&ShakeParams::at_orbit_start(&o, bounds, seed, amp), &shot))
+            shake::shake(&ShakeParams::at_orbit_start(&o, bounds, seed, amp), &shot)
         }
+    };
+    check_frames(spec, &traj)?;
+    Ok(traj)
+}
+
+/// Checks every generated camera as a cameras.json reader would ([`check_camera`]): extreme
+/// values (`radius=1e-320`, `height=1e308`) give degenerate poses, which are errors naming the
+/// spec rather than black frames or an unreadable output file.
+fn check_frames(spec: &str, traj: &Trajectory) -> InputResult<()> {
+    for (i, cam) in traj.frames.iter().enumerate() {
+        check_camera(cam).map_err(|p| {
+            err(
+                spec,
+                format!("camera {i} ('{}'): {p} (a value of the spec is too large or too small)", cam.name),
+            )
+        })?;
     }
+    Ok(())
 }
 
 fn err(spec: &str, problem: impl Into<String>) -> InputError {
@@ -289,6 +310,14 @@ mod tests {
             ("orbit:target=1/2", "target=1/2"),
             ("shake:seed=-1", "seed=-1"),
             ("missing_file.json", "missing_file.json: cannot read"),
+            ("file:", "the path after 'file:' is empty"),
+            ("file: ", "the path after 'file:' is empty"),
+            ("orbit:radius=1e-320", "camera 0 ('frame_00000'): rotation has non-finite entries"),
+            ("orbit:radius=1e308", "camera 0 ('frame_00000'): "),
+            ("orbit:height=1e308", "camera 0 ('frame_00000'): "),
+            ("orbit:radius=1e39", "camera 0 ('frame_00000'): position"),
+            ("walk:radius=1e308", "camera 0 ('frame_00000'): "),
+            ("shake:radius=1e-320", "camera 0 ('frame_00000'): "),
         ];
         for (spec, want) in cases {
             let e = parse_trajectory(spec, B, 10).unwrap_err().to_string();
