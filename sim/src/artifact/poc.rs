@@ -6,7 +6,11 @@
 //! table entry's number of set subtile bits. Every malformed line is an error naming the file,
 //! the 1-based line and the problem.
 
+use neo_golden::trajectory::resolution::MAX_SIDE;
 use std::path::Path;
+
+/// The largest chunk a trace may name (the engine configuration's limit).
+const MAX_CHUNK: u64 = 1 << 16;
 
 /// One tile of a trace.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -126,27 +130,40 @@ pub fn parse_poc_trace(text: &str, path: &Path) -> Result<PocFrame, PocError> {
     let mut lines = Lines { it: text.lines(), line: 0, path };
     let h = lines.numbers("the header", 7)?;
     let [width, height, tile, subtile, chunk, gaussians, tiles] = [h[0], h[1], h[2], h[3], h[4], h[5], h[6]];
-    if tile == 0 || subtile == 0 || tile % subtile != 0 || tile / subtile > 8 {
+    let side = u64::from(MAX_SIDE);
+    if !(1..=side).contains(&width) || !(1..=side).contains(&height) {
+        return Err(lines.err(format!("image {width}x{height}: each side must be 1 to {side} pixels")));
+    }
+    if tile == 0 || subtile == 0 || tile % subtile != 0 || tile / subtile > 8 || tile > side {
         return Err(
             lines.err(format!("tile {tile} and subtile {subtile}: need a tile of at most 8 x 8 subtiles"))
         );
+    }
+    if !(1..=MAX_CHUNK).contains(&chunk) {
+        return Err(lines.err(format!("chunk {chunk} is not in 1..={MAX_CHUNK}")));
+    }
+    if gaussians > u64::from(u32::MAX) {
+        return Err(lines.err(format!("{gaussians} Gaussians: ids are 32-bit, at most {}", u32::MAX)));
     }
     let expect_tiles = width.div_ceil(tile) * height.div_ceil(tile);
     if tiles != expect_tiles {
         return Err(lines
             .err(format!("{tiles} tiles, but a {width}x{height} image has {expect_tiles} tiles of {tile}")));
     }
+    // Each Gaussian line and tile header takes at least 4 bytes: no larger reservation than the
+    // text could fill, whatever the header claims.
     let n = gaussians as usize;
+    let room = |count: usize| count.min(text.len() / 4);
     let mut frame = PocFrame {
         width: width as u32,
         height: height as u32,
         tile: tile as u32,
         subtile: subtile as u32,
         chunk: chunk as u32,
-        culled: Vec::with_capacity(n),
-        incoming_tiles: Vec::with_capacity(n),
+        culled: Vec::with_capacity(room(n)),
+        incoming_tiles: Vec::with_capacity(room(n)),
         incoming_list: Vec::new(),
-        tiles: Vec::with_capacity(tiles as usize),
+        tiles: Vec::with_capacity(room(tiles as usize)),
     };
     for _ in 0..n {
         let g = lines.numbers_at_least("a Gaussian line", 2)?;
@@ -175,10 +192,14 @@ pub fn parse_poc_trace(text: &str, path: &Path) -> Result<PocFrame, PocError> {
 
 fn tile_block(lines: &mut Lines<'_>, gaussians: u64, bits: usize) -> Result<PocTile, PocError> {
     let h = lines.numbers("a tile header (num_new num_reuse count)", 3)?;
-    if h[0] + h[1] != h[2] {
+    if h[0].checked_add(h[1]) != Some(h[2]) {
         return Err(lines.err(format!("num_new {} + num_reuse {} is not count {}", h[0], h[1], h[2])));
     }
-    let n = h[2] as usize;
+    if h[2] > u64::from(u32::MAX) {
+        return Err(lines.err(format!("count {} exceeds a 32-bit table length", h[2])));
+    }
+    // Reserved up to a bound: the count is only a claim until its lines are read.
+    let n = (h[2] as usize).min(1 << 16);
     let mut t = PocTile {
         new: h[0] as u32,
         reused: h[1] as u32,
@@ -305,6 +326,34 @@ mod tests {
             assert!(e.to_string().starts_with(&format!("t.trace:{line}: ")), "{e}");
             assert!(e.message.contains(phrase), "{e}");
         }
+        let header_cases = [
+            ("32 16 16 8 256 4 2", "0 0 16 8 256 4 0", "image 0x0"),
+            ("32 16 16 8 256 4 2", "18446744073709551615 18446744073709551615 1 1 256 1 1", "each side"),
+            ("32 16 16 8 256 4 2", "32 16 16 8 0 4 2", "chunk 0"),
+            ("32 16 16 8 256 4 2", "32 16 16 8 4294967552 4 2", "chunk 4294967552"),
+            ("32 16 16 8 256 4 2", "32 16 16 8 256 99999999999999 2", "ids are 32-bit"),
+            ("32 16 16 8 256 4 2", "6400000000 6400000000 64 8 256 1 10000000000000000", "each side"),
+        ];
+        for (from, to, phrase) in header_cases {
+            let e = parse_poc_trace(&good.replacen(from, to, 1), Path::new("t.trace")).unwrap_err();
+            assert_eq!(e.line, 1, "{e}");
+            assert!(e.message.contains(phrase), "{to}: {e}");
+        }
+        // A huge count on the header (4 Gaussians claimed as 4e9) or a tile header fails on the
+        // lines that follow, without reserving for the claim first.
+        let e = parse_poc_trace(&good.replacen(" 4 2\n", " 4000000000 2\n", 1), Path::new("t.trace"))
+            .unwrap_err();
+        assert!(e.line > 1, "{e}");
+        let e =
+            parse_poc_trace(&good.replacen("1 1 2\n", "18446744073709551615 1 0\n", 1), Path::new("t.trace"))
+                .unwrap_err();
+        assert!(e.message.contains("is not count 0"), "{e}");
+        let e = parse_poc_trace(
+            &good.replacen("1 1 2\n", "4294967295 4294967295 8589934590\n", 1),
+            Path::new("t.trace"),
+        )
+        .unwrap_err();
+        assert!(e.message.contains("exceeds a 32-bit table length"), "{e}");
         let cut = &good[..good.len() - 12];
         assert!(parse_poc_trace(cut, Path::new("t.trace")).unwrap_err().message.contains("expected"));
         let e = read_poc_trace(Path::new("/nonexistent/t.trace")).unwrap_err();
