@@ -65,7 +65,7 @@ fn truncate(s: &str) -> String {
     s.chars().take(40).collect()
 }
 
-/// Parses a whole stream; `path` names it in errors.
+/// Parses a whole stream, at least one request; `path` names it in errors.
 pub fn parse_stream(text: &str, path: &Path) -> Result<Vec<StreamRequest>, StreamError> {
     let mut out = Vec::with_capacity(text.len() / 13);
     for (i, line) in text.lines().enumerate() {
@@ -75,6 +75,13 @@ pub fn parse_stream(text: &str, path: &Path) -> Result<Vec<StreamRequest>, Strea
             message,
         })?;
         out.push(req);
+    }
+    if out.is_empty() {
+        return Err(StreamError {
+            path: path.to_path_buf(),
+            line: 0,
+            message: "no requests: the stream is empty".into(),
+        });
     }
     Ok(out)
 }
@@ -312,6 +319,8 @@ mod tests {
         let e = parse_stream("0x0 R\n0x40 W\nzz\n", Path::new("s.trace")).unwrap_err();
         assert_eq!(e.line, 3);
         assert!(e.to_string().starts_with("s.trace:3: "), "{e}");
+        let e = parse_stream("", Path::new("e.trace")).unwrap_err();
+        assert!(e.to_string().starts_with("e.trace: no requests"), "{e}");
     }
 
     #[test]
