@@ -632,3 +632,153 @@ fn bench_model_splits_the_cpu_by_phase() {
         assert!((97.0..=103.0).contains(&shares(l)), "shares {} of {l}", shares(l));
     }
 }
+
+/// A command-line error from clap (exit 2) that names `flag` and says `phrase`, not a crash.
+fn bad_flag(args: &[&str], flag: &str, phrase: &str) {
+    let o = neo(args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "neo {args:?} should be refused by the parser, stderr:\n{err}");
+    assert!(err.contains(flag) && err.contains(phrase), "error lacks '{flag}' or '{phrase}':\n{err}");
+}
+
+#[test]
+fn image_sizes_are_capped_on_every_flag_and_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = "synthetic:blobs?gaussians=50&seed=1";
+    let png = dir.path().join("x.png");
+    let cams = dir.path().join("cams.json");
+    let (p, c) = (png.to_str().unwrap(), cams.to_str().unwrap());
+    for (w, h) in [("100000", "100000"), ("4294967295", "1"), ("0", "5")] {
+        let bad = if w == "0" { "'0'" } else { w };
+        bad_flag(&["render", "--scene", spec, "--width", w, "--height", h, "--out", p], "--width", bad);
+        bad_flag(&["trajectory", "--scene", spec, "--width", w, "--height", h, "--out", c], "--width", bad);
+    }
+    bad_flag(&["render", "--scene", spec, "--height", "16385", "--out", p], "--height", "1 to 16384");
+    assert!(!png.exists() && !cams.exists(), "nothing is written");
+    // A cameras.json camera larger than the cap is an error naming the file and the camera.
+    ok(&["trajectory", "--scene", spec, "--frames", "1", "--width", "16384", "--height", "8", "--out", c]);
+    let text = std::fs::read_to_string(&cams).unwrap().replace("16384", "100000");
+    std::fs::write(&cams, text).unwrap();
+    fails_cleanly(
+        &["render", "--scene", spec, "--camera", c, "--out", p],
+        &cams,
+        "camera 0: image size 100000x8 is too large (at most 16384",
+    );
+    assert!(!png.exists());
+}
+
+#[test]
+fn degenerate_trajectory_specs_are_errors_naming_the_spec() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = "synthetic:blobs?gaussians=50&seed=1";
+    let png = dir.path().join("x.png");
+    let cams = dir.path().join("tj.json");
+    let stats = dir.path().join("frames");
+    let outs = [png.to_str().unwrap(), cams.to_str().unwrap(), stats.to_str().unwrap()];
+    for t in ["orbit:radius=1e-320", "orbit:radius=1e308", "orbit:height=1e308", "walk:radius=1e308"] {
+        let runs: [Vec<&str>; 3] = [
+            vec!["render", "--scene", spec, "--trajectory", t, "--out", outs[0]],
+            vec!["trajectory", "--scene", spec, "--trajectory", t, "--out", outs[1]],
+            vec![
+                "frames",
+                "--scene",
+                spec,
+                "--trajectory",
+                t,
+                "--frames",
+                "2",
+                "--res",
+                "64x64",
+                "--out",
+                outs[2],
+            ],
+        ];
+        for args in runs {
+            let o = neo(&args);
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(1), "neo {args:?} must fail, stderr:\n{err}");
+            assert!(err.starts_with(&format!("error: {t}: camera 0 ('frame_00000'): ")), "{err}");
+            assert!(!err.contains("tj.json"), "the output file is not at fault:\n{err}");
+        }
+    }
+    assert!(!png.exists() && !cams.exists(), "nothing is written");
+    let o = neo(&["render", "--scene", spec, "--trajectory", "file:", "--out", outs[0]]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("file:: the path after 'file:' is empty"), "{err}");
+}
+
+#[test]
+fn outputs_never_overwrite_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("victim.ply");
+    let cams = dir.path().join("cv.json");
+    let (s, c) = (scene.to_str().unwrap(), cams.to_str().unwrap());
+    ok(&["scene", "convert", "synthetic:blobs?gaussians=50&seed=1", s]);
+    ok(&["trajectory", "--scene", s, "--frames", "2", "--width", "32", "--height", "32", "--out", c]);
+    let (scene_bytes, cam_bytes) = (std::fs::read(&scene).unwrap(), std::fs::read(&cams).unwrap());
+    // The same file under another name is still the same file.
+    let alias = dir.path().join(".").join("victim.ply");
+    let a = alias.to_str().unwrap();
+    let cam0 = format!("{c}#0");
+    let file_spec = format!("file:{c}");
+    let cases: [(Vec<&str>, &Path, &str); 7] = [
+        (vec!["render", "--scene", s, "--out", a], &alias, "--out is the same file as the --scene file"),
+        (vec!["scene", "convert", s, a], &alias, "OUTPUT is the same file as INPUT"),
+        (vec!["scene", "bake", s, s], &scene, "OUTPUT is the same file as INPUT"),
+        (vec!["trajectory", "--scene", s, "--trajectory", c, "--out", c], &cams, "the --trajectory file"),
+        (
+            vec!["trajectory", "--scene", s, "--trajectory", &file_spec, "--out", c],
+            &cams,
+            "the --trajectory file",
+        ),
+        (vec!["render", "--scene", s, "--camera", &cam0, "--out", c], &cams, "the --camera file"),
+        (vec!["render", "--scene", s, "--trajectory", c, "--out", c], &cams, "the --trajectory file"),
+    ];
+    for (args, file, phrase) in cases {
+        fails_cleanly(&args, file, phrase);
+    }
+    assert_eq!(std::fs::read(&scene).unwrap(), scene_bytes, "the scene is untouched");
+    assert_eq!(std::fs::read(&cams).unwrap(), cam_bytes, "the cameras are untouched");
+}
+
+#[test]
+fn render_frame_errors_are_about_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = "synthetic:blobs?gaussians=50&seed=1";
+    let png = dir.path().join("x.png");
+    let p = png.to_str().unwrap();
+    for frame in ["18446744073709551615", "1000000000"] {
+        let o = neo(&["render", "--scene", spec, "--frame", frame, "--out", p]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.starts_with(&format!("error: --frame {frame}: must be below 1000000")), "{err}");
+    }
+    let o = neo(&["render", "--scene", spec, "--trajectory", "orbit:frames=3", "--frame", "7", "--out", p]);
+    assert!(
+        stderr(&o).starts_with("error: --frame 7: trajectory 'orbit:frames=3' has 3 frames"),
+        "{}",
+        stderr(&o)
+    );
+    let cams = dir.path().join("c.json");
+    let c = cams.to_str().unwrap();
+    ok(&["trajectory", "--scene", spec, "--frames", "2", "--width", "32", "--height", "32", "--out", c]);
+    bad_flag(
+        &["render", "--scene", spec, "--camera", c, "--frame", "1", "--out", p],
+        "--frame",
+        "cannot be used",
+    );
+    assert!(!png.exists());
+    // Infinite values are called non-finite, as `neo scene info` calls them.
+    let scene = dir.path().join("inf.ply");
+    ok(&["scene", "convert", spec, scene.to_str().unwrap()]);
+    let mut bytes = std::fs::read(&scene).unwrap();
+    let start = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    bytes[start..start + 4].copy_from_slice(&f32::INFINITY.to_le_bytes()); // Gaussian 0's x
+    std::fs::write(&scene, bytes).unwrap();
+    let o =
+        neo(&["render", "--scene", scene.to_str().unwrap(), "--width", "32", "--height", "32", "--out", p]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("dropped 1 Gaussians with non-finite values"), "{err}");
+}

@@ -7,9 +7,9 @@ mod model;
 mod sampler;
 
 use crate::progress::spin;
-use anyhow::Result;
+use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
-use neo_golden::{camera::Camera, pipeline, ply, render, source, trajectory};
+use neo_golden::{camera::Camera, pipeline, ply, render, source, synthetic, trajectory};
 use std::time::Duration;
 
 /// Arguments of `neo bench`: with no subcommand, the throughput figures of the golden model and
@@ -23,7 +23,7 @@ pub struct BenchArgs {
     /// Gaussians in the loading and rendering workloads.
     #[arg(long, default_value_t = 1_000_000)]
     pub gaussians: usize,
-    /// Timed repetitions; the best is reported.
+    /// Timed repetitions, at least 1; the best is reported.
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
 }
@@ -40,6 +40,7 @@ pub enum BenchCommand {
     Model(model::ModelBenchArgs),
 }
 
+/// The best (shortest) of `n` timed runs of `f` (at least one), with its result.
 fn best_of<T>(n: usize, what: &str, mut f: impl FnMut() -> T) -> (T, Duration) {
     let mut best: Option<(T, Duration)> = None;
     for i in 0..n.max(1) {
@@ -59,6 +60,14 @@ fn verdict(ok: bool) -> &'static str {
     }
 }
 
+/// The synthetic outdoor scene of `--gaussians n` the benches run on, checked as a scene spec
+/// (1 to [`synthetic::MAX_GAUSSIANS`] Gaussians) before any work.
+fn synthetic_spec(n: usize) -> Result<String> {
+    let spec = format!("synthetic:outdoor?gaussians={n}&seed=1");
+    synthetic::parse_spec(&spec).context("--gaussians")?;
+    Ok(spec)
+}
+
 /// Runs `neo bench` (or its subcommand).
 pub fn run(a: BenchArgs) -> Result<()> {
     match a.command {
@@ -66,7 +75,12 @@ pub fn run(a: BenchArgs) -> Result<()> {
         Some(BenchCommand::Model(m)) => return model::run(m),
         None => {}
     }
+    // Every argument is checked before the first measurement is printed.
+    if a.repeat == 0 {
+        bail!("--repeat 0: the bench needs at least 1 timed repetition");
+    }
     let n = a.gaussians;
+    let spec = synthetic_spec(n)?;
     let threads = rayon::current_num_threads();
     println!("neo bench: {n} Gaussians, {threads} threads, best of {}", a.repeat);
 
@@ -79,7 +93,6 @@ pub fn run(a: BenchArgs) -> Result<()> {
         verdict(mbps >= 300.0)
     );
 
-    let spec = format!("synthetic:outdoor?gaussians={n}&seed=1");
     let (loaded, t_gen) = best_of(a.repeat, "generating", || source::load_scene(&spec, false));
     let (scene, _) = loaded?;
     println!("synthetic gen   {:>9.3} s     ({spec})", t_gen.as_secs_f64());

@@ -48,6 +48,17 @@ pub fn run(a: GenArgs) -> Result<()> {
     };
     let files = neo_gen::try_generate(&cfg)?;
     if a.check {
+        if a.out.exists() && !a.out.is_dir() {
+            bail!("{}: --out is not a directory", a.out.display());
+        }
+        if !a.out.exists() {
+            let config = a.config.as_ref().map(|p| format!(" --config {}", p.display())).unwrap_or_default();
+            bail!(
+                "{}: the directory does not exist; `neo gen{config} --out {}` writes it",
+                a.out.display(),
+                a.out.display()
+            );
+        }
         let diffs = check_dir(&a.out, &files).with_context(|| format!("reading {}", a.out.display()))?;
         if !diffs.is_empty() {
             let list: Vec<String> =

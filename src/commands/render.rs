@@ -1,6 +1,6 @@
 //! `neo render`: one view through the float reference renderer, written as an 8-bit PNG.
 
-use crate::args::{SceneArg, StrictArg, ViewArgs};
+use crate::args::{refuse_overwriting_input, spec_paths, warn_dropped, SceneArg, StrictArg, ViewArgs};
 use crate::progress::spin;
 use anyhow::Result;
 use clap::Args;
@@ -23,12 +23,14 @@ pub struct RenderArgs {
 
 /// Runs `neo render`.
 pub fn run(a: RenderArgs) -> Result<()> {
+    let mut inputs: Vec<(&str, PathBuf)> =
+        spec_paths(&a.scene.scene).into_iter().map(|p| ("the --scene file", p)).collect();
+    inputs.extend(a.view.input_paths());
+    refuse_overwriting_input(&a.out, "--out", &inputs)?;
     let (loaded, t_load) =
         spin(&format!("loading {}", a.scene.scene), || source::load_scene(&a.scene.scene, a.strict.strict));
     let (scene, report) = loaded?;
-    if report.dropped_non_finite > 0 {
-        eprintln!("warning: dropped {} Gaussians with NaN values", report.dropped_non_finite);
-    }
+    warn_dropped(&report);
     let cam = a.view.camera(&scene)?;
     let opts = render::RenderOptions::default();
     let (out, t_render) = spin("rendering", || render::render(&scene, &cam, &opts));

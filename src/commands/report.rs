@@ -60,7 +60,7 @@ pub struct ReportArgs {
     /// Chunk sizes of the sweep.
     #[arg(long, default_value = "64,128,256,512", value_delimiter = ',')]
     pub sweep_chunk: Vec<usize>,
-    /// DPS passes of the sweep.
+    /// DPS passes of the sweep, each 0 to 16.
     #[arg(long, default_value = "1,2", value_delimiter = ',')]
     pub sweep_passes: Vec<usize>,
     /// Camera speeds of the sweep.
@@ -101,9 +101,12 @@ impl ReportArgs {
         given.unwrap_or(if self.full { default.1 } else { default.0 })
     }
 
-    /// The report's plan specification; a bad `--sweep-window` is refused.
+    /// The report's plan specification; a bad `--sweep-window` or `--sweep-passes` is refused.
     fn spec(&self) -> Result<ReportSpec> {
         let windows = parse_sweep_windows(&self.sweep_window).map_err(|e| anyhow!(e))?;
+        for &p in &self.sweep_passes {
+            neo_golden::pipeline::check_passes(p).map_err(|e| anyhow!("--sweep-passes: {e}"))?;
+        }
         let sweep = (!self.no_sweep && self.sweep_results.is_none()).then(|| SweepSpec {
             scene: self.sweep_scene.clone(),
             res: self.sweep_res.clone(),
@@ -217,6 +220,17 @@ mod tests {
         assert_eq!(windows(&["--sweep-window", "1024,4096"]), [1024, 4096]);
         assert!(windows(&["--sweep-window", ""]).is_empty());
         assert!(windows(&["--sweep-window", "1"]).is_empty());
+    }
+
+    /// `--sweep-passes` has the limit of every `--passes` (16).
+    #[test]
+    fn sweep_passes_are_bounded_like_every_passes_flag() {
+        assert_eq!(spec_of(&["--sweep-passes", "0,16"]).sweep.expect("a sweep").passes, [0, 16]);
+        use clap::Parser;
+        let argv = ["neo", "report", "--sweep-passes", "1,17"];
+        let Top::Report(a) = Cli::try_parse_from(argv).expect("parses").command;
+        let e = format!("{:#}", a.spec().unwrap_err());
+        assert!(e.contains("--sweep-passes") && e.contains("limit of 16"), "{e}");
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! `neo scene info`, `neo scene convert` and `neo scene bake`.
 
+use crate::args::{refuse_overwriting_input, warn_dropped};
 use crate::progress::spin;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
@@ -30,7 +31,8 @@ pub struct BakeArgs {
     /// SH storage: `f32` or `f16`.
     #[arg(long, default_value = "f32", value_parser = parse_sh)]
     pub sh: ShPrecision,
-    /// Treat Gaussians with NaN values as an error instead of dropping them.
+    /// Treat Gaussians with non-finite (NaN or infinite) values as an error instead of dropping
+    /// them.
     #[arg(long)]
     pub strict: bool,
 }
@@ -52,7 +54,8 @@ pub struct InfoArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// Treat Gaussians with NaN values as an error instead of dropping them.
+    /// Treat Gaussians with non-finite (NaN or infinite) values as an error instead of dropping
+    /// them.
     #[arg(long)]
     pub strict: bool,
 }
@@ -64,7 +67,8 @@ pub struct ConvertArgs {
     pub input: String,
     /// The standard-layout .ply to write.
     pub output: PathBuf,
-    /// Treat Gaussians with NaN values as an error instead of dropping them.
+    /// Treat Gaussians with non-finite (NaN or infinite) values as an error instead of dropping
+    /// them.
     #[arg(long)]
     pub strict: bool,
 }
@@ -86,12 +90,11 @@ pub fn run(cmd: SceneCommand) -> Result<()> {
             Ok(())
         }
         SceneCommand::Convert(a) => {
+            refuse_overwriting_input(&a.output, "OUTPUT", &[("INPUT", PathBuf::from(&a.input))])?;
             let (loaded, _) =
                 spin(&format!("loading {}", a.input), || source::load_scene(&a.input, a.strict));
             let (scene, report) = loaded?;
-            if report.dropped_non_finite > 0 {
-                eprintln!("warning: dropped {} Gaussians with NaN values", report.dropped_non_finite);
-            }
+            warn_dropped(&report);
             ply::write_standard(&a.output, &scene.to_raw())
                 .with_context(|| format!("converting {}", a.input))?;
             println!(
@@ -103,12 +106,11 @@ pub fn run(cmd: SceneCommand) -> Result<()> {
             Ok(())
         }
         SceneCommand::Bake(a) => {
+            refuse_overwriting_input(&a.output, "OUTPUT", &[("INPUT", PathBuf::from(&a.input))])?;
             let (loaded, _) =
                 spin(&format!("loading {}", a.input), || source::load_scene(&a.input, a.strict));
             let (scene, report) = loaded?;
-            if report.dropped_non_finite > 0 {
-                eprintln!("warning: dropped {} Gaussians with NaN values", report.dropped_non_finite);
-            }
+            warn_dropped(&report);
             let baked = Baked::from_scene(&scene, &FeatureFormat::default(), a.sh);
             baked.write(&a.output)?;
             println!(

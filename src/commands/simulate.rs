@@ -44,7 +44,7 @@ pub struct SimulateArgs {
     /// Chunk sizes (default: the configuration's, 256).
     #[arg(long, value_delimiter = ',')]
     pub chunk: Vec<usize>,
-    /// DPS passes per frame (default: the configuration's, 1).
+    /// DPS passes per frame, 0 to 16 (default: the configuration's, 1).
     #[arg(long, value_delimiter = ',')]
     pub passes: Vec<usize>,
     /// Camera speed multipliers.
@@ -115,6 +115,9 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     };
     if a.frames.frames == 0 {
         bail!("--frames must be at least 1");
+    }
+    for &p in &a.passes {
+        neo_golden::pipeline::check_passes(p).map_err(|e| anyhow!("--passes: {e}"))?;
     }
     let all = grid.points().map_err(|e| anyhow!(e))?;
     let points = match &a.shard {
@@ -228,7 +231,9 @@ fn traced_points(
         let (wl, _) = crate::progress::spin("golden pipeline with trace export", || {
             neo_sim::driver::generate(scene, &traj.frames, &traj.cuts, &ws, |_| {})
         });
-        let wl = wl?;
+        // The driver's error says its cause (a pipeline parameter) and also gives it as its
+        // source; its message alone reads once.
+        let wl = wl.map_err(|e| anyhow!(e.to_string()))?;
         results.push(suite::evaluate(p, &wl, cfg, lat, archs).map_err(|e| anyhow!(e))?);
         eprintln!("wrote poc.trace files into {}", dir.join(p.id()).display());
     }

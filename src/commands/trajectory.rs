@@ -1,6 +1,6 @@
 //! `neo trajectory`: generate a camera trajectory and write it as an INRIA cameras.json.
 
-use crate::args::{SceneArg, TrajectoryArg};
+use crate::args::{image_side, refuse_overwriting_input, spec_paths, SceneArg, TrajectoryArg};
 use crate::progress::spin;
 use anyhow::Result;
 use clap::Args;
@@ -17,11 +17,11 @@ pub struct TrajectoryArgs {
     /// Number of frames (30 fps), unless the spec sets `frames=`.
     #[arg(long, default_value_t = 60)]
     pub frames: usize,
-    /// Override the image width (the field of view is kept).
-    #[arg(long)]
+    /// Override the image width, 1 to 16384 (the field of view is kept).
+    #[arg(long, value_parser = image_side)]
     pub width: Option<u32>,
-    /// Override the image height (the field of view is kept).
-    #[arg(long)]
+    /// Override the image height, 1 to 16384 (the field of view is kept).
+    #[arg(long, value_parser = image_side)]
     pub height: Option<u32>,
     /// The cameras.json to write.
     #[arg(long)]
@@ -30,6 +30,10 @@ pub struct TrajectoryArgs {
 
 /// Runs `neo trajectory`.
 pub fn run(a: TrajectoryArgs) -> Result<()> {
+    let mut inputs: Vec<(&str, PathBuf)> =
+        spec_paths(&a.scene.scene).into_iter().map(|p| ("the --scene file", p)).collect();
+    inputs.extend(spec_paths(&a.trajectory.trajectory).into_iter().map(|p| ("the --trajectory file", p)));
+    refuse_overwriting_input(&a.out, "--out", &inputs)?;
     let (loaded, _) =
         spin(&format!("loading {}", a.scene.scene), || source::load_scene(&a.scene.scene, false));
     let (scene, _) = loaded?;

@@ -183,7 +183,7 @@ impl AdaptiveParams {
             };
             match k {
                 "budget" => p.budget = num(0, 1000)?,
-                "max" => p.max_passes = num(1, 16)?,
+                "max" => p.max_passes = num(1, super::config::MAX_PASSES as u32)?,
                 "resort" => p.resort = num(0, 1)? == 1,
                 "wide" => {
                     p.wide = num(1, 64)?;

@@ -20,7 +20,7 @@ pub struct PipelineConfig {
     pub raster: RasterConfig,
     /// DPS and conventional-sort chunk size `C` (256).
     pub chunk: usize,
-    /// DPS passes per frame (1).
+    /// DPS passes per frame (1; 0 merges the reused table as it is; at most [`MAX_PASSES`]).
     pub dps_passes: usize,
     /// Entries in the raster core's reorder window ([`crate::raster::window`]); 1 (the paper's
     /// engine) reorders nothing. Needs a strategy that writes keys back.
@@ -91,6 +91,22 @@ impl Default for PipelineConfig {
     }
 }
 
+/// The most DPS passes per tile and frame the golden pipeline runs: the one limit of `--passes`
+/// (`neo frames`, `neo simulate`), of the model configuration's `pipeline.dps_passes` and of
+/// `adaptive`'s `max` ([`super::adaptive::AdaptiveParams`]). Each pass costs about as much as
+/// the sort of a reused table, and the tables are usually in order after a few. (The engine's
+/// tile descriptor holds up to 15, `engine::memory::MAX_DPS_PASSES`.)
+pub const MAX_PASSES: usize = 16;
+
+/// Checks a number of DPS passes per frame: 0 (the reused table is merged as it is) to
+/// [`MAX_PASSES`].
+pub fn check_passes(passes: usize) -> Result<(), String> {
+    if passes > MAX_PASSES {
+        return Err(format!("{passes} DPS passes per frame is above the limit of {MAX_PASSES}"));
+    }
+    Ok(())
+}
+
 impl PipelineConfig {
     /// The table capacity as a number (`usize::MAX` when unbounded).
     pub fn capacity_or_max(&self) -> usize {
@@ -111,20 +127,41 @@ impl PipelineConfig {
         }
         Ok(())
     }
+
+    /// Checks the DPS passes per frame ([`check_passes`]).
+    pub fn check_passes(&self) -> Result<(), PipelineError> {
+        check_passes(self.dps_passes).map_err(PipelineError::Other)
+    }
 }
 
 /// Why a configuration cannot run.
+///
+/// The message holds the cause's own (`sorting parameters: chunk size 0 is ...`), so the cause
+/// is not also given as [`std::error::Error::source`]: a report that prints an error with its
+/// chain of sources (`anyhow`'s `{:#}`) would repeat it.
 #[derive(Debug, thiserror::Error)]
 pub enum PipelineError {
     /// A sorting parameter (chunk size, key or id width).
     #[error("sorting parameters: {0}")]
-    Sort(#[from] SortParamError),
+    Sort(SortParamError),
     /// A feature-table or raster parameter.
     #[error("feature/raster format: {0}")]
-    Format(#[from] FormatError),
+    Format(FormatError),
     /// Anything else.
     #[error("{0}")]
     Other(String),
+}
+
+impl From<SortParamError> for PipelineError {
+    fn from(e: SortParamError) -> Self {
+        PipelineError::Sort(e)
+    }
+}
+
+impl From<FormatError> for PipelineError {
+    fn from(e: FormatError) -> Self {
+        PipelineError::Format(e)
+    }
 }
 
 /// The number formats of a run: feature table, depth key, sort entry.
@@ -304,5 +341,50 @@ impl ConfigRecord {
             threads: rayon::current_num_threads(),
             preprocess: cfg.preprocess,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The full report of an error: its message and those of its sources, as `anyhow`'s `{:#}`
+    /// prints them.
+    fn report(e: &dyn std::error::Error) -> String {
+        let mut text = e.to_string();
+        let mut source = e.source();
+        while let Some(s) = source {
+            text += &format!(": {s}");
+            source = s.source();
+        }
+        text
+    }
+
+    /// A pipeline error says its cause once, also where the chain of sources is printed.
+    #[test]
+    fn pipeline_errors_say_their_cause_once() {
+        let sort = PipelineError::from(SortParamError::Chunk { chunk: 0, bsu: 16 });
+        assert_eq!(
+            report(&sort),
+            "sorting parameters: chunk size 0 is not the BSU width 16 times a power of two"
+        );
+        let format =
+            PipelineError::from(FormatError::new("tile", "tile 0 is not a positive multiple of subtile 8"));
+        assert_eq!(
+            report(&format),
+            "feature/raster format: tile: tile 0 is not a positive multiple of subtile 8"
+        );
+    }
+
+    /// DPS passes run from 0 to [`MAX_PASSES`], the limit of adaptive's `max` as well.
+    #[test]
+    fn passes_are_bounded_by_the_one_limit() {
+        assert!(check_passes(0).is_ok() && check_passes(MAX_PASSES).is_ok());
+        let e = check_passes(usize::MAX).unwrap_err();
+        assert!(e.contains(&usize::MAX.to_string()) && e.contains("above the limit of 16"), "{e}");
+        let cfg = PipelineConfig { dps_passes: MAX_PASSES + 1, ..PipelineConfig::default() };
+        assert!(cfg.check_passes().is_err());
+        assert!(super::super::adaptive::AdaptiveParams::parse(&format!("max={MAX_PASSES}")).is_ok());
+        assert!(super::super::adaptive::AdaptiveParams::parse(&format!("max={}", MAX_PASSES + 1)).is_err());
     }
 }

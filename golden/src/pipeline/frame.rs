@@ -276,6 +276,7 @@ impl<'s> Pipeline<'s> {
     ) -> Result<Self, PipelineError> {
         formats.check(&cfg.raster, scene.len())?;
         cfg.check_window()?;
+        cfg.check_passes()?;
         if width == 0 || height == 0 {
             return Err(PipelineError::Other(format!("image size {width}x{height} is empty")));
         }

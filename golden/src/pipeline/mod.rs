@@ -39,7 +39,9 @@ pub mod tile;
 pub mod trace;
 pub mod work;
 
-pub use config::{ConfigRecord, Formats, PipelineConfig, PipelineError, Preprocessing, RunInfo};
+pub use config::{
+    check_passes, ConfigRecord, Formats, PipelineConfig, PipelineError, Preprocessing, RunInfo, MAX_PASSES,
+};
 pub use frame::{FrameOutput, FrameWork, Pipeline, SampledRaster, TileWork, WorkOptions};
 pub use run::{bench_frames, formats_for, run_trajectory, StatsFile};
 pub use stats::{FrameStats, Summary, TileColumns, Timing};

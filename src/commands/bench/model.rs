@@ -82,7 +82,7 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
     let mut archs = Arch::parse_list(&a.arch, &cfg).map_err(|e| anyhow!(e))?;
     archs.retain(|&x| x != Arch::Neo);
     archs.insert(0, Arch::Neo);
-    let spec = format!("synthetic:outdoor?gaussians={}&seed=1", a.gaussians);
+    let spec = super::synthetic_spec(a.gaussians)?;
     let (label, width, height) = parse_res(&a.res).map_err(|e| anyhow!(e))?;
     let point = Point {
         scene: spec.clone(),
@@ -100,8 +100,12 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
     let threads = rayon::current_num_threads();
     let (scene, cpu, wall) = timed(|| suite::load_scene(&spec));
     let scene = scene.map_err(|e| anyhow!(e))?;
+    let sampled = match a.model.raster_sample {
+        0 => "early termination not sampled (--raster-sample 0: ratio 1)".to_string(),
+        k => format!("early termination sampled on one tile in {k}"),
+    };
     println!(
-        "neo bench model: {spec} ({} Gaussians, made in {wall:.1} s, {cpu:.1} CPU s; not counted), {} frames of orbit at {}x{}, {threads} threads",
+        "neo bench model: {spec} ({} Gaussians, made in {wall:.1} s, {cpu:.1} CPU s; not counted), {} frames of orbit at {}x{}, {sampled}, {threads} threads",
         scene.len(),
         a.frames,
         width,
