@@ -85,7 +85,7 @@ impl WorkloadSpec {
 #[derive(Debug, thiserror::Error)]
 pub enum DriverError {
     /// A pipeline parameter.
-    #[error("{0}")]
+    #[error(transparent)]
     Pipeline(#[from] PipelineError),
     /// The work-only counters disagree with the golden pipeline's (a bug).
     #[error("frame {frame}: work-only counters disagree with the golden pipeline: {what}")]
@@ -556,6 +556,19 @@ pub fn generate_many(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A pipeline parameter's error says its cause once, also where the whole chain of sources
+    /// is printed (`anyhow`'s `{:#}`): it is the pipeline error itself.
+    #[test]
+    fn a_pipeline_error_says_its_cause_once() {
+        use neo_golden::sort::SortParamError;
+        let e = DriverError::from(PipelineError::from(SortParamError::Chunk { chunk: 0, bsu: 16 }));
+        assert_eq!(
+            e.to_string(),
+            "sorting parameters: chunk size 0 is not the BSU width 16 times a power of two"
+        );
+        assert!(std::error::Error::source(&e).is_none());
+    }
 
     #[test]
     fn a_reuse_tile_whose_counters_are_not_one_command_sequence_is_refused() {

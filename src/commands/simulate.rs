@@ -231,9 +231,7 @@ fn traced_points(
         let (wl, _) = crate::progress::spin("golden pipeline with trace export", || {
             neo_sim::driver::generate(scene, &traj.frames, &traj.cuts, &ws, |_| {})
         });
-        // The driver's error says its cause (a pipeline parameter) and also gives it as its
-        // source; its message alone reads once.
-        let wl = wl.map_err(|e| anyhow!(e.to_string()))?;
+        let wl = wl?;
         results.push(suite::evaluate(p, &wl, cfg, lat, archs).map_err(|e| anyhow!(e))?);
         eprintln!("wrote poc.trace files into {}", dir.join(p.id()).display());
     }

@@ -75,9 +75,10 @@ pub enum SessionError {
     /// The configuration does not validate.
     #[error(transparent)]
     Config(#[from] super::ConfigError),
-    /// The golden pipeline refuses the scene or formats.
+    /// The golden pipeline refuses the scene or formats (its message holds the cause's, so the
+    /// cause is no error source: a chain printed whole would repeat it).
     #[error("golden pipeline: {0}")]
-    Pipeline(#[from] crate::pipeline::PipelineError),
+    Pipeline(crate::pipeline::PipelineError),
     /// The memory map does not fit the address widths.
     #[error("memory map: {0}")]
     Layout(String),
@@ -101,6 +102,12 @@ pub enum SessionError {
         "strategy {0}: the engine runs `neo` and `adaptive` with wide=1 or wide = its dps_wide (DPS passes per tile, in chunks or wide chunks; re-sorts of single tiles with resort=1 in lists mode only, where the host writes a re-sorted tile's whole list)"
     )]
     Strategy(String),
+}
+
+impl From<crate::pipeline::PipelineError> for SessionError {
+    fn from(e: crate::pipeline::PipelineError) -> Self {
+        SessionError::Pipeline(e)
+    }
 }
 
 /// How the host feeds the engine (see the module docs).
@@ -749,6 +756,16 @@ fn tile_pixels(out: &FrameOutput, d: &TileDescriptor, tile: u32) -> Vec<[u8; 3]>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The golden pipeline's refusal says its cause once, also where the whole chain of
+    /// sources is printed: it has none.
+    #[test]
+    fn a_pipeline_refusal_says_its_cause_once() {
+        use crate::pipeline::PipelineError;
+        let e = SessionError::from(PipelineError::Other("image size 0x4 is empty".into()));
+        assert_eq!(e.to_string(), "golden pipeline: image size 0x4 is empty");
+        assert!(std::error::Error::source(&e).is_none());
+    }
 
     #[test]
     fn layout_regions_are_ordered_aligned_and_disjoint() {
