@@ -47,7 +47,8 @@ pub struct TrajectoryArg {
 /// How many frames of the trajectory run.
 #[derive(Args, Clone)]
 pub struct FramesArg {
-    /// Number of frames, unless the spec sets `frames=`.
+    /// Number of frames: the trajectory's first N (a cameras.json, or a spec that sets
+    /// `frames=`, must have at least N).
     #[arg(long, default_value_t = 30)]
     pub frames: usize,
 }

@@ -3,7 +3,7 @@
 //! `--frames`/`--res`, the build of the model behind a spinner, and the frame loop (the golden
 //! host session writes each frame's inputs, the rig runs the RTL and compares bit-exactly).
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use neo_golden::engine::host::FramePlan;
 use neo_golden::engine::memory::Memory;
@@ -32,11 +32,7 @@ pub fn engine_config(path: Option<&Path>) -> Result<EngineConfig> {
 /// The trajectory `spec` of `scene` with its first `frames` frames at resolution `res`.
 pub fn trajectory_at(spec: &str, scene: &Scene, frames: usize, res: (u32, u32)) -> Result<Trajectory> {
     let mut traj = parse_trajectory(spec, source::robust_bounds(scene), frames)?;
-    if traj.frames.len() < frames {
-        bail!("--trajectory {spec:?} has {} frames; {frames} requested", traj.frames.len());
-    }
-    traj.frames.truncate(frames);
-    traj.cuts.retain(|&c| c < frames);
+    traj.take_first(frames).map_err(|e| anyhow!("--trajectory {spec:?} {e}"))?;
     let (w, h) = res;
     traj.frames = traj.frames.iter().map(|c| c.with_resolution(w, h)).collect();
     Ok(traj)

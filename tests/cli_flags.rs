@@ -142,10 +142,10 @@ fn walk(dir: &Path) -> Vec<String> {
     names
 }
 
-/// `--frames 2` on a trajectory of one camera runs that frame and says so (as `neo simulate`,
-/// it runs what the trajectory has).
+/// `--frames 2` on a trajectory of one camera is refused (as by `neo simulate` and `neo cosim`):
+/// the run would not be the one asked for.
 #[test]
-fn frames_says_when_the_trajectory_has_fewer_frames() {
+fn frames_refuses_a_trajectory_with_fewer_frames_than_asked() {
     let dir = tempfile::tempdir().unwrap();
     let cams = dir.path().join("cameras.json");
     std::fs::write(
@@ -155,12 +155,14 @@ fn frames_says_when_the_trajectory_has_fewer_frames() {
     )
     .unwrap();
     let out = dir.path().join("run");
-    let o = ok(&frames_args(&out, "2", &["--trajectory", cams.to_str().unwrap()]));
-    let err = stderr(&o);
-    assert!(err.contains("has 1 camera(s): running 1 frame(s), not the 2 of --frames"), "{err}");
+    refused(
+        &frames_args(&out, "2", &["--trajectory", cams.to_str().unwrap()]),
+        &["has 1 frame(s); 2 requested (--frames)"],
+    );
+    ok(&frames_args(&out, "1", &["--trajectory", cams.to_str().unwrap()]));
     // The frame beyond it cannot be traced.
     refused(
-        &frames_args(&out, "2", &["--trajectory", cams.to_str().unwrap(), "--trace-frames", "1"]),
+        &frames_args(&out, "1", &["--trajectory", cams.to_str().unwrap(), "--trace-frames", "1"]),
         &["--trace-frames 1", "1 frame(s)"],
     );
 }
@@ -222,4 +224,33 @@ fn gen_check_of_a_missing_directory_says_it_does_not_exist() {
     let file = dir.path().join("file");
     std::fs::write(&file, "x").unwrap();
     refused(&["gen", "--check", "--out", file.to_str().unwrap()], &["not a directory"]);
+}
+
+/// `neo simulate` runs exactly `--frames` frames of a trajectory: the first ones of a longer
+/// cameras.json (it ran all three of three for `--frames 2`, and the record said 2), and a
+/// shorter one is refused (it ran one for `--frames 2`).
+#[test]
+fn simulate_runs_the_frames_asked_for_or_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    let cams = dir.path().join("three.json");
+    let scene = "synthetic:outdoor?gaussians=2000&seed=1";
+    let c = cams.to_str().unwrap();
+    ok(&["trajectory", "--scene", scene, "--trajectory", "orbit:frames=3", "--out", c]);
+    let sim = |frames: &str| {
+        let args = ["simulate", "--scene", scene, "--res", "128x128", "--arch", "neo", "--quality", "off"];
+        let mut v: Vec<&str> = args.to_vec();
+        v.extend(["--trajectory", c, "--frames", frames, "--json"]);
+        v.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let two = sim("2");
+    let o = ok(&two.iter().map(String::as_str).collect::<Vec<_>>());
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("JSON");
+    let p = if v.is_array() { &v[0] } else { &v };
+    assert_eq!(p["point"]["frames"], 2);
+    assert_eq!(p["archs"][0]["frames"].as_array().expect("per-frame records").len(), 2);
+    let four = sim("4");
+    refused(
+        &four.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["has 3 frame(s); 4 requested (--frames)"],
+    );
 }

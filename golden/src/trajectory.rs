@@ -54,6 +54,17 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
+    /// Keeps the first `frames` frames and the scene cuts among them (what `--frames` runs of a
+    /// cameras.json or of a spec that sets `frames=`); an error when there are fewer.
+    pub fn take_first(&mut self, frames: usize) -> Result<(), String> {
+        if self.frames.len() < frames {
+            return Err(format!("has {} frame(s); {frames} requested", self.frames.len()));
+        }
+        self.frames.truncate(frames);
+        self.cuts.retain(|&c| c < frames);
+        Ok(())
+    }
+
     /// Number of frames.
     pub fn len(&self) -> usize {
         self.frames.len()

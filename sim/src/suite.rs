@@ -339,9 +339,11 @@ pub fn workload_spec(
     raster_sample: u32,
 ) -> Result<(WorkloadSpec, trajectory::Trajectory), String> {
     let spec = point.trajectory_spec()?;
-    let traj = trajectory::parse_trajectory(&spec, source::robust_bounds(scene), point.frames)
-        .map_err(|e| e.to_string())?
-        .with_resolution(point.width, point.height);
+    let mut traj = trajectory::parse_trajectory(&spec, source::robust_bounds(scene), point.frames)
+        .map_err(|e| e.to_string())?;
+    // A cameras.json, or a spec's frames=, may hold another number of frames than the point's.
+    traj.take_first(point.frames).map_err(|e| format!("trajectory '{spec}' {e} (--frames)"))?;
+    let traj = traj.with_resolution(point.width, point.height);
     if traj.is_empty() {
         return Err(format!("trajectory '{spec}' has no frames"));
     }

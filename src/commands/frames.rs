@@ -3,7 +3,7 @@
 
 use crate::args::{warn_dropped, FramesArg, SceneArg, StrictArg, TrajectoryArg};
 use crate::progress::spin;
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use neo_golden::formats::FeatureFormat;
@@ -217,16 +217,8 @@ pub fn run(a: FramesArgs) -> Result<()> {
     if let Some((w, h)) = a.res {
         traj = traj.with_resolution(w, h);
     }
+    traj.take_first(a.frames.frames).map_err(|e| anyhow!("trajectory '{traj_spec}' {e} (--frames)"))?;
     let n = traj.len();
-    if n == 0 {
-        bail!("trajectory '{traj_spec}' has no frames");
-    }
-    if n < a.frames.frames && !traj_spec.contains("frames=") {
-        eprintln!(
-            "warning: trajectory '{traj_spec}' has {n} camera(s): running {n} frame(s), not the {} of --frames",
-            a.frames.frames
-        );
-    }
     if let Some(f) = a.trace_frames.iter().find(|&&f| f >= n) {
         bail!("--trace-frames {f}: the run has {n} frame(s), numbered 0 to {}", n - 1);
     }
