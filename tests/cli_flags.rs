@@ -254,3 +254,29 @@ fn simulate_runs_the_frames_asked_for_or_refuses() {
         &["has 3 frame(s); 4 requested (--frames)"],
     );
 }
+
+/// `neo simulate` refuses an empty `--sort` (it ran no point and exited 0) and a
+/// `--trace-frames` beyond the run (it wrote no trace), before any work.
+#[test]
+fn simulate_refuses_an_empty_sort_and_a_trace_frame_beyond_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let trace = dir.path().join("trace");
+    let base = [
+        "simulate",
+        "--scene",
+        "synthetic:outdoor?gaussians=2000&seed=1",
+        "--res",
+        "128x128",
+        "--frames",
+        "2",
+    ];
+    for sort in ["", ","] {
+        let mut args = base.to_vec();
+        args.extend(["--sort", sort]);
+        refused(&args, &["--sort", "no strategy given"]);
+    }
+    let mut args = base.to_vec();
+    args.extend(["--trace", trace.to_str().unwrap(), "--trace-frames", "5"]);
+    refused(&args, &["--trace-frames 5", "2 frame(s)"]);
+    assert!(!trace.exists(), "nothing written");
+}

@@ -119,6 +119,16 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     for &p in &a.passes {
         neo_golden::pipeline::check_passes(p).map_err(|e| anyhow!("--passes: {e}"))?;
     }
+    if grid.strategies.is_empty() {
+        bail!("--sort {:?}: no strategy given", a.sort);
+    }
+    if let Some(f) = a.trace_frames.iter().find(|&&f| f >= a.frames.frames) {
+        bail!(
+            "--trace-frames {f}: the run has {} frame(s), numbered 0 to {}",
+            a.frames.frames,
+            a.frames.frames - 1
+        );
+    }
     let all = grid.points().map_err(|e| anyhow!(e))?;
     let points = match &a.shard {
         Some(s) => {

@@ -170,11 +170,16 @@ impl AdaptiveParams {
     /// Parses `key=value` pairs separated by commas (any subset, defaults for the rest).
     pub fn parse(s: &str) -> Result<Self, String> {
         let mut p = AdaptiveParams::default();
+        let mut seen: Vec<&str> = Vec::new();
         for kv in s.split(',').map(str::trim).filter(|kv| !kv.is_empty()) {
             let (k, v) = kv.split_once('=').ok_or_else(|| {
                 format!("adaptive: '{kv}' is not key=value (budget=, max=, resort=, wide=)")
             })?;
             let (k, v) = (k.trim(), v.trim());
+            if seen.contains(&k) {
+                return Err(format!("adaptive: parameter '{k}' is given twice"));
+            }
+            seen.push(k);
             let num = |lo: u32, hi: u32| -> Result<u32, String> {
                 match v.parse::<u32>() {
                     Ok(n) if (lo..=hi).contains(&n) => Ok(n),
@@ -362,6 +367,7 @@ mod tests {
             ("resort=2", "resort"),
             ("speed=1", "speed"),
             ("wide=3", "wide"),
+            ("budget=1,budget=2", "budget"),
         ] {
             let err = AdaptiveParams::parse(bad).unwrap_err();
             assert!(err.contains(&format!("'{name}'")), "{bad}: {err}");
