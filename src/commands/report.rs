@@ -10,11 +10,11 @@
 
 use crate::args::{resolution, ModelArgs, TrajectoryArg};
 use crate::points::{load_config, load_latency, ProgressRunner, Scenes};
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use neo_sim::report::render;
 use neo_sim::report_plan::{parse_sweep_windows, read_point_results, ReportPlan, ReportSpec, SweepSpec};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Arguments of `neo report`.
@@ -138,6 +138,34 @@ fn peak_rss_mb() -> Option<f64> {
     Some(kb / 1024.0)
 }
 
+/// Writes the report's files (`(name, text)`) into `out` as a whole: every file is written under
+/// a temporary name first and each target checked, then all are renamed; so a file that cannot
+/// be written leaves the previous report as it was, not half old and half new.
+fn write_report(out: &Path, files: &[(String, String)]) -> Result<()> {
+    let tmp = |name: &str| out.join(format!(".{name}.tmp"));
+    let staged = (|| -> Result<()> {
+        for (name, text) in files {
+            let target = out.join(name);
+            if target.is_dir() {
+                bail!("{}: is a directory, cannot write the report's file there", target.display());
+            }
+            std::fs::write(tmp(name), text).with_context(|| format!("{}: cannot write", target.display()))?;
+        }
+        Ok(())
+    })();
+    if let Err(e) = staged {
+        for (name, _) in files {
+            let _ = std::fs::remove_file(tmp(name));
+        }
+        return Err(e);
+    }
+    for (name, _) in files {
+        let target = out.join(name);
+        std::fs::rename(tmp(name), &target).with_context(|| format!("{}: cannot write", target.display()))?;
+    }
+    Ok(())
+}
+
 /// Runs `neo report`.
 pub fn run(a: ReportArgs) -> Result<()> {
     let t0 = Instant::now();
@@ -145,6 +173,8 @@ pub fn run(a: ReportArgs) -> Result<()> {
     let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref(), a.model.sizes.as_deref())?;
     let lat = load_latency(&a.model.latency, &cfg)?;
     let plan = ReportPlan::new(spec, &cfg).map_err(|e| anyhow!(e))?;
+    // Before any work: an --out that cannot be a directory fails now, not after the runs.
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
     let sweep_results = match &a.sweep_results {
         Some(dir) => read_point_results(dir).map_err(|e| anyhow!(e))?,
         None => Vec::new(),
@@ -160,14 +190,10 @@ pub fn run(a: ReportArgs) -> Result<()> {
         ProgressRunner { scenes: Scenes::default(), cfg: &cfg, lat: &lat, started: Instant::now() };
     let (data, times) = plan.run(&mut runner, &lat, sweep_results).map_err(|e| anyhow!(e))?;
     let (md, svgs) = render(&data).map_err(|e| anyhow!(e))?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
-    let index = a.out.join("index.md");
-    std::fs::write(&index, md).with_context(|| format!("{}: cannot write", index.display()))?;
-    for (name, svg) in &svgs {
-        let p = a.out.join(name);
-        std::fs::write(&p, svg).with_context(|| format!("{}: cannot write", p.display()))?;
-    }
-    println!("wrote {} and {} figures", index.display(), svgs.len());
+    let mut files = vec![("index.md".to_string(), md)];
+    files.extend(svgs.iter().cloned());
+    write_report(&a.out, &files)?;
+    println!("wrote {} and {} figures", a.out.join("index.md").display(), svgs.len());
     println!(
         "time: throughput {:.0} s, timelines {:.0} s more, sweep {:.0} s more, total {:.0} s wall, {:.0} s CPU; peak memory {}",
         times.headline_s,
@@ -231,6 +257,29 @@ mod tests {
         let Top::Report(a) = Cli::try_parse_from(argv).expect("parses").command;
         let e = format!("{:#}", a.spec().unwrap_err());
         assert!(e.contains("--sweep-passes") && e.contains("limit of 16"), "{e}");
+    }
+
+    /// A report file that cannot be written (a directory stands at its name) fails before any
+    /// file of the previous report changes, and leaves no temporary file.
+    #[test]
+    fn a_report_is_written_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let files =
+            |v: &str| vec![("index.md".to_string(), v.to_string()), ("fig.svg".to_string(), v.to_string())];
+        write_report(dir.path(), &files("old")).unwrap();
+        std::fs::remove_file(dir.path().join("fig.svg")).unwrap();
+        std::fs::create_dir(dir.path().join("fig.svg")).unwrap();
+        let e = format!("{:#}", write_report(dir.path(), &files("new")).unwrap_err());
+        assert!(e.contains("fig.svg") && e.contains("directory"), "{e}");
+        assert_eq!(std::fs::read_to_string(dir.path().join("index.md")).unwrap(), "old");
+        let names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into())
+            .collect();
+        assert!(names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
+        std::fs::remove_dir(dir.path().join("fig.svg")).unwrap();
+        write_report(dir.path(), &files("new")).unwrap();
+        assert_eq!(std::fs::read_to_string(dir.path().join("fig.svg")).unwrap(), "new");
     }
 
     #[test]
