@@ -2,24 +2,13 @@
 
 use neo_golden::shared::shared_file_for_test;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn neo(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_neo")).args(args).output().expect("run neo")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{neo, stderr, stdout, succeeds};
 
 fn ok(args: &[&str]) -> String {
-    let o = neo(args);
-    assert!(o.status.success(), "neo {args:?} failed:\n{}", stderr(&o));
-    stdout(&o)
+    stdout(&succeeds(args))
 }
 
 fn json(args: &[&str]) -> serde_json::Value {

@@ -3,27 +3,12 @@
 //! write anything, and `neo frames` leaves no earlier run's files behind.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
+
+mod common;
+use common::{neo, stderr, stdout, succeeds as ok};
 
 const SCENE: &str = "synthetic:outdoor?gaussians=1000&seed=1";
-
-fn neo(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_neo")).args(args).output().expect("run neo")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn ok(args: &[&str]) -> Output {
-    let o = neo(args);
-    assert!(o.status.success(), "neo {args:?} failed:\n{}", stderr(&o));
-    o
-}
 
 /// `neo args` fails with exit 1 and an error containing every one of `phrases`, saying its
 /// problem once (no part of the message repeated after a `: `), without a panic and without
