@@ -27,10 +27,6 @@ pub fn load_config(path: Option<&Path>, engine: Option<&Path>, sizes: Option<&st
         Some(p) => SimConfig::from_file(p)?,
         None => SimConfig::default(),
     };
-    if let Some(p) = path {
-        neo_golden::pipeline::check_passes(cfg.pipeline.dps_passes)
-            .map_err(|e| anyhow!("{}: pipeline.dps_passes: {e}", p.display()))?;
-    }
     if let Some(e) = engine {
         cfg.engine = EngineConfig::from_json_file(e)?;
         cfg.check().map_err(|err| anyhow!("{}: {err}", e.display()))?;

@@ -12,6 +12,7 @@ pub mod formats;
 pub mod hwarith;
 pub mod hwpre;
 pub mod image;
+pub mod json_shape;
 pub mod metrics;
 pub mod pipeline;
 pub mod ply;

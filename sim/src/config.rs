@@ -14,13 +14,93 @@
 //! DRAM timing defaults are the published LPDDR4-3200 speed bin (see [`DramConfig`]).
 
 use serde::{Deserialize, Serialize};
+use std::ops::RangeInclusive;
 use std::path::Path;
 
 use neo_golden::engine::pre::sh_record_words;
 use neo_golden::engine::EngineConfig;
 use neo_golden::error::{InputError, InputResult};
 use neo_golden::hwpre::ShPrecision;
+use neo_golden::json_shape::check_shape;
 use neo_golden::pipeline::Preprocessing;
+
+/// The accelerator clock range in MHz: 1 MHz to 10 GHz. Slower clocks make a frame millions of
+/// DRAM refresh intervals long (a 1e-300 MHz clock never finishes); faster ones are no silicon.
+pub const CLOCK_MHZ: RangeInclusive<f64> = 1.0..=10_000.0;
+
+/// The largest DRAM timing parameter (every `n_*` of [`DramConfig`]), in DRAM clocks: 2^16.
+/// Real speed bins need far less (LPDDR4-3200's tREFI is 6247 clocks, DDR4-3200's 12480,
+/// DDR5-8800's about 17200; tRFC stays below 1500, every other parameter below 200); a larger
+/// value makes a latency wrap around or a run hang.
+pub const MAX_DRAM_CLOCKS: u64 = 1 << 16;
+
+/// The DRAM data-rate range in MT/s: 100 (below DDR's slowest bin, 200) to 100 000 (twice
+/// GDDR7's). It fixes the clock period `t_ck_ps`.
+pub const DRAM_DATA_RATE_MTS: RangeInclusive<u32> = 100..=100_000;
+
+/// Most DRAM channels: 64 (four HBM3 stacks of 16).
+pub const MAX_DRAM_CHANNELS: u32 = 64;
+
+/// Most banks per DRAM channel: 64 (DDR5 has 32, HBM3 48).
+pub const MAX_DRAM_BANKS: u32 = 64;
+
+/// Most entries of a DRAM channel's read or write queue.
+pub const MAX_DRAM_QUEUE: u32 = 1024;
+
+/// Most cores of a GSCore-style baseline (`gscore.core_counts`): 64, as many sorting cores as
+/// the engine may have (`engine.sort_cores`).
+pub const MAX_GSCORE_CORES: u32 = 64;
+
+/// The largest byte size of one record: a Gaussian's geometry or SH coefficients, a feature
+/// entry, a pixel, a GSCore bitmap, a GPU key, value or per-Gaussian record (4 KiB; the largest
+/// real one, degree-3 FP32 SH, is 192 bytes).
+pub const MAX_RECORD_BYTES: u32 = 4096;
+
+/// The largest initiation interval of a unit, in cycles per item, assumed (config
+/// `preprocess`, `raster_assumed`) or measured (`latency.json`): 1024 (the RTL's are 1 to 4).
+pub const MAX_UNIT_II: f64 = 1024.0;
+
+/// The largest cycle count of a unit's timing, assumed or measured: a pipeline latency, a fixed
+/// overhead, one measured command (`latency.json`): 2^24 (the RTL's longest measured command
+/// takes a few thousand cycles). Larger values make runs hang.
+pub const MAX_UNIT_CYCLES: u64 = 1 << 24;
+
+/// Checks that `v` (named `what`) is finite and in `min..=max` (`min` excluded when
+/// `positive`).
+fn check_f64(v: f64, what: &str, positive: bool, min: f64, max: f64) -> Result<(), String> {
+    let low_ok = if positive { v > min } else { v >= min };
+    if low_ok && v <= max {
+        Ok(())
+    } else {
+        let low = if positive { format!("above {min}") } else { format!("at least {min}") };
+        Err(format!("{what} = {v}: must be {low} and at most {max}"))
+    }
+}
+
+/// Checks that `v` (named `what`) is in `range`.
+fn check_range<T: PartialOrd + std::fmt::Display>(
+    v: T,
+    what: &str,
+    range: RangeInclusive<T>,
+) -> Result<(), String> {
+    if range.contains(&v) {
+        Ok(())
+    } else {
+        Err(format!("{what} = {v}: outside {}..={}", range.start(), range.end()))
+    }
+}
+
+/// Checks a unit's assumed or measured initiation interval `ii` (named `what`): positive (when
+/// `positive`, else at least 0) and at most [`MAX_UNIT_II`].
+pub fn check_unit_ii(ii: f64, what: &str, positive: bool) -> Result<(), String> {
+    check_f64(ii, what, positive, 0.0, MAX_UNIT_II)
+}
+
+/// Checks a unit's assumed or measured cycle count `cycles` (named `what`): at most
+/// [`MAX_UNIT_CYCLES`].
+pub fn check_unit_cycles(cycles: f64, what: &str) -> Result<(), String> {
+    check_f64(cycles, what, false, 0.0, MAX_UNIT_CYCLES as f64)
+}
 
 /// The whole model configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -320,6 +400,34 @@ pub struct RasterTiming {
     pub window: u64,
 }
 
+impl RasterTiming {
+    /// Checks every field (named `section.field`): the per-entry cycles are finite, at least 0
+    /// (`itu_ii`, `scu_cycles_per_pair` above 0) and at most [`MAX_UNIT_II`]; the cycle counts
+    /// at most [`MAX_UNIT_CYCLES`]; the feature buffer at most 2^20 entries and the window at
+    /// most the engine's [`neo_golden::engine::MAX_RASTER_WINDOW`].
+    pub fn check(&self, section: &str) -> Result<(), String> {
+        let at = |f: &str| format!("{section}.{f}");
+        check_unit_ii(self.itu_ii, &at("itu_ii"), true)?;
+        check_unit_ii(self.scu_cycles_per_pair, &at("scu_cycles_per_pair"), true)?;
+        check_unit_ii(self.scu_drain_ii, &at("scu_drain_ii"), false)?;
+        check_unit_ii(self.load_cycles_per_entry, &at("load_cycles_per_entry"), false)?;
+        check_unit_ii(self.write_back_cycles_per_entry, &at("write_back_cycles_per_entry"), false)?;
+        for (v, f) in [
+            (self.itu_latency as f64, "itu_latency"),
+            (self.scu_latency as f64, "scu_latency"),
+            (self.tile_overhead as f64, "tile_overhead"),
+            (self.pixel_write_cycles as f64, "pixel_write_cycles"),
+            (self.write_back_overlap, "write_back_overlap"),
+            (self.segment_overhead, "segment_overhead"),
+        ] {
+            check_unit_cycles(v, &at(f))?;
+        }
+        check_range(self.feature_buffer, &at("feature_buffer"), 0..=1 << 20)?;
+        check_range(self.window, &at("window"), 0..=neo_golden::engine::MAX_RASTER_WINDOW as u64)?;
+        Ok(())
+    }
+}
+
 impl Default for RasterTiming {
     fn default() -> Self {
         RasterTiming {
@@ -565,19 +673,48 @@ impl DramConfig {
         self.channels as f64 * self.channel_bits as f64 / 8.0 * self.data_rate_mts as f64 * 1e6
     }
 
-    /// Checks the organisation and that a request is one burst of `n_bl` clocks.
+    /// Every timing parameter (`n_*`) by name.
+    fn timings(&self) -> [(u64, &'static str); 19] {
+        [
+            (self.n_cl, "n_cl"),
+            (self.n_dqsck, "n_dqsck"),
+            (self.n_cwl, "n_cwl"),
+            (self.n_rcd, "n_rcd"),
+            (self.n_rp, "n_rp"),
+            (self.n_ras, "n_ras"),
+            (self.n_rc, "n_rc"),
+            (self.n_rtp, "n_rtp"),
+            (self.n_wtr, "n_wtr"),
+            (self.n_wr, "n_wr"),
+            (self.n_rrd, "n_rrd"),
+            (self.n_faw, "n_faw"),
+            (self.n_ccd, "n_ccd"),
+            (self.n_bl, "n_bl"),
+            (self.n_rtrs, "n_rtrs"),
+            (self.n_refi, "n_refi"),
+            (self.n_rfc, "n_rfc"),
+            (self.n_rpab, "n_rpab"),
+            (self.n_ppd, "n_ppd"),
+        ]
+    }
+
+    /// Checks the organisation (powers of two, at most [`MAX_DRAM_CHANNELS`] channels and
+    /// [`MAX_DRAM_BANKS`] banks), the data rate ([`DRAM_DATA_RATE_MTS`]), that a request is one
+    /// burst of `n_bl` clocks, every timing parameter against [`MAX_DRAM_CLOCKS`], that a
+    /// refresh interval leaves room for a row cycle, and the queues (at most
+    /// [`MAX_DRAM_QUEUE`] entries; a write queue whose low watermark is not 0).
     pub fn check(&self) -> Result<(), String> {
-        let pow2 = |v: u32, what: &str| {
-            if v == 0 || !v.is_power_of_two() {
-                Err(format!("dram.{what} = {v}: must be a power of two"))
+        let pow2 = |v: u32, what: &str, max: u32| {
+            if v == 0 || !v.is_power_of_two() || v > max {
+                Err(format!("dram.{what} = {v}: must be a power of two of at most {max}"))
             } else {
                 Ok(())
             }
         };
-        pow2(self.channels, "channels")?;
-        pow2(self.banks, "banks")?;
-        pow2(self.line_bytes, "line_bytes")?;
-        pow2(self.row_bytes, "row_bytes")?;
+        pow2(self.channels, "channels", MAX_DRAM_CHANNELS)?;
+        pow2(self.banks, "banks", MAX_DRAM_BANKS)?;
+        pow2(self.line_bytes, "line_bytes", u32::MAX)?;
+        pow2(self.row_bytes, "row_bytes", u32::MAX)?;
         if self.row_bytes < self.line_bytes {
             return Err("dram.row_bytes must be at least dram.line_bytes".into());
         }
@@ -590,7 +727,23 @@ impl DramConfig {
         if self.channel_bits == 0 || self.data_rate_mts == 0 || self.t_ck_ps == 0 {
             return Err("dram.channel_bits, data_rate_mts and t_ck_ps must be positive".into());
         }
-        let beats = self.line_bytes as u64 * 8 / self.channel_bits as u64;
+        check_range(self.data_rate_mts, "dram.data_rate_mts", DRAM_DATA_RATE_MTS)?;
+        for (v, what) in self.timings() {
+            if v > MAX_DRAM_CLOCKS {
+                return Err(format!("dram.{what} = {v}: at most {MAX_DRAM_CLOCKS} clocks"));
+            }
+        }
+        if self.n_bl == 0 {
+            return Err("dram.n_bl = 0: a request takes at least one clock of the data bus".into());
+        }
+        let line_bits = self.line_bytes as u64 * 8;
+        if !line_bits.is_multiple_of(self.channel_bits as u64) {
+            return Err(format!(
+                "dram: a {}-byte request is not a whole number of beats on a {}-bit channel",
+                self.line_bytes, self.channel_bits
+            ));
+        }
+        let beats = line_bits / self.channel_bits as u64;
         if beats != 2 * self.n_bl {
             return Err(format!(
                 "dram: a {}-byte request is {beats} beats on a {}-bit channel, but n_bl = {} clocks ({} beats)",
@@ -613,11 +766,44 @@ impl DramConfig {
                 self.n_ccd, self.n_bl
             ));
         }
-        if self.read_queue > 1024 {
-            return Err(format!("dram.read_queue = {}: at most 1024 entries", self.read_queue));
+        // The standard's order of the row timings (every speed bin keeps it): a row's column
+        // command may issue before it may be closed (tRCD <= tRAS; else another row's precharge
+        // closes it first, forever), a row cycle holds its active time (tRAS <= tRC), and a
+        // precharge-to-precharge gap is within a precharge (tPPD <= tRP).
+        for (a, an, b, bn) in [
+            (self.n_rcd, "n_rcd", self.n_ras, "n_ras"),
+            (self.n_ras, "n_ras", self.n_rc, "n_rc"),
+            (self.n_ppd, "n_ppd", self.n_rp, "n_rp"),
+        ] {
+            if a > b {
+                return Err(format!("dram.{an} = {a} > {bn} = {b}: must be at most dram.{bn}"));
+            }
         }
-        if self.write_queue == 0 {
-            return Err("dram.write_queue must be at least 1".into());
+        // Every refresh interval must leave room, after the refresh (all-bank precharge, then
+        // tRFC), for an activate (the longest activate-to-activate spacing) and its column
+        // command (tRCD): otherwise refreshes close every row before it is used and no access is
+        // ever served.
+        let busy = self.n_rpab + self.n_rfc + self.n_rc.max(self.n_rrd).max(self.n_faw) + self.n_rcd;
+        if self.n_refi != 0 && self.n_refi <= busy {
+            return Err(format!(
+                "dram.n_refi = {}: the refresh interval must exceed n_rpab + n_rfc + max(n_rc, n_rrd, n_faw) \
+                 + n_rcd = {busy} (a refresh, an activate and its column command), or be 0 (no refresh)",
+                self.n_refi
+            ));
+        }
+        if self.read_queue > MAX_DRAM_QUEUE {
+            return Err(format!("dram.read_queue = {}: at most {MAX_DRAM_QUEUE} entries", self.read_queue));
+        }
+        if self.write_queue > MAX_DRAM_QUEUE {
+            return Err(format!("dram.write_queue = {}: at most {MAX_DRAM_QUEUE} entries", self.write_queue));
+        }
+        if crate::dram::write_watermarks(self.write_queue).1 == 0 {
+            let least = (1..).find(|&q| crate::dram::write_watermarks(q).1 > 0).unwrap_or(u32::MAX);
+            return Err(format!(
+                "dram.write_queue = {}: at least {least} entries (write mode ends only when fewer than \
+                 int(0.2 x write_queue) writes wait, which must not be 0)",
+                self.write_queue
+            ));
         }
         Ok(())
     }
@@ -627,8 +813,11 @@ impl SimConfig {
     /// Reads a JSON configuration (missing fields keep their defaults).
     pub fn from_file(path: &Path) -> InputResult<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| InputError::new(path, e.to_string()))?;
-        let cfg: SimConfig = serde_json::from_str(&text)
-            .map_err(|e| InputError::new(path, format!("bad configuration: {e}")))?;
+        let bad = |e: String| InputError::new(path, format!("bad configuration: {e}"));
+        let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        let default = serde_json::to_value(SimConfig::default()).expect("a SimConfig always serialises");
+        check_shape(&value, &default).map_err(bad)?;
+        let cfg: SimConfig = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         cfg.check().map_err(|e| InputError::new(path, e))?;
         Ok(cfg)
     }
@@ -643,11 +832,20 @@ impl SimConfig {
         1e6 / self.clock_mhz
     }
 
-    /// Checks counts and sizes against each other.
+    /// Checks counts and sizes against each other and every value against its range: the clock
+    /// ([`CLOCK_MHZ`]), the DRAM ([`DramConfig::check`]), the engine, the GSCore core counts
+    /// (1..=[`MAX_GSCORE_CORES`]), the byte sizes (1..=[`MAX_RECORD_BYTES`]), the GPU's
+    /// rates and sizes, and the assumed unit timings ([`check_unit_ii`],
+    /// [`check_unit_cycles`]).
     pub fn check(&self) -> Result<(), String> {
         self.dram.check()?;
-        if !(self.clock_mhz > 0.0 && self.clock_mhz.is_finite()) {
-            return Err(format!("clock_mhz = {}: must be positive", self.clock_mhz));
+        if !(self.clock_mhz.is_finite() && CLOCK_MHZ.contains(&self.clock_mhz)) {
+            return Err(format!(
+                "clock_mhz = {}: must be positive, in {}..={} MHz",
+                self.clock_mhz,
+                CLOCK_MHZ.start(),
+                CLOCK_MHZ.end()
+            ));
         }
         let n = &self.neo;
         for (v, what) in [
@@ -663,18 +861,31 @@ impl SimConfig {
                 return Err(format!("{what} must be at least 1"));
             }
         }
+        // Half the raster buffer holds the feature prefetch: at least one line.
+        let least_raster_buffer = 2 * self.dram.line_bytes as u64;
+        if n.raster_buffer_bytes < least_raster_buffer {
+            return Err(format!(
+                "neo.raster_buffer_bytes = {}: at least two dram.line_bytes ({least_raster_buffer}; half of \
+                 it holds the feature prefetch)",
+                n.raster_buffer_bytes
+            ));
+        }
         self.engine.validate().map_err(|e| format!("engine: {}", e.0))?;
-        if self.gscore.core_counts.contains(&0) {
-            return Err("gscore.core_counts must be positive".into());
+        for &c in &self.gscore.core_counts {
+            check_range(c, "gscore.core_counts: a count", 1..=MAX_GSCORE_CORES)?;
         }
-        if self.gscore.approx_entries_per_cycle.is_nan() || self.gscore.approx_entries_per_cycle <= 0.0 {
-            return Err("gscore.approx_entries_per_cycle must be positive".into());
-        }
+        let g = &self.gscore;
+        check_f64(
+            g.approx_entries_per_cycle,
+            "gscore.approx_entries_per_cycle",
+            true,
+            1.0 / MAX_UNIT_II,
+            MAX_UNIT_II,
+        )?;
+        check_unit_cycles(g.approx_latency as f64, "gscore.approx_latency")?;
         let g = &self.gpu;
         for (v, what) in [
             (g.peak_gbs, "gpu.peak_gbs"),
-            (g.stream_efficiency, "gpu.stream_efficiency"),
-            (g.gather_efficiency, "gpu.gather_efficiency"),
             (g.raster_evals_per_s, "gpu.raster_evals_per_s"),
             (g.preprocess_per_s, "gpu.preprocess_per_s"),
         ] {
@@ -682,23 +893,37 @@ impl SimConfig {
                 return Err(format!("{what} = {v}: must be positive"));
             }
         }
-        if g.tile == 0 || g.radix_bits == 0 {
-            return Err("gpu.tile and gpu.radix_bits must be positive".into());
+        check_f64(g.stream_efficiency, "gpu.stream_efficiency", true, 0.0, 1.0)?;
+        check_f64(g.gather_efficiency, "gpu.gather_efficiency", true, 0.0, 1.0)?;
+        // One second per kernel launch is already far beyond any GPU's.
+        check_f64(g.kernel_overhead_us, "gpu.kernel_overhead_us", false, 0.0, 1e6)?;
+        // A CUDA block has at most 1024 threads, one per pixel of the tile.
+        check_range(g.tile, "gpu.tile", 1..=32)?;
+        // 2^16 buckets per pass is the largest histogram a GPU radix sort keeps on chip.
+        check_range(g.radix_bits, "gpu.radix_bits", 1..=16)?;
+        let s = &self.sizes;
+        for (v, what) in [
+            (Some(g.key_bytes), "gpu.key_bytes"),
+            (Some(g.value_bytes), "gpu.value_bytes"),
+            (Some(g.record_bytes), "gpu.record_bytes"),
+            (Some(s.pixel_bytes), "sizes.pixel_bytes"),
+            (s.gaussian_geometry_bytes, "sizes.gaussian_geometry_bytes"),
+            (s.gaussian_sh_bytes, "sizes.gaussian_sh_bytes"),
+            (s.feature_entry_bytes, "sizes.feature_entry_bytes"),
+        ] {
+            if let Some(v) = v {
+                check_range(v, what, 1..=MAX_RECORD_BYTES)?;
+            }
         }
-        let r = &self.raster_assumed;
-        if !(r.itu_ii > 0.0 && r.scu_cycles_per_pair > 0.0) {
-            return Err("raster_assumed.itu_ii and scu_cycles_per_pair must be positive".into());
-        }
+        check_range(self.gscore.bitmap_bytes, "gscore.bitmap_bytes", 0..=MAX_RECORD_BYTES)?;
+        self.raster_assumed.check("raster_assumed")?;
         let pp = &self.preprocess;
-        if !(pp.projection_ii > 0.0 && pp.color_ii > 0.0 && pp.duplication_ii > 0.0) {
-            return Err("preprocess.*_ii must be positive".into());
-        }
-        if self.sizes.gaussian_geometry_bytes == Some(0) || self.sizes.gaussian_sh_bytes == Some(0) {
-            return Err("sizes.gaussian_*_bytes = 0: must be positive (or absent: the baked format's)".into());
-        }
-        if self.sizes.feature_entry_bytes == Some(0) {
-            return Err("sizes.feature_entry_bytes = 0: must be positive (or absent: golden's format)".into());
-        }
+        check_unit_ii(pp.projection_ii, "preprocess.projection_ii", true)?;
+        check_unit_ii(pp.color_ii, "preprocess.color_ii", true)?;
+        check_unit_ii(pp.duplication_ii, "preprocess.duplication_ii", true)?;
+        check_unit_cycles(pp.latency as f64, "preprocess.latency")?;
+        neo_golden::pipeline::check_passes(self.pipeline.dps_passes)
+            .map_err(|e| format!("pipeline.dps_passes: {e}"))?;
         Ok(())
     }
 
@@ -772,5 +997,102 @@ mod tests {
         std::fs::write(&p, "{\"clock_mhz\": -1}").unwrap();
         let e = SimConfig::from_file(&p).unwrap_err().to_string();
         assert!(e.contains("c.json") && e.contains("clock_mhz"), "{e}");
+    }
+
+    /// Values that hang, wrap, abort or give absurd results are refused naming the file and
+    /// the field: DRAM queues, refresh, timings, clocks, organisation and bursts; GSCore core
+    /// counts; byte sizes; GPU rates and sizes; assumed unit timings.
+    #[test]
+    fn nonsense_values_are_refused_naming_the_file_and_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("c.json");
+        let load = |text: &str| {
+            std::fs::write(&p, text).unwrap();
+            SimConfig::from_file(&p)
+        };
+        for (text, field) in [
+            (r#"{"dram":{"write_queue":4}}"#, "dram.write_queue = 4"),
+            (r#"{"dram":{"write_queue":1}}"#, "dram.write_queue = 1"),
+            (r#"{"dram":{"write_queue":4294967295}}"#, "dram.write_queue"),
+            (r#"{"dram":{"n_refi":288}}"#, "dram.n_refi = 288"),
+            (r#"{"dram":{"n_refi":1}}"#, "dram.n_refi = 1"),
+            (r#"{"dram":{"n_cl":1000000000000}}"#, "dram.n_cl"),
+            (r#"{"dram":{"n_cl":18446744073709551615}}"#, "dram.n_cl"),
+            (r#"{"dram":{"n_rcd":18446744073709551615}}"#, "dram.n_rcd"),
+            (r#"{"dram":{"n_rcd":2000}}"#, "dram.n_rcd = 2000 > n_ras"),
+            (r#"{"dram":{"n_ppd":40000}}"#, "dram.n_ppd"),
+            (r#"{"dram":{"data_rate_mts":4000000,"t_ck_ps":1}}"#, "dram.data_rate_mts"),
+            (r#"{"dram":{"banks":2147483648}}"#, "dram.banks"),
+            (r#"{"dram":{"channels":1073741824}}"#, "dram.channels"),
+            (r#"{"dram":{"line_bytes":1,"channel_bits":32,"n_bl":0,"n_ccd":0}}"#, "dram.n_bl = 0"),
+            (r#"{"dram":{"line_bytes":2,"channel_bits":32,"n_bl":1,"n_ccd":0}}"#, "whole number of beats"),
+            (r#"{"clock_mhz":1e-300}"#, "clock_mhz"),
+            (r#"{"clock_mhz":1e308}"#, "clock_mhz"),
+            (r#"{"gscore":{"core_counts":[4294967295]}}"#, "gscore.core_counts"),
+            (r#"{"gscore":{"bitmap_bytes":4294967295}}"#, "gscore.bitmap_bytes"),
+            (r#"{"sizes":{"gaussian_geometry_bytes":4294967295}}"#, "sizes.gaussian_geometry_bytes"),
+            (r#"{"sizes":{"gaussian_sh_bytes":4294967295}}"#, "sizes.gaussian_sh_bytes"),
+            (r#"{"sizes":{"feature_entry_bytes":4294967295}}"#, "sizes.feature_entry_bytes"),
+            (r#"{"sizes":{"pixel_bytes":0}}"#, "sizes.pixel_bytes"),
+            (r#"{"neo":{"raster_buffer_bytes":0}}"#, "neo.raster_buffer_bytes"),
+            (r#"{"gpu":{"kernel_overhead_us":-1e9}}"#, "gpu.kernel_overhead_us"),
+            (r#"{"gpu":{"stream_efficiency":100}}"#, "gpu.stream_efficiency"),
+            (r#"{"gpu":{"key_bytes":0}}"#, "gpu.key_bytes"),
+            (r#"{"gpu":{"value_bytes":0}}"#, "gpu.value_bytes"),
+            (r#"{"gpu":{"record_bytes":0}}"#, "gpu.record_bytes"),
+            (r#"{"gpu":{"radix_bits":4294967295}}"#, "gpu.radix_bits"),
+            (r#"{"gpu":{"tile":4294967295}}"#, "gpu.tile"),
+            (r#"{"preprocess":{"projection_ii":1e308}}"#, "preprocess.projection_ii"),
+            (r#"{"preprocess":{"latency":18446744073709551615}}"#, "preprocess.latency"),
+            (r#"{"raster_assumed":{"itu_ii":1e308}}"#, "raster_assumed.itu_ii"),
+            (r#"{"raster_assumed":{"load_cycles_per_entry":-100}}"#, "raster_assumed.load_cycles_per_entry"),
+            (r#"{"raster_assumed":{"scu_drain_ii":-5}}"#, "raster_assumed.scu_drain_ii"),
+            (r#"{"raster_assumed":{"segment_overhead":-1e9}}"#, "raster_assumed.segment_overhead"),
+        ] {
+            let e = load(text).unwrap_err().to_string();
+            assert!(e.contains("c.json") && e.contains(field), "{text}: {e}");
+        }
+        // The nearest sound values pass.
+        for text in [
+            r#"{"dram":{"write_queue":5}}"#,
+            r#"{"dram":{"write_queue":1024}}"#,
+            r#"{"dram":{"n_refi":0}}"#,
+            r#"{"dram":{"banks":64,"channels":64}}"#,
+            r#"{"gscore":{"core_counts":[1,64]}}"#,
+            r#"{"clock_mhz":1}"#,
+            r#"{"gpu":{"stream_efficiency":1}}"#,
+        ] {
+            load(text).unwrap_or_else(|e| panic!("{text}: {e}"));
+        }
+    }
+
+    /// serde reads an array as a struct field by field: `[500]` was a 500 MHz clock and
+    /// `{"dram": ["x", 2]}` a DRAM named `x` of 2 channels. Both, and `[]`, are refused.
+    #[test]
+    fn arrays_are_not_read_as_sections() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("C.json");
+        for (text, want) in [
+            ("[500]", "C.json: bad configuration: expected an object, found an array"),
+            ("[]", "expected an object, found an array"),
+            (r#"{"dram":["x",2]}"#, "C.json: bad configuration: dram: expected an object, found an array"),
+            (r#"{"engine":[4]}"#, "engine: expected an object, found an array"),
+        ] {
+            std::fs::write(&p, text).unwrap();
+            let e = SimConfig::from_file(&p).unwrap_err().to_string();
+            assert!(e.contains(want), "{text}: {e}");
+        }
+    }
+
+    /// The default configuration passes every bound, and its assumed raster timing is the one
+    /// the latency reader falls back to, so using `raster_assumed` changes no default result.
+    #[test]
+    fn the_default_passes_the_bounds_and_assumes_the_default_raster_timing() {
+        let c = SimConfig::default();
+        c.check().unwrap();
+        assert_eq!(c.raster_assumed, RasterTiming::default());
+        for (v, what) in c.dram.timings() {
+            assert!(v <= MAX_DRAM_CLOCKS, "{what}");
+        }
     }
 }

@@ -657,6 +657,15 @@ fn ceil_div(t: u64, d: u64, inv: u64) -> u64 {
     q + (r != 0) as u64
 }
 
+/// The write-mode watermarks `(high, low)` of a `write_queue`-entry write queue (Ramulator's
+/// `int(0.8 * size)` and `int(0.2 * size)`): write mode starts above `high` waiting writes and
+/// ends below `low`, so a low watermark of 0 never ends it ([`DramConfig::check`] refuses such
+/// queues).
+pub fn write_watermarks(write_queue: u32) -> (usize, usize) {
+    let wq = write_queue as f64;
+    ((0.8 * wq) as usize, (0.2 * wq) as usize)
+}
+
 impl Dram {
     /// The model of `cfg` (which must pass [`DramConfig::check`]).
     pub fn new(cfg: &DramConfig) -> Self {
@@ -688,7 +697,7 @@ impl Dram {
                 ..Channel::default()
             })
             .collect();
-        let wq = cfg.write_queue as f64;
+        let (hi, lo) = write_watermarks(cfg.write_queue);
         Dram {
             line_shift: cfg.line_bytes.trailing_zeros(),
             ch_bits: cfg.channels.trailing_zeros(),
@@ -700,9 +709,8 @@ impl Dram {
             ck_inv: u64::MAX / cfg.t_ck_ps.max(1),
             t,
             channels,
-            // Ramulator: int(0.8 * size) and int(0.2 * size).
-            hi: (0.8 * wq) as usize,
-            lo: (0.2 * wq) as usize,
+            hi,
+            lo,
             window: (cfg.read_queue as usize).max(1),
             cap: cfg.bypass_cap,
             arrivals: Vec::new(),

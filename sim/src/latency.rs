@@ -34,7 +34,7 @@
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-use crate::config::RasterTiming;
+use crate::config::{check_unit_cycles, check_unit_ii, RasterTiming};
 use neo_golden::engine::EngineConfig;
 use neo_golden::error::{InputError, InputResult};
 use neo_golden::formats::latency::{self as latency_file, LatencyReport};
@@ -237,6 +237,13 @@ pub struct Latency {
     pub raster_source: RasterSource,
     /// The preprocessing units measured so far.
     pub preprocess: PreprocessMeasured,
+    /// The measured SCU (`units.neo_scu`), refitted over other assumed values by
+    /// [`Latency::raster_over`].
+    #[serde(skip)]
+    scu: Option<latency_file::ScuUnit>,
+    /// The measured raster section (`raster`), as `scu`.
+    #[serde(skip)]
+    raster_measured: Option<latency_file::Raster>,
 }
 
 fn chunk_points(points: &[latency_file::ChunkPoint], key: &str) -> Result<Vec<ChunkPoint>, String> {
@@ -289,6 +296,12 @@ impl Latency {
     /// type (golden's [`LatencyReport`]), then what the model needs of the values.
     pub fn from_json_str(text: &str, path: &Path) -> InputResult<Self> {
         let report = LatencyReport::from_json_str(text, path)?;
+        // serde reads an array as a struct, field by field: the document must have the shape of
+        // the report it was read as.
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| InputError::new(path, format!("not JSON: {e}")))?;
+        let shape = serde_json::to_value(&report).map_err(|e| InputError::new(path, e.to_string()))?;
+        neo_golden::json_shape::check_shape(&value, &shape).map_err(|e| InputError::new(path, e))?;
         Self::from_report(&report, path).map_err(|e| InputError::new(path, e))
     }
 
@@ -300,7 +313,9 @@ impl Latency {
         if r.units.neo_msu.ii == 0 {
             return Err("`units.neo_msu.ii` must be positive".into());
         }
-        let (raster, raster_source) = raster_timing(r)?;
+        check_measured_bounds(r)?;
+        let (raster, raster_source) =
+            raster_timing(r.units.neo_scu.as_ref(), r.raster.as_ref(), &RasterTiming::default())?;
         let sc = &r.sort_core;
         Ok(Latency {
             source: path.to_path_buf(),
@@ -315,7 +330,18 @@ impl Latency {
             raster,
             raster_source,
             preprocess: PreprocessMeasured::from_report(r)?,
+            scu: r.units.neo_scu,
+            raster_measured: r.raster.clone(),
         })
+    }
+
+    /// The raster timing over `assumed` (config `raster_assumed`): the measured fields replace
+    /// its values, the raster core's constants are fitted over it; over the default assumed
+    /// values this is [`Latency::raster`].
+    pub fn raster_over(&self, assumed: &RasterTiming) -> Result<RasterTiming, String> {
+        raster_timing(self.scu.as_ref(), self.raster_measured.as_ref(), assumed)
+            .map(|(t, _)| t)
+            .map_err(|e| format!("{}: {e}", self.source.display()))
     }
 
     /// Refuses to time `engine` with these measurements when they were made on another
@@ -467,12 +493,64 @@ impl Latency {
     }
 }
 
-/// Raster timing: the measured fields over the assumed defaults, the raster core's fitted with
-/// its formula ([`crate::arch::fit_raster_core`]).
-fn raster_timing(r: &LatencyReport) -> Result<(RasterTiming, RasterSource), String> {
-    let mut t = RasterTiming::default();
+/// The keys of `latency.json`'s measured sections (`units`, `sort_core`, `raster`,
+/// `preprocess`) holding an initiation interval: each at most [`crate::config::MAX_UNIT_II`] cycles per item.
+const II_KEYS: [&str; 4] = ["ii", "drain_ii", "cycles_per_candidate", "min_cycles_per_gaussian"];
+
+/// The keys of the measured sections holding a cycle count (a latency, a command's cycles, an
+/// interval, an overhead): each at most [`crate::config::MAX_UNIT_CYCLES`].
+const CYCLE_KEYS: [&str; 9] = [
+    "latency",
+    "cycles",
+    "interval",
+    "load_cycles",
+    "pixel_writes",
+    "command_overhead",
+    "settle",
+    "merge_gap",
+    "read_latency",
+];
+
+/// Checks every measured timing of `r` (by key, [`II_KEYS`] and [`CYCLE_KEYS`], wherever it
+/// is in the measured sections) against the bounds of any unit timing; the error names the
+/// field's path (`sort_core.merge[3].cycles`).
+fn check_measured_bounds(r: &LatencyReport) -> Result<(), String> {
+    fn walk(v: &serde_json::Value, path: &str) -> Result<(), String> {
+        match v {
+            serde_json::Value::Object(m) => m.iter().try_for_each(|(k, v)| {
+                let at = format!("{path}.{k}");
+                match v.as_f64() {
+                    Some(x) if II_KEYS.contains(&k.as_str()) => check_unit_ii(x, &format!("`{at}`"), false),
+                    Some(x) if CYCLE_KEYS.contains(&k.as_str()) => check_unit_cycles(x, &format!("`{at}`")),
+                    _ => walk(v, &at),
+                }
+            }),
+            serde_json::Value::Array(a) => {
+                a.iter().enumerate().try_for_each(|(i, v)| walk(v, &format!("{path}[{i}]")))
+            }
+            _ => Ok(()),
+        }
+    }
+    let v = serde_json::to_value(r).map_err(|e| e.to_string())?;
+    for section in ["units", "sort_core", "raster", "preprocess"] {
+        if let Some(s) = v.get(section) {
+            walk(s, section)?;
+        }
+    }
+    Ok(())
+}
+
+/// Raster timing: the measured fields (`scu`: `units.neo_scu`; `raster`) over the `assumed`
+/// values (config `raster_assumed`), the raster core's fitted with its formula
+/// ([`crate::arch::fit_raster_core`]).
+fn raster_timing(
+    scu: Option<&latency_file::ScuUnit>,
+    raster: Option<&latency_file::Raster>,
+    assumed: &RasterTiming,
+) -> Result<(RasterTiming, RasterSource), String> {
+    let mut t = assumed.clone();
     let mut measured: Vec<String> = Vec::new();
-    let itu = r.raster.as_ref().and_then(|x| x.itu);
+    let itu = raster.and_then(|x| x.itu);
     if let Some(itu) = itu {
         if !(itu.ii > 0.0 && itu.ii.is_finite()) {
             return Err(format!("`raster.itu.ii` = {}: must be positive", itu.ii));
@@ -481,7 +559,7 @@ fn raster_timing(r: &LatencyReport) -> Result<(RasterTiming, RasterSource), Stri
         t.itu_latency = itu.latency;
         measured.extend(["raster.itu.ii".into(), "raster.itu.latency".into()]);
     }
-    if let Some(scu) = r.units.neo_scu {
+    if let Some(scu) = scu {
         if scu.ii == 0 {
             return Err("`units.neo_scu.ii` must be positive".into());
         }
@@ -494,7 +572,7 @@ fn raster_timing(r: &LatencyReport) -> Result<(RasterTiming, RasterSource), Stri
             "units.neo_scu.latency".into(),
         ]);
     }
-    let core = r.raster.as_ref().and_then(|x| x.core.as_ref());
+    let core = raster.and_then(|x| x.core.as_ref());
     if let Some(core) = core {
         let itu = itu.ok_or("`raster.core` needs `raster.itu` (the subtiles per tile)")?;
         t = crate::arch::fit_raster_core(core, itu.subtiles_per_job, &t)
@@ -505,12 +583,12 @@ fn raster_timing(r: &LatencyReport) -> Result<(RasterTiming, RasterSource), Stri
             "raster.core.grid (fitted: tile_overhead, load_cycles_per_entry, segment_overhead)".into(),
         ]);
     }
-    if r.raster.is_some() && itu.is_none() && core.is_none() {
+    if raster.is_some() && itu.is_none() && core.is_none() {
         return Err("`raster` has neither `itu` nor `core` (see docs/cycle-model.md)".into());
     }
     let assumed: Vec<String> = [
         (itu.is_none(), &["itu_ii", "itu_latency"][..]),
-        (r.units.neo_scu.is_none(), &["scu_cycles_per_pair", "scu_drain_ii", "scu_latency"][..]),
+        (scu.is_none(), &["scu_cycles_per_pair", "scu_drain_ii", "scu_latency"][..]),
         (
             core.is_none(),
             &[
@@ -696,6 +774,76 @@ mod tests {
             RasterSource::Measured { assumed, .. } => assert!(assumed.is_empty(), "{assumed:?}"),
             other => panic!("{other:?}"),
         }
+    }
+
+    /// Measured timings beyond any unit's (1e15 or 2^64 - 1 cycles hung the model) are refused
+    /// naming the file and the field's path; so is an array in place of a section.
+    #[test]
+    fn absurd_measurements_and_arrays_are_refused_naming_the_field() {
+        let p = Path::new("lat.json");
+        let text = std::fs::read_to_string(project_file()).unwrap();
+        let bad = |f: &dyn Fn(&mut Value)| {
+            let mut v: Value = serde_json::from_str(&text).unwrap();
+            f(&mut v);
+            Latency::from_json_str(&v.to_string(), p).unwrap_err().to_string()
+        };
+        let big = 1_000_000_000_000_000u64;
+        for (want, f) in [
+            (
+                "`units.neo_scu.ii`",
+                &(|v: &mut Value| v["units"]["neo_scu"]["ii"] = u64::MAX.into()) as &dyn Fn(&mut Value),
+            ),
+            ("`units.neo_msu.ii`", &|v: &mut Value| v["units"]["neo_msu"]["ii"] = big.into()),
+            ("`raster.itu.ii`", &|v: &mut Value| v["raster"]["itu"]["ii"] = 1e15.into()),
+            ("`preprocess.projection.ii`", &|v: &mut Value| v["preprocess"]["projection"]["ii"] = big.into()),
+            ("`preprocess.color.latency`", &|v: &mut Value| v["preprocess"]["color"]["latency"] = big.into()),
+            ("`raster.core.pixel_writes`", &|v: &mut Value| v["raster"]["core"]["pixel_writes"] = big.into()),
+            ("`raster.core.grid[0].cycles`", &|v: &mut Value| {
+                v["raster"]["core"]["grid"][0]["cycles"] = big.into()
+            }),
+            ("`sort_core.conventional[2].cycles`", &|v: &mut Value| {
+                v["sort_core"]["conventional"][2]["cycles"] = u64::MAX.into()
+            }),
+            ("`sort_core.merge[3].interval`", &|v: &mut Value| {
+                v["sort_core"]["merge"][3]["interval"] = big.into()
+            }),
+            ("units.neo_msu: expected an object, found an array", &|v: &mut Value| {
+                v["units"]["neo_msu"] = serde_json::json!([1, 1, 1, 1, 1])
+            }),
+        ] {
+            let e = bad(f);
+            assert!(e.starts_with("lat.json: ") && e.contains(want), "{want}: {e}");
+        }
+        let mut v: Value = serde_json::from_str(&text).unwrap();
+        v["sort_core"]["merge"][3]["interval"] = (crate::config::MAX_UNIT_CYCLES).into();
+        Latency::from_json_str(&v.to_string(), p).expect("the bound itself is accepted");
+    }
+
+    /// Without measured raster figures the config's `raster_assumed` is the raster timing (it was
+    /// ignored: the reader started from the defaults); measured fields still replace it, and
+    /// over the default assumed values it is the reader's own.
+    #[test]
+    fn the_assumed_raster_timing_is_the_configs() {
+        let l = Latency::from_file(&project_file()).unwrap();
+        assert_eq!(l.raster_over(&RasterTiming::default()).unwrap(), l.raster);
+        let assumed = RasterTiming {
+            itu_ii: 1000.0,
+            scu_cycles_per_pair: 1000.0,
+            tile_overhead: 100_000,
+            ..RasterTiming::default()
+        };
+        let measured = l.raster_over(&assumed).unwrap();
+        assert_eq!(
+            (measured.itu_ii, measured.scu_cycles_per_pair),
+            (l.raster.itu_ii, l.raster.scu_cycles_per_pair)
+        );
+        let text = std::fs::read_to_string(project_file()).unwrap();
+        let mut v: Value = serde_json::from_str(&text).unwrap();
+        v.as_object_mut().unwrap().remove("raster");
+        v["units"].as_object_mut().unwrap().remove("neo_scu");
+        let l = Latency::from_json_str(&v.to_string(), Path::new("lat.json")).unwrap();
+        assert_eq!(l.raster_over(&assumed).unwrap(), assumed);
+        assert_eq!(l.raster_over(&RasterTiming::default()).unwrap(), RasterTiming::default());
     }
 
     proptest::proptest! {

@@ -252,8 +252,12 @@ impl EngineConfig {
     pub fn from_json_file(path: &Path) -> Result<EngineConfig, InputError> {
         let text =
             std::fs::read_to_string(path).map_err(|e| InputError::new(path, format!("cannot read: {e}")))?;
-        let cfg: EngineConfig = serde_json::from_str(&text)
-            .map_err(|e| InputError::new(path, format!("not a valid engine configuration: {e}")))?;
+        let bad = |e: String| InputError::new(path, format!("not a valid engine configuration: {e}"));
+        let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        let default =
+            serde_json::to_value(EngineConfig::default()).expect("a EngineConfig always serialises");
+        crate::json_shape::check_shape(&value, &default).map_err(bad)?;
+        let cfg: EngineConfig = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         cfg.validate().map_err(|e| InputError::new(path, e.0))?;
         Ok(cfg)
     }

@@ -169,7 +169,7 @@ impl<'a> Model<'a> {
         // half double-buffers the prefetch) when that is larger than the measured RTL's
         // (`raster.core.feature_buffer`); the RTL structure of the rest of the raster timing is
         // kept.
-        let mut raster = lat.raster.clone();
+        let mut raster = lat.raster_over(&cfg.raster_assumed)?;
         raster.window = cfg.engine.raster_window as u64;
         if raster.feature_buffer > 0 {
             raster.feature_buffer = raster.feature_buffer.max(cfg.neo.raster_buffer_bytes / 2 / fb.max(1));
