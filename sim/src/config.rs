@@ -41,8 +41,8 @@ pub const DRAM_DATA_RATE_MTS: RangeInclusive<u32> = 100..=100_000;
 /// Most DRAM channels: 64 (four HBM3 stacks of 16).
 pub const MAX_DRAM_CHANNELS: u32 = 64;
 
-/// Most banks per DRAM channel: 64 (DDR5 has 32, HBM3 48).
-pub const MAX_DRAM_BANKS: u32 = 64;
+/// Most banks per DRAM channel: 256 (DDR5 has 32; the DRAM model's stress tests use 128).
+pub const MAX_DRAM_BANKS: u32 = 256;
 
 /// Most entries of a DRAM channel's read or write queue.
 pub const MAX_DRAM_QUEUE: u32 = 1024;
@@ -1057,7 +1057,7 @@ mod tests {
             r#"{"dram":{"write_queue":5}}"#,
             r#"{"dram":{"write_queue":1024}}"#,
             r#"{"dram":{"n_refi":0}}"#,
-            r#"{"dram":{"banks":64,"channels":64}}"#,
+            r#"{"dram":{"banks":256,"channels":64}}"#,
             r#"{"gscore":{"core_counts":[1,64]}}"#,
             r#"{"clock_mhz":1}"#,
             r#"{"gpu":{"stream_efficiency":1}}"#,
