@@ -73,7 +73,17 @@ fn check_f64(v: f64, what: &str, positive: bool, min: f64, max: f64) -> Result<(
         Ok(())
     } else {
         let low = if positive { format!("above {min}") } else { format!("at least {min}") };
-        Err(format!("{what} = {v}: must be {low} and at most {max}"))
+        Err(format!("{what} = {}: must be {low} and at most {max}", readable(v)))
+    }
+}
+
+/// `v` as a person reads it: in exponent form when very large or very small (`1e300`, not its
+/// 301 digits).
+fn readable(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-6..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
@@ -842,7 +852,7 @@ impl SimConfig {
         if !(self.clock_mhz.is_finite() && CLOCK_MHZ.contains(&self.clock_mhz)) {
             return Err(format!(
                 "clock_mhz = {}: must be positive, in {}..={} MHz",
-                self.clock_mhz,
+                readable(self.clock_mhz),
                 CLOCK_MHZ.start(),
                 CLOCK_MHZ.end()
             ));
@@ -1064,6 +1074,9 @@ mod tests {
         ] {
             load(text).unwrap_or_else(|e| panic!("{text}: {e}"));
         }
+        // A huge or tiny value is echoed in exponent form, not as hundreds of digits.
+        let e = load(r#"{"clock_mhz":1e300}"#).unwrap_err().to_string();
+        assert!(e.contains("clock_mhz") && e.len() < 200, "{e}");
     }
 
     /// serde reads an array as a struct field by field: `[500]` was a 500 MHz clock and

@@ -276,9 +276,15 @@ impl ReportPlan {
             }
         }
         let (timeline_res, _, _) = parse_res(&spec.timeline_res)?;
-        let timeline = |strategy: &str| {
-            point(synthetic::DEFAULT_SCENE, traj, spec.frames, &spec.timeline_res, strategy, cfg)
-        };
+        if spec.timeline_sort.iter().any(|s| s.trim() == "neo") {
+            return Err(
+                "--timeline-sort: neo is in the timelines always; give the strategies compared with it"
+                    .into(),
+            );
+        }
+        // The timelines run on the main scene, the one Neo's timeline may be taken from.
+        let timeline =
+            |strategy: &str| point(&scenes[0], traj, spec.frames, &spec.timeline_res, strategy, cfg);
         let timelines = spec.timeline_sort.iter().map(|s| timeline(s)).collect::<Result<Vec<_>, _>>()?;
         let neo_timeline = timeline("neo")?;
         let sweep = match &spec.sweep {
@@ -555,6 +561,24 @@ mod tests {
         let plan = ReportPlan::new(sweep_spec(&[64, 256], &speeds, &[256]), &windowed).unwrap();
         assert_eq!(plan.sweep.len(), none.len());
         assert!(plan.sweep.iter().chain(&plan.headline).all(|p| p.raster_window == 256));
+    }
+
+    /// The timelines run on the main scene: the given one when the default scene is left out
+    /// (they ran on the default scene, while Neo's row could come from the given one's
+    /// throughput run, and the report named the given one); `neo` is not a compared strategy.
+    #[test]
+    fn timelines_run_on_the_main_scene() {
+        let given = "synthetic:outdoor?gaussians=2000&seed=1".to_string();
+        let mut s = spec();
+        s.default_scene = false;
+        s.scenes = vec![given.clone()];
+        let plan = ReportPlan::new(s.clone(), &SimConfig::default()).expect("plan");
+        assert!(plan.timelines.iter().chain([&plan.neo_timeline]).all(|p| p.scene == given));
+        let default = ReportPlan::new(spec(), &SimConfig::default()).expect("plan");
+        assert!(default.timelines.iter().all(|p| p.scene == synthetic::DEFAULT_SCENE));
+        s.timeline_sort.push("neo".into());
+        let e = ReportPlan::new(s, &SimConfig::default()).unwrap_err();
+        assert!(e.contains("--timeline-sort") && e.contains("neo"), "{e}");
     }
 
     #[test]
