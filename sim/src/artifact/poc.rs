@@ -176,6 +176,12 @@ pub fn parse_poc_trace(text: &str, path: &Path) -> Result<PocFrame, PocError> {
         if let Some(&t) = g[2..].iter().find(|&&t| t >= tiles) {
             return Err(lines.err(format!("tile {t} is outside the {tiles} tiles")));
         }
+        // A Gaussian is incoming in a tile once: a repeat would be counted as another entry.
+        let mut listed = g[2..].to_vec();
+        listed.sort_unstable();
+        if let Some(w) = listed.windows(2).find(|w| w[0] == w[1]) {
+            return Err(lines.err(format!("tile {} is listed twice", w[0])));
+        }
         frame.culled.push(g[0] == 1);
         frame.incoming_tiles.push(g[1] as u32);
         frame.incoming_list.extend(g[2..].iter().map(|&t| t as u32));
@@ -310,10 +316,11 @@ mod tests {
     #[test]
     fn errors_name_file_line_and_problem() {
         let good = small();
-        let cases: [(&str, &str, usize, &str); 6] = [
+        let cases: [(&str, &str, usize, &str); 7] = [
             ("32 16 16 8 256 4 2", "32 16 16 8 256 4 3", 1, "3 tiles"),
             ("1 0\n", "2 0\n", 3, "culled flag"),
             ("0 2 0 1", "0 2 0 9", 2, "tile 9"),
+            ("0 2 0 1", "0 2 1 1", 2, "tile 1 is listed twice"),
             ("1 1 2\n", "1 1 3\n", 6, "is not count 3"),
             ("\n0 1 0 0 0", "\n7 1 0 0 0", 8, "Gaussian id 7"),
             ("\n0 1 0 0 0", "\n0 1 0 x 0", 8, "unsigned integers"),
