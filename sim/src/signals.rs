@@ -115,7 +115,9 @@ pub fn samples(frames: &[&TileColumns], signal: Signal, lag: Lag) -> Vec<(f64, f
     samples_of(frames, signal, lag, Target::AbsError)
 }
 
-/// `(signal, target)` pairs of `signal` over a run's frames (in order).
+/// `(signal, target)` pairs of `signal` over a run's frames (in order). With [`Lag::Next`] a
+/// frame's write-back signal comes from the frame numbered just before it; a frame after a gap
+/// in the numbers (a `tiles.jsonl` of every K-th frame) has none.
 pub fn samples_of(frames: &[&TileColumns], signal: Signal, lag: Lag, target: Target) -> Vec<(f64, f64)> {
     let mut out = Vec::new();
     for (k, f) in frames.iter().enumerate() {
@@ -123,8 +125,8 @@ pub fn samples_of(frames: &[&TileColumns], signal: Signal, lag: Lag, target: Tar
             continue;
         }
         let src = match lag {
-            Lag::Next if signal.is_write_back() => match k.checked_sub(1) {
-                Some(p) if frames[p].current.len() == f.current.len() => frames[p],
+            Lag::Next if signal.is_write_back() => match k.checked_sub(1).map(|p| frames[p]) {
+                Some(p) if p.frame + 1 == f.frame && p.current.len() == f.current.len() => p,
                 _ => continue,
             },
             _ => f,
@@ -447,8 +449,8 @@ mod tests {
     #[test]
     fn samples_skip_shot_starts_empty_and_fresh_tiles_and_lag_the_write_back() {
         let f0 = cols(&[5, 5, 5], &[1, 2, 3], &[0, 0, 0], &[1, 1, 1]);
-        let f1 = cols(&[5, 0, 5], &[7, 8, 9], &[10, 20, 30], &[0, 0, 1]);
-        let f2 = cols(&[5, 5, 5], &[4, 5, 6], &[40, 50, 60], &[0, 0, 0]);
+        let f1 = TileColumns { frame: 1, ..cols(&[5, 0, 5], &[7, 8, 9], &[10, 20, 30], &[0, 0, 1]) };
+        let f2 = TileColumns { frame: 2, ..cols(&[5, 5, 5], &[4, 5, 6], &[40, 50, 60], &[0, 0, 0]) };
         let frames = [&f0, &f1, &f2];
         // Frame 0 starts the shot; in frame 1 tile 1 is empty and tile 2 fresh.
         assert_eq!(
@@ -469,5 +471,22 @@ mod tests {
         assert_eq!(s.reach_vs_error.len(), 4);
         assert!((s.get(Signal::WbReach).unwrap().next.unwrap() - 1.0).abs() < 1e-12);
         assert_eq!(SignalSummary::of(&[]), None);
+    }
+
+    /// The `next` lag pairs a frame only with the one numbered just before it (a file of frames
+    /// 0, 1, 1000 and 1001 paired 1000 with 1).
+    #[test]
+    fn the_next_lag_pairs_only_consecutive_frames() {
+        let frame = |n: usize, scratch: u8| TileColumns {
+            frame: n,
+            ..cols(&[5; 4], &[1, 2, 3, 4], &[1, 2, 3, 4], &[scratch; 4])
+        };
+        let frames = [frame(0, 1), frame(1, 0), frame(1000, 0), frame(1001, 0)];
+        let refs: Vec<&TileColumns> = frames.iter().collect();
+        // Same lag: every frame but the one sorted from scratch; next: 1 after 0 and 1001 after
+        // 1000, not 1000 after 1.
+        assert_eq!(samples(&refs, Signal::WbReach, Lag::Same).len(), 12);
+        assert_eq!(samples(&refs, Signal::WbReach, Lag::Next).len(), 8);
+        assert_eq!(samples(&refs[..2], Signal::WbReach, Lag::Next).len(), 4, "1 pairs with 0");
     }
 }
