@@ -4,7 +4,19 @@
 //! [`check_shape`] first: wherever the reference (the serialised default, or the serialised
 //! typed document) is an object, the input must be an object.
 
+use serde::de::DeserializeOwned;
+use serde::Serialize;
 use serde_json::Value;
+
+/// Parses `text` as a `T` whose shape is that of `default` (its serialised form, [`check_shape`]):
+/// the reader of a configuration whose absent fields keep their defaults. The typed parse reads
+/// the text itself, so its errors keep their line and column.
+pub fn parse_shaped<T: DeserializeOwned + Serialize>(text: &str, default: &T) -> Result<T, String> {
+    let value: Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    let reference = serde_json::to_value(default).map_err(|e| e.to_string())?;
+    check_shape(&value, &reference)?;
+    serde_json::from_str(text).map_err(|e| e.to_string())
+}
 
 /// Checks that `input` is an object wherever `reference` is one, recursing into the fields (and
 /// array elements, pairwise) both have. The error names the field path (`dram`,

@@ -21,7 +21,7 @@ use neo_golden::engine::pre::sh_record_words;
 use neo_golden::engine::EngineConfig;
 use neo_golden::error::{InputError, InputResult};
 use neo_golden::hwpre::ShPrecision;
-use neo_golden::json_shape::check_shape;
+use neo_golden::json_shape::parse_shaped;
 use neo_golden::pipeline::Preprocessing;
 
 /// The accelerator clock range in MHz: 1 MHz to 10 GHz. Slower clocks make a frame millions of
@@ -47,9 +47,9 @@ pub const MAX_DRAM_BANKS: u32 = 256;
 /// Most entries of a DRAM channel's read or write queue.
 pub const MAX_DRAM_QUEUE: u32 = 1024;
 
-/// Most cores of a GSCore-style baseline (`gscore.core_counts`): 64, as many sorting cores as
-/// the engine may have (`engine.sort_cores`).
-pub const MAX_GSCORE_CORES: u32 = 64;
+/// Most cores of a GSCore-style baseline (`gscore.core_counts`): as many sorting cores as the
+/// engine may have ([`neo_golden::engine::MAX_SORT_CORES`]).
+pub const MAX_GSCORE_CORES: u32 = neo_golden::engine::MAX_SORT_CORES as u32;
 
 /// The largest byte size of one record: a Gaussian's geometry or SH coefficients, a feature
 /// entry, a pixel, a GSCore bitmap, a GPU key, value or per-Gaussian record (4 KiB; the largest
@@ -823,11 +823,8 @@ impl SimConfig {
     /// Reads a JSON configuration (missing fields keep their defaults).
     pub fn from_file(path: &Path) -> InputResult<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| InputError::new(path, e.to_string()))?;
-        let bad = |e: String| InputError::new(path, format!("bad configuration: {e}"));
-        let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-        let default = serde_json::to_value(SimConfig::default()).expect("a SimConfig always serialises");
-        check_shape(&value, &default).map_err(bad)?;
-        let cfg: SimConfig = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        let cfg: SimConfig = parse_shaped(&text, &SimConfig::default())
+            .map_err(|e| InputError::new(path, format!("bad configuration: {e}")))?;
         cfg.check().map_err(|e| InputError::new(path, e))?;
         Ok(cfg)
     }
@@ -849,14 +846,7 @@ impl SimConfig {
     /// [`check_unit_cycles`]).
     pub fn check(&self) -> Result<(), String> {
         self.dram.check()?;
-        if !(self.clock_mhz.is_finite() && CLOCK_MHZ.contains(&self.clock_mhz)) {
-            return Err(format!(
-                "clock_mhz = {}: must be positive, in {}..={} MHz",
-                readable(self.clock_mhz),
-                CLOCK_MHZ.start(),
-                CLOCK_MHZ.end()
-            ));
-        }
+        check_f64(self.clock_mhz, "clock_mhz", false, *CLOCK_MHZ.start(), *CLOCK_MHZ.end())?;
         let n = &self.neo;
         for (v, what) in [
             (n.projection_units, "neo.projection_units"),

@@ -242,6 +242,9 @@ impl Default for EngineConfig {
 /// The AXI4 data width of the engine's ports: the raster bridge packs two 32-bit pixels a beat.
 pub const AXI_DATA_BITS: u32 = 64;
 
+/// The most Sorting Cores an engine may have (`sort_cores`).
+pub const MAX_SORT_CORES: usize = 64;
+
 /// A configuration the generator cannot honour.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("invalid engine configuration: {0}")]
@@ -252,12 +255,8 @@ impl EngineConfig {
     pub fn from_json_file(path: &Path) -> Result<EngineConfig, InputError> {
         let text =
             std::fs::read_to_string(path).map_err(|e| InputError::new(path, format!("cannot read: {e}")))?;
-        let bad = |e: String| InputError::new(path, format!("not a valid engine configuration: {e}"));
-        let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-        let default =
-            serde_json::to_value(EngineConfig::default()).expect("a EngineConfig always serialises");
-        crate::json_shape::check_shape(&value, &default).map_err(bad)?;
-        let cfg: EngineConfig = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        let cfg: EngineConfig = crate::json_shape::parse_shaped(&text, &EngineConfig::default())
+            .map_err(|e| InputError::new(path, format!("not a valid engine configuration: {e}")))?;
         cfg.validate().map_err(|e| InputError::new(path, e.0))?;
         Ok(cfg)
     }
@@ -408,8 +407,8 @@ impl EngineConfig {
     /// The engine's constraints: counts, the table region and the AXI4 ports.
     fn validate_engine(&self) -> Result<(), ConfigError> {
         let err = |s: String| Err(ConfigError(s));
-        if !(1..=64).contains(&self.sort_cores) {
-            return err(format!("sort_cores {} is outside 1..=64", self.sort_cores));
+        if !(1..=MAX_SORT_CORES).contains(&self.sort_cores) {
+            return err(format!("sort_cores {} is outside 1..={MAX_SORT_CORES}", self.sort_cores));
         }
         if !(1..=16).contains(&self.raster_cores) {
             return err(format!("raster_cores {} is outside 1..=16", self.raster_cores));
