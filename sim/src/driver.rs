@@ -475,7 +475,7 @@ impl<'s> InMaking<'s> {
             fw.golden_tiles = Some(out.tiles);
             if let Some((dir, which)) = &self.spec.trace {
                 if which.is_empty() || which.contains(&i) {
-                    let path = dir.join(format!("frame_{i:05}.poc.trace"));
+                    let path = dir.join(neo_golden::pipeline::trace::file_name(i));
                     let mut file = std::fs::File::create(&path)
                         .map_err(|err| DriverError::Io { path: path.clone(), err })?;
                     p.write_trace(&mut file).map_err(|err| DriverError::Io { path: path.clone(), err })?;

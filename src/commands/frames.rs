@@ -7,6 +7,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use neo_golden::formats::FeatureFormat;
+use neo_golden::pipeline::trace;
 use neo_golden::pipeline::{
     formats_for, run_trajectory, ConfigRecord, FrameOutput, Pipeline, PipelineConfig, PipelineError,
     Preprocessing, RunInfo, StatsFile, Strategy,
@@ -159,7 +160,7 @@ fn stale_outputs(out: &Path, o: &Outputs) -> Result<Vec<PathBuf>> {
     }
     let trace = out.join("trace");
     for name in files_in(&trace)? {
-        if frame_index(&name, ".poc.trace").is_some_and(|f| !o.traces(f)) {
+        if frame_index(&name, trace::FILE_SUFFIX).is_some_and(|f| !o.traces(f)) {
             stale.push(trace.join(name));
         }
     }
@@ -279,7 +280,7 @@ pub fn run(a: FramesArgs) -> Result<()> {
             out.image.write_png(a.out.join(format!("frame_{f:05}.png")))?;
         }
         if trace_all || a.trace_frames.contains(&f) {
-            let path = a.out.join("trace").join(format!("frame_{f:05}.poc.trace"));
+            let path = a.out.join("trace").join(trace::file_name(f));
             let mut file =
                 fs::File::create(&path).with_context(|| format!("{}: cannot create", path.display()))?;
             p.write_trace(&mut file).with_context(|| format!("{}: write failed", path.display()))?;

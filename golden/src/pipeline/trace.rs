@@ -28,6 +28,14 @@ use std::io::{self, Write};
 
 use crate::sort::SortEntry;
 
+/// The end of a trace file's name ([`file_name`]).
+pub const FILE_SUFFIX: &str = ".poc.trace";
+
+/// The file name of frame `frame`'s trace in a directory of traces: `frame_NNNNN.poc.trace`.
+pub fn file_name(frame: usize) -> String {
+    format!("frame_{frame:05}{FILE_SUFFIX}")
+}
+
 /// The header fields of a trace.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TraceHeader {
