@@ -5,7 +5,7 @@ use anyhow::{bail, Result};
 use clap::Args;
 use neo_golden::scene::LoadReport;
 use neo_golden::trajectory::parse_resolution;
-use neo_golden::trajectory::resolution::MAX_SIDE;
+use neo_golden::trajectory::resolution::{parse_side, MAX_SIDE};
 use neo_golden::trajectory::spec::MAX_FRAMES;
 use neo_golden::{camera::Camera, cameras_json, scene::Scene, source, synthetic, trajectory};
 use neo_sim::latency;
@@ -87,10 +87,7 @@ pub fn resolution(s: &str) -> Result<String, String> {
 /// An image side (`--width`, `--height`): an integer from 1 to [`MAX_SIDE`], the bound of
 /// `--res` and of cameras.json sizes.
 pub fn image_side(s: &str) -> Result<u32, String> {
-    match s.trim().parse::<u64>() {
-        Ok(n) if (1..=MAX_SIDE as u64).contains(&n) => Ok(n as u32),
-        _ => Err(format!("'{s}' is not an integer from 1 to {MAX_SIDE}")),
-    }
+    parse_side(s.trim()).map_err(|_| format!("'{s}' is not an integer from 1 to {MAX_SIDE}"))
 }
 
 /// The files a scene, camera or trajectory argument may name: the spec itself, the path after

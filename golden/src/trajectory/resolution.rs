@@ -16,13 +16,16 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     }
     let (w, h) =
         l.split_once('x').ok_or_else(|| format!("resolution '{s}': expected hd, fhd, qhd or WxH"))?;
-    let side = |v: &str, what: &str| -> Result<u32, String> {
-        match v.parse::<u32>() {
-            Ok(n) if (1..=MAX_SIDE).contains(&n) => Ok(n),
-            _ => Err(format!("resolution '{s}': {what} '{v}' is not an integer from 1 to {MAX_SIDE}")),
-        }
-    };
+    let side = |v: &str, what: &str| parse_side(v).map_err(|e| format!("resolution '{s}': {what} {e}"));
     Ok((side(w, "width")?, side(h, "height")?))
+}
+
+/// Parses one image side: an integer in `1..=`[`MAX_SIDE`]. The error names the value.
+pub fn parse_side(v: &str) -> Result<u32, String> {
+    match v.parse::<u32>() {
+        Ok(n) if (1..=MAX_SIDE).contains(&n) => Ok(n),
+        _ => Err(format!("'{v}' is not an integer from 1 to {MAX_SIDE}")),
+    }
 }
 
 #[cfg(test)]
