@@ -130,8 +130,8 @@ fn placed(all: &[Module], report: Option<&SynthReport>, ps: &[Placement], count:
             out.iter().position(|o| o.module.is_some() && o.module == n.module && o.params == n.params);
         match same {
             Some(i) => {
-                out[i].count += n.count;
-                names[i].push(n.label);
+                names[i].push(n.label.clone());
+                out[i].absorb(n);
             }
             None => {
                 names.push(vec![n.label.clone()]);
@@ -172,6 +172,15 @@ fn placed_each(all: &[Module], report: Option<&SynthReport>, ps: &[Placement], c
 }
 
 impl Node {
+    /// Adds a sibling instance of the same module and parameters to this row: its count and,
+    /// level by level, its subtree's counts (the two subtrees have the same shape).
+    fn absorb(&mut self, other: Node) {
+        self.count += other.count;
+        for (c, o) in self.children.iter_mut().zip(other.children) {
+            c.absorb(o);
+        }
+    }
+
     /// The module instances directly below (looking through generate loops).
     pub fn instances(&self) -> Vec<&Node> {
         let mut out = Vec::new();
@@ -388,6 +397,19 @@ mod tests {
             ("u_* (4)", 4 * 16),
             "four chunk buffers per core, one row"
         );
+        let pre = find("u_pre");
+        let lanes = pre.children.iter().find(|c| c.module.is_none()).expect("the lane loop");
+        let project = lanes.children[0]
+            .children
+            .iter()
+            .find(|c| c.module.as_deref() == Some("neo_pre_project"))
+            .expect("projection unit");
+        let muls = project.children.iter().find(|c| c.module.as_deref() == Some("neo_fp_mul")).expect("muls");
+        assert!(muls.count > project.count, "{} multipliers", muls.count);
+        assert_eq!(muls.children[0].count, muls.count, "a counter in each of the grouped multipliers");
+        let divs = project.children.iter().find(|c| c.module.as_deref() == Some("neo_fp_div")).expect("divs");
+        let stages = divs.children.iter().find(|c| c.module.is_none()).expect("the divider's stage loop");
+        assert_eq!(stages.count, 13 * divs.count, "13 stages in each grouped divider");
         let raster = find(&format!("g_raster[{}]", cfg.raster_cores));
         assert_eq!(raster.count, cfg.raster_cores as u64);
         let port = find(&format!("g_port[{}]", cfg.mem_channels));
