@@ -14,58 +14,15 @@ module neo_fp_widen_half_comb (
   assign f = a_i[9:0];
   wire [15:0] lzin;
   assign lzin = {f, 6'b111111};
-  wire lzhhh_c;
-  assign lzhhh_c = ~lzin[15];
-  wire lzhhh_z;
-  assign lzhhh_z = ~(lzin[15] | lzin[14]);
-  wire lzhhl_c;
-  assign lzhhl_c = ~lzin[13];
-  wire lzhhl_z;
-  assign lzhhl_z = ~(lzin[13] | lzin[12]);
-  wire lzhh_z;
-  assign lzhh_z = lzhhh_z & lzhhl_z;
-  wire [1:0] lzhh_c;
-  assign lzhh_c = lzhhh_z ? {1'b1, lzhhl_c} : {1'b0, lzhhh_c};
-  wire lzhlh_c;
-  assign lzhlh_c = ~lzin[11];
-  wire lzhlh_z;
-  assign lzhlh_z = ~(lzin[11] | lzin[10]);
-  wire lzhll_c;
-  assign lzhll_c = ~lzin[9];
-  wire lzhll_z;
-  assign lzhll_z = ~(lzin[9] | lzin[8]);
-  wire lzhl_z;
-  assign lzhl_z = lzhlh_z & lzhll_z;
-  wire [1:0] lzhl_c;
-  assign lzhl_c = lzhlh_z ? {1'b1, lzhll_c} : {1'b0, lzhlh_c};
-  wire lzh_z;
-  assign lzh_z = lzhh_z & lzhl_z;
-  wire [2:0] lzh_c;
-  assign lzh_c = lzhh_z ? {1'b1, lzhl_c} : {1'b0, lzhh_c};
-  wire lzlhh_c;
-  assign lzlhh_c = ~lzin[7];
-  wire lzlhh_z;
-  assign lzlhh_z = ~(lzin[7] | lzin[6]);
-  wire lzlhl_c;
-  assign lzlhl_c = ~lzin[5];
-  wire lzlhl_z;
-  assign lzlhl_z = ~(lzin[5] | lzin[4]);
-  wire lzlh_z;
-  assign lzlh_z = lzlhh_z & lzlhl_z;
-  wire [1:0] lzlh_c;
-  assign lzlh_c = lzlhh_z ? {1'b1, lzlhl_c} : {1'b0, lzlhh_c};
-  wire lzllh_c;
-  assign lzllh_c = ~lzin[3];
-  wire lzllh_z;
-  assign lzllh_z = ~(lzin[3] | lzin[2]);
-  wire lzlll_c;
-  assign lzlll_c = ~lzin[1];
-  wire [1:0] lzll_c;
-  assign lzll_c = lzllh_z ? {1'b1, lzlll_c} : {1'b0, lzllh_c};
-  wire [2:0] lzl_c;
-  assign lzl_c = lzlh_z ? {1'b1, lzll_c} : {1'b0, lzlh_c};
   wire [3:0] lz_c;
-  assign lz_c = lzh_z ? {1'b1, lzl_c} : {1'b0, lzh_c};
+  wire lz_z;
+  neo_fp_lzc #(
+    .WIDTH(16)
+  ) u_lz (
+    .x_i(lzin),
+    .cnt_o(lz_c),
+    .zero_o(lz_z)
+  );
   wire [9:0] fs;
   assign fs = f << (lz_c + 4'd1);
   wire [7:0] es;
@@ -76,6 +33,6 @@ module neo_fp_widen_half_comb (
   assign y = (e == 5'd31) ? (fnz ? 32'h7fc00000 : {s, 8'hff, 23'd0}) : (e != 5'd0) ? {s, {3'd0, e} + 8'd112, f, 13'd0} : fnz ? {s, es, fs, 13'd0} : {s, 31'd0};
   assign y_o = y;
   wire unused_bits;
-  assign unused_bits = ^{a_i[31:16], lzin[0]};
+  assign unused_bits = ^{a_i[31:16], lz_z};
 
 endmodule

@@ -641,3 +641,54 @@ fn sort_core_back_to_back_chunks_overlap_loads_with_passes() {
     assert!(interval <= passes * c + 4 * merges + 16, "interval {interval} above the MSU+ bound");
     assert!(interval + c <= one[0], "load not hidden: interval {interval}, single {}", one[0]);
 }
+
+/// The leading-zero counter's inputs at `width` bits: every value up to 16 bits; else zero,
+/// every single bit, every bit with every lower bit set, and random values shifted right by a
+/// random amount (so every count occurs).
+fn lzc_inputs(width: u32, rng: &mut Rng) -> Vec<u64> {
+    if width <= 16 {
+        return (0..1u64 << width).collect();
+    }
+    let mask = if width == 64 { u64::MAX } else { (1u64 << width) - 1 };
+    let mut v = vec![0, mask];
+    for b in 0..width {
+        v.push(1u64 << b);
+        v.push((1u64 << b) | ((1u64 << b) - 1));
+    }
+    for _ in 0..4000 {
+        v.push((rng.next() & mask) >> rng.below(u64::from(width)));
+    }
+    v
+}
+
+#[test]
+fn lzc_counts_leading_zeros_at_every_width() {
+    if !require_for_test("iverilog", "lzc_counts_leading_zeros_at_every_width") {
+        return;
+    }
+    let module = neo_gen::units::fp::lzc::module();
+    let file = VerilogFile { name: module.name.clone(), text: module.to_verilog() };
+    let mut rng = Rng(0x1ead_2e50);
+    for width in [2u32, 4, 8, 16, 32, 64] {
+        let inputs = lzc_inputs(width, &mut rng);
+        let digits = hex_digits(width);
+        let data: String = inputs.iter().map(|x| format!("{x:0digits$x}\n")).collect();
+        let cb = neo_gen::units::fp::lzc::count_bits(width);
+        let tb = format!(
+            "module tb;\n  reg [{w1}:0] x;\n  wire [{c1}:0] cnt;\n  wire zero;\n  reg [{w1}:0] mem [0:{last}];\n\
+             \x20 integer i;\n  neo_fp_lzc #(.WIDTH({width})) u_lzc (.x_i(x), .cnt_o(cnt), .zero_o(zero));\n\
+             \x20 initial begin\n    $readmemh(\"in.hex\", mem);\n    for (i = 0; i <= {last}; i = i + 1) begin\n\
+             \x20     x = mem[i];\n      #1 $display(\"%0d %0d\", cnt, zero);\n    end\n  end\nendmodule\n",
+            w1 = width - 1,
+            c1 = cb - 1,
+            last = inputs.len() - 1,
+        );
+        let out = simulate(std::slice::from_ref(&file), &tb, &[("in.hex", data)]);
+        let lines: Vec<&str> = out.lines().collect();
+        assert_eq!(lines.len(), inputs.len(), "width {width}: one line per input");
+        for (x, line) in inputs.iter().zip(lines) {
+            let lz = (x.leading_zeros() - (64 - width)).min(width - 1);
+            assert_eq!(line, format!("{lz} {}", u8::from(*x == 0)), "width {width}, x = {x:#x}");
+        }
+    }
+}

@@ -166,6 +166,35 @@ pub enum Item {
         /// Body, where `var` is a constant.
         items: Vec<Item>,
     },
+    /// `for (VAR = 0; VAR < BOUND; VAR = VAR + 1) begin : LABEL ... end` with `BOUND` an
+    /// expression of the module's parameters and enclosing loop variables: the structure of a
+    /// parametric module ([`Module::gen_loop`]; `genvar VAR` is declared just before the loop,
+    /// and `generate ... endgenerate` wraps it unless it is nested in another generate item).
+    /// Its body holds no instances, so reports that count instances need no count for it.
+    GenLoop {
+        /// Loop variable.
+        var: String,
+        /// Iteration count, a constant expression.
+        bound: String,
+        /// Block label (`g_` prefix by convention).
+        label: String,
+        /// Body, where `var` is a constant.
+        items: Vec<Item>,
+    },
+    /// `if (COND) begin : LABEL ... end else begin : ELSE_LABEL ... end` inside a generate loop
+    /// ([`Module::gen_if`]): `COND` is a constant expression of parameters and loop variables.
+    GenIf {
+        /// The condition.
+        cond: String,
+        /// Label of the block taken when `cond` holds.
+        label: String,
+        /// Items of that block.
+        then: Vec<Item>,
+        /// Label of the other block.
+        else_label: String,
+        /// Items of the other block.
+        els: Vec<Item>,
+    },
     /// Named cover points, for Verilator's coverage build only: printed inside
     /// `` `ifdef VERILATOR `` as `LABEL: cover property (@(posedge clk_i) (COND));`, so Yosys and
     /// Icarus read the module unchanged. Verilator counts them only with `--coverage-user`
@@ -290,7 +319,8 @@ impl Module {
 
     /// Declares the width of port, wire, register, memory or sized local parameter `name` (declared already, with its
     /// width at the parameters' defaults) as the parameter expression `width` (`WIDTH`,
-    /// `$clog2(DEPTH)`): printed `[width-1:0]`.
+    /// `$clog2(DEPTH)`): printed `[width-1:0]`. A net declared in a [`Item::GenLoop`] may take
+    /// an expression of the loop variables too; its numeric width is then not used.
     ///
     /// # Panics
     /// When `name` is not declared yet (a generator bug).
@@ -312,16 +342,21 @@ impl Module {
         self
     }
 
-    /// True when `name` is a port or a top-level wire, register, memory or local parameter.
+    /// True when `name` is a port or a wire, register, memory or local parameter of the body
+    /// or of a generate loop's body.
     fn declares(&self, name: &str) -> bool {
-        self.ports.iter().any(|p| p.name == name)
-            || self.items.iter().any(|i| match i {
+        fn within(items: &[Item], name: &str) -> bool {
+            items.iter().any(|i| match i {
                 Item::Wire { name: n, .. }
                 | Item::Reg { name: n, .. }
                 | Item::Mem { name: n, .. }
                 | Item::LocalParam { name: n, .. } => n == name,
+                Item::GenLoop { items, .. } => within(items, name),
+                Item::GenIf { then, els, .. } => within(then, name) || within(els, name),
                 _ => false,
             })
+        }
+        self.ports.iter().any(|p| p.name == name) || within(&self.items, name)
     }
 
     /// Adds an input port.
@@ -527,6 +562,23 @@ impl Module {
         self.item(Item::GenFor { var: var.into(), count, label: label.into(), items })
     }
 
+    /// A generate loop whose bound is the constant expression `bound` (of parameters and
+    /// enclosing loop variables), for parametric modules ([`Item::GenLoop`]); nest it in
+    /// another one's items with [`gen_loop`].
+    ///
+    /// # Panics
+    /// When `items` place an instance (instances go in [`Module::gen_for`] loops, whose counts
+    /// `neo gen --stats` multiplies out).
+    pub fn gen_loop(
+        &mut self,
+        var: impl Into<String>,
+        bound: impl Into<String>,
+        label: impl Into<String>,
+        items: Vec<Item>,
+    ) -> &mut Self {
+        self.item(gen_loop(var, bound, label, items))
+    }
+
     /// The port list, for the Verilator shim and the Rust bindings.
     pub fn interface(&self) -> ModuleInterface {
         ModuleInterface {
@@ -624,6 +676,35 @@ fn collect_instances(items: &[Item], out: &mut Vec<String>) {
             _ => {}
         }
     }
+}
+
+/// A generate loop with an expression bound ([`Item::GenLoop`], [`Module::gen_loop`]), as an
+/// item to nest in another generate item.
+///
+/// # Panics
+/// When `items` place an instance.
+pub fn gen_loop(
+    var: impl Into<String>,
+    bound: impl Into<String>,
+    label: impl Into<String>,
+    items: Vec<Item>,
+) -> Item {
+    let label = label.into();
+    assert!(placements(&items).is_empty(), "gen_loop {label}: instances go in gen_for loops");
+    Item::GenLoop { var: var.into(), bound: bound.into(), label, items }
+}
+
+/// A generate `if`/`else` ([`Item::GenIf`]), to place in a generate loop's items.
+///
+/// # Panics
+/// When either branch places an instance.
+pub fn gen_if(
+    cond: impl Into<String>,
+    (label, then): (&str, Vec<Item>),
+    (else_label, els): (&str, Vec<Item>),
+) -> Item {
+    assert!(placements(&then).is_empty() && placements(&els).is_empty(), "gen_if {label}: no instances");
+    Item::GenIf { cond: cond.into(), label: label.to_string(), then, else_label: else_label.to_string(), els }
 }
 
 /// Named-connection list helper: `conns(&[("a_i", "x"), ...])`.
@@ -860,5 +941,45 @@ endmodule
         assert!(v.contains("localparam [0:0] LANE = 1'b1;"), "{v}");
         assert!(v.contains("localparam [1:0] TWO = 2'd2;"), "{v}");
         assert!(v.contains("localparam OFF = 7;"), "{v}");
+    }
+
+    #[test]
+    fn generate_loops_with_expression_bounds_nest_in_one_generate_region() {
+        let mut m = Module::new("t");
+        m.param("WIDTH", 8);
+        m.input("x_i", 8).width_param("x_i", "WIDTH");
+        let inner = gen_loop(
+            "n",
+            "(WIDTH >> l)",
+            "g_node",
+            vec![gen_if(
+                "l == 0",
+                ("g_first", vec![Item::Assign { lhs: "v[n]".into(), rhs: "x_i[n]".into() }]),
+                ("g_rest", vec![Item::Assign { lhs: "v[n]".into(), rhs: "1'b0".into() }]),
+            )],
+        );
+        m.gen_loop("l", "3", "g_level", vec![Item::Wire { name: "v".into(), width: 1 }, inner]);
+        m.width_param("v", "(WIDTH >> l)");
+        let v = m.to_verilog();
+        let want = "  genvar l;\n  generate\n    for (l = 0; l < 3; l = l + 1) begin : g_level\n      \
+                    wire [(WIDTH >> l)-1:0] v;\n      genvar n;\n      \
+                    for (n = 0; n < (WIDTH >> l); n = n + 1) begin : g_node\n        \
+                    if (l == 0) begin : g_first\n          assign v[n] = x_i[n];\n        \
+                    end else begin : g_rest\n          assign v[n] = 1'b0;\n        end\n      end\n    \
+                    end\n  endgenerate\n";
+        assert!(v.contains(want), "{v}");
+        assert_eq!(v.lines().filter(|l| l.trim() == "generate").count(), 1, "one generate region: {v}");
+    }
+
+    #[test]
+    #[should_panic(expected = "instances go in gen_for loops")]
+    fn expression_bound_loops_refuse_instances() {
+        let i = Item::Instance(Instance {
+            module: "m".into(),
+            name: "u".into(),
+            params: Vec::new(),
+            conns: Vec::new(),
+        });
+        gen_loop("k", "N", "g_k", vec![i]);
     }
 }

@@ -68,7 +68,7 @@ pub(super) fn module(m: &Module) -> String {
         }
     }
     s.push_str(");\n\n");
-    items(&mut s, 1, &m.items, m);
+    items(&mut s, 1, &m.items, m, false);
     s.push_str("\nendmodule\n");
     s
 }
@@ -97,7 +97,9 @@ fn decl(m: &Module, kind: &str, width: u32, name: &str) -> String {
     }
 }
 
-fn items(s: &mut String, level: usize, list: &[Item], m: &Module) {
+/// Prints `list` at indent `level`; `in_generate` when inside a generate loop (no nested
+/// `generate ... endgenerate`).
+fn items(s: &mut String, level: usize, list: &[Item], m: &Module, in_generate: bool) {
     let ind = indent(level);
     for it in list {
         match it {
@@ -141,9 +143,32 @@ fn items(s: &mut String, level: usize, list: &[Item], m: &Module) {
                 writeln!(s, "{ind}generate").unwrap();
                 writeln!(s, "{ind}{IND}for ({var} = 0; {var} < {count}; {var} = {var} + 1) begin : {label}")
                     .unwrap();
-                items(s, level + 2, body, m);
+                items(s, level + 2, body, m, true);
                 writeln!(s, "{ind}{IND}end").unwrap();
                 writeln!(s, "{ind}endgenerate").unwrap();
+            }
+            Item::GenLoop { var, bound, label, items: body } => {
+                writeln!(s, "{ind}genvar {var};").unwrap();
+                let inner = if in_generate { level } else { level + 1 };
+                if !in_generate {
+                    writeln!(s, "{ind}generate").unwrap();
+                }
+                let lind = indent(inner);
+                writeln!(s, "{lind}for ({var} = 0; {var} < {bound}; {var} = {var} + 1) begin : {label}")
+                    .unwrap();
+                items(s, inner + 1, body, m, true);
+                writeln!(s, "{lind}end").unwrap();
+                if !in_generate {
+                    writeln!(s, "{ind}endgenerate").unwrap();
+                }
+            }
+            Item::GenIf { cond, label, then, else_label, els } => {
+                assert!(in_generate, "a generate if ({label}) belongs in a generate loop");
+                writeln!(s, "{ind}if ({cond}) begin : {label}").unwrap();
+                items(s, level + 1, then, m, true);
+                writeln!(s, "{ind}end else begin : {else_label}").unwrap();
+                items(s, level + 1, els, m, true);
+                writeln!(s, "{ind}end").unwrap();
             }
             Item::Covers(points) => {
                 writeln!(s, "`ifdef VERILATOR").unwrap();

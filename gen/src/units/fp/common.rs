@@ -1,9 +1,9 @@
 //! Building blocks shared by the binary32 primitives: pipeline registers advanced by `en_i`,
-//! operand unpacking, a leading-zero counter tree, the subnormal right shift with sticky and the
+//! operand unpacking, a leading-zero counter instance, the subnormal right shift with sticky and the
 //! round-to-nearest-even packer.
 
 use crate::emit::expr::hex;
-use crate::emit::{if_, set, Module};
+use crate::emit::{conns, if_, set, Module};
 
 /// The canonical quiet NaN every NaN result is replaced by (golden `hwarith::CANONICAL_NAN`).
 pub const CANONICAL_NAN: &str = "32'h7fc00000";
@@ -132,33 +132,23 @@ pub fn unpack(pp: &mut Pipe, p: &str, x: &str, f: Fields) {
     }
 }
 
-/// A leading-zero counter over wire `x` of `width` bits (a power of two, at least 2): wires
-/// `{p}_c` (the count, log2(width) bits; `width - 1` when `x` is zero) and, when `zero`,
-/// `{p}_z` (x is zero). Returns the count's width. A binary tree of 2-bit counters.
+/// A leading-zero counter over wire `x` of `width` bits (a power of two, at least 2): an
+/// instance `u_{p}` of [`super::lzc`] driving wires `{p}_c` (the count, log2(width) bits;
+/// `width - 1` when `x` is zero) and `{p}_z` (x is zero; recorded as unused unless `zero`).
+/// Returns the count's width.
 pub fn lzc(pp: &mut Pipe, p: &str, x: &str, width: u32, zero: bool) -> u32 {
-    assert!(width.is_power_of_two() && width >= 2, "lzc width {width}");
-    fn node(pp: &mut Pipe, p: &str, x: &str, hi: u32, width: u32, need_z: bool) -> u32 {
-        // Counts leading zeros of x[hi -: width]; wires {p}_c and (if need_z) {p}_z.
-        if width == 2 {
-            pp.w(&format!("{p}_c"), 1, format!("~{x}[{hi}]"));
-            if need_z {
-                pp.w(&format!("{p}_z"), 1, format!("~({x}[{hi}] | {x}[{}])", hi - 1));
-            }
-            return 1;
-        }
-        let half = width / 2;
-        let (ph, pl) = (format!("{p}h"), format!("{p}l"));
-        let cw = node(pp, &ph, x, hi, half, true);
-        node(pp, &pl, x, hi - half, half, need_z);
-        if need_z {
-            pp.w(&format!("{p}_z"), 1, format!("{ph}_z & {pl}_z"));
-        }
-        pp.w(&format!("{p}_c"), cw + 1, format!("{ph}_z ? {{1'b1, {pl}_c}} : {{1'b0, {ph}_c}}"));
-        cw + 1
-    }
-    let cw = node(pp, p, x, width - 1, width, zero);
+    let cw = super::lzc::count_bits(width);
+    let (c, z) = (format!("{p}_c"), format!("{p}_z"));
+    pp.m.wire(c.clone(), cw);
+    pp.m.wire(z.clone(), 1);
+    pp.m.instance_with(
+        super::lzc::NAME,
+        format!("u_{p}"),
+        vec![("WIDTH".to_string(), width.to_string())],
+        conns(&[("x_i", x.to_string()), ("cnt_o", c), ("zero_o", z.clone())]),
+    );
     if !zero {
-        pp.unused(format!("{x}[0]"));
+        pp.unused(z);
     }
     cw
 }
