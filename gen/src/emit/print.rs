@@ -98,7 +98,7 @@ fn decl(m: &Module, kind: &str, width: u32, name: &str) -> String {
 }
 
 /// Prints `list` at indent `level`; `in_generate` when inside a generate loop (no nested
-/// `generate ... endgenerate`).
+/// `generate ... endgenerate`, for [`Item::GenFor`] and [`Item::GenLoop`] alike).
 fn items(s: &mut String, level: usize, list: &[Item], m: &Module, in_generate: bool) {
     let ind = indent(level);
     for it in list {
@@ -139,28 +139,10 @@ fn items(s: &mut String, level: usize, list: &[Item], m: &Module, in_generate: b
             }
             Item::Instance(i) => instance(s, level, i),
             Item::GenFor { var, count, label, items: body } => {
-                writeln!(s, "{ind}genvar {var};").unwrap();
-                writeln!(s, "{ind}generate").unwrap();
-                writeln!(s, "{ind}{IND}for ({var} = 0; {var} < {count}; {var} = {var} + 1) begin : {label}")
-                    .unwrap();
-                items(s, level + 2, body, m, true);
-                writeln!(s, "{ind}{IND}end").unwrap();
-                writeln!(s, "{ind}endgenerate").unwrap();
+                generate_loop(s, level, (var, &count.to_string(), label), body, m, in_generate)
             }
             Item::GenLoop { var, bound, label, items: body } => {
-                writeln!(s, "{ind}genvar {var};").unwrap();
-                let inner = if in_generate { level } else { level + 1 };
-                if !in_generate {
-                    writeln!(s, "{ind}generate").unwrap();
-                }
-                let lind = indent(inner);
-                writeln!(s, "{lind}for ({var} = 0; {var} < {bound}; {var} = {var} + 1) begin : {label}")
-                    .unwrap();
-                items(s, inner + 1, body, m, true);
-                writeln!(s, "{lind}end").unwrap();
-                if !in_generate {
-                    writeln!(s, "{ind}endgenerate").unwrap();
-                }
+                generate_loop(s, level, (var, bound, label), body, m, in_generate)
             }
             Item::GenIf { cond, label, then, else_label, els } => {
                 assert!(in_generate, "a generate if ({label}) belongs in a generate loop");
@@ -180,6 +162,32 @@ fn items(s: &mut String, level: usize, list: &[Item], m: &Module, in_generate: b
                 writeln!(s, "`endif").unwrap();
             }
         }
+    }
+}
+
+/// `genvar VAR;` and `for (VAR = 0; VAR < BOUND; VAR = VAR + 1) begin : LABEL BODY end`, wrapped
+/// in `generate ... endgenerate` unless already inside a generate loop ([`Item::GenFor`],
+/// [`Item::GenLoop`]).
+fn generate_loop(
+    s: &mut String,
+    level: usize,
+    (var, bound, label): (&str, &str, &str),
+    body: &[Item],
+    m: &Module,
+    in_generate: bool,
+) {
+    let ind = indent(level);
+    writeln!(s, "{ind}genvar {var};").unwrap();
+    let inner = if in_generate { level } else { level + 1 };
+    if !in_generate {
+        writeln!(s, "{ind}generate").unwrap();
+    }
+    let lind = indent(inner);
+    writeln!(s, "{lind}for ({var} = 0; {var} < {bound}; {var} = {var} + 1) begin : {label}").unwrap();
+    items(s, inner + 1, body, m, true);
+    writeln!(s, "{lind}end").unwrap();
+    if !in_generate {
+        writeln!(s, "{ind}endgenerate").unwrap();
     }
 }
 
