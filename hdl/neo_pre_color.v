@@ -83,538 +83,538 @@ module neo_pre_color (
     end
   end
   assign out_valid_o = valid_q[128];
-  wire [31:0] n0_input;
-  assign n0_input = in_mean_x_i;
-  wire [31:0] n1_input;
-  assign n1_input = in_mean_y_i;
-  wire [31:0] n2_input;
-  assign n2_input = in_mean_z_i;
-  wire [31:0] n3_input;
-  assign n3_input = in_sh0_red_i;
-  wire [31:0] n4_input;
-  assign n4_input = in_sh0_green_i;
-  wire [31:0] n5_input;
-  assign n5_input = in_sh0_blue_i;
-  wire [31:0] n6_input;
-  assign n6_input = in_sh1_red_i;
-  reg  [1631:0] n6_dly_q;
+  wire [31:0] n0_mean_x;
+  assign n0_mean_x = in_mean_x_i;
+  wire [31:0] n1_mean_y;
+  assign n1_mean_y = in_mean_y_i;
+  wire [31:0] n2_mean_z;
+  assign n2_mean_z = in_mean_z_i;
+  wire [31:0] n3_sh0_red;
+  assign n3_sh0_red = in_sh0_red_i;
+  wire [31:0] n4_sh0_green;
+  assign n4_sh0_green = in_sh0_green_i;
+  wire [31:0] n5_sh0_blue;
+  assign n5_sh0_blue = in_sh0_blue_i;
+  wire [31:0] n6_sh1_red;
+  assign n6_sh1_red = in_sh1_red_i;
+  reg  [1631:0] n6_sh1_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n6_dly_q <= {n6_dly_q[1599:0], n6_input};
+      n6_sh1_red_dly_q <= {n6_sh1_red_dly_q[1599:0], n6_sh1_red};
     end
   end
-  wire [31:0] n6_d51;
-  assign n6_d51 = n6_dly_q[1631:1600];
-  wire [31:0] n7_input;
-  assign n7_input = in_sh1_green_i;
-  reg  [1631:0] n7_dly_q;
+  wire [31:0] n6_sh1_red_d51;
+  assign n6_sh1_red_d51 = n6_sh1_red_dly_q[1631:1600];
+  wire [31:0] n7_sh1_green;
+  assign n7_sh1_green = in_sh1_green_i;
+  reg  [1631:0] n7_sh1_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n7_dly_q <= {n7_dly_q[1599:0], n7_input};
+      n7_sh1_green_dly_q <= {n7_sh1_green_dly_q[1599:0], n7_sh1_green};
     end
   end
-  wire [31:0] n7_d51;
-  assign n7_d51 = n7_dly_q[1631:1600];
-  wire [31:0] n8_input;
-  assign n8_input = in_sh1_blue_i;
-  reg  [1631:0] n8_dly_q;
+  wire [31:0] n7_sh1_green_d51;
+  assign n7_sh1_green_d51 = n7_sh1_green_dly_q[1631:1600];
+  wire [31:0] n8_sh1_blue;
+  assign n8_sh1_blue = in_sh1_blue_i;
+  reg  [1631:0] n8_sh1_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n8_dly_q <= {n8_dly_q[1599:0], n8_input};
+      n8_sh1_blue_dly_q <= {n8_sh1_blue_dly_q[1599:0], n8_sh1_blue};
     end
   end
-  wire [31:0] n8_d51;
-  assign n8_d51 = n8_dly_q[1631:1600];
-  wire [31:0] n9_input;
-  assign n9_input = in_sh2_red_i;
-  reg  [1631:0] n9_dly_q;
+  wire [31:0] n8_sh1_blue_d51;
+  assign n8_sh1_blue_d51 = n8_sh1_blue_dly_q[1631:1600];
+  wire [31:0] n9_sh2_red;
+  assign n9_sh2_red = in_sh2_red_i;
+  reg  [1631:0] n9_sh2_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n9_dly_q <= {n9_dly_q[1599:0], n9_input};
+      n9_sh2_red_dly_q <= {n9_sh2_red_dly_q[1599:0], n9_sh2_red};
     end
   end
-  wire [31:0] n9_d51;
-  assign n9_d51 = n9_dly_q[1631:1600];
-  wire [31:0] n10_input;
-  assign n10_input = in_sh2_green_i;
-  reg  [1631:0] n10_dly_q;
+  wire [31:0] n9_sh2_red_d51;
+  assign n9_sh2_red_d51 = n9_sh2_red_dly_q[1631:1600];
+  wire [31:0] n10_sh2_green;
+  assign n10_sh2_green = in_sh2_green_i;
+  reg  [1631:0] n10_sh2_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n10_dly_q <= {n10_dly_q[1599:0], n10_input};
+      n10_sh2_green_dly_q <= {n10_sh2_green_dly_q[1599:0], n10_sh2_green};
     end
   end
-  wire [31:0] n10_d51;
-  assign n10_d51 = n10_dly_q[1631:1600];
-  wire [31:0] n11_input;
-  assign n11_input = in_sh2_blue_i;
-  reg  [1631:0] n11_dly_q;
+  wire [31:0] n10_sh2_green_d51;
+  assign n10_sh2_green_d51 = n10_sh2_green_dly_q[1631:1600];
+  wire [31:0] n11_sh2_blue;
+  assign n11_sh2_blue = in_sh2_blue_i;
+  reg  [1631:0] n11_sh2_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n11_dly_q <= {n11_dly_q[1599:0], n11_input};
+      n11_sh2_blue_dly_q <= {n11_sh2_blue_dly_q[1599:0], n11_sh2_blue};
     end
   end
-  wire [31:0] n11_d51;
-  assign n11_d51 = n11_dly_q[1631:1600];
-  wire [31:0] n12_input;
-  assign n12_input = in_sh3_red_i;
-  reg  [1631:0] n12_dly_q;
+  wire [31:0] n11_sh2_blue_d51;
+  assign n11_sh2_blue_d51 = n11_sh2_blue_dly_q[1631:1600];
+  wire [31:0] n12_sh3_red;
+  assign n12_sh3_red = in_sh3_red_i;
+  reg  [1631:0] n12_sh3_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n12_dly_q <= {n12_dly_q[1599:0], n12_input};
+      n12_sh3_red_dly_q <= {n12_sh3_red_dly_q[1599:0], n12_sh3_red};
     end
   end
-  wire [31:0] n12_d51;
-  assign n12_d51 = n12_dly_q[1631:1600];
-  wire [31:0] n13_input;
-  assign n13_input = in_sh3_green_i;
-  reg  [1631:0] n13_dly_q;
+  wire [31:0] n12_sh3_red_d51;
+  assign n12_sh3_red_d51 = n12_sh3_red_dly_q[1631:1600];
+  wire [31:0] n13_sh3_green;
+  assign n13_sh3_green = in_sh3_green_i;
+  reg  [1631:0] n13_sh3_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n13_dly_q <= {n13_dly_q[1599:0], n13_input};
+      n13_sh3_green_dly_q <= {n13_sh3_green_dly_q[1599:0], n13_sh3_green};
     end
   end
-  wire [31:0] n13_d51;
-  assign n13_d51 = n13_dly_q[1631:1600];
-  wire [31:0] n14_input;
-  assign n14_input = in_sh3_blue_i;
-  reg  [1631:0] n14_dly_q;
+  wire [31:0] n13_sh3_green_d51;
+  assign n13_sh3_green_d51 = n13_sh3_green_dly_q[1631:1600];
+  wire [31:0] n14_sh3_blue;
+  assign n14_sh3_blue = in_sh3_blue_i;
+  reg  [1631:0] n14_sh3_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n14_dly_q <= {n14_dly_q[1599:0], n14_input};
+      n14_sh3_blue_dly_q <= {n14_sh3_blue_dly_q[1599:0], n14_sh3_blue};
     end
   end
-  wire [31:0] n14_d51;
-  assign n14_d51 = n14_dly_q[1631:1600];
-  wire [31:0] n15_input;
-  assign n15_input = in_sh4_red_i;
-  reg  [1759:0] n15_dly_q;
+  wire [31:0] n14_sh3_blue_d51;
+  assign n14_sh3_blue_d51 = n14_sh3_blue_dly_q[1631:1600];
+  wire [31:0] n15_sh4_red;
+  assign n15_sh4_red = in_sh4_red_i;
+  reg  [1759:0] n15_sh4_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n15_dly_q <= {n15_dly_q[1727:0], n15_input};
+      n15_sh4_red_dly_q <= {n15_sh4_red_dly_q[1727:0], n15_sh4_red};
     end
   end
-  wire [31:0] n15_d55;
-  assign n15_d55 = n15_dly_q[1759:1728];
-  wire [31:0] n16_input;
-  assign n16_input = in_sh4_green_i;
-  reg  [1759:0] n16_dly_q;
+  wire [31:0] n15_sh4_red_d55;
+  assign n15_sh4_red_d55 = n15_sh4_red_dly_q[1759:1728];
+  wire [31:0] n16_sh4_green;
+  assign n16_sh4_green = in_sh4_green_i;
+  reg  [1759:0] n16_sh4_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n16_dly_q <= {n16_dly_q[1727:0], n16_input};
+      n16_sh4_green_dly_q <= {n16_sh4_green_dly_q[1727:0], n16_sh4_green};
     end
   end
-  wire [31:0] n16_d55;
-  assign n16_d55 = n16_dly_q[1759:1728];
-  wire [31:0] n17_input;
-  assign n17_input = in_sh4_blue_i;
-  reg  [1759:0] n17_dly_q;
+  wire [31:0] n16_sh4_green_d55;
+  assign n16_sh4_green_d55 = n16_sh4_green_dly_q[1759:1728];
+  wire [31:0] n17_sh4_blue;
+  assign n17_sh4_blue = in_sh4_blue_i;
+  reg  [1759:0] n17_sh4_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n17_dly_q <= {n17_dly_q[1727:0], n17_input};
+      n17_sh4_blue_dly_q <= {n17_sh4_blue_dly_q[1727:0], n17_sh4_blue};
     end
   end
-  wire [31:0] n17_d55;
-  assign n17_d55 = n17_dly_q[1759:1728];
-  wire [31:0] n18_input;
-  assign n18_input = in_sh5_red_i;
-  reg  [1759:0] n18_dly_q;
+  wire [31:0] n17_sh4_blue_d55;
+  assign n17_sh4_blue_d55 = n17_sh4_blue_dly_q[1759:1728];
+  wire [31:0] n18_sh5_red;
+  assign n18_sh5_red = in_sh5_red_i;
+  reg  [1759:0] n18_sh5_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n18_dly_q <= {n18_dly_q[1727:0], n18_input};
+      n18_sh5_red_dly_q <= {n18_sh5_red_dly_q[1727:0], n18_sh5_red};
     end
   end
-  wire [31:0] n18_d55;
-  assign n18_d55 = n18_dly_q[1759:1728];
-  wire [31:0] n19_input;
-  assign n19_input = in_sh5_green_i;
-  reg  [1759:0] n19_dly_q;
+  wire [31:0] n18_sh5_red_d55;
+  assign n18_sh5_red_d55 = n18_sh5_red_dly_q[1759:1728];
+  wire [31:0] n19_sh5_green;
+  assign n19_sh5_green = in_sh5_green_i;
+  reg  [1759:0] n19_sh5_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n19_dly_q <= {n19_dly_q[1727:0], n19_input};
+      n19_sh5_green_dly_q <= {n19_sh5_green_dly_q[1727:0], n19_sh5_green};
     end
   end
-  wire [31:0] n19_d55;
-  assign n19_d55 = n19_dly_q[1759:1728];
-  wire [31:0] n20_input;
-  assign n20_input = in_sh5_blue_i;
-  reg  [1759:0] n20_dly_q;
+  wire [31:0] n19_sh5_green_d55;
+  assign n19_sh5_green_d55 = n19_sh5_green_dly_q[1759:1728];
+  wire [31:0] n20_sh5_blue;
+  assign n20_sh5_blue = in_sh5_blue_i;
+  reg  [1759:0] n20_sh5_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n20_dly_q <= {n20_dly_q[1727:0], n20_input};
+      n20_sh5_blue_dly_q <= {n20_sh5_blue_dly_q[1727:0], n20_sh5_blue};
     end
   end
-  wire [31:0] n20_d55;
-  assign n20_d55 = n20_dly_q[1759:1728];
-  wire [31:0] n21_input;
-  assign n21_input = in_sh6_red_i;
-  reg  [2143:0] n21_dly_q;
+  wire [31:0] n20_sh5_blue_d55;
+  assign n20_sh5_blue_d55 = n20_sh5_blue_dly_q[1759:1728];
+  wire [31:0] n21_sh6_red;
+  assign n21_sh6_red = in_sh6_red_i;
+  reg  [2143:0] n21_sh6_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n21_dly_q <= {n21_dly_q[2111:0], n21_input};
+      n21_sh6_red_dly_q <= {n21_sh6_red_dly_q[2111:0], n21_sh6_red};
     end
   end
-  wire [31:0] n21_d67;
-  assign n21_d67 = n21_dly_q[2143:2112];
-  wire [31:0] n22_input;
-  assign n22_input = in_sh6_green_i;
-  reg  [2143:0] n22_dly_q;
+  wire [31:0] n21_sh6_red_d67;
+  assign n21_sh6_red_d67 = n21_sh6_red_dly_q[2143:2112];
+  wire [31:0] n22_sh6_green;
+  assign n22_sh6_green = in_sh6_green_i;
+  reg  [2143:0] n22_sh6_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n22_dly_q <= {n22_dly_q[2111:0], n22_input};
+      n22_sh6_green_dly_q <= {n22_sh6_green_dly_q[2111:0], n22_sh6_green};
     end
   end
-  wire [31:0] n22_d67;
-  assign n22_d67 = n22_dly_q[2143:2112];
-  wire [31:0] n23_input;
-  assign n23_input = in_sh6_blue_i;
-  reg  [2143:0] n23_dly_q;
+  wire [31:0] n22_sh6_green_d67;
+  assign n22_sh6_green_d67 = n22_sh6_green_dly_q[2143:2112];
+  wire [31:0] n23_sh6_blue;
+  assign n23_sh6_blue = in_sh6_blue_i;
+  reg  [2143:0] n23_sh6_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n23_dly_q <= {n23_dly_q[2111:0], n23_input};
+      n23_sh6_blue_dly_q <= {n23_sh6_blue_dly_q[2111:0], n23_sh6_blue};
     end
   end
-  wire [31:0] n23_d67;
-  assign n23_d67 = n23_dly_q[2143:2112];
-  wire [31:0] n24_input;
-  assign n24_input = in_sh7_red_i;
-  reg  [1759:0] n24_dly_q;
+  wire [31:0] n23_sh6_blue_d67;
+  assign n23_sh6_blue_d67 = n23_sh6_blue_dly_q[2143:2112];
+  wire [31:0] n24_sh7_red;
+  assign n24_sh7_red = in_sh7_red_i;
+  reg  [1759:0] n24_sh7_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n24_dly_q <= {n24_dly_q[1727:0], n24_input};
+      n24_sh7_red_dly_q <= {n24_sh7_red_dly_q[1727:0], n24_sh7_red};
     end
   end
-  wire [31:0] n24_d55;
-  assign n24_d55 = n24_dly_q[1759:1728];
-  wire [31:0] n25_input;
-  assign n25_input = in_sh7_green_i;
-  reg  [1759:0] n25_dly_q;
+  wire [31:0] n24_sh7_red_d55;
+  assign n24_sh7_red_d55 = n24_sh7_red_dly_q[1759:1728];
+  wire [31:0] n25_sh7_green;
+  assign n25_sh7_green = in_sh7_green_i;
+  reg  [1759:0] n25_sh7_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n25_dly_q <= {n25_dly_q[1727:0], n25_input};
+      n25_sh7_green_dly_q <= {n25_sh7_green_dly_q[1727:0], n25_sh7_green};
     end
   end
-  wire [31:0] n25_d55;
-  assign n25_d55 = n25_dly_q[1759:1728];
-  wire [31:0] n26_input;
-  assign n26_input = in_sh7_blue_i;
-  reg  [1759:0] n26_dly_q;
+  wire [31:0] n25_sh7_green_d55;
+  assign n25_sh7_green_d55 = n25_sh7_green_dly_q[1759:1728];
+  wire [31:0] n26_sh7_blue;
+  assign n26_sh7_blue = in_sh7_blue_i;
+  reg  [1759:0] n26_sh7_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n26_dly_q <= {n26_dly_q[1727:0], n26_input};
+      n26_sh7_blue_dly_q <= {n26_sh7_blue_dly_q[1727:0], n26_sh7_blue};
     end
   end
-  wire [31:0] n26_d55;
-  assign n26_d55 = n26_dly_q[1759:1728];
-  wire [31:0] n27_input;
-  assign n27_input = in_sh8_red_i;
-  reg  [1887:0] n27_dly_q;
+  wire [31:0] n26_sh7_blue_d55;
+  assign n26_sh7_blue_d55 = n26_sh7_blue_dly_q[1759:1728];
+  wire [31:0] n27_sh8_red;
+  assign n27_sh8_red = in_sh8_red_i;
+  reg  [1887:0] n27_sh8_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n27_dly_q <= {n27_dly_q[1855:0], n27_input};
+      n27_sh8_red_dly_q <= {n27_sh8_red_dly_q[1855:0], n27_sh8_red};
     end
   end
-  wire [31:0] n27_d59;
-  assign n27_d59 = n27_dly_q[1887:1856];
-  wire [31:0] n28_input;
-  assign n28_input = in_sh8_green_i;
-  reg  [1887:0] n28_dly_q;
+  wire [31:0] n27_sh8_red_d59;
+  assign n27_sh8_red_d59 = n27_sh8_red_dly_q[1887:1856];
+  wire [31:0] n28_sh8_green;
+  assign n28_sh8_green = in_sh8_green_i;
+  reg  [1887:0] n28_sh8_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n28_dly_q <= {n28_dly_q[1855:0], n28_input};
+      n28_sh8_green_dly_q <= {n28_sh8_green_dly_q[1855:0], n28_sh8_green};
     end
   end
-  wire [31:0] n28_d59;
-  assign n28_d59 = n28_dly_q[1887:1856];
-  wire [31:0] n29_input;
-  assign n29_input = in_sh8_blue_i;
-  reg  [1887:0] n29_dly_q;
+  wire [31:0] n28_sh8_green_d59;
+  assign n28_sh8_green_d59 = n28_sh8_green_dly_q[1887:1856];
+  wire [31:0] n29_sh8_blue;
+  assign n29_sh8_blue = in_sh8_blue_i;
+  reg  [1887:0] n29_sh8_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n29_dly_q <= {n29_dly_q[1855:0], n29_input};
+      n29_sh8_blue_dly_q <= {n29_sh8_blue_dly_q[1855:0], n29_sh8_blue};
     end
   end
-  wire [31:0] n29_d59;
-  assign n29_d59 = n29_dly_q[1887:1856];
-  wire [31:0] n30_input;
-  assign n30_input = in_sh9_red_i;
-  reg  [2015:0] n30_dly_q;
+  wire [31:0] n29_sh8_blue_d59;
+  assign n29_sh8_blue_d59 = n29_sh8_blue_dly_q[1887:1856];
+  wire [31:0] n30_sh9_red;
+  assign n30_sh9_red = in_sh9_red_i;
+  reg  [2015:0] n30_sh9_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n30_dly_q <= {n30_dly_q[1983:0], n30_input};
+      n30_sh9_red_dly_q <= {n30_sh9_red_dly_q[1983:0], n30_sh9_red};
     end
   end
-  wire [31:0] n30_d63;
-  assign n30_d63 = n30_dly_q[2015:1984];
-  wire [31:0] n31_input;
-  assign n31_input = in_sh9_green_i;
-  reg  [2015:0] n31_dly_q;
+  wire [31:0] n30_sh9_red_d63;
+  assign n30_sh9_red_d63 = n30_sh9_red_dly_q[2015:1984];
+  wire [31:0] n31_sh9_green;
+  assign n31_sh9_green = in_sh9_green_i;
+  reg  [2015:0] n31_sh9_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n31_dly_q <= {n31_dly_q[1983:0], n31_input};
+      n31_sh9_green_dly_q <= {n31_sh9_green_dly_q[1983:0], n31_sh9_green};
     end
   end
-  wire [31:0] n31_d63;
-  assign n31_d63 = n31_dly_q[2015:1984];
-  wire [31:0] n32_input;
-  assign n32_input = in_sh9_blue_i;
-  reg  [2015:0] n32_dly_q;
+  wire [31:0] n31_sh9_green_d63;
+  assign n31_sh9_green_d63 = n31_sh9_green_dly_q[2015:1984];
+  wire [31:0] n32_sh9_blue;
+  assign n32_sh9_blue = in_sh9_blue_i;
+  reg  [2015:0] n32_sh9_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n32_dly_q <= {n32_dly_q[1983:0], n32_input};
+      n32_sh9_blue_dly_q <= {n32_sh9_blue_dly_q[1983:0], n32_sh9_blue};
     end
   end
-  wire [31:0] n32_d63;
-  assign n32_d63 = n32_dly_q[2015:1984];
-  wire [31:0] n33_input;
-  assign n33_input = in_sh10_red_i;
-  reg  [1887:0] n33_dly_q;
+  wire [31:0] n32_sh9_blue_d63;
+  assign n32_sh9_blue_d63 = n32_sh9_blue_dly_q[2015:1984];
+  wire [31:0] n33_sh10_red;
+  assign n33_sh10_red = in_sh10_red_i;
+  reg  [1887:0] n33_sh10_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n33_dly_q <= {n33_dly_q[1855:0], n33_input};
+      n33_sh10_red_dly_q <= {n33_sh10_red_dly_q[1855:0], n33_sh10_red};
     end
   end
-  wire [31:0] n33_d59;
-  assign n33_d59 = n33_dly_q[1887:1856];
-  wire [31:0] n34_input;
-  assign n34_input = in_sh10_green_i;
-  reg  [1887:0] n34_dly_q;
+  wire [31:0] n33_sh10_red_d59;
+  assign n33_sh10_red_d59 = n33_sh10_red_dly_q[1887:1856];
+  wire [31:0] n34_sh10_green;
+  assign n34_sh10_green = in_sh10_green_i;
+  reg  [1887:0] n34_sh10_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n34_dly_q <= {n34_dly_q[1855:0], n34_input};
+      n34_sh10_green_dly_q <= {n34_sh10_green_dly_q[1855:0], n34_sh10_green};
     end
   end
-  wire [31:0] n34_d59;
-  assign n34_d59 = n34_dly_q[1887:1856];
-  wire [31:0] n35_input;
-  assign n35_input = in_sh10_blue_i;
-  reg  [1887:0] n35_dly_q;
+  wire [31:0] n34_sh10_green_d59;
+  assign n34_sh10_green_d59 = n34_sh10_green_dly_q[1887:1856];
+  wire [31:0] n35_sh10_blue;
+  assign n35_sh10_blue = in_sh10_blue_i;
+  reg  [1887:0] n35_sh10_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n35_dly_q <= {n35_dly_q[1855:0], n35_input};
+      n35_sh10_blue_dly_q <= {n35_sh10_blue_dly_q[1855:0], n35_sh10_blue};
     end
   end
-  wire [31:0] n35_d59;
-  assign n35_d59 = n35_dly_q[1887:1856];
-  wire [31:0] n36_input;
-  assign n36_input = in_sh11_red_i;
-  reg  [2143:0] n36_dly_q;
+  wire [31:0] n35_sh10_blue_d59;
+  assign n35_sh10_blue_d59 = n35_sh10_blue_dly_q[1887:1856];
+  wire [31:0] n36_sh11_red;
+  assign n36_sh11_red = in_sh11_red_i;
+  reg  [2143:0] n36_sh11_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n36_dly_q <= {n36_dly_q[2111:0], n36_input};
+      n36_sh11_red_dly_q <= {n36_sh11_red_dly_q[2111:0], n36_sh11_red};
     end
   end
-  wire [31:0] n36_d67;
-  assign n36_d67 = n36_dly_q[2143:2112];
-  wire [31:0] n37_input;
-  assign n37_input = in_sh11_green_i;
-  reg  [2143:0] n37_dly_q;
+  wire [31:0] n36_sh11_red_d67;
+  assign n36_sh11_red_d67 = n36_sh11_red_dly_q[2143:2112];
+  wire [31:0] n37_sh11_green;
+  assign n37_sh11_green = in_sh11_green_i;
+  reg  [2143:0] n37_sh11_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n37_dly_q <= {n37_dly_q[2111:0], n37_input};
+      n37_sh11_green_dly_q <= {n37_sh11_green_dly_q[2111:0], n37_sh11_green};
     end
   end
-  wire [31:0] n37_d67;
-  assign n37_d67 = n37_dly_q[2143:2112];
-  wire [31:0] n38_input;
-  assign n38_input = in_sh11_blue_i;
-  reg  [2143:0] n38_dly_q;
+  wire [31:0] n37_sh11_green_d67;
+  assign n37_sh11_green_d67 = n37_sh11_green_dly_q[2143:2112];
+  wire [31:0] n38_sh11_blue;
+  assign n38_sh11_blue = in_sh11_blue_i;
+  reg  [2143:0] n38_sh11_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n38_dly_q <= {n38_dly_q[2111:0], n38_input};
+      n38_sh11_blue_dly_q <= {n38_sh11_blue_dly_q[2111:0], n38_sh11_blue};
     end
   end
-  wire [31:0] n38_d67;
-  assign n38_d67 = n38_dly_q[2143:2112];
-  wire [31:0] n39_input;
-  assign n39_input = in_sh12_red_i;
-  reg  [2143:0] n39_dly_q;
+  wire [31:0] n38_sh11_blue_d67;
+  assign n38_sh11_blue_d67 = n38_sh11_blue_dly_q[2143:2112];
+  wire [31:0] n39_sh12_red;
+  assign n39_sh12_red = in_sh12_red_i;
+  reg  [2143:0] n39_sh12_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n39_dly_q <= {n39_dly_q[2111:0], n39_input};
+      n39_sh12_red_dly_q <= {n39_sh12_red_dly_q[2111:0], n39_sh12_red};
     end
   end
-  wire [31:0] n39_d67;
-  assign n39_d67 = n39_dly_q[2143:2112];
-  wire [31:0] n40_input;
-  assign n40_input = in_sh12_green_i;
-  reg  [2143:0] n40_dly_q;
+  wire [31:0] n39_sh12_red_d67;
+  assign n39_sh12_red_d67 = n39_sh12_red_dly_q[2143:2112];
+  wire [31:0] n40_sh12_green;
+  assign n40_sh12_green = in_sh12_green_i;
+  reg  [2143:0] n40_sh12_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n40_dly_q <= {n40_dly_q[2111:0], n40_input};
+      n40_sh12_green_dly_q <= {n40_sh12_green_dly_q[2111:0], n40_sh12_green};
     end
   end
-  wire [31:0] n40_d67;
-  assign n40_d67 = n40_dly_q[2143:2112];
-  wire [31:0] n41_input;
-  assign n41_input = in_sh12_blue_i;
-  reg  [2143:0] n41_dly_q;
+  wire [31:0] n40_sh12_green_d67;
+  assign n40_sh12_green_d67 = n40_sh12_green_dly_q[2143:2112];
+  wire [31:0] n41_sh12_blue;
+  assign n41_sh12_blue = in_sh12_blue_i;
+  reg  [2143:0] n41_sh12_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n41_dly_q <= {n41_dly_q[2111:0], n41_input};
+      n41_sh12_blue_dly_q <= {n41_sh12_blue_dly_q[2111:0], n41_sh12_blue};
     end
   end
-  wire [31:0] n41_d67;
-  assign n41_d67 = n41_dly_q[2143:2112];
-  wire [31:0] n42_input;
-  assign n42_input = in_sh13_red_i;
-  reg  [2143:0] n42_dly_q;
+  wire [31:0] n41_sh12_blue_d67;
+  assign n41_sh12_blue_d67 = n41_sh12_blue_dly_q[2143:2112];
+  wire [31:0] n42_sh13_red;
+  assign n42_sh13_red = in_sh13_red_i;
+  reg  [2143:0] n42_sh13_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n42_dly_q <= {n42_dly_q[2111:0], n42_input};
+      n42_sh13_red_dly_q <= {n42_sh13_red_dly_q[2111:0], n42_sh13_red};
     end
   end
-  wire [31:0] n42_d67;
-  assign n42_d67 = n42_dly_q[2143:2112];
-  wire [31:0] n43_input;
-  assign n43_input = in_sh13_green_i;
-  reg  [2143:0] n43_dly_q;
+  wire [31:0] n42_sh13_red_d67;
+  assign n42_sh13_red_d67 = n42_sh13_red_dly_q[2143:2112];
+  wire [31:0] n43_sh13_green;
+  assign n43_sh13_green = in_sh13_green_i;
+  reg  [2143:0] n43_sh13_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n43_dly_q <= {n43_dly_q[2111:0], n43_input};
+      n43_sh13_green_dly_q <= {n43_sh13_green_dly_q[2111:0], n43_sh13_green};
     end
   end
-  wire [31:0] n43_d67;
-  assign n43_d67 = n43_dly_q[2143:2112];
-  wire [31:0] n44_input;
-  assign n44_input = in_sh13_blue_i;
-  reg  [2143:0] n44_dly_q;
+  wire [31:0] n43_sh13_green_d67;
+  assign n43_sh13_green_d67 = n43_sh13_green_dly_q[2143:2112];
+  wire [31:0] n44_sh13_blue;
+  assign n44_sh13_blue = in_sh13_blue_i;
+  reg  [2143:0] n44_sh13_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n44_dly_q <= {n44_dly_q[2111:0], n44_input};
+      n44_sh13_blue_dly_q <= {n44_sh13_blue_dly_q[2111:0], n44_sh13_blue};
     end
   end
-  wire [31:0] n44_d67;
-  assign n44_d67 = n44_dly_q[2143:2112];
-  wire [31:0] n45_input;
-  assign n45_input = in_sh14_red_i;
-  reg  [1887:0] n45_dly_q;
+  wire [31:0] n44_sh13_blue_d67;
+  assign n44_sh13_blue_d67 = n44_sh13_blue_dly_q[2143:2112];
+  wire [31:0] n45_sh14_red;
+  assign n45_sh14_red = in_sh14_red_i;
+  reg  [1887:0] n45_sh14_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n45_dly_q <= {n45_dly_q[1855:0], n45_input};
+      n45_sh14_red_dly_q <= {n45_sh14_red_dly_q[1855:0], n45_sh14_red};
     end
   end
-  wire [31:0] n45_d59;
-  assign n45_d59 = n45_dly_q[1887:1856];
-  wire [31:0] n46_input;
-  assign n46_input = in_sh14_green_i;
-  reg  [1887:0] n46_dly_q;
+  wire [31:0] n45_sh14_red_d59;
+  assign n45_sh14_red_d59 = n45_sh14_red_dly_q[1887:1856];
+  wire [31:0] n46_sh14_green;
+  assign n46_sh14_green = in_sh14_green_i;
+  reg  [1887:0] n46_sh14_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n46_dly_q <= {n46_dly_q[1855:0], n46_input};
+      n46_sh14_green_dly_q <= {n46_sh14_green_dly_q[1855:0], n46_sh14_green};
     end
   end
-  wire [31:0] n46_d59;
-  assign n46_d59 = n46_dly_q[1887:1856];
-  wire [31:0] n47_input;
-  assign n47_input = in_sh14_blue_i;
-  reg  [1887:0] n47_dly_q;
+  wire [31:0] n46_sh14_green_d59;
+  assign n46_sh14_green_d59 = n46_sh14_green_dly_q[1887:1856];
+  wire [31:0] n47_sh14_blue;
+  assign n47_sh14_blue = in_sh14_blue_i;
+  reg  [1887:0] n47_sh14_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n47_dly_q <= {n47_dly_q[1855:0], n47_input};
+      n47_sh14_blue_dly_q <= {n47_sh14_blue_dly_q[1855:0], n47_sh14_blue};
     end
   end
-  wire [31:0] n47_d59;
-  assign n47_d59 = n47_dly_q[1887:1856];
-  wire [31:0] n48_input;
-  assign n48_input = in_sh15_red_i;
-  reg  [2015:0] n48_dly_q;
+  wire [31:0] n47_sh14_blue_d59;
+  assign n47_sh14_blue_d59 = n47_sh14_blue_dly_q[1887:1856];
+  wire [31:0] n48_sh15_red;
+  assign n48_sh15_red = in_sh15_red_i;
+  reg  [2015:0] n48_sh15_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n48_dly_q <= {n48_dly_q[1983:0], n48_input};
+      n48_sh15_red_dly_q <= {n48_sh15_red_dly_q[1983:0], n48_sh15_red};
     end
   end
-  wire [31:0] n48_d63;
-  assign n48_d63 = n48_dly_q[2015:1984];
-  wire [31:0] n49_input;
-  assign n49_input = in_sh15_green_i;
-  reg  [2015:0] n49_dly_q;
+  wire [31:0] n48_sh15_red_d63;
+  assign n48_sh15_red_d63 = n48_sh15_red_dly_q[2015:1984];
+  wire [31:0] n49_sh15_green;
+  assign n49_sh15_green = in_sh15_green_i;
+  reg  [2015:0] n49_sh15_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n49_dly_q <= {n49_dly_q[1983:0], n49_input};
+      n49_sh15_green_dly_q <= {n49_sh15_green_dly_q[1983:0], n49_sh15_green};
     end
   end
-  wire [31:0] n49_d63;
-  assign n49_d63 = n49_dly_q[2015:1984];
-  wire [31:0] n50_input;
-  assign n50_input = in_sh15_blue_i;
-  reg  [2015:0] n50_dly_q;
+  wire [31:0] n49_sh15_green_d63;
+  assign n49_sh15_green_d63 = n49_sh15_green_dly_q[2015:1984];
+  wire [31:0] n50_sh15_blue;
+  assign n50_sh15_blue = in_sh15_blue_i;
+  reg  [2015:0] n50_sh15_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n50_dly_q <= {n50_dly_q[1983:0], n50_input};
+      n50_sh15_blue_dly_q <= {n50_sh15_blue_dly_q[1983:0], n50_sh15_blue};
     end
   end
-  wire [31:0] n50_d63;
-  assign n50_d63 = n50_dly_q[2015:1984];
-  wire [31:0] n51_input;
-  assign n51_input = cam_x_i;
-  wire [31:0] n52_input;
-  assign n52_input = cam_y_i;
-  wire [31:0] n53_input;
-  assign n53_input = cam_z_i;
-  wire [31:0] n54_input;
-  assign n54_input = degree_i;
+  wire [31:0] n50_sh15_blue_d63;
+  assign n50_sh15_blue_d63 = n50_sh15_blue_dly_q[2015:1984];
+  wire [31:0] n51_cam_x;
+  assign n51_cam_x = cam_x_i;
+  wire [31:0] n52_cam_y;
+  assign n52_cam_y = cam_y_i;
+  wire [31:0] n53_cam_z;
+  assign n53_cam_z = cam_z_i;
+  wire [31:0] n54_degree;
+  assign n54_degree = degree_i;
   wire [31:0] n55_lit;
   assign n55_lit = 32'h3e906ebb;
-  wire [31:0] n56_mul;
-  neo_fp_mul u_n56 (
+  wire [31:0] n56_band0_red;
+  neo_fp_mul u_n56_band0_red (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n55_lit),
-    .b_i(n3_input),
-    .y_o(n56_mul)
+    .b_i(n3_sh0_red),
+    .y_o(n56_band0_red)
   );
-  reg  [2015:0] n56_dly_q;
+  reg  [2015:0] n56_band0_red_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n56_dly_q <= {n56_dly_q[1983:0], n56_mul};
+      n56_band0_red_dly_q <= {n56_band0_red_dly_q[1983:0], n56_band0_red};
     end
   end
-  wire [31:0] n56_d51;
-  assign n56_d51 = n56_dly_q[1631:1600];
-  wire [31:0] n56_d63;
-  assign n56_d63 = n56_dly_q[2015:1984];
-  wire [31:0] n57_mul;
-  neo_fp_mul u_n57 (
+  wire [31:0] n56_band0_red_d51;
+  assign n56_band0_red_d51 = n56_band0_red_dly_q[1631:1600];
+  wire [31:0] n56_band0_red_d63;
+  assign n56_band0_red_d63 = n56_band0_red_dly_q[2015:1984];
+  wire [31:0] n57_band0_green;
+  neo_fp_mul u_n57_band0_green (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n55_lit),
-    .b_i(n4_input),
-    .y_o(n57_mul)
+    .b_i(n4_sh0_green),
+    .y_o(n57_band0_green)
   );
-  reg  [2015:0] n57_dly_q;
+  reg  [2015:0] n57_band0_green_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n57_dly_q <= {n57_dly_q[1983:0], n57_mul};
+      n57_band0_green_dly_q <= {n57_band0_green_dly_q[1983:0], n57_band0_green};
     end
   end
-  wire [31:0] n57_d51;
-  assign n57_d51 = n57_dly_q[1631:1600];
-  wire [31:0] n57_d63;
-  assign n57_d63 = n57_dly_q[2015:1984];
-  wire [31:0] n58_mul;
-  neo_fp_mul u_n58 (
+  wire [31:0] n57_band0_green_d51;
+  assign n57_band0_green_d51 = n57_band0_green_dly_q[1631:1600];
+  wire [31:0] n57_band0_green_d63;
+  assign n57_band0_green_d63 = n57_band0_green_dly_q[2015:1984];
+  wire [31:0] n58_band0_blue;
+  neo_fp_mul u_n58_band0_blue (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n55_lit),
-    .b_i(n5_input),
-    .y_o(n58_mul)
+    .b_i(n5_sh0_blue),
+    .y_o(n58_band0_blue)
   );
-  reg  [2015:0] n58_dly_q;
+  reg  [2015:0] n58_band0_blue_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n58_dly_q <= {n58_dly_q[1983:0], n58_mul};
+      n58_band0_blue_dly_q <= {n58_band0_blue_dly_q[1983:0], n58_band0_blue};
     end
   end
-  wire [31:0] n58_d51;
-  assign n58_d51 = n58_dly_q[1631:1600];
-  wire [31:0] n58_d63;
-  assign n58_d63 = n58_dly_q[2015:1984];
+  wire [31:0] n58_band0_blue_d51;
+  assign n58_band0_blue_d51 = n58_band0_blue_dly_q[1631:1600];
+  wire [31:0] n58_band0_blue_d63;
+  assign n58_band0_blue_d63 = n58_band0_blue_dly_q[2015:1984];
   wire [31:0] n59_sub;
   neo_fp_sub u_n59 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n0_input),
-    .b_i(n51_input),
+    .a_i(n0_mean_x),
+    .b_i(n51_cam_x),
     .y_o(n59_sub)
   );
   reg  [863:0] n59_dly_q;
@@ -629,8 +629,8 @@ module neo_pre_color (
   neo_fp_sub u_n60 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n1_input),
-    .b_i(n52_input),
+    .a_i(n1_mean_y),
+    .b_i(n52_cam_y),
     .y_o(n60_sub)
   );
   reg  [863:0] n60_dly_q;
@@ -645,8 +645,8 @@ module neo_pre_color (
   neo_fp_sub u_n61 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n2_input),
-    .b_i(n53_input),
+    .a_i(n2_mean_z),
+    .b_i(n53_cam_z),
     .y_o(n61_sub)
   );
   reg  [863:0] n61_dly_q;
@@ -712,38 +712,38 @@ module neo_pre_color (
     .a_i(n66_add),
     .y_o(n67_sqrt)
   );
-  wire [31:0] n68_div;
-  neo_fp_div u_n68 (
+  wire [31:0] n68_dir_x;
+  neo_fp_div u_n68_dir_x (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n59_d27),
     .b_i(n67_sqrt),
-    .y_o(n68_div)
+    .y_o(n68_dir_x)
   );
-  wire [31:0] n69_div;
-  neo_fp_div u_n69 (
+  wire [31:0] n69_dir_y;
+  neo_fp_div u_n69_dir_y (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n60_d27),
     .b_i(n67_sqrt),
-    .y_o(n69_div)
+    .y_o(n69_dir_y)
   );
-  wire [31:0] n70_div;
-  neo_fp_div u_n70 (
+  wire [31:0] n70_dir_z;
+  neo_fp_div u_n70_dir_z (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n61_d27),
     .b_i(n67_sqrt),
-    .y_o(n70_div)
+    .y_o(n70_dir_z)
   );
-  reg  [255:0] n70_dly_q;
+  reg  [255:0] n70_dir_z_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n70_dly_q <= {n70_dly_q[223:0], n70_div};
+      n70_dir_z_dly_q <= {n70_dir_z_dly_q[223:0], n70_dir_z};
     end
   end
-  wire [31:0] n70_d8;
-  assign n70_d8 = n70_dly_q[255:224];
+  wire [31:0] n70_dir_z_d8;
+  assign n70_dir_z_d8 = n70_dir_z_dly_q[255:224];
   wire [31:0] n71_lit;
   assign n71_lit = 32'h3efa2a1c;
   wire [31:0] n72_mul;
@@ -751,7 +751,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n71_lit),
-    .b_i(n69_div),
+    .b_i(n69_dir_y),
     .y_o(n72_mul)
   );
   wire [31:0] n73_mul;
@@ -759,14 +759,14 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n72_mul),
-    .b_i(n6_d51),
+    .b_i(n6_sh1_red_d51),
     .y_o(n73_mul)
   );
   wire [31:0] n74_sub;
   neo_fp_sub u_n74 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n56_d51),
+    .a_i(n56_band0_red_d51),
     .b_i(n73_mul),
     .y_o(n74_sub)
   );
@@ -775,14 +775,14 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n72_mul),
-    .b_i(n7_d51),
+    .b_i(n7_sh1_green_d51),
     .y_o(n75_mul)
   );
   wire [31:0] n76_sub;
   neo_fp_sub u_n76 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n57_d51),
+    .a_i(n57_band0_green_d51),
     .b_i(n75_mul),
     .y_o(n76_sub)
   );
@@ -791,14 +791,14 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n72_mul),
-    .b_i(n8_d51),
+    .b_i(n8_sh1_blue_d51),
     .y_o(n77_mul)
   );
   wire [31:0] n78_sub;
   neo_fp_sub u_n78 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n58_d51),
+    .a_i(n58_band0_blue_d51),
     .b_i(n77_mul),
     .y_o(n78_sub)
   );
@@ -807,7 +807,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n71_lit),
-    .b_i(n70_div),
+    .b_i(n70_dir_z),
     .y_o(n79_mul)
   );
   wire [31:0] n80_mul;
@@ -815,7 +815,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n79_mul),
-    .b_i(n9_d51),
+    .b_i(n9_sh2_red_d51),
     .y_o(n80_mul)
   );
   reg  [127:0] n80_dly_q;
@@ -839,7 +839,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n79_mul),
-    .b_i(n10_d51),
+    .b_i(n10_sh2_green_d51),
     .y_o(n82_mul)
   );
   reg  [127:0] n82_dly_q;
@@ -863,7 +863,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n79_mul),
-    .b_i(n11_d51),
+    .b_i(n11_sh2_blue_d51),
     .y_o(n84_mul)
   );
   reg  [127:0] n84_dly_q;
@@ -887,7 +887,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n71_lit),
-    .b_i(n68_div),
+    .b_i(n68_dir_x),
     .y_o(n86_mul)
   );
   wire [31:0] n87_mul;
@@ -895,7 +895,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n86_mul),
-    .b_i(n12_d51),
+    .b_i(n12_sh3_red_d51),
     .y_o(n87_mul)
   );
   reg  [255:0] n87_dly_q;
@@ -906,20 +906,20 @@ module neo_pre_color (
   end
   wire [31:0] n87_d8;
   assign n87_d8 = n87_dly_q[255:224];
-  wire [31:0] n88_sub;
-  neo_fp_sub u_n88 (
+  wire [31:0] n88_band1_red;
+  neo_fp_sub u_n88_band1_red (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n81_add),
     .b_i(n87_d8),
-    .y_o(n88_sub)
+    .y_o(n88_band1_red)
   );
   wire [31:0] n89_mul;
   neo_fp_mul u_n89 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n86_mul),
-    .b_i(n13_d51),
+    .b_i(n13_sh3_green_d51),
     .y_o(n89_mul)
   );
   reg  [255:0] n89_dly_q;
@@ -930,20 +930,20 @@ module neo_pre_color (
   end
   wire [31:0] n89_d8;
   assign n89_d8 = n89_dly_q[255:224];
-  wire [31:0] n90_sub;
-  neo_fp_sub u_n90 (
+  wire [31:0] n90_band1_green;
+  neo_fp_sub u_n90_band1_green (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n83_add),
     .b_i(n89_d8),
-    .y_o(n90_sub)
+    .y_o(n90_band1_green)
   );
   wire [31:0] n91_mul;
   neo_fp_mul u_n91 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n86_mul),
-    .b_i(n14_d51),
+    .b_i(n14_sh3_blue_d51),
     .y_o(n91_mul)
   );
   reg  [255:0] n91_dly_q;
@@ -954,79 +954,79 @@ module neo_pre_color (
   end
   wire [31:0] n91_d8;
   assign n91_d8 = n91_dly_q[255:224];
-  wire [31:0] n92_sub;
-  neo_fp_sub u_n92 (
+  wire [31:0] n92_band1_blue;
+  neo_fp_sub u_n92_band1_blue (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n85_add),
     .b_i(n91_d8),
-    .y_o(n92_sub)
+    .y_o(n92_band1_blue)
   );
-  wire [31:0] n93_mul;
-  neo_fp_mul u_n93 (
+  wire [31:0] n93_dir_xx;
+  neo_fp_mul u_n93_dir_xx (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n68_div),
-    .b_i(n68_div),
-    .y_o(n93_mul)
+    .a_i(n68_dir_x),
+    .b_i(n68_dir_x),
+    .y_o(n93_dir_xx)
   );
-  reg  [127:0] n93_dly_q;
+  reg  [127:0] n93_dir_xx_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n93_dly_q <= {n93_dly_q[95:0], n93_mul};
+      n93_dir_xx_dly_q <= {n93_dir_xx_dly_q[95:0], n93_dir_xx};
     end
   end
-  wire [31:0] n93_d4;
-  assign n93_d4 = n93_dly_q[127:96];
-  wire [31:0] n94_mul;
-  neo_fp_mul u_n94 (
+  wire [31:0] n93_dir_xx_d4;
+  assign n93_dir_xx_d4 = n93_dir_xx_dly_q[127:96];
+  wire [31:0] n94_dir_yy;
+  neo_fp_mul u_n94_dir_yy (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n69_div),
-    .b_i(n69_div),
-    .y_o(n94_mul)
+    .a_i(n69_dir_y),
+    .b_i(n69_dir_y),
+    .y_o(n94_dir_yy)
   );
-  reg  [255:0] n94_dly_q;
+  reg  [255:0] n94_dir_yy_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n94_dly_q <= {n94_dly_q[223:0], n94_mul};
+      n94_dir_yy_dly_q <= {n94_dir_yy_dly_q[223:0], n94_dir_yy};
     end
   end
-  wire [31:0] n94_d4;
-  assign n94_d4 = n94_dly_q[127:96];
-  wire [31:0] n94_d8;
-  assign n94_d8 = n94_dly_q[255:224];
-  wire [31:0] n95_mul;
-  neo_fp_mul u_n95 (
+  wire [31:0] n94_dir_yy_d4;
+  assign n94_dir_yy_d4 = n94_dir_yy_dly_q[127:96];
+  wire [31:0] n94_dir_yy_d8;
+  assign n94_dir_yy_d8 = n94_dir_yy_dly_q[255:224];
+  wire [31:0] n95_dir_zz;
+  neo_fp_mul u_n95_dir_zz (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n70_div),
-    .b_i(n70_div),
-    .y_o(n95_mul)
+    .a_i(n70_dir_z),
+    .b_i(n70_dir_z),
+    .y_o(n95_dir_zz)
   );
-  wire [31:0] n96_mul;
-  neo_fp_mul u_n96 (
+  wire [31:0] n96_dir_xy;
+  neo_fp_mul u_n96_dir_xy (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n68_div),
-    .b_i(n69_div),
-    .y_o(n96_mul)
+    .a_i(n68_dir_x),
+    .b_i(n69_dir_y),
+    .y_o(n96_dir_xy)
   );
-  wire [31:0] n97_mul;
-  neo_fp_mul u_n97 (
+  wire [31:0] n97_dir_yz;
+  neo_fp_mul u_n97_dir_yz (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n69_div),
-    .b_i(n70_div),
-    .y_o(n97_mul)
+    .a_i(n69_dir_y),
+    .b_i(n70_dir_z),
+    .y_o(n97_dir_yz)
   );
-  wire [31:0] n98_mul;
-  neo_fp_mul u_n98 (
+  wire [31:0] n98_dir_xz;
+  neo_fp_mul u_n98_dir_xz (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n68_div),
-    .b_i(n70_div),
-    .y_o(n98_mul)
+    .a_i(n68_dir_x),
+    .b_i(n70_dir_z),
+    .y_o(n98_dir_xz)
   );
   wire [31:0] n99_lit;
   assign n99_lit = 32'h3f8bd8a1;
@@ -1035,7 +1035,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n99_lit),
-    .b_i(n96_mul),
+    .b_i(n96_dir_xy),
     .y_o(n100_mul)
   );
   wire [31:0] n101_mul;
@@ -1043,7 +1043,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n100_mul),
-    .b_i(n15_d55),
+    .b_i(n15_sh4_red_d55),
     .y_o(n101_mul)
   );
   reg  [255:0] n101_dly_q;
@@ -1058,7 +1058,7 @@ module neo_pre_color (
   neo_fp_add u_n102 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n88_sub),
+    .a_i(n88_band1_red),
     .b_i(n101_d8),
     .y_o(n102_add)
   );
@@ -1067,7 +1067,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n100_mul),
-    .b_i(n16_d55),
+    .b_i(n16_sh4_green_d55),
     .y_o(n103_mul)
   );
   reg  [255:0] n103_dly_q;
@@ -1082,7 +1082,7 @@ module neo_pre_color (
   neo_fp_add u_n104 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n90_sub),
+    .a_i(n90_band1_green),
     .b_i(n103_d8),
     .y_o(n104_add)
   );
@@ -1091,7 +1091,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n100_mul),
-    .b_i(n17_d55),
+    .b_i(n17_sh4_blue_d55),
     .y_o(n105_mul)
   );
   reg  [255:0] n105_dly_q;
@@ -1106,7 +1106,7 @@ module neo_pre_color (
   neo_fp_add u_n106 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n92_sub),
+    .a_i(n92_band1_blue),
     .b_i(n105_d8),
     .y_o(n106_add)
   );
@@ -1117,7 +1117,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n107_lit),
-    .b_i(n97_mul),
+    .b_i(n97_dir_yz),
     .y_o(n108_mul)
   );
   wire [31:0] n109_mul;
@@ -1125,7 +1125,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n108_mul),
-    .b_i(n18_d55),
+    .b_i(n18_sh5_red_d55),
     .y_o(n109_mul)
   );
   reg  [383:0] n109_dly_q;
@@ -1149,7 +1149,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n108_mul),
-    .b_i(n19_d55),
+    .b_i(n19_sh5_green_d55),
     .y_o(n111_mul)
   );
   reg  [383:0] n111_dly_q;
@@ -1173,7 +1173,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n108_mul),
-    .b_i(n20_d55),
+    .b_i(n20_sh5_blue_d55),
     .y_o(n113_mul)
   );
   reg  [383:0] n113_dly_q;
@@ -1199,7 +1199,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n115_lit),
-    .b_i(n95_mul),
+    .b_i(n95_dir_zz),
     .y_o(n116_mul)
   );
   wire [31:0] n117_sub;
@@ -1207,7 +1207,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n116_mul),
-    .b_i(n93_d4),
+    .b_i(n93_dir_xx_d4),
     .y_o(n117_sub)
   );
   wire [31:0] n118_sub;
@@ -1215,7 +1215,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n117_sub),
-    .b_i(n94_d8),
+    .b_i(n94_dir_yy_d8),
     .y_o(n118_sub)
   );
   wire [31:0] n119_lit;
@@ -1233,7 +1233,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n120_mul),
-    .b_i(n21_d67),
+    .b_i(n21_sh6_red_d67),
     .y_o(n121_mul)
   );
   reg  [127:0] n121_dly_q;
@@ -1257,7 +1257,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n120_mul),
-    .b_i(n22_d67),
+    .b_i(n22_sh6_green_d67),
     .y_o(n123_mul)
   );
   reg  [127:0] n123_dly_q;
@@ -1281,7 +1281,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n120_mul),
-    .b_i(n23_d67),
+    .b_i(n23_sh6_blue_d67),
     .y_o(n125_mul)
   );
   reg  [127:0] n125_dly_q;
@@ -1305,7 +1305,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n107_lit),
-    .b_i(n98_mul),
+    .b_i(n98_dir_xz),
     .y_o(n127_mul)
   );
   wire [31:0] n128_mul;
@@ -1313,7 +1313,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n127_mul),
-    .b_i(n24_d55),
+    .b_i(n24_sh7_red_d55),
     .y_o(n128_mul)
   );
   reg  [639:0] n128_dly_q;
@@ -1337,7 +1337,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n127_mul),
-    .b_i(n25_d55),
+    .b_i(n25_sh7_green_d55),
     .y_o(n130_mul)
   );
   reg  [639:0] n130_dly_q;
@@ -1361,7 +1361,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n127_mul),
-    .b_i(n26_d55),
+    .b_i(n26_sh7_blue_d55),
     .y_o(n132_mul)
   );
   reg  [639:0] n132_dly_q;
@@ -1384,8 +1384,8 @@ module neo_pre_color (
   neo_fp_sub u_n134 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n93_mul),
-    .b_i(n94_mul),
+    .a_i(n93_dir_xx),
+    .b_i(n94_dir_yy),
     .y_o(n134_sub)
   );
   wire [31:0] n135_lit;
@@ -1403,7 +1403,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n136_mul),
-    .b_i(n27_d59),
+    .b_i(n27_sh8_red_d59),
     .y_o(n137_mul)
   );
   reg  [639:0] n137_dly_q;
@@ -1414,20 +1414,20 @@ module neo_pre_color (
   end
   wire [31:0] n137_d20;
   assign n137_d20 = n137_dly_q[639:608];
-  wire [31:0] n138_add;
-  neo_fp_add u_n138 (
+  wire [31:0] n138_band2_red;
+  neo_fp_add u_n138_band2_red (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n129_add),
     .b_i(n137_d20),
-    .y_o(n138_add)
+    .y_o(n138_band2_red)
   );
   wire [31:0] n139_mul;
   neo_fp_mul u_n139 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n136_mul),
-    .b_i(n28_d59),
+    .b_i(n28_sh8_green_d59),
     .y_o(n139_mul)
   );
   reg  [639:0] n139_dly_q;
@@ -1438,20 +1438,20 @@ module neo_pre_color (
   end
   wire [31:0] n139_d20;
   assign n139_d20 = n139_dly_q[639:608];
-  wire [31:0] n140_add;
-  neo_fp_add u_n140 (
+  wire [31:0] n140_band2_green;
+  neo_fp_add u_n140_band2_green (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n131_add),
     .b_i(n139_d20),
-    .y_o(n140_add)
+    .y_o(n140_band2_green)
   );
   wire [31:0] n141_mul;
   neo_fp_mul u_n141 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n136_mul),
-    .b_i(n29_d59),
+    .b_i(n29_sh8_blue_d59),
     .y_o(n141_mul)
   );
   reg  [639:0] n141_dly_q;
@@ -1462,13 +1462,13 @@ module neo_pre_color (
   end
   wire [31:0] n141_d20;
   assign n141_d20 = n141_dly_q[639:608];
-  wire [31:0] n142_add;
-  neo_fp_add u_n142 (
+  wire [31:0] n142_band2_blue;
+  neo_fp_add u_n142_band2_blue (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n133_add),
     .b_i(n141_d20),
-    .y_o(n142_add)
+    .y_o(n142_band2_blue)
   );
   wire [31:0] n143_lit;
   assign n143_lit = 32'h40400000;
@@ -1477,7 +1477,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n143_lit),
-    .b_i(n93_mul),
+    .b_i(n93_dir_xx),
     .y_o(n144_mul)
   );
   wire [31:0] n145_sub;
@@ -1485,7 +1485,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n144_mul),
-    .b_i(n94_d4),
+    .b_i(n94_dir_yy_d4),
     .y_o(n145_sub)
   );
   wire [31:0] n146_lit;
@@ -1495,7 +1495,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n146_lit),
-    .b_i(n69_div),
+    .b_i(n69_dir_y),
     .y_o(n147_mul)
   );
   reg  [255:0] n147_dly_q;
@@ -1519,7 +1519,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n148_mul),
-    .b_i(n30_d63),
+    .b_i(n30_sh9_red_d63),
     .y_o(n149_mul)
   );
   reg  [639:0] n149_dly_q;
@@ -1534,7 +1534,7 @@ module neo_pre_color (
   neo_fp_add u_n150 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n138_add),
+    .a_i(n138_band2_red),
     .b_i(n149_d20),
     .y_o(n150_add)
   );
@@ -1543,7 +1543,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n148_mul),
-    .b_i(n31_d63),
+    .b_i(n31_sh9_green_d63),
     .y_o(n151_mul)
   );
   reg  [639:0] n151_dly_q;
@@ -1558,7 +1558,7 @@ module neo_pre_color (
   neo_fp_add u_n152 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n140_add),
+    .a_i(n140_band2_green),
     .b_i(n151_d20),
     .y_o(n152_add)
   );
@@ -1567,7 +1567,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n148_mul),
-    .b_i(n32_d63),
+    .b_i(n32_sh9_blue_d63),
     .y_o(n153_mul)
   );
   reg  [639:0] n153_dly_q;
@@ -1582,7 +1582,7 @@ module neo_pre_color (
   neo_fp_add u_n154 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n142_add),
+    .a_i(n142_band2_blue),
     .b_i(n153_d20),
     .y_o(n154_add)
   );
@@ -1593,7 +1593,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n155_lit),
-    .b_i(n96_mul),
+    .b_i(n96_dir_xy),
     .y_o(n156_mul)
   );
   wire [31:0] n157_mul;
@@ -1601,7 +1601,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n156_mul),
-    .b_i(n70_d8),
+    .b_i(n70_dir_z_d8),
     .y_o(n157_mul)
   );
   wire [31:0] n158_mul;
@@ -1609,7 +1609,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n157_mul),
-    .b_i(n33_d59),
+    .b_i(n33_sh10_red_d59),
     .y_o(n158_mul)
   );
   reg  [895:0] n158_dly_q;
@@ -1633,7 +1633,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n157_mul),
-    .b_i(n34_d59),
+    .b_i(n34_sh10_green_d59),
     .y_o(n160_mul)
   );
   reg  [895:0] n160_dly_q;
@@ -1657,7 +1657,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n157_mul),
-    .b_i(n35_d59),
+    .b_i(n35_sh10_blue_d59),
     .y_o(n162_mul)
   );
   reg  [895:0] n162_dly_q;
@@ -1683,7 +1683,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n164_lit),
-    .b_i(n95_mul),
+    .b_i(n95_dir_zz),
     .y_o(n165_mul)
   );
   wire [31:0] n166_sub;
@@ -1691,7 +1691,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n165_mul),
-    .b_i(n93_d4),
+    .b_i(n93_dir_xx_d4),
     .y_o(n166_sub)
   );
   wire [31:0] n167_sub;
@@ -1699,7 +1699,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n166_sub),
-    .b_i(n94_d8),
+    .b_i(n94_dir_yy_d8),
     .y_o(n167_sub)
   );
   wire [31:0] n168_lit;
@@ -1709,7 +1709,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n168_lit),
-    .b_i(n69_div),
+    .b_i(n69_dir_y),
     .y_o(n169_mul)
   );
   reg  [383:0] n169_dly_q;
@@ -1733,7 +1733,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n170_mul),
-    .b_i(n36_d67),
+    .b_i(n36_sh11_red_d67),
     .y_o(n171_mul)
   );
   reg  [767:0] n171_dly_q;
@@ -1757,7 +1757,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n170_mul),
-    .b_i(n37_d67),
+    .b_i(n37_sh11_green_d67),
     .y_o(n173_mul)
   );
   reg  [767:0] n173_dly_q;
@@ -1781,7 +1781,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n170_mul),
-    .b_i(n38_d67),
+    .b_i(n38_sh11_blue_d67),
     .y_o(n175_mul)
   );
   reg  [767:0] n175_dly_q;
@@ -1813,7 +1813,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n143_lit),
-    .b_i(n94_mul),
+    .b_i(n94_dir_yy),
     .y_o(n178_mul)
   );
   reg  [127:0] n178_dly_q;
@@ -1839,7 +1839,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n180_lit),
-    .b_i(n70_div),
+    .b_i(n70_dir_z),
     .y_o(n181_mul)
   );
   reg  [383:0] n181_dly_q;
@@ -1863,7 +1863,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n182_mul),
-    .b_i(n39_d67),
+    .b_i(n39_sh12_red_d67),
     .y_o(n183_mul)
   );
   reg  [895:0] n183_dly_q;
@@ -1887,7 +1887,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n182_mul),
-    .b_i(n40_d67),
+    .b_i(n40_sh12_green_d67),
     .y_o(n185_mul)
   );
   reg  [895:0] n185_dly_q;
@@ -1911,7 +1911,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n182_mul),
-    .b_i(n41_d67),
+    .b_i(n41_sh12_blue_d67),
     .y_o(n187_mul)
   );
   reg  [895:0] n187_dly_q;
@@ -1935,7 +1935,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n168_lit),
-    .b_i(n68_div),
+    .b_i(n68_dir_x),
     .y_o(n189_mul)
   );
   reg  [383:0] n189_dly_q;
@@ -1959,7 +1959,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n190_mul),
-    .b_i(n42_d67),
+    .b_i(n42_sh13_red_d67),
     .y_o(n191_mul)
   );
   reg  [1023:0] n191_dly_q;
@@ -1983,7 +1983,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n190_mul),
-    .b_i(n43_d67),
+    .b_i(n43_sh13_green_d67),
     .y_o(n193_mul)
   );
   reg  [1023:0] n193_dly_q;
@@ -2007,7 +2007,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n190_mul),
-    .b_i(n44_d67),
+    .b_i(n44_sh13_blue_d67),
     .y_o(n195_mul)
   );
   reg  [1023:0] n195_dly_q;
@@ -2033,7 +2033,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n197_lit),
-    .b_i(n70_div),
+    .b_i(n70_dir_z),
     .y_o(n198_mul)
   );
   reg  [127:0] n198_dly_q;
@@ -2057,7 +2057,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n199_mul),
-    .b_i(n45_d59),
+    .b_i(n45_sh14_red_d59),
     .y_o(n200_mul)
   );
   reg  [1407:0] n200_dly_q;
@@ -2081,7 +2081,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n199_mul),
-    .b_i(n46_d59),
+    .b_i(n46_sh14_green_d59),
     .y_o(n202_mul)
   );
   reg  [1407:0] n202_dly_q;
@@ -2105,7 +2105,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n199_mul),
-    .b_i(n47_d59),
+    .b_i(n47_sh14_blue_d59),
     .y_o(n204_mul)
   );
   reg  [1407:0] n204_dly_q;
@@ -2128,7 +2128,7 @@ module neo_pre_color (
   neo_fp_sub u_n206 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n93_d4),
+    .a_i(n93_dir_xx_d4),
     .b_i(n178_mul),
     .y_o(n206_sub)
   );
@@ -2137,7 +2137,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n146_lit),
-    .b_i(n68_div),
+    .b_i(n68_dir_x),
     .y_o(n207_mul)
   );
   reg  [255:0] n207_dly_q;
@@ -2161,7 +2161,7 @@ module neo_pre_color (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n208_mul),
-    .b_i(n48_d63),
+    .b_i(n48_sh15_red_d63),
     .y_o(n209_mul)
   );
   reg  [1407:0] n209_dly_q;
@@ -2172,20 +2172,20 @@ module neo_pre_color (
   end
   wire [31:0] n209_d44;
   assign n209_d44 = n209_dly_q[1407:1376];
-  wire [31:0] n210_add;
-  neo_fp_add u_n210 (
+  wire [31:0] n210_band3_red;
+  neo_fp_add u_n210_band3_red (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n201_add),
     .b_i(n209_d44),
-    .y_o(n210_add)
+    .y_o(n210_band3_red)
   );
   wire [31:0] n211_mul;
   neo_fp_mul u_n211 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n208_mul),
-    .b_i(n49_d63),
+    .b_i(n49_sh15_green_d63),
     .y_o(n211_mul)
   );
   reg  [1407:0] n211_dly_q;
@@ -2196,20 +2196,20 @@ module neo_pre_color (
   end
   wire [31:0] n211_d44;
   assign n211_d44 = n211_dly_q[1407:1376];
-  wire [31:0] n212_add;
-  neo_fp_add u_n212 (
+  wire [31:0] n212_band3_green;
+  neo_fp_add u_n212_band3_green (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n203_add),
     .b_i(n211_d44),
-    .y_o(n212_add)
+    .y_o(n212_band3_green)
   );
   wire [31:0] n213_mul;
   neo_fp_mul u_n213 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n208_mul),
-    .b_i(n50_d63),
+    .b_i(n50_sh15_blue_d63),
     .y_o(n213_mul)
   );
   reg  [1407:0] n213_dly_q;
@@ -2220,13 +2220,13 @@ module neo_pre_color (
   end
   wire [31:0] n213_d44;
   assign n213_d44 = n213_dly_q[1407:1376];
-  wire [31:0] n214_add;
-  neo_fp_add u_n214 (
+  wire [31:0] n214_band3_blue;
+  neo_fp_add u_n214_band3_blue (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n205_add),
     .b_i(n213_d44),
-    .y_o(n214_add)
+    .y_o(n214_band3_blue)
   );
   wire [31:0] n215_lit;
   assign n215_lit = 32'h1;
@@ -2236,7 +2236,7 @@ module neo_pre_color (
   assign n217_lit = 32'h3;
   reg  n218_ilt_q;
   always @(posedge clk_i) begin
-    n218_ilt_q <= ($signed(n54_input) < $signed(n215_lit));
+    n218_ilt_q <= ($signed(n54_degree) < $signed(n215_lit));
   end
   reg  n219_not_q;
   always @(posedge clk_i) begin
@@ -2244,7 +2244,7 @@ module neo_pre_color (
   end
   reg  n220_ilt_q;
   always @(posedge clk_i) begin
-    n220_ilt_q <= ($signed(n54_input) < $signed(n216_lit));
+    n220_ilt_q <= ($signed(n54_degree) < $signed(n216_lit));
   end
   reg  n221_not_q;
   always @(posedge clk_i) begin
@@ -2252,7 +2252,7 @@ module neo_pre_color (
   end
   reg  n222_ilt_q;
   always @(posedge clk_i) begin
-    n222_ilt_q <= ($signed(n54_input) < $signed(n217_lit));
+    n222_ilt_q <= ($signed(n54_degree) < $signed(n217_lit));
   end
   reg  n223_not_q;
   always @(posedge clk_i) begin
@@ -2265,7 +2265,7 @@ module neo_pre_color (
   reg  [31:0] n226_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n226_select_q <= (n219_not_q ? n88_sub : n56_d63);
+      n226_select_q <= (n219_not_q ? n88_band1_red : n56_band0_red_d63);
     end
   end
   reg  [607:0] n226_dly_q;
@@ -2279,7 +2279,7 @@ module neo_pre_color (
   reg  [31:0] n227_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n227_select_q <= (n221_not_q ? n138_add : n226_d19);
+      n227_select_q <= (n221_not_q ? n138_band2_red : n226_d19);
     end
   end
   reg  [863:0] n227_dly_q;
@@ -2293,7 +2293,7 @@ module neo_pre_color (
   reg  [31:0] n228_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n228_select_q <= (n223_not_q ? n210_add : n227_d27);
+      n228_select_q <= (n223_not_q ? n210_band3_red : n227_d27);
     end
   end
   wire [31:0] n229_add;
@@ -2304,30 +2304,30 @@ module neo_pre_color (
     .b_i(n224_lit),
     .y_o(n229_add)
   );
-  wire n230_cmp_lt;
-  wire n230_cmp_le;
-  wire n230_cmp_eq;
-  wire [31:0] n230_cmp_max;
-  wire [31:0] n230_cmp_min;
-  neo_fp_cmp u_n230 (
+  wire n230_rgb_red_cmp_lt;
+  wire n230_rgb_red_cmp_le;
+  wire n230_rgb_red_cmp_eq;
+  wire [31:0] n230_rgb_red_cmp_max;
+  wire [31:0] n230_rgb_red_cmp_min;
+  neo_fp_cmp u_n230_rgb_red (
     .a_i(n229_add),
     .b_i(n225_lit),
-    .lt_o(n230_cmp_lt),
-    .le_o(n230_cmp_le),
-    .eq_o(n230_cmp_eq),
-    .max_o(n230_cmp_max),
-    .min_o(n230_cmp_min)
+    .lt_o(n230_rgb_red_cmp_lt),
+    .le_o(n230_rgb_red_cmp_le),
+    .eq_o(n230_rgb_red_cmp_eq),
+    .max_o(n230_rgb_red_cmp_max),
+    .min_o(n230_rgb_red_cmp_min)
   );
-  reg  [31:0] n230_max_q;
+  reg  [31:0] n230_rgb_red_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n230_max_q <= n230_cmp_max;
+      n230_rgb_red_q <= n230_rgb_red_cmp_max;
     end
   end
   reg  [31:0] n231_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n231_select_q <= (n219_not_q ? n90_sub : n57_d63);
+      n231_select_q <= (n219_not_q ? n90_band1_green : n57_band0_green_d63);
     end
   end
   reg  [607:0] n231_dly_q;
@@ -2341,7 +2341,7 @@ module neo_pre_color (
   reg  [31:0] n232_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n232_select_q <= (n221_not_q ? n140_add : n231_d19);
+      n232_select_q <= (n221_not_q ? n140_band2_green : n231_d19);
     end
   end
   reg  [863:0] n232_dly_q;
@@ -2355,7 +2355,7 @@ module neo_pre_color (
   reg  [31:0] n233_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n233_select_q <= (n223_not_q ? n212_add : n232_d27);
+      n233_select_q <= (n223_not_q ? n212_band3_green : n232_d27);
     end
   end
   wire [31:0] n234_add;
@@ -2366,30 +2366,30 @@ module neo_pre_color (
     .b_i(n224_lit),
     .y_o(n234_add)
   );
-  wire n235_cmp_lt;
-  wire n235_cmp_le;
-  wire n235_cmp_eq;
-  wire [31:0] n235_cmp_max;
-  wire [31:0] n235_cmp_min;
-  neo_fp_cmp u_n235 (
+  wire n235_rgb_green_cmp_lt;
+  wire n235_rgb_green_cmp_le;
+  wire n235_rgb_green_cmp_eq;
+  wire [31:0] n235_rgb_green_cmp_max;
+  wire [31:0] n235_rgb_green_cmp_min;
+  neo_fp_cmp u_n235_rgb_green (
     .a_i(n234_add),
     .b_i(n225_lit),
-    .lt_o(n235_cmp_lt),
-    .le_o(n235_cmp_le),
-    .eq_o(n235_cmp_eq),
-    .max_o(n235_cmp_max),
-    .min_o(n235_cmp_min)
+    .lt_o(n235_rgb_green_cmp_lt),
+    .le_o(n235_rgb_green_cmp_le),
+    .eq_o(n235_rgb_green_cmp_eq),
+    .max_o(n235_rgb_green_cmp_max),
+    .min_o(n235_rgb_green_cmp_min)
   );
-  reg  [31:0] n235_max_q;
+  reg  [31:0] n235_rgb_green_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n235_max_q <= n235_cmp_max;
+      n235_rgb_green_q <= n235_rgb_green_cmp_max;
     end
   end
   reg  [31:0] n236_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n236_select_q <= (n219_not_q ? n92_sub : n58_d63);
+      n236_select_q <= (n219_not_q ? n92_band1_blue : n58_band0_blue_d63);
     end
   end
   reg  [607:0] n236_dly_q;
@@ -2403,7 +2403,7 @@ module neo_pre_color (
   reg  [31:0] n237_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n237_select_q <= (n221_not_q ? n142_add : n236_d19);
+      n237_select_q <= (n221_not_q ? n142_band2_blue : n236_d19);
     end
   end
   reg  [863:0] n237_dly_q;
@@ -2417,7 +2417,7 @@ module neo_pre_color (
   reg  [31:0] n238_select_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n238_select_q <= (n223_not_q ? n214_add : n237_d27);
+      n238_select_q <= (n223_not_q ? n214_band3_blue : n237_d27);
     end
   end
   wire [31:0] n239_add;
@@ -2428,24 +2428,24 @@ module neo_pre_color (
     .b_i(n224_lit),
     .y_o(n239_add)
   );
-  wire n240_cmp_lt;
-  wire n240_cmp_le;
-  wire n240_cmp_eq;
-  wire [31:0] n240_cmp_max;
-  wire [31:0] n240_cmp_min;
-  neo_fp_cmp u_n240 (
+  wire n240_rgb_blue_cmp_lt;
+  wire n240_rgb_blue_cmp_le;
+  wire n240_rgb_blue_cmp_eq;
+  wire [31:0] n240_rgb_blue_cmp_max;
+  wire [31:0] n240_rgb_blue_cmp_min;
+  neo_fp_cmp u_n240_rgb_blue (
     .a_i(n239_add),
     .b_i(n225_lit),
-    .lt_o(n240_cmp_lt),
-    .le_o(n240_cmp_le),
-    .eq_o(n240_cmp_eq),
-    .max_o(n240_cmp_max),
-    .min_o(n240_cmp_min)
+    .lt_o(n240_rgb_blue_cmp_lt),
+    .le_o(n240_rgb_blue_cmp_le),
+    .eq_o(n240_rgb_blue_cmp_eq),
+    .max_o(n240_rgb_blue_cmp_max),
+    .min_o(n240_rgb_blue_cmp_min)
   );
-  reg  [31:0] n240_max_q;
+  reg  [31:0] n240_rgb_blue_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n240_max_q <= n240_cmp_max;
+      n240_rgb_blue_q <= n240_rgb_blue_cmp_max;
     end
   end
   wire [31:0] n241_lit;
@@ -2454,7 +2454,7 @@ module neo_pre_color (
   neo_fp_mul u_n242 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n230_max_q),
+    .a_i(n230_rgb_red_q),
     .b_i(n241_lit),
     .y_o(n242_mul)
   );
@@ -2477,17 +2477,17 @@ module neo_pre_color (
       n246_imax_q <= (($signed(n244_lit) > $signed(n243_toint)) ? n244_lit : n243_toint);
     end
   end
-  reg  [31:0] n247_imin_q;
+  reg  [31:0] n247_red_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n247_imin_q <= (($signed(n245_lit) < $signed(n246_imax_q)) ? n245_lit : n246_imax_q);
+      n247_red_q <= (($signed(n245_lit) < $signed(n246_imax_q)) ? n245_lit : n246_imax_q);
     end
   end
   wire [31:0] n248_mul;
   neo_fp_mul u_n248 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n235_max_q),
+    .a_i(n235_rgb_green_q),
     .b_i(n241_lit),
     .y_o(n248_mul)
   );
@@ -2506,17 +2506,17 @@ module neo_pre_color (
       n250_imax_q <= (($signed(n244_lit) > $signed(n249_toint)) ? n244_lit : n249_toint);
     end
   end
-  reg  [31:0] n251_imin_q;
+  reg  [31:0] n251_green_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n251_imin_q <= (($signed(n245_lit) < $signed(n250_imax_q)) ? n245_lit : n250_imax_q);
+      n251_green_q <= (($signed(n245_lit) < $signed(n250_imax_q)) ? n245_lit : n250_imax_q);
     end
   end
   wire [31:0] n252_mul;
   neo_fp_mul u_n252 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n240_max_q),
+    .a_i(n240_rgb_blue_q),
     .b_i(n241_lit),
     .y_o(n252_mul)
   );
@@ -2535,16 +2535,16 @@ module neo_pre_color (
       n254_imax_q <= (($signed(n244_lit) > $signed(n253_toint)) ? n244_lit : n253_toint);
     end
   end
-  reg  [31:0] n255_imin_q;
+  reg  [31:0] n255_blue_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n255_imin_q <= (($signed(n245_lit) < $signed(n254_imax_q)) ? n245_lit : n254_imax_q);
+      n255_blue_q <= (($signed(n245_lit) < $signed(n254_imax_q)) ? n245_lit : n254_imax_q);
     end
   end
-  assign out_red_o = n247_imin_q;
-  assign out_green_o = n251_imin_q;
-  assign out_blue_o = n255_imin_q;
+  assign out_red_o = n247_red_q;
+  assign out_green_o = n251_green_q;
+  assign out_blue_o = n255_blue_q;
   wire unused_cmp;
-  assign unused_cmp = ^{n230_cmp_lt, n230_cmp_le, n230_cmp_eq, n230_cmp_min, n235_cmp_lt, n235_cmp_le, n235_cmp_eq, n235_cmp_min, n240_cmp_lt, n240_cmp_le, n240_cmp_eq, n240_cmp_min};
+  assign unused_cmp = ^{n230_rgb_red_cmp_lt, n230_rgb_red_cmp_le, n230_rgb_red_cmp_eq, n230_rgb_red_cmp_min, n235_rgb_green_cmp_lt, n235_rgb_green_cmp_le, n235_rgb_green_cmp_eq, n235_rgb_green_cmp_min, n240_rgb_blue_cmp_lt, n240_rgb_blue_cmp_le, n240_rgb_blue_cmp_eq, n240_rgb_blue_cmp_min};
 
 endmodule

@@ -76,148 +76,148 @@ module neo_pre_project (
     end
   end
   assign out_valid_o = valid_q[249];
-  wire [31:0] n0_input;
-  assign n0_input = in_pos_x_i;
-  wire [31:0] n1_input;
-  assign n1_input = in_pos_y_i;
-  wire [31:0] n2_input;
-  assign n2_input = in_pos_z_i;
-  wire [31:0] n3_input;
-  assign n3_input = in_cov_xx_i;
-  reg  [2111:0] n3_dly_q;
+  wire [31:0] n0_pos_x;
+  assign n0_pos_x = in_pos_x_i;
+  wire [31:0] n1_pos_y;
+  assign n1_pos_y = in_pos_y_i;
+  wire [31:0] n2_pos_z;
+  assign n2_pos_z = in_pos_z_i;
+  wire [31:0] n3_cov_xx;
+  assign n3_cov_xx = in_cov_xx_i;
+  reg  [2111:0] n3_cov_xx_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n3_dly_q <= {n3_dly_q[2079:0], n3_input};
+      n3_cov_xx_dly_q <= {n3_cov_xx_dly_q[2079:0], n3_cov_xx};
     end
   end
-  wire [31:0] n3_d66;
-  assign n3_d66 = n3_dly_q[2111:2080];
-  wire [31:0] n4_input;
-  assign n4_input = in_cov_xy_i;
-  reg  [2111:0] n4_dly_q;
+  wire [31:0] n3_cov_xx_d66;
+  assign n3_cov_xx_d66 = n3_cov_xx_dly_q[2111:2080];
+  wire [31:0] n4_cov_xy;
+  assign n4_cov_xy = in_cov_xy_i;
+  reg  [2111:0] n4_cov_xy_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n4_dly_q <= {n4_dly_q[2079:0], n4_input};
+      n4_cov_xy_dly_q <= {n4_cov_xy_dly_q[2079:0], n4_cov_xy};
     end
   end
-  wire [31:0] n4_d66;
-  assign n4_d66 = n4_dly_q[2111:2080];
-  wire [31:0] n5_input;
-  assign n5_input = in_cov_xz_i;
-  reg  [2111:0] n5_dly_q;
+  wire [31:0] n4_cov_xy_d66;
+  assign n4_cov_xy_d66 = n4_cov_xy_dly_q[2111:2080];
+  wire [31:0] n5_cov_xz;
+  assign n5_cov_xz = in_cov_xz_i;
+  reg  [2111:0] n5_cov_xz_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n5_dly_q <= {n5_dly_q[2079:0], n5_input};
+      n5_cov_xz_dly_q <= {n5_cov_xz_dly_q[2079:0], n5_cov_xz};
     end
   end
-  wire [31:0] n5_d66;
-  assign n5_d66 = n5_dly_q[2111:2080];
-  wire [31:0] n6_input;
-  assign n6_input = in_cov_yy_i;
-  reg  [2111:0] n6_dly_q;
+  wire [31:0] n5_cov_xz_d66;
+  assign n5_cov_xz_d66 = n5_cov_xz_dly_q[2111:2080];
+  wire [31:0] n6_cov_yy;
+  assign n6_cov_yy = in_cov_yy_i;
+  reg  [2111:0] n6_cov_yy_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n6_dly_q <= {n6_dly_q[2079:0], n6_input};
+      n6_cov_yy_dly_q <= {n6_cov_yy_dly_q[2079:0], n6_cov_yy};
     end
   end
-  wire [31:0] n6_d66;
-  assign n6_d66 = n6_dly_q[2111:2080];
-  wire [31:0] n7_input;
-  assign n7_input = in_cov_yz_i;
-  reg  [2111:0] n7_dly_q;
+  wire [31:0] n6_cov_yy_d66;
+  assign n6_cov_yy_d66 = n6_cov_yy_dly_q[2111:2080];
+  wire [31:0] n7_cov_yz;
+  assign n7_cov_yz = in_cov_yz_i;
+  reg  [2111:0] n7_cov_yz_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n7_dly_q <= {n7_dly_q[2079:0], n7_input};
+      n7_cov_yz_dly_q <= {n7_cov_yz_dly_q[2079:0], n7_cov_yz};
     end
   end
-  wire [31:0] n7_d66;
-  assign n7_d66 = n7_dly_q[2111:2080];
-  wire [31:0] n8_input;
-  assign n8_input = in_cov_zz_i;
-  reg  [2111:0] n8_dly_q;
+  wire [31:0] n7_cov_yz_d66;
+  assign n7_cov_yz_d66 = n7_cov_yz_dly_q[2111:2080];
+  wire [31:0] n8_cov_zz;
+  assign n8_cov_zz = in_cov_zz_i;
+  reg  [2111:0] n8_cov_zz_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n8_dly_q <= {n8_dly_q[2079:0], n8_input};
+      n8_cov_zz_dly_q <= {n8_cov_zz_dly_q[2079:0], n8_cov_zz};
     end
   end
-  wire [31:0] n8_d66;
-  assign n8_d66 = n8_dly_q[2111:2080];
-  wire [31:0] n9_input;
-  assign n9_input = in_opacity_i;
-  wire [31:0] n10_input;
-  assign n10_input = in_k2_i;
-  reg  [6719:0] n10_dly_q;
+  wire [31:0] n8_cov_zz_d66;
+  assign n8_cov_zz_d66 = n8_cov_zz_dly_q[2111:2080];
+  wire [31:0] n9_opacity;
+  assign n9_opacity = in_opacity_i;
+  wire [31:0] n10_k2;
+  assign n10_k2 = in_k2_i;
+  reg  [6719:0] n10_k2_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n10_dly_q <= {n10_dly_q[6687:0], n10_input};
+      n10_k2_dly_q <= {n10_k2_dly_q[6687:0], n10_k2};
     end
   end
-  wire [31:0] n10_d115;
-  assign n10_d115 = n10_dly_q[3679:3648];
-  wire [31:0] n10_d210;
-  assign n10_d210 = n10_dly_q[6719:6688];
-  wire [31:0] n11_input;
-  assign n11_input = w2v_00_i;
-  wire [31:0] n12_input;
-  assign n12_input = w2v_01_i;
-  wire [31:0] n13_input;
-  assign n13_input = w2v_02_i;
-  wire [31:0] n14_input;
-  assign n14_input = w2v_10_i;
-  wire [31:0] n15_input;
-  assign n15_input = w2v_11_i;
-  wire [31:0] n16_input;
-  assign n16_input = w2v_12_i;
-  wire [31:0] n17_input;
-  assign n17_input = w2v_20_i;
-  wire [31:0] n18_input;
-  assign n18_input = w2v_21_i;
-  wire [31:0] n19_input;
-  assign n19_input = w2v_22_i;
-  wire [31:0] n20_input;
-  assign n20_input = t_x_i;
-  wire [31:0] n21_input;
-  assign n21_input = t_y_i;
-  wire [31:0] n22_input;
-  assign n22_input = t_z_i;
-  wire [31:0] n23_input;
-  assign n23_input = focal_x_i;
-  wire [31:0] n24_input;
-  assign n24_input = focal_y_i;
-  wire [31:0] n25_input;
-  assign n25_input = lim_x_i;
-  wire [31:0] n26_input;
-  assign n26_input = lim_y_i;
-  wire [31:0] n27_input;
-  assign n27_input = principal_x_i;
-  wire [31:0] n28_input;
-  assign n28_input = principal_y_i;
-  wire [31:0] n29_input;
-  assign n29_input = grid_x_i;
-  wire [31:0] n30_input;
-  assign n30_input = grid_y_i;
+  wire [31:0] n10_k2_d115;
+  assign n10_k2_d115 = n10_k2_dly_q[3679:3648];
+  wire [31:0] n10_k2_d210;
+  assign n10_k2_d210 = n10_k2_dly_q[6719:6688];
+  wire [31:0] n11_w2v_00;
+  assign n11_w2v_00 = w2v_00_i;
+  wire [31:0] n12_w2v_01;
+  assign n12_w2v_01 = w2v_01_i;
+  wire [31:0] n13_w2v_02;
+  assign n13_w2v_02 = w2v_02_i;
+  wire [31:0] n14_w2v_10;
+  assign n14_w2v_10 = w2v_10_i;
+  wire [31:0] n15_w2v_11;
+  assign n15_w2v_11 = w2v_11_i;
+  wire [31:0] n16_w2v_12;
+  assign n16_w2v_12 = w2v_12_i;
+  wire [31:0] n17_w2v_20;
+  assign n17_w2v_20 = w2v_20_i;
+  wire [31:0] n18_w2v_21;
+  assign n18_w2v_21 = w2v_21_i;
+  wire [31:0] n19_w2v_22;
+  assign n19_w2v_22 = w2v_22_i;
+  wire [31:0] n20_t_x;
+  assign n20_t_x = t_x_i;
+  wire [31:0] n21_t_y;
+  assign n21_t_y = t_y_i;
+  wire [31:0] n22_t_z;
+  assign n22_t_z = t_z_i;
+  wire [31:0] n23_focal_x;
+  assign n23_focal_x = focal_x_i;
+  wire [31:0] n24_focal_y;
+  assign n24_focal_y = focal_y_i;
+  wire [31:0] n25_lim_x;
+  assign n25_lim_x = lim_x_i;
+  wire [31:0] n26_lim_y;
+  assign n26_lim_y = lim_y_i;
+  wire [31:0] n27_principal_x;
+  assign n27_principal_x = principal_x_i;
+  wire [31:0] n28_principal_y;
+  assign n28_principal_y = principal_y_i;
+  wire [31:0] n29_grid_x;
+  assign n29_grid_x = grid_x_i;
+  wire [31:0] n30_grid_y;
+  assign n30_grid_y = grid_y_i;
   wire [31:0] n31_mul;
   neo_fp_mul u_n31 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n11_input),
-    .b_i(n0_input),
+    .a_i(n11_w2v_00),
+    .b_i(n0_pos_x),
     .y_o(n31_mul)
   );
   wire [31:0] n32_mul;
   neo_fp_mul u_n32 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n12_input),
-    .b_i(n1_input),
+    .a_i(n12_w2v_01),
+    .b_i(n1_pos_y),
     .y_o(n32_mul)
   );
   wire [31:0] n33_mul;
   neo_fp_mul u_n33 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n13_input),
-    .b_i(n2_input),
+    .a_i(n13_w2v_02),
+    .b_i(n2_pos_z),
     .y_o(n33_mul)
   );
   reg  [127:0] n33_dly_q;
@@ -244,36 +244,36 @@ module neo_pre_project (
     .b_i(n33_d4),
     .y_o(n35_add)
   );
-  wire [31:0] n36_add;
-  neo_fp_add u_n36 (
+  wire [31:0] n36_view_x;
+  neo_fp_add u_n36_view_x (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n35_add),
-    .b_i(n20_input),
-    .y_o(n36_add)
+    .b_i(n20_t_x),
+    .y_o(n36_view_x)
   );
   wire [31:0] n37_mul;
   neo_fp_mul u_n37 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n14_input),
-    .b_i(n0_input),
+    .a_i(n14_w2v_10),
+    .b_i(n0_pos_x),
     .y_o(n37_mul)
   );
   wire [31:0] n38_mul;
   neo_fp_mul u_n38 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n15_input),
-    .b_i(n1_input),
+    .a_i(n15_w2v_11),
+    .b_i(n1_pos_y),
     .y_o(n38_mul)
   );
   wire [31:0] n39_mul;
   neo_fp_mul u_n39 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n16_input),
-    .b_i(n2_input),
+    .a_i(n16_w2v_12),
+    .b_i(n2_pos_z),
     .y_o(n39_mul)
   );
   reg  [127:0] n39_dly_q;
@@ -300,36 +300,36 @@ module neo_pre_project (
     .b_i(n39_d4),
     .y_o(n41_add)
   );
-  wire [31:0] n42_add;
-  neo_fp_add u_n42 (
+  wire [31:0] n42_view_y;
+  neo_fp_add u_n42_view_y (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n41_add),
-    .b_i(n21_input),
-    .y_o(n42_add)
+    .b_i(n21_t_y),
+    .y_o(n42_view_y)
   );
   wire [31:0] n43_mul;
   neo_fp_mul u_n43 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n17_input),
-    .b_i(n0_input),
+    .a_i(n17_w2v_20),
+    .b_i(n0_pos_x),
     .y_o(n43_mul)
   );
   wire [31:0] n44_mul;
   neo_fp_mul u_n44 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n18_input),
-    .b_i(n1_input),
+    .a_i(n18_w2v_21),
+    .b_i(n1_pos_y),
     .y_o(n44_mul)
   );
   wire [31:0] n45_mul;
   neo_fp_mul u_n45 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n19_input),
-    .b_i(n2_input),
+    .a_i(n19_w2v_22),
+    .b_i(n2_pos_z),
     .y_o(n45_mul)
   );
   reg  [127:0] n45_dly_q;
@@ -356,64 +356,64 @@ module neo_pre_project (
     .b_i(n45_d4),
     .y_o(n47_add)
   );
-  wire [31:0] n48_add;
-  neo_fp_add u_n48 (
+  wire [31:0] n48_view_z;
+  neo_fp_add u_n48_view_z (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n47_add),
-    .b_i(n22_input),
-    .y_o(n48_add)
+    .b_i(n22_t_z),
+    .y_o(n48_view_z)
   );
-  reg  [575:0] n48_dly_q;
+  reg  [575:0] n48_view_z_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n48_dly_q <= {n48_dly_q[543:0], n48_add};
+      n48_view_z_dly_q <= {n48_view_z_dly_q[543:0], n48_view_z};
     end
   end
-  wire [31:0] n48_d4;
-  assign n48_d4 = n48_dly_q[127:96];
-  wire [31:0] n48_d18;
-  assign n48_d18 = n48_dly_q[575:544];
+  wire [31:0] n48_view_z_d4;
+  assign n48_view_z_d4 = n48_view_z_dly_q[127:96];
+  wire [31:0] n48_view_z_d18;
+  assign n48_view_z_d18 = n48_view_z_dly_q[575:544];
   wire [31:0] n49_lit;
   assign n49_lit = 32'h3e4ccccd;
-  wire n50_cmp_lt;
-  wire n50_cmp_le;
-  wire n50_cmp_eq;
-  wire [31:0] n50_cmp_max;
-  wire [31:0] n50_cmp_min;
-  neo_fp_cmp u_n50 (
+  wire n50_in_front_cmp_lt;
+  wire n50_in_front_cmp_le;
+  wire n50_in_front_cmp_eq;
+  wire [31:0] n50_in_front_cmp_max;
+  wire [31:0] n50_in_front_cmp_min;
+  neo_fp_cmp u_n50_in_front (
     .a_i(n49_lit),
-    .b_i(n48_add),
-    .lt_o(n50_cmp_lt),
-    .le_o(n50_cmp_le),
-    .eq_o(n50_cmp_eq),
-    .max_o(n50_cmp_max),
-    .min_o(n50_cmp_min)
+    .b_i(n48_view_z),
+    .lt_o(n50_in_front_cmp_lt),
+    .le_o(n50_in_front_cmp_le),
+    .eq_o(n50_in_front_cmp_eq),
+    .max_o(n50_in_front_cmp_max),
+    .min_o(n50_in_front_cmp_min)
   );
-  reg  n50_lt_q;
+  reg  n50_in_front_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n50_lt_q <= n50_cmp_lt;
+      n50_in_front_q <= n50_in_front_cmp_lt;
     end
   end
-  reg  [135:0] n50_dly_q;
+  reg  [135:0] n50_in_front_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n50_dly_q <= {n50_dly_q[134:0], n50_lt_q};
+      n50_in_front_dly_q <= {n50_in_front_dly_q[134:0], n50_in_front_q};
     end
   end
-  wire n50_d136;
-  assign n50_d136 = n50_dly_q[135:135];
+  wire n50_in_front_d136;
+  assign n50_in_front_d136 = n50_in_front_dly_q[135:135];
   wire [31:0] n51_div;
   neo_fp_div u_n51 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n36_add),
-    .b_i(n48_add),
+    .a_i(n36_view_x),
+    .b_i(n48_view_z),
     .y_o(n51_div)
   );
   wire [31:0] n52_neg;
-  assign n52_neg = {~n25_input[31], n25_input[30:0]};
+  assign n52_neg = {~n25_lim_x[31], n25_lim_x[30:0]};
   wire n53_cmp_lt;
   wire n53_cmp_le;
   wire n53_cmp_eq;
@@ -441,7 +441,7 @@ module neo_pre_project (
   wire [31:0] n54_cmp_min;
   neo_fp_cmp u_n54 (
     .a_i(n53_max_q),
-    .b_i(n25_input),
+    .b_i(n25_lim_x),
     .lt_o(n54_cmp_lt),
     .le_o(n54_cmp_le),
     .eq_o(n54_cmp_eq),
@@ -454,24 +454,24 @@ module neo_pre_project (
       n54_min_q <= n54_cmp_min;
     end
   end
-  wire [31:0] n55_mul;
-  neo_fp_mul u_n55 (
+  wire [31:0] n55_view_x_clamped;
+  neo_fp_mul u_n55_view_x_clamped (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n54_min_q),
-    .b_i(n48_d18),
-    .y_o(n55_mul)
+    .b_i(n48_view_z_d18),
+    .y_o(n55_view_x_clamped)
   );
   wire [31:0] n56_div;
   neo_fp_div u_n56 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n42_add),
-    .b_i(n48_add),
+    .a_i(n42_view_y),
+    .b_i(n48_view_z),
     .y_o(n56_div)
   );
   wire [31:0] n57_neg;
-  assign n57_neg = {~n26_input[31], n26_input[30:0]};
+  assign n57_neg = {~n26_lim_y[31], n26_lim_y[30:0]};
   wire n58_cmp_lt;
   wire n58_cmp_le;
   wire n58_cmp_eq;
@@ -499,7 +499,7 @@ module neo_pre_project (
   wire [31:0] n59_cmp_min;
   neo_fp_cmp u_n59 (
     .a_i(n58_max_q),
-    .b_i(n26_input),
+    .b_i(n26_lim_y),
     .lt_o(n59_cmp_lt),
     .le_o(n59_cmp_le),
     .eq_o(n59_cmp_eq),
@@ -512,52 +512,52 @@ module neo_pre_project (
       n59_min_q <= n59_cmp_min;
     end
   end
-  wire [31:0] n60_mul;
-  neo_fp_mul u_n60 (
+  wire [31:0] n60_view_y_clamped;
+  neo_fp_mul u_n60_view_y_clamped (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n59_min_q),
-    .b_i(n48_d18),
-    .y_o(n60_mul)
+    .b_i(n48_view_z_d18),
+    .y_o(n60_view_y_clamped)
   );
-  wire [31:0] n61_mul;
-  neo_fp_mul u_n61 (
+  wire [31:0] n61_view_z_sq;
+  neo_fp_mul u_n61_view_z_sq (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n48_add),
-    .b_i(n48_add),
-    .y_o(n61_mul)
+    .a_i(n48_view_z),
+    .b_i(n48_view_z),
+    .y_o(n61_view_z_sq)
   );
-  reg  [703:0] n61_dly_q;
+  reg  [703:0] n61_view_z_sq_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n61_dly_q <= {n61_dly_q[671:0], n61_mul};
+      n61_view_z_sq_dly_q <= {n61_view_z_sq_dly_q[671:0], n61_view_z_sq};
     end
   end
-  wire [31:0] n61_d22;
-  assign n61_d22 = n61_dly_q[703:672];
-  wire [31:0] n62_div;
-  neo_fp_div u_n62 (
+  wire [31:0] n61_view_z_sq_d22;
+  assign n61_view_z_sq_d22 = n61_view_z_sq_dly_q[703:672];
+  wire [31:0] n62_jac_00;
+  neo_fp_div u_n62_jac_00 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n23_input),
-    .b_i(n48_add),
-    .y_o(n62_div)
+    .a_i(n23_focal_x),
+    .b_i(n48_view_z),
+    .y_o(n62_jac_00)
   );
-  wire [31:0] n63_div;
-  neo_fp_div u_n63 (
+  wire [31:0] n63_jac_11;
+  neo_fp_div u_n63_jac_11 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n24_input),
-    .b_i(n48_add),
-    .y_o(n63_div)
+    .a_i(n24_focal_y),
+    .b_i(n48_view_z),
+    .y_o(n63_jac_11)
   );
   wire [31:0] n64_mul;
   neo_fp_mul u_n64 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n23_input),
-    .b_i(n55_mul),
+    .a_i(n23_focal_x),
+    .b_i(n55_view_x_clamped),
     .y_o(n64_mul)
   );
   wire [31:0] n65_div;
@@ -565,17 +565,17 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n64_mul),
-    .b_i(n61_d22),
+    .b_i(n61_view_z_sq_d22),
     .y_o(n65_div)
   );
-  wire [31:0] n66_neg;
-  assign n66_neg = {~n65_div[31], n65_div[30:0]};
+  wire [31:0] n66_jac_02;
+  assign n66_jac_02 = {~n65_div[31], n65_div[30:0]};
   wire [31:0] n67_mul;
   neo_fp_mul u_n67 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n24_input),
-    .b_i(n60_mul),
+    .a_i(n24_focal_y),
+    .b_i(n60_view_y_clamped),
     .y_o(n67_mul)
   );
   wire [31:0] n68_div;
@@ -583,17 +583,17 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n67_mul),
-    .b_i(n61_d22),
+    .b_i(n61_view_z_sq_d22),
     .y_o(n68_div)
   );
-  wire [31:0] n69_neg;
-  assign n69_neg = {~n68_div[31], n68_div[30:0]};
+  wire [31:0] n69_jac_12;
+  assign n69_jac_12 = {~n68_div[31], n68_div[30:0]};
   wire [31:0] n70_mul;
   neo_fp_mul u_n70 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n11_input),
-    .b_i(n62_div),
+    .a_i(n11_w2v_00),
+    .b_i(n62_jac_00),
     .y_o(n70_mul)
   );
   reg  [831:0] n70_dly_q;
@@ -608,32 +608,32 @@ module neo_pre_project (
   neo_fp_mul u_n71 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n17_input),
-    .b_i(n66_neg),
+    .a_i(n17_w2v_20),
+    .b_i(n66_jac_02),
     .y_o(n71_mul)
   );
-  wire [31:0] n72_add;
-  neo_fp_add u_n72 (
+  wire [31:0] n72_t_00;
+  neo_fp_add u_n72_t_00 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n70_d26),
     .b_i(n71_mul),
-    .y_o(n72_add)
+    .y_o(n72_t_00)
   );
-  reg  [383:0] n72_dly_q;
+  reg  [383:0] n72_t_00_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n72_dly_q <= {n72_dly_q[351:0], n72_add};
+      n72_t_00_dly_q <= {n72_t_00_dly_q[351:0], n72_t_00};
     end
   end
-  wire [31:0] n72_d12;
-  assign n72_d12 = n72_dly_q[383:352];
+  wire [31:0] n72_t_00_d12;
+  assign n72_t_00_d12 = n72_t_00_dly_q[383:352];
   wire [31:0] n73_mul;
   neo_fp_mul u_n73 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n12_input),
-    .b_i(n62_div),
+    .a_i(n12_w2v_01),
+    .b_i(n62_jac_00),
     .y_o(n73_mul)
   );
   reg  [831:0] n73_dly_q;
@@ -648,32 +648,32 @@ module neo_pre_project (
   neo_fp_mul u_n74 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n18_input),
-    .b_i(n66_neg),
+    .a_i(n18_w2v_21),
+    .b_i(n66_jac_02),
     .y_o(n74_mul)
   );
-  wire [31:0] n75_add;
-  neo_fp_add u_n75 (
+  wire [31:0] n75_t_01;
+  neo_fp_add u_n75_t_01 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n73_d26),
     .b_i(n74_mul),
-    .y_o(n75_add)
+    .y_o(n75_t_01)
   );
-  reg  [383:0] n75_dly_q;
+  reg  [383:0] n75_t_01_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n75_dly_q <= {n75_dly_q[351:0], n75_add};
+      n75_t_01_dly_q <= {n75_t_01_dly_q[351:0], n75_t_01};
     end
   end
-  wire [31:0] n75_d12;
-  assign n75_d12 = n75_dly_q[383:352];
+  wire [31:0] n75_t_01_d12;
+  assign n75_t_01_d12 = n75_t_01_dly_q[383:352];
   wire [31:0] n76_mul;
   neo_fp_mul u_n76 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n13_input),
-    .b_i(n62_div),
+    .a_i(n13_w2v_02),
+    .b_i(n62_jac_00),
     .y_o(n76_mul)
   );
   reg  [831:0] n76_dly_q;
@@ -688,32 +688,32 @@ module neo_pre_project (
   neo_fp_mul u_n77 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n19_input),
-    .b_i(n66_neg),
+    .a_i(n19_w2v_22),
+    .b_i(n66_jac_02),
     .y_o(n77_mul)
   );
-  wire [31:0] n78_add;
-  neo_fp_add u_n78 (
+  wire [31:0] n78_t_02;
+  neo_fp_add u_n78_t_02 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n76_d26),
     .b_i(n77_mul),
-    .y_o(n78_add)
+    .y_o(n78_t_02)
   );
-  reg  [383:0] n78_dly_q;
+  reg  [383:0] n78_t_02_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n78_dly_q <= {n78_dly_q[351:0], n78_add};
+      n78_t_02_dly_q <= {n78_t_02_dly_q[351:0], n78_t_02};
     end
   end
-  wire [31:0] n78_d12;
-  assign n78_d12 = n78_dly_q[383:352];
+  wire [31:0] n78_t_02_d12;
+  assign n78_t_02_d12 = n78_t_02_dly_q[383:352];
   wire [31:0] n79_mul;
   neo_fp_mul u_n79 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n14_input),
-    .b_i(n63_div),
+    .a_i(n14_w2v_10),
+    .b_i(n63_jac_11),
     .y_o(n79_mul)
   );
   reg  [831:0] n79_dly_q;
@@ -728,32 +728,32 @@ module neo_pre_project (
   neo_fp_mul u_n80 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n17_input),
-    .b_i(n69_neg),
+    .a_i(n17_w2v_20),
+    .b_i(n69_jac_12),
     .y_o(n80_mul)
   );
-  wire [31:0] n81_add;
-  neo_fp_add u_n81 (
+  wire [31:0] n81_t_10;
+  neo_fp_add u_n81_t_10 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n79_d26),
     .b_i(n80_mul),
-    .y_o(n81_add)
+    .y_o(n81_t_10)
   );
-  reg  [383:0] n81_dly_q;
+  reg  [383:0] n81_t_10_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n81_dly_q <= {n81_dly_q[351:0], n81_add};
+      n81_t_10_dly_q <= {n81_t_10_dly_q[351:0], n81_t_10};
     end
   end
-  wire [31:0] n81_d12;
-  assign n81_d12 = n81_dly_q[383:352];
+  wire [31:0] n81_t_10_d12;
+  assign n81_t_10_d12 = n81_t_10_dly_q[383:352];
   wire [31:0] n82_mul;
   neo_fp_mul u_n82 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n15_input),
-    .b_i(n63_div),
+    .a_i(n15_w2v_11),
+    .b_i(n63_jac_11),
     .y_o(n82_mul)
   );
   reg  [831:0] n82_dly_q;
@@ -768,32 +768,32 @@ module neo_pre_project (
   neo_fp_mul u_n83 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n18_input),
-    .b_i(n69_neg),
+    .a_i(n18_w2v_21),
+    .b_i(n69_jac_12),
     .y_o(n83_mul)
   );
-  wire [31:0] n84_add;
-  neo_fp_add u_n84 (
+  wire [31:0] n84_t_11;
+  neo_fp_add u_n84_t_11 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n82_d26),
     .b_i(n83_mul),
-    .y_o(n84_add)
+    .y_o(n84_t_11)
   );
-  reg  [383:0] n84_dly_q;
+  reg  [383:0] n84_t_11_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n84_dly_q <= {n84_dly_q[351:0], n84_add};
+      n84_t_11_dly_q <= {n84_t_11_dly_q[351:0], n84_t_11};
     end
   end
-  wire [31:0] n84_d12;
-  assign n84_d12 = n84_dly_q[383:352];
+  wire [31:0] n84_t_11_d12;
+  assign n84_t_11_d12 = n84_t_11_dly_q[383:352];
   wire [31:0] n85_mul;
   neo_fp_mul u_n85 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n16_input),
-    .b_i(n63_div),
+    .a_i(n16_w2v_12),
+    .b_i(n63_jac_11),
     .y_o(n85_mul)
   );
   reg  [831:0] n85_dly_q;
@@ -808,48 +808,48 @@ module neo_pre_project (
   neo_fp_mul u_n86 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n19_input),
-    .b_i(n69_neg),
+    .a_i(n19_w2v_22),
+    .b_i(n69_jac_12),
     .y_o(n86_mul)
   );
-  wire [31:0] n87_add;
-  neo_fp_add u_n87 (
+  wire [31:0] n87_t_12;
+  neo_fp_add u_n87_t_12 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n85_d26),
     .b_i(n86_mul),
-    .y_o(n87_add)
+    .y_o(n87_t_12)
   );
-  reg  [383:0] n87_dly_q;
+  reg  [383:0] n87_t_12_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n87_dly_q <= {n87_dly_q[351:0], n87_add};
+      n87_t_12_dly_q <= {n87_t_12_dly_q[351:0], n87_t_12};
     end
   end
-  wire [31:0] n87_d12;
-  assign n87_d12 = n87_dly_q[383:352];
+  wire [31:0] n87_t_12_d12;
+  assign n87_t_12_d12 = n87_t_12_dly_q[383:352];
   wire [31:0] n88_mul;
   neo_fp_mul u_n88 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n72_add),
-    .b_i(n3_d66),
+    .a_i(n72_t_00),
+    .b_i(n3_cov_xx_d66),
     .y_o(n88_mul)
   );
   wire [31:0] n89_mul;
   neo_fp_mul u_n89 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n75_add),
-    .b_i(n4_d66),
+    .a_i(n75_t_01),
+    .b_i(n4_cov_xy_d66),
     .y_o(n89_mul)
   );
   wire [31:0] n90_mul;
   neo_fp_mul u_n90 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n78_add),
-    .b_i(n5_d66),
+    .a_i(n78_t_02),
+    .b_i(n5_cov_xz_d66),
     .y_o(n90_mul)
   );
   reg  [127:0] n90_dly_q;
@@ -868,36 +868,36 @@ module neo_pre_project (
     .b_i(n89_mul),
     .y_o(n91_add)
   );
-  wire [31:0] n92_add;
-  neo_fp_add u_n92 (
+  wire [31:0] n92_m_00;
+  neo_fp_add u_n92_m_00 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n91_add),
     .b_i(n90_d4),
-    .y_o(n92_add)
+    .y_o(n92_m_00)
   );
   wire [31:0] n93_mul;
   neo_fp_mul u_n93 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n81_add),
-    .b_i(n3_d66),
+    .a_i(n81_t_10),
+    .b_i(n3_cov_xx_d66),
     .y_o(n93_mul)
   );
   wire [31:0] n94_mul;
   neo_fp_mul u_n94 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n84_add),
-    .b_i(n4_d66),
+    .a_i(n84_t_11),
+    .b_i(n4_cov_xy_d66),
     .y_o(n94_mul)
   );
   wire [31:0] n95_mul;
   neo_fp_mul u_n95 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n87_add),
-    .b_i(n5_d66),
+    .a_i(n87_t_12),
+    .b_i(n5_cov_xz_d66),
     .y_o(n95_mul)
   );
   reg  [127:0] n95_dly_q;
@@ -916,36 +916,36 @@ module neo_pre_project (
     .b_i(n94_mul),
     .y_o(n96_add)
   );
-  wire [31:0] n97_add;
-  neo_fp_add u_n97 (
+  wire [31:0] n97_m_01;
+  neo_fp_add u_n97_m_01 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n96_add),
     .b_i(n95_d4),
-    .y_o(n97_add)
+    .y_o(n97_m_01)
   );
   wire [31:0] n98_mul;
   neo_fp_mul u_n98 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n72_add),
-    .b_i(n4_d66),
+    .a_i(n72_t_00),
+    .b_i(n4_cov_xy_d66),
     .y_o(n98_mul)
   );
   wire [31:0] n99_mul;
   neo_fp_mul u_n99 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n75_add),
-    .b_i(n6_d66),
+    .a_i(n75_t_01),
+    .b_i(n6_cov_yy_d66),
     .y_o(n99_mul)
   );
   wire [31:0] n100_mul;
   neo_fp_mul u_n100 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n78_add),
-    .b_i(n7_d66),
+    .a_i(n78_t_02),
+    .b_i(n7_cov_yz_d66),
     .y_o(n100_mul)
   );
   reg  [127:0] n100_dly_q;
@@ -964,36 +964,36 @@ module neo_pre_project (
     .b_i(n99_mul),
     .y_o(n101_add)
   );
-  wire [31:0] n102_add;
-  neo_fp_add u_n102 (
+  wire [31:0] n102_m_10;
+  neo_fp_add u_n102_m_10 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n101_add),
     .b_i(n100_d4),
-    .y_o(n102_add)
+    .y_o(n102_m_10)
   );
   wire [31:0] n103_mul;
   neo_fp_mul u_n103 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n81_add),
-    .b_i(n4_d66),
+    .a_i(n81_t_10),
+    .b_i(n4_cov_xy_d66),
     .y_o(n103_mul)
   );
   wire [31:0] n104_mul;
   neo_fp_mul u_n104 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n84_add),
-    .b_i(n6_d66),
+    .a_i(n84_t_11),
+    .b_i(n6_cov_yy_d66),
     .y_o(n104_mul)
   );
   wire [31:0] n105_mul;
   neo_fp_mul u_n105 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n87_add),
-    .b_i(n7_d66),
+    .a_i(n87_t_12),
+    .b_i(n7_cov_yz_d66),
     .y_o(n105_mul)
   );
   reg  [127:0] n105_dly_q;
@@ -1012,36 +1012,36 @@ module neo_pre_project (
     .b_i(n104_mul),
     .y_o(n106_add)
   );
-  wire [31:0] n107_add;
-  neo_fp_add u_n107 (
+  wire [31:0] n107_m_11;
+  neo_fp_add u_n107_m_11 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n106_add),
     .b_i(n105_d4),
-    .y_o(n107_add)
+    .y_o(n107_m_11)
   );
   wire [31:0] n108_mul;
   neo_fp_mul u_n108 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n72_add),
-    .b_i(n5_d66),
+    .a_i(n72_t_00),
+    .b_i(n5_cov_xz_d66),
     .y_o(n108_mul)
   );
   wire [31:0] n109_mul;
   neo_fp_mul u_n109 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n75_add),
-    .b_i(n7_d66),
+    .a_i(n75_t_01),
+    .b_i(n7_cov_yz_d66),
     .y_o(n109_mul)
   );
   wire [31:0] n110_mul;
   neo_fp_mul u_n110 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n78_add),
-    .b_i(n8_d66),
+    .a_i(n78_t_02),
+    .b_i(n8_cov_zz_d66),
     .y_o(n110_mul)
   );
   reg  [127:0] n110_dly_q;
@@ -1060,36 +1060,36 @@ module neo_pre_project (
     .b_i(n109_mul),
     .y_o(n111_add)
   );
-  wire [31:0] n112_add;
-  neo_fp_add u_n112 (
+  wire [31:0] n112_m_20;
+  neo_fp_add u_n112_m_20 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n111_add),
     .b_i(n110_d4),
-    .y_o(n112_add)
+    .y_o(n112_m_20)
   );
   wire [31:0] n113_mul;
   neo_fp_mul u_n113 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n81_add),
-    .b_i(n5_d66),
+    .a_i(n81_t_10),
+    .b_i(n5_cov_xz_d66),
     .y_o(n113_mul)
   );
   wire [31:0] n114_mul;
   neo_fp_mul u_n114 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n84_add),
-    .b_i(n7_d66),
+    .a_i(n84_t_11),
+    .b_i(n7_cov_yz_d66),
     .y_o(n114_mul)
   );
   wire [31:0] n115_mul;
   neo_fp_mul u_n115 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n87_add),
-    .b_i(n8_d66),
+    .a_i(n87_t_12),
+    .b_i(n8_cov_zz_d66),
     .y_o(n115_mul)
   );
   reg  [127:0] n115_dly_q;
@@ -1108,36 +1108,36 @@ module neo_pre_project (
     .b_i(n114_mul),
     .y_o(n116_add)
   );
-  wire [31:0] n117_add;
-  neo_fp_add u_n117 (
+  wire [31:0] n117_m_21;
+  neo_fp_add u_n117_m_21 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n116_add),
     .b_i(n115_d4),
-    .y_o(n117_add)
+    .y_o(n117_m_21)
   );
   wire [31:0] n118_mul;
   neo_fp_mul u_n118 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n92_add),
-    .b_i(n72_d12),
+    .a_i(n92_m_00),
+    .b_i(n72_t_00_d12),
     .y_o(n118_mul)
   );
   wire [31:0] n119_mul;
   neo_fp_mul u_n119 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n102_add),
-    .b_i(n75_d12),
+    .a_i(n102_m_10),
+    .b_i(n75_t_01_d12),
     .y_o(n119_mul)
   );
   wire [31:0] n120_mul;
   neo_fp_mul u_n120 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n112_add),
-    .b_i(n78_d12),
+    .a_i(n112_m_20),
+    .b_i(n78_t_02_d12),
     .y_o(n120_mul)
   );
   reg  [127:0] n120_dly_q;
@@ -1168,24 +1168,24 @@ module neo_pre_project (
   neo_fp_mul u_n123 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n97_add),
-    .b_i(n72_d12),
+    .a_i(n97_m_01),
+    .b_i(n72_t_00_d12),
     .y_o(n123_mul)
   );
   wire [31:0] n124_mul;
   neo_fp_mul u_n124 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n107_add),
-    .b_i(n75_d12),
+    .a_i(n107_m_11),
+    .b_i(n75_t_01_d12),
     .y_o(n124_mul)
   );
   wire [31:0] n125_mul;
   neo_fp_mul u_n125 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n117_add),
-    .b_i(n78_d12),
+    .a_i(n117_m_21),
+    .b_i(n78_t_02_d12),
     .y_o(n125_mul)
   );
   reg  [127:0] n125_dly_q;
@@ -1204,44 +1204,44 @@ module neo_pre_project (
     .b_i(n124_mul),
     .y_o(n126_add)
   );
-  wire [31:0] n127_add;
-  neo_fp_add u_n127 (
+  wire [31:0] n127_cov2d_xy;
+  neo_fp_add u_n127_cov2d_xy (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n126_add),
     .b_i(n125_d4),
-    .y_o(n127_add)
+    .y_o(n127_cov2d_xy)
   );
-  reg  [3167:0] n127_dly_q;
+  reg  [3167:0] n127_cov2d_xy_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n127_dly_q <= {n127_dly_q[3135:0], n127_add};
+      n127_cov2d_xy_dly_q <= {n127_cov2d_xy_dly_q[3135:0], n127_cov2d_xy};
     end
   end
-  wire [31:0] n127_d99;
-  assign n127_d99 = n127_dly_q[3167:3136];
+  wire [31:0] n127_cov2d_xy_d99;
+  assign n127_cov2d_xy_d99 = n127_cov2d_xy_dly_q[3167:3136];
   wire [31:0] n128_mul;
   neo_fp_mul u_n128 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n97_add),
-    .b_i(n81_d12),
+    .a_i(n97_m_01),
+    .b_i(n81_t_10_d12),
     .y_o(n128_mul)
   );
   wire [31:0] n129_mul;
   neo_fp_mul u_n129 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n107_add),
-    .b_i(n84_d12),
+    .a_i(n107_m_11),
+    .b_i(n84_t_11_d12),
     .y_o(n129_mul)
   );
   wire [31:0] n130_mul;
   neo_fp_mul u_n130 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n117_add),
-    .b_i(n87_d12),
+    .a_i(n117_m_21),
+    .b_i(n87_t_12_d12),
     .y_o(n130_mul)
   );
   reg  [127:0] n130_dly_q;
@@ -1270,56 +1270,56 @@ module neo_pre_project (
   );
   wire [31:0] n133_lit;
   assign n133_lit = 32'h3e99999a;
-  wire [31:0] n134_add;
-  neo_fp_add u_n134 (
+  wire [31:0] n134_cov2d_xx;
+  neo_fp_add u_n134_cov2d_xx (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n122_add),
     .b_i(n133_lit),
-    .y_o(n134_add)
+    .y_o(n134_cov2d_xx)
   );
-  reg  [2911:0] n134_dly_q;
+  reg  [2911:0] n134_cov2d_xx_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n134_dly_q <= {n134_dly_q[2879:0], n134_add};
+      n134_cov2d_xx_dly_q <= {n134_cov2d_xx_dly_q[2879:0], n134_cov2d_xx};
     end
   end
-  wire [31:0] n134_d24;
-  assign n134_d24 = n134_dly_q[767:736];
-  wire [31:0] n134_d91;
-  assign n134_d91 = n134_dly_q[2911:2880];
-  wire [31:0] n135_add;
-  neo_fp_add u_n135 (
+  wire [31:0] n134_cov2d_xx_d24;
+  assign n134_cov2d_xx_d24 = n134_cov2d_xx_dly_q[767:736];
+  wire [31:0] n134_cov2d_xx_d91;
+  assign n134_cov2d_xx_d91 = n134_cov2d_xx_dly_q[2911:2880];
+  wire [31:0] n135_cov2d_yy;
+  neo_fp_add u_n135_cov2d_yy (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n132_add),
     .b_i(n133_lit),
-    .y_o(n135_add)
+    .y_o(n135_cov2d_yy)
   );
-  reg  [2911:0] n135_dly_q;
+  reg  [2911:0] n135_cov2d_yy_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n135_dly_q <= {n135_dly_q[2879:0], n135_add};
+      n135_cov2d_yy_dly_q <= {n135_cov2d_yy_dly_q[2879:0], n135_cov2d_yy};
     end
   end
-  wire [31:0] n135_d24;
-  assign n135_d24 = n135_dly_q[767:736];
-  wire [31:0] n135_d91;
-  assign n135_d91 = n135_dly_q[2911:2880];
+  wire [31:0] n135_cov2d_yy_d24;
+  assign n135_cov2d_yy_d24 = n135_cov2d_yy_dly_q[767:736];
+  wire [31:0] n135_cov2d_yy_d91;
+  assign n135_cov2d_yy_d91 = n135_cov2d_yy_dly_q[2911:2880];
   wire [31:0] n136_mul;
   neo_fp_mul u_n136 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n134_add),
-    .b_i(n135_add),
+    .a_i(n134_cov2d_xx),
+    .b_i(n135_cov2d_yy),
     .y_o(n136_mul)
   );
   wire [31:0] n137_mul;
   neo_fp_mul u_n137 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n127_add),
-    .b_i(n127_add),
+    .a_i(n127_cov2d_xy),
+    .b_i(n127_cov2d_xy),
     .y_o(n137_mul)
   );
   reg  [127:0] n137_dly_q;
@@ -1330,22 +1330,22 @@ module neo_pre_project (
   end
   wire [31:0] n137_d4;
   assign n137_d4 = n137_dly_q[127:96];
-  wire [31:0] n138_sub;
-  neo_fp_sub u_n138 (
+  wire [31:0] n138_det;
+  neo_fp_sub u_n138_det (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n136_mul),
     .b_i(n137_d4),
-    .y_o(n138_sub)
+    .y_o(n138_det)
   );
-  reg  [127:0] n138_dly_q;
+  reg  [127:0] n138_det_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n138_dly_q <= {n138_dly_q[95:0], n138_sub};
+      n138_det_dly_q <= {n138_det_dly_q[95:0], n138_det};
     end
   end
-  wire [31:0] n138_d4;
-  assign n138_d4 = n138_dly_q[127:96];
+  wire [31:0] n138_det_d4;
+  assign n138_det_d4 = n138_det_dly_q[127:96];
   wire [31:0] n139_lit;
   assign n139_lit = 32'h0;
   wire n140_cmp_lt;
@@ -1354,7 +1354,7 @@ module neo_pre_project (
   wire [31:0] n140_cmp_max;
   wire [31:0] n140_cmp_min;
   neo_fp_cmp u_n140 (
-    .a_i(n138_sub),
+    .a_i(n138_det),
     .b_i(n139_lit),
     .lt_o(n140_cmp_lt),
     .le_o(n140_cmp_le),
@@ -1370,16 +1370,16 @@ module neo_pre_project (
   end
   wire [31:0] n141_lit;
   assign n141_lit = 32'h3f800000;
-  wire [31:0] n142_div;
-  neo_fp_div u_n142 (
+  wire [31:0] n142_det_inv;
+  neo_fp_div u_n142_det_inv (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n141_lit),
-    .b_i(n138_sub),
-    .y_o(n142_div)
+    .b_i(n138_det),
+    .y_o(n142_det_inv)
   );
   wire [31:0] n143_neg;
-  assign n143_neg = {~n127_add[31], n127_add[30:0]};
+  assign n143_neg = {~n127_cov2d_xy[31], n127_cov2d_xy[30:0]};
   reg  [895:0] n143_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
@@ -1388,37 +1388,37 @@ module neo_pre_project (
   end
   wire [31:0] n143_d28;
   assign n143_d28 = n143_dly_q[895:864];
-  wire [31:0] n144_mul;
-  neo_fp_mul u_n144 (
+  wire [31:0] n144_conic_a_f;
+  neo_fp_mul u_n144_conic_a_f (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n135_d24),
-    .b_i(n142_div),
-    .y_o(n144_mul)
+    .a_i(n135_cov2d_yy_d24),
+    .b_i(n142_det_inv),
+    .y_o(n144_conic_a_f)
   );
-  wire [31:0] n145_mul;
-  neo_fp_mul u_n145 (
+  wire [31:0] n145_conic_b_f;
+  neo_fp_mul u_n145_conic_b_f (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n143_d28),
-    .b_i(n142_div),
-    .y_o(n145_mul)
+    .b_i(n142_det_inv),
+    .y_o(n145_conic_b_f)
   );
-  reg  [991:0] n145_dly_q;
+  reg  [991:0] n145_conic_b_f_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n145_dly_q <= {n145_dly_q[959:0], n145_mul};
+      n145_conic_b_f_dly_q <= {n145_conic_b_f_dly_q[959:0], n145_conic_b_f};
     end
   end
-  wire [31:0] n145_d31;
-  assign n145_d31 = n145_dly_q[991:960];
-  wire [31:0] n146_mul;
-  neo_fp_mul u_n146 (
+  wire [31:0] n145_conic_b_f_d31;
+  assign n145_conic_b_f_d31 = n145_conic_b_f_dly_q[991:960];
+  wire [31:0] n146_conic_c_f;
+  neo_fp_mul u_n146_conic_c_f (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n134_d24),
-    .b_i(n142_div),
-    .y_o(n146_mul)
+    .a_i(n134_cov2d_xx_d24),
+    .b_i(n142_det_inv),
+    .y_o(n146_conic_c_f)
   );
   wire [31:0] n147_lit;
   assign n147_lit = 32'h3f000000;
@@ -1426,32 +1426,32 @@ module neo_pre_project (
   neo_fp_add u_n148 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n134_add),
-    .b_i(n135_add),
+    .a_i(n134_cov2d_xx),
+    .b_i(n135_cov2d_yy),
     .y_o(n148_add)
   );
-  wire [31:0] n149_mul;
-  neo_fp_mul u_n149 (
+  wire [31:0] n149_eig_mid;
+  neo_fp_mul u_n149_eig_mid (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n147_lit),
     .b_i(n148_add),
-    .y_o(n149_mul)
+    .y_o(n149_eig_mid)
   );
-  reg  [767:0] n149_dly_q;
+  reg  [767:0] n149_eig_mid_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n149_dly_q <= {n149_dly_q[735:0], n149_mul};
+      n149_eig_mid_dly_q <= {n149_eig_mid_dly_q[735:0], n149_eig_mid};
     end
   end
-  wire [31:0] n149_d24;
-  assign n149_d24 = n149_dly_q[767:736];
+  wire [31:0] n149_eig_mid_d24;
+  assign n149_eig_mid_d24 = n149_eig_mid_dly_q[767:736];
   wire [31:0] n150_mul;
   neo_fp_mul u_n150 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n149_mul),
-    .b_i(n149_mul),
+    .a_i(n149_eig_mid),
+    .b_i(n149_eig_mid),
     .y_o(n150_mul)
   );
   wire [31:0] n151_sub;
@@ -1459,7 +1459,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n150_mul),
-    .b_i(n138_d4),
+    .b_i(n138_det_d4),
     .y_o(n151_sub)
   );
   wire [31:0] n152_lit;
@@ -1484,54 +1484,54 @@ module neo_pre_project (
       n153_max_q <= n153_cmp_max;
     end
   end
-  wire [31:0] n154_sqrt;
-  neo_fp_sqrt u_n154 (
+  wire [31:0] n154_eig_disc;
+  neo_fp_sqrt u_n154_eig_disc (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n153_max_q),
-    .y_o(n154_sqrt)
+    .y_o(n154_eig_disc)
   );
   wire [31:0] n155_add;
   neo_fp_add u_n155 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n149_d24),
-    .b_i(n154_sqrt),
+    .a_i(n149_eig_mid_d24),
+    .b_i(n154_eig_disc),
     .y_o(n155_add)
   );
   wire [31:0] n156_sub;
   neo_fp_sub u_n156 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n149_d24),
-    .b_i(n154_sqrt),
+    .a_i(n149_eig_mid_d24),
+    .b_i(n154_eig_disc),
     .y_o(n156_sub)
   );
-  wire n157_cmp_lt;
-  wire n157_cmp_le;
-  wire n157_cmp_eq;
-  wire [31:0] n157_cmp_max;
-  wire [31:0] n157_cmp_min;
-  neo_fp_cmp u_n157 (
+  wire n157_eig_max_cmp_lt;
+  wire n157_eig_max_cmp_le;
+  wire n157_eig_max_cmp_eq;
+  wire [31:0] n157_eig_max_cmp_max;
+  wire [31:0] n157_eig_max_cmp_min;
+  neo_fp_cmp u_n157_eig_max (
     .a_i(n155_add),
     .b_i(n156_sub),
-    .lt_o(n157_cmp_lt),
-    .le_o(n157_cmp_le),
-    .eq_o(n157_cmp_eq),
-    .max_o(n157_cmp_max),
-    .min_o(n157_cmp_min)
+    .lt_o(n157_eig_max_cmp_lt),
+    .le_o(n157_eig_max_cmp_le),
+    .eq_o(n157_eig_max_cmp_eq),
+    .max_o(n157_eig_max_cmp_max),
+    .min_o(n157_eig_max_cmp_min)
   );
-  reg  [31:0] n157_max_q;
+  reg  [31:0] n157_eig_max_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n157_max_q <= n157_cmp_max;
+      n157_eig_max_q <= n157_eig_max_cmp_max;
     end
   end
   wire [31:0] n158_sqrt;
   neo_fp_sqrt u_n158 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n157_max_q),
+    .a_i(n157_eig_max_q),
     .y_o(n158_sqrt)
   );
   wire [31:0] n159_lit;
@@ -1544,21 +1544,21 @@ module neo_pre_project (
     .b_i(n158_sqrt),
     .y_o(n160_mul)
   );
-  wire [31:0] n161_toint;
+  wire [31:0] n161_radius;
   neo_fp_to_int #(
     .ROUNDING(2)
-  ) u_n161 (
+  ) u_n161_radius (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n160_mul),
-    .y_o(n161_toint)
+    .y_o(n161_radius)
   );
   wire [31:0] n162_mul;
   neo_fp_mul u_n162 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n23_input),
-    .b_i(n36_add),
+    .a_i(n23_focal_x),
+    .b_i(n36_view_x),
     .y_o(n162_mul)
   );
   wire [31:0] n163_div;
@@ -1566,33 +1566,33 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n162_mul),
-    .b_i(n48_d4),
+    .b_i(n48_view_z_d4),
     .y_o(n163_div)
   );
-  wire [31:0] n164_add;
-  neo_fp_add u_n164 (
+  wire [31:0] n164_mean2d_x;
+  neo_fp_add u_n164_mean2d_x (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n163_div),
-    .b_i(n27_input),
-    .y_o(n164_add)
+    .b_i(n27_principal_x),
+    .y_o(n164_mean2d_x)
   );
-  reg  [3679:0] n164_dly_q;
+  reg  [3679:0] n164_mean2d_x_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n164_dly_q <= {n164_dly_q[3647:0], n164_add};
+      n164_mean2d_x_dly_q <= {n164_mean2d_x_dly_q[3647:0], n164_mean2d_x};
     end
   end
-  wire [31:0] n164_d15;
-  assign n164_d15 = n164_dly_q[479:448];
-  wire [31:0] n164_d115;
-  assign n164_d115 = n164_dly_q[3679:3648];
+  wire [31:0] n164_mean2d_x_d15;
+  assign n164_mean2d_x_d15 = n164_mean2d_x_dly_q[479:448];
+  wire [31:0] n164_mean2d_x_d115;
+  assign n164_mean2d_x_d115 = n164_mean2d_x_dly_q[3679:3648];
   wire [31:0] n165_mul;
   neo_fp_mul u_n165 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n24_input),
-    .b_i(n42_add),
+    .a_i(n24_focal_y),
+    .b_i(n42_view_y),
     .y_o(n165_mul)
   );
   wire [31:0] n166_div;
@@ -1600,39 +1600,39 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n165_mul),
-    .b_i(n48_d4),
+    .b_i(n48_view_z_d4),
     .y_o(n166_div)
   );
-  wire [31:0] n167_add;
-  neo_fp_add u_n167 (
+  wire [31:0] n167_mean2d_y;
+  neo_fp_add u_n167_mean2d_y (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n166_div),
-    .b_i(n28_input),
-    .y_o(n167_add)
+    .b_i(n28_principal_y),
+    .y_o(n167_mean2d_y)
   );
-  reg  [3679:0] n167_dly_q;
+  reg  [3679:0] n167_mean2d_y_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n167_dly_q <= {n167_dly_q[3647:0], n167_add};
+      n167_mean2d_y_dly_q <= {n167_mean2d_y_dly_q[3647:0], n167_mean2d_y};
     end
   end
-  wire [31:0] n167_d15;
-  assign n167_d15 = n167_dly_q[479:448];
-  wire [31:0] n167_d115;
-  assign n167_d115 = n167_dly_q[3679:3648];
+  wire [31:0] n167_mean2d_y_d15;
+  assign n167_mean2d_y_d15 = n167_mean2d_y_dly_q[479:448];
+  wire [31:0] n167_mean2d_y_d115;
+  assign n167_mean2d_y_d115 = n167_mean2d_y_dly_q[3679:3648];
   wire [31:0] n168_lit;
   assign n168_lit = 32'h0;
   reg  n169_ilt_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n169_ilt_q <= ($signed(n168_lit) < $signed(n161_toint));
+      n169_ilt_q <= ($signed(n168_lit) < $signed(n161_radius));
     end
   end
   reg  n170_isfinite_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n170_isfinite_q <= ~&n164_add[30:23];
+      n170_isfinite_q <= ~&n164_mean2d_x[30:23];
     end
   end
   reg  [113:0] n170_dly_q;
@@ -1646,7 +1646,7 @@ module neo_pre_project (
   reg  n171_isfinite_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n171_isfinite_q <= ~&n167_add[30:23];
+      n171_isfinite_q <= ~&n167_mean2d_y[30:23];
     end
   end
   reg  [114:0] n171_dly_q;
@@ -1660,7 +1660,7 @@ module neo_pre_project (
   reg  n172_isfinite_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n172_isfinite_q <= ~&n144_mul[30:23];
+      n172_isfinite_q <= ~&n144_conic_a_f[30:23];
     end
   end
   reg  [33:0] n172_dly_q;
@@ -1674,7 +1674,7 @@ module neo_pre_project (
   reg  n173_isfinite_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n173_isfinite_q <= ~&n145_mul[30:23];
+      n173_isfinite_q <= ~&n145_conic_b_f[30:23];
     end
   end
   reg  [34:0] n173_dly_q;
@@ -1688,7 +1688,7 @@ module neo_pre_project (
   reg  n174_isfinite_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n174_isfinite_q <= ~&n146_mul[30:23];
+      n174_isfinite_q <= ~&n146_conic_c_f[30:23];
     end
   end
   reg  [35:0] n174_dly_q;
@@ -1702,7 +1702,7 @@ module neo_pre_project (
   reg  n175_and_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n175_and_q <= n50_d136 & n169_ilt_q;
+      n175_and_q <= n50_in_front_d136 & n169_ilt_q;
     end
   end
   reg  n176_not_q;
@@ -1749,25 +1749,25 @@ module neo_pre_project (
       n181_and_q <= n180_and_q & n173_d35;
     end
   end
-  reg  n182_and_q;
+  reg  n182_projected_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n182_and_q <= n181_and_q & n174_d36;
+      n182_projected_q <= n181_and_q & n174_d36;
     end
   end
-  reg  [17:0] n182_dly_q;
+  reg  [17:0] n182_projected_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n182_dly_q <= {n182_dly_q[16:0], n182_and_q};
+      n182_projected_dly_q <= {n182_projected_dly_q[16:0], n182_projected_q};
     end
   end
-  wire n182_d18;
-  assign n182_d18 = n182_dly_q[17:17];
+  wire n182_projected_d18;
+  assign n182_projected_d18 = n182_projected_dly_q[17:17];
   wire [31:0] n183_inttofloat;
   neo_fp_from_int u_n183 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n161_toint),
+    .a_i(n161_radius),
     .y_o(n183_inttofloat)
   );
   wire [31:0] n184_lit;
@@ -1778,7 +1778,7 @@ module neo_pre_project (
   neo_fp_sub u_n186 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n164_d115),
+    .a_i(n164_mean2d_x_d115),
     .b_i(n183_inttofloat),
     .y_o(n186_sub)
   );
@@ -1805,27 +1805,27 @@ module neo_pre_project (
       n189_imax_q <= (($signed(n168_lit) > $signed(n188_toint)) ? n168_lit : n188_toint);
     end
   end
-  reg  [31:0] n190_imin_q;
+  reg  [31:0] n190_tile_min_x_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n190_imin_q <= (($signed(n29_input) < $signed(n189_imax_q)) ? n29_input : n189_imax_q);
+      n190_tile_min_x_q <= (($signed(n29_grid_x) < $signed(n189_imax_q)) ? n29_grid_x : n189_imax_q);
     end
   end
-  reg  [2655:0] n190_dly_q;
+  reg  [2655:0] n190_tile_min_x_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n190_dly_q <= {n190_dly_q[2623:0], n190_imin_q};
+      n190_tile_min_x_dly_q <= {n190_tile_min_x_dly_q[2623:0], n190_tile_min_x_q};
     end
   end
-  wire [31:0] n190_d8;
-  assign n190_d8 = n190_dly_q[255:224];
-  wire [31:0] n190_d83;
-  assign n190_d83 = n190_dly_q[2655:2624];
+  wire [31:0] n190_tile_min_x_d8;
+  assign n190_tile_min_x_d8 = n190_tile_min_x_dly_q[255:224];
+  wire [31:0] n190_tile_min_x_d83;
+  assign n190_tile_min_x_d83 = n190_tile_min_x_dly_q[2655:2624];
   wire [31:0] n191_add;
   neo_fp_add u_n191 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n164_d115),
+    .a_i(n164_mean2d_x_d115),
     .b_i(n183_inttofloat),
     .y_o(n191_add)
   );
@@ -1868,25 +1868,25 @@ module neo_pre_project (
       n196_imax_q <= (($signed(n168_lit) > $signed(n195_toint)) ? n168_lit : n195_toint);
     end
   end
-  reg  [31:0] n197_imin_q;
+  reg  [31:0] n197_tile_max_x_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n197_imin_q <= (($signed(n29_input) < $signed(n196_imax_q)) ? n29_input : n196_imax_q);
+      n197_tile_max_x_q <= (($signed(n29_grid_x) < $signed(n196_imax_q)) ? n29_grid_x : n196_imax_q);
     end
   end
-  reg  [2399:0] n197_dly_q;
+  reg  [2399:0] n197_tile_max_x_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n197_dly_q <= {n197_dly_q[2367:0], n197_imin_q};
+      n197_tile_max_x_dly_q <= {n197_tile_max_x_dly_q[2367:0], n197_tile_max_x_q};
     end
   end
-  wire [31:0] n197_d75;
-  assign n197_d75 = n197_dly_q[2399:2368];
+  wire [31:0] n197_tile_max_x_d75;
+  assign n197_tile_max_x_d75 = n197_tile_max_x_dly_q[2399:2368];
   wire [31:0] n198_sub;
   neo_fp_sub u_n198 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n167_d115),
+    .a_i(n167_mean2d_y_d115),
     .b_i(n183_inttofloat),
     .y_o(n198_sub)
   );
@@ -1913,27 +1913,27 @@ module neo_pre_project (
       n201_imax_q <= (($signed(n168_lit) > $signed(n200_toint)) ? n168_lit : n200_toint);
     end
   end
-  reg  [31:0] n202_imin_q;
+  reg  [31:0] n202_tile_min_y_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n202_imin_q <= (($signed(n30_input) < $signed(n201_imax_q)) ? n30_input : n201_imax_q);
+      n202_tile_min_y_q <= (($signed(n30_grid_y) < $signed(n201_imax_q)) ? n30_grid_y : n201_imax_q);
     end
   end
-  reg  [2655:0] n202_dly_q;
+  reg  [2655:0] n202_tile_min_y_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n202_dly_q <= {n202_dly_q[2623:0], n202_imin_q};
+      n202_tile_min_y_dly_q <= {n202_tile_min_y_dly_q[2623:0], n202_tile_min_y_q};
     end
   end
-  wire [31:0] n202_d8;
-  assign n202_d8 = n202_dly_q[255:224];
-  wire [31:0] n202_d83;
-  assign n202_d83 = n202_dly_q[2655:2624];
+  wire [31:0] n202_tile_min_y_d8;
+  assign n202_tile_min_y_d8 = n202_tile_min_y_dly_q[255:224];
+  wire [31:0] n202_tile_min_y_d83;
+  assign n202_tile_min_y_d83 = n202_tile_min_y_dly_q[2655:2624];
   wire [31:0] n203_add;
   neo_fp_add u_n203 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n167_d115),
+    .a_i(n167_mean2d_y_d115),
     .b_i(n183_inttofloat),
     .y_o(n203_add)
   );
@@ -1976,30 +1976,30 @@ module neo_pre_project (
       n208_imax_q <= (($signed(n168_lit) > $signed(n207_toint)) ? n168_lit : n207_toint);
     end
   end
-  reg  [31:0] n209_imin_q;
+  reg  [31:0] n209_tile_max_y_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n209_imin_q <= (($signed(n30_input) < $signed(n208_imax_q)) ? n30_input : n208_imax_q);
+      n209_tile_max_y_q <= (($signed(n30_grid_y) < $signed(n208_imax_q)) ? n30_grid_y : n208_imax_q);
     end
   end
-  reg  [2399:0] n209_dly_q;
+  reg  [2399:0] n209_tile_max_y_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n209_dly_q <= {n209_dly_q[2367:0], n209_imin_q};
+      n209_tile_max_y_dly_q <= {n209_tile_max_y_dly_q[2367:0], n209_tile_max_y_q};
     end
   end
-  wire [31:0] n209_d75;
-  assign n209_d75 = n209_dly_q[2399:2368];
+  wire [31:0] n209_tile_max_y_d75;
+  assign n209_tile_max_y_d75 = n209_tile_max_y_dly_q[2399:2368];
   reg  n210_ieq_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n210_ieq_q <= (n190_d8 == n197_imin_q);
+      n210_ieq_q <= (n190_tile_min_x_d8 == n197_tile_max_x_q);
     end
   end
   reg  n211_ieq_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n211_ieq_q <= (n202_d8 == n209_imin_q);
+      n211_ieq_q <= (n202_tile_min_y_d8 == n209_tile_max_y_q);
     end
   end
   reg  n212_or_q;
@@ -2014,27 +2014,27 @@ module neo_pre_project (
       n213_not_q <= ~n212_or_q;
     end
   end
-  reg  n214_and_q;
+  reg  n214_visible_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n214_and_q <= n182_d18 & n213_not_q;
+      n214_visible_q <= n182_projected_d18 & n213_not_q;
     end
   end
-  reg  [70:0] n214_dly_q;
+  reg  [70:0] n214_visible_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n214_dly_q <= {n214_dly_q[69:0], n214_and_q};
+      n214_visible_dly_q <= {n214_visible_dly_q[69:0], n214_visible_q};
     end
   end
-  wire n214_d71;
-  assign n214_d71 = n214_dly_q[70:70];
+  wire n214_visible_d71;
+  assign n214_visible_d71 = n214_visible_dly_q[70:70];
   wire [31:0] n215_lit;
   assign n215_lit = 32'h43800000;
   wire [31:0] n216_mul;
   neo_fp_mul u_n216 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n164_add),
+    .a_i(n164_mean2d_x),
     .b_i(n215_lit),
     .y_o(n216_mul)
   );
@@ -2057,25 +2057,25 @@ module neo_pre_project (
       n220_imax_q <= (($signed(n218_lit) > $signed(n217_toint)) ? n218_lit : n217_toint);
     end
   end
-  reg  [31:0] n221_imin_q;
+  reg  [31:0] n221_mean_x_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n221_imin_q <= (($signed(n219_lit) < $signed(n220_imax_q)) ? n219_lit : n220_imax_q);
+      n221_mean_x_q <= (($signed(n219_lit) < $signed(n220_imax_q)) ? n219_lit : n220_imax_q);
     end
   end
-  reg  [6463:0] n221_dly_q;
+  reg  [6463:0] n221_mean_x_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n221_dly_q <= {n221_dly_q[6431:0], n221_imin_q};
+      n221_mean_x_dly_q <= {n221_mean_x_dly_q[6431:0], n221_mean_x_q};
     end
   end
-  wire [31:0] n221_d202;
-  assign n221_d202 = n221_dly_q[6463:6432];
+  wire [31:0] n221_mean_x_d202;
+  assign n221_mean_x_d202 = n221_mean_x_dly_q[6463:6432];
   wire [31:0] n222_mul;
   neo_fp_mul u_n222 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n167_add),
+    .a_i(n167_mean2d_y),
     .b_i(n215_lit),
     .y_o(n222_mul)
   );
@@ -2094,27 +2094,27 @@ module neo_pre_project (
       n224_imax_q <= (($signed(n218_lit) > $signed(n223_toint)) ? n218_lit : n223_toint);
     end
   end
-  reg  [31:0] n225_imin_q;
+  reg  [31:0] n225_mean_y_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n225_imin_q <= (($signed(n219_lit) < $signed(n224_imax_q)) ? n219_lit : n224_imax_q);
+      n225_mean_y_q <= (($signed(n219_lit) < $signed(n224_imax_q)) ? n219_lit : n224_imax_q);
     end
   end
-  reg  [6463:0] n225_dly_q;
+  reg  [6463:0] n225_mean_y_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n225_dly_q <= {n225_dly_q[6431:0], n225_imin_q};
+      n225_mean_y_dly_q <= {n225_mean_y_dly_q[6431:0], n225_mean_y_q};
     end
   end
-  wire [31:0] n225_d202;
-  assign n225_d202 = n225_dly_q[6463:6432];
+  wire [31:0] n225_mean_y_d202;
+  assign n225_mean_y_d202 = n225_mean_y_dly_q[6463:6432];
   wire [31:0] n226_lit;
   assign n226_lit = 32'h3b800000;
   wire [31:0] n227_inttofloat;
   neo_fp_from_int u_n227 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n221_imin_q),
+    .a_i(n221_mean_x_q),
     .y_o(n227_inttofloat)
   );
   wire [31:0] n228_mul;
@@ -2125,19 +2125,19 @@ module neo_pre_project (
     .b_i(n226_lit),
     .y_o(n228_mul)
   );
-  wire [31:0] n229_sub;
-  neo_fp_sub u_n229 (
+  wire [31:0] n229_mean_err_x;
+  neo_fp_sub u_n229_mean_err_x (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n164_d15),
+    .a_i(n164_mean2d_x_d15),
     .b_i(n228_mul),
-    .y_o(n229_sub)
+    .y_o(n229_mean_err_x)
   );
   wire [31:0] n230_inttofloat;
   neo_fp_from_int u_n230 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n225_imin_q),
+    .a_i(n225_mean_y_q),
     .y_o(n230_inttofloat)
   );
   wire [31:0] n231_mul;
@@ -2148,19 +2148,19 @@ module neo_pre_project (
     .b_i(n226_lit),
     .y_o(n231_mul)
   );
-  wire [31:0] n232_sub;
-  neo_fp_sub u_n232 (
+  wire [31:0] n232_mean_err_y;
+  neo_fp_sub u_n232_mean_err_y (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n167_d15),
+    .a_i(n167_mean2d_y_d15),
     .b_i(n231_mul),
-    .y_o(n232_sub)
+    .y_o(n232_mean_err_y)
   );
   wire [31:0] n233_mul;
   neo_fp_mul u_n233 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n9_input),
+    .a_i(n9_opacity),
     .b_i(n215_lit),
     .y_o(n233_mul)
   );
@@ -2181,36 +2181,36 @@ module neo_pre_project (
       n236_imax_q <= (($signed(n168_lit) > $signed(n234_toint)) ? n168_lit : n234_toint);
     end
   end
-  reg  [31:0] n237_imin_q;
+  reg  [31:0] n237_opacity_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n237_imin_q <= (($signed(n235_lit) < $signed(n236_imax_q)) ? n235_lit : n236_imax_q);
+      n237_opacity_q <= (($signed(n235_lit) < $signed(n236_imax_q)) ? n235_lit : n236_imax_q);
     end
   end
-  reg  [7743:0] n237_dly_q;
+  reg  [7743:0] n237_opacity_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n237_dly_q <= {n237_dly_q[7711:0], n237_imin_q};
+      n237_opacity_dly_q <= {n237_opacity_dly_q[7711:0], n237_opacity_q};
     end
   end
-  wire [31:0] n237_d242;
-  assign n237_d242 = n237_dly_q[7743:7712];
+  wire [31:0] n237_opacity_d242;
+  assign n237_opacity_d242 = n237_opacity_dly_q[7743:7712];
   reg  n238_isnan_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n238_isnan_q <= (&n144_mul[30:23] & |n144_mul[22:0]);
+      n238_isnan_q <= (&n144_conic_a_f[30:23] & |n144_conic_a_f[22:0]);
     end
   end
   reg  n239_isnan_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n239_isnan_q <= (&n145_mul[30:23] & |n145_mul[22:0]);
+      n239_isnan_q <= (&n145_conic_b_f[30:23] & |n145_conic_b_f[22:0]);
     end
   end
   reg  n240_isnan_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n240_isnan_q <= (&n146_mul[30:23] & |n146_mul[22:0]);
+      n240_isnan_q <= (&n146_conic_c_f[30:23] & |n146_conic_c_f[22:0]);
     end
   end
   reg  n240_dly_q;
@@ -2249,7 +2249,7 @@ module neo_pre_project (
   wire [31:0] n243_cmp_max;
   wire [31:0] n243_cmp_min;
   neo_fp_cmp u_n243 (
-    .a_i(n144_mul),
+    .a_i(n144_conic_a_f),
     .b_i(n139_lit),
     .lt_o(n243_cmp_lt),
     .le_o(n243_cmp_le),
@@ -2277,7 +2277,7 @@ module neo_pre_project (
   wire [31:0] n244_cmp_max;
   wire [31:0] n244_cmp_min;
   neo_fp_cmp u_n244 (
-    .a_i(n146_mul),
+    .a_i(n146_conic_c_f),
     .b_i(n139_lit),
     .lt_o(n244_cmp_lt),
     .le_o(n244_cmp_le),
@@ -2302,7 +2302,7 @@ module neo_pre_project (
   wire [31:0] n244_d30;
   assign n244_d30 = n244_dly_q[959:928];
   wire [31:0] n245_abs;
-  assign n245_abs = {1'b0, n145_mul[30:0]};
+  assign n245_abs = {1'b0, n145_conic_b_f[30:0]};
   reg  [31:0] n245_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
@@ -2331,34 +2331,34 @@ module neo_pre_project (
       n246_max_q <= n246_cmp_max;
     end
   end
-  wire n247_cmp_lt;
-  wire n247_cmp_le;
-  wire n247_cmp_eq;
-  wire [31:0] n247_cmp_max;
-  wire [31:0] n247_cmp_min;
-  neo_fp_cmp u_n247 (
+  wire n247_conic_max_cmp_lt;
+  wire n247_conic_max_cmp_le;
+  wire n247_conic_max_cmp_eq;
+  wire [31:0] n247_conic_max_cmp_max;
+  wire [31:0] n247_conic_max_cmp_min;
+  neo_fp_cmp u_n247_conic_max (
     .a_i(n246_max_q),
     .b_i(n244_d1),
-    .lt_o(n247_cmp_lt),
-    .le_o(n247_cmp_le),
-    .eq_o(n247_cmp_eq),
-    .max_o(n247_cmp_max),
-    .min_o(n247_cmp_min)
+    .lt_o(n247_conic_max_cmp_lt),
+    .le_o(n247_conic_max_cmp_le),
+    .eq_o(n247_conic_max_cmp_eq),
+    .max_o(n247_conic_max_cmp_max),
+    .min_o(n247_conic_max_cmp_min)
   );
-  reg  [31:0] n247_max_q;
+  reg  [31:0] n247_conic_max_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n247_max_q <= n247_cmp_max;
+      n247_conic_max_q <= n247_conic_max_cmp_max;
     end
   end
-  reg  [383:0] n247_dly_q;
+  reg  [383:0] n247_conic_max_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n247_dly_q <= {n247_dly_q[351:0], n247_max_q};
+      n247_conic_max_dly_q <= {n247_conic_max_dly_q[351:0], n247_conic_max_q};
     end
   end
-  wire [31:0] n247_d12;
-  assign n247_d12 = n247_dly_q[383:352];
+  wire [31:0] n247_conic_max_d12;
+  assign n247_conic_max_d12 = n247_conic_max_dly_q[383:352];
   wire [31:0] n248_lit;
   assign n248_lit = 32'h20800000;
   wire n249_cmp_lt;
@@ -2367,7 +2367,7 @@ module neo_pre_project (
   wire [31:0] n249_cmp_max;
   wire [31:0] n249_cmp_min;
   neo_fp_cmp u_n249 (
-    .a_i(n247_max_q),
+    .a_i(n247_conic_max_q),
     .b_i(n248_lit),
     .lt_o(n249_cmp_lt),
     .le_o(n249_cmp_le),
@@ -2395,7 +2395,7 @@ module neo_pre_project (
   neo_fp_mul u_n251 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n247_max_q),
+    .a_i(n247_conic_max_q),
     .b_i(n250_lit),
     .y_o(n251_mul)
   );
@@ -2410,7 +2410,7 @@ module neo_pre_project (
     end
   end
   wire [31:0] n255_expfield;
-  assign n255_expfield = {24'h000000, n247_max_q[30:23]};
+  assign n255_expfield = {24'h000000, n247_conic_max_q[30:23]};
   reg  [159:0] n255_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
@@ -2513,7 +2513,7 @@ module neo_pre_project (
   neo_fp_mul u_n272 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n247_d12),
+    .a_i(n247_conic_max_d12),
     .b_i(n270_pow2field_q),
     .y_o(n272_mul)
   );
@@ -2576,32 +2576,32 @@ module neo_pre_project (
   end
   wire [31:0] n279_d14;
   assign n279_d14 = n279_dly_q[447:416];
-  reg  [31:0] n280_iselect_q;
+  reg  [31:0] n280_conic_shift_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n280_iselect_q <= (n277_and_q ? n279_d14 : n262_d15);
+      n280_conic_shift_q <= (n277_and_q ? n279_d14 : n262_d15);
     end
   end
-  reg  [31:0] n280_dly_q;
+  reg  [31:0] n280_conic_shift_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n280_dly_q <= n280_iselect_q;
+      n280_conic_shift_dly_q <= n280_conic_shift_q;
     end
   end
-  wire [31:0] n280_d1;
-  assign n280_d1 = n280_dly_q[31:0];
+  wire [31:0] n280_conic_shift_d1;
+  assign n280_conic_shift_d1 = n280_conic_shift_dly_q[31:0];
   wire [31:0] n281_lit;
   assign n281_lit = 32'hfffc0001;
   reg  [31:0] n282_imin_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n282_imin_q <= (($signed(n264_lit) < $signed(n280_iselect_q)) ? n264_lit : n280_iselect_q);
+      n282_imin_q <= (($signed(n264_lit) < $signed(n280_conic_shift_q)) ? n264_lit : n280_conic_shift_q);
     end
   end
   reg  [31:0] n283_isub_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n283_isub_q <= n280_d1 - n282_imin_q;
+      n283_isub_q <= n280_conic_shift_d1 - n282_imin_q;
     end
   end
   reg  [31:0] n284_iadd_q;
@@ -2673,25 +2673,25 @@ module neo_pre_project (
       n292_imin_q <= (($signed(n263_lit) < $signed(n291_imax_q)) ? n263_lit : n291_imax_q);
     end
   end
-  reg  [31:0] n293_iselect_q;
+  reg  [31:0] n293_conic_a_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n293_iselect_q <= (n242_d40 ? n168_lit : n292_imin_q);
+      n293_conic_a_q <= (n242_d40 ? n168_lit : n292_imin_q);
     end
   end
-  reg  [2687:0] n293_dly_q;
+  reg  [2687:0] n293_conic_a_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n293_dly_q <= {n293_dly_q[2655:0], n293_iselect_q};
+      n293_conic_a_dly_q <= {n293_conic_a_dly_q[2655:0], n293_conic_a_q};
     end
   end
-  wire [31:0] n293_d84;
-  assign n293_d84 = n293_dly_q[2687:2656];
+  wire [31:0] n293_conic_a_d84;
+  assign n293_conic_a_d84 = n293_conic_a_dly_q[2687:2656];
   wire [31:0] n294_mul;
   neo_fp_mul u_n294 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n145_d31),
+    .a_i(n145_conic_b_f_d31),
     .b_i(n286_pow2field_q),
     .y_o(n294_mul)
   );
@@ -2724,20 +2724,20 @@ module neo_pre_project (
       n298_imin_q <= (($signed(n263_lit) < $signed(n297_imax_q)) ? n263_lit : n297_imax_q);
     end
   end
-  reg  [31:0] n299_iselect_q;
+  reg  [31:0] n299_conic_b_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n299_iselect_q <= (n242_d40 ? n168_lit : n298_imin_q);
+      n299_conic_b_q <= (n242_d40 ? n168_lit : n298_imin_q);
     end
   end
-  reg  [2687:0] n299_dly_q;
+  reg  [2687:0] n299_conic_b_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n299_dly_q <= {n299_dly_q[2655:0], n299_iselect_q};
+      n299_conic_b_dly_q <= {n299_conic_b_dly_q[2655:0], n299_conic_b_q};
     end
   end
-  wire [31:0] n299_d84;
-  assign n299_d84 = n299_dly_q[2687:2656];
+  wire [31:0] n299_conic_b_d84;
+  assign n299_conic_b_d84 = n299_conic_b_dly_q[2687:2656];
   wire [31:0] n300_mul;
   neo_fp_mul u_n300 (
     .clk_i(clk_i),
@@ -2775,48 +2775,48 @@ module neo_pre_project (
       n304_imin_q <= (($signed(n263_lit) < $signed(n303_imax_q)) ? n263_lit : n303_imax_q);
     end
   end
-  reg  [31:0] n305_iselect_q;
+  reg  [31:0] n305_conic_c_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n305_iselect_q <= (n242_d40 ? n168_lit : n304_imin_q);
+      n305_conic_c_q <= (n242_d40 ? n168_lit : n304_imin_q);
     end
   end
-  reg  [2687:0] n305_dly_q;
+  reg  [2687:0] n305_conic_c_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n305_dly_q <= {n305_dly_q[2655:0], n305_iselect_q};
+      n305_conic_c_dly_q <= {n305_conic_c_dly_q[2655:0], n305_conic_c_q};
     end
   end
-  wire [31:0] n305_d84;
-  assign n305_d84 = n305_dly_q[2687:2656];
+  wire [31:0] n305_conic_c_d84;
+  assign n305_conic_c_d84 = n305_conic_c_dly_q[2687:2656];
   reg  [31:0] n306_isub_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n306_isub_q <= n280_iselect_q - n259_lit;
+      n306_isub_q <= n280_conic_shift_q - n259_lit;
     end
   end
   wire [31:0] n307_lit;
   assign n307_lit = 32'h3f;
-  reg  [31:0] n308_iselect_q;
+  reg  [31:0] n308_conic_exp_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n308_iselect_q <= (n242_d26 ? n307_lit : n306_isub_q);
+      n308_conic_exp_q <= (n242_d26 ? n307_lit : n306_isub_q);
     end
   end
-  reg  [3135:0] n308_dly_q;
+  reg  [3135:0] n308_conic_exp_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n308_dly_q <= {n308_dly_q[3103:0], n308_iselect_q};
+      n308_conic_exp_dly_q <= {n308_conic_exp_dly_q[3103:0], n308_conic_exp_q};
     end
   end
-  wire [31:0] n308_d98;
-  assign n308_d98 = n308_dly_q[3135:3104];
+  wire [31:0] n308_conic_exp_d98;
+  assign n308_conic_exp_d98 = n308_conic_exp_dly_q[3135:3104];
   wire [31:0] n309_sub;
   neo_fp_sub u_n309 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n134_add),
-    .b_i(n135_add),
+    .a_i(n134_cov2d_xx),
+    .b_i(n135_cov2d_yy),
     .y_o(n309_sub)
   );
   wire [31:0] n310_lit;
@@ -2826,7 +2826,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n310_lit),
-    .b_i(n127_add),
+    .b_i(n127_cov2d_xy),
     .y_o(n311_mul)
   );
   reg  [1727:0] n311_dly_q;
@@ -2869,21 +2869,21 @@ module neo_pre_project (
     .b_i(n313_d4),
     .y_o(n314_add)
   );
-  wire [31:0] n315_sqrt;
-  neo_fp_sqrt u_n315 (
+  wire [31:0] n315_axis_r;
+  neo_fp_sqrt u_n315_axis_r (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n314_add),
-    .y_o(n315_sqrt)
+    .y_o(n315_axis_r)
   );
-  reg  [127:0] n315_dly_q;
+  reg  [127:0] n315_axis_r_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n315_dly_q <= {n315_dly_q[95:0], n315_sqrt};
+      n315_axis_r_dly_q <= {n315_axis_r_dly_q[95:0], n315_axis_r};
     end
   end
-  wire [31:0] n315_d4;
-  assign n315_d4 = n315_dly_q[127:96];
+  wire [31:0] n315_axis_r_d4;
+  assign n315_axis_r_d4 = n315_axis_r_dly_q[127:96];
   wire [31:0] n316_abs;
   assign n316_abs = {1'b0, n309_sub[30:0]};
   reg  [735:0] n316_dly_q;
@@ -2898,7 +2898,7 @@ module neo_pre_project (
   neo_fp_add u_n317 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n315_sqrt),
+    .a_i(n315_axis_r),
     .b_i(n316_d23),
     .y_o(n317_add)
   );
@@ -2914,7 +2914,7 @@ module neo_pre_project (
   neo_fp_mul u_n318 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n315_d4),
+    .a_i(n315_axis_r_d4),
     .b_i(n317_add),
     .y_o(n318_mul)
   );
@@ -2926,19 +2926,19 @@ module neo_pre_project (
     .b_i(n318_mul),
     .y_o(n319_mul)
   );
-  wire [31:0] n320_sqrt;
-  neo_fp_sqrt u_n320 (
+  wire [31:0] n320_axis_n;
+  neo_fp_sqrt u_n320_axis_n (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n319_mul),
-    .y_o(n320_sqrt)
+    .y_o(n320_axis_n)
   );
   wire [31:0] n321_div;
   neo_fp_div u_n321 (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n317_d23),
-    .b_i(n320_sqrt),
+    .b_i(n320_axis_n),
     .y_o(n321_div)
   );
   wire [31:0] n322_abs;
@@ -2956,7 +2956,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n322_d54),
-    .b_i(n320_sqrt),
+    .b_i(n320_axis_n),
     .y_o(n323_div)
   );
   wire [31:0] n324_div;
@@ -2964,7 +2964,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n311_d54),
-    .b_i(n320_sqrt),
+    .b_i(n320_axis_n),
     .y_o(n324_div)
   );
   reg  [31:0] n324_dly_q;
@@ -3102,7 +3102,7 @@ module neo_pre_project (
   wire [31:0] n334_cmp_min;
   neo_fp_cmp u_n334 (
     .a_i(n139_lit),
-    .b_i(n320_sqrt),
+    .b_i(n320_axis_n),
     .lt_o(n334_cmp_lt),
     .le_o(n334_cmp_le),
     .eq_o(n334_cmp_eq),
@@ -3129,23 +3129,23 @@ module neo_pre_project (
       n335_and_q <= n333_and_q & n334_d19;
     end
   end
-  reg  [31:0] n336_select_q;
+  reg  [31:0] n336_axis_c_f_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n336_select_q <= (n335_and_q ? n329_d4 : n141_lit);
+      n336_axis_c_f_q <= (n335_and_q ? n329_d4 : n141_lit);
     end
   end
-  reg  [31:0] n337_select_q;
+  reg  [31:0] n337_axis_s_f_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n337_select_q <= (n335_and_q ? n330_d3 : n139_lit);
+      n337_axis_s_f_q <= (n335_and_q ? n330_d3 : n139_lit);
     end
   end
   wire [31:0] n338_mul;
   neo_fp_mul u_n338 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n336_select_q),
+    .a_i(n336_axis_c_f_q),
     .b_i(n215_lit),
     .y_o(n338_mul)
   );
@@ -3168,25 +3168,25 @@ module neo_pre_project (
       n342_imax_q <= (($signed(n340_lit) > $signed(n339_toint)) ? n340_lit : n339_toint);
     end
   end
-  reg  [31:0] n343_imin_q;
+  reg  [31:0] n343_axis_c_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n343_imin_q <= (($signed(n341_lit) < $signed(n342_imax_q)) ? n341_lit : n342_imax_q);
+      n343_axis_c_q <= (($signed(n341_lit) < $signed(n342_imax_q)) ? n341_lit : n342_imax_q);
     end
   end
-  reg  [2303:0] n343_dly_q;
+  reg  [2303:0] n343_axis_c_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n343_dly_q <= {n343_dly_q[2271:0], n343_imin_q};
+      n343_axis_c_dly_q <= {n343_axis_c_dly_q[2271:0], n343_axis_c_q};
     end
   end
-  wire [31:0] n343_d72;
-  assign n343_d72 = n343_dly_q[2303:2272];
+  wire [31:0] n343_axis_c_d72;
+  assign n343_axis_c_d72 = n343_axis_c_dly_q[2303:2272];
   wire [31:0] n344_mul;
   neo_fp_mul u_n344 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n337_select_q),
+    .a_i(n337_axis_s_f_q),
     .b_i(n215_lit),
     .y_o(n344_mul)
   );
@@ -3205,32 +3205,32 @@ module neo_pre_project (
       n346_imax_q <= (($signed(n340_lit) > $signed(n345_toint)) ? n340_lit : n345_toint);
     end
   end
-  reg  [31:0] n347_imin_q;
+  reg  [31:0] n347_axis_s_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n347_imin_q <= (($signed(n341_lit) < $signed(n346_imax_q)) ? n341_lit : n346_imax_q);
+      n347_axis_s_q <= (($signed(n341_lit) < $signed(n346_imax_q)) ? n341_lit : n346_imax_q);
     end
   end
-  reg  [2303:0] n347_dly_q;
+  reg  [2303:0] n347_axis_s_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n347_dly_q <= {n347_dly_q[2271:0], n347_imin_q};
+      n347_axis_s_dly_q <= {n347_axis_s_dly_q[2271:0], n347_axis_s_q};
     end
   end
-  wire [31:0] n347_d72;
-  assign n347_d72 = n347_dly_q[2303:2272];
+  wire [31:0] n347_axis_s_d72;
+  assign n347_axis_s_d72 = n347_axis_s_dly_q[2303:2272];
   wire [31:0] n348_inttofloat;
   neo_fp_from_int u_n348 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n343_imin_q),
+    .a_i(n343_axis_c_q),
     .y_o(n348_inttofloat)
   );
   wire [31:0] n349_inttofloat;
   neo_fp_from_int u_n349 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n347_imin_q),
+    .a_i(n347_axis_s_q),
     .y_o(n349_inttofloat)
   );
   wire [31:0] n350_neg;
@@ -3272,7 +3272,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n351_mul),
-    .b_i(n134_d91),
+    .b_i(n134_cov2d_xx_d91),
     .y_o(n355_mul)
   );
   reg  [127:0] n355_dly_q;
@@ -3288,7 +3288,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n354_mul),
-    .b_i(n127_d99),
+    .b_i(n127_cov2d_xy_d99),
     .y_o(n356_mul)
   );
   wire [31:0] n357_mul;
@@ -3296,7 +3296,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n352_mul),
-    .b_i(n135_d91),
+    .b_i(n135_cov2d_yy_d91),
     .y_o(n357_mul)
   );
   reg  [255:0] n357_dly_q;
@@ -3387,47 +3387,47 @@ module neo_pre_project (
     .b_i(n366_mul),
     .y_o(n367_add)
   );
-  wire n368_cmp_lt;
-  wire n368_cmp_le;
-  wire n368_cmp_eq;
-  wire [31:0] n368_cmp_max;
-  wire [31:0] n368_cmp_min;
-  neo_fp_cmp u_n368 (
+  wire n368_support_var_cmp_lt;
+  wire n368_support_var_cmp_le;
+  wire n368_support_var_cmp_eq;
+  wire [31:0] n368_support_var_cmp_max;
+  wire [31:0] n368_support_var_cmp_min;
+  neo_fp_cmp u_n368_support_var (
     .a_i(n367_add),
     .b_i(n139_lit),
-    .lt_o(n368_cmp_lt),
-    .le_o(n368_cmp_le),
-    .eq_o(n368_cmp_eq),
-    .max_o(n368_cmp_max),
-    .min_o(n368_cmp_min)
+    .lt_o(n368_support_var_cmp_lt),
+    .le_o(n368_support_var_cmp_le),
+    .eq_o(n368_support_var_cmp_eq),
+    .max_o(n368_support_var_cmp_max),
+    .min_o(n368_support_var_cmp_min)
   );
-  reg  [31:0] n368_max_q;
+  reg  [31:0] n368_support_var_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n368_max_q <= n368_cmp_max;
+      n368_support_var_q <= n368_support_var_cmp_max;
     end
   end
   wire [31:0] n369_mul;
   neo_fp_mul u_n369 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n10_d210),
-    .b_i(n368_max_q),
+    .a_i(n10_k2_d210),
+    .b_i(n368_support_var_q),
     .y_o(n369_mul)
   );
-  wire [31:0] n370_sqrt;
-  neo_fp_sqrt u_n370 (
+  wire [31:0] n370_support_sd;
+  neo_fp_sqrt u_n370_support_sd (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n369_mul),
-    .y_o(n370_sqrt)
+    .y_o(n370_support_sd)
   );
   wire [31:0] n371_abs;
   assign n371_abs = {1'b0, n348_inttofloat[30:0]};
   wire [31:0] n372_abs;
   assign n372_abs = {1'b0, n349_inttofloat[30:0]};
   wire [31:0] n373_abs;
-  assign n373_abs = {1'b0, n229_sub[30:0]};
+  assign n373_abs = {1'b0, n229_mean_err_x[30:0]};
   reg  [3903:0] n373_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
@@ -3437,7 +3437,7 @@ module neo_pre_project (
   wire [31:0] n373_d122;
   assign n373_d122 = n373_dly_q[3903:3872];
   wire [31:0] n374_abs;
-  assign n374_abs = {1'b0, n232_sub[30:0]};
+  assign n374_abs = {1'b0, n232_mean_err_y[30:0]};
   reg  [3903:0] n374_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
@@ -3482,7 +3482,7 @@ module neo_pre_project (
   neo_fp_add u_n378 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n370_sqrt),
+    .a_i(n370_support_sd),
     .b_i(n377_d40),
     .y_o(n378_add)
   );
@@ -3496,13 +3496,13 @@ module neo_pre_project (
     .b_i(n379_lit),
     .y_o(n380_mul)
   );
-  wire [31:0] n381_mul;
-  neo_fp_mul u_n381 (
+  wire [31:0] n381_support_u;
+  neo_fp_mul u_n381_support_u (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n380_mul),
     .b_i(n226_lit),
-    .y_o(n381_mul)
+    .y_o(n381_support_u)
   );
   wire [31:0] n382_mul;
   neo_fp_mul u_n382 (
@@ -3533,7 +3533,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n382_mul),
-    .b_i(n134_d91),
+    .b_i(n134_cov2d_xx_d91),
     .y_o(n385_mul)
   );
   reg  [127:0] n385_dly_q;
@@ -3549,7 +3549,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n384_mul),
-    .b_i(n127_d99),
+    .b_i(n127_cov2d_xy_d99),
     .y_o(n386_mul)
   );
   wire [31:0] n387_mul;
@@ -3557,7 +3557,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n351_mul),
-    .b_i(n135_d91),
+    .b_i(n135_cov2d_yy_d91),
     .y_o(n387_mul)
   );
   reg  [255:0] n387_dly_q;
@@ -3646,40 +3646,40 @@ module neo_pre_project (
     .b_i(n395_mul),
     .y_o(n396_add)
   );
-  wire n397_cmp_lt;
-  wire n397_cmp_le;
-  wire n397_cmp_eq;
-  wire [31:0] n397_cmp_max;
-  wire [31:0] n397_cmp_min;
-  neo_fp_cmp u_n397 (
+  wire n397_support_var_cmp_lt;
+  wire n397_support_var_cmp_le;
+  wire n397_support_var_cmp_eq;
+  wire [31:0] n397_support_var_cmp_max;
+  wire [31:0] n397_support_var_cmp_min;
+  neo_fp_cmp u_n397_support_var (
     .a_i(n396_add),
     .b_i(n139_lit),
-    .lt_o(n397_cmp_lt),
-    .le_o(n397_cmp_le),
-    .eq_o(n397_cmp_eq),
-    .max_o(n397_cmp_max),
-    .min_o(n397_cmp_min)
+    .lt_o(n397_support_var_cmp_lt),
+    .le_o(n397_support_var_cmp_le),
+    .eq_o(n397_support_var_cmp_eq),
+    .max_o(n397_support_var_cmp_max),
+    .min_o(n397_support_var_cmp_min)
   );
-  reg  [31:0] n397_max_q;
+  reg  [31:0] n397_support_var_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n397_max_q <= n397_cmp_max;
+      n397_support_var_q <= n397_support_var_cmp_max;
     end
   end
   wire [31:0] n398_mul;
   neo_fp_mul u_n398 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n10_d210),
-    .b_i(n397_max_q),
+    .a_i(n10_k2_d210),
+    .b_i(n397_support_var_q),
     .y_o(n398_mul)
   );
-  wire [31:0] n399_sqrt;
-  neo_fp_sqrt u_n399 (
+  wire [31:0] n399_support_sd;
+  neo_fp_sqrt u_n399_support_sd (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n398_mul),
-    .y_o(n399_sqrt)
+    .y_o(n399_support_sd)
   );
   wire [31:0] n400_abs;
   assign n400_abs = {1'b0, n350_neg[30:0]};
@@ -3719,7 +3719,7 @@ module neo_pre_project (
   neo_fp_add u_n404 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n399_sqrt),
+    .a_i(n399_support_sd),
     .b_i(n403_d40),
     .y_o(n404_add)
   );
@@ -3731,13 +3731,13 @@ module neo_pre_project (
     .b_i(n379_lit),
     .y_o(n405_mul)
   );
-  wire [31:0] n406_mul;
-  neo_fp_mul u_n406 (
+  wire [31:0] n406_support_v;
+  neo_fp_mul u_n406_support_v (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n405_mul),
     .b_i(n226_lit),
-    .y_o(n406_mul)
+    .y_o(n406_support_v)
   );
   wire [31:0] n407_mul;
   neo_fp_mul u_n407 (
@@ -3776,7 +3776,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n407_mul),
-    .b_i(n134_add),
+    .b_i(n134_cov2d_xx),
     .y_o(n411_mul)
   );
   wire [31:0] n412_mul;
@@ -3784,7 +3784,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n410_mul),
-    .b_i(n127_add),
+    .b_i(n127_cov2d_xy),
     .y_o(n412_mul)
   );
   reg  [127:0] n412_dly_q;
@@ -3800,7 +3800,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n408_mul),
-    .b_i(n135_add),
+    .b_i(n135_cov2d_yy),
     .y_o(n413_mul)
   );
   reg  [127:0] n413_dly_q;
@@ -3889,40 +3889,40 @@ module neo_pre_project (
     .b_i(n421_mul),
     .y_o(n422_add)
   );
-  wire n423_cmp_lt;
-  wire n423_cmp_le;
-  wire n423_cmp_eq;
-  wire [31:0] n423_cmp_max;
-  wire [31:0] n423_cmp_min;
-  neo_fp_cmp u_n423 (
+  wire n423_support_var_cmp_lt;
+  wire n423_support_var_cmp_le;
+  wire n423_support_var_cmp_eq;
+  wire [31:0] n423_support_var_cmp_max;
+  wire [31:0] n423_support_var_cmp_min;
+  neo_fp_cmp u_n423_support_var (
     .a_i(n422_add),
     .b_i(n139_lit),
-    .lt_o(n423_cmp_lt),
-    .le_o(n423_cmp_le),
-    .eq_o(n423_cmp_eq),
-    .max_o(n423_cmp_max),
-    .min_o(n423_cmp_min)
+    .lt_o(n423_support_var_cmp_lt),
+    .le_o(n423_support_var_cmp_le),
+    .eq_o(n423_support_var_cmp_eq),
+    .max_o(n423_support_var_cmp_max),
+    .min_o(n423_support_var_cmp_min)
   );
-  reg  [31:0] n423_max_q;
+  reg  [31:0] n423_support_var_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n423_max_q <= n423_cmp_max;
+      n423_support_var_q <= n423_support_var_cmp_max;
     end
   end
   wire [31:0] n424_mul;
   neo_fp_mul u_n424 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n10_d115),
-    .b_i(n423_max_q),
+    .a_i(n10_k2_d115),
+    .b_i(n423_support_var_q),
     .y_o(n424_mul)
   );
-  wire [31:0] n425_sqrt;
-  neo_fp_sqrt u_n425 (
+  wire [31:0] n425_support_sd;
+  neo_fp_sqrt u_n425_support_sd (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n424_mul),
-    .y_o(n425_sqrt)
+    .y_o(n425_support_sd)
   );
   wire [31:0] n426_abs;
   assign n426_abs = {1'b0, n141_lit[30:0]};
@@ -3964,17 +3964,17 @@ module neo_pre_project (
   neo_fp_add u_n431 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n425_sqrt),
+    .a_i(n425_support_sd),
     .b_i(n430_d67),
     .y_o(n431_add)
   );
-  wire [31:0] n432_mul;
-  neo_fp_mul u_n432 (
+  wire [31:0] n432_support_x;
+  neo_fp_mul u_n432_support_x (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n431_add),
     .b_i(n379_lit),
-    .y_o(n432_mul)
+    .y_o(n432_support_x)
   );
   wire [31:0] n433_mul;
   neo_fp_mul u_n433 (
@@ -3997,7 +3997,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n408_mul),
-    .b_i(n134_add),
+    .b_i(n134_cov2d_xx),
     .y_o(n435_mul)
   );
   wire [31:0] n436_mul;
@@ -4005,7 +4005,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n434_mul),
-    .b_i(n127_add),
+    .b_i(n127_cov2d_xy),
     .y_o(n436_mul)
   );
   reg  [127:0] n436_dly_q;
@@ -4021,7 +4021,7 @@ module neo_pre_project (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n407_mul),
-    .b_i(n135_add),
+    .b_i(n135_cov2d_yy),
     .y_o(n437_mul)
   );
   reg  [127:0] n437_dly_q;
@@ -4110,40 +4110,40 @@ module neo_pre_project (
     .b_i(n445_mul),
     .y_o(n446_add)
   );
-  wire n447_cmp_lt;
-  wire n447_cmp_le;
-  wire n447_cmp_eq;
-  wire [31:0] n447_cmp_max;
-  wire [31:0] n447_cmp_min;
-  neo_fp_cmp u_n447 (
+  wire n447_support_var_cmp_lt;
+  wire n447_support_var_cmp_le;
+  wire n447_support_var_cmp_eq;
+  wire [31:0] n447_support_var_cmp_max;
+  wire [31:0] n447_support_var_cmp_min;
+  neo_fp_cmp u_n447_support_var (
     .a_i(n446_add),
     .b_i(n139_lit),
-    .lt_o(n447_cmp_lt),
-    .le_o(n447_cmp_le),
-    .eq_o(n447_cmp_eq),
-    .max_o(n447_cmp_max),
-    .min_o(n447_cmp_min)
+    .lt_o(n447_support_var_cmp_lt),
+    .le_o(n447_support_var_cmp_le),
+    .eq_o(n447_support_var_cmp_eq),
+    .max_o(n447_support_var_cmp_max),
+    .min_o(n447_support_var_cmp_min)
   );
-  reg  [31:0] n447_max_q;
+  reg  [31:0] n447_support_var_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n447_max_q <= n447_cmp_max;
+      n447_support_var_q <= n447_support_var_cmp_max;
     end
   end
   wire [31:0] n448_mul;
   neo_fp_mul u_n448 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n10_d115),
-    .b_i(n447_max_q),
+    .a_i(n10_k2_d115),
+    .b_i(n447_support_var_q),
     .y_o(n448_mul)
   );
-  wire [31:0] n449_sqrt;
-  neo_fp_sqrt u_n449 (
+  wire [31:0] n449_support_sd;
+  neo_fp_sqrt u_n449_support_sd (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n448_mul),
-    .y_o(n449_sqrt)
+    .y_o(n449_support_sd)
   );
   wire [31:0] n450_mul;
   neo_fp_mul u_n450 (
@@ -4181,17 +4181,17 @@ module neo_pre_project (
   neo_fp_add u_n453 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n449_sqrt),
+    .a_i(n449_support_sd),
     .b_i(n452_d67),
     .y_o(n453_add)
   );
-  wire [31:0] n454_mul;
-  neo_fp_mul u_n454 (
+  wire [31:0] n454_support_y;
+  neo_fp_mul u_n454_support_y (
     .clk_i(clk_i),
     .en_i(en),
     .a_i(n453_add),
     .b_i(n379_lit),
-    .y_o(n454_mul)
+    .y_o(n454_support_y)
   );
   wire [31:0] n455_lit;
   assign n455_lit = 32'h40800000;
@@ -4199,7 +4199,7 @@ module neo_pre_project (
   neo_fp_mul u_n456 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n381_mul),
+    .a_i(n381_support_u),
     .b_i(n455_lit),
     .y_o(n456_mul)
   );
@@ -4240,17 +4240,17 @@ module neo_pre_project (
   end
   wire n461_d3;
   assign n461_d3 = n461_dly_q[2:2];
-  reg  [31:0] n462_iselect_q;
+  reg  [31:0] n462_extent_u_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n462_iselect_q <= (n461_d3 ? n458_lit : n460_imin_q);
+      n462_extent_u_q <= (n461_d3 ? n458_lit : n460_imin_q);
     end
   end
   wire [31:0] n463_mul;
   neo_fp_mul u_n463 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n406_mul),
+    .a_i(n406_support_v),
     .b_i(n455_lit),
     .y_o(n463_mul)
   );
@@ -4289,17 +4289,17 @@ module neo_pre_project (
   end
   wire n467_d3;
   assign n467_d3 = n467_dly_q[2:2];
-  reg  [31:0] n468_iselect_q;
+  reg  [31:0] n468_extent_v_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n468_iselect_q <= (n467_d3 ? n458_lit : n466_imin_q);
+      n468_extent_v_q <= (n467_d3 ? n458_lit : n466_imin_q);
     end
   end
   wire [31:0] n469_mul;
   neo_fp_mul u_n469 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n432_mul),
+    .a_i(n432_support_x),
     .b_i(n455_lit),
     .y_o(n469_mul)
   );
@@ -4338,25 +4338,25 @@ module neo_pre_project (
   end
   wire n473_d3;
   assign n473_d3 = n473_dly_q[2:2];
-  reg  [31:0] n474_iselect_q;
+  reg  [31:0] n474_extent_x_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n474_iselect_q <= (n473_d3 ? n458_lit : n472_imin_q);
+      n474_extent_x_q <= (n473_d3 ? n458_lit : n472_imin_q);
     end
   end
-  reg  [3167:0] n474_dly_q;
+  reg  [3167:0] n474_extent_x_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n474_dly_q <= {n474_dly_q[3135:0], n474_iselect_q};
+      n474_extent_x_dly_q <= {n474_extent_x_dly_q[3135:0], n474_extent_x_q};
     end
   end
-  wire [31:0] n474_d99;
-  assign n474_d99 = n474_dly_q[3167:3136];
+  wire [31:0] n474_extent_x_d99;
+  assign n474_extent_x_d99 = n474_extent_x_dly_q[3167:3136];
   wire [31:0] n475_mul;
   neo_fp_mul u_n475 (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n454_mul),
+    .a_i(n454_support_y),
     .b_i(n455_lit),
     .y_o(n475_mul)
   );
@@ -4395,57 +4395,57 @@ module neo_pre_project (
   end
   wire n479_d3;
   assign n479_d3 = n479_dly_q[2:2];
-  reg  [31:0] n480_iselect_q;
+  reg  [31:0] n480_extent_y_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n480_iselect_q <= (n479_d3 ? n458_lit : n478_imin_q);
+      n480_extent_y_q <= (n479_d3 ? n458_lit : n478_imin_q);
     end
   end
-  reg  [3167:0] n480_dly_q;
+  reg  [3167:0] n480_extent_y_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n480_dly_q <= {n480_dly_q[3135:0], n480_iselect_q};
+      n480_extent_y_dly_q <= {n480_extent_y_dly_q[3135:0], n480_extent_y_q};
     end
   end
-  wire [31:0] n480_d99;
-  assign n480_d99 = n480_dly_q[3167:3136];
-  wire [31:0] n481_f16bits;
-  neo_fp_f16 u_n481 (
+  wire [31:0] n480_extent_y_d99;
+  assign n480_extent_y_d99 = n480_extent_y_dly_q[3167:3136];
+  wire [31:0] n481_depth_key;
+  neo_fp_f16 u_n481_depth_key (
     .clk_i(clk_i),
     .en_i(en),
-    .a_i(n48_add),
-    .y_o(n481_f16bits)
+    .a_i(n48_view_z),
+    .y_o(n481_depth_key)
   );
-  reg  [7423:0] n481_dly_q;
+  reg  [7423:0] n481_depth_key_dly_q;
   always @(posedge clk_i) begin
     if (en) begin
-      n481_dly_q <= {n481_dly_q[7391:0], n481_f16bits};
+      n481_depth_key_dly_q <= {n481_depth_key_dly_q[7391:0], n481_depth_key};
     end
   end
-  wire [31:0] n481_d232;
-  assign n481_d232 = n481_dly_q[7423:7392];
-  assign out_visible_o = n214_d71;
-  assign out_tile_min_x_o = n190_d83;
-  assign out_tile_max_x_o = n197_d75;
-  assign out_tile_min_y_o = n202_d83;
-  assign out_tile_max_y_o = n209_d75;
-  assign out_depth_key_o = n481_d232;
-  assign out_mean_x_o = n221_d202;
-  assign out_mean_y_o = n225_d202;
-  assign out_conic_a_o = n293_d84;
-  assign out_conic_b_o = n299_d84;
-  assign out_conic_c_o = n305_d84;
-  assign out_conic_exp_o = n308_d98;
-  assign out_opacity_o = n237_d242;
-  assign out_axis_c_o = n343_d72;
-  assign out_axis_s_o = n347_d72;
-  assign out_extent_u_o = n462_iselect_q;
-  assign out_extent_v_o = n468_iselect_q;
-  assign out_extent_x_o = n474_d99;
-  assign out_extent_y_o = n480_d99;
+  wire [31:0] n481_depth_key_d232;
+  assign n481_depth_key_d232 = n481_depth_key_dly_q[7423:7392];
+  assign out_visible_o = n214_visible_d71;
+  assign out_tile_min_x_o = n190_tile_min_x_d83;
+  assign out_tile_max_x_o = n197_tile_max_x_d75;
+  assign out_tile_min_y_o = n202_tile_min_y_d83;
+  assign out_tile_max_y_o = n209_tile_max_y_d75;
+  assign out_depth_key_o = n481_depth_key_d232;
+  assign out_mean_x_o = n221_mean_x_d202;
+  assign out_mean_y_o = n225_mean_y_d202;
+  assign out_conic_a_o = n293_conic_a_d84;
+  assign out_conic_b_o = n299_conic_b_d84;
+  assign out_conic_c_o = n305_conic_c_d84;
+  assign out_conic_exp_o = n308_conic_exp_d98;
+  assign out_opacity_o = n237_opacity_d242;
+  assign out_axis_c_o = n343_axis_c_d72;
+  assign out_axis_s_o = n347_axis_s_d72;
+  assign out_extent_u_o = n462_extent_u_q;
+  assign out_extent_v_o = n468_extent_v_q;
+  assign out_extent_x_o = n474_extent_x_d99;
+  assign out_extent_y_o = n480_extent_y_d99;
   wire unused_cmp;
-  assign unused_cmp = ^{n50_cmp_le, n50_cmp_eq, n50_cmp_max, n50_cmp_min, n53_cmp_lt, n53_cmp_le, n53_cmp_eq, n53_cmp_min, n54_cmp_lt, n54_cmp_le, n54_cmp_eq, n54_cmp_max, n58_cmp_lt, n58_cmp_le, n58_cmp_eq, n58_cmp_min, n59_cmp_lt, n59_cmp_le, n59_cmp_eq, n59_cmp_max, n140_cmp_lt, n140_cmp_le, n140_cmp_max, n140_cmp_min, n153_cmp_lt, n153_cmp_le, n153_cmp_eq, n153_cmp_min, n157_cmp_lt, n157_cmp_le, n157_cmp_eq, n157_cmp_min, n243_cmp_lt, n243_cmp_le, n243_cmp_eq, n243_cmp_min, n244_cmp_lt, n244_cmp_le, n244_cmp_eq, n244_cmp_min, n246_cmp_lt, n246_cmp_le, n246_cmp_eq, n246_cmp_min, n247_cmp_lt, n247_cmp_le, n247_cmp_eq, n247_cmp_min, n249_cmp_le, n249_cmp_eq, n249_cmp_max, n249_cmp_min, n325_cmp_le, n325_cmp_eq, n325_cmp_max, n325_cmp_min, n328_cmp_le, n328_cmp_eq, n328_cmp_max, n328_cmp_min, n334_cmp_le, n334_cmp_eq, n334_cmp_max, n334_cmp_min, n368_cmp_lt, n368_cmp_le, n368_cmp_eq, n368_cmp_min, n397_cmp_lt, n397_cmp_le, n397_cmp_eq, n397_cmp_min, n423_cmp_lt, n423_cmp_le, n423_cmp_eq, n423_cmp_min, n447_cmp_lt, n447_cmp_le, n447_cmp_eq, n447_cmp_min};
+  assign unused_cmp = ^{n50_in_front_cmp_le, n50_in_front_cmp_eq, n50_in_front_cmp_max, n50_in_front_cmp_min, n53_cmp_lt, n53_cmp_le, n53_cmp_eq, n53_cmp_min, n54_cmp_lt, n54_cmp_le, n54_cmp_eq, n54_cmp_max, n58_cmp_lt, n58_cmp_le, n58_cmp_eq, n58_cmp_min, n59_cmp_lt, n59_cmp_le, n59_cmp_eq, n59_cmp_max, n140_cmp_lt, n140_cmp_le, n140_cmp_max, n140_cmp_min, n153_cmp_lt, n153_cmp_le, n153_cmp_eq, n153_cmp_min, n157_eig_max_cmp_lt, n157_eig_max_cmp_le, n157_eig_max_cmp_eq, n157_eig_max_cmp_min, n243_cmp_lt, n243_cmp_le, n243_cmp_eq, n243_cmp_min, n244_cmp_lt, n244_cmp_le, n244_cmp_eq, n244_cmp_min, n246_cmp_lt, n246_cmp_le, n246_cmp_eq, n246_cmp_min, n247_conic_max_cmp_lt, n247_conic_max_cmp_le, n247_conic_max_cmp_eq, n247_conic_max_cmp_min, n249_cmp_le, n249_cmp_eq, n249_cmp_max, n249_cmp_min, n325_cmp_le, n325_cmp_eq, n325_cmp_max, n325_cmp_min, n328_cmp_le, n328_cmp_eq, n328_cmp_max, n328_cmp_min, n334_cmp_le, n334_cmp_eq, n334_cmp_max, n334_cmp_min, n368_support_var_cmp_lt, n368_support_var_cmp_le, n368_support_var_cmp_eq, n368_support_var_cmp_min, n397_support_var_cmp_lt, n397_support_var_cmp_le, n397_support_var_cmp_eq, n397_support_var_cmp_min, n423_support_var_cmp_lt, n423_support_var_cmp_le, n423_support_var_cmp_eq, n423_support_var_cmp_min, n447_support_var_cmp_lt, n447_support_var_cmp_le, n447_support_var_cmp_eq, n447_support_var_cmp_min};
   wire unused_bits;
-  assign unused_bits = ^{n164_add, n167_add, n144_mul, n145_mul, n146_mul, n251_mul, n247_max_q, n309_sub, n311_mul, n329_select_q, n330_select_q, n355_mul, n356_mul, n357_mul, n348_inttofloat, n349_inttofloat, n229_sub, n232_sub, n385_mul, n386_mul, n387_mul, n350_neg, n411_mul, n412_mul, n413_mul, n141_lit, n139_lit, n435_mul, n436_mul, n437_mul, n456_mul, n463_mul, n469_mul, n475_mul};
+  assign unused_bits = ^{n164_mean2d_x, n167_mean2d_y, n144_conic_a_f, n145_conic_b_f, n146_conic_c_f, n251_mul, n247_conic_max_q, n309_sub, n311_mul, n329_select_q, n330_select_q, n355_mul, n356_mul, n357_mul, n348_inttofloat, n349_inttofloat, n229_mean_err_x, n232_mean_err_y, n385_mul, n386_mul, n387_mul, n350_neg, n411_mul, n412_mul, n413_mul, n141_lit, n139_lit, n435_mul, n436_mul, n437_mul, n456_mul, n463_mul, n469_mul, n475_mul};
 
 endmodule

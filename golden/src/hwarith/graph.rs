@@ -143,6 +143,16 @@ pub struct Graph {
     pub outputs: Vec<(String, NodeId)>,
     /// The ranges the program asserts of its values ([`Arith::assume_f`], [`Arith::assume_i`]).
     pub assumptions: Vec<Assumption>,
+    /// The names the program gives its values ([`Arith::name_f`]), one per node at most, in
+    /// node order.
+    pub names: Vec<(NodeId, String)>,
+}
+
+impl Graph {
+    /// The name the program gave node `id`, if any.
+    pub fn name_of(&self, id: NodeId) -> Option<&str> {
+        self.names.binary_search_by_key(&id, |(n, _)| *n).ok().map(|k| self.names[k].1.as_str())
+    }
 }
 
 /// A range a node's value always lies in, as the program asserts it ([`Arith::assume_f`]).
@@ -231,8 +241,21 @@ impl Trace {
         INode(self.input(name, Ty::I, uniform))
     }
 
+    /// Records `name` for node `id` unless it has one; inputs and literals keep their own nets.
+    fn name(&mut self, id: NodeId, name: &str) {
+        let valid = name.bytes().next().is_some_and(|b| b.is_ascii_lowercase())
+            && name.bytes().all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_');
+        assert!(valid, "value name {name:?}: lower case letters, digits and _, a letter first");
+        let plain = !matches!(self.graph.nodes[id].op, Op::Input(_) | Op::Lit(_));
+        if plain && self.graph.names.iter().all(|(n, _)| *n != id) {
+            self.graph.names.push((id, name.to_string()));
+        }
+    }
+
+    /// Declares output `name`; its node takes the name too if the program gave it none.
     fn output(&mut self, name: &str, id: NodeId) {
         assert!(self.graph.outputs.iter().all(|(n, _)| n != name), "output {name} declared twice");
+        self.name(id, name);
         self.graph.outputs.push((name.into(), id));
     }
 
@@ -281,7 +304,10 @@ impl Trace {
             .filter(|a| live[a.node])
             .map(|a| Assumption { node: new_id[a.node], ..*a })
             .collect();
-        Graph { nodes, inputs: g.inputs, outputs, assumptions }
+        let mut names: Vec<(NodeId, String)> =
+            g.names.into_iter().filter(|(id, _)| live[*id]).map(|(id, name)| (new_id[id], name)).collect();
+        names.sort_unstable();
+        Graph { nodes, inputs: g.inputs, outputs, assumptions, names }
     }
 }
 
@@ -351,6 +377,19 @@ impl Arith for Trace {
     fn assume_zero_or(&mut self, x: FNode, lo: f32, hi: f32, why: &'static str) {
         let range = AssumedRange::ZeroOr(lo, hi);
         self.graph.assumptions.push(Assumption { node: x.0, range, why });
+    }
+
+    fn name_f(&mut self, x: FNode, name: &'static str) -> FNode {
+        self.name(x.0, name);
+        x
+    }
+    fn name_i(&mut self, x: INode, name: &'static str) -> INode {
+        self.name(x.0, name);
+        x
+    }
+    fn name_b(&mut self, x: BNode, name: &'static str) -> BNode {
+        self.name(x.0, name);
+        x
     }
 
     fn lit(&mut self, v: f32) -> FNode {
@@ -507,5 +546,35 @@ mod tests {
         let g = t.finish();
         assert_eq!(g.nodes.len(), 4);
         assert_eq!(g.eval(&[2f32.to_bits(), 1f32.to_bits()]), vec![9f32.to_bits()]);
+    }
+
+    #[test]
+    fn names_follow_their_nodes_and_the_first_one_wins() {
+        let mut t = Trace::new();
+        let x = t.input_f("x", false);
+        let y = t.input_f("y", false);
+        let dead = t.mul(x, y);
+        t.name_f(dead, "dead");
+        let s = t.add(x, y);
+        t.name_f(s, "sum");
+        let again = t.add(x, y);
+        t.name_f(again, "other");
+        let named_input = t.name_f(x, "input_name");
+        let p = t.mul(s, named_input);
+        t.output_f("p", p);
+        let g = t.finish();
+        // x, y, s, p: the dead product and its name are gone, s renumbered from 3 to 2.
+        assert_eq!(g.names, vec![(2, "sum".to_string()), (3, "p".to_string())]);
+        assert_eq!(g.name_of(2), Some("sum"));
+        assert_eq!(g.name_of(0), None, "an input keeps its port name");
+    }
+
+    #[test]
+    #[should_panic(expected = "value name \"Sum\"")]
+    fn a_name_that_is_no_verilog_identifier_is_refused() {
+        let mut t = Trace::new();
+        let x = t.input_f("x", false);
+        let s = t.add(x, x);
+        t.name_f(s, "Sum");
     }
 }

@@ -146,4 +146,22 @@ pub trait Arith {
     fn assume_i(&mut self, x: Self::I, lo: i32, hi: i32, why: &'static str);
     /// [`Arith::assume_f`] for a binary32 that is a zero or of magnitude in `[lo, hi]`.
     fn assume_zero_or(&mut self, x: Self::F, lo: f32, hi: f32, why: &'static str);
+
+    /// Names the binary32 `x` after the program's variable (lower case, digits and `_`), so
+    /// the RTL's net for it reads `n<id>_<name>`: no operation, `x` unchanged. Only a
+    /// [`graph::Trace`] records it; the first name given to a value wins.
+    fn name_f(&mut self, x: Self::F, name: &'static str) -> Self::F {
+        let _ = name;
+        x
+    }
+    /// [`Arith::name_f`] for an integer.
+    fn name_i(&mut self, x: Self::I, name: &'static str) -> Self::I {
+        let _ = name;
+        x
+    }
+    /// [`Arith::name_f`] for a boolean.
+    fn name_b(&mut self, x: Self::B, name: &'static str) -> Self::B {
+        let _ = name;
+        x
+    }
 }

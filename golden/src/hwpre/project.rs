@@ -150,6 +150,7 @@ pub fn conic_bfp<A: Arith>(a: &mut A, conic: [A::F; 3], f: &ConicFormat) -> ([A:
     let ab = a.abs(conic[1]);
     let mx = a.max(ca, ab);
     let mx = a.max(mx, cc);
+    let mx = a.name_f(mx, "conic_max");
     // The exponent of mx, subnormals normalised by 2^64 first.
     let tiny = a.lit(2f32.powi(-62));
     let small = a.lt(mx, tiny);
@@ -178,6 +179,7 @@ pub fn conic_bfp<A: Arith>(a: &mut A, conic: [A::F; 3], f: &ConicFormat) -> ([A:
     let one = a.ilit(1);
     let s0m = a.isub(s0, one);
     let s = a.iselect(dec, s0m, s0);
+    let s = a.name_i(s, "conic_shift");
     let izero = a.ilit(0);
     let neg_max = a.ilit(-(f.max_mantissa() as i32));
     let q = |a: &mut A, v: A::F, lo: A::I| {
@@ -214,11 +216,13 @@ pub fn major_axis<A: Arith>(a: &mut A, cov: [A::F; 3]) -> [A::F; 2] {
     let bb = a.mul(b, b);
     let rr = a.add(dd, bb);
     let r = a.sqrt(rr);
+    let r = a.name_f(r, "axis_r");
     let ad = a.abs(d);
     let w = a.add(r, ad);
     let rw = a.mul(r, w);
     let rw2 = a.mul(two, rw);
     let n = a.sqrt(rw2);
+    let n = a.name_f(n, "axis_n");
     let big = a.div(w, n);
     let ab = a.abs(b);
     let small = a.div(ab, n);
@@ -296,8 +300,10 @@ fn support<A: Arith>(
     let var = a.add(var, err);
     let zero = a.lit(0.0);
     let var = a.max(var, zero);
+    let var = a.name_f(var, "support_var");
     let kv = a.mul(k2, var);
     let sd = a.sqrt(kv);
+    let sd = a.name_f(sd, "support_sd");
     let nx = a.abs(n[0]);
     let ny = a.abs(n[1]);
     let dx = a.abs(dm[0]);
@@ -358,10 +364,12 @@ pub fn project<A: Arith>(
     // View transform: R p + t.
     let t = [0, 1, 2].map(|r| {
         let d = dot3(a, cam.w2v[r], g.position);
-        a.add(d, cam.translation[r])
+        let v = a.add(d, cam.translation[r]);
+        a.name_f(v, ["view_x", "view_y", "view_z"][r])
     });
     let near = a.lit(NEAR_CULL);
     let in_front = a.lt(near, t[2]);
+    let in_front = a.name_b(in_front, "in_front");
     let tz = t[2];
 
     // EWA Jacobian with the FOV clamp.
@@ -374,28 +382,37 @@ pub fn project<A: Arith>(
         a.mul(q, tz)
     };
     let tx = clamp(a, t[0], cam.lim[0]);
+    let tx = a.name_f(tx, "view_x_clamped");
     let ty = clamp(a, t[1], cam.lim[1]);
+    let ty = a.name_f(ty, "view_y_clamped");
     let tz2 = a.mul(tz, tz);
+    let tz2 = a.name_f(tz2, "view_z_sq");
     let j00 = a.div(fx, tz);
+    let j00 = a.name_f(j00, "jac_00");
     let j11 = a.div(fy, tz);
+    let j11 = a.name_f(j11, "jac_11");
     let fxtx = a.mul(fx, tx);
     let j02 = a.div(fxtx, tz2);
     let j02 = a.neg(j02);
+    let j02 = a.name_f(j02, "jac_02");
     let fyty = a.mul(fy, ty);
     let j12 = a.div(fyty, tz2);
     let j12 = a.neg(j12);
+    let j12 = a.name_f(j12, "jac_12");
     // T = W J (GLM, W's columns the rows of w2v): T[c][r] = sum_k w2v[k][r] J[c][k]; J's zero
     // entries dropped. Only T's columns 0 and 1 reach the 2x2 result.
     let w = &cam.w2v;
     let tcol0 = [0, 1, 2].map(|r| {
         let p0 = a.mul(w[0][r], j00);
         let p2 = a.mul(w[2][r], j02);
-        a.add(p0, p2)
+        let v = a.add(p0, p2);
+        a.name_f(v, ["t_00", "t_01", "t_02"][r])
     });
     let tcol1 = [0, 1, 2].map(|r| {
         let p1 = a.mul(w[1][r], j11);
         let p2 = a.mul(w[2][r], j12);
-        a.add(p1, p2)
+        let v = a.add(p1, p2);
+        a.name_f(v, ["t_10", "t_11", "t_12"][r])
     });
     let c = &g.cov3d;
     let vrk = [[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]];
@@ -404,7 +421,9 @@ pub fn project<A: Arith>(
     let mut m = [[tz; 2]; 3];
     for (k, row) in m.iter_mut().enumerate() {
         for (r, v) in row.iter_mut().enumerate() {
+            let name = [["m_00", "m_01"], ["m_10", "m_11"], ["m_20", "m_21"]][k][r];
             *v = dot3(a, tcols[r], vrk[k]);
+            *v = a.name_f(*v, name);
         }
     }
     // cov[c][r] = sum_k M[k][r] T[c][k].
@@ -414,38 +433,47 @@ pub fn project<A: Arith>(
     let c11 = cov_cr(a, 1, 1);
     let dil = a.lit(COV2D_DILATION);
     let cov = [a.add(c00, dil), c01, a.add(c11, dil)];
+    let cov = [0, 1, 2].map(|k| a.name_f(cov[k], ["cov2d_xx", "cov2d_xy", "cov2d_yy"][k]));
 
     // det, conic, radius.
     let p02 = a.mul(cov[0], cov[2]);
     let p11 = a.mul(cov[1], cov[1]);
     let det = a.sub(p02, p11);
+    let det = a.name_f(det, "det");
     let fzero = a.lit(0.0);
     let det_zero = a.eq(det, fzero);
     let one = a.lit(1.0);
     let det_inv = a.div(one, det);
+    let det_inv = a.name_f(det_inv, "det_inv");
     let nb = a.neg(cov[1]);
     let conic_f = [a.mul(cov[2], det_inv), a.mul(nb, det_inv), a.mul(cov[0], det_inv)];
+    let conic_f = [0, 1, 2].map(|k| a.name_f(conic_f[k], ["conic_a_f", "conic_b_f", "conic_c_f"][k]));
     let half = a.lit(0.5);
     let sum = a.add(cov[0], cov[2]);
     let mid = a.mul(half, sum);
+    let mid = a.name_f(mid, "eig_mid");
     let mm = a.mul(mid, mid);
     let disc = a.sub(mm, det);
     let tenth = a.lit(0.1);
     let disc = a.max(disc, tenth);
     let disc = a.sqrt(disc);
+    let disc = a.name_f(disc, "eig_disc");
     let l1 = a.add(mid, disc);
     let l2 = a.sub(mid, disc);
     let lmax = a.max(l1, l2);
+    let lmax = a.name_f(lmax, "eig_max");
     let sl = a.sqrt(lmax);
     let three = a.lit(3.0);
     let r3 = a.mul(three, sl);
     let radius = a.to_int(r3, Round::Ceil);
+    let radius = a.name_i(radius, "radius");
 
     // Mean in pixels.
     let mean2d = [0, 1].map(|k| {
         let ft = a.mul(cam.focal[k], t[k]);
         let q = a.div(ft, tz);
-        a.add(q, cam.principal[k])
+        let v = a.add(q, cam.principal[k]);
+        a.name_f(v, ["mean2d_x", "mean2d_y"][k])
     });
     let izero = a.ilit(0);
     let r_pos = a.ilt(izero, radius);
@@ -456,37 +484,53 @@ pub fn project<A: Arith>(
     for f in finite {
         ok = a.and(ok, f);
     }
+    let ok = a.name_b(ok, "projected");
     let rf = a.int_to_float(radius);
     let (x0, x1) = rect_axis(a, mean2d[0], rf, cam.grid[0], params.tile);
     let (y0, y1) = rect_axis(a, mean2d[1], rf, cam.grid[1], params.tile);
+    let (x0, x1) = (a.name_i(x0, "tile_min_x"), a.name_i(x1, "tile_max_x"));
+    let (y0, y1) = (a.name_i(y0, "tile_min_y"), a.name_i(y1, "tile_max_y"));
     let ex = a.ieq(x0, x1);
     let ey = a.ieq(y0, y1);
     let empty = a.or(ex, ey);
     let has_tiles = a.not(empty);
     let visible = a.and(ok, has_tiles);
+    let visible = a.name_b(visible, "visible");
 
     // Feature entry fields.
-    let mean = mean2d.map(|v| to_fixed(a, v, &fmt.mean));
+    let mean = [0, 1].map(|k| {
+        let v = to_fixed(a, mean2d[k], &fmt.mean);
+        a.name_i(v, ["mean_x", "mean_y"][k])
+    });
     let lsb = a.lit((-(fmt.mean.frac as f32)).exp2());
     let dm = [0, 1].map(|k| {
         let mf = a.int_to_float(mean[k]);
         let mq = a.mul(mf, lsb);
-        a.sub(mean2d[k], mq)
+        let v = a.sub(mean2d[k], mq);
+        a.name_f(v, ["mean_err_x", "mean_err_y"][k])
     });
     let opacity = to_fixed(a, g.opacity, &fmt.opacity);
     let (conic, conic_exp) = conic_bfp(a, conic_f, &fmt.conic);
     let axis_f = major_axis(a, cov);
-    let axis = axis_f.map(|v| to_fixed(a, v, &fmt.axis));
+    let axis_f = [0, 1].map(|k| a.name_f(axis_f[k], ["axis_c_f", "axis_s_f"][k]));
+    let axis = [0, 1].map(|k| {
+        let v = to_fixed(a, axis_f[k], &fmt.axis);
+        a.name_i(v, ["axis_c", "axis_s"][k])
+    });
     let cs = axis.map(|v| a.int_to_float(v));
     let ncs = a.neg(cs[1]);
     let inv_axis = a.lit((-(fmt.axis.frac as f32)).exp2());
     let frac = fmt.axis.frac;
     let su = support(a, cov, g.k2, dm, cs, frac);
     let su = a.mul(su, inv_axis);
+    let su = a.name_f(su, "support_u");
     let sv = support(a, cov, g.k2, dm, [ncs, cs[0]], frac);
     let sv = a.mul(sv, inv_axis);
+    let sv = a.name_f(sv, "support_v");
     let sx = support(a, cov, g.k2, dm, [one, fzero], frac);
+    let sx = a.name_f(sx, "support_x");
     let sy = support(a, cov, g.k2, dm, [fzero, one], frac);
+    let sy = a.name_f(sy, "support_y");
     let extent_uv = [extent_ceil(a, su, fmt), extent_ceil(a, sv, fmt)];
     let extent_xy = [extent_ceil(a, sx, fmt), extent_ceil(a, sy, fmt)];
     let depth_key = a.f16_bits(tz);

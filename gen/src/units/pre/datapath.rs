@@ -157,24 +157,59 @@ impl<'a> Datapath<'a> {
         taps
     }
 
-    /// The net holding node `id`'s value: `n<id>_<op>`, with `_q` when it is a register.
+    /// The name of node `id`'s value: the input's, or the one the program gave it
+    /// ([`neo_golden::hwarith::Arith::name_f`], an output's name otherwise), if any.
+    fn value_name(&self, id: NodeId) -> Option<&str> {
+        match self.graph.nodes[id].op {
+            Op::Input(k) => Some(&self.graph.inputs[k].name),
+            _ => self.graph.name_of(id),
+        }
+    }
+
+    /// The stem of node `id`'s nets and instance: `n<id>_<name>` for a named value, else `n<id>`.
+    fn stem(&self, id: NodeId) -> String {
+        match self.value_name(id) {
+            Some(name) => format!("n{id}_{name}"),
+            None => format!("n{id}"),
+        }
+    }
+
+    /// The net holding node `id`'s value: the stem, with the operation (`n<id>_<op>`) when the
+    /// value has no name, and `_q` when it is a register.
     fn name(&self, id: NodeId) -> String {
-        let op = format!("{:?}", self.graph.nodes[id].op);
-        let tag = op.split('(').next().unwrap_or("").to_lowercase();
+        let mut net = self.stem(id);
+        if self.value_name(id).is_none() {
+            let op = format!("{:?}", self.graph.nodes[id].op);
+            net = format!("{net}_{}", op.split('(').next().unwrap_or("").to_lowercase());
+        }
         let registered =
             matches!(self.lowering[id], Lowering::Inline { registered: true, .. } | Lowering::Compare { .. })
                 && !matches!(self.graph.nodes[id].op, Op::Input(_) | Op::Lit(_));
         if registered {
-            format!("n{id}_{tag}_q")
-        } else {
-            format!("n{id}_{tag}")
+            net.push_str("_q");
         }
+        net
+    }
+
+    /// The delay line's tap of node `id` `t` cycles after its value is ready.
+    fn tap(&self, id: NodeId, t: u32) -> String {
+        format!("{}_d{t}", self.stem(id))
+    }
+
+    /// The shift register of node `id`'s delay line.
+    fn delay_reg(&self, id: NodeId) -> String {
+        format!("{}_dly_q", self.stem(id))
+    }
+
+    /// The wire of node `id`'s comparator output `port` (`lt_o` -> `<stem>_cmp_lt`).
+    fn compare_net(&self, id: NodeId, port: &str) -> String {
+        format!("{}_cmp_{}", self.stem(id), port.trim_end_matches("_o"))
     }
 
     /// The net carrying node `node`'s value as seen at cycle `at`.
     fn value_at(&self, node: NodeId, at: u32) -> String {
         match self.ready[node] {
-            Some(r) if at > r => format!("n{node}_d{}", at - r),
+            Some(r) if at > r => self.tap(node, at - r),
             _ => self.name(node),
         }
     }
@@ -225,7 +260,7 @@ impl<'a> Datapath<'a> {
                     COMPARE_OUTPUTS
                         .iter()
                         .filter(move |o| *o != output)
-                        .map(move |o| (compare_net(id, o), compare_ty(o).bits())),
+                        .map(move |o| (self.compare_net(id, o), compare_ty(o).bits())),
                 ),
                 _ => None,
             })
@@ -320,18 +355,18 @@ impl<'a> Datapath<'a> {
             (_, Lowering::Compare { output }) => {
                 let mut c: Vec<(&str, String)> = vec![("a_i", args[0].clone()), ("b_i", args[1].clone())];
                 for o in COMPARE_OUTPUTS {
-                    let wire = compare_net(id, o);
+                    let wire = self.compare_net(id, o);
                     m.wire(&wire, compare_ty(o).bits());
                     c.push((o, wire));
                 }
                 m.item(Item::Instance(Instance {
                     module: COMPARE_MODULE.into(),
-                    name: format!("u_n{id}"),
+                    name: format!("u_{}", self.stem(id)),
                     params: Vec::new(),
                     conns: conns(&c),
                 }));
                 m.reg(&out, w);
-                let update = set(&out, compare_net(id, output));
+                let update = set(&out, self.compare_net(id, output));
                 m.seq_noreset(if self.ready[id].is_some() {
                     vec![if_("en", vec![update])]
                 } else {
@@ -347,7 +382,7 @@ impl<'a> Datapath<'a> {
                 c.push(("y_o", out));
                 m.item(Item::Instance(Instance {
                     module: p.module.clone(),
-                    name: format!("u_n{id}"),
+                    name: format!("u_{}", self.stem(id)),
                     params: p.params.clone(),
                     conns: conns(&c),
                 }));
@@ -360,14 +395,14 @@ impl<'a> Datapath<'a> {
         let Some(&longest) = taps.last() else { return };
         let w = self.graph.nodes[id].ty.bits();
         let src = self.name(id);
-        let reg = format!("n{id}_dly_q");
+        let reg = self.delay_reg(id);
         m.reg(&reg, w * longest);
         let next = if longest == 1 { src } else { format!("{{{reg}[{}:0], {src}}}", w * (longest - 1) - 1) };
         m.seq_noreset(vec![if_("en", vec![set(&reg, next)])]);
         for &t in taps {
             let tap =
                 if w * longest == 1 { reg.clone() } else { format!("{reg}[{}:{}]", w * t - 1, w * (t - 1)) };
-            m.wire_assign(format!("n{id}_d{t}"), w, tap);
+            m.wire_assign(self.tap(id, t), w, tap);
         }
     }
 }
@@ -433,16 +468,16 @@ impl Datapath<'_> {
             }
             if let Some(&longest) = taps[id].last() {
                 for t in &taps[id] {
-                    push(format!("n{id}_d{t}"), w, &k, 1);
+                    push(self.tap(id, *t), w, &k, 1);
                 }
-                push(format!("n{id}_dly_q"), w, &k, longest);
+                push(self.delay_reg(id), w, &k, longest);
             }
             if let (Lowering::Compare { .. }, [p, q]) = (&self.lowering[id], n.op.args().as_slice()) {
                 let (p, q) = (*p, *q);
                 let ops = [Op::Lt(p, q), Op::Le(p, q), Op::Eq(p, q), Op::Max(p, q), Op::Min(p, q)];
                 for (port, op) in COMPARE_OUTPUTS.iter().zip(ops) {
                     let ty = compare_ty(port);
-                    push(compare_net(id, port), ty.bits(), &a.op(&op, ty), 1);
+                    push(self.compare_net(id, port), ty.bits(), &a.op(&op, ty), 1);
                 }
             }
         }
@@ -461,11 +496,6 @@ fn compare_ty(port: &str) -> Ty {
     } else {
         Ty::B
     }
-}
-
-/// The wire of node `id`'s comparator output `port` (`lt_o` -> `n<id>_cmp_lt`).
-fn compare_net(id: NodeId, port: &str) -> String {
-    format!("n{id}_cmp_{}", port.trim_end_matches("_o"))
 }
 
 /// `template` with `$k` replaced by `args[k]` (highest k first, so `$1` never eats `$10`).

@@ -150,6 +150,7 @@ mod tests {
         let lt = t.lt(m, c);
         let one = t.ilit(1);
         let inc = t.iadd(i, one);
+        let inc = t.name_i(inc, "inc");
         let r = t.iselect(lt, inc, i);
         t.output_i("r", r);
         t.output_b("lt", lt);
@@ -163,9 +164,12 @@ mod tests {
         // max (1) -> lt (2) -> select (3); i + 1 is ready at 1 and waits 1 cycle.
         assert_eq!(d.depth(), 3);
         let v = d.module("t", &[]).to_verilog();
-        // The integer input waits two cycles for the select, the increment one.
-        assert!(v.contains("assign n3_d2 = n3_dly_q[63:32];"), "{v}");
-        assert!(v.contains("n7_iadd_q <= n3_input + n6_lit;"), "{v}");
+        // The integer input waits two cycles for the select, the increment one. Nets carry
+        // the input's, the program's or the output's name, else the operation's.
+        assert!(v.contains("assign n3_i_d2 = n3_i_dly_q[63:32];"), "{v}");
+        assert!(v.contains("n7_inc_q <= n3_i + n6_lit;"), "{v}");
+        assert!(v.contains("reg  [31:0] n8_r_q;"), "{v}");
+        assert!(v.contains("n4_max_q"), "{v}");
     }
 
     #[test]
