@@ -91,6 +91,15 @@ pub struct PartTotal {
     pub flip_flops: Option<u64>,
 }
 
+/// The whole engine's row under the per-part totals of [`Node::totals`]: the parts' cells and
+/// flip-flops added up, `None` where a part has no figure (as `neo gen --stats` prints it).
+pub fn engine_total(totals: &[(Part, PartTotal)]) -> (Option<u64>, Option<u64>) {
+    let sum = |f: fn(&PartTotal) -> Option<u64>| {
+        totals.iter().map(|(_, t)| f(t)).try_fold(0u64, |a, v| v.map(|v| a + v))
+    };
+    (sum(|t| t.cells), sum(|t| t.flip_flops))
+}
+
 /// The tree of `neo_engine` for `cfg`, with the figures of `report` where it has the module.
 pub fn build(cfg: &EngineConfig, report: Option<&SynthReport>) -> Result<Node, ConfigError> {
     let all = crate::units::modules(cfg)?;
@@ -284,16 +293,14 @@ impl Node {
                 opt(t.flip_flops)
             );
         }
-        let sum = |f: fn(&PartTotal) -> Option<u64>| {
-            totals.iter().map(|(_, t)| f(t)).try_fold(0u64, |a, v| v.map(|v| a + v))
-        };
+        let (cells, flip_flops) = engine_total(&totals);
         s += &format!(
             "{:<14} {:<60} {:>6} {:>10} {:>10}\n",
             "engine",
             "",
             all_lines,
-            opt(sum(|t| t.cells)),
-            opt(sum(|t| t.flip_flops))
+            opt(cells),
+            opt(flip_flops)
         );
         s
     }
