@@ -21,7 +21,7 @@ pub use adapt::{engine_passes, AdaptRegs, EnginePlan, ADAPT_ENABLE};
 pub use cases::{CaseScene, EngineCase, WINDOW_CASE};
 pub use clients::{client_port_slot, port_slot_client, port_slots, MemoryClient};
 pub use config::{
-    check_raster_window, ConfigError, EngineConfig, SchedulerPolicy, Topology, BRIDGE_W_SLOTS,
+    check_raster_window, ConfigError, EngineConfig, SchedulerPolicy, Topology, AXI_DATA_BITS, BRIDGE_W_SLOTS,
     COMPLETION_QUEUE_DEPTH, MAX_RASTER_WINDOW, MAX_SORT_CORES, MUX_W_FIFO_DEPTH, ROUTING_FIFO_DEPTH,
 };
 pub use expected::{Expected, Mismatch, Place, PreExpected};

@@ -21,7 +21,7 @@ use super::{byte_addr, ports, read_issuer, unused_responses, w_slot_moves, write
 use crate::emit::expr::{bits_for, lit, slice, zext};
 use crate::emit::{if_, if_else, set, Module};
 use crate::units::raster_core::{feature_word_bits, wdata_bits};
-use neo_golden::engine::EngineConfig;
+use neo_golden::engine::{EngineConfig, AXI_DATA_BITS};
 use neo_golden::raster::RGB_BITS;
 
 /// Module name.
@@ -66,7 +66,10 @@ struct Dims {
 impl Dims {
     fn new(cfg: &EngineConfig) -> Self {
         let (eb, aw, ab, db) = (cfg.entry_bits(), cfg.addr_bits, cfg.axi_addr_bits, cfg.axi_data_bits);
-        assert_eq!(db, 64, "the raster bridge packs two pixels a beat: 64-bit data only");
+        assert_eq!(
+            db, AXI_DATA_BITS,
+            "the raster bridge packs two pixels a beat: {AXI_DATA_BITS}-bit data only"
+        );
         let fw = feature_word_bits(cfg);
         assert!(fw <= 256, "a feature word of {fw} bits does not fit 4 beats");
         let (wdb, lb) = (wdata_bits(cfg), len_bits(cfg));
@@ -83,7 +86,7 @@ impl Dims {
 /// The raster bridge for `cfg`.
 ///
 /// # Panics
-/// When the AXI data width is not 64 bits (validated by the configuration) or the feature word
+/// When the AXI data width is not [`AXI_DATA_BITS`] (validated by the configuration) or the feature word
 /// does not fit 256 bits.
 pub fn module(cfg: &EngineConfig) -> Module {
     let d = Dims::new(cfg);
