@@ -2,7 +2,8 @@
 // Intersection Test Unit: subtile bitmap of one Gaussian's cutoff octagon in one tile, bit-exact with
 // golden raster::subtile_bitmap (bit sy*N+sx), and its OR (the table entry's valid bit).
 // 3-stage pipeline, II = 1, all stages advance on ~out_valid_o | out_ready_i. 42-bit signed datapath.
-// See docs/rtl.md (ITU).
+// Submodules: g_centre[c].u_col / u_row (neo_itu_centre: a column's x test, a row's y test), g_window[k].u_window
+// (neo_itu_window: step k's products and row k's U / V windows). See docs/rtl.md (ITU).
 module neo_itu (
   input  wire        clk_i,     // clock
   input  wire        rst_ni,    // asynchronous reset, active low
@@ -130,54 +131,27 @@ module neo_itu (
   // Stage 2: x test per column, y test per row (centre steps of 4096); projections on U = (C, S), V = (-S, C).
   wire [7:0] col_ok;
   wire [7:0] row_ok;
-  wire [41:0] dx_0;
-  assign dx_0 = dx0_q - 42'd0;
-  assign col_ok[0] = ux1_q | ~((dx_0[41] ? (42'd0 - dx_0) : dx_0) > tx1_q);
-  wire [41:0] dy_0;
-  assign dy_0 = dy0_q - 42'd0;
-  assign row_ok[0] = uy1_q | ~((dy_0[41] ? (42'd0 - dy_0) : dy_0) > ty1_q);
-  wire [41:0] dx_1;
-  assign dx_1 = dx0_q - 42'd4096;
-  assign col_ok[1] = ux1_q | ~((dx_1[41] ? (42'd0 - dx_1) : dx_1) > tx1_q);
-  wire [41:0] dy_1;
-  assign dy_1 = dy0_q - 42'd4096;
-  assign row_ok[1] = uy1_q | ~((dy_1[41] ? (42'd0 - dy_1) : dy_1) > ty1_q);
-  wire [41:0] dx_2;
-  assign dx_2 = dx0_q - 42'd8192;
-  assign col_ok[2] = ux1_q | ~((dx_2[41] ? (42'd0 - dx_2) : dx_2) > tx1_q);
-  wire [41:0] dy_2;
-  assign dy_2 = dy0_q - 42'd8192;
-  assign row_ok[2] = uy1_q | ~((dy_2[41] ? (42'd0 - dy_2) : dy_2) > ty1_q);
-  wire [41:0] dx_3;
-  assign dx_3 = dx0_q - 42'd12288;
-  assign col_ok[3] = ux1_q | ~((dx_3[41] ? (42'd0 - dx_3) : dx_3) > tx1_q);
-  wire [41:0] dy_3;
-  assign dy_3 = dy0_q - 42'd12288;
-  assign row_ok[3] = uy1_q | ~((dy_3[41] ? (42'd0 - dy_3) : dy_3) > ty1_q);
-  wire [41:0] dx_4;
-  assign dx_4 = dx0_q - 42'd16384;
-  assign col_ok[4] = ux1_q | ~((dx_4[41] ? (42'd0 - dx_4) : dx_4) > tx1_q);
-  wire [41:0] dy_4;
-  assign dy_4 = dy0_q - 42'd16384;
-  assign row_ok[4] = uy1_q | ~((dy_4[41] ? (42'd0 - dy_4) : dy_4) > ty1_q);
-  wire [41:0] dx_5;
-  assign dx_5 = dx0_q - 42'd20480;
-  assign col_ok[5] = ux1_q | ~((dx_5[41] ? (42'd0 - dx_5) : dx_5) > tx1_q);
-  wire [41:0] dy_5;
-  assign dy_5 = dy0_q - 42'd20480;
-  assign row_ok[5] = uy1_q | ~((dy_5[41] ? (42'd0 - dy_5) : dy_5) > ty1_q);
-  wire [41:0] dx_6;
-  assign dx_6 = dx0_q - 42'd24576;
-  assign col_ok[6] = ux1_q | ~((dx_6[41] ? (42'd0 - dx_6) : dx_6) > tx1_q);
-  wire [41:0] dy_6;
-  assign dy_6 = dy0_q - 42'd24576;
-  assign row_ok[6] = uy1_q | ~((dy_6[41] ? (42'd0 - dy_6) : dy_6) > ty1_q);
-  wire [41:0] dx_7;
-  assign dx_7 = dx0_q - 42'd28672;
-  assign col_ok[7] = ux1_q | ~((dx_7[41] ? (42'd0 - dx_7) : dx_7) > tx1_q);
-  wire [41:0] dy_7;
-  assign dy_7 = dy0_q - 42'd28672;
-  assign row_ok[7] = uy1_q | ~((dy_7[41] ? (42'd0 - dy_7) : dy_7) > ty1_q);
+  genvar c;
+  generate
+    for (c = 0; c < 8; c = c + 1) begin : g_centre
+      neo_itu_centre #(
+        .K(c)
+      ) u_col (
+        .d0_i(dx0_q),
+        .t_i(tx1_q),
+        .unb_i(ux1_q),
+        .ok_o(col_ok[c])
+      );
+      neo_itu_centre #(
+        .K(c)
+      ) u_row (
+        .d0_i(dy0_q),
+        .t_i(ty1_q),
+        .unb_i(uy1_q),
+        .ok_o(row_ok[c])
+      );
+    end
+  endgenerate
   // Signed products (the same low W bits as unsigned ones): synthesis then drops the operands'
   // sign-extension bits, so the multipliers are W x axis.bits, not W x W.
   wire [41:0] pu0;
@@ -219,182 +193,27 @@ module neo_itu (
   wire [207:0] hu;
   wire [207:0] lv;
   wire [207:0] hv;
-  wire [25:0] kc_0;
-  assign kc_0 = $signed(c2_q) * $signed(26'd0);
-  wire [25:0] ks_0;
-  assign ks_0 = $signed(s2_q) * $signed(26'd0);
-  assign kc[25:0] = kc_0;
-  assign ks[25:0] = ks_0;
-  wire [41:0] ru_0;
-  assign ru_0 = pu2_q - {{16{ks_0[25]}}, ks_0};
-  wire [41:0] rv_0;
-  assign rv_0 = pv2_q - {{16{kc_0[25]}}, kc_0};
-  wire [41:0] lu_0;
-  assign lu_0 = ru_0 - tu2_q;
-  wire [41:0] hu_0;
-  assign hu_0 = ru_0 + tu2_q;
-  wire [41:0] lv_0;
-  assign lv_0 = 42'd0 - tv2_q - rv_0;
-  wire [41:0] hv_0;
-  assign hv_0 = tv2_q - rv_0;
-  assign lu[25:0] = (&lu_0[41:25] | ~|lu_0[41:25]) ? lu_0[25:0] : (lu_0[41] ? 26'd33554432 : 26'd33554431);
-  assign hu[25:0] = (&hu_0[41:25] | ~|hu_0[41:25]) ? hu_0[25:0] : (hu_0[41] ? 26'd33554432 : 26'd33554431);
-  assign lv[25:0] = (&lv_0[41:25] | ~|lv_0[41:25]) ? lv_0[25:0] : (lv_0[41] ? 26'd33554432 : 26'd33554431);
-  assign hv[25:0] = (&hv_0[41:25] | ~|hv_0[41:25]) ? hv_0[25:0] : (hv_0[41] ? 26'd33554432 : 26'd33554431);
-  wire [25:0] kc_1;
-  assign kc_1 = $signed(c2_q) * $signed(26'd4096);
-  wire [25:0] ks_1;
-  assign ks_1 = $signed(s2_q) * $signed(26'd4096);
-  assign kc[51:26] = kc_1;
-  assign ks[51:26] = ks_1;
-  wire [41:0] ru_1;
-  assign ru_1 = pu2_q - {{16{ks_1[25]}}, ks_1};
-  wire [41:0] rv_1;
-  assign rv_1 = pv2_q - {{16{kc_1[25]}}, kc_1};
-  wire [41:0] lu_1;
-  assign lu_1 = ru_1 - tu2_q;
-  wire [41:0] hu_1;
-  assign hu_1 = ru_1 + tu2_q;
-  wire [41:0] lv_1;
-  assign lv_1 = 42'd0 - tv2_q - rv_1;
-  wire [41:0] hv_1;
-  assign hv_1 = tv2_q - rv_1;
-  assign lu[51:26] = (&lu_1[41:25] | ~|lu_1[41:25]) ? lu_1[25:0] : (lu_1[41] ? 26'd33554432 : 26'd33554431);
-  assign hu[51:26] = (&hu_1[41:25] | ~|hu_1[41:25]) ? hu_1[25:0] : (hu_1[41] ? 26'd33554432 : 26'd33554431);
-  assign lv[51:26] = (&lv_1[41:25] | ~|lv_1[41:25]) ? lv_1[25:0] : (lv_1[41] ? 26'd33554432 : 26'd33554431);
-  assign hv[51:26] = (&hv_1[41:25] | ~|hv_1[41:25]) ? hv_1[25:0] : (hv_1[41] ? 26'd33554432 : 26'd33554431);
-  wire [25:0] kc_2;
-  assign kc_2 = $signed(c2_q) * $signed(26'd8192);
-  wire [25:0] ks_2;
-  assign ks_2 = $signed(s2_q) * $signed(26'd8192);
-  assign kc[77:52] = kc_2;
-  assign ks[77:52] = ks_2;
-  wire [41:0] ru_2;
-  assign ru_2 = pu2_q - {{16{ks_2[25]}}, ks_2};
-  wire [41:0] rv_2;
-  assign rv_2 = pv2_q - {{16{kc_2[25]}}, kc_2};
-  wire [41:0] lu_2;
-  assign lu_2 = ru_2 - tu2_q;
-  wire [41:0] hu_2;
-  assign hu_2 = ru_2 + tu2_q;
-  wire [41:0] lv_2;
-  assign lv_2 = 42'd0 - tv2_q - rv_2;
-  wire [41:0] hv_2;
-  assign hv_2 = tv2_q - rv_2;
-  assign lu[77:52] = (&lu_2[41:25] | ~|lu_2[41:25]) ? lu_2[25:0] : (lu_2[41] ? 26'd33554432 : 26'd33554431);
-  assign hu[77:52] = (&hu_2[41:25] | ~|hu_2[41:25]) ? hu_2[25:0] : (hu_2[41] ? 26'd33554432 : 26'd33554431);
-  assign lv[77:52] = (&lv_2[41:25] | ~|lv_2[41:25]) ? lv_2[25:0] : (lv_2[41] ? 26'd33554432 : 26'd33554431);
-  assign hv[77:52] = (&hv_2[41:25] | ~|hv_2[41:25]) ? hv_2[25:0] : (hv_2[41] ? 26'd33554432 : 26'd33554431);
-  wire [25:0] kc_3;
-  assign kc_3 = $signed(c2_q) * $signed(26'd12288);
-  wire [25:0] ks_3;
-  assign ks_3 = $signed(s2_q) * $signed(26'd12288);
-  assign kc[103:78] = kc_3;
-  assign ks[103:78] = ks_3;
-  wire [41:0] ru_3;
-  assign ru_3 = pu2_q - {{16{ks_3[25]}}, ks_3};
-  wire [41:0] rv_3;
-  assign rv_3 = pv2_q - {{16{kc_3[25]}}, kc_3};
-  wire [41:0] lu_3;
-  assign lu_3 = ru_3 - tu2_q;
-  wire [41:0] hu_3;
-  assign hu_3 = ru_3 + tu2_q;
-  wire [41:0] lv_3;
-  assign lv_3 = 42'd0 - tv2_q - rv_3;
-  wire [41:0] hv_3;
-  assign hv_3 = tv2_q - rv_3;
-  assign lu[103:78] = (&lu_3[41:25] | ~|lu_3[41:25]) ? lu_3[25:0] : (lu_3[41] ? 26'd33554432 : 26'd33554431);
-  assign hu[103:78] = (&hu_3[41:25] | ~|hu_3[41:25]) ? hu_3[25:0] : (hu_3[41] ? 26'd33554432 : 26'd33554431);
-  assign lv[103:78] = (&lv_3[41:25] | ~|lv_3[41:25]) ? lv_3[25:0] : (lv_3[41] ? 26'd33554432 : 26'd33554431);
-  assign hv[103:78] = (&hv_3[41:25] | ~|hv_3[41:25]) ? hv_3[25:0] : (hv_3[41] ? 26'd33554432 : 26'd33554431);
-  wire [25:0] kc_4;
-  assign kc_4 = $signed(c2_q) * $signed(26'd16384);
-  wire [25:0] ks_4;
-  assign ks_4 = $signed(s2_q) * $signed(26'd16384);
-  assign kc[129:104] = kc_4;
-  assign ks[129:104] = ks_4;
-  wire [41:0] ru_4;
-  assign ru_4 = pu2_q - {{16{ks_4[25]}}, ks_4};
-  wire [41:0] rv_4;
-  assign rv_4 = pv2_q - {{16{kc_4[25]}}, kc_4};
-  wire [41:0] lu_4;
-  assign lu_4 = ru_4 - tu2_q;
-  wire [41:0] hu_4;
-  assign hu_4 = ru_4 + tu2_q;
-  wire [41:0] lv_4;
-  assign lv_4 = 42'd0 - tv2_q - rv_4;
-  wire [41:0] hv_4;
-  assign hv_4 = tv2_q - rv_4;
-  assign lu[129:104] = (&lu_4[41:25] | ~|lu_4[41:25]) ? lu_4[25:0] : (lu_4[41] ? 26'd33554432 : 26'd33554431);
-  assign hu[129:104] = (&hu_4[41:25] | ~|hu_4[41:25]) ? hu_4[25:0] : (hu_4[41] ? 26'd33554432 : 26'd33554431);
-  assign lv[129:104] = (&lv_4[41:25] | ~|lv_4[41:25]) ? lv_4[25:0] : (lv_4[41] ? 26'd33554432 : 26'd33554431);
-  assign hv[129:104] = (&hv_4[41:25] | ~|hv_4[41:25]) ? hv_4[25:0] : (hv_4[41] ? 26'd33554432 : 26'd33554431);
-  wire [25:0] kc_5;
-  assign kc_5 = $signed(c2_q) * $signed(26'd20480);
-  wire [25:0] ks_5;
-  assign ks_5 = $signed(s2_q) * $signed(26'd20480);
-  assign kc[155:130] = kc_5;
-  assign ks[155:130] = ks_5;
-  wire [41:0] ru_5;
-  assign ru_5 = pu2_q - {{16{ks_5[25]}}, ks_5};
-  wire [41:0] rv_5;
-  assign rv_5 = pv2_q - {{16{kc_5[25]}}, kc_5};
-  wire [41:0] lu_5;
-  assign lu_5 = ru_5 - tu2_q;
-  wire [41:0] hu_5;
-  assign hu_5 = ru_5 + tu2_q;
-  wire [41:0] lv_5;
-  assign lv_5 = 42'd0 - tv2_q - rv_5;
-  wire [41:0] hv_5;
-  assign hv_5 = tv2_q - rv_5;
-  assign lu[155:130] = (&lu_5[41:25] | ~|lu_5[41:25]) ? lu_5[25:0] : (lu_5[41] ? 26'd33554432 : 26'd33554431);
-  assign hu[155:130] = (&hu_5[41:25] | ~|hu_5[41:25]) ? hu_5[25:0] : (hu_5[41] ? 26'd33554432 : 26'd33554431);
-  assign lv[155:130] = (&lv_5[41:25] | ~|lv_5[41:25]) ? lv_5[25:0] : (lv_5[41] ? 26'd33554432 : 26'd33554431);
-  assign hv[155:130] = (&hv_5[41:25] | ~|hv_5[41:25]) ? hv_5[25:0] : (hv_5[41] ? 26'd33554432 : 26'd33554431);
-  wire [25:0] kc_6;
-  assign kc_6 = $signed(c2_q) * $signed(26'd24576);
-  wire [25:0] ks_6;
-  assign ks_6 = $signed(s2_q) * $signed(26'd24576);
-  assign kc[181:156] = kc_6;
-  assign ks[181:156] = ks_6;
-  wire [41:0] ru_6;
-  assign ru_6 = pu2_q - {{16{ks_6[25]}}, ks_6};
-  wire [41:0] rv_6;
-  assign rv_6 = pv2_q - {{16{kc_6[25]}}, kc_6};
-  wire [41:0] lu_6;
-  assign lu_6 = ru_6 - tu2_q;
-  wire [41:0] hu_6;
-  assign hu_6 = ru_6 + tu2_q;
-  wire [41:0] lv_6;
-  assign lv_6 = 42'd0 - tv2_q - rv_6;
-  wire [41:0] hv_6;
-  assign hv_6 = tv2_q - rv_6;
-  assign lu[181:156] = (&lu_6[41:25] | ~|lu_6[41:25]) ? lu_6[25:0] : (lu_6[41] ? 26'd33554432 : 26'd33554431);
-  assign hu[181:156] = (&hu_6[41:25] | ~|hu_6[41:25]) ? hu_6[25:0] : (hu_6[41] ? 26'd33554432 : 26'd33554431);
-  assign lv[181:156] = (&lv_6[41:25] | ~|lv_6[41:25]) ? lv_6[25:0] : (lv_6[41] ? 26'd33554432 : 26'd33554431);
-  assign hv[181:156] = (&hv_6[41:25] | ~|hv_6[41:25]) ? hv_6[25:0] : (hv_6[41] ? 26'd33554432 : 26'd33554431);
-  wire [25:0] kc_7;
-  assign kc_7 = $signed(c2_q) * $signed(26'd28672);
-  wire [25:0] ks_7;
-  assign ks_7 = $signed(s2_q) * $signed(26'd28672);
-  assign kc[207:182] = kc_7;
-  assign ks[207:182] = ks_7;
-  wire [41:0] ru_7;
-  assign ru_7 = pu2_q - {{16{ks_7[25]}}, ks_7};
-  wire [41:0] rv_7;
-  assign rv_7 = pv2_q - {{16{kc_7[25]}}, kc_7};
-  wire [41:0] lu_7;
-  assign lu_7 = ru_7 - tu2_q;
-  wire [41:0] hu_7;
-  assign hu_7 = ru_7 + tu2_q;
-  wire [41:0] lv_7;
-  assign lv_7 = 42'd0 - tv2_q - rv_7;
-  wire [41:0] hv_7;
-  assign hv_7 = tv2_q - rv_7;
-  assign lu[207:182] = (&lu_7[41:25] | ~|lu_7[41:25]) ? lu_7[25:0] : (lu_7[41] ? 26'd33554432 : 26'd33554431);
-  assign hu[207:182] = (&hu_7[41:25] | ~|hu_7[41:25]) ? hu_7[25:0] : (hu_7[41] ? 26'd33554432 : 26'd33554431);
-  assign lv[207:182] = (&lv_7[41:25] | ~|lv_7[41:25]) ? lv_7[25:0] : (lv_7[41] ? 26'd33554432 : 26'd33554431);
-  assign hv[207:182] = (&hv_7[41:25] | ~|hv_7[41:25]) ? hv_7[25:0] : (hv_7[41] ? 26'd33554432 : 26'd33554431);
+  genvar k;
+  generate
+    for (k = 0; k < 8; k = k + 1) begin : g_window
+      neo_itu_window #(
+        .K(k)
+      ) u_window (
+        .c_i(c2_q),
+        .s_i(s2_q),
+        .pu_i(pu2_q),
+        .pv_i(pv2_q),
+        .tu_i(tu2_q),
+        .tv_i(tv2_q),
+        .kc_o(kc[k*26 +: 26]),
+        .ks_o(ks[k*26 +: 26]),
+        .lu_o(lu[k*26 +: 26]),
+        .hu_o(hu[k*26 +: 26]),
+        .lv_o(lv[k*26 +: 26]),
+        .hv_o(hv[k*26 +: 26])
+      );
+    end
+  endgenerate
   wire [63:0] bitmap_d;
   genvar gi;
   generate

@@ -38,11 +38,17 @@
 //! quantised Gaussians.
 
 use crate::emit::expr::{bits_for, lit, sext, slice, zext};
-use crate::emit::{if_, set, Item, Module};
+use crate::emit::{if_, set, Instance, Item, Module};
 use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_itu";
+
+/// The per-column (per-row) centre test, [`centre_module`].
+pub const CENTRE_NAME: &str = "neo_itu_centre";
+
+/// The per-step products and windows, [`window_module`].
+pub const WINDOW_NAME: &str = "neo_itu_window";
 
 /// Pipeline latency in cycles (input transfer edge to output valid).
 pub const LATENCY: u32 = 3;
@@ -170,7 +176,10 @@ fn ports(m: &mut Module, d: &Dims) {
     m.doc(format!(
         "{LATENCY}-stage pipeline, II = 1, all stages advance on ~out_valid_o | out_ready_i. {w}-bit signed datapath."
     ));
-    m.doc("See docs/rtl.md (ITU).");
+    m.doc(format!(
+        "Submodules: g_centre[c].u_col / u_row ({CENTRE_NAME}: a column's x test, a row's y test), g_window[k].u_window"
+    ));
+    m.doc(format!("({WINDOW_NAME}: step k's products and row k's U / V windows). See docs/rtl.md (ITU)."));
     m.clock_reset();
     m.input("in_valid_i", 1);
     m.output("in_ready_o", 1);
@@ -282,20 +291,22 @@ fn stage1(m: &mut Module, cfg: &EngineConfig, d: &Dims) {
 /// Stage 2: the x / y tests per column / row and the U / V projections.
 fn stage2(m: &mut Module, d: &Dims) {
     let Dims { n, w, kb, tg, step, .. } = *d;
-    let l = |v: u64| lit(w, v);
     // Stage 2.
     m.blank();
     m.comment(format!(
         "Stage 2: x test per column, y test per row (centre steps of {step}); projections on U = (C, S), V = (-S, C)."
     ));
     m.wire("col_ok", n).wire("row_ok", n);
-    for k in 0..n as u64 {
-        for (a, ok, u) in [("x", "col_ok", "ux1_q"), ("y", "row_ok", "uy1_q")] {
-            let d = format!("d{a}_{k}");
-            m.wire_assign(&d, w, format!("d{a}0_q - {}", l(k * step)));
-            m.assign(format!("{ok}[{k}]"), format!("{u} | ~({} > t{a}1_q)", abs(&d, w)));
-        }
-    }
+    let centre = |name: &str, a: &str, ok: &str| {
+        let conns = [
+            ("d0_i", format!("d{a}0_q")),
+            ("t_i", format!("t{a}1_q")),
+            ("unb_i", format!("u{a}1_q")),
+            ("ok_o", format!("{ok}[c]")),
+        ];
+        step_instance(CENTRE_NAME, name, "c", conns.map(|(p, e)| (p.to_string(), e)).to_vec())
+    };
+    m.gen_for("c", n, "g_centre", vec![centre("u_col", "x", "col_ok"), centre("u_row", "y", "row_ok")]);
     m.comment("Signed products (the same low W bits as unsigned ones): synthesis then drops the operands'");
     m.comment("sign-extension bits, so the multipliers are W x axis.bits, not W x W.");
     m.wire_assign("pu0", w, "$signed(dx0_q) * $signed(c1_q) + $signed(dy0_q) * $signed(s1_q)");
@@ -322,8 +333,7 @@ fn stage2(m: &mut Module, d: &Dims) {
 
 /// Stage 3: the U / V windows per row and the bitmap.
 fn stage3(m: &mut Module, d: &Dims) {
-    let Dims { n, nb, w, kb, tg, step, .. } = *d;
-    let l = |v: u64| lit(w, v);
+    let Dims { n, nb, kb, tg, step, .. } = *d;
     // Stage 3.
     m.blank();
     m.comment(format!(
@@ -332,33 +342,16 @@ fn stage3(m: &mut Module, d: &Dims) {
     m.comment("|pu| > Tu iff kc[sx] lies outside [ru - Tu, ru + Tu], ru = pu0 - ks[sy] (one window per row), likewise V.");
     m.wire("kc", n * kb).wire("ks", n * kb);
     m.wire("lu", n * kb).wire("hu", n * kb).wire("lv", n * kb).wire("hv", n * kb);
-    let sat = |x: &str| {
-        let top = slice(x, w - 1, kb - 1);
-        format!(
-            "(&{top} | ~|{top}) ? {} : ({x}[{}] ? {} : {})",
-            slice(x, kb - 1, 0),
-            w - 1,
-            lit(kb, 1 << (kb - 1)),
-            lit(kb, (1 << (kb - 1)) - 1)
-        )
-    };
-    for k in 0..n {
-        let ln = |v: &str| slice(v, (k + 1) * kb - 1, k * kb);
-        let kl = lit(kb, k as u64 * step);
-        m.wire_assign(format!("kc_{k}"), kb, format!("$signed(c2_q) * $signed({kl})"));
-        m.wire_assign(format!("ks_{k}"), kb, format!("$signed(s2_q) * $signed({kl})"));
-        m.assign(ln("kc"), format!("kc_{k}"));
-        m.assign(ln("ks"), format!("ks_{k}"));
-        m.wire_assign(format!("ru_{k}"), w, format!("pu2_q - {}", sext(&format!("ks_{k}"), kb, w)));
-        m.wire_assign(format!("rv_{k}"), w, format!("pv2_q - {}", sext(&format!("kc_{k}"), kb, w)));
-        m.wire_assign(format!("lu_{k}"), w, format!("ru_{k} - tu2_q"));
-        m.wire_assign(format!("hu_{k}"), w, format!("ru_{k} + tu2_q"));
-        m.wire_assign(format!("lv_{k}"), w, format!("{} - tv2_q - rv_{k}", l(0)));
-        m.wire_assign(format!("hv_{k}"), w, format!("tv2_q - rv_{k}"));
-        for v in ["lu", "hu", "lv", "hv"] {
-            m.assign(ln(v), sat(&format!("{v}_{k}")));
-        }
+    let mut conns: Vec<(String, String)> =
+        [("c_i", "c2_q"), ("s_i", "s2_q"), ("pu_i", "pu2_q"), ("pv_i", "pv2_q")]
+            .into_iter()
+            .chain([("tu_i", "tu2_q"), ("tv_i", "tv2_q")])
+            .map(|(p, e)| (p.to_string(), e.to_string()))
+            .collect();
+    for v in ["kc", "ks", "lu", "hu", "lv", "hv"] {
+        conns.push((format!("{v}_o"), format!("{v}[k*{kb} +: {kb}]")));
     }
+    m.gen_for("k", n, "g_window", vec![step_instance(WINDOW_NAME, "u_window", "k", conns)]);
     m.wire("bitmap_d", nb);
     let lane = |v: &str, idx: &str| format!("$signed({v}[({idx})*{kb} +: {kb}])");
     let (col, row) = (format!("gi % {n}"), format!("gi / {n}"));
@@ -400,6 +393,96 @@ fn stage3(m: &mut Module, d: &Dims) {
     m.assign("bitmap_o", "bitmap3_q");
     m.assign("hit_o", "|bitmap3_q");
     m.assign("tag_o", "tag3_q");
+}
+
+/// An instance `name` of the step module `module` inside a generate loop over `var`, its `K`
+/// the loop's index.
+fn step_instance(module: &str, name: &str, var: &str, conns: Vec<(String, String)>) -> Item {
+    Item::Instance(Instance {
+        module: module.into(),
+        name: name.into(),
+        params: vec![("K".into(), var.into())],
+        conns,
+    })
+}
+
+/// `neo_itu_centre #(K)`: the `x` test of subtile column `K` (or the `y` test of row `K`):
+/// the offset from the column's centre, `d0 - K step`, is within the threshold, or the
+/// extent is unbounded. Combinational; `neo_itu` places two per column in stage 2.
+pub fn centre_module(cfg: &EngineConfig) -> Module {
+    let Dims { w, step, .. } = Dims::new(cfg);
+    let mut m = Module::new(CENTRE_NAME);
+    m.doc("ITU centre test of subtile column (or row) K: |d0 - K step| <= T, or the extent is unbounded.");
+    m.doc(format!("Combinational; neo_itu's stage 2 places one per column and one per row (step {step})."));
+    m.param("K", 0);
+    m.input_c("d0_i", w, "offset from the centre of subtile 0 (dx0 or dy0)");
+    m.input_c("t_i", w, "threshold R + w (tx or ty)");
+    m.input_c("unb_i", 1, "the extent is unbounded");
+    m.output_c("ok_o", 1, "the column (row) may be touched");
+    m.localparam("OFFSET", w, format!("{} * K", lit(w, step)));
+    m.wire_assign("d", w, "d0_i - OFFSET");
+    m.assign("ok_o", format!("unb_i | ~({} > t_i)", abs("d", w)));
+    m
+}
+
+/// `neo_itu_window #(K)`: the subtile steps of index `K`, `kc = K step C` and `ks = K step
+/// S`, and row `K`'s windows: `[ru - Tu, ru + Tu]` with `ru = pu0 - ks`, and `[-Tv - rv, Tv -
+/// rv]` with `rv = pv0 - kc`, saturated to [`step_bits`] bits. Combinational; `neo_itu`
+/// places one per step in stage 3.
+pub fn window_module(cfg: &EngineConfig) -> Module {
+    let Dims { w, kb, step, .. } = Dims::new(cfg);
+    let mut m = Module::new(WINDOW_NAME);
+    m.doc("ITU step K: kc = K step C and ks = K step S (subtile column or row K), and row K's U / V windows");
+    m.doc(format!(
+        "[ru - Tu, ru + Tu], ru = pu0 - ks, and [-Tv - rv, Tv - rv], rv = pv0 - kc, saturated to {kb} bits."
+    ));
+    m.doc(format!("Combinational; neo_itu's stage 3 places one per step (step {step})."));
+    m.param("K", 0);
+    m.input_c("c_i", kb, "axis C, low bits");
+    m.input_c("s_i", kb, "axis S, low bits");
+    m.input_c("pu_i", w, "projection of d0 on U");
+    m.input_c("pv_i", w, "projection of d0 on V");
+    m.input_c("tu_i", w, "threshold along U");
+    m.input_c("tv_i", w, "threshold along V");
+    for (v, what) in [("kc", "K step C"), ("ks", "K step S")] {
+        m.output_c(format!("{v}_o"), kb, what);
+    }
+    for (v, what) in [
+        ("lu", "U window, low, saturated"),
+        ("hu", "U window, high, saturated"),
+        ("lv", "V window, low, saturated"),
+        ("hv", "V window, high, saturated"),
+    ] {
+        m.output_c(format!("{v}_o"), kb, what);
+    }
+    m.localparam("STEP_K_INT", 0, format!("{step} * K"));
+    m.localparam("STEP_K", kb, slice("STEP_K_INT", kb - 1, 0));
+    m.wire_assign("kc", kb, "$signed(c_i) * $signed(STEP_K)");
+    m.wire_assign("ks", kb, "$signed(s_i) * $signed(STEP_K)");
+    m.assign("kc_o", "kc");
+    m.assign("ks_o", "ks");
+    m.wire_assign("ru", w, format!("pu_i - {}", sext("ks", kb, w)));
+    m.wire_assign("rv", w, format!("pv_i - {}", sext("kc", kb, w)));
+    m.wire_assign("lu", w, "ru - tu_i");
+    m.wire_assign("hu", w, "ru + tu_i");
+    m.wire_assign("lv", w, format!("{} - tv_i - rv", lit(w, 0)));
+    m.wire_assign("hv", w, "tv_i - rv");
+    for v in ["lu", "hu", "lv", "hv"] {
+        m.assign(format!("{v}_o"), saturate(v, w, kb));
+    }
+    m
+}
+
+/// The `w`-bit value `x` saturated to `kb` signed bits.
+fn saturate(x: &str, w: u32, kb: u32) -> String {
+    let top = slice(x, w - 1, kb - 1);
+    format!(
+        "(&{top} | ~|{top}) ? {} : ({x}[{}] ? {} : {})",
+        slice(x, kb - 1, 0),
+        w - 1,
+        lit(kb, 1 << (kb - 1)),
+        lit(kb, (1 << (kb - 1)) - 1)
+    )
 }
 
 #[cfg(test)]

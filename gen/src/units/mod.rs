@@ -7,6 +7,8 @@
 //! | `neo_msu`       | Merge Sort Unit+: streaming two-way merge with delete   | yes       |
 //! | `neo_chunk_ram` | one chunk buffer: 1 write port, 2 asynchronous reads    | no        |
 //! | `neo_sort_core` | Sorting Core: BSU + MSU+ + buffers + memory/command ports | yes     |
+//! | `neo_itu_centre` | ITU: the centre test of one subtile column or row, parameter `K` | no |
+//! | `neo_itu_window` | ITU: the steps and U / V windows of step `K`, parameter `K` | no     |
 //! | `neo_itu`       | Intersection Test Unit: subtile bitmap of one Gaussian  | yes       |
 //! | `neo_scu_exp`   | SCU exp unit: ROM over one octave + interpolation       | no        |
 //! | `neo_scu_lane`  | SCU pixel lane: S0..S5, quadratic form, exp, alpha      | no        |
@@ -149,6 +151,8 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
         msu::module(cfg),
         chunk_ram::module(cfg),
         sort_core::module(cfg),
+        itu::centre_module(cfg),
+        itu::window_module(cfg),
         itu::module(cfg),
         scu::exp::module(cfg),
         scu::lane::module(cfg),
