@@ -50,6 +50,64 @@ pub struct HLine {
     pub label: String,
 }
 
+/// A chart with `f64` axes on the SVG backend.
+type Chart<'a, 'b> = ChartContext<
+    'a,
+    SVGBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// Draws `h` across the chart from 0 to `x_end`, with its legend entry.
+fn reference_line(chart: &mut Chart<'_, '_>, h: HLine, x_end: f64) -> Result<(), String> {
+    chart
+        .draw_series(LineSeries::new(vec![(0.0, h.y), (x_end, h.y)], BLACK.stroke_width(1)))
+        .map_err(err)?
+        .label(h.label)
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], BLACK));
+    Ok(())
+}
+
+/// Draws the legend at `position` (in the default font, or at `font_size` points).
+fn legend<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    position: SeriesLabelPosition,
+    font_size: Option<u32>,
+) -> Result<(), String> {
+    let mut labels = chart.configure_series_labels();
+    labels.position(position).background_style(WHITE.mix(0.85)).border_style(BLACK);
+    if let Some(size) = font_size {
+        labels.label_font(("sans-serif", size));
+    }
+    labels.draw().map_err(err)
+}
+
+/// The axes of an x-y chart over `x` and `y`, drawn with its caption, mesh and axis titles.
+fn xy_chart<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+    (x_desc, y_desc): (&str, &str),
+    x: std::ops::Range<f64>,
+    y: std::ops::Range<f64>,
+) -> Result<Chart<'a, 'b>, String> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(64)
+        .build_cartesian_2d(x, y)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .light_line_style(WHITE)
+        .label_style(("sans-serif", 15))
+        .axis_desc_style(("sans-serif", 15))
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
 /// Grouped bars: one group per entry of `groups`, one bar per series in each.
 pub fn grouped_bars(
     title: &str,
@@ -84,20 +142,9 @@ pub fn grouped_bars(
                 .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
         }
         if let Some(h) = hline {
-            chart
-                .draw_series(LineSeries::new(vec![(0.0, h.y), (ng, h.y)], BLACK.stroke_width(1)))
-                .map_err(err)?
-                .label(h.label)
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], BLACK));
+            reference_line(&mut chart, h, ng)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font(("sans-serif", 14))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight, Some(14))?;
         root.present().map_err(err)?;
     }
     Ok(out)
@@ -114,14 +161,7 @@ fn category_chart<'a, 'b>(
     x_max: f64,
     ymax: f64,
     x_labels: usize,
-) -> Result<
-    ChartContext<
-        'a,
-        SVGBackend<'b>,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
-    String,
-> {
+) -> Result<Chart<'a, 'b>, String> {
     let mut chart = ChartBuilder::on(root)
         .caption(title, ("sans-serif", 20))
         .margin(12)
@@ -187,13 +227,7 @@ pub fn stacked_bars(title: &str, y_desc: &str, bars: &[String], stacks: &[(Strin
                 .label(name.clone())
                 .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight, None)?;
         root.present().map_err(err)?;
     }
     Ok(out)
@@ -214,22 +248,7 @@ pub fn lines(
         let pts = || series.iter().flat_map(|s| s.1.iter().copied());
         let xmax = pts().map(|p| p.0).fold(0.0, f64::max).max(1.0);
         let ymax = nice_max(pts().map(|p| p.1).chain(hline.iter().map(|h| h.y)).fold(0.0, f64::max));
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(64)
-            .build_cartesian_2d(0f64..xmax, 0f64..ymax)
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE)
-            .label_style(("sans-serif", 15))
-            .axis_desc_style(("sans-serif", 15))
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .draw()
-            .map_err(err)?;
+        let mut chart = xy_chart(&root, title, (x_desc, y_desc), 0f64..xmax, 0f64..ymax)?;
         for (si, (name, p)) in series.iter().enumerate() {
             let c = color(si);
             chart
@@ -240,19 +259,9 @@ pub fn lines(
             chart.draw_series(p.iter().map(|&q| Circle::new(q, 2, c.filled()))).map_err(err)?;
         }
         if let Some(h) = hline {
-            chart
-                .draw_series(LineSeries::new(vec![(0.0, h.y), (xmax, h.y)], BLACK.stroke_width(1)))
-                .map_err(err)?
-                .label(h.label)
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], BLACK));
+            reference_line(&mut chart, h, xmax)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::LowerRight, None)?;
         root.present().map_err(err)?;
     }
     Ok(out)
@@ -279,22 +288,7 @@ pub fn scatter_front(
         let ymax = pts().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
         let (ymin, ymax) =
             if ymin.is_finite() { ((ymin - 2.0).floor(), (ymax + 2.0).ceil()) } else { (0.0, 1.0) };
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(64)
-            .build_cartesian_2d(xmin..xmax, ymin..ymax)
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE)
-            .label_style(("sans-serif", 15))
-            .axis_desc_style(("sans-serif", 15))
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .draw()
-            .map_err(err)?;
+        let mut chart = xy_chart(&root, title, (x_desc, y_desc), xmin..xmax, ymin..ymax)?;
         if front.len() > 1 {
             chart
                 .draw_series(LineSeries::new(front.iter().copied(), BLACK.stroke_width(1)))
@@ -310,13 +304,7 @@ pub fn scatter_front(
                 .label(name.clone())
                 .legend(move |(x, y)| Circle::new((x + 6, y), 4, c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::LowerLeft, None)?;
         root.present().map_err(err)?;
     }
     Ok(out)
