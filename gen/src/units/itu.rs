@@ -342,12 +342,15 @@ fn stage3(m: &mut Module, d: &Dims) {
     m.comment("|pu| > Tu iff kc[sx] lies outside [ru - Tu, ru + Tu], ru = pu0 - ks[sy] (one window per row), likewise V.");
     m.wire("kc", n * kb).wire("ks", n * kb);
     m.wire("lu", n * kb).wire("hu", n * kb).wire("lv", n * kb).wire("hv", n * kb);
-    let mut conns: Vec<(String, String)> =
-        [("c_i", "c2_q"), ("s_i", "s2_q"), ("pu_i", "pu2_q"), ("pv_i", "pv2_q")]
-            .into_iter()
-            .chain([("tu_i", "tu2_q"), ("tv_i", "tv2_q")])
-            .map(|(p, e)| (p.to_string(), e.to_string()))
-            .collect();
+    let inputs = [
+        ("c_i", "c2_q"),
+        ("s_i", "s2_q"),
+        ("pu_i", "pu2_q"),
+        ("pv_i", "pv2_q"),
+        ("tu_i", "tu2_q"),
+        ("tv_i", "tv2_q"),
+    ];
+    let mut conns: Vec<(String, String)> = inputs.map(|(p, e)| (p.to_string(), e.to_string())).to_vec();
     for v in ["kc", "ks", "lu", "hu", "lv", "hv"] {
         conns.push((format!("{v}_o"), format!("{v}[k*{kb} +: {kb}]")));
     }
