@@ -38,7 +38,7 @@
 //! quantised Gaussians.
 
 use crate::emit::expr::{bits_for, lit, sext, slice, zext};
-use crate::emit::{if_, set, Instance, Item, Module};
+use crate::emit::{conns, if_, set, Instance, Item, Module};
 use neo_golden::engine::EngineConfig;
 
 /// Module name.
@@ -298,13 +298,13 @@ fn stage2(m: &mut Module, d: &Dims) {
     ));
     m.wire("col_ok", n).wire("row_ok", n);
     let centre = |name: &str, a: &str, ok: &str| {
-        let conns = [
+        let c = [
             ("d0_i", format!("d{a}0_q")),
             ("t_i", format!("t{a}1_q")),
             ("unb_i", format!("u{a}1_q")),
             ("ok_o", format!("{ok}[c]")),
         ];
-        step_instance(CENTRE_NAME, name, "c", conns.map(|(p, e)| (p.to_string(), e)).to_vec())
+        step_instance(CENTRE_NAME, name, "c", conns(&c))
     };
     m.gen_for("c", n, "g_centre", vec![centre("u_col", "x", "col_ok"), centre("u_row", "y", "row_ok")]);
     m.comment("Signed products (the same low W bits as unsigned ones): synthesis then drops the operands'");
@@ -350,11 +350,14 @@ fn stage3(m: &mut Module, d: &Dims) {
         ("tu_i", "tu2_q"),
         ("tv_i", "tv2_q"),
     ];
-    let mut conns: Vec<(String, String)> = inputs.map(|(p, e)| (p.to_string(), e.to_string())).to_vec();
-    for v in ["kc", "ks", "lu", "hu", "lv", "hv"] {
-        conns.push((format!("{v}_o"), format!("{v}[k*{kb} +: {kb}]")));
-    }
-    m.gen_for("k", n, "g_window", vec![step_instance(WINDOW_NAME, "u_window", "k", conns)]);
+    let outputs =
+        [("kc_o", "kc"), ("ks_o", "ks"), ("lu_o", "lu"), ("hu_o", "hu"), ("lv_o", "lv"), ("hv_o", "hv")];
+    let c: Vec<(&str, String)> = inputs
+        .into_iter()
+        .map(|(p, net)| (p, net.to_string()))
+        .chain(outputs.into_iter().map(|(p, v)| (p, format!("{v}[k*{kb} +: {kb}]"))))
+        .collect();
+    m.gen_for("k", n, "g_window", vec![step_instance(WINDOW_NAME, "u_window", "k", conns(&c))]);
     m.wire("bitmap_d", nb);
     let lane = |v: &str, idx: &str| format!("$signed({v}[({idx})*{kb} +: {kb}])");
     let (col, row) = (format!("gi % {n}"), format!("gi / {n}"));

@@ -48,6 +48,16 @@ impl Round {
     pub const ALL: [Round; 4] = [Round::Trunc, Round::Floor, Round::Ceil, Round::HalfUp];
 }
 
+/// Names each of `values` after the name at the same place of `names` ([`Arith::name_f`]), for
+/// the program's arrays (a vector's components, a colour's channels).
+pub fn name_each<A: Arith + ?Sized, const N: usize>(
+    a: &mut A,
+    values: [A::F; N],
+    names: [&'static str; N],
+) -> [A::F; N] {
+    std::array::from_fn(|k| a.name_f(values[k], names[k]))
+}
+
 /// The operations of the preprocessing datapath. Each call is one hardware operator (or, for
 /// the sign and select operations, wiring and a multiplexer).
 pub trait Arith {

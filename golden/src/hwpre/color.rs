@@ -10,7 +10,7 @@
 use super::quant::to_fixed;
 use crate::formats::fixed::QFormat;
 use crate::hwarith::graph::{FNode, Graph, Trace};
-use crate::hwarith::Arith;
+use crate::hwarith::{name_each, Arith};
 use crate::render::sh::{SH_C0, SH_C1, SH_C2, SH_C3};
 
 /// SH coefficients per colour channel at degree 3.
@@ -153,11 +153,11 @@ fn band3<A: Arith>(
 pub fn color<A: Arith>(a: &mut A, g: &ColorInputs<A::F>, view: &ColorView<A::F, A::I>) -> [A::F; 3] {
     let c0 = a.lit(SH_C0);
     let r0 = g.sh[0].map(|v| a.mul(c0, v));
-    let r0 = name_rgb(a, r0, ["band0_red", "band0_green", "band0_blue"]);
+    let r0 = name_each(a, r0, ["band0_red", "band0_green", "band0_blue"]);
     let dir = view_direction(a, g.mean, view.cam_pos);
-    let dir = [0, 1, 2].map(|k| a.name_f(dir[k], ["dir_x", "dir_y", "dir_z"][k]));
+    let dir = name_each(a, dir, ["dir_x", "dir_y", "dir_z"]);
     let r1 = band1(a, r0, &g.sh, dir);
-    let r1 = name_rgb(a, r1, ["band1_red", "band1_green", "band1_blue"]);
+    let r1 = name_each(a, r1, ["band1_red", "band1_green", "band1_blue"]);
     let [x, y, z] = dir;
     let p = Products {
         xx: product(a, x, x, "dir_xx"),
@@ -168,9 +168,9 @@ pub fn color<A: Arith>(a: &mut A, g: &ColorInputs<A::F>, view: &ColorView<A::F, 
         xz: product(a, x, z, "dir_xz"),
     };
     let r2 = band2(a, r1, &g.sh, &p);
-    let r2 = name_rgb(a, r2, ["band2_red", "band2_green", "band2_blue"]);
+    let r2 = name_each(a, r2, ["band2_red", "band2_green", "band2_blue"]);
     let r3 = band3(a, r2, &g.sh, dir, &p);
-    let r3 = name_rgb(a, r3, ["band3_red", "band3_green", "band3_blue"]);
+    let r3 = name_each(a, r3, ["band3_red", "band3_green", "band3_blue"]);
     // Select the scene's degree.
     let (one, two, three) = (a.ilit(1), a.ilit(2), a.ilit(3));
     let ge1 = a.ilt(view.degree, one);
@@ -188,18 +188,13 @@ pub fn color<A: Arith>(a: &mut A, g: &ColorInputs<A::F>, view: &ColorView<A::F, 
         let v = a.add(v, half);
         out[ch] = a.max(v, zero);
     }
-    name_rgb(a, out, ["rgb_red", "rgb_green", "rgb_blue"])
+    name_each(a, out, ["rgb_red", "rgb_green", "rgb_blue"])
 }
 
 /// `u w`, named `name` for the hardware's nets.
 fn product<A: Arith>(a: &mut A, u: A::F, w: A::F, name: &'static str) -> A::F {
     let p = a.mul(u, w);
     a.name_f(p, name)
-}
-
-/// The three channels named `names` for the hardware's nets.
-fn name_rgb<A: Arith>(a: &mut A, rgb: [A::F; 3], names: [&'static str; 3]) -> [A::F; 3] {
-    [0, 1, 2].map(|ch| a.name_f(rgb[ch], names[ch]))
 }
 
 /// Names of the colour channels, in order (port names).

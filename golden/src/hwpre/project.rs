@@ -28,7 +28,7 @@
 //!   covariance around its float mean, seen from the quantised mean.
 
 use crate::formats::{ConicFormat, FeatureFormat};
-use crate::hwarith::{Arith, Round};
+use crate::hwarith::{name_each, Arith, Round};
 use crate::render::{COV2D_DILATION, NEAR_CULL};
 
 use super::quant::to_fixed;
@@ -433,7 +433,7 @@ pub fn project<A: Arith>(
     let c11 = cov_cr(a, 1, 1);
     let dil = a.lit(COV2D_DILATION);
     let cov = [a.add(c00, dil), c01, a.add(c11, dil)];
-    let cov = [0, 1, 2].map(|k| a.name_f(cov[k], ["cov2d_xx", "cov2d_xy", "cov2d_yy"][k]));
+    let cov = name_each(a, cov, ["cov2d_xx", "cov2d_xy", "cov2d_yy"]);
 
     // det, conic, radius.
     let p02 = a.mul(cov[0], cov[2]);
@@ -447,7 +447,7 @@ pub fn project<A: Arith>(
     let det_inv = a.name_f(det_inv, "det_inv");
     let nb = a.neg(cov[1]);
     let conic_f = [a.mul(cov[2], det_inv), a.mul(nb, det_inv), a.mul(cov[0], det_inv)];
-    let conic_f = [0, 1, 2].map(|k| a.name_f(conic_f[k], ["conic_a_f", "conic_b_f", "conic_c_f"][k]));
+    let conic_f = name_each(a, conic_f, ["conic_a_f", "conic_b_f", "conic_c_f"]);
     let half = a.lit(0.5);
     let sum = a.add(cov[0], cov[2]);
     let mid = a.mul(half, sum);
@@ -512,7 +512,7 @@ pub fn project<A: Arith>(
     let opacity = to_fixed(a, g.opacity, &fmt.opacity);
     let (conic, conic_exp) = conic_bfp(a, conic_f, &fmt.conic);
     let axis_f = major_axis(a, cov);
-    let axis_f = [0, 1].map(|k| a.name_f(axis_f[k], ["axis_c_f", "axis_s_f"][k]));
+    let axis_f = name_each(a, axis_f, ["axis_c_f", "axis_s_f"]);
     let axis = [0, 1].map(|k| {
         let v = to_fixed(a, axis_f[k], &fmt.axis);
         a.name_i(v, ["axis_c", "axis_s"][k])
