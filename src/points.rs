@@ -2,6 +2,7 @@
 //! inputs (configuration, measured timing), a scene cache, and a [`PointRunner`] that shows
 //! each workload's frames or each group's points.
 
+use crate::args::ModelArgs;
 use anyhow::{anyhow, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use neo_golden::engine::EngineConfig;
@@ -35,6 +36,30 @@ pub fn load_config(path: Option<&Path>, engine: Option<&Path>, sizes: Option<&st
         cfg.sizes = neo_sim::config::DataSizes::preset(name).map_err(|err| anyhow!("--sizes: {err}"))?;
     }
     Ok(cfg)
+}
+
+/// Where the model configuration of `model` came from, to name in an error about its fields.
+pub fn config_source(model: &ModelArgs) -> String {
+    match (&model.config, &model.engine) {
+        (Some(c), Some(e)) => format!("{} (engine {})", c.display(), e.display()),
+        (Some(c), None) => c.display().to_string(),
+        (None, Some(e)) => format!("the default configuration with engine {}", e.display()),
+        (None, None) => "the default configuration".into(),
+    }
+}
+
+/// Refuses, before any workload is generated, a configuration whose sorting-core buffers do
+/// not hold the chunks of a point on one of its architectures, naming the configuration's files.
+pub fn check_buffers<'p>(
+    model: &ModelArgs,
+    cfg: &SimConfig,
+    jobs: impl IntoIterator<Item = (&'p Point, &'p [Arch])>,
+) -> Result<()> {
+    for (point, archs) in jobs {
+        suite::check_point_buffers(point, cfg, archs)
+            .map_err(|e| anyhow!("{}: {e}", config_source(model)))?;
+    }
+    Ok(())
 }
 
 /// Reads `latency.json` (the path as given, else, for the default path, beside the sources) and

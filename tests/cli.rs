@@ -395,6 +395,45 @@ fn simulate_takes_the_artifacts_byte_sizes() {
     assert!(stderr(&o).contains("--sizes: unknown byte-size preset \"fp8\""), "{}", stderr(&o));
 }
 
+/// A configuration whose sorting-core buffers cannot hold the double-buffered chunks is refused
+/// with its file named, before any scene is loaded or workload generated, by each command that
+/// runs the model.
+#[test]
+fn a_too_small_sort_buffer_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("small-buffer.json");
+    std::fs::write(&cfg, r#"{"neo": {"sort_io_buffer_bytes": 100}}"#).unwrap();
+    let c = cfg.to_str().unwrap();
+    let out = dir.path().join("report");
+    let runs: [Vec<&str>; 3] = [
+        vec!["simulate", "--config", c, "--frames", "1", "--res", "hd", "--arch", "neo", "--quality", "off"],
+        vec!["report", "--config", c, "--out", out.to_str().unwrap()],
+        vec!["bench", "model", "--config", c, "--frames", "1"],
+    ];
+    for args in &runs {
+        fails_cleanly(args, &cfg, "neo.sort_io_buffer_bytes = 100");
+        let o = neo(args);
+        let err = stderr(&o);
+        assert!(err.starts_with(&format!("error: {c}: chunk 256")), "the error must come first:\n{err}");
+        assert!(stdout(&o).is_empty(), "no work before the error:\n{}", stdout(&o));
+    }
+    // The GPU's model has no sorting cores: the same file runs it.
+    let o = ok(&[
+        "simulate",
+        "--config",
+        c,
+        "--frames",
+        "1",
+        "--res",
+        "320x180",
+        "--arch",
+        "gpu",
+        "--quality",
+        "off",
+    ]);
+    assert!(o.contains("gpu"), "{o}");
+}
+
 #[test]
 fn cosim_refuses_an_unknown_input_mode_before_any_work() {
     let o = neo(&["cosim", "--input", "pixels", "--frames", "1"]);

@@ -928,8 +928,8 @@ impl SimConfig {
     }
 
     /// Checks that the sorting-core buffers hold the double-buffered chunks of `entry_bytes`.
-    pub fn check_buffers(&self, entry_bytes: u32) -> Result<(), String> {
-        let need = 4 * self.engine.chunk as u64 * entry_bytes as u64;
+    pub fn check_buffers(&self, entry_bytes: u64) -> Result<(), String> {
+        let need = 4 * self.engine.chunk as u64 * entry_bytes;
         if need > self.neo.sort_io_buffer_bytes {
             return Err(format!(
                 "chunk {} of {entry_bytes}-byte entries needs {need} bytes of double-buffered I/O, more than \

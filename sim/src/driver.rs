@@ -128,14 +128,25 @@ pub fn pipeline_config(strategy: Strategy, p: &PipelineParams, raster: GoldenRas
     cfg
 }
 
-/// The work-only pipeline's configuration (no golden raster) and the artifact's number formats,
-/// for both of [`WorkDriver`]'s constructors.
+/// The number formats of every workload of sort chunk `chunk`: the artifact's.
+pub fn workload_formats(chunk: usize) -> Result<Formats, DriverError> {
+    Ok(Formats::artifact(chunk)?)
+}
+
+/// The bytes of a sort entry in the workloads of sort chunk `chunk` (the workload's
+/// `sort_entry_bytes`), known before any workload is generated.
+pub fn sort_entry_bytes(chunk: usize) -> Result<u32, DriverError> {
+    Ok(workload_formats(chunk)?.sort.format().bytes_per_entry() as u32)
+}
+
+/// The work-only pipeline's configuration (no golden raster) and its number formats, for both
+/// of [`WorkDriver`]'s constructors.
 fn work_config(
     strategy: Strategy,
     params: &PipelineParams,
 ) -> Result<(PipelineConfig, Formats), DriverError> {
     let cfg = pipeline_config(strategy, params, GoldenRaster::Off);
-    let formats = Formats::artifact(cfg.chunk)?;
+    let formats = workload_formats(cfg.chunk)?;
     Ok((cfg, formats))
 }
 
@@ -415,7 +426,7 @@ impl<'s> InMaking<'s> {
         )?;
         let golden = if spec.golden_raster != GoldenRaster::Off {
             let cfg = pipeline_config(spec.strategy, &spec.params, spec.golden_raster);
-            let formats = Formats::artifact(cfg.chunk)?;
+            let formats = workload_formats(cfg.chunk)?;
             Some(Pipeline::for_shared_inputs(scene, cfg, formats, w, h)?)
         } else {
             None
@@ -530,7 +541,7 @@ pub fn generate_many(
         m.frames.reserve(cams.len());
     }
     let cfg0 = pipeline_config(spec0.strategy, &spec0.params, GoldenRaster::Off);
-    let prep = FramePrep::new(scene, &Formats::artifact(cfg0.chunk)?, cfg0.raster, cfg0.preprocess, w, h);
+    let prep = FramePrep::new(scene, &workload_formats(cfg0.chunk)?, cfg0.raster, cfg0.preprocess, w, h);
     let mut inputs = Arc::new(FrameInputs::default());
     for (i, cam) in cams.iter().enumerate() {
         if (cam.width, cam.height) != (w, h) {

@@ -31,7 +31,7 @@ use crate::driver::GoldenRaster;
 use crate::latency::{self, Latency};
 use crate::report::{ReportData, ReportSettings, SPEED_TABLE_CHUNK};
 use crate::run::Arch;
-use crate::suite::{parse_res, Grid, Point, PointResult};
+use crate::suite::{self, parse_res, Grid, Point, PointResult};
 
 /// What `neo report` runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -316,35 +316,8 @@ impl ReportPlan {
     ) -> Result<(ReportData, ReportTimes), String> {
         let mut times = ReportTimes::default();
         let sample = self.spec.raster_sample;
-
-        // Every step's jobs, in order: throughput runs, Neo's timeline unless a throughput run
-        // is it, the compared strategies' timelines, the sweep.
-        let main_scene = &self.scenes[0];
-        let job = |point: &Point, archs: Vec<Arch>, golden, headline| PointJob {
-            point: point.clone(),
-            archs,
-            golden,
-            headline,
-        };
-        let off = GoldenRaster::Off;
-        let mut jobs: Vec<PointJob> =
-            self.headline.iter().map(|p| job(p, self.archs.clone(), off, true)).collect();
-        // Neo-S (the Fig. 18 ablation) on the main scene's largest resolution: a job of its own,
-        // on the same workload, so that the throughput table need not wait for it.
-        let ablation = (0..self.headline.len())
-            .filter(|&k| &self.headline[k].scene == main_scene)
-            .max_by_key(|&k| self.headline[k].width as u64 * self.headline[k].height as u64);
-        if let Some(k) = ablation {
-            jobs.push(job(&self.headline[k], vec![self.neo_s], off, false));
-        }
-        let neo_from =
-            self.headline.iter().position(|p| &p.scene == main_scene && p.res == self.timeline_res);
-        if neo_from.is_none() {
-            jobs.push(job(&self.neo_timeline, vec![Arch::Neo], off, false));
-        }
-        jobs.extend(self.timelines.iter().map(|p| job(p, vec![Arch::Neo], off, false)));
+        let PlanJobs { jobs, ablation, neo_from } = self.jobs();
         let n_sweep = self.sweep.len();
-        jobs.extend(self.sweep.iter().map(|p| job(p, vec![Arch::Neo], GoldenRaster::Exact, false)));
         let mut done = run_headline_first(runner, &jobs, sample)?;
         let swept = done.split_off(done.len() - n_sweep);
         let mut timed = done.split_off(self.headline.len());
@@ -382,6 +355,43 @@ impl ReportPlan {
         Ok((data, times))
     }
 
+    /// Every step's jobs, in order: throughput runs, Neo-S, Neo's timeline unless a throughput
+    /// run is it, the compared strategies' timelines, the sweep.
+    fn jobs(&self) -> PlanJobs {
+        let main_scene = &self.scenes[0];
+        let job = |point: &Point, archs: Vec<Arch>, golden, headline| PointJob {
+            point: point.clone(),
+            archs,
+            golden,
+            headline,
+        };
+        let off = GoldenRaster::Off;
+        let mut jobs: Vec<PointJob> =
+            self.headline.iter().map(|p| job(p, self.archs.clone(), off, true)).collect();
+        // Neo-S (the Fig. 18 ablation) on the main scene's largest resolution: a job of its own,
+        // on the same workload, so that the throughput table need not wait for it.
+        let ablation = (0..self.headline.len())
+            .filter(|&k| &self.headline[k].scene == main_scene)
+            .max_by_key(|&k| self.headline[k].width as u64 * self.headline[k].height as u64);
+        if let Some(k) = ablation {
+            jobs.push(job(&self.headline[k], vec![self.neo_s], off, false));
+        }
+        let neo_from =
+            self.headline.iter().position(|p| &p.scene == main_scene && p.res == self.timeline_res);
+        if neo_from.is_none() {
+            jobs.push(job(&self.neo_timeline, vec![Arch::Neo], off, false));
+        }
+        jobs.extend(self.timelines.iter().map(|p| job(p, vec![Arch::Neo], off, false)));
+        jobs.extend(self.sweep.iter().map(|p| job(p, vec![Arch::Neo], GoldenRaster::Exact, false)));
+        PlanJobs { jobs, ablation, neo_from }
+    }
+
+    /// Checks, before any workload is generated, that `cfg`'s sorting-core buffers hold every
+    /// job's chunks on each of its architectures ([`suite::check_point_buffers`]).
+    pub fn check_buffers(&self, cfg: &SimConfig) -> Result<(), String> {
+        self.jobs().jobs.iter().try_for_each(|j| suite::check_point_buffers(&j.point, cfg, &j.archs))
+    }
+
     /// The report's notes on the reduced sizes used.
     fn notes(&self, sweep: &[PointResult]) -> Vec<String> {
         let mut notes = vec![
@@ -403,6 +413,15 @@ impl ReportPlan {
         notes.push("GSCore-N: N sorting cores and N subtile units (N/4 raster cores of 4), hierarchical sort from scratch every frame, subtile bitmaps carried with every sort entry; GPU: Orin-AGX-like kernels with a global radix sort.".into());
         notes
     }
+}
+
+/// A plan's jobs ([`ReportPlan::jobs`]).
+struct PlanJobs {
+    jobs: Vec<PointJob>,
+    /// The throughput run that Neo-S runs on.
+    ablation: Option<usize>,
+    /// The throughput run that is Neo's timeline.
+    neo_from: Option<usize>,
 }
 
 /// Runs `jobs` in two sets: first the throughput runs (`headline`) with the jobs that run on

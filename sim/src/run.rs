@@ -36,6 +36,16 @@ impl Arch {
         }
     }
 
+    /// The accelerator the cycle model simulates (`None` for the GPU, whose model is analytic).
+    pub fn accel(self) -> Option<Accel> {
+        match self {
+            Arch::Neo => Some(Accel::Neo),
+            Arch::Gscore(c) => Some(Accel::Gscore { cores: c }),
+            Arch::NeoS(c) => Some(Accel::NeoS { cores: c }),
+            Arch::Gpu => None,
+        }
+    }
+
     /// Parses `neo`, `gscore` (every configured core count), `gscoreN`, `gpu`, `all` (these),
     /// `neos` (Neo-S with the engine's sorting-core count) or `neosN`, comma-separated.
     pub fn parse_list(s: &str, cfg: &SimConfig) -> Result<Vec<Arch>, String> {
@@ -329,11 +339,7 @@ pub fn simulate(
             })
         }
         Arch::Neo | Arch::Gscore(_) | Arch::NeoS(_) => {
-            let accel = match arch {
-                Arch::Gscore(c) => Accel::Gscore { cores: c },
-                Arch::NeoS(c) => Accel::NeoS { cores: c },
-                _ => Accel::Neo,
-            };
+            let accel = arch.accel().expect("a cycle-modelled architecture");
             let model = Model::new(accel, cfg, lat, wl)?;
             let line = cfg.dram.line_bytes as u64;
             let dram = if opt.ideal_memory {

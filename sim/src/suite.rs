@@ -445,6 +445,18 @@ pub fn point_config(point: &Point, cfg: &SimConfig) -> SimConfig {
     cfg
 }
 
+/// Checks, before `point`'s workload is generated, that the sorting cores' I/O buffers of
+/// `cfg` hold the double-buffered chunks of each architecture of `archs` (the check every
+/// model makes on its workload).
+pub fn check_point_buffers(point: &Point, cfg: &SimConfig, archs: &[Arch]) -> Result<(), String> {
+    let cfg = point_config(point, cfg);
+    let entry = crate::driver::sort_entry_bytes(point.chunk).map_err(|e| e.to_string())?;
+    for accel in archs.iter().filter_map(|a| a.accel()) {
+        cfg.check_buffers(accel.stored_sort_entry_bytes(&cfg, entry))?;
+    }
+    Ok(())
+}
+
 /// The result of `point` from its workload and its architectures' results (each from
 /// [`simulate`] with [`point_config`]), as [`evaluate`] makes it.
 pub fn point_result(point: &Point, wl: &Workload, results: Vec<ArchResult>) -> Result<PointResult, String> {
@@ -583,6 +595,50 @@ mod tests {
         assert_eq!(a1.traffic.total_bytes(), a0.traffic.total_bytes(), "the window moves no DRAM traffic");
         assert!(a1.total_ms > a0.total_ms, "held-back loads: {} ms against {} ms", a1.total_ms, a0.total_ms);
         assert_eq!(point_config(&window, &cfg).engine.raster_window, 256);
+    }
+
+    /// The check made before generation refuses exactly what the model refuses on the
+    /// workload: at a buffer of exactly Neo's double-buffered chunks, Neo passes both and
+    /// GSCore (whose entries carry a bitmap) fails both.
+    #[test]
+    fn buffers_are_checked_before_generation_as_the_model_checks_them() {
+        let spec = "synthetic:outdoor?gaussians=500&seed=3";
+        let scene = load_scene(spec).unwrap();
+        let point = Point {
+            scene: spec.into(),
+            trajectory: "orbit".into(),
+            speed: 1.0,
+            frames: 1,
+            res: "128x64".into(),
+            width: 128,
+            height: 64,
+            strategy: "neo".into(),
+            chunk: 128,
+            passes: 1,
+            raster_window: 1,
+        };
+        let mut cfg = SimConfig::default();
+        let wl = workload(&scene, &point, &cfg, GoldenRaster::Off, 0, |_| {}).unwrap();
+        let entry = crate::driver::sort_entry_bytes(point.chunk).unwrap();
+        assert_eq!(entry, wl.info.sort_entry_bytes, "the bytes known before generation are the workload's");
+        assert!(cfg.gscore.bitmap_bytes > 0, "the premise: GSCore's entries are larger");
+        cfg.neo.sort_io_buffer_bytes = 4 * point.chunk as u64 * entry as u64;
+        let lat =
+            Latency::from_file(&neo_golden::shared::workspace_root().join(crate::latency::DEFAULT_PATH))
+                .expect("reports/latency.json");
+        for (arch, fits) in [(Arch::Neo, true), (Arch::Gscore(4), false), (Arch::Gpu, true)] {
+            let early = check_point_buffers(&point, &cfg, &[arch]);
+            assert_eq!(early.is_ok(), fits, "{arch:?}: {early:?}");
+            if let Err(e) = early {
+                assert!(e.contains("neo.sort_io_buffer_bytes"), "{e}");
+                let late = evaluate(&point, &wl, &cfg, &lat, &[arch]).unwrap_err();
+                assert_eq!(late, e, "the model refuses the workload with the same error");
+            } else {
+                evaluate(&point, &wl, &cfg, &lat, &[arch]).unwrap();
+            }
+        }
+        cfg.neo.sort_io_buffer_bytes -= 1;
+        assert!(check_point_buffers(&point, &cfg, &[Arch::Neo]).is_err(), "one byte short");
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! result is the one the point has alone. The tables are printed in the points' order at the end.
 
 use crate::args::{resolution, FramesArg, ModelArgs, SceneArg, TrajectoryArg};
-use crate::points::{load_config, load_latency, log_point, run_jobs, Scenes};
+use crate::points::{check_buffers, load_config, load_latency, log_point, run_jobs, Scenes};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use neo_sim::config::SimConfig;
@@ -137,6 +137,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         }
         None => all.clone(),
     };
+    check_buffers(&a.model, &cfg, points.iter().map(|p| (p, &archs[..])))?;
     let mut golden = golden_mode(&a.quality, &points)?;
     if a.trace.is_some() && golden == GoldenRaster::Off {
         golden = GoldenRaster::Exact;

@@ -91,6 +91,17 @@ pub enum Accel {
     },
 }
 
+impl Accel {
+    /// The bytes of a sort entry as this accelerator stores it: the workload's
+    /// `sort_entry_bytes`, with GSCore's subtile bitmap for the GSCore-style architectures.
+    pub fn stored_sort_entry_bytes(self, cfg: &SimConfig, sort_entry_bytes: u32) -> u64 {
+        match self {
+            Accel::Neo => sort_entry_bytes as u64,
+            Accel::Gscore { .. } | Accel::NeoS { .. } => (sort_entry_bytes + cfg.gscore.bitmap_bytes) as u64,
+        }
+    }
+}
+
 /// The model of one accelerator on one workload.
 pub struct Model<'a> {
     accel: Accel,
@@ -117,9 +128,9 @@ impl<'a> Model<'a> {
     /// The model of `accel` running `wl`.
     pub fn new(accel: Accel, cfg: &'a SimConfig, lat: &'a Latency, wl: &'a Workload) -> Result<Self, String> {
         let strategy: Strategy = wl.info.strategy.parse().map_err(|e: String| e)?;
-        let (eb, sort_cores, raster_cores, scus_per_core, itus_per_core, hier) = match accel {
+        let eb = accel.stored_sort_entry_bytes(cfg, wl.info.sort_entry_bytes);
+        let (sort_cores, raster_cores, scus_per_core, itus_per_core, hier) = match accel {
             Accel::Neo => (
-                wl.info.sort_entry_bytes as u64,
                 cfg.engine.sort_cores as u32,
                 cfg.engine.raster_cores as u32,
                 cfg.engine.raster_scus as u32,
@@ -127,7 +138,6 @@ impl<'a> Model<'a> {
                 strategy == Strategy::Hierarchical,
             ),
             Accel::Gscore { cores } | Accel::NeoS { cores } => (
-                (wl.info.sort_entry_bytes + cfg.gscore.bitmap_bytes) as u64,
                 cores,
                 cores.div_ceil(4).max(1),
                 cores.min(4),
@@ -140,7 +150,7 @@ impl<'a> Model<'a> {
                 "the workload has no hierarchical-sort record (generate it with hierarchical on)".into()
             );
         }
-        cfg.check_buffers(eb as u32)?;
+        cfg.check_buffers(eb)?;
         if wl.info.chunk != cfg.engine.chunk {
             return Err(format!(
                 "workload chunk {} differs from the configuration's engine.chunk {}",

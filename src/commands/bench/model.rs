@@ -12,7 +12,7 @@
 use super::sampler::{split, Counts, Sampler};
 use super::verdict;
 use crate::args::ModelArgs;
-use crate::points::{load_config, load_latency};
+use crate::points::{check_buffers, load_config, load_latency};
 use crate::progress::self_cpu;
 use anyhow::{anyhow, Result};
 use clap::Args;
@@ -97,6 +97,7 @@ pub fn run(a: ModelBenchArgs) -> Result<()> {
         passes: cfg.pipeline.dps_passes,
         raster_window: cfg.engine.raster_window,
     };
+    check_buffers(&a.model, &cfg, [(&point, &archs[..])])?;
     let threads = rayon::current_num_threads();
     let (scene, cpu, wall) = timed(|| suite::load_scene(&spec));
     let scene = scene.map_err(|e| anyhow!(e))?;
