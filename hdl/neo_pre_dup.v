@@ -27,68 +27,33 @@ module neo_pre_dup (
   output wire        idle_o              // no Gaussian being walked, no test in the ITUs
 );
 
-  // Candidate tiles along x: [x0, x1).
-  wire [27:0] x_mean;
-  assign x_mean = in_mean_i[27:0];
-  wire [14:0] x_ext;
-  assign x_ext = in_geom_i[14:0];
-  wire [31:0] x_m;
-  assign x_m = {{3{x_mean[27]}}, x_mean, 1'b0};
-  wire [31:0] x_r;
-  assign x_r = {10'd0, {x_ext, 7'd0}};
-  wire x_unbounded;
-  assign x_unbounded = x_ext == 15'd32767;
-  wire [31:0] x_below;
-  assign x_below = x_r - x_m;
-  wire [31:0] x_below_g;
-  assign x_below_g = $signed(x_below) >>> 9;
-  wire [31:0] x_lo;
-  assign x_lo = 32'd0 - x_below_g;
-  wire [31:0] x_above;
-  assign x_above = x_m + x_r;
-  wire [31:0] x_hi;
-  assign x_hi = $signed(x_above) >>> 9;
-  wire [31:0] x_first;
-  assign x_first = $signed(x_lo) >>> 6;
-  wire [31:0] x_last;
-  assign x_last = $signed(x_hi) >>> 6;
-  wire [31:0] x_end;
-  assign x_end = x_last + 32'd1;
+  // Candidate tiles: [x0, x1) x [y0, y1), one range per axis (the mean's and the extent's field order).
+  localparam AXIS_X = 0;
+  localparam AXIS_Y = 1;
+  wire [19:0] grid;
+  assign grid = {grid_y_i, grid_x_i};
+  wire [19:0] range_first;
+  wire [19:0] range_end;
+  genvar a;
+  generate
+    for (a = 0; a < 2; a = a + 1) begin : g_axis
+      neo_pre_dup_range u_range (
+        .mean_i(in_mean_i[a*28 +: 28]),
+        .ext_i(in_geom_i[a*15 +: 15]),
+        .grid_i(grid[a*10 +: 10]),
+        .first_o(range_first[a*10 +: 10]),
+        .end_o(range_end[a*10 +: 10])
+      );
+    end
+  endgenerate
   wire [9:0] x0;
-  assign x0 = x_unbounded ? 10'd0 : (x_first[31] ? 10'd0 : ((x_first > {22'd0, grid_x_i}) ? grid_x_i : x_first[9:0]));
+  assign x0 = range_first[AXIS_X*10 +: 10];
   wire [9:0] x1;
-  assign x1 = x_unbounded ? grid_x_i : (x_end[31] ? 10'd0 : ((x_end > {22'd0, grid_x_i}) ? grid_x_i : x_end[9:0]));
-  // Candidate tiles along y: [y0, y1).
-  wire [27:0] y_mean;
-  assign y_mean = in_mean_i[55:28];
-  wire [14:0] y_ext;
-  assign y_ext = in_geom_i[29:15];
-  wire [31:0] y_m;
-  assign y_m = {{3{y_mean[27]}}, y_mean, 1'b0};
-  wire [31:0] y_r;
-  assign y_r = {10'd0, {y_ext, 7'd0}};
-  wire y_unbounded;
-  assign y_unbounded = y_ext == 15'd32767;
-  wire [31:0] y_below;
-  assign y_below = y_r - y_m;
-  wire [31:0] y_below_g;
-  assign y_below_g = $signed(y_below) >>> 9;
-  wire [31:0] y_lo;
-  assign y_lo = 32'd0 - y_below_g;
-  wire [31:0] y_above;
-  assign y_above = y_m + y_r;
-  wire [31:0] y_hi;
-  assign y_hi = $signed(y_above) >>> 9;
-  wire [31:0] y_first;
-  assign y_first = $signed(y_lo) >>> 6;
-  wire [31:0] y_last;
-  assign y_last = $signed(y_hi) >>> 6;
-  wire [31:0] y_end;
-  assign y_end = y_last + 32'd1;
+  assign x1 = range_end[AXIS_X*10 +: 10];
   wire [9:0] y0;
-  assign y0 = y_unbounded ? 10'd0 : (y_first[31] ? 10'd0 : ((y_first > {22'd0, grid_y_i}) ? grid_y_i : y_first[9:0]));
+  assign y0 = range_first[AXIS_Y*10 +: 10];
   wire [9:0] y1;
-  assign y1 = y_unbounded ? grid_y_i : (y_end[31] ? 10'd0 : ((y_end > {22'd0, grid_y_i}) ? grid_y_i : y_end[9:0]));
+  assign y1 = range_end[AXIS_Y*10 +: 10];
   // Walker: one candidate tile per cycle, row-major.
   reg  busy_q;
   reg  [9:0] tx_q;
@@ -203,7 +168,16 @@ module neo_pre_dup (
     .hit_o(prev_hit),
     .tag_o(prev_tag)
   );
-  // Sideband of each test, advancing with the ITU pipeline ({tile_y, tile_x, key, id, prev_visible}).
+  // Sideband of each test, advancing with the ITU pipeline ({tile_y, tile_x, key, id, prev_visible}): fields SB_*.
+  localparam SB_PREV_VISIBLE = 0;
+  localparam SB_ID = 1;
+  localparam SB_ID_W = 31;
+  localparam SB_KEY = 32;
+  localparam SB_KEY_W = 16;
+  localparam SB_TILE_X = 48;
+  localparam SB_TILE_X_W = 10;
+  localparam SB_TILE_Y = 58;
+  localparam SB_TILE_Y_W = 10;
   wire [67:0] sb_in;
   assign sb_in = {ty_q, tx_q, key_q, id_q, prev_visible_q};
   reg  [67:0] sb_q;
@@ -231,11 +205,11 @@ module neo_pre_dup (
   end
   assign idle_o = ~busy_q & (sbv_q == 3'd0);
   wire out_prev_visible;
-  assign out_prev_visible = sb_q3[0];
-  assign out_id_o = sb_q3[31:1];
-  assign out_key_o = sb_q3[47:32];
-  assign out_tile_x_o = sb_q3[57:48];
-  assign out_tile_y_o = sb_q3[67:58];
+  assign out_prev_visible = sb_q3[SB_PREV_VISIBLE];
+  assign out_id_o = sb_q3[SB_ID +: SB_ID_W];
+  assign out_key_o = sb_q3[SB_KEY +: SB_KEY_W];
+  assign out_tile_x_o = sb_q3[SB_TILE_X +: SB_TILE_X_W];
+  assign out_tile_y_o = sb_q3[SB_TILE_Y +: SB_TILE_Y_W];
   assign out_valid_o = now_out_valid & now_hit;
   assign out_incoming_o = all_fresh_i | ~(out_prev_visible & prev_hit);
   wire unused_itu;

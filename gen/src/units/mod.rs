@@ -20,6 +20,7 @@
 //! | `neo_raster_core` | Rasterization Core: ITUs + SCUs + buffers + ports     | yes       |
 //! | `neo_pre_color` | Preprocessing: colour unit (SH degree 0-3, from golden's graph) | run time |
 //! | `neo_pre_project` | Preprocessing: projection unit (from golden's graph) | run time |
+//! | `neo_pre_dup_range` | Preprocessing: duplication unit's candidate tiles along one axis | no |
 //! | `neo_pre_dup`   | Preprocessing: duplication unit (tiles entered, incoming flag) | run time |
 //! | `neo_pre_fetch` | Preprocessing: record fetch unit (streams, gathers; the read window) | run time |
 //! | `neo_pre_lane`  | Preprocessing: one lane (fetch, projection, colour, duplication, feature words) | run time |
@@ -179,6 +180,7 @@ pub fn modules(cfg: &EngineConfig) -> Result<Vec<Module>, ConfigError> {
     all.push(axi::mux::module(cfg)?);
     all.push(engine::module(cfg));
     all.extend(fp::modules(cfg));
+    all.push(pre::dup::range_module(cfg));
     all.push(pre::dup::module(cfg));
     all.push(pre::fifo::module());
     all.push(pre::ram::module());

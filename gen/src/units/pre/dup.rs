@@ -12,8 +12,8 @@
 //!
 //! # Structure
 //! 1. On acceptance, the candidate rectangle (golden `raster::candidate_tiles`: the AABB
-//!    `mean +- extent_xy` in tiles, clamped to the grid; the whole grid on an unbounded extent)
-//!    is registered with the Gaussian.
+//!    `mean +- extent_xy` in tiles, clamped to the grid; the whole grid on an unbounded extent;
+//!    one `neo_pre_dup_range` per axis, `g_axis[a].u_range`) is registered with the Gaussian.
 //! 2. The walker offers one tile per cycle to two `neo_itu` instances in lockstep: `u_itu_now`
 //!    tests this frame's entry, `u_itu_prev` the previous frame's.
 //! 3. A sideband pipeline (`sb_q`, `sb_q2`, ...) as deep as the ITU and advancing with it
@@ -32,6 +32,8 @@ use neo_golden::engine::EngineConfig;
 
 /// Module name.
 pub const NAME: &str = "neo_pre_dup";
+/// The per-axis candidate range, [`range_module`].
+pub const RANGE_NAME: &str = "neo_pre_dup_range";
 
 /// Widths of the unit.
 struct Dims {
@@ -97,8 +99,7 @@ pub fn module(cfg: &EngineConfig) -> Module {
         "previous frame); bit-exact with golden hwpre::duplicate::incoming. See docs/rtl.md (Preprocessing).",
     );
     ports(&mut m, &d);
-    rectangle(&mut m, &d, "x", 0);
-    rectangle(&mut m, &d, "y", 1);
+    rectangle(&mut m, &d);
     walker(&mut m, &d);
     itus(&mut m, &d);
     sideband(&mut m, &d);
@@ -129,47 +130,75 @@ fn ports(m: &mut Module, d: &Dims) {
     m.output_c("idle_o", 1, "no Gaussian being walked, no test in the ITUs");
 }
 
-/// The candidate range of axis `a` (`x`: 0, `y`: 1) of the offered Gaussian: `{a}0`, `{a}1`
-/// (one past the last), clamped to the grid (golden `candidate_tiles`).
-fn rectangle(m: &mut Module, d: &Dims, a: &str, axis: u32) {
-    let Dims { w, m1, eb, g, eshift, log2t, tb, .. } = *d;
-    let mean = format!("in_mean_i[{}:{}]", m1 * (axis + 1) - 1, m1 * axis);
-    let ext = format!("in_geom_i[{}:{}]", eb * (axis + 1) - 1, eb * axis);
-    m.comment(format!("Candidate tiles along {a}: [{a}0, {a}1)."));
-    m.wire_assign(format!("{a}_mean"), m1, mean);
-    m.wire_assign(format!("{a}_ext"), eb, ext);
-    m.wire_assign(
-        format!("{a}_m"),
-        w,
-        format!("{{{{{}{{{a}_mean[{}]}}}}, {a}_mean, 1'b0}}", w - m1 - 1, m1 - 1),
+/// The candidate range along both axes: one [`range_module`] per axis in a generate loop
+/// (`g_axis[AXIS_X]`, `g_axis[AXIS_Y]`), giving `x0`, `x1`, `y0`, `y1` (`x1`, `y1` one past the
+/// last).
+fn rectangle(m: &mut Module, d: &Dims) {
+    let Dims { m1, eb, tb, .. } = *d;
+    m.comment(
+        "Candidate tiles: [x0, x1) x [y0, y1), one range per axis (the mean's and the extent's field order).",
     );
-    let shifted = if eshift == 0 { format!("{a}_ext") } else { format!("{{{a}_ext, {}}}", lit(eshift, 0)) };
-    m.wire_assign(format!("{a}_r"), w, format!("{{{}, {shifted}}}", lit(w - eb - eshift, 0)));
-    m.wire_assign(format!("{a}_unbounded"), 1, format!("{a}_ext == {}", lit(eb, d.unb)));
+    m.localparam_int("AXIS_X", 0);
+    m.localparam_int("AXIS_Y", 1);
+    m.wire_assign("grid", 2 * tb, "{grid_y_i, grid_x_i}");
+    m.wire("range_first", 2 * tb).wire("range_end", 2 * tb);
+    let field = |bus: &str, w: u32| format!("{bus}[a*{w} +: {w}]");
+    let c = [
+        ("mean_i", field("in_mean_i", m1)),
+        ("ext_i", field("in_geom_i", eb)),
+        ("grid_i", field("grid", tb)),
+        ("first_o", field("range_first", tb)),
+        ("end_o", field("range_end", tb)),
+    ];
+    let range = Item::Instance(Instance {
+        module: RANGE_NAME.into(),
+        name: "u_range".into(),
+        params: Vec::new(),
+        conns: conns(&c),
+    });
+    m.gen_for("a", 2, "g_axis", vec![range]);
+    for (axis, a) in [("AXIS_X", "x"), ("AXIS_Y", "y")] {
+        m.wire_assign(format!("{a}0"), tb, format!("range_first[{axis}*{tb} +: {tb}]"));
+        m.wire_assign(format!("{a}1"), tb, format!("range_end[{axis}*{tb} +: {tb}]"));
+    }
+}
+
+/// `neo_pre_dup_range`: a Gaussian's candidate tiles along one axis, `[first, end)`: the
+/// tiles the AABB `mean +- extent` enters, clamped to the grid; the whole axis on an unbounded
+/// extent (golden `raster::candidate_tiles`). Combinational; `neo_pre_dup` places one per axis.
+pub fn range_module(cfg: &EngineConfig) -> Module {
+    let d = Dims::new(cfg);
+    let Dims { w, m1, eb, g, eshift, log2t, tb, .. } = d;
+    let mut m = Module::new(RANGE_NAME);
+    m.doc("Duplication unit: a Gaussian's candidate tiles along one axis, [first, end): the tiles the AABB");
+    m.doc("mean +- extent enters, clamped to the grid; the whole axis on an unbounded extent (golden");
+    m.doc("raster::candidate_tiles). Combinational; neo_pre_dup places one per axis.");
+    m.input_c("mean_i", m1, "mean along the axis (ITU mean field)");
+    m.input_c("ext_i", eb, "extent along the axis (ITU extent field)");
+    m.input_c("grid_i", tb, "tiles along the axis");
+    m.output_c("first_o", tb, "first candidate tile");
+    m.output_c("end_o", tb, "one past the last candidate tile");
+    m.wire_assign("m", w, format!("{{{{{}{{mean_i[{}]}}}}, mean_i, 1'b0}}", w - m1 - 1, m1 - 1));
+    let shifted = if eshift == 0 { "ext_i".to_string() } else { format!("{{ext_i, {}}}", lit(eshift, 0)) };
+    m.wire_assign("r", w, format!("{{{}, {shifted}}}", lit(w - eb - eshift, 0)));
+    m.wire_assign("unbounded", 1, format!("ext_i == {}", lit(eb, d.unb)));
     // Each arithmetic shift gets its own assignment: in a wider expression with an unsigned
     // operand Verilog would make the shift logical.
-    m.wire_assign(format!("{a}_below"), w, format!("{a}_r - {a}_m"));
-    m.wire_assign(format!("{a}_below_g"), w, format!("$signed({a}_below) >>> {g}"));
-    m.wire_assign(format!("{a}_lo"), w, format!("{} - {a}_below_g", lit(w, 0)));
-    m.wire_assign(format!("{a}_above"), w, format!("{a}_m + {a}_r"));
-    m.wire_assign(format!("{a}_hi"), w, format!("$signed({a}_above) >>> {g}"));
-    m.wire_assign(format!("{a}_first"), w, format!("$signed({a}_lo) >>> {log2t}"));
-    m.wire_assign(format!("{a}_last"), w, format!("$signed({a}_hi) >>> {log2t}"));
-    m.wire_assign(format!("{a}_end"), w, format!("{a}_last + {}", lit(w, 1)));
-    let grid = format!("{{{}, grid_{a}_i}}", lit(w - tb, 0));
+    m.wire_assign("below", w, "r - m");
+    m.wire_assign("below_g", w, format!("$signed(below) >>> {g}"));
+    m.wire_assign("lo", w, format!("{} - below_g", lit(w, 0)));
+    m.wire_assign("above", w, "m + r");
+    m.wire_assign("hi", w, format!("$signed(above) >>> {g}"));
+    m.wire_assign("tile_first", w, format!("$signed(lo) >>> {log2t}"));
+    m.wire_assign("tile_last", w, format!("$signed(hi) >>> {log2t}"));
+    m.wire_assign("tile_end", w, format!("tile_last + {}", lit(w, 1)));
+    let grid = format!("{{{}, grid_i}}", lit(w - tb, 0));
     let clamp = |v: &str| {
-        format!("({v}[{}] ? {} : (({v} > {grid}) ? grid_{a}_i : {v}[{}:0]))", w - 1, lit(tb, 0), tb - 1)
+        format!("({v}[{}] ? {} : (({v} > {grid}) ? grid_i : {v}[{}:0]))", w - 1, lit(tb, 0), tb - 1)
     };
-    m.wire_assign(
-        format!("{a}0"),
-        tb,
-        format!("{a}_unbounded ? {} : {}", lit(tb, 0), clamp(&format!("{a}_first"))),
-    );
-    m.wire_assign(
-        format!("{a}1"),
-        tb,
-        format!("{a}_unbounded ? grid_{a}_i : {}", clamp(&format!("{a}_end"))),
-    );
+    m.assign("first_o", format!("unbounded ? {} : {}", lit(tb, 0), clamp("tile_first")));
+    m.assign("end_o", format!("unbounded ? grid_i : {}", clamp("tile_end")));
+    m
 }
 
 /// The Gaussian registers and the tile walker.
@@ -270,8 +299,18 @@ fn sideband(m: &mut Module, d: &Dims) {
     let Dims { tb, ib, kb, .. } = *d;
     let sb = 2 * tb + ib + kb + 1;
     m.comment(
-        "Sideband of each test, advancing with the ITU pipeline ({tile_y, tile_x, key, id, prev_visible}).",
+        "Sideband of each test, advancing with the ITU pipeline ({tile_y, tile_x, key, id, prev_visible}): fields SB_*.",
     );
+    let fields =
+        [("SB_PREV_VISIBLE", 1), ("SB_ID", ib), ("SB_KEY", kb), ("SB_TILE_X", tb), ("SB_TILE_Y", tb)];
+    let mut at = 0;
+    for (name, w) in fields {
+        m.localparam_int(name, at);
+        if w > 1 {
+            m.localparam_int(format!("{name}_W"), w);
+        }
+        at += w;
+    }
     m.wire_assign("sb_in", sb, "{ty_q, tx_q, key_q, id_q, prev_visible_q}");
     let names: Vec<String> =
         (1..=itu::LATENCY).map(|k| if k == 1 { "sb_q".to_string() } else { format!("sb_q{k}") }).collect();
@@ -294,11 +333,11 @@ fn sideband(m: &mut Module, d: &Dims) {
     m.seq(vec![set("sbv_q", lit(itu::LATENCY, 0))], vec![if_("itu_adv", vec![set("sbv_q", shift)])]);
     m.assign("idle_o", format!("~busy_q & (sbv_q == {})", lit(itu::LATENCY, 0)));
     let out = names.last().expect("the ITU has stages");
-    m.wire_assign("out_prev_visible", 1, format!("{out}[0]"));
-    m.assign("out_id_o", format!("{out}[{}:1]", ib));
-    m.assign("out_key_o", format!("{out}[{}:{}]", ib + kb, ib + 1));
-    m.assign("out_tile_x_o", format!("{out}[{}:{}]", ib + kb + tb, ib + kb + 1));
-    m.assign("out_tile_y_o", format!("{out}[{}:{}]", ib + kb + 2 * tb, ib + kb + tb + 1));
+    m.wire_assign("out_prev_visible", 1, format!("{out}[SB_PREV_VISIBLE]"));
+    m.assign("out_id_o", format!("{out}[SB_ID +: SB_ID_W]"));
+    m.assign("out_key_o", format!("{out}[SB_KEY +: SB_KEY_W]"));
+    m.assign("out_tile_x_o", format!("{out}[SB_TILE_X +: SB_TILE_X_W]"));
+    m.assign("out_tile_y_o", format!("{out}[SB_TILE_Y +: SB_TILE_Y_W]"));
     m.assign("out_valid_o", "now_out_valid & now_hit");
     m.assign("out_incoming_o", "all_fresh_i | ~(out_prev_visible & prev_hit)");
     m.wire_assign(
