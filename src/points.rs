@@ -39,7 +39,7 @@ pub fn load_config(path: Option<&Path>, engine: Option<&Path>, sizes: Option<&st
 }
 
 /// Where the model configuration of `model` came from, to name in an error about its fields.
-pub fn config_source(model: &ModelArgs) -> String {
+fn config_source(model: &ModelArgs) -> String {
     match (&model.config, &model.engine) {
         (Some(c), Some(e)) => format!("{} (engine {})", c.display(), e.display()),
         (Some(c), None) => c.display().to_string(),

@@ -31,7 +31,7 @@ use crate::driver::GoldenRaster;
 use crate::latency::{self, Latency};
 use crate::report::{ReportData, ReportSettings, SPEED_TABLE_CHUNK};
 use crate::run::Arch;
-use crate::suite::{self, parse_res, Grid, Point, PointResult};
+use crate::suite::{parse_res, Grid, Point, PointResult};
 
 /// What `neo report` runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -386,10 +386,10 @@ impl ReportPlan {
         PlanJobs { jobs, ablation, neo_from }
     }
 
-    /// Checks, before any workload is generated, that `cfg`'s sorting-core buffers hold every
-    /// job's chunks on each of its architectures ([`suite::check_point_buffers`]).
-    pub fn check_buffers(&self, cfg: &SimConfig) -> Result<(), String> {
-        self.jobs().jobs.iter().try_for_each(|j| suite::check_point_buffers(&j.point, cfg, &j.archs))
+    /// Every job of the plan, in the order [`ReportPlan::run`] runs them (its points and their
+    /// architectures, e.g. for checks before any workload is generated).
+    pub fn point_jobs(&self) -> Vec<PointJob> {
+        self.jobs().jobs
     }
 
     /// The report's notes on the reduced sizes used.

@@ -9,7 +9,7 @@
 //! command parses its options, runs the plan with progress bars and writes the files.
 
 use crate::args::{resolution, ModelArgs, TrajectoryArg};
-use crate::points::{config_source, load_config, load_latency, ProgressRunner, Scenes};
+use crate::points::{check_buffers, load_config, load_latency, ProgressRunner, Scenes};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use neo_sim::report::render;
@@ -173,7 +173,8 @@ pub fn run(a: ReportArgs) -> Result<()> {
     let cfg = load_config(a.model.config.as_deref(), a.model.engine.as_deref(), a.model.sizes.as_deref())?;
     let lat = load_latency(&a.model.latency, &cfg)?;
     let plan = ReportPlan::new(spec, &cfg).map_err(|e| anyhow!(e))?;
-    plan.check_buffers(&cfg).map_err(|e| anyhow!("{}: {e}", config_source(&a.model)))?;
+    let jobs = plan.point_jobs();
+    check_buffers(&a.model, &cfg, jobs.iter().map(|j| (&j.point, &j.archs[..])))?;
     // Before any work: an --out that cannot be a directory fails now, not after the runs.
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
     let sweep_results = match &a.sweep_results {
